@@ -1,0 +1,54 @@
+# The one entry point for people and CI. See README.md.
+SHELL := /bin/bash
+BUILD_DIR ?= build
+ASAN_DIR ?= build-asan
+JOBS ?= $(shell nproc)
+CMAKE_FLAGS ?=
+SOURCES = $(shell git ls-files '*.cpp' '*.hpp' '*.h' 2>/dev/null)
+
+.PHONY: all deps configure build test asan bench format format-check run clean
+
+all: build
+
+deps:
+	@scripts/install-deps.sh
+
+$(BUILD_DIR)/build.ninja:
+	cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo $(CMAKE_FLAGS)
+
+configure: $(BUILD_DIR)/build.ninja
+
+build: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+test: deps build
+	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
+	@if ls tests/python/test_*.py >/dev/null 2>&1; then .venv/bin/python -m pytest -q tests/python; fi
+
+asan: deps
+	cmake -S . -B $(ASAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCANEMU_SANITIZE=ON \
+	      -DCANEMU_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	cmake --build $(ASAN_DIR) -j $(JOBS)
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS)
+
+# Benchmarks write one JSON file each into $(BUILD_DIR)/bench-results/.
+bench: deps build
+	@mkdir -p $(BUILD_DIR)/bench-results
+	$(BUILD_DIR)/bin/firmware_model_bench --benchmark_out=$(BUILD_DIR)/bench-results/firmware_model.json \
+	  --benchmark_out_format=json $(BENCH_ARGS)
+	@echo "bench: results in $(BUILD_DIR)/bench-results/"
+
+format:
+	clang-format -i $(SOURCES)
+
+format-check:
+	clang-format --dry-run --Werror $(SOURCES)
+
+run:
+	@echo "make run: canemud (the daemon) is not built yet; it arrives with its own issue." >&2
+	@echo "Until then, 'make test' builds and tests the firmware model." >&2
+	@exit 1
+
+clean:
+	rm -rf $(BUILD_DIR) $(ASAN_DIR)

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Installs what canemu needs, idempotently:
+#   - the Debian packages listed in scripts/apt-packages.txt (through sudo when not root);
+#   - a Python virtual environment at .venv from the pinned requirements.txt.
+# A second run finds nothing to do and says so.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+missing=()
+while read -r pkg; do
+  pkg=${pkg%%#*}
+  pkg=$(echo "$pkg" | tr -d '[:space:]')
+  [ -n "$pkg" ] || continue
+  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$pkg")
+  fi
+done < scripts/apt-packages.txt
+
+did_something=0
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "deps: installing Debian packages: ${missing[*]}"
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "deps: need root or sudo to install ${missing[*]}" >&2; exit 1; }
+    sudo="sudo"
+  fi
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  did_something=1
+fi
+
+# Debian's interpreter, not whatever python3 is first on PATH, so the venv is the same everywhere.
+py=/usr/bin/python3
+stamp=.venv/.requirements.sha256
+want=$(sha256sum requirements.txt | cut -d' ' -f1)
+if [ ! -x .venv/bin/python ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  echo "deps: creating the Python venv at .venv from requirements.txt"
+  rm -rf .venv
+  "$py" -m venv .venv
+  .venv/bin/pip install --quiet --disable-pip-version-check -r requirements.txt
+  echo "$want" > "$stamp"
+  did_something=1
+fi
+
+if [ "$did_something" -eq 0 ]; then
+  echo "deps: everything is already installed; nothing to do"
+fi

@@ -9,6 +9,7 @@ EventId SimScheduler::schedule_at(SimTime at, Action action) {
 }
 
 std::size_t SimScheduler::run_until(SimTime limit) {
+  limit = std::max(limit, now_);  // time never goes backwards
   std::size_t ran = 0;
   while (true) {
     const auto next = queue_.next_time();
@@ -20,7 +21,7 @@ std::size_t SimScheduler::run_until(SimTime limit) {
     entry->payload(now_);
     ++ran;
   }
-  now_ = std::max(now_, limit);
+  now_ = limit;
   return ran;
 }
 

@@ -1,6 +1,8 @@
 #include "canemu/firmware_model/wire_encoding.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstring>
 
 namespace canemu::model {
 
@@ -11,224 +13,376 @@ constexpr uint32_t kCrc15Poly = 0x4599;
 constexpr uint32_t kCrc17Poly = 0x1685B;
 constexpr uint32_t kCrc21Poly = 0x102899;
 
+uint64_t to_big_endian(uint64_t v) {
+  if constexpr (std::endian::native == std::endian::little) {
+    return __builtin_bswap64(v);
+  }
+  return v;
+}
+
+// Population count without a library call on CPUs where the compiler may not use POPCNT.
+uint32_t count_ones(uint64_t x) {
+  x = x - ((x >> 1) & 0x5555555555555555ULL);
+  x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0FULL;
+  return static_cast<uint32_t>((x * 0x0101010101010101ULL) >> 56);
+}
+
 // Gray code of the stuff count (0..7) in bits 3..1 and its even parity in bit 0.
 constexpr std::array<uint8_t, 8> kStuffCountCode{0x0, 0x3, 0x6, 0x5, 0xC, 0xF, 0xA, 0x9};
 
-// Writes bits into an EncodedFrame, doing the dynamic bit stuffing and the CRC as it goes.
-class BitWriter {
- public:
-  BitWriter(EncodedFrame& out, uint8_t crc_bits) : out_(out), crc_bits_(crc_bits) {
-    crc_top_ = 1u << (crc_bits - 1);
-    crc_mask_ = (1u << crc_bits) - 1;
-    crc_poly_ = crc_bits == 15 ? kCrc15Poly : crc_bits == 17 ? kCrc17Poly : kCrc21Poly;
-    // ISO CAN FD starts CRC-17/21 with the top bit set; classic CRC-15 starts at zero.
-    crc_ = crc_bits == 15 ? 0u : crc_top_;
-  }
+// A bit string, first bit in the most significant position of the first word, so that fields
+// are appended and runs found with word operations rather than bit by bit. Words past the end
+// are not initialised (zeroing them costs more than the encoding): appending assigns a word
+// when it starts one, and only bits before `size` are ever read.
+struct BitString {
+  EncodedFrame::Bits words;
+  uint32_t size = 0;
 
-  void begin(Field field) {
-    out_.fields[out_.field_count++] = FieldSpan{field, pos_};
-  }
-
-  // A bit of the dynamically stuffed part. `may_stuff` is false for the last bit before the CAN FD
-  // CRC field, where the fixed stuff bit takes the place of a dynamic one.
-  void stuffed(bool bit, bool may_stuff = true) {
-    emit(bit, false);
-    crc_step(bit);
-    if (bit == last_) {
-      ++run_;
+  // Appends the low `count` (1..64) bits of `value`, most significant first.
+  void append(uint64_t value, uint32_t count) {
+    const uint64_t v = value << (64 - count);
+    const uint32_t off = size & 63;
+    const std::size_t w = size >> 6;
+    if (off == 0) {
+      words[w] = v;
     } else {
-      last_ = bit;
-      run_ = 1;
-    }
-    if (run_ == 5 && may_stuff) {
-      const bool s = !bit;
-      emit(s, true);
-      if (crc_bits_ != 15) {
-        crc_step(s);  // ISO CAN FD: dynamic stuff bits are part of the CRC
+      words[w] |= v >> off;
+      if (off + count > 64) {
+        words[w + 1] = v << (64 - off);
       }
-      ++out_.dynamic_stuff_bits;
-      last_ = s;
-      run_ = 1;
+    }
+    size += count;
+    // Keep the bits after the end of the last word zero, so the next append can OR into it.
+    if ((size & 63) != 0) {
+      words[size >> 6] &= ~uint64_t{0} << (64 - (size & 63));
+    }
+  }
+  void append_bit(bool bit) { append(bit ? 1u : 0u, 1); }
+  // Appends zeros up to `new_size`.
+  void pad_to(uint32_t new_size) {
+    while (size < new_size) {
+      append(0, new_size - size < 64 ? new_size - size : 64);
+    }
+  }
+  void pop_back() {
+    --size;
+    words[size >> 6] &= ~(uint64_t{1} << (63 - (size & 63)));
+  }
+
+  bool bit(uint32_t i) const { return (words[i >> 6] >> (63 - (i & 63))) & 1u; }
+
+  // Bits i..i+63 (i < size), most significant first; bits past the end read as 0 once sealed.
+  uint64_t window(uint32_t i) const {
+    const std::size_t w = i >> 6;
+    const uint32_t off = i & 63;
+    if (off == 0) {
+      return words[w];
+    }
+    return (words[w] << off) | (words[w + 1] >> (64 - off));
+  }
+
+  // Zeroes the word a window at the last bit may read past the end.
+  void seal() {
+    const std::size_t next = (size & 63) == 0 ? size >> 6 : (size >> 6) + 1;
+    if (next < words.size()) {
+      words[next] = 0;
     }
   }
 
-  void stuffed_field(uint32_t value, int bits) {
-    for (int i = bits - 1; i >= 0; --i) {
-      stuffed((value >> i) & 1u);
+  // The 8 bits i..i+7 (i + 8 <= size).
+  uint32_t byte_at(uint32_t i) const {
+    const std::size_t w = i >> 6;
+    const uint32_t off = i & 63;
+    uint64_t v = words[w] << off;
+    if (off > 56) {
+      v |= words[w + 1] >> (64 - off);
+    }
+    return static_cast<uint32_t>(v >> 56);
+  }
+
+  // Copies the used words into `out`; words after them keep what they had.
+  void store(EncodedFrame::Bits& out) const {
+    const std::size_t used = (size + 63) / 64;
+    for (std::size_t w = 0; w < used; ++w) {
+      out[w] = words[w];
     }
   }
-
-  // A bit that is not stuffed but enters the CRC (the CAN FD stuff count).
-  void crc_only(bool bit) {
-    emit(bit, false);
-    crc_step(bit);
-  }
-
-  // A bit neither stuffed nor in the CRC (fixed stuff bits, CRC, delimiters, ACK, EOF).
-  void plain(bool bit) { emit(bit, false); }
-  void fixed_stuff() {
-    emit(!previous(), true);
-    ++out_.fixed_stuff_bits;
-  }
-
-  bool previous() const { return out_.level_at(pos_ - 1u); }
-  uint16_t pos() const { return pos_; }
-  uint32_t crc() const { return crc_ & crc_mask_; }
-
- private:
-  void emit(bool bit, bool is_stuff) {
-    const std::size_t w = pos_ >> 6;
-    const uint64_t m = uint64_t{1} << (pos_ & 63);
-    if (bit) {
-      out_.level[w] |= m;
-    }
-    if (is_stuff) {
-      out_.stuff[w] |= m;
-    }
-    ++pos_;
-  }
-
-  void crc_step(bool bit) {
-    const bool feedback = bit ^ ((crc_ & crc_top_) != 0);
-    crc_ = (crc_ << 1) & crc_mask_;
-    if (feedback) {
-      crc_ ^= crc_poly_;
-    }
-  }
-
-  EncodedFrame& out_;
-  uint8_t crc_bits_;
-  uint32_t crc_ = 0;
-  uint32_t crc_top_ = 0;
-  uint32_t crc_mask_ = 0;
-  uint32_t crc_poly_ = 0;
-  uint16_t pos_ = 0;
-  bool last_ = true;  // the idle bus is recessive
-  int run_ = 0;
 };
 
-constexpr bool kDominant = false;
-constexpr bool kRecessive = true;
+// Table-driven CRC over a bit string (MSB first), 16 bits per step. The register after 16
+// input bits is linear in (register, input): it equals feeding (top 16 register bits ^ input)
+// into a cleared register, plus the register shifted left by 16 when it is wider than 16 bits.
+// That 16-bit feed splits into two 256-entry tables, looked up in parallel.
+template <uint32_t Width, uint32_t Poly>
+struct Crc {
+  static constexpr uint32_t kMask = (1u << Width) - 1;
 
-void encode_arbitration_and_control(const Frame& frame, BitWriter& w, EncodedFrame& out) {
+  static constexpr uint32_t step_bit(uint32_t crc, bool bit) {
+    const uint32_t feedback = (bit ^ ((crc >> (Width - 1)) & 1u)) ? Poly : 0u;
+    return ((crc << 1) & kMask) ^ feedback;
+  }
+  static constexpr uint32_t feed16(uint32_t v) {
+    uint32_t crc = 0;
+    for (int i = 15; i >= 0; --i) {
+      crc = step_bit(crc, (v >> i) & 1u);
+    }
+    return crc;
+  }
+  static constexpr std::array<uint32_t, 256> make_table(uint32_t shift) {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t i = 0; i < 256; ++i) {
+      t[i] = feed16(i << shift);
+    }
+    return t;
+  }
+  static constexpr std::array<uint32_t, 256> kHigh = make_table(8);
+  static constexpr std::array<uint32_t, 256> kLow = make_table(0);
+
+  static uint32_t over(const BitString& s, uint32_t bits, uint32_t crc) {
+    uint32_t i = 0;
+    for (; i + 16 <= bits; i += 16) {
+      const uint32_t input = (s.byte_at(i) << 8) | s.byte_at(i + 8);
+      const uint32_t top = Width >= 16 ? crc >> (Width - 16) : crc << (16 - Width);
+      const uint32_t idx = (top ^ input) & 0xFFFF;
+      const uint32_t rest = Width > 16 ? (crc << 16) & kMask : 0u;
+      crc = rest ^ kHigh[idx >> 8] ^ kLow[idx & 0xFF];
+    }
+    for (; i < bits; ++i) {
+      crc = step_bit(crc, s.bit(i));
+    }
+    return crc;
+  }
+};
+
+using Crc15 = Crc<15, kCrc15Poly>;
+using Crc17 = Crc<17, kCrc17Poly>;
+using Crc21 = Crc<21, kCrc21Poly>;
+
+void add_field(EncodedFrame& out, Field f, uint32_t begin) {
+  out.fields[out.field_count++] = FieldSpan{f, static_cast<uint16_t>(begin)};
+}
+
+// Builds SOF..data, destuffed, and records where each field begins in it.
+void build_header_and_data(const Frame& frame, BitString& d, EncodedFrame& out) {
   const bool fd = frame.fd();
-  w.begin(Field::sof);
-  w.stuffed(kDominant);
-  w.begin(Field::base_id);
+  const uint32_t rtr = frame.remote() ? 1u : 0u;  // RRS of CAN FD is always dominant
   const Field rtr_field = fd ? Field::rrs : Field::rtr;
-  const bool rtr_level = frame.remote();  // RRS is always dominant
+  add_field(out, Field::sof, 0);
+  add_field(out, Field::base_id, 1);
   if (frame.extended()) {
-    w.stuffed_field(frame.id() >> 18, 11);
-    w.begin(Field::srr);
-    w.stuffed(kRecessive);
-    w.begin(Field::ide);
-    w.stuffed(kRecessive);
-    w.begin(Field::ext_id);
-    w.stuffed_field(frame.id() & 0x3FFFF, 18);
-    w.begin(rtr_field);
-    w.stuffed(rtr_level);
-    out.arbitration_end = w.pos();
-    w.begin(Field::fdf);
-    w.stuffed(fd ? kRecessive : kDominant);
-    w.begin(Field::res);
-    w.stuffed(kDominant);
+    // SOF, base ID, SRR, IDE, extended ID, RTR/RRS, FDF (r1), r0/res
+    add_field(out, Field::srr, 12);
+    add_field(out, Field::ide, 13);
+    add_field(out, Field::ext_id, 14);
+    add_field(out, rtr_field, 32);
+    add_field(out, Field::fdf, 33);
+    add_field(out, Field::res, 34);
+    d.append((uint64_t{frame.id() >> 18} << 2) | 0x3u, 14);  // SOF (0), ID-28..18, SRR, IDE
+    d.append((uint64_t{frame.id() & 0x3FFFF} << 3) | (rtr << 2) | (fd ? 0x2u : 0x0u), 21);
   } else {
-    w.stuffed_field(frame.id(), 11);
-    w.begin(rtr_field);
-    w.stuffed(rtr_level);
-    out.arbitration_end = w.pos();
-    w.begin(Field::ide);
-    w.stuffed(kDominant);
-    w.begin(Field::fdf);
-    w.stuffed(fd ? kRecessive : kDominant);
+    // SOF, ID, RTR/RRS, IDE, FDF (r0), [res]
+    add_field(out, rtr_field, 12);
+    add_field(out, Field::ide, 13);
+    add_field(out, Field::fdf, 14);
+    d.append((uint64_t{frame.id()} << 3) | (rtr << 2) | (fd ? 0x1u : 0x0u), 15);
     if (fd) {
-      w.begin(Field::res);
-      w.stuffed(kDominant);
+      add_field(out, Field::res, 15);
+      d.append(0, 1);
     }
   }
   if (fd) {
-    w.begin(Field::brs);
-    out.brs_index = w.pos();
-    w.stuffed(frame.brs());
-    w.begin(Field::esi);
-    w.stuffed(frame.esi());
+    add_field(out, Field::brs, d.size);
+    add_field(out, Field::esi, d.size + 1);
+    d.append((frame.brs() ? 2u : 0u) | (frame.esi() ? 1u : 0u), 2);
+  }
+  add_field(out, Field::dlc, d.size);
+  d.append(frame.dlc(), 4);
+  const auto data = frame.data();
+  if (!data.empty()) {
+    add_field(out, Field::data, d.size);
+    std::size_t i = 0;
+    for (; i + 8 <= data.size(); i += 8) {
+      uint64_t v;
+      std::memcpy(&v, data.data() + i, 8);
+      d.append(to_big_endian(v), 64);
+    }
+    for (; i < data.size(); ++i) {
+      d.append(data[i], 8);
+    }
   }
 }
 
-// CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: fixed form, never stuffed.
-void encode_tail(BitWriter& w, EncodedFrame& out) {
-  w.begin(Field::crc_delimiter);
-  out.crc_delimiter_index = w.pos();
-  w.plain(kRecessive);
-  w.begin(Field::ack_slot);
-  w.plain(kRecessive);
-  w.begin(Field::ack_delimiter);
-  w.plain(kRecessive);
-  w.begin(Field::eof);
-  for (uint32_t i = 0; i < kEofBits; ++i) {
-    w.plain(kRecessive);
+// Dynamic bit stuffing of `d` into the frame bits `s`, marking stuff bits in `m`: after five
+// equal bits a complementary bit, which starts the next run. `last_may_stuff` is false for
+// CAN FD, where no dynamic stuff bit follows the last bit before the CRC field.
+//
+// Runs are found a 64-bit window at a time (bit j equals bit j + 1 for four j in a row), and the
+// bits between two stuff bits are copied as one block, so the cost grows with the number of
+// stuff bits, not with the number of bits.
+void stuff(BitString& d, bool last_may_stuff, BitString& s, BitString& m) {
+  // Both outputs start empty and grow in step; their bits are gathered in registers and stored
+  // a word at a time.
+  struct Writer {
+    EncodedFrame::Bits& bits;
+    EncodedFrame::Bits& marks;
+    std::size_t w = 0;
+    uint64_t acc_bits = 0;
+    uint64_t acc_marks = 0;
+    uint32_t n = 0;  // bits in the accumulators, from the top
+
+    // Appends `count` (1..64) bits and as many stuff marks; neither value has bits above count.
+    void put(uint64_t v, uint64_t mark, uint32_t count) {
+      const uint32_t space = 64 - n;
+      if (count < space) {
+        acc_bits |= v << (space - count);
+        acc_marks |= mark << (space - count);
+        n += count;
+        return;
+      }
+      const uint32_t rest = count - space;
+      bits[w] = acc_bits | (v >> rest);
+      marks[w] = acc_marks | (mark >> rest);
+      ++w;
+      acc_bits = rest != 0 ? v << (64 - rest) : 0;
+      acc_marks = rest != 0 ? mark << (64 - rest) : 0;
+      n = rest;
+    }
+    void copy(const BitString& from, uint32_t begin, uint32_t count) {
+      while (count > 0) {
+        const uint32_t c = count < 64 ? count : 64;
+        put(from.window(begin) >> (64 - c), 0, c);
+        begin += c;
+        count -= c;
+      }
+    }
+    void close(BitString& a, BitString& b) {
+      if (n != 0) {
+        bits[w] = acc_bits;
+        marks[w] = acc_marks;
+      }
+      a.size = b.size = static_cast<uint32_t>(w * 64 + n);
+    }
+  };
+
+  d.seal();
+  Writer out{s.words, m.words};
+  const uint32_t n = d.size;
+  const uint32_t last_allowed = last_may_stuff ? n - 1 : n - 2;  // highest bit a stuff may follow
+  uint32_t pos = 0;  // next destuffed bit to copy
+  while (true) {
+    uint32_t p = UINT32_MAX;  // the destuffed bit after which the next stuff bit goes
+    if (pos > 0 && pos + 3 < n) {
+      // Right after a stuff bit, that bit is the first of the run: four more like it suffice.
+      const uint64_t four = d.window(pos) >> 60;
+      if (four == (d.bit(pos - 1) ? 0x0u : 0xFu)) {
+        p = pos + 3;
+      }
+    }
+    for (uint32_t i = pos; p == UINT32_MAX && i + 4 < n; i += 60) {
+      const uint64_t x = d.window(i);
+      const uint64_t eq = ~(x ^ (x << 1));  // bit 63 - j: bit j equals bit j + 1
+      const uint64_t runs = eq & (eq << 1) & (eq << 2) & (eq << 3) & (~uint64_t{0} << 4);
+      if (runs != 0) {
+        p = i + static_cast<uint32_t>(__builtin_clzll(runs)) + 4;
+      }
+    }
+    if (p >= n || p > last_allowed) {
+      out.copy(d, pos, n - pos);
+      break;
+    }
+    out.copy(d, pos, p + 1 - pos);
+    out.put(d.bit(p) ? 0u : 1u, 1u, 1);
+    pos = p + 1;
   }
-  out.length = w.pos();
+  out.close(s, m);
+}
+
+// CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits.
+void finish(BitString& s, BitString& m, EncodedFrame& out) {
+  out.crc_delimiter_index = static_cast<uint16_t>(s.size);
+  add_field(out, Field::crc_delimiter, s.size);
+  add_field(out, Field::ack_slot, s.size + 1);
+  add_field(out, Field::ack_delimiter, s.size + 2);
+  add_field(out, Field::eof, s.size + 3);
+  s.append(0x3FF, 3 + kEofBits);
+  out.length = static_cast<uint16_t>(s.size);
+  s.store(out.level);
+  m.pad_to(s.size);
+  m.store(out.stuff);
+  // Positions the bus engine needs on every frame; the other fields are mapped on demand.
+  // Field order (build_header_and_data): standard SOF, ID, RTR/RRS, IDE, FDF, [res, BRS];
+  // extended SOF, ID, SRR, IDE, ID-ext, RTR/RRS, FDF, res, [BRS].
+  const bool extended = out.fields[2].field == Field::srr;
+  out.arbitration_end = out.stuffed_index(out.fields[extended ? 6 : 3].begin);
+  if (out.fd) {
+    out.brs_index = out.stuffed_index(out.fields[extended ? 8 : 6].begin);
+  }
 }
 
 void encode_classic(const Frame& frame, EncodedFrame& out) {
-  BitWriter w(out, 15);
-  encode_arbitration_and_control(frame, w, out);
-  w.begin(Field::dlc);
-  w.stuffed_field(frame.dlc(), 4);
-  if (frame.length() > 0) {
-    w.begin(Field::data);
-    for (uint8_t byte : frame.data()) {
-      w.stuffed_field(byte, 8);
-    }
-  }
-  // The CRC sequence is stuffed like the rest, and stuff bits do not enter the CRC.
-  const uint32_t crc = w.crc();
-  w.begin(Field::crc);
-  w.stuffed_field(crc, 15);
+  BitString d;
+  build_header_and_data(frame, d, out);
+  // CRC-15 over the destuffed bits; the CRC sequence is then stuffed like the rest.
+  const uint32_t crc = Crc15::over(d, d.size, 0);
+  add_field(out, Field::crc, d.size);
+  out.dynamic_fields = out.field_count;
+  d.append(crc, 15);
+  BitString s;
+  BitString m;
+  stuff(d, true, s, m);
+  out.dynamic_stuff_bits = static_cast<uint16_t>(s.size - d.size);
   out.crc = crc;
   out.crc_bits = 15;
-  encode_tail(w, out);
+  finish(s, m, out);
 }
 
 void encode_fd(const Frame& frame, EncodedFrame& out) {
-  const uint8_t crc_bits = frame.length() > 16 ? 21 : 17;
-  BitWriter w(out, crc_bits);
-  encode_arbitration_and_control(frame, w, out);
-  w.begin(Field::dlc);
-  const auto data = frame.data();
-  for (int i = 3; i >= 0; --i) {
-    // No dynamic stuff bit after the last bit before the CRC field (ISO 11898-1:2015 10.5).
-    w.stuffed((frame.dlc() >> i) & 1u, i > 0 || !data.empty());
-  }
-  if (!data.empty()) {
-    w.begin(Field::data);
-    for (std::size_t b = 0; b < data.size(); ++b) {
-      for (int i = 7; i >= 0; --i) {
-        const bool last = b + 1 == data.size() && i == 0;
-        w.stuffed((data[b] >> i) & 1u, !last);
-      }
-    }
-  }
-  w.begin(Field::stuff_count);
-  w.fixed_stuff();
-  out.stuff_count = static_cast<uint8_t>(out.dynamic_stuff_bits % 8);
+  BitString d;
+  build_header_and_data(frame, d, out);
+  out.dynamic_fields = out.field_count;
+  BitString s;
+  BitString m;
+  stuff(d, false, s, m);
+  const uint32_t count = s.size - d.size;
+  out.dynamic_stuff_bits = static_cast<uint16_t>(count);
+
+  // Stuff count field: a fixed stuff bit, the Gray-coded count and its parity (in the CRC).
+  add_field(out, Field::stuff_count, s.size);
+  auto fixed_stuff = [&] {
+    const uint32_t at = s.size;
+    s.append_bit(!s.bit(at - 1));
+    m.pad_to(at);
+    m.append(1, 1);
+    ++out.fixed_stuff_bits;
+  };
+  const uint32_t dynamic_end = s.size;
+  fixed_stuff();
+  out.stuff_count = static_cast<uint8_t>(count % 8);
   const uint8_t code = kStuffCountCode[out.stuff_count];
+  s.append(code, 4);
+
+  // ISO CAN FD: CRC over the stuffed bits SOF..data (dynamic stuff bits included) and the
+  // stuff count, starting with the top bit set; fixed stuff bits are not part of it.
+  const bool crc21 = frame.length() > 16;
+  const uint8_t width = crc21 ? 21 : 17;
+  uint32_t crc =
+      crc21 ? Crc21::over(s, dynamic_end, 1u << 20) : Crc17::over(s, dynamic_end, 1u << 16);
   for (int i = 3; i >= 0; --i) {
-    w.crc_only((code >> i) & 1u);
+    const bool b = (code >> i) & 1u;
+    crc = crc21 ? Crc21::step_bit(crc, b) : Crc17::step_bit(crc, b);
   }
-  const uint32_t crc = w.crc();
-  w.begin(Field::crc);
+  add_field(out, Field::crc, s.size);
   // A fixed stuff bit, the complement of the bit before it, precedes every four CRC bits.
-  for (int i = crc_bits - 1; i >= 0; --i) {
-    if ((crc_bits - 1 - i) % 4 == 0) {
-      w.fixed_stuff();
+  for (int i = width - 1; i >= 0; --i) {
+    if ((width - 1 - i) % 4 == 0) {
+      fixed_stuff();
     }
-    w.plain((crc >> i) & 1u);
+    s.append_bit((crc >> i) & 1u);
   }
   out.crc = crc;
-  out.crc_bits = crc_bits;
-  encode_tail(w, out);
+  out.crc_bits = width;
+  finish(s, m, out);
 }
 
 }  // namespace
@@ -277,21 +431,51 @@ std::string_view to_string(Field field) {
   return "?";
 }
 
-Field EncodedFrame::field_at(std::size_t i) const {
-  Field f = Field::sof;
-  for (uint8_t k = 0; k < field_count && fields[k].begin <= i; ++k) {
-    f = fields[k].field;
+uint16_t EncodedFrame::stuffed_index(uint16_t destuffed) const {
+  // The frame index s of a destuffed bit has exactly `destuffed` non-stuff bits before it and is
+  // not a stuff bit itself.
+  auto stuff_before = [this](uint32_t s) {
+    uint32_t n = 0;
+    for (uint32_t w = 0; w < s / 64; ++w) {
+      n += count_ones(stuff[w]);
+    }
+    if (s % 64 != 0) {
+      n += count_ones(stuff[s / 64] >> (64 - s % 64));
+    }
+    return n;
+  };
+  uint32_t s = destuffed;
+  while (true) {
+    const uint32_t t = destuffed + stuff_before(s);
+    if (t > s) {
+      s = t;
+    } else if (is_stuff(s)) {
+      ++s;
+    } else {
+      return static_cast<uint16_t>(s);
+    }
   }
-  return f;
 }
 
 uint16_t EncodedFrame::field_begin(Field field) const {
   for (uint8_t k = 0; k < field_count; ++k) {
     if (fields[k].field == field) {
-      return fields[k].begin;
+      return k < dynamic_fields ? stuffed_index(fields[k].begin) : fields[k].begin;
     }
   }
   return length;
+}
+
+Field EncodedFrame::field_at(std::size_t i) const {
+  Field f = Field::sof;
+  for (uint8_t k = 0; k < field_count; ++k) {
+    const uint16_t begin = k < dynamic_fields ? stuffed_index(fields[k].begin) : fields[k].begin;
+    if (begin > i) {
+      break;
+    }
+    f = fields[k].field;
+  }
+  return f;
 }
 
 std::string EncodedFrame::to_string() const {
@@ -305,11 +489,10 @@ std::string EncodedFrame::to_string() const {
 }
 
 void encode(const Frame& frame, EncodedFrame& out) {
-  out.level.fill(0);
-  out.stuff.fill(0);
   out.dynamic_stuff_bits = 0;
   out.fixed_stuff_bits = 0;
   out.field_count = 0;
+  out.dynamic_fields = 0;
   out.brs_index = 0;
   out.stuff_count = 0;
   out.fd = frame.fd();

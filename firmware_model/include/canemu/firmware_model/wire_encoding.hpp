@@ -65,8 +65,10 @@ struct EncodedFrame {
   static constexpr std::size_t kCapacity = 768;  // longest frame: CAN FD, 29-bit ID, 64 bytes
   using Bits = std::array<uint64_t, kCapacity / 64>;
 
-  Bits level{};  // bit i: 1 = recessive, 0 = dominant
-  Bits stuff{};  // bit i: 1 = stuff bit (dynamic or fixed)
+  // Bit i of the frame is bit 63 - i % 64 of word i / 64 (first bit in the most significant
+  // position), so that whole fields move with shifts. Bits at and after `length` are unspecified.
+  Bits level{};  // 1 = recessive, 0 = dominant
+  Bits stuff{};  // 1 = stuff bit (dynamic or fixed)
   uint16_t length = 0;  // SOF through EOF
   uint16_t dynamic_stuff_bits = 0;
   uint16_t fixed_stuff_bits = 0;  // CAN FD CRC field only
@@ -78,12 +80,18 @@ struct EncodedFrame {
   uint16_t brs_index = 0;            // CAN FD: index of the BRS bit
   uint16_t crc_delimiter_index = 0;  // index of the CRC delimiter
   uint16_t arbitration_end = 0;      // index of the first bit after the arbitration field
+  // Field starts. The first `dynamic_fields` entries (SOF..data) hold the index in the destuffed
+  // bits, mapped through the stuff bits on demand; the rest hold the frame index. Read them
+  // through field_begin() and field_at().
   std::array<FieldSpan, 19> fields{};
   uint8_t field_count = 0;
+  uint8_t dynamic_fields = 0;
 
-  bool level_at(std::size_t i) const { return (level[i >> 6] >> (i & 63)) & 1u; }
-  bool is_stuff(std::size_t i) const { return (stuff[i >> 6] >> (i & 63)) & 1u; }
+  bool level_at(std::size_t i) const { return (level[i >> 6] >> (63 - (i & 63))) & 1u; }
+  bool is_stuff(std::size_t i) const { return (stuff[i >> 6] >> (63 - (i & 63))) & 1u; }
   Field field_at(std::size_t i) const;
+  // Frame index of the `destuffed`-th bit of the dynamically stuffed part.
+  uint16_t stuffed_index(uint16_t destuffed) const;
   // Bit index where `field` begins, or `length` if the frame has no such field.
   uint16_t field_begin(Field field) const;
   // The bits as '0' (dominant) and '1' (recessive), SOF first.

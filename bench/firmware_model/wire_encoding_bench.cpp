@@ -43,8 +43,12 @@ void encode_frames(benchmark::State& state, bool fd, std::size_t length) {
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 
-void BM_EncodeClassic8Bytes(benchmark::State& state) { encode_frames(state, false, 8); }
-void BM_EncodeFd64BytesBrs(benchmark::State& state) { encode_frames(state, true, 64); }
+void BM_EncodeClassic8Bytes(benchmark::State& state) {
+  encode_frames(state, false, 8);
+}
+void BM_EncodeFd64BytesBrs(benchmark::State& state) {
+  encode_frames(state, true, 64);
+}
 
 void BM_EncodeAndTimeClassic8Bytes(benchmark::State& state) {
   const auto frames = random_frames(false, 8, 1024);

@@ -34,13 +34,14 @@ Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz)
                             t.quanta_per_bit()));
   }
   if (t.tseg2 < 2) {
-    return rule(fmt::format("{}: TSEG2 = {} quantum, but it must cover the 2-quantum "
-                            "information processing time",
-                            where, t.tseg2));
+    return rule(
+        fmt::format("{}: TSEG2 = {} quantum, but it must cover the 2-quantum "
+                    "information processing time",
+                    where, t.tseg2));
   }
   if (t.sjw > t.tseg2) {
-    return rule(fmt::format("{}: SJW = {} exceeds TSEG2 = {} (rule SJW <= TSEG2)", where, t.sjw,
-                            t.tseg2));
+    return rule(
+        fmt::format("{}: SJW = {} exceeds TSEG2 = {} (rule SJW <= TSEG2)", where, t.sjw, t.tseg2));
   }
   return t;
 }
@@ -56,9 +57,10 @@ Result<BitTiming> decode_sorcus(const SorcusDevice& device, const SorcusTiming& 
                         device.tq_max_ns);
   }
   if (timing.tq_ns % period_ns != 0) {
-    return rule(fmt::format("{}: Tq = {} ns is not a multiple of the {} ns controller clock "
-                            "period",
-                            device.name, timing.tq_ns, period_ns));
+    return rule(
+        fmt::format("{}: Tq = {} ns is not a multiple of the {} ns controller clock "
+                    "period",
+                    device.name, timing.tq_ns, period_ns));
   }
   if (timing.tseg1 < 3 || timing.tseg1 > 16) {
     return out_of_range(fmt::format("{} Tseg1", device.name), timing.tseg1, 3, 16);
@@ -109,9 +111,10 @@ Result<Btp> to_raw(const Btp& btp, const BtpRange& range, Phase phase) {
                        fmt::format("the controller has no {} phase timing", phase_name(phase)));
   }
   if (btp.mode & ~(kBtModeRaw | kBtModeTsm)) {
-    return rule(fmt::format("{} CANBTP dwMode = 0x{:X} has bits other than CAN_BTMODE_RAW and "
-                            "CAN_BTMODE_TSM",
-                            phase_name(phase), btp.mode));
+    return rule(
+        fmt::format("{} CANBTP dwMode = 0x{:X} has bits other than CAN_BTMODE_RAW and "
+                    "CAN_BTMODE_TSM",
+                    phase_name(phase), btp.mode));
   }
   if (btp.mode & kBtModeRaw) {
     return btp;
@@ -119,9 +122,10 @@ Result<Btp> to_raw(const Btp& btp, const BtpRange& range, Phase phase) {
   // Bit/s form: ts1 counts the sync quantum, so quanta per bit = ts1 + ts2.
   const uint64_t quanta = uint64_t{btp.ts1} + btp.ts2;
   if (btp.bps == 0 || btp.ts1 < 2 || btp.ts2 == 0) {
-    return rule(fmt::format("{} CANBTP {{dwBPS={}, wTS1={}, wTS2={}}}: the bit rate and wTS2 must "
-                            "be non-zero and wTS1 must include the sync quantum (>= 2)",
-                            phase_name(phase), btp.bps, btp.ts1, btp.ts2));
+    return rule(
+        fmt::format("{} CANBTP {{dwBPS={}, wTS1={}, wTS2={}}}: the bit rate and wTS2 must "
+                    "be non-zero and wTS1 must include the sync quantum (>= 2)",
+                    phase_name(phase), btp.bps, btp.ts1, btp.ts2));
   }
   const uint64_t per_bit = uint64_t{btp.bps} * quanta;
   if (range.clock_hz % per_bit != 0) {
@@ -129,8 +133,7 @@ Result<Btp> to_raw(const Btp& btp, const BtpRange& range, Phase phase) {
         ModelErrc::timing_not_realizable,
         fmt::format("{} CANBTP {{dwBPS={}, wTS1={}, wTS2={}}}: the {} Hz controller clock is not a "
                     "whole multiple of {} bit/s x {} quanta, so no prescaler gives this timing",
-                    phase_name(phase), btp.bps, btp.ts1, btp.ts2, range.clock_hz, btp.bps,
-                    quanta));
+                    phase_name(phase), btp.bps, btp.ts1, btp.ts2, range.clock_hz, btp.bps, quanta));
   }
   Btp raw = btp;
   raw.mode = btp.mode | kBtModeRaw;
@@ -162,9 +165,10 @@ Result<BitTiming> decode_btp(const Btp& btp, const BtpRange& range, Phase phase)
     }
   }
   if (raw->sjw > raw->ts2 || raw->sjw > raw->ts1) {
-    return rule(fmt::format("{} CANBTP: wSJW = {} exceeds a phase segment (wTS1 raw = {}, "
-                            "wTS2 = {}); the rule is SJW <= both",
-                            name, raw->sjw, raw->ts1, raw->ts2));
+    return rule(
+        fmt::format("{} CANBTP: wSJW = {} exceeds a phase segment (wTS1 raw = {}, "
+                    "wTS2 = {}); the rule is SJW <= both",
+                    name, raw->sjw, raw->ts1, raw->ts2));
   }
   BitTiming t;
   t.clock_hz = range.clock_hz;

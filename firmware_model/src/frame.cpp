@@ -18,13 +18,13 @@ Result<Frame> Frame::create(const FrameSpec& spec) {
                        "CAN FD has no remote frames: remote and fd cannot both be set");
   }
   if (!spec.fd && (spec.brs || spec.esi)) {
-    return model_error(ModelErrc::invalid_flags,
-                       fmt::format("{} is a CAN FD bit: it needs fd set", spec.brs ? "BRS" : "ESI"));
+    return model_error(ModelErrc::invalid_flags, fmt::format("{} is a CAN FD bit: it needs fd set",
+                                                             spec.brs ? "BRS" : "ESI"));
   }
   if (spec.remote && !spec.data.empty()) {
-    return model_error(ModelErrc::data_length_mismatch,
-                       fmt::format("a remote frame carries no data, but {} bytes were given",
-                                   spec.data.size()));
+    return model_error(
+        ModelErrc::data_length_mismatch,
+        fmt::format("a remote frame carries no data, but {} bytes were given", spec.data.size()));
   }
   const std::size_t max_length = spec.fd ? kMaxFdLength : kMaxClassicLength;
   if (spec.data.size() > max_length) {
@@ -77,8 +77,7 @@ Result<Frame> Frame::classic(uint32_t id, std::span<const uint8_t> data, bool ex
   return create(spec);
 }
 
-Result<Frame> Frame::fd_frame(uint32_t id, std::span<const uint8_t> data, bool extended,
-                              bool brs) {
+Result<Frame> Frame::fd_frame(uint32_t id, std::span<const uint8_t> data, bool extended, bool brs) {
   FrameSpec spec;
   spec.id = id;
   spec.extended = extended;

@@ -110,6 +110,22 @@ struct BitString {
   }
 };
 
+// Up to 128 bits in one register pair: the destuffed bits of a classic frame (at most
+// 39 + 64 + 15 = 118), so that windows and bits are shifts instead of memory reads.
+struct ShortBits {
+  uint128 bits = 0;  // first bit at bit 127
+  uint32_t size = 0;
+
+  void append(uint64_t value, uint32_t count) {
+    bits |= (uint128{value} << (128 - count)) >> size;
+    size += count;
+  }
+  bool bit(uint32_t i) const { return static_cast<uint64_t>(bits >> (127 - i)) & 1u; }
+  uint64_t window(uint32_t i) const { return static_cast<uint64_t>((bits << i) >> 64); }
+  uint32_t byte_at(uint32_t i) const { return static_cast<uint32_t>((bits << i) >> 120); }
+  void seal() {}
+};
+
 // Table-driven CRC over a bit string (MSB first), 16 bits per step. The register after 16
 // input bits is linear in (register, input): it equals feeding (top 16 register bits ^ input)
 // into a cleared register, plus the register shifted left by 16 when it is wider than 16 bits.
@@ -139,7 +155,8 @@ struct Crc {
   static constexpr std::array<uint32_t, 256> kHigh = make_table(8);
   static constexpr std::array<uint32_t, 256> kLow = make_table(0);
 
-  static uint32_t over(const BitString& s, uint32_t bits, uint32_t crc) {
+  template <class Bits>
+  static uint32_t over(const Bits& s, uint32_t bits, uint32_t crc) {
     uint32_t i = 0;
     for (; i + 16 <= bits; i += 16) {
       const uint32_t input = (s.byte_at(i) << 8) | s.byte_at(i + 8);
@@ -164,7 +181,8 @@ void add_field(EncodedFrame& out, Field f, uint32_t begin) {
 }
 
 // Builds SOF..data, destuffed, and records where each field begins in it.
-void build_header_and_data(const Frame& frame, BitString& d, EncodedFrame& out) {
+template <class Bits>
+void build_header_and_data(const Frame& frame, Bits& d, EncodedFrame& out) {
   const bool fd = frame.fd();
   const uint32_t rtr = frame.remote() ? 1u : 0u;  // RRS of CAN FD is always dominant
   const Field rtr_field = fd ? Field::rrs : Field::rtr;
@@ -220,7 +238,14 @@ void build_header_and_data(const Frame& frame, BitString& d, EncodedFrame& out) 
 // Runs are found a 64-bit window at a time (bit j equals bit j + 1 for four j in a row), and the
 // bits between two stuff bits are copied as one block, so the cost grows with the number of
 // stuff bits, not with the number of bits.
-void stuff(BitString& d, bool last_may_stuff, BitString& s, BitString& m) {
+// Frame positions of two destuffed bits, worked out while stuffing.
+struct Probes {
+  std::array<uint32_t, 2> destuffed{UINT32_MAX, UINT32_MAX};
+  std::array<uint16_t, 2> stuffed{};
+};
+
+template <class Bits>
+void stuff(Bits& d, bool last_may_stuff, BitString& s, BitString& m, Probes& probes) {
   // Both outputs start empty and grow in step; their bits are gathered in registers and stored
   // a word at a time.
   struct Writer {
@@ -248,7 +273,7 @@ void stuff(BitString& d, bool last_may_stuff, BitString& s, BitString& m) {
       acc_marks = rest != 0 ? mark << (64 - rest) : 0;
       n = rest;
     }
-    void copy(const BitString& from, uint32_t begin, uint32_t count) {
+    void copy(const Bits& from, uint32_t begin, uint32_t count) {
       while (count > 0) {
         const uint32_t c = count < 64 ? count : 64;
         put(from.window(begin) >> (64 - c), 0, c);
@@ -269,7 +294,16 @@ void stuff(BitString& d, bool last_may_stuff, BitString& s, BitString& m) {
   Writer out{s.words, m.words};
   const uint32_t n = d.size;
   const uint32_t last_allowed = last_may_stuff ? n - 1 : n - 2;  // highest bit a stuff may follow
-  uint32_t pos = 0;  // next destuffed bit to copy
+  uint32_t pos = 0;                                              // next destuffed bit to copy
+  uint32_t count = 0;                                            // stuff bits so far
+  auto settle = [&](uint32_t upto) {  // probes at or before destuffed bit `upto`
+    for (std::size_t k = 0; k < 2; ++k) {
+      if (probes.destuffed[k] <= upto) {
+        probes.stuffed[k] = static_cast<uint16_t>(probes.destuffed[k] + count);
+        probes.destuffed[k] = UINT32_MAX;
+      }
+    }
+  };
   while (true) {
     uint32_t p = UINT32_MAX;  // the destuffed bit after which the next stuff bit goes
     if (pos > 0 && pos + 3 < n) {
@@ -291,10 +325,13 @@ void stuff(BitString& d, bool last_may_stuff, BitString& s, BitString& m) {
       out.copy(d, pos, n - pos);
       break;
     }
+    settle(p);
     out.copy(d, pos, p + 1 - pos);
     out.put(d.bit(p) ? 0u : 1u, 1u, 1);
+    ++count;
     pos = p + 1;
   }
+  settle(UINT32_MAX - 1);
   out.close(s, m);
 }
 
@@ -310,18 +347,30 @@ void finish(BitString& s, BitString& m, EncodedFrame& out) {
   s.store(out.level);
   m.pad_to(s.size);
   m.store(out.stuff);
-  // Positions the bus engine needs on every frame; the other fields are mapped on demand.
-  // Field order (build_header_and_data): standard SOF, ID, RTR/RRS, IDE, FDF, [res, BRS];
-  // extended SOF, ID, SRR, IDE, ID-ext, RTR/RRS, FDF, res, [BRS].
+}
+
+// The destuffed positions of the bits the bus engine needs on every frame: the end of the
+// arbitration field and BRS. Field order (build_header_and_data): standard SOF, ID, RTR/RRS,
+// IDE, FDF, [res, BRS]; extended SOF, ID, SRR, IDE, ID-ext, RTR/RRS, FDF, res, [BRS].
+Probes probes_for(const EncodedFrame& out) {
   const bool extended = out.fields[2].field == Field::srr;
-  out.arbitration_end = out.stuffed_index(out.fields[extended ? 6 : 3].begin);
+  Probes p;
+  p.destuffed[0] = out.fields[extended ? 6 : 3].begin;
   if (out.fd) {
-    out.brs_index = out.stuffed_index(out.fields[extended ? 8 : 6].begin);
+    p.destuffed[1] = out.fields[extended ? 8 : 6].begin;
+  }
+  return p;
+}
+
+void apply(const Probes& p, EncodedFrame& out) {
+  out.arbitration_end = p.stuffed[0];
+  if (out.fd) {
+    out.brs_index = p.stuffed[1];
   }
 }
 
 void encode_classic(const Frame& frame, EncodedFrame& out) {
-  BitString d;
+  ShortBits d;
   build_header_and_data(frame, d, out);
   // CRC-15 over the destuffed bits; the CRC sequence is then stuffed like the rest.
   const uint32_t crc = Crc15::over(d, d.size, 0);
@@ -330,7 +379,9 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
   d.append(crc, 15);
   BitString s;
   BitString m;
-  stuff(d, true, s, m);
+  Probes probes = probes_for(out);
+  stuff(d, true, s, m, probes);
+  apply(probes, out);
   out.dynamic_stuff_bits = static_cast<uint16_t>(s.size - d.size);
   out.crc = crc;
   out.crc_bits = 15;
@@ -343,7 +394,9 @@ void encode_fd(const Frame& frame, EncodedFrame& out) {
   out.dynamic_fields = out.field_count;
   BitString s;
   BitString m;
-  stuff(d, false, s, m);
+  Probes probes = probes_for(out);
+  stuff(d, false, s, m, probes);
+  apply(probes, out);
   const uint32_t count = s.size - d.size;
   out.dynamic_stuff_bits = static_cast<uint16_t>(count);
 

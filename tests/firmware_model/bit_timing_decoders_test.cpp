@@ -86,7 +86,8 @@ TEST(Sja1000Btr, RejectsPhaseSegmentTwoShorterThanTheProcessingTime) {
 TEST(Sja1000Btr, RejectsSjwLongerThanPhaseSegmentTwo) {
   auto t = sja1000::decode_btr(0xC0, 0x1C);  // SJW 4, TSEG2 2
   ASSERT_FALSE(t);
-  EXPECT_EQ(t.error().message, "BTR0=0xC0 BTR1=0x1C: SJW = 4 exceeds TSEG2 = 2 (rule SJW <= TSEG2)");
+  EXPECT_EQ(t.error().message,
+            "BTR0=0xC0 BTR1=0x1C: SJW = 4 exceeds TSEG2 = 2 (rule SJW <= TSEG2)");
 }
 
 // Golden vectors: the SORCUS CiA tables (X-CAN-2i at 125 ns, SL-CANi at 100 ns clock).
@@ -182,8 +183,8 @@ TEST(VciBtp, BitPerSecondPresetsDecodeToTheirRates) {
   // CAN_BTP_xxKB presets: 5k {17, 8}, 10k..500k {14, 2}, 800k {8, 2}, 1000k {6, 2}.
   for (const Row& r : {Row{5000, 17, 8, 640}, Row{10000, 14, 2, 500}, Row{125000, 14, 2, 40},
                        Row{500000, 14, 2, 10}, Row{800000, 8, 2, 10}, Row{1000000, 6, 2, 10}}) {
-    auto t = vci::decode_btp({0, r.bps, r.ts1, r.ts2, 1, 0}, vci::kFdNominalRange,
-                             vci::Phase::nominal);
+    auto t =
+        vci::decode_btp({0, r.bps, r.ts1, r.ts2, 1, 0}, vci::kFdNominalRange, vci::Phase::nominal);
     ASSERT_TRUE(t) << r.bps << ": " << t.error().message;
     EXPECT_EQ(t->bit_rate(), (BitRate{r.bps, 1}));
     EXPECT_EQ(t->prescaler, r.prescaler);

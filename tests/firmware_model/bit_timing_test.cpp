@@ -72,8 +72,8 @@ TEST(Compatibility, OscillatorOffsetsBreakDecodingExactlyBeyondTolerance) {
 }
 
 TEST(Compatibility, BitRateSwitchNeedsMatchingDataPhases) {
-  const BitTiming nominal = *vci::decode_btp({0, 500000, 14, 2, 1, 0}, vci::kFdNominalRange,
-                                             vci::Phase::nominal);
+  const BitTiming nominal =
+      *vci::decode_btp({0, 500000, 14, 2, 1, 0}, vci::kFdNominalRange, vci::Phase::nominal);
   const BitTiming d2m =
       *vci::decode_btp({0, 2000000, 30, 10, 4, 0}, vci::kFdDataRange, vci::Phase::data);
   const BitTiming d4m =

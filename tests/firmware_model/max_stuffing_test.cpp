@@ -37,7 +37,9 @@ uint32_t crc15_unstep(uint32_t crc, int bit) {
 // One bit of the destuffed stream: 0, 1, or free (-1).
 using Layout = std::vector<int8_t>;
 
-void put(Layout& l, int value, int count) { l.insert(l.end(), count, static_cast<int8_t>(value)); }
+void put(Layout& l, int value, int count) {
+  l.insert(l.end(), count, static_cast<int8_t>(value));
+}
 
 struct Format {
   bool fd;
@@ -52,13 +54,13 @@ Layout layout_of(const Format& f) {
   put(l, 0, 1);    // SOF
   put(l, -1, 11);  // base identifier
   if (f.extended) {
-    put(l, 1, 2);    // SRR, IDE
-    put(l, -1, 18);  // extended identifier
-    put(l, 0, 1);    // RTR (data frame) / RRS
+    put(l, 1, 2);             // SRR, IDE
+    put(l, -1, 18);           // extended identifier
+    put(l, 0, 1);             // RTR (data frame) / RRS
     put(l, f.fd ? 1 : 0, 1);  // FDF (r1)
     put(l, 0, 1);             // r0 / res
   } else {
-    put(l, 0, 2);  // RTR / RRS, IDE
+    put(l, 0, 2);             // RTR / RRS, IDE
     put(l, f.fd ? 1 : 0, 1);  // FDF (r0)
     if (f.fd) {
       put(l, 0, 1);  // res
@@ -160,10 +162,10 @@ Optimum search(const Format& f, bool maximise) {
     if (cur[s] == kNone) {
       continue;
     }
-    const int tail = track_crc ? crc_tail_stuff(static_cast<uint32_t>(s >> 3),
-                                                static_cast<int>((s >> 2) & 1),
-                                                static_cast<int>(s & 3) + 1)
-                               : 0;
+    const int tail =
+        track_crc ? crc_tail_stuff(static_cast<uint32_t>(s >> 3), static_cast<int>((s >> 2) & 1),
+                                   static_cast<int>(s & 3) + 1)
+                  : 0;
     const int value = cur[s] + tail;
     if (!found || (maximise ? value > best_value : value < best_value)) {
       found = true;
@@ -225,7 +227,7 @@ struct Case {
   Format format;
   uint32_t kernel_min;  // with intermission
   uint32_t kernel_max;
-  uint32_t true_max;    // with intermission: what the search finds (docs/wire-model.md)
+  uint32_t true_max;  // with intermission: what the search finds (docs/wire-model.md)
 };
 
 class MaxStuffing : public ::testing::TestWithParam<Case> {};
@@ -238,9 +240,9 @@ TEST_P(MaxStuffing, LongestRealFrameIsFoundEncodedAndWithinTheKernelBound) {
   EXPECT_EQ(e.dynamic_stuff_bits, worst.stuff_bits);
   EXPECT_EQ(e.length + kIntermissionBits, c.true_max);
   EXPECT_LE(e.length + kIntermissionBits, c.kernel_max);
-  EXPECT_EQ(frame_length_bound(c.format.fd, c.format.extended, c.format.length,
-                               Stuffing::worst_case),
-            c.kernel_max);
+  EXPECT_EQ(
+      frame_length_bound(c.format.fd, c.format.extended, c.format.length, Stuffing::worst_case),
+      c.kernel_max);
 }
 
 TEST_P(MaxStuffing, ShortestRealFrameHasNoStuffBitAndMatchesTheKernelMinimum) {
@@ -255,15 +257,17 @@ TEST_P(MaxStuffing, ShortestRealFrameHasNoStuffBitAndMatchesTheKernelMinimum) {
             c.kernel_min);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    KernelTable, MaxStuffing,
-    ::testing::Values(Case{{false, false, 8}, 111, 135, 133}, Case{{false, true, 8}, 131, 160, 159},
-                      Case{{true, false, 64}, 579, 712, 710}, Case{{true, true, 64}, 598, 736, 733}),
-    [](const auto& param_info) {
-      const Format& f = param_info.param.format;
-      return std::string(f.fd ? "Fd" : "Classic") + (f.extended ? "Extended" : "Standard") +
-             std::to_string(f.length) + "Bytes";
-    });
+INSTANTIATE_TEST_SUITE_P(KernelTable, MaxStuffing,
+                         ::testing::Values(Case{{false, false, 8}, 111, 135, 133},
+                                           Case{{false, true, 8}, 131, 160, 159},
+                                           Case{{true, false, 64}, 579, 712, 710},
+                                           Case{{true, true, 64}, 598, 736, 733}),
+                         [](const auto& param_info) {
+                           const Format& f = param_info.param.format;
+                           return std::string(f.fd ? "Fd" : "Classic") +
+                                  (f.extended ? "Extended" : "Standard") +
+                                  std::to_string(f.length) + "Bytes";
+                         });
 
 }  // namespace
 }  // namespace canemu::model

@@ -26,8 +26,24 @@ std::vector<uint8_t> bytes(std::initializer_list<int> v) {
 TEST(WireEncoding, AllZeroStandardFrameIsTheHandCheckedSequence) {
   FrameSpec spec;
   const EncodedFrame e = encode(make(spec));
-  EXPECT_EQ(e.to_string(), "00000" "1" "00000" "1" "00000" "1" "00000" "1" "00000" "1" "00000" "1"
-                           "0000" "1" "1" "1" "1111111");
+  EXPECT_EQ(e.to_string(),
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "0000"
+            "1"
+            "1"
+            "1"
+            "1111111");
   EXPECT_EQ(e.crc, 0u);
   EXPECT_EQ(e.crc_bits, 15);
   EXPECT_EQ(e.dynamic_stuff_bits, 6);
@@ -73,8 +89,7 @@ std::vector<Golden> goldens() {
   s.id = 0x555;
   s.fd = true;
   s.brs = true;
-  add("555 9 000102030405060708090A0B fd brs", s,
-      bytes({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}),
+  add("555 9 000102030405060708090A0B fd brs", s, bytes({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}),
       "0101010101010010101001000001000001000001100000101000001001100000110000010010100000111000001"
       "011100001000001001001000010100000110110010100011001010011101110101111111111");
   s = {};
@@ -264,8 +279,8 @@ TEST(FrameDuration, ClassicFrameTakesItsBitsTimesTheBitTime) {
 TEST(FrameDuration, BitRateSwitchTimesBrsAndCrcDelimiterAtTheirSamplePoints) {
   // 500 kbit/s nominal: 80 MHz / 10 = 125 ns quanta, 1 + 13 + 2. 2 Mbit/s data: 12.5 ns quanta,
   // 1 + 29 + 10.
-  const BitTiming nominal = *vci::decode_btp({0, 500000, 14, 2, 1, 0}, vci::kFdNominalRange,
-                                             vci::Phase::nominal);
+  const BitTiming nominal =
+      *vci::decode_btp({0, 500000, 14, 2, 1, 0}, vci::kFdNominalRange, vci::Phase::nominal);
   const BitTiming data =
       *vci::decode_btp({0, 2000000, 30, 10, 1, 0}, vci::kFdDataRange, vci::Phase::data);
   FrameSpec s;

@@ -23,8 +23,7 @@ struct BitRate {
   constexpr double bps() const { return static_cast<double>(num) / static_cast<double>(den); }
   constexpr bool is_integral() const { return den != 0 && num % den == 0; }
   friend constexpr bool operator==(const BitRate& a, const BitRate& b) {
-    return static_cast<uint128>(a.num) * b.den ==
-           static_cast<uint128>(b.num) * a.den;
+    return static_cast<uint128>(a.num) * b.den == static_cast<uint128>(b.num) * a.den;
   }
 };
 
@@ -65,7 +64,7 @@ SimDuration quanta_duration(const BitTiming& a, uint64_t qa, const BitTiming& b,
 // switch) and its oscillator's deviation from nominal in parts per million.
 struct NodeTiming {
   BitTiming nominal;
-  BitTiming data;            // meaningful only when has_data_phase
+  BitTiming data;  // meaningful only when has_data_phase
   bool has_data_phase = false;
   int32_t oscillator_ppm = 0;
 };

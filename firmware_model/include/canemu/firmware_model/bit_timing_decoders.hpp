@@ -23,7 +23,8 @@ inline constexpr uint32_t kIxxatOscillatorHz = 16'000'000;
 // SJA1000 datasheet 6.5.1/6.5.2: BTR0 = SJW-1 [7:6] | BRP-1 [5:0]; BTR1 = SAM [7] |
 // TSEG2-1 [6:4] | TSEG1-1 [3:0]; tq = 2 * BRP / f_osc. Rules beyond the register widths:
 // 8..25 quanta per bit (ISO 11898-1), TSEG2 >= 2 (information processing time), SJW <= TSEG2.
-Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz = kIxxatOscillatorHz);
+Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1,
+                             uint32_t oscillator_hz = kIxxatOscillatorHz);
 
 }  // namespace sja1000
 
@@ -43,9 +44,9 @@ inline constexpr SorcusDevice kSlCani{"SL-CANi", 10'000'000, 100, 6400};
 // XCAN_BITPARAMS / SL-CANi EEPROM words 15..19.
 struct SorcusTiming {
   uint32_t tq_ns = 0;
-  uint32_t tseg1 = 0;  // t_SEG1 / t_Q, 3..16 (propagation included, as on the 82527)
-  uint32_t tseg2 = 0;  // t_SEG2 / t_Q, 2..8
-  uint32_t sjw = 0;    // t_SJW / t_Q, 1..4
+  uint32_t tseg1 = 0;    // t_SEG1 / t_Q, 3..16 (propagation included, as on the 82527)
+  uint32_t tseg2 = 0;    // t_SEG2 / t_Q, 2..8
+  uint32_t sjw = 0;      // t_SJW / t_Q, 1..4
   uint32_t samples = 1;  // 1 or 3
 };
 
@@ -82,10 +83,10 @@ enum class Phase { nominal, data };
 
 // Ranges of the emulated IXXAT CAN FD controller (80 MHz). Decision recorded in
 // docs/wire-model.md; the VCI device model reports them in CANCAPABILITIES2.
-inline constexpr BtpRange kFdNominalRange{80'000'000, {kBtModeRaw, 1, 1, 2, 1, 0},
-                                          {kBtModeRaw, 1024, 256, 128, 128, 0}};
-inline constexpr BtpRange kFdDataRange{80'000'000, {kBtModeRaw, 1, 1, 1, 1, 0},
-                                       {kBtModeRaw, 32, 32, 16, 16, 255}};
+inline constexpr BtpRange kFdNominalRange{
+    80'000'000, {kBtModeRaw, 1, 1, 2, 1, 0}, {kBtModeRaw, 1024, 256, 128, 128, 0}};
+inline constexpr BtpRange kFdDataRange{
+    80'000'000, {kBtModeRaw, 1, 1, 1, 1, 0}, {kBtModeRaw, 32, 32, 16, 16, 255}};
 
 // Decodes a CANBTP. The bit/s form is converted to the raw form the controller would be
 // programmed with (prescaler = clock / (bps * (ts1 + ts2)), which must be a whole number), and

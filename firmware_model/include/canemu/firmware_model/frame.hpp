@@ -24,7 +24,8 @@ inline constexpr uint8_t kMaxDlc = 15;
 // Payload length in bytes for a DLC (ISO 11898-1:2015 table 5). Classic frames treat DLC 9..15
 // as 8 bytes; CAN FD maps 9..15 to 12, 16, 20, 24, 32, 48, 64.
 constexpr std::size_t dlc_to_length(uint8_t dlc, bool fd) {
-  constexpr std::array<uint8_t, 16> kFdLengths{0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64};
+  constexpr std::array<uint8_t, 16> kFdLengths{0, 1,  2,  3,  4,  5,  6,  7,
+                                               8, 12, 16, 20, 24, 32, 48, 64};
   const uint8_t code = dlc & 0x0F;
   if (fd) {
     return kFdLengths[code];

@@ -29,18 +29,30 @@ class SimDuration {
   friend constexpr SimDuration operator-(SimDuration a, SimDuration b) {
     return SimDuration(a.ns_ - b.ns_);
   }
-  friend constexpr SimDuration operator*(SimDuration a, int64_t k) { return SimDuration(a.ns_ * k); }
-  friend constexpr SimDuration operator*(int64_t k, SimDuration a) { return SimDuration(a.ns_ * k); }
+  friend constexpr SimDuration operator*(SimDuration a, int64_t k) {
+    return SimDuration(a.ns_ * k);
+  }
+  friend constexpr SimDuration operator*(int64_t k, SimDuration a) {
+    return SimDuration(a.ns_ * k);
+  }
   friend constexpr auto operator<=>(SimDuration, SimDuration) = default;
 
  private:
   int64_t ns_ = 0;
 };
 
-constexpr SimDuration nanoseconds(int64_t n) { return SimDuration(n); }
-constexpr SimDuration microseconds(int64_t n) { return SimDuration(n * 1'000); }
-constexpr SimDuration milliseconds(int64_t n) { return SimDuration(n * 1'000'000); }
-constexpr SimDuration seconds(int64_t n) { return SimDuration(n * 1'000'000'000); }
+constexpr SimDuration nanoseconds(int64_t n) {
+  return SimDuration(n);
+}
+constexpr SimDuration microseconds(int64_t n) {
+  return SimDuration(n * 1'000);
+}
+constexpr SimDuration milliseconds(int64_t n) {
+  return SimDuration(n * 1'000'000);
+}
+constexpr SimDuration seconds(int64_t n) {
+  return SimDuration(n * 1'000'000'000);
+}
 
 class SimTime {
  public:
@@ -54,7 +66,9 @@ class SimTime {
   }
   friend constexpr SimTime operator+(SimTime t, SimDuration d) { return SimTime(t.ns_ + d.ns()); }
   friend constexpr SimTime operator-(SimTime t, SimDuration d) { return SimTime(t.ns_ - d.ns()); }
-  friend constexpr SimDuration operator-(SimTime a, SimTime b) { return SimDuration(a.ns_ - b.ns_); }
+  friend constexpr SimDuration operator-(SimTime a, SimTime b) {
+    return SimDuration(a.ns_ - b.ns_);
+  }
   friend constexpr auto operator<=>(SimTime, SimTime) = default;
 
  private:

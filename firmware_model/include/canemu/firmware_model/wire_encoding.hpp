@@ -67,8 +67,8 @@ struct EncodedFrame {
 
   // Bit i of the frame is bit 63 - i % 64 of word i / 64 (first bit in the most significant
   // position), so that whole fields move with shifts. Bits at and after `length` are unspecified.
-  Bits level{};  // 1 = recessive, 0 = dominant
-  Bits stuff{};  // 1 = stuff bit (dynamic or fixed)
+  Bits level{};         // 1 = recessive, 0 = dominant
+  Bits stuff{};         // 1 = stuff bit (dynamic or fixed)
   uint16_t length = 0;  // SOF through EOF
   uint16_t dynamic_stuff_bits = 0;
   uint16_t fixed_stuff_bits = 0;  // CAN FD CRC field only

@@ -46,7 +46,7 @@ format-check:
 	clang-format --dry-run --Werror $(SOURCES)
 
 run:
-	@echo "make run: canemud (the daemon) is not built yet; it arrives with its own issue." >&2
+	@echo "make run: canemud (the daemon) is not part of this build yet, so there is nothing to run." >&2
 	@echo "Until then, 'make test' builds and tests the firmware model." >&2
 	@exit 1
 

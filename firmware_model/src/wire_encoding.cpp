@@ -566,19 +566,30 @@ BitCounts bit_counts(const EncodedFrame& frame) {
   return BitCounts{frame.length - data, data};
 }
 
+SimDuration frame_prefix_duration(const EncodedFrame& frame, const BitTiming& nominal,
+                                  const BitTiming& data, uint32_t bits) {
+  if (!frame.brs || bits <= frame.brs_index) {
+    return nominal.bits_duration(bits);
+  }
+  // Nominal bits before BRS; BRS = nominal quanta up to its sample point, then data phase 2;
+  // data bits; CRC delimiter = data quanta up to its sample point, then nominal phase 2; nominal
+  // bits after it. A prefix ending inside the data phase ends on a whole data bit.
+  uint64_t nominal_quanta = uint64_t{frame.brs_index} * nominal.quanta_per_bit() +
+                            (1u + nominal.tseg1);
+  uint64_t data_quanta = data.tseg2;
+  const uint32_t data_end = std::min<uint32_t>(bits, frame.crc_delimiter_index);
+  data_quanta += uint64_t{data_end - frame.brs_index - 1u} * data.quanta_per_bit();
+  if (bits > frame.crc_delimiter_index) {
+    data_quanta += 1u + data.tseg1;
+    nominal_quanta += nominal.tseg2;
+    nominal_quanta += uint64_t{bits - frame.crc_delimiter_index - 1u} * nominal.quanta_per_bit();
+  }
+  return quanta_duration(nominal, nominal_quanta, data, data_quanta);
+}
+
 SimDuration frame_duration(const EncodedFrame& frame, const BitTiming& nominal,
                            const BitTiming& data) {
-  if (!frame.brs) {
-    return nominal.bits_duration(frame.length);
-  }
-  const BitCounts counts = bit_counts(frame);
-  // BRS: nominal quanta up to its sample point, then data phase 2. CRC delimiter: data quanta up
-  // to its sample point, then nominal phase 2.
-  const uint64_t nominal_quanta = uint64_t{counts.nominal - 2u} * nominal.quanta_per_bit() +
-                                  (1u + nominal.tseg1) + nominal.tseg2;
-  const uint64_t data_quanta =
-      uint64_t{counts.data} * data.quanta_per_bit() + data.tseg2 + (1u + data.tseg1);
-  return quanta_duration(nominal, nominal_quanta, data, data_quanta);
+  return frame_prefix_duration(frame, nominal, data, frame.length);
 }
 
 EncodedFrame encode(const Frame& frame) {

@@ -111,6 +111,11 @@ struct BitCounts {
 };
 BitCounts bit_counts(const EncodedFrame& frame);
 
+// Exact duration of the first `bits` bits of the frame (bits past its end count at the nominal
+// rate), rounded once to the nearest ns; the rate switches as in frame_duration().
+SimDuration frame_prefix_duration(const EncodedFrame& frame, const BitTiming& nominal,
+                                  const BitTiming& data, uint32_t bits);
+
 // Exact duration from SOF to the end of EOF, rounded once to the nearest ns. With bit-rate switch
 // the rate changes at the sample point of BRS (nominal -> data) and at the sample point of the
 // CRC delimiter (data -> nominal); `data` is used only then.

@@ -1,0 +1,99 @@
+// A minimal CAN controller for bus-engine tests: a transmit queue and a log of what the bus
+// reported, with its instants.
+#pragma once
+
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "canemu/firmware_model/bit_timing_decoders.hpp"
+#include "canemu/firmware_model/can_bus.hpp"
+
+namespace canemu::model::testing {
+
+inline BitTiming timing_500k() { return *sja1000::decode_btr(0x00, 0x1C); }
+inline BitTiming timing_250k() { return *sja1000::decode_btr(0x01, 0x1C); }
+
+inline Frame frame(uint32_t id, std::vector<uint8_t> data, bool extended = false) {
+  auto f = Frame::classic(id, data, extended);
+  return *f;
+}
+
+class TestController : public CanController {
+ public:
+  explicit TestController(BitTiming nominal = timing_500k()) { timing_.nominal = nominal; }
+
+  void attach_to(CanBus& bus) {
+    bus_ = &bus;
+    id_ = bus.attach(*this);
+  }
+  NodeId id() const { return id_; }
+
+  void send(const Frame& f, bool single_shot = false, bool self_reception = false) {
+    queue_.push_back(TxFrame{f, single_shot, self_reception});
+    if (queue_.size() == 1 && bus_ != nullptr) {
+      bus_->tx_changed(id_);
+    }
+  }
+
+  NodeTiming timing() const override { return timing_; }
+  bool participating() const override { return running; }
+  bool listen_only() const override { return listen; }
+  bool self_test() const override { return self_test_mode; }
+  bool fd_capable() const override { return fd; }
+  BusOffRecovery bus_off_recovery() const override { return recovery; }
+  const TxFrame* pending_tx() override { return queue_.empty() ? nullptr : &queue_.front(); }
+  FaultConfinement& confinement() override { return fc; }
+
+  void on_frame(SimTime at, const Frame& f, bool own) override {
+    received.push_back({at, f, own});
+  }
+  void on_tx_done(SimTime at) override {
+    sent.push_back({at, queue_.front().frame, false});
+    pop();
+  }
+  void on_tx_dropped(SimTime at) override {
+    dropped.push_back(at);
+    pop();
+  }
+  void on_arbitration_lost(SimTime at, uint16_t bit) override { lost.push_back({at, bit}); }
+  void on_error(const BusErrorEvent& e) override { errors.push_back(e); }
+  void on_state_change(SimTime at, ErrorState s) override { states.push_back({at, s}); }
+
+  struct Rx {
+    SimTime at;
+    Frame frame;
+    bool own;
+  };
+  struct Lost {
+    SimTime at;
+    uint16_t bit;
+  };
+  std::vector<Rx> received;
+  std::vector<Rx> sent;
+  std::vector<SimTime> dropped;
+  std::vector<Lost> lost;
+  std::vector<BusErrorEvent> errors;
+  std::vector<StateChange> states;
+
+  FaultConfinement fc;
+  NodeTiming timing_;
+  bool running = true;
+  bool listen = false;
+  bool self_test_mode = false;
+  bool fd = false;
+  BusOffRecovery recovery = BusOffRecovery::automatic;
+
+ private:
+  void pop() {
+    queue_.pop_front();
+    if (!queue_.empty()) {
+      bus_->tx_changed(id_);
+    }
+  }
+  CanBus* bus_ = nullptr;
+  NodeId id_ = 0;
+  std::deque<TxFrame> queue_;
+};
+
+}  // namespace canemu::model::testing

@@ -72,12 +72,12 @@ uint64_t& ErrorCounts::operator[](CanErrorType t) {
 struct CanBus::Participant {
   NodeId id = 0;
   bool transmitter = false;
-  bool drives = true;     // false for listen-only nodes
-  bool decodes = true;    // timing and format let it follow the frame
+  bool drives = true;   // false for listen-only nodes
+  bool decodes = true;  // timing and format let it follow the frame
   bool acks = false;
-  bool passive = false;   // error-passive when the activity started: its flags are recessive
+  bool passive = false;  // error-passive when the activity started: its flags are recessive
   bool self_test = false;
-  const EncodedFrame* bits = nullptr;  // what it sends (transmitters)
+  const EncodedFrame* bits = nullptr;                        // what it sends (transmitters)
   std::optional<std::pair<CanErrorType, uint16_t>> planned;  // detection it will make
 };
 
@@ -233,8 +233,8 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
       for (std::size_t w = 0; w < words; ++w) {
         const uint64_t d = e.level[w] & ~bus[w];
         if (d != 0) {
-          const uint32_t at = static_cast<uint32_t>(w * 64) +
-                              static_cast<uint32_t>(__builtin_clzll(d));
+          const uint32_t at =
+              static_cast<uint32_t>(w * 64) + static_cast<uint32_t>(__builtin_clzll(d));
           if (at < min_len) {
             diffs.emplace_back(id, at);
             first = std::min(first, at);
@@ -249,7 +249,8 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
     bool any_collision = false;
     std::vector<NodeId> still;
     for (NodeId id : active) {
-      const auto it = std::find_if(diffs.begin(), diffs.end(), [&](auto& p) { return p.first == id; });
+      const auto it =
+          std::find_if(diffs.begin(), diffs.end(), [&](auto& p) { return p.first == id; });
       if (it == diffs.end() || it->second != first) {
         still.push_back(id);
         continue;
@@ -275,7 +276,8 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
   const BitTiming& nominal = tx_timing.nominal;
   const BitTiming& data = tx_timing.has_data_phase ? tx_timing.data : tx_timing.nominal;
   auto bit_end = [&](uint32_t bit) {
-    return sof + with_ppm(frame_prefix_duration(e, nominal, data, bit + 1), tx_timing.oscillator_ppm);
+    return sof +
+           with_ppm(frame_prefix_duration(e, nominal, data, bit + 1), tx_timing.oscillator_ppm);
   };
 
   for (const auto& [id, bit] : lost) {
@@ -321,13 +323,15 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
       if (c != collisions.end()) {
         p.planned = std::make_pair(CanErrorType::bit, c->second);
       } else if (fault.error && *fault.error == CanErrorType::bit) {
-        p.planned = std::make_pair(CanErrorType::bit, place_injected(e, CanErrorType::bit, fault.bit));
+        p.planned =
+            std::make_pair(CanErrorType::bit, place_injected(e, CanErrorType::bit, fault.bit));
       }
     } else {
       const NodeTiming rx = timing_of(n);
       if (tx_frame.frame.fd() && !n.controller->fd_capable()) {
         p.decodes = false;
-        p.planned = std::make_pair(CanErrorType::form, static_cast<uint16_t>(e.field_begin(Field::fdf) + 1));
+        p.planned = std::make_pair(CanErrorType::form,
+                                   static_cast<uint16_t>(e.field_begin(Field::fdf) + 1));
       } else if (!check_compatibility(tx_timing, rx, tx_frame.frame.brs()).ok) {
         p.decodes = false;
         p.planned = std::make_pair(CanErrorType::stuff, e.arbitration_end);
@@ -361,8 +365,9 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
       first_bit = first_bit ? std::min(*first_bit, k) : k;
     }
   }
-  const bool self_test = std::any_of(parts.begin(), parts.end(),
-                                     [](const Participant& p) { return p.transmitter && p.self_test; });
+  const bool self_test = std::any_of(parts.begin(), parts.end(), [](const Participant& p) {
+    return p.transmitter && p.self_test;
+  });
   if (!any_ack && !self_test) {
     const uint16_t ack_slot = static_cast<uint16_t>(e.crc_delimiter_index + 1);
     first_bit = first_bit ? std::min(*first_bit, ack_slot) : ack_slot;
@@ -394,44 +399,43 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const std::vector<NodeId>& w
     on_bus_event(BusEvent{BusEvent::Kind::frame, sof, eof_end, tx, frame, 0});
   }
 
-  scheduler_.schedule_at(eof_end, [this, parts, winners, sent, frame, eof_end, ifs_end, nominal,
-                                   ppm](SimTime) {
-    for (std::size_t k = 0; k < winners.size(); ++k) {
-      const NodeId id = winners[k];
-      Node& n = nodes_[id];
-      FaultConfinement& fc = n.controller->confinement();
-      const bool was_passive = fc.error_passive();
-      fc.transmit_succeeded();
-      n.stats.frames_sent++;
-      n.encoded_valid = false;
-      // An error-passive transmitter waits 8 more bits after the intermission (suspend
-      // transmission) before it may start again.
-      n.ready_at = was_passive ? ifs_end + with_ppm(nominal.bits_duration(kSuspendBits), ppm)
-                               : ifs_end;
-      n.controller->on_tx_done(eof_end);
-      if (sent[k].self_reception) {
-        n.stats.frames_received++;
-        n.controller->on_frame(eof_end, sent[k].frame, true);
-      }
-      report_state(id, eof_end);
-    }
-    for (const Participant& p : parts) {
-      if (p.transmitter || !p.decodes) {
-        continue;
-      }
-      Node& n = nodes_[p.id];
-      if (p.acks) {
-        n.controller->confinement().receive_succeeded();
-      }
-      n.stats.frames_received++;
-      n.controller->on_frame(eof_end, frame, false);
-      report_state(p.id, eof_end);
-    }
-  });
+  scheduler_.schedule_at(
+      eof_end, [this, parts, winners, sent, frame, eof_end, ifs_end, nominal, ppm](SimTime) {
+        for (std::size_t k = 0; k < winners.size(); ++k) {
+          const NodeId id = winners[k];
+          Node& n = nodes_[id];
+          FaultConfinement& fc = n.controller->confinement();
+          const bool was_passive = fc.error_passive();
+          fc.transmit_succeeded();
+          n.stats.frames_sent++;
+          n.encoded_valid = false;
+          // An error-passive transmitter waits 8 more bits after the intermission (suspend
+          // transmission) before it may start again.
+          n.ready_at =
+              was_passive ? ifs_end + with_ppm(nominal.bits_duration(kSuspendBits), ppm) : ifs_end;
+          n.controller->on_tx_done(eof_end);
+          if (sent[k].self_reception) {
+            n.stats.frames_received++;
+            n.controller->on_frame(eof_end, sent[k].frame, true);
+          }
+          report_state(id, eof_end);
+        }
+        for (const Participant& p : parts) {
+          if (p.transmitter || !p.decodes) {
+            continue;
+          }
+          Node& n = nodes_[p.id];
+          if (p.acks) {
+            n.controller->confinement().receive_succeeded();
+          }
+          n.stats.frames_received++;
+          n.controller->on_frame(eof_end, frame, false);
+          report_state(p.id, eof_end);
+        }
+      });
   const SimTime last_dominant = ack_end - with_ppm(nominal.bits_duration(1), ppm);
-  scheduler_.schedule_at(ifs_end, [this, last_dominant, ifs_end](SimTime) {
-    bus_released(last_dominant, ifs_end);
-  });
+  scheduler_.schedule_at(
+      ifs_end, [this, last_dominant, ifs_end](SimTime) { bus_released(last_dominant, ifs_end); });
 }
 
 void CanBus::run_hold(SimTime now) {
@@ -498,10 +502,10 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
     Phase phase = Phase::frame;
     bool is_tx = false;
     uint32_t flag_start = 0;
-    uint32_t flag_end = 0;        // last bit of the flag
-    uint32_t equal_run = 0;       // passive flag: equal bits seen since the flag started
+    uint32_t flag_end = 0;   // last bit of the flag
+    uint32_t equal_run = 0;  // passive flag: equal bits seen since the flag started
     bool equal_level = true;
-    uint32_t dominant_run = 0;    // consecutive dominant bits (rule 6)
+    uint32_t dominant_run = 0;  // consecutive dominant bits (rule 6)
     uint32_t delimiter = 0;
     bool passive_ack_pending = false;  // ACK-error exception still possible
     bool validated = false;
@@ -523,6 +527,7 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
     uint16_t bit = 0;
     bool count = true;  // apply the counter change of the rule
     bool in_frame = true;
+    Field field = Field::sof;
   };
   std::vector<Action> actions;
 
@@ -562,10 +567,12 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
     s.dominant_run = 0;
     const bool passive_ack = s.is_tx && p.passive && type == CanErrorType::ack;
     s.passive_ack_pending = passive_ack;
+    const EncodedFrame* seen = s.is_tx && p.bits != nullptr ? p.bits : e;
     actions.push_back(Action{bit_end(i), p.id, Action::Kind::error, type,
                              s.is_tx ? ErrorRole::transmitter : ErrorRole::receiver,
                              static_cast<uint16_t>(i), count && p.drives && !passive_ack,
-                             e != nullptr});
+                             e != nullptr,
+                             seen != nullptr && i < seen->length ? seen->field_at(i) : Field::eof});
   };
 
   const uint32_t max_bits = 4096 + static_cast<uint32_t>(length);
@@ -641,7 +648,9 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
             // Valid for receivers at the last-but-one bit of EOF.
             if (p.decodes) {
               s.validated = true;
-              actions.push_back(Action{bit_end(i), p.id, Action::Kind::rx_ok});
+              // Rule 8 needs the ACK sent: a node that could not give it keeps its counter.
+              actions.push_back(Action{bit_end(i), p.id, Action::Kind::rx_ok, CanErrorType::bit,
+                                       ErrorRole::receiver, static_cast<uint16_t>(i), p.acks});
             }
             s.phase = Phase::done;
             s.done_at = i;
@@ -744,8 +753,12 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
   error_frames_on_bus_++;
   record_busy(sof, ifs_end);
   if (on_bus_event) {
-    BusEvent ev{e != nullptr ? BusEvent::Kind::error_frame : BusEvent::Kind::bus_held, sof, end,
-                0, std::nullopt, first_bit};
+    BusEvent ev{e != nullptr ? BusEvent::Kind::error_frame : BusEvent::Kind::bus_held,
+                sof,
+                end,
+                0,
+                std::nullopt,
+                first_bit};
     for (const auto& p : parts) {
       if (p.transmitter) {
         ev.transmitter = p.id;
@@ -773,7 +786,8 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
       switch (a.kind) {
         case Action::Kind::error: {
           if (a.count) {
-            a.role == ErrorRole::transmitter ? fc.transmitter_error() : fc.receiver_detected_error();
+            a.role == ErrorRole::transmitter ? fc.transmitter_error()
+                                             : fc.receiver_detected_error();
           }
           (a.role == ErrorRole::transmitter ? n.stats.errors_as_transmitter
                                             : n.stats.errors_as_receiver)[a.type]++;
@@ -783,9 +797,7 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
           ev.role = a.role;
           ev.bit = a.bit;
           ev.in_frame = a.in_frame && e_present;
-          ev.field = e_present && a.node < nodes_.size() && n.encoded_valid
-                         ? n.encoded.field_at(a.bit)
-                         : Field::sof;
+          ev.field = a.field;
           ev.tec = fc.tec();
           ev.rec = fc.rec();
           n.controller->on_error(ev);
@@ -806,7 +818,9 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
           n.controller->on_tx_done(now);
           break;
         case Action::Kind::rx_ok:
-          fc.receive_succeeded();
+          if (a.count) {
+            fc.receive_succeeded();
+          }
           if (frame) {
             n.stats.frames_received++;
             n.controller->on_frame(now, *frame, false);
@@ -843,9 +857,8 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
       }
     }
   });
-  scheduler_.schedule_at(ifs_end, [this, dominant_end, ifs_end](SimTime) {
-    bus_released(dominant_end, ifs_end);
-  });
+  scheduler_.schedule_at(
+      ifs_end, [this, dominant_end, ifs_end](SimTime) { bus_released(dominant_end, ifs_end); });
 }
 
 void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
@@ -875,7 +888,8 @@ void CanBus::account_recessive(SimTime dominant_start) {
     }
     const SimTime from = std::max(last_dominant_end_, n.recovery_from);
     if (dominant_start > from) {
-      const SimDuration bit = with_ppm(timing_of(n).nominal.bits_duration(1), timing_of(n).oscillator_ppm);
+      const SimDuration bit =
+          with_ppm(timing_of(n).nominal.bits_duration(1), timing_of(n).oscillator_ppm);
       const uint64_t bits = static_cast<uint64_t>((dominant_start - from).ns() / bit.ns());
       if (fc.recessive_sequences(static_cast<uint32_t>(bits / kRecoverySequenceBits))) {
         report_state(id, dominant_start);

@@ -574,8 +574,8 @@ SimDuration frame_prefix_duration(const EncodedFrame& frame, const BitTiming& no
   // Nominal bits before BRS; BRS = nominal quanta up to its sample point, then data phase 2;
   // data bits; CRC delimiter = data quanta up to its sample point, then nominal phase 2; nominal
   // bits after it. A prefix ending inside the data phase ends on a whole data bit.
-  uint64_t nominal_quanta = uint64_t{frame.brs_index} * nominal.quanta_per_bit() +
-                            (1u + nominal.tseg1);
+  uint64_t nominal_quanta =
+      uint64_t{frame.brs_index} * nominal.quanta_per_bit() + (1u + nominal.tseg1);
   uint64_t data_quanta = data.tseg2;
   const uint32_t data_end = std::min<uint32_t>(bits, frame.crc_delimiter_index);
   data_quanta += uint64_t{data_end - frame.brs_index - 1u} * data.quanta_per_bit();

@@ -11,8 +11,12 @@
 
 namespace canemu::model::testing {
 
-inline BitTiming timing_500k() { return *sja1000::decode_btr(0x00, 0x1C); }
-inline BitTiming timing_250k() { return *sja1000::decode_btr(0x01, 0x1C); }
+inline BitTiming timing_500k() {
+  return *sja1000::decode_btr(0x00, 0x1C);
+}
+inline BitTiming timing_250k() {
+  return *sja1000::decode_btr(0x01, 0x1C);
+}
 
 inline Frame frame(uint32_t id, std::vector<uint8_t> data, bool extended = false) {
   auto f = Frame::classic(id, data, extended);
@@ -45,9 +49,7 @@ class TestController : public CanController {
   const TxFrame* pending_tx() override { return queue_.empty() ? nullptr : &queue_.front(); }
   FaultConfinement& confinement() override { return fc; }
 
-  void on_frame(SimTime at, const Frame& f, bool own) override {
-    received.push_back({at, f, own});
-  }
+  void on_frame(SimTime at, const Frame& f, bool own) override { received.push_back({at, f, own}); }
   void on_tx_done(SimTime at) override {
     sent.push_back({at, queue_.front().frame, false});
     pop();

@@ -116,12 +116,12 @@ class CanBus {
     CanController* controller = nullptr;
     bool connected = true;
     int32_t oscillator_ppm = 0;
-    SimTime ready_at;          // suspend transmission of error-passive transmitters
+    SimTime ready_at;  // suspend transmission of error-passive transmitters
     bool encoded_valid = false;
     EncodedFrame encoded;
     ErrorState last_state = ErrorState::active;
     // Bus-off recovery bookkeeping.
-    SimTime recovery_from;     // recessive bits count from here
+    SimTime recovery_from;  // recessive bits count from here
     EventId recovery_event = 0;
     NodeStats stats;
   };
@@ -158,8 +158,8 @@ class CanBus {
 
   // Bus activity.
   bool busy_ = false;
-  SimTime free_at_;              // end of intermission of the last activity
-  SimTime last_dominant_end_;    // recessive run on the wire started here
+  SimTime free_at_;            // end of intermission of the last activity
+  SimTime last_dominant_end_;  // recessive run on the wire started here
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   std::vector<std::pair<SimTime, SimDuration>> holds_;  // pending dominant holds

@@ -23,7 +23,9 @@ class FaultConfinement {
   uint16_t tec() const { return tec_; }
   uint16_t rec() const { return rec_; }
   bool bus_off() const { return bus_off_; }
-  bool error_passive() const { return !bus_off_ && (tec_ >= kErrorPassiveLimit || rec_ >= kErrorPassiveLimit); }
+  bool error_passive() const {
+    return !bus_off_ && (tec_ >= kErrorPassiveLimit || rec_ >= kErrorPassiveLimit);
+  }
   ErrorState state() const;
 
   // The limit for the warning state (SJA1000 EWLR); 96 unless programmed.
@@ -41,7 +43,9 @@ class FaultConfinement {
   void transmitter_error() { add_tec(8); }
   // Rule 6: 14 consecutive dominant bits after an active error flag (8 after a passive one), and
   // each further 8: + 8 for every transmitter and every receiver.
-  void dominant_sequence(ErrorRole role) { role == ErrorRole::transmitter ? add_tec(8) : add_rec(8); }
+  void dominant_sequence(ErrorRole role) {
+    role == ErrorRole::transmitter ? add_tec(8) : add_rec(8);
+  }
   // Rule 7: successful transmission: TEC - 1.
   void transmit_succeeded() {
     if (tec_ > 0) {

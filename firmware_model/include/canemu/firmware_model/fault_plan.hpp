@@ -1,0 +1,57 @@
+// A rule-based FaultInjector: frame faults chosen by matching transmitter, identifier with mask,
+// format and occurrence. The scenario language of the daemon compiles into these rules; tests
+// use them directly.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "canemu/firmware_model/can_bus.hpp"
+
+namespace canemu::model {
+
+struct FrameMatch {
+  std::optional<NodeId> transmitter;
+  uint32_t id = 0;
+  uint32_t mask = 0;  // bits of the identifier that must equal `id`; 0 matches every frame
+  std::optional<bool> extended;
+  std::optional<bool> remote;
+
+  bool matches(NodeId tx, const Frame& frame) const {
+    return (!transmitter || *transmitter == tx) && ((frame.id() ^ id) & mask) == 0 &&
+           (!extended || *extended == frame.extended()) && (!remote || *remote == frame.remote());
+  }
+};
+
+struct FaultRule {
+  FrameMatch match;
+  FrameFault fault;
+  uint64_t skip = 0;                // matching frames to let through first (nth occurrence)
+  std::optional<uint64_t> count;    // matching frames to hit; none: every one
+  SimTime from;                     // window in simulated time
+  std::optional<SimTime> until;
+
+  uint64_t seen = 0;  // matching frames so far
+  uint64_t hits = 0;  // frames hit so far
+};
+
+class FaultPlan final : public FaultInjector {
+ public:
+  std::size_t add(FaultRule rule) {
+    rules_.push_back(rule);
+    return rules_.size() - 1;
+  }
+  const FaultRule& rule(std::size_t i) const { return rules_[i]; }
+  std::size_t size() const { return rules_.size(); }
+  void clear() { rules_.clear(); }
+
+  // The first rule that matches and still has hits left decides; every matching rule counts
+  // the frame as seen.
+  FrameFault on_frame(const FrameContext& ctx) override;
+
+ private:
+  std::vector<FaultRule> rules_;
+};
+
+}  // namespace canemu::model

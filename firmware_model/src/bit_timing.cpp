@@ -63,19 +63,35 @@ SimDuration quanta_duration(const BitTiming& a, uint64_t qa, const BitTiming& b,
   if (a.clock_hz == 0 || b.clock_hz == 0) {
     return SimDuration(0);
   }
+  if (qb == 0 && qa < (uint64_t{1} << 32) / a.prescaler) {
+    // One timing and a product that fits 64 bits (frames, intermissions): no 128-bit division.
+    const uint64_t quanta_ps = qa * a.prescaler;  // < 2^32, times 10^9 < 2^62
+    return SimDuration(
+        static_cast<int64_t>((quanta_ps * kNsPerSecond + a.clock_hz / 2) / a.clock_hz));
+  }
   // qa * pa / fa + qb * pb / fb seconds = (qa * pa * fb + qb * pb * fa) / (fa * fb).
   const u128 num = u128{qa} * a.prescaler * b.clock_hz + u128{qb} * b.prescaler * a.clock_hz;
   const u128 den = u128{a.clock_hz} * b.clock_hz;
   return SimDuration(static_cast<int64_t>((num * kNsPerSecond + den / 2) / den));
 }
 
-Compatibility check_compatibility(const NodeTiming& tx, const NodeTiming& rx,
+TimingProfile timing_profile(const NodeTiming& t) {
+  TimingProfile p;
+  p.rate = effective_rate(t.nominal, t.oscillator_ppm);
+  p.tolerance = 2.0 * t.nominal.oscillator_tolerance();
+  p.has_data_phase = t.has_data_phase;
+  if (t.has_data_phase) {
+    p.data_rate = effective_rate(t.data, t.oscillator_ppm);
+    p.data_tolerance = 2.0 * data_phase_tolerance(t.nominal, t.data);
+  }
+  return p;
+}
+
+Compatibility check_compatibility(const TimingProfile& tx, const TimingProfile& rx,
                                   bool bit_rate_switch) {
   Compatibility c;
-  const double f_tx = effective_rate(tx.nominal, tx.oscillator_ppm);
-  const double f_rx = effective_rate(rx.nominal, rx.oscillator_ppm);
-  c.mismatch = f_rx > 0 ? std::fabs(f_tx - f_rx) / f_rx : 1.0;
-  c.tolerance = 2.0 * rx.nominal.oscillator_tolerance();
+  c.mismatch = rx.rate > 0 ? std::fabs(tx.rate - rx.rate) / rx.rate : 1.0;
+  c.tolerance = rx.tolerance;
   c.ok = c.mismatch <= c.tolerance;
   if (!c.ok || !bit_rate_switch) {
     return c;
@@ -87,12 +103,15 @@ Compatibility check_compatibility(const NodeTiming& tx, const NodeTiming& rx,
     c.tolerance = 0.0;
     return c;
   }
-  const double d_tx = effective_rate(tx.data, tx.oscillator_ppm);
-  const double d_rx = effective_rate(rx.data, rx.oscillator_ppm);
-  c.mismatch = d_rx > 0 ? std::fabs(d_tx - d_rx) / d_rx : 1.0;
-  c.tolerance = 2.0 * data_phase_tolerance(rx.nominal, rx.data);
+  c.mismatch = rx.data_rate > 0 ? std::fabs(tx.data_rate - rx.data_rate) / rx.data_rate : 1.0;
+  c.tolerance = rx.data_tolerance;
   c.ok = c.mismatch <= c.tolerance;
   return c;
+}
+
+Compatibility check_compatibility(const NodeTiming& tx, const NodeTiming& rx,
+                                  bool bit_rate_switch) {
+  return check_compatibility(timing_profile(tx), timing_profile(rx), bit_rate_switch);
 }
 
 }  // namespace canemu::model

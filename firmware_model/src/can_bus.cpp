@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <tuple>
 
 namespace canemu::model {
 
@@ -84,11 +85,15 @@ struct CanBus::Participant {
 CanBus::CanBus(SimScheduler& scheduler, std::string name)
     : scheduler_(scheduler), name_(std::move(name)) {}
 
+CanBus::~CanBus() = default;
+
 NodeId CanBus::attach(CanController& controller) {
   Node n;
   n.controller = &controller;
-  n.last_state = controller.confinement().state();
+  n.fc = &controller.confinement();
+  n.last_state = n.fc->state();
   nodes_.push_back(std::move(n));
+  decodes_cache_.clear();
   const NodeId id = static_cast<NodeId>(nodes_.size() - 1);
   if (!busy_) {
     schedule_attempt(scheduler_.now());
@@ -102,25 +107,91 @@ NodeTiming CanBus::timing_of(const Node& n) const {
   return t;
 }
 
-bool CanBus::on_bus(const Node& n) const {
-  return n.connected && n.controller->participating() && !n.controller->confinement().bus_off();
+void CanBus::controller_changed(NodeId node) {
+  nodes_[node].props_known = false;
+  nodes_[node].timing_known = false;
+  decodes_cache_.clear();
+  if (!busy_) {
+    schedule_attempt(std::max(scheduler_.now(), free_at_));
+  }
 }
 
-bool CanBus::can_transmit(const Node& n) const {
-  return on_bus(n) && !n.controller->listen_only() && n.controller->pending_tx() != nullptr;
+CanBus::Node& CanBus::refresh(NodeId id) {
+  Node& n = nodes_[id];
+  if (!n.props_known) {
+    n.participating = n.controller->participating();
+    n.listen_only = n.controller->listen_only();
+    n.self_test = n.controller->self_test();
+    n.fd_capable = n.controller->fd_capable();
+    n.recovery = n.controller->bus_off_recovery();
+    n.props_known = true;
+  }
+  return n;
+}
+
+bool CanBus::decodes(NodeId tx, NodeId rx, bool brs) {
+  const std::size_t n = nodes_.size();
+  if (decodes_cache_.size() != 2 * n * n) {
+    decodes_cache_.assign(2 * n * n, -1);
+  }
+  int8_t& c = decodes_cache_[(brs ? n * n : 0) + tx * n + rx];
+  if (c < 0) {
+    c = check_compatibility(refresh_timing(tx).profile, refresh_timing(rx).profile, brs).ok ? 1 : 0;
+  }
+  return c == 1;
+}
+
+const CanBus::Node& CanBus::refresh_timing(NodeId id) {
+  Node& n = nodes_[id];
+  if (!n.timing_known) {
+    n.timing = timing_of(n);
+    n.profile = timing_profile(n.timing);
+    n.timing_known = true;
+  }
+  return n;
+}
+
+void CanBus::report_losses() {
+  for (const auto& [id, bit, at] : completion_.losses) {
+    Node& n = nodes_[id];
+    n.controller->on_arbitration_lost(at, bit);
+    const TxFrame* p = n.controller->pending_tx();
+    if (p != nullptr && p->single_shot) {
+      n.stats.tx_dropped++;
+      forget_tx(n);
+      n.controller->on_tx_dropped(at);
+    }
+  }
+  completion_.losses.clear();
+}
+
+bool CanBus::on_bus(const Node& n) const {
+  return n.connected && n.participating && !n.fc->bus_off();
+}
+
+const TxFrame* CanBus::pending(Node& n) {
+  if (!n.tx_known) {
+    n.tx = n.controller->pending_tx();
+    n.tx_known = true;
+  }
+  return n.tx;
+}
+
+bool CanBus::can_transmit(Node& n) {
+  return on_bus(n) && !n.listen_only && pending(n) != nullptr;
 }
 
 const EncodedFrame& CanBus::encoded_tx(NodeId id) {
   Node& n = nodes_[id];
   if (!n.encoded_valid) {
-    encode(n.controller->pending_tx()->frame, n.encoded);
+    encode(pending(n)->frame, n.encoded);
     n.encoded_valid = true;
   }
   return n.encoded;
 }
 
 void CanBus::tx_changed(NodeId node) {
-  nodes_[node].encoded_valid = false;
+  forget_tx(nodes_[node]);
   if (!busy_) {
     schedule_attempt(std::max(scheduler_.now(), free_at_));
   }
@@ -135,6 +206,12 @@ void CanBus::restart(NodeId node) {
   fc.begin_recovery();
   n.recovery_from = std::max(scheduler_.now(), busy_ ? free_at_ : scheduler_.now());
   arm_recovery(node);
+}
+
+void CanBus::set_oscillator_ppm(NodeId node, int32_t ppm) {
+  nodes_[node].oscillator_ppm = ppm;
+  nodes_[node].timing_known = false;
+  decodes_cache_.clear();
 }
 
 void CanBus::set_connected(NodeId node, bool connected) {
@@ -180,10 +257,11 @@ void CanBus::attempt(SimTime now) {
       return;
     }
   }
-  std::vector<NodeId> contenders;
+  std::vector<NodeId>& contenders = contenders_;
+  contenders.clear();
   std::optional<SimTime> next_ready;
   for (NodeId id = 0; id < nodes_.size(); ++id) {
-    const Node& n = nodes_[id];
+    Node& n = refresh(id);
     if (!can_transmit(n)) {
       continue;
     }
@@ -199,19 +277,21 @@ void CanBus::attempt(SimTime now) {
     }
     return;
   }
-  run_frame(now, std::move(contenders));
+  run_frame(now);
 }
 
-void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
+void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
   // Arbitration: wired-AND of every contender's bits; a contender sending recessive where the
   // bus is dominant loses (inside its arbitration field) or detects a bit error (after it).
-  std::vector<NodeId> active = contenders;
-  std::vector<std::pair<NodeId, uint16_t>> lost;
-  std::optional<std::pair<NodeId, uint16_t>> collision_first;
-  std::vector<std::pair<NodeId, uint16_t>> collisions;
+  std::vector<NodeId>& active = active_;
+  active = contenders_;
+  std::vector<std::pair<NodeId, uint16_t>>& lost = lost_;
+  lost.clear();
+  std::vector<std::pair<NodeId, uint16_t>>& collisions = collisions_;
+  collisions.clear();
   while (active.size() > 1) {
     uint32_t min_len = EncodedFrame::kCapacity;
     for (NodeId id : active) {
@@ -227,7 +307,8 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
       bus[w] = v;
     }
     uint32_t first = UINT32_MAX;
-    std::vector<std::pair<NodeId, uint32_t>> diffs;
+    std::vector<std::pair<NodeId, uint32_t>>& diffs = diffs_;
+    diffs.clear();
     for (NodeId id : active) {
       const EncodedFrame& e = encoded_tx(id);
       for (std::size_t w = 0; w < words; ++w) {
@@ -247,7 +328,8 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
       break;  // identical frames: every one of them is sent at once
     }
     bool any_collision = false;
-    std::vector<NodeId> still;
+    std::vector<NodeId>& still = still_;
+    still.clear();
     for (NodeId id : active) {
       const auto it =
           std::find_if(diffs.begin(), diffs.end(), [&](auto& p) { return p.first == id; });
@@ -263,16 +345,17 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
         still.push_back(id);
       }
     }
-    active = std::move(still);
+    active.swap(still);
     if (any_collision) {
       break;
     }
   }
 
   const NodeId tx = active.front();
-  const TxFrame tx_frame = *nodes_[tx].controller->pending_tx();
+  const TxFrame tx_frame = *pending(nodes_[tx]);
   const EncodedFrame& e = encoded_tx(tx);
-  const NodeTiming tx_timing = timing_of(nodes_[tx]);
+  const Node& tx_node = refresh_timing(tx);
+  const NodeTiming tx_timing = tx_node.timing;
   const BitTiming& nominal = tx_timing.nominal;
   const BitTiming& data = tx_timing.has_data_phase ? tx_timing.data : tx_timing.nominal;
   auto bit_end = [&](uint32_t bit) {
@@ -280,19 +363,10 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
            with_ppm(frame_prefix_duration(e, nominal, data, bit + 1), tx_timing.oscillator_ppm);
   };
 
+  completion_.losses.clear();
   for (const auto& [id, bit] : lost) {
-    const SimTime at = bit_end(bit);
+    completion_.losses.emplace_back(id, bit, bit_end(bit));
     nodes_[id].stats.arbitration_lost++;
-    scheduler_.schedule_at(at, [this, id = id, bit = bit](SimTime now) {
-      Node& n = nodes_[id];
-      n.controller->on_arbitration_lost(now, bit);
-      const TxFrame* p = n.controller->pending_tx();
-      if (p != nullptr && p->single_shot) {
-        n.stats.tx_dropped++;
-        n.encoded_valid = false;
-        n.controller->on_tx_dropped(now);
-      }
-    });
   }
 
   // Everybody on the bus takes part: the transmitters, and every other node as a receiver.
@@ -302,20 +376,21 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
   }
   const bool acks_suppressed = fault.suppress_ack || sof < ack_suppressed_until_ ||
                                (fault.error && *fault.error == CanErrorType::ack);
-  std::vector<Participant> parts;
+  std::vector<Participant>& parts = parts_;
+  parts.clear();
   bool any_ack = false;
   bool any_planned = !collisions.empty();
   for (NodeId id = 0; id < nodes_.size(); ++id) {
-    Node& n = nodes_[id];
+    Node& n = refresh(id);
     if (!on_bus(n)) {
       continue;
     }
     Participant p;
     p.id = id;
     p.transmitter = std::find(active.begin(), active.end(), id) != active.end();
-    p.drives = !n.controller->listen_only();
-    p.passive = n.controller->confinement().error_passive();
-    p.self_test = n.controller->self_test();
+    p.drives = !n.listen_only;
+    p.passive = n.fc->error_passive();
+    p.self_test = n.self_test;
     if (p.transmitter) {
       p.bits = &encoded_tx(id);
       const auto c = std::find_if(collisions.begin(), collisions.end(),
@@ -327,12 +402,11 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
             std::make_pair(CanErrorType::bit, place_injected(e, CanErrorType::bit, fault.bit));
       }
     } else {
-      const NodeTiming rx = timing_of(n);
-      if (tx_frame.frame.fd() && !n.controller->fd_capable()) {
+      if (tx_frame.frame.fd() && !n.fd_capable) {
         p.decodes = false;
         p.planned = std::make_pair(CanErrorType::form,
                                    static_cast<uint16_t>(e.field_begin(Field::fdf) + 1));
-      } else if (!check_compatibility(tx_timing, rx, tx_frame.frame.brs()).ok) {
+      } else if (!decodes(tx, id, tx_frame.frame.brs())) {
         p.decodes = false;
         p.planned = std::make_pair(CanErrorType::stuff, e.arbitration_end);
       } else if (fault.error && *fault.error != CanErrorType::bit &&
@@ -373,69 +447,80 @@ void CanBus::run_frame(SimTime sof, std::vector<NodeId> contenders) {
     first_bit = first_bit ? std::min(*first_bit, ack_slot) : ack_slot;
   }
   if (!first_bit && !any_planned) {
-    finish_success(sof, tx, active, parts, nominal, data);
+    finish_success(sof, tx, nominal, data);
     return;
+  }
+  if (!completion_.losses.empty()) {
+    SimTime latest = sof;
+    for (const auto& loss : completion_.losses) {
+      latest = std::max(latest, std::get<2>(loss));
+    }
+    scheduler_.schedule_at(latest, [this](SimTime) { report_losses(); });
   }
   run_error_phase(sof, parts, &e, nominal, data, first_bit.value_or(e.crc_delimiter_index));
 }
 
-void CanBus::finish_success(SimTime sof, NodeId tx, const std::vector<NodeId>& winners,
-                            const std::vector<Participant>& parts, const BitTiming& nominal,
+void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
                             const BitTiming& data) {
   const EncodedFrame& e = encoded_tx(tx);
-  const int32_t ppm = timing_of(nodes_[tx]).oscillator_ppm;
-  const SimTime eof_end = sof + with_ppm(frame_duration(e, nominal, data), ppm);
-  const SimTime ack_end =
-      sof + with_ppm(frame_prefix_duration(e, nominal, data, e.crc_delimiter_index + 2u), ppm);
-  const SimTime ifs_end = eof_end + with_ppm(intermission_duration(nominal), ppm);
-  const Frame frame = nodes_[tx].controller->pending_tx()->frame;
-  std::vector<TxFrame> sent;
-  for (NodeId id : winners) {
-    sent.push_back(*nodes_[id].controller->pending_tx());
+  Completion& c = completion_;
+  c.ppm = nodes_[tx].timing.oscillator_ppm;
+  c.nominal = nominal;
+  c.eof_end = sof + with_ppm(frame_duration(e, nominal, data), c.ppm);
+  // The last dominant bit is the ACK slot; then ACK delimiter, EOF and intermission.
+  c.ifs_end = c.eof_end + with_ppm(intermission_duration(nominal), c.ppm);
+  c.last_dominant_end = c.eof_end - with_ppm(nominal.bits_duration(1 + kEofBits), c.ppm);
+  c.frame = pending(nodes_[tx])->frame;
+  c.winners.assign(active_.begin(), active_.end());
+  c.sent.clear();
+  for (NodeId id : c.winners) {
+    c.sent.push_back(*pending(nodes_[id]));
   }
   frames_on_bus_++;
-  record_busy(sof, ifs_end);
+  record_busy(sof, c.ifs_end);
   if (on_bus_event) {
-    on_bus_event(BusEvent{BusEvent::Kind::frame, sof, eof_end, tx, frame, 0});
+    on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.frame, 0});
   }
+  scheduler_.schedule_at(c.eof_end, [this](SimTime now) { complete_success(now); });
+}
 
-  scheduler_.schedule_at(
-      eof_end, [this, parts, winners, sent, frame, eof_end, ifs_end, nominal, ppm](SimTime) {
-        for (std::size_t k = 0; k < winners.size(); ++k) {
-          const NodeId id = winners[k];
-          Node& n = nodes_[id];
-          FaultConfinement& fc = n.controller->confinement();
-          const bool was_passive = fc.error_passive();
-          fc.transmit_succeeded();
-          n.stats.frames_sent++;
-          n.encoded_valid = false;
-          // An error-passive transmitter waits 8 more bits after the intermission (suspend
-          // transmission) before it may start again.
-          n.ready_at =
-              was_passive ? ifs_end + with_ppm(nominal.bits_duration(kSuspendBits), ppm) : ifs_end;
-          n.controller->on_tx_done(eof_end);
-          if (sent[k].self_reception) {
-            n.stats.frames_received++;
-            n.controller->on_frame(eof_end, sent[k].frame, true);
-          }
-          report_state(id, eof_end);
-        }
-        for (const Participant& p : parts) {
-          if (p.transmitter || !p.decodes) {
-            continue;
-          }
-          Node& n = nodes_[p.id];
-          if (p.acks) {
-            n.controller->confinement().receive_succeeded();
-          }
-          n.stats.frames_received++;
-          n.controller->on_frame(eof_end, frame, false);
-          report_state(p.id, eof_end);
-        }
-      });
-  const SimTime last_dominant = ack_end - with_ppm(nominal.bits_duration(1), ppm);
-  scheduler_.schedule_at(
-      ifs_end, [this, last_dominant, ifs_end](SimTime) { bus_released(last_dominant, ifs_end); });
+void CanBus::complete_success(SimTime eof_end) {
+  Completion& c = completion_;
+  report_losses();
+  for (std::size_t k = 0; k < c.winners.size(); ++k) {
+    const NodeId id = c.winners[k];
+    Node& n = nodes_[id];
+    FaultConfinement& fc = *n.fc;
+    const bool was_passive = fc.error_passive();
+    fc.transmit_succeeded();
+    n.stats.frames_sent++;
+    forget_tx(n);
+    // An error-passive transmitter waits 8 more bits after the intermission (suspend
+    // transmission) before it may start again.
+    n.ready_at = was_passive ? c.ifs_end + with_ppm(c.nominal.bits_duration(kSuspendBits), c.ppm)
+                             : c.ifs_end;
+    n.controller->on_tx_done(eof_end);
+    if (c.sent[k].self_reception) {
+      n.stats.frames_received++;
+      n.controller->on_frame(eof_end, c.sent[k].frame, true);
+    }
+    report_state(id, eof_end);
+  }
+  for (const Participant& p : parts_) {
+    if (p.transmitter || !p.decodes) {
+      continue;
+    }
+    Node& n = nodes_[p.id];
+    if (p.acks && n.fc->rec() > 0) {
+      n.fc->receive_succeeded();
+      report_state(p.id, eof_end);
+    }
+    n.stats.frames_received++;
+    n.controller->on_frame(eof_end, c.frame, false);
+  }
+  scheduler_.schedule_at(c.ifs_end, [this](SimTime) {
+    bus_released(completion_.last_dominant_end, completion_.ifs_end);
+  });
 }
 
 void CanBus::run_hold(SimTime now) {
@@ -445,14 +530,14 @@ void CanBus::run_hold(SimTime now) {
   BitTiming nominal;
   bool have_timing = false;
   for (NodeId id = 0; id < nodes_.size(); ++id) {
-    Node& n = nodes_[id];
+    Node& n = refresh(id);
     if (!on_bus(n)) {
       continue;
     }
     Participant p;
     p.id = id;
-    p.drives = !n.controller->listen_only();
-    p.passive = n.controller->confinement().error_passive();
+    p.drives = !n.listen_only;
+    p.passive = n.fc->error_passive();
     parts.push_back(p);
     if (!have_timing) {
       nominal = timing_of(n).nominal;
@@ -814,7 +899,7 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
         case Action::Kind::tx_ok:
           fc.transmit_succeeded();
           n.stats.frames_sent++;
-          n.encoded_valid = false;
+          forget_tx(n);
           n.controller->on_tx_done(now);
           break;
         case Action::Kind::rx_ok:
@@ -852,7 +937,7 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
       const TxFrame* p = n.controller->pending_tx();
       if (p != nullptr && p->single_shot) {
         n.stats.tx_dropped++;
-        n.encoded_valid = false;
+        forget_tx(n);
         n.controller->on_tx_dropped(now);
       }
     }
@@ -866,11 +951,15 @@ void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
   free_at_ = idle_at;
   last_dominant_end_ = last_dominant_end;
   for (NodeId id = 0; id < nodes_.size(); ++id) {
-    if (nodes_[id].controller->confinement().recovering()) {
+    if (nodes_[id].fc->recovering()) {
       arm_recovery(id);
     }
   }
-  schedule_attempt(idle_at);
+  if (idle_at <= scheduler_.now() && !attempt_pending_) {
+    attempt(scheduler_.now());
+  } else {
+    schedule_attempt(idle_at);
+  }
 }
 
 // A dominant bit starts at `dominant_start`: every recovering node counts the sequences of 11
@@ -878,7 +967,7 @@ void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
 void CanBus::account_recessive(SimTime dominant_start) {
   for (NodeId id = 0; id < nodes_.size(); ++id) {
     Node& n = nodes_[id];
-    FaultConfinement& fc = n.controller->confinement();
+    FaultConfinement& fc = *n.fc;
     if (!fc.recovering()) {
       continue;
     }
@@ -944,7 +1033,12 @@ void CanBus::recovery_check(NodeId id, SimTime now) {
 
 void CanBus::report_state(NodeId id, SimTime at) {
   Node& n = nodes_[id];
-  FaultConfinement& fc = n.controller->confinement();
+  FaultConfinement& fc = *n.fc;
+  if (fc.tec() == n.reported_tec && fc.rec() == n.reported_rec && !fc.bus_off()) {
+    return;  // nothing counted since the last report
+  }
+  n.reported_tec = fc.tec();
+  n.reported_rec = fc.rec();
   const ErrorState s = fc.state();
   if (s == n.last_state) {
     return;
@@ -952,8 +1046,8 @@ void CanBus::report_state(NodeId id, SimTime at) {
   n.last_state = s;
   n.stats.state_changes.push_back(StateChange{at, s});
   if (s == ErrorState::bus_off) {
-    n.encoded_valid = false;
-    if (n.controller->bus_off_recovery() == BusOffRecovery::automatic) {
+    forget_tx(n);
+    if (refresh(id).recovery == BusOffRecovery::automatic) {
       fc.begin_recovery();
       n.recovery_from = at;
     }

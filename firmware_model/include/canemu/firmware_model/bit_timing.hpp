@@ -76,6 +76,19 @@ struct Compatibility {
   double tolerance = 0;     // 2 * df of the receiver for that phase
 };
 
+// The numbers compatibility depends on, computed once per timing: actual rates (with the
+// oscillator offset) and tolerances of both phases.
+struct TimingProfile {
+  double rate = 0;       // bit/s, nominal phase
+  double tolerance = 0;  // 2 * df, nominal phase
+  double data_rate = 0;
+  double data_tolerance = 0;
+  bool has_data_phase = false;
+};
+TimingProfile timing_profile(const NodeTiming& t);
+Compatibility check_compatibility(const TimingProfile& tx, const TimingProfile& rx,
+                                  bool bit_rate_switch);
+
 // Whether `rx` decodes what `tx` sends. The nominal rates must agree within the receiver's
 // tolerance; when `bit_rate_switch` is set, the data rates as well (and the receiver must have
 // a data phase). Sample points may differ: real nodes interoperate with different sample points.

@@ -14,6 +14,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "canemu/firmware_model/can_controller.hpp"
@@ -78,6 +79,7 @@ struct BusEvent {
 class CanBus {
  public:
   CanBus(SimScheduler& scheduler, std::string name);
+  ~CanBus();
   CanBus(const CanBus&) = delete;
   CanBus& operator=(const CanBus&) = delete;
 
@@ -88,6 +90,10 @@ class CanBus {
 
   // The controller has a new or changed pending_tx() (or wants to try again).
   void tx_changed(NodeId node);
+  // Something the bus asks the controller changed: timing(), participating(), listen_only(),
+  // self_test(), fd_capable() or bus_off_recovery(). The bus caches these and reads them again
+  // only after this call, so a controller must make it whenever one of them changes.
+  void controller_changed(NodeId node);
   // A controller with BusOffRecovery::on_restart was restarted: recovery counting begins.
   void restart(NodeId node);
 
@@ -96,7 +102,7 @@ class CanBus {
   // Transceiver unplugged (false) or back (true).
   void set_connected(NodeId node, bool connected);
   bool connected(NodeId node) const { return nodes_[node].connected; }
-  void set_oscillator_ppm(NodeId node, int32_t ppm) { nodes_[node].oscillator_ppm = ppm; }
+  void set_oscillator_ppm(NodeId node, int32_t ppm);
   // No node acknowledges anything from now until `until`.
   void suppress_acks_until(SimTime until) { ack_suppressed_until_ = until; }
   // The bus is held dominant from `from` for `duration` (a shorted or stuck transceiver).
@@ -114,12 +120,31 @@ class CanBus {
  private:
   struct Node {
     CanController* controller = nullptr;
+    FaultConfinement* fc = nullptr;  // the controller's counters (a stable reference)
+    // Cached controller properties, read again after controller_changed().
+    bool props_known = false;
+    bool participating = true;
+    bool listen_only = false;
+    bool self_test = false;
+    bool fd_capable = false;
+    BusOffRecovery recovery = BusOffRecovery::automatic;
     bool connected = true;
     int32_t oscillator_ppm = 0;
     SimTime ready_at;  // suspend transmission of error-passive transmitters
+    // pending_tx() and its encoding, cached until the controller reports a change or the bus
+    // finishes with the frame.
+    bool tx_known = false;
+    const TxFrame* tx = nullptr;
     bool encoded_valid = false;
     EncodedFrame encoded;
     ErrorState last_state = ErrorState::active;
+    // Timing as last seen (controller timing plus injected oscillator offset) and what follows
+    // from it; refreshed when it changes.
+    NodeTiming timing;
+    TimingProfile profile;
+    bool timing_known = false;
+    uint16_t reported_tec = 0;  // counters at the last state report
+    uint16_t reported_rec = 0;
     // Bus-off recovery bookkeeping.
     SimTime recovery_from;  // recessive bits count from here
     EventId recovery_event = 0;
@@ -128,17 +153,40 @@ class CanBus {
 
   struct Participant;  // a node's view during one frame (can_bus.cpp)
 
+  // The frame on the bus between its start and its completion.
+  struct Completion {
+    SimTime eof_end;
+    SimTime ifs_end;
+    SimTime last_dominant_end;
+    Frame frame = *Frame::classic(0, {});
+    BitTiming nominal;
+    int32_t ppm = 0;
+    std::vector<NodeId> winners;
+    std::vector<TxFrame> sent;
+    // Arbitration losses of this frame: node, bit, end of that bit. Reported at the end of the
+    // frame (or of its error frame), each with its own instant.
+    std::vector<std::tuple<NodeId, uint16_t, SimTime>> losses;
+  };
+
   NodeTiming timing_of(const Node& n) const;
-  bool can_transmit(const Node& n) const;
+  const Node& refresh_timing(NodeId id);
+  Node& refresh(NodeId id);
+  bool decodes(NodeId tx, NodeId rx, bool brs);
+  bool can_transmit(Node& n);
   bool on_bus(const Node& n) const;
   const EncodedFrame& encoded_tx(NodeId id);
+  const TxFrame* pending(Node& n);
+  static void forget_tx(Node& n) {
+    n.tx_known = false;
+    n.encoded_valid = false;
+  }
 
   void schedule_attempt(SimTime at);
   void attempt(SimTime now);
-  void run_frame(SimTime sof, std::vector<NodeId> contenders);
-  void finish_success(SimTime sof, NodeId tx, const std::vector<NodeId>& winners,
-                      const std::vector<Participant>& parts, const BitTiming& nominal,
-                      const BitTiming& data);
+  void run_frame(SimTime sof);
+  void finish_success(SimTime sof, NodeId tx, const BitTiming& nominal, const BitTiming& data);
+  void complete_success(SimTime eof_end);
+  void report_losses();
   void run_error_phase(SimTime sof, std::vector<Participant>& parts, const EncodedFrame* bits,
                        const BitTiming& nominal, const BitTiming& data, uint16_t first_bit);
   void run_hold(SimTime now);
@@ -163,6 +211,18 @@ class CanBus {
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   std::vector<std::pair<SimTime, SimDuration>> holds_;  // pending dominant holds
+
+  // Scratch space reused from frame to frame, and the frame in flight.
+  std::vector<NodeId> contenders_;
+  std::vector<NodeId> active_;
+  std::vector<NodeId> still_;
+  std::vector<std::pair<NodeId, uint16_t>> lost_;
+  std::vector<std::pair<NodeId, uint16_t>> collisions_;
+  std::vector<std::pair<NodeId, uint32_t>> diffs_;
+  std::vector<Participant> parts_;
+  Completion completion_;
+  // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
+  std::vector<int8_t> decodes_cache_;
 
   std::deque<std::pair<SimTime, SimTime>> busy_intervals_;
   uint64_t frames_on_bus_ = 0;

@@ -27,9 +27,9 @@ struct FrameMatch {
 struct FaultRule {
   FrameMatch match;
   FrameFault fault;
-  uint64_t skip = 0;                // matching frames to let through first (nth occurrence)
-  std::optional<uint64_t> count;    // matching frames to hit; none: every one
-  SimTime from;                     // window in simulated time
+  uint64_t skip = 0;              // matching frames to let through first (nth occurrence)
+  std::optional<uint64_t> count;  // matching frames to hit; none: every one
+  SimTime from;                   // window in simulated time
   std::optional<SimTime> until;
 
   uint64_t seen = 0;  // matching frames so far

@@ -20,7 +20,7 @@ tl::unexpected<ModelError> rule(std::string text) {
 
 namespace sja1000 {
 
-Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz) {
+BitTiming timing_from_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz) {
   BitTiming t;
   t.clock_hz = oscillator_hz;
   t.prescaler = 2u * ((btr0 & 0x3Fu) + 1u);
@@ -28,6 +28,11 @@ Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz)
   t.tseg1 = (btr1 & 0x0Fu) + 1u;
   t.tseg2 = ((btr1 >> 4) & 0x07u) + 1u;
   t.samples = (btr1 & 0x80u) ? 3 : 1;
+  return t;
+}
+
+Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz) {
+  const BitTiming t = timing_from_btr(btr0, btr1, oscillator_hz);
   const auto where = fmt::format("BTR0=0x{:02X} BTR1=0x{:02X}", btr0, btr1);
   if (t.quanta_per_bit() < 8) {
     return rule(fmt::format("{}: 1 + TSEG1 + TSEG2 = {} quanta, but a bit needs at least 8", where,

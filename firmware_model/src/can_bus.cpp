@@ -107,6 +107,10 @@ NodeTiming CanBus::timing_of(const Node& n) const {
   return t;
 }
 
+bool CanBus::in_flight(NodeId node) const {
+  return busy_ && std::find(in_flight_.begin(), in_flight_.end(), node) != in_flight_.end();
+}
+
 void CanBus::controller_changed(NodeId node) {
   nodes_[node].props_known = false;
   nodes_[node].timing_known = false;
@@ -352,6 +356,7 @@ void CanBus::run_frame(SimTime sof) {
   }
 
   const NodeId tx = active.front();
+  in_flight_.assign(active.begin(), active.end());
   const TxFrame tx_frame = *pending(nodes_[tx]);
   const EncodedFrame& e = encoded_tx(tx);
   const Node& tx_node = refresh_timing(tx);
@@ -525,6 +530,7 @@ void CanBus::complete_success(SimTime eof_end) {
 
 void CanBus::run_hold(SimTime now) {
   busy_ = true;
+  in_flight_.clear();
   account_recessive(now);
   std::vector<Participant> parts;
   BitTiming nominal;
@@ -613,6 +619,8 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
     bool count = true;  // apply the counter change of the rule
     bool in_frame = true;
     Field field = Field::sof;
+    uint16_t destuffed_bit = 0;
+    bool extended = false;
   };
   std::vector<Action> actions;
 
@@ -653,11 +661,13 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
     const bool passive_ack = s.is_tx && p.passive && type == CanErrorType::ack;
     s.passive_ack_pending = passive_ack;
     const EncodedFrame* seen = s.is_tx && p.bits != nullptr ? p.bits : e;
-    actions.push_back(Action{bit_end(i), p.id, Action::Kind::error, type,
-                             s.is_tx ? ErrorRole::transmitter : ErrorRole::receiver,
-                             static_cast<uint16_t>(i), count && p.drives && !passive_ack,
-                             e != nullptr,
-                             seen != nullptr && i < seen->length ? seen->field_at(i) : Field::eof});
+    const bool inside = seen != nullptr && i < seen->length;
+    actions.push_back(Action{
+        bit_end(i), p.id, Action::Kind::error, type,
+        s.is_tx ? ErrorRole::transmitter : ErrorRole::receiver, static_cast<uint16_t>(i),
+        count && p.drives && !passive_ack, e != nullptr, inside ? seen->field_at(i) : Field::eof,
+        inside ? seen->destuffed_index(static_cast<uint16_t>(i)) : static_cast<uint16_t>(i),
+        seen != nullptr && seen->field_begin(Field::srr) < seen->length});
   };
 
   const uint32_t max_bits = 4096 + static_cast<uint32_t>(length);
@@ -883,6 +893,8 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
           ev.bit = a.bit;
           ev.in_frame = a.in_frame && e_present;
           ev.field = a.field;
+          ev.destuffed_bit = a.destuffed_bit;
+          ev.extended_frame = a.extended;
           ev.tec = fc.tec();
           ev.rec = fc.rec();
           n.controller->on_error(ev);
@@ -948,6 +960,7 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
 
 void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
   busy_ = false;
+  in_flight_.clear();
   free_at_ = idle_at;
   last_dominant_end_ = last_dominant_end;
   for (NodeId id = 0; id < nodes_.size(); ++id) {

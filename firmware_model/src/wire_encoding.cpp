@@ -510,6 +510,17 @@ uint16_t EncodedFrame::stuffed_index(uint16_t destuffed) const {
   }
 }
 
+uint16_t EncodedFrame::destuffed_index(uint16_t i) const {
+  uint32_t n = 0;
+  for (uint32_t w = 0; w < i / 64u; ++w) {
+    n += count_ones(stuff[w]);
+  }
+  if (i % 64 != 0) {
+    n += count_ones(stuff[i / 64] >> (64 - i % 64));
+  }
+  return static_cast<uint16_t>(i - n);
+}
+
 uint16_t EncodedFrame::field_begin(Field field) const {
   for (uint8_t k = 0; k < field_count; ++k) {
     if (fields[k].field == field) {

@@ -26,6 +26,10 @@ inline constexpr uint32_t kIxxatOscillatorHz = 16'000'000;
 Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1,
                              uint32_t oscillator_hz = kIxxatOscillatorHz);
 
+// What the chip does with any register values, valid or not: the chip model runs with it, and
+// the bus decides whether anybody can decode such a node.
+BitTiming timing_from_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz = kIxxatOscillatorHz);
+
 }  // namespace sja1000
 
 namespace i82527 {

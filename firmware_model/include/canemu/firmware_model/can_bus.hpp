@@ -84,6 +84,10 @@ class CanBus {
   CanBus& operator=(const CanBus&) = delete;
 
   const std::string& name() const { return name_; }
+  SimTime now() const { return scheduler_.now(); }
+  // Whether `node`'s pending frame is on the wire right now (from its start of frame to the end
+  // of the frame or error frame).
+  bool in_flight(NodeId node) const;
 
   NodeId attach(CanController& controller);
   std::size_t node_count() const { return nodes_.size(); }
@@ -206,8 +210,9 @@ class CanBus {
 
   // Bus activity.
   bool busy_ = false;
-  SimTime free_at_;            // end of intermission of the last activity
-  SimTime last_dominant_end_;  // recessive run on the wire started here
+  std::vector<NodeId> in_flight_;  // transmitters of the current activity
+  SimTime free_at_;                // end of intermission of the last activity
+  SimTime last_dominant_end_;      // recessive run on the wire started here
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   std::vector<std::pair<SimTime, SimDuration>> holds_;  // pending dominant holds

@@ -35,8 +35,10 @@ struct BusErrorEvent {
   SimTime at;  // end of the bit where the error was detected
   CanErrorType type = CanErrorType::bit;
   ErrorRole role = ErrorRole::receiver;
-  uint16_t bit = 0;  // index in the frame (SOF = 0), as the detecting node saw it
+  uint16_t bit = 0;            // index in the frame (SOF = 0), as the detecting node saw it
+  uint16_t destuffed_bit = 0;  // the same position without stuff bits
   Field field = Field::sof;
+  bool extended_frame = false;
   bool in_frame = true;  // false when the bus was idle (e.g. held dominant)
   uint16_t tec = 0;      // counters after the error was counted
   uint16_t rec = 0;

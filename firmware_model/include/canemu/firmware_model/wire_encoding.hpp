@@ -92,6 +92,8 @@ struct EncodedFrame {
   Field field_at(std::size_t i) const;
   // Frame index of the `destuffed`-th bit of the dynamically stuffed part.
   uint16_t stuffed_index(uint16_t destuffed) const;
+  // The other way: bits before frame index `i` that are not stuff bits.
+  uint16_t destuffed_index(uint16_t i) const;
   // Bit index where `field` begins, or `length` if the frame has no such field.
   uint16_t field_begin(Field field) const;
   // The bits as '0' (dominant) and '1' (recessive), SOF first.

@@ -13,7 +13,9 @@ void Sja1000::connect(CanBus& bus) {
   node_ = bus.attach(*this);
 }
 
-SimTime Sja1000::now() const { return bus_ != nullptr ? bus_->now() : SimTime{}; }
+SimTime Sja1000::now() const {
+  return bus_ != nullptr ? bus_->now() : SimTime{};
+}
 
 NodeTiming Sja1000::timing() const {
   NodeTiming t;
@@ -104,7 +106,7 @@ uint8_t Sja1000::read(uint8_t address) {
   }
   if (address >= FRAME && address < FRAME + 13) {
     if (reset) {
-      return address < AMR0 ? acr_[address - ACR0]
+      return address < AMR0       ? acr_[address - ACR0]
              : address < AMR0 + 4 ? amr_[address - AMR0]
                                   : 0xFF;
     }

@@ -106,9 +106,9 @@ TEST(Sja1000, TwoChipsExchangeAFrameThroughTheirRegisters) {
   // Receiver: RI, one message, the PeliCAN layout in the receive window.
   EXPECT_EQ(r.chip.read(IR), IR_RI);
   EXPECT_EQ(r.chip.read(RMC), 1);
-  EXPECT_EQ(r.chip.read(FRAME), 0x02);          // SFF, no RTR, DLC 2
-  EXPECT_EQ(r.chip.read(FRAME + 1), 0x24);      // ID.28-21
-  EXPECT_EQ(r.chip.read(FRAME + 2), 0x60);      // ID.20-18, RTR 0
+  EXPECT_EQ(r.chip.read(FRAME), 0x02);      // SFF, no RTR, DLC 2
+  EXPECT_EQ(r.chip.read(FRAME + 1), 0x24);  // ID.28-21
+  EXPECT_EQ(r.chip.read(FRAME + 2), 0x60);  // ID.20-18, RTR 0
   EXPECT_EQ(r.chip.read(FRAME + 3), 0x11);
   EXPECT_EQ(r.receive(), f);
   EXPECT_EQ(r.chip.read(RMC), 0);

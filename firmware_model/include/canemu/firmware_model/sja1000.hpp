@@ -145,7 +145,9 @@ class Sja1000 final : public CanController {
   std::size_t fifo_used() const { return fifo_used_; }
   bool fifo_push(const Frame& frame);
   void fifo_release();
-  uint8_t fifo_byte(std::size_t offset) const { return fifo_[(rbsa_ + offset) % sja1000::kRxFifoBytes]; }
+  uint8_t fifo_byte(std::size_t offset) const {
+    return fifo_[(rbsa_ + offset) % sja1000::kRxFifoBytes];
+  }
 
   CanBus* bus_ = nullptr;
   NodeId node_ = 0;
@@ -167,9 +169,9 @@ class Sja1000 final : public CanController {
   std::array<uint8_t, 4> acr_{};
   std::array<uint8_t, 4> amr_{0xFF, 0xFF, 0xFF, 0xFF};
   std::array<uint8_t, 13> tx_buffer_{};
-  std::optional<TxFrame> tx_;       // the request being transmitted
-  bool tx_complete_ = true;         // TCS
-  bool data_overrun_ = false;       // DOS
+  std::optional<TxFrame> tx_;  // the request being transmitted
+  bool tx_complete_ = true;    // TCS
+  bool data_overrun_ = false;  // DOS
   ErrorState state_ = ErrorState::active;
 
   std::array<uint8_t, sja1000::kRxFifoBytes> fifo_{};

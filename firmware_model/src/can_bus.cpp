@@ -53,6 +53,22 @@ uint16_t place_injected(const EncodedFrame& e, CanErrorType type, std::optional<
 
 }  // namespace
 
+// First bit where two frames differ, within the shorter one.
+static std::optional<uint16_t> first_difference(const EncodedFrame& a, const EncodedFrame& b) {
+  const uint32_t len = std::min(a.length, b.length);
+  for (uint32_t w = 0; w * 64 < len; ++w) {
+    const uint64_t x = a.level[w] ^ b.level[w];
+    if (x != 0) {
+      const uint32_t at = w * 64 + static_cast<uint32_t>(__builtin_clzll(x));
+      if (at < len) {
+        return static_cast<uint16_t>(at);
+      }
+      return std::nullopt;
+    }
+  }
+  return std::nullopt;
+}
+
 uint64_t& ErrorCounts::operator[](CanErrorType t) {
   switch (t) {
     case CanErrorType::bit:
@@ -120,20 +136,16 @@ void CanBus::controller_changed(NodeId node) {
   }
 }
 
-CanBus::Node& CanBus::refresh(NodeId id) {
-  Node& n = nodes_[id];
-  if (!n.props_known) {
-    n.participating = n.controller->participating();
-    n.listen_only = n.controller->listen_only();
-    n.self_test = n.controller->self_test();
-    n.fd_capable = n.controller->fd_capable();
-    n.recovery = n.controller->bus_off_recovery();
-    n.props_known = true;
-  }
-  return n;
+void CanBus::load_props(Node& n) {
+  n.participating = n.controller->participating();
+  n.listen_only = n.controller->listen_only();
+  n.self_test = n.controller->self_test();
+  n.fd_capable = n.controller->fd_capable();
+  n.recovery = n.controller->bus_off_recovery();
+  n.props_known = true;
 }
 
-bool CanBus::decodes(NodeId tx, NodeId rx, bool brs) {
+bool CanBus::decodes_slow(NodeId tx, NodeId rx, bool brs) {
   const std::size_t n = nodes_.size();
   if (decodes_cache_.size() != 2 * n * n) {
     decodes_cache_.assign(2 * n * n, -1);
@@ -169,29 +181,14 @@ void CanBus::report_losses() {
   completion_.losses.clear();
 }
 
-bool CanBus::on_bus(const Node& n) const {
-  return n.connected && n.participating && !n.fc->bus_off();
+void CanBus::load_tx(Node& n) {
+  n.tx = n.controller->pending_tx();
+  n.tx_known = true;
 }
 
-const TxFrame* CanBus::pending(Node& n) {
-  if (!n.tx_known) {
-    n.tx = n.controller->pending_tx();
-    n.tx_known = true;
-  }
-  return n.tx;
-}
-
-bool CanBus::can_transmit(Node& n) {
-  return on_bus(n) && !n.listen_only && pending(n) != nullptr;
-}
-
-const EncodedFrame& CanBus::encoded_tx(NodeId id) {
-  Node& n = nodes_[id];
-  if (!n.encoded_valid) {
-    encode(pending(n)->frame, n.encoded);
-    n.encoded_valid = true;
-  }
-  return n.encoded;
+void CanBus::load_encoding(Node& n) {
+  encode(pending(n)->frame, n.encoded);
+  n.encoded_valid = true;
 }
 
 void CanBus::tx_changed(NodeId node) {
@@ -241,10 +238,24 @@ void CanBus::schedule_attempt(SimTime at) {
     return;
   }
   attempt_pending_ = true;
-  attempt_event_ = scheduler_.schedule_at(at, [this](SimTime now) {
-    attempt_pending_ = false;
-    attempt(now);
-  });
+  attempt_event_ = scheduler_.schedule_at(at, *this, kAttempt);
+}
+
+void CanBus::on_event(SimTime now, uint64_t tag) {
+  switch (tag) {
+    case kAttempt:
+      attempt_pending_ = false;
+      attempt(now);
+      break;
+    case kFrameEnd:
+      complete_success(now);
+      break;
+    case kBusFree:
+      bus_released(completion_.last_dominant_end, completion_.ifs_end);
+      break;
+    default:
+      break;
+  }
 }
 
 void CanBus::attempt(SimTime now) {
@@ -288,70 +299,41 @@ void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
-  // Arbitration: wired-AND of every contender's bits; a contender sending recessive where the
-  // bus is dominant loses (inside its arbitration field) or detects a bit error (after it).
+  // Arbitration. The wired-AND makes the bus carry the lexicographically smallest of the
+  // contenders' bit sequences (dominant, 0, wins every comparison), so each contender drops out
+  // at its first difference from the winner's: inside its arbitration field that is a lost
+  // arbitration, after it a collision (a bit error, which the error simulation plays out).
   std::vector<NodeId>& active = active_;
-  active = contenders_;
   std::vector<std::pair<NodeId, uint16_t>>& lost = lost_;
-  lost.clear();
   std::vector<std::pair<NodeId, uint16_t>>& collisions = collisions_;
+  active.clear();
+  lost.clear();
   collisions.clear();
-  while (active.size() > 1) {
-    uint32_t min_len = EncodedFrame::kCapacity;
-    for (NodeId id : active) {
-      min_len = std::min<uint32_t>(min_len, encoded_tx(id).length);
+  NodeId winner = contenders_.front();
+  const EncodedFrame* best = &encoded_tx(winner);
+  for (std::size_t k = 1; k < contenders_.size(); ++k) {
+    const NodeId c = contenders_[k];
+    const EncodedFrame& ec = encoded_tx(c);
+    const auto d = first_difference(ec, *best);
+    if (d && !ec.level_at(*d)) {
+      winner = c;
+      best = &ec;
     }
-    const std::size_t words = (min_len + 63) / 64;
-    EncodedFrame::Bits bus;
-    for (std::size_t w = 0; w < words; ++w) {
-      uint64_t v = ~uint64_t{0};
-      for (NodeId id : active) {
-        v &= encoded_tx(id).level[w];
-      }
-      bus[w] = v;
+  }
+  active.push_back(winner);
+  for (NodeId c : contenders_) {
+    if (c == winner) {
+      continue;
     }
-    uint32_t first = UINT32_MAX;
-    std::vector<std::pair<NodeId, uint32_t>>& diffs = diffs_;
-    diffs.clear();
-    for (NodeId id : active) {
-      const EncodedFrame& e = encoded_tx(id);
-      for (std::size_t w = 0; w < words; ++w) {
-        const uint64_t d = e.level[w] & ~bus[w];
-        if (d != 0) {
-          const uint32_t at =
-              static_cast<uint32_t>(w * 64) + static_cast<uint32_t>(__builtin_clzll(d));
-          if (at < min_len) {
-            diffs.emplace_back(id, at);
-            first = std::min(first, at);
-          }
-          break;
-        }
-      }
-    }
-    if (first == UINT32_MAX) {
-      break;  // identical frames: every one of them is sent at once
-    }
-    bool any_collision = false;
-    std::vector<NodeId>& still = still_;
-    still.clear();
-    for (NodeId id : active) {
-      const auto it =
-          std::find_if(diffs.begin(), diffs.end(), [&](auto& p) { return p.first == id; });
-      if (it == diffs.end() || it->second != first) {
-        still.push_back(id);
-        continue;
-      }
-      if (first < encoded_tx(id).arbitration_end) {
-        lost.emplace_back(id, static_cast<uint16_t>(first));
-      } else {
-        collisions.emplace_back(id, static_cast<uint16_t>(first));
-        any_collision = true;
-        still.push_back(id);
-      }
-    }
-    active.swap(still);
-    if (any_collision) {
-      break;
+    const EncodedFrame& ec = encoded_tx(c);
+    const auto d = first_difference(ec, *best);
+    if (!d) {
+      active.push_back(c);  // the same frame: sent together
+    } else if (*d < ec.arbitration_end) {
+      lost.emplace_back(c, *d);
+    } else {
+      active.push_back(c);
+      collisions.emplace_back(c, *d);
     }
   }
 
@@ -486,7 +468,7 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
   if (on_bus_event) {
     on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.frame, 0});
   }
-  scheduler_.schedule_at(c.eof_end, [this](SimTime now) { complete_success(now); });
+  scheduler_.schedule_at(c.eof_end, *this, kFrameEnd);
 }
 
 void CanBus::complete_success(SimTime eof_end) {
@@ -523,9 +505,7 @@ void CanBus::complete_success(SimTime eof_end) {
     n.stats.frames_received++;
     n.controller->on_frame(eof_end, c.frame, false);
   }
-  scheduler_.schedule_at(c.ifs_end, [this](SimTime) {
-    bus_released(completion_.last_dominant_end, completion_.ifs_end);
-  });
+  scheduler_.schedule_at(c.ifs_end, *this, kBusFree);
 }
 
 void CanBus::run_hold(SimTime now) {

@@ -5,7 +5,32 @@
 namespace canemu::model {
 
 EventId SimScheduler::schedule_at(SimTime at, Action action) {
-  return queue_.push(std::max(at, now_), std::move(action));
+  std::size_t slot;
+  if (!free_slots_.empty()) {
+    slot = free_slots_.back();
+    free_slots_.pop_back();
+    actions_[slot] = std::move(action);
+  } else {
+    slot = actions_.size();
+    actions_.push_back(std::move(action));
+  }
+  return queue_.push(std::max(at, now_), Target{nullptr, slot});
+}
+
+EventId SimScheduler::schedule_at(SimTime at, EventHandler& handler, uint64_t tag) {
+  return queue_.push(std::max(at, now_), Target{&handler, tag});
+}
+
+bool SimScheduler::cancel(EventId id) {
+  const Target* t = queue_.find(id);
+  if (t == nullptr) {
+    return false;
+  }
+  if (t->handler == nullptr) {
+    actions_[t->tag] = nullptr;
+    free_slots_.push_back(t->tag);
+  }
+  return queue_.cancel(id);
 }
 
 std::size_t SimScheduler::run_until(SimTime limit) {
@@ -18,7 +43,15 @@ std::size_t SimScheduler::run_until(SimTime limit) {
     }
     auto entry = queue_.pop();
     now_ = std::max(now_, entry->time);
-    entry->payload(now_);
+    const Target t = entry->payload;
+    if (t.handler != nullptr) {
+      t.handler->on_event(now_, t.tag);
+    } else {
+      Action action = std::move(actions_[t.tag]);
+      actions_[t.tag] = nullptr;
+      free_slots_.push_back(t.tag);
+      action(now_);
+    }
     ++ran;
   }
   now_ = limit;

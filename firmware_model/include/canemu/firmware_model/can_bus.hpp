@@ -76,7 +76,7 @@ struct BusEvent {
   uint16_t error_bit = 0;  // first detection
 };
 
-class CanBus {
+class CanBus final : private EventHandler {
  public:
   CanBus(SimScheduler& scheduler, std::string name);
   ~CanBus();
@@ -157,6 +157,10 @@ class CanBus {
 
   struct Participant;  // a node's view during one frame (can_bus.cpp)
 
+  // Events the bus schedules on itself, by tag.
+  enum EventTag : uint64_t { kAttempt = 1, kFrameEnd = 2, kBusFree = 3 };
+  void on_event(SimTime now, uint64_t tag) override;
+
   // The frame on the bus between its start and its completion.
   struct Completion {
     SimTime eof_end;
@@ -174,12 +178,44 @@ class CanBus {
 
   NodeTiming timing_of(const Node& n) const;
   const Node& refresh_timing(NodeId id);
-  Node& refresh(NodeId id);
-  bool decodes(NodeId tx, NodeId rx, bool brs);
-  bool can_transmit(Node& n);
-  bool on_bus(const Node& n) const;
-  const EncodedFrame& encoded_tx(NodeId id);
-  const TxFrame* pending(Node& n);
+  // Cached controller state, loaded on first use after a change (fast paths inline).
+  Node& refresh(NodeId id) {
+    Node& n = nodes_[id];
+    if (!n.props_known) {
+      load_props(n);
+    }
+    return n;
+  }
+  const TxFrame* pending(Node& n) {
+    if (!n.tx_known) {
+      load_tx(n);
+    }
+    return n.tx;
+  }
+  const EncodedFrame& encoded_tx(NodeId id) {
+    Node& n = nodes_[id];
+    if (!n.encoded_valid) {
+      load_encoding(n);
+    }
+    return n.encoded;
+  }
+  bool on_bus(const Node& n) const { return n.connected && n.participating && !n.fc->bus_off(); }
+  bool can_transmit(Node& n) { return on_bus(n) && !n.listen_only && pending(n) != nullptr; }
+  bool decodes(NodeId tx, NodeId rx, bool brs) {
+    const std::size_t n = nodes_.size();
+    if (decodes_cache_.size() == 2 * n * n) {
+      const int8_t c = decodes_cache_[(brs ? n * n : 0) + tx * n + rx];
+      if (c >= 0) {
+        return c == 1;
+      }
+    }
+    return decodes_slow(tx, rx, brs);
+  }
+  void load_props(Node& n);
+  void load_tx(Node& n);
+  void load_encoding(Node& n);
+  bool decodes_slow(NodeId tx, NodeId rx, bool brs);
+
   static void forget_tx(Node& n) {
     n.tx_known = false;
     n.encoded_valid = false;
@@ -220,10 +256,8 @@ class CanBus {
   // Scratch space reused from frame to frame, and the frame in flight.
   std::vector<NodeId> contenders_;
   std::vector<NodeId> active_;
-  std::vector<NodeId> still_;
   std::vector<std::pair<NodeId, uint16_t>> lost_;
   std::vector<std::pair<NodeId, uint16_t>> collisions_;
-  std::vector<std::pair<NodeId, uint32_t>> diffs_;
   std::vector<Participant> parts_;
   Completion completion_;
   // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.

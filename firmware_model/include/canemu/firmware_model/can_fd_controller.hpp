@@ -20,10 +20,10 @@ namespace canemu::model {
 
 struct CanFdConfig {
   BitTiming nominal;
-  BitTiming data;             // used for frames with BRS
-  bool fd_enabled = true;     // false: behaves as a classic controller (form errors on FD frames)
+  BitTiming data;          // used for frames with BRS
+  bool fd_enabled = true;  // false: behaves as a classic controller (form errors on FD frames)
   bool listen_only = false;
-  bool self_test = false;     // transmissions need no ACK
+  bool self_test = false;        // transmissions need no ACK
   std::size_t rx_capacity = 64;  // frames
   std::size_t tx_capacity = 16;  // frames
   BusOffRecovery recovery = BusOffRecovery::automatic;

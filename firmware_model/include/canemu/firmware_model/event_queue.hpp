@@ -50,6 +50,16 @@ class EventQueue {
     return false;
   }
 
+  // The payload of a pending event, or nullptr.
+  const Payload* find(EventId id) const {
+    for (const Entry& e : heap_) {
+      if (e.id == id && !e.cancelled) {
+        return &e.payload;
+      }
+    }
+    return nullptr;
+  }
+
   bool empty() const { return live_ == 0; }
   std::size_t size() const { return live_; }
 

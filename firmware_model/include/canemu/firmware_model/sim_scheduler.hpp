@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <functional>
 #include <optional>
+#include <vector>
 
 #include "canemu/firmware_model/event_queue.hpp"
 #include "canemu/firmware_model/sim_time.hpp"
@@ -43,6 +44,16 @@ class SteppedClock final : public ClockSource {
   SimTime now_;
 };
 
+// A long-lived object that receives events by tag: the cheap way to schedule the events that
+// recur all the time (a bus's end of frame), without a std::function per event.
+class EventHandler {
+ public:
+  virtual void on_event(SimTime now, uint64_t tag) = 0;
+
+ protected:
+  ~EventHandler() = default;
+};
+
 class SimScheduler {
  public:
   using Action = std::function<void(SimTime)>;
@@ -51,10 +62,12 @@ class SimScheduler {
 
   // Schedules `action` at `at`; an instant in the past runs at the next run_until(), at now().
   EventId schedule_at(SimTime at, Action action);
+  // Schedules handler.on_event(now, tag) at `at`. The handler must outlive the event.
+  EventId schedule_at(SimTime at, EventHandler& handler, uint64_t tag);
   EventId schedule_after(SimDuration delay, Action action) {
     return schedule_at(now_ + delay, std::move(action));
   }
-  bool cancel(EventId id) { return queue_.cancel(id); }
+  bool cancel(EventId id);
 
   std::optional<SimTime> next_event_time() { return queue_.next_time(); }
   std::size_t pending() const { return queue_.size(); }
@@ -64,7 +77,15 @@ class SimScheduler {
   std::size_t run_until(SimTime limit);
 
  private:
-  EventQueue<Action> queue_;
+  // Heap entries stay small: a handler and a tag, or an index into the slots of std::function
+  // actions.
+  struct Target {
+    EventHandler* handler = nullptr;
+    uint64_t tag = 0;  // handler's tag, or the action's slot
+  };
+  EventQueue<Target> queue_;
+  std::vector<Action> actions_;
+  std::vector<std::size_t> free_slots_;
   SimTime now_;
 };
 

@@ -63,7 +63,7 @@ SimDuration quanta_duration(const BitTiming& a, uint64_t qa, const BitTiming& b,
   if (a.clock_hz == 0 || b.clock_hz == 0) {
     return SimDuration(0);
   }
-  if (qb == 0 && qa < (uint64_t{1} << 32) / a.prescaler) {
+  if (qb == 0 && qa < (uint64_t{1} << 32) && qa * a.prescaler < (uint64_t{1} << 32)) {
     // One timing and a product that fits 64 bits (frames, intermissions): no 128-bit division.
     const uint64_t quanta_ps = qa * a.prescaler;  // < 2^32, times 10^9 < 2^62
     return SimDuration(

@@ -162,6 +162,11 @@ const CanBus::Node& CanBus::refresh_timing(NodeId id) {
   if (!n.timing_known) {
     n.timing = timing_of(n);
     n.profile = timing_profile(n.timing);
+    const BitTiming& t = n.timing.nominal;
+    const uint128 ps = uint128{t.prescaler} * t.quanta_per_bit() * 1'000'000'000u;
+    n.bit_ns = n.timing.oscillator_ppm == 0 && t.clock_hz != 0 && ps % t.clock_hz == 0
+                   ? static_cast<int64_t>(ps / t.clock_hz)
+                   : 0;
     n.timing_known = true;
   }
   return n;
@@ -314,8 +319,13 @@ void CanBus::run_frame(SimTime sof) {
   for (std::size_t k = 1; k < contenders_.size(); ++k) {
     const NodeId c = contenders_[k];
     const EncodedFrame& ec = encoded_tx(c);
-    const auto d = first_difference(ec, *best);
-    if (d && !ec.level_at(*d)) {
+    // First bit first: comparing words as numbers is comparing bit sequences. (Bits past the
+    // end of a frame only count when two frames are equal up to there, that is, identical.)
+    std::size_t w = 0;
+    while (w + 1 < ec.level.size() && ec.level[w] == best->level[w]) {
+      ++w;
+    }
+    if (ec.level[w] < best->level[w]) {
       winner = c;
       best = &ec;
     }
@@ -345,7 +355,11 @@ void CanBus::run_frame(SimTime sof) {
   const NodeTiming tx_timing = tx_node.timing;
   const BitTiming& nominal = tx_timing.nominal;
   const BitTiming& data = tx_timing.has_data_phase ? tx_timing.data : tx_timing.nominal;
+  const int64_t tx_bit_ns = tx_node.bit_ns;
   auto bit_end = [&](uint32_t bit) {
+    if (tx_bit_ns != 0 && (!e.brs || bit < e.brs_index)) {
+      return sof + SimDuration(tx_bit_ns * (int64_t{bit} + 1));
+    }
     return sof +
            with_ppm(frame_prefix_duration(e, nominal, data, bit + 1), tx_timing.oscillator_ppm);
   };
@@ -364,7 +378,8 @@ void CanBus::run_frame(SimTime sof) {
   const bool acks_suppressed = fault.suppress_ack || sof < ack_suppressed_until_ ||
                                (fault.error && *fault.error == CanErrorType::ack);
   std::vector<Participant>& parts = parts_;
-  parts.clear();
+  parts.resize(nodes_.size());
+  std::size_t count = 0;
   bool any_ack = false;
   bool any_planned = !collisions.empty();
   for (NodeId id = 0; id < nodes_.size(); ++id) {
@@ -372,7 +387,8 @@ void CanBus::run_frame(SimTime sof) {
     if (!on_bus(n)) {
       continue;
     }
-    Participant p;
+    Participant& p = parts[count++];
+    p = Participant{};
     p.id = id;
     p.transmitter = std::find(active.begin(), active.end(), id) != active.end();
     p.drives = !n.listen_only;
@@ -405,8 +421,8 @@ void CanBus::run_frame(SimTime sof) {
       any_ack = any_ack || p.acks;
     }
     any_planned = any_planned || p.planned.has_value();
-    parts.push_back(p);
   }
+  parts.resize(count);
 
   // A dominant hold that overlaps the frame disturbs it.
   std::optional<uint16_t> first_bit;
@@ -453,10 +469,17 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
   Completion& c = completion_;
   c.ppm = nodes_[tx].timing.oscillator_ppm;
   c.nominal = nominal;
-  c.eof_end = sof + with_ppm(frame_duration(e, nominal, data), c.ppm);
-  // The last dominant bit is the ACK slot; then ACK delimiter, EOF and intermission.
-  c.ifs_end = c.eof_end + with_ppm(intermission_duration(nominal), c.ppm);
-  c.last_dominant_end = c.eof_end - with_ppm(nominal.bits_duration(1 + kEofBits), c.ppm);
+  const int64_t bit_ns = nodes_[tx].bit_ns;
+  if (bit_ns != 0 && !e.brs) {
+    c.eof_end = sof + SimDuration(bit_ns * e.length);
+    c.ifs_end = c.eof_end + SimDuration(bit_ns * kIntermissionBits);
+    c.last_dominant_end = c.eof_end - SimDuration(bit_ns * (1 + kEofBits));
+  } else {
+    c.eof_end = sof + with_ppm(frame_duration(e, nominal, data), c.ppm);
+    // The last dominant bit is the ACK slot; then ACK delimiter, EOF and intermission.
+    c.ifs_end = c.eof_end + with_ppm(intermission_duration(nominal), c.ppm);
+    c.last_dominant_end = c.eof_end - with_ppm(nominal.bits_duration(1 + kEofBits), c.ppm);
+  }
   c.frame = pending(nodes_[tx])->frame;
   c.winners.assign(active_.begin(), active_.end());
   c.sent.clear();

@@ -36,12 +36,7 @@ bool SimScheduler::cancel(EventId id) {
 std::size_t SimScheduler::run_until(SimTime limit) {
   limit = std::max(limit, now_);  // time never goes backwards
   std::size_t ran = 0;
-  while (true) {
-    const auto next = queue_.next_time();
-    if (!next || *next > limit) {
-      break;
-    }
-    auto entry = queue_.pop();
+  while (auto entry = queue_.pop_due(limit)) {
     now_ = std::max(now_, entry->time);
     const Target t = entry->payload;
     if (t.handler != nullptr) {

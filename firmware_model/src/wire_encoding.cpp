@@ -176,49 +176,28 @@ using Crc15 = Crc<15, kCrc15Poly>;
 using Crc17 = Crc<17, kCrc17Poly>;
 using Crc21 = Crc<21, kCrc21Poly>;
 
-void add_field(EncodedFrame& out, Field f, uint32_t begin) {
-  out.fields[out.field_count++] = FieldSpan{f, static_cast<uint16_t>(begin)};
-}
-
-// Builds SOF..data, destuffed, and records where each field begins in it.
+// Builds SOF..data, destuffed (field positions: EncodedFrame::fields()).
 template <class Bits>
-void build_header_and_data(const Frame& frame, Bits& d, EncodedFrame& out) {
+void build_header_and_data(const Frame& frame, Bits& d) {
   const bool fd = frame.fd();
   const uint32_t rtr = frame.remote() ? 1u : 0u;  // RRS of CAN FD is always dominant
-  const Field rtr_field = fd ? Field::rrs : Field::rtr;
-  add_field(out, Field::sof, 0);
-  add_field(out, Field::base_id, 1);
   if (frame.extended()) {
     // SOF, base ID, SRR, IDE, extended ID, RTR/RRS, FDF (r1), r0/res
-    add_field(out, Field::srr, 12);
-    add_field(out, Field::ide, 13);
-    add_field(out, Field::ext_id, 14);
-    add_field(out, rtr_field, 32);
-    add_field(out, Field::fdf, 33);
-    add_field(out, Field::res, 34);
     d.append((uint64_t{frame.id() >> 18} << 2) | 0x3u, 14);  // SOF (0), ID-28..18, SRR, IDE
     d.append((uint64_t{frame.id() & 0x3FFFF} << 3) | (rtr << 2) | (fd ? 0x2u : 0x0u), 21);
   } else {
     // SOF, ID, RTR/RRS, IDE, FDF (r0), [res]
-    add_field(out, rtr_field, 12);
-    add_field(out, Field::ide, 13);
-    add_field(out, Field::fdf, 14);
     d.append((uint64_t{frame.id()} << 3) | (rtr << 2) | (fd ? 0x1u : 0x0u), 15);
     if (fd) {
-      add_field(out, Field::res, 15);
       d.append(0, 1);
     }
   }
   if (fd) {
-    add_field(out, Field::brs, d.size);
-    add_field(out, Field::esi, d.size + 1);
     d.append((frame.brs() ? 2u : 0u) | (frame.esi() ? 1u : 0u), 2);
   }
-  add_field(out, Field::dlc, d.size);
   d.append(frame.dlc(), 4);
   const auto data = frame.data();
   if (!data.empty()) {
-    add_field(out, Field::data, d.size);
     std::size_t i = 0;
     for (; i + 8 <= data.size(); i += 8) {
       uint64_t v;
@@ -338,10 +317,6 @@ void stuff(Bits& d, bool last_may_stuff, BitString& s, BitString& m, Probes& pro
 // CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits.
 void finish(BitString& s, BitString& m, EncodedFrame& out) {
   out.crc_delimiter_index = static_cast<uint16_t>(s.size);
-  add_field(out, Field::crc_delimiter, s.size);
-  add_field(out, Field::ack_slot, s.size + 1);
-  add_field(out, Field::ack_delimiter, s.size + 2);
-  add_field(out, Field::eof, s.size + 3);
   s.append(0x3FF, 3 + kEofBits);
   out.length = static_cast<uint16_t>(s.size);
   s.store(out.level);
@@ -353,11 +328,10 @@ void finish(BitString& s, BitString& m, EncodedFrame& out) {
 // arbitration field and BRS. Field order (build_header_and_data): standard SOF, ID, RTR/RRS,
 // IDE, FDF, [res, BRS]; extended SOF, ID, SRR, IDE, ID-ext, RTR/RRS, FDF, res, [BRS].
 Probes probes_for(const EncodedFrame& out) {
-  const bool extended = out.fields[2].field == Field::srr;
   Probes p;
-  p.destuffed[0] = out.fields[extended ? 6 : 3].begin;
+  p.destuffed[0] = out.extended ? 33 : 13;
   if (out.fd) {
-    p.destuffed[1] = out.fields[extended ? 8 : 6].begin;
+    p.destuffed[1] = out.extended ? 35 : 16;
   }
   return p;
 }
@@ -371,11 +345,9 @@ void apply(const Probes& p, EncodedFrame& out) {
 
 void encode_classic(const Frame& frame, EncodedFrame& out) {
   ShortBits d;
-  build_header_and_data(frame, d, out);
+  build_header_and_data(frame, d);
   // CRC-15 over the destuffed bits; the CRC sequence is then stuffed like the rest.
   const uint32_t crc = Crc15::over(d, d.size, 0);
-  add_field(out, Field::crc, d.size);
-  out.dynamic_fields = out.field_count;
   d.append(crc, 15);
   BitString s;
   BitString m;
@@ -390,8 +362,7 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
 
 void encode_fd(const Frame& frame, EncodedFrame& out) {
   BitString d;
-  build_header_and_data(frame, d, out);
-  out.dynamic_fields = out.field_count;
+  build_header_and_data(frame, d);
   BitString s;
   BitString m;
   Probes probes = probes_for(out);
@@ -401,7 +372,6 @@ void encode_fd(const Frame& frame, EncodedFrame& out) {
   out.dynamic_stuff_bits = static_cast<uint16_t>(count);
 
   // Stuff count field: a fixed stuff bit, the Gray-coded count and its parity (in the CRC).
-  add_field(out, Field::stuff_count, s.size);
   auto fixed_stuff = [&] {
     const uint32_t at = s.size;
     s.append_bit(!s.bit(at - 1));
@@ -410,6 +380,7 @@ void encode_fd(const Frame& frame, EncodedFrame& out) {
     ++out.fixed_stuff_bits;
   };
   const uint32_t dynamic_end = s.size;
+  out.stuff_count_begin = static_cast<uint16_t>(dynamic_end);
   fixed_stuff();
   out.stuff_count = static_cast<uint8_t>(count % 8);
   const uint8_t code = kStuffCountCode[out.stuff_count];
@@ -425,7 +396,6 @@ void encode_fd(const Frame& frame, EncodedFrame& out) {
     const bool b = (code >> i) & 1u;
     crc = crc21 ? Crc21::step_bit(crc, b) : Crc17::step_bit(crc, b);
   }
-  add_field(out, Field::crc, s.size);
   // A fixed stuff bit, the complement of the bit before it, precedes every four CRC bits.
   for (int i = width - 1; i >= 0; --i) {
     if ((width - 1 - i) % 4 == 0) {
@@ -521,25 +491,75 @@ uint16_t EncodedFrame::destuffed_index(uint16_t i) const {
   return static_cast<uint16_t>(i - n);
 }
 
+uint8_t EncodedFrame::fields(std::array<FieldSpan, 19>& out) const {
+  uint8_t n = 0;
+  auto at = [&](Field f, uint32_t index) { out[n++] = FieldSpan{f, static_cast<uint16_t>(index)}; };
+  auto destuffed = [&](Field f, uint32_t d) { at(f, stuffed_index(static_cast<uint16_t>(d))); };
+  const Field rtr = fd ? Field::rrs : Field::rtr;
+  uint32_t d = 0;
+  destuffed(Field::sof, 0);
+  destuffed(Field::base_id, 1);
+  if (extended) {
+    destuffed(Field::srr, 12);
+    destuffed(Field::ide, 13);
+    destuffed(Field::ext_id, 14);
+    destuffed(rtr, 32);
+    destuffed(Field::fdf, 33);
+    destuffed(Field::res, 34);
+    d = 35;
+  } else {
+    destuffed(rtr, 12);
+    destuffed(Field::ide, 13);
+    destuffed(Field::fdf, 14);
+    d = 15;
+    if (fd) {
+      destuffed(Field::res, 15);
+      d = 16;
+    }
+  }
+  if (fd) {
+    destuffed(Field::brs, d);
+    destuffed(Field::esi, d + 1);
+    d += 2;
+  }
+  destuffed(Field::dlc, d);
+  d += 4;
+  if (data_bytes > 0) {
+    destuffed(Field::data, d);
+    d += 8u * data_bytes;
+  }
+  if (fd) {
+    at(Field::stuff_count, stuff_count_begin);
+    at(Field::crc, stuff_count_begin + 5u);
+  } else {
+    destuffed(Field::crc, d);
+  }
+  at(Field::crc_delimiter, crc_delimiter_index);
+  at(Field::ack_slot, crc_delimiter_index + 1u);
+  at(Field::ack_delimiter, crc_delimiter_index + 2u);
+  at(Field::eof, crc_delimiter_index + 3u);
+  return n;
+}
+
 uint16_t EncodedFrame::field_begin(Field field) const {
-  for (uint8_t k = 0; k < field_count; ++k) {
-    if (fields[k].field == field) {
-      return k < dynamic_fields ? stuffed_index(fields[k].begin) : fields[k].begin;
+  std::array<FieldSpan, 19> f;
+  const uint8_t n = fields(f);
+  for (uint8_t k = 0; k < n; ++k) {
+    if (f[k].field == field) {
+      return f[k].begin;
     }
   }
   return length;
 }
 
 Field EncodedFrame::field_at(std::size_t i) const {
-  Field f = Field::sof;
-  for (uint8_t k = 0; k < field_count; ++k) {
-    const uint16_t begin = k < dynamic_fields ? stuffed_index(fields[k].begin) : fields[k].begin;
-    if (begin > i) {
-      break;
-    }
-    f = fields[k].field;
+  std::array<FieldSpan, 19> f;
+  const uint8_t n = fields(f);
+  Field result = Field::sof;
+  for (uint8_t k = 0; k < n && f[k].begin <= i; ++k) {
+    result = f[k].field;
   }
-  return f;
+  return result;
 }
 
 std::string EncodedFrame::to_string() const {
@@ -555,8 +575,8 @@ std::string EncodedFrame::to_string() const {
 void encode(const Frame& frame, EncodedFrame& out) {
   out.dynamic_stuff_bits = 0;
   out.fixed_stuff_bits = 0;
-  out.field_count = 0;
-  out.dynamic_fields = 0;
+  out.extended = frame.extended();
+  out.data_bytes = static_cast<uint8_t>(frame.length());
   out.brs_index = 0;
   out.stuff_count = 0;
   out.fd = frame.fd();

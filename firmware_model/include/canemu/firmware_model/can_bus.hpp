@@ -146,6 +146,7 @@ class CanBus final : private EventHandler {
     // from it; refreshed when it changes.
     NodeTiming timing;
     TimingProfile profile;
+    int64_t bit_ns = 0;  // nominal bit time when it is a whole number of ns (no ppm offset), or 0
     bool timing_known = false;
     uint16_t reported_tec = 0;  // counters at the last state report
     uint16_t reported_rec = 0;

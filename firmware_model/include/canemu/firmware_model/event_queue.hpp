@@ -72,9 +72,12 @@ class EventQueue {
   }
 
   // Removes and returns the earliest event, if any.
-  std::optional<Entry> pop() {
+  std::optional<Entry> pop() { return pop_due(SimTime::from_ns(INT64_MAX)); }
+
+  // Removes and returns the earliest event if it is due at or before `limit`.
+  std::optional<Entry> pop_due(SimTime limit) {
     drop_cancelled();
-    if (heap_.empty()) {
+    if (heap_.empty() || heap_.front().time > limit) {
       return std::nullopt;
     }
     std::pop_heap(heap_.begin(), heap_.end(), later);

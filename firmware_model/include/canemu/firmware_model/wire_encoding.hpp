@@ -80,16 +80,15 @@ struct EncodedFrame {
   uint16_t brs_index = 0;            // CAN FD: index of the BRS bit
   uint16_t crc_delimiter_index = 0;  // index of the CRC delimiter
   uint16_t arbitration_end = 0;      // index of the first bit after the arbitration field
-  // Field starts. The first `dynamic_fields` entries (SOF..data) hold the index in the destuffed
-  // bits, mapped through the stuff bits on demand; the rest hold the frame index. Read them
-  // through field_begin() and field_at().
-  std::array<FieldSpan, 19> fields{};
-  uint8_t field_count = 0;
-  uint8_t dynamic_fields = 0;
+  bool extended = false;
+  uint8_t data_bytes = 0;      // bytes in the data field
+  uint16_t stuff_count_begin = 0;  // CAN FD: index of the stuff count field
 
   bool level_at(std::size_t i) const { return (level[i >> 6] >> (63 - (i & 63))) & 1u; }
   bool is_stuff(std::size_t i) const { return (stuff[i >> 6] >> (63 - (i & 63))) & 1u; }
   Field field_at(std::size_t i) const;
+  // Every field with the index it begins at, in order; returns how many.
+  uint8_t fields(std::array<FieldSpan, 19>& out) const;
   // Frame index of the `destuffed`-th bit of the dynamically stuffed part.
   uint16_t stuffed_index(uint16_t destuffed) const;
   // The other way: bits before frame index `i` that are not stuff bits.

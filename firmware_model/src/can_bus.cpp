@@ -480,16 +480,15 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
     c.ifs_end = c.eof_end + with_ppm(intermission_duration(nominal), c.ppm);
     c.last_dominant_end = c.eof_end - with_ppm(nominal.bits_duration(1 + kEofBits), c.ppm);
   }
-  c.frame = pending(nodes_[tx])->frame;
   c.winners.assign(active_.begin(), active_.end());
   c.sent.clear();
   for (NodeId id : c.winners) {
-    c.sent.push_back(*pending(nodes_[id]));
+    c.sent.push_back(pending(nodes_[id]));
   }
   frames_on_bus_++;
   record_busy(sof, c.ifs_end);
   if (on_bus_event) {
-    on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.frame, 0});
+    on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.sent.front()->frame, 0});
   }
   scheduler_.schedule_at(c.eof_end, *this, kFrameEnd);
 }
@@ -497,6 +496,20 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
 void CanBus::complete_success(SimTime eof_end) {
   Completion& c = completion_;
   report_losses();
+  // Receivers first: the frame they get is the transmitter's, which it may drop once told.
+  const Frame& frame = c.sent.front()->frame;
+  for (const Participant& p : parts_) {
+    if (p.transmitter || !p.decodes) {
+      continue;
+    }
+    Node& n = nodes_[p.id];
+    if (p.acks && n.fc->rec() > 0) {
+      n.fc->receive_succeeded();
+      report_state(p.id, eof_end);
+    }
+    n.stats.frames_received++;
+    n.controller->on_frame(eof_end, frame, false);
+  }
   for (std::size_t k = 0; k < c.winners.size(); ++k) {
     const NodeId id = c.winners[k];
     Node& n = nodes_[id];
@@ -509,24 +522,12 @@ void CanBus::complete_success(SimTime eof_end) {
     // transmission) before it may start again.
     n.ready_at = was_passive ? c.ifs_end + with_ppm(c.nominal.bits_duration(kSuspendBits), c.ppm)
                              : c.ifs_end;
-    n.controller->on_tx_done(eof_end);
-    if (c.sent[k].self_reception) {
+    if (c.sent[k]->self_reception) {
       n.stats.frames_received++;
-      n.controller->on_frame(eof_end, c.sent[k].frame, true);
+      n.controller->on_frame(eof_end, c.sent[k]->frame, true);
     }
+    n.controller->on_tx_done(eof_end);
     report_state(id, eof_end);
-  }
-  for (const Participant& p : parts_) {
-    if (p.transmitter || !p.decodes) {
-      continue;
-    }
-    Node& n = nodes_[p.id];
-    if (p.acks && n.fc->rec() > 0) {
-      n.fc->receive_succeeded();
-      report_state(p.id, eof_end);
-    }
-    n.stats.frames_received++;
-    n.controller->on_frame(eof_end, c.frame, false);
   }
   scheduler_.schedule_at(c.ifs_end, *this, kBusFree);
 }

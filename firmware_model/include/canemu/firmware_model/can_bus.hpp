@@ -167,11 +167,11 @@ class CanBus final : private EventHandler {
     SimTime eof_end;
     SimTime ifs_end;
     SimTime last_dominant_end;
-    Frame frame = *Frame::classic(0, {});
     BitTiming nominal;
     int32_t ppm = 0;
     std::vector<NodeId> winners;
-    std::vector<TxFrame> sent;
+    // The winners' frames: their pending_tx(), valid until they are told the frame is done.
+    std::vector<const TxFrame*> sent;
     // Arbitration losses of this frame: node, bit, end of that bit. Reported at the end of the
     // frame (or of its error frame), each with its own instant.
     std::vector<std::tuple<NodeId, uint16_t, SimTime>> losses;

@@ -16,10 +16,11 @@ using namespace canemu::model;
 // Always has a frame to send: the next of a fixed random set.
 class Saturating final : public CanController {
  public:
+  static constexpr std::size_t kFrames = 64;  // a power of two
   Saturating(uint32_t seed, BitTiming t) {
     timing_.nominal = t;
     std::mt19937 rng(seed);
-    for (int i = 0; i < 64; ++i) {
+    for (std::size_t i = 0; i < kFrames; ++i) {
       std::vector<uint8_t> data(8);
       for (auto& b : data) {
         b = static_cast<uint8_t>(rng());
@@ -34,7 +35,7 @@ class Saturating final : public CanController {
   NodeTiming timing() const override { return timing_; }
   bool participating() const override { return true; }
   BusOffRecovery bus_off_recovery() const override { return BusOffRecovery::automatic; }
-  const TxFrame* pending_tx() override { return &frames_[next_ % frames_.size()]; }
+  const TxFrame* pending_tx() override { return &frames_[next_ & (kFrames - 1)]; }
   FaultConfinement& confinement() override { return fc_; }
   void on_frame(SimTime, const Frame&, bool) override { ++received; }
   void on_tx_done(SimTime) override {

@@ -175,9 +175,10 @@ const CanBus::Node& CanBus::refresh_timing(NodeId id) {
 void CanBus::report_losses() {
   for (const auto& [id, bit, at] : completion_.losses) {
     Node& n = nodes_[id];
+    const TxFrame* p = pending(n);
+    const bool single_shot = p != nullptr && p->single_shot;
     n.controller->on_arbitration_lost(at, bit);
-    const TxFrame* p = n.controller->pending_tx();
-    if (p != nullptr && p->single_shot) {
+    if (single_shot) {
       n.stats.tx_dropped++;
       forget_tx(n);
       n.controller->on_tx_dropped(at);

@@ -81,7 +81,7 @@ struct EncodedFrame {
   uint16_t crc_delimiter_index = 0;  // index of the CRC delimiter
   uint16_t arbitration_end = 0;      // index of the first bit after the arbitration field
   bool extended = false;
-  uint8_t data_bytes = 0;      // bytes in the data field
+  uint8_t data_bytes = 0;          // bytes in the data field
   uint16_t stuff_count_begin = 0;  // CAN FD: index of the stuff count field
 
   bool level_at(std::size_t i) const { return (level[i >> 6] >> (63 - (i & 63))) & 1u; }

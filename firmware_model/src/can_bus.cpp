@@ -278,6 +278,9 @@ void CanBus::attempt(SimTime now) {
       return;
     }
   }
+  if (injector_ != nullptr) {
+    injector_->before_arbitration(now, *this);
+  }
   std::vector<NodeId>& contenders = contenders_;
   contenders.clear();
   std::optional<SimTime> next_ready;

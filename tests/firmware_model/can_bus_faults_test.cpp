@@ -332,6 +332,40 @@ TEST(CanBusFaults, BusLoadIsBusyTimeOverTheLastSecond) {
   EXPECT_EQ(f.bus.bus_load_percent(SimTime::from_ns(2'500'000'000)), 0.0);
 }
 
+TEST(CanBusFaults, InjectorActsBeforeArbitrationAtFrameBoundaries) {
+  // An injector that unplugs node b from 1 ms on: the first frame that starts after that
+  // instant goes unacknowledged.
+  struct Unplug final : FaultInjector {
+    NodeId node = 0;
+    std::vector<int64_t> calls;
+    void before_arbitration(SimTime now, CanBus& bus) override {
+      calls.push_back(now.ns());
+      if (now.ns() >= 1'000'000 && bus.connected(node)) {
+        bus.set_connected(node, false);
+      }
+    }
+  };
+  SimScheduler sched;
+  CanBus bus(sched, "can0");
+  Unplug unplug;
+  bus.set_injector(&unplug);
+  TestController a, b;
+  a.attach_to(bus);
+  b.attach_to(bus);
+  unplug.node = b.id();
+  for (int i = 0; i < 20; ++i) {
+    a.send(k123);
+  }
+  sched.run_until(SimTime::from_ns(1'200'000));
+  // 65 bits per frame with intermission: frames start at 0, 130 us, ..., 1040 us; the one at
+  // 1040 us is the first after 1 ms and fails.
+  EXPECT_EQ(b.received.size(), 8u);
+  ASSERT_FALSE(a.errors.empty());
+  EXPECT_EQ(a.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(a.errors[0].at.ns(), 1'040'000 + 54 * kBit);
+  EXPECT_GE(unplug.calls.size(), 9u);
+}
+
 TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {
   Fixture f;
   TestController a, b;

@@ -22,6 +22,8 @@
 
 namespace canemu::model {
 
+class CanBus;
+
 // What an injection does to one frame.
 struct FrameFault {
   std::optional<CanErrorType> error;  // corrupt the frame: who detects what, see docs
@@ -40,6 +42,9 @@ struct FrameContext {
 class FaultInjector {
  public:
   virtual ~FaultInjector() = default;
+  // Whenever the bus is free and about to look for transmitters: node-level faults (unplug,
+  // oscillator, counters) applied here take effect from this start of frame on.
+  virtual void before_arbitration(SimTime /*now*/, CanBus& /*bus*/) {}
   // At every start of frame that wins arbitration.
   virtual FrameFault on_frame(const FrameContext&) { return {}; }
 };

@@ -271,7 +271,8 @@ void CanBus::attempt(SimTime now) {
     }
     return;
   }
-  // A dominant hold that began while the bus was busy starts now.
+  // Holds that are over are forgotten; one that began while the bus was busy starts now.
+  std::erase_if(holds_, [&](const auto& h) { return h.first + h.second <= now; });
   for (const auto& [from, duration] : holds_) {
     if (from <= now && now < from + duration) {
       run_hold(now);
@@ -353,10 +354,10 @@ void CanBus::run_frame(SimTime sof) {
 
   const NodeId tx = active.front();
   in_flight_.assign(active.begin(), active.end());
-  const TxFrame tx_frame = *pending(nodes_[tx]);
+  const TxFrame& tx_frame = *pending(nodes_[tx]);
   const EncodedFrame& e = encoded_tx(tx);
   const Node& tx_node = refresh_timing(tx);
-  const NodeTiming tx_timing = tx_node.timing;
+  const NodeTiming& tx_timing = tx_node.timing;
   const BitTiming& nominal = tx_timing.nominal;
   const BitTiming& data = tx_timing.has_data_phase ? tx_timing.data : tx_timing.nominal;
   const int64_t tx_bit_ns = tx_node.bit_ns;
@@ -435,7 +436,7 @@ void CanBus::run_frame(SimTime sof) {
       first_bit = first_bit ? std::min(*first_bit, p.planned->second) : p.planned->second;
     }
   }
-  const SimTime frame_end = bit_end(e.length - 1u);
+  const SimTime frame_end = holds_.empty() ? sof : bit_end(e.length - 1u);
   for (const auto& [from, duration] : holds_) {
     if (from < frame_end && from + duration > sof) {
       // First bit whose end lies after the hold's start.

@@ -1,0 +1,81 @@
+// canemud's configuration: TOML text -> checked, typed Config, or every error found, each as
+// "file:line:column: key: what is wrong".
+//
+// The schema and every key are documented in docs/configuration.md; config/default.toml is the
+// embedded default and a commented example.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <tl/expected.hpp>
+
+namespace canemu::daemon {
+
+enum class BusKind { can, can_fd, lin };
+std::string_view to_string(BusKind kind);
+
+struct BusConfig {
+  std::string name;
+  BusKind kind = BusKind::can;
+  uint32_t bitrate = 500000;       // nominal bit/s
+  uint32_t sample_point = 875;     // per mille
+  uint32_t data_bitrate = 0;       // can-fd: data-phase bit/s (0: no bit-rate switch)
+  uint32_t line = 0;               // where it was declared
+};
+
+// Adapter models the daemon can emulate.
+enum class DeviceModel { ixxat_usb_to_can, ixxat_usb_to_can_fd };
+std::string_view to_string(DeviceModel model);
+
+struct DeviceConfig {
+  std::string name;
+  DeviceModel model = DeviceModel::ixxat_usb_to_can;
+  std::vector<std::string> controllers;  // bus name per controller
+  uint32_t line = 0;
+};
+
+enum class TimeMode { realtime, scaled, stepped };
+
+struct TimeSetting {
+  TimeMode mode = TimeMode::realtime;
+  double scale = 1.0;  // scaled: simulated seconds per wall-clock second
+};
+// "realtime", "stepped" or "scaled:F" with F > 0.
+tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text);
+std::string to_string(const TimeSetting& time);
+
+struct SimulationConfig {
+  TimeSetting time;
+  uint64_t seed = 1;
+};
+
+struct SecurityConfig {
+  std::vector<std::string> allowed_users;
+  std::vector<std::string> allowed_groups;
+};
+
+struct Config {
+  std::string source;  // file name, or "<embedded default>"
+  SimulationConfig simulation;
+  SecurityConfig security;
+  std::vector<BusConfig> buses;
+  std::vector<DeviceConfig> devices;
+
+  const BusConfig* bus(std::string_view name) const;
+};
+
+using ConfigErrors = std::vector<std::string>;
+
+tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::string source);
+tl::expected<Config, ConfigErrors> load_config_file(const std::string& path);
+// config/default.toml, compiled in.
+std::string_view embedded_default_config();
+tl::expected<Config, ConfigErrors> load_default_config();
+
+// A few lines for humans: buses, devices, time mode.
+std::string summary(const Config& config);
+
+}  // namespace canemu::daemon

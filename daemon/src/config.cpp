@@ -1,0 +1,444 @@
+#include "canemu/daemon/config.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <fstream>
+#include <initializer_list>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+namespace canemu::daemon {
+
+namespace detail {
+std::string_view default_config_text();  // generated from config/default.toml
+}
+
+namespace {
+
+// Collects every problem with its place; nothing is applied unless there are none.
+class Checker {
+ public:
+  explicit Checker(std::string file) : file_(std::move(file)) {}
+
+  void error(const toml::source_region& where, std::string_view key, std::string_view what) {
+    errors_.push_back(fmt::format("{}:{}:{}: {}: {}", file_, where.begin.line, where.begin.column,
+                                  key, what));
+  }
+  void error(const toml::node& node, std::string_view key, std::string_view what) {
+    error(node.source(), key, what);
+  }
+
+  void only_keys(const toml::table& table, std::string_view path,
+                 std::initializer_list<std::string_view> allowed) {
+    for (const auto& [k, v] : table) {
+      if (std::find(allowed.begin(), allowed.end(), k.str()) == allowed.end()) {
+        std::string known;
+        for (auto a : allowed) {
+          known += known.empty() ? std::string(a) : ", " + std::string(a);
+        }
+        (void)v;
+        error(k.source(), key(path, k.str()), fmt::format("unknown key (known here: {})", known));
+      }
+    }
+  }
+
+  std::optional<std::string> string(const toml::table& t, std::string_view path,
+                                    std::string_view name, bool required) {
+    const toml::node* n = t.get(name);
+    if (n == nullptr) {
+      if (required) {
+        error(t.source(), key(path, name), "missing (a string is required)");
+      }
+      return std::nullopt;
+    }
+    if (!n->is_string()) {
+      error(*n, key(path, name), "must be a string");
+      return std::nullopt;
+    }
+    return std::string(n->as_string()->get());
+  }
+
+  std::optional<int64_t> integer(const toml::table& t, std::string_view path,
+                                 std::string_view name, bool required, int64_t lo, int64_t hi) {
+    const toml::node* n = t.get(name);
+    if (n == nullptr) {
+      if (required) {
+        error(t.source(), key(path, name), "missing (an integer is required)");
+      }
+      return std::nullopt;
+    }
+    if (!n->is_integer()) {
+      error(*n, key(path, name), "must be an integer");
+      return std::nullopt;
+    }
+    const int64_t v = n->as_integer()->get();
+    if (v < lo || v > hi) {
+      error(*n, key(path, name), fmt::format("{} is outside {}..{}", v, lo, hi));
+      return std::nullopt;
+    }
+    return v;
+  }
+
+  std::optional<double> number(const toml::table& t, std::string_view path, std::string_view name) {
+    const toml::node* n = t.get(name);
+    if (n == nullptr) {
+      return std::nullopt;
+    }
+    if (n->is_floating_point()) {
+      return n->as_floating_point()->get();
+    }
+    if (n->is_integer()) {
+      return static_cast<double>(n->as_integer()->get());
+    }
+    error(*n, key(path, name), "must be a number");
+    return std::nullopt;
+  }
+
+  std::optional<std::vector<std::string>> strings(const toml::table& t, std::string_view path,
+                                                  std::string_view name) {
+    const toml::node* n = t.get(name);
+    if (n == nullptr) {
+      return std::nullopt;
+    }
+    const toml::array* a = n->as_array();
+    if (a == nullptr) {
+      error(*n, key(path, name), "must be an array of strings");
+      return std::nullopt;
+    }
+    std::vector<std::string> out;
+    for (const toml::node& e : *a) {
+      if (!e.is_string()) {
+        error(e, key(path, name), "must be an array of strings");
+        return std::nullopt;
+      }
+      out.emplace_back(e.as_string()->get());
+    }
+    return out;
+  }
+
+  static std::string key(std::string_view path, std::string_view name) {
+    return path.empty() ? std::string(name) : fmt::format("{}.{}", path, name);
+  }
+
+  ConfigErrors& errors() { return errors_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+  ConfigErrors errors_;
+};
+
+bool valid_name(std::string_view s) {
+  return !s.empty() && s.size() <= 32 && std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  });
+}
+
+constexpr std::string_view kNameRule = "must be 1 to 32 characters of a-z, 0-9, '_' and '-'";
+
+void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
+  const toml::node* n = root.get("simulation");
+  if (n == nullptr) {
+    return;
+  }
+  const toml::table* t = n->as_table();
+  if (t == nullptr) {
+    c.error(*n, "simulation", "must be a table");
+    return;
+  }
+  c.only_keys(*t, "simulation", {"time", "seed"});
+  if (auto time = c.string(*t, "simulation", "time", false)) {
+    auto parsed = parse_time_setting(*time);
+    if (parsed) {
+      cfg.simulation.time = *parsed;
+    } else {
+      c.error(*t->get("time"), "simulation.time", parsed.error());
+    }
+  }
+  if (auto seed = c.integer(*t, "simulation", "seed", false, 0, INT64_MAX)) {
+    cfg.simulation.seed = static_cast<uint64_t>(*seed);
+  }
+}
+
+void read_security(Checker& c, const toml::table& root, Config& cfg) {
+  const toml::node* n = root.get("security");
+  if (n == nullptr) {
+    return;
+  }
+  const toml::table* t = n->as_table();
+  if (t == nullptr) {
+    c.error(*n, "security", "must be a table");
+    return;
+  }
+  c.only_keys(*t, "security", {"allowed_users", "allowed_groups"});
+  if (auto v = c.strings(*t, "security", "allowed_users")) {
+    cfg.security.allowed_users = *v;
+  }
+  if (auto v = c.strings(*t, "security", "allowed_groups")) {
+    cfg.security.allowed_groups = *v;
+  }
+}
+
+void read_buses(Checker& c, const toml::table& root, Config& cfg) {
+  const toml::node* n = root.get("bus");
+  if (n == nullptr) {
+    return;
+  }
+  const toml::array* a = n->as_array();
+  if (a == nullptr) {
+    c.error(*n, "bus", "must be an array of tables ([[bus]])");
+    return;
+  }
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::node& e = *a->get(i);
+    const std::string path = fmt::format("bus[{}]", i);
+    const toml::table* t = e.as_table();
+    if (t == nullptr) {
+      c.error(e, path, "must be a table");
+      continue;
+    }
+    c.only_keys(*t, path, {"name", "kind", "bitrate", "sample_point", "data_bitrate"});
+    BusConfig bus;
+    bus.line = static_cast<uint32_t>(t->source().begin.line);
+    if (auto name = c.string(*t, path, "name", true)) {
+      if (!valid_name(*name)) {
+        c.error(*t->get("name"), path + ".name", kNameRule);
+      } else if (!names.insert(*name).second) {
+        c.error(*t->get("name"), path + ".name", fmt::format("a bus named \"{}\" exists already", *name));
+      }
+      bus.name = *name;
+    }
+    if (auto kind = c.string(*t, path, "kind", false)) {
+      if (*kind == "can") {
+        bus.kind = BusKind::can;
+      } else if (*kind == "can-fd") {
+        bus.kind = BusKind::can_fd;
+      } else if (*kind == "lin") {
+        bus.kind = BusKind::lin;
+      } else {
+        c.error(*t->get("kind"), path + ".kind",
+                fmt::format("\"{}\" is not a bus kind (can, can-fd, lin)", *kind));
+      }
+    }
+    const int64_t max_rate = bus.kind == BusKind::lin ? 20'000 : 1'000'000;
+    const int64_t min_rate = bus.kind == BusKind::lin ? 1'000 : 5'000;
+    if (auto rate = c.integer(*t, path, "bitrate", false, min_rate, max_rate)) {
+      bus.bitrate = static_cast<uint32_t>(*rate);
+    } else if (bus.kind == BusKind::lin && t->get("bitrate") == nullptr) {
+      bus.bitrate = 19'200;
+    }
+    if (auto sp = c.number(*t, path, "sample_point")) {
+      if (*sp < 0.5 || *sp > 0.95) {
+        c.error(*t->get("sample_point"), path + ".sample_point",
+                fmt::format("{} is outside 0.5..0.95", *sp));
+      } else {
+        bus.sample_point = static_cast<uint32_t>(*sp * 1000 + 0.5);
+      }
+    }
+    if (t->get("data_bitrate") != nullptr) {
+      if (bus.kind != BusKind::can_fd) {
+        c.error(*t->get("data_bitrate"), path + ".data_bitrate",
+                "only a can-fd bus has a data bit rate");
+      } else if (auto d = c.integer(*t, path, "data_bitrate", false, bus.bitrate, 10'000'000)) {
+        bus.data_bitrate = static_cast<uint32_t>(*d);
+      }
+    }
+    cfg.buses.push_back(bus);
+  }
+}
+
+void read_devices(Checker& c, const toml::table& root, Config& cfg) {
+  const toml::node* n = root.get("device");
+  if (n == nullptr) {
+    return;
+  }
+  const toml::array* a = n->as_array();
+  if (a == nullptr) {
+    c.error(*n, "device", "must be an array of tables ([[device]])");
+    return;
+  }
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::node& e = *a->get(i);
+    const std::string path = fmt::format("device[{}]", i);
+    const toml::table* t = e.as_table();
+    if (t == nullptr) {
+      c.error(e, path, "must be a table");
+      continue;
+    }
+    c.only_keys(*t, path, {"name", "model", "controllers"});
+    DeviceConfig dev;
+    dev.line = static_cast<uint32_t>(t->source().begin.line);
+    if (auto name = c.string(*t, path, "name", true)) {
+      if (!valid_name(*name)) {
+        c.error(*t->get("name"), path + ".name", kNameRule);
+      } else if (!names.insert(*name).second) {
+        c.error(*t->get("name"), path + ".name",
+                fmt::format("a device named \"{}\" exists already", *name));
+      }
+      dev.name = *name;
+    }
+    if (auto model = c.string(*t, path, "model", true)) {
+      if (*model == "ixxat-usb-to-can") {
+        dev.model = DeviceModel::ixxat_usb_to_can;
+      } else if (*model == "ixxat-usb-to-can-fd") {
+        dev.model = DeviceModel::ixxat_usb_to_can_fd;
+      } else {
+        c.error(*t->get("model"), path + ".model",
+                fmt::format("\"{}\" is not a device model (ixxat-usb-to-can, ixxat-usb-to-can-fd)",
+                            *model));
+      }
+    }
+    const toml::node* ctl = t->get("controllers");
+    if (ctl == nullptr) {
+      c.error(t->source(), path + ".controllers", "missing (the bus of each controller)");
+    } else if (auto buses = c.strings(*t, path, "controllers")) {
+      if (buses->empty() || buses->size() > 4) {
+        c.error(*ctl, path + ".controllers",
+                fmt::format("{} controllers; an adapter has 1 to 4", buses->size()));
+      }
+      for (const std::string& b : *buses) {
+        const BusConfig* bus = cfg.bus(b);
+        if (bus == nullptr) {
+          c.error(*ctl, path + ".controllers", fmt::format("no bus is named \"{}\"", b));
+        } else if (bus->kind == BusKind::lin) {
+          c.error(*ctl, path + ".controllers",
+                  fmt::format("\"{}\" is a LIN bus; a CAN controller cannot sit on it", b));
+        }
+      }
+      dev.controllers = *buses;
+    }
+    cfg.devices.push_back(dev);
+  }
+}
+
+}  // namespace
+
+std::string_view to_string(BusKind kind) {
+  switch (kind) {
+    case BusKind::can:
+      return "can";
+    case BusKind::can_fd:
+      return "can-fd";
+    case BusKind::lin:
+      return "lin";
+  }
+  return "?";
+}
+
+std::string_view to_string(DeviceModel model) {
+  switch (model) {
+    case DeviceModel::ixxat_usb_to_can:
+      return "ixxat-usb-to-can";
+    case DeviceModel::ixxat_usb_to_can_fd:
+      return "ixxat-usb-to-can-fd";
+  }
+  return "?";
+}
+
+tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text) {
+  if (text == "realtime") {
+    return TimeSetting{TimeMode::realtime, 1.0};
+  }
+  if (text == "stepped") {
+    return TimeSetting{TimeMode::stepped, 1.0};
+  }
+  if (text.substr(0, 7) == "scaled:") {
+    const std::string number(text.substr(7));
+    char* end = nullptr;
+    const double f = std::strtod(number.c_str(), &end);
+    if (!number.empty() && end == number.c_str() + number.size() && f > 0 && f <= 1e6) {
+      return TimeSetting{TimeMode::scaled, f};
+    }
+    return tl::unexpected(fmt::format(
+        "\"{}\": the factor after \"scaled:\" must be a number above 0 and at most 1000000", text));
+  }
+  return tl::unexpected(
+      fmt::format("\"{}\" is not a time mode (realtime, stepped, scaled:F)", text));
+}
+
+std::string to_string(const TimeSetting& time) {
+  switch (time.mode) {
+    case TimeMode::realtime:
+      return "realtime";
+    case TimeMode::stepped:
+      return "stepped";
+    case TimeMode::scaled:
+      return fmt::format("scaled:{}", time.scale);
+  }
+  return "?";
+}
+
+const BusConfig* Config::bus(std::string_view name) const {
+  for (const BusConfig& b : buses) {
+    if (b.name == name) {
+      return &b;
+    }
+  }
+  return nullptr;
+}
+
+tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::string source) {
+  Checker c(source);
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    c.error(e.source(), "syntax", e.description());
+    return tl::unexpected(c.errors());
+  }
+  Config cfg;
+  cfg.source = std::move(source);
+  c.only_keys(root, "", {"simulation", "security", "bus", "device"});
+  read_simulation(c, root, cfg);
+  read_security(c, root, cfg);
+  read_buses(c, root, cfg);
+  read_devices(c, root, cfg);
+  if (!c.errors().empty()) {
+    return tl::unexpected(c.errors());
+  }
+  return cfg;
+}
+
+tl::expected<Config, ConfigErrors> load_config_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return tl::unexpected(ConfigErrors{fmt::format("{}: cannot be read", path)});
+  }
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_config(ss.str(), path);
+}
+
+std::string_view embedded_default_config() { return detail::default_config_text(); }
+
+tl::expected<Config, ConfigErrors> load_default_config() {
+  return parse_config(embedded_default_config(), "<embedded default>");
+}
+
+std::string summary(const Config& cfg) {
+  std::string s = fmt::format("config {}: time {}, seed {}\n", cfg.source,
+                              to_string(cfg.simulation.time), cfg.simulation.seed);
+  for (const BusConfig& b : cfg.buses) {
+    s += fmt::format("  bus {} ({}, {} bit/s", b.name, to_string(b.kind), b.bitrate);
+    if (b.data_bitrate != 0) {
+      s += fmt::format(", data {} bit/s", b.data_bitrate);
+    }
+    s += fmt::format(", sample point {:.1f} %)\n", b.sample_point / 10.0);
+  }
+  for (const DeviceConfig& d : cfg.devices) {
+    s += fmt::format("  device {} ({}):", d.name, to_string(d.model));
+    for (std::size_t i = 0; i < d.controllers.size(); ++i) {
+      s += fmt::format(" {}:{} on {}", d.name, i, d.controllers[i]);
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+}  // namespace canemu::daemon

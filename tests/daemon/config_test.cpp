@@ -1,0 +1,165 @@
+#include "canemu/daemon/config.hpp"
+
+#include <gtest/gtest.h>
+
+namespace canemu::daemon {
+namespace {
+
+std::vector<std::string> errors_of(std::string_view text) {
+  auto c = parse_config(text, "t.toml");
+  EXPECT_FALSE(c.has_value());
+  return c ? std::vector<std::string>{} : c.error();
+}
+
+TEST(Config, EmbeddedDefaultHasTwoBusesAndOneAdapterWithTwoControllers) {
+  auto c = load_default_config();
+  ASSERT_TRUE(c) << c.error().front();
+  EXPECT_EQ(c->source, "<embedded default>");
+  ASSERT_EQ(c->buses.size(), 2u);
+  for (const BusConfig& b : c->buses) {
+    EXPECT_EQ(b.kind, BusKind::can);
+    EXPECT_EQ(b.bitrate, 500000u);
+  }
+  ASSERT_EQ(c->devices.size(), 1u);
+  EXPECT_EQ(c->devices[0].model, DeviceModel::ixxat_usb_to_can);
+  EXPECT_EQ(c->devices[0].controllers, (std::vector<std::string>{"can0", "can1"}));
+  EXPECT_EQ(c->simulation.time.mode, TimeMode::realtime);
+}
+
+TEST(Config, TheShippedDefaultFileIsTheEmbeddedOne) {
+  auto file = load_config_file(CANEMU_SOURCE_DIR "/config/default.toml");
+  ASSERT_TRUE(file) << file.error().front();
+  EXPECT_EQ(summary(*file).substr(summary(*file).find('\n')),
+            summary(*load_default_config()).substr(summary(*load_default_config()).find('\n')));
+}
+
+TEST(Config, ReadsEveryKey) {
+  auto c = parse_config(R"(
+[simulation]
+time = "scaled:2.5"
+seed = 42
+[security]
+allowed_users = ["alice"]
+allowed_groups = ["canemu"]
+[[bus]]
+name = "fd0"
+kind = "can-fd"
+bitrate = 1000000
+sample_point = 0.8
+data_bitrate = 5000000
+[[bus]]
+name = "lin0"
+kind = "lin"
+[[device]]
+name = "fd-adapter"
+model = "ixxat-usb-to-can-fd"
+controllers = ["fd0"]
+)",
+                        "t.toml");
+  ASSERT_TRUE(c) << c.error().front();
+  EXPECT_EQ(c->simulation.time.mode, TimeMode::scaled);
+  EXPECT_DOUBLE_EQ(c->simulation.time.scale, 2.5);
+  EXPECT_EQ(c->simulation.seed, 42u);
+  EXPECT_EQ(c->security.allowed_users, (std::vector<std::string>{"alice"}));
+  EXPECT_EQ(c->security.allowed_groups, (std::vector<std::string>{"canemu"}));
+  EXPECT_EQ(c->buses[0].kind, BusKind::can_fd);
+  EXPECT_EQ(c->buses[0].sample_point, 800u);
+  EXPECT_EQ(c->buses[0].data_bitrate, 5000000u);
+  EXPECT_EQ(c->buses[1].bitrate, 19200u);  // LIN default
+  EXPECT_EQ(c->devices[0].model, DeviceModel::ixxat_usb_to_can_fd);
+}
+
+TEST(Config, UnknownKeysAreErrorsWithFileLineColumnAndKey) {
+  const auto e = errors_of("[[bus]]\nname = \"can0\"\nspeed = 5\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], "t.toml:3:1: bus[0].speed: unknown key (known here: name, kind, bitrate, "
+                  "sample_point, data_bitrate)");
+  const auto top = errors_of("[buses]\n");
+  ASSERT_EQ(top.size(), 1u);
+  EXPECT_NE(top[0].find("t.toml:1:2: buses: unknown key"), std::string::npos) << top[0];
+}
+
+TEST(Config, CollectsEveryErrorAtOnce) {
+  const auto e = errors_of(R"([simulation]
+time = "fast"
+[[bus]]
+name = "can0"
+bitrate = 2000000
+[[bus]]
+name = "can0"
+kind = "flexray"
+[[device]]
+name = "x"
+model = "ixxat-usb-to-can"
+controllers = ["can9"]
+)");
+  ASSERT_EQ(e.size(), 5u);
+  EXPECT_EQ(e[0], "t.toml:2:8: simulation.time: \"fast\" is not a time mode (realtime, stepped, "
+                  "scaled:F)");
+  EXPECT_EQ(e[1], "t.toml:5:11: bus[0].bitrate: 2000000 is outside 5000..1000000");
+  EXPECT_EQ(e[2], "t.toml:7:8: bus[1].name: a bus named \"can0\" exists already");
+  EXPECT_EQ(e[3], "t.toml:8:8: bus[1].kind: \"flexray\" is not a bus kind (can, can-fd, lin)");
+  EXPECT_EQ(e[4], "t.toml:12:15: device[0].controllers: no bus is named \"can9\"");
+}
+
+TEST(Config, RejectsControllersOnLinBusesAndDataRatesOnClassicBuses) {
+  const auto e = errors_of(R"([[bus]]
+name = "lin0"
+kind = "lin"
+[[bus]]
+name = "can0"
+data_bitrate = 2000000
+[[device]]
+name = "a"
+model = "ixxat-usb-to-can"
+controllers = ["lin0"]
+)");
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_NE(e[0].find("bus[1].data_bitrate: only a can-fd bus has a data bit rate"),
+            std::string::npos);
+  EXPECT_NE(e[1].find("\"lin0\" is a LIN bus"), std::string::npos);
+}
+
+TEST(Config, RejectsBadNamesMissingKeysAndWrongTypes) {
+  const auto e = errors_of(R"([[bus]]
+name = "CAN 0"
+bitrate = "fast"
+[[device]]
+model = "ixxat-usb-to-can"
+)");
+  ASSERT_EQ(e.size(), 4u);
+  EXPECT_NE(e[0].find("bus[0].name: must be 1 to 32 characters"), std::string::npos);
+  EXPECT_NE(e[1].find("bus[0].bitrate: must be an integer"), std::string::npos);
+  EXPECT_NE(e[2].find("device[0].name: missing"), std::string::npos);
+  EXPECT_NE(e[3].find("device[0].controllers: missing"), std::string::npos);
+}
+
+TEST(Config, SyntaxErrorsNameTheirPlace) {
+  const auto e = errors_of("[[bus]\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0].rfind("t.toml:1:", 0), 0u) << e[0];
+  EXPECT_NE(e[0].find("syntax"), std::string::npos);
+}
+
+TEST(Config, MissingFileIsAClearError) {
+  auto c = load_config_file("/nonexistent/canemu.toml");
+  ASSERT_FALSE(c);
+  EXPECT_EQ(c.error().front(), "/nonexistent/canemu.toml: cannot be read");
+}
+
+TEST(TimeSetting, ParsesTheThreeModes) {
+  EXPECT_EQ(parse_time_setting("realtime")->mode, TimeMode::realtime);
+  EXPECT_EQ(parse_time_setting("stepped")->mode, TimeMode::stepped);
+  auto s = parse_time_setting("scaled:0.5");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->mode, TimeMode::scaled);
+  EXPECT_DOUBLE_EQ(s->scale, 0.5);
+  EXPECT_EQ(to_string(*s), "scaled:0.5");
+  EXPECT_FALSE(parse_time_setting("scaled:0"));
+  EXPECT_FALSE(parse_time_setting("scaled:abc"));
+  EXPECT_FALSE(parse_time_setting("scaled:"));
+  EXPECT_FALSE(parse_time_setting("Realtime"));
+}
+
+}  // namespace
+}  // namespace canemu::daemon

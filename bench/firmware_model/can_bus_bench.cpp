@@ -43,7 +43,7 @@ class Saturating final : public CanController {
     bus->tx_changed(id);
   }
   void on_tx_dropped(SimTime) override {}
-  void on_arbitration_lost(SimTime, uint16_t) override {}
+  void on_arbitration_lost(SimTime, uint16_t, uint16_t) override {}
   void on_error(const BusErrorEvent&) override {}
   void on_state_change(SimTime, ErrorState) override {}
 

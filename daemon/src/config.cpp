@@ -25,8 +25,8 @@ class Checker {
   explicit Checker(std::string file) : file_(std::move(file)) {}
 
   void error(const toml::source_region& where, std::string_view key, std::string_view what) {
-    errors_.push_back(fmt::format("{}:{}:{}: {}: {}", file_, where.begin.line, where.begin.column,
-                                  key, what));
+    errors_.push_back(
+        fmt::format("{}:{}:{}: {}: {}", file_, where.begin.line, where.begin.column, key, what));
   }
   void error(const toml::node& node, std::string_view key, std::string_view what) {
     error(node.source(), key, what);
@@ -62,8 +62,8 @@ class Checker {
     return std::string(n->as_string()->get());
   }
 
-  std::optional<int64_t> integer(const toml::table& t, std::string_view path,
-                                 std::string_view name, bool required, int64_t lo, int64_t hi) {
+  std::optional<int64_t> integer(const toml::table& t, std::string_view path, std::string_view name,
+                                 bool required, int64_t lo, int64_t hi) {
     const toml::node* n = t.get(name);
     if (n == nullptr) {
       if (required) {
@@ -209,7 +209,8 @@ void read_buses(Checker& c, const toml::table& root, Config& cfg) {
       if (!valid_name(*name)) {
         c.error(*t->get("name"), path + ".name", kNameRule);
       } else if (!names.insert(*name).second) {
-        c.error(*t->get("name"), path + ".name", fmt::format("a bus named \"{}\" exists already", *name));
+        c.error(*t->get("name"), path + ".name",
+                fmt::format("a bus named \"{}\" exists already", *name));
       }
       bus.name = *name;
     }
@@ -415,7 +416,9 @@ tl::expected<Config, ConfigErrors> load_config_file(const std::string& path) {
   return parse_config(ss.str(), path);
 }
 
-std::string_view embedded_default_config() { return detail::default_config_text(); }
+std::string_view embedded_default_config() {
+  return detail::default_config_text();
+}
 
 tl::expected<Config, ConfigErrors> load_default_config() {
   return parse_config(embedded_default_config(), "<embedded default>");

@@ -11,6 +11,7 @@ namespace {
 constexpr uint32_t kErrorFlagBits = 6;
 constexpr uint32_t kErrorDelimiterBits = 8;
 constexpr uint32_t kSuspendBits = 8;
+constexpr uint32_t kMaxHeldBits = 1'000'000;
 
 // A duration measured by a node whose oscillator runs `ppm` fast takes proportionally less time.
 SimDuration with_ppm(SimDuration d, int32_t ppm) {
@@ -138,6 +139,12 @@ void CanBus::controller_changed(NodeId node) {
 
 void CanBus::load_props(Node& n) {
   n.participating = n.controller->participating();
+  {
+    // A controller without a usable bit time cannot take part (its bits would take no time).
+    const NodeTiming t = n.controller->timing();
+    n.timing_valid = t.nominal.clock_hz != 0 && t.nominal.prescaler != 0 &&
+                     (!t.has_data_phase || (t.data.clock_hz != 0 && t.data.prescaler != 0));
+  }
   n.listen_only = n.controller->listen_only();
   n.self_test = n.controller->self_test();
   n.fd_capable = n.controller->fd_capable();
@@ -173,12 +180,11 @@ const CanBus::Node& CanBus::refresh_timing(NodeId id) {
 }
 
 void CanBus::report_losses() {
-  for (const auto& [id, bit, at] : completion_.losses) {
-    Node& n = nodes_[id];
-    const TxFrame* p = pending(n);
-    const bool single_shot = p != nullptr && p->single_shot;
-    n.controller->on_arbitration_lost(at, bit);
-    if (single_shot) {
+  for (const Completion::Loss& loss : completion_.losses) {
+    Node& n = nodes_[loss.node];
+    const SimTime at = loss.at;
+    n.controller->on_arbitration_lost(at, loss.bit, loss.destuffed_bit);
+    if (loss.single_shot) {
       n.stats.tx_dropped++;
       forget_tx(n);
       n.controller->on_tx_dropped(at);
@@ -215,8 +221,18 @@ void CanBus::restart(NodeId node) {
   arm_recovery(node);
 }
 
+void CanBus::counters_changed(NodeId node) {
+  Node& n = nodes_[node];
+  n.reported_tec = static_cast<uint16_t>(~n.fc->tec());  // force a fresh report
+  report_state(node, scheduler_.now());
+  if (!n.fc->bus_off() && n.last_state != ErrorState::bus_off && !busy_) {
+    schedule_attempt(std::max(scheduler_.now(), free_at_));
+  }
+}
+
 void CanBus::set_oscillator_ppm(NodeId node, int32_t ppm) {
-  nodes_[node].oscillator_ppm = ppm;
+  // Beyond +-50 % no clock deserves the name; clamping keeps durations positive.
+  nodes_[node].oscillator_ppm = std::clamp<int32_t>(ppm, -500'000, 500'000);
   nodes_[node].timing_known = false;
   decodes_cache_.clear();
 }
@@ -229,6 +245,9 @@ void CanBus::set_connected(NodeId node, bool connected) {
 }
 
 void CanBus::hold_dominant(SimTime from, SimDuration duration) {
+  if (duration.ns() <= 0) {
+    return;
+  }
   holds_.emplace_back(from, duration);
   scheduler_.schedule_at(from, [this](SimTime now) {
     if (!busy_) {
@@ -240,10 +259,15 @@ void CanBus::hold_dominant(SimTime from, SimDuration duration) {
 }
 
 void CanBus::schedule_attempt(SimTime at) {
+  at = std::max(at, scheduler_.now());
   if (attempt_pending_) {
-    return;
+    if (at >= attempt_at_) {
+      return;
+    }
+    scheduler_.cancel(attempt_event_);  // an earlier request: look for transmitters sooner
   }
   attempt_pending_ = true;
+  attempt_at_ = at;
   attempt_event_ = scheduler_.schedule_at(at, *this, kAttempt);
 }
 
@@ -371,8 +395,10 @@ void CanBus::run_frame(SimTime sof) {
 
   completion_.losses.clear();
   for (const auto& [id, bit] : lost) {
-    completion_.losses.emplace_back(id, bit, bit_end(bit));
-    nodes_[id].stats.arbitration_lost++;
+    Node& n = nodes_[id];
+    completion_.losses.push_back(Completion::Loss{id, bit, encoded_tx(id).destuffed_index(bit),
+                                                  bit_end(bit), pending(n)->single_shot});
+    n.stats.arbitration_lost++;
   }
 
   // Everybody on the bus takes part: the transmitters, and every other node as a receiver.
@@ -461,7 +487,7 @@ void CanBus::run_frame(SimTime sof) {
   if (!completion_.losses.empty()) {
     SimTime latest = sof;
     for (const auto& loss : completion_.losses) {
-      latest = std::max(latest, std::get<2>(loss));
+      latest = std::max(latest, loss.at);
     }
     scheduler_.schedule_at(latest, [this](SimTime) { report_losses(); });
   }
@@ -680,6 +706,7 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
   };
 
   const uint32_t max_bits = 4096 + static_cast<uint32_t>(length);
+  uint32_t last_dominant = first_bit;  // last bit the bus was dominant
   uint32_t i = first_bit;
   for (;; ++i) {
     // What each node drives.
@@ -705,8 +732,12 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
     if (held(i)) {
       bus = false;
     }
+    const bool prev_bus = last_level;
     run = bus == last_level ? run + 1 : 1;
     last_level = bus;
+    if (!bus) {
+      last_dominant = i;
+    }
 
     // What each node makes of it.
     bool all_done = true;
@@ -735,7 +766,8 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
                   s.is_tx = false;  // lost arbitration: it receives from here on
                   actions.push_back(Action{bit_end(i), p.id, Action::Kind::arbitration_lost,
                                            CanErrorType::bit, ErrorRole::transmitter,
-                                           static_cast<uint16_t>(i), false, true});
+                                           static_cast<uint16_t>(i), false, true, Field::sof,
+                                           p.bits->destuffed_index(static_cast<uint16_t>(i))});
                 }
               } else {
                 detect(k, i, CanErrorType::bit, true);
@@ -748,26 +780,27 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
             break;
           }
           // Receiver (or a node that has nothing to send while the bus is held).
-          if (e != nullptr && i + 2u == length) {
-            // Valid for receivers at the last-but-one bit of EOF.
+          if (i < stuff_end && run >= 6) {
+            detect(k, i, CanErrorType::stuff, true);
+          } else if (e != nullptr && !bus &&
+                     (i == e->crc_delimiter_index || (i > ack_slot && i + 1u < length))) {
+            // Fixed-form bits: CRC delimiter, ACK delimiter, EOF up to its last-but-one bit (a
+            // dominant last bit is an overload condition for receivers, not modelled).
+            detect(k, i, CanErrorType::form, true);
+          } else if (e != nullptr && e->fd && i >= stuff_end && i < e->crc_delimiter_index &&
+                     e->is_stuff(i) && bus == prev_bus) {
+            detect(k, i, CanErrorType::form, true);  // fixed stuff bit with the wrong level
+          } else if (e != nullptr && i + 2u == length) {
+            // Valid for receivers once the last-but-one bit of EOF is through without error;
+            // delivered at the end of EOF like any frame.
             if (p.decodes) {
               s.validated = true;
               // Rule 8 needs the ACK sent: a node that could not give it keeps its counter.
-              actions.push_back(Action{bit_end(i), p.id, Action::Kind::rx_ok, CanErrorType::bit,
+              actions.push_back(Action{bit_end(i + 1), p.id, Action::Kind::rx_ok, CanErrorType::bit,
                                        ErrorRole::receiver, static_cast<uint16_t>(i), p.acks});
             }
             s.phase = Phase::done;
             s.done_at = i;
-            break;
-          }
-          if (i < stuff_end && run >= 6) {
-            detect(k, i, CanErrorType::stuff, true);
-          } else if (e != nullptr && !bus &&
-                     (i == e->crc_delimiter_index || (i > ack_slot && i + 2u < length))) {
-            detect(k, i, CanErrorType::form, true);
-          } else if (e != nullptr && e->fd && i >= stuff_end && i < e->crc_delimiter_index &&
-                     e->is_stuff(i) && bus == frame_bit(i - 1) && bus != e->level_at(i)) {
-            detect(k, i, CanErrorType::form, true);  // fixed stuff bit with the wrong level
           }
           break;
         }
@@ -835,22 +868,15 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
       }
       all_done = all_done && s.phase == Phase::done;
     }
-    if ((all_done && !held(i + 1)) || i >= max_bits) {
+    // A hold keeps everybody waiting for recessive bits for as long as it lasts (up to a
+    // million bit times per activity; docs/bus-engine.md).
+    if ((all_done && !held(i + 1)) || (i >= max_bits && !held(i + 1)) ||
+        i >= max_bits + kMaxHeldBits) {
       break;
     }
   }
   // The error frame ends with the last node's delimiter; a hold keeps the bus until it ends.
   const uint32_t end_bit = i;
-  uint32_t last_dominant = first_bit;
-  // Find the last dominant bit to account for bus-off recovery (the delimiter is recessive).
-  for (const State& s : st) {
-    if (s.detected) {
-      last_dominant = std::max(last_dominant, s.flag_end);
-    }
-  }
-  while (last_dominant < end_bit && held(last_dominant + 1)) {
-    ++last_dominant;
-  }
   const SimTime end = bit_end(end_bit);
   const SimTime ifs_end = end + nominal.bits_duration(kIntermissionBits);
   const SimTime dominant_end = bit_end(last_dominant);
@@ -915,14 +941,20 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
           break;
         case Action::Kind::arbitration_lost:
           n.stats.arbitration_lost++;
-          n.controller->on_arbitration_lost(now, a.bit);
+          n.controller->on_arbitration_lost(now, a.bit, a.destuffed_bit);
           break;
-        case Action::Kind::tx_ok:
+        case Action::Kind::tx_ok: {
           fc.transmit_succeeded();
           n.stats.frames_sent++;
+          const TxFrame* t = pending(n);
+          if (t != nullptr && t->self_reception) {
+            n.stats.frames_received++;
+            n.controller->on_frame(now, t->frame, true);
+          }
           forget_tx(n);
           n.controller->on_tx_done(now);
           break;
+        }
         case Action::Kind::rx_ok:
           if (a.count) {
             fc.receive_succeeded();
@@ -999,12 +1031,9 @@ void CanBus::account_recessive(SimTime dominant_start) {
     }
     const SimTime from = std::max(last_dominant_end_, n.recovery_from);
     if (dominant_start > from) {
-      const SimDuration bit =
-          with_ppm(timing_of(n).nominal.bits_duration(1), timing_of(n).oscillator_ppm);
-      const uint64_t bits = static_cast<uint64_t>((dominant_start - from).ns() / bit.ns());
+      const uint64_t bits = bits_in(id, dominant_start - from);
       if (fc.recessive_sequences(static_cast<uint32_t>(bits / kRecoverySequenceBits))) {
-        report_state(id, dominant_start);
-        n.controller->on_state_change(dominant_start, ErrorState::active);
+        recovered(id, dominant_start);
         continue;
       }
     }
@@ -1039,18 +1068,37 @@ void CanBus::recovery_check(NodeId id, SimTime now) {
     return;
   }
   const SimTime from = std::max(last_dominant_end_, n.recovery_from);
-  const NodeTiming t = timing_of(n);
-  const SimDuration bit = with_ppm(t.nominal.bits_duration(1), t.oscillator_ppm);
-  const uint64_t bits = static_cast<uint64_t>((now - from).ns() / bit.ns());
+  const uint64_t bits = bits_in(id, now - from);
   n.recovery_from = now;
   if (fc.recessive_sequences(static_cast<uint32_t>(bits / kRecoverySequenceBits))) {
-    n.last_state = ErrorState::active;
-    n.stats.state_changes.push_back(StateChange{now, ErrorState::active});
-    n.controller->on_state_change(now, ErrorState::active);
-    schedule_attempt(now);
+    recovered(id, now);
     return;
   }
   arm_recovery(id);
+}
+
+uint64_t CanBus::bits_in(NodeId id, SimDuration span) {
+  // Rounded to the nearest bit: a node whose clock runs a little slow still sees the 11
+  // recessive bits between two frames as 11.
+  const Node& n = refresh_timing(id);
+  const int64_t bit = with_ppm(n.timing.nominal.bits_duration(1), n.timing.oscillator_ppm).ns();
+  if (bit <= 0 || span.ns() <= 0) {
+    return 0;
+  }
+  return static_cast<uint64_t>((span.ns() + bit / 2) / bit);
+}
+
+// Bus-off recovery completed: both counters are 0 and the node is error-active again.
+void CanBus::recovered(NodeId id, SimTime at) {
+  Node& n = nodes_[id];
+  n.last_state = ErrorState::active;
+  n.reported_tec = 0;
+  n.reported_rec = 0;
+  n.stats.state_changes.push_back(StateChange{at, ErrorState::active});
+  n.controller->on_state_change(at, ErrorState::active);
+  if (!busy_) {
+    schedule_attempt(std::max(at, free_at_));
+  }
 }
 
 void CanBus::report_state(NodeId id, SimTime at) {

@@ -143,7 +143,7 @@ void CanFdController::on_tx_dropped(SimTime at) {
   }
 }
 
-void CanFdController::on_arbitration_lost(SimTime at, uint16_t bit) {
+void CanFdController::on_arbitration_lost(SimTime at, uint16_t bit, uint16_t /*destuffed_bit*/) {
   if (listener_ != nullptr) {
     listener_->arbitration_lost(at, bit);
   }

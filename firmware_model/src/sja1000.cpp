@@ -25,7 +25,7 @@ NodeTiming Sja1000::timing() const {
 
 void Sja1000::set_ir(uint8_t bits, SimTime at) {
   const bool was = interrupt_line();
-  ir_ |= bits;
+  ir_ |= static_cast<uint8_t>(bits & ier_ & ~IR_RI);
   if (!was && interrupt_line() && on_interrupt) {
     on_interrupt(at);
   }
@@ -67,8 +67,8 @@ uint8_t Sja1000::read(uint8_t address) {
     case SR:
       return status();
     case IR: {
-      const uint8_t r = ir_;
-      ir_ &= IR_RI;  // RI stays while the FIFO holds a message
+      const uint8_t r = ir_value();
+      ir_ = 0;  // reading clears every bit but RI, which follows the FIFO
       return r;
     }
     case IER:
@@ -88,7 +88,7 @@ uint8_t Sja1000::read(uint8_t address) {
     case EWLR:
       return fc_.warning_limit();
     case RXERR:
-      return static_cast<uint8_t>(std::min<uint16_t>(fc_.rec(), 255));
+      return fc_.bus_off() ? 0 : static_cast<uint8_t>(std::min<uint16_t>(fc_.rec(), 255));
     case TXERR:
       // In bus-off TXERR counts the recovery down from 127 (datasheet 6.4.13).
       if (fc_.bus_off()) {
@@ -176,10 +176,12 @@ void Sja1000::write(uint8_t address, uint8_t value) {
         return;
       case RXERR:
         fc_.set_counters(fc_.tec(), value);
+        counters_written();
         return;
       case TXERR:
         // Writing 255 starts a bus-off (datasheet 6.4.13).
         fc_.set_counters(value == 255 ? kBusOffLimit : value, fc_.rec());
+        counters_written();
         return;
       default:
         break;
@@ -194,6 +196,14 @@ void Sja1000::write(uint8_t address, uint8_t value) {
   // Operating mode: the transmit buffer, while it is released.
   if (address >= FRAME && address < FRAME + 13 && !tx_) {
     tx_buffer_[address - FRAME] = value;
+  }
+}
+
+void Sja1000::counters_written() {
+  if (bus_ != nullptr) {
+    bus_->counters_changed(node_);
+  } else {
+    update_error_status(now());
   }
 }
 
@@ -239,9 +249,17 @@ void Sja1000::command(uint8_t cmr) {
 
 void Sja1000::enter_reset() {
   mod_ |= MOD_RM;
-  // Reset mode drops a pending request (one on the wire finishes first) and empties the FIFO.
-  if (tx_ && !(bus_ != nullptr && bus_->in_flight(node_))) {
-    tx_.reset();
+  // Reset mode drops the pending request and empties the FIFO. Not modelled: aborting a frame
+  // already on the wire (its outcome is fixed at its start of frame); it is not repeated.
+  if (tx_) {
+    if (bus_ != nullptr && bus_->in_flight(node_)) {
+      tx_->single_shot = true;
+    } else {
+      tx_.reset();
+      if (bus_ != nullptr) {
+        bus_->tx_changed(node_);
+      }
+    }
   }
   tx_complete_ = true;
   rbsa_ = 0;
@@ -293,15 +311,23 @@ void Sja1000::fifo_release() {
   rbsa_ = (rbsa_ + n) % kRxFifoBytes;
   fifo_used_ -= std::min(n, fifo_used_);
   --rmc_;
-  if (rmc_ == 0) {
-    ir_ &= static_cast<uint8_t>(~IR_RI);
+}
+
+void Sja1000::update_error_status(SimTime at) {
+  // EI on every change of SR.ES or SR.BS (datasheet 6.4.4).
+  const uint8_t bits = status() & (SR_ES | SR_BS);
+  if (bits != error_status_) {
+    error_status_ = bits;
+    set_ir(IR_EI, at);
   }
 }
 
 void Sja1000::on_frame(SimTime at, const Frame& frame, bool own) {
+  update_error_status(at);
   if (!accepts(acr_, amr_, (mod_ & MOD_AFM) != 0, frame)) {
     return;
   }
+  const bool line_was_active = interrupt_line();
   if (!fifo_push(frame)) {
     // Data overrun: the message is lost, the ones already held stay.
     data_overrun_ = true;
@@ -311,13 +337,19 @@ void Sja1000::on_frame(SimTime at, const Frame& frame, bool own) {
     }
     return;
   }
-  set_ir(IR_RI, at);
+  if (!line_was_active && interrupt_line() && on_interrupt) {
+    on_interrupt(at);  // RI
+  }
   if (listener_ != nullptr) {
     listener_->frame_received(at, frame, own);
   }
 }
 
 void Sja1000::on_tx_done(SimTime at) {
+  update_error_status(at);
+  if (!tx_) {
+    return;
+  }
   const Frame f = tx_->frame;
   tx_.reset();
   tx_complete_ = true;
@@ -328,6 +360,9 @@ void Sja1000::on_tx_done(SimTime at) {
 }
 
 void Sja1000::on_tx_dropped(SimTime at) {
+  if (!tx_) {
+    return;
+  }
   const Frame f = tx_->frame;
   tx_.reset();
   tx_complete_ = false;
@@ -337,13 +372,14 @@ void Sja1000::on_tx_dropped(SimTime at) {
   }
 }
 
-void Sja1000::on_arbitration_lost(SimTime at, uint16_t bit) {
-  if (alc_armed_ && tx_) {
-    // ALC holds the lost bit's number counted from ID.28 = 0 (SRTR 11, IDE 12, RTR 31).
-    const uint16_t d = encode(tx_->frame).destuffed_index(bit);
-    alc_ = static_cast<uint8_t>(std::clamp<int>(d - 1, 0, 31));
-    alc_armed_ = false;
+void Sja1000::on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed_bit) {
+  // A new loss is captured, and raises ALI, only once ALC has been read (datasheet 6.4.8).
+  if (!alc_armed_) {
+    return;
   }
+  // ALC holds the lost bit's number counted from ID.28 = 0 (SRTR 11, IDE 12, RTR 31).
+  alc_ = static_cast<uint8_t>(std::clamp<int>(destuffed_bit - 1, 0, 31));
+  alc_armed_ = false;
   set_ir(IR_ALI, at);
   if (listener_ != nullptr) {
     listener_->arbitration_lost(at, bit);
@@ -351,6 +387,7 @@ void Sja1000::on_arbitration_lost(SimTime at, uint16_t bit) {
 }
 
 void Sja1000::on_error(const BusErrorEvent& e) {
+  update_error_status(e.at);
   if (ecc_armed_) {
     const uint8_t code = e.type == CanErrorType::bit     ? 0
                          : e.type == CanErrorType::form  ? 1
@@ -370,23 +407,19 @@ void Sja1000::on_error(const BusErrorEvent& e) {
 void Sja1000::on_state_change(SimTime at, ErrorState state) {
   const ErrorState before = state_;
   state_ = state;
-  const bool es_before = before != ErrorState::active;
-  const bool es_now = state != ErrorState::active;
+  update_error_status(at);
   uint8_t bits = 0;
-  if (es_before != es_now || (before == ErrorState::bus_off) != (state == ErrorState::bus_off)) {
-    bits |= IR_EI;
-  }
+  // EPI: into error-passive, and from error-passive back to error-active (not into bus-off).
   const bool passive_before = before == ErrorState::passive;
   const bool passive_now = state == ErrorState::passive;
-  if (passive_before != passive_now) {
+  if ((passive_now && !passive_before) ||
+      (passive_before && (state == ErrorState::active || state == ErrorState::warning))) {
     bits |= IR_EPI;
   }
   if (state == ErrorState::bus_off) {
     // Bus-off puts the chip in reset mode; the host restarts it by clearing RM.
     mod_ |= MOD_RM;
-    if (tx_ && !(bus_ != nullptr && bus_->in_flight(node_))) {
-      // The request stays in the transmit buffer and goes out after recovery.
-    }
+    // A request stays in the transmit buffer and goes out after recovery.
     if (bus_ != nullptr) {
       bus_->controller_changed(node_);
     }

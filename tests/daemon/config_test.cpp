@@ -72,8 +72,9 @@ controllers = ["fd0"]
 TEST(Config, UnknownKeysAreErrorsWithFileLineColumnAndKey) {
   const auto e = errors_of("[[bus]]\nname = \"can0\"\nspeed = 5\n");
   ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(e[0], "t.toml:3:1: bus[0].speed: unknown key (known here: name, kind, bitrate, "
-                  "sample_point, data_bitrate)");
+  EXPECT_EQ(e[0],
+            "t.toml:3:1: bus[0].speed: unknown key (known here: name, kind, bitrate, "
+            "sample_point, data_bitrate)");
   const auto top = errors_of("[buses]\n");
   ASSERT_EQ(top.size(), 1u);
   EXPECT_NE(top[0].find("t.toml:1:2: buses: unknown key"), std::string::npos) << top[0];
@@ -94,8 +95,9 @@ model = "ixxat-usb-to-can"
 controllers = ["can9"]
 )");
   ASSERT_EQ(e.size(), 5u);
-  EXPECT_EQ(e[0], "t.toml:2:8: simulation.time: \"fast\" is not a time mode (realtime, stepped, "
-                  "scaled:F)");
+  EXPECT_EQ(e[0],
+            "t.toml:2:8: simulation.time: \"fast\" is not a time mode (realtime, stepped, "
+            "scaled:F)");
   EXPECT_EQ(e[1], "t.toml:5:11: bus[0].bitrate: 2000000 is outside 5000..1000000");
   EXPECT_EQ(e[2], "t.toml:7:8: bus[1].name: a bus named \"can0\" exists already");
   EXPECT_EQ(e[3], "t.toml:8:8: bus[1].kind: \"flexray\" is not a bus kind (can, can-fd, lin)");

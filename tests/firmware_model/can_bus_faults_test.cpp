@@ -113,6 +113,90 @@ TEST(CanBusFaults, RecoveryCountsElevenRecessiveBitsBetweenOtherNodesFrames) {
   EXPECT_EQ(victim.fc.recovery_sequences_left(), 1u);
   f.run_until(129 * 65 * kBit);
   EXPECT_FALSE(victim.fc.bus_off());
+  // One report of the recovery, at the start of the frame after the 128th sequence.
+  ASSERT_EQ(victim.states.size(), 1u);
+  EXPECT_EQ(victim.states[0].state, ErrorState::active);
+  EXPECT_EQ(victim.states[0].at.ns(), 128 * 65 * kBit);
+  EXPECT_EQ(f.bus.stats(victim.id()).state_changes.size(), 1u);
+}
+
+TEST(CanBusFaults, ASlowOscillatorStillCountsElevenBitsBetweenFrames) {
+  // At -3000 ppm the 11 recessive bits between two frames measure 10.97 of the node's bits;
+  // counting to the nearest bit, recovery still takes 128 frames.
+  Fixture f;
+  TestController victim, talker, listener;
+  for (auto* n : {&victim, &talker, &listener}) {
+    n->attach_to(f.bus);
+  }
+  f.bus.set_oscillator_ppm(victim.id(), -3000);
+  victim.fc.set_counters(256, 0);
+  f.bus.restart(victim.id());
+  for (int i = 0; i < 200; ++i) {
+    talker.send(k123);
+  }
+  f.run_until(129 * 65 * kBit);
+  EXPECT_FALSE(victim.fc.bus_off());
+}
+
+TEST(CanBusFaults, ReceiversRejectAFrameWhoseLastButOneEofBitIsDominant) {
+  Fixture f;
+  TestController tx, rx;
+  tx.attach_to(f.bus);
+  rx.attach_to(f.bus);
+  FaultRule r = rule(CanErrorType::bit, 1);
+  r.fault.bit = 59;  // EOF bit 5: the transmitter's flag starts at EOF bit 6
+  f.plan.add(r);
+  tx.send(k123);
+  f.run_until(1'000'000);
+  ASSERT_EQ(rx.errors.size(), 1u);
+  EXPECT_EQ(rx.errors[0].type, CanErrorType::form);
+  EXPECT_EQ(rx.errors[0].bit, 60);
+  EXPECT_EQ(rx.received.size(), 1u);  // only the retransmission
+}
+
+TEST(CanBusFaults, AnErrorInTheLastEofBitLeavesReceiversWithTheFrameTwice) {
+  // The transmitter's flag starts at the last EOF bit: receivers have already accepted the
+  // frame (at the last-but-one EOF bit), and the retransmission arrives again, as on a real bus.
+  Fixture f;
+  TestController tx, rx;
+  tx.attach_to(f.bus);
+  rx.attach_to(f.bus);
+  FaultRule r = rule(CanErrorType::bit, 1);
+  r.fault.bit = 60;
+  f.plan.add(r);
+  tx.send(k123);
+  f.run_until(1'000'000);
+  ASSERT_EQ(rx.received.size(), 2u);
+  EXPECT_EQ(rx.received[0].at.ns(), 62 * kBit);  // delivered at the end of EOF
+  EXPECT_EQ(tx.sent.size(), 1u);
+}
+
+TEST(CanBusFaults, SelfReceptionWorksWhenTheFrameSucceedsDespiteAPassiveFlag) {
+  Fixture f;
+  TestController tx, rx;
+  TestController slow(testing::timing_250k());
+  for (auto* n : {&tx, &rx, &slow}) {
+    n->attach_to(f.bus);
+  }
+  slow.fc.set_counters(0, 200);  // error-passive: its flag does not disturb the others
+  tx.send(k123, false, /*self_reception=*/true);
+  f.run_until(1'000'000);
+  EXPECT_FALSE(slow.errors.empty());
+  ASSERT_EQ(tx.received.size(), 1u);
+  EXPECT_TRUE(tx.received[0].own);
+  EXPECT_EQ(tx.received[0].at.ns(), 62 * kBit);
+  EXPECT_EQ(rx.received.size(), 1u);
+}
+
+TEST(CanBusFaults, ZeroLengthHoldsChangeNothing) {
+  Fixture f;
+  TestController a, b;
+  a.attach_to(f.bus);
+  b.attach_to(f.bus);
+  f.bus.hold_dominant(SimTime::from_ns(0), SimDuration(0));
+  f.run_until(1'000'000);
+  EXPECT_TRUE(a.errors.empty());
+  EXPECT_EQ(f.bus.error_frames_on_bus(), 0u);
 }
 
 TEST(CanBusFaults, CrcErrorOnEveryReceiverEndsInAnAckErrorForTheTransmitter) {

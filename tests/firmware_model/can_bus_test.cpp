@@ -102,6 +102,7 @@ TEST(CanBus, ElevenBitFrameBeatsTwentyNineBitFrameWithTheSameBaseIdAndDataBeatsR
   EXPECT_TRUE(listener.received[2].frame.extended());
   // The remote frame loses at RTR (bit 12), the extended one at SRR (bit 12) to the data frame.
   ASSERT_GE(ext_node.lost.size(), 1u);
+  ASSERT_EQ(remote_node.lost.size(), 1u);
   EXPECT_EQ(ext_node.lost[0].bit, 12);
   EXPECT_EQ(remote_node.lost[0].bit, 12);
   // Then the standard remote frame (IDE dominant) beats the extended one at IDE (bit 13).
@@ -223,9 +224,12 @@ TEST(CanBus, SingleShotFrameThatLosesArbitrationIsDropped) {
   b.send(kZero);
   f.run_until(1'000'000);
   EXPECT_EQ(a.lost.size(), 1u);
-  EXPECT_EQ(a.dropped.size(), 1u);
+  ASSERT_EQ(a.dropped.size(), 1u);
+  EXPECT_EQ(a.dropped[0].ns(), 4 * kBit);  // at the bit it lost, reported at the frame's end
   EXPECT_TRUE(a.sent.empty());
-  EXPECT_EQ(b.received.size(), 0u);
+  ASSERT_EQ(b.sent.size(), 1u);
+  EXPECT_EQ(b.sent[0].at.ns(), 50 * kBit);
+  EXPECT_EQ(f.bus.frames_on_bus(), 1u);
 }
 
 TEST(CanBus, SelfReceptionDeliversTheOwnFrame) {
@@ -275,6 +279,38 @@ TEST(CanBus, ErrorPassiveTransmitterSuspendsEightBitsAndYields) {
   EXPECT_EQ(rx.received[2].at.ns(),
             (first_len + 3 + second_len + 3 + encode(frame(0x011, {})).length) * kBit);
   EXPECT_EQ(passive.fc.tec(), 128);
+}
+
+TEST(CanBus, ANodeMayStartWhileAnErrorPassiveNodeIsSuspended) {
+  Fixture f;
+  TestController passive, late, rx;
+  for (auto* n : {&passive, &late, &rx}) {
+    n->attach_to(f.bus);
+  }
+  passive.fc.set_counters(130, 0);
+  passive.send(frame(0x010, {}));
+  passive.send(frame(0x011, {}));
+  const int64_t len = encode(frame(0x010, {})).length;
+  // The late node's request comes 2 bits into the passive node's suspension: it starts at once.
+  const int64_t request = (len + 3 + 2) * kBit;
+  f.run_until(request);
+  late.send(frame(0x7F0, {}));
+  f.run_until(2'000'000);
+  ASSERT_EQ(rx.received.size(), 3u);
+  EXPECT_EQ(rx.received[1].frame.id(), 0x7F0u);
+  EXPECT_EQ(rx.received[1].at.ns(), request + encode(frame(0x7F0, {})).length * kBit);
+  EXPECT_EQ(rx.received[2].frame.id(), 0x011u);
+}
+
+TEST(CanBus, AControllerWithoutABitTimeStaysOffTheBus) {
+  Fixture f;
+  TestController broken(BitTiming{}), rx;
+  broken.attach_to(f.bus);
+  rx.attach_to(f.bus);
+  broken.send(kZero);
+  EXPECT_LE(f.sched.run_until(SimTime::from_ns(1'000'000)), 1u);  // one look for transmitters
+  EXPECT_TRUE(rx.received.empty());
+  EXPECT_TRUE(broken.errors.empty());
 }
 
 TEST(CanBus, ReceiveCounterFallsByOneAndFromPassiveBackTo127) {

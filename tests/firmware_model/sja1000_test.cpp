@@ -357,3 +357,104 @@ TEST(Sja1000FrameFormat, PacksAndUnpacksBothFormats) {
 
 }  // namespace
 }  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+using namespace sja1000;
+
+TEST(Sja1000Interrupts, SourcesDisabledInIerSetNoIrBits) {
+  Bus b;
+  Chip a, r;
+  a.chip.connect(b.bus);
+  r.chip.connect(b.bus);
+  a.start();
+  r.start();
+  r.chip.write(MOD, MOD_RM);
+  r.chip.write(IER, IR_TI);  // receive interrupt disabled
+  r.chip.write(MOD, 0);
+  a.send(frame(0x123, {1}));
+  b.run_until(1'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 1);
+  EXPECT_EQ(r.chip.read(IR), 0);
+  EXPECT_EQ(r.interrupts, 0);
+  r.chip.write(IER, IR_RI);  // RI follows the FIFO: enabling it now shows the message
+  EXPECT_EQ(r.chip.read(IR), IR_RI);
+  EXPECT_EQ(r.interrupts, 1);
+}
+
+TEST(Sja1000Interrupts, ArbitrationLostCaptureHoldsUntilReadAndRaisesAliOnce) {
+  Bus b;
+  Chip a, w, v, r;
+  for (auto* c : {&a, &w, &v, &r}) {
+    c->chip.connect(b.bus);
+    c->start();
+  }
+  a.send(frame(0x123, {}));  // 001 0010 0011
+  w.send(frame(0x000, {}));  // beats a at ID.26 (ALC 2)
+  v.send(frame(0x120, {}));  // then beats a at ID.19 (ALC 9)
+  b.run_until(1'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 3);
+  EXPECT_TRUE(a.chip.read(IR) & IR_ALI);
+  EXPECT_EQ(a.chip.read(ALC), 2);  // the first loss, held; the second was not captured
+  // Read: armed again. The next loss is captured.
+  v.send(frame(0x120, {}));
+  a.send(frame(0x123, {}));
+  b.run_until(2'000'000);
+  EXPECT_TRUE(a.chip.read(IR) & IR_ALI);
+  EXPECT_EQ(a.chip.read(ALC), 9);
+}
+
+TEST(Sja1000Interrupts, ErrorInterruptFollowsTheEsBitNotTheErrorPassiveState) {
+  Bus b;
+  Chip a;
+  a.chip.connect(b.bus);
+  a.chip.write(EWLR, 200);
+  a.start();
+  a.send(frame(0x123, {1}));
+  b.run_until(20'000'000);  // alone: TXERR climbs to 128 and stays
+  EXPECT_EQ(a.chip.read(TXERR), 128);
+  const uint8_t ir = a.chip.read(IR);
+  EXPECT_TRUE(ir & IR_EPI);  // error-passive reached
+  EXPECT_FALSE(ir & IR_EI);  // ES (TXERR >= 200) never set
+  EXPECT_FALSE(a.chip.read(SR) & SR_ES);
+}
+
+TEST(Sja1000Interrupts, Writing255ToTxerrStartsABusOffThatTheHostSees) {
+  Bus b;
+  Chip a;
+  a.chip.connect(b.bus);
+  a.chip.write(IER, 0xFF);
+  a.chip.write(TXERR, 255);
+  EXPECT_TRUE(a.chip.read(SR) & SR_BS);
+  EXPECT_TRUE(a.chip.read(IR) & IR_EI);
+  EXPECT_EQ(a.chip.read(RXERR), 0);
+  EXPECT_EQ(b.bus.stats(a.chip.node()).state_changes.back().state, ErrorState::bus_off);
+  // Leaving reset mode starts the recovery: 128 x 11 bit times on the idle bus.
+  a.chip.write(BTR0, 0x00);
+  a.chip.write(BTR1, 0x1C);
+  a.chip.write(MOD, 0);
+  b.run_until(128 * 11 * kBit);
+  EXPECT_FALSE(a.chip.read(SR) & SR_BS);
+  EXPECT_EQ(a.chip.read(TXERR), 0);
+}
+
+TEST(Sja1000, EnteringResetModeDropsAPendingRequest) {
+  Bus b;
+  Chip a, busy, r;
+  for (auto* c : {&a, &busy, &r}) {
+    c->chip.connect(b.bus);
+    c->start();
+  }
+  busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));
+  b.run_until(10 * kBit);
+  a.send(frame(0x7FF, {}));  // waits for the bus
+  a.chip.write(MOD, MOD_RM);
+  EXPECT_TRUE(a.chip.read(SR) & SR_TBS);
+  a.chip.write(MOD, 0);
+  b.run_until(2'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 1);  // only the other chip's frame
+}
+
+}  // namespace
+}  // namespace canemu::model

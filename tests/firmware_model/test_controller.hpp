@@ -58,7 +58,9 @@ class TestController : public CanController {
     dropped.push_back(at);
     pop();
   }
-  void on_arbitration_lost(SimTime at, uint16_t bit) override { lost.push_back({at, bit}); }
+  void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t) override {
+    lost.push_back({at, bit});
+  }
   void on_error(const BusErrorEvent& e) override { errors.push_back(e); }
   void on_state_change(SimTime at, ErrorState s) override { states.push_back({at, s}); }
 

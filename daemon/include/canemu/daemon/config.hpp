@@ -20,10 +20,10 @@ std::string_view to_string(BusKind kind);
 struct BusConfig {
   std::string name;
   BusKind kind = BusKind::can;
-  uint32_t bitrate = 500000;       // nominal bit/s
-  uint32_t sample_point = 875;     // per mille
-  uint32_t data_bitrate = 0;       // can-fd: data-phase bit/s (0: no bit-rate switch)
-  uint32_t line = 0;               // where it was declared
+  uint32_t bitrate = 500000;    // nominal bit/s
+  uint32_t sample_point = 875;  // per mille
+  uint32_t data_bitrate = 0;    // can-fd: data-phase bit/s (0: no bit-rate switch)
+  uint32_t line = 0;            // where it was declared
 };
 
 // Adapter models the daemon can emulate.

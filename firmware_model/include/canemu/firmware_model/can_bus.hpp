@@ -105,6 +105,9 @@ class CanBus final : private EventHandler {
   void controller_changed(NodeId node);
   // A controller with BusOffRecovery::on_restart was restarted: recovery counting begins.
   void restart(NodeId node);
+  // The controller's counters were written directly (SJA1000 RXERR/TXERR in reset mode): the
+  // state they give is reported as any other change.
+  void counters_changed(NodeId node);
 
   // --- fault injection (programmatic API) ---
   void set_injector(FaultInjector* injector) { injector_ = injector; }
@@ -133,6 +136,7 @@ class CanBus final : private EventHandler {
     // Cached controller properties, read again after controller_changed().
     bool props_known = false;
     bool participating = true;
+    bool timing_valid = true;  // a bit time that is not zero
     bool listen_only = false;
     bool self_test = false;
     bool fd_capable = false;
@@ -179,7 +183,14 @@ class CanBus final : private EventHandler {
     std::vector<const TxFrame*> sent;
     // Arbitration losses of this frame: node, bit, end of that bit. Reported at the end of the
     // frame (or of its error frame), each with its own instant.
-    std::vector<std::tuple<NodeId, uint16_t, SimTime>> losses;
+    struct Loss {
+      NodeId node;
+      uint16_t bit;
+      uint16_t destuffed_bit;
+      SimTime at;
+      bool single_shot;  // as requested when the frame started
+    };
+    std::vector<Loss> losses;
   };
 
   NodeTiming timing_of(const Node& n) const;
@@ -205,7 +216,9 @@ class CanBus final : private EventHandler {
     }
     return n.encoded;
   }
-  bool on_bus(const Node& n) const { return n.connected && n.participating && !n.fc->bus_off(); }
+  bool on_bus(const Node& n) const {
+    return n.connected && n.participating && n.timing_valid && !n.fc->bus_off();
+  }
   bool can_transmit(Node& n) { return on_bus(n) && !n.listen_only && pending(n) != nullptr; }
   bool decodes(NodeId tx, NodeId rx, bool brs) {
     const std::size_t n = nodes_.size();
@@ -242,6 +255,9 @@ class CanBus final : private EventHandler {
   void arm_recovery(NodeId id);
   void recovery_check(NodeId id, SimTime now);
   void report_state(NodeId id, SimTime at);
+  void recovered(NodeId id, SimTime at);
+  // Whole bits of `node`'s own bit time in `span`, rounded to the nearest bit.
+  uint64_t bits_in(NodeId node, SimDuration span);
   void record_busy(SimTime start, SimTime end);
 
   SimScheduler& scheduler_;
@@ -257,6 +273,7 @@ class CanBus final : private EventHandler {
   SimTime last_dominant_end_;      // recessive run on the wire started here
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
+  SimTime attempt_at_;
   std::vector<std::pair<SimTime, SimDuration>> holds_;  // pending dominant holds
 
   // Scratch space reused from frame to frame, and the frame in flight.

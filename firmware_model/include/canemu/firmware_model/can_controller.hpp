@@ -71,7 +71,9 @@ class CanController {
   virtual void on_tx_done(SimTime at) = 0;
   // pending_tx() will not be retried (single shot after an error or lost arbitration).
   virtual void on_tx_dropped(SimTime at) = 0;
-  virtual void on_arbitration_lost(SimTime at, uint16_t bit) = 0;
+  // Lost arbitration at frame bit `bit` (SOF = 0, stuff bits counted), which is bit
+  // `destuffed_bit` of the frame without its stuff bits.
+  virtual void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed_bit) = 0;
   virtual void on_error(const BusErrorEvent& event) = 0;
   virtual void on_state_change(SimTime at, ErrorState state) = 0;
 };

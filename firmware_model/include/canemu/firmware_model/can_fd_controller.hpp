@@ -79,7 +79,7 @@ class CanFdController final : public CanController {
   void on_frame(SimTime at, const Frame& frame, bool own) override;
   void on_tx_done(SimTime at) override;
   void on_tx_dropped(SimTime at) override;
-  void on_arbitration_lost(SimTime at, uint16_t bit) override;
+  void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed_bit) override;
   void on_error(const BusErrorEvent& event) override;
   void on_state_change(SimTime at, ErrorState state) override;
 

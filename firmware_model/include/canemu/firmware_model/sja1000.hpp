@@ -113,9 +113,11 @@ class Sja1000 final : public CanController {
   uint8_t read(uint8_t address);
   void write(uint8_t address, uint8_t value);
 
-  // The interrupt line: IR & IER != 0. Called when it goes active.
+  // The interrupt line: active while IR has a bit set. IR bits are only set for sources enabled
+  // in IER; RI follows the FIFO (set while it holds a message and RIE is set). Called when the
+  // line goes active.
   std::function<void(SimTime)> on_interrupt;
-  bool interrupt_line() const { return (ir_ & ier_) != 0; }
+  bool interrupt_line() const { return ir_value() != 0; }
   void set_listener(ControllerEvents* listener) { listener_ = listener; }
 
   // --- CanController ---
@@ -130,16 +132,21 @@ class Sja1000 final : public CanController {
   void on_frame(SimTime at, const Frame& frame, bool own) override;
   void on_tx_done(SimTime at) override;
   void on_tx_dropped(SimTime at) override;
-  void on_arbitration_lost(SimTime at, uint16_t bit) override;
+  void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed_bit) override;
   void on_error(const BusErrorEvent& event) override;
   void on_state_change(SimTime at, ErrorState state) override;
 
  private:
   SimTime now() const;
+  uint8_t ir_value() const {
+    return static_cast<uint8_t>(ir_ | ((rmc_ > 0 && (ier_ & sja1000::IR_RI)) ? sja1000::IR_RI : 0));
+  }
   void set_ir(uint8_t bits, SimTime at);
   void command(uint8_t cmr);
   void enter_reset();
   void leave_reset();
+  void update_error_status(SimTime at);
+  void counters_written();
   uint8_t status() const;
   // Receive FIFO.
   std::size_t fifo_used() const { return fifo_used_; }
@@ -173,6 +180,7 @@ class Sja1000 final : public CanController {
   bool tx_complete_ = true;    // TCS
   bool data_overrun_ = false;  // DOS
   ErrorState state_ = ErrorState::active;
+  uint8_t error_status_ = 0;  // SR.ES | SR.BS as last reported through EI
 
   std::array<uint8_t, sja1000::kRxFifoBytes> fifo_{};
   std::size_t rbsa_ = 0;       // start of the current message

@@ -45,10 +45,15 @@ format:
 format-check:
 	clang-format --dry-run --Werror $(SOURCES)
 
-run:
-	@echo "make run: canemud (the daemon) is not part of this build yet, so there is nothing to run." >&2
-	@echo "Until then, 'make test' builds and tests the firmware model." >&2
-	@exit 1
+# canemud in the foreground on the embedded default config. The socket: $CANEMU_SOCKET, else
+# /run/canemu/canemud.sock when that directory can be used, else build/canemud.sock.
+run: deps build
+	@sock="$${CANEMU_SOCKET:-}"; \
+	if [ -z "$$sock" ]; then \
+	  if mkdir -p /run/canemu 2>/dev/null && [ -w /run/canemu ]; then sock=/run/canemu/canemud.sock; \
+	  else sock=$(CURDIR)/$(BUILD_DIR)/canemud.sock; fi; \
+	fi; \
+	exec $(BUILD_DIR)/bin/canemud --socket "$$sock"
 
 clean:
 	rm -rf $(BUILD_DIR) $(ASAN_DIR)

@@ -1,4 +1,4 @@
-// canemud: parse the command line, load and check the configuration, run.
+// canemud: parse the command line, load and check the configuration, build the simulation, run.
 #include <cstdio>
 #include <string>
 
@@ -6,15 +6,25 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/server.hpp"
+#include "canemu/daemon/simulation.hpp"
 
 int main(int argc, char** argv) {
   using namespace canemu::daemon;
   CLI::App app{"canemud: emulated IXXAT and SORCUS CAN/LIN adapters"};
   std::string config_file;
   std::string check_file;
+  std::string socket;
+  std::string time;
   app.add_option("--config", config_file, "configuration file (default: the embedded one)");
   app.add_option("--check-config", check_file, "check FILE, print a summary and exit")
       ->option_text("FILE");
+  app.add_option("--socket", socket,
+                 "control socket (default: $CANEMU_SOCKET, $RUNTIME_DIRECTORY/canemud.sock, "
+                 "/run/canemu/canemud.sock)");
+  app.add_option("--time", time,
+                 "time mode, overriding the configuration: realtime, stepped, "
+                 "scaled:F");
   CLI11_PARSE(app, argc, argv);
 
   const bool checking = !check_file.empty();
@@ -28,12 +38,34 @@ int main(int argc, char** argv) {
                  config.error().size() == 1 ? "" : "s");
     return 1;
   }
+  if (!time.empty()) {
+    auto t = parse_time_setting(time);
+    if (!t) {
+      std::fprintf(stderr, "canemud: --time: %s\n", t.error().c_str());
+      return 1;
+    }
+    config->simulation.time = *t;
+  }
+  auto sim = Simulation::build(*config);
+  if (!sim) {
+    for (const std::string& e : sim.error()) {
+      std::fprintf(stderr, "%s\n", e.c_str());
+    }
+    return 1;
+  }
   if (checking) {
     std::fputs(summary(*config).c_str(), stdout);
     std::fputs("configuration OK\n", stdout);
     return 0;
   }
+  Server server(**sim, ServerOptions{canemu::ipc::socket_path(socket), config->simulation.time});
+  if (auto opened = server.open(); !opened) {
+    std::fprintf(stderr, "<3>canemud: %s\n", opened.error().message.c_str());
+    return 1;
+  }
   std::fputs(summary(*config).c_str(), stderr);
-  std::fprintf(stderr, "canemud: the daemon's event loop is not part of this build yet\n");
-  return 2;
+  std::fprintf(stderr, "<6>canemud: listening on %s\n", server.socket_path().c_str());
+  std::fprintf(stderr, "<6>canemud: try: CANEMU_SOCKET=%s build/bin/canemu status\n",
+               server.socket_path().c_str());
+  return server.run();
 }

@@ -1,0 +1,69 @@
+// A connection to canemud: connect, handshake, requests with replies. The VCI, SORCUS and
+// Python layers build on it; it knows the protocol (ipc/), never the model.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "canemu/ipc/protocol.hpp"
+#include "canemu/ipc/seqpacket.hpp"
+
+namespace canemu::client {
+
+using ipc::IpcError;
+template <class T>
+using Result = ipc::IpcResult<T>;
+
+class Connection {
+ public:
+  // Connects to the daemon at `path` (see ipc::socket_path) and says hello. Fails with a message
+  // that says how to start canemud when nobody listens.
+  static Result<Connection> open(const std::string& path, const std::string& client_name,
+                                 int timeout_ms = 2000);
+
+  // Sends `request` and waits for its reply of type Reply (or an ErrorReply, returned as an
+  // error naming the code and the daemon's message).
+  template <class Request, class Reply>
+  Result<Reply> call(Request request) {
+    request.header.request_id = ++next_id_;
+    auto sent = ipc::send_message(fd_.get(), request);
+    if (!sent) {
+      return tl::unexpected(sent.error());
+    }
+    auto got = receive(request.header.request_id);
+    if (!got) {
+      return tl::unexpected(got.error());
+    }
+    return expect<Reply>();
+  }
+
+  uint32_t server_pid() const { return server_pid_; }
+  int fd() const { return fd_.get(); }
+
+ private:
+  Connection(ipc::UniqueFd fd, int timeout_ms) : fd_(std::move(fd)), timeout_ms_(timeout_ms) {}
+  Result<void> receive(uint32_t request_id);
+  template <class Reply>
+  Result<Reply> expect() {
+    const ipc::MsgHeader* h = reinterpret_cast<const ipc::MsgHeader*>(buffer_.data());
+    if (h->type == static_cast<uint16_t>(ipc::MsgType::error_reply)) {
+      return tl::unexpected(error_from_reply());
+    }
+    if (h->type != static_cast<uint16_t>(ipc::type_of<Reply>())) {
+      return tl::unexpected(IpcError{0, "unexpected reply type " + std::to_string(h->type)});
+    }
+    Reply r;
+    std::memcpy(&r, buffer_.data(), sizeof r);
+    return r;
+  }
+  IpcError error_from_reply() const;
+
+  ipc::UniqueFd fd_;
+  int timeout_ms_;
+  uint32_t next_id_ = 0;
+  uint32_t server_pid_ = 0;
+  std::vector<uint8_t> buffer_;
+};
+
+}  // namespace canemu::client

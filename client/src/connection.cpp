@@ -1,0 +1,58 @@
+#include "canemu/client/connection.hpp"
+
+#include <unistd.h>
+
+namespace canemu::client {
+
+Result<Connection> Connection::open(const std::string& path, const std::string& client_name,
+                                    int timeout_ms) {
+  auto fd = ipc::connect_seqpacket(path);
+  if (!fd) {
+    IpcError e = fd.error();
+    e.message += " (is canemud running? start it with 'make run' or 'canemud --socket " + path +
+                 "', or set CANEMU_SOCKET)";
+    return tl::unexpected(e);
+  }
+  Connection c(std::move(*fd), timeout_ms);
+  auto hello = ipc::make_message<ipc::Hello>();
+  hello.client_pid = static_cast<uint32_t>(::getpid());
+  ipc::copy_name(hello.client_name, client_name);
+  auto reply = c.call<ipc::Hello, ipc::HelloReply>(hello);
+  if (!reply) {
+    return tl::unexpected(reply.error());
+  }
+  c.server_pid_ = reply->server_pid;
+  return c;
+}
+
+Result<void> Connection::receive(uint32_t request_id) {
+  while (true) {
+    auto n = ipc::receive_packet(fd_.get(), buffer_, timeout_ms_);
+    if (!n) {
+      return tl::unexpected(n.error());
+    }
+    if (*n == 0) {
+      return tl::unexpected(IpcError{0, "canemud closed the connection"});
+    }
+    const ipc::ErrorCode check = ipc::check_message(buffer_.data(), *n);
+    if (check != ipc::ErrorCode::none) {
+      return tl::unexpected(
+          IpcError{0, "malformed reply from canemud (" + std::string(ipc::to_string(check)) + ")"});
+    }
+    const auto* h = reinterpret_cast<const ipc::MsgHeader*>(buffer_.data());
+    if (h->request_id == request_id) {
+      return {};
+    }
+    // Not ours (a notification): skipped until the protocol has some.
+  }
+}
+
+IpcError Connection::error_from_reply() const {
+  ipc::ErrorReply e;
+  std::memcpy(&e, buffer_.data(), sizeof e);
+  return IpcError{0, "canemud: " +
+                         std::string(ipc::to_string(static_cast<ipc::ErrorCode>(e.code))) + ": " +
+                         ipc::name_of(e.message)};
+}
+
+}  // namespace canemu::client

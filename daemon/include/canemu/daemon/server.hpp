@@ -1,0 +1,67 @@
+// canemud's event loop: one thread, epoll over the control socket, the clients, a timer for the
+// next simulated event and the signals. Time follows the configured mode:
+//   realtime  simulated time = CLOCK_MONOTONIC since start;
+//   scaled:F  simulated time = F x CLOCK_MONOTONIC since start;
+//   stepped   simulated time moves only on a client's time-step request.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "canemu/daemon/config.hpp"
+#include "canemu/daemon/simulation.hpp"
+#include "canemu/ipc/seqpacket.hpp"
+
+namespace canemu::daemon {
+
+struct ServerOptions {
+  std::string socket_path;
+  TimeSetting time;
+};
+
+class Server {
+ public:
+  Server(Simulation& sim, ServerOptions options);
+  ~Server();
+
+  // Opens the socket and the loop's descriptors; an error names the failing call.
+  ipc::IpcResult<void> open();
+  // Runs until SIGTERM or SIGINT (or stop()). Returns the exit code.
+  int run();
+  void stop() { running_ = false; }
+  const std::string& socket_path() const { return options_.socket_path; }
+
+ private:
+  struct Client {
+    ipc::UniqueFd fd;
+    bool greeted = false;
+    uint32_t uid = 0;
+    int pid = 0;
+    std::string name;
+  };
+
+  model::SimTime wall_to_sim() const;
+  void advance_to_now();
+  void arm_timer();
+  void accept_clients();
+  void serve(int fd);
+  void drop(int fd);
+  void forget_closed_clients();
+  void handle(Client& c, const std::vector<uint8_t>& packet);
+  void reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
+  bool allowed(uint32_t uid) const;
+
+  Simulation& sim_;
+  ServerOptions options_;
+  ipc::UniqueFd listen_;
+  ipc::UniqueFd epoll_;
+  ipc::UniqueFd timer_;
+  ipc::UniqueFd signals_;
+  std::map<int, Client> clients_;
+  int64_t start_mono_ns_ = 0;
+  bool running_ = true;
+  std::vector<uint8_t> buffer_;
+};
+
+}  // namespace canemu::daemon

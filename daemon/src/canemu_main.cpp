@@ -1,0 +1,292 @@
+// canemu: the command-line tool. status and time talk to canemud over its control socket;
+// calc works offline on the wire model.
+#include <cctype>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/firmware_model/bit_timing_decoders.hpp"
+#include "canemu/firmware_model/wire_encoding.hpp"
+
+namespace {
+
+using namespace canemu;
+
+constexpr const char* kStates[] = {"error-active", "warning", "error-passive", "bus-off"};
+constexpr const char* kKinds[] = {"can", "can-fd", "lin"};
+constexpr const char* kModes[] = {"realtime", "scaled", "stepped"};
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "canemu: %s\n", message.c_str());
+  return 1;
+}
+
+std::optional<int64_t> parse_duration(const std::string& text) {
+  std::size_t i = 0;
+  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.')) {
+    ++i;
+  }
+  if (i == 0) {
+    return std::nullopt;
+  }
+  const double value = std::stod(text.substr(0, i));
+  const std::string unit = text.substr(i);
+  const double scale = unit == "ns"   ? 1
+                       : unit == "us" ? 1e3
+                       : unit == "ms" ? 1e6
+                       : unit == "s"  ? 1e9
+                                      : 0;
+  if (scale == 0 || value <= 0) {
+    return std::nullopt;
+  }
+  return static_cast<int64_t>(value * scale + 0.5);
+}
+
+int cmd_status(const std::string& socket, bool json) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu status");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto reply = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  if (!reply) {
+    return fail(reply.error().message);
+  }
+  const ipc::StatusReply& s = *reply;
+  const char* mode = s.time_mode < 3 ? kModes[s.time_mode] : "?";
+  if (json) {
+    std::string out = fmt::format(
+        "{{\"server_pid\":{},\"time_mode\":\"{}\",\"time_scale\":{},\"sim_time_ns\":{},"
+        "\"clients\":{},\"buses\":[",
+        c->server_pid(), mode, s.time_scale, s.sim_time_ns, s.client_count);
+    for (uint16_t i = 0; i < s.bus_count; ++i) {
+      const ipc::StatusBus& b = s.buses[i];
+      out += fmt::format(
+          "{}{{\"name\":\"{}\",\"kind\":\"{}\",\"bitrate\":{},\"data_bitrate\":{},"
+          "\"load_percent\":{:.1f},\"frames\":{},\"error_frames\":{}}}",
+          i ? "," : "", ipc::name_of(b.name), b.kind < 3 ? kKinds[b.kind] : "?", b.bitrate,
+          b.data_bitrate, b.load_permille / 10.0, b.frames, b.error_frames);
+    }
+    out += "],\"nodes\":[";
+    for (uint16_t i = 0; i < s.node_count; ++i) {
+      const ipc::StatusNode& n = s.nodes[i];
+      out += fmt::format(
+          "{}{{\"name\":\"{}\",\"bus\":\"{}\",\"state\":\"{}\",\"tec\":{},\"rec\":{},"
+          "\"frames_sent\":{},\"frames_received\":{},\"errors\":{}}}",
+          i ? "," : "", ipc::name_of(n.name),
+          n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : "?",
+          n.state < 4 ? kStates[n.state] : "?", n.tec, n.rec, n.frames_sent,
+          n.frames_received, n.errors);
+    }
+    out += "]}\n";
+    std::fputs(out.c_str(), stdout);
+    return 0;
+  }
+  std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c->server_pid(), mode,
+              static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
+              s.client_count == 1 ? "" : "s");
+  std::printf("%-12s %-7s %9s %9s %7s %10s %8s\n", "BUS", "KIND", "BITRATE", "DATA", "LOAD",
+              "FRAMES", "ERRORS");
+  for (uint16_t i = 0; i < s.bus_count; ++i) {
+    const ipc::StatusBus& b = s.buses[i];
+    std::printf("%-12s %-7s %9u %9u %6.1f%% %10llu %8llu\n", ipc::name_of(b.name).c_str(),
+                b.kind < 3 ? kKinds[b.kind] : "?", b.bitrate, b.data_bitrate,
+                b.load_permille / 10.0, static_cast<unsigned long long>(b.frames),
+                static_cast<unsigned long long>(b.error_frames));
+  }
+  std::printf("%-14s %-12s %-14s %4s %4s %10s %10s %8s\n", "NODE", "BUS", "STATE", "TEC", "REC",
+              "SENT", "RECEIVED", "ERRORS");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    const ipc::StatusNode& n = s.nodes[i];
+    std::printf("%-14s %-12s %-14s %4u %4u %10llu %10llu %8llu\n", ipc::name_of(n.name).c_str(),
+                n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name).c_str() : "?",
+                n.state < 4 ? kStates[n.state] : "?", n.tec, n.rec,
+                static_cast<unsigned long long>(n.frames_sent),
+                static_cast<unsigned long long>(n.frames_received),
+                static_cast<unsigned long long>(n.errors));
+  }
+  return 0;
+}
+
+int cmd_time_step(const std::string& socket, const std::string& duration) {
+  const auto ns = parse_duration(duration);
+  if (!ns) {
+    return fail(fmt::format("'{}' is not a duration (examples: 150ns, 20us, 10ms, 2s)", duration));
+  }
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu time");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto req = ipc::make_message<ipc::TimeStepRequest>();
+  req.step_ns = *ns;
+  auto reply = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+  if (!reply) {
+    return fail(reply.error().message);
+  }
+  std::printf("simulated time %.9f s (%llu events)\n",
+              static_cast<double>(reply->sim_time_ns) / 1e9,
+              static_cast<unsigned long long>(reply->events_run));
+  return 0;
+}
+
+// cansend syntax: <id>#<data>, <id>#R[<len>], <id>##<flags><data>; 3 hex digits = 11 bit,
+// 8 = 29 bit; data as hex pairs, optionally separated by '.'.
+std::optional<model::Frame> parse_frame(const std::string& text, std::string& error) {
+  const std::size_t hash = text.find('#');
+  if (hash == std::string::npos || (hash != 3 && hash != 8)) {
+    error = "expected <id>#<data> with a 3- or 8-digit hex identifier";
+    return std::nullopt;
+  }
+  model::FrameSpec spec;
+  spec.id = static_cast<uint32_t>(std::stoul(text.substr(0, hash), nullptr, 16));
+  spec.extended = hash == 8;
+  std::string rest = text.substr(hash + 1);
+  if (!rest.empty() && rest[0] == '#') {
+    spec.fd = true;
+    if (rest.size() < 2 || !std::isxdigit(static_cast<unsigned char>(rest[1]))) {
+      error = "CAN FD frames need a flags digit after ## (1 = BRS, 2 = ESI)";
+      return std::nullopt;
+    }
+    const int flags = std::stoi(rest.substr(1, 1), nullptr, 16);
+    spec.brs = (flags & 1) != 0;
+    spec.esi = (flags & 2) != 0;
+    rest = rest.substr(2);
+  } else if (!rest.empty() && (rest[0] == 'R' || rest[0] == 'r')) {
+    spec.remote = true;
+    spec.dlc = rest.size() > 1 ? static_cast<uint8_t>(std::stoi(rest.substr(1))) : 0;
+    rest.clear();
+  }
+  std::vector<uint8_t> data;
+  for (std::size_t i = 0; i < rest.size();) {
+    if (rest[i] == '.') {
+      ++i;
+      continue;
+    }
+    if (i + 1 >= rest.size() || !std::isxdigit(static_cast<unsigned char>(rest[i])) ||
+        !std::isxdigit(static_cast<unsigned char>(rest[i + 1]))) {
+      error = "data must be pairs of hex digits";
+      return std::nullopt;
+    }
+    data.push_back(static_cast<uint8_t>(std::stoi(rest.substr(i, 2), nullptr, 16)));
+    i += 2;
+  }
+  spec.data = data;
+  auto f = model::Frame::create(spec);
+  if (!f) {
+    error = f.error().message;
+    return std::nullopt;
+  }
+  return *f;
+}
+
+int cmd_calc_frame(const std::string& text, uint32_t bitrate, uint32_t data_bitrate) {
+  std::string error;
+  auto frame = parse_frame(text, error);
+  if (!frame) {
+    return fail(fmt::format("'{}': {}", text, error));
+  }
+  const model::EncodedFrame e = model::encode(*frame);
+  std::array<model::FieldSpan, 19> fields;
+  const uint8_t n = e.fields(fields);
+  for (uint8_t k = 0; k < n; ++k) {
+    const uint16_t end = k + 1 < n ? fields[k + 1].begin : e.length;
+    std::string bits;
+    for (uint16_t i = fields[k].begin; i < end; ++i) {
+      bits += e.is_stuff(i) ? (e.level_at(i) ? "[1]" : "[0]") : (e.level_at(i) ? "1" : "0");
+    }
+    std::printf("%-8s %s\n", std::string(model::to_string(fields[k].field)).c_str(), bits.c_str());
+  }
+  const model::BitCounts counts = model::bit_counts(e);
+  std::printf("bits: %u (+%u intermission), stuff bits: %u dynamic, %u fixed; CRC-%u 0x%X\n",
+              e.length, model::kIntermissionBits, e.dynamic_stuff_bits, e.fixed_stuff_bits,
+              e.crc_bits, e.crc);
+  if (bitrate == 0 || data_bitrate == 0) {
+    return fail("bit rates must be above 0");
+  }
+  // Durations depend only on the rates: ten quanta per bit at exactly that rate.
+  const auto at_rate = [](uint32_t bps) {
+    return model::BitTiming{uint64_t{bps} * 10, 1, 7, 2, 1, 1};
+  };
+  const auto nominal = std::optional<model::BitTiming>(at_rate(bitrate));
+  const auto data = std::optional<model::BitTiming>(at_rate(data_bitrate));
+  std::printf("at %u bit/s%s: %lld ns (%u nominal + %u data-phase bits), %lld ns with "
+              "intermission\n",
+              bitrate, e.brs ? fmt::format(" / {} bit/s", data_bitrate).c_str() : "",
+              static_cast<long long>(model::frame_duration(e, *nominal, *data).ns()),
+              counts.nominal, counts.data,
+              static_cast<long long>((model::frame_duration(e, *nominal, *data) +
+                                      model::intermission_duration(*nominal))
+                                         .ns()));
+  return 0;
+}
+
+int cmd_calc_btr(const std::string& btr0, const std::string& btr1) {
+  const auto t = model::sja1000::decode_btr(static_cast<uint8_t>(std::stoul(btr0, nullptr, 16)),
+                                            static_cast<uint8_t>(std::stoul(btr1, nullptr, 16)));
+  if (!t) {
+    return fail(t.error().message);
+  }
+  std::printf("SJA1000 at 16 MHz: %.3f bit/s, tq %.3f ns, %u quanta (1 + %u + %u), sample point "
+              "%.1f %%, SJW %u, %u sample%s per bit\n",
+              t->bit_rate().bps(), static_cast<double>(t->quantum_ps()) / 1000.0,
+              t->quanta_per_bit(), t->tseg1, t->tseg2, t->sample_point_permille() / 10.0, t->sjw,
+              t->samples, t->samples == 1 ? "" : "s");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"canemu: talk to canemud, and calculate CAN frames and bit timings"};
+  app.require_subcommand(1);
+  std::string socket;
+  app.add_option("--socket", socket, "canemud's control socket (default: $CANEMU_SOCKET, ...)");
+
+  auto* status = app.add_subcommand("status", "buses with load, nodes with state and counters");
+  bool json = false;
+  status->add_flag("--json", json, "one JSON object instead of tables");
+
+  auto* time = app.add_subcommand("time", "simulated time (stepped mode)");
+  time->require_subcommand(1);
+  auto* step = time->add_subcommand("step", "advance simulated time, e.g. 'time step 10ms'");
+  std::string duration;
+  step->add_option("DURATION", duration, "150ns, 20us, 10ms, 2s")->required();
+
+  auto* calc = app.add_subcommand("calc", "offline calculations on the wire model");
+  calc->require_subcommand(1);
+  auto* frame = calc->add_subcommand("frame", "exact bits and duration of a frame, e.g. 123#1122");
+  std::string frame_text;
+  uint32_t bitrate = 500000;
+  uint32_t data_bitrate = 2000000;
+  frame->add_option("FRAME", frame_text, "cansend syntax: 123#1122, 12345678#R, 123##1AABB")
+      ->required();
+  frame->add_option("--bitrate", bitrate, "nominal bit/s (default 500000)");
+  frame->add_option("--data-bitrate", data_bitrate, "data-phase bit/s for BRS (default 2000000)");
+  auto* bt = calc->add_subcommand("bittiming", "decode SJA1000 BTR0 BTR1 (hex), e.g. 00 1C");
+  std::string btr0, btr1;
+  bt->add_option("BTR0", btr0, "hex")->required();
+  bt->add_option("BTR1", btr1, "hex")->required();
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*status) {
+      return cmd_status(socket, json);
+    }
+    if (*step) {
+      return cmd_time_step(socket, duration);
+    }
+    if (*frame) {
+      return cmd_calc_frame(frame_text, bitrate, data_bitrate);
+    }
+    if (*bt) {
+      return cmd_calc_btr(btr0, btr1);
+    }
+  } catch (const std::exception& e) {
+    return fail(std::string("bad argument: ") + e.what());
+  }
+  return 1;
+}

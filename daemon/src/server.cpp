@@ -1,0 +1,326 @@
+#include "canemu/daemon/server.hpp"
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+
+#include <grp.h>
+#include <poll.h>
+#include <pwd.h>
+#include <sys/epoll.h>
+#include <sys/signalfd.h>
+#include <sys/socket.h>
+#include <sys/timerfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+namespace canemu::daemon {
+
+namespace {
+
+int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+ipc::IpcError sys(const std::string& what) {
+  const int e = errno;
+  return ipc::IpcError{e, what + ": " + std::strerror(e)};
+}
+
+bool add(int epoll, int fd) {
+  epoll_event ev{};
+  ev.events = EPOLLIN;
+  ev.data.fd = fd;
+  return ::epoll_ctl(epoll, EPOLL_CTL_ADD, fd, &ev) == 0;
+}
+
+}  // namespace
+
+Server::Server(Simulation& sim, ServerOptions options) : sim_(sim), options_(std::move(options)) {}
+
+Server::~Server() {
+  if (listen_.valid()) {
+    ::unlink(options_.socket_path.c_str());
+  }
+}
+
+ipc::IpcResult<void> Server::open() {
+  auto l = ipc::listen_seqpacket(options_.socket_path);
+  if (!l) {
+    return tl::unexpected(l.error());
+  }
+  listen_ = std::move(*l);
+  epoll_.reset(::epoll_create1(EPOLL_CLOEXEC));
+  if (!epoll_.valid()) {
+    return tl::unexpected(sys("epoll_create1"));
+  }
+  timer_.reset(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+  if (!timer_.valid()) {
+    return tl::unexpected(sys("timerfd_create"));
+  }
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGINT);
+  sigaddset(&mask, SIGTERM);
+  sigaddset(&mask, SIGHUP);
+  if (::sigprocmask(SIG_BLOCK, &mask, nullptr) != 0) {
+    return tl::unexpected(sys("sigprocmask"));
+  }
+  signals_.reset(::signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC));
+  if (!signals_.valid()) {
+    return tl::unexpected(sys("signalfd"));
+  }
+  if (!add(epoll_.get(), listen_.get()) || !add(epoll_.get(), timer_.get()) ||
+      !add(epoll_.get(), signals_.get())) {
+    return tl::unexpected(sys("epoll_ctl"));
+  }
+  start_mono_ns_ = monotonic_ns();
+  return {};
+}
+
+model::SimTime Server::wall_to_sim() const {
+  const double elapsed = static_cast<double>(monotonic_ns() - start_mono_ns_);
+  const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
+  return model::SimTime::from_ns(static_cast<int64_t>(elapsed * scale));
+}
+
+void Server::advance_to_now() {
+  if (options_.time.mode != TimeMode::stepped) {
+    sim_.scheduler().run_until(wall_to_sim());
+  }
+}
+
+void Server::arm_timer() {
+  itimerspec its{};
+  if (options_.time.mode != TimeMode::stepped) {
+    if (auto next = sim_.scheduler().next_event_time()) {
+      // Absolute CLOCK_MONOTONIC deadline of the next simulated event.
+      const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
+      const int64_t wall = start_mono_ns_ + static_cast<int64_t>(static_cast<double>(next->ns()) / scale);
+      its.it_value.tv_sec = wall / 1'000'000'000;
+      its.it_value.tv_nsec = wall % 1'000'000'000;
+      if (its.it_value.tv_sec == 0 && its.it_value.tv_nsec == 0) {
+        its.it_value.tv_nsec = 1;
+      }
+    }
+  }
+  ::timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr);
+}
+
+int Server::run() {
+  constexpr int kMaxEvents = 32;
+  epoll_event events[kMaxEvents];
+  while (running_) {
+    advance_to_now();
+    arm_timer();
+    const int n = ::epoll_wait(epoll_.get(), events, kMaxEvents, -1);
+    if (n < 0) {
+      if (errno == EINTR) {
+        continue;
+      }
+      std::fprintf(stderr, "<3>canemud: epoll_wait: %s\n", std::strerror(errno));
+      return 1;
+    }
+    for (int i = 0; i < n; ++i) {
+      const int fd = events[i].data.fd;
+      if (fd == listen_.get()) {
+        accept_clients();
+      } else if (fd == timer_.get()) {
+        uint64_t expirations = 0;
+        [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
+      } else if (fd == signals_.get()) {
+        signalfd_siginfo si{};
+        while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
+          if (si.ssi_signo == SIGHUP) {
+            std::fprintf(stderr,
+                         "<4>canemud: SIGHUP: reloading the configuration is not supported yet; "
+                         "nothing changed\n");
+          } else {
+            std::fprintf(stderr, "<6>canemud: signal %u, stopping\n", si.ssi_signo);
+            running_ = false;
+          }
+        }
+      } else {
+        serve(fd);
+      }
+    }
+  }
+  return 0;
+}
+
+bool Server::allowed(uint32_t uid) const {
+  if (uid == 0 || uid == ::geteuid()) {
+    return true;
+  }
+  const SecurityConfig& sec = sim_.config().security;
+  const passwd* pw = ::getpwuid(uid);
+  if (pw == nullptr) {
+    return false;
+  }
+  for (const std::string& u : sec.allowed_users) {
+    if (u == pw->pw_name) {
+      return true;
+    }
+  }
+  if (sec.allowed_groups.empty()) {
+    return false;
+  }
+  int count = 64;
+  std::vector<gid_t> groups(static_cast<std::size_t>(count));
+  if (::getgrouplist(pw->pw_name, pw->pw_gid, groups.data(), &count) < 0) {
+    groups.resize(static_cast<std::size_t>(count));
+    ::getgrouplist(pw->pw_name, pw->pw_gid, groups.data(), &count);
+  }
+  groups.resize(static_cast<std::size_t>(count));
+  for (const std::string& g : sec.allowed_groups) {
+    const group* gr = ::getgrnam(g.c_str());
+    if (gr != nullptr &&
+        std::find(groups.begin(), groups.end(), gr->gr_gid) != groups.end()) {
+      return true;
+    }
+  }
+  return false;
+}
+
+void Server::accept_clients() {
+  while (true) {
+    const int fd = ::accept4(listen_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (fd < 0) {
+      return;  // EAGAIN: no more; other errors: the client is gone already
+    }
+    Client c;
+    c.fd.reset(fd);
+    ucred cred{};
+    socklen_t len = sizeof cred;
+    if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0) {
+      c.uid = cred.uid;
+      c.pid = cred.pid;
+    }
+    if (!allowed(c.uid)) {
+      reply_error(c, 0, ipc::ErrorCode::permission_denied,
+                  fmt::format("uid {} is not allowed by the [security] configuration", c.uid));
+      continue;  // closed when c goes out of scope
+    }
+    if (!add(epoll_.get(), fd)) {
+      continue;
+    }
+    clients_.emplace(fd, std::move(c));
+  }
+}
+
+void Server::forget_closed_clients() {
+  std::vector<int> gone;
+  for (const auto& [fd, c] : clients_) {
+    pollfd p{fd, POLLRDHUP, 0};
+    if (::poll(&p, 1, 0) == 1 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR))) {
+      gone.push_back(fd);
+    }
+  }
+  for (int fd : gone) {
+    drop(fd);
+  }
+}
+
+void Server::drop(int fd) {
+  ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd, nullptr);
+  clients_.erase(fd);
+}
+
+void Server::serve(int fd) {
+  auto it = clients_.find(fd);
+  if (it == clients_.end()) {
+    return;
+  }
+  auto n = ipc::receive_packet(fd, buffer_, 0);
+  if (!n || *n == 0) {
+    drop(fd);  // closed, or broken: its resources go at once
+    return;
+  }
+  handle(it->second, buffer_);
+}
+
+void Server::reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code,
+                         const std::string& text) {
+  auto e = ipc::make_message<ipc::ErrorReply>(request_id);
+  e.code = static_cast<uint32_t>(code);
+  ipc::copy_name(e.message, text);
+  (void)ipc::send_message(c.fd.get(), e);
+}
+
+void Server::handle(Client& c, const std::vector<uint8_t>& packet) {
+  uint32_t request_id = 0;
+  if (packet.size() >= sizeof(ipc::MsgHeader)) {
+    ipc::MsgHeader h;
+    std::memcpy(&h, packet.data(), sizeof h);
+    request_id = h.request_id;
+  }
+  const ipc::ErrorCode check = ipc::check_message(packet.data(), packet.size());
+  if (check != ipc::ErrorCode::none) {
+    reply_error(c, request_id, check,
+                fmt::format("rejected a {}-byte message", packet.size()));
+    return;
+  }
+  ipc::MsgHeader h;
+  std::memcpy(&h, packet.data(), sizeof h);
+  const auto type = static_cast<ipc::MsgType>(h.type);
+  if (!c.greeted && type != ipc::MsgType::hello) {
+    reply_error(c, request_id, ipc::ErrorCode::not_hello, "say hello first");
+    return;
+  }
+  switch (type) {
+    case ipc::MsgType::hello: {
+      ipc::Hello m;
+      std::memcpy(&m, packet.data(), sizeof m);
+      c.greeted = true;
+      c.name = ipc::name_of(m.client_name);
+      auto r = ipc::make_message<ipc::HelloReply>(request_id);
+      r.server_pid = static_cast<uint32_t>(::getpid());
+      (void)ipc::send_message(c.fd.get(), r);
+      return;
+    }
+    case ipc::MsgType::status_request: {
+      advance_to_now();
+      forget_closed_clients();
+      auto r = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>(request_id));
+      sim_.fill_status(*r);
+      r->time_mode = static_cast<uint8_t>(options_.time.mode == TimeMode::realtime ? 0
+                                          : options_.time.mode == TimeMode::scaled ? 1
+                                                                                   : 2);
+      r->time_scale = options_.time.scale;
+      r->client_count = static_cast<uint16_t>(clients_.size());
+      (void)ipc::send_message(c.fd.get(), *r);
+      return;
+    }
+    case ipc::MsgType::time_step_request: {
+      ipc::TimeStepRequest m;
+      std::memcpy(&m, packet.data(), sizeof m);
+      if (options_.time.mode != TimeMode::stepped) {
+        reply_error(c, request_id, ipc::ErrorCode::not_stepped,
+                    fmt::format("time runs {}; steps need --time stepped",
+                                to_string(options_.time)));
+        return;
+      }
+      if (m.step_ns <= 0 || m.step_ns > int64_t{3600} * 1'000'000'000) {
+        reply_error(c, request_id, ipc::ErrorCode::bad_argument,
+                    fmt::format("step of {} ns is outside 1 ns .. 1 h", m.step_ns));
+        return;
+      }
+      auto r = ipc::make_message<ipc::TimeStepReply>(request_id);
+      model::SimScheduler& s = sim_.scheduler();
+      r.events_run = s.run_until(s.now() + model::SimDuration(m.step_ns));
+      r.sim_time_ns = s.now().ns();
+      (void)ipc::send_message(c.fd.get(), r);
+      return;
+    }
+    default:
+      reply_error(c, request_id, ipc::ErrorCode::unknown_type,
+                  fmt::format("message type {} is not a request", h.type));
+      return;
+  }
+}
+
+}  // namespace canemu::daemon

@@ -1,0 +1,166 @@
+#include "canemu/daemon/simulation.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "canemu/firmware_model/bit_timing_decoders.hpp"
+
+namespace canemu::daemon {
+
+using namespace canemu::model;
+
+std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate,
+                                                           uint32_t sample_point) {
+  std::optional<std::pair<uint8_t, uint8_t>> best;
+  int best_error = 1 << 30;
+  for (uint8_t brp = 0; brp < 64; ++brp) {
+    for (uint8_t t2 = 1; t2 < 8; ++t2) {
+      for (uint8_t t1 = 0; t1 < 16; ++t1) {
+        const uint8_t btr0 = brp;
+        const uint8_t btr1 = static_cast<uint8_t>((t2 << 4) | t1);
+        auto t = sja1000::decode_btr(btr0, btr1);
+        if (!t || !(t->bit_rate() == BitRate{bitrate, 1})) {
+          continue;
+        }
+        const int error = std::abs(static_cast<int>(t->sample_point_permille()) -
+                                   static_cast<int>(sample_point));
+        if (error < best_error) {
+          best_error = error;
+          best = std::make_pair(btr0, btr1);
+        }
+      }
+    }
+  }
+  return best;
+}
+
+std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
+                                       vci::Phase phase) {
+  const vci::BtpRange& range = phase == vci::Phase::nominal ? vci::kFdNominalRange
+                                                            : vci::kFdDataRange;
+  std::optional<BitTiming> best;
+  int best_error = 1 << 30;
+  for (uint32_t prescaler = range.min.bps; prescaler <= range.max.bps; ++prescaler) {
+    const uint64_t per_bit = uint64_t{bitrate} * prescaler;
+    if (range.clock_hz % per_bit != 0) {
+      continue;
+    }
+    const uint64_t quanta = range.clock_hz / per_bit;
+    if (quanta < 4 || quanta > 1u + range.max.ts1 + range.max.ts2) {
+      continue;
+    }
+    const auto ts2 = static_cast<uint16_t>(std::max<uint64_t>(
+        range.min.ts2, quanta - (quanta * sample_point + 500) / 1000));
+    const auto ts1 = static_cast<uint16_t>(quanta - 1 - ts2);
+    auto t = vci::decode_btp(vci::Btp{vci::kBtModeRaw, prescaler, ts1, ts2,
+                                      static_cast<uint16_t>(std::min<uint16_t>(ts2, 4)), 0},
+                             range, phase);
+    if (!t) {
+      continue;
+    }
+    const int error = std::abs(static_cast<int>(t->sample_point_permille()) -
+                               static_cast<int>(sample_point));
+    if (error < best_error) {
+      best_error = error;
+      best = *t;
+    }
+  }
+  return best;
+}
+
+tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::build(
+    const Config& config) {
+  std::unique_ptr<Simulation> sim(new Simulation(config));
+  std::vector<std::string> errors;
+  for (const BusConfig& b : sim->config_.buses) {
+    sim->buses_.push_back(Bus{std::make_unique<CanBus>(sim->scheduler_, b.name), &b});
+  }
+  for (const DeviceConfig& d : sim->config_.devices) {
+    for (std::size_t i = 0; i < d.controllers.size(); ++i) {
+      std::size_t bus = 0;
+      while (sim->buses_[bus].config->name != d.controllers[i]) {
+        ++bus;
+      }
+      const BusConfig& bc = *sim->buses_[bus].config;
+      Controller c;
+      c.name = fmt::format("{}:{}", d.name, i);
+      c.bus = bus;
+      if (d.model == DeviceModel::ixxat_usb_to_can) {
+        const auto btr = sja1000_btr_for(bc.bitrate, bc.sample_point);
+        if (!btr) {
+          errors.push_back(fmt::format(
+              "{}:{}: device {}: an SJA1000 at 16 MHz cannot run bus {} at {} bit/s",
+              config.source, d.line, d.name, bc.name, bc.bitrate));
+          continue;
+        }
+        c.sja1000 = std::make_unique<Sja1000>();
+        c.sja1000->connect(*sim->buses_[bus].bus);
+        // Programmed as the adapter firmware does at start: timing, accept all, operating mode.
+        c.sja1000->write(sja1000::BTR0, btr->first);
+        c.sja1000->write(sja1000::BTR1, btr->second);
+        for (uint8_t k = 0; k < 4; ++k) {
+          c.sja1000->write(static_cast<uint8_t>(sja1000::AMR0 + k), 0xFF);
+        }
+        c.sja1000->write(sja1000::MOD, 0);
+        c.node = c.sja1000->node();
+      } else {
+        CanFdConfig fc;
+        auto nominal = fd_timing_for(bc.bitrate, bc.sample_point, vci::Phase::nominal);
+        auto data = fd_timing_for(bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate,
+                                  bc.sample_point, vci::Phase::data);
+        if (!nominal || !data) {
+          errors.push_back(
+              fmt::format("{}:{}: device {}: the CAN FD controller cannot run bus {} at {} bit/s",
+                          config.source, d.line, d.name, bc.name, bc.bitrate));
+          continue;
+        }
+        fc.nominal = *nominal;
+        fc.data = *data;
+        c.fd = std::make_unique<CanFdController>(fc);
+        c.fd->connect(*sim->buses_[bus].bus);
+        c.fd->start();
+        c.node = c.fd->node();
+      }
+      sim->controllers_.push_back(std::move(c));
+    }
+  }
+  if (!errors.empty()) {
+    return tl::unexpected(errors);
+  }
+  return sim;
+}
+
+void Simulation::fill_status(ipc::StatusReply& r) {
+  const SimTime now = scheduler_.now();
+  r.sim_time_ns = now.ns();
+  r.bus_count = static_cast<uint16_t>(std::min(buses_.size(), ipc::kMaxStatusBuses));
+  for (std::size_t i = 0; i < r.bus_count; ++i) {
+    const Bus& b = buses_[i];
+    ipc::StatusBus& s = r.buses[i];
+    ipc::copy_name(s.name, b.config->name);
+    s.kind = static_cast<uint8_t>(b.config->kind);
+    s.bitrate = b.config->bitrate;
+    s.data_bitrate = b.config->data_bitrate;
+    s.load_permille = static_cast<uint32_t>(b.bus->bus_load_percent(now) * 10 + 0.5);
+    s.frames = b.bus->frames_on_bus();
+    s.error_frames = b.bus->error_frames_on_bus();
+  }
+  r.node_count = static_cast<uint16_t>(std::min(controllers_.size(), ipc::kMaxStatusNodes));
+  for (std::size_t i = 0; i < r.node_count; ++i) {
+    Controller& c = controllers_[i];
+    ipc::StatusNode& s = r.nodes[i];
+    ipc::copy_name(s.name, c.name);
+    s.bus = static_cast<uint16_t>(c.bus);
+    FaultConfinement& fc = c.controller().confinement();
+    s.state = static_cast<uint8_t>(fc.state());
+    s.tec = fc.tec();
+    s.rec = fc.rec();
+    const NodeStats& st = buses_[c.bus].bus->stats(c.node);
+    s.frames_sent = st.frames_sent;
+    s.frames_received = st.frames_received;
+    s.errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
+  }
+}
+
+}  // namespace canemu::daemon

@@ -1,0 +1,139 @@
+#include "canemu/ipc/seqpacket.hpp"
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+namespace canemu::ipc {
+
+namespace {
+
+IpcError system_error(const std::string& what) {
+  const int e = errno;
+  return IpcError{e, what + ": " + std::strerror(e)};
+}
+
+tl::expected<sockaddr_un, IpcError> address(const std::string& path) {
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  if (path.empty() || path.size() >= sizeof a.sun_path) {
+    return tl::unexpected(IpcError{
+        ENAMETOOLONG, "socket path \"" + path + "\" is empty or longer than " +
+                          std::to_string(sizeof a.sun_path - 1) + " bytes"});
+  }
+  std::memcpy(a.sun_path, path.c_str(), path.size() + 1);
+  return a;
+}
+
+}  // namespace
+
+std::string socket_path(const std::string& explicit_path) {
+  if (!explicit_path.empty()) {
+    return explicit_path;
+  }
+  if (const char* s = std::getenv("CANEMU_SOCKET"); s != nullptr && *s != '\0') {
+    return s;
+  }
+  if (const char* d = std::getenv("RUNTIME_DIRECTORY"); d != nullptr && *d != '\0') {
+    // systemd may pass several directories separated by ':'; the first is ours.
+    std::string dir(d);
+    dir = dir.substr(0, dir.find(':'));
+    return dir + "/canemud.sock";
+  }
+  return "/run/canemu/canemud.sock";
+}
+
+IpcResult<UniqueFd> listen_seqpacket(const std::string& path, int backlog) {
+  auto a = address(path);
+  if (!a) {
+    return tl::unexpected(a.error());
+  }
+  UniqueFd fd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+  if (!fd.valid()) {
+    return tl::unexpected(system_error("socket"));
+  }
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) {
+    ::unlink(path.c_str());  // left by an earlier run
+  }
+  if (::bind(fd.get(), reinterpret_cast<const sockaddr*>(&*a), sizeof *a) != 0) {
+    return tl::unexpected(system_error("bind " + path));
+  }
+  if (::listen(fd.get(), backlog) != 0) {
+    return tl::unexpected(system_error("listen " + path));
+  }
+  return fd;
+}
+
+IpcResult<UniqueFd> connect_seqpacket(const std::string& path) {
+  auto a = address(path);
+  if (!a) {
+    return tl::unexpected(a.error());
+  }
+  UniqueFd fd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0));
+  if (!fd.valid()) {
+    return tl::unexpected(system_error("socket"));
+  }
+  if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&*a), sizeof *a) != 0) {
+    return tl::unexpected(system_error("connect " + path));
+  }
+  return fd;
+}
+
+IpcResult<void> send_packet(int fd, const void* data, std::size_t size) {
+  while (true) {
+    const ssize_t n = ::send(fd, data, size, MSG_NOSIGNAL);
+    if (n == static_cast<ssize_t>(size)) {
+      return {};
+    }
+    if (n < 0 && errno == EINTR) {
+      continue;
+    }
+    if (n < 0) {
+      return tl::unexpected(system_error("send"));
+    }
+    return tl::unexpected(IpcError{EMSGSIZE, "send: short packet"});
+  }
+}
+
+IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int timeout_ms) {
+  buffer.resize(kMaxMessageSize);
+  if (timeout_ms >= 0) {
+    pollfd p{fd, POLLIN, 0};
+    int r;
+    do {
+      r = ::poll(&p, 1, timeout_ms);
+    } while (r < 0 && errno == EINTR);
+    if (r < 0) {
+      return tl::unexpected(system_error("poll"));
+    }
+    if (r == 0) {
+      return tl::unexpected(IpcError{ETIMEDOUT, "no reply within " + std::to_string(timeout_ms) +
+                                                    " ms"});
+    }
+  }
+  while (true) {
+    const ssize_t n = ::recv(fd, buffer.data(), buffer.size(), MSG_TRUNC);
+    if (n < 0 && errno == EINTR) {
+      continue;
+    }
+    if (n < 0) {
+      return tl::unexpected(system_error("recv"));
+    }
+    if (static_cast<std::size_t>(n) > buffer.size()) {
+      buffer.clear();
+      return tl::unexpected(IpcError{EMSGSIZE, "recv: packet larger than " +
+                                                   std::to_string(kMaxMessageSize) + " bytes"});
+    }
+    buffer.resize(static_cast<std::size_t>(n));
+    return static_cast<std::size_t>(n);
+  }
+}
+
+}  // namespace canemu::ipc

@@ -1,0 +1,200 @@
+// canemud as a process: started in stepped time on a private socket, driven by real clients.
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <cstring>
+#include <string>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "canemu/client/connection.hpp"
+
+extern char** environ;
+
+namespace canemu {
+namespace {
+
+// Waits until `fd` is readable or `timeout_ms` passes.
+bool readable(int fd, int timeout_ms) {
+  pollfd p{fd, POLLIN, 0};
+  return ::poll(&p, 1, timeout_ms) == 1;
+}
+
+class Daemon {
+ public:
+  explicit Daemon(const std::string& time = "stepped") {
+    char dir[] = "/tmp/canemu-test-XXXXXX";
+    dir_ = ::mkdtemp(dir);
+    socket_ = dir_ + "/canemud.sock";
+    int err[2];
+    EXPECT_EQ(::pipe2(err, O_CLOEXEC), 0);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, err[1], 2);
+    const std::string time_arg = "--time=" + time;
+    const std::string socket_arg = "--socket=" + socket_;
+    char* argv[] = {const_cast<char*>(CANEMUD_PATH), const_cast<char*>(time_arg.c_str()),
+                    const_cast<char*>(socket_arg.c_str()), nullptr};
+    EXPECT_EQ(::posix_spawn(&pid_, CANEMUD_PATH, &actions, nullptr, argv, environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(err[1]);
+    stderr_ = err[0];
+    // Ready when it says it listens (stderr), within 10 s.
+    std::string log;
+    char buf[512];
+    while (log.find("listening on") == std::string::npos && readable(stderr_, 10'000)) {
+      const ssize_t n = ::read(stderr_, buf, sizeof buf);
+      if (n <= 0) {
+        break;
+      }
+      log.append(buf, static_cast<std::size_t>(n));
+    }
+    EXPECT_NE(log.find("listening on " + socket_), std::string::npos) << log;
+  }
+  ~Daemon() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+    ::close(stderr_);
+    ::unlink(socket_.c_str());
+    ::rmdir(dir_.c_str());
+  }
+  // SIGTERM, then the exit status within `timeout_ms` (-1 if it did not exit).
+  int terminate(int timeout_ms) {
+    const int pidfd = static_cast<int>(::syscall(SYS_pidfd_open, pid_, 0));
+    ::kill(pid_, SIGTERM);
+    int status = -1;
+    if (pidfd >= 0 && readable(pidfd, timeout_ms)) {
+      ::waitpid(pid_, &status, 0);
+      pid_ = -1;
+    }
+    if (pidfd >= 0) {
+      ::close(pidfd);
+    }
+    return status;
+  }
+  const std::string& socket() const { return socket_; }
+
+ private:
+  std::string dir_;
+  std::string socket_;
+  pid_t pid_ = -1;
+  int stderr_ = -1;
+};
+
+client::Connection connect(const Daemon& d, const char* name = "test") {
+  auto c = client::Connection::open(d.socket(), name);
+  EXPECT_TRUE(c) << c.error().message;
+  return std::move(*c);
+}
+
+ipc::StatusReply status(client::Connection& c) {
+  auto r = c.call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  EXPECT_TRUE(r) << r.error().message;
+  return r ? *r : ipc::StatusReply{};
+}
+
+TEST(Canemud, ServesTheEmbeddedDefaultAndStepsTimeExactly) {
+  Daemon d;
+  auto c = connect(d);
+  const ipc::StatusReply s = status(c);
+  EXPECT_EQ(s.time_mode, static_cast<uint8_t>(ipc::WireTimeMode::stepped));
+  EXPECT_EQ(s.sim_time_ns, 0);
+  ASSERT_EQ(s.bus_count, 2);
+  EXPECT_EQ(ipc::name_of(s.buses[0].name), "can0");
+  EXPECT_EQ(s.buses[1].bitrate, 500000u);
+  ASSERT_EQ(s.node_count, 2);
+  EXPECT_EQ(ipc::name_of(s.nodes[1].name), "ixxat0:1");
+  EXPECT_EQ(s.nodes[1].bus, 1);
+  EXPECT_EQ(s.nodes[0].state, static_cast<uint8_t>(ipc::WireErrorState::active));
+  for (int k = 1; k <= 3; ++k) {
+    auto step = ipc::make_message<ipc::TimeStepRequest>();
+    step.step_ns = 10'000'000;
+    auto r = c.call<ipc::TimeStepRequest, ipc::TimeStepReply>(step);
+    ASSERT_TRUE(r) << r.error().message;
+    EXPECT_EQ(r->sim_time_ns, k * 10'000'000);
+  }
+  EXPECT_EQ(status(c).sim_time_ns, 30'000'000);
+  EXPECT_EQ(d.terminate(10'000), 0);
+}
+
+TEST(Canemud, RejectsBadStepsAndStepsOutsideSteppedMode) {
+  Daemon d;
+  auto c = connect(d);
+  auto step = ipc::make_message<ipc::TimeStepRequest>();
+  step.step_ns = -5;
+  auto r = c.call<ipc::TimeStepRequest, ipc::TimeStepReply>(step);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("bad_argument"), std::string::npos) << r.error().message;
+
+  Daemon realtime("realtime");
+  auto rt = connect(realtime);
+  step.step_ns = 1000;
+  auto r2 = rt.call<ipc::TimeStepRequest, ipc::TimeStepReply>(step);
+  ASSERT_FALSE(r2);
+  EXPECT_NE(r2.error().message.find("not_stepped"), std::string::npos) << r2.error().message;
+  // Realtime: simulated time moves on its own.
+  const int64_t t0 = status(rt).sim_time_ns;
+  EXPECT_GT(t0, 0);
+}
+
+TEST(Canemud, MalformedMessagesGetErrorsAndOthersAreStillServed) {
+  Daemon d;
+  auto good = connect(d, "good");
+  auto raw = ipc::connect_seqpacket(d.socket());
+  ASSERT_TRUE(raw);
+  std::vector<uint8_t> buf;
+  auto expect_error = [&](const void* data, std::size_t size, ipc::ErrorCode code) {
+    ASSERT_TRUE(ipc::send_packet(raw->get(), data, size));
+    auto n = ipc::receive_packet(raw->get(), buf, 5000);
+    ASSERT_TRUE(n) << n.error().message;
+    ASSERT_EQ(*n, sizeof(ipc::ErrorReply));
+    ipc::ErrorReply e;
+    std::memcpy(&e, buf.data(), sizeof e);
+    EXPECT_EQ(e.code, static_cast<uint32_t>(code)) << ipc::name_of(e.message);
+  };
+  const char garbage[3] = {1, 2, 3};
+  expect_error(garbage, sizeof garbage, ipc::ErrorCode::bad_size);
+  auto bad_magic = ipc::make_message<ipc::StatusRequest>();
+  bad_magic.header.magic = 0xDEADBEEF;
+  expect_error(&bad_magic, sizeof bad_magic, ipc::ErrorCode::bad_magic);
+  auto lying = ipc::make_message<ipc::StatusRequest>();
+  lying.header.size = 4000;
+  expect_error(&lying, sizeof lying, ipc::ErrorCode::bad_size);
+  auto early = ipc::make_message<ipc::StatusRequest>();
+  expect_error(&early, sizeof early, ipc::ErrorCode::not_hello);
+  auto unknown = ipc::make_message<ipc::StatusRequest>();
+  unknown.header.type = 999;
+  expect_error(&unknown, sizeof unknown, ipc::ErrorCode::unknown_type);
+  std::vector<uint8_t> huge(ipc::kMaxMessageSize + 100, 0xAB);
+  ASSERT_TRUE(ipc::send_packet(raw->get(), huge.data(), huge.size()));
+  // The well-behaved client is served all along.
+  EXPECT_EQ(status(good).bus_count, 2);
+}
+
+TEST(Canemud, AClientThatGoesAwayIsForgotten) {
+  Daemon d;
+  auto a = connect(d, "a");
+  {
+    auto b = connect(d, "b");
+    EXPECT_EQ(status(b).client_count, 2);
+  }
+  // b's socket is closed; the daemon notices before it answers a's next request.
+  EXPECT_EQ(status(a).client_count, 1);
+}
+
+TEST(Canemud, NobodyListeningIsAClearError) {
+  auto c = client::Connection::open("/tmp/canemu-nobody-listens.sock", "t");
+  ASSERT_FALSE(c);
+  EXPECT_NE(c.error().message.find("is canemud running?"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace canemu

@@ -50,9 +50,9 @@ Result<void> Connection::receive(uint32_t request_id) {
 IpcError Connection::error_from_reply() const {
   ipc::ErrorReply e;
   std::memcpy(&e, buffer_.data(), sizeof e);
-  return IpcError{0, "canemud: " +
-                         std::string(ipc::to_string(static_cast<ipc::ErrorCode>(e.code))) + ": " +
-                         ipc::name_of(e.message)};
+  return IpcError{
+      0, "canemud: " + std::string(ipc::to_string(static_cast<ipc::ErrorCode>(e.code))) + ": " +
+             ipc::name_of(e.message)};
 }
 
 }  // namespace canemu::client

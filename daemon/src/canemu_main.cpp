@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
@@ -52,7 +52,8 @@ int cmd_status(const std::string& socket, bool json) {
   if (!c) {
     return fail(c.error().message);
   }
-  auto reply = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  auto reply =
+      c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
   if (!reply) {
     return fail(reply.error().message);
   }
@@ -79,8 +80,8 @@ int cmd_status(const std::string& socket, bool json) {
           "\"frames_sent\":{},\"frames_received\":{},\"errors\":{}}}",
           i ? "," : "", ipc::name_of(n.name),
           n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : "?",
-          n.state < 4 ? kStates[n.state] : "?", n.tec, n.rec, n.frames_sent,
-          n.frames_received, n.errors);
+          n.state < 4 ? kStates[n.state] : "?", n.tec, n.rec, n.frames_sent, n.frames_received,
+          n.errors);
     }
     out += "]}\n";
     std::fputs(out.c_str(), stdout);
@@ -213,14 +214,15 @@ int cmd_calc_frame(const std::string& text, uint32_t bitrate, uint32_t data_bitr
   };
   const auto nominal = std::optional<model::BitTiming>(at_rate(bitrate));
   const auto data = std::optional<model::BitTiming>(at_rate(data_bitrate));
-  std::printf("at %u bit/s%s: %lld ns (%u nominal + %u data-phase bits), %lld ns with "
-              "intermission\n",
-              bitrate, e.brs ? fmt::format(" / {} bit/s", data_bitrate).c_str() : "",
-              static_cast<long long>(model::frame_duration(e, *nominal, *data).ns()),
-              counts.nominal, counts.data,
-              static_cast<long long>((model::frame_duration(e, *nominal, *data) +
-                                      model::intermission_duration(*nominal))
-                                         .ns()));
+  std::printf(
+      "at %u bit/s%s: %lld ns (%u nominal + %u data-phase bits), %lld ns with "
+      "intermission\n",
+      bitrate, e.brs ? fmt::format(" / {} bit/s", data_bitrate).c_str() : "",
+      static_cast<long long>(model::frame_duration(e, *nominal, *data).ns()), counts.nominal,
+      counts.data,
+      static_cast<long long>(
+          (model::frame_duration(e, *nominal, *data) + model::intermission_duration(*nominal))
+              .ns()));
   return 0;
 }
 
@@ -230,11 +232,12 @@ int cmd_calc_btr(const std::string& btr0, const std::string& btr1) {
   if (!t) {
     return fail(t.error().message);
   }
-  std::printf("SJA1000 at 16 MHz: %.3f bit/s, tq %.3f ns, %u quanta (1 + %u + %u), sample point "
-              "%.1f %%, SJW %u, %u sample%s per bit\n",
-              t->bit_rate().bps(), static_cast<double>(t->quantum_ps()) / 1000.0,
-              t->quanta_per_bit(), t->tseg1, t->tseg2, t->sample_point_permille() / 10.0, t->sjw,
-              t->samples, t->samples == 1 ? "" : "s");
+  std::printf(
+      "SJA1000 at 16 MHz: %.3f bit/s, tq %.3f ns, %u quanta (1 + %u + %u), sample point "
+      "%.1f %%, SJW %u, %u sample%s per bit\n",
+      t->bit_rate().bps(), static_cast<double>(t->quantum_ps()) / 1000.0, t->quanta_per_bit(),
+      t->tseg1, t->tseg2, t->sample_point_permille() / 10.0, t->sjw, t->samples,
+      t->samples == 1 ? "" : "s");
   return 0;
 }
 

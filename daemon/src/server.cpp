@@ -100,7 +100,8 @@ void Server::arm_timer() {
     if (auto next = sim_.scheduler().next_event_time()) {
       // Absolute CLOCK_MONOTONIC deadline of the next simulated event.
       const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
-      const int64_t wall = start_mono_ns_ + static_cast<int64_t>(static_cast<double>(next->ns()) / scale);
+      const int64_t wall =
+          start_mono_ns_ + static_cast<int64_t>(static_cast<double>(next->ns()) / scale);
       its.it_value.tv_sec = wall / 1'000'000'000;
       its.it_value.tv_nsec = wall % 1'000'000'000;
       if (its.it_value.tv_sec == 0 && its.it_value.tv_nsec == 0) {
@@ -178,8 +179,7 @@ bool Server::allowed(uint32_t uid) const {
   groups.resize(static_cast<std::size_t>(count));
   for (const std::string& g : sec.allowed_groups) {
     const group* gr = ::getgrnam(g.c_str());
-    if (gr != nullptr &&
-        std::find(groups.begin(), groups.end(), gr->gr_gid) != groups.end()) {
+    if (gr != nullptr && std::find(groups.begin(), groups.end(), gr->gr_gid) != groups.end()) {
       return true;
     }
   }
@@ -260,8 +260,7 @@ void Server::handle(Client& c, const std::vector<uint8_t>& packet) {
   }
   const ipc::ErrorCode check = ipc::check_message(packet.data(), packet.size());
   if (check != ipc::ErrorCode::none) {
-    reply_error(c, request_id, check,
-                fmt::format("rejected a {}-byte message", packet.size()));
+    reply_error(c, request_id, check, fmt::format("rejected a {}-byte message", packet.size()));
     return;
   }
   ipc::MsgHeader h;
@@ -299,9 +298,9 @@ void Server::handle(Client& c, const std::vector<uint8_t>& packet) {
       ipc::TimeStepRequest m;
       std::memcpy(&m, packet.data(), sizeof m);
       if (options_.time.mode != TimeMode::stepped) {
-        reply_error(c, request_id, ipc::ErrorCode::not_stepped,
-                    fmt::format("time runs {}; steps need --time stepped",
-                                to_string(options_.time)));
+        reply_error(
+            c, request_id, ipc::ErrorCode::not_stepped,
+            fmt::format("time runs {}; steps need --time stepped", to_string(options_.time)));
         return;
       }
       if (m.step_ns <= 0 || m.step_ns > int64_t{3600} * 1'000'000'000) {

@@ -23,8 +23,8 @@ std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate,
         if (!t || !(t->bit_rate() == BitRate{bitrate, 1})) {
           continue;
         }
-        const int error = std::abs(static_cast<int>(t->sample_point_permille()) -
-                                   static_cast<int>(sample_point));
+        const int error =
+            std::abs(static_cast<int>(t->sample_point_permille()) - static_cast<int>(sample_point));
         if (error < best_error) {
           best_error = error;
           best = std::make_pair(btr0, btr1);
@@ -35,10 +35,9 @@ std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate,
   return best;
 }
 
-std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
-                                       vci::Phase phase) {
-  const vci::BtpRange& range = phase == vci::Phase::nominal ? vci::kFdNominalRange
-                                                            : vci::kFdDataRange;
+std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point, vci::Phase phase) {
+  const vci::BtpRange& range =
+      phase == vci::Phase::nominal ? vci::kFdNominalRange : vci::kFdDataRange;
   std::optional<BitTiming> best;
   int best_error = 1 << 30;
   for (uint32_t prescaler = range.min.bps; prescaler <= range.max.bps; ++prescaler) {
@@ -50,8 +49,8 @@ std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
     if (quanta < 4 || quanta > 1u + range.max.ts1 + range.max.ts2) {
       continue;
     }
-    const auto ts2 = static_cast<uint16_t>(std::max<uint64_t>(
-        range.min.ts2, quanta - (quanta * sample_point + 500) / 1000));
+    const auto ts2 = static_cast<uint16_t>(
+        std::max<uint64_t>(range.min.ts2, quanta - (quanta * sample_point + 500) / 1000));
     const auto ts1 = static_cast<uint16_t>(quanta - 1 - ts2);
     auto t = vci::decode_btp(vci::Btp{vci::kBtModeRaw, prescaler, ts1, ts2,
                                       static_cast<uint16_t>(std::min<uint16_t>(ts2, 4)), 0},
@@ -59,8 +58,8 @@ std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
     if (!t) {
       continue;
     }
-    const int error = std::abs(static_cast<int>(t->sample_point_permille()) -
-                               static_cast<int>(sample_point));
+    const int error =
+        std::abs(static_cast<int>(t->sample_point_permille()) - static_cast<int>(sample_point));
     if (error < best_error) {
       best_error = error;
       best = *t;
@@ -89,9 +88,9 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
       if (d.model == DeviceModel::ixxat_usb_to_can) {
         const auto btr = sja1000_btr_for(bc.bitrate, bc.sample_point);
         if (!btr) {
-          errors.push_back(fmt::format(
-              "{}:{}: device {}: an SJA1000 at 16 MHz cannot run bus {} at {} bit/s",
-              config.source, d.line, d.name, bc.name, bc.bitrate));
+          errors.push_back(
+              fmt::format("{}:{}: device {}: an SJA1000 at 16 MHz cannot run bus {} at {} bit/s",
+                          config.source, d.line, d.name, bc.name, bc.bitrate));
           continue;
         }
         c.sja1000 = std::make_unique<Sja1000>();

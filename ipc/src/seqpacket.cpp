@@ -23,9 +23,9 @@ tl::expected<sockaddr_un, IpcError> address(const std::string& path) {
   sockaddr_un a{};
   a.sun_family = AF_UNIX;
   if (path.empty() || path.size() >= sizeof a.sun_path) {
-    return tl::unexpected(IpcError{
-        ENAMETOOLONG, "socket path \"" + path + "\" is empty or longer than " +
-                          std::to_string(sizeof a.sun_path - 1) + " bytes"});
+    return tl::unexpected(
+        IpcError{ENAMETOOLONG, "socket path \"" + path + "\" is empty or longer than " +
+                                   std::to_string(sizeof a.sun_path - 1) + " bytes"});
   }
   std::memcpy(a.sun_path, path.c_str(), path.size() + 1);
   return a;
@@ -114,8 +114,8 @@ IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int 
       return tl::unexpected(system_error("poll"));
     }
     if (r == 0) {
-      return tl::unexpected(IpcError{ETIMEDOUT, "no reply within " + std::to_string(timeout_ms) +
-                                                    " ms"});
+      return tl::unexpected(
+          IpcError{ETIMEDOUT, "no reply within " + std::to_string(timeout_ms) + " ms"});
     }
   }
   while (true) {
@@ -128,8 +128,8 @@ IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int 
     }
     if (static_cast<std::size_t>(n) > buffer.size()) {
       buffer.clear();
-      return tl::unexpected(IpcError{EMSGSIZE, "recv: packet larger than " +
-                                                   std::to_string(kMaxMessageSize) + " bytes"});
+      return tl::unexpected(IpcError{
+          EMSGSIZE, "recv: packet larger than " + std::to_string(kMaxMessageSize) + " bytes"});
     }
     buffer.resize(static_cast<std::size_t>(n));
     return static_cast<std::size_t>(n);

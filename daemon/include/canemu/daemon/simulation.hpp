@@ -18,8 +18,7 @@ namespace canemu::daemon {
 
 // SJA1000 BTR0/BTR1 at 16 MHz for `bitrate`, with the sample point closest to `sample_point`
 // (per mille); nothing if no register values give that rate exactly.
-std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate,
-                                                           uint32_t sample_point);
+std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate, uint32_t sample_point);
 // The emulated CAN FD controller's timing for a rate in one phase (80 MHz clock).
 std::optional<model::BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
                                               model::vci::Phase phase);

@@ -40,8 +40,8 @@ enum class ErrorCode : uint32_t {
   bad_version = 2,
   bad_size = 3,
   unknown_type = 4,
-  not_hello = 5,        // a request before the handshake
-  not_stepped = 6,      // time step outside stepped mode
+  not_hello = 5,    // a request before the handshake
+  not_stepped = 6,  // time step outside stepped mode
   bad_argument = 7,
   permission_denied = 8,
 };
@@ -142,19 +142,33 @@ static_assert(sizeof(TimeStepReply) == 32);
 template <class T>
 constexpr MsgType type_of();
 template <>
-constexpr MsgType type_of<Hello>() { return MsgType::hello; }
+constexpr MsgType type_of<Hello>() {
+  return MsgType::hello;
+}
 template <>
-constexpr MsgType type_of<HelloReply>() { return MsgType::hello_reply; }
+constexpr MsgType type_of<HelloReply>() {
+  return MsgType::hello_reply;
+}
 template <>
-constexpr MsgType type_of<ErrorReply>() { return MsgType::error_reply; }
+constexpr MsgType type_of<ErrorReply>() {
+  return MsgType::error_reply;
+}
 template <>
-constexpr MsgType type_of<StatusRequest>() { return MsgType::status_request; }
+constexpr MsgType type_of<StatusRequest>() {
+  return MsgType::status_request;
+}
 template <>
-constexpr MsgType type_of<StatusReply>() { return MsgType::status_reply; }
+constexpr MsgType type_of<StatusReply>() {
+  return MsgType::status_reply;
+}
 template <>
-constexpr MsgType type_of<TimeStepRequest>() { return MsgType::time_step_request; }
+constexpr MsgType type_of<TimeStepRequest>() {
+  return MsgType::time_step_request;
+}
 template <>
-constexpr MsgType type_of<TimeStepReply>() { return MsgType::time_step_reply; }
+constexpr MsgType type_of<TimeStepReply>() {
+  return MsgType::time_step_reply;
+}
 
 // A message of type T with its header filled in.
 template <class T>

@@ -1,0 +1,169 @@
+// A single-producer single-consumer ring of fixed-size elements in shared memory, with the VCI
+// FIFO semantics (spec/vci-cpp-digest.md section 2): capacity at least the request,
+// PutDataEntry/GetDataEntry, AcquireWrite/ReleaseWrite, AcquireRead/ReleaseRead, fill and free
+// counts, and threshold events signalled only on the opposite side's access.
+//
+// Layout: RingHeader (the data part, trivially laid out, checked by magic, ABI version and
+// sizes) followed by capacity x element_size bytes. RingWriter and RingReader are the two views;
+// each process holds one. Positions are free-running 64-bit element counts; each side writes
+// only its own position and reads the other's with acquire order, which is all an SPSC ring
+// needs. Everything read from the other side is validated: a position that would put more than
+// `capacity` elements in the ring, or move backwards, marks the ring corrupted and every
+// further operation fails (the daemon then drops that client).
+//
+// Events: each side has an auto-reset event (a flag in the header plus an eventfd). Signalling
+// sets the flag and writes the eventfd only if the other side is blocked in wait(), so a busy
+// ring makes no system call per element.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "canemu/ipc/seqpacket.hpp"
+#include "canemu/ipc/unique_fd.hpp"
+
+namespace canemu::ipc {
+
+inline constexpr uint32_t kRingMagic = 0x474E4952;  // "RING"
+inline constexpr uint16_t kRingAbiVersion = 1;
+
+struct alignas(64) RingHeader {
+  uint32_t magic;
+  uint16_t abi_version;
+  uint16_t reserved;
+  uint32_t element_size;
+  uint32_t capacity;  // elements
+  uint64_t total_bytes;
+  // Written by the writer only.
+  alignas(64) std::atomic<uint64_t> write_pos;
+  std::atomic<uint32_t> reader_threshold;  // the reader's event fires at fill >= threshold
+  std::atomic<uint32_t> reader_signalled;  // auto-reset event flag of the reader
+  std::atomic<uint32_t> overruns;          // elements the writer could not put
+  // Written by the reader only.
+  alignas(64) std::atomic<uint64_t> read_pos;
+  std::atomic<uint32_t> writer_threshold;  // the writer's event fires at free >= threshold
+  std::atomic<uint32_t> writer_signalled;
+  // Set by a side while it blocks in wait().
+  alignas(64) std::atomic<uint32_t> reader_waiting;
+  std::atomic<uint32_t> writer_waiting;
+};
+static_assert(sizeof(RingHeader) == 256);
+static_assert(std::atomic<uint64_t>::is_always_lock_free);
+static_assert(std::atomic<uint32_t>::is_always_lock_free);
+
+// The shared memory of one ring: a memfd, mapped. Move-only.
+class RingMemory {
+ public:
+  // Capacity is rounded up so the element area fills whole 4 KiB pages (as VCI FIFOs do); at
+  // least `capacity`, at most 65535 elements.
+  static IpcResult<RingMemory> create(uint32_t capacity, uint32_t element_size,
+                                      const std::string& name);
+  // Maps a ring received from the other side; checks magic, version and sizes against the fd's
+  // size before anything else is used.
+  static IpcResult<RingMemory> map(UniqueFd fd);
+
+  RingMemory(RingMemory&& other) noexcept;
+  RingMemory& operator=(RingMemory&& other) noexcept;
+  RingMemory(const RingMemory&) = delete;
+  RingMemory& operator=(const RingMemory&) = delete;
+  ~RingMemory();
+
+  RingHeader* header() const { return static_cast<RingHeader*>(base_); }
+  uint8_t* elements() const { return static_cast<uint8_t*>(base_) + sizeof(RingHeader); }
+  int fd() const { return fd_.get(); }
+  uint32_t capacity() const { return capacity_; }
+  uint32_t element_size() const { return element_size_; }
+
+ private:
+  RingMemory() = default;
+  UniqueFd fd_;
+  void* base_ = nullptr;
+  std::size_t bytes_ = 0;
+  uint32_t capacity_ = 0;
+  uint32_t element_size_ = 0;
+};
+
+enum class RingStatus { ok, empty, full, invalid_argument, corrupted };
+std::string_view to_string(RingStatus s);
+
+// An auto-reset event between the two sides: a flag in shared memory and an eventfd.
+struct RingEvent {
+  std::atomic<uint32_t>* flag = nullptr;
+  std::atomic<uint32_t>* waiting = nullptr;
+  int eventfd = -1;
+
+  void signal() const;
+  // Returns true if signalled within `timeout_ms` (-1: forever); resets the event.
+  bool wait(int timeout_ms) const;
+};
+
+class RingWriter {
+ public:
+  // `reader_event` is the eventfd the reader blocks on; `own_event` the one this side blocks on.
+  RingWriter(const RingMemory& memory, int reader_eventfd, int own_eventfd);
+
+  RingStatus put(const void* element);               // PutDataEntry
+  RingStatus acquire(void** elements, uint32_t* count);  // AcquireWrite: contiguous free
+  RingStatus release(uint32_t count);                 // ReleaseWrite
+  uint32_t free_count() const;
+  uint32_t fill_count() const;
+  void set_threshold(uint32_t free_threshold);  // clamped to the capacity
+  uint32_t threshold() const;
+  bool wait(int timeout_ms) const { return own_.wait(timeout_ms); }
+  void count_overrun() { hdr_->overruns.fetch_add(1, std::memory_order_relaxed); }
+  bool corrupted() const { return corrupted_; }
+
+ private:
+  bool load_read(uint64_t& read) const;
+  void published(uint64_t new_write, uint64_t read);
+
+  RingHeader* hdr_;
+  uint8_t* data_;
+  uint32_t capacity_;
+  uint32_t size_;
+  uint32_t acquired_ = 0;
+  uint64_t write_ = 0;  // own position, never read back from shared memory
+  mutable bool corrupted_ = false;
+  mutable uint64_t last_read_ = 0;
+  RingEvent reader_;
+  RingEvent own_;
+};
+
+class RingReader {
+ public:
+  RingReader(const RingMemory& memory, int writer_eventfd, int own_eventfd);
+
+  RingStatus get(void* element);                           // GetDataEntry (nullptr: drop)
+  RingStatus acquire(const void** elements, uint32_t* count);  // AcquireRead: contiguous filled
+  RingStatus release(uint32_t count);                       // ReleaseRead
+  uint32_t fill_count() const;
+  uint32_t free_count() const;
+  void set_threshold(uint32_t fill_threshold);  // clamped to the capacity
+  uint32_t threshold() const;
+  bool wait(int timeout_ms) const { return own_.wait(timeout_ms); }
+  uint32_t overruns() const { return hdr_->overruns.load(std::memory_order_relaxed); }
+  bool corrupted() const { return corrupted_; }
+
+ private:
+  bool load_write(uint64_t& write) const;
+  void consumed(uint64_t new_read, uint64_t write);
+
+  RingHeader* hdr_;
+  const uint8_t* data_;
+  uint32_t capacity_;
+  uint32_t size_;
+  uint32_t acquired_ = 0;
+  uint64_t read_ = 0;  // own position, never read back from shared memory
+  mutable bool corrupted_ = false;
+  mutable uint64_t last_write_ = 0;
+  RingEvent writer_;
+  RingEvent own_;
+};
+
+// An eventfd for a ring side (non-blocking, close-on-exec).
+IpcResult<UniqueFd> make_eventfd();
+
+}  // namespace canemu::ipc

@@ -1,0 +1,420 @@
+#include "canemu/ipc/shm_ring.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <new>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+namespace canemu::ipc {
+
+namespace {
+
+constexpr std::size_t kPage = 4096;
+constexpr uint32_t kMaxCapacity = 65535;  // VCI FIFO counts are 16-bit
+
+IpcError sys(const std::string& what) {
+  const int e = errno;
+  return IpcError{e, what + ": " + std::strerror(e)};
+}
+
+}  // namespace
+
+std::string_view to_string(RingStatus s) {
+  switch (s) {
+    case RingStatus::ok:
+      return "ok";
+    case RingStatus::empty:
+      return "empty";
+    case RingStatus::full:
+      return "full";
+    case RingStatus::invalid_argument:
+      return "invalid_argument";
+    case RingStatus::corrupted:
+      return "corrupted";
+  }
+  return "?";
+}
+
+IpcResult<UniqueFd> make_eventfd() {
+  UniqueFd fd(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC));
+  if (!fd.valid()) {
+    return tl::unexpected(sys("eventfd"));
+  }
+  return fd;
+}
+
+IpcResult<RingMemory> RingMemory::create(uint32_t capacity, uint32_t element_size,
+                                         const std::string& name) {
+  if (capacity == 0 || capacity > kMaxCapacity || element_size == 0 || element_size > 4096) {
+    return tl::unexpected(IpcError{EINVAL, "ring of " + std::to_string(capacity) + " x " +
+                                               std::to_string(element_size) +
+                                               " bytes: capacity must be 1..65535, elements "
+                                               "1..4096 bytes"});
+  }
+  // Whole pages; the rest of the last page becomes extra elements.
+  std::size_t bytes = sizeof(RingHeader) + std::size_t{capacity} * element_size;
+  bytes = (bytes + kPage - 1) / kPage * kPage;
+  const uint32_t rounded = static_cast<uint32_t>(
+      std::min<std::size_t>((bytes - sizeof(RingHeader)) / element_size, kMaxCapacity));
+
+  RingMemory m;
+  m.fd_.reset(::memfd_create(name.c_str(), MFD_CLOEXEC | MFD_ALLOW_SEALING));
+  if (!m.fd_.valid()) {
+    return tl::unexpected(sys("memfd_create"));
+  }
+  if (::ftruncate(m.fd_.get(), static_cast<off_t>(bytes)) != 0) {
+    return tl::unexpected(sys("ftruncate"));
+  }
+  // The other side must not resize it under us (a shrink would fault our accesses).
+  if (::fcntl(m.fd_.get(), F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
+    return tl::unexpected(sys("fcntl F_ADD_SEALS"));
+  }
+  m.base_ = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, m.fd_.get(), 0);
+  if (m.base_ == MAP_FAILED) {
+    m.base_ = nullptr;
+    return tl::unexpected(sys("mmap"));
+  }
+  m.bytes_ = bytes;
+  m.capacity_ = rounded;
+  m.element_size_ = element_size;
+  RingHeader* h = new (m.base_) RingHeader{};
+  h->magic = kRingMagic;
+  h->abi_version = kRingAbiVersion;
+  h->element_size = element_size;
+  h->capacity = rounded;
+  h->total_bytes = bytes;
+  h->reader_threshold.store(1);
+  h->writer_threshold.store(1);
+  return m;
+}
+
+IpcResult<RingMemory> RingMemory::map(UniqueFd fd) {
+  struct stat st {};
+  if (::fstat(fd.get(), &st) != 0) {
+    return tl::unexpected(sys("fstat"));
+  }
+  const int seals = ::fcntl(fd.get(), F_GET_SEALS);
+  if (seals < 0 || !(seals & F_SEAL_SHRINK)) {
+    return tl::unexpected(IpcError{EINVAL, "ring memory is not sealed against shrinking"});
+  }
+  const auto bytes = static_cast<std::size_t>(st.st_size);
+  if (bytes < sizeof(RingHeader)) {
+    return tl::unexpected(IpcError{EINVAL, "ring memory smaller than its header"});
+  }
+  RingMemory m;
+  m.base_ = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd.get(), 0);
+  if (m.base_ == MAP_FAILED) {
+    m.base_ = nullptr;
+    return tl::unexpected(sys("mmap"));
+  }
+  m.bytes_ = bytes;
+  m.fd_ = std::move(fd);
+  const RingHeader* h = m.header();
+  if (h->magic != kRingMagic || h->abi_version != kRingAbiVersion || h->element_size == 0 ||
+      h->capacity == 0 || h->capacity > kMaxCapacity ||
+      sizeof(RingHeader) + std::size_t{h->capacity} * h->element_size > bytes) {
+    return tl::unexpected(IpcError{EINVAL, "ring header is not valid (magic, version or sizes)"});
+  }
+  m.capacity_ = h->capacity;
+  m.element_size_ = h->element_size;
+  return m;
+}
+
+RingMemory::RingMemory(RingMemory&& o) noexcept
+    : fd_(std::move(o.fd_)),
+      base_(std::exchange(o.base_, nullptr)),
+      bytes_(std::exchange(o.bytes_, 0)),
+      capacity_(o.capacity_),
+      element_size_(o.element_size_) {}
+
+RingMemory& RingMemory::operator=(RingMemory&& o) noexcept {
+  if (this != &o) {
+    if (base_ != nullptr) {
+      ::munmap(base_, bytes_);
+    }
+    fd_ = std::move(o.fd_);
+    base_ = std::exchange(o.base_, nullptr);
+    bytes_ = std::exchange(o.bytes_, 0);
+    capacity_ = o.capacity_;
+    element_size_ = o.element_size_;
+  }
+  return *this;
+}
+
+RingMemory::~RingMemory() {
+  if (base_ != nullptr) {
+    ::munmap(base_, bytes_);
+  }
+}
+
+void RingEvent::signal() const {
+  flag->store(1, std::memory_order_seq_cst);
+  if (waiting->load(std::memory_order_seq_cst) != 0 && eventfd >= 0) {
+    const uint64_t one = 1;
+    [[maybe_unused]] const ssize_t n = ::write(eventfd, &one, sizeof one);
+  }
+}
+
+bool RingEvent::wait(int timeout_ms) const {
+  if (flag->exchange(0, std::memory_order_acq_rel) != 0) {
+    return true;
+  }
+  timespec start{};
+  clock_gettime(CLOCK_MONOTONIC, &start);
+  const int64_t start_ms = int64_t{start.tv_sec} * 1000 + start.tv_nsec / 1'000'000;
+  while (true) {
+    waiting->store(1, std::memory_order_seq_cst);
+    if (flag->exchange(0, std::memory_order_seq_cst) != 0) {
+      waiting->store(0, std::memory_order_seq_cst);
+      return true;
+    }
+    int left = -1;
+    if (timeout_ms >= 0) {
+      timespec now{};
+      clock_gettime(CLOCK_MONOTONIC, &now);
+      const int64_t elapsed = int64_t{now.tv_sec} * 1000 + now.tv_nsec / 1'000'000 - start_ms;
+      left = static_cast<int>(std::max<int64_t>(0, timeout_ms - elapsed));
+    }
+    pollfd p{eventfd, POLLIN, 0};
+    const int r = ::poll(&p, 1, left);
+    uint64_t count;
+    [[maybe_unused]] const ssize_t n = ::read(eventfd, &count, sizeof count);
+    waiting->store(0, std::memory_order_seq_cst);
+    if (flag->exchange(0, std::memory_order_acq_rel) != 0) {
+      return true;
+    }
+    // A wake-up left over from a signal already consumed: wait on, unless time is up.
+    if ((r == 0 && left >= 0) || (r < 0 && errno != EINTR) || left == 0) {
+      return false;
+    }
+  }
+}
+
+// ---- writer ----
+
+RingWriter::RingWriter(const RingMemory& m, int reader_eventfd, int own_eventfd)
+    : hdr_(m.header()),
+      data_(m.elements()),
+      capacity_(m.capacity()),
+      size_(m.element_size()),
+      reader_{&hdr_->reader_signalled, &hdr_->reader_waiting, reader_eventfd},
+      own_{&hdr_->writer_signalled, &hdr_->writer_waiting, own_eventfd} {
+  write_ = hdr_->write_pos.load(std::memory_order_relaxed);
+  last_read_ = hdr_->read_pos.load(std::memory_order_acquire);
+}
+
+bool RingWriter::load_read(uint64_t& read) const {
+  if (corrupted_) {
+    return false;
+  }
+  read = hdr_->read_pos.load(std::memory_order_acquire);
+  // The reader may only move forward, and never past what was written.
+  if (read < last_read_ || read > write_ || write_ - read > capacity_) {
+    corrupted_ = true;
+    return false;
+  }
+  last_read_ = read;
+  return true;
+}
+
+void RingWriter::published(uint64_t new_write, uint64_t read) {
+  hdr_->write_pos.store(new_write, std::memory_order_release);
+  const uint32_t threshold =
+      std::min(std::max<uint32_t>(hdr_->reader_threshold.load(std::memory_order_relaxed), 1),
+               capacity_);
+  if (new_write - read >= threshold) {
+    reader_.signal();  // a write access that leaves the fill level at or above the threshold
+  }
+}
+
+RingStatus RingWriter::put(const void* element) {
+  uint64_t read;
+  if (!load_read(read)) {
+    return RingStatus::corrupted;
+  }
+  if (write_ - read == capacity_) {
+    return RingStatus::full;
+  }
+  std::memcpy(data_ + (write_ % capacity_) * size_, element, size_);
+  ++write_;
+  published(write_, read);
+  return RingStatus::ok;
+}
+
+RingStatus RingWriter::acquire(void** elements, uint32_t* count) {
+  if (elements == nullptr) {
+    return RingStatus::invalid_argument;
+  }
+  uint64_t read;
+  if (!load_read(read)) {
+    return RingStatus::corrupted;
+  }
+  const uint32_t free = static_cast<uint32_t>(capacity_ - (write_ - read));
+  if (free == 0) {
+    return RingStatus::full;
+  }
+  const uint32_t at = static_cast<uint32_t>(write_ % capacity_);
+  acquired_ = std::min(free, capacity_ - at);
+  *elements = data_ + std::size_t{at} * size_;
+  if (count != nullptr) {
+    *count = acquired_;
+  } else {
+    acquired_ = 1;
+  }
+  return RingStatus::ok;
+}
+
+RingStatus RingWriter::release(uint32_t count) {
+  if (count > acquired_) {
+    return RingStatus::invalid_argument;
+  }
+  uint64_t read;
+  if (!load_read(read)) {
+    return RingStatus::corrupted;
+  }
+  acquired_ = 0;
+  if (count == 0) {
+    return RingStatus::ok;
+  }
+  write_ += count;
+  published(write_, read);
+  return RingStatus::ok;
+}
+
+uint32_t RingWriter::fill_count() const {
+  uint64_t read;
+  return load_read(read) ? static_cast<uint32_t>(write_ - read) : 0;
+}
+
+uint32_t RingWriter::free_count() const {
+  uint64_t read;
+  return load_read(read) ? static_cast<uint32_t>(capacity_ - (write_ - read)) : 0;
+}
+
+void RingWriter::set_threshold(uint32_t t) {
+  hdr_->writer_threshold.store(std::min(t, capacity_), std::memory_order_relaxed);
+}
+
+uint32_t RingWriter::threshold() const {
+  return hdr_->writer_threshold.load(std::memory_order_relaxed);
+}
+
+// ---- reader ----
+
+RingReader::RingReader(const RingMemory& m, int writer_eventfd, int own_eventfd)
+    : hdr_(m.header()),
+      data_(m.elements()),
+      capacity_(m.capacity()),
+      size_(m.element_size()),
+      writer_{&hdr_->writer_signalled, &hdr_->writer_waiting, writer_eventfd},
+      own_{&hdr_->reader_signalled, &hdr_->reader_waiting, own_eventfd} {
+  read_ = hdr_->read_pos.load(std::memory_order_relaxed);
+  last_write_ = hdr_->write_pos.load(std::memory_order_acquire);
+}
+
+bool RingReader::load_write(uint64_t& write) const {
+  if (corrupted_) {
+    return false;
+  }
+  write = hdr_->write_pos.load(std::memory_order_acquire);
+  if (write < last_write_ || write < read_ || write - read_ > capacity_) {
+    corrupted_ = true;
+    return false;
+  }
+  last_write_ = write;
+  return true;
+}
+
+void RingReader::consumed(uint64_t new_read, uint64_t write) {
+  hdr_->read_pos.store(new_read, std::memory_order_release);
+  const uint32_t threshold =
+      std::min(std::max<uint32_t>(hdr_->writer_threshold.load(std::memory_order_relaxed), 1),
+               capacity_);
+  if (capacity_ - (write - new_read) >= threshold) {
+    writer_.signal();  // a read access that leaves at least `threshold` elements free
+  }
+}
+
+RingStatus RingReader::get(void* element) {
+  uint64_t write;
+  if (!load_write(write)) {
+    return RingStatus::corrupted;
+  }
+  if (write == read_) {
+    return RingStatus::empty;
+  }
+  if (element != nullptr) {
+    std::memcpy(element, data_ + (read_ % capacity_) * size_, size_);
+  }
+  ++read_;
+  consumed(read_, write);
+  return RingStatus::ok;
+}
+
+RingStatus RingReader::acquire(const void** elements, uint32_t* count) {
+  if (elements == nullptr) {
+    return RingStatus::invalid_argument;
+  }
+  uint64_t write;
+  if (!load_write(write)) {
+    return RingStatus::corrupted;
+  }
+  const uint32_t fill = static_cast<uint32_t>(write - read_);
+  if (fill == 0) {
+    return RingStatus::empty;
+  }
+  const uint32_t at = static_cast<uint32_t>(read_ % capacity_);
+  acquired_ = std::min(fill, capacity_ - at);
+  *elements = data_ + std::size_t{at} * size_;
+  if (count != nullptr) {
+    *count = acquired_;
+  } else {
+    acquired_ = 1;
+  }
+  return RingStatus::ok;
+}
+
+RingStatus RingReader::release(uint32_t count) {
+  if (count > acquired_) {
+    return RingStatus::invalid_argument;
+  }
+  uint64_t write;
+  if (!load_write(write)) {
+    return RingStatus::corrupted;
+  }
+  acquired_ = 0;
+  if (count == 0) {
+    return RingStatus::ok;
+  }
+  read_ += count;
+  consumed(read_, write);
+  return RingStatus::ok;
+}
+
+uint32_t RingReader::fill_count() const {
+  uint64_t write;
+  return load_write(write) ? static_cast<uint32_t>(write - read_) : 0;
+}
+
+uint32_t RingReader::free_count() const {
+  uint64_t write;
+  return load_write(write) ? static_cast<uint32_t>(capacity_ - (write - read_)) : 0;
+}
+
+void RingReader::set_threshold(uint32_t t) {
+  hdr_->reader_threshold.store(std::min(t, capacity_), std::memory_order_relaxed);
+}
+
+uint32_t RingReader::threshold() const {
+  return hdr_->reader_threshold.load(std::memory_order_relaxed);
+}
+
+}  // namespace canemu::ipc

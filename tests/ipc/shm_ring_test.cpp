@@ -1,0 +1,250 @@
+#include "canemu/ipc/shm_ring.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include <csignal>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace canemu::ipc {
+namespace {
+
+struct Element {
+  uint32_t seq;
+  uint8_t payload[16];
+};
+static_assert(sizeof(Element) == 20);
+
+struct Pair {
+  RingMemory memory;
+  UniqueFd reader_event;
+  UniqueFd writer_event;
+  RingWriter writer;
+  RingReader reader;
+  explicit Pair(RingMemory m, UniqueFd re, UniqueFd we)
+      : memory(std::move(m)),
+        reader_event(std::move(re)),
+        writer_event(std::move(we)),
+        writer(memory, reader_event.get(), writer_event.get()),
+        reader(memory, writer_event.get(), reader_event.get()) {}
+};
+
+Pair make(uint32_t capacity) {
+  auto m = RingMemory::create(capacity, sizeof(Element), "test-ring");
+  EXPECT_TRUE(m) << m.error().message;
+  return Pair(std::move(*m), std::move(*make_eventfd()), std::move(*make_eventfd()));
+}
+
+Element element(uint32_t seq) {
+  Element e{};
+  e.seq = seq;
+  std::memset(e.payload, static_cast<int>(seq & 0xFF), sizeof e.payload);
+  return e;
+}
+
+TEST(ShmRing, CapacityIsAtLeastTheRequestAndFillsWholePages) {
+  // 32 x 20 bytes + 256 header bytes round up to one 4 KiB page: (4096 - 256) / 20 = 192.
+  auto p = make(32);
+  EXPECT_EQ(p.memory.capacity(), 192u);
+  EXPECT_EQ(p.writer.free_count(), 192u);
+  auto big = RingMemory::create(1000, 20, "big");
+  ASSERT_TRUE(big);
+  EXPECT_GE(big->capacity(), 1000u);
+  EXPECT_FALSE(RingMemory::create(0, 20, "x"));
+  EXPECT_FALSE(RingMemory::create(70000, 20, "x"));
+}
+
+TEST(ShmRing, ElementsComeOutInOrderAndCountsFollow) {
+  auto p = make(32);
+  for (uint32_t i = 0; i < 10; ++i) {
+    const Element e = element(i);
+    ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+  }
+  EXPECT_EQ(p.reader.fill_count(), 10u);
+  EXPECT_EQ(p.writer.free_count(), 182u);
+  for (uint32_t i = 0; i < 10; ++i) {
+    Element e;
+    ASSERT_EQ(p.reader.get(&e), RingStatus::ok);
+    EXPECT_EQ(e.seq, i);
+    EXPECT_EQ(e.payload[15], i);
+  }
+  Element e;
+  EXPECT_EQ(p.reader.get(&e), RingStatus::empty);
+}
+
+TEST(ShmRing, AFullRingRefusesAndNullGetDropsAnElement) {
+  auto p = make(1);  // rounds up to 192
+  const uint32_t cap = p.memory.capacity();
+  for (uint32_t i = 0; i < cap; ++i) {
+    const Element e = element(i);
+    ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+  }
+  const Element extra = element(999);
+  EXPECT_EQ(p.writer.put(&extra), RingStatus::full);
+  p.writer.count_overrun();
+  EXPECT_EQ(p.reader.overruns(), 1u);
+  EXPECT_EQ(p.reader.get(nullptr), RingStatus::ok);  // removed without copying
+  Element e;
+  ASSERT_EQ(p.reader.get(&e), RingStatus::ok);
+  EXPECT_EQ(e.seq, 1u);
+}
+
+TEST(ShmRing, AcquireGivesContiguousRunsAndPartialReleases) {
+  auto p = make(1);
+  const uint32_t cap = p.memory.capacity();
+  // Move the positions near the end so the next run wraps.
+  for (uint32_t i = 0; i < cap - 3; ++i) {
+    const Element e = element(i);
+    ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+    ASSERT_EQ(p.reader.get(nullptr), RingStatus::ok);
+  }
+  void* w = nullptr;
+  uint32_t n = 0;
+  ASSERT_EQ(p.writer.acquire(&w, &n), RingStatus::ok);
+  EXPECT_EQ(n, 3u);  // up to the end of the buffer, not the whole free count
+  auto* slots = static_cast<Element*>(w);
+  for (uint32_t i = 0; i < 3; ++i) {
+    slots[i] = element(100 + i);
+  }
+  EXPECT_EQ(p.writer.release(4), RingStatus::invalid_argument);
+  ASSERT_EQ(p.writer.release(3), RingStatus::ok);
+  const Element e = element(103);
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);  // at the start of the buffer
+  const void* r = nullptr;
+  ASSERT_EQ(p.reader.acquire(&r, &n), RingStatus::ok);
+  EXPECT_EQ(n, 3u);
+  EXPECT_EQ(static_cast<const Element*>(r)[0].seq, 100u);
+  ASSERT_EQ(p.reader.release(2), RingStatus::ok);  // partial: the third stays
+  ASSERT_EQ(p.reader.acquire(&r, &n), RingStatus::ok);
+  EXPECT_EQ(n, 1u);
+  EXPECT_EQ(static_cast<const Element*>(r)[0].seq, 102u);
+  ASSERT_EQ(p.reader.release(1), RingStatus::ok);
+  ASSERT_EQ(p.reader.acquire(&r, &n), RingStatus::ok);
+  EXPECT_EQ(static_cast<const Element*>(r)[0].seq, 103u);
+  EXPECT_EQ(p.reader.release(0), RingStatus::ok);
+  EXPECT_EQ(p.reader.fill_count(), 1u);
+}
+
+TEST(ShmRing, ReaderEventFiresOnWritesThatReachTheThresholdOnly) {
+  auto p = make(32);
+  p.reader.set_threshold(3);
+  for (uint32_t i = 0; i < 2; ++i) {
+    const Element e = element(i);
+    p.writer.put(&e);
+  }
+  EXPECT_FALSE(p.reader.wait(0));
+  const Element e = element(2);
+  p.writer.put(&e);
+  EXPECT_TRUE(p.reader.wait(0));
+  EXPECT_FALSE(p.reader.wait(0));  // auto-reset
+  // Reading does not signal the reader again, even with elements left.
+  p.reader.get(nullptr);
+  EXPECT_FALSE(p.reader.wait(0));
+  // Setting the threshold does not signal either.
+  p.reader.set_threshold(1);
+  EXPECT_FALSE(p.reader.wait(0));
+  p.reader.set_threshold(100000);
+  EXPECT_EQ(p.reader.threshold(), p.memory.capacity());  // clamped
+}
+
+TEST(ShmRing, WriterEventFiresWhenReadsFreeEnoughSpace) {
+  auto p = make(1);
+  const uint32_t cap = p.memory.capacity();
+  for (uint32_t i = 0; i < cap; ++i) {
+    const Element e = element(i);
+    p.writer.put(&e);
+  }
+  p.writer.set_threshold(2);
+  p.reader.get(nullptr);
+  EXPECT_FALSE(p.writer.wait(0));  // 1 free
+  p.reader.get(nullptr);
+  EXPECT_TRUE(p.writer.wait(0));  // 2 free
+}
+
+TEST(ShmRing, CorruptedPositionsAreDetectedAndStick) {
+  auto p = make(32);
+  const Element e = element(1);
+  p.writer.put(&e);
+  // A misbehaving writer claims more than the capacity was written.
+  p.memory.header()->write_pos.store(1000000);
+  Element out;
+  EXPECT_EQ(p.reader.get(&out), RingStatus::corrupted);
+  EXPECT_TRUE(p.reader.corrupted());
+  p.memory.header()->write_pos.store(1);
+  EXPECT_EQ(p.reader.get(&out), RingStatus::corrupted);
+  // A reader position moving backwards is caught by the writer.
+  auto q = make(32);
+  q.writer.put(&e);
+  q.reader.get(nullptr);
+  EXPECT_EQ(q.writer.fill_count(), 0u);  // the writer has seen the reader at 1
+  q.memory.header()->read_pos.store(0);
+  EXPECT_EQ(q.writer.put(&e), RingStatus::corrupted);
+}
+
+TEST(ShmRing, MapChecksTheHeaderAndTheSeals) {
+  auto p = make(32);
+  const int dup = ::dup(p.memory.fd());
+  auto mapped = RingMemory::map(UniqueFd(dup));
+  ASSERT_TRUE(mapped) << mapped.error().message;
+  EXPECT_EQ(mapped->capacity(), p.memory.capacity());
+  p.memory.header()->magic = 0;
+  auto bad = RingMemory::map(UniqueFd(::dup(p.memory.fd())));
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("header"), std::string::npos);
+}
+
+TEST(ShmRing, TwoProcessesExchangeAHundredThousandElementsInOrder) {
+  auto p = make(64);
+  p.writer.set_threshold(16);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    // Writer process: its own view of the same memory and events. It gives up after 20 s of
+    // waiting in all, so a failing reader cannot leave it behind.
+    RingWriter w(p.memory, p.reader_event.get(), p.writer_event.get());
+    int waited = 0;
+    for (uint32_t i = 0; i < 100000 && waited < 20;) {
+      const Element e = element(i);
+      if (w.put(&e) == RingStatus::ok) {
+        ++i;
+      } else if (!w.wait(1000)) {
+        ++waited;  // full: wait for the reader to free space
+      }
+    }
+    ::_exit(waited < 20 ? 0 : 1);
+  }
+  struct Reap {
+    pid_t pid;
+    ~Reap() {
+      if (pid > 0) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+      }
+    }
+  } reap{child};
+  uint32_t expected = 0;
+  bool in_order = true;
+  while (expected < 100000) {
+    Element e;
+    const RingStatus s = p.reader.get(&e);
+    if (s == RingStatus::ok) {
+      in_order = in_order && e.seq == expected && e.payload[7] == (expected & 0xFF);
+      ++expected;
+    } else if (s == RingStatus::empty) {
+      ASSERT_TRUE(p.reader.wait(5000)) << "no element for 5 s at " << expected;
+    } else {
+      FAIL() << to_string(s);
+    }
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  reap.pid = -1;
+  EXPECT_TRUE(in_order);
+  EXPECT_EQ(status, 0);
+}
+
+}  // namespace
+}  // namespace canemu::ipc

@@ -227,9 +227,8 @@ bool RingWriter::load_read(uint64_t& read) const {
 
 void RingWriter::published(uint64_t new_write, uint64_t read) {
   hdr_->write_pos.store(new_write, std::memory_order_release);
-  const uint32_t threshold =
-      std::min(std::max<uint32_t>(hdr_->reader_threshold.load(std::memory_order_relaxed), 1),
-               capacity_);
+  const uint32_t threshold = std::min(
+      std::max<uint32_t>(hdr_->reader_threshold.load(std::memory_order_relaxed), 1), capacity_);
   if (new_write - read >= threshold) {
     reader_.signal();  // a write access that leaves the fill level at or above the threshold
   }
@@ -335,9 +334,8 @@ bool RingReader::load_write(uint64_t& write) const {
 
 void RingReader::consumed(uint64_t new_read, uint64_t write) {
   hdr_->read_pos.store(new_read, std::memory_order_release);
-  const uint32_t threshold =
-      std::min(std::max<uint32_t>(hdr_->writer_threshold.load(std::memory_order_relaxed), 1),
-               capacity_);
+  const uint32_t threshold = std::min(
+      std::max<uint32_t>(hdr_->writer_threshold.load(std::memory_order_relaxed), 1), capacity_);
   if (capacity_ - (write - new_read) >= threshold) {
     writer_.signal();  // a read access that leaves at least `threshold` elements free
   }

@@ -105,9 +105,9 @@ class RingWriter {
   // `reader_event` is the eventfd the reader blocks on; `own_event` the one this side blocks on.
   RingWriter(const RingMemory& memory, int reader_eventfd, int own_eventfd);
 
-  RingStatus put(const void* element);               // PutDataEntry
+  RingStatus put(const void* element);                   // PutDataEntry
   RingStatus acquire(void** elements, uint32_t* count);  // AcquireWrite: contiguous free
-  RingStatus release(uint32_t count);                 // ReleaseWrite
+  RingStatus release(uint32_t count);                    // ReleaseWrite
   uint32_t free_count() const;
   uint32_t fill_count() const;
   void set_threshold(uint32_t free_threshold);  // clamped to the capacity
@@ -136,9 +136,9 @@ class RingReader {
  public:
   RingReader(const RingMemory& memory, int writer_eventfd, int own_eventfd);
 
-  RingStatus get(void* element);                           // GetDataEntry (nullptr: drop)
+  RingStatus get(void* element);                               // GetDataEntry (nullptr: drop)
   RingStatus acquire(const void** elements, uint32_t* count);  // AcquireRead: contiguous filled
-  RingStatus release(uint32_t count);                       // ReleaseRead
+  RingStatus release(uint32_t count);                          // ReleaseRead
   uint32_t fill_count() const;
   uint32_t free_count() const;
   void set_threshold(uint32_t fill_threshold);  // clamped to the capacity

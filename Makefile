@@ -37,6 +37,8 @@ bench: deps build
 	@mkdir -p $(BUILD_DIR)/bench-results
 	$(BUILD_DIR)/bin/firmware_model_bench --benchmark_out=$(BUILD_DIR)/bench-results/firmware_model.json \
 	  --benchmark_out_format=json $(BENCH_ARGS)
+	$(BUILD_DIR)/bin/ipc_bench --benchmark_out=$(BUILD_DIR)/bench-results/ipc.json \
+	  --benchmark_out_format=json $(BENCH_ARGS)
 	@echo "bench: results in $(BUILD_DIR)/bench-results/"
 
 format:

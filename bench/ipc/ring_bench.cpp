@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <optional>
 
 #include <sys/mman.h>
 #include <sys/wait.h>
@@ -24,14 +25,31 @@ struct Message {
   uint8_t bytes[kElement];
 };
 
-void BM_RingTwoProcessesBusyPoll(benchmark::State& state) {
-  auto memory = RingMemory::create(1024, kElement, "bench-ring");
+struct Ring {
+  RingMemory memory;
+  UniqueFd reader_event;
+  UniqueFd writer_event;
+};
+
+std::optional<Ring> make_ring(const char* name) {
+  auto memory = RingMemory::create(1024, kElement, name);
   auto reader_event = make_eventfd();
   auto writer_event = make_eventfd();
   if (!memory || !reader_event || !writer_event) {
+    return std::nullopt;
+  }
+  return Ring{std::move(*memory), std::move(*reader_event), std::move(*writer_event)};
+}
+
+void BM_RingTwoProcessesBusyPoll(benchmark::State& state) {
+  auto ring = make_ring("bench-ring");
+  if (!ring) {
     state.SkipWithError("ring setup failed");
     return;
   }
+  RingMemory* memory = &ring->memory;
+  UniqueFd* reader_event = &ring->reader_event;
+  UniqueFd* writer_event = &ring->writer_event;
   uint64_t total = 0;
   for (auto _ : state) {
     const pid_t child = ::fork();
@@ -70,13 +88,14 @@ void BM_RingTwoProcessesBusyPoll(benchmark::State& state) {
 // AcquireWrite/ReleaseWrite and AcquireRead/ReleaseRead, so the event bookkeeping (one fence per
 // access) is paid per run, not per element.
 void BM_RingTwoProcessesBusyPollRuns(benchmark::State& state) {
-  auto memory = RingMemory::create(1024, kElement, "bench-ring-runs");
-  auto reader_event = make_eventfd();
-  auto writer_event = make_eventfd();
-  if (!memory || !reader_event || !writer_event) {
+  auto ring = make_ring("bench-ring-runs");
+  if (!ring) {
     state.SkipWithError("ring setup failed");
     return;
   }
+  RingMemory* memory = &ring->memory;
+  UniqueFd* reader_event = &ring->reader_event;
+  UniqueFd* writer_event = &ring->writer_event;
   uint64_t total = 0;
   for (auto _ : state) {
     const pid_t child = ::fork();

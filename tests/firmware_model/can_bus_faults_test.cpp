@@ -10,20 +10,11 @@ namespace canemu::model {
 namespace {
 
 using testing::frame;
+using testing::k123;
+using testing::kBit;
+using testing::kZero;
 using testing::TestController;
-
-constexpr int64_t kBit = 2000;  // ns at 500 kbit/s
-
-struct Fixture {
-  SimScheduler sched;
-  CanBus bus{sched, "can0"};
-  FaultPlan plan;
-  Fixture() { bus.set_injector(&plan); }
-  void run_until(int64_t ns) { sched.run_until(SimTime::from_ns(ns)); }
-};
-
-const Frame kZero = frame(0x000, {});
-const Frame k123 = frame(0x123, {0x11, 0x22});
+using Fixture = testing::BusFixture;
 
 FaultRule rule(CanErrorType type, std::optional<uint64_t> count = std::nullopt) {
   FaultRule r;

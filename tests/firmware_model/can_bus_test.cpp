@@ -8,20 +8,11 @@ namespace canemu::model {
 namespace {
 
 using testing::frame;
+using testing::k123;
+using testing::kBit;
+using testing::kZero;
 using testing::TestController;
-
-constexpr int64_t kBit = 2000;  // ns at 500 kbit/s
-
-struct Fixture {
-  SimScheduler sched;
-  CanBus bus{sched, "can0"};
-  void run_until(int64_t ns) { sched.run_until(SimTime::from_ns(ns)); }
-};
-
-// The all-zero standard frame is 50 bits (hand-checked in wire_encoding_test), 0x123 with two
-// bytes 62 bits (golden vector).
-const Frame kZero = frame(0x000, {});
-const Frame k123 = frame(0x123, {0x11, 0x22});
+using Fixture = testing::BusFixture;
 
 TEST(CanBus, TwoNodesExchangeFramesBackToBackWithExactTimes) {
   Fixture f;

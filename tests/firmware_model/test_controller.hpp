@@ -8,6 +8,7 @@
 
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
 #include "canemu/firmware_model/can_bus.hpp"
+#include "canemu/firmware_model/fault_plan.hpp"
 
 namespace canemu::model::testing {
 
@@ -22,6 +23,22 @@ inline Frame frame(uint32_t id, std::vector<uint8_t> data, bool extended = false
   auto f = Frame::classic(id, data, extended);
   return *f;
 }
+
+inline constexpr int64_t kBit = 2000;  // ns at 500 kbit/s
+
+// A bus on its own scheduler, with a fault plan plugged in (empty unless a test adds rules).
+struct BusFixture {
+  SimScheduler sched;
+  CanBus bus{sched, "can0"};
+  FaultPlan plan;
+  BusFixture() { bus.set_injector(&plan); }
+  void run_until(int64_t ns) { sched.run_until(SimTime::from_ns(ns)); }
+};
+
+// The all-zero standard frame is 50 bits (hand-checked in wire_encoding_test), 0x123 with two
+// bytes 62 bits (golden vector).
+inline const Frame kZero = *Frame::classic(0x000, {});
+inline const Frame k123 = *Frame::classic(0x123, std::vector<uint8_t>{0x11, 0x22});
 
 class TestController : public CanController {
  public:

@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 SOURCES = $(shell git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.h' 2>/dev/null)
 
-.PHONY: all deps configure build test asan bench format format-check run clean
+.PHONY: all deps configure build test asan bench fuzz format format-check run clean
 
 all: build
 
@@ -31,6 +31,20 @@ asan: deps
 	cmake --build $(ASAN_DIR) -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS)
+
+# libFuzzer targets (clang), each run for FUZZ_SECONDS from its seed corpus.
+FUZZ_DIR ?= build-fuzz
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	@scripts/install-deps.sh scripts/apt-packages-fuzz.txt
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCANEMU_FUZZ=ON -DCANEMU_WERROR=OFF -DCANEMU_BUILD_TESTS=OFF -DCANEMU_BUILD_BENCH=OFF
+	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_control_messages fuzz_config
+	@mkdir -p $(FUZZ_DIR)/corpus/control $(FUZZ_DIR)/corpus/config
+	$(FUZZ_DIR)/bin/fuzz_control_messages -max_total_time=$(FUZZ_SECONDS) -max_len=20000 \
+	  $(FUZZ_DIR)/corpus/control tests/fuzz/corpus/control
+	$(FUZZ_DIR)/bin/fuzz_config -max_total_time=$(FUZZ_SECONDS) -max_len=4096 \
+	  $(FUZZ_DIR)/corpus/config tests/fuzz/corpus/config
 
 # Benchmarks write one JSON file each into $(BUILD_DIR)/bench-results/.
 bench: deps build
@@ -58,4 +72,4 @@ run: deps build
 	exec $(BUILD_DIR)/bin/canemud --socket "$$sock"
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_DIR)
+	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(FUZZ_DIR)

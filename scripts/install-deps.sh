@@ -1,20 +1,25 @@
 #!/usr/bin/env bash
 # Installs what canemu needs, idempotently:
-#   - the Debian packages listed in scripts/apt-packages.txt (through sudo when not root);
+#   - the Debian packages listed in scripts/apt-packages.txt, or in the lists given as
+#     arguments (through sudo when not root);
 #   - a Python virtual environment at .venv from the pinned requirements.txt.
 # A second run finds nothing to do and says so.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+lists=("$@")
+[ ${#lists[@]} -gt 0 ] || lists=(scripts/apt-packages.txt)
 missing=()
-while read -r pkg; do
-  pkg=${pkg%%#*}
-  pkg=$(echo "$pkg" | tr -d '[:space:]')
-  [ -n "$pkg" ] || continue
-  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q 'install ok installed'; then
-    missing+=("$pkg")
-  fi
-done < scripts/apt-packages.txt
+for list in "${lists[@]}"; do
+  while read -r pkg; do
+    pkg=${pkg%%#*}
+    pkg=$(echo "$pkg" | tr -d '[:space:]')
+    [ -n "$pkg" ] || continue
+    if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q 'install ok installed'; then
+      missing+=("$pkg")
+    fi
+  done < "$list"
+done
 
 did_something=0
 if [ ${#missing[@]} -gt 0 ]; then

@@ -40,7 +40,14 @@ bool add(int epoll, int fd) {
 
 }  // namespace
 
-Server::Server(Simulation& sim, ServerOptions options) : sim_(sim), options_(std::move(options)) {}
+Server::Server(Simulation& sim, ServerOptions options)
+    : sim_(sim), options_(std::move(options)), dispatcher_(sim, options_.time) {
+  dispatcher_.before_status = [this] {
+    advance_to_now();
+    forget_closed_clients();
+  };
+  dispatcher_.client_count = [this] { return static_cast<uint16_t>(clients_.size()); };
+}
 
 Server::~Server() {
   if (listen_.valid()) {
@@ -252,74 +259,9 @@ void Server::reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code,
 }
 
 void Server::handle(Client& c, const std::vector<uint8_t>& packet) {
-  uint32_t request_id = 0;
-  if (packet.size() >= sizeof(ipc::MsgHeader)) {
-    ipc::MsgHeader h;
-    std::memcpy(&h, packet.data(), sizeof h);
-    request_id = h.request_id;
-  }
-  const ipc::ErrorCode check = ipc::check_message(packet.data(), packet.size());
-  if (check != ipc::ErrorCode::none) {
-    reply_error(c, request_id, check, fmt::format("rejected a {}-byte message", packet.size()));
-    return;
-  }
-  ipc::MsgHeader h;
-  std::memcpy(&h, packet.data(), sizeof h);
-  const auto type = static_cast<ipc::MsgType>(h.type);
-  if (!c.greeted && type != ipc::MsgType::hello) {
-    reply_error(c, request_id, ipc::ErrorCode::not_hello, "say hello first");
-    return;
-  }
-  switch (type) {
-    case ipc::MsgType::hello: {
-      ipc::Hello m;
-      std::memcpy(&m, packet.data(), sizeof m);
-      c.greeted = true;
-      c.name = ipc::name_of(m.client_name);
-      auto r = ipc::make_message<ipc::HelloReply>(request_id);
-      r.server_pid = static_cast<uint32_t>(::getpid());
-      (void)ipc::send_message(c.fd.get(), r);
-      return;
-    }
-    case ipc::MsgType::status_request: {
-      advance_to_now();
-      forget_closed_clients();
-      auto r = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>(request_id));
-      sim_.fill_status(*r);
-      r->time_mode = static_cast<uint8_t>(options_.time.mode == TimeMode::realtime ? 0
-                                          : options_.time.mode == TimeMode::scaled ? 1
-                                                                                   : 2);
-      r->time_scale = options_.time.scale;
-      r->client_count = static_cast<uint16_t>(clients_.size());
-      (void)ipc::send_message(c.fd.get(), *r);
-      return;
-    }
-    case ipc::MsgType::time_step_request: {
-      ipc::TimeStepRequest m;
-      std::memcpy(&m, packet.data(), sizeof m);
-      if (options_.time.mode != TimeMode::stepped) {
-        reply_error(
-            c, request_id, ipc::ErrorCode::not_stepped,
-            fmt::format("time runs {}; steps need --time stepped", to_string(options_.time)));
-        return;
-      }
-      if (m.step_ns <= 0 || m.step_ns > int64_t{3600} * 1'000'000'000) {
-        reply_error(c, request_id, ipc::ErrorCode::bad_argument,
-                    fmt::format("step of {} ns is outside 1 ns .. 1 h", m.step_ns));
-        return;
-      }
-      auto r = ipc::make_message<ipc::TimeStepReply>(request_id);
-      model::SimScheduler& s = sim_.scheduler();
-      r.events_run = s.run_until(s.now() + model::SimDuration(m.step_ns));
-      r.sim_time_ns = s.now().ns();
-      (void)ipc::send_message(c.fd.get(), r);
-      return;
-    }
-    default:
-      reply_error(c, request_id, ipc::ErrorCode::unknown_type,
-                  fmt::format("message type {} is not a request", h.type));
-      return;
-  }
+  dispatcher_.handle(
+      c.session, packet.data(), packet.size(),
+      [&c](const void* data, std::size_t size) { (void)ipc::send_packet(c.fd.get(), data, size); });
 }
 
 }  // namespace canemu::daemon

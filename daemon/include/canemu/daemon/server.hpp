@@ -10,6 +10,7 @@
 #include <string>
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/control_dispatcher.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 
@@ -35,10 +36,9 @@ class Server {
  private:
   struct Client {
     ipc::UniqueFd fd;
-    bool greeted = false;
+    Session session;
     uint32_t uid = 0;
     int pid = 0;
-    std::string name;
   };
 
   model::SimTime wall_to_sim() const;
@@ -54,6 +54,7 @@ class Server {
 
   Simulation& sim_;
   ServerOptions options_;
+  ControlDispatcher dispatcher_;
   ipc::UniqueFd listen_;
   ipc::UniqueFd epoll_;
   ipc::UniqueFd timer_;

@@ -1,0 +1,46 @@
+// libFuzzer target: canemud's control-message handling. The input is a sequence of packets,
+// each a 16-bit little-endian length and that many bytes, fed to one client session of a daemon
+// built from the embedded default configuration in stepped time. Every reply must be a valid
+// message, and nothing may crash.
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+
+#include "canemu/daemon/control_dispatcher.hpp"
+
+namespace {
+
+using namespace canemu;
+
+daemon::Simulation& simulation() {
+  static std::unique_ptr<daemon::Simulation> sim = [] {
+    auto config = daemon::load_default_config();
+    auto built = daemon::Simulation::build(*config);
+    return std::move(*built);
+  }();
+  return *sim;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  daemon::ControlDispatcher dispatcher(simulation(),
+                                       daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
+  dispatcher.client_count = [] { return uint16_t{1}; };
+  daemon::Session session;
+  const auto check_reply = [](const void* reply, size_t bytes) {
+    if (ipc::check_message(reply, bytes) != ipc::ErrorCode::none) {
+      std::abort();  // the daemon must only ever send well-formed messages
+    }
+  };
+  size_t at = 0;
+  while (at + 2 <= size) {
+    const size_t length = data[at] | (size_t{data[at + 1]} << 8);
+    at += 2;
+    const size_t n = length < size - at ? length : size - at;
+    dispatcher.handle(session, data + at, n, check_reply);
+    at += n;
+  }
+  return 0;
+}

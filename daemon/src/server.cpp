@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <systemd/sd-daemon.h>
 
 namespace canemu::daemon {
 
@@ -86,6 +87,9 @@ ipc::IpcResult<void> Server::open() {
     return tl::unexpected(sys("epoll_ctl"));
   }
   start_mono_ns_ = monotonic_ns();
+  // Under systemd (Type=notify): ready once the socket listens. A no-op elsewhere.
+  sd_notifyf(0, "READY=1\nSTATUS=listening on %s\nMAINPID=%d", options_.socket_path.c_str(),
+             static_cast<int>(::getpid()));
   return {};
 }
 
@@ -144,11 +148,14 @@ int Server::run() {
         signalfd_siginfo si{};
         while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
           if (si.ssi_signo == SIGHUP) {
+            sd_notify(0, "RELOADING=1");
             std::fprintf(stderr,
                          "<4>canemud: SIGHUP: reloading the configuration is not supported yet; "
                          "nothing changed\n");
+            sd_notify(0, "READY=1");
           } else {
             std::fprintf(stderr, "<6>canemud: signal %u, stopping\n", si.ssi_signo);
+            sd_notify(0, "STOPPING=1");
             running_ = false;
           }
         }

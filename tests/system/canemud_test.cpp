@@ -10,6 +10,7 @@
 #include <spawn.h>
 #include <sys/socket.h>
 #include <sys/syscall.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -188,6 +189,35 @@ TEST(Canemud, AClientThatGoesAwayIsForgotten) {
   }
   // b's socket is closed; the daemon notices before it answers a's next request.
   EXPECT_EQ(status(a).client_count, 1);
+}
+
+TEST(Canemud, TellsSystemdWhenItIsReadyAndWhenItStops) {
+  // A notification socket like systemd's for Type=notify services.
+  const std::string path = "/tmp/canemu-notify-" + std::to_string(::getpid()) + ".sock";
+  ipc::UniqueFd notify(::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+  ASSERT_TRUE(notify.valid());
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+  ::unlink(path.c_str());
+  ASSERT_EQ(::bind(notify.get(), reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  ::setenv("NOTIFY_SOCKET", path.c_str(), 1);
+  Daemon d;
+  ::unsetenv("NOTIFY_SOCKET");
+  auto next = [&]() -> std::string {
+    char buf[512];
+    if (!readable(notify.get(), 10'000)) {
+      return "";
+    }
+    const ssize_t n = ::recv(notify.get(), buf, sizeof buf, 0);
+    return n > 0 ? std::string(buf, static_cast<std::size_t>(n)) : "";
+  };
+  const std::string ready = next();
+  EXPECT_NE(ready.find("READY=1"), std::string::npos) << ready;
+  EXPECT_NE(ready.find("STATUS=listening on " + d.socket()), std::string::npos) << ready;
+  EXPECT_EQ(d.terminate(10'000), 0);
+  EXPECT_NE(next().find("STOPPING=1"), std::string::npos);
+  ::unlink(path.c_str());
 }
 
 TEST(Canemud, NobodyListeningIsAClearError) {

@@ -217,6 +217,7 @@ void CanBus::restart(NodeId node) {
     return;
   }
   fc.begin_recovery();
+  maybe_recovering_ = true;
   n.recovery_from = std::max(scheduler_.now(), busy_ ? free_at_ : scheduler_.now());
   arm_recovery(node);
 }
@@ -511,9 +512,8 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
     c.ifs_end = c.eof_end + with_ppm(intermission_duration(nominal), c.ppm);
     c.last_dominant_end = c.eof_end - with_ppm(nominal.bits_duration(1 + kEofBits), c.ppm);
   }
-  c.winners.assign(active_.begin(), active_.end());
   c.sent.clear();
-  for (NodeId id : c.winners) {
+  for (NodeId id : in_flight_) {
     c.sent.push_back(pending(nodes_[id]));
   }
   frames_on_bus_++;
@@ -541,8 +541,8 @@ void CanBus::complete_success(SimTime eof_end) {
     n.stats.frames_received++;
     n.controller->on_frame(eof_end, frame, false);
   }
-  for (std::size_t k = 0; k < c.winners.size(); ++k) {
-    const NodeId id = c.winners[k];
+  for (std::size_t k = 0; k < in_flight_.size(); ++k) {
+    const NodeId id = in_flight_[k];
     Node& n = nodes_[id];
     FaultConfinement& fc = *n.fc;
     const bool was_passive = fc.error_passive();
@@ -1004,9 +1004,11 @@ void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
   in_flight_.clear();
   free_at_ = idle_at;
   last_dominant_end_ = last_dominant_end;
-  for (NodeId id = 0; id < nodes_.size(); ++id) {
-    if (nodes_[id].fc->recovering()) {
-      arm_recovery(id);
+  if (maybe_recovering_) {
+    for (NodeId id = 0; id < nodes_.size(); ++id) {
+      if (nodes_[id].fc->recovering()) {
+        arm_recovery(id);
+      }
     }
   }
   if (idle_at <= scheduler_.now() && !attempt_pending_) {
@@ -1019,12 +1021,17 @@ void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
 // A dominant bit starts at `dominant_start`: every recovering node counts the sequences of 11
 // recessive bits it saw since the last dominant bit (or since its recovery began).
 void CanBus::account_recessive(SimTime dominant_start) {
+  if (!maybe_recovering_) {
+    return;
+  }
+  bool any = false;
   for (NodeId id = 0; id < nodes_.size(); ++id) {
     Node& n = nodes_[id];
     FaultConfinement& fc = *n.fc;
     if (!fc.recovering()) {
       continue;
     }
+    any = true;
     if (n.recovery_event != 0) {
       scheduler_.cancel(n.recovery_event);
       n.recovery_event = 0;
@@ -1039,6 +1046,7 @@ void CanBus::account_recessive(SimTime dominant_start) {
     }
     n.recovery_from = dominant_start;
   }
+  maybe_recovering_ = any;
 }
 
 void CanBus::arm_recovery(NodeId id) {
@@ -1119,6 +1127,7 @@ void CanBus::report_state(NodeId id, SimTime at) {
     forget_tx(n);
     if (refresh(id).recovery == BusOffRecovery::automatic) {
       fc.begin_recovery();
+      maybe_recovering_ = true;
       n.recovery_from = at;
     }
   }

@@ -178,8 +178,8 @@ class CanBus final : private EventHandler {
     SimTime last_dominant_end;
     BitTiming nominal;
     int32_t ppm = 0;
-    std::vector<NodeId> winners;
-    // The winners' frames: their pending_tx(), valid until they are told the frame is done.
+    // The transmitters' frames (in_flight_ order): their pending_tx(), valid until they are told
+    // the frame is done.
     std::vector<const TxFrame*> sent;
     // Arbitration losses of this frame: node, bit, end of that bit. Reported at the end of the
     // frame (or of its error frame), each with its own instant.
@@ -268,6 +268,9 @@ class CanBus final : private EventHandler {
 
   // Bus activity.
   bool busy_ = false;
+  // Set whenever a node may have begun bus-off recovery; cleared when a look finds none, so the
+  // per-frame recovery bookkeeping costs nothing on a healthy bus.
+  bool maybe_recovering_ = false;
   std::vector<NodeId> in_flight_;  // transmitters of the current activity
   SimTime free_at_;                // end of intermission of the last activity
   SimTime last_dominant_end_;      // recessive run on the wire started here

@@ -28,10 +28,14 @@ int fail(const std::string& message) {
 
 std::optional<int64_t> parse_duration(const std::string& text) {
   std::size_t i = 0;
+  int dots = 0;
+  bool digits = false;
   while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.')) {
+    dots += text[i] == '.';
+    digits = digits || text[i] != '.';
     ++i;
   }
-  if (i == 0) {
+  if (!digits || dots > 1) {
     return std::nullopt;
   }
   const double value = std::stod(text.substr(0, i));
@@ -41,7 +45,7 @@ std::optional<int64_t> parse_duration(const std::string& text) {
                        : unit == "ms" ? 1e6
                        : unit == "s"  ? 1e9
                                       : 0;
-  if (scale == 0 || value <= 0) {
+  if (scale == 0 || value <= 0 || value * scale > 9.0e18) {
     return std::nullopt;
   }
   return static_cast<int64_t>(value * scale + 0.5);

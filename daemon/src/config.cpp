@@ -132,13 +132,16 @@ class Checker {
   ConfigErrors errors_;
 };
 
+// 28 characters, so that "device:N" fits the protocol's 32-byte names with its NUL.
 bool valid_name(std::string_view s) {
-  return !s.empty() && s.size() <= 32 && std::all_of(s.begin(), s.end(), [](char c) {
+  return !s.empty() && s.size() <= 28 && std::all_of(s.begin(), s.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
   });
 }
 
-constexpr std::string_view kNameRule = "must be 1 to 32 characters of a-z, 0-9, '_' and '-'";
+constexpr std::string_view kNameRule = "must be 1 to 28 characters of a-z, 0-9, '_' and '-'";
+constexpr std::size_t kMaxBuses = 16;  // what a status reply carries
+constexpr std::size_t kMaxControllers = 64;
 
 void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
   const toml::node* n = root.get("simulation");
@@ -234,7 +237,7 @@ void read_buses(Checker& c, const toml::table& root, Config& cfg) {
       bus.bitrate = 19'200;
     }
     if (auto sp = c.number(*t, path, "sample_point")) {
-      if (*sp < 0.5 || *sp > 0.95) {
+      if (!(*sp >= 0.5 && *sp <= 0.95)) {  // also rejects NaN
         c.error(*t->get("sample_point"), path + ".sample_point",
                 fmt::format("{} is outside 0.5..0.95", *sp));
       } else {
@@ -353,11 +356,11 @@ tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text)
     const std::string number(text.substr(7));
     char* end = nullptr;
     const double f = std::strtod(number.c_str(), &end);
-    if (!number.empty() && end == number.c_str() + number.size() && f > 0 && f <= 1e6) {
+    if (!number.empty() && end == number.c_str() + number.size() && f >= 1e-6 && f <= 1e6) {
       return TimeSetting{TimeMode::scaled, f};
     }
     return tl::unexpected(fmt::format(
-        "\"{}\": the factor after \"scaled:\" must be a number above 0 and at most 1000000", text));
+        "\"{}\": the factor after \"scaled:\" must be a number from 0.000001 to 1000000", text));
   }
   return tl::unexpected(
       fmt::format("\"{}\" is not a time mode (realtime, stepped, scaled:F)", text));
@@ -400,6 +403,17 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   read_security(c, root, cfg);
   read_buses(c, root, cfg);
   read_devices(c, root, cfg);
+  std::size_t controllers = 0;
+  for (const DeviceConfig& d : cfg.devices) {
+    controllers += d.controllers.size();
+  }
+  if (cfg.buses.size() > kMaxBuses) {
+    c.error(root.source(), "bus", fmt::format("{} buses; at most {}", cfg.buses.size(), kMaxBuses));
+  }
+  if (controllers > kMaxControllers) {
+    c.error(root.source(), "device",
+            fmt::format("{} controllers in all; at most {}", controllers, kMaxControllers));
+  }
   if (!c.errors().empty()) {
     return tl::unexpected(c.errors());
   }

@@ -1,6 +1,7 @@
 #include "canemu/daemon/server.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 
@@ -43,11 +44,8 @@ bool add(int epoll, int fd) {
 
 Server::Server(Simulation& sim, ServerOptions options)
     : sim_(sim), options_(std::move(options)), dispatcher_(sim, options_.time) {
-  dispatcher_.before_status = [this] {
-    advance_to_now();
-    forget_closed_clients();
-  };
-  dispatcher_.client_count = [this] { return static_cast<uint16_t>(clients_.size()); };
+  dispatcher_.before_status = [this] { advance_to_now(); };
+  dispatcher_.client_count = [this] { return live_clients(); };
 }
 
 Server::~Server() {
@@ -86,6 +84,22 @@ ipc::IpcResult<void> Server::open() {
       !add(epoll_.get(), signals_.get())) {
     return tl::unexpected(sys("epoll_ctl"));
   }
+  // Users and groups of [security] are resolved once, at start.
+  for (const std::string& u : sim_.config().security.allowed_users) {
+    if (const passwd* pw = ::getpwnam(u.c_str())) {
+      allowed_uids_.push_back(pw->pw_uid);
+    } else {
+      std::fprintf(stderr, "<4>canemud: [security] user \"%s\" does not exist\n", u.c_str());
+    }
+  }
+  for (const std::string& g : sim_.config().security.allowed_groups) {
+    if (const group* gr = ::getgrnam(g.c_str())) {
+      allowed_gids_.push_back(gr->gr_gid);
+    } else {
+      std::fprintf(stderr, "<4>canemud: [security] group \"%s\" does not exist\n", g.c_str());
+    }
+  }
+  ::signal(SIGPIPE, SIG_IGN);  // a closed stderr or peer must not kill the daemon
   start_mono_ns_ = monotonic_ns();
   // Under systemd (Type=notify): ready once the socket listens. A no-op elsewhere.
   sd_notifyf(0, "READY=1\nSTATUS=listening on %s\nMAINPID=%d", options_.socket_path.c_str(),
@@ -96,7 +110,8 @@ ipc::IpcResult<void> Server::open() {
 model::SimTime Server::wall_to_sim() const {
   const double elapsed = static_cast<double>(monotonic_ns() - start_mono_ns_);
   const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
-  return model::SimTime::from_ns(static_cast<int64_t>(elapsed * scale));
+  // Saturates instead of overflowing (scaled:1000000 reaches 2^63 ns after 2.5 hours).
+  return model::SimTime::from_ns(static_cast<int64_t>(std::min(elapsed * scale, 9.0e18)));
 }
 
 void Server::advance_to_now() {
@@ -111,8 +126,9 @@ void Server::arm_timer() {
     if (auto next = sim_.scheduler().next_event_time()) {
       // Absolute CLOCK_MONOTONIC deadline of the next simulated event.
       const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
-      const int64_t wall =
-          start_mono_ns_ + static_cast<int64_t>(static_cast<double>(next->ns()) / scale);
+      // Rounded up, so the timer never fires before the event is due.
+      const double offset = std::ceil(static_cast<double>(next->ns()) / scale);
+      const int64_t wall = start_mono_ns_ + static_cast<int64_t>(std::min(offset, 9.0e18));
       its.it_value.tv_sec = wall / 1'000'000'000;
       its.it_value.tv_nsec = wall % 1'000'000'000;
       if (its.it_value.tv_sec == 0 && its.it_value.tv_nsec == 0) {
@@ -120,7 +136,9 @@ void Server::arm_timer() {
       }
     }
   }
-  ::timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr);
+  if (::timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr) != 0) {
+    std::fprintf(stderr, "<3>canemud: timerfd_settime: %s\n", std::strerror(errno));
+  }
 }
 
 int Server::run() {
@@ -163,37 +181,36 @@ int Server::run() {
         serve(fd);
       }
     }
+    drop_closing();
   }
   return 0;
 }
 
-bool Server::allowed(uint32_t uid) const {
+bool Server::allowed(int fd, uint32_t uid) const {
   if (uid == 0 || uid == ::geteuid()) {
     return true;
   }
-  const SecurityConfig& sec = sim_.config().security;
-  const passwd* pw = ::getpwuid(uid);
-  if (pw == nullptr) {
+  if (std::find(allowed_uids_.begin(), allowed_uids_.end(), uid) != allowed_uids_.end()) {
+    return true;
+  }
+  if (allowed_gids_.empty()) {
     return false;
   }
-  for (const std::string& u : sec.allowed_users) {
-    if (u == pw->pw_name) {
-      return true;
+  // The peer's groups from the kernel (SO_PEERGROUPS): no user database lookups in the loop.
+  std::vector<gid_t> groups(64);
+  socklen_t len = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+  if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &len) != 0) {
+    if (errno != ERANGE) {
+      return false;
+    }
+    groups.resize(len / sizeof(gid_t));
+    if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &len) != 0) {
+      return false;
     }
   }
-  if (sec.allowed_groups.empty()) {
-    return false;
-  }
-  int count = 64;
-  std::vector<gid_t> groups(static_cast<std::size_t>(count));
-  if (::getgrouplist(pw->pw_name, pw->pw_gid, groups.data(), &count) < 0) {
-    groups.resize(static_cast<std::size_t>(count));
-    ::getgrouplist(pw->pw_name, pw->pw_gid, groups.data(), &count);
-  }
-  groups.resize(static_cast<std::size_t>(count));
-  for (const std::string& g : sec.allowed_groups) {
-    const group* gr = ::getgrnam(g.c_str());
-    if (gr != nullptr && std::find(groups.begin(), groups.end(), gr->gr_gid) != groups.end()) {
+  groups.resize(len / sizeof(gid_t));
+  for (gid_t g : groups) {
+    if (std::find(allowed_gids_.begin(), allowed_gids_.end(), g) != allowed_gids_.end()) {
       return true;
     }
   }
@@ -204,17 +221,30 @@ void Server::accept_clients() {
   while (true) {
     const int fd = ::accept4(listen_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) {
+      if (errno == EMFILE || errno == ENFILE) {
+        // Out of descriptors: stop accepting until a client leaves, instead of spinning on a
+        // listening socket that stays readable.
+        ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, listen_.get(), nullptr);
+        accepting_ = false;
+        std::fprintf(stderr, "<4>canemud: out of file descriptors; not accepting for now\n");
+      }
       return;  // EAGAIN: no more; other errors: the client is gone already
     }
     Client c;
     c.fd.reset(fd);
     ucred cred{};
     socklen_t len = sizeof cred;
-    if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0) {
-      c.uid = cred.uid;
-      c.pid = cred.pid;
+    if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) != 0) {
+      continue;  // unknown peer: refused (closed when c goes out of scope)
     }
-    if (!allowed(c.uid)) {
+    c.uid = cred.uid;
+    c.pid = cred.pid;
+    if (clients_.size() >= kMaxClients) {
+      reply_error(c, 0, ipc::ErrorCode::permission_denied,
+                  fmt::format("canemud serves at most {} clients", kMaxClients));
+      continue;
+    }
+    if (!allowed(fd, c.uid)) {
       reply_error(c, 0, ipc::ErrorCode::permission_denied,
                   fmt::format("uid {} is not allowed by the [security] configuration", c.uid));
       continue;  // closed when c goes out of scope
@@ -226,11 +256,25 @@ void Server::accept_clients() {
   }
 }
 
-void Server::forget_closed_clients() {
-  std::vector<int> gone;
-  for (const auto& [fd, c] : clients_) {
+// Counts clients whose socket is still open; the ones that went away are dropped after the
+// current batch of events (never while one of their requests is being answered).
+uint16_t Server::live_clients() {
+  uint16_t live = 0;
+  for (auto& [fd, c] : clients_) {
     pollfd p{fd, POLLRDHUP, 0};
     if (::poll(&p, 1, 0) == 1 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR))) {
+      c.closing = true;
+    } else {
+      ++live;
+    }
+  }
+  return live;
+}
+
+void Server::drop_closing() {
+  std::vector<int> gone;
+  for (const auto& [fd, c] : clients_) {
+    if (c.closing) {
       gone.push_back(fd);
     }
   }
@@ -242,6 +286,9 @@ void Server::forget_closed_clients() {
 void Server::drop(int fd) {
   ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd, nullptr);
   clients_.erase(fd);
+  if (!accepting_ && add(epoll_.get(), listen_.get())) {
+    accepting_ = true;  // a descriptor is free again
+  }
 }
 
 void Server::serve(int fd) {
@@ -249,9 +296,12 @@ void Server::serve(int fd) {
   if (it == clients_.end()) {
     return;
   }
+  if (it->second.closing) {
+    return;
+  }
   auto n = ipc::receive_packet(fd, buffer_, 0);
   if (!n || *n == 0) {
-    drop(fd);  // closed, or broken: its resources go at once
+    it->second.closing = true;  // closed, oversized or broken: dropped after this batch
     return;
   }
   handle(it->second, buffer_);
@@ -266,9 +316,13 @@ void Server::reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code,
 }
 
 void Server::handle(Client& c, const std::vector<uint8_t>& packet) {
-  dispatcher_.handle(
-      c.session, packet.data(), packet.size(),
-      [&c](const void* data, std::size_t size) { (void)ipc::send_packet(c.fd.get(), data, size); });
+  dispatcher_.handle(c.session, packet.data(), packet.size(),
+                     [&c](const void* data, std::size_t size) {
+                       // A client that does not read its replies is dropped, not waited for.
+                       if (!ipc::send_packet(c.fd.get(), data, size)) {
+                         c.closing = true;
+                       }
+                     });
 }
 
 }  // namespace canemu::daemon

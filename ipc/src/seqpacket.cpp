@@ -60,7 +60,13 @@ IpcResult<UniqueFd> listen_seqpacket(const std::string& path, int backlog) {
   }
   struct stat st {};
   if (::lstat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) {
-    ::unlink(path.c_str());  // left by an earlier run
+    // Replace a socket left by an earlier run, but never one a running daemon listens on.
+    UniqueFd probe(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0));
+    if (probe.valid() &&
+        ::connect(probe.get(), reinterpret_cast<const sockaddr*>(&*a), sizeof *a) == 0) {
+      return tl::unexpected(IpcError{EADDRINUSE, "another canemud is listening on " + path});
+    }
+    ::unlink(path.c_str());
   }
   if (::bind(fd.get(), reinterpret_cast<const sockaddr*>(&*a), sizeof *a) != 0) {
     return tl::unexpected(system_error("bind " + path));

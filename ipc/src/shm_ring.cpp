@@ -117,14 +117,19 @@ IpcResult<RingMemory> RingMemory::map(UniqueFd fd) {
   }
   m.bytes_ = bytes;
   m.fd_ = std::move(fd);
+  // Read the other side's header once, into locals, and use only what was checked.
   const RingHeader* h = m.header();
-  if (h->magic != kRingMagic || h->abi_version != kRingAbiVersion || h->element_size == 0 ||
-      h->capacity == 0 || h->capacity > kMaxCapacity ||
-      sizeof(RingHeader) + std::size_t{h->capacity} * h->element_size > bytes) {
+  const uint32_t magic = h->magic;
+  const uint16_t version = h->abi_version;
+  const uint32_t element_size = h->element_size;
+  const uint32_t capacity = h->capacity;
+  if (magic != kRingMagic || version != kRingAbiVersion || element_size == 0 ||
+      element_size > 4096 || capacity == 0 || capacity > kMaxCapacity ||
+      sizeof(RingHeader) + std::size_t{capacity} * element_size > bytes) {
     return tl::unexpected(IpcError{EINVAL, "ring header is not valid (magic, version or sizes)"});
   }
-  m.capacity_ = h->capacity;
-  m.element_size_ = h->element_size;
+  m.capacity_ = capacity;
+  m.element_size_ = element_size;
   return m;
 }
 

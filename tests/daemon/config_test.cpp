@@ -130,7 +130,7 @@ bitrate = "fast"
 model = "ixxat-usb-to-can"
 )");
   ASSERT_EQ(e.size(), 4u);
-  EXPECT_NE(e[0].find("bus[0].name: must be 1 to 32 characters"), std::string::npos);
+  EXPECT_NE(e[0].find("bus[0].name: must be 1 to 28 characters"), std::string::npos);
   EXPECT_NE(e[1].find("bus[0].bitrate: must be an integer"), std::string::npos);
   EXPECT_NE(e[2].find("device[0].name: missing"), std::string::npos);
   EXPECT_NE(e[3].find("device[0].controllers: missing"), std::string::npos);

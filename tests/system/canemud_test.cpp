@@ -220,6 +220,29 @@ TEST(Canemud, TellsSystemdWhenItIsReadyAndWhenItStops) {
   ::unlink(path.c_str());
 }
 
+TEST(Canemud, AClientThatAsksAndLeavesAtOnceDoesNotHurtTheDaemon) {
+  Daemon d;
+  auto keeper = connect(d, "keeper");
+  for (int i = 0; i < 20; ++i) {
+    auto c = client::Connection::open(d.socket(), "hit-and-run");
+    ASSERT_TRUE(c) << c.error().message;
+    auto req = ipc::make_message<ipc::StatusRequest>();
+    ASSERT_TRUE(ipc::send_message(c->fd(), req));
+    // c closes here, before reading the reply
+  }
+  EXPECT_EQ(status(keeper).bus_count, 2);
+  EXPECT_EQ(status(keeper).client_count, 1);
+}
+
+TEST(Canemud, ASecondDaemonDoesNotStealALiveSocket) {
+  Daemon d;
+  auto second = ipc::listen_seqpacket(d.socket());
+  ASSERT_FALSE(second);
+  EXPECT_NE(second.error().message.find("another canemud is listening"), std::string::npos);
+  auto c = connect(d);
+  EXPECT_EQ(status(c).bus_count, 2);
+}
+
 TEST(Canemud, NobodyListeningIsAClearError) {
   auto c = client::Connection::open("/tmp/canemu-nobody-listens.sock", "t");
   ASSERT_FALSE(c);

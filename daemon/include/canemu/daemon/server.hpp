@@ -39,7 +39,9 @@ class Server {
     Session session;
     uint32_t uid = 0;
     int pid = 0;
+    bool closing = false;  // gone or misbehaving: dropped after the current batch of events
   };
+  static constexpr std::size_t kMaxClients = 256;
 
   model::SimTime wall_to_sim() const;
   void advance_to_now();
@@ -47,10 +49,11 @@ class Server {
   void accept_clients();
   void serve(int fd);
   void drop(int fd);
-  void forget_closed_clients();
+  uint16_t live_clients();
+  void drop_closing();
   void handle(Client& c, const std::vector<uint8_t>& packet);
   void reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
-  bool allowed(uint32_t uid) const;
+  bool allowed(int fd, uint32_t uid) const;
 
   Simulation& sim_;
   ServerOptions options_;
@@ -61,6 +64,9 @@ class Server {
   ipc::UniqueFd signals_;
   std::map<int, Client> clients_;
   int64_t start_mono_ns_ = 0;
+  bool accepting_ = true;
+  std::vector<uint32_t> allowed_uids_;
+  std::vector<uint32_t> allowed_gids_;
   bool running_ = true;
   std::vector<uint8_t> buffer_;
 };

@@ -41,47 +41,58 @@ std::optional<Ring> make_ring(const char* name) {
   return Ring{std::move(*memory), std::move(*reader_event), std::move(*writer_event)};
 }
 
+// Runs `produce` in a forked child and `consume` (which takes kCount elements and returns a
+// checksum of them) in this process, once per benchmark iteration.
+template <typename Produce, typename Consume>
+void run_between_processes(benchmark::State& state, Produce produce, Consume consume) {
+  uint64_t total = 0;
+  for (auto _ : state) {
+    const pid_t child = ::fork();
+    if (child == 0) {
+      produce();
+      ::_exit(0);
+    }
+    const uint64_t check = consume();
+    ::waitpid(child, nullptr, 0);
+    benchmark::DoNotOptimize(check);
+    total += kCount;
+  }
+  state.counters["elements_per_second"] =
+      benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate);
+}
+
 void BM_RingTwoProcessesBusyPoll(benchmark::State& state) {
   auto ring = make_ring("bench-ring");
   if (!ring) {
     state.SkipWithError("ring setup failed");
     return;
   }
-  RingMemory* memory = &ring->memory;
-  UniqueFd* reader_event = &ring->reader_event;
-  UniqueFd* writer_event = &ring->writer_event;
-  uint64_t total = 0;
-  for (auto _ : state) {
-    const pid_t child = ::fork();
-    if (child == 0) {
-      RingWriter w(*memory, reader_event->get(), writer_event->get());
-      Message m{};
-      for (uint64_t i = 0; i < kCount;) {
-        std::memcpy(m.bytes, &i, sizeof i);
-        if (w.put(&m) == RingStatus::ok) {
-          ++i;
+  run_between_processes(
+      state,
+      [&] {
+        RingWriter w(ring->memory, ring->reader_event.get(), ring->writer_event.get());
+        Message m{};
+        for (uint64_t i = 0; i < kCount;) {
+          std::memcpy(m.bytes, &i, sizeof i);
+          if (w.put(&m) == RingStatus::ok) {
+            ++i;
+          }
         }
-      }
-      ::_exit(0);
-    }
-    RingReader r(*memory, writer_event->get(), reader_event->get());
-    Message m{};
-    uint64_t got = 0;
-    uint64_t check = 0;
-    while (got < kCount) {
-      if (r.get(&m) == RingStatus::ok) {
-        uint64_t v;
-        std::memcpy(&v, m.bytes, sizeof v);
-        check += v;
-        ++got;
-      }
-    }
-    ::waitpid(child, nullptr, 0);
-    benchmark::DoNotOptimize(check);
-    total += got;
-  }
-  state.counters["elements_per_second"] =
-      benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate);
+      },
+      [&] {
+        RingReader r(ring->memory, ring->writer_event.get(), ring->reader_event.get());
+        Message m{};
+        uint64_t check = 0;
+        for (uint64_t got = 0; got < kCount;) {
+          if (r.get(&m) == RingStatus::ok) {
+            uint64_t v;
+            std::memcpy(&v, m.bytes, sizeof v);
+            check += v;
+            ++got;
+          }
+        }
+        return check;
+      });
 }
 
 // The same ring used the way the daemon and the client libraries move frames: whole runs with
@@ -93,56 +104,48 @@ void BM_RingTwoProcessesBusyPollRuns(benchmark::State& state) {
     state.SkipWithError("ring setup failed");
     return;
   }
-  RingMemory* memory = &ring->memory;
-  UniqueFd* reader_event = &ring->reader_event;
-  UniqueFd* writer_event = &ring->writer_event;
-  uint64_t total = 0;
-  for (auto _ : state) {
-    const pid_t child = ::fork();
-    if (child == 0) {
-      RingWriter w(*memory, reader_event->get(), writer_event->get());
-      for (uint64_t i = 0; i < kCount;) {
-        void* slots = nullptr;
-        uint32_t n = 0;
-        if (w.acquire(&slots, &n) != RingStatus::ok) {
-          continue;
+  run_between_processes(
+      state,
+      [&] {
+        RingWriter w(ring->memory, ring->reader_event.get(), ring->writer_event.get());
+        for (uint64_t i = 0; i < kCount;) {
+          void* slots = nullptr;
+          uint32_t n = 0;
+          if (w.acquire(&slots, &n) != RingStatus::ok) {
+            continue;
+          }
+          n = static_cast<uint32_t>(std::min<uint64_t>({n, 64, kCount - i}));
+          auto* m = static_cast<Message*>(slots);
+          for (uint32_t k = 0; k < n; ++k, ++i) {
+            std::memcpy(m[k].bytes, &i, sizeof i);
+          }
+          w.release(n);
         }
-        n = static_cast<uint32_t>(std::min<uint64_t>({n, 64, kCount - i}));
-        auto* m = static_cast<Message*>(slots);
-        for (uint32_t k = 0; k < n; ++k, ++i) {
-          std::memcpy(m[k].bytes, &i, sizeof i);
+      },
+      [&] {
+        RingReader r(ring->memory, ring->writer_event.get(), ring->reader_event.get());
+        uint64_t check = 0;
+        for (uint64_t got = 0; got < kCount;) {
+          const void* slots = nullptr;
+          uint32_t n = 0;
+          if (r.acquire(&slots, &n) != RingStatus::ok) {
+            continue;
+          }
+          const auto* m = static_cast<const Message*>(slots);
+          for (uint32_t k = 0; k < n; ++k) {
+            uint64_t v;
+            std::memcpy(&v, m[k].bytes, sizeof v);
+            check += v;
+          }
+          r.release(n);
+          got += n;
         }
-        w.release(n);
-      }
-      ::_exit(0);
-    }
-    RingReader r(*memory, writer_event->get(), reader_event->get());
-    uint64_t got = 0;
-    uint64_t check = 0;
-    while (got < kCount) {
-      const void* slots = nullptr;
-      uint32_t n = 0;
-      if (r.acquire(&slots, &n) != RingStatus::ok) {
-        continue;
-      }
-      const auto* m = static_cast<const Message*>(slots);
-      for (uint32_t k = 0; k < n; ++k) {
-        uint64_t v;
-        std::memcpy(&v, m[k].bytes, sizeof v);
-        check += v;
-      }
-      r.release(n);
-      got += n;
-    }
-    ::waitpid(child, nullptr, 0);
-    benchmark::DoNotOptimize(check);
-    total += got;
-  }
-  state.counters["elements_per_second"] =
-      benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate);
+        return check;
+      });
 }
 
-// The baseline: the simplest correct SPSC ring in shared memory.
+// The baseline: the simplest correct SPSC ring in shared memory. Its positions only grow, so
+// one ring serves every iteration.
 struct alignas(64) Bare {
   alignas(64) std::atomic<uint64_t> head{0};
   alignas(64) std::atomic<uint64_t> tail{0};
@@ -156,42 +159,36 @@ void BM_BareSpscRingTwoProcessesBaseline(benchmark::State& state) {
     state.SkipWithError("mmap failed");
     return;
   }
-  uint64_t total = 0;
-  for (auto _ : state) {
-    Bare* ring = new (mem) Bare{};
-    const pid_t child = ::fork();
-    if (child == 0) {
-      Message m{};
-      for (uint64_t i = 0; i < kCount;) {
-        const uint64_t head = ring->head.load(std::memory_order_relaxed);
-        if (head - ring->tail.load(std::memory_order_acquire) < 1024) {
-          std::memcpy(m.bytes, &i, sizeof i);
-          ring->slots[head % 1024] = m;
-          ring->head.store(head + 1, std::memory_order_release);
-          ++i;
+  Bare* ring = new (mem) Bare{};
+  run_between_processes(
+      state,
+      [&] {
+        Message m{};
+        for (uint64_t i = 0; i < kCount;) {
+          const uint64_t head = ring->head.load(std::memory_order_relaxed);
+          if (head - ring->tail.load(std::memory_order_acquire) < 1024) {
+            std::memcpy(m.bytes, &i, sizeof i);
+            ring->slots[head % 1024] = m;
+            ring->head.store(head + 1, std::memory_order_release);
+            ++i;
+          }
         }
-      }
-      ::_exit(0);
-    }
-    uint64_t got = 0;
-    uint64_t check = 0;
-    while (got < kCount) {
-      const uint64_t tail = ring->tail.load(std::memory_order_relaxed);
-      if (ring->head.load(std::memory_order_acquire) != tail) {
-        uint64_t v;
-        std::memcpy(&v, ring->slots[tail % 1024].bytes, sizeof v);
-        check += v;
-        ring->tail.store(tail + 1, std::memory_order_release);
-        ++got;
-      }
-    }
-    ::waitpid(child, nullptr, 0);
-    benchmark::DoNotOptimize(check);
-    total += got;
-  }
+      },
+      [&] {
+        uint64_t check = 0;
+        for (uint64_t got = 0; got < kCount;) {
+          const uint64_t tail = ring->tail.load(std::memory_order_relaxed);
+          if (ring->head.load(std::memory_order_acquire) != tail) {
+            uint64_t v;
+            std::memcpy(&v, ring->slots[tail % 1024].bytes, sizeof v);
+            check += v;
+            ring->tail.store(tail + 1, std::memory_order_release);
+            ++got;
+          }
+        }
+        return check;
+      });
   ::munmap(mem, sizeof(Bare));
-  state.counters["elements_per_second"] =
-      benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate);
 }
 
 BENCHMARK(BM_RingTwoProcessesBusyPoll)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -25,6 +25,28 @@ IpcError sys(const std::string& what) {
   return IpcError{e, what + ": " + std::strerror(e)};
 }
 
+// Whether the other side's position, just loaded, is consistent: it never moves back, and the
+// reader is never ahead of the writer nor more than a capacity behind it.
+bool positions_consistent(uint64_t peer, uint64_t last_peer, uint64_t read, uint64_t write,
+                          uint32_t capacity) {
+  return peer >= last_peer && read <= write && write - read <= capacity;
+}
+
+// Grants the contiguous run of `available` (> 0) elements from position `pos` for an Acquire
+// call: returns the slot index of its first element and sets how many the caller may release
+// (the whole run when it asked for the count, else one).
+uint32_t grant_run(uint64_t pos, uint32_t available, uint32_t capacity, uint32_t* count,
+                   uint32_t& acquired) {
+  const uint32_t at = static_cast<uint32_t>(pos % capacity);
+  acquired = std::min(available, capacity - at);
+  if (count != nullptr) {
+    *count = acquired;
+  } else {
+    acquired = 1;
+  }
+  return at;
+}
+
 }  // namespace
 
 std::string_view to_string(RingStatus s) {
@@ -221,8 +243,7 @@ bool RingWriter::load_read(uint64_t& read) const {
     return false;
   }
   read = hdr_->read_pos.load(std::memory_order_acquire);
-  // The reader may only move forward, and never past what was written.
-  if (read < last_read_ || read > write_ || write_ - read > capacity_) {
+  if (!positions_consistent(read, last_read_, read, write_, capacity_)) {
     corrupted_ = true;
     return false;
   }
@@ -265,14 +286,8 @@ RingStatus RingWriter::acquire(void** elements, uint32_t* count) {
   if (free == 0) {
     return RingStatus::full;
   }
-  const uint32_t at = static_cast<uint32_t>(write_ % capacity_);
-  acquired_ = std::min(free, capacity_ - at);
+  const uint32_t at = grant_run(write_, free, capacity_, count, acquired_);
   *elements = data_ + std::size_t{at} * size_;
-  if (count != nullptr) {
-    *count = acquired_;
-  } else {
-    acquired_ = 1;
-  }
   return RingStatus::ok;
 }
 
@@ -329,7 +344,7 @@ bool RingReader::load_write(uint64_t& write) const {
     return false;
   }
   write = hdr_->write_pos.load(std::memory_order_acquire);
-  if (write < last_write_ || write < read_ || write - read_ > capacity_) {
+  if (!positions_consistent(write, last_write_, read_, write, capacity_)) {
     corrupted_ = true;
     return false;
   }
@@ -374,14 +389,8 @@ RingStatus RingReader::acquire(const void** elements, uint32_t* count) {
   if (fill == 0) {
     return RingStatus::empty;
   }
-  const uint32_t at = static_cast<uint32_t>(read_ % capacity_);
-  acquired_ = std::min(fill, capacity_ - at);
+  const uint32_t at = grant_run(read_, fill, capacity_, count, acquired_);
   *elements = data_ + std::size_t{at} * size_;
-  if (count != nullptr) {
-    *count = acquired_;
-  } else {
-    acquired_ = 1;
-  }
   return RingStatus::ok;
 }
 

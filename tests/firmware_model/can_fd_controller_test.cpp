@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
-#include "canemu/firmware_model/fault_plan.hpp"
 #include "canemu/firmware_model/sja1000.hpp"
+#include "test_controller.hpp"
 
 namespace canemu::model {
 namespace {
@@ -27,11 +27,7 @@ Frame fd_frame(uint32_t id, std::size_t len, bool brs) {
   return *Frame::fd_frame(id, data, false, brs);
 }
 
-struct Bus {
-  SimScheduler sched;
-  CanBus bus{sched, "canfd0"};
-  void run_until(int64_t ns) { sched.run_until(SimTime::from_ns(ns)); }
-};
+using Bus = testing::BusFixture;
 
 TEST(CanFdController, ExchangesFdFramesWithBitRateSwitchInTheirExactTime) {
   Bus b;
@@ -137,8 +133,6 @@ TEST(CanFdController, DataRateMismatchBreaksOnlyFramesWithBitRateSwitch) {
 
 TEST(CanFdController, RecoversFromBusOffByItselfByDefault) {
   Bus b;
-  FaultPlan plan;
-  b.bus.set_injector(&plan);
   CanFdController a(fd_config()), r(fd_config());
   a.connect(b.bus);
   r.connect(b.bus);
@@ -147,7 +141,7 @@ TEST(CanFdController, RecoversFromBusOffByItselfByDefault) {
   FaultRule rule;
   rule.fault.error = CanErrorType::bit;
   rule.count = 32;
-  plan.add(rule);
+  b.plan.add(rule);
   ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x10, 8, true)}));
   b.run_until(100'000'000);
   EXPECT_EQ(a.state(), ErrorState::active);

@@ -4,18 +4,15 @@
 
 #include <gtest/gtest.h>
 
-#include "canemu/firmware_model/fault_plan.hpp"
+#include "test_controller.hpp"
 
 namespace canemu::model {
 namespace {
 
 using namespace sja1000;
-
-constexpr int64_t kBit = 2000;  // 500 kbit/s
-
-Frame frame(uint32_t id, std::vector<uint8_t> data, bool ext = false) {
-  return *Frame::classic(id, data, ext);
-}
+using testing::frame;
+using testing::kBit;
+using Bus = testing::BusFixture;
 
 struct Chip {
   Sja1000 chip;
@@ -56,12 +53,6 @@ struct Chip {
     chip.write(CMR, CMR_RRB);
     return unpack_frame(bytes.data());
   }
-};
-
-struct Bus {
-  SimScheduler sched;
-  CanBus bus{sched, "can0"};
-  void run_until(int64_t ns) { sched.run_until(SimTime::from_ns(ns)); }
 };
 
 TEST(Sja1000, StartsInResetModeWithTheDatasheetResetValues) {
@@ -282,8 +273,6 @@ TEST(Sja1000, ArbitrationLostCaptureHoldsTheBitNumberUntilRead) {
 
 TEST(Sja1000, BusOffSetsResetModeAndRecoversAfterTheHostRestartsIt) {
   Bus b;
-  FaultPlan plan;
-  b.bus.set_injector(&plan);
   Chip a, r;
   a.chip.connect(b.bus);
   r.chip.connect(b.bus);
@@ -292,7 +281,7 @@ TEST(Sja1000, BusOffSetsResetModeAndRecoversAfterTheHostRestartsIt) {
   FaultRule rule;
   rule.fault.error = CanErrorType::bit;
   rule.count = 32;
-  plan.add(rule);
+  b.plan.add(rule);
   a.send(frame(0x123, {1}));
   b.run_until(20'000'000);
   EXPECT_EQ(a.chip.read(SR) & (SR_BS | SR_ES), SR_BS | SR_ES);

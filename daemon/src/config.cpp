@@ -19,6 +19,28 @@ std::string_view default_config_text();  // generated from config/default.toml
 
 namespace {
 
+template <typename E>
+struct NamedValue {
+  E value;
+  std::string_view name;
+};
+
+constexpr NamedValue<BusKind> kBusKinds[] = {
+    {BusKind::can, "can"}, {BusKind::can_fd, "can-fd"}, {BusKind::lin, "lin"}};
+constexpr NamedValue<DeviceModel> kDeviceModels[] = {
+    {DeviceModel::ixxat_usb_to_can, "ixxat-usb-to-can"},
+    {DeviceModel::ixxat_usb_to_can_fd, "ixxat-usb-to-can-fd"}};
+
+template <typename E, std::size_t N>
+std::string_view name_of(E value, const NamedValue<E> (&table)[N]) {
+  for (const auto& c : table) {
+    if (c.value == value) {
+      return c.name;
+    }
+  }
+  return "?";
+}
+
 // Collects every problem with its place; nothing is applied unless there are none.
 class Checker {
  public:
@@ -120,6 +142,63 @@ class Checker {
     return out;
   }
 
+  // The table `name` of the root, or nullptr when it is absent or (reported) not a table.
+  const toml::table* section(const toml::table& root, std::string_view name) {
+    const toml::node* n = root.get(name);
+    if (n == nullptr) {
+      return nullptr;
+    }
+    if (n->as_table() == nullptr) {
+      error(*n, name, "must be a table");
+    }
+    return n->as_table();
+  }
+
+  // Calls each(table, path) for every table of the array of tables `name` ([[name]]) of the root.
+  template <typename Each>
+  void for_each_table(const toml::table& root, std::string_view name, Each each) {
+    const toml::node* n = root.get(name);
+    if (n == nullptr) {
+      return;
+    }
+    const toml::array* a = n->as_array();
+    if (a == nullptr) {
+      error(*n, name, fmt::format("must be an array of tables ([[{}]])", name));
+      return;
+    }
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const toml::node& e = *a->get(i);
+      const std::string path = fmt::format("{}[{}]", name, i);
+      if (const toml::table* t = e.as_table()) {
+        each(*t, path);
+      } else {
+        error(e, path, "must be a table");
+      }
+    }
+  }
+
+  // A string key whose value must be one of the names of `choices`.
+  template <typename E, std::size_t N>
+  std::optional<E> choice(const toml::table& t, std::string_view path, std::string_view name,
+                          bool required, const NamedValue<E> (&choices)[N], std::string_view what) {
+    auto text = string(t, path, name, required);
+    if (!text) {
+      return std::nullopt;
+    }
+    for (const auto& c : choices) {
+      if (c.name == *text) {
+        return c.value;
+      }
+    }
+    std::string known;
+    for (const auto& c : choices) {
+      known += known.empty() ? std::string(c.name) : ", " + std::string(c.name);
+    }
+    error(*t.get(name), key(path, name),
+          fmt::format("\"{}\" is not a {} ({})", *text, what, known));
+    return std::nullopt;
+  }
+
   static std::string key(std::string_view path, std::string_view name) {
     return path.empty() ? std::string(name) : fmt::format("{}.{}", path, name);
   }
@@ -140,17 +219,27 @@ bool valid_name(std::string_view s) {
 }
 
 constexpr std::string_view kNameRule = "must be 1 to 28 characters of a-z, 0-9, '_' and '-'";
+
+// The required key "name" of a [[bus]] or [[device]] table: valid, and unique among `names`.
+std::optional<std::string> read_name(Checker& c, const toml::table& t, const std::string& path,
+                                     std::set<std::string>& names, std::string_view what) {
+  auto name = c.string(t, path, "name", true);
+  if (name) {
+    if (!valid_name(*name)) {
+      c.error(*t.get("name"), path + ".name", kNameRule);
+    } else if (!names.insert(*name).second) {
+      c.error(*t.get("name"), path + ".name",
+              fmt::format("a {} named \"{}\" exists already", what, *name));
+    }
+  }
+  return name;
+}
 constexpr std::size_t kMaxBuses = 16;  // what a status reply carries
 constexpr std::size_t kMaxControllers = 64;
 
 void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
-  const toml::node* n = root.get("simulation");
-  if (n == nullptr) {
-    return;
-  }
-  const toml::table* t = n->as_table();
+  const toml::table* t = c.section(root, "simulation");
   if (t == nullptr) {
-    c.error(*n, "simulation", "must be a table");
     return;
   }
   c.only_keys(*t, "simulation", {"time", "seed"});
@@ -168,13 +257,8 @@ void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
 }
 
 void read_security(Checker& c, const toml::table& root, Config& cfg) {
-  const toml::node* n = root.get("security");
-  if (n == nullptr) {
-    return;
-  }
-  const toml::table* t = n->as_table();
+  const toml::table* t = c.section(root, "security");
   if (t == nullptr) {
-    c.error(*n, "security", "must be a table");
     return;
   }
   c.only_keys(*t, "security", {"allowed_users", "allowed_groups"});
@@ -187,121 +271,60 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
 }
 
 void read_buses(Checker& c, const toml::table& root, Config& cfg) {
-  const toml::node* n = root.get("bus");
-  if (n == nullptr) {
-    return;
-  }
-  const toml::array* a = n->as_array();
-  if (a == nullptr) {
-    c.error(*n, "bus", "must be an array of tables ([[bus]])");
-    return;
-  }
   std::set<std::string> names;
-  for (std::size_t i = 0; i < a->size(); ++i) {
-    const toml::node& e = *a->get(i);
-    const std::string path = fmt::format("bus[{}]", i);
-    const toml::table* t = e.as_table();
-    if (t == nullptr) {
-      c.error(e, path, "must be a table");
-      continue;
-    }
-    c.only_keys(*t, path, {"name", "kind", "bitrate", "sample_point", "data_bitrate"});
+  c.for_each_table(root, "bus", [&](const toml::table& t, const std::string& path) {
+    c.only_keys(t, path, {"name", "kind", "bitrate", "sample_point", "data_bitrate"});
     BusConfig bus;
-    bus.line = static_cast<uint32_t>(t->source().begin.line);
-    if (auto name = c.string(*t, path, "name", true)) {
-      if (!valid_name(*name)) {
-        c.error(*t->get("name"), path + ".name", kNameRule);
-      } else if (!names.insert(*name).second) {
-        c.error(*t->get("name"), path + ".name",
-                fmt::format("a bus named \"{}\" exists already", *name));
-      }
+    bus.line = static_cast<uint32_t>(t.source().begin.line);
+    if (auto name = read_name(c, t, path, names, "bus")) {
       bus.name = *name;
     }
-    if (auto kind = c.string(*t, path, "kind", false)) {
-      if (*kind == "can") {
-        bus.kind = BusKind::can;
-      } else if (*kind == "can-fd") {
-        bus.kind = BusKind::can_fd;
-      } else if (*kind == "lin") {
-        bus.kind = BusKind::lin;
-      } else {
-        c.error(*t->get("kind"), path + ".kind",
-                fmt::format("\"{}\" is not a bus kind (can, can-fd, lin)", *kind));
-      }
+    if (auto kind = c.choice(t, path, "kind", false, kBusKinds, "bus kind")) {
+      bus.kind = *kind;
     }
     const int64_t max_rate = bus.kind == BusKind::lin ? 20'000 : 1'000'000;
     const int64_t min_rate = bus.kind == BusKind::lin ? 1'000 : 5'000;
-    if (auto rate = c.integer(*t, path, "bitrate", false, min_rate, max_rate)) {
+    if (auto rate = c.integer(t, path, "bitrate", false, min_rate, max_rate)) {
       bus.bitrate = static_cast<uint32_t>(*rate);
-    } else if (bus.kind == BusKind::lin && t->get("bitrate") == nullptr) {
+    } else if (bus.kind == BusKind::lin && t.get("bitrate") == nullptr) {
       bus.bitrate = 19'200;
     }
-    if (auto sp = c.number(*t, path, "sample_point")) {
+    if (auto sp = c.number(t, path, "sample_point")) {
       if (!(*sp >= 0.5 && *sp <= 0.95)) {  // also rejects NaN
-        c.error(*t->get("sample_point"), path + ".sample_point",
+        c.error(*t.get("sample_point"), path + ".sample_point",
                 fmt::format("{} is outside 0.5..0.95", *sp));
       } else {
         bus.sample_point = static_cast<uint32_t>(*sp * 1000 + 0.5);
       }
     }
-    if (t->get("data_bitrate") != nullptr) {
+    if (t.get("data_bitrate") != nullptr) {
       if (bus.kind != BusKind::can_fd) {
-        c.error(*t->get("data_bitrate"), path + ".data_bitrate",
+        c.error(*t.get("data_bitrate"), path + ".data_bitrate",
                 "only a can-fd bus has a data bit rate");
-      } else if (auto d = c.integer(*t, path, "data_bitrate", false, bus.bitrate, 10'000'000)) {
+      } else if (auto d = c.integer(t, path, "data_bitrate", false, bus.bitrate, 10'000'000)) {
         bus.data_bitrate = static_cast<uint32_t>(*d);
       }
     }
     cfg.buses.push_back(bus);
-  }
+  });
 }
 
 void read_devices(Checker& c, const toml::table& root, Config& cfg) {
-  const toml::node* n = root.get("device");
-  if (n == nullptr) {
-    return;
-  }
-  const toml::array* a = n->as_array();
-  if (a == nullptr) {
-    c.error(*n, "device", "must be an array of tables ([[device]])");
-    return;
-  }
   std::set<std::string> names;
-  for (std::size_t i = 0; i < a->size(); ++i) {
-    const toml::node& e = *a->get(i);
-    const std::string path = fmt::format("device[{}]", i);
-    const toml::table* t = e.as_table();
-    if (t == nullptr) {
-      c.error(e, path, "must be a table");
-      continue;
-    }
-    c.only_keys(*t, path, {"name", "model", "controllers"});
+  c.for_each_table(root, "device", [&](const toml::table& t, const std::string& path) {
+    c.only_keys(t, path, {"name", "model", "controllers"});
     DeviceConfig dev;
-    dev.line = static_cast<uint32_t>(t->source().begin.line);
-    if (auto name = c.string(*t, path, "name", true)) {
-      if (!valid_name(*name)) {
-        c.error(*t->get("name"), path + ".name", kNameRule);
-      } else if (!names.insert(*name).second) {
-        c.error(*t->get("name"), path + ".name",
-                fmt::format("a device named \"{}\" exists already", *name));
-      }
+    dev.line = static_cast<uint32_t>(t.source().begin.line);
+    if (auto name = read_name(c, t, path, names, "device")) {
       dev.name = *name;
     }
-    if (auto model = c.string(*t, path, "model", true)) {
-      if (*model == "ixxat-usb-to-can") {
-        dev.model = DeviceModel::ixxat_usb_to_can;
-      } else if (*model == "ixxat-usb-to-can-fd") {
-        dev.model = DeviceModel::ixxat_usb_to_can_fd;
-      } else {
-        c.error(*t->get("model"), path + ".model",
-                fmt::format("\"{}\" is not a device model (ixxat-usb-to-can, ixxat-usb-to-can-fd)",
-                            *model));
-      }
+    if (auto model = c.choice(t, path, "model", true, kDeviceModels, "device model")) {
+      dev.model = *model;
     }
-    const toml::node* ctl = t->get("controllers");
+    const toml::node* ctl = t.get("controllers");
     if (ctl == nullptr) {
-      c.error(t->source(), path + ".controllers", "missing (the bus of each controller)");
-    } else if (auto buses = c.strings(*t, path, "controllers")) {
+      c.error(t.source(), path + ".controllers", "missing (the bus of each controller)");
+    } else if (auto buses = c.strings(t, path, "controllers")) {
       if (buses->empty() || buses->size() > 4) {
         c.error(*ctl, path + ".controllers",
                 fmt::format("{} controllers; an adapter has 1 to 4", buses->size()));
@@ -318,31 +341,17 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
       dev.controllers = *buses;
     }
     cfg.devices.push_back(dev);
-  }
+  });
 }
 
 }  // namespace
 
 std::string_view to_string(BusKind kind) {
-  switch (kind) {
-    case BusKind::can:
-      return "can";
-    case BusKind::can_fd:
-      return "can-fd";
-    case BusKind::lin:
-      return "lin";
-  }
-  return "?";
+  return name_of(kind, kBusKinds);
 }
 
 std::string_view to_string(DeviceModel model) {
-  switch (model) {
-    case DeviceModel::ixxat_usb_to_can:
-      return "ixxat-usb-to-can";
-    case DeviceModel::ixxat_usb_to_can_fd:
-      return "ixxat-usb-to-can-fd";
-  }
-  return "?";
+  return name_of(model, kDeviceModels);
 }
 
 tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text) {

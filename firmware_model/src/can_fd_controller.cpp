@@ -121,23 +121,24 @@ void CanFdController::on_frame(SimTime at, const Frame& frame, bool own) {
   }
 }
 
-void CanFdController::on_tx_done(SimTime at) {
+Frame CanFdController::take_tx() {
   const Frame f = tx_.front().frame;
   tx_.pop_front();
   if (!tx_.empty() && bus_ != nullptr) {
     bus_->tx_changed(node_);
   }
+  return f;
+}
+
+void CanFdController::on_tx_done(SimTime at) {
+  const Frame f = take_tx();
   if (listener_ != nullptr) {
     listener_->frame_transmitted(at, f);
   }
 }
 
 void CanFdController::on_tx_dropped(SimTime at) {
-  const Frame f = tx_.front().frame;
-  tx_.pop_front();
-  if (!tx_.empty() && bus_ != nullptr) {
-    bus_->tx_changed(node_);
-  }
+  const Frame f = take_tx();
   if (listener_ != nullptr) {
     listener_->transmission_dropped(at, f);
   }

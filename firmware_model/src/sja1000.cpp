@@ -350,10 +350,7 @@ void Sja1000::on_tx_done(SimTime at) {
   if (!tx_) {
     return;
   }
-  const Frame f = tx_->frame;
-  tx_.reset();
-  tx_complete_ = true;
-  set_ir(IR_TI, at);
+  const Frame f = end_tx(at, true);
   if (listener_ != nullptr) {
     listener_->frame_transmitted(at, f);
   }
@@ -363,13 +360,18 @@ void Sja1000::on_tx_dropped(SimTime at) {
   if (!tx_) {
     return;
   }
-  const Frame f = tx_->frame;
-  tx_.reset();
-  tx_complete_ = false;
-  set_ir(IR_TI, at);
+  const Frame f = end_tx(at, false);
   if (listener_ != nullptr) {
     listener_->transmission_dropped(at, f);
   }
+}
+
+Frame Sja1000::end_tx(SimTime at, bool complete) {
+  const Frame f = tx_->frame;
+  tx_.reset();
+  tx_complete_ = complete;
+  set_ir(IR_TI, at);  // TI follows the end of a request, completed or not
+  return f;
 }
 
 void Sja1000::on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed_bit) {

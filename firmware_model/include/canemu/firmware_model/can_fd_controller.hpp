@@ -85,6 +85,7 @@ class CanFdController final : public CanController {
 
  private:
   void changed();
+  Frame take_tx();  // the frame at the head of the queue, removed, and the next one offered
 
   CanFdConfig config_;
   CanBus* bus_ = nullptr;

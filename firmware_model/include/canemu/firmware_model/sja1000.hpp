@@ -138,6 +138,7 @@ class Sja1000 final : public CanController {
 
  private:
   SimTime now() const;
+  Frame end_tx(SimTime at, bool complete);  // ends the request (TCS = complete, TI); its frame
   uint8_t ir_value() const {
     return static_cast<uint8_t>(ir_ | ((rmc_ > 0 && (ier_ & sja1000::IR_RI)) ? sja1000::IR_RI : 0));
   }

@@ -122,6 +122,8 @@ class CanBus final : private EventHandler {
 
   // --- observation ---
   const NodeStats& stats(NodeId node) const { return nodes_[node].stats; }
+  // Zeroes a node's statistics (a reused node starts afresh).
+  void reset_stats(NodeId node) { nodes_[node].stats = NodeStats{}; }
   // Busy time (start of frame to end of intermission) over the second before `now`, percent.
   double bus_load_percent(SimTime now) const;
   uint64_t frames_on_bus() const { return frames_on_bus_; }

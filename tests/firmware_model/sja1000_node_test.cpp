@@ -1,0 +1,222 @@
+// The SJA1000 with its host driver: frames pulled from a queue as the transmit buffer frees,
+// received frames reported and the FIFO emptied, bus-off restarts, and reuse after stop().
+#include "canemu/firmware_model/sja1000_node.hpp"
+
+#include <gtest/gtest.h>
+
+#include <deque>
+
+#include "test_controller.hpp"
+
+namespace canemu::model {
+namespace {
+
+using testing::k123;
+using testing::kBit;
+using testing::kZero;
+using Bus = testing::BusFixture;
+
+// What a node's sink saw.
+struct Log : ControllerEvents {
+  struct Item {
+    int64_t at;
+    Frame frame;
+    bool own;
+  };
+  std::vector<Item> received;
+  std::vector<Item> sent;
+  std::vector<int64_t> dropped;
+  std::vector<BusErrorEvent> errors;
+  std::vector<std::pair<int64_t, ErrorState>> states;
+  void frame_received(SimTime at, const Frame& f, bool own) override {
+    received.push_back({at.ns(), f, own});
+  }
+  void frame_transmitted(SimTime at, const Frame& f) override {
+    sent.push_back({at.ns(), f, false});
+  }
+  void transmission_dropped(SimTime at, const Frame&) override { dropped.push_back(at.ns()); }
+  void bus_error(const BusErrorEvent& e) override { errors.push_back(e); }
+  void state_changed(SimTime at, ErrorState s, uint16_t, uint16_t) override {
+    states.emplace_back(at.ns(), s);
+  }
+};
+
+// A node with its own queue and log, at 500 kbit/s.
+struct Station {
+  Sja1000Node node;
+  Log log;
+  std::deque<TxFrame> queue;
+  int pulls = 0;
+  explicit Station(Bus& b) : node(b.sched, b.bus) {}
+  void start(bool listen_only = false, int64_t restart_ns = 0) {
+    Sja1000NodeSettings s;
+    s.btr0 = 0x00;
+    s.btr1 = 0x1C;
+    s.listen_only = listen_only;
+    s.restart_delay = SimDuration(restart_ns);
+    node.start(s, &log, [this]() -> std::optional<TxFrame> {
+      ++pulls;
+      if (queue.empty()) {
+        return std::nullopt;
+      }
+      TxFrame f = queue.front();
+      queue.pop_front();
+      return f;
+    });
+  }
+  void send(const Frame& f, bool single_shot = false, bool self_reception = false) {
+    queue.push_back(TxFrame{f, single_shot, self_reception});
+    node.kick();
+  }
+};
+
+TEST(Sja1000Node, PullsFramesAsTheTransmitBufferFreesAndEmptiesTheReceiveFifo) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  for (int i = 0; i < 8; ++i) {
+    a.queue.push_back(TxFrame{k123, false, false});
+  }
+  a.node.kick();
+  b.run_until(8 * 65 * kBit);
+  // 62 bits each, 3 bits of intermission between: ends at 62, 127, 192, ... bit times.
+  ASSERT_EQ(r.log.received.size(), 8u);
+  ASSERT_EQ(a.log.sent.size(), 8u);
+  for (int i = 0; i < 8; ++i) {
+    EXPECT_EQ(r.log.received[i].at, (62 + 65 * i) * kBit) << i;
+    EXPECT_EQ(a.log.sent[i].at, (62 + 65 * i) * kBit) << i;
+    EXPECT_EQ(r.log.received[i].frame, k123);
+  }
+  // Eight frames of 5 FIFO bytes each would overflow a 64-byte FIFO after 12: the driver keeps
+  // it empty.
+  EXPECT_EQ(r.node.chip().read(sja1000::RMC), 0);
+  EXPECT_EQ(b.bus.stats(r.node.node()).frames_received, 8u);
+  // One pull at start (empty), one per loaded frame, one that found the queue empty again.
+  EXPECT_EQ(a.pulls, 10);
+  EXPECT_FALSE(a.node.transmitting());
+}
+
+TEST(Sja1000Node, AFrameQueuedWhileIdleStartsAtTheKick) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  b.run_until(1000 * kBit);
+  a.send(kZero);
+  EXPECT_TRUE(a.node.transmitting());
+  b.run_until(2000 * kBit);
+  ASSERT_EQ(r.log.received.size(), 1u);
+  EXPECT_EQ(r.log.received[0].at, (1000 + 50) * kBit);
+}
+
+TEST(Sja1000Node, SelfReceptionAndSingleShotGoThroughTheChipCommands) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  a.send(k123, false, true);
+  b.run_until(100 * kBit);
+  ASSERT_EQ(a.log.received.size(), 1u);
+  EXPECT_TRUE(a.log.received[0].own);
+  EXPECT_EQ(a.log.received[0].at, 62 * kBit);
+  // Single shot on a bus where nobody acknowledges: one attempt, then dropped.
+  r.node.stop();
+  a.send(kZero, true);
+  b.run_until(300 * kBit);
+  EXPECT_EQ(a.log.sent.size(), 1u);
+  ASSERT_EQ(a.log.dropped.size(), 1u);
+  ASSERT_FALSE(a.log.errors.empty());
+  EXPECT_EQ(a.log.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(a.node.chip().read(sja1000::TXERR), 8);
+}
+
+TEST(Sja1000Node, AListenOnlyNodeReceivesButNeverAcknowledges) {
+  Bus b;
+  Station a(b), l(b);
+  a.start();
+  l.start(true);
+  a.send(kZero);
+  b.run_until(30 * 70 * kBit);
+  EXPECT_FALSE(l.log.received.empty());
+  EXPECT_TRUE(a.log.sent.empty());
+  EXPECT_EQ(a.node.chip().confinement().state(), ErrorState::passive);
+  EXPECT_EQ(a.node.chip().read(sja1000::TXERR), 128);  // a lone transmitter stays at 128
+}
+
+TEST(Sja1000Node, RestartsAfterBusOffOnceTheDelayHasPassed) {
+  Bus b;
+  Station a(b), r(b);
+  a.start(false, 1'000'000);  // 1 ms
+  r.start();
+  b.run_until(100 * kBit);
+  // Bus-off by the host writing 255 to TXERR in reset mode (datasheet 6.4.13).
+  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
+  a.node.chip().write(sja1000::TXERR, 255);
+  ASSERT_FALSE(a.log.states.empty());
+  EXPECT_EQ(a.log.states.back(), std::make_pair(100 * kBit, ErrorState::bus_off));
+  // Restart at 100 bits + 1 ms, then 128 x 11 recessive bits on the idle bus.
+  const int64_t recovered = 100 * kBit + 1'000'000 + 128 * 11 * kBit;
+  b.run_until(recovered - 1);
+  EXPECT_EQ(a.log.states.back().second, ErrorState::bus_off);
+  b.run_until(recovered);
+  EXPECT_EQ(a.log.states.back(), std::make_pair(recovered, ErrorState::active));
+  EXPECT_EQ(a.node.chip().read(sja1000::TXERR), 0);
+}
+
+TEST(Sja1000Node, WithoutADelayBusOffLastsUntilRestart) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
+  a.node.chip().write(sja1000::TXERR, 255);
+  b.run_until(10'000 * kBit);
+  EXPECT_TRUE(a.node.chip().confinement().bus_off());
+  a.node.restart();
+  b.run_until(10'000 * kBit + 128 * 11 * kBit);
+  EXPECT_EQ(a.log.states.back(), std::make_pair((10'000 + 128 * 11) * kBit, ErrorState::active));
+}
+
+TEST(Sja1000Node, AStoppedNodeIsReusedWithClearedCountersAndStatistics) {
+  Bus b;
+  Station a(b), r(b);
+  a.start(false, 1'000'000);
+  r.start();
+  a.send(kZero);
+  b.run_until(100 * kBit);
+  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
+  a.node.chip().write(sja1000::TXERR, 255);
+  a.node.stop();
+  EXPECT_TRUE(a.node.reusable());
+  EXPECT_FALSE(a.node.running());
+  // Reused by someone else: a fresh node, and the restart scheduled before the stop is void.
+  Station& again = a;
+  again.log = Log{};
+  again.start();
+  EXPECT_EQ(again.node.chip().read(sja1000::TXERR), 0);
+  EXPECT_EQ(again.node.chip().confinement().state(), ErrorState::active);
+  EXPECT_EQ(b.bus.stats(again.node.node()).frames_sent, 0u);
+  b.run_until(100 * kBit + 2'000'000);
+  EXPECT_TRUE(again.log.states.empty());
+  again.send(kZero);
+  b.run_until(100 * kBit + 2'000'000 + 50 * kBit);
+  ASSERT_EQ(r.log.received.size(), 2u);
+  EXPECT_EQ(r.log.received[1].at, 100 * kBit + 2'000'000 + 50 * kBit);
+}
+
+TEST(Sja1000Node, AStoppedNodeTakesNoPartOnTheBus) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  r.node.stop();
+  a.send(kZero);
+  b.run_until(200 * kBit);
+  EXPECT_TRUE(r.log.received.empty());
+  EXPECT_TRUE(a.log.sent.empty());  // nobody acknowledges
+  EXPECT_EQ(b.bus.stats(r.node.node()).frames_received, 0u);
+}
+
+}  // namespace
+}  // namespace canemu::model

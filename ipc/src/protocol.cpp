@@ -22,30 +22,31 @@ std::string_view to_string(ErrorCode code) {
       return "bad_argument";
     case ErrorCode::permission_denied:
       return "permission_denied";
+    case ErrorCode::no_such_bus:
+      return "no_such_bus";
+    case ErrorCode::no_such_channel:
+      return "no_such_channel";
+    case ErrorCode::name_in_use:
+      return "name_in_use";
+    case ErrorCode::bad_bit_timing:
+      return "bad_bit_timing";
+    case ErrorCode::no_resources:
+      return "no_resources";
   }
   return "unknown";
 }
 
 namespace {
 
+template <class... T>
+std::size_t size_among(MsgType type) {
+  std::size_t size = 0;
+  ((type == type_of<T>() ? size = sizeof(T) : 0), ...);
+  return size;
+}
+
 std::size_t size_of(MsgType type) {
-  switch (type) {
-    case MsgType::hello:
-      return sizeof(Hello);
-    case MsgType::hello_reply:
-      return sizeof(HelloReply);
-    case MsgType::error_reply:
-      return sizeof(ErrorReply);
-    case MsgType::status_request:
-      return sizeof(StatusRequest);
-    case MsgType::status_reply:
-      return sizeof(StatusReply);
-    case MsgType::time_step_request:
-      return sizeof(TimeStepRequest);
-    case MsgType::time_step_reply:
-      return sizeof(TimeStepReply);
-  }
-  return 0;
+  return size_among<Hello, HelloReply, ErrorReply, StatusRequest, StatusReply, TimeStepRequest, TimeStepReply, OpenChannelRequest, OpenChannelReply, CloseChannelRequest, CloseChannelReply, ChannelStatusRequest, ChannelStatusReply, DeviceListRequest, DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest, SubscribeReply, Notification>(type);
 }
 
 }  // namespace

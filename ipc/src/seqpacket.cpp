@@ -92,9 +92,27 @@ IpcResult<UniqueFd> connect_seqpacket(const std::string& path) {
   return fd;
 }
 
-IpcResult<void> send_packet(int fd, const void* data, std::size_t size) {
+IpcResult<void> send_packet(int fd, const void* data, std::size_t size,
+                            std::span<const int> fds) {
+  if (fds.size() > kMaxPassedFds) {
+    return tl::unexpected(IpcError{EINVAL, "send: too many descriptors"});
+  }
+  iovec iov{const_cast<void*>(data), size};
+  msghdr msg{};
+  msg.msg_iov = &iov;
+  msg.msg_iovlen = 1;
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int) * kMaxPassedFds)] = {};
+  if (!fds.empty()) {
+    msg.msg_control = control;
+    msg.msg_controllen = CMSG_SPACE(sizeof(int) * fds.size());
+    cmsghdr* c = CMSG_FIRSTHDR(&msg);
+    c->cmsg_level = SOL_SOCKET;
+    c->cmsg_type = SCM_RIGHTS;
+    c->cmsg_len = CMSG_LEN(sizeof(int) * fds.size());
+    std::memcpy(CMSG_DATA(c), fds.data(), sizeof(int) * fds.size());
+  }
   while (true) {
-    const ssize_t n = ::send(fd, data, size, MSG_NOSIGNAL);
+    const ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL);
     if (n == static_cast<ssize_t>(size)) {
       return {};
     }
@@ -108,8 +126,12 @@ IpcResult<void> send_packet(int fd, const void* data, std::size_t size) {
   }
 }
 
-IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int timeout_ms) {
+IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int timeout_ms,
+                                      std::vector<UniqueFd>* fds) {
   buffer.resize(kMaxMessageSize);
+  if (fds != nullptr) {
+    fds->clear();
+  }
   if (timeout_ms >= 0) {
     pollfd p{fd, POLLIN, 0};
     int r;
@@ -125,12 +147,33 @@ IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int 
     }
   }
   while (true) {
-    const ssize_t n = ::recv(fd, buffer.data(), buffer.size(), MSG_TRUNC);
+    iovec iov{buffer.data(), buffer.size()};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int) * kMaxPassedFds)];
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(fd, &msg, MSG_TRUNC | MSG_CMSG_CLOEXEC);
     if (n < 0 && errno == EINTR) {
       continue;
     }
     if (n < 0) {
       return tl::unexpected(system_error("recv"));
+    }
+    // Whatever descriptors came are owned here, kept only if asked for.
+    for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_RIGHTS) {
+        const std::size_t count = (c->cmsg_len - CMSG_LEN(0)) / sizeof(int);
+        for (std::size_t k = 0; k < count; ++k) {
+          int passed;
+          std::memcpy(&passed, CMSG_DATA(c) + k * sizeof(int), sizeof passed);
+          UniqueFd owned(passed);
+          if (fds != nullptr) {
+            fds->push_back(std::move(owned));
+          }
+        }
+      }
     }
     if (static_cast<std::size_t>(n) > buffer.size()) {
       buffer.clear();

@@ -225,6 +225,15 @@ bool RingEvent::wait(int timeout_ms) const {
   }
 }
 
+void RingEvent::disarm() const {
+  waiting->store(0, std::memory_order_seq_cst);
+  flag->store(0, std::memory_order_relaxed);
+  uint64_t count;
+  if (eventfd >= 0) {
+    [[maybe_unused]] const ssize_t n = ::read(eventfd, &count, sizeof count);
+  }
+}
+
 // ---- writer ----
 
 RingWriter::RingWriter(const RingMemory& m, int reader_eventfd, int own_eventfd)
@@ -327,6 +336,16 @@ uint32_t RingWriter::threshold() const {
 }
 
 // ---- reader ----
+
+bool RingReader::arm_unless_filled() {
+  own_.arm();
+  // A put between the last read and arm() did not write the eventfd: look once more.
+  if (fill_count() > 0 || corrupted_) {
+    own_.disarm();
+    return false;
+  }
+  return true;
+}
 
 RingReader::RingReader(const RingMemory& m, int writer_eventfd, int own_eventfd)
     : hdr_(m.header()),

@@ -6,6 +6,7 @@
 
 #include <csignal>
 
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -55,6 +56,29 @@ TEST(ShmRing, CapacityIsAtLeastTheRequestAndFillsWholePages) {
   EXPECT_GE(big->capacity(), 1000u);
   EXPECT_FALSE(RingMemory::create(0, 20, "x"));
   EXPECT_FALSE(RingMemory::create(70000, 20, "x"));
+}
+
+// A reader that sleeps in its own poll loop: the eventfd is written only while it is armed, and
+// arming with elements already in the ring says so instead of sleeping.
+TEST(ShmRing, AReaderArmedForAPollLoopGetsItsEventfdWrittenOnce) {
+  auto p = make(32);
+  auto readable = [&] {
+    pollfd q{p.reader_event.get(), POLLIN, 0};
+    return ::poll(&q, 1, 0) == 1;
+  };
+  const Element e = element(1);
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+  EXPECT_FALSE(readable());  // not armed: no system call on the writer's side
+  EXPECT_FALSE(p.reader.arm_unless_filled());  // something to read already
+  ASSERT_EQ(p.reader.get(nullptr), RingStatus::ok);
+  EXPECT_TRUE(p.reader.arm_unless_filled());
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+  EXPECT_TRUE(readable());
+  p.reader.disarm();
+  EXPECT_FALSE(readable());  // drained
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+  EXPECT_FALSE(readable());  // disarmed again
+  EXPECT_EQ(p.reader.fill_count(), 2u);
 }
 
 TEST(ShmRing, ElementsComeOutInOrderAndCountsFollow) {

@@ -14,6 +14,8 @@
 #include <string_view>
 #include <type_traits>
 
+#include "canemu/ipc/channel_message.hpp"
+
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
@@ -22,6 +24,11 @@ inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 inline constexpr std::size_t kMaxStatusBuses = 16;
 inline constexpr std::size_t kMaxStatusNodes = 64;
+inline constexpr std::size_t kMaxDevices = 64;
+inline constexpr std::size_t kMaxDeviceControllers = 4;
+inline constexpr std::size_t kMaxClients = 64;
+// Descriptors that come with an OpenChannelReply, in this order.
+inline constexpr std::size_t kChannelFdCount = 5;
 
 enum class MsgType : uint16_t {
   hello = 1,
@@ -31,6 +38,19 @@ enum class MsgType : uint16_t {
   status_reply = 11,
   time_step_request = 20,
   time_step_reply = 21,
+  open_channel_request = 30,
+  open_channel_reply = 31,
+  close_channel_request = 32,
+  close_channel_reply = 33,
+  channel_status_request = 34,
+  channel_status_reply = 35,
+  device_list_request = 40,
+  device_list_reply = 41,
+  client_list_request = 42,
+  client_list_reply = 43,
+  subscribe_request = 50,
+  subscribe_reply = 51,
+  notification = 52,  // unsolicited, request_id 0
 };
 
 // Why a request failed. Values are stable: clients show them by name.
@@ -44,6 +64,11 @@ enum class ErrorCode : uint32_t {
   not_stepped = 6,  // time step outside stepped mode
   bad_argument = 7,
   permission_denied = 8,
+  no_such_bus = 9,
+  no_such_channel = 10,
+  name_in_use = 11,
+  bad_bit_timing = 12,
+  no_resources = 13,
 };
 std::string_view to_string(ErrorCode code);
 
@@ -139,35 +164,209 @@ struct TimeStepReply {
 };
 static_assert(sizeof(TimeStepReply) == 32);
 
+
+// ---- channels (the data plane) ----
+
+// OpenChannelRequest.flags
+inline constexpr uint16_t kChannelListenOnly = 0x0001;  // never drives the bus (no ACK)
+inline constexpr uint16_t kChannelReportTx = 0x0002;    // tx_done / tx_dropped messages
+inline constexpr uint16_t kChannelReportErrors = 0x0004;  // error and state messages
+
+// Asks for an ephemeral device: one SJA1000 node on the bus `bus`, alive while this client is
+// connected (or until CloseChannelRequest). The reply carries kChannelFdCount descriptors:
+// rx ring memory, tx ring memory, the rx reader's eventfd (the client waits on it), the tx
+// writer's eventfd (the client waits on it for room), the tx reader's eventfd (the daemon's
+// doorbell, written by the client's ring writer).
+struct OpenChannelRequest {
+  MsgHeader header;
+  char bus[kNameSize] = {};
+  char device[kNameSize] = {};  // name of the ephemeral device; empty: the daemon picks one
+  uint32_t bitrate = 0;         // 0: the bus's rate
+  uint16_t sample_point = 0;    // per mille; 0: the bus's
+  uint16_t flags = 0;
+  uint32_t rx_capacity = 0;  // elements; 0: 1024
+  uint32_t tx_capacity = 0;  // elements; 0: 256
+  uint32_t restart_ms = 0;   // restart after bus-off after this long; 0: stay bus-off
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(OpenChannelRequest) == 16 + 64 + 24);
+
+struct OpenChannelReply {
+  MsgHeader header;
+  uint32_t channel = 0;
+  uint32_t rx_capacity = 0;
+  uint32_t tx_capacity = 0;
+  uint32_t element_size = 0;
+  char device[kNameSize] = {};
+  uint32_t bitrate = 0;
+  uint16_t sample_point = 0;
+  uint8_t btr0 = 0;
+  uint8_t btr1 = 0;
+};
+static_assert(sizeof(OpenChannelReply) == 16 + 16 + 32 + 8);
+
+struct CloseChannelRequest {
+  MsgHeader header;
+  uint32_t channel = 0;
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(CloseChannelRequest) == 24);
+
+struct CloseChannelReply {
+  MsgHeader header;
+  uint32_t channel = 0;
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(CloseChannelReply) == 24);
+
+struct ChannelStatusRequest {
+  MsgHeader header;
+  uint32_t channel = 0;
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(ChannelStatusRequest) == 24);
+
+struct ChannelStatusReply {
+  MsgHeader header;
+  uint32_t channel = 0;
+  uint8_t state = 0;  // WireErrorState
+  uint8_t transmitting = 0;
+  uint16_t reserved = 0;
+  uint16_t tec = 0;
+  uint16_t rec = 0;
+  uint32_t rx_fill = 0;
+  uint64_t frames_sent = 0;
+  uint64_t frames_received = 0;
+  uint64_t rx_lost = 0;  // messages the rx ring had no room for
+  uint64_t errors = 0;
+  int64_t sim_time_ns = 0;
+};
+static_assert(sizeof(ChannelStatusReply) == 16 + 16 + 40);
+
+// ---- devices, clients, notifications ----
+
+enum class WireDeviceModel : uint8_t { ixxat_usb_to_can = 0, ixxat_usb_to_can_fd = 1, ephemeral = 2 };
+
+struct DeviceEntry {
+  char name[kNameSize] = {};
+  uint8_t model = 0;  // WireDeviceModel
+  uint8_t controller_count = 0;
+  uint8_t ephemeral = 0;
+  uint8_t reserved = 0;
+  uint32_t owner_pid = 0;  // ephemeral devices: the client's pid
+  char buses[kMaxDeviceControllers][kNameSize] = {};  // bus of each controller
+};
+static_assert(sizeof(DeviceEntry) == 40 + 32 * kMaxDeviceControllers);
+
+struct DeviceListRequest {
+  MsgHeader header;
+};
+
+struct DeviceListReply {
+  MsgHeader header;
+  uint32_t generation = 0;  // changes whenever a device comes or goes
+  uint16_t count = 0;
+  uint16_t total = 0;  // devices that exist (count is capped at kMaxDevices)
+  DeviceEntry devices[kMaxDevices];
+};
+static_assert(sizeof(DeviceListReply) <= kMaxMessageSize);
+
+struct ClientEntry {
+  char name[kNameSize] = {};
+  uint32_t pid = 0;
+  uint32_t uid = 0;
+  uint32_t channels = 0;
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(ClientEntry) == 48);
+
+struct ClientListRequest {
+  MsgHeader header;
+};
+
+struct ClientListReply {
+  MsgHeader header;
+  uint16_t count = 0;
+  uint16_t total = 0;
+  uint32_t reserved = 0;
+  ClientEntry clients[kMaxClients];
+};
+static_assert(sizeof(ClientListReply) <= kMaxMessageSize);
+
+// SubscribeRequest.events
+inline constexpr uint32_t kEventDevices = 0x0001;  // devices added or removed
+
+struct SubscribeRequest {
+  MsgHeader header;
+  uint32_t events = 0;  // replaces the earlier subscription
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(SubscribeRequest) == 24);
+
+struct SubscribeReply {
+  MsgHeader header;
+  uint32_t events = 0;
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(SubscribeReply) == 24);
+
+enum class NotificationKind : uint32_t { device_added = 1, device_removed = 2 };
+
+struct Notification {
+  MsgHeader header;
+  uint32_t kind = 0;        // NotificationKind
+  uint32_t generation = 0;  // of the device list after the change
+  char device[kNameSize] = {};
+};
+static_assert(sizeof(Notification) == 16 + 8 + 32);
+
+// The message type of each struct (and, in protocol.cpp, the size of each type).
 template <class T>
-constexpr MsgType type_of();
+inline constexpr MsgType type_of_v = MsgType{};
 template <>
-constexpr MsgType type_of<Hello>() {
-  return MsgType::hello;
-}
+inline constexpr MsgType type_of_v<Hello> = MsgType::hello;
 template <>
-constexpr MsgType type_of<HelloReply>() {
-  return MsgType::hello_reply;
-}
+inline constexpr MsgType type_of_v<HelloReply> = MsgType::hello_reply;
 template <>
-constexpr MsgType type_of<ErrorReply>() {
-  return MsgType::error_reply;
-}
+inline constexpr MsgType type_of_v<ErrorReply> = MsgType::error_reply;
 template <>
-constexpr MsgType type_of<StatusRequest>() {
-  return MsgType::status_request;
-}
+inline constexpr MsgType type_of_v<StatusRequest> = MsgType::status_request;
 template <>
-constexpr MsgType type_of<StatusReply>() {
-  return MsgType::status_reply;
-}
+inline constexpr MsgType type_of_v<StatusReply> = MsgType::status_reply;
 template <>
-constexpr MsgType type_of<TimeStepRequest>() {
-  return MsgType::time_step_request;
-}
+inline constexpr MsgType type_of_v<TimeStepRequest> = MsgType::time_step_request;
 template <>
-constexpr MsgType type_of<TimeStepReply>() {
-  return MsgType::time_step_reply;
+inline constexpr MsgType type_of_v<TimeStepReply> = MsgType::time_step_reply;
+template <>
+inline constexpr MsgType type_of_v<OpenChannelRequest> = MsgType::open_channel_request;
+template <>
+inline constexpr MsgType type_of_v<OpenChannelReply> = MsgType::open_channel_reply;
+template <>
+inline constexpr MsgType type_of_v<CloseChannelRequest> = MsgType::close_channel_request;
+template <>
+inline constexpr MsgType type_of_v<CloseChannelReply> = MsgType::close_channel_reply;
+template <>
+inline constexpr MsgType type_of_v<ChannelStatusRequest> = MsgType::channel_status_request;
+template <>
+inline constexpr MsgType type_of_v<ChannelStatusReply> = MsgType::channel_status_reply;
+template <>
+inline constexpr MsgType type_of_v<DeviceListRequest> = MsgType::device_list_request;
+template <>
+inline constexpr MsgType type_of_v<DeviceListReply> = MsgType::device_list_reply;
+template <>
+inline constexpr MsgType type_of_v<ClientListRequest> = MsgType::client_list_request;
+template <>
+inline constexpr MsgType type_of_v<ClientListReply> = MsgType::client_list_reply;
+template <>
+inline constexpr MsgType type_of_v<SubscribeRequest> = MsgType::subscribe_request;
+template <>
+inline constexpr MsgType type_of_v<SubscribeReply> = MsgType::subscribe_reply;
+template <>
+inline constexpr MsgType type_of_v<Notification> = MsgType::notification;
+template <class T>
+constexpr MsgType type_of() {
+  static_assert(type_of_v<T> != MsgType{}, "not a protocol message");
+  return type_of_v<T>;
 }
 
 // A message of type T with its header filled in.

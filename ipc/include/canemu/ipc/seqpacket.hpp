@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -31,15 +32,20 @@ IpcResult<UniqueFd> listen_seqpacket(const std::string& path, int backlog = 64);
 // A connected socket (blocking), close-on-exec.
 IpcResult<UniqueFd> connect_seqpacket(const std::string& path);
 
-// Sends one message; the whole packet or an error.
-IpcResult<void> send_packet(int fd, const void* data, std::size_t size);
+inline constexpr std::size_t kMaxPassedFds = 8;
+
+// Sends one message, with `fds` (at most kMaxPassedFds) attached; the whole packet or an error.
+IpcResult<void> send_packet(int fd, const void* data, std::size_t size,
+                            std::span<const int> fds = {});
 template <class T>
 IpcResult<void> send_message(int fd, const T& message) {
   return send_packet(fd, &message, sizeof message);
 }
 
 // Receives one packet into `buffer` (resized to what came). An empty packet means the peer
-// closed. `timeout_ms` < 0 waits forever.
-IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int timeout_ms = -1);
+// closed. `timeout_ms` < 0 waits forever. Descriptors that came with it go to `fds` (opened
+// close-on-exec); without `fds` they are closed.
+IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int timeout_ms = -1,
+                                      std::vector<UniqueFd>* fds = nullptr);
 
 }  // namespace canemu::ipc

@@ -98,6 +98,11 @@ struct RingEvent {
   void signal() const;
   // Returns true if signalled within `timeout_ms` (-1: forever); resets the event.
   bool wait(int timeout_ms) const;
+  // For a side that sleeps in its own poll loop (canemud's epoll) rather than in wait():
+  // arm() makes the next signal write the eventfd; disarm() stops that, resets the event and
+  // drains the eventfd.
+  void arm() const { waiting->store(1, std::memory_order_seq_cst); }
+  void disarm() const;
 };
 
 class RingWriter {
@@ -144,6 +149,10 @@ class RingReader {
   void set_threshold(uint32_t fill_threshold);  // clamped to the capacity
   uint32_t threshold() const;
   bool wait(int timeout_ms) const { return own_.wait(timeout_ms); }
+  // Sleeping in a poll loop on the own eventfd: arms it unless elements are waiting already.
+  // Returns false (and stays disarmed) when there is something to read.
+  bool arm_unless_filled();
+  void disarm() { own_.disarm(); }
   uint32_t overruns() const { return hdr_->overruns.load(std::memory_order_relaxed); }
   bool corrupted() const { return corrupted_; }
 

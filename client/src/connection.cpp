@@ -1,5 +1,7 @@
 #include "canemu/client/connection.hpp"
 
+#include <cstring>
+
 #include <unistd.h>
 
 namespace canemu::client {
@@ -25,26 +27,61 @@ Result<Connection> Connection::open(const std::string& path, const std::string& 
   return c;
 }
 
+Result<uint32_t> Connection::receive_one(int timeout_ms) {
+  auto n = ipc::receive_packet(fd_.get(), buffer_, timeout_ms, &fds_);
+  if (!n) {
+    return tl::unexpected(n.error());
+  }
+  if (*n == 0) {
+    return tl::unexpected(IpcError{0, "canemud closed the connection"});
+  }
+  const ipc::ErrorCode check = ipc::check_message(buffer_.data(), *n);
+  if (check != ipc::ErrorCode::none) {
+    return tl::unexpected(
+        IpcError{0, "malformed reply from canemud (" + std::string(ipc::to_string(check)) + ")"});
+  }
+  ipc::MsgHeader h;
+  std::memcpy(&h, buffer_.data(), sizeof h);
+  if (h.type == static_cast<uint16_t>(ipc::MsgType::notification)) {
+    ipc::Notification note;
+    std::memcpy(&note, buffer_.data(), sizeof note);
+    notifications_.push_back(note);
+  }
+  return h.request_id;
+}
+
 Result<void> Connection::receive(uint32_t request_id) {
   while (true) {
-    auto n = ipc::receive_packet(fd_.get(), buffer_, timeout_ms_);
-    if (!n) {
-      return tl::unexpected(n.error());
+    auto id = receive_one(timeout_ms_);
+    if (!id) {
+      return tl::unexpected(id.error());
     }
-    if (*n == 0) {
-      return tl::unexpected(IpcError{0, "canemud closed the connection"});
-    }
-    const ipc::ErrorCode check = ipc::check_message(buffer_.data(), *n);
-    if (check != ipc::ErrorCode::none) {
-      return tl::unexpected(
-          IpcError{0, "malformed reply from canemud (" + std::string(ipc::to_string(check)) + ")"});
-    }
-    const auto* h = reinterpret_cast<const ipc::MsgHeader*>(buffer_.data());
-    if (h->request_id == request_id) {
+    if (*id == request_id) {
       return {};
     }
-    // Not ours (a notification): skipped until the protocol has some.
   }
+}
+
+Result<void> Connection::subscribe(uint32_t events) {
+  auto m = ipc::make_message<ipc::SubscribeRequest>();
+  m.events = events;
+  auto r = call<ipc::SubscribeRequest, ipc::SubscribeReply>(m);
+  if (!r) {
+    return tl::unexpected(r.error());
+  }
+  return {};
+}
+
+std::optional<ipc::Notification> Connection::next_notification(int timeout_ms) {
+  while (notifications_.empty()) {
+    auto id = receive_one(timeout_ms);
+    if (!id) {
+      return std::nullopt;  // nothing within the time (or the connection broke)
+    }
+  }
+  ipc::Notification n = notifications_.front();
+  notifications_.pop_front();
+  return n;
 }
 
 IpcError Connection::error_from_reply() const {

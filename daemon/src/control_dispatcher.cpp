@@ -14,7 +14,163 @@ void ControlDispatcher::error(const Send& send, uint32_t request_id, ipc::ErrorC
   auto e = ipc::make_message<ipc::ErrorReply>(request_id);
   e.code = static_cast<uint32_t>(code);
   ipc::copy_name(e.message, text);
-  send(&e, sizeof e);
+  send(&e, sizeof e, {});
+}
+
+namespace {
+
+template <class T>
+T read_as(const uint8_t* data) {
+  T m;
+  std::memcpy(&m, data, sizeof m);
+  return m;
+}
+
+template <class T>
+void send_reply(const ControlDispatcher::Send& send, const T& reply) {
+  send(&reply, sizeof reply, {});
+}
+
+bool valid_name(std::string_view name) {
+  if (name.empty()) {
+    return false;
+  }
+  for (char ch : name) {
+    const bool ok = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+                    (ch >= '0' && ch <= '9') || ch == '_' || ch == '-' || ch == '.';
+    if (!ok) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& m,
+                                     const Send& send) {
+  const uint32_t rid = m.header.request_id;
+  const std::string bus_name = ipc::name_of(m.bus);
+  const auto bus = sim_.bus_index(bus_name);
+  if (!bus) {
+    error(send, rid, ipc::ErrorCode::no_such_bus, fmt::format("no bus named \"{}\"", bus_name));
+    return;
+  }
+  if (c.channels.size() >= kMaxChannelsPerClient) {
+    error(send, rid, ipc::ErrorCode::no_resources,
+          fmt::format("a client may open at most {} channels", kMaxChannelsPerClient));
+    return;
+  }
+  std::string device = ipc::name_of(m.device);
+  if (device.empty()) {
+    device = sim_.unique_device_name("eph");
+  } else if (!valid_name(device)) {
+    error(send, rid, ipc::ErrorCode::bad_argument,
+          "device names use letters, digits, '_', '-' and '.'");
+    return;
+  } else if (sim_.device_exists(device)) {
+    error(send, rid, ipc::ErrorCode::name_in_use,
+          fmt::format("a device named \"{}\" exists", device));
+    return;
+  }
+  constexpr uint16_t kKnownFlags =
+      ipc::kChannelListenOnly | ipc::kChannelReportTx | ipc::kChannelReportErrors;
+  if (m.flags & ~kKnownFlags) {
+    error(send, rid, ipc::ErrorCode::bad_argument, fmt::format("unknown flags {:#x}", m.flags));
+    return;
+  }
+  if (m.rx_capacity > 65535 || m.tx_capacity > 65535) {
+    error(send, rid, ipc::ErrorCode::bad_argument, "ring capacities are at most 65535");
+    return;
+  }
+  if (m.restart_ms > 60'000) {
+    error(send, rid, ipc::ErrorCode::bad_argument, "restart_ms is at most 60000");
+    return;
+  }
+  const BusConfig& bc = sim_.bus_config(*bus);
+  if (bc.kind == BusKind::lin) {
+    error(send, rid, ipc::ErrorCode::bad_argument,
+          fmt::format("bus \"{}\" is a LIN bus; CAN channels need a CAN bus", bus_name));
+    return;
+  }
+  const uint32_t bitrate = m.bitrate != 0 ? m.bitrate : bc.bitrate;
+  const uint32_t sample_point = m.sample_point != 0 ? m.sample_point : bc.sample_point;
+  if (sample_point >= 1000) {
+    error(send, rid, ipc::ErrorCode::bad_argument,
+          fmt::format("sample point {} is not below 1000 per mille", sample_point));
+    return;
+  }
+  const auto btr = sja1000_btr_for(bitrate, sample_point);
+  if (!btr) {
+    error(send, rid, ipc::ErrorCode::bad_bit_timing,
+          fmt::format("an SJA1000 at 16 MHz cannot run at {} bit/s", bitrate));
+    return;
+  }
+  model::Sja1000NodeSettings settings;
+  settings.btr0 = btr->first;
+  settings.btr1 = btr->second;
+  settings.listen_only = (m.flags & ipc::kChannelListenOnly) != 0;
+  settings.restart_delay = model::SimDuration(int64_t{m.restart_ms} * 1'000'000);
+  Channel::Options options;
+  options.flags = m.flags;
+  options.rx_capacity = m.rx_capacity != 0 ? m.rx_capacity : 1024;
+  options.tx_capacity = m.tx_capacity != 0 ? m.tx_capacity : 256;
+  const uint32_t id = c.next_channel++;
+  model::Sja1000Node& node = sim_.spare_node(*bus);
+  auto channel = Channel::open(id, device, *bus, node, settings, options);
+  if (!channel) {
+    error(send, rid, ipc::ErrorCode::no_resources, channel.error());
+    return;
+  }
+  SessionChannel& sc = c.channels[id];
+  sc.lease = sim_.add_ephemeral(device, *bus, node, c.pid);
+  sc.channel = std::move(*channel);
+  if (channel_opened) {
+    channel_opened(*sc.channel);
+  }
+  auto r = ipc::make_message<ipc::OpenChannelReply>(rid);
+  r.channel = id;
+  r.rx_capacity = sc.channel->rx_capacity();
+  r.tx_capacity = sc.channel->tx_capacity();
+  r.element_size = sizeof(ipc::ChannelMessage);
+  ipc::copy_name(r.device, device);
+  r.bitrate = bitrate;
+  r.sample_point = static_cast<uint16_t>(node.chip().timing().nominal.sample_point_permille());
+  r.btr0 = settings.btr0;
+  r.btr1 = settings.btr1;
+  const auto fds = sc.channel->client_fds();
+  send(&r, sizeof r, fds);
+}
+
+void ControlDispatcher::channel_status(Session& c, const ipc::ChannelStatusRequest& m,
+                                       const Send& send) {
+  auto it = c.channels.find(m.channel);
+  if (it == c.channels.end()) {
+    error(send, m.header.request_id, ipc::ErrorCode::no_such_channel,
+          fmt::format("no channel {} on this connection", m.channel));
+    return;
+  }
+  if (before_status) {
+    before_status();
+  }
+  Channel& ch = *it->second.channel;
+  model::Sja1000Node& node = ch.node();
+  auto r = ipc::make_message<ipc::ChannelStatusReply>(m.header.request_id);
+  r.channel = m.channel;
+  const model::FaultConfinement& fc = node.chip().confinement();
+  r.state = static_cast<uint8_t>(fc.state());
+  r.tec = fc.tec();
+  r.rec = fc.rec();
+  r.transmitting = node.transmitting() ? 1 : 0;
+  r.rx_fill = ch.rx_fill();
+  const model::NodeStats& st = sim_.bus(ch.bus()).stats(node.node());
+  r.frames_sent = st.frames_sent;
+  r.frames_received = st.frames_received;
+  r.errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
+  r.rx_lost = ch.stats().rx_lost;
+  r.tx_rejected = ch.stats().tx_rejected;
+  r.sim_time_ns = sim_.scheduler().now().ns();
+  send_reply(send, r);
 }
 
 void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size,
@@ -39,13 +195,12 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
   }
   switch (type) {
     case ipc::MsgType::hello: {
-      ipc::Hello m;
-      std::memcpy(&m, data, sizeof m);
+      const auto m = read_as<ipc::Hello>(data);
       c.greeted = true;
       c.name = ipc::name_of(m.client_name);
       auto r = ipc::make_message<ipc::HelloReply>(request_id);
       r.server_pid = static_cast<uint32_t>(::getpid());
-      send(&r, sizeof r);
+      send_reply(send, r);
       return;
     }
     case ipc::MsgType::status_request: {
@@ -59,12 +214,11 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
                                                                            : 2);
       r->time_scale = time_.scale;
       r->client_count = client_count ? client_count() : 0;
-      send(r.get(), sizeof *r);
+      send_reply(send, *r);
       return;
     }
     case ipc::MsgType::time_step_request: {
-      ipc::TimeStepRequest m;
-      std::memcpy(&m, data, sizeof m);
+      const auto m = read_as<ipc::TimeStepRequest>(data);
       if (time_.mode != TimeMode::stepped) {
         error(send, request_id, ipc::ErrorCode::not_stepped,
               fmt::format("time runs {}; steps need --time stepped", to_string(time_)));
@@ -76,11 +230,66 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
               fmt::format("step of {} ns is outside 1 ns .. 60 s", m.step_ns));
         return;
       }
+      if (before_step) {
+        before_step();
+      }
       auto r = ipc::make_message<ipc::TimeStepReply>(request_id);
       model::SimScheduler& s = sim_.scheduler();
       r.events_run = s.run_until(s.now() + model::SimDuration(m.step_ns));
       r.sim_time_ns = s.now().ns();
-      send(&r, sizeof r);
+      send_reply(send, r);
+      return;
+    }
+    case ipc::MsgType::open_channel_request:
+      open_channel(c, read_as<ipc::OpenChannelRequest>(data), send);
+      return;
+    case ipc::MsgType::close_channel_request: {
+      const auto m = read_as<ipc::CloseChannelRequest>(data);
+      auto it = c.channels.find(m.channel);
+      if (it == c.channels.end()) {
+        error(send, request_id, ipc::ErrorCode::no_such_channel,
+              fmt::format("no channel {} on this connection", m.channel));
+        return;
+      }
+      if (channel_closing) {
+        channel_closing(*it->second.channel);
+      }
+      c.channels.erase(it);
+      auto r = ipc::make_message<ipc::CloseChannelReply>(request_id);
+      r.channel = m.channel;
+      send_reply(send, r);
+      return;
+    }
+    case ipc::MsgType::channel_status_request:
+      channel_status(c, read_as<ipc::ChannelStatusRequest>(data), send);
+      return;
+    case ipc::MsgType::device_list_request: {
+      auto r = std::make_unique<ipc::DeviceListReply>(
+          ipc::make_message<ipc::DeviceListReply>(request_id));
+      sim_.fill_devices(*r);
+      send_reply(send, *r);
+      return;
+    }
+    case ipc::MsgType::client_list_request: {
+      auto r = std::make_unique<ipc::ClientListReply>(
+          ipc::make_message<ipc::ClientListReply>(request_id));
+      if (fill_clients) {
+        fill_clients(*r);
+      }
+      send_reply(send, *r);
+      return;
+    }
+    case ipc::MsgType::subscribe_request: {
+      const auto m = read_as<ipc::SubscribeRequest>(data);
+      if (m.events & ~ipc::kEventDevices) {
+        error(send, request_id, ipc::ErrorCode::bad_argument,
+              fmt::format("unknown events {:#x}", m.events));
+        return;
+      }
+      c.events = m.events;
+      auto r = ipc::make_message<ipc::SubscribeReply>(request_id);
+      r.events = c.events;
+      send_reply(send, r);
       return;
     }
     default:

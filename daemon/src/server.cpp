@@ -46,9 +46,35 @@ Server::Server(Simulation& sim, ServerOptions options)
     : sim_(sim), options_(std::move(options)), dispatcher_(sim, options_.time) {
   dispatcher_.before_status = [this] { advance_to_now(); };
   dispatcher_.client_count = [this] { return live_clients(); };
+  dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
+  dispatcher_.before_step = [this] { kick_all_channels(); };
+  dispatcher_.channel_opened = [this](Channel& ch) {
+    epoll_event ev{};
+    ev.events = EPOLLIN;
+    ev.data.fd = ch.doorbell_fd();
+    if (::epoll_ctl(epoll_.get(), EPOLL_CTL_ADD, ch.doorbell_fd(), &ev) == 0) {
+      doorbells_[ch.doorbell_fd()] = &ch;
+    }
+  };
+  dispatcher_.channel_closing = [this](Channel& ch) {
+    ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, ch.doorbell_fd(), nullptr);
+    doorbells_.erase(ch.doorbell_fd());
+  };
+  sim_.on_device_change = [this](ipc::NotificationKind kind, const std::string& name) {
+    // Sent after the current batch of events: a device can go while its client is dropped.
+    auto n = ipc::make_message<ipc::Notification>(0);
+    n.kind = static_cast<uint32_t>(kind);
+    n.generation = sim_.device_generation();
+    ipc::copy_name(n.device, name);
+    pending_notifications_.push_back(n);
+  };
 }
 
 Server::~Server() {
+  for (auto& [fd, c] : clients_) {
+    c.session.channels.clear();
+  }
+  sim_.on_device_change = nullptr;
   if (listen_.valid()) {
     ::unlink(options_.socket_path.c_str());
   }
@@ -155,9 +181,12 @@ int Server::run() {
       std::fprintf(stderr, "<3>canemud: epoll_wait: %s\n", std::strerror(errno));
       return 1;
     }
+    advance_to_now();  // events are handled at the simulated instant they are seen
     for (int i = 0; i < n; ++i) {
       const int fd = events[i].data.fd;
-      if (fd == listen_.get()) {
+      if (auto bell = doorbells_.find(fd); bell != doorbells_.end()) {
+        bell->second->kick();
+      } else if (fd == listen_.get()) {
         accept_clients();
       } else if (fd == timer_.get()) {
         uint64_t expirations = 0;
@@ -181,9 +210,67 @@ int Server::run() {
         serve(fd);
       }
     }
+    check_channels();
     drop_closing();
+    send_notifications();
   }
   return 0;
+}
+
+void Server::kick_all_channels() {
+  for (auto& [fd, c] : clients_) {
+    for (auto& [id, sc] : c.session.channels) {
+      sc.channel->kick();
+    }
+  }
+}
+
+// A client whose ring positions make no sense is dropped; the others go on.
+void Server::check_channels() {
+  for (auto& [fd, c] : clients_) {
+    for (auto& [id, sc] : c.session.channels) {
+      if (!c.closing && sc.channel->broken()) {
+        std::fprintf(stderr,
+                     "<4>canemud: client %u (%s): channel %u: ring corrupted; disconnecting\n",
+                     c.session.pid, c.session.name.c_str(), id);
+        c.closing = true;
+      }
+    }
+  }
+}
+
+void Server::send_notifications() {
+  // Sending can drop a client (full socket), which can remove devices and add notifications.
+  while (!pending_notifications_.empty()) {
+    std::vector<ipc::Notification> batch;
+    batch.swap(pending_notifications_);
+    for (const ipc::Notification& n : batch) {
+      for (auto& [fd, c] : clients_) {
+        if (!c.closing && (c.session.events & ipc::kEventDevices) && !ipc::send_message(fd, n)) {
+          c.closing = true;  // a subscriber that does not read its notifications
+        }
+      }
+    }
+    drop_closing();
+  }
+}
+
+void Server::fill_clients(ipc::ClientListReply& r) {
+  std::size_t n = 0;
+  for (auto& [fd, c] : clients_) {
+    if (c.closing) {
+      continue;
+    }
+    ++r.total;
+    if (n < ipc::kMaxClients) {
+      ipc::ClientEntry& e = r.clients[n++];
+      ipc::copy_name(e.name, c.session.name);
+      e.pid = c.session.pid;
+      e.uid = c.session.uid;
+      e.channels = static_cast<uint32_t>(c.session.channels.size());
+    }
+  }
+  r.count = static_cast<uint16_t>(n);
 }
 
 bool Server::allowed(int fd, uint32_t uid) const {
@@ -237,16 +324,17 @@ void Server::accept_clients() {
     if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) != 0) {
       continue;  // unknown peer: refused (closed when c goes out of scope)
     }
-    c.uid = cred.uid;
-    c.pid = cred.pid;
+    c.session.uid = cred.uid;
+    c.session.pid = static_cast<uint32_t>(cred.pid);
     if (clients_.size() >= kMaxClients) {
       reply_error(c, 0, ipc::ErrorCode::permission_denied,
                   fmt::format("canemud serves at most {} clients", kMaxClients));
       continue;
     }
-    if (!allowed(fd, c.uid)) {
-      reply_error(c, 0, ipc::ErrorCode::permission_denied,
-                  fmt::format("uid {} is not allowed by the [security] configuration", c.uid));
+    if (!allowed(fd, c.session.uid)) {
+      reply_error(
+          c, 0, ipc::ErrorCode::permission_denied,
+          fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid));
       continue;  // closed when c goes out of scope
     }
     if (!add(epoll_.get(), fd)) {
@@ -285,7 +373,15 @@ void Server::drop_closing() {
 
 void Server::drop(int fd) {
   ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd, nullptr);
-  clients_.erase(fd);
+  auto it = clients_.find(fd);
+  if (it == clients_.end()) {
+    return;
+  }
+  // Its channels stop their nodes and their devices go (notified after this batch).
+  for (auto& [id, sc] : it->second.session.channels) {
+    dispatcher_.channel_closing(*sc.channel);
+  }
+  clients_.erase(it);
   if (!accepting_ && add(epoll_.get(), listen_.get())) {
     accepting_ = true;  // a descriptor is free again
   }
@@ -317,9 +413,9 @@ void Server::reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code,
 
 void Server::handle(Client& c, const std::vector<uint8_t>& packet) {
   dispatcher_.handle(c.session, packet.data(), packet.size(),
-                     [&c](const void* data, std::size_t size) {
+                     [&c](const void* data, std::size_t size, std::span<const int> fds) {
                        // A client that does not read its replies is dropped, not waited for.
-                       if (!ipc::send_packet(c.fd.get(), data, size)) {
+                       if (!ipc::send_packet(c.fd.get(), data, size, fds)) {
                          c.closing = true;
                        }
                      });

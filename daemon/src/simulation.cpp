@@ -75,6 +75,7 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
   for (const BusConfig& b : sim->config_.buses) {
     sim->buses_.push_back(Bus{std::make_unique<CanBus>(sim->scheduler_, b.name), &b});
   }
+  sim->pools_.resize(sim->buses_.size());
   for (const DeviceConfig& d : sim->config_.devices) {
     for (std::size_t i = 0; i < d.controllers.size(); ++i) {
       std::size_t bus = 0;
@@ -145,20 +146,129 @@ void Simulation::fill_status(ipc::StatusReply& r) {
     s.frames = b.bus->frames_on_bus();
     s.error_frames = b.bus->error_frames_on_bus();
   }
-  r.node_count = static_cast<uint16_t>(std::min(controllers_.size(), ipc::kMaxStatusNodes));
-  for (std::size_t i = 0; i < r.node_count; ++i) {
-    Controller& c = controllers_[i];
-    ipc::StatusNode& s = r.nodes[i];
-    ipc::copy_name(s.name, c.name);
-    s.bus = static_cast<uint16_t>(c.bus);
-    FaultConfinement& fc = c.controller().confinement();
+  std::size_t n = 0;
+  auto add_node = [&](const std::string& name, std::size_t bus, CanController& controller,
+                      NodeId node) {
+    if (n == ipc::kMaxStatusNodes) {
+      return;
+    }
+    ipc::StatusNode& s = r.nodes[n++];
+    ipc::copy_name(s.name, name);
+    s.bus = static_cast<uint16_t>(bus);
+    FaultConfinement& fc = controller.confinement();
     s.state = static_cast<uint8_t>(fc.state());
     s.tec = fc.tec();
     s.rec = fc.rec();
-    const NodeStats& st = buses_[c.bus].bus->stats(c.node);
+    const NodeStats& st = buses_[bus].bus->stats(node);
     s.frames_sent = st.frames_sent;
     s.frames_received = st.frames_received;
     s.errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
+  };
+  for (Controller& c : controllers_) {
+    add_node(c.name, c.bus, c.controller(), c.node);
+  }
+  for (const Ephemeral& e : ephemeral_) {
+    add_node(e.name + ":0", e.bus, e.node->chip(), e.node->node());
+  }
+  r.node_count = static_cast<uint16_t>(n);
+}
+
+void Simulation::fill_devices(ipc::DeviceListReply& r) const {
+  r.generation = generation_;
+  r.total = static_cast<uint16_t>(config_.devices.size() + ephemeral_.size());
+  std::size_t n = 0;
+  for (const DeviceConfig& d : config_.devices) {
+    if (n == ipc::kMaxDevices) {
+      break;
+    }
+    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::copy_name(e.name, d.name);
+    e.model = static_cast<uint8_t>(d.model == DeviceModel::ixxat_usb_to_can
+                                       ? ipc::WireDeviceModel::ixxat_usb_to_can
+                                       : ipc::WireDeviceModel::ixxat_usb_to_can_fd);
+    e.controller_count = static_cast<uint8_t>(d.controllers.size());
+    for (std::size_t k = 0; k < d.controllers.size() && k < ipc::kMaxDeviceControllers; ++k) {
+      ipc::copy_name(e.buses[k], d.controllers[k]);
+    }
+  }
+  for (const Ephemeral& x : ephemeral_) {
+    if (n == ipc::kMaxDevices) {
+      break;
+    }
+    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::copy_name(e.name, x.name);
+    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::ephemeral);
+    e.controller_count = 1;
+    e.ephemeral = 1;
+    e.owner_pid = x.owner_pid;
+    ipc::copy_name(e.buses[0], buses_[x.bus].config->name);
+  }
+  r.count = static_cast<uint16_t>(n);
+}
+
+std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {
+  for (std::size_t i = 0; i < buses_.size(); ++i) {
+    if (buses_[i].config->name == name) {
+      return i;
+    }
+  }
+  return std::nullopt;
+}
+
+Sja1000Node& Simulation::spare_node(std::size_t bus) {
+  for (auto& node : pools_[bus]) {
+    if (node->reusable()) {
+      return *node;
+    }
+  }
+  pools_[bus].push_back(std::make_unique<Sja1000Node>(scheduler_, *buses_[bus].bus));
+  return *pools_[bus].back();
+}
+
+bool Simulation::device_exists(std::string_view name) const {
+  for (const DeviceConfig& d : config_.devices) {
+    if (d.name == name) {
+      return true;
+    }
+  }
+  for (const Ephemeral& e : ephemeral_) {
+    if (e.name == name) {
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string Simulation::unique_device_name(std::string_view prefix) const {
+  for (uint64_t k = 1;; ++k) {
+    std::string name = fmt::format("{}{}", prefix, k);
+    if (!device_exists(name)) {
+      return name;
+    }
+  }
+}
+
+Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t bus,
+                                                  Sja1000Node& node, uint32_t owner_pid) {
+  ephemeral_.push_back(Ephemeral{name, bus, &node, owner_pid});
+  ++generation_;
+  if (on_device_change) {
+    on_device_change(ipc::NotificationKind::device_added, name);
+  }
+  return DeviceLease(this, std::move(name));
+}
+
+void Simulation::remove_ephemeral(const std::string& name) {
+  std::erase_if(ephemeral_, [&](const Ephemeral& e) { return e.name == name; });
+  ++generation_;
+  if (on_device_change) {
+    on_device_change(ipc::NotificationKind::device_removed, name);
+  }
+}
+
+Simulation::DeviceLease::~DeviceLease() {
+  if (sim_ != nullptr) {
+    sim_->remove_ephemeral(name_);
   }
 }
 

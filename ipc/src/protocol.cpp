@@ -46,7 +46,11 @@ std::size_t size_among(MsgType type) {
 }
 
 std::size_t size_of(MsgType type) {
-  return size_among<Hello, HelloReply, ErrorReply, StatusRequest, StatusReply, TimeStepRequest, TimeStepReply, OpenChannelRequest, OpenChannelReply, CloseChannelRequest, CloseChannelReply, ChannelStatusRequest, ChannelStatusReply, DeviceListRequest, DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest, SubscribeReply, Notification>(type);
+  return size_among<Hello, HelloReply, ErrorReply, StatusRequest, StatusReply, TimeStepRequest,
+                    TimeStepReply, OpenChannelRequest, OpenChannelReply, CloseChannelRequest,
+                    CloseChannelReply, ChannelStatusRequest, ChannelStatusReply, DeviceListRequest,
+                    DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest,
+                    SubscribeReply, Notification>(type);
 }
 
 }  // namespace

@@ -92,8 +92,7 @@ IpcResult<UniqueFd> connect_seqpacket(const std::string& path) {
   return fd;
 }
 
-IpcResult<void> send_packet(int fd, const void* data, std::size_t size,
-                            std::span<const int> fds) {
+IpcResult<void> send_packet(int fd, const void* data, std::size_t size, std::span<const int> fds) {
   if (fds.size() > kMaxPassedFds) {
     return tl::unexpected(IpcError{EINVAL, "send: too many descriptors"});
   }

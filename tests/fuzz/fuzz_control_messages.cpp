@@ -1,10 +1,12 @@
 // libFuzzer target: canemud's control-message handling. The input is a sequence of packets,
 // each a 16-bit little-endian length and that many bytes, fed to one client session of a daemon
 // built from the embedded default configuration in stepped time. Every reply must be a valid
-// message, and nothing may crash.
+// message, with ring descriptors exactly when it opens a channel, and nothing may crash. The
+// session ends with each input, so the channels it opened close again.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 
 #include "canemu/daemon/control_dispatcher.hpp"
@@ -29,9 +31,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                                        daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
   dispatcher.client_count = [] { return uint16_t{1}; };
   daemon::Session session;
-  const auto check_reply = [](const void* reply, size_t bytes) {
+  const auto check_reply = [](const void* reply, size_t bytes, std::span<const int> fds) {
     if (ipc::check_message(reply, bytes) != ipc::ErrorCode::none) {
       std::abort();  // the daemon must only ever send well-formed messages
+    }
+    ipc::MsgHeader h;
+    std::memcpy(&h, reply, sizeof h);
+    const bool opened = h.type == static_cast<uint16_t>(ipc::MsgType::open_channel_reply);
+    if (fds.size() != (opened ? ipc::kChannelFdCount : 0)) {
+      std::abort();  // descriptors come with an opened channel, and only then
     }
   };
   size_t at = 0;

@@ -68,7 +68,7 @@ TEST(ShmRing, AReaderArmedForAPollLoopGetsItsEventfdWrittenOnce) {
   };
   const Element e = element(1);
   ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
-  EXPECT_FALSE(readable());  // not armed: no system call on the writer's side
+  EXPECT_FALSE(readable());                    // not armed: no system call on the writer's side
   EXPECT_FALSE(p.reader.arm_unless_filled());  // something to read already
   ASSERT_EQ(p.reader.get(nullptr), RingStatus::ok);
   EXPECT_TRUE(p.reader.arm_unless_filled());

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,10 +42,19 @@ class Connection {
 
   uint32_t server_pid() const { return server_pid_; }
   int fd() const { return fd_.get(); }
+  // Descriptors that came with the last reply (an opened channel's rings and events).
+  std::vector<ipc::UniqueFd> take_fds() { return std::move(fds_); }
+
+  // Asks for notifications (ipc::kEvent*); they queue up as they come.
+  Result<void> subscribe(uint32_t events);
+  // The oldest notification, waiting up to `timeout_ms` (0: only what came already).
+  std::optional<ipc::Notification> next_notification(int timeout_ms);
 
  private:
   Connection(ipc::UniqueFd fd, int timeout_ms) : fd_(std::move(fd)), timeout_ms_(timeout_ms) {}
   Result<void> receive(uint32_t request_id);
+  // Takes one packet: queues it if it is a notification. Returns its request id.
+  Result<uint32_t> receive_one(int timeout_ms);
   template <class Reply>
   Result<Reply> expect() {
     const ipc::MsgHeader* h = reinterpret_cast<const ipc::MsgHeader*>(buffer_.data());
@@ -64,6 +75,8 @@ class Connection {
   uint32_t next_id_ = 0;
   uint32_t server_pid_ = 0;
   std::vector<uint8_t> buffer_;
+  std::vector<ipc::UniqueFd> fds_;
+  std::deque<ipc::Notification> notifications_;
 };
 
 }  // namespace canemu::client

@@ -37,8 +37,6 @@ class Server {
   struct Client {
     ipc::UniqueFd fd;
     Session session;
-    uint32_t uid = 0;
-    int pid = 0;
     bool closing = false;  // gone or misbehaving: dropped after the current batch of events
   };
   static constexpr std::size_t kMaxClients = 256;
@@ -54,6 +52,10 @@ class Server {
   void handle(Client& c, const std::vector<uint8_t>& packet);
   void reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
   bool allowed(int fd, uint32_t uid) const;
+  void kick_all_channels();
+  void check_channels();
+  void send_notifications();
+  void fill_clients(ipc::ClientListReply& r);
 
   Simulation& sim_;
   ServerOptions options_;
@@ -69,6 +71,8 @@ class Server {
   std::vector<uint32_t> allowed_gids_;
   bool running_ = true;
   std::vector<uint8_t> buffer_;
+  std::map<int, Channel*> doorbells_;  // doorbell fd -> its channel
+  std::vector<ipc::Notification> pending_notifications_;
 };
 
 }  // namespace canemu::daemon

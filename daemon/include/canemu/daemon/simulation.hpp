@@ -2,8 +2,10 @@
 // configured adapter controller, all on one scheduler (one simulation island).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <tl/expected.hpp>
@@ -12,6 +14,7 @@
 #include "canemu/firmware_model/can_bus.hpp"
 #include "canemu/firmware_model/can_fd_controller.hpp"
 #include "canemu/firmware_model/sja1000.hpp"
+#include "canemu/firmware_model/sja1000_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 
 namespace canemu::daemon {
@@ -33,8 +36,46 @@ class Simulation {
   std::size_t bus_count() const { return buses_.size(); }
   model::CanBus& bus(std::size_t i) { return *buses_[i].bus; }
 
+  std::optional<std::size_t> bus_index(std::string_view name) const;
+  const BusConfig& bus_config(std::size_t i) const { return *buses_[i].config; }
+
   // What `canemu status` shows.
   void fill_status(ipc::StatusReply& reply);
+  // What a device list request shows: configured devices, then ephemeral ones.
+  void fill_devices(ipc::DeviceListReply& reply) const;
+
+  // ---- ephemeral devices ----
+  // A stopped SJA1000 node on bus `bus`, ready to start: one that an earlier ephemeral device
+  // left (and that has no frame on the wire), or a new one. Nodes are never removed from a bus,
+  // so the number of nodes is the largest number of ephemeral devices alive at once.
+  model::Sja1000Node& spare_node(std::size_t bus);
+  bool device_exists(std::string_view name) const;
+  // A name no device has: `prefix` followed by a number.
+  std::string unique_device_name(std::string_view prefix) const;
+  // Registers an ephemeral device for as long as the returned lease lives.
+  class DeviceLease {
+   public:
+    DeviceLease() = default;
+    DeviceLease(Simulation* sim, std::string name) : sim_(sim), name_(std::move(name)) {}
+    DeviceLease(DeviceLease&& o) noexcept
+        : sim_(std::exchange(o.sim_, nullptr)), name_(std::move(o.name_)) {}
+    DeviceLease& operator=(DeviceLease&& o) noexcept {
+      DeviceLease old(std::move(*this));
+      sim_ = std::exchange(o.sim_, nullptr);
+      name_ = std::move(o.name_);
+      return *this;
+    }
+    ~DeviceLease();
+
+   private:
+    Simulation* sim_ = nullptr;
+    std::string name_;
+  };
+  DeviceLease add_ephemeral(std::string name, std::size_t bus, model::Sja1000Node& node,
+                            uint32_t owner_pid);
+  uint32_t device_generation() const { return generation_; }
+  // Told of every device that comes or goes (ephemeral devices).
+  std::function<void(ipc::NotificationKind, const std::string&)> on_device_change;
 
  private:
   explicit Simulation(Config config) : config_(std::move(config)) {}
@@ -54,10 +95,22 @@ class Simulation {
     }
   };
 
+  struct Ephemeral {
+    std::string name;
+    std::size_t bus;
+    model::Sja1000Node* node;
+    uint32_t owner_pid;
+  };
+  void remove_ephemeral(const std::string& name);
+
   Config config_;
   model::SimScheduler scheduler_;
   std::vector<Bus> buses_;
   std::vector<Controller> controllers_;
+  std::vector<Ephemeral> ephemeral_;  // in order of creation
+  // Per bus, the nodes made for ephemeral devices (in use or spare).
+  std::vector<std::vector<std::unique_ptr<model::Sja1000Node>>> pools_;
+  uint32_t generation_ = 0;
 };
 
 }  // namespace canemu::daemon

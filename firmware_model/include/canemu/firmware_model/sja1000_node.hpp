@@ -50,6 +50,7 @@ class Sja1000Node final : private ControllerEvents {
   // A frame is in the transmit buffer.
   bool transmitting() const { return tx_loaded_; }
 
+  SimTime now() const { return bus_.now(); }
   Sja1000& chip() { return chip_; }
   NodeId node() const { return chip_.node(); }
 

@@ -10,7 +10,8 @@ namespace canemu::ipc {
 enum class ChannelMessageKind : uint8_t {
   frame = 0,       // a frame (received, or to send)
   tx_done = 1,     // an own frame went out (kChannelReportTx)
-  tx_dropped = 2,  // an own frame was given up (single shot after an error or lost arbitration)
+  tx_dropped = 2,  // an own frame was given up (single shot after an error or lost arbitration,
+                   // or a tx ring element that is not a valid frame)
   bus_error = 3,   // an error the node detected (kChannelReportErrors)
   state = 4,       // the node's error state changed (kChannelReportErrors)
 };
@@ -30,13 +31,13 @@ struct ChannelMessage {
   uint32_t id = 0;
   uint8_t kind = 0;  // ChannelMessageKind
   uint8_t flags = 0;
-  uint8_t length = 0;  // data bytes (0..8 classic, 0..64 FD); remote frames: the DLC's length
+  uint8_t dlc = 0;  // 0..15; the data bytes follow from it (classic 9..15 mean 8; none if remote)
   uint8_t error_type = 0;  // bus_error: model CanErrorType (bit, stuff, form, crc, ack)
-  uint8_t error_role = 0;  // bus_error: 0 receiver, 1 transmitter
+  uint8_t error_role = 0;  // bus_error: model ErrorRole (0 transmitter, 1 receiver)
   uint8_t state = 0;       // bus_error and state: WireErrorState after the event
   uint16_t tec = 0;        // bus_error and state: counters after the event
   uint16_t rec = 0;
-  uint16_t error_bit = 0;  // bus_error: frame bit (SOF = 0, stuff bits counted)
+  uint16_t error_bit = 0;    // bus_error: frame bit (SOF = 0, stuff bits counted)
   uint32_t lost_before = 0;  // messages lost just before this one because the ring was full
   uint32_t reserved = 0;
   uint8_t data[64] = {};

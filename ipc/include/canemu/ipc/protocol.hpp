@@ -23,7 +23,7 @@ inline constexpr uint16_t kProtocolVersion = 1;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 inline constexpr std::size_t kMaxStatusBuses = 16;
-inline constexpr std::size_t kMaxStatusNodes = 64;
+inline constexpr std::size_t kMaxStatusNodes = 128;
 inline constexpr std::size_t kMaxDevices = 64;
 inline constexpr std::size_t kMaxDeviceControllers = 4;
 inline constexpr std::size_t kMaxClients = 64;
@@ -164,12 +164,11 @@ struct TimeStepReply {
 };
 static_assert(sizeof(TimeStepReply) == 32);
 
-
 // ---- channels (the data plane) ----
 
 // OpenChannelRequest.flags
-inline constexpr uint16_t kChannelListenOnly = 0x0001;  // never drives the bus (no ACK)
-inline constexpr uint16_t kChannelReportTx = 0x0002;    // tx_done / tx_dropped messages
+inline constexpr uint16_t kChannelListenOnly = 0x0001;    // never drives the bus (no ACK)
+inline constexpr uint16_t kChannelReportTx = 0x0002;      // tx_done / tx_dropped messages
 inline constexpr uint16_t kChannelReportErrors = 0x0004;  // error and state messages
 
 // Asks for an ephemeral device: one SJA1000 node on the bus `bus`, alive while this client is
@@ -237,15 +236,20 @@ struct ChannelStatusReply {
   uint32_t rx_fill = 0;
   uint64_t frames_sent = 0;
   uint64_t frames_received = 0;
-  uint64_t rx_lost = 0;  // messages the rx ring had no room for
+  uint64_t rx_lost = 0;      // messages the rx ring had no room for
+  uint64_t tx_rejected = 0;  // tx ring elements that were not valid frames
   uint64_t errors = 0;
   int64_t sim_time_ns = 0;
 };
-static_assert(sizeof(ChannelStatusReply) == 16 + 16 + 40);
+static_assert(sizeof(ChannelStatusReply) == 16 + 16 + 48);
 
 // ---- devices, clients, notifications ----
 
-enum class WireDeviceModel : uint8_t { ixxat_usb_to_can = 0, ixxat_usb_to_can_fd = 1, ephemeral = 2 };
+enum class WireDeviceModel : uint8_t {
+  ixxat_usb_to_can = 0,
+  ixxat_usb_to_can_fd = 1,
+  ephemeral = 2
+};
 
 struct DeviceEntry {
   char name[kNameSize] = {};
@@ -253,7 +257,7 @@ struct DeviceEntry {
   uint8_t controller_count = 0;
   uint8_t ephemeral = 0;
   uint8_t reserved = 0;
-  uint32_t owner_pid = 0;  // ephemeral devices: the client's pid
+  uint32_t owner_pid = 0;                             // ephemeral devices: the client's pid
   char buses[kMaxDeviceControllers][kNameSize] = {};  // bus of each controller
 };
 static_assert(sizeof(DeviceEntry) == 40 + 32 * kMaxDeviceControllers);

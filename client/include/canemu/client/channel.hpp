@@ -1,0 +1,85 @@
+// A channel on an ephemeral device: one SJA1000 node on a named bus, alive while the connection
+// lasts (or until close()), with its receive and transmit rings mapped into this process.
+//
+// receive() and send() spin briefly, then block on the ring's eventfd; while frames flow no
+// system call is made. The rings themselves (rx(), tx()) offer the VCI FIFO operations:
+// get/put, acquire/release runs, fill and free counts, thresholds. lock()/unlock() serialise
+// threads that share one channel (the rings are single-producer, single-consumer).
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/ipc/channel_message.hpp"
+#include "canemu/ipc/shm_ring.hpp"
+
+namespace canemu::client {
+
+struct ChannelOptions {
+  std::string bus;
+  std::string device;         // empty: the daemon names it
+  uint32_t bitrate = 0;       // 0: the bus's rate
+  uint16_t sample_point = 0;  // per mille; 0: the bus's
+  uint16_t flags = 0;         // ipc::kChannel*
+  uint32_t rx_capacity = 0;   // 0: 1024
+  uint32_t tx_capacity = 0;   // 0: 256
+  uint32_t restart_ms = 0;    // restart after bus-off; 0: stay bus-off
+};
+
+class Channel {
+ public:
+  // Opens a channel through `connection`, which must outlive it.
+  static Result<Channel> open(Connection& connection, const ChannelOptions& options);
+  Channel(Channel&&) noexcept;
+  Channel& operator=(Channel&&) noexcept;
+  ~Channel();
+
+  // Puts a frame in the transmit ring; waits up to `timeout_ms` for room (0: not at all).
+  // Errors: full after the wait, or the ring is corrupted.
+  Result<void> send(const ipc::ChannelMessage& message, int timeout_ms = 0);
+  // The next message from the receive ring, waiting up to `timeout_ms` (-1: forever).
+  std::optional<ipc::ChannelMessage> receive(int timeout_ms);
+
+  ipc::RingReader& rx() { return *rx_; }
+  ipc::RingWriter& tx() { return *tx_; }
+  // The eventfd signalled when the receive ring reaches its threshold while this side waits
+  // (see RingReader::arm_unless_filled for use in a poll loop).
+  int rx_event_fd() const { return rx_event_.get(); }
+  // The shared headers and the daemon's doorbell, for tools and tests that need the raw ring.
+  ipc::RingHeader* rx_header() const { return rx_memory_->header(); }
+  ipc::RingHeader* tx_header() const { return tx_memory_->header(); }
+  int tx_doorbell_fd() const { return tx_doorbell_.get(); }
+
+  void lock() { mutex_->lock(); }
+  void unlock() { mutex_->unlock(); }
+
+  Result<ipc::ChannelStatusReply> status();
+  // Closes the channel; its device disappears. Also done by the destructor (without waiting
+  // for the reply) and when the connection closes.
+  Result<void> close();
+
+  uint32_t id() const { return id_; }
+  const std::string& device() const { return device_; }
+  const ipc::OpenChannelReply& info() const { return info_; }
+
+ private:
+  Channel() = default;
+
+  Connection* connection_ = nullptr;
+  uint32_t id_ = 0;
+  std::string device_;
+  ipc::OpenChannelReply info_{};
+  std::unique_ptr<ipc::RingMemory> rx_memory_;
+  std::unique_ptr<ipc::RingMemory> tx_memory_;
+  ipc::UniqueFd rx_event_;
+  ipc::UniqueFd tx_writer_event_;
+  ipc::UniqueFd tx_doorbell_;
+  std::unique_ptr<ipc::RingReader> rx_;
+  std::unique_ptr<ipc::RingWriter> tx_;
+  std::unique_ptr<std::mutex> mutex_;
+};
+
+}  // namespace canemu::client

@@ -1,0 +1,206 @@
+#include "canemu/daemon/channel.hpp"
+
+#include <cstring>
+
+#include <fmt/format.h>
+
+namespace canemu::daemon {
+
+using namespace canemu::model;
+
+ipc::ChannelMessage to_message(SimTime at, const Frame& frame, ipc::ChannelMessageKind kind,
+                               bool own) {
+  ipc::ChannelMessage m;
+  m.timestamp_ns = at.ns();
+  m.kind = static_cast<uint8_t>(kind);
+  m.id = frame.id();
+  m.dlc = frame.dlc();
+  m.flags = static_cast<uint8_t>((frame.extended() ? ipc::kMsgExtended : 0) |
+                                 (frame.remote() ? ipc::kMsgRemote : 0) |
+                                 (frame.fd() ? ipc::kMsgFd : 0) | (frame.brs() ? ipc::kMsgBrs : 0) |
+                                 (frame.esi() ? ipc::kMsgEsi : 0) | (own ? ipc::kMsgOwn : 0));
+  std::memcpy(m.data, frame.data().data(), frame.length());
+  return m;
+}
+
+Result<TxFrame> to_tx_frame(const ipc::ChannelMessage& m) {
+  if (m.kind != static_cast<uint8_t>(ipc::ChannelMessageKind::frame)) {
+    return model_error(ModelErrc::invalid_flags,
+                       fmt::format("message kind {} is not a frame", m.kind));
+  }
+  FrameSpec spec;
+  spec.id = m.id;
+  spec.extended = (m.flags & ipc::kMsgExtended) != 0;
+  spec.remote = (m.flags & ipc::kMsgRemote) != 0;
+  spec.fd = (m.flags & ipc::kMsgFd) != 0;
+  spec.brs = (m.flags & ipc::kMsgBrs) != 0;
+  spec.esi = (m.flags & ipc::kMsgEsi) != 0;
+  if (m.dlc > kMaxDlc) {
+    return model_error(ModelErrc::invalid_dlc, fmt::format("DLC {} is above 15", m.dlc));
+  }
+  spec.dlc = m.dlc;
+  spec.data = std::span<const uint8_t>(m.data, spec.remote ? 0 : dlc_to_length(m.dlc, spec.fd));
+  auto frame = Frame::create(spec);
+  if (!frame) {
+    return tl::unexpected(frame.error());
+  }
+  return TxFrame{*frame, (m.flags & ipc::kMsgSingleShot) != 0,
+                 (m.flags & ipc::kMsgSelfReception) != 0};
+}
+
+tl::expected<std::unique_ptr<Channel>, std::string> Channel::open(
+    uint32_t id, std::string device, std::size_t bus, Sja1000Node& node,
+    const Sja1000NodeSettings& settings, const Options& options) {
+  auto rx = ipc::RingMemory::create(options.rx_capacity, sizeof(ipc::ChannelMessage),
+                                    "canemu-rx-" + device);
+  auto tx = ipc::RingMemory::create(options.tx_capacity, sizeof(ipc::ChannelMessage),
+                                    "canemu-tx-" + device);
+  if (!rx || !tx) {
+    return tl::unexpected(!rx ? rx.error().message : tx.error().message);
+  }
+  auto rx_event = ipc::make_eventfd();
+  auto tx_writer_event = ipc::make_eventfd();
+  auto doorbell = ipc::make_eventfd();
+  if (!rx_event || !tx_writer_event || !doorbell) {
+    return tl::unexpected(std::string("eventfd: out of descriptors"));
+  }
+  std::unique_ptr<Channel> c(new Channel(id, std::move(device), bus, node, options.flags,
+                                         std::move(*rx), std::move(*tx), std::move(*rx_event),
+                                         std::move(*tx_writer_event), std::move(*doorbell)));
+  Channel* self = c.get();
+  node.start(settings, self, [self] { return self->next_tx(); });
+  return c;
+}
+
+Channel::Channel(uint32_t id, std::string device, std::size_t bus, Sja1000Node& node,
+                 uint16_t flags, ipc::RingMemory rx_memory, ipc::RingMemory tx_memory,
+                 ipc::UniqueFd rx_event, ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell)
+    : id_(id),
+      device_(std::move(device)),
+      bus_(bus),
+      node_(node),
+      flags_(flags),
+      rx_memory_(std::move(rx_memory)),
+      tx_memory_(std::move(tx_memory)),
+      rx_event_(std::move(rx_event)),
+      tx_writer_event_(std::move(tx_writer_event)),
+      tx_doorbell_(std::move(tx_doorbell)),
+      rx_(rx_memory_, rx_event_.get(), -1),
+      tx_(tx_memory_, tx_writer_event_.get(), tx_doorbell_.get()) {}
+
+Channel::~Channel() {
+  node_.stop();
+}
+
+std::array<int, ipc::kChannelFdCount> Channel::client_fds() const {
+  return {rx_memory_.fd(), tx_memory_.fd(), rx_event_.get(), tx_writer_event_.get(),
+          tx_doorbell_.get()};
+}
+
+void Channel::kick() {
+  if (armed_) {
+    tx_.disarm();
+    armed_ = false;
+  }
+  node_.kick();
+}
+
+std::optional<TxFrame> Channel::next_tx() {
+  ipc::ChannelMessage m;
+  while (true) {
+    const ipc::RingStatus status = tx_.get(&m);
+    if (status == ipc::RingStatus::ok) {
+      if (armed_) {
+        tx_.disarm();  // busy again: the client's puts need not write the eventfd
+        armed_ = false;
+      }
+      auto frame = to_tx_frame(m);
+      if (frame) {
+        return *frame;
+      }
+      // Not a frame: counted, reported when the client asked for transmit reports, skipped.
+      ++stats_.tx_rejected;
+      if (flags_ & ipc::kChannelReportTx) {
+        m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped);
+        m.timestamp_ns = node_.now().ns();
+        deliver(m);
+      }
+      continue;
+    }
+    if (status != ipc::RingStatus::empty || armed_) {
+      return std::nullopt;  // corrupted (broken() tells the server), or asleep already
+    }
+    // Idle with an empty ring: sleep on the doorbell, unless a frame came in meanwhile.
+    if (tx_.arm_unless_filled()) {
+      armed_ = true;
+      return std::nullopt;
+    }
+  }
+}
+
+void Channel::deliver(ipc::ChannelMessage& m) {
+  m.lost_before = lost_pending_;
+  switch (rx_.put(&m)) {
+    case ipc::RingStatus::ok:
+      lost_pending_ = 0;
+      return;
+    case ipc::RingStatus::full:
+      // Never silent: counted here, in the ring header, and on the next message that fits.
+      ++stats_.rx_lost;
+      ++lost_pending_;
+      rx_.count_overrun();
+      return;
+    default:
+      return;  // corrupted: broken() tells the server
+  }
+}
+
+void Channel::frame_received(SimTime at, const Frame& frame, bool own) {
+  ipc::ChannelMessage m = to_message(at, frame, ipc::ChannelMessageKind::frame, own);
+  deliver(m);
+}
+
+void Channel::frame_transmitted(SimTime at, const Frame& frame) {
+  if (flags_ & ipc::kChannelReportTx) {
+    ipc::ChannelMessage m = to_message(at, frame, ipc::ChannelMessageKind::tx_done);
+    deliver(m);
+  }
+}
+
+void Channel::transmission_dropped(SimTime at, const Frame& frame) {
+  if (flags_ & ipc::kChannelReportTx) {
+    ipc::ChannelMessage m = to_message(at, frame, ipc::ChannelMessageKind::tx_dropped);
+    deliver(m);
+  }
+}
+
+void Channel::bus_error(const BusErrorEvent& e) {
+  if (!(flags_ & ipc::kChannelReportErrors)) {
+    return;
+  }
+  ipc::ChannelMessage m;
+  m.timestamp_ns = e.at.ns();
+  m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::bus_error);
+  m.error_type = static_cast<uint8_t>(e.type);
+  m.error_role = static_cast<uint8_t>(e.role);
+  m.error_bit = e.bit;
+  m.tec = e.tec;
+  m.rec = e.rec;
+  m.state = static_cast<uint8_t>(node_.chip().confinement().state());
+  deliver(m);
+}
+
+void Channel::state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
+  if (!(flags_ & ipc::kChannelReportErrors)) {
+    return;
+  }
+  ipc::ChannelMessage m;
+  m.timestamp_ns = at.ns();
+  m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::state);
+  m.state = static_cast<uint8_t>(state);
+  m.tec = tec;
+  m.rec = rec;
+  deliver(m);
+}
+
+}  // namespace canemu::daemon

@@ -1,6 +1,7 @@
 // canemu: the command-line tool. status and time talk to canemud over its control socket;
-// calc works offline on the wire model.
+// send and dump open a channel on an ephemeral device; calc works offline on the wire model.
 #include <cctype>
+#include <csignal>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -9,7 +10,10 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "canemu/client/channel.hpp"
 #include "canemu/client/connection.hpp"
+#include "canemu/daemon/channel.hpp"
+#include "canemu/daemon/frame_text.hpp"
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
 #include "canemu/firmware_model/wire_encoding.hpp"
 
@@ -20,6 +24,7 @@ using namespace canemu;
 constexpr const char* kStates[] = {"error-active", "warning", "error-passive", "bus-off"};
 constexpr const char* kKinds[] = {"can", "can-fd", "lin"};
 constexpr const char* kModes[] = {"realtime", "scaled", "stepped"};
+constexpr const char* kModels[] = {"ixxat-usb-to-can", "ixxat-usb-to-can-fd", "ephemeral"};
 
 int fail(const std::string& message) {
   std::fprintf(stderr, "canemu: %s\n", message.c_str());
@@ -62,6 +67,20 @@ int cmd_status(const std::string& socket, bool json) {
     return fail(reply.error().message);
   }
   const ipc::StatusReply& s = *reply;
+  auto devices = c->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
+      ipc::make_message<ipc::DeviceListRequest>());
+  auto clients = c->call<ipc::ClientListRequest, ipc::ClientListReply>(
+      ipc::make_message<ipc::ClientListRequest>());
+  if (!devices || !clients) {
+    return fail(!devices ? devices.error().message : clients.error().message);
+  }
+  const auto device_buses = [](const ipc::DeviceEntry& d) {
+    std::vector<std::string> buses;
+    for (uint8_t k = 0; k < d.controller_count && k < ipc::kMaxDeviceControllers; ++k) {
+      buses.push_back(ipc::name_of(d.buses[k]));
+    }
+    return buses;
+  };
   const char* mode = s.time_mode < 3 ? kModes[s.time_mode] : "?";
   if (json) {
     std::string out = fmt::format(
@@ -86,6 +105,25 @@ int cmd_status(const std::string& socket, bool json) {
           n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : "?",
           n.state < 4 ? kStates[n.state] : "?", n.tec, n.rec, n.frames_sent, n.frames_received,
           n.errors);
+    }
+    out += "],\"devices\":[";
+    for (uint16_t i = 0; i < devices->count; ++i) {
+      const ipc::DeviceEntry& d = devices->devices[i];
+      std::string buses;
+      for (const std::string& b : device_buses(d)) {
+        buses += fmt::format("{}\"{}\"", buses.empty() ? "" : ",", b);
+      }
+      out += fmt::format(
+          "{}{{\"name\":\"{}\",\"model\":\"{}\",\"ephemeral\":{},"
+          "\"owner_pid\":{},\"buses\":[{}]}}",
+          i ? "," : "", ipc::name_of(d.name), d.model < 3 ? kModels[d.model] : "?",
+          d.ephemeral ? "true" : "false", d.owner_pid, buses);
+    }
+    out += "],\"client_list\":[";
+    for (uint16_t i = 0; i < clients->count; ++i) {
+      const ipc::ClientEntry& e = clients->clients[i];
+      out += fmt::format("{}{{\"name\":\"{}\",\"pid\":{},\"uid\":{},\"channels\":{}}}",
+                         i ? "," : "", ipc::name_of(e.name), e.pid, e.uid, e.channels);
     }
     out += "]}\n";
     std::fputs(out.c_str(), stdout);
@@ -114,6 +152,167 @@ int cmd_status(const std::string& socket, bool json) {
                 static_cast<unsigned long long>(n.frames_received),
                 static_cast<unsigned long long>(n.errors));
   }
+  std::printf("%-14s %-20s %-8s %s\n", "DEVICE", "MODEL", "OWNER", "BUSES");
+  for (uint16_t i = 0; i < devices->count; ++i) {
+    const ipc::DeviceEntry& d = devices->devices[i];
+    std::string buses;
+    for (const std::string& b : device_buses(d)) {
+      buses += (buses.empty() ? "" : " ") + b;
+    }
+    std::printf("%-14s %-20s %-8s %s\n", ipc::name_of(d.name).c_str(),
+                d.model < 3 ? kModels[d.model] : "?",
+                d.ephemeral ? std::to_string(d.owner_pid).c_str() : "config", buses.c_str());
+  }
+  std::printf("%-20s %8s %8s %8s\n", "CLIENT", "PID", "UID", "CHANNELS");
+  for (uint16_t i = 0; i < clients->count; ++i) {
+    const ipc::ClientEntry& e = clients->clients[i];
+    std::printf("%-20s %8u %8u %8u\n", ipc::name_of(e.name).c_str(), e.pid, e.uid, e.channels);
+  }
+  return 0;
+}
+
+volatile std::sig_atomic_t g_stop = 0;
+
+void on_stop_signal(int) {
+  g_stop = 1;
+}
+
+struct SendOptions {
+  std::string bus;
+  std::vector<std::string> frames;
+  uint32_t bitrate = 0;
+  std::string step;
+  int timeout_ms = 2000;
+};
+
+int cmd_send(const std::string& socket, const SendOptions& o) {
+  std::vector<ipc::ChannelMessage> messages;
+  for (const std::string& text : o.frames) {
+    std::string error;
+    auto m = daemon::parse_cansend(text, error);
+    if (!m) {
+      return fail(fmt::format("'{}': {}", text, error));
+    }
+    messages.push_back(*m);
+  }
+  std::optional<int64_t> step_ns;
+  if (!o.step.empty()) {
+    step_ns = parse_duration(o.step);
+    if (!step_ns) {
+      return fail(fmt::format("'{}' is not a duration (examples: 150ns, 20us, 10ms, 2s)", o.step));
+    }
+  }
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu send");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto s = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  if (!s) {
+    return fail(s.error().message);
+  }
+  const bool stepped = s->time_mode == static_cast<uint8_t>(ipc::WireTimeMode::stepped);
+  if (stepped && !step_ns) {
+    return fail(
+        "simulated time is stepped: frames go out only while time moves; add --step "
+        "DURATION to step after queueing them");
+  }
+  if (!stepped && step_ns) {
+    return fail("--step needs stepped time; canemud runs " + std::string(kModes[s->time_mode]));
+  }
+  client::ChannelOptions co;
+  co.bus = o.bus;
+  co.bitrate = o.bitrate;
+  co.flags = ipc::kChannelReportTx;
+  co.tx_capacity = static_cast<uint32_t>(messages.size());
+  auto ch = client::Channel::open(*c, co);
+  if (!ch) {
+    return fail(ch.error().message);
+  }
+  for (const ipc::ChannelMessage& m : messages) {
+    auto sent = ch->send(m, o.timeout_ms);
+    if (!sent) {
+      return fail(sent.error().message);
+    }
+  }
+  if (step_ns) {
+    auto req = ipc::make_message<ipc::TimeStepRequest>();
+    req.step_ns = *step_ns;
+    auto r = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+    if (!r) {
+      return fail(r.error().message);
+    }
+  }
+  // One confirmation per frame: sent (printed as candump would log it) or given up.
+  int failed = 0;
+  for (std::size_t done = 0; done < messages.size();) {
+    auto m = ch->receive(stepped ? 0 : o.timeout_ms);
+    if (!m) {
+      return fail(
+          fmt::format("{} of {} frame(s) not sent {}: is a node on {} acknowledging at "
+                      "{} bit/s?",
+                      messages.size() - done, messages.size(),
+                      stepped ? "within the step" : "in time", o.bus, ch->info().bitrate));
+    }
+    if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_done)) {
+      m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
+      std::printf("%s\n", daemon::candump_line(*m, o.bus).c_str());
+      ++done;
+    } else if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped)) {
+      m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
+      std::fprintf(stderr,
+                   "canemu: %s: not sent (given up after an error, or not a frame the channel's "
+                   "classic SJA1000 can send, such as CAN FD)\n",
+                   daemon::candump_frame(*m).c_str());
+      ++failed;
+      ++done;
+    }
+  }
+  return failed == 0 ? 0 : 1;
+}
+
+struct DumpOptions {
+  std::string bus;
+  uint32_t bitrate = 0;
+  uint64_t count = 0;  // 0: until interrupted
+  bool errors = true;
+};
+
+int cmd_dump(const std::string& socket, const DumpOptions& o) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu dump");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  client::ChannelOptions co;
+  co.bus = o.bus;
+  co.bitrate = o.bitrate;
+  co.flags = ipc::kChannelListenOnly | (o.errors ? ipc::kChannelReportErrors : 0);
+  co.rx_capacity = 4096;
+  auto ch = client::Channel::open(*c, co);
+  if (!ch) {
+    return fail(ch.error().message);
+  }
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  std::fprintf(stderr, "canemu: listening on %s as %s (listen-only, %u bit/s)\n", o.bus.c_str(),
+               ch->device().c_str(), ch->info().bitrate);
+  uint64_t printed = 0;
+  while (!g_stop && (o.count == 0 || printed < o.count)) {
+    auto m = ch->receive(200);
+    if (!m) {
+      continue;
+    }
+    if (m->lost_before != 0) {
+      std::fprintf(stderr, "canemu: %u message(s) lost: the output did not keep up\n",
+                   m->lost_before);
+    }
+    const std::string frame = daemon::candump_frame(*m);
+    if (frame.empty()) {
+      continue;
+    }
+    std::printf("%s\n", daemon::candump_line(*m, o.bus).c_str());
+    std::fflush(stdout);
+    ++printed;
+  }
   return 0;
 }
 
@@ -138,63 +337,13 @@ int cmd_time_step(const std::string& socket, const std::string& duration) {
   return 0;
 }
 
-// cansend syntax: <id>#<data>, <id>#R[<len>], <id>##<flags><data>; 3 hex digits = 11 bit,
-// 8 = 29 bit; data as hex pairs, optionally separated by '.'.
-std::optional<model::Frame> parse_frame(const std::string& text, std::string& error) {
-  const std::size_t hash = text.find('#');
-  if (hash == std::string::npos || (hash != 3 && hash != 8)) {
-    error = "expected <id>#<data> with a 3- or 8-digit hex identifier";
-    return std::nullopt;
-  }
-  model::FrameSpec spec;
-  spec.id = static_cast<uint32_t>(std::stoul(text.substr(0, hash), nullptr, 16));
-  spec.extended = hash == 8;
-  std::string rest = text.substr(hash + 1);
-  if (!rest.empty() && rest[0] == '#') {
-    spec.fd = true;
-    if (rest.size() < 2 || !std::isxdigit(static_cast<unsigned char>(rest[1]))) {
-      error = "CAN FD frames need a flags digit after ## (1 = BRS, 2 = ESI)";
-      return std::nullopt;
-    }
-    const int flags = std::stoi(rest.substr(1, 1), nullptr, 16);
-    spec.brs = (flags & 1) != 0;
-    spec.esi = (flags & 2) != 0;
-    rest = rest.substr(2);
-  } else if (!rest.empty() && (rest[0] == 'R' || rest[0] == 'r')) {
-    spec.remote = true;
-    spec.dlc = rest.size() > 1 ? static_cast<uint8_t>(std::stoi(rest.substr(1))) : 0;
-    rest.clear();
-  }
-  std::vector<uint8_t> data;
-  for (std::size_t i = 0; i < rest.size();) {
-    if (rest[i] == '.') {
-      ++i;
-      continue;
-    }
-    if (i + 1 >= rest.size() || !std::isxdigit(static_cast<unsigned char>(rest[i])) ||
-        !std::isxdigit(static_cast<unsigned char>(rest[i + 1]))) {
-      error = "data must be pairs of hex digits";
-      return std::nullopt;
-    }
-    data.push_back(static_cast<uint8_t>(std::stoi(rest.substr(i, 2), nullptr, 16)));
-    i += 2;
-  }
-  spec.data = data;
-  auto f = model::Frame::create(spec);
-  if (!f) {
-    error = f.error().message;
-    return std::nullopt;
-  }
-  return *f;
-}
-
 int cmd_calc_frame(const std::string& text, uint32_t bitrate, uint32_t data_bitrate) {
   std::string error;
-  auto frame = parse_frame(text, error);
-  if (!frame) {
+  auto message = daemon::parse_cansend(text, error);
+  if (!message) {
     return fail(fmt::format("'{}': {}", text, error));
   }
-  const model::EncodedFrame e = model::encode(*frame);
+  const model::EncodedFrame e = model::encode(daemon::to_tx_frame(*message)->frame);
   std::array<model::FieldSpan, 19> fields;
   const uint8_t n = e.fields(fields);
   for (uint8_t k = 0; k < n; ++k) {
@@ -257,6 +406,25 @@ int main(int argc, char** argv) {
   bool json = false;
   status->add_flag("--json", json, "one JSON object instead of tables");
 
+  auto* send = app.add_subcommand("send", "send frames on a bus, e.g. 'send can0 123#1122'");
+  SendOptions send_options;
+  send->add_option("BUS", send_options.bus, "bus name")->required();
+  send->add_option("FRAME", send_options.frames,
+                   "cansend syntax: 123#1122, 12345678#R4, 123##1AABB")
+      ->required();
+  send->add_option("--bitrate", send_options.bitrate, "the sender's bit/s (default: the bus's)");
+  send->add_option("--step", send_options.step, "stepped time: step this long after queueing");
+  send->add_option("--timeout", send_options.timeout_ms,
+                   "ms to wait for the frames (default 2000)");
+
+  auto* dump = app.add_subcommand("dump", "print a bus's frames and errors as a candump -L log");
+  DumpOptions dump_options;
+  dump->add_option("BUS", dump_options.bus, "bus name")->required();
+  dump->add_option("--bitrate", dump_options.bitrate, "the listener's bit/s (default: the bus's)");
+  dump->add_option("-n,--count", dump_options.count, "stop after this many lines");
+  bool no_errors = false;
+  dump->add_flag("--no-errors", no_errors, "frames only, no error frames");
+
   auto* time = app.add_subcommand("time", "simulated time (stepped mode)");
   time->require_subcommand(1);
   auto* step = time->add_subcommand("step", "advance simulated time, e.g. 'time step 10ms'");
@@ -285,6 +453,13 @@ int main(int argc, char** argv) {
     }
     if (*step) {
       return cmd_time_step(socket, duration);
+    }
+    if (*send) {
+      return cmd_send(socket, send_options);
+    }
+    if (*dump) {
+      dump_options.errors = !no_errors;
+      return cmd_dump(socket, dump_options);
     }
     if (*frame) {
       return cmd_calc_frame(frame_text, bitrate, data_bitrate);

@@ -115,10 +115,12 @@ std::optional<TxFrame> Channel::next_tx() {
         armed_ = false;
       }
       auto frame = to_tx_frame(m);
-      if (frame) {
+      // The node is an SJA1000: classic CAN only.
+      if (frame && !frame->frame.fd()) {
         return *frame;
       }
-      // Not a frame: counted, reported when the client asked for transmit reports, skipped.
+      // Not a frame it can send: counted, reported when the client asked for transmit reports,
+      // skipped.
       ++stats_.tx_rejected;
       if (flags_ & ipc::kChannelReportTx) {
         m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped);
@@ -184,6 +186,7 @@ void Channel::bus_error(const BusErrorEvent& e) {
   m.error_type = static_cast<uint8_t>(e.type);
   m.error_role = static_cast<uint8_t>(e.role);
   m.error_bit = e.bit;
+  m.error_location = sja1000::ecc_segment(e, e.destuffed_bit, e.extended_frame);
   m.tec = e.tec;
   m.rec = e.rec;
   m.state = static_cast<uint8_t>(node_.chip().confinement().state());

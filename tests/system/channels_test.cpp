@@ -151,18 +151,21 @@ TEST(Channels, ElementsThatAreNotFramesAreCountedAndReported) {
   bad = frame(0x1, {});
   bad.dlc = 16;
   ASSERT_TRUE(a.send(bad));
+  ASSERT_TRUE(a.send(frame(0x6, {1, 2}, ipc::kMsgFd)));  // the SJA1000 node is classic CAN
   ASSERT_TRUE(a.send(frame(0x5, {9})));
   step(c, 1'000'000);
   const auto got = drain(a);
-  ASSERT_EQ(got.size(), 3u);
+  ASSERT_EQ(got.size(), 4u);
   EXPECT_EQ(got[0].kind, static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped));
   EXPECT_EQ(got[0].id, 0x800u);
   EXPECT_EQ(got[1].kind, static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped));
-  EXPECT_EQ(got[2].kind, static_cast<uint8_t>(ipc::ChannelMessageKind::tx_done));
-  EXPECT_EQ(got[2].id, 0x5u);
+  EXPECT_EQ(got[2].kind, static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped));
+  EXPECT_EQ(got[2].id, 0x6u);
+  EXPECT_EQ(got[3].kind, static_cast<uint8_t>(ipc::ChannelMessageKind::tx_done));
+  EXPECT_EQ(got[3].id, 0x5u);
   auto st = a.status();
   ASSERT_TRUE(st);
-  EXPECT_EQ(st->tx_rejected, 2u);
+  EXPECT_EQ(st->tx_rejected, 3u);
 }
 
 TEST(Channels, AMismatchedBitRateDisruptsTheBusAndErrorsAreReported) {

@@ -25,7 +25,7 @@ namespace canemu::daemon {
 
 struct ChannelStats {
   uint64_t rx_lost = 0;      // messages the receive ring had no room for
-  uint64_t tx_rejected = 0;  // transmit ring elements that were not valid frames
+  uint64_t tx_rejected = 0;  // transmit ring elements that were not frames the node can send
 };
 
 class Channel final : private model::ControllerEvents {

@@ -37,9 +37,10 @@ struct ChannelMessage {
   uint8_t state = 0;       // bus_error and state: WireErrorState after the event
   uint16_t tec = 0;        // bus_error and state: counters after the event
   uint16_t rec = 0;
-  uint16_t error_bit = 0;    // bus_error: frame bit (SOF = 0, stuff bits counted)
-  uint32_t lost_before = 0;  // messages lost just before this one because the ring was full
-  uint32_t reserved = 0;
+  uint16_t error_bit = 0;      // bus_error: frame bit (SOF = 0, stuff bits counted)
+  uint32_t lost_before = 0;    // messages lost just before this one because the ring was full
+  uint8_t error_location = 0;  // bus_error: where, as SJA1000 ECC segment / CAN_ERR_PROT_LOC_*
+  uint8_t reserved[3] = {};
   uint8_t data[64] = {};
 };
 static_assert(sizeof(ChannelMessage) == 96);

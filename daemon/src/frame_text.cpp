@@ -1,0 +1,195 @@
+#include "canemu/daemon/frame_text.hpp"
+
+#include <cctype>
+#include <cstring>
+
+#include <fmt/format.h>
+
+#include "canemu/daemon/channel.hpp"
+
+namespace canemu::daemon {
+
+namespace {
+
+bool all_hex(std::string_view s) {
+  for (char ch : s) {
+    if (!std::isxdigit(static_cast<unsigned char>(ch))) {
+      return false;
+    }
+  }
+  return !s.empty();
+}
+
+int hex(char ch) {
+  return std::isdigit(static_cast<unsigned char>(ch)) ? ch - '0' : std::tolower(ch) - 'a' + 10;
+}
+
+// linux/can/error.h
+constexpr uint32_t kErrFlag = 0x20000000;
+constexpr uint32_t kErrCrtl = 0x004;
+constexpr uint32_t kErrProt = 0x008;
+constexpr uint32_t kErrAck = 0x020;
+constexpr uint32_t kErrBusOff = 0x040;
+constexpr uint32_t kErrBusError = 0x080;
+constexpr uint32_t kErrCnt = 0x200;
+constexpr uint8_t kCrtlRxWarning = 0x04;
+constexpr uint8_t kCrtlTxWarning = 0x08;
+constexpr uint8_t kCrtlRxPassive = 0x10;
+constexpr uint8_t kCrtlTxPassive = 0x20;
+constexpr uint8_t kCrtlActive = 0x40;
+constexpr uint8_t kProtBit = 0x01;
+constexpr uint8_t kProtForm = 0x02;
+constexpr uint8_t kProtStuff = 0x04;
+constexpr uint8_t kProtTx = 0x80;
+
+std::string error_frame(uint32_t classes, const uint8_t (&data)[8]) {
+  std::string text = fmt::format("{:08X}#", kErrFlag | classes);
+  for (uint8_t b : data) {
+    text += fmt::format("{:02X}", b);
+  }
+  return text;
+}
+
+}  // namespace
+
+std::optional<ipc::ChannelMessage> parse_cansend(std::string_view text, std::string& error) {
+  const std::size_t hash = text.find('#');
+  if (hash == std::string_view::npos || (hash != 3 && hash != 8) ||
+      !all_hex(text.substr(0, hash))) {
+    error = "expected <id>#<data> with a 3- or 8-digit hex identifier";
+    return std::nullopt;
+  }
+  ipc::ChannelMessage m;
+  for (char ch : text.substr(0, hash)) {
+    m.id = (m.id << 4) | static_cast<uint32_t>(hex(ch));
+  }
+  if (hash == 8) {
+    m.flags |= ipc::kMsgExtended;
+  }
+  std::string_view rest = text.substr(hash + 1);
+  bool fd = false;
+  if (!rest.empty() && rest[0] == '#') {
+    if (rest.size() < 2 || !std::isxdigit(static_cast<unsigned char>(rest[1]))) {
+      error = "CAN FD frames need a flags digit after ## (1 = BRS, 2 = ESI)";
+      return std::nullopt;
+    }
+    fd = true;
+    const int flags = hex(rest[1]);
+    m.flags |= ipc::kMsgFd | ((flags & 1) ? ipc::kMsgBrs : 0) | ((flags & 2) ? ipc::kMsgEsi : 0);
+    rest = rest.substr(2);
+  } else if (!rest.empty() && (rest[0] == 'R' || rest[0] == 'r')) {
+    m.flags |= ipc::kMsgRemote;
+    rest = rest.substr(1);
+    if (rest.size() > 1 ||
+        (rest.size() == 1 && !std::isdigit(static_cast<unsigned char>(rest[0])))) {
+      error = "a remote frame takes one length digit (0..8) after R";
+      return std::nullopt;
+    }
+    m.dlc = rest.empty() ? 0 : static_cast<uint8_t>(rest[0] - '0');
+    rest = {};
+  }
+  std::size_t length = 0;
+  for (std::size_t i = 0; i < rest.size();) {
+    if (rest[i] == '.') {
+      ++i;
+      continue;
+    }
+    if (i + 1 >= rest.size() || !std::isxdigit(static_cast<unsigned char>(rest[i])) ||
+        !std::isxdigit(static_cast<unsigned char>(rest[i + 1]))) {
+      error = "data must be pairs of hex digits";
+      return std::nullopt;
+    }
+    if (length == sizeof m.data) {
+      error = "more than 64 data bytes";
+      return std::nullopt;
+    }
+    m.data[length++] = static_cast<uint8_t>(hex(rest[i]) * 16 + hex(rest[i + 1]));
+    i += 2;
+  }
+  if (!(m.flags & ipc::kMsgRemote)) {
+    const auto dlc = model::length_to_dlc(length, fd);
+    if (!dlc || (!fd && length > 8)) {
+      error = fmt::format("{} data bytes is not a {} frame length", length,
+                          fd ? "CAN FD" : "classic CAN");
+      return std::nullopt;
+    }
+    m.dlc = *dlc;
+  }
+  // Everything else (identifier range, flag combinations) as the daemon will check it.
+  auto checked = to_tx_frame(m);
+  if (!checked) {
+    error = checked.error().message;
+    return std::nullopt;
+  }
+  return m;
+}
+
+std::string candump_frame(const ipc::ChannelMessage& m) {
+  switch (static_cast<ipc::ChannelMessageKind>(m.kind)) {
+    case ipc::ChannelMessageKind::frame:
+      break;
+    case ipc::ChannelMessageKind::bus_error: {
+      uint8_t data[8] = {};
+      uint32_t classes = kErrProt | kErrBusError | kErrCnt;
+      const auto type = static_cast<model::CanErrorType>(m.error_type);
+      data[2] = type == model::CanErrorType::bit     ? kProtBit
+                : type == model::CanErrorType::form  ? kProtForm
+                : type == model::CanErrorType::stuff ? kProtStuff
+                                                     : 0;
+      if (m.error_role == static_cast<uint8_t>(model::ErrorRole::transmitter)) {
+        data[2] |= kProtTx;
+      }
+      if (type == model::CanErrorType::ack) {
+        classes |= kErrAck;
+      }
+      data[3] = m.error_location;
+      data[6] = static_cast<uint8_t>(std::min<uint16_t>(m.tec, 255));
+      data[7] = static_cast<uint8_t>(std::min<uint16_t>(m.rec, 255));
+      return error_frame(classes, data);
+    }
+    case ipc::ChannelMessageKind::state: {
+      uint8_t data[8] = {};
+      uint32_t classes = kErrCnt;
+      const auto state = static_cast<model::ErrorState>(m.state);
+      const bool tx = m.tec >= m.rec;
+      if (state == model::ErrorState::bus_off) {
+        classes |= kErrBusOff;
+      } else {
+        classes |= kErrCrtl;
+        data[1] = state == model::ErrorState::warning   ? (tx ? kCrtlTxWarning : kCrtlRxWarning)
+                  : state == model::ErrorState::passive ? (tx ? kCrtlTxPassive : kCrtlRxPassive)
+                                                        : kCrtlActive;
+      }
+      data[6] = static_cast<uint8_t>(std::min<uint16_t>(m.tec, 255));
+      data[7] = static_cast<uint8_t>(std::min<uint16_t>(m.rec, 255));
+      return error_frame(classes, data);
+    }
+    default:
+      return {};
+  }
+  const bool extended = (m.flags & ipc::kMsgExtended) != 0;
+  std::string text = extended ? fmt::format("{:08X}", m.id) : fmt::format("{:03X}", m.id);
+  if (m.flags & ipc::kMsgRemote) {
+    return text + fmt::format("#R{}", m.dlc);
+  }
+  const bool fd = (m.flags & ipc::kMsgFd) != 0;
+  if (fd) {
+    const int flags = ((m.flags & ipc::kMsgBrs) ? 1 : 0) | ((m.flags & ipc::kMsgEsi) ? 2 : 0);
+    text += fmt::format("##{:X}", flags);
+  } else {
+    text += '#';
+  }
+  const std::size_t length = model::dlc_to_length(m.dlc, fd);
+  for (std::size_t i = 0; i < length; ++i) {
+    text += fmt::format("{:02X}", m.data[i]);
+  }
+  return text;
+}
+
+std::string candump_line(const ipc::ChannelMessage& m, std::string_view bus) {
+  const int64_t ns = m.timestamp_ns;
+  return fmt::format("({:010}.{:06}) {} {}", ns / 1'000'000'000, (ns % 1'000'000'000) / 1000, bus,
+                     candump_frame(m));
+}
+
+}  // namespace canemu::daemon

@@ -1,0 +1,106 @@
+// The canemu command line against a real canemud: send and dump in stepped time.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "daemon_process.hpp"
+
+namespace canemu {
+namespace {
+
+using testing::connect;
+using testing::Daemon;
+using testing::readable;
+
+// canemu with `args` on the daemon's socket; stdout (and stderr) through pipes.
+struct Cli {
+  pid_t pid = -1;
+  int out = -1;
+  int err = -1;
+  Cli(const Daemon& d, std::vector<std::string> args) {
+    int o[2];
+    int e[2];
+    EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
+    EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, o[1], 1);
+    posix_spawn_file_actions_adddup2(&actions, e[1], 2);
+    args.insert(args.begin(), {CANEMU_PATH, "--socket", d.socket()});
+    std::vector<char*> argv;
+    for (std::string& a : args) {
+      argv.push_back(a.data());
+    }
+    argv.push_back(nullptr);
+    EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(o[1]);
+    ::close(e[1]);
+    out = o[0];
+    err = e[0];
+  }
+  ~Cli() {
+    if (pid > 0) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, nullptr, 0);
+    }
+    ::close(out);
+    ::close(err);
+  }
+  // Reads `fd` until it closes or `timeout_ms` passes without data.
+  static std::string read_all(int fd, int timeout_ms = 10'000) {
+    std::string text;
+    char buf[512];
+    while (readable(fd, timeout_ms)) {
+      const ssize_t n = ::read(fd, buf, sizeof buf);
+      if (n <= 0) {
+        break;
+      }
+      text.append(buf, static_cast<std::size_t>(n));
+    }
+    return text;
+  }
+  int wait() {
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    pid = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+};
+
+TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
+  Daemon d;
+  auto watcher = connect(d, "watcher");
+  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
+  Cli dump(d, {"dump", "can0", "-n", "3"});
+  ASSERT_TRUE(watcher.next_notification(10'000));  // the dump's device is there
+  Cli send(d, {"send", "can0", "123#1122", "12345678#R4", "7FF#0102030405060708", "--step", "1ms"});
+  const std::string sent = Cli::read_all(send.out);
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  // Each frame at the end of its EOF: 62 bits, then 3 + 64, then 3 + 108 bits at 2 us.
+  const std::string expected =
+      "(0000000000.000124) can0 123#1122\n"
+      "(0000000000.000258) can0 12345678#R4\n"
+      "(0000000000.000500) can0 7FF#0102030405060708\n";
+  EXPECT_EQ(sent, expected);
+  EXPECT_EQ(Cli::read_all(dump.out), expected);
+  EXPECT_EQ(dump.wait(), 0);
+}
+
+TEST(Cli, SendRefusesBadFramesAndUnsteppedStepsWithReasons) {
+  Daemon d;
+  Cli bad(d, {"send", "can0", "800#11", "--step", "1ms"});
+  EXPECT_EQ(bad.wait(), 1);
+  EXPECT_EQ(Cli::read_all(bad.err),
+            "canemu: '800#11': identifier 0x800 does not fit 11 bits (maximum 0x7FF)\n");
+  Cli unstepped(d, {"send", "can0", "123#"});
+  EXPECT_EQ(unstepped.wait(), 1);
+  EXPECT_NE(Cli::read_all(unstepped.err).find("add --step DURATION"), std::string::npos);
+  Cli nobus(d, {"send", "can9", "123#", "--step", "1ms"});
+  EXPECT_EQ(nobus.wait(), 1);
+  EXPECT_NE(Cli::read_all(nobus.err).find("no bus named \"can9\""), std::string::npos);
+}
+
+}  // namespace
+}  // namespace canemu

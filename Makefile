@@ -53,6 +53,8 @@ bench: deps build
 	  --benchmark_out_format=json $(BENCH_ARGS)
 	$(BUILD_DIR)/bin/ipc_bench --benchmark_out=$(BUILD_DIR)/bench-results/ipc.json \
 	  --benchmark_out_format=json $(BENCH_ARGS)
+	$(BUILD_DIR)/bin/daemon_bench --benchmark_out=$(BUILD_DIR)/bench-results/daemon.json \
+	  --benchmark_out_format=json $(BENCH_ARGS)
 	@echo "bench: results in $(BUILD_DIR)/bench-results/"
 
 format:

@@ -1,13 +1,35 @@
 #include "canemu/client/channel.hpp"
 
+#include <time.h>
+
 #include <fmt/format.h>
 
 namespace canemu::client {
 
 namespace {
 
-// Polls before blocking: a frame that arrives within this many tries costs no system call.
-constexpr int kSpins = 2000;
+int64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+// Calls `attempt` until it succeeds or `spin_ns` has passed (the clock is read every 64 tries).
+template <class Attempt>
+bool spin(int64_t spin_ns, Attempt attempt) {
+  if (spin_ns <= 0) {
+    return false;
+  }
+  const int64_t until = now_ns() + spin_ns;
+  for (uint32_t k = 1;; ++k) {
+    if (attempt()) {
+      return true;
+    }
+    if (k % 64 == 0 && now_ns() >= until) {
+      return false;
+    }
+  }
+}
 
 }  // namespace
 
@@ -58,12 +80,14 @@ Result<Channel> Channel::open(Connection& connection, const ChannelOptions& o) {
   c.tx_ = std::make_unique<ipc::RingWriter>(*c.tx_memory_, c.tx_doorbell_.get(),
                                             c.tx_writer_event_.get());
   c.mutex_ = std::make_unique<std::mutex>();
+  c.spin_ns_ = int64_t{o.spin_us} * 1000;
   return c;
 }
 
 Channel::Channel(Channel&& o) noexcept
     : connection_(std::exchange(o.connection_, nullptr)),
       id_(o.id_),
+      spin_ns_(o.spin_ns_),
       device_(std::move(o.device_)),
       info_(o.info_),
       rx_memory_(std::move(o.rx_memory_)),
@@ -82,6 +106,7 @@ Channel& Channel::operator=(Channel&& o) noexcept {
     }
     connection_ = std::exchange(o.connection_, nullptr);
     id_ = o.id_;
+    spin_ns_ = o.spin_ns_;
     device_ = std::move(o.device_);
     info_ = o.info_;
     rx_memory_ = std::move(o.rx_memory_);
@@ -103,43 +128,43 @@ Channel::~Channel() {
 }
 
 Result<void> Channel::send(const ipc::ChannelMessage& message, int timeout_ms) {
-  for (int spin = 0;; ++spin) {
-    switch (tx_->put(&message)) {
-      case ipc::RingStatus::ok:
-        return {};
-      case ipc::RingStatus::full:
-        break;
-      default:
-        return tl::unexpected(IpcError{EIO, "transmit ring corrupted"});
-    }
-    if (timeout_ms == 0) {
-      return tl::unexpected(IpcError{EAGAIN, "transmit ring full"});
-    }
-    if (spin >= kSpins && !tx_->wait(timeout_ms)) {
-      if (tx_->free_count() == 0) {
+  ipc::RingStatus status = tx_->put(&message);
+  if (status == ipc::RingStatus::full && timeout_ms != 0) {
+    spin(spin_ns_, [&] { return (status = tx_->put(&message)) != ipc::RingStatus::full; });
+    while (status == ipc::RingStatus::full) {
+      if (!tx_->wait(timeout_ms) && tx_->free_count() == 0) {
         return tl::unexpected(IpcError{ETIMEDOUT, "transmit ring still full"});
       }
+      status = tx_->put(&message);
     }
+  }
+  switch (status) {
+    case ipc::RingStatus::ok:
+      return {};
+    case ipc::RingStatus::full:
+      return tl::unexpected(IpcError{EAGAIN, "transmit ring full"});
+    default:
+      return tl::unexpected(IpcError{EIO, "transmit ring corrupted"});
   }
 }
 
 std::optional<ipc::ChannelMessage> Channel::receive(int timeout_ms) {
   ipc::ChannelMessage m;
-  for (int spin = 0;; ++spin) {
-    const ipc::RingStatus s = rx_->get(&m);
-    if (s == ipc::RingStatus::ok) {
-      return m;
-    }
-    if (s != ipc::RingStatus::empty || timeout_ms == 0) {
-      return std::nullopt;
-    }
-    if (spin >= kSpins && !rx_->wait(timeout_ms)) {
-      if (rx_->get(&m) == ipc::RingStatus::ok) {
-        return m;
+  ipc::RingStatus status = rx_->get(&m);
+  if (status == ipc::RingStatus::empty && timeout_ms != 0) {
+    spin(spin_ns_, [&] { return (status = rx_->get(&m)) != ipc::RingStatus::empty; });
+    while (status == ipc::RingStatus::empty) {
+      if (!rx_->wait(timeout_ms)) {
+        status = rx_->get(&m);
+        break;
       }
-      return std::nullopt;
+      status = rx_->get(&m);
     }
   }
+  if (status == ipc::RingStatus::ok) {
+    return m;
+  }
+  return std::nullopt;
 }
 
 Result<ipc::ChannelStatusReply> Channel::status() {

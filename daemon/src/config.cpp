@@ -211,15 +211,6 @@ class Checker {
   ConfigErrors errors_;
 };
 
-// 28 characters, so that "device:N" fits the protocol's 32-byte names with its NUL.
-bool valid_name(std::string_view s) {
-  return !s.empty() && s.size() <= 28 && std::all_of(s.begin(), s.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
-  });
-}
-
-constexpr std::string_view kNameRule = "must be 1 to 28 characters of a-z, 0-9, '_' and '-'";
-
 // The required key "name" of a [[bus]] or [[device]] table: valid, and unique among `names`.
 std::optional<std::string> read_name(Checker& c, const toml::table& t, const std::string& path,
                                      std::set<std::string>& names, std::string_view what) {
@@ -242,7 +233,7 @@ void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
   if (t == nullptr) {
     return;
   }
-  c.only_keys(*t, "simulation", {"time", "seed"});
+  c.only_keys(*t, "simulation", {"time", "seed", "batch_us", "spin_us"});
   if (auto time = c.string(*t, "simulation", "time", false)) {
     auto parsed = parse_time_setting(*time);
     if (parsed) {
@@ -253,6 +244,12 @@ void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
   }
   if (auto seed = c.integer(*t, "simulation", "seed", false, 0, INT64_MAX)) {
     cfg.simulation.seed = static_cast<uint64_t>(*seed);
+  }
+  if (auto batch = c.integer(*t, "simulation", "batch_us", false, 0, 100'000)) {
+    cfg.simulation.batch_us = static_cast<uint32_t>(*batch);
+  }
+  if (auto spin = c.integer(*t, "simulation", "spin_us", false, 0, 1000)) {
+    cfg.simulation.spin_us = static_cast<uint32_t>(*spin);
   }
 }
 
@@ -373,6 +370,12 @@ tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text)
   }
   return tl::unexpected(
       fmt::format("\"{}\" is not a time mode (realtime, stepped, scaled:F)", text));
+}
+
+bool valid_name(std::string_view s) {
+  return !s.empty() && s.size() <= 28 && std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  });
 }
 
 std::string to_string(const TimeSetting& time) {

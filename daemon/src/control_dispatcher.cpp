@@ -31,20 +31,6 @@ void send_reply(const ControlDispatcher::Send& send, const T& reply) {
   send(&reply, sizeof reply, {});
 }
 
-bool valid_name(std::string_view name) {
-  if (name.empty()) {
-    return false;
-  }
-  for (char ch : name) {
-    const bool ok = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
-                    (ch >= '0' && ch <= '9') || ch == '_' || ch == '-' || ch == '.';
-    if (!ok) {
-      return false;
-    }
-  }
-  return true;
-}
-
 }  // namespace
 
 void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& m,
@@ -65,8 +51,7 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   if (device.empty()) {
     device = sim_.unique_device_name("eph");
   } else if (!valid_name(device)) {
-    error(send, rid, ipc::ErrorCode::bad_argument,
-          "device names use letters, digits, '_', '-' and '.'");
+    error(send, rid, ipc::ErrorCode::bad_argument, fmt::format("device names {}", kNameRule));
     return;
   } else if (sim_.device_exists(device)) {
     error(send, rid, ipc::ErrorCode::name_in_use,

@@ -9,6 +9,7 @@
 #include <poll.h>
 #include <pwd.h>
 #include <sys/epoll.h>
+#include <sys/prctl.h>
 #include <sys/signalfd.h>
 #include <sys/socket.h>
 #include <sys/timerfd.h>
@@ -126,6 +127,8 @@ ipc::IpcResult<void> Server::open() {
     }
   }
   ::signal(SIGPIPE, SIG_IGN);  // a closed stderr or peer must not kill the daemon
+  // Timer deadlines are met to the microsecond, not within Linux's default 50 us slack.
+  ::prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   start_mono_ns_ = monotonic_ns();
   // Under systemd (Type=notify): ready once the socket listens. A no-op elsewhere.
   sd_notifyf(0, "READY=1\nSTATUS=listening on %s\nMAINPID=%d", options_.socket_path.c_str(),
@@ -148,18 +151,21 @@ void Server::advance_to_now() {
 
 void Server::arm_timer() {
   itimerspec its{};
+  deadline_ns_ = 0;
   if (options_.time.mode != TimeMode::stepped) {
     if (auto next = sim_.scheduler().next_event_time()) {
-      // Absolute CLOCK_MONOTONIC deadline of the next simulated event.
+      // Absolute CLOCK_MONOTONIC deadline of the next simulated event, rounded up so the
+      // timer never fires before the event is due; no sooner than one batch after the last
+      // wake-up.
       const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
-      // Rounded up, so the timer never fires before the event is due.
       const double offset = std::ceil(static_cast<double>(next->ns()) / scale);
-      const int64_t wall = start_mono_ns_ + static_cast<int64_t>(std::min(offset, 9.0e18));
+      const int64_t due = start_mono_ns_ + static_cast<int64_t>(std::min(offset, 9.0e18));
+      const SimulationConfig& sc = sim_.config().simulation;
+      deadline_ns_ = std::max(due, last_wake_ns_ + int64_t{sc.batch_us} * 1000);
+      // Woken a little early, the loop spins to the deadline.
+      const int64_t wall = std::max<int64_t>(1, deadline_ns_ - int64_t{sc.spin_us} * 1000);
       its.it_value.tv_sec = wall / 1'000'000'000;
       its.it_value.tv_nsec = wall % 1'000'000'000;
-      if (its.it_value.tv_sec == 0 && its.it_value.tv_nsec == 0) {
-        its.it_value.tv_nsec = 1;
-      }
     }
   }
   if (::timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr) != 0) {
@@ -171,7 +177,6 @@ int Server::run() {
   constexpr int kMaxEvents = 32;
   epoll_event events[kMaxEvents];
   while (running_) {
-    advance_to_now();
     arm_timer();
     const int n = ::epoll_wait(epoll_.get(), events, kMaxEvents, -1);
     if (n < 0) {
@@ -181,6 +186,16 @@ int Server::run() {
       std::fprintf(stderr, "<3>canemud: epoll_wait: %s\n", std::strerror(errno));
       return 1;
     }
+    for (int i = 0; i < n; ++i) {
+      if (events[i].data.fd == timer_.get() && deadline_ns_ != 0) {
+        // The last few microseconds to the deadline (simulation.spin_us), never longer.
+        const int64_t until = std::min(
+            deadline_ns_, monotonic_ns() + int64_t{sim_.config().simulation.spin_us} * 1000);
+        while (monotonic_ns() < until) {
+        }
+      }
+    }
+    last_wake_ns_ = monotonic_ns();
     advance_to_now();  // events are handled at the simulated instant they are seen
     for (int i = 0; i < n; ++i) {
       const int fd = events[i].data.fd;

@@ -1,6 +1,9 @@
 // canemud as a process: started in stepped time on a private socket, driven by real clients.
 #include <gtest/gtest.h>
 
+#include <sys/socket.h>
+#include <sys/un.h>
+
 #include "daemon_process.hpp"
 
 namespace canemu {

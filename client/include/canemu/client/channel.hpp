@@ -1,10 +1,11 @@
 // A channel on an ephemeral device: one SJA1000 node on a named bus, alive while the connection
 // lasts (or until close()), with its receive and transmit rings mapped into this process.
 //
-// receive() and send() spin briefly, then block on the ring's eventfd; while frames flow no
-// system call is made. The rings themselves (rx(), tx()) offer the VCI FIFO operations:
-// get/put, acquire/release runs, fill and free counts, thresholds. lock()/unlock() serialise
-// threads that share one channel (the rings are single-producer, single-consumer).
+// receive() and send() poll for a while (ChannelOptions::spin_us), then block on the ring's
+// eventfd; while frames flow no system call is made. The rings themselves (rx(), tx()) offer the
+// VCI FIFO operations: get/put, acquire/release runs, fill and free counts, thresholds.
+// lock()/unlock() serialise threads that share one channel (the rings are single-producer,
+// single-consumer).
 #pragma once
 
 #include <memory>
@@ -27,6 +28,10 @@ struct ChannelOptions {
   uint32_t rx_capacity = 0;   // 0: 1024
   uint32_t tx_capacity = 0;   // 0: 256
   uint32_t restart_ms = 0;    // restart after bus-off; 0: stay bus-off
+  // receive() and send() poll this long before they block on the eventfd: a frame that comes
+  // within it costs no system call and no wake-up latency (one frame at 125 kbit/s takes up to
+  // about 1 ms, at 1 Mbit/s up to 135 us).
+  uint32_t spin_us = 200;
 };
 
 class Channel {
@@ -70,6 +75,7 @@ class Channel {
 
   Connection* connection_ = nullptr;
   uint32_t id_ = 0;
+  int64_t spin_ns_ = 0;
   std::string device_;
   ipc::OpenChannelReply info_{};
   std::unique_ptr<ipc::RingMemory> rx_memory_;

@@ -47,9 +47,19 @@ struct TimeSetting {
 tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text);
 std::string to_string(const TimeSetting& time);
 
+// Names of buses and devices (configured or ephemeral): 1 to 28 characters, so that "device:N"
+// fits the protocol's 32-byte names with its NUL.
+bool valid_name(std::string_view name);
+inline constexpr std::string_view kNameRule = "must be 1 to 28 characters of a-z, 0-9, '_' and '-'";
+
 struct SimulationConfig {
   TimeSetting time;
   uint64_t seed = 1;
+  // Real and scaled time: the daemon wakes at most once per batch_us (events due meanwhile run
+  // together, each at its exact simulated instant), and wakes spin_us early to spin to the
+  // deadline instead of trusting the timer's accuracy.
+  uint32_t batch_us = 50;
+  uint32_t spin_us = 20;
 };
 
 struct SecurityConfig {

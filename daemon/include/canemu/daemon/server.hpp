@@ -66,6 +66,8 @@ class Server {
   ipc::UniqueFd signals_;
   std::map<int, Client> clients_;
   int64_t start_mono_ns_ = 0;
+  int64_t last_wake_ns_ = 0;  // CLOCK_MONOTONIC of the loop's last wake-up
+  int64_t deadline_ns_ = 0;   // of the armed timer (0: none)
   bool accepting_ = true;
   std::vector<uint32_t> allowed_uids_;
   std::vector<uint32_t> allowed_gids_;

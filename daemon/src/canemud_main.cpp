@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
                  config.error().size() == 1 ? "" : "s");
     return 1;
   }
+  std::optional<TimeSetting> time_override;
   if (!time.empty()) {
     auto t = parse_time_setting(time);
     if (!t) {
@@ -45,6 +46,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     config->simulation.time = *t;
+    time_override = *t;
   }
   auto sim = Simulation::build(*config);
   if (!sim) {
@@ -58,7 +60,8 @@ int main(int argc, char** argv) {
     std::fputs("configuration OK\n", stdout);
     return 0;
   }
-  Server server(**sim, ServerOptions{canemu::ipc::socket_path(socket), config->simulation.time});
+  Server server(**sim, ServerOptions{canemu::ipc::socket_path(socket), config->simulation.time,
+                                     config_file, time_override});
   if (auto opened = server.open(); !opened) {
     std::fprintf(stderr, "<3>canemud: %s\n", opened.error().message.c_str());
     return 1;

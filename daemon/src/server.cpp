@@ -111,7 +111,36 @@ ipc::IpcResult<void> Server::open() {
       !add(epoll_.get(), signals_.get())) {
     return tl::unexpected(sys("epoll_ctl"));
   }
-  // Users and groups of [security] are resolved once, at start.
+  resolve_security();
+  // Under systemd with WatchdogSec=: a ping every half period, from the loop itself, so a
+  // stalled loop gets the daemon restarted.
+  uint64_t watchdog_us = 0;
+  if (sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0) {
+    watchdog_.reset(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+    itimerspec its{};
+    const uint64_t half_ns = watchdog_us * 500;
+    its.it_interval.tv_sec = static_cast<time_t>(half_ns / 1'000'000'000);
+    its.it_interval.tv_nsec = static_cast<long>(half_ns % 1'000'000'000);
+    its.it_value = its.it_interval;
+    if (!watchdog_.valid() || ::timerfd_settime(watchdog_.get(), 0, &its, nullptr) != 0 ||
+        !add(epoll_.get(), watchdog_.get())) {
+      return tl::unexpected(sys("watchdog timer"));
+    }
+  }
+  ::signal(SIGPIPE, SIG_IGN);  // a closed stderr or peer must not kill the daemon
+  // Timer deadlines are met to the microsecond, not within Linux's default 50 us slack.
+  ::prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  start_mono_ns_ = monotonic_ns();
+  // Under systemd (Type=notify): ready once the socket listens. A no-op elsewhere.
+  sd_notifyf(0, "READY=1\nSTATUS=listening on %s\nMAINPID=%d", options_.socket_path.c_str(),
+             static_cast<int>(::getpid()));
+  return {};
+}
+
+// Users and groups of [security] are resolved at start and on reload, never per connection.
+void Server::resolve_security() {
+  allowed_uids_.clear();
+  allowed_gids_.clear();
   for (const std::string& u : sim_.config().security.allowed_users) {
     if (const passwd* pw = ::getpwnam(u.c_str())) {
       allowed_uids_.push_back(pw->pw_uid);
@@ -126,14 +155,34 @@ ipc::IpcResult<void> Server::open() {
       std::fprintf(stderr, "<4>canemud: [security] group \"%s\" does not exist\n", g.c_str());
     }
   }
-  ::signal(SIGPIPE, SIG_IGN);  // a closed stderr or peer must not kill the daemon
-  // Timer deadlines are met to the microsecond, not within Linux's default 50 us slack.
-  ::prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
-  start_mono_ns_ = monotonic_ns();
-  // Under systemd (Type=notify): ready once the socket listens. A no-op elsewhere.
-  sd_notifyf(0, "READY=1\nSTATUS=listening on %s\nMAINPID=%d", options_.socket_path.c_str(),
-             static_cast<int>(::getpid()));
-  return {};
+}
+
+void Server::reload() {
+  sd_notify(0, "RELOADING=1");
+  const std::string& file = options_.config_file;
+  auto fresh = file.empty() ? load_default_config() : load_config_file(file);
+  if (!fresh) {
+    for (const std::string& e : fresh.error()) {
+      std::fprintf(stderr, "<3>canemud: reload: %s\n", e.c_str());
+    }
+    std::fprintf(stderr, "<4>canemud: reload: configuration rejected; nothing changed\n");
+  } else {
+    if (options_.time_override) {
+      fresh->simulation.time = *options_.time_override;
+    }
+    const ReloadReport r = sim_.reload(*fresh);
+    resolve_security();
+    for (const std::string& line : r.applied) {
+      std::fprintf(stderr, "<6>canemud: reload: %s\n", line.c_str());
+    }
+    for (const std::string& line : r.refused) {
+      std::fprintf(stderr, "<4>canemud: reload: not applied: %s\n", line.c_str());
+    }
+    std::fprintf(stderr, "<6>canemud: reload of %s done: %zu change%s applied, %zu not\n",
+                 fresh->source.c_str(), r.applied.size(), r.applied.size() == 1 ? "" : "s",
+                 r.refused.size());
+  }
+  sd_notify(0, "READY=1");
 }
 
 model::SimTime Server::wall_to_sim() const {
@@ -203,6 +252,10 @@ int Server::run() {
         bell->second->kick();
       } else if (fd == listen_.get()) {
         accept_clients();
+      } else if (watchdog_.valid() && fd == watchdog_.get()) {
+        uint64_t expirations = 0;
+        [[maybe_unused]] const ssize_t r = ::read(fd, &expirations, sizeof expirations);
+        sd_notify(0, "WATCHDOG=1");
       } else if (fd == timer_.get()) {
         uint64_t expirations = 0;
         [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
@@ -210,11 +263,7 @@ int Server::run() {
         signalfd_siginfo si{};
         while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
           if (si.ssi_signo == SIGHUP) {
-            sd_notify(0, "RELOADING=1");
-            std::fprintf(stderr,
-                         "<4>canemud: SIGHUP: reloading the configuration is not supported yet; "
-                         "nothing changed\n");
-            sd_notify(0, "READY=1");
+            reload();
           } else {
             std::fprintf(stderr, "<6>canemud: signal %u, stopping\n", si.ssi_signo);
             sd_notify(0, "STOPPING=1");

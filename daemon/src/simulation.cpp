@@ -73,62 +73,178 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
   std::unique_ptr<Simulation> sim(new Simulation(config));
   std::vector<std::string> errors;
   for (const BusConfig& b : sim->config_.buses) {
-    sim->buses_.push_back(Bus{std::make_unique<CanBus>(sim->scheduler_, b.name), &b});
+    sim->add_bus(b);
   }
-  sim->pools_.resize(sim->buses_.size());
   for (const DeviceConfig& d : sim->config_.devices) {
-    for (std::size_t i = 0; i < d.controllers.size(); ++i) {
-      std::size_t bus = 0;
-      while (sim->buses_[bus].config->name != d.controllers[i]) {
-        ++bus;
-      }
-      const BusConfig& bc = *sim->buses_[bus].config;
-      Controller c;
-      c.name = fmt::format("{}:{}", d.name, i);
-      c.bus = bus;
-      if (d.model == DeviceModel::ixxat_usb_to_can) {
-        const auto btr = sja1000_btr_for(bc.bitrate, bc.sample_point);
-        if (!btr) {
-          errors.push_back(
-              fmt::format("{}:{}: device {}: an SJA1000 at 16 MHz cannot run bus {} at {} bit/s",
-                          config.source, d.line, d.name, bc.name, bc.bitrate));
-          continue;
-        }
-        c.sja1000 = std::make_unique<Sja1000>();
-        c.sja1000->connect(*sim->buses_[bus].bus);
-        // Programmed as the adapter firmware does at start: timing, accept all, operating mode.
-        c.sja1000->write(sja1000::BTR0, btr->first);
-        c.sja1000->write(sja1000::BTR1, btr->second);
-        for (uint8_t k = 0; k < 4; ++k) {
-          c.sja1000->write(static_cast<uint8_t>(sja1000::AMR0 + k), 0xFF);
-        }
-        c.sja1000->write(sja1000::MOD, 0);
-        c.node = c.sja1000->node();
-      } else {
-        CanFdConfig fc;
-        auto nominal = fd_timing_for(bc.bitrate, bc.sample_point, vci::Phase::nominal);
-        auto data = fd_timing_for(bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate,
-                                  bc.sample_point, vci::Phase::data);
-        if (!nominal || !data) {
-          errors.push_back(
-              fmt::format("{}:{}: device {}: the CAN FD controller cannot run bus {} at {} bit/s",
-                          config.source, d.line, d.name, bc.name, bc.bitrate));
-          continue;
-        }
-        fc.nominal = *nominal;
-        fc.data = *data;
-        c.fd = std::make_unique<CanFdController>(fc);
-        c.fd->connect(*sim->buses_[bus].bus);
-        c.fd->start();
-        c.node = c.fd->node();
-      }
-      sim->controllers_.push_back(std::move(c));
+    if (auto error = sim->add_device(d)) {
+      errors.push_back(*error);
     }
   }
   if (!errors.empty()) {
     return tl::unexpected(errors);
   }
   return sim;
+}
+
+void Simulation::add_bus(const BusConfig& b) {
+  buses_.push_back(Bus{std::make_unique<CanBus>(scheduler_, b.name)});
+  pools_.emplace_back();
+}
+
+std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
+  // Every controller's timing first, so that a device is added whole or not at all.
+  struct Plan {
+    std::size_t bus;
+    std::pair<uint8_t, uint8_t> btr;
+    CanFdConfig fd;
+  };
+  std::vector<Plan> plans;
+  for (const std::string& bus_name : d.controllers) {
+    Plan p{};
+    p.bus = *bus_index(bus_name);
+    const BusConfig& bc = config_.buses[p.bus];
+    if (d.model == DeviceModel::ixxat_usb_to_can) {
+      const auto btr = sja1000_btr_for(bc.bitrate, bc.sample_point);
+      if (!btr) {
+        return fmt::format("{}:{}: device {}: an SJA1000 at 16 MHz cannot run bus {} at {} bit/s",
+                           config_.source, d.line, d.name, bc.name, bc.bitrate);
+      }
+      p.btr = *btr;
+    } else {
+      auto nominal = fd_timing_for(bc.bitrate, bc.sample_point, vci::Phase::nominal);
+      auto data = fd_timing_for(bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate,
+                                bc.sample_point, vci::Phase::data);
+      if (!nominal || !data) {
+        return fmt::format("{}:{}: device {}: the CAN FD controller cannot run bus {} at {} bit/s",
+                           config_.source, d.line, d.name, bc.name, bc.bitrate);
+      }
+      p.fd.nominal = *nominal;
+      p.fd.data = *data;
+    }
+    plans.push_back(p);
+  }
+  for (std::size_t i = 0; i < plans.size(); ++i) {
+    const Plan& p = plans[i];
+    Controller c;
+    c.name = fmt::format("{}:{}", d.name, i);
+    c.bus = p.bus;
+    if (d.model == DeviceModel::ixxat_usb_to_can) {
+      c.sja1000 = std::make_unique<Sja1000>();
+      c.sja1000->connect(*buses_[p.bus].bus);
+      // Programmed as the adapter firmware does at start: timing, accept all, operating mode.
+      c.sja1000->write(sja1000::BTR0, p.btr.first);
+      c.sja1000->write(sja1000::BTR1, p.btr.second);
+      for (uint8_t k = 0; k < 4; ++k) {
+        c.sja1000->write(static_cast<uint8_t>(sja1000::AMR0 + k), 0xFF);
+      }
+      c.sja1000->write(sja1000::MOD, 0);
+      c.node = c.sja1000->node();
+    } else {
+      c.fd = std::make_unique<CanFdController>(p.fd);
+      c.fd->connect(*buses_[p.bus].bus);
+      c.fd->start();
+      c.node = c.fd->node();
+    }
+    controllers_.push_back(std::move(c));
+  }
+  return std::nullopt;
+}
+
+namespace {
+
+bool same(const BusConfig& a, const BusConfig& b) {
+  return a.name == b.name && a.kind == b.kind && a.bitrate == b.bitrate &&
+         a.sample_point == b.sample_point && a.data_bitrate == b.data_bitrate;
+}
+
+bool same(const DeviceConfig& a, const DeviceConfig& b) {
+  return a.name == b.name && a.model == b.model && a.controllers == b.controllers;
+}
+
+template <class T>
+const T* find_named(const std::vector<T>& items, const std::string& name) {
+  for (const T& item : items) {
+    if (item.name == name) {
+      return &item;
+    }
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+ReloadReport Simulation::reload(const Config& fresh) {
+  ReloadReport r;
+  // What cannot change while the simulation runs.
+  if (fresh.simulation.time.mode != config_.simulation.time.mode ||
+      fresh.simulation.time.scale != config_.simulation.time.scale) {
+    r.refused.push_back(fmt::format("simulation.time: stays {} (a restart changes it)",
+                                    to_string(config_.simulation.time)));
+  }
+  if (fresh.simulation.seed != config_.simulation.seed) {
+    r.refused.push_back(
+        fmt::format("simulation.seed: stays {} (a restart changes it)", config_.simulation.seed));
+  }
+  for (const BusConfig& old : config_.buses) {
+    const BusConfig* now = find_named(fresh.buses, old.name);
+    if (now == nullptr) {
+      r.refused.push_back(
+          fmt::format("bus {}: still there (buses are removed by a restart)", old.name));
+    } else if (!same(old, *now)) {
+      r.refused.push_back(
+          fmt::format("bus {}: keeps its settings ({} at {} bit/s; a restart changes them)",
+                      old.name, to_string(old.kind), old.bitrate));
+    }
+  }
+  for (const DeviceConfig& old : config_.devices) {
+    const DeviceConfig* now = find_named(fresh.devices, old.name);
+    if (now == nullptr) {
+      r.refused.push_back(
+          fmt::format("device {}: still there (devices are removed by a restart)", old.name));
+    } else if (!same(old, *now)) {
+      r.refused.push_back(
+          fmt::format("device {}: keeps its settings (a restart changes them)", old.name));
+    }
+  }
+  // What can: new buses and devices, the security lists, the wake-up tuning.
+  for (const BusConfig& b : fresh.buses) {
+    if (find_named(config_.buses, b.name) == nullptr) {
+      config_.buses.push_back(b);
+      add_bus(b);
+      r.applied.push_back(
+          fmt::format("bus {}: added ({} at {} bit/s)", b.name, to_string(b.kind), b.bitrate));
+    }
+  }
+  for (const DeviceConfig& d : fresh.devices) {
+    if (find_named(config_.devices, d.name) != nullptr) {
+      continue;
+    }
+    if (device_exists(d.name)) {
+      r.refused.push_back(fmt::format("device {}: an ephemeral device has that name", d.name));
+    } else if (auto error = add_device(d)) {
+      r.refused.push_back(*error);
+    } else {
+      config_.devices.push_back(d);
+      ++generation_;
+      if (on_device_change) {
+        on_device_change(ipc::NotificationKind::device_added, d.name);
+      }
+      r.applied.push_back(fmt::format("device {}: added", d.name));
+    }
+  }
+  if (fresh.security.allowed_users != config_.security.allowed_users ||
+      fresh.security.allowed_groups != config_.security.allowed_groups) {
+    config_.security = fresh.security;
+    r.applied.push_back("security: allowed users and groups replaced");
+  }
+  if (fresh.simulation.batch_us != config_.simulation.batch_us ||
+      fresh.simulation.spin_us != config_.simulation.spin_us) {
+    config_.simulation.batch_us = fresh.simulation.batch_us;
+    config_.simulation.spin_us = fresh.simulation.spin_us;
+    r.applied.push_back(fmt::format("simulation: batch_us {}, spin_us {}",
+                                    config_.simulation.batch_us, config_.simulation.spin_us));
+  }
+  return r;
 }
 
 void Simulation::fill_status(ipc::StatusReply& r) {
@@ -138,10 +254,10 @@ void Simulation::fill_status(ipc::StatusReply& r) {
   for (std::size_t i = 0; i < r.bus_count; ++i) {
     const Bus& b = buses_[i];
     ipc::StatusBus& s = r.buses[i];
-    ipc::copy_name(s.name, b.config->name);
-    s.kind = static_cast<uint8_t>(b.config->kind);
-    s.bitrate = b.config->bitrate;
-    s.data_bitrate = b.config->data_bitrate;
+    ipc::copy_name(s.name, config_.buses[i].name);
+    s.kind = static_cast<uint8_t>(config_.buses[i].kind);
+    s.bitrate = config_.buses[i].bitrate;
+    s.data_bitrate = config_.buses[i].data_bitrate;
     s.load_permille = static_cast<uint32_t>(b.bus->bus_load_percent(now) * 10 + 0.5);
     s.frames = b.bus->frames_on_bus();
     s.error_frames = b.bus->error_frames_on_bus();
@@ -201,14 +317,14 @@ void Simulation::fill_devices(ipc::DeviceListReply& r) const {
     e.controller_count = 1;
     e.ephemeral = 1;
     e.owner_pid = x.owner_pid;
-    ipc::copy_name(e.buses[0], buses_[x.bus].config->name);
+    ipc::copy_name(e.buses[0], config_.buses[x.bus].name);
   }
   r.count = static_cast<uint16_t>(n);
 }
 
 std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {
-  for (std::size_t i = 0; i < buses_.size(); ++i) {
-    if (buses_[i].config->name == name) {
+  for (std::size_t i = 0; i < config_.buses.size(); ++i) {
+    if (config_.buses[i].name == name) {
       return i;
     }
   }

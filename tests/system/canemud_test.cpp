@@ -114,8 +114,10 @@ TEST(Canemud, TellsSystemdWhenItIsReadyAndWhenItStops) {
   ::unlink(path.c_str());
   ASSERT_EQ(::bind(notify.get(), reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
   ::setenv("NOTIFY_SOCKET", path.c_str(), 1);
+  ::setenv("WATCHDOG_USEC", "100000", 1);
   Daemon d;
   ::unsetenv("NOTIFY_SOCKET");
+  ::unsetenv("WATCHDOG_USEC");
   auto next = [&]() -> std::string {
     char buf[512];
     if (!readable(notify.get(), 10'000)) {
@@ -127,9 +129,68 @@ TEST(Canemud, TellsSystemdWhenItIsReadyAndWhenItStops) {
   const std::string ready = next();
   EXPECT_NE(ready.find("READY=1"), std::string::npos) << ready;
   EXPECT_NE(ready.find("STATUS=listening on " + d.socket()), std::string::npos) << ready;
+  // WATCHDOG_USEC of 100 ms: pings every 50 ms from the loop.
+  EXPECT_EQ(next(), "WATCHDOG=1");
+  EXPECT_EQ(next(), "WATCHDOG=1");
+  // A reload is framed by RELOADING and READY.
+  d.signal(SIGHUP);
+  std::string reload;
+  for (int k = 0; k < 10 && reload.find("READY=1") == std::string::npos; ++k) {
+    const std::string m = next();
+    if (m != "WATCHDOG=1") {
+      reload += m + "|";
+    }
+  }
+  EXPECT_EQ(reload, "RELOADING=1|READY=1|");
   EXPECT_EQ(d.terminate(10'000), 0);
   EXPECT_NE(next().find("STOPPING=1"), std::string::npos);
   ::unlink(path.c_str());
+}
+
+// SIGHUP reads the file again: new buses and devices come, changed ones stay as they were and
+// are named in the log, a broken file changes nothing.
+TEST(Canemud, ReloadAppliesWhatItSafelyCanAndSaysWhatNot) {
+  char dir[] = "/tmp/canemu-reload-XXXXXX";
+  const std::string file = std::string(::mkdtemp(dir)) + "/canemud.toml";
+  const auto write = [&](const std::string& text) {
+    FILE* f = std::fopen(file.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  };
+  write("[[bus]]\nname = \"a\"\nbitrate = 500000\n");
+  Daemon d("stepped", {"--config=" + file});
+  auto watcher = connect(d, "watcher");
+  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
+  write(
+      "[[bus]]\nname = \"a\"\nbitrate = 250000\n\n"
+      "[[bus]]\nname = \"b\"\nbitrate = 125000\n\n"
+      "[[device]]\nname = \"dev\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"a\", \"b\"]\n");
+  d.signal(SIGHUP);
+  ASSERT_TRUE(d.read_log_until("changes applied, 1 not", 10'000)) << d.log();
+  EXPECT_NE(d.log().find("reload: bus b: added (can at 125000 bit/s)"), std::string::npos);
+  EXPECT_NE(d.log().find("reload: device dev: added"), std::string::npos);
+  EXPECT_NE(d.log().find("reload: not applied: bus a: keeps its settings (can at 500000 bit/s"),
+            std::string::npos)
+      << d.log();
+  auto added = watcher.next_notification(5000);
+  ASSERT_TRUE(added);
+  EXPECT_EQ(ipc::name_of(added->device), "dev");
+  ipc::StatusReply s = status(watcher);
+  ASSERT_EQ(s.bus_count, 2);
+  EXPECT_EQ(s.buses[0].bitrate, 500000u);
+  EXPECT_EQ(s.buses[1].bitrate, 125000u);
+  ASSERT_EQ(s.node_count, 2);
+  EXPECT_EQ(ipc::name_of(s.nodes[1].name), "dev:1");
+  // A file with an error: named, and nothing changes.
+  write("[[bus]]\nname = \"a\"\nspeed = 1\n");
+  d.signal(SIGHUP);
+  ASSERT_TRUE(d.read_log_until("configuration rejected; nothing changed", 10'000)) << d.log();
+  EXPECT_NE(d.log().find("canemud.toml:3:1: bus[0].speed: unknown key"), std::string::npos)
+      << d.log();
+  EXPECT_EQ(status(watcher).bus_count, 2);
+  ::unlink(file.c_str());
+  ::rmdir(dir);
 }
 
 TEST(Canemud, AClientThatAsksAndLeavesAtOnceDoesNotHurtTheDaemon) {

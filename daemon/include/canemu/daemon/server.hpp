@@ -7,6 +7,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "canemu/daemon/config.hpp"
@@ -19,6 +20,8 @@ namespace canemu::daemon {
 struct ServerOptions {
   std::string socket_path;
   TimeSetting time;
+  std::string config_file;                   // read again on SIGHUP; empty: the embedded one
+  std::optional<TimeSetting> time_override;  // --time, which a reload keeps
 };
 
 class Server {
@@ -52,6 +55,8 @@ class Server {
   void handle(Client& c, const std::vector<uint8_t>& packet);
   void reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
   bool allowed(int fd, uint32_t uid) const;
+  void resolve_security();
+  void reload();
   void kick_all_channels();
   void check_channels();
   void send_notifications();
@@ -64,6 +69,7 @@ class Server {
   ipc::UniqueFd epoll_;
   ipc::UniqueFd timer_;
   ipc::UniqueFd signals_;
+  ipc::UniqueFd watchdog_;  // only under systemd's watchdog
   std::map<int, Client> clients_;
   int64_t start_mono_ns_ = 0;
   int64_t last_wake_ns_ = 0;  // CLOCK_MONOTONIC of the loop's last wake-up

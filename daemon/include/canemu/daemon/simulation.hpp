@@ -26,6 +26,12 @@ std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate, uin
 std::optional<model::BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
                                               model::vci::Phase phase);
 
+// What a configuration reload did and what it left as it was, one line each.
+struct ReloadReport {
+  std::vector<std::string> applied;
+  std::vector<std::string> refused;
+};
+
 class Simulation {
  public:
   static tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> build(
@@ -37,7 +43,11 @@ class Simulation {
   model::CanBus& bus(std::size_t i) { return *buses_[i].bus; }
 
   std::optional<std::size_t> bus_index(std::string_view name) const;
-  const BusConfig& bus_config(std::size_t i) const { return *buses_[i].config; }
+  const BusConfig& bus_config(std::size_t i) const { return config_.buses[i]; }
+
+  // Applies what can change while running (new buses and devices, the security lists, the
+  // wake-up tuning) from `fresh`, a configuration already checked, and reports the rest.
+  ReloadReport reload(const Config& fresh);
 
   // What `canemu status` shows.
   void fill_status(ipc::StatusReply& reply);
@@ -80,10 +90,14 @@ class Simulation {
  private:
   explicit Simulation(Config config) : config_(std::move(config)) {}
 
+  // Bus i is config_.buses[i]: both only grow, in step.
   struct Bus {
     std::unique_ptr<model::CanBus> bus;
-    const BusConfig* config;
   };
+  void add_bus(const BusConfig& b);
+  // Adds a device whose buses exist; an error (and nothing added) if a controller cannot run
+  // its bus's timing.
+  std::optional<std::string> add_device(const DeviceConfig& d);
   struct Controller {
     std::string name;  // "device:N"
     std::size_t bus;

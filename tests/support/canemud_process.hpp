@@ -8,12 +8,10 @@
 
 #include <fcntl.h>
 #include <poll.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-extern char** environ;
 
 namespace canemu::testing {
 
@@ -35,9 +33,6 @@ class CanemudProcess {
     if (::pipe2(err, O_CLOEXEC) != 0) {
       return;
     }
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, err[1], 2);
     args.insert(args.begin(), canemud);
     args.push_back("--socket=" + socket_);
     std::vector<char*> argv;
@@ -45,10 +40,19 @@ class CanemudProcess {
       argv.push_back(a.data());
     }
     argv.push_back(nullptr);
-    if (::posix_spawn(&pid_, canemud.c_str(), &actions, nullptr, argv.data(), environ) != 0) {
-      pid_ = -1;
+    const pid_t parent = ::getpid();
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      // Dies with the test process, even when that one crashes, so that nothing keeps the test
+      // runner's output pipe open.
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (::getppid() != parent) {
+        ::_exit(127);
+      }
+      ::dup2(err[1], 2);
+      ::execv(canemud.c_str(), argv.data());
+      ::_exit(127);
     }
-    posix_spawn_file_actions_destroy(&actions);
     ::close(err[1]);
     stderr_ = err[0];
     read_log_until("listening on " + socket_, 10'000);

@@ -4,7 +4,11 @@
 #include <string>
 #include <vector>
 
+#include <spawn.h>
+
 #include "daemon_process.hpp"
+
+extern char** environ;
 
 namespace canemu {
 namespace {

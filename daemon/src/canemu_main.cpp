@@ -260,8 +260,8 @@ int cmd_send(const std::string& socket, const SendOptions& o) {
     } else if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped)) {
       m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
       std::fprintf(stderr,
-                   "canemu: %s: not sent (given up after an error, or not a frame the channel's "
-                   "classic SJA1000 can send, such as CAN FD)\n",
+                   "canemu: %s: not sent (given up after an error, or a CAN FD frame on a classic "
+                   "CAN bus)\n",
                    daemon::candump_frame(*m).c_str());
       ++failed;
       ++done;

@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "canemu/firmware_model/sja1000.hpp"
+
 namespace canemu::daemon {
 
 using namespace canemu::model;
@@ -49,8 +51,8 @@ Result<TxFrame> to_tx_frame(const ipc::ChannelMessage& m) {
 }
 
 tl::expected<std::unique_ptr<Channel>, std::string> Channel::open(
-    uint32_t id, std::string device, std::size_t bus, Sja1000Node& node,
-    const Sja1000NodeSettings& settings, const Options& options) {
+    uint32_t id, std::string device, std::size_t bus, HostedNode& node,
+    const HostedNodeSettings& settings, const Options& options) {
   auto rx = ipc::RingMemory::create(options.rx_capacity, sizeof(ipc::ChannelMessage),
                                     "canemu-rx-" + device);
   auto tx = ipc::RingMemory::create(options.tx_capacity, sizeof(ipc::ChannelMessage),
@@ -72,9 +74,9 @@ tl::expected<std::unique_ptr<Channel>, std::string> Channel::open(
   return c;
 }
 
-Channel::Channel(uint32_t id, std::string device, std::size_t bus, Sja1000Node& node,
-                 uint16_t flags, ipc::RingMemory rx_memory, ipc::RingMemory tx_memory,
-                 ipc::UniqueFd rx_event, ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell)
+Channel::Channel(uint32_t id, std::string device, std::size_t bus, HostedNode& node, uint16_t flags,
+                 ipc::RingMemory rx_memory, ipc::RingMemory tx_memory, ipc::UniqueFd rx_event,
+                 ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell)
     : id_(id),
       device_(std::move(device)),
       bus_(bus),
@@ -115,8 +117,8 @@ std::optional<TxFrame> Channel::next_tx() {
         armed_ = false;
       }
       auto frame = to_tx_frame(m);
-      // The node is an SJA1000: classic CAN only.
-      if (frame && !frame->frame.fd()) {
+      // An SJA1000 node sends classic frames only.
+      if (frame && (!frame->frame.fd() || node_.fd_capable())) {
         return *frame;
       }
       // Not a frame it can send: counted, reported when the client asked for transmit reports,
@@ -189,7 +191,7 @@ void Channel::bus_error(const BusErrorEvent& e) {
   m.error_location = sja1000::ecc_segment(e, e.destuffed_bit, e.extended_frame);
   m.tec = e.tec;
   m.rec = e.rec;
-  m.state = static_cast<uint8_t>(node_.chip().confinement().state());
+  m.state = static_cast<uint8_t>(node_.controller().confinement().state());
   deliver(m);
 }
 

@@ -85,15 +85,34 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
           fmt::format("sample point {} is not below 1000 per mille", sample_point));
     return;
   }
-  const auto btr = sja1000_btr_for(bitrate, sample_point);
-  if (!btr) {
-    error(send, rid, ipc::ErrorCode::bad_bit_timing,
-          fmt::format("an SJA1000 at 16 MHz cannot run at {} bit/s", bitrate));
-    return;
+  model::HostedNodeSettings settings;
+  const bool fd = bc.kind == BusKind::can_fd;
+  const uint32_t data_bitrate = !fd ? 0
+                                : m.data_bitrate != 0
+                                    ? m.data_bitrate
+                                    : (bc.data_bitrate != 0 ? bc.data_bitrate : bitrate);
+  if (!fd) {
+    const auto btr = sja1000_btr_for(bitrate, sample_point);
+    if (!btr) {
+      error(send, rid, ipc::ErrorCode::bad_bit_timing,
+            fmt::format("an SJA1000 at 16 MHz cannot run at {} bit/s", bitrate));
+      return;
+    }
+    settings.btr0 = btr->first;
+    settings.btr1 = btr->second;
+    settings.nominal = *model::sja1000::decode_btr(btr->first, btr->second);
+  } else {
+    const auto nominal = fd_timing_for(bitrate, sample_point, model::vci::Phase::nominal);
+    const auto data = fd_timing_for(data_bitrate, sample_point, model::vci::Phase::data);
+    if (!nominal || !data) {
+      error(send, rid, ipc::ErrorCode::bad_bit_timing,
+            fmt::format("the CAN FD controller at 80 MHz cannot run at {} / {} bit/s", bitrate,
+                        data_bitrate));
+      return;
+    }
+    settings.nominal = *nominal;
+    settings.data = *data;
   }
-  model::Sja1000NodeSettings settings;
-  settings.btr0 = btr->first;
-  settings.btr1 = btr->second;
   settings.listen_only = (m.flags & ipc::kChannelListenOnly) != 0;
   settings.restart_delay = model::SimDuration(int64_t{m.restart_ms} * 1'000'000);
   Channel::Options options;
@@ -101,7 +120,7 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   options.rx_capacity = m.rx_capacity != 0 ? m.rx_capacity : 1024;
   options.tx_capacity = m.tx_capacity != 0 ? m.tx_capacity : 256;
   const uint32_t id = c.next_channel++;
-  model::Sja1000Node& node = sim_.spare_node(*bus);
+  model::HostedNode& node = sim_.spare_node(*bus);
   auto channel = Channel::open(id, device, *bus, node, settings, options);
   if (!channel) {
     error(send, rid, ipc::ErrorCode::no_resources, channel.error());
@@ -120,9 +139,11 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   r.element_size = sizeof(ipc::ChannelMessage);
   ipc::copy_name(r.device, device);
   r.bitrate = bitrate;
-  r.sample_point = static_cast<uint16_t>(node.chip().timing().nominal.sample_point_permille());
+  r.sample_point = static_cast<uint16_t>(settings.nominal.sample_point_permille());
   r.btr0 = settings.btr0;
   r.btr1 = settings.btr1;
+  r.data_bitrate = data_bitrate;
+  r.fd_capable = node.fd_capable() ? 1 : 0;
   const auto fds = sc.channel->client_fds();
   send(&r, sizeof r, fds);
 }
@@ -139,10 +160,10 @@ void ControlDispatcher::channel_status(Session& c, const ipc::ChannelStatusReque
     before_status();
   }
   Channel& ch = *it->second.channel;
-  model::Sja1000Node& node = ch.node();
+  model::HostedNode& node = ch.node();
   auto r = ipc::make_message<ipc::ChannelStatusReply>(m.header.request_id);
   r.channel = m.channel;
-  const model::FaultConfinement& fc = node.chip().confinement();
+  const model::FaultConfinement& fc = node.controller().confinement();
   r.state = static_cast<uint8_t>(fc.state());
   r.tec = fc.tec();
   r.rec = fc.rec();

@@ -5,6 +5,8 @@
 #include <fmt/format.h>
 
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
+#include "canemu/firmware_model/can_fd_node.hpp"
+#include "canemu/firmware_model/sja1000_node.hpp"
 
 namespace canemu::daemon {
 
@@ -284,7 +286,7 @@ void Simulation::fill_status(ipc::StatusReply& r) {
     add_node(c.name, c.bus, c.controller(), c.node);
   }
   for (const Ephemeral& e : ephemeral_) {
-    add_node(e.name + ":0", e.bus, e.node->chip(), e.node->node());
+    add_node(e.name + ":0", e.bus, e.node->controller(), e.node->node());
   }
   r.node_count = static_cast<uint16_t>(n);
 }
@@ -331,13 +333,17 @@ std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {
   return std::nullopt;
 }
 
-Sja1000Node& Simulation::spare_node(std::size_t bus) {
+HostedNode& Simulation::spare_node(std::size_t bus) {
   for (auto& node : pools_[bus]) {
     if (node->reusable()) {
       return *node;
     }
   }
-  pools_[bus].push_back(std::make_unique<Sja1000Node>(scheduler_, *buses_[bus].bus));
+  if (config_.buses[bus].kind == BusKind::can_fd) {
+    pools_[bus].push_back(std::make_unique<CanFdNode>(scheduler_, *buses_[bus].bus));
+  } else {
+    pools_[bus].push_back(std::make_unique<Sja1000Node>(scheduler_, *buses_[bus].bus));
+  }
   return *pools_[bus].back();
 }
 
@@ -365,7 +371,7 @@ std::string Simulation::unique_device_name(std::string_view prefix) const {
 }
 
 Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t bus,
-                                                  Sja1000Node& node, uint32_t owner_pid) {
+                                                  HostedNode& node, uint32_t owner_pid) {
   ephemeral_.push_back(Ephemeral{name, bus, &node, owner_pid});
   ++generation_;
   if (on_device_change) {

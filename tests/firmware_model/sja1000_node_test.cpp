@@ -49,7 +49,7 @@ struct Station {
   int pulls = 0;
   explicit Station(Bus& b) : node(b.sched, b.bus) {}
   void start(bool listen_only = false, int64_t restart_ns = 0) {
-    Sja1000NodeSettings s;
+    HostedNodeSettings s;
     s.btr0 = 0x00;
     s.btr1 = 0x1C;
     s.listen_only = listen_only;

@@ -6,6 +6,9 @@
 
 #include <spawn.h>
 
+#include <fmt/format.h>
+
+#include "canemu/firmware_model/wire_encoding.hpp"
 #include "daemon_process.hpp"
 
 extern char** environ;
@@ -90,6 +93,46 @@ TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
   EXPECT_EQ(sent, expected);
   EXPECT_EQ(Cli::read_all(dump.out), expected);
   EXPECT_EQ(dump.wait(), 0);
+}
+
+// On a CAN FD bus the ephemeral nodes are CAN FD controllers: FD frames with the rate switch go
+// out and are logged in candump's FD syntax.
+TEST(Cli, OnACanFdBusFdFramesGoOutWithTheRateSwitch) {
+  char dir[] = "/tmp/canemu-fd-XXXXXX";
+  const std::string file = std::string(::mkdtemp(dir)) + "/fd.toml";
+  FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs(
+      "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\n"
+      "data_bitrate = 2000000\n\n"
+      "[[device]]\nname = \"acker\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n",
+      f);
+  std::fclose(f);
+  Daemon d("stepped", {"--config=" + file});
+  auto watcher = connect(d, "watcher");
+  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
+  Cli dump(d, {"dump", "fd0", "-n", "2"});
+  ASSERT_TRUE(watcher.next_notification(10'000));
+  Cli send(d, {"send", "fd0", "123##1000102030405060708090A0B", "456#1122", "--step", "1ms"});
+  const std::string sent = Cli::read_all(send.out);
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  // The FD frame's exact length with the data phase at 2 Mbit/s, then 3 bits of intermission
+  // and the classic frame.
+  const auto fd = model::Frame::fd_frame(
+      0x123, std::vector<uint8_t>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, false, true);
+  const model::BitTiming nominal{5'000'000, 1, 7, 2, 1, 1};
+  const model::BitTiming data{20'000'000, 1, 7, 2, 1, 1};
+  const int64_t first = model::frame_duration(model::encode(*fd), nominal, data).ns();
+  const auto classic = model::Frame::classic(0x456, std::vector<uint8_t>{0x11, 0x22});
+  const int64_t second =
+      first + 3 * 2000 + model::frame_duration(model::encode(*classic), nominal).ns();
+  const std::string expected =
+      fmt::format("(0000000000.{:06}) fd0 123##1000102030405060708090A0B\n", first / 1000) +
+      fmt::format("(0000000000.{:06}) fd0 456#1122\n", second / 1000);
+  EXPECT_EQ(sent, expected);
+  EXPECT_EQ(Cli::read_all(dump.out), expected);
+  ::unlink(file.c_str());
+  ::rmdir(dir);
 }
 
 TEST(Cli, SendRefusesBadFramesAndUnsteppedStepsWithReasons) {

@@ -1,4 +1,5 @@
-// A client's channel on an ephemeral device: one SJA1000 node (model::Sja1000Node) on a bus,
+// A client's channel on an ephemeral device: one node (model::HostedNode: an SJA1000 on a
+// classic bus, the CAN FD controller on a CAN FD bus) on a bus,
 // joined to the client by two rings in shared memory. The receive ring gets every frame the
 // node receives (and, when asked for, transmit confirmations, bus errors and state changes), at
 // its exact simulated instant; the node takes frames to send from the transmit ring whenever its
@@ -17,7 +18,7 @@
 
 #include <tl/expected.hpp>
 
-#include "canemu/firmware_model/sja1000_node.hpp"
+#include "canemu/firmware_model/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/shm_ring.hpp"
 
@@ -38,8 +39,8 @@ class Channel final : private model::ControllerEvents {
 
   // Makes the rings and starts `node` with `settings`. The error names what failed.
   static tl::expected<std::unique_ptr<Channel>, std::string> open(
-      uint32_t id, std::string device, std::size_t bus, model::Sja1000Node& node,
-      const model::Sja1000NodeSettings& settings, const Options& options);
+      uint32_t id, std::string device, std::size_t bus, model::HostedNode& node,
+      const model::HostedNodeSettings& settings, const Options& options);
   // Stops the node (it can then be reused) and unmaps the rings.
   ~Channel() override;
   Channel(const Channel&) = delete;
@@ -48,7 +49,7 @@ class Channel final : private model::ControllerEvents {
   uint32_t id() const { return id_; }
   const std::string& device() const { return device_; }
   std::size_t bus() const { return bus_; }
-  model::Sja1000Node& node() { return node_; }
+  model::HostedNode& node() { return node_; }
   const ChannelStats& stats() const { return stats_; }
   uint32_t rx_capacity() const { return rx_memory_.capacity(); }
   uint32_t tx_capacity() const { return tx_memory_.capacity(); }
@@ -65,9 +66,9 @@ class Channel final : private model::ControllerEvents {
   bool broken() const { return rx_.corrupted() || tx_.corrupted(); }
 
  private:
-  Channel(uint32_t id, std::string device, std::size_t bus, model::Sja1000Node& node,
-          uint16_t flags, ipc::RingMemory rx_memory, ipc::RingMemory tx_memory,
-          ipc::UniqueFd rx_event, ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell);
+  Channel(uint32_t id, std::string device, std::size_t bus, model::HostedNode& node, uint16_t flags,
+          ipc::RingMemory rx_memory, ipc::RingMemory tx_memory, ipc::UniqueFd rx_event,
+          ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell);
 
   std::optional<model::TxFrame> next_tx();
   void deliver(ipc::ChannelMessage& m);
@@ -82,7 +83,7 @@ class Channel final : private model::ControllerEvents {
   uint32_t id_;
   std::string device_;
   std::size_t bus_;
-  model::Sja1000Node& node_;
+  model::HostedNode& node_;
   uint16_t flags_;
   ipc::RingMemory rx_memory_;
   ipc::RingMemory tx_memory_;

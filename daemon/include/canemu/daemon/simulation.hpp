@@ -13,8 +13,8 @@
 #include "canemu/daemon/config.hpp"
 #include "canemu/firmware_model/can_bus.hpp"
 #include "canemu/firmware_model/can_fd_controller.hpp"
+#include "canemu/firmware_model/hosted_node.hpp"
 #include "canemu/firmware_model/sja1000.hpp"
-#include "canemu/firmware_model/sja1000_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 
 namespace canemu::daemon {
@@ -55,10 +55,11 @@ class Simulation {
   void fill_devices(ipc::DeviceListReply& reply) const;
 
   // ---- ephemeral devices ----
-  // A stopped SJA1000 node on bus `bus`, ready to start: one that an earlier ephemeral device
-  // left (and that has no frame on the wire), or a new one. Nodes are never removed from a bus,
+  // A stopped node on bus `bus`, ready to start (an SJA1000 on a classic bus, the CAN FD
+  // controller on a CAN FD bus): one that an earlier ephemeral device left (and that has no
+  // frame on the wire), or a new one. Nodes are never removed from a bus,
   // so the number of nodes is the largest number of ephemeral devices alive at once.
-  model::Sja1000Node& spare_node(std::size_t bus);
+  model::HostedNode& spare_node(std::size_t bus);
   bool device_exists(std::string_view name) const;
   // A name no device has: `prefix` followed by a number.
   std::string unique_device_name(std::string_view prefix) const;
@@ -81,7 +82,7 @@ class Simulation {
     Simulation* sim_ = nullptr;
     std::string name_;
   };
-  DeviceLease add_ephemeral(std::string name, std::size_t bus, model::Sja1000Node& node,
+  DeviceLease add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node,
                             uint32_t owner_pid);
   uint32_t device_generation() const { return generation_; }
   // Told of every device that comes or goes (ephemeral devices).
@@ -112,7 +113,7 @@ class Simulation {
   struct Ephemeral {
     std::string name;
     std::size_t bus;
-    model::Sja1000Node* node;
+    model::HostedNode* node;
     uint32_t owner_pid;
   };
   void remove_ephemeral(const std::string& name);
@@ -123,7 +124,7 @@ class Simulation {
   std::vector<Controller> controllers_;
   std::vector<Ephemeral> ephemeral_;  // in order of creation
   // Per bus, the nodes made for ephemeral devices (in use or spare).
-  std::vector<std::vector<std::unique_ptr<model::Sja1000Node>>> pools_;
+  std::vector<std::vector<std::unique_ptr<model::HostedNode>>> pools_;
   uint32_t generation_ = 0;
 };
 

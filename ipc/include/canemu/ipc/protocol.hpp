@@ -171,8 +171,9 @@ inline constexpr uint16_t kChannelListenOnly = 0x0001;    // never drives the bu
 inline constexpr uint16_t kChannelReportTx = 0x0002;      // tx_done / tx_dropped messages
 inline constexpr uint16_t kChannelReportErrors = 0x0004;  // error and state messages
 
-// Asks for an ephemeral device: one SJA1000 node on the bus `bus`, alive while this client is
-// connected (or until CloseChannelRequest). The reply carries kChannelFdCount descriptors:
+// Asks for an ephemeral device: one node on the bus `bus` (an SJA1000 on a classic CAN bus, the
+// CAN FD controller on a CAN FD bus), alive while this client is connected (or until
+// CloseChannelRequest). The reply carries kChannelFdCount descriptors:
 // rx ring memory, tx ring memory, the rx reader's eventfd (the client waits on it), the tx
 // writer's eventfd (the client waits on it for room), the tx reader's eventfd (the daemon's
 // doorbell, written by the client's ring writer).
@@ -183,10 +184,10 @@ struct OpenChannelRequest {
   uint32_t bitrate = 0;         // 0: the bus's rate
   uint16_t sample_point = 0;    // per mille; 0: the bus's
   uint16_t flags = 0;
-  uint32_t rx_capacity = 0;  // elements; 0: 1024
-  uint32_t tx_capacity = 0;  // elements; 0: 256
-  uint32_t restart_ms = 0;   // restart after bus-off after this long; 0: stay bus-off
-  uint32_t reserved = 0;
+  uint32_t rx_capacity = 0;   // elements; 0: 1024
+  uint32_t tx_capacity = 0;   // elements; 0: 256
+  uint32_t restart_ms = 0;    // restart after bus-off after this long; 0: stay bus-off
+  uint32_t data_bitrate = 0;  // CAN FD buses: data-phase bit/s; 0: the bus's
 };
 static_assert(sizeof(OpenChannelRequest) == 16 + 64 + 24);
 
@@ -199,10 +200,13 @@ struct OpenChannelReply {
   char device[kNameSize] = {};
   uint32_t bitrate = 0;
   uint16_t sample_point = 0;
-  uint8_t btr0 = 0;
+  uint8_t btr0 = 0;  // SJA1000 nodes: the register values
   uint8_t btr1 = 0;
+  uint32_t data_bitrate = 0;  // CAN FD nodes: the data-phase rate
+  uint8_t fd_capable = 0;
+  uint8_t reserved[3] = {};
 };
-static_assert(sizeof(OpenChannelReply) == 16 + 16 + 32 + 8);
+static_assert(sizeof(OpenChannelReply) == 16 + 16 + 32 + 16);
 
 struct CloseChannelRequest {
   MsgHeader header;

@@ -1,0 +1,102 @@
+// A controller run by a minimal host driver, the way an operating system's driver runs a CAN
+// chip: it programs the bit timing, accepts every frame, feeds the transmit buffer from a queue
+// the owner provides (one frame at a time, so the owner's queue fills when the bus is busy),
+// takes received frames out at once, reports every event through one ControllerEvents sink, and
+// optionally restarts the controller after bus-off.
+//
+// canemud runs ephemeral channels on these: an SJA1000 on classic CAN buses (Sja1000Node), the
+// CAN FD controller on CAN FD buses (CanFdNode). A node can be stopped and started again, so
+// the daemon reuses nodes instead of growing the bus.
+#pragma once
+
+#include <functional>
+#include <optional>
+
+#include "canemu/firmware_model/can_bus.hpp"
+#include "canemu/firmware_model/controller_events.hpp"
+#include "canemu/firmware_model/sim_scheduler.hpp"
+
+namespace canemu::model {
+
+struct HostedNodeSettings {
+  uint8_t btr0 = 0;  // Sja1000Node: the bit timing registers
+  uint8_t btr1 = 0;
+  BitTiming nominal;  // CanFdNode: the arbitration-phase timing
+  BitTiming data;     // CanFdNode: the data-phase timing of frames with BRS
+  bool listen_only = false;
+  // After bus-off, the driver restarts the controller this long after the bus-off instant
+  // (recovery then takes its 128 x 11 recessive bits). Zero: the node stays in bus-off until
+  // restart().
+  SimDuration restart_delay{};
+};
+
+class HostedNode : private ControllerEvents {
+ public:
+  // The next frame to send, or nothing when the queue is empty.
+  using TxSource = std::function<std::optional<TxFrame>()>;
+
+  ~HostedNode() override = default;
+  HostedNode(const HostedNode&) = delete;
+  HostedNode& operator=(const HostedNode&) = delete;
+
+  // Clears the counters and statistics, programs the controller and puts it on the bus.
+  // Events go to `sink` (may be nullptr); frames to send come from `source`.
+  void start(const HostedNodeSettings& settings, ControllerEvents* sink, TxSource source);
+  // Off the bus (a frame already on the wire completes without retransmission); the sink and
+  // source are forgotten.
+  void stop();
+  bool running() const { return running_; }
+  // True when start() may be called: stopped and no frame of this node on the wire.
+  bool reusable() const { return !running_ && !bus_.in_flight(node()); }
+
+  // The source has frames: loads the next one if the transmit buffer is free.
+  void kick() { load_next(); }
+  // Leaves bus-off: recovery starts counting.
+  void restart();
+  // A frame is in the transmit buffer.
+  bool transmitting() const { return tx_loaded_; }
+  SimTime now() const { return bus_.now(); }
+
+  virtual NodeId node() const = 0;
+  virtual CanController& controller() = 0;
+  virtual bool fd_capable() const = 0;
+
+ protected:
+  HostedNode(SimScheduler& scheduler, CanBus& bus) : scheduler_(scheduler), bus_(bus) {}
+  // What the derived class hands its controller as listener.
+  ControllerEvents* events() { return this; }
+
+  // --- what differs per chip ---
+  // Counters cleared, timing and acceptance programmed, still off the bus.
+  virtual void program(const HostedNodeSettings& settings) = 0;
+  virtual void go_on_bus(const HostedNodeSettings& settings) = 0;
+  virtual void go_off_bus() = 0;
+  virtual void leave_bus_off(const HostedNodeSettings& settings) = 0;
+  virtual bool buffer_free() = 0;
+  virtual void load(const TxFrame& tx) = 0;
+  virtual void release_received() = 0;
+
+  CanBus& bus() { return bus_; }
+
+ private:
+  void frame_received(SimTime at, const Frame& frame, bool own) override;
+  void frame_transmitted(SimTime at, const Frame& frame) override;
+  void transmission_dropped(SimTime at, const Frame& frame) override;
+  void bus_error(const BusErrorEvent& event) override;
+  void state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) override;
+  void overrun(SimTime at, const Frame& lost) override;
+  void arbitration_lost(SimTime at, uint16_t bit) override;
+
+  void load_next();
+
+  SimScheduler& scheduler_;
+  CanBus& bus_;
+  HostedNodeSettings settings_;
+  ControllerEvents* sink_ = nullptr;
+  TxSource source_;
+  bool running_ = false;
+  bool tx_loaded_ = false;
+  uint64_t generation_ = 0;  // start() count: a restart scheduled before a stop is void
+};
+
+}  // namespace canemu::model

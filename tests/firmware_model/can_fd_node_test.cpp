@@ -1,0 +1,123 @@
+// The CAN FD controller with its host driver: FD frames with the rate switch between nodes,
+// bus-off left by the driver's restart, reuse with cleared counters.
+#include "canemu/firmware_model/can_fd_node.hpp"
+
+#include <gtest/gtest.h>
+
+#include <deque>
+
+#include "canemu/firmware_model/wire_encoding.hpp"
+#include "test_controller.hpp"
+
+namespace canemu::model {
+namespace {
+
+using Bus = testing::BusFixture;
+
+// Ten quanta per bit, sample point at 80 %: 500 kbit/s nominal, 2 Mbit/s data.
+const BitTiming kNominal{5'000'000, 1, 7, 2, 1, 1};
+const BitTiming kData{20'000'000, 1, 7, 2, 1, 1};
+constexpr int64_t kBit = 2000;
+
+struct Log : ControllerEvents {
+  std::vector<std::pair<int64_t, Frame>> received;
+  std::vector<int64_t> sent;
+  std::vector<std::pair<int64_t, ErrorState>> states;
+  void frame_received(SimTime at, const Frame& f, bool) override {
+    received.emplace_back(at.ns(), f);
+  }
+  void frame_transmitted(SimTime at, const Frame&) override { sent.push_back(at.ns()); }
+  void state_changed(SimTime at, ErrorState s, uint16_t, uint16_t) override {
+    states.emplace_back(at.ns(), s);
+  }
+};
+
+struct Station {
+  CanFdNode node;
+  Log log;
+  std::deque<TxFrame> queue;
+  explicit Station(Bus& b) : node(b.sched, b.bus) {}
+  void start(int64_t restart_ns = 0) {
+    HostedNodeSettings s;
+    s.nominal = kNominal;
+    s.data = kData;
+    s.restart_delay = SimDuration(restart_ns);
+    node.start(s, &log, [this]() -> std::optional<TxFrame> {
+      if (queue.empty()) {
+        return std::nullopt;
+      }
+      TxFrame f = queue.front();
+      queue.pop_front();
+      return f;
+    });
+  }
+};
+
+Frame fd_frame(uint32_t id, std::size_t length, bool brs) {
+  std::vector<uint8_t> data(length);
+  for (std::size_t k = 0; k < length; ++k) {
+    data[k] = static_cast<uint8_t>(k * 7);
+  }
+  return *Frame::fd_frame(id, data, false, brs);
+}
+
+TEST(CanFdNode, SendsFdFramesWithTheRateSwitchOneAfterTheOther) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  const Frame big = fd_frame(0x100, 64, true);
+  const Frame small = fd_frame(0x101, 12, false);
+  a.queue = {TxFrame{big, false, false}, TxFrame{small, false, false}};
+  a.node.kick();
+  EXPECT_TRUE(a.node.transmitting());
+  EXPECT_EQ(a.node.chip().tx_queued(), 1u);  // one at a time: the rest waits in the owner's queue
+  b.run_until(10'000'000);
+  const int64_t first = frame_duration(encode(big), kNominal, kData).ns();
+  const int64_t gap = 3 * kBit;  // intermission
+  const int64_t second = first + gap + frame_duration(encode(small), kNominal, kData).ns();
+  ASSERT_EQ(r.log.received.size(), 2u);
+  EXPECT_EQ(r.log.received[0], std::make_pair(first, big));
+  EXPECT_EQ(r.log.received[1], std::make_pair(second, small));
+  EXPECT_EQ(a.log.sent, (std::vector<int64_t>{first, second}));
+  EXPECT_EQ(r.node.chip().rx_queued(), 0u);  // taken out at once
+}
+
+TEST(CanFdNode, LeavesBusOffOnlyWhenTheDriverRestartsIt) {
+  Bus b;
+  Station a(b), r(b);
+  a.start(1'000'000);  // restart 1 ms after bus-off
+  r.start();
+  b.run_until(100 * kBit);
+  a.node.controller().confinement().set_counters(256, 0);
+  b.bus.counters_changed(a.node.node());
+  ASSERT_FALSE(a.log.states.empty());
+  EXPECT_EQ(a.log.states.back(), std::make_pair(100 * kBit, ErrorState::bus_off));
+  const int64_t recovered = 100 * kBit + 1'000'000 + 128 * 11 * kBit;
+  b.run_until(recovered - 1);
+  EXPECT_EQ(a.log.states.back().second, ErrorState::bus_off);
+  b.run_until(recovered);
+  EXPECT_EQ(a.log.states.back(), std::make_pair(recovered, ErrorState::active));
+}
+
+TEST(CanFdNode, AReusedNodeStartsWithClearedCounters) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  a.node.controller().confinement().set_counters(200, 17);
+  b.bus.counters_changed(a.node.node());
+  a.node.stop();
+  EXPECT_TRUE(a.node.reusable());
+  a.start();
+  EXPECT_EQ(a.node.controller().confinement().tec(), 0);
+  EXPECT_EQ(a.node.controller().confinement().rec(), 0);
+  EXPECT_EQ(a.node.controller().confinement().state(), ErrorState::active);
+  a.queue.push_back(TxFrame{fd_frame(0x5, 8, true), false, false});
+  a.node.kick();
+  b.run_until(1'000'000);
+  EXPECT_EQ(r.log.received.size(), 1u);
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -3,10 +3,12 @@
 //   channel's ring until it comes out of another's, minus the frame's own duration on the wire
 //   (targets p50 <= 30 us, p99 <= 200 us), beside a Unix-socket round trip measured in the
 //   same run;
+// - how long after a client is killed its resources are freed (target: 100 ms);
 // - peak resident memory of canemud on the default configuration with 64 clients connected,
 //   each with an open channel (target <= 64 MB).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -121,6 +123,56 @@ void BM_ClientDaemonClientLatencyRealtime(benchmark::State& state) {
   ::rmdir(dir);
 }
 BENCHMARK(BM_ClientDaemonClientLatencyRealtime)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// A client killed with an open channel: the time from SIGKILL until a subscriber hears that
+// its device is gone (target: within 100 ms).
+void BM_DeadClientCleanup(benchmark::State& state) {
+  testing::CanemudProcess daemon(CANEMUD_PATH, {});
+  auto watcher = client::Connection::open(daemon.socket(), "bench-watcher");
+  if (!daemon.ready() || !watcher || !watcher->subscribe(ipc::kEventDevices)) {
+    state.SkipWithError("canemud did not start");
+    return;
+  }
+  std::vector<int64_t> cleanup;
+  for (auto _ : state) {
+    for (int round = 0; round < 20; ++round) {
+      int ready[2];
+      if (::pipe(ready) != 0) {
+        state.SkipWithError("pipe");
+        return;
+      }
+      const pid_t child = ::fork();
+      if (child == 0) {
+        auto c = client::Connection::open(daemon.socket(), "doomed");
+        client::ChannelOptions o;
+        o.bus = "can0";
+        auto ch = c ? client::Channel::open(*c, o) : tl::unexpected(c.error());
+        (void)!::write(ready[1], ch ? "y" : "n", 1);
+        ::pause();
+        ::_exit(0);
+      }
+      ::close(ready[1]);
+      char ok = 'n';
+      (void)!::read(ready[0], &ok, 1);
+      ::close(ready[0]);
+      const auto added = watcher->next_notification(5000);
+      const int64_t t0 = now_ns();
+      ::kill(child, SIGKILL);
+      const auto removed = watcher->next_notification(5000);
+      const int64_t t1 = now_ns();
+      ::waitpid(child, nullptr, 0);
+      if (ok != 'y' || !added || !removed) {
+        state.SkipWithError("the client's device did not come and go");
+        return;
+      }
+      cleanup.push_back(t1 - t0);
+    }
+  }
+  report(state, "cleanup", cleanup);
+  state.counters["cleanup_max_us"] =
+      static_cast<double>(*std::max_element(cleanup.begin(), cleanup.end())) / 1000.0;
+}
+BENCHMARK(BM_DeadClientCleanup)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 void BM_DaemonPeakRss64Clients(benchmark::State& state) {
   testing::CanemudProcess daemon(CANEMUD_PATH, {});

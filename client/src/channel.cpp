@@ -43,6 +43,7 @@ Result<Channel> Channel::open(Connection& connection, const ChannelOptions& o) {
   m.rx_capacity = o.rx_capacity;
   m.tx_capacity = o.tx_capacity;
   m.restart_ms = o.restart_ms;
+  m.data_bitrate = o.data_bitrate;
   auto reply = connection.call<ipc::OpenChannelRequest, ipc::OpenChannelReply>(m);
   if (!reply) {
     return tl::unexpected(reply.error());

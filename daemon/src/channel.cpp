@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 
 #include "canemu/firmware_model/sja1000.hpp"
@@ -100,10 +102,11 @@ std::array<int, ipc::kChannelFdCount> Channel::client_fds() const {
 }
 
 void Channel::kick() {
-  if (armed_) {
-    tx_.disarm();
-    armed_ = false;
-  }
+  // Always drained: a client's write can land after the daemon disarmed (or a client can write
+  // the doorbell on its own); a doorbell left readable would wake the loop at once, forever.
+  tx_.disarm();
+  armed_ = false;
+  rejects_left_ = kMaxRejectsPerKick;
   node_.kick();
 }
 
@@ -128,6 +131,14 @@ std::optional<TxFrame> Channel::next_tx() {
         m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped);
         m.timestamp_ns = node_.now().ns();
         deliver(m);
+      }
+      rejects_left_ = rejects_left_ > 0 ? rejects_left_ - 1 : 0;
+      if (rejects_left_ == 0) {
+        // A client feeding nothing but junk gets a turn per loop iteration, not the loop: ring
+        // its own doorbell so the next iteration goes on from here.
+        const uint64_t one = 1;
+        [[maybe_unused]] const ssize_t n = ::write(tx_doorbell_.get(), &one, sizeof one);
+        return std::nullopt;
       }
       continue;
     }

@@ -119,7 +119,18 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   options.flags = m.flags;
   options.rx_capacity = m.rx_capacity != 0 ? m.rx_capacity : 1024;
   options.tx_capacity = m.tx_capacity != 0 ? m.tx_capacity : 256;
-  const uint32_t id = c.next_channel++;
+  // Ring memory is limited daemon-wide, so that clients together cannot exhaust the machine.
+  const std::size_t ring_bytes =
+      (std::size_t{options.rx_capacity} + options.tx_capacity) * sizeof(ipc::ChannelMessage);
+  if (ring_bytes_in_use_ + ring_bytes > kMaxRingBytes) {
+    error(send, rid, ipc::ErrorCode::no_resources,
+          fmt::format("ring memory for all channels is limited to {} MiB", kMaxRingBytes >> 20));
+    return;
+  }
+  uint32_t id = c.next_channel++;
+  while (id == 0 || c.channels.count(id) != 0) {  // after 2^32 opens, skip ids in use
+    id = c.next_channel++;
+  }
   model::HostedNode& node = sim_.spare_node(*bus);
   auto channel = Channel::open(id, device, *bus, node, settings, options);
   if (!channel) {
@@ -129,6 +140,7 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   SessionChannel& sc = c.channels[id];
   sc.lease = sim_.add_ephemeral(device, *bus, node, c.pid);
   sc.channel = std::move(*channel);
+  sc.budget = RingBudget(&ring_bytes_in_use_, ring_bytes);
   if (channel_opened) {
     channel_opened(*sc.channel);
   }

@@ -460,6 +460,9 @@ void Server::serve(int fd) {
     return;
   }
   auto n = ipc::receive_packet(fd, buffer_, 0);
+  if (!n && n.error().error_number == ETIMEDOUT) {
+    return;  // nothing to read: a stale event for a descriptor number reused in this batch
+  }
   if (!n || *n == 0) {
     it->second.closing = true;  // closed, oversized or broken: dropped after this batch
     return;

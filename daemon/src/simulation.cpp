@@ -105,6 +105,11 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     Plan p{};
     p.bus = *bus_index(bus_name);
     const BusConfig& bc = config_.buses[p.bus];
+    // Checked against the bus as it runs (a reload leaves changed buses as they were).
+    if (bc.kind == BusKind::lin) {
+      return fmt::format("{}:{}: device {}: bus {} is a LIN bus; a CAN controller cannot sit on it",
+                         config_.source, d.line, d.name, bc.name);
+    }
     if (d.model == DeviceModel::ixxat_usb_to_can) {
       const auto btr = sja1000_btr_for(bc.bitrate, bc.sample_point);
       if (!btr) {

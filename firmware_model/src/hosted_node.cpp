@@ -85,6 +85,9 @@ void HostedNode::state_changed(SimTime at, ErrorState state, uint16_t tec, uint1
       }
     });
   }
+  if (state != ErrorState::bus_off) {
+    load_next();  // back from bus-off: the buffer may take frames again
+  }
 }
 
 void HostedNode::overrun(SimTime at, const Frame& lost) {

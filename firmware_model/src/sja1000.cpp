@@ -13,6 +13,33 @@ void Sja1000::connect(CanBus& bus) {
   node_ = bus.attach(*this);
 }
 
+void Sja1000::hardware_reset() {
+  enter_reset();  // drops the request and the FIFO, tells the bus
+  if (tx_) {
+    tx_->single_shot = true;  // on the wire: completes, is not repeated
+  }
+  mod_ = MOD_RM;
+  ier_ = 0;
+  btr0_ = 0;
+  btr1_ = 0;
+  ocr_ = 0;
+  cdr_ = 0x80;
+  alc_ = 0;
+  ecc_ = 0;
+  alc_armed_ = true;
+  ecc_armed_ = true;
+  acr_ = {};
+  amr_ = {0xFF, 0xFF, 0xFF, 0xFF};
+  tx_buffer_ = {};
+  tx_complete_ = true;
+  fc_.reset();
+  fc_.set_warning_limit(kDefaultWarningLimit);
+  if (bus_ != nullptr) {
+    bus_->controller_changed(node_);
+  }
+  counters_written();
+}
+
 SimTime Sja1000::now() const {
   return bus_ != nullptr ? bus_->now() : SimTime{};
 }

@@ -10,9 +10,9 @@ Sja1000Node::Sja1000Node(SimScheduler& scheduler, CanBus& bus) : HostedNode(sche
 }
 
 void Sja1000Node::program(const HostedNodeSettings& settings) {
-  chip_.write(MOD, MOD_RM);
-  chip_.write(TXERR, 0);
-  chip_.write(RXERR, 0);
+  // A reset through the RST pin: whatever the last user left (a request held through bus-off,
+  // counters, filters) is gone.
+  chip_.hardware_reset();
   chip_.write(BTR0, settings.btr0);
   chip_.write(BTR1, settings.btr1);
   for (uint8_t k = 0; k < 4; ++k) {
@@ -33,7 +33,8 @@ void Sja1000Node::leave_bus_off(const HostedNodeSettings& settings) {
 }
 
 bool Sja1000Node::buffer_free() {
-  return (chip_.read(SR) & SR_TBS) != 0;
+  // In reset mode (stopped, or bus-off) the buffer's addresses are the acceptance registers.
+  return (chip_.read(MOD) & MOD_RM) == 0 && (chip_.read(SR) & SR_TBS) != 0;
 }
 
 void Sja1000Node::load(const TxFrame& tx) {

@@ -339,6 +339,8 @@ uint32_t RingWriter::threshold() const {
 
 bool RingReader::arm_unless_filled() {
   own_.arm();
+  // The store above must be visible before the position is read below (a store-load pair).
+  std::atomic_thread_fence(std::memory_order_seq_cst);
   // A put between the last read and arm() did not write the eventfd: look once more.
   if (fill_count() > 0 || corrupted_) {
     own_.disarm();

@@ -6,6 +6,7 @@
 
 #include <deque>
 
+#include "canemu/firmware_model/fault_plan.hpp"
 #include "test_controller.hpp"
 
 namespace canemu::model {
@@ -203,6 +204,70 @@ TEST(Sja1000Node, AStoppedNodeIsReusedWithClearedCountersAndStatistics) {
   b.run_until(100 * kBit + 2'000'000 + 50 * kBit);
   ASSERT_EQ(r.log.received.size(), 2u);
   EXPECT_EQ(r.log.received[1].at, 100 * kBit + 2'000'000 + 50 * kBit);
+}
+
+// A single-shot frame whose bit error takes the node bus-off: the chip is in reset mode when the
+// frame is given up, so the driver must not load the next frame (its registers would land in the
+// acceptance filter); it loads it once the node is back.
+TEST(Sja1000Node, AFrameQueuedThroughBusOffGoesOutAfterRecovery) {
+  Bus b;
+  Station a(b), r(b);
+  a.start(false, 1'000'000);
+  r.start();
+  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
+  a.node.chip().write(sja1000::TXERR, 248);
+  a.node.chip().write(sja1000::MOD, 0);
+  FaultRule rule;
+  rule.match.transmitter = a.node.node();
+  rule.fault.error = CanErrorType::bit;
+  rule.count = 1;
+  b.plan.add(rule);
+  a.queue.push_back(TxFrame{kZero, true, false});  // single shot: hit, bus-off, dropped
+  a.queue.push_back(TxFrame{k123, false, false});  // waits through bus-off
+  a.node.kick();
+  b.run_until(200 * kBit);
+  ASSERT_EQ(a.log.dropped.size(), 1u);
+  EXPECT_TRUE(a.node.chip().confinement().bus_off());
+  EXPECT_EQ(a.queue.size(), 1u);  // not taken while the chip is in reset mode
+  b.run_until(10'000'000);
+  ASSERT_EQ(r.log.received.size(), 1u);
+  EXPECT_EQ(r.log.received[0].frame, k123);
+  // The acceptance filter still takes everything: a receives r's frame.
+  r.send(kZero);
+  b.run_until(11'000'000);
+  ASSERT_FALSE(a.log.received.empty());
+  EXPECT_EQ(a.log.received.back().frame, kZero);
+}
+
+// A node stopped while bus-off with a request held in its buffer (the SJA1000 keeps it through
+// bus-off): the next user gets a clean chip, not the old frame.
+TEST(Sja1000Node, AReusedNodeDoesNotSendTheLastUsersFrame) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
+  a.node.chip().write(sja1000::TXERR, 248);
+  a.node.chip().write(sja1000::MOD, 0);
+  FaultRule rule;
+  rule.match.transmitter = a.node.node();
+  rule.fault.error = CanErrorType::bit;
+  rule.count = 1;
+  b.plan.add(rule);
+  a.send(kZero);
+  b.run_until(200 * kBit);
+  ASSERT_TRUE(a.node.chip().confinement().bus_off());
+  EXPECT_EQ(a.node.chip().read(sja1000::SR) & sja1000::SR_TBS, 0);  // the request is held
+  a.node.stop();
+  a.log = Log{};
+  a.start();
+  b.run_until(1'000'000);
+  EXPECT_TRUE(a.log.sent.empty());
+  EXPECT_TRUE(r.log.received.empty());
+  a.send(k123);
+  b.run_until(2'000'000);
+  ASSERT_EQ(r.log.received.size(), 1u);
+  EXPECT_EQ(r.log.received[0].frame, k123);
 }
 
 TEST(Sja1000Node, AStoppedNodeTakesNoPartOnTheBus) {

@@ -68,6 +68,28 @@ TEST(Sja1000, StartsInResetModeWithTheDatasheetResetValues) {
   EXPECT_FALSE(c.participating());
 }
 
+TEST(Sja1000, AHardwareResetRestoresTheResetValues) {
+  Bus b;
+  Chip a;
+  a.chip.connect(b.bus);
+  a.start();
+  a.chip.write(MOD, MOD_RM);
+  a.chip.write(EWLR, 10);
+  a.chip.write(TXERR, 200);
+  a.chip.write(ACR0, 0x12);
+  a.chip.write(AMR0, 0x00);
+  a.chip.hardware_reset();
+  EXPECT_EQ(a.chip.read(MOD), MOD_RM);
+  EXPECT_EQ(a.chip.read(SR), 0x3C);
+  EXPECT_EQ(a.chip.read(IER), 0x00);
+  EXPECT_EQ(a.chip.read(EWLR), 96);
+  EXPECT_EQ(a.chip.read(TXERR), 0);
+  EXPECT_EQ(a.chip.read(BTR0), 0x00);
+  EXPECT_EQ(a.chip.read(ACR0), 0x00);
+  EXPECT_EQ(a.chip.read(AMR0), 0xFF);
+  EXPECT_EQ(a.chip.confinement().state(), ErrorState::active);
+}
+
 TEST(Sja1000, TimingAndFiltersAreWritableInResetModeOnly) {
   Chip a;
   a.start();

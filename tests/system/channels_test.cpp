@@ -370,6 +370,56 @@ TEST(Channels, CorruptedRingPositionsDisconnectOnlyThatClient) {
   }
 }
 
+// A client that fills its transmit ring with nothing but junk gets it rejected a slice at a time;
+// the daemon keeps serving everyone meanwhile.
+TEST(Channels, AFloodOfJunkIsRejectedWithoutHoldingTheLoop) {
+  Daemon d;
+  auto c = connect(d);
+  auto other = connect(d, "other");
+  client::ChannelOptions o;
+  o.bus = "can0";
+  o.tx_capacity = 2000;
+  auto junk = client::Channel::open(c, o);
+  ASSERT_TRUE(junk) << junk.error().message;
+  ipc::ChannelMessage bad = frame(0x1, {});
+  bad.dlc = 16;
+  for (int i = 0; i < 2000; ++i) {
+    ASSERT_TRUE(junk->send(bad));
+  }
+  step(c, 1'000'000);
+  EXPECT_EQ(status(other).bus_count, 2);
+  uint64_t rejected = 0;
+  for (int k = 0; k < 1000 && rejected < 2000; ++k) {
+    auto st = junk->status();
+    ASSERT_TRUE(st);
+    rejected = st->tx_rejected;
+  }
+  EXPECT_EQ(rejected, 2000u);
+}
+
+// Ring memory is limited daemon-wide: the channel that would pass 256 MiB is refused.
+TEST(Channels, RingMemoryHasADaemonWideLimit) {
+  Daemon d;
+  auto c1 = connect(d, "one");
+  auto c2 = connect(d, "two");
+  client::ChannelOptions o;
+  o.bus = "can0";
+  o.rx_capacity = 65535;
+  o.tx_capacity = 65535;
+  std::vector<client::Channel> held;
+  for (int i = 0; i < 21; ++i) {  // 21 x 2 x 65535 x 96 bytes: 252 MiB
+    auto ch = client::Channel::open(i < 16 ? c1 : c2, o);
+    ASSERT_TRUE(ch) << i << ": " << ch.error().message;
+    held.push_back(std::move(*ch));
+  }
+  auto refused = client::Channel::open(c2, o);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("no_resources"), std::string::npos)
+      << refused.error().message;
+  held.pop_back();  // closing one frees its share
+  EXPECT_TRUE(client::Channel::open(c2, o));
+}
+
 // In real time nobody steps: the doorbell wakes the daemon for an idle node, the node pulls the
 // rest as it finishes each frame, and the receiver blocks until frames come.
 TEST(Channels, InRealTimeFramesFlowWithoutSteps) {

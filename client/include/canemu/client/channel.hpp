@@ -23,6 +23,7 @@ struct ChannelOptions {
   std::string bus;
   std::string device;         // empty: the daemon names it
   uint32_t bitrate = 0;       // 0: the bus's rate
+  uint32_t data_bitrate = 0;  // CAN FD buses: the data-phase rate; 0: the bus's
   uint16_t sample_point = 0;  // per mille; 0: the bus's
   uint16_t flags = 0;         // ipc::kChannel*
   uint32_t rx_capacity = 0;   // 0: 1024

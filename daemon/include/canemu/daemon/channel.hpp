@@ -95,6 +95,9 @@ class Channel final : private model::ControllerEvents {
   ChannelStats stats_;
   uint32_t lost_pending_ = 0;  // lost since the last message that made it into the ring
   bool armed_ = false;         // sleeping on the doorbell
+  // Invalid transmit elements skipped per kick before the loop gets back to other work.
+  static constexpr uint32_t kMaxRejectsPerKick = 256;
+  uint32_t rejects_left_ = kMaxRejectsPerKick;
 };
 
 // Frames and channel messages, both ways.

@@ -10,6 +10,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "canemu/daemon/channel.hpp"
 #include "canemu/daemon/config.hpp"
@@ -17,14 +18,43 @@
 
 namespace canemu::daemon {
 
+// Ring memory counted against the daemon-wide limit while a channel lives.
+class RingBudget {
+ public:
+  RingBudget() = default;
+  RingBudget(std::size_t* in_use, std::size_t bytes) : in_use_(in_use), bytes_(bytes) {
+    *in_use_ += bytes_;
+  }
+  RingBudget(RingBudget&& o) noexcept
+      : in_use_(std::exchange(o.in_use_, nullptr)), bytes_(o.bytes_) {}
+  RingBudget& operator=(RingBudget&& o) noexcept {
+    RingBudget old(std::move(*this));
+    in_use_ = std::exchange(o.in_use_, nullptr);
+    bytes_ = o.bytes_;
+    return *this;
+  }
+  ~RingBudget() {
+    if (in_use_ != nullptr) {
+      *in_use_ -= bytes_;
+    }
+  }
+
+ private:
+  std::size_t* in_use_ = nullptr;
+  std::size_t bytes_ = 0;
+};
+
 // A channel and the ephemeral device it runs on; the device is unregistered after the channel
 // has stopped its node.
 struct SessionChannel {
+  RingBudget budget;
   Simulation::DeviceLease lease;
   std::unique_ptr<Channel> channel;
 };
 
 inline constexpr std::size_t kMaxChannelsPerClient = 16;
+// Shared memory of all channels' rings together.
+inline constexpr std::size_t kMaxRingBytes = std::size_t{256} << 20;
 
 // What the daemon knows of one client.
 struct Session {
@@ -64,6 +94,7 @@ class ControlDispatcher {
 
   Simulation& sim_;
   TimeSetting time_;
+  std::size_t ring_bytes_in_use_ = 0;
 };
 
 }  // namespace canemu::daemon

@@ -67,7 +67,8 @@ class HostedNode : private ControllerEvents {
   ControllerEvents* events() { return this; }
 
   // --- what differs per chip ---
-  // Counters cleared, timing and acceptance programmed, still off the bus.
+  // Everything the last user left dropped, counters cleared, timing and acceptance programmed,
+  // still off the bus.
   virtual void program(const HostedNodeSettings& settings) = 0;
   virtual void go_on_bus(const HostedNodeSettings& settings) = 0;
   virtual void go_off_bus() = 0;

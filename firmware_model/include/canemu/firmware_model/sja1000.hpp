@@ -106,6 +106,10 @@ class Sja1000 final : public CanController {
 
   // Puts the chip on `bus`. It starts in reset mode, as after a hardware reset.
   void connect(CanBus& bus);
+  // The RST pin: every register back to its reset value, counters cleared, the transmit request
+  // and the receive FIFO dropped, reset mode (a frame already on the wire completes without
+  // retransmission; its outcome was fixed at its start of frame).
+  void hardware_reset();
   NodeId node() const { return node_; }
 
   // Register access (PeliCAN addresses 0..127). Reading IR clears it (but RI), reading ALC and

@@ -9,14 +9,14 @@
 #include <benchmark/benchmark.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
+
 #include <time.h>
+#include "canemu/ipc/clock.hpp"
 
 namespace canemu::bench {
 
 inline int64_t now_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+  return ipc::monotonic_ns();
 }
 
 // Sleeps `ns` with 1 ns timer slack (the default 50 us slack would dominate short sleeps).

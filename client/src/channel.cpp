@@ -1,18 +1,12 @@
 #include "canemu/client/channel.hpp"
 
-#include <time.h>
-
 #include <fmt/format.h>
+
+#include "canemu/ipc/clock.hpp"
 
 namespace canemu::client {
 
 namespace {
-
-int64_t now_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
 
 // Calls `attempt` until it succeeds or `spin_ns` has passed (the clock is read every 64 tries).
 template <class Attempt>
@@ -20,12 +14,12 @@ bool spin(int64_t spin_ns, Attempt attempt) {
   if (spin_ns <= 0) {
     return false;
   }
-  const int64_t until = now_ns() + spin_ns;
+  const int64_t until = ipc::monotonic_ns() + spin_ns;
   for (uint32_t k = 1;; ++k) {
     if (attempt()) {
       return true;
     }
-    if (k % 64 == 0 && now_ns() >= until) {
+    if (k % 64 == 0 && ipc::monotonic_ns() >= until) {
       return false;
     }
   }

@@ -19,15 +19,13 @@
 #include <fmt/format.h>
 #include <systemd/sd-daemon.h>
 
+#include "canemu/ipc/clock.hpp"
+
 namespace canemu::daemon {
 
 namespace {
 
-int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
+using ipc::monotonic_ns;
 
 ipc::IpcError sys(const std::string& what) {
   const int e = errno;

@@ -1,5 +1,7 @@
 #include "canemu/ipc/shm_ring.hpp"
 
+#include "canemu/ipc/clock.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -194,9 +196,7 @@ bool RingEvent::wait(int timeout_ms) const {
   if (flag->exchange(0, std::memory_order_acq_rel) != 0) {
     return true;
   }
-  timespec start{};
-  clock_gettime(CLOCK_MONOTONIC, &start);
-  const int64_t start_ms = int64_t{start.tv_sec} * 1000 + start.tv_nsec / 1'000'000;
+  const int64_t start_ms = monotonic_ns() / 1'000'000;
   while (true) {
     waiting->store(1, std::memory_order_seq_cst);
     if (flag->exchange(0, std::memory_order_seq_cst) != 0) {
@@ -205,9 +205,7 @@ bool RingEvent::wait(int timeout_ms) const {
     }
     int left = -1;
     if (timeout_ms >= 0) {
-      timespec now{};
-      clock_gettime(CLOCK_MONOTONIC, &now);
-      const int64_t elapsed = int64_t{now.tv_sec} * 1000 + now.tv_nsec / 1'000'000 - start_ms;
+      const int64_t elapsed = monotonic_ns() / 1'000'000 - start_ms;
       left = static_cast<int>(std::max<int64_t>(0, timeout_ms - elapsed));
     }
     pollfd p{eventfd, POLLIN, 0};

@@ -4,10 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include <deque>
-
 #include "canemu/firmware_model/wire_encoding.hpp"
-#include "test_controller.hpp"
+#include "hosted_station.hpp"
 
 namespace canemu::model {
 namespace {
@@ -19,37 +17,15 @@ const BitTiming kNominal{5'000'000, 1, 7, 2, 1, 1};
 const BitTiming kData{20'000'000, 1, 7, 2, 1, 1};
 constexpr int64_t kBit = 2000;
 
-struct Log : ControllerEvents {
-  std::vector<std::pair<int64_t, Frame>> received;
-  std::vector<int64_t> sent;
-  std::vector<std::pair<int64_t, ErrorState>> states;
-  void frame_received(SimTime at, const Frame& f, bool) override {
-    received.emplace_back(at.ns(), f);
-  }
-  void frame_transmitted(SimTime at, const Frame&) override { sent.push_back(at.ns()); }
-  void state_changed(SimTime at, ErrorState s, uint16_t, uint16_t) override {
-    states.emplace_back(at.ns(), s);
-  }
-};
-
-struct Station {
-  CanFdNode node;
-  Log log;
-  std::deque<TxFrame> queue;
-  explicit Station(Bus& b) : node(b.sched, b.bus) {}
+// A CAN FD node with its own queue and log.
+struct Station : testing::Station<CanFdNode> {
+  using testing::Station<CanFdNode>::Station;
   void start(int64_t restart_ns = 0) {
     HostedNodeSettings s;
     s.nominal = kNominal;
     s.data = kData;
     s.restart_delay = SimDuration(restart_ns);
-    node.start(s, &log, [this]() -> std::optional<TxFrame> {
-      if (queue.empty()) {
-        return std::nullopt;
-      }
-      TxFrame f = queue.front();
-      queue.pop_front();
-      return f;
-    });
+    testing::Station<CanFdNode>::start(s);
   }
 };
 
@@ -77,9 +53,13 @@ TEST(CanFdNode, SendsFdFramesWithTheRateSwitchOneAfterTheOther) {
   const int64_t gap = 3 * kBit;  // intermission
   const int64_t second = first + gap + frame_duration(encode(small), kNominal, kData).ns();
   ASSERT_EQ(r.log.received.size(), 2u);
-  EXPECT_EQ(r.log.received[0], std::make_pair(first, big));
-  EXPECT_EQ(r.log.received[1], std::make_pair(second, small));
-  EXPECT_EQ(a.log.sent, (std::vector<int64_t>{first, second}));
+  EXPECT_EQ(r.log.received[0].at, first);
+  EXPECT_EQ(r.log.received[0].frame, big);
+  EXPECT_EQ(r.log.received[1].at, second);
+  EXPECT_EQ(r.log.received[1].frame, small);
+  ASSERT_EQ(a.log.sent.size(), 2u);
+  EXPECT_EQ(a.log.sent[0].at, first);
+  EXPECT_EQ(a.log.sent[1].at, second);
   EXPECT_EQ(r.node.chip().rx_queued(), 0u);  // taken out at once
 }
 

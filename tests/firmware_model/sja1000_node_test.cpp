@@ -4,10 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include <deque>
-
 #include "canemu/firmware_model/fault_plan.hpp"
-#include "test_controller.hpp"
+#include "hosted_station.hpp"
 
 namespace canemu::model {
 namespace {
@@ -17,59 +15,32 @@ using testing::kBit;
 using testing::kZero;
 using Bus = testing::BusFixture;
 
-// What a node's sink saw.
-struct Log : ControllerEvents {
-  struct Item {
-    int64_t at;
-    Frame frame;
-    bool own;
-  };
-  std::vector<Item> received;
-  std::vector<Item> sent;
-  std::vector<int64_t> dropped;
-  std::vector<BusErrorEvent> errors;
-  std::vector<std::pair<int64_t, ErrorState>> states;
-  void frame_received(SimTime at, const Frame& f, bool own) override {
-    received.push_back({at.ns(), f, own});
-  }
-  void frame_transmitted(SimTime at, const Frame& f) override {
-    sent.push_back({at.ns(), f, false});
-  }
-  void transmission_dropped(SimTime at, const Frame&) override { dropped.push_back(at.ns()); }
-  void bus_error(const BusErrorEvent& e) override { errors.push_back(e); }
-  void state_changed(SimTime at, ErrorState s, uint16_t, uint16_t) override {
-    states.emplace_back(at.ns(), s);
-  }
-};
+using Log = testing::NodeLog;
 
-// A node with its own queue and log, at 500 kbit/s.
-struct Station {
-  Sja1000Node node;
-  Log log;
-  std::deque<TxFrame> queue;
-  int pulls = 0;
-  explicit Station(Bus& b) : node(b.sched, b.bus) {}
+// An SJA1000 node with its own queue and log, at 500 kbit/s.
+struct Station : testing::Station<Sja1000Node> {
+  using testing::Station<Sja1000Node>::Station;
   void start(bool listen_only = false, int64_t restart_ns = 0) {
     HostedNodeSettings s;
     s.btr0 = 0x00;
     s.btr1 = 0x1C;
     s.listen_only = listen_only;
     s.restart_delay = SimDuration(restart_ns);
-    node.start(s, &log, [this]() -> std::optional<TxFrame> {
-      ++pulls;
-      if (queue.empty()) {
-        return std::nullopt;
-      }
-      TxFrame f = queue.front();
-      queue.pop_front();
-      return f;
-    });
-  }
-  void send(const Frame& f, bool single_shot = false, bool self_reception = false) {
-    queue.push_back(TxFrame{f, single_shot, self_reception});
-    node.kick();
+    testing::Station<Sja1000Node>::start(s);
   }
 };
+
+// TEC at 248 and one bit error planned on the node's next frame: that frame takes it bus-off.
+void one_error_from_bus_off(Bus& b, Station& a) {
+  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
+  a.node.chip().write(sja1000::TXERR, 248);
+  a.node.chip().write(sja1000::MOD, 0);
+  FaultRule rule;
+  rule.match.transmitter = a.node.node();
+  rule.fault.error = CanErrorType::bit;
+  rule.count = 1;
+  b.plan.add(rule);
+}
 
 TEST(Sja1000Node, PullsFramesAsTheTransmitBufferFreesAndEmptiesTheReceiveFifo) {
   Bus b;
@@ -214,14 +185,7 @@ TEST(Sja1000Node, AFrameQueuedThroughBusOffGoesOutAfterRecovery) {
   Station a(b), r(b);
   a.start(false, 1'000'000);
   r.start();
-  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
-  a.node.chip().write(sja1000::TXERR, 248);
-  a.node.chip().write(sja1000::MOD, 0);
-  FaultRule rule;
-  rule.match.transmitter = a.node.node();
-  rule.fault.error = CanErrorType::bit;
-  rule.count = 1;
-  b.plan.add(rule);
+  one_error_from_bus_off(b, a);
   a.queue.push_back(TxFrame{kZero, true, false});  // single shot: hit, bus-off, dropped
   a.queue.push_back(TxFrame{k123, false, false});  // waits through bus-off
   a.node.kick();
@@ -246,14 +210,7 @@ TEST(Sja1000Node, AReusedNodeDoesNotSendTheLastUsersFrame) {
   Station a(b), r(b);
   a.start();
   r.start();
-  a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
-  a.node.chip().write(sja1000::TXERR, 248);
-  a.node.chip().write(sja1000::MOD, 0);
-  FaultRule rule;
-  rule.match.transmitter = a.node.node();
-  rule.fault.error = CanErrorType::bit;
-  rule.count = 1;
-  b.plan.add(rule);
+  one_error_from_bus_off(b, a);
   a.send(kZero);
   b.run_until(200 * kBit);
   ASSERT_TRUE(a.node.chip().confinement().bus_off());

@@ -1,0 +1,61 @@
+// A hosted node (hosted_node.hpp) for tests: its own transmit queue, and a log of everything its
+// sink was told, with the instants in ns.
+#pragma once
+
+#include <deque>
+#include <vector>
+
+#include "canemu/firmware_model/hosted_node.hpp"
+#include "test_controller.hpp"
+
+namespace canemu::model::testing {
+
+struct NodeLog : ControllerEvents {
+  struct Item {
+    int64_t at;
+    Frame frame;
+    bool own;
+  };
+  std::vector<Item> received;
+  std::vector<Item> sent;
+  std::vector<int64_t> dropped;
+  std::vector<BusErrorEvent> errors;
+  std::vector<std::pair<int64_t, ErrorState>> states;
+  void frame_received(SimTime at, const Frame& f, bool own) override {
+    received.push_back({at.ns(), f, own});
+  }
+  void frame_transmitted(SimTime at, const Frame& f) override {
+    sent.push_back({at.ns(), f, false});
+  }
+  void transmission_dropped(SimTime at, const Frame&) override { dropped.push_back(at.ns()); }
+  void bus_error(const BusErrorEvent& e) override { errors.push_back(e); }
+  void state_changed(SimTime at, ErrorState s, uint16_t, uint16_t) override {
+    states.emplace_back(at.ns(), s);
+  }
+};
+
+template <class Node>
+struct Station {
+  Node node;
+  NodeLog log;
+  std::deque<TxFrame> queue;
+  int pulls = 0;  // how often the node asked the queue for a frame
+  explicit Station(BusFixture& b) : node(b.sched, b.bus) {}
+  void start(const HostedNodeSettings& s) {
+    node.start(s, &log, [this]() -> std::optional<TxFrame> {
+      ++pulls;
+      if (queue.empty()) {
+        return std::nullopt;
+      }
+      TxFrame f = queue.front();
+      queue.pop_front();
+      return f;
+    });
+  }
+  void send(const Frame& f, bool single_shot = false, bool self_reception = false) {
+    queue.push_back(TxFrame{f, single_shot, self_reception});
+    node.kick();
+  }
+};
+
+}  // namespace canemu::model::testing

@@ -13,6 +13,7 @@
 #include "canemu/client/channel.hpp"
 #include "canemu/client/connection.hpp"
 #include "canemu/daemon/channel.hpp"
+#include "canemu/daemon/config.hpp"
 #include "canemu/daemon/frame_text.hpp"
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
 #include "canemu/firmware_model/wire_encoding.hpp"
@@ -31,29 +32,10 @@ int fail(const std::string& message) {
   return 1;
 }
 
+// A positive duration for the command line (see daemon::parse_duration).
 std::optional<int64_t> parse_duration(const std::string& text) {
-  std::size_t i = 0;
-  int dots = 0;
-  bool digits = false;
-  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.')) {
-    dots += text[i] == '.';
-    digits = digits || text[i] != '.';
-    ++i;
-  }
-  if (!digits || dots > 1) {
-    return std::nullopt;
-  }
-  const double value = std::stod(text.substr(0, i));
-  const std::string unit = text.substr(i);
-  const double scale = unit == "ns"   ? 1
-                       : unit == "us" ? 1e3
-                       : unit == "ms" ? 1e6
-                       : unit == "s"  ? 1e9
-                                      : 0;
-  if (scale == 0 || value <= 0 || value * scale > 9.0e18) {
-    return std::nullopt;
-  }
-  return static_cast<int64_t>(value * scale + 0.5);
+  const auto ns = daemon::parse_duration(text);
+  return ns && *ns > 0 ? ns : std::nullopt;
 }
 
 int cmd_status(const std::string& socket, bool json) {

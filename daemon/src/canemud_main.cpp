@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/scenario.hpp"
 #include "canemu/daemon/server.hpp"
 #include "canemu/daemon/simulation.hpp"
 
@@ -55,8 +56,27 @@ int main(int argc, char** argv) {
     }
     return 1;
   }
+  // Fault scenarios of the configuration, applied from time 0.
+  std::string scenarios;
+  for (const std::string& scenario_file : config->scenario_files) {
+    auto scenario = load_scenario_file(scenario_file);
+    auto applied =
+        scenario ? (*sim)->apply_scenario(*scenario, canemu::model::SimTime{})
+                 : tl::expected<void, std::vector<std::string>>(tl::unexpected(scenario.error()));
+    if (!applied) {
+      for (const std::string& e : applied.error()) {
+        std::fprintf(stderr, "%s\n", e.c_str());
+      }
+      std::fprintf(stderr, "canemud: scenario %s rejected; nothing of it applied\n",
+                   scenario_file.c_str());
+      return 1;
+    }
+    scenarios += fmt::format("  scenario \"{}\" ({}): {} fault{}\n", scenario->name, scenario_file,
+                             scenario->faults.size(), scenario->faults.size() == 1 ? "" : "s");
+  }
   if (checking) {
     std::fputs(summary(*config).c_str(), stdout);
+    std::fputs(scenarios.c_str(), stdout);
     std::fputs("configuration OK\n", stdout);
     return 0;
   }
@@ -67,6 +87,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::fputs(summary(*config).c_str(), stderr);
+  std::fputs(scenarios.c_str(), stderr);
+  (*sim)->on_fault_log = [](const std::string& line) {
+    std::fprintf(stderr, "<6>canemud: fault: %s\n", line.c_str());
+  };
   std::fprintf(stderr, "<6>canemud: listening on %s\n", server.socket_path().c_str());
   std::fprintf(stderr, "<6>canemud: try: CANEMU_SOCKET=%s build/bin/canemu status\n",
                server.socket_path().c_str());

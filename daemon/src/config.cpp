@@ -1,6 +1,7 @@
 #include "canemu/daemon/config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <fstream>
 #include <initializer_list>
@@ -11,6 +12,8 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "toml_checker.hpp"
+
 namespace canemu::daemon {
 
 namespace detail {
@@ -19,197 +22,15 @@ std::string_view default_config_text();  // generated from config/default.toml
 
 namespace {
 
-template <typename E>
-struct NamedValue {
-  E value;
-  std::string_view name;
-};
+using detail::Checker;
+using detail::name_of;
+using detail::NamedValue;
 
 constexpr NamedValue<BusKind> kBusKinds[] = {
     {BusKind::can, "can"}, {BusKind::can_fd, "can-fd"}, {BusKind::lin, "lin"}};
 constexpr NamedValue<DeviceModel> kDeviceModels[] = {
     {DeviceModel::ixxat_usb_to_can, "ixxat-usb-to-can"},
     {DeviceModel::ixxat_usb_to_can_fd, "ixxat-usb-to-can-fd"}};
-
-template <typename E, std::size_t N>
-std::string_view name_of(E value, const NamedValue<E> (&table)[N]) {
-  for (const auto& c : table) {
-    if (c.value == value) {
-      return c.name;
-    }
-  }
-  return "?";
-}
-
-// Collects every problem with its place; nothing is applied unless there are none.
-class Checker {
- public:
-  explicit Checker(std::string file) : file_(std::move(file)) {}
-
-  void error(const toml::source_region& where, std::string_view key, std::string_view what) {
-    errors_.push_back(
-        fmt::format("{}:{}:{}: {}: {}", file_, where.begin.line, where.begin.column, key, what));
-  }
-  void error(const toml::node& node, std::string_view key, std::string_view what) {
-    error(node.source(), key, what);
-  }
-
-  void only_keys(const toml::table& table, std::string_view path,
-                 std::initializer_list<std::string_view> allowed) {
-    for (const auto& [k, v] : table) {
-      if (std::find(allowed.begin(), allowed.end(), k.str()) == allowed.end()) {
-        std::string known;
-        for (auto a : allowed) {
-          known += known.empty() ? std::string(a) : ", " + std::string(a);
-        }
-        (void)v;
-        error(k.source(), key(path, k.str()), fmt::format("unknown key (known here: {})", known));
-      }
-    }
-  }
-
-  std::optional<std::string> string(const toml::table& t, std::string_view path,
-                                    std::string_view name, bool required) {
-    const toml::node* n = t.get(name);
-    if (n == nullptr) {
-      if (required) {
-        error(t.source(), key(path, name), "missing (a string is required)");
-      }
-      return std::nullopt;
-    }
-    if (!n->is_string()) {
-      error(*n, key(path, name), "must be a string");
-      return std::nullopt;
-    }
-    return std::string(n->as_string()->get());
-  }
-
-  std::optional<int64_t> integer(const toml::table& t, std::string_view path, std::string_view name,
-                                 bool required, int64_t lo, int64_t hi) {
-    const toml::node* n = t.get(name);
-    if (n == nullptr) {
-      if (required) {
-        error(t.source(), key(path, name), "missing (an integer is required)");
-      }
-      return std::nullopt;
-    }
-    if (!n->is_integer()) {
-      error(*n, key(path, name), "must be an integer");
-      return std::nullopt;
-    }
-    const int64_t v = n->as_integer()->get();
-    if (v < lo || v > hi) {
-      error(*n, key(path, name), fmt::format("{} is outside {}..{}", v, lo, hi));
-      return std::nullopt;
-    }
-    return v;
-  }
-
-  std::optional<double> number(const toml::table& t, std::string_view path, std::string_view name) {
-    const toml::node* n = t.get(name);
-    if (n == nullptr) {
-      return std::nullopt;
-    }
-    if (n->is_floating_point()) {
-      return n->as_floating_point()->get();
-    }
-    if (n->is_integer()) {
-      return static_cast<double>(n->as_integer()->get());
-    }
-    error(*n, key(path, name), "must be a number");
-    return std::nullopt;
-  }
-
-  std::optional<std::vector<std::string>> strings(const toml::table& t, std::string_view path,
-                                                  std::string_view name) {
-    const toml::node* n = t.get(name);
-    if (n == nullptr) {
-      return std::nullopt;
-    }
-    const toml::array* a = n->as_array();
-    if (a == nullptr) {
-      error(*n, key(path, name), "must be an array of strings");
-      return std::nullopt;
-    }
-    std::vector<std::string> out;
-    for (const toml::node& e : *a) {
-      if (!e.is_string()) {
-        error(e, key(path, name), "must be an array of strings");
-        return std::nullopt;
-      }
-      out.emplace_back(e.as_string()->get());
-    }
-    return out;
-  }
-
-  // The table `name` of the root, or nullptr when it is absent or (reported) not a table.
-  const toml::table* section(const toml::table& root, std::string_view name) {
-    const toml::node* n = root.get(name);
-    if (n == nullptr) {
-      return nullptr;
-    }
-    if (n->as_table() == nullptr) {
-      error(*n, name, "must be a table");
-    }
-    return n->as_table();
-  }
-
-  // Calls each(table, path) for every table of the array of tables `name` ([[name]]) of the root.
-  template <typename Each>
-  void for_each_table(const toml::table& root, std::string_view name, Each each) {
-    const toml::node* n = root.get(name);
-    if (n == nullptr) {
-      return;
-    }
-    const toml::array* a = n->as_array();
-    if (a == nullptr) {
-      error(*n, name, fmt::format("must be an array of tables ([[{}]])", name));
-      return;
-    }
-    for (std::size_t i = 0; i < a->size(); ++i) {
-      const toml::node& e = *a->get(i);
-      const std::string path = fmt::format("{}[{}]", name, i);
-      if (const toml::table* t = e.as_table()) {
-        each(*t, path);
-      } else {
-        error(e, path, "must be a table");
-      }
-    }
-  }
-
-  // A string key whose value must be one of the names of `choices`.
-  template <typename E, std::size_t N>
-  std::optional<E> choice(const toml::table& t, std::string_view path, std::string_view name,
-                          bool required, const NamedValue<E> (&choices)[N], std::string_view what) {
-    auto text = string(t, path, name, required);
-    if (!text) {
-      return std::nullopt;
-    }
-    for (const auto& c : choices) {
-      if (c.name == *text) {
-        return c.value;
-      }
-    }
-    std::string known;
-    for (const auto& c : choices) {
-      known += known.empty() ? std::string(c.name) : ", " + std::string(c.name);
-    }
-    error(*t.get(name), key(path, name),
-          fmt::format("\"{}\" is not a {} ({})", *text, what, known));
-    return std::nullopt;
-  }
-
-  static std::string key(std::string_view path, std::string_view name) {
-    return path.empty() ? std::string(name) : fmt::format("{}.{}", path, name);
-  }
-
-  ConfigErrors& errors() { return errors_; }
-  const std::string& file() const { return file_; }
-
- private:
-  std::string file_;
-  ConfigErrors errors_;
-};
 
 // The required key "name" of a [[bus]] or [[device]] table: valid, and unique among `names`.
 std::optional<std::string> read_name(Checker& c, const toml::table& t, const std::string& path,
@@ -372,6 +193,35 @@ tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text)
       fmt::format("\"{}\" is not a time mode (realtime, stepped, scaled:F)", text));
 }
 
+std::optional<int64_t> parse_duration(std::string_view text) {
+  std::size_t i = 0;
+  int dots = 0;
+  bool digits = false;
+  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.')) {
+    dots += text[i] == '.';
+    digits = digits || text[i] != '.';
+    ++i;
+  }
+  if (!digits || dots > 1) {
+    return std::nullopt;
+  }
+  double value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + i, value);
+  if (ec != std::errc{} || end != text.data() + i) {
+    return std::nullopt;
+  }
+  const std::string_view unit = text.substr(i);
+  const double scale = unit == "ns"   ? 1
+                       : unit == "us" ? 1e3
+                       : unit == "ms" ? 1e6
+                       : unit == "s"  ? 1e9
+                                      : 0;
+  if (scale == 0 || value * scale > 9.0e18) {
+    return std::nullopt;
+  }
+  return static_cast<int64_t>(value * scale + 0.5);
+}
+
 bool valid_name(std::string_view s) {
   return !s.empty() && s.size() <= 28 && std::all_of(s.begin(), s.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
@@ -410,11 +260,20 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   }
   Config cfg;
   cfg.source = std::move(source);
-  c.only_keys(root, "", {"simulation", "security", "bus", "device"});
+  c.only_keys(root, "", {"simulation", "security", "bus", "device", "scenario"});
   read_simulation(c, root, cfg);
   read_security(c, root, cfg);
   read_buses(c, root, cfg);
   read_devices(c, root, cfg);
+  c.for_each_table(root, "scenario", [&](const toml::table& t, const std::string& path) {
+    c.only_keys(t, path, {"file"});
+    if (auto file = c.string(t, path, "file", true)) {
+      const std::size_t slash = cfg.source.find_last_of('/');
+      const bool relative = !file->empty() && (*file)[0] != '/';
+      cfg.scenario_files.push_back(
+          relative && slash != std::string::npos ? cfg.source.substr(0, slash + 1) + *file : *file);
+    }
+  });
   std::size_t controllers = 0;
   for (const DeviceConfig& d : cfg.devices) {
     controllers += d.controllers.size();

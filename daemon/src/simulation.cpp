@@ -89,8 +89,187 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
 }
 
 void Simulation::add_bus(const BusConfig& b) {
-  buses_.push_back(Bus{std::make_unique<CanBus>(scheduler_, b.name)});
+  buses_.push_back(
+      Bus{std::make_unique<CanBus>(scheduler_, b.name), std::make_unique<FaultPlan>()});
+  buses_.back().bus->set_injector(buses_.back().faults.get());
   pools_.emplace_back();
+}
+
+std::optional<Simulation::NodeRef> Simulation::find_node(std::string_view name) {
+  for (Controller& c : controllers_) {
+    if (c.name == name) {
+      return NodeRef{c.bus, c.node, &c.controller()};
+    }
+  }
+  for (const Ephemeral& e : ephemeral_) {
+    if (e.name == name || e.name + ":0" == name) {
+      return NodeRef{e.bus, e.node->node(), &e.node->controller()};
+    }
+  }
+  return std::nullopt;
+}
+
+void Simulation::fault_log(const std::string& text) {
+  if (on_fault_log) {
+    on_fault_log(
+        fmt::format("t={:.9f} s: {}", static_cast<double>(scheduler_.now().ns()) / 1e9, text));
+  }
+}
+
+tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Scenario& s,
+                                                                        SimTime start) {
+  // Resolve everything first: all or nothing.
+  struct Resolved {
+    const FaultSpec* spec;
+    std::size_t bus = 0;
+    std::optional<NodeRef> node;  // node effects; frame effects with match.from
+  };
+  std::vector<Resolved> plan;
+  std::vector<std::string> errors;
+  for (const FaultSpec& f : s.faults) {
+    Resolved r{&f, 0, std::nullopt};
+    const auto where = [&](std::string_view what) {
+      errors.push_back(fmt::format("{}:{}: {}: {}", s.source, f.line, to_string(f.effect), what));
+    };
+    if (!f.bus.empty()) {
+      if (auto b = bus_index(f.bus)) {
+        r.bus = *b;
+        if (config_.buses[*b].kind == BusKind::lin) {
+          where(fmt::format("bus {} is a LIN bus; CAN faults need a CAN bus", f.bus));
+          continue;
+        }
+      } else {
+        where(fmt::format("no bus named \"{}\"", f.bus));
+        continue;
+      }
+    }
+    const std::string& node_name = !f.node.empty() ? f.node : f.match.from;
+    if (!node_name.empty()) {
+      r.node = find_node(node_name);
+      if (!r.node) {
+        where(fmt::format("no node named \"{}\" (configured nodes are DEVICE:N)", node_name));
+        continue;
+      }
+      if (!f.bus.empty() && r.node->bus != r.bus) {
+        where(fmt::format("node {} is not on bus {}", node_name, f.bus));
+        continue;
+      }
+      r.bus = r.node->bus;
+    }
+    plan.push_back(r);
+  }
+  if (!errors.empty()) {
+    return tl::unexpected(errors);
+  }
+  const uint64_t seed = s.seed.value_or(config_.simulation.seed);
+  // A fault due now takes effect at once (before any frame that starts now); later ones when due.
+  const auto when = [this](SimTime at, std::function<void()> fire) {
+    if (at <= scheduler_.now()) {
+      fire();
+    } else {
+      scheduler_.schedule_at(at, [fire = std::move(fire)](SimTime) { fire(); });
+    }
+  };
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    const FaultSpec& f = *plan[k].spec;
+    const std::size_t bus = plan[k].bus;
+    CanBus& b = *buses_[bus].bus;
+    const SimTime at = start + SimDuration(f.at_ns);
+    const std::string what =
+        fmt::format("scenario \"{}\" line {}: {}", s.name, f.line, to_string(f.effect));
+    switch (f.effect) {
+      case FaultEffect::bit_error:
+      case FaultEffect::stuff_error:
+      case FaultEffect::form_error:
+      case FaultEffect::crc_error:
+      case FaultEffect::ack_error: {
+        FaultRule rule;
+        if (plan[k].node) {
+          rule.match.transmitter = plan[k].node->node;
+        }
+        rule.match.id = f.match.id;
+        rule.match.mask = f.match.mask;
+        rule.match.extended = f.match.ext;
+        rule.match.remote = f.match.rtr;
+        if (f.effect == FaultEffect::ack_error) {
+          rule.fault.suppress_ack = true;
+        } else {
+          rule.fault.error = f.effect == FaultEffect::bit_error     ? CanErrorType::bit
+                             : f.effect == FaultEffect::stuff_error ? CanErrorType::stuff
+                             : f.effect == FaultEffect::form_error  ? CanErrorType::form
+                                                                    : CanErrorType::crc;
+          rule.fault.bit = f.bit;
+        }
+        rule.count = f.count;
+        rule.from = at;
+        if (f.until_ns) {
+          rule.until = start + SimDuration(*f.until_ns);
+        }
+        rule.probability = f.probability;
+        rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;  // each fault its own draws
+        buses_[bus].faults->add(rule);
+        break;
+      }
+      case FaultEffect::ack_suppress: {
+        const SimTime until = at + SimDuration(f.duration_ns);
+        when(at, [this, &b, until, what] {
+          b.suppress_acks_until(until);
+          fault_log(what);
+        });
+        break;
+      }
+      case FaultEffect::stuck_dominant:
+        b.hold_dominant(at, SimDuration(f.duration_ns));
+        when(at, [this, what] { fault_log(what); });
+        break;
+      case FaultEffect::node_off:
+      case FaultEffect::node_on: {
+        const NodeId node = plan[k].node->node;
+        const bool on = f.effect == FaultEffect::node_on;
+        when(at, [this, &b, node, on, what] {
+          b.set_connected(node, on);
+          fault_log(what);
+        });
+        if (!on && f.until_ns) {
+          when(start + SimDuration(*f.until_ns), [this, &b, node, what] {
+            b.set_connected(node, true);
+            fault_log(what + " ends");
+          });
+        }
+        break;
+      }
+      case FaultEffect::bus_off:
+      case FaultEffect::error_counters: {
+        const NodeRef n = *plan[k].node;
+        const bool off = f.effect == FaultEffect::bus_off;
+        const uint16_t tec = f.tec;
+        const uint16_t rec = f.rec;
+        when(at, [this, &b, n, off, tec, rec, what] {
+          FaultConfinement& fc = n.controller->confinement();
+          fc.set_counters(off ? kBusOffLimit : tec, off ? fc.rec() : rec);
+          b.counters_changed(n.node);
+          fault_log(what);
+        });
+        break;
+      }
+      case FaultEffect::oscillator: {
+        const NodeId node = plan[k].node->node;
+        const int32_t ppm = f.ppm;
+        when(at, [this, &b, node, ppm, what] {
+          b.set_oscillator_ppm(node, ppm);
+          fault_log(what);
+        });
+        if (f.until_ns) {
+          when(start + SimDuration(*f.until_ns), [this, &b, node, what] {
+            b.set_oscillator_ppm(node, 0);
+            fault_log(what + " ends");
+          });
+        }
+        break;
+      }
+    }
+  }
+  return {};
 }
 
 std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {

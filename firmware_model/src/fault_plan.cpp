@@ -15,10 +15,23 @@ FrameFault FaultPlan::on_frame(const FrameContext& ctx) {
     if (nth < r.skip || (r.count && r.hits >= *r.count) || chosen) {
       continue;
     }
+    // A draw only for rules that are not certain, so that certain rules leave the sequence
+    // alone.
+    if (r.probability < 1.0 && !(draw(r) < r.probability)) {
+      continue;
+    }
     r.hits++;
     chosen = r.fault;
   }
   return chosen.value_or(FrameFault{});
+}
+
+double FaultPlan::draw(FaultRule& rule) {
+  uint64_t z = (rule.rng += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
 }
 
 }  // namespace canemu::model

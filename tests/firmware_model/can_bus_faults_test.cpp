@@ -467,3 +467,37 @@ TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {
 
 }  // namespace
 }  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+// Rules with a probability draw from their own seeded generator: the same seed hits the same
+// frames, another seed others, and the share hit is near the probability.
+TEST(FaultPlanProbability, DrawsFromTheSeedAndRepeats) {
+  const Frame f = testing::k123;
+  const EncodedFrame bits = encode(f);
+  auto hits = [&](uint64_t seed) {
+    FaultPlan plan;
+    FaultRule r;
+    r.fault.error = CanErrorType::bit;
+    r.probability = 0.25;
+    r.seed = seed;
+    plan.add(r);
+    std::vector<bool> hit;
+    for (int i = 0; i < 4000; ++i) {
+      hit.push_back(plan.on_frame(FrameContext{SimTime::from_ns(i), 0, f, bits}).error.has_value());
+    }
+    EXPECT_EQ(plan.rule(0).seen, 4000u);
+    EXPECT_EQ(plan.rule(0).hits, static_cast<uint64_t>(std::count(hit.begin(), hit.end(), true)));
+    return hit;
+  };
+  const auto a = hits(7);
+  EXPECT_EQ(a, hits(7));
+  EXPECT_NE(a, hits(8));
+  const auto n = std::count(a.begin(), a.end(), true);
+  EXPECT_GT(n, 900);  // 1000 expected; 4 standard deviations is 110
+  EXPECT_LT(n, 1100);
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -193,6 +193,53 @@ TEST(Canemud, ReloadAppliesWhatItSafelyCanAndSaysWhatNot) {
   ::rmdir(dir);
 }
 
+// [[scenario]] files of the configuration are applied from time 0; a broken one stops the start
+// with its errors.
+TEST(Canemud, AppliesTheScenariosOfItsConfigurationOrRefusesToStart) {
+  char dir[] = "/tmp/canemu-scenario-XXXXXX";
+  const std::string folder = ::mkdtemp(dir);
+  const auto write = [](const std::string& file, const std::string& text) {
+    FILE* f = std::fopen(file.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  };
+  write(folder + "/canemud.toml",
+        "[[bus]]\nname = \"can0\"\n\n[[device]]\nname = \"d\"\nmodel = \"ixxat-usb-to-can\"\n"
+        "controllers = [\"can0\"]\n\n[[scenario]]\nfile = \"counters.toml\"\n");
+  write(folder + "/counters.toml",
+        "[scenario]\nname = \"warm\"\n\n[[fault]]\nat = \"0s\"\nnode = \"d:0\"\n"
+        "effect = \"error_counters\"\ntec = 100\nrec = 3\n");
+  {
+    Daemon d("stepped", {"--config=" + folder + "/canemud.toml"});
+    EXPECT_NE(d.log().find("scenario \"warm\" (" + folder + "/counters.toml): 1 fault"),
+              std::string::npos)
+        << d.log();
+    auto c = connect(d);
+    const ipc::StatusReply s = status(c);
+    ASSERT_EQ(s.node_count, 1);
+    EXPECT_EQ(s.nodes[0].tec, 100);
+    EXPECT_EQ(s.nodes[0].rec, 3);
+    EXPECT_EQ(s.nodes[0].state, static_cast<uint8_t>(ipc::WireErrorState::warning));
+  }
+  write(folder + "/counters.toml",
+        "[[fault]]\nat = \"0s\"\nnode = \"x:0\"\neffect = \"bus_off\"\n");
+  testing::CanemudProcess refused(CANEMUD_PATH, {"--config=" + folder + "/canemud.toml"});
+  EXPECT_FALSE(refused.ready());
+  EXPECT_NE(
+      refused.log().find(folder + "/counters.toml:1: bus_off: no node named \"x:0\" (configured "
+                                  "nodes are DEVICE:N)"),
+      std::string::npos)
+      << refused.log();
+  EXPECT_NE(refused.log().find("scenario " + folder +
+                               "/counters.toml rejected; nothing of it "
+                               "applied"),
+            std::string::npos);
+  ::unlink((folder + "/canemud.toml").c_str());
+  ::unlink((folder + "/counters.toml").c_str());
+  ::rmdir(dir);
+}
+
 TEST(Canemud, AClientThatAsksAndLeavesAtOnceDoesNotHurtTheDaemon) {
   Daemon d;
   auto keeper = connect(d, "keeper");

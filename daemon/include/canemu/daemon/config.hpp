@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -47,6 +48,10 @@ struct TimeSetting {
 tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text);
 std::string to_string(const TimeSetting& time);
 
+// "150ns", "20us", "10ms", "2s", "1.5ms": a duration in ns, at least 0 and at most about 285
+// years; nothing if the text is not one.
+std::optional<int64_t> parse_duration(std::string_view text);
+
 // Names of buses and devices (configured or ephemeral): 1 to 28 characters, so that "device:N"
 // fits the protocol's 32-byte names with its NUL.
 bool valid_name(std::string_view name);
@@ -71,6 +76,9 @@ struct Config {
   std::string source;  // file name, or "<embedded default>"
   SimulationConfig simulation;
   SecurityConfig security;
+  // [[scenario]] file = "...": fault scenarios applied at start, paths relative to the
+  // configuration file's folder.
+  std::vector<std::string> scenario_files;
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
 

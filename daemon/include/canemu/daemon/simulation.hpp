@@ -11,8 +11,10 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/scenario.hpp"
 #include "canemu/firmware_model/can_bus.hpp"
 #include "canemu/firmware_model/can_fd_controller.hpp"
+#include "canemu/firmware_model/fault_plan.hpp"
 #include "canemu/firmware_model/hosted_node.hpp"
 #include "canemu/firmware_model/sja1000.hpp"
 #include "canemu/ipc/protocol.hpp"
@@ -44,6 +46,14 @@ class Simulation {
 
   std::optional<std::size_t> bus_index(std::string_view name) const;
   const BusConfig& bus_config(std::size_t i) const { return config_.buses[i]; }
+
+  // Resolves the scenario's buses and nodes and applies every fault, its times counted from
+  // `start`. Nothing is applied when a name does not resolve; the errors say which, with the
+  // scenario file's line.
+  tl::expected<void, std::vector<std::string>> apply_scenario(const Scenario& scenario,
+                                                              model::SimTime start);
+  // Told when a scheduled fault fires (bus and node effects), with the simulated time.
+  std::function<void(const std::string&)> on_fault_log;
 
   // Applies what can change while running (new buses and devices, the security lists, the
   // wake-up tuning) from `fresh`, a configuration already checked, and reports the rest.
@@ -94,7 +104,16 @@ class Simulation {
   // Bus i is config_.buses[i]: both only grow, in step.
   struct Bus {
     std::unique_ptr<model::CanBus> bus;
+    std::unique_ptr<model::FaultPlan> faults;  // the bus's injector: frame faults of scenarios
   };
+  struct NodeRef {
+    std::size_t bus;
+    model::NodeId node;
+    model::CanController* controller;
+  };
+  // A configured controller ("DEVICE:N") or an ephemeral device ("NAME" or "NAME:0").
+  std::optional<NodeRef> find_node(std::string_view name);
+  void fault_log(const std::string& text);
   void add_bus(const BusConfig& b);
   // Adds a device whose buses exist; an error (and nothing added) if a controller cannot run
   // its bus's timing.

@@ -31,14 +31,18 @@ struct FaultRule {
   std::optional<uint64_t> count;  // matching frames to hit; none: every one
   SimTime from;                   // window in simulated time
   std::optional<SimTime> until;
+  double probability = 1.0;  // per matching frame, drawn from the rule's own generator
+  uint64_t seed = 1;         // of that generator: the same seed gives the same draws
 
   uint64_t seen = 0;  // matching frames so far
   uint64_t hits = 0;  // frames hit so far
+  uint64_t rng = 0;   // generator state, from `seed` when the rule is added
 };
 
 class FaultPlan final : public FaultInjector {
  public:
   std::size_t add(FaultRule rule) {
+    rule.rng = rule.seed;
     rules_.push_back(rule);
     return rules_.size() - 1;
   }
@@ -46,11 +50,13 @@ class FaultPlan final : public FaultInjector {
   std::size_t size() const { return rules_.size(); }
   void clear() { rules_.clear(); }
 
-  // The first rule that matches and still has hits left decides; every matching rule counts
-  // the frame as seen.
+  // The first rule that matches, still has hits left and wins its draw decides; every matching
+  // rule counts the frame as seen.
   FrameFault on_frame(const FrameContext& ctx) override;
 
  private:
+  static double draw(FaultRule& rule);  // uniform in [0, 1), splitmix64
+
   std::vector<FaultRule> rules_;
 };
 

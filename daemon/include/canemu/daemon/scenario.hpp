@@ -1,0 +1,72 @@
+// Fault scenarios: TOML files of timed faults (docs/faults.md). parse_scenario() checks a file
+// whole (every problem with file, line and key); Simulation::apply_scenario() resolves its bus
+// and node names and applies all of it, or none.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <tl/expected.hpp>
+
+namespace canemu::daemon {
+
+enum class FaultEffect {
+  // on matching frames
+  bit_error,
+  stuff_error,
+  form_error,
+  crc_error,
+  ack_error,
+  // on the bus
+  ack_suppress,
+  stuck_dominant,
+  // on a node
+  node_off,
+  node_on,
+  bus_off,
+  error_counters,
+  oscillator,
+};
+std::string_view to_string(FaultEffect effect);
+
+// Which frames a frame effect hits; every part optional.
+struct FaultMatch {
+  uint32_t id = 0;
+  uint32_t mask = 0;  // 0: any identifier (with `id` given and no mask: all 29 bits)
+  std::optional<bool> ext;
+  std::optional<bool> rtr;
+  std::string from;  // transmitting node ("DEVICE:N" or an ephemeral device's name)
+};
+
+struct FaultSpec {
+  uint32_t line = 0;  // in the scenario file
+  FaultEffect effect = FaultEffect::bit_error;
+  int64_t at_ns = 0;                // from the scenario's start
+  std::optional<int64_t> until_ns;  // end of the window (frame effects, node_off, oscillator)
+  std::string bus;                  // frame and bus effects
+  std::string node;                 // node effects
+  FaultMatch match;
+  std::optional<uint16_t> bit;    // frame bit (SOF = 0) where the error hits
+  std::optional<uint64_t> count;  // matching frames to hit; nothing: every one in the window
+  double probability = 1.0;       // per matching frame
+  int64_t duration_ns = 0;        // ack_suppress, stuck_dominant; node_off/oscillator: optional
+  uint16_t tec = 0;               // error_counters
+  uint16_t rec = 0;
+  int32_t ppm = 0;  // oscillator
+};
+
+struct Scenario {
+  std::string name;
+  std::string source;  // file name
+  std::optional<uint64_t> seed;
+  std::vector<FaultSpec> faults;
+};
+
+tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view text,
+                                                                const std::string& source);
+tl::expected<Scenario, std::vector<std::string>> load_scenario_file(const std::string& path);
+
+}  // namespace canemu::daemon

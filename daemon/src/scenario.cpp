@@ -1,0 +1,267 @@
+#include "canemu/daemon/scenario.hpp"
+
+#include <fstream>
+#include <sstream>
+
+#include "canemu/daemon/config.hpp"
+#include "toml_checker.hpp"
+
+namespace canemu::daemon {
+
+namespace {
+
+using detail::Checker;
+using detail::NamedValue;
+
+constexpr NamedValue<FaultEffect> kEffects[] = {
+    {FaultEffect::bit_error, "bit_error"},
+    {FaultEffect::stuff_error, "stuff_error"},
+    {FaultEffect::form_error, "form_error"},
+    {FaultEffect::crc_error, "crc_error"},
+    {FaultEffect::ack_error, "ack_error"},
+    {FaultEffect::ack_suppress, "ack_suppress"},
+    {FaultEffect::stuck_dominant, "stuck_dominant"},
+    {FaultEffect::node_off, "node_off"},
+    {FaultEffect::node_on, "node_on"},
+    {FaultEffect::bus_off, "bus_off"},
+    {FaultEffect::error_counters, "error_counters"},
+    {FaultEffect::oscillator, "oscillator"},
+};
+
+// Named by the language, not emulated yet: a scenario using them is refused with a reason.
+constexpr std::string_view kLaterEffects[] = {
+    "random_errors",    "babble",         "line_error",    "lin_no_response", "lin_checksum_error",
+    "lin_parity_error", "lin_sync_error", "lin_bit_error", "lin_wakeup"};
+
+bool is_frame_effect(FaultEffect e) {
+  return e <= FaultEffect::ack_error;
+}
+bool is_bus_effect(FaultEffect e) {
+  return e == FaultEffect::ack_suppress || e == FaultEffect::stuck_dominant;
+}
+
+// A duration key ("2s", "150ms", "20us", "10ns").
+std::optional<int64_t> duration(Checker& c, const toml::table& t, const std::string& path,
+                                std::string_view name, bool required) {
+  auto text = c.string(t, path, name, required);
+  if (!text) {
+    return std::nullopt;
+  }
+  auto ns = parse_duration(*text);
+  if (!ns) {
+    c.error(*t.get(name), Checker::key(path, name),
+            fmt::format("\"{}\" is not a duration (examples: 2s, 150ms, 20us, 10ns)", *text));
+  }
+  return ns;
+}
+
+std::optional<bool> boolean(Checker& c, const toml::table& t, const std::string& path,
+                            std::string_view name) {
+  const toml::node* n = t.get(name);
+  if (n == nullptr) {
+    return std::nullopt;
+  }
+  if (!n->is_boolean()) {
+    c.error(*n, Checker::key(path, name), "must be true or false");
+    return std::nullopt;
+  }
+  return n->as_boolean()->get();
+}
+
+void read_match(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
+  const toml::node* n = t.get("match");
+  if (n == nullptr) {
+    return;
+  }
+  const toml::table* m = n->as_table();
+  const std::string mpath = path + ".match";
+  if (m == nullptr) {
+    c.error(*n, mpath, "must be a table, e.g. { id = 0x100, mask = 0x7FF }");
+    return;
+  }
+  c.only_keys(*m, mpath, {"id", "mask", "ext", "rtr", "from"});
+  if (auto id = c.integer(*m, mpath, "id", false, 0, 0x1FFFFFFF)) {
+    f.match.id = static_cast<uint32_t>(*id);
+    f.match.mask = 0x1FFFFFFF;
+  }
+  if (auto mask = c.integer(*m, mpath, "mask", false, 0, 0x1FFFFFFF)) {
+    f.match.mask = static_cast<uint32_t>(*mask);
+  }
+  f.match.ext = boolean(c, *m, mpath, "ext");
+  f.match.rtr = boolean(c, *m, mpath, "rtr");
+  if (auto from = c.string(*m, mpath, "from", false)) {
+    f.match.from = *from;
+  }
+}
+
+void read_fault(Checker& c, const toml::table& t, const std::string& path, Scenario& s) {
+  FaultSpec f;
+  f.line = t.source().begin.line;
+  // The effect decides which keys belong.
+  auto effect_text = c.string(t, path, "effect", true);
+  if (!effect_text) {
+    return;
+  }
+  for (std::string_view later : kLaterEffects) {
+    if (*effect_text == later) {
+      c.error(*t.get("effect"), path + ".effect",
+              fmt::format("\"{}\" is not emulated yet{}", later,
+                          later.substr(0, 4) == "lin_" ? " (it comes with LIN)" : ""));
+      return;
+    }
+  }
+  auto effect = c.choice(t, path, "effect", true, kEffects, "fault effect");
+  if (!effect) {
+    return;
+  }
+  f.effect = *effect;
+  std::vector<std::string_view> keys = {"at", "effect"};
+  const auto allow = [&](std::initializer_list<std::string_view> more) {
+    keys.insert(keys.end(), more.begin(), more.end());
+  };
+  if (is_frame_effect(f.effect)) {
+    allow({"until", "bus", "match", "count", "probability"});
+    if (f.effect != FaultEffect::ack_error) {
+      allow({"bit"});
+    }
+  } else if (is_bus_effect(f.effect)) {
+    allow({"bus", "duration"});
+  } else {
+    allow({"node"});
+    if (f.effect == FaultEffect::node_off || f.effect == FaultEffect::oscillator) {
+      allow({"until"});
+    }
+    if (f.effect == FaultEffect::error_counters) {
+      allow({"tec", "rec"});
+    }
+    if (f.effect == FaultEffect::oscillator) {
+      allow({"ppm"});
+    }
+  }
+  // only_keys takes an initializer list; check by hand against the effect's own set.
+  for (const auto& [k, v] : t) {
+    if (std::find(keys.begin(), keys.end(), k.str()) == keys.end()) {
+      std::string known;
+      for (auto a : keys) {
+        known += known.empty() ? std::string(a) : ", " + std::string(a);
+      }
+      c.error(k.source(), Checker::key(path, k.str()),
+              fmt::format("not a key of {} (known: {})", to_string(f.effect), known));
+    }
+  }
+  if (auto at = duration(c, t, path, "at", true)) {
+    f.at_ns = *at;
+  }
+  if (t.get("until") != nullptr) {
+    f.until_ns = duration(c, t, path, "until", false);
+    if (f.until_ns && *f.until_ns <= f.at_ns) {
+      c.error(*t.get("until"), path + ".until", "must be later than at");
+    }
+  }
+  if (is_frame_effect(f.effect) || is_bus_effect(f.effect)) {
+    if (auto bus = c.string(t, path, "bus", true)) {
+      f.bus = *bus;
+    }
+  } else if (auto node = c.string(t, path, "node", true)) {
+    f.node = *node;
+  }
+  if (is_frame_effect(f.effect)) {
+    read_match(c, t, path, f);
+    if (const toml::node* n = t.get("count")) {
+      if (n->is_string() && n->as_string()->get() == "all") {
+        f.count.reset();
+      } else if (auto count = c.integer(t, path, "count", false, 1, INT64_MAX)) {
+        f.count = static_cast<uint64_t>(*count);
+      }
+    }
+    if (auto bit = c.integer(t, path, "bit", false, 0, 735)) {
+      f.bit = static_cast<uint16_t>(*bit);
+    }
+    if (auto p = c.number(t, path, "probability")) {
+      if (!(*p > 0.0 && *p <= 1.0)) {
+        c.error(*t.get("probability"), path + ".probability", "must be above 0 and at most 1");
+      } else {
+        f.probability = *p;
+      }
+    }
+  }
+  if (is_bus_effect(f.effect)) {
+    if (auto d = duration(c, t, path, "duration", true)) {
+      f.duration_ns = *d;
+      if (*d <= 0) {
+        c.error(*t.get("duration"), path + ".duration", "must be above 0");
+      }
+    }
+  }
+  if (f.effect == FaultEffect::error_counters) {
+    if (auto tec = c.integer(t, path, "tec", true, 0, 255)) {
+      f.tec = static_cast<uint16_t>(*tec);
+    }
+    if (auto rec = c.integer(t, path, "rec", true, 0, 255)) {
+      f.rec = static_cast<uint16_t>(*rec);
+    }
+  }
+  if (f.effect == FaultEffect::oscillator) {
+    if (auto ppm = c.integer(t, path, "ppm", true, -500'000, 500'000)) {
+      f.ppm = static_cast<int32_t>(*ppm);
+    }
+  }
+  s.faults.push_back(f);
+}
+
+}  // namespace
+
+std::string_view to_string(FaultEffect effect) {
+  return detail::name_of(effect, kEffects);
+}
+
+tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view text,
+                                                                const std::string& source) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    return tl::unexpected(std::vector<std::string>{fmt::format(
+        "{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column, e.description())});
+  }
+  Checker c(source);
+  Scenario s;
+  s.source = source;
+  c.only_keys(root, "", {"scenario", "fault"});
+  if (const toml::table* head = c.section(root, "scenario")) {
+    c.only_keys(*head, "scenario", {"name", "seed"});
+    if (auto name = c.string(*head, "scenario", "name", false)) {
+      s.name = *name;
+    }
+    if (auto seed = c.integer(*head, "scenario", "seed", false, 0, INT64_MAX)) {
+      s.seed = static_cast<uint64_t>(*seed);
+    }
+  }
+  c.for_each_table(root, "fault", [&](const toml::table& t, const std::string& path) {
+    read_fault(c, t, path, s);
+  });
+  if (!c.errors().empty()) {
+    return tl::unexpected(c.errors());
+  }
+  if (s.faults.empty()) {
+    return tl::unexpected(std::vector<std::string>{
+        fmt::format("{}: no [[fault]] tables: a scenario needs at least one", source)});
+  }
+  if (s.name.empty()) {
+    const std::size_t slash = source.find_last_of('/');
+    s.name = source.substr(slash == std::string::npos ? 0 : slash + 1);
+  }
+  return s;
+}
+
+tl::expected<Scenario, std::vector<std::string>> load_scenario_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return tl::unexpected(std::vector<std::string>{fmt::format("{}: cannot be read", path)});
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_scenario(text.str(), path);
+}
+
+}  // namespace canemu::daemon

@@ -1,0 +1,297 @@
+// Fault scenarios: the file checked whole with file, line and key; names resolved against the
+// running simulation, all or nothing; every effect with its consequence on the wire.
+#include "canemu/daemon/scenario.hpp"
+
+#include <gtest/gtest.h>
+
+#include "canemu/daemon/simulation.hpp"
+#include "canemu/firmware_model/sja1000_node.hpp"
+
+namespace canemu::daemon {
+namespace {
+
+using namespace canemu::model;
+
+std::vector<std::string> errors_of(std::string_view text) {
+  auto s = parse_scenario(text, "s.toml");
+  EXPECT_FALSE(s.has_value());
+  return s ? std::vector<std::string>{} : s.error();
+}
+
+TEST(Scenario, ReadsEveryKeyOfAFrameFault) {
+  auto s = parse_scenario(R"([scenario]
+name = "demo"
+seed = 7
+
+[[fault]]
+at = "2s"
+until = "5s"
+bus = "can0"
+match = { id = 0x100, mask = 0x7F0, ext = false, rtr = false, from = "ixxat0:0" }
+effect = "bit_error"
+bit = 24
+count = 32
+probability = 0.5
+)",
+                          "s.toml");
+  ASSERT_TRUE(s) << s.error().front();
+  EXPECT_EQ(s->name, "demo");
+  EXPECT_EQ(s->seed, 7u);
+  ASSERT_EQ(s->faults.size(), 1u);
+  const FaultSpec& f = s->faults[0];
+  EXPECT_EQ(f.line, 5u);
+  EXPECT_EQ(f.effect, FaultEffect::bit_error);
+  EXPECT_EQ(f.at_ns, 2'000'000'000);
+  EXPECT_EQ(f.until_ns, 5'000'000'000);
+  EXPECT_EQ(f.bus, "can0");
+  EXPECT_EQ(f.match.id, 0x100u);
+  EXPECT_EQ(f.match.mask, 0x7F0u);
+  EXPECT_EQ(f.match.ext, false);
+  EXPECT_EQ(f.match.from, "ixxat0:0");
+  EXPECT_EQ(f.bit, 24);
+  EXPECT_EQ(f.count, 32u);
+  EXPECT_EQ(f.probability, 0.5);
+}
+
+TEST(Scenario, NamesEveryProblemWithItsLine) {
+  const auto e = errors_of(R"([[fault]]
+at = "soon"
+bus = "can0"
+effect = "bit_error"
+
+[[fault]]
+at = "1s"
+until = "2s"
+bus = "can0"
+effect = "ack_suppress"
+
+[[fault]]
+at = "1s"
+effect = "teleport"
+
+[[fault]]
+at = "1s"
+node = "x:0"
+effect = "babble"
+
+[[fault]]
+at = "1s"
+bus = "can0"
+effect = "crc_error"
+probability = 2
+
+[[fault]]
+at = "1s"
+node = "ixxat0:0"
+effect = "error_counters"
+tec = 300
+)");
+  EXPECT_EQ(e, (std::vector<std::string>{
+                   "s.toml:2:6: fault[0].at: \"soon\" is not a duration (examples: 2s, 150ms, "
+                   "20us, 10ns)",
+                   "s.toml:8:1: fault[1].until: not a key of ack_suppress (known: at, effect, bus, "
+                   "duration)",
+                   "s.toml:6:1: fault[1].duration: missing (a string is required)",
+                   "s.toml:14:10: fault[2].effect: \"teleport\" is not a fault effect (bit_error, "
+                   "stuff_error, form_error, crc_error, ack_error, ack_suppress, stuck_dominant, "
+                   "node_off, node_on, bus_off, error_counters, oscillator)",
+                   "s.toml:19:10: fault[3].effect: \"babble\" is not emulated yet",
+                   "s.toml:25:15: fault[4].probability: must be above 0 and at most 1",
+                   "s.toml:31:7: fault[5].tec: 300 is outside 0..255",
+                   "s.toml:27:1: fault[5].rec: missing (an integer is required)",
+               }));
+  EXPECT_EQ(
+      errors_of("[scenario]\nname = \"empty\"\n"),
+      (std::vector<std::string>{"s.toml: no [[fault]] tables: a scenario needs at least one"}));
+}
+
+// The default configuration (can0 and can1 at 500 kbit/s, ixxat0 with a controller on each)
+// and an ephemeral SJA1000 "tester" on can0 that always has a frame to send.
+struct World {
+  std::unique_ptr<Simulation> sim;
+  HostedNode* tester = nullptr;
+  Simulation::DeviceLease lease;
+  World() {
+    sim = std::move(*Simulation::build(*load_default_config()));
+    tester = &sim->spare_node(0);
+    HostedNodeSettings s;
+    s.btr0 = 0x00;
+    s.btr1 = 0x1C;
+    tester->start(s, nullptr, [] { return TxFrame{*Frame::classic(0x123, {}), false, false}; });
+    lease = sim->add_ephemeral("tester", 0, *tester, 0);
+  }
+  void apply(std::string_view text) {
+    auto s = parse_scenario(text, "s.toml");
+    ASSERT_TRUE(s) << s.error().front();
+    auto applied = sim->apply_scenario(*s, sim->scheduler().now());
+    ASSERT_TRUE(applied) << applied.error().front();
+  }
+  void run_until(int64_t ns) { sim->scheduler().run_until(SimTime::from_ns(ns)); }
+  const FaultConfinement& fc() { return tester->controller().confinement(); }
+  const NodeStats& stats() { return sim->bus(0).stats(tester->node()); }
+};
+
+TEST(ScenarioEffects, ThirtyTwoBitErrorsTakeTheSenderFromZeroToBusOff) {
+  World w;
+  w.apply(R"([[fault]]
+at = "0s"
+bus = "can0"
+match = { from = "tester" }
+effect = "bit_error"
+count = 32
+)");
+  w.run_until(100'000'000);
+  EXPECT_EQ(w.stats().errors_as_transmitter.bit, 32u);
+  EXPECT_EQ(w.fc().tec(), kBusOffLimit);
+  EXPECT_TRUE(w.fc().bus_off());
+  EXPECT_EQ(w.stats().frames_sent, 0u);
+}
+
+TEST(ScenarioEffects, NobodyAcknowledgingLeavesALoneSenderErrorPassiveAt128) {
+  World w;
+  w.apply(R"([[fault]]
+at = "0s"
+bus = "can0"
+effect = "ack_suppress"
+duration = "1s"
+)");
+  w.run_until(500'000'000);
+  EXPECT_EQ(w.fc().tec(), 128);
+  EXPECT_EQ(w.fc().state(), ErrorState::passive);
+  EXPECT_EQ(w.stats().frames_sent, 0u);
+  w.run_until(1'100'000'000);  // acknowledged again: every success takes one off
+  EXPECT_GT(w.stats().frames_sent, 128u);
+  EXPECT_EQ(w.fc().tec(), 0);
+  EXPECT_EQ(w.fc().state(), ErrorState::active);
+}
+
+TEST(ScenarioEffects, AckErrorsHitOnlyTheMatchingFrames) {
+  World w;
+  w.apply(R"([[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x7FF }
+effect = "ack_error"
+)");
+  w.run_until(10'000'000);  // the tester's 0x123 frames do not match
+  EXPECT_EQ(w.fc().tec(), 0);
+  EXPECT_GT(w.stats().frames_sent, 0u);
+}
+
+TEST(ScenarioEffects, UnpluggingTheOnlyOtherNodeLeavesTheSenderUnacknowledged) {
+  World w;
+  w.apply(R"([[fault]]
+at = "0s"
+until = "100ms"
+node = "ixxat0:0"
+effect = "node_off"
+)");
+  w.run_until(50'000'000);
+  EXPECT_EQ(w.fc().tec(), 128);
+  EXPECT_EQ(w.sim->bus(0).stats(0).frames_received, 0u);
+  w.run_until(200'000'000);  // plugged in again at 100 ms
+  EXPECT_GT(w.sim->bus(0).stats(0).frames_received, 0u);
+  EXPECT_LT(w.fc().tec(), 128);
+}
+
+TEST(ScenarioEffects, CountersAndBusOffAreSetAtTheirInstant) {
+  World w;
+  w.apply(R"([[fault]]
+at = "1ms"
+node = "ixxat0:1"
+effect = "error_counters"
+tec = 100
+rec = 5
+
+[[fault]]
+at = "2ms"
+node = "tester"
+effect = "bus_off"
+)");
+  auto s = ipc::make_message<ipc::StatusReply>();
+  w.run_until(999'999);
+  w.sim->fill_status(s);
+  EXPECT_EQ(s.nodes[1].tec, 0);
+  w.run_until(1'000'000);
+  w.sim->fill_status(s);
+  EXPECT_EQ(ipc::name_of(s.nodes[1].name), "ixxat0:1");
+  EXPECT_EQ(s.nodes[1].tec, 100);
+  EXPECT_EQ(s.nodes[1].rec, 5);
+  EXPECT_EQ(s.nodes[1].state, static_cast<uint8_t>(ErrorState::warning));
+  EXPECT_FALSE(w.fc().bus_off());
+  w.run_until(2'000'000);
+  EXPECT_TRUE(w.fc().bus_off());
+}
+
+TEST(ScenarioEffects, AnOscillatorFarOffStopsTheNodeFromBeingUnderstood) {
+  World w;
+  w.apply(R"([[fault]]
+at = "0s"
+until = "20ms"
+node = "tester"
+effect = "oscillator"
+ppm = 30000
+)");
+  w.run_until(20'000'000);
+  EXPECT_EQ(w.sim->bus(0).stats(0).frames_received, 0u);
+  EXPECT_GT(w.stats().errors_as_transmitter.total(), 0u);
+  const uint64_t received = w.sim->bus(0).stats(0).frames_received;
+  w.run_until(40'000'000);
+  EXPECT_GT(w.sim->bus(0).stats(0).frames_received, received);
+}
+
+TEST(ScenarioEffects, AStuckDominantBusMakesEveryoneSeeErrors) {
+  World w;
+  w.run_until(1'000'000);
+  const uint64_t before = w.sim->bus(0).error_frames_on_bus();
+  w.apply(R"([[fault]]
+at = "1ms"
+bus = "can0"
+effect = "stuck_dominant"
+duration = "1ms"
+)");
+  w.run_until(3'000'000);
+  EXPECT_GT(w.sim->bus(0).error_frames_on_bus(), before);
+  EXPECT_GT(w.stats().errors_as_transmitter.total() + w.stats().errors_as_receiver.total(), 0u);
+}
+
+TEST(ScenarioEffects, UnknownNamesRejectTheWholeScenario) {
+  World w;
+  auto s = parse_scenario(R"([[fault]]
+at = "0s"
+bus = "can0"
+effect = "ack_suppress"
+duration = "1s"
+
+[[fault]]
+at = "0s"
+bus = "can9"
+effect = "bit_error"
+
+[[fault]]
+at = "0s"
+node = "ghost:0"
+effect = "bus_off"
+
+[[fault]]
+at = "0s"
+bus = "can1"
+match = { from = "tester" }
+effect = "crc_error"
+)",
+                          "s.toml");
+  ASSERT_TRUE(s);
+  auto applied = w.sim->apply_scenario(*s, SimTime{});
+  ASSERT_FALSE(applied);
+  EXPECT_EQ(applied.error(),
+            (std::vector<std::string>{
+                "s.toml:7: bit_error: no bus named \"can9\"",
+                "s.toml:12: bus_off: no node named \"ghost:0\" (configured nodes are DEVICE:N)",
+                "s.toml:17: crc_error: node tester is not on bus can1",
+            }));
+  w.run_until(500'000'000);  // the valid first fault was not applied either
+  EXPECT_EQ(w.fc().tec(), 0);
+}
+
+}  // namespace
+}  // namespace canemu::daemon

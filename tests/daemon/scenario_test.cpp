@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/firmware_model/sja1000_node.hpp"
 
@@ -291,6 +293,30 @@ effect = "crc_error"
             }));
   w.run_until(500'000'000);  // the valid first fault was not applied either
   EXPECT_EQ(w.fc().tec(), 0);
+}
+
+}  // namespace
+}  // namespace canemu::daemon
+
+namespace canemu::daemon {
+namespace {
+
+// The shipped examples run as they are against the embedded default configuration.
+TEST(ScenarioExamples, EveryShippedExampleAppliesToTheDefaultConfiguration) {
+  int seen = 0;
+  for (const auto& entry :
+       std::filesystem::directory_iterator(CANEMU_SOURCE_DIR "/config/faults")) {
+    if (entry.path().extension() != ".toml") {
+      continue;
+    }
+    ++seen;
+    auto scenario = load_scenario_file(entry.path().string());
+    ASSERT_TRUE(scenario) << scenario.error().front();
+    auto sim = std::move(*Simulation::build(*load_default_config()));
+    auto applied = sim->apply_scenario(*scenario, model::SimTime{});
+    EXPECT_TRUE(applied) << entry.path() << ": " << applied.error().front();
+  }
+  EXPECT_GE(seen, 6);
 }
 
 }  // namespace

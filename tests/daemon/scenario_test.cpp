@@ -178,6 +178,21 @@ effect = "ack_error"
   w.run_until(10'000'000);  // the tester's 0x123 frames do not match
   EXPECT_EQ(w.fc().tec(), 0);
   EXPECT_GT(w.stats().frames_sent, 0u);
+
+  World hit;
+  hit.apply(R"([[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x123 }
+effect = "ack_error"
+count = 3
+)");
+  hit.run_until(1'000'000);  // the first three attempts go unacknowledged: TEC 3 x 8
+  EXPECT_EQ(hit.stats().errors_as_transmitter.ack, 3u);
+  EXPECT_EQ(hit.fc().tec(), 24 - hit.stats().frames_sent);
+  hit.run_until(10'000'000);  // then acknowledged, one off per success
+  EXPECT_EQ(hit.stats().errors_as_transmitter.ack, 3u);
+  EXPECT_EQ(hit.fc().tec(), 0);
 }
 
 TEST(ScenarioEffects, UnpluggingTheOnlyOtherNodeLeavesTheSenderUnacknowledged) {

@@ -3,11 +3,16 @@
 #include <cctype>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/channel.hpp"
@@ -252,6 +257,142 @@ int cmd_send(const std::string& socket, const SendOptions& o) {
   return failed == 0 ? 0 : 1;
 }
 
+// Sends a scenario's text; prints what was applied or every problem.
+int load_scenario_text(const std::string& socket, const std::string& source,
+                       const std::string& text) {
+  if (text.size() > ipc::kMaxScenarioText) {
+    return fail(fmt::format("{}: {} bytes; a scenario sent to canemud is at most {}", source,
+                            text.size(), ipc::kMaxScenarioText));
+  }
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto m = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+  ipc::copy_name(m->source, source);
+  m->length = static_cast<uint32_t>(text.size());
+  std::memcpy(m->text, text.data(), text.size());
+  auto r = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*m);
+  if (!r) {
+    return fail(r.error().message);
+  }
+  if (!r->applied) {
+    std::fputs(ipc::name_of(r->errors).c_str(), stderr);
+    return fail("scenario rejected; nothing of it applied");
+  }
+  std::printf("scenario \"%s\": %u fault%s applied\n", ipc::name_of(r->name).c_str(), r->faults,
+              r->faults == 1 ? "" : "s");
+  return 0;
+}
+
+int cmd_fault_load(const std::string& socket, const std::string& file) {
+  std::ifstream in(file);
+  if (!in) {
+    return fail(fmt::format("{}: cannot be read", file));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return load_scenario_text(socket, file, text.str());
+}
+
+int cmd_fault_list(const std::string& socket) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto r = c->call<ipc::FaultListRequest, ipc::FaultListReply>(
+      ipc::make_message<ipc::FaultListRequest>());
+  if (!r) {
+    return fail(r.error().message);
+  }
+  constexpr const char* kFaultStates[] = {"pending", "active", "done", "cleared"};
+  std::printf("%-24s %5s %-15s %-12s %14s %14s %8s %8s %s\n", "SCENARIO", "LINE", "EFFECT",
+              "TARGET", "AT", "UNTIL", "SEEN", "HITS", "STATE");
+  for (uint16_t i = 0; i < r->count; ++i) {
+    const ipc::FaultEntry& e = r->faults[i];
+    const std::string until =
+        e.has_until ? fmt::format("{:.6f}", static_cast<double>(e.until_ns) / 1e9) : "-";
+    std::printf("%-24s %5u %-15s %-12s %14.6f %14s %8llu %8llu %s\n",
+                ipc::name_of(e.scenario).c_str(), e.line, ipc::name_of(e.effect).c_str(),
+                ipc::name_of(e.target).c_str(), static_cast<double>(e.at_ns) / 1e9, until.c_str(),
+                static_cast<unsigned long long>(e.seen), static_cast<unsigned long long>(e.hits),
+                e.state < 4 ? kFaultStates[e.state] : "?");
+  }
+  if (r->total > r->count) {
+    std::printf("(%u more not shown)\n", r->total - r->count);
+  }
+  return 0;
+}
+
+int cmd_fault_clear(const std::string& socket, const std::string& name) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto m = ipc::make_message<ipc::FaultClearRequest>();
+  ipc::copy_name(m.scenario, name == "all" ? std::string() : name);
+  auto r = c->call<ipc::FaultClearRequest, ipc::FaultClearReply>(m);
+  if (!r) {
+    return fail(r.error().message);
+  }
+  std::printf("%u scenario%s cleared\n", r->cleared, r->cleared == 1 ? "" : "s");
+  return 0;
+}
+
+// One fault from the command line, in the scenario language's own keys.
+struct InjectOptions {
+  std::string effect;
+  std::string at = "0s";
+  std::string until;
+  std::string bus;
+  std::string node;
+  std::string duration;
+  std::string from;
+  std::string id;
+  std::string mask;
+  bool ext = false;
+  bool std_id = false;
+  uint32_t bit = 0;
+  uint64_t count = 0;
+  double probability = 0;
+  int tec = -1;
+  int rec = -1;
+  int ppm = 0;
+};
+
+int cmd_fault_inject(const std::string& socket, const InjectOptions& o) {
+  const auto quoted = [](const std::string& v) { return "\"" + v + "\""; };
+  std::string text = fmt::format("[scenario]\nname = \"inject-{}\"\n\n[[fault]]\n", ::getpid());
+  text += "effect = " + quoted(o.effect) + "\nat = " + quoted(o.at) + "\n";
+  const auto key = [&](const char* k, const std::string& v) {
+    if (!v.empty()) {
+      text += std::string(k) + " = " + v + "\n";
+    }
+  };
+  key("until", o.until.empty() ? "" : quoted(o.until));
+  key("bus", o.bus.empty() ? "" : quoted(o.bus));
+  key("node", o.node.empty() ? "" : quoted(o.node));
+  key("duration", o.duration.empty() ? "" : quoted(o.duration));
+  key("bit", o.bit ? std::to_string(o.bit) : "");
+  key("count", o.count ? std::to_string(o.count) : "");
+  key("probability", o.probability > 0 ? fmt::format("{}", o.probability) : "");
+  key("tec", o.tec >= 0 ? std::to_string(o.tec) : "");
+  key("rec", o.rec >= 0 ? std::to_string(o.rec) : "");
+  key("ppm", o.ppm ? std::to_string(o.ppm) : "");
+  std::string match;
+  const auto part = [&](const std::string& k, const std::string& v) {
+    if (!v.empty()) {
+      match += (match.empty() ? "" : ", ") + k + " = " + v;
+    }
+  };
+  part("id", o.id);
+  part("mask", o.mask);
+  part("ext", o.ext ? "true" : o.std_id ? "false" : "");
+  part("from", o.from.empty() ? "" : quoted(o.from));
+  key("match", match.empty() ? "" : "{ " + match + " }");
+  return load_scenario_text(socket, "<command line>", text);
+}
+
 struct DumpOptions {
   std::string bus;
   uint32_t bitrate = 0;
@@ -407,6 +548,36 @@ int main(int argc, char** argv) {
   bool no_errors = false;
   dump->add_flag("--no-errors", no_errors, "frames only, no error frames");
 
+  auto* fault = app.add_subcommand("fault", "fault scenarios (docs/faults.md)");
+  fault->require_subcommand(1);
+  auto* fault_load = fault->add_subcommand("load", "apply a scenario file from now on");
+  std::string fault_file;
+  fault_load->add_option("FILE", fault_file, "scenario (TOML)")->required();
+  auto* fault_list = fault->add_subcommand("list", "every fault applied, with its hits and state");
+  auto* fault_clear = fault->add_subcommand("clear", "stop a scenario's faults (NAME or all)");
+  std::string fault_name = "all";
+  fault_clear->add_option("NAME", fault_name, "scenario name, or all (default)");
+  auto* fault_inject = fault->add_subcommand("inject", "one fault from the command line");
+  InjectOptions inject;
+  fault_inject->add_option("--effect", inject.effect, "bit_error, ack_suppress, node_off, ...")
+      ->required();
+  fault_inject->add_option("--at", inject.at, "from now (default 0s)");
+  fault_inject->add_option("--until", inject.until, "end of the window");
+  fault_inject->add_option("--bus", inject.bus, "bus (frame and bus effects)");
+  fault_inject->add_option("--node", inject.node, "node, DEVICE:N (node effects)");
+  fault_inject->add_option("--duration", inject.duration, "ack_suppress, stuck_dominant");
+  fault_inject->add_option("--from", inject.from, "match: transmitting node");
+  fault_inject->add_option("--id", inject.id, "match: identifier (0x100)");
+  fault_inject->add_option("--mask", inject.mask, "match: identifier mask (0x7FF)");
+  fault_inject->add_flag("--ext", inject.ext, "match: extended frames only");
+  fault_inject->add_flag("--std", inject.std_id, "match: standard frames only");
+  fault_inject->add_option("--bit", inject.bit, "frame bit where the error hits");
+  fault_inject->add_option("--count", inject.count, "matching frames to hit (default: all)");
+  fault_inject->add_option("--probability", inject.probability, "per matching frame");
+  fault_inject->add_option("--tec", inject.tec, "error_counters");
+  fault_inject->add_option("--rec", inject.rec, "error_counters");
+  fault_inject->add_option("--ppm", inject.ppm, "oscillator");
+
   auto* time = app.add_subcommand("time", "simulated time (stepped mode)");
   time->require_subcommand(1);
   auto* step = time->add_subcommand("step", "advance simulated time, e.g. 'time step 10ms'");
@@ -438,6 +609,18 @@ int main(int argc, char** argv) {
     }
     if (*send) {
       return cmd_send(socket, send_options);
+    }
+    if (*fault_load) {
+      return cmd_fault_load(socket, fault_file);
+    }
+    if (*fault_list) {
+      return cmd_fault_list(socket);
+    }
+    if (*fault_clear) {
+      return cmd_fault_clear(socket, fault_name);
+    }
+    if (*fault_inject) {
+      return cmd_fault_inject(socket, inject);
     }
     if (*dump) {
       dump_options.errors = !no_errors;

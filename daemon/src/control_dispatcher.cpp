@@ -297,6 +297,75 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       send_reply(send, *r);
       return;
     }
+    case ipc::MsgType::fault_load_request: {
+      auto m = std::make_unique<ipc::FaultLoadRequest>(read_as<ipc::FaultLoadRequest>(data));
+      auto r =
+          std::make_unique<ipc::FaultLoadReply>(ipc::make_message<ipc::FaultLoadReply>(request_id));
+      const std::string source =
+          ipc::name_of(m->source).empty() ? std::string("<client>") : ipc::name_of(m->source);
+      std::vector<std::string> problems;
+      if (m->length > ipc::kMaxScenarioText) {
+        problems.push_back(fmt::format("{}: {} bytes of text claimed, at most {}", source,
+                                       m->length, ipc::kMaxScenarioText));
+      } else {
+        auto scenario = parse_scenario(std::string_view(m->text, m->length), source);
+        if (!scenario) {
+          problems = scenario.error();
+        } else if (auto applied = sim_.apply_scenario(*scenario, sim_.scheduler().now());
+                   !applied) {
+          problems = applied.error();
+        } else {
+          r->applied = 1;
+          r->faults = static_cast<uint32_t>(scenario->faults.size());
+          ipc::copy_name(r->name, scenario->name);
+        }
+      }
+      std::string text;
+      for (const std::string& p : problems) {
+        text += p + "\n";
+      }
+      ipc::copy_name(r->errors, text);
+      send_reply(send, *r);
+      return;
+    }
+    case ipc::MsgType::fault_list_request: {
+      auto r =
+          std::make_unique<ipc::FaultListReply>(ipc::make_message<ipc::FaultListReply>(request_id));
+      const auto faults = sim_.fault_status();
+      r->total = static_cast<uint16_t>(std::min<std::size_t>(faults.size(), UINT16_MAX));
+      for (const Simulation::FaultStatus& f : faults) {
+        if (r->count == ipc::kMaxFaults) {
+          break;
+        }
+        ipc::FaultEntry& e = r->faults[r->count++];
+        ipc::copy_name(e.scenario, f.scenario);
+        ipc::copy_name(e.effect, to_string(f.effect));
+        ipc::copy_name(e.target, f.target);
+        e.line = f.line;
+        e.state = static_cast<uint8_t>(f.state);
+        e.has_until = f.until_ns ? 1 : 0;
+        e.at_ns = f.at_ns;
+        e.until_ns = f.until_ns.value_or(0);
+        e.seen = f.seen;
+        e.hits = f.hits;
+      }
+      send_reply(send, *r);
+      return;
+    }
+    case ipc::MsgType::fault_clear_request: {
+      const auto m = read_as<ipc::FaultClearRequest>(data);
+      const std::string name = ipc::name_of(m.scenario);
+      const std::size_t cleared = sim_.clear_scenarios(name);
+      if (cleared == 0 && !name.empty()) {
+        error(send, request_id, ipc::ErrorCode::bad_argument,
+              fmt::format("no scenario named \"{}\" to clear", name));
+        return;
+      }
+      auto r = ipc::make_message<ipc::FaultClearReply>(request_id);
+      r.cleared = static_cast<uint32_t>(cleared);
+      send_reply(send, r);
+      return;
+    }
     case ipc::MsgType::subscribe_request: {
       const auto m = read_as<ipc::SubscribeRequest>(data);
       if (m.events & ~ipc::kEventDevices) {

@@ -162,17 +162,28 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
     return tl::unexpected(errors);
   }
   const uint64_t seed = s.seed.value_or(config_.simulation.seed);
-  // A fault due now takes effect at once (before any frame that starts now); later ones when due.
-  const auto when = [this](SimTime at, std::function<void()> fire) {
-    if (at <= scheduler_.now()) {
-      fire();
-    } else {
-      scheduler_.schedule_at(at, [fire = std::move(fire)](SimTime) { fire(); });
-    }
-  };
+  LoadedScenario loaded{s.name, {}, false};
   for (std::size_t k = 0; k < plan.size(); ++k) {
     const FaultSpec& f = *plan[k].spec;
     const std::size_t bus = plan[k].bus;
+    auto state = std::make_shared<FaultSwitch>();
+    // A fault due now takes effect at once (before any frame that starts now); later ones when
+    // due, unless cleared by then.
+    const auto when = [this, state](SimTime at, std::function<void()> fire) {
+      auto guarded = [state, fire = std::move(fire)] {
+        if (!state->cleared) {
+          ++state->fired;
+          fire();
+        }
+      };
+      if (at <= scheduler_.now()) {
+        guarded();
+      } else {
+        scheduler_.schedule_at(at, [guarded](SimTime) { guarded(); });
+      }
+    };
+    AppliedFault applied{f,     bus,          !f.node.empty() ? f.node : config_.buses[bus].name,
+                         start, std::nullopt, state};
     CanBus& b = *buses_[bus].bus;
     const SimTime at = start + SimDuration(f.at_ns);
     const std::string what =
@@ -207,7 +218,7 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         }
         rule.probability = f.probability;
         rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;  // each fault its own draws
-        buses_[bus].faults->add(rule);
+        applied.rule = buses_[bus].faults->add(rule);
         break;
       }
       case FaultEffect::ack_suppress: {
@@ -218,10 +229,14 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         });
         break;
       }
-      case FaultEffect::stuck_dominant:
-        b.hold_dominant(at, SimDuration(f.duration_ns));
-        when(at, [this, what] { fault_log(what); });
+      case FaultEffect::stuck_dominant: {
+        const SimDuration d(f.duration_ns);
+        when(at, [this, &b, d, what] {
+          b.hold_dominant(scheduler_.now(), d);
+          fault_log(what);
+        });
         break;
+      }
       case FaultEffect::node_off:
       case FaultEffect::node_on: {
         const NodeId node = plan[k].node->node;
@@ -268,7 +283,9 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         break;
       }
     }
+    loaded.faults.push_back(std::move(applied));
   }
+  scenarios_.push_back(std::move(loaded));
   return {};
 }
 
@@ -431,6 +448,66 @@ ReloadReport Simulation::reload(const Config& fresh) {
                                     config_.simulation.batch_us, config_.simulation.spin_us));
   }
   return r;
+}
+
+std::vector<Simulation::FaultStatus> Simulation::fault_status() const {
+  using State = FaultStatus::State;
+  std::vector<FaultStatus> out;
+  const SimTime now = scheduler_.now();
+  for (const LoadedScenario& sc : scenarios_) {
+    for (const AppliedFault& a : sc.faults) {
+      const FaultSpec& f = a.spec;
+      FaultStatus st{sc.name,
+                     f.line,
+                     f.effect,
+                     a.target,
+                     (a.start + SimDuration(f.at_ns)).ns(),
+                     std::nullopt,
+                     0,
+                     a.state->fired,
+                     State::pending};
+      if (f.until_ns) {
+        st.until_ns = (a.start + SimDuration(*f.until_ns)).ns();
+      } else if (f.duration_ns > 0) {
+        st.until_ns = st.at_ns + f.duration_ns;
+      }
+      bool over = st.until_ns && now.ns() >= *st.until_ns;
+      if (a.rule) {
+        const FaultRule& rule = buses_[a.bus].faults->rule(*a.rule);
+        st.seen = rule.seen;
+        st.hits = rule.hits;
+        over = over || (rule.count && rule.hits >= *rule.count);
+        st.state = now.ns() < st.at_ns ? State::pending : over ? State::done : State::active;
+      } else if (a.state->fired == 0) {
+        st.state = State::pending;
+      } else {
+        st.state = st.until_ns && !over ? State::active : State::done;
+      }
+      if (a.state->cleared && st.state != State::done) {
+        st.state = State::cleared;
+      }
+      out.push_back(st);
+    }
+  }
+  return out;
+}
+
+std::size_t Simulation::clear_scenarios(std::string_view name) {
+  std::size_t cleared = 0;
+  for (LoadedScenario& sc : scenarios_) {
+    if (sc.cleared || (!name.empty() && sc.name != name)) {
+      continue;
+    }
+    sc.cleared = true;
+    ++cleared;
+    for (AppliedFault& a : sc.faults) {
+      a.state->cleared = true;
+      if (a.rule) {
+        buses_[a.bus].faults->disable(*a.rule);
+      }
+    }
+  }
+  return cleared;
 }
 
 void Simulation::fill_status(ipc::StatusReply& r) {

@@ -5,7 +5,7 @@ namespace canemu::model {
 FrameFault FaultPlan::on_frame(const FrameContext& ctx) {
   std::optional<FrameFault> chosen;
   for (FaultRule& r : rules_) {
-    if (ctx.sof < r.from || (r.until && ctx.sof >= *r.until)) {
+    if (!r.enabled || ctx.sof < r.from || (r.until && ctx.sof >= *r.until)) {
       continue;
     }
     if (!r.match.matches(ctx.transmitter, ctx.frame)) {

@@ -32,6 +32,8 @@ std::string_view to_string(ErrorCode code) {
       return "bad_bit_timing";
     case ErrorCode::no_resources:
       return "no_resources";
+    case ErrorCode::bad_scenario:
+      return "bad_scenario";
   }
   return "unknown";
 }
@@ -50,7 +52,8 @@ std::size_t size_of(MsgType type) {
                     TimeStepReply, OpenChannelRequest, OpenChannelReply, CloseChannelRequest,
                     CloseChannelReply, ChannelStatusRequest, ChannelStatusReply, DeviceListRequest,
                     DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest,
-                    SubscribeReply, Notification>(type);
+                    SubscribeReply, Notification, FaultLoadRequest, FaultLoadReply,
+                    FaultListRequest, FaultListReply, FaultClearRequest, FaultClearReply>(type);
 }
 
 }  // namespace

@@ -135,6 +135,48 @@ TEST(Cli, OnACanFdBusFdFramesGoOutWithTheRateSwitch) {
   ::rmdir(dir);
 }
 
+// Faults at run time: loaded from a file or one from the command line, applied from now, listed
+// with their hits, cleared; a bad one is refused with its problems and changes nothing.
+TEST(Cli, FaultsLoadListInjectAndClear) {
+  Daemon d;
+  Cli load(d, {"fault", "load", CANEMU_SOURCE_DIR "/config/faults/corrupt-id.toml"});
+  EXPECT_EQ(Cli::read_all(load.out), "scenario \"three CRC errors on 0x1A0\": 1 fault applied\n");
+  EXPECT_EQ(load.wait(), 0);
+  Cli inject(d, {"fault", "inject", "--effect", "bit_error", "--bus", "can0", "--id", "0x123",
+                 "--count", "2"});
+  EXPECT_NE(Cli::read_all(inject.out).find(": 1 fault applied"), std::string::npos);
+  EXPECT_EQ(inject.wait(), 0);
+  Cli bad(d, {"fault", "inject", "--effect", "node_off", "--node", "ixxat0:9"});
+  EXPECT_EQ(Cli::read_all(bad.err),
+            "<command line>:4: node_off: no node named \"ixxat0:9\" (configured nodes are "
+            "DEVICE:N)\ncanemu: scenario rejected; nothing of it applied\n");
+  EXPECT_EQ(bad.wait(), 1);
+  // The injected fault hits 0x123 twice: two bit errors, then the frame goes out.
+  Cli send(d, {"send", "can0", "123#11", "--step", "5ms"});
+  EXPECT_EQ(Cli::read_all(send.out), "(0000000000.000246) can0 123#11\n");
+  EXPECT_EQ(send.wait(), 0);
+  Cli list(d, {"fault", "list"});
+  const std::string listed = Cli::read_all(list.out);
+  EXPECT_EQ(list.wait(), 0);
+  EXPECT_NE(listed.find("three CRC errors on 0x1A0     6 crc_error       can0              "
+                        "12.000000              -        0        0 pending"),
+            std::string::npos)
+      << listed;
+  EXPECT_NE(listed.find("4 bit_error       can0               0.000000              -        3 "
+                        "       2 done"),
+            std::string::npos)
+      << listed;
+  Cli clear(d, {"fault", "clear", "three CRC errors on 0x1A0"});
+  EXPECT_EQ(Cli::read_all(clear.out), "1 scenario cleared\n");
+  EXPECT_EQ(clear.wait(), 0);
+  Cli again(d, {"fault", "list"});
+  EXPECT_NE(Cli::read_all(again.out).find("0        0 cleared"), std::string::npos);
+  EXPECT_EQ(again.wait(), 0);
+  Cli none(d, {"fault", "clear", "nope"});
+  EXPECT_NE(Cli::read_all(none.err).find("no scenario named \"nope\" to clear"), std::string::npos);
+  EXPECT_EQ(none.wait(), 1);
+}
+
 TEST(Cli, SendRefusesBadFramesAndUnsteppedStepsWithReasons) {
   Daemon d;
   Cli bad(d, {"send", "can0", "800#11", "--step", "1ms"});

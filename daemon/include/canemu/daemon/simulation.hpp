@@ -52,6 +52,25 @@ class Simulation {
   // scenario file's line.
   tl::expected<void, std::vector<std::string>> apply_scenario(const Scenario& scenario,
                                                               model::SimTime start);
+  // Every fault applied so far, with what it did.
+  struct FaultStatus {
+    enum class State : uint8_t { pending, active, done, cleared };
+    std::string scenario;
+    uint32_t line;
+    FaultEffect effect;
+    std::string target;  // bus, or node
+    int64_t at_ns;       // absolute simulated time
+    std::optional<int64_t> until_ns;
+    uint64_t seen;  // frame effects: matching frames; others: 0
+    uint64_t hits;  // frame effects: frames hit; others: times fired
+    State state;
+  };
+  std::vector<FaultStatus> fault_status() const;
+  // Clears the faults of the scenario named `name` (empty: of every scenario): frame rules stop
+  // matching, scheduled effects do not fire. Effects that fired stay (an unplugged node stays
+  // unplugged). Returns the number of scenarios cleared.
+  std::size_t clear_scenarios(std::string_view name);
+
   // Told when a scheduled fault fires (bus and node effects), with the simulated time.
   std::function<void(const std::string&)> on_fault_log;
 
@@ -114,6 +133,24 @@ class Simulation {
   // A configured controller ("DEVICE:N") or an ephemeral device ("NAME" or "NAME:0").
   std::optional<NodeRef> find_node(std::string_view name);
   void fault_log(const std::string& text);
+  struct FaultSwitch {
+    bool cleared = false;
+    uint64_t fired = 0;
+  };
+  struct AppliedFault {
+    FaultSpec spec;
+    std::size_t bus;
+    std::string target;
+    model::SimTime start;
+    std::optional<std::size_t> rule;  // in the bus's FaultPlan
+    std::shared_ptr<FaultSwitch> state;
+  };
+  struct LoadedScenario {
+    std::string name;
+    std::vector<AppliedFault> faults;
+    bool cleared = false;
+  };
+  std::vector<LoadedScenario> scenarios_;
   void add_bus(const BusConfig& b);
   // Adds a device whose buses exist; an error (and nothing added) if a controller cannot run
   // its bus's timing.

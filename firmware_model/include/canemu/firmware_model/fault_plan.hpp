@@ -34,9 +34,10 @@ struct FaultRule {
   double probability = 1.0;  // per matching frame, drawn from the rule's own generator
   uint64_t seed = 1;         // of that generator: the same seed gives the same draws
 
-  uint64_t seen = 0;  // matching frames so far
-  uint64_t hits = 0;  // frames hit so far
-  uint64_t rng = 0;   // generator state, from `seed` when the rule is added
+  uint64_t seen = 0;    // matching frames so far
+  uint64_t hits = 0;    // frames hit so far
+  uint64_t rng = 0;     // generator state, from `seed` when the rule is added
+  bool enabled = true;  // a cleared rule stays (its counts with it) but matches nothing
 };
 
 class FaultPlan final : public FaultInjector {
@@ -47,6 +48,7 @@ class FaultPlan final : public FaultInjector {
     return rules_.size() - 1;
   }
   const FaultRule& rule(std::size_t i) const { return rules_[i]; }
+  void disable(std::size_t i) { rules_[i].enabled = false; }
   std::size_t size() const { return rules_.size(); }
   void clear() { rules_.clear(); }
 

@@ -51,6 +51,12 @@ enum class MsgType : uint16_t {
   subscribe_request = 50,
   subscribe_reply = 51,
   notification = 52,  // unsolicited, request_id 0
+  fault_load_request = 60,
+  fault_load_reply = 61,
+  fault_list_request = 62,
+  fault_list_reply = 63,
+  fault_clear_request = 64,
+  fault_clear_reply = 65,
 };
 
 // Why a request failed. Values are stable: clients show them by name.
@@ -69,6 +75,7 @@ enum class ErrorCode : uint32_t {
   name_in_use = 11,
   bad_bit_timing = 12,
   no_resources = 13,
+  bad_scenario = 14,
 };
 std::string_view to_string(ErrorCode code);
 
@@ -320,6 +327,74 @@ static_assert(sizeof(SubscribeReply) == 24);
 
 enum class NotificationKind : uint32_t { device_added = 1, device_removed = 2 };
 
+// ---- fault scenarios (docs/faults.md) ----
+
+inline constexpr std::size_t kMaxScenarioText = 12288;
+inline constexpr std::size_t kMaxFaults = 64;
+
+// A scenario's text (not a path: the daemon never reads files on a client's behalf), applied
+// from the simulated time the request is handled.
+struct FaultLoadRequest {
+  MsgHeader header;
+  char source[64] = {};  // shown in errors, e.g. the client's file name
+  uint32_t length = 0;   // bytes of `text` used
+  uint32_t reserved = 0;
+  char text[kMaxScenarioText] = {};
+};
+static_assert(sizeof(FaultLoadRequest) == 16 + 72 + kMaxScenarioText);
+
+struct FaultLoadReply {
+  MsgHeader header;
+  uint32_t applied = 0;  // 1: applied; 0: rejected, see `errors`
+  uint32_t faults = 0;
+  char name[kNameSize] = {};
+  char errors[4096] = {};  // one problem per line, with the line of the scenario text
+};
+static_assert(sizeof(FaultLoadReply) == 16 + 8 + 32 + 4096);
+
+enum class WireFaultState : uint8_t { pending = 0, active = 1, done = 2, cleared = 3 };
+
+struct FaultEntry {
+  char scenario[kNameSize] = {};
+  char effect[24] = {};
+  char target[kNameSize] = {};  // bus or node
+  uint32_t line = 0;
+  uint8_t state = 0;  // WireFaultState
+  uint8_t has_until = 0;
+  uint16_t reserved = 0;
+  int64_t at_ns = 0;
+  int64_t until_ns = 0;
+  uint64_t seen = 0;
+  uint64_t hits = 0;
+};
+static_assert(sizeof(FaultEntry) == 32 + 24 + 32 + 8 + 32);
+
+struct FaultListRequest {
+  MsgHeader header;
+};
+
+struct FaultListReply {
+  MsgHeader header;
+  uint16_t count = 0;
+  uint16_t total = 0;
+  uint32_t reserved = 0;
+  FaultEntry faults[kMaxFaults];
+};
+static_assert(sizeof(FaultListReply) <= kMaxMessageSize);
+
+struct FaultClearRequest {
+  MsgHeader header;
+  char scenario[kNameSize] = {};  // empty: every scenario
+};
+static_assert(sizeof(FaultClearRequest) == 48);
+
+struct FaultClearReply {
+  MsgHeader header;
+  uint32_t cleared = 0;  // scenarios
+  uint32_t reserved = 0;
+};
+static_assert(sizeof(FaultClearReply) == 24);
+
 struct Notification {
   MsgHeader header;
   uint32_t kind = 0;        // NotificationKind
@@ -371,6 +446,18 @@ template <>
 inline constexpr MsgType type_of_v<SubscribeReply> = MsgType::subscribe_reply;
 template <>
 inline constexpr MsgType type_of_v<Notification> = MsgType::notification;
+template <>
+inline constexpr MsgType type_of_v<FaultLoadRequest> = MsgType::fault_load_request;
+template <>
+inline constexpr MsgType type_of_v<FaultLoadReply> = MsgType::fault_load_reply;
+template <>
+inline constexpr MsgType type_of_v<FaultListRequest> = MsgType::fault_list_request;
+template <>
+inline constexpr MsgType type_of_v<FaultListReply> = MsgType::fault_list_reply;
+template <>
+inline constexpr MsgType type_of_v<FaultClearRequest> = MsgType::fault_clear_request;
+template <>
+inline constexpr MsgType type_of_v<FaultClearReply> = MsgType::fault_clear_reply;
 template <class T>
 constexpr MsgType type_of() {
   static_assert(type_of_v<T> != MsgType{}, "not a protocol message");

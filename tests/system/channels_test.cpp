@@ -3,8 +3,10 @@
 // and a byte-for-byte repeatable trace in stepped time.
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <mutex>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "canemu/client/channel.hpp"
@@ -508,6 +510,48 @@ TEST(Channels, SteppedTimeGivesTheSameTraceByteForByte) {
   // The monitor sees 20 frames; each sender its 10 confirmations and the other's 10 frames.
   EXPECT_EQ(first.size(), (20 + 20 + 20) * sizeof(ipc::ChannelMessage));
   EXPECT_EQ(first, second);
+}
+
+// A scenario with random hits, loaded at run time, repeats byte for byte with the same seed, and
+// its errors are in the trace.
+TEST(Channels, AScenarioWithRandomHitsRepeatsByteForByte) {
+  const std::string text =
+      "[scenario]\nname = \"noise\"\nseed = 3\n\n[[fault]]\nat = \"0s\"\nbus = \"can0\"\n"
+      "effect = \"stuff_error\"\nprobability = 0.3\n";
+  auto run = [&] {
+    Daemon d;
+    auto c = connect(d);
+    auto load = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+    load->length = static_cast<uint32_t>(text.size());
+    std::copy(text.begin(), text.end(), load->text);
+    auto loaded = c.call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
+    EXPECT_TRUE(loaded && loaded->applied == 1) << (loaded ? loaded->errors : "no reply");
+    auto monitor = open(c, "can0", ipc::kChannelListenOnly | ipc::kChannelReportErrors);
+    auto a = open(c, "can0", ipc::kChannelReportTx | ipc::kChannelReportErrors);
+    for (int i = 0; i < 30; ++i) {
+      (void)a.send(frame(0x300 + i, {static_cast<uint8_t>(i)}));
+    }
+    step(c, 20'000'000);
+    std::vector<uint8_t> trace;
+    std::size_t errors = 0;
+    for (auto* ch : {&monitor, &a}) {
+      for (const auto& m : drain(*ch)) {
+        errors += m.kind == static_cast<uint8_t>(ipc::ChannelMessageKind::bus_error);
+        const auto* p = reinterpret_cast<const uint8_t*>(&m);
+        trace.insert(trace.end(), p, p + sizeof m);
+      }
+    }
+    auto list = c.call<ipc::FaultListRequest, ipc::FaultListReply>(
+        ipc::make_message<ipc::FaultListRequest>());
+    EXPECT_TRUE(list && list->count == 1);
+    return std::make_tuple(trace, errors, list ? list->faults[0].hits : 0);
+  };
+  const auto [first, errors, hits] = run();
+  const auto [second, errors2, hits2] = run();
+  EXPECT_EQ(first, second);
+  EXPECT_GT(hits, 0u);
+  EXPECT_EQ(hits, hits2);
+  EXPECT_GE(errors, hits);  // every hit is an error the nodes report
 }
 
 }  // namespace

@@ -21,6 +21,7 @@ constexpr NamedValue<FaultEffect> kEffects[] = {
     {FaultEffect::ack_error, "ack_error"},
     {FaultEffect::ack_suppress, "ack_suppress"},
     {FaultEffect::stuck_dominant, "stuck_dominant"},
+    {FaultEffect::random_errors, "random_errors"},
     {FaultEffect::node_off, "node_off"},
     {FaultEffect::node_on, "node_on"},
     {FaultEffect::bus_off, "bus_off"},
@@ -30,8 +31,8 @@ constexpr NamedValue<FaultEffect> kEffects[] = {
 
 // Named by the language, not emulated yet: a scenario using them is refused with a reason.
 constexpr std::string_view kLaterEffects[] = {
-    "random_errors",    "babble",         "line_error",    "lin_no_response", "lin_checksum_error",
-    "lin_parity_error", "lin_sync_error", "lin_bit_error", "lin_wakeup"};
+    "babble",           "line_error",     "lin_no_response", "lin_checksum_error",
+    "lin_parity_error", "lin_sync_error", "lin_bit_error",   "lin_wakeup"};
 
 bool is_frame_effect(FaultEffect e) {
   return e <= FaultEffect::ack_error;
@@ -126,10 +127,24 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     }
   } else if (is_bus_effect(f.effect)) {
     allow({"bus", "duration"});
+  } else if (f.effect == FaultEffect::random_errors) {
+    allow({"bus", "until", "bit_error_rate"});
   } else {
     allow({"node"});
     if (f.effect == FaultEffect::node_off || f.effect == FaultEffect::oscillator) {
       allow({"until"});
+    }
+    if (f.effect == FaultEffect::random_errors) {
+      const toml::node* n = t.get("bit_error_rate");
+      if (n == nullptr) {
+        c.error(t.source(), path + ".bit_error_rate", "missing (a number is required)");
+      } else if (auto rate = c.number(t, path, "bit_error_rate")) {
+        if (!(*rate > 0.0 && *rate <= 0.1)) {
+          c.error(*n, path + ".bit_error_rate", "must be above 0 and at most 0.1");
+        } else {
+          f.bit_error_rate = *rate;
+        }
+      }
     }
     if (f.effect == FaultEffect::error_counters) {
       allow({"tec", "rec"});
@@ -158,7 +173,8 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
       c.error(*t.get("until"), path + ".until", "must be later than at");
     }
   }
-  if (is_frame_effect(f.effect) || is_bus_effect(f.effect)) {
+  if (is_frame_effect(f.effect) || is_bus_effect(f.effect) ||
+      f.effect == FaultEffect::random_errors) {
     if (auto bus = c.string(t, path, "bus", true)) {
       f.bus = *bus;
     }
@@ -190,6 +206,18 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
       f.duration_ns = *d;
       if (*d <= 0) {
         c.error(*t.get("duration"), path + ".duration", "must be above 0");
+      }
+    }
+  }
+  if (f.effect == FaultEffect::random_errors) {
+    const toml::node* n = t.get("bit_error_rate");
+    if (n == nullptr) {
+      c.error(t.source(), path + ".bit_error_rate", "missing (a number is required)");
+    } else if (auto rate = c.number(t, path, "bit_error_rate")) {
+      if (!(*rate > 0.0 && *rate <= 0.1)) {
+        c.error(*n, path + ".bit_error_rate", "must be above 0 and at most 0.1");
+      } else {
+        f.bit_error_rate = *rate;
       }
     }
   }

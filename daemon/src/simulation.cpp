@@ -221,6 +221,17 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         applied.rule = buses_[bus].faults->add(rule);
         break;
       }
+      case FaultEffect::random_errors: {
+        FaultRule rule;
+        rule.bit_error_rate = f.bit_error_rate;
+        rule.from = at;
+        if (f.until_ns) {
+          rule.until = start + SimDuration(*f.until_ns);
+        }
+        rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;
+        applied.rule = buses_[bus].faults->add(rule);
+        break;
+      }
       case FaultEffect::ack_suppress: {
         const SimTime until = at + SimDuration(f.duration_ns);
         when(at, [this, &b, until, what] {

@@ -1,5 +1,7 @@
 #include "canemu/firmware_model/fault_plan.hpp"
 
+#include <cmath>
+
 namespace canemu::model {
 
 FrameFault FaultPlan::on_frame(const FrameContext& ctx) {
@@ -18,6 +20,19 @@ FrameFault FaultPlan::on_frame(const FrameContext& ctx) {
     // A draw only for rules that are not certain, so that certain rules leave the sequence
     // alone.
     if (r.probability < 1.0 && !(draw(r) < r.probability)) {
+      continue;
+    }
+    if (r.bit_error_rate > 0) {
+      // The first bit hit, from a geometric distribution: P(first hit = k) = (1 - p)^k p.
+      const double u = draw(r);
+      const double k = r.bit_error_rate >= 1.0
+                           ? 0.0
+                           : std::floor(std::log1p(-u) / std::log1p(-r.bit_error_rate));
+      if (!(k < static_cast<double>(ctx.bits.length))) {
+        continue;
+      }
+      r.hits++;
+      chosen = FrameFault{CanErrorType::bit, static_cast<uint16_t>(k), false};
       continue;
     }
     r.hits++;

@@ -96,7 +96,7 @@ tec = 300
                    "s.toml:6:1: fault[1].duration: missing (a string is required)",
                    "s.toml:14:10: fault[2].effect: \"teleport\" is not a fault effect (bit_error, "
                    "stuff_error, form_error, crc_error, ack_error, ack_suppress, stuck_dominant, "
-                   "node_off, node_on, bus_off, error_counters, oscillator)",
+                   "random_errors, node_off, node_on, bus_off, error_counters, oscillator)",
                    "s.toml:19:10: fault[3].effect: \"babble\" is not emulated yet",
                    "s.toml:25:15: fault[4].probability: must be above 0 and at most 1",
                    "s.toml:31:7: fault[5].tec: 300 is outside 0..255",
@@ -270,6 +270,28 @@ duration = "1ms"
   w.run_until(3'000'000);
   EXPECT_GT(w.sim->bus(0).error_frames_on_bus(), before);
   EXPECT_GT(w.stats().errors_as_transmitter.total() + w.stats().errors_as_receiver.total(), 0u);
+}
+
+// Random bit errors: each bit hit with the given rate, the first hit of a frame a bit error
+// there. At 1e-3 and 50-bit frames about 5 % of the tester's frames are hit.
+TEST(ScenarioEffects, RandomErrorsHitFramesAtTheirBitErrorRate) {
+  auto run = [] {
+    World w;
+    w.apply(R"([[fault]]
+at = "0s"
+until = "200ms"
+bus = "can0"
+effect = "random_errors"
+bit_error_rate = 0.001
+)");
+    w.run_until(200'000'000);
+    return std::make_pair(w.stats().errors_as_transmitter.bit, w.stats().frames_sent);
+  };
+  const auto [errors, sent] = run();
+  EXPECT_EQ(run(), std::make_pair(errors, sent));  // the same seed, the same hits
+  const double share = static_cast<double>(errors) / static_cast<double>(errors + sent);
+  EXPECT_GT(share, 0.03);
+  EXPECT_LT(share, 0.07);
 }
 
 TEST(ScenarioEffects, UnknownNamesRejectTheWholeScenario) {

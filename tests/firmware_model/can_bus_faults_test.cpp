@@ -501,3 +501,35 @@ TEST(FaultPlanProbability, DrawsFromTheSeedAndRepeats) {
 
 }  // namespace
 }  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+// A bit error rate: the first bit hit (geometric over the frame's bits) becomes a bit error at
+// that bit; frames with no bit hit pass untouched.
+TEST(FaultPlanProbability, ABitErrorRateHitsAtTheFirstBitDrawn) {
+  const Frame f = testing::k123;
+  const EncodedFrame bits = encode(f);
+  FaultPlan plan;
+  FaultRule r;
+  r.bit_error_rate = 0.01;
+  r.seed = 11;
+  plan.add(r);
+  int hit = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const FrameFault ff = plan.on_frame(FrameContext{SimTime::from_ns(i), 0, f, bits});
+    if (ff.error) {
+      ++hit;
+      EXPECT_EQ(*ff.error, CanErrorType::bit);
+      ASSERT_TRUE(ff.bit);
+      EXPECT_LT(*ff.bit, bits.length);
+    }
+  }
+  // 1 - 0.99^62 = 46 % of the frames; 4 standard deviations is 126 of 4000.
+  EXPECT_GT(hit, 1840 - 130);
+  EXPECT_LT(hit, 1840 + 130);
+  EXPECT_EQ(plan.rule(0).hits, static_cast<uint64_t>(hit));
+}
+
+}  // namespace
+}  // namespace canemu::model

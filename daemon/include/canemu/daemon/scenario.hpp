@@ -23,6 +23,7 @@ enum class FaultEffect {
   // on the bus
   ack_suppress,
   stuck_dominant,
+  random_errors,
   // on a node
   node_off,
   node_on,
@@ -55,7 +56,8 @@ struct FaultSpec {
   int64_t duration_ns = 0;        // ack_suppress, stuck_dominant; node_off/oscillator: optional
   uint16_t tec = 0;               // error_counters
   uint16_t rec = 0;
-  int32_t ppm = 0;  // oscillator
+  int32_t ppm = 0;            // oscillator
+  double bit_error_rate = 0;  // random_errors
 };
 
 struct Scenario {

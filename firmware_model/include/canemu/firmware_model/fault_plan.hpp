@@ -32,7 +32,10 @@ struct FaultRule {
   SimTime from;                   // window in simulated time
   std::optional<SimTime> until;
   double probability = 1.0;  // per matching frame, drawn from the rule's own generator
-  uint64_t seed = 1;         // of that generator: the same seed gives the same draws
+  // Above 0: random bit errors instead of `fault`. Every bit of a matching frame is hit with
+  // this probability; the first bit hit becomes a bit error there (frames with no bit hit pass).
+  double bit_error_rate = 0;
+  uint64_t seed = 1;  // of that generator: the same seed gives the same draws
 
   uint64_t seen = 0;    // matching frames so far
   uint64_t hits = 0;    // frames hit so far

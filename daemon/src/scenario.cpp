@@ -134,18 +134,6 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     if (f.effect == FaultEffect::node_off || f.effect == FaultEffect::oscillator) {
       allow({"until"});
     }
-    if (f.effect == FaultEffect::random_errors) {
-      const toml::node* n = t.get("bit_error_rate");
-      if (n == nullptr) {
-        c.error(t.source(), path + ".bit_error_rate", "missing (a number is required)");
-      } else if (auto rate = c.number(t, path, "bit_error_rate")) {
-        if (!(*rate > 0.0 && *rate <= 0.1)) {
-          c.error(*n, path + ".bit_error_rate", "must be above 0 and at most 0.1");
-        } else {
-          f.bit_error_rate = *rate;
-        }
-      }
-    }
     if (f.effect == FaultEffect::error_counters) {
       allow({"tec", "rec"});
     }

@@ -107,6 +107,16 @@ tec = 300
       (std::vector<std::string>{"s.toml: no [[fault]] tables: a scenario needs at least one"}));
 }
 
+TEST(Scenario, RandomErrorsNeedABitErrorRateInRange) {
+  EXPECT_EQ(errors_of("[[fault]]\nat = \"0s\"\nbus = \"can0\"\neffect = \"random_errors\"\n"),
+            (std::vector<std::string>{
+                "s.toml:1:1: fault[0].bit_error_rate: missing (a number is required)"}));
+  EXPECT_EQ(errors_of("[[fault]]\nat = \"0s\"\nbus = \"can0\"\neffect = \"random_errors\"\n"
+                      "bit_error_rate = 0.5\n"),
+            (std::vector<std::string>{
+                "s.toml:5:18: fault[0].bit_error_rate: must be above 0 and at most 0.1"}));
+}
+
 // The default configuration (can0 and can1 at 500 kbit/s, ixxat0 with a controller on each)
 // and an ephemeral SJA1000 "tester" on can0 that always has a frame to send.
 struct World {

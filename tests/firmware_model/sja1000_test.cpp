@@ -20,6 +20,8 @@ struct Chip {
   Chip() {
     chip.on_interrupt = [this](SimTime) { ++interrupts; };
   }
+  // On `bus`, in reset mode.
+  explicit Chip(Bus& bus) : Chip() { chip.connect(bus.bus); }
   // Reset mode: 500 kbit/s, accept everything, all interrupts, then operating mode.
   void start(uint8_t mod_bits = 0) {
     chip.write(BTR0, 0x00);
@@ -70,8 +72,7 @@ TEST(Sja1000, StartsInResetModeWithTheDatasheetResetValues) {
 
 TEST(Sja1000, AHardwareResetRestoresTheResetValues) {
   Bus b;
-  Chip a;
-  a.chip.connect(b.bus);
+  Chip a(b);
   a.start();
   a.chip.write(MOD, MOD_RM);
   a.chip.write(EWLR, 10);
@@ -105,9 +106,7 @@ TEST(Sja1000, TimingAndFiltersAreWritableInResetModeOnly) {
 
 TEST(Sja1000, TwoChipsExchangeAFrameThroughTheirRegisters) {
   Bus b;
-  Chip a, r;
-  a.chip.connect(b.bus);
-  r.chip.connect(b.bus);
+  Chip a(b), r(b);
   a.start();
   r.start();
   const Frame f = frame(0x123, {0x11, 0x22});
@@ -135,9 +134,7 @@ TEST(Sja1000, TwoChipsExchangeAFrameThroughTheirRegisters) {
 
 TEST(Sja1000, SingleAcceptanceFilterPassesOnlyTheProgrammedIdentifier) {
   Bus b;
-  Chip a, r;
-  a.chip.connect(b.bus);
-  r.chip.connect(b.bus);
+  Chip a(b), r(b);
   a.start();
   r.start(MOD_AFM);
   r.chip.write(MOD, MOD_RM | MOD_AFM);
@@ -181,9 +178,7 @@ TEST(Sja1000, DualFilterOnStandardFramesUsesTheFirstDataByteInFilterOne) {
 
 TEST(Sja1000, FullReceiveFifoOverrunsKeepingTheOldestFrames) {
   Bus b;
-  Chip a, r;
-  a.chip.connect(b.bus);
-  r.chip.connect(b.bus);
+  Chip a(b), r(b);
   a.start();
   r.start();
   // An 8-byte standard frame takes 11 FIFO bytes: five fit in 64, the sixth overruns.
@@ -208,9 +203,7 @@ TEST(Sja1000, FullReceiveFifoOverrunsKeepingTheOldestFrames) {
 
 TEST(Sja1000, ListenOnlyChipNeitherAcknowledgesNorCounts) {
   Bus b;
-  Chip a, l;
-  a.chip.connect(b.bus);
-  l.chip.connect(b.bus);
+  Chip a(b), l(b);
   a.start();
   l.start(MOD_LOM);
   a.send(frame(0x123, {1}));
@@ -227,9 +220,7 @@ TEST(Sja1000, ListenOnlyChipNeitherAcknowledgesNorCounts) {
 
 TEST(Sja1000, SelfReceptionRequestReceivesTheOwnFrame) {
   Bus b;
-  Chip a, r;
-  a.chip.connect(b.bus);
-  r.chip.connect(b.bus);
+  Chip a(b), r(b);
   a.start();
   r.start();
   a.send(frame(0x321, {9}), CMR_SRR);
@@ -240,8 +231,7 @@ TEST(Sja1000, SelfReceptionRequestReceivesTheOwnFrame) {
 
 TEST(Sja1000, SelfTestModeWithSelfReceptionWorksAlone) {
   Bus b;
-  Chip a;
-  a.chip.connect(b.bus);
+  Chip a(b);
   a.start(MOD_STM);
   a.send(frame(0x321, {9}), CMR_SRR);
   b.run_until(1'000'000);
@@ -251,8 +241,7 @@ TEST(Sja1000, SelfTestModeWithSelfReceptionWorksAlone) {
 
 TEST(Sja1000, SingleShotIsTriedOnceAndReleasesTheBufferIncomplete) {
   Bus b;
-  Chip a;
-  a.chip.connect(b.bus);
+  Chip a(b);
   a.start();
   a.send(frame(0x123, {1}), CMR_TR | CMR_AT);
   b.run_until(10'000'000);
@@ -264,9 +253,8 @@ TEST(Sja1000, SingleShotIsTriedOnceAndReleasesTheBufferIncomplete) {
 
 TEST(Sja1000, AbortBeforeTheStartOfFrameCancelsTheRequest) {
   Bus b;
-  Chip a, busy, r;
+  Chip a(b), busy(b), r(b);
   for (auto* c : {&a, &busy, &r}) {
-    c->chip.connect(b.bus);
     c->start();
   }
   busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));
@@ -280,9 +268,8 @@ TEST(Sja1000, AbortBeforeTheStartOfFrameCancelsTheRequest) {
 
 TEST(Sja1000, ArbitrationLostCaptureHoldsTheBitNumberUntilRead) {
   Bus b;
-  Chip a, w, r;
+  Chip a(b), w(b), r(b);
   for (auto* c : {&a, &w, &r}) {
-    c->chip.connect(b.bus);
     c->start();
   }
   a.send(frame(0x123, {}));  // 001 0010 0011
@@ -295,9 +282,7 @@ TEST(Sja1000, ArbitrationLostCaptureHoldsTheBitNumberUntilRead) {
 
 TEST(Sja1000, BusOffSetsResetModeAndRecoversAfterTheHostRestartsIt) {
   Bus b;
-  Chip a, r;
-  a.chip.connect(b.bus);
-  r.chip.connect(b.bus);
+  Chip a(b), r(b);
   a.start();
   r.start();
   FaultRule rule;
@@ -326,8 +311,7 @@ TEST(Sja1000, BusOffSetsResetModeAndRecoversAfterTheHostRestartsIt) {
 
 TEST(Sja1000, ErrorWarningLimitIsProgrammable) {
   Bus b;
-  Chip a;
-  a.chip.connect(b.bus);
+  Chip a(b);
   a.chip.write(EWLR, 16);
   a.start();
   a.send(frame(0x123, {1}));
@@ -376,9 +360,7 @@ using namespace sja1000;
 
 TEST(Sja1000Interrupts, SourcesDisabledInIerSetNoIrBits) {
   Bus b;
-  Chip a, r;
-  a.chip.connect(b.bus);
-  r.chip.connect(b.bus);
+  Chip a(b), r(b);
   a.start();
   r.start();
   r.chip.write(MOD, MOD_RM);
@@ -396,9 +378,8 @@ TEST(Sja1000Interrupts, SourcesDisabledInIerSetNoIrBits) {
 
 TEST(Sja1000Interrupts, ArbitrationLostCaptureHoldsUntilReadAndRaisesAliOnce) {
   Bus b;
-  Chip a, w, v, r;
+  Chip a(b), w(b), v(b), r(b);
   for (auto* c : {&a, &w, &v, &r}) {
-    c->chip.connect(b.bus);
     c->start();
   }
   a.send(frame(0x123, {}));  // 001 0010 0011
@@ -418,8 +399,7 @@ TEST(Sja1000Interrupts, ArbitrationLostCaptureHoldsUntilReadAndRaisesAliOnce) {
 
 TEST(Sja1000Interrupts, ErrorInterruptFollowsTheEsBitNotTheErrorPassiveState) {
   Bus b;
-  Chip a;
-  a.chip.connect(b.bus);
+  Chip a(b);
   a.chip.write(EWLR, 200);
   a.start();
   a.send(frame(0x123, {1}));
@@ -433,8 +413,7 @@ TEST(Sja1000Interrupts, ErrorInterruptFollowsTheEsBitNotTheErrorPassiveState) {
 
 TEST(Sja1000Interrupts, Writing255ToTxerrStartsABusOffThatTheHostSees) {
   Bus b;
-  Chip a;
-  a.chip.connect(b.bus);
+  Chip a(b);
   a.chip.write(IER, 0xFF);
   a.chip.write(TXERR, 255);
   EXPECT_TRUE(a.chip.read(SR) & SR_BS);
@@ -452,9 +431,8 @@ TEST(Sja1000Interrupts, Writing255ToTxerrStartsABusOffThatTheHostSees) {
 
 TEST(Sja1000, EnteringResetModeDropsAPendingRequest) {
   Bus b;
-  Chip a, busy, r;
+  Chip a(b), busy(b), r(b);
   for (auto* c : {&a, &busy, &r}) {
-    c->chip.connect(b.bus);
     c->start();
   }
   busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));

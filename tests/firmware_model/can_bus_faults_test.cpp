@@ -25,9 +25,7 @@ FaultRule rule(CanErrorType type, std::optional<uint64_t> count = std::nullopt) 
 
 TEST(CanBusFaults, ThirtyTwoBitErrorsDriveTheSenderBusOffAndItRecoversAfter128x11Bits) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   f.plan.add(rule(CanErrorType::bit, 32));
   std::vector<BusEvent> events;
   f.bus.on_bus_event = [&](const BusEvent& e) { events.push_back(e); };
@@ -131,9 +129,7 @@ TEST(CanBusFaults, ASlowOscillatorStillCountsElevenBitsBetweenFrames) {
 
 TEST(CanBusFaults, ReceiversRejectAFrameWhoseLastButOneEofBitIsDominant) {
   Fixture f;
-  TestController tx, rx;
-  tx.attach_to(f.bus);
-  rx.attach_to(f.bus);
+  TestController tx(f.bus), rx(f.bus);
   FaultRule r = rule(CanErrorType::bit, 1);
   r.fault.bit = 59;  // EOF bit 5: the transmitter's flag starts at EOF bit 6
   f.plan.add(r);
@@ -149,9 +145,7 @@ TEST(CanBusFaults, AnErrorInTheLastEofBitLeavesReceiversWithTheFrameTwice) {
   // The transmitter's flag starts at the last EOF bit: receivers have already accepted the
   // frame (at the last-but-one EOF bit), and the retransmission arrives again, as on a real bus.
   Fixture f;
-  TestController tx, rx;
-  tx.attach_to(f.bus);
-  rx.attach_to(f.bus);
+  TestController tx(f.bus), rx(f.bus);
   FaultRule r = rule(CanErrorType::bit, 1);
   r.fault.bit = 60;
   f.plan.add(r);
@@ -181,9 +175,7 @@ TEST(CanBusFaults, SelfReceptionWorksWhenTheFrameSucceedsDespiteAPassiveFlag) {
 
 TEST(CanBusFaults, ZeroLengthHoldsChangeNothing) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   f.bus.hold_dominant(SimTime::from_ns(0), SimDuration(0));
   f.run_until(1'000'000);
   EXPECT_TRUE(a.errors.empty());
@@ -217,9 +209,7 @@ TEST(CanBusFaults, CrcErrorOnEveryReceiverEndsInAnAckErrorForTheTransmitter) {
 
 TEST(CanBusFaults, InjectedStuffErrorIsDetectedByReceiversAtTheChosenBit) {
   Fixture f;
-  TestController tx, rx;
-  tx.attach_to(f.bus);
-  rx.attach_to(f.bus);
+  TestController tx(f.bus), rx(f.bus);
   FaultRule r = rule(CanErrorType::stuff, 1);
   r.fault.bit = 30;
   f.plan.add(r);
@@ -237,9 +227,7 @@ TEST(CanBusFaults, InjectedStuffErrorIsDetectedByReceiversAtTheChosenBit) {
 
 TEST(CanBusFaults, InjectedFormErrorHitsTheCrcDelimiterByDefault) {
   Fixture f;
-  TestController tx, rx;
-  tx.attach_to(f.bus);
-  rx.attach_to(f.bus);
+  TestController tx(f.bus), rx(f.bus);
   f.plan.add(rule(CanErrorType::form, 1));
   tx.send(k123);
   f.run_until(1'000'000);
@@ -251,9 +239,7 @@ TEST(CanBusFaults, InjectedFormErrorHitsTheCrcDelimiterByDefault) {
 
 TEST(CanBusFaults, AckErrorOnOneFrameCostsTheTransmitterEightAndTheReceiverOne) {
   Fixture f;
-  TestController tx, rx;
-  tx.attach_to(f.bus);
-  rx.attach_to(f.bus);
+  TestController tx(f.bus), rx(f.bus);
   f.plan.add(rule(CanErrorType::ack, 1));
   tx.send(k123);
   f.run_until(1'000'000);
@@ -270,8 +256,7 @@ TEST(CanBusFaults, AckErrorOnOneFrameCostsTheTransmitterEightAndTheReceiverOne) 
 
 TEST(CanBusFaults, PassiveTransmitterWithAckErrorAndNoDominantBitKeepsItsCounter) {
   Fixture f;
-  TestController lone;
-  lone.attach_to(f.bus);
+  TestController lone(f.bus);
   lone.fc.set_counters(130, 0);
   lone.send(kZero, /*single_shot=*/true);
   f.run_until(1'000'000);
@@ -282,9 +267,7 @@ TEST(CanBusFaults, PassiveTransmitterWithAckErrorAndNoDominantBitKeepsItsCounter
 
 TEST(CanBusFaults, UnpluggedNodeLeavesTheOtherUnacknowledged) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   f.bus.set_connected(b.id(), false);
   a.send(kZero);
   f.run_until(3 * 59 * kBit - 1);
@@ -324,9 +307,7 @@ TEST(CanBusFaults, NodeAtAnotherBitRateDestroysFramesUntilItIsErrorPassive) {
 
 TEST(CanBusFaults, OscillatorOffsetBeyondToleranceStopsDecoding) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   f.bus.set_oscillator_ppm(b.id(), 7000);  // beyond 2 x 0.3125 %
   a.send(k123);
   f.run_until(200'000);
@@ -339,9 +320,7 @@ TEST(CanBusFaults, OscillatorOffsetBeyondToleranceStopsDecoding) {
 
 TEST(CanBusFaults, DominantHoldOnAnIdleBusRaisesReceiveCountersBySequences) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   f.bus.hold_dominant(SimTime::from_ns(0), SimDuration(100 * kBit));
   f.run_until(1'000'000);
   // Seen as a start of frame: stuff error at the sixth dominant bit (+1), a dominant bit after
@@ -357,9 +336,7 @@ TEST(CanBusFaults, DominantHoldOnAnIdleBusRaisesReceiveCountersBySequences) {
 
 TEST(CanBusFaults, RecessiveStuffBitOverwrittenInArbitrationCostsTheTransmitterNothing) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   // kZero's bit 5 is a recessive stuff bit inside the identifier.
   ASSERT_TRUE(encode(kZero).is_stuff(5));
   f.bus.hold_dominant(SimTime::from_ns(5 * kBit), SimDuration(kBit));
@@ -373,9 +350,7 @@ TEST(CanBusFaults, RecessiveStuffBitOverwrittenInArbitrationCostsTheTransmitterN
 
 TEST(CanBusFaults, AckSuppressionLeavesALoneSenderPassiveAtTec128) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   f.bus.suppress_acks_until(SimTime::from_ns(1'000'000'000));
   a.send(kZero);
   f.run_until(500'000'000);
@@ -394,9 +369,7 @@ TEST(CanBusFaults, AckSuppressionLeavesALoneSenderPassiveAtTec128) {
 
 TEST(CanBusFaults, BusLoadIsBusyTimeOverTheLastSecond) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   for (int i = 0; i < 10000; ++i) {
     a.send(kZero);
   }
@@ -443,9 +416,7 @@ TEST(CanBusFaults, InjectorActsBeforeArbitrationAtFrameBoundaries) {
 
 TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   FaultRule r = rule(CanErrorType::bit, 2);
   r.match.transmitter = a.id();
   r.match.id = 0x120;

@@ -16,9 +16,7 @@ using Fixture = testing::BusFixture;
 
 TEST(CanBus, TwoNodesExchangeFramesBackToBackWithExactTimes) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   a.send(k123);
   b.send(kZero);
   f.run_until(1'000'000);
@@ -133,8 +131,7 @@ TEST(CanBus, SameArbitrationFieldWithDifferentDataCollidesInABitError) {
 
 TEST(CanBus, LoneNodeClimbsToTec128AndStaysErrorPassiveRetrying) {
   Fixture f;
-  TestController lone;
-  lone.attach_to(f.bus);
+  TestController lone(f.bus);
   lone.send(kZero);
   // Error-active: ACK error at the ACK slot (bit 41), 6-bit active flag, 8-bit delimiter, 3-bit
   // intermission: a new attempt every 41 + 1 + 6 + 8 + 3 = 59 bits, TEC + 8 each time.
@@ -195,8 +192,7 @@ TEST(CanBus, AListenOnlyNodeStillReceivesAcknowledgedFrames) {
 
 TEST(CanBus, SingleShotFrameIsNotRetried) {
   Fixture f;
-  TestController lone;
-  lone.attach_to(f.bus);
+  TestController lone(f.bus);
   lone.send(kZero, /*single_shot=*/true);
   f.run_until(1'000'000);
   EXPECT_EQ(lone.errors.size(), 1u);
@@ -208,9 +204,7 @@ TEST(CanBus, SingleShotFrameIsNotRetried) {
 
 TEST(CanBus, SingleShotFrameThatLosesArbitrationIsDropped) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   a.send(k123, /*single_shot=*/true);
   b.send(kZero);
   f.run_until(1'000'000);
@@ -225,9 +219,7 @@ TEST(CanBus, SingleShotFrameThatLosesArbitrationIsDropped) {
 
 TEST(CanBus, SelfReceptionDeliversTheOwnFrame) {
   Fixture f;
-  TestController a, b;
-  a.attach_to(f.bus);
-  b.attach_to(f.bus);
+  TestController a(f.bus), b(f.bus);
   a.send(k123, false, /*self_reception=*/true);
   f.run_until(200'000);
   ASSERT_EQ(a.received.size(), 1u);
@@ -306,9 +298,7 @@ TEST(CanBus, AControllerWithoutABitTimeStaysOffTheBus) {
 
 TEST(CanBus, ReceiveCounterFallsByOneAndFromPassiveBackTo127) {
   Fixture f;
-  TestController tx, rx;
-  tx.attach_to(f.bus);
-  rx.attach_to(f.bus);
+  TestController tx(f.bus), rx(f.bus);
   rx.fc.set_counters(0, 140);
   tx.send(kZero);
   tx.send(kZero);

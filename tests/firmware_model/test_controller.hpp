@@ -43,6 +43,11 @@ inline const Frame k123 = *Frame::classic(0x123, std::vector<uint8_t>{0x11, 0x22
 class TestController : public CanController {
  public:
   explicit TestController(BitTiming nominal = timing_500k()) { timing_.nominal = nominal; }
+  // Attached to `bus` at once.
+  explicit TestController(CanBus& bus, BitTiming nominal = timing_500k())
+      : TestController(nominal) {
+    attach_to(bus);
+  }
 
   void attach_to(CanBus& bus) {
     bus_ = &bus;

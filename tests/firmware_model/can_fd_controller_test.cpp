@@ -29,13 +29,20 @@ Frame fd_frame(uint32_t id, std::size_t len, bool brs) {
 
 using Bus = testing::BusFixture;
 
+// Puts the controllers on the bus, in this order, and starts them.
+void connect_and_start(Bus& b, std::initializer_list<CanFdController*> controllers) {
+  for (CanFdController* c : controllers) {
+    c->connect(b.bus);
+  }
+  for (CanFdController* c : controllers) {
+    c->start();
+  }
+}
+
 TEST(CanFdController, ExchangesFdFramesWithBitRateSwitchInTheirExactTime) {
   Bus b;
   CanFdController a(fd_config()), r(fd_config());
-  a.connect(b.bus);
-  r.connect(b.bus);
-  a.start();
-  r.start();
+  connect_and_start(b, {&a, &r});
   const Frame f = fd_frame(0x555, 12, true);
   ASSERT_TRUE(a.submit(TxFrame{f}));
   b.run_until(1'000'000);
@@ -50,10 +57,7 @@ TEST(CanFdController, ExchangesFdFramesWithBitRateSwitchInTheirExactTime) {
 TEST(CanFdController, SixtyFourByteFramesAndClassicFramesShareTheBus) {
   Bus b;
   CanFdController a(fd_config(4'000'000)), r(fd_config(4'000'000));
-  a.connect(b.bus);
-  r.connect(b.bus);
-  a.start();
-  r.start();
+  connect_and_start(b, {&a, &r});
   ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x100, 64, true)}));
   ASSERT_TRUE(a.submit(TxFrame{*Frame::classic(0x101, std::vector<uint8_t>{1, 2})}));
   b.run_until(2'000'000);
@@ -65,10 +69,7 @@ TEST(CanFdController, SixtyFourByteFramesAndClassicFramesShareTheBus) {
 TEST(CanFdController, ErrorPassiveTransmitterSetsEsi) {
   Bus b;
   CanFdController a(fd_config()), r(fd_config());
-  a.connect(b.bus);
-  r.connect(b.bus);
-  a.start();
-  r.start();
+  connect_and_start(b, {&a, &r});
   a.confinement().set_counters(140, 0);
   ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x10, 8, true)}));
   b.run_until(1'000'000);
@@ -101,10 +102,7 @@ TEST(CanFdController, ReceiveQueueOverrunsWhenNobodyDrainsIt) {
   CanFdConfig small = fd_config();
   small.rx_capacity = 2;
   CanFdController a(fd_config()), r(small);
-  a.connect(b.bus);
-  r.connect(b.bus);
-  a.start();
-  r.start();
+  connect_and_start(b, {&a, &r});
   for (uint32_t i = 0; i < 4; ++i) {
     ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x100 + i, 8, true)}));
   }
@@ -118,10 +116,7 @@ TEST(CanFdController, ReceiveQueueOverrunsWhenNobodyDrainsIt) {
 TEST(CanFdController, DataRateMismatchBreaksOnlyFramesWithBitRateSwitch) {
   Bus b;
   CanFdController a(fd_config(2'000'000)), r(fd_config(4'000'000));
-  a.connect(b.bus);
-  r.connect(b.bus);
-  a.start();
-  r.start();
+  connect_and_start(b, {&a, &r});
   ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x10, 8, false)}));
   b.run_until(1'000'000);
   EXPECT_EQ(r.rx_queued(), 1u);
@@ -134,10 +129,7 @@ TEST(CanFdController, DataRateMismatchBreaksOnlyFramesWithBitRateSwitch) {
 TEST(CanFdController, RecoversFromBusOffByItselfByDefault) {
   Bus b;
   CanFdController a(fd_config()), r(fd_config());
-  a.connect(b.bus);
-  r.connect(b.bus);
-  a.start();
-  r.start();
+  connect_and_start(b, {&a, &r});
   FaultRule rule;
   rule.fault.error = CanErrorType::bit;
   rule.count = 32;

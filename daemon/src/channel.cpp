@@ -124,20 +124,7 @@ std::optional<TxFrame> Channel::next_tx() {
       if (frame && (!frame->frame.fd() || node_.fd_capable())) {
         return *frame;
       }
-      // Not a frame it can send: counted, reported when the client asked for transmit reports,
-      // skipped.
-      ++stats_.tx_rejected;
-      if (flags_ & ipc::kChannelReportTx) {
-        m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped);
-        m.timestamp_ns = node_.now().ns();
-        deliver(m);
-      }
-      rejects_left_ = rejects_left_ > 0 ? rejects_left_ - 1 : 0;
-      if (rejects_left_ == 0) {
-        // A client feeding nothing but junk gets a turn per loop iteration, not the loop: ring
-        // its own doorbell so the next iteration goes on from here.
-        const uint64_t one = 1;
-        [[maybe_unused]] const ssize_t n = ::write(tx_doorbell_.get(), &one, sizeof one);
+      if (!reject(m)) {
         return std::nullopt;
       }
       continue;
@@ -151,6 +138,25 @@ std::optional<TxFrame> Channel::next_tx() {
       return std::nullopt;
     }
   }
+}
+
+bool Channel::reject(ipc::ChannelMessage& m) {
+  // Not a frame the node can send: counted, reported when the client asked for transmit
+  // reports, skipped.
+  ++stats_.tx_rejected;
+  if (flags_ & ipc::kChannelReportTx) {
+    m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped);
+    m.timestamp_ns = node_.now().ns();
+    deliver(m);
+  }
+  if (rejects_left_ == 0 || --rejects_left_ == 0) {
+    // A client feeding nothing but junk gets a turn per loop iteration, not the loop: ring its
+    // own doorbell so the next iteration goes on from here.
+    const uint64_t one = 1;
+    [[maybe_unused]] const ssize_t n = ::write(tx_doorbell_.get(), &one, sizeof one);
+    return false;
+  }
+  return true;
 }
 
 void Channel::deliver(ipc::ChannelMessage& m) {

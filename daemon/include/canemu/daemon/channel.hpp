@@ -71,6 +71,9 @@ class Channel final : private model::ControllerEvents {
           ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell);
 
   std::optional<model::TxFrame> next_tx();
+  // Counts and reports a transmit element the node cannot send; false when this kick has
+  // skipped enough of them and the loop should get its turn.
+  bool reject(ipc::ChannelMessage& m);
   void deliver(ipc::ChannelMessage& m);
 
   void frame_received(model::SimTime at, const model::Frame& frame, bool own) override;

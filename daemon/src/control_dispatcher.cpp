@@ -85,34 +85,20 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
           fmt::format("sample point {} is not below 1000 per mille", sample_point));
     return;
   }
-  model::HostedNodeSettings settings;
   const bool fd = bc.kind == BusKind::can_fd;
   const uint32_t data_bitrate = !fd ? 0
                                 : m.data_bitrate != 0
                                     ? m.data_bitrate
                                     : (bc.data_bitrate != 0 ? bc.data_bitrate : bitrate);
-  if (!fd) {
-    const auto btr = sja1000_btr_for(bitrate, sample_point);
-    if (!btr) {
-      error(send, rid, ipc::ErrorCode::bad_bit_timing,
-            fmt::format("an SJA1000 at 16 MHz cannot run at {} bit/s", bitrate));
-      return;
-    }
-    settings.btr0 = btr->first;
-    settings.btr1 = btr->second;
-    settings.nominal = *model::sja1000::decode_btr(btr->first, btr->second);
-  } else {
-    const auto nominal = fd_timing_for(bitrate, sample_point, model::vci::Phase::nominal);
-    const auto data = fd_timing_for(data_bitrate, sample_point, model::vci::Phase::data);
-    if (!nominal || !data) {
-      error(send, rid, ipc::ErrorCode::bad_bit_timing,
-            fmt::format("the CAN FD controller at 80 MHz cannot run at {} / {} bit/s", bitrate,
-                        data_bitrate));
-      return;
-    }
-    settings.nominal = *nominal;
-    settings.data = *data;
+  const auto timing = controller_timing(fd, bitrate, data_bitrate, sample_point);
+  if (!timing) {
+    error(send, rid, ipc::ErrorCode::bad_bit_timing,
+          fd ? fmt::format("the CAN FD controller at 80 MHz cannot run at {} / {} bit/s", bitrate,
+                           data_bitrate)
+             : fmt::format("an SJA1000 at 16 MHz cannot run at {} bit/s", bitrate));
+    return;
   }
+  model::HostedNodeSettings settings = *timing;
   settings.listen_only = (m.flags & ipc::kChannelListenOnly) != 0;
   settings.restart_delay = model::SimDuration(int64_t{m.restart_ms} * 1'000'000);
   Channel::Options options;

@@ -70,6 +70,29 @@ std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point, 
   return best;
 }
 
+std::optional<HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
+                                                    uint32_t data_bitrate, uint32_t sample_point) {
+  HostedNodeSettings s;
+  if (!fd) {
+    const auto btr = sja1000_btr_for(bitrate, sample_point);
+    if (!btr) {
+      return std::nullopt;
+    }
+    s.btr0 = btr->first;
+    s.btr1 = btr->second;
+    s.nominal = *sja1000::decode_btr(btr->first, btr->second);
+    return s;
+  }
+  const auto nominal = fd_timing_for(bitrate, sample_point, vci::Phase::nominal);
+  const auto data = fd_timing_for(data_bitrate, sample_point, vci::Phase::data);
+  if (!nominal || !data) {
+    return std::nullopt;
+  }
+  s.nominal = *nominal;
+  s.data = *data;
+  return s;
+}
+
 tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::build(
     const Config& config) {
   std::unique_ptr<Simulation> sim(new Simulation(config));
@@ -304,8 +327,7 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
   // Every controller's timing first, so that a device is added whole or not at all.
   struct Plan {
     std::size_t bus;
-    std::pair<uint8_t, uint8_t> btr;
-    CanFdConfig fd;
+    HostedNodeSettings timing;
   };
   std::vector<Plan> plans;
   for (const std::string& bus_name : d.controllers) {
@@ -317,24 +339,15 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
       return fmt::format("{}:{}: device {}: bus {} is a LIN bus; a CAN controller cannot sit on it",
                          config_.source, d.line, d.name, bc.name);
     }
-    if (d.model == DeviceModel::ixxat_usb_to_can) {
-      const auto btr = sja1000_btr_for(bc.bitrate, bc.sample_point);
-      if (!btr) {
-        return fmt::format("{}:{}: device {}: an SJA1000 at 16 MHz cannot run bus {} at {} bit/s",
-                           config_.source, d.line, d.name, bc.name, bc.bitrate);
-      }
-      p.btr = *btr;
-    } else {
-      auto nominal = fd_timing_for(bc.bitrate, bc.sample_point, vci::Phase::nominal);
-      auto data = fd_timing_for(bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate,
-                                bc.sample_point, vci::Phase::data);
-      if (!nominal || !data) {
-        return fmt::format("{}:{}: device {}: the CAN FD controller cannot run bus {} at {} bit/s",
-                           config_.source, d.line, d.name, bc.name, bc.bitrate);
-      }
-      p.fd.nominal = *nominal;
-      p.fd.data = *data;
+    const bool fd = d.model != DeviceModel::ixxat_usb_to_can;
+    const auto timing = controller_timing(
+        fd, bc.bitrate, bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate, bc.sample_point);
+    if (!timing) {
+      return fmt::format("{}:{}: device {}: {} cannot run bus {} at {} bit/s", config_.source,
+                         d.line, d.name, fd ? "the CAN FD controller" : "an SJA1000 at 16 MHz",
+                         bc.name, bc.bitrate);
     }
+    p.timing = *timing;
     plans.push_back(p);
   }
   for (std::size_t i = 0; i < plans.size(); ++i) {
@@ -346,15 +359,18 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
       c.sja1000 = std::make_unique<Sja1000>();
       c.sja1000->connect(*buses_[p.bus].bus);
       // Programmed as the adapter firmware does at start: timing, accept all, operating mode.
-      c.sja1000->write(sja1000::BTR0, p.btr.first);
-      c.sja1000->write(sja1000::BTR1, p.btr.second);
+      c.sja1000->write(sja1000::BTR0, p.timing.btr0);
+      c.sja1000->write(sja1000::BTR1, p.timing.btr1);
       for (uint8_t k = 0; k < 4; ++k) {
         c.sja1000->write(static_cast<uint8_t>(sja1000::AMR0 + k), 0xFF);
       }
       c.sja1000->write(sja1000::MOD, 0);
       c.node = c.sja1000->node();
     } else {
-      c.fd = std::make_unique<CanFdController>(p.fd);
+      CanFdConfig fc;
+      fc.nominal = p.timing.nominal;
+      fc.data = p.timing.data;
+      c.fd = std::make_unique<CanFdController>(fc);
       c.fd->connect(*buses_[p.bus].bus);
       c.fd->start();
       c.node = c.fd->node();

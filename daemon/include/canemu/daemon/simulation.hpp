@@ -27,6 +27,13 @@ std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate, uin
 // The emulated CAN FD controller's timing for a rate in one phase (80 MHz clock).
 std::optional<model::BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
                                               model::vci::Phase phase);
+// The timing a controller needs: for an SJA1000 (`fd` false) the BTR0/BTR1 values for
+// `bitrate` and their decoded timing; for the CAN FD controller the nominal timing for
+// `bitrate` and the data timing for `data_bitrate`. Nothing if the clock cannot make a rate
+// exactly. Only the timing fields of the result are set.
+std::optional<model::HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
+                                                           uint32_t data_bitrate,
+                                                           uint32_t sample_point);
 
 // What a configuration reload did and what it left as it was, one line each.
 struct ReloadReport {

@@ -246,17 +246,15 @@ int Server::run() {
     advance_to_now();  // events are handled at the simulated instant they are seen
     for (int i = 0; i < n; ++i) {
       const int fd = events[i].data.fd;
-      if (auto bell = doorbells_.find(fd); bell != doorbells_.end()) {
-        bell->second->kick();
+      if (fd == timer_.get()) {
+        uint64_t expirations = 0;
+        [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
       } else if (fd == listen_.get()) {
         accept_clients();
       } else if (watchdog_.valid() && fd == watchdog_.get()) {
         uint64_t expirations = 0;
         [[maybe_unused]] const ssize_t r = ::read(fd, &expirations, sizeof expirations);
         sd_notify(0, "WATCHDOG=1");
-      } else if (fd == timer_.get()) {
-        uint64_t expirations = 0;
-        [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
       } else if (fd == signals_.get()) {
         signalfd_siginfo si{};
         while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
@@ -268,6 +266,8 @@ int Server::run() {
             running_ = false;
           }
         }
+      } else if (auto bell = doorbells_.find(fd); bell != doorbells_.end()) {
+        bell->second->kick();
       } else {
         serve(fd);
       }

@@ -60,77 +60,49 @@ Result<Channel> Channel::open(Connection& connection, const ChannelOptions& o) {
       tx->element_size() != sizeof(ipc::ChannelMessage)) {
     return tl::unexpected(IpcError{EPROTO, "ring element size is not a ChannelMessage"});
   }
-  Channel c;
-  c.connection_ = &connection;
-  c.id_ = reply->channel;
-  c.device_ = ipc::name_of(reply->device);
-  c.info_ = *reply;
-  c.rx_memory_ = std::make_unique<ipc::RingMemory>(std::move(*rx));
-  c.tx_memory_ = std::make_unique<ipc::RingMemory>(std::move(*tx));
-  c.rx_event_ = std::move(fds[2]);
-  c.tx_writer_event_ = std::move(fds[3]);
-  c.tx_doorbell_ = std::move(fds[4]);
-  // The daemon never waits on the receive ring's writer side: no eventfd there.
-  c.rx_ = std::make_unique<ipc::RingReader>(*c.rx_memory_, -1, c.rx_event_.get());
-  c.tx_ = std::make_unique<ipc::RingWriter>(*c.tx_memory_, c.tx_doorbell_.get(),
-                                            c.tx_writer_event_.get());
-  c.mutex_ = std::make_unique<std::mutex>();
-  c.spin_ns_ = int64_t{o.spin_us} * 1000;
-  return c;
+  return Channel(std::make_unique<State>(&connection, *reply, int64_t{o.spin_us} * 1000,
+                                         std::move(*rx), std::move(*tx), fds));
 }
 
-Channel::Channel(Channel&& o) noexcept
-    : connection_(std::exchange(o.connection_, nullptr)),
-      id_(o.id_),
-      spin_ns_(o.spin_ns_),
-      device_(std::move(o.device_)),
-      info_(o.info_),
-      rx_memory_(std::move(o.rx_memory_)),
-      tx_memory_(std::move(o.tx_memory_)),
-      rx_event_(std::move(o.rx_event_)),
-      tx_writer_event_(std::move(o.tx_writer_event_)),
-      tx_doorbell_(std::move(o.tx_doorbell_)),
-      rx_(std::move(o.rx_)),
-      tx_(std::move(o.tx_)),
-      mutex_(std::move(o.mutex_)) {}
+Channel::State::State(Connection* c, const ipc::OpenChannelReply& reply, int64_t spin,
+                      ipc::RingMemory rxm, ipc::RingMemory txm, std::vector<ipc::UniqueFd>& fds)
+    : connection(c),
+      info(reply),
+      device(ipc::name_of(reply.device)),
+      spin_ns(spin),
+      rx_memory(std::move(rxm)),
+      tx_memory(std::move(txm)),
+      rx_event(std::move(fds[2])),
+      tx_writer_event(std::move(fds[3])),
+      tx_doorbell(std::move(fds[4])),
+      // The daemon never waits on the receive ring's writer side: no eventfd there.
+      rx(rx_memory, -1, rx_event.get()),
+      tx(tx_memory, tx_doorbell.get(), tx_writer_event.get()) {}
+
+Channel::Channel(Channel&& o) noexcept = default;
 
 Channel& Channel::operator=(Channel&& o) noexcept {
   if (this != &o) {
-    if (connection_ != nullptr) {
-      (void)close();
-    }
-    connection_ = std::exchange(o.connection_, nullptr);
-    id_ = o.id_;
-    spin_ns_ = o.spin_ns_;
-    device_ = std::move(o.device_);
-    info_ = o.info_;
-    rx_memory_ = std::move(o.rx_memory_);
-    tx_memory_ = std::move(o.tx_memory_);
-    rx_event_ = std::move(o.rx_event_);
-    tx_writer_event_ = std::move(o.tx_writer_event_);
-    tx_doorbell_ = std::move(o.tx_doorbell_);
-    rx_ = std::move(o.rx_);
-    tx_ = std::move(o.tx_);
-    mutex_ = std::move(o.mutex_);
+    (void)close();
+    s_ = std::move(o.s_);
   }
   return *this;
 }
 
 Channel::~Channel() {
-  if (connection_ != nullptr) {
-    (void)close();
-  }
+  (void)close();
 }
 
 Result<void> Channel::send(const ipc::ChannelMessage& message, int timeout_ms) {
-  ipc::RingStatus status = tx_->put(&message);
+  ipc::RingWriter& tx = s_->tx;
+  ipc::RingStatus status = tx.put(&message);
   if (status == ipc::RingStatus::full && timeout_ms != 0) {
-    spin(spin_ns_, [&] { return (status = tx_->put(&message)) != ipc::RingStatus::full; });
+    spin(s_->spin_ns, [&] { return (status = tx.put(&message)) != ipc::RingStatus::full; });
     while (status == ipc::RingStatus::full) {
-      if (!tx_->wait(timeout_ms) && tx_->free_count() == 0) {
+      if (!tx.wait(timeout_ms) && tx.free_count() == 0) {
         return tl::unexpected(IpcError{ETIMEDOUT, "transmit ring still full"});
       }
-      status = tx_->put(&message);
+      status = tx.put(&message);
     }
   }
   switch (status) {
@@ -144,16 +116,17 @@ Result<void> Channel::send(const ipc::ChannelMessage& message, int timeout_ms) {
 }
 
 std::optional<ipc::ChannelMessage> Channel::receive(int timeout_ms) {
+  ipc::RingReader& rx = s_->rx;
   ipc::ChannelMessage m;
-  ipc::RingStatus status = rx_->get(&m);
+  ipc::RingStatus status = rx.get(&m);
   if (status == ipc::RingStatus::empty && timeout_ms != 0) {
-    spin(spin_ns_, [&] { return (status = rx_->get(&m)) != ipc::RingStatus::empty; });
+    spin(s_->spin_ns, [&] { return (status = rx.get(&m)) != ipc::RingStatus::empty; });
     while (status == ipc::RingStatus::empty) {
-      if (!rx_->wait(timeout_ms)) {
-        status = rx_->get(&m);
+      const bool woken = rx.wait(timeout_ms);
+      status = rx.get(&m);
+      if (!woken) {
         break;
       }
-      status = rx_->get(&m);
     }
   }
   if (status == ipc::RingStatus::ok) {
@@ -163,19 +136,22 @@ std::optional<ipc::ChannelMessage> Channel::receive(int timeout_ms) {
 }
 
 Result<ipc::ChannelStatusReply> Channel::status() {
+  if (!s_ || s_->connection == nullptr) {
+    return tl::unexpected(IpcError{EBADF, "the channel is closed"});
+  }
   auto m = ipc::make_message<ipc::ChannelStatusRequest>();
-  m.channel = id_;
-  return connection_->call<ipc::ChannelStatusRequest, ipc::ChannelStatusReply>(m);
+  m.channel = id();
+  return s_->connection->call<ipc::ChannelStatusRequest, ipc::ChannelStatusReply>(m);
 }
 
 Result<void> Channel::close() {
-  if (connection_ == nullptr) {
+  if (!s_ || s_->connection == nullptr) {
     return {};
   }
   auto m = ipc::make_message<ipc::CloseChannelRequest>();
-  m.channel = id_;
-  auto r = connection_->call<ipc::CloseChannelRequest, ipc::CloseChannelReply>(m);
-  connection_ = nullptr;
+  m.channel = id();
+  auto r = s_->connection->call<ipc::CloseChannelRequest, ipc::CloseChannelReply>(m);
+  s_->connection = nullptr;
   if (!r) {
     return tl::unexpected(r.error());
   }

@@ -12,6 +12,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "canemu/client/connection.hpp"
 #include "canemu/ipc/channel_message.hpp"
@@ -49,44 +50,49 @@ class Channel {
   // The next message from the receive ring, waiting up to `timeout_ms` (-1: forever).
   std::optional<ipc::ChannelMessage> receive(int timeout_ms);
 
-  ipc::RingReader& rx() { return *rx_; }
-  ipc::RingWriter& tx() { return *tx_; }
+  ipc::RingReader& rx() { return s_->rx; }
+  ipc::RingWriter& tx() { return s_->tx; }
   // The eventfd signalled when the receive ring reaches its threshold while this side waits
   // (see RingReader::arm_unless_filled for use in a poll loop).
-  int rx_event_fd() const { return rx_event_.get(); }
+  int rx_event_fd() const { return s_->rx_event.get(); }
   // The shared headers and the daemon's doorbell, for tools and tests that need the raw ring.
-  ipc::RingHeader* rx_header() const { return rx_memory_->header(); }
-  ipc::RingHeader* tx_header() const { return tx_memory_->header(); }
-  int tx_doorbell_fd() const { return tx_doorbell_.get(); }
+  ipc::RingHeader* rx_header() const { return s_->rx_memory.header(); }
+  ipc::RingHeader* tx_header() const { return s_->tx_memory.header(); }
+  int tx_doorbell_fd() const { return s_->tx_doorbell.get(); }
 
-  void lock() { mutex_->lock(); }
-  void unlock() { mutex_->unlock(); }
+  void lock() { s_->mutex.lock(); }
+  void unlock() { s_->mutex.unlock(); }
 
   Result<ipc::ChannelStatusReply> status();
   // Closes the channel; its device disappears. Also done by the destructor (without waiting
   // for the reply) and when the connection closes.
   Result<void> close();
 
-  uint32_t id() const { return id_; }
-  const std::string& device() const { return device_; }
-  const ipc::OpenChannelReply& info() const { return info_; }
+  uint32_t id() const { return s_->info.channel; }
+  const std::string& device() const { return s_->device; }
+  const ipc::OpenChannelReply& info() const { return s_->info; }
 
  private:
-  Channel() = default;
+  // Everything in one place that does not move, since the ring views point into the mappings.
+  struct State {
+    State(Connection* c, const ipc::OpenChannelReply& reply, int64_t spin, ipc::RingMemory rxm,
+          ipc::RingMemory txm, std::vector<ipc::UniqueFd>& fds);
+    Connection* connection;  // nullptr once closed
+    ipc::OpenChannelReply info;
+    std::string device;
+    int64_t spin_ns;
+    ipc::RingMemory rx_memory;
+    ipc::RingMemory tx_memory;
+    ipc::UniqueFd rx_event;
+    ipc::UniqueFd tx_writer_event;
+    ipc::UniqueFd tx_doorbell;
+    ipc::RingReader rx;
+    ipc::RingWriter tx;
+    std::mutex mutex;
+  };
+  explicit Channel(std::unique_ptr<State> s) : s_(std::move(s)) {}
 
-  Connection* connection_ = nullptr;
-  uint32_t id_ = 0;
-  int64_t spin_ns_ = 0;
-  std::string device_;
-  ipc::OpenChannelReply info_{};
-  std::unique_ptr<ipc::RingMemory> rx_memory_;
-  std::unique_ptr<ipc::RingMemory> tx_memory_;
-  ipc::UniqueFd rx_event_;
-  ipc::UniqueFd tx_writer_event_;
-  ipc::UniqueFd tx_doorbell_;
-  std::unique_ptr<ipc::RingReader> rx_;
-  std::unique_ptr<ipc::RingWriter> tx_;
-  std::unique_ptr<std::mutex> mutex_;
+  std::unique_ptr<State> s_;  // nullptr once moved from
 };
 
 }  // namespace canemu::client

@@ -216,7 +216,8 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
       case FaultEffect::stuff_error:
       case FaultEffect::form_error:
       case FaultEffect::crc_error:
-      case FaultEffect::ack_error: {
+      case FaultEffect::ack_error:
+      case FaultEffect::random_errors: {
         FaultRule rule;
         if (plan[k].node) {
           rule.match.transmitter = plan[k].node->node;
@@ -225,7 +226,9 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         rule.match.mask = f.match.mask;
         rule.match.extended = f.match.ext;
         rule.match.remote = f.match.rtr;
-        if (f.effect == FaultEffect::ack_error) {
+        if (f.effect == FaultEffect::random_errors) {
+          rule.bit_error_rate = f.bit_error_rate;  // the rule picks the bit per frame
+        } else if (f.effect == FaultEffect::ack_error) {
           rule.fault.suppress_ack = true;
         } else {
           rule.fault.error = f.effect == FaultEffect::bit_error     ? CanErrorType::bit
@@ -241,17 +244,6 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         }
         rule.probability = f.probability;
         rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;  // each fault its own draws
-        applied.rule = buses_[bus].faults->add(rule);
-        break;
-      }
-      case FaultEffect::random_errors: {
-        FaultRule rule;
-        rule.bit_error_rate = f.bit_error_rate;
-        rule.from = at;
-        if (f.until_ns) {
-          rule.until = start + SimDuration(*f.until_ns);
-        }
-        rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;
         applied.rule = buses_[bus].faults->add(rule);
         break;
       }

@@ -40,6 +40,10 @@ bool is_frame_effect(FaultEffect e) {
 bool is_bus_effect(FaultEffect e) {
   return e == FaultEffect::ack_suppress || e == FaultEffect::stuck_dominant;
 }
+// Node effects name a node; all others a bus.
+bool is_node_effect(FaultEffect e) {
+  return e >= FaultEffect::node_off;
+}
 
 // A duration key ("2s", "150ms", "20us", "10ns").
 std::optional<int64_t> duration(Checker& c, const toml::table& t, const std::string& path,
@@ -141,17 +145,7 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
       allow({"ppm"});
     }
   }
-  // only_keys takes an initializer list; check by hand against the effect's own set.
-  for (const auto& [k, v] : t) {
-    if (std::find(keys.begin(), keys.end(), k.str()) == keys.end()) {
-      std::string known;
-      for (auto a : keys) {
-        known += known.empty() ? std::string(a) : ", " + std::string(a);
-      }
-      c.error(k.source(), Checker::key(path, k.str()),
-              fmt::format("not a key of {} (known: {})", to_string(f.effect), known));
-    }
-  }
+  c.only_keys(t, path, keys, fmt::format("not a key of {} (known: ", to_string(f.effect)));
   if (auto at = duration(c, t, path, "at", true)) {
     f.at_ns = *at;
   }
@@ -161,8 +155,7 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
       c.error(*t.get("until"), path + ".until", "must be later than at");
     }
   }
-  if (is_frame_effect(f.effect) || is_bus_effect(f.effect) ||
-      f.effect == FaultEffect::random_errors) {
+  if (!is_node_effect(f.effect)) {
     if (auto bus = c.string(t, path, "bus", true)) {
       f.bus = *bus;
     }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <initializer_list>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,8 +44,10 @@ class Checker {
     error(node.source(), key, what);
   }
 
+  // Every key of `table` not in `allowed` is an error: `complaint`, then the known keys.
   void only_keys(const toml::table& table, std::string_view path,
-                 std::initializer_list<std::string_view> allowed) {
+                 std::span<const std::string_view> allowed,
+                 std::string_view complaint = "unknown key (known here: ") {
     for (const auto& [k, v] : table) {
       if (std::find(allowed.begin(), allowed.end(), k.str()) == allowed.end()) {
         std::string known;
@@ -52,9 +55,13 @@ class Checker {
           known += known.empty() ? std::string(a) : ", " + std::string(a);
         }
         (void)v;
-        error(k.source(), key(path, k.str()), fmt::format("unknown key (known here: {})", known));
+        error(k.source(), key(path, k.str()), fmt::format("{}{})", complaint, known));
       }
     }
+  }
+  void only_keys(const toml::table& table, std::string_view path,
+                 std::initializer_list<std::string_view> allowed) {
+    only_keys(table, path, std::span<const std::string_view>(allowed.begin(), allowed.size()));
   }
 
   std::optional<std::string> string(const toml::table& t, std::string_view path,

@@ -4,10 +4,8 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -286,13 +284,11 @@ int load_scenario_text(const std::string& socket, const std::string& source,
 }
 
 int cmd_fault_load(const std::string& socket, const std::string& file) {
-  std::ifstream in(file);
-  if (!in) {
+  auto text = daemon::read_text_file(file);
+  if (!text) {
     return fail(fmt::format("{}: cannot be read", file));
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  return load_scenario_text(socket, file, text.str());
+  return load_scenario_text(socket, file, *text);
 }
 
 int cmd_fault_list(const std::string& socket) {

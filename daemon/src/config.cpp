@@ -291,14 +291,22 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   return cfg;
 }
 
-tl::expected<Config, ConfigErrors> load_config_file(const std::string& path) {
+std::optional<std::string> read_text_file(const std::string& path) {
   std::ifstream in(path);
   if (!in) {
-    return tl::unexpected(ConfigErrors{fmt::format("{}: cannot be read", path)});
+    return std::nullopt;
   }
   std::stringstream ss;
   ss << in.rdbuf();
-  return parse_config(ss.str(), path);
+  return ss.str();
+}
+
+tl::expected<Config, ConfigErrors> load_config_file(const std::string& path) {
+  auto text = read_text_file(path);
+  if (!text) {
+    return tl::unexpected(ConfigErrors{fmt::format("{}: cannot be read", path)});
+  }
+  return parse_config(*text, path);
 }
 
 std::string_view embedded_default_config() {

@@ -1,8 +1,5 @@
 #include "canemu/daemon/scenario.hpp"
 
-#include <fstream>
-#include <sstream>
-
 #include "canemu/daemon/config.hpp"
 #include "toml_checker.hpp"
 
@@ -264,13 +261,11 @@ tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view
 }
 
 tl::expected<Scenario, std::vector<std::string>> load_scenario_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
+  auto text = read_text_file(path);
+  if (!text) {
     return tl::unexpected(std::vector<std::string>{fmt::format("{}: cannot be read", path)});
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_scenario(text.str(), path);
+  return parse_scenario(*text, path);
 }
 
 }  // namespace canemu::daemon

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/wire_encoding.hpp"
 #include "daemon_process.hpp"
 
@@ -175,6 +176,67 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
   Cli none(d, {"fault", "clear", "nope"});
   EXPECT_NE(Cli::read_all(none.err).find("no scenario named \"nope\" to clear"), std::string::npos);
   EXPECT_EQ(none.wait(), 1);
+}
+
+// status (text and JSON), time step and calc, as a user types them.
+TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
+  Daemon d;
+  auto c = connect(d, "holder");
+  client::ChannelOptions o;
+  o.bus = "can1";
+  o.device = "probe";
+  auto ch = client::Channel::open(c, o);
+  ASSERT_TRUE(ch) << ch.error().message;
+
+  Cli step(d, {"time", "step", "10ms"});
+  EXPECT_NE(Cli::read_all(step.out).find("simulated time 0.010000000 s"), std::string::npos);
+  EXPECT_EQ(step.wait(), 0);
+
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("time stepped, simulated 0.010000000 s, 2 clients"), std::string::npos) << t;
+  EXPECT_NE(t.find("can0         can        500000"), std::string::npos) << t;
+  EXPECT_NE(t.find("ixxat0:1       can1         error-active      0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("probe:0        can1         error-active"), std::string::npos) << t;
+  EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1"), std::string::npos)
+      << t;
+  EXPECT_NE(t.find("probe          ephemeral"), std::string::npos) << t;
+  EXPECT_NE(t.find("holder"), std::string::npos) << t;
+
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  ASSERT_FALSE(j.empty());
+  EXPECT_EQ(j.front(), '{');
+  EXPECT_EQ(j.substr(j.size() - 2), "}\n");
+  EXPECT_NE(j.find("\"time_mode\":\"stepped\""), std::string::npos) << j;
+  EXPECT_NE(j.find("\"sim_time_ns\":10000000"), std::string::npos) << j;
+  EXPECT_NE(j.find("{\"name\":\"can1\",\"kind\":\"can\",\"bitrate\":500000"), std::string::npos)
+      << j;
+  EXPECT_NE(j.find("{\"name\":\"probe\",\"model\":\"ephemeral\",\"ephemeral\":true"),
+            std::string::npos)
+      << j;
+
+  Cli frame(d, {"calc", "frame", "123#1122"});
+  const std::string f = Cli::read_all(frame.out);
+  EXPECT_EQ(frame.wait(), 0);
+  EXPECT_NE(f.find("DLC      00[1]10\n"), std::string::npos) << f;
+  EXPECT_NE(f.find("bits: 62 (+3 intermission), stuff bits: 2 dynamic, 0 fixed; CRC-15 0x4B7\n"
+                   "at 500000 bit/s: 124000 ns (62 nominal + 0 data-phase bits), 130000 ns with "
+                   "intermission\n"),
+            std::string::npos)
+      << f;
+  Cli btr(d, {"calc", "bittiming", "00", "1C"});
+  EXPECT_EQ(Cli::read_all(btr.out),
+            "SJA1000 at 16 MHz: 500000.000 bit/s, tq 125.000 ns, 16 quanta (1 + 13 + 2), sample "
+            "point 87.5 %, SJW 1, 1 sample per bit\n");
+  EXPECT_EQ(btr.wait(), 0);
+
+  Cli bad_step(d, {"time", "step", "soon"});
+  EXPECT_EQ(Cli::read_all(bad_step.err),
+            "canemu: 'soon' is not a duration (examples: 150ns, 20us, 10ms, 2s)\n");
+  EXPECT_EQ(bad_step.wait(), 1);
 }
 
 TEST(Cli, SendRefusesBadFramesAndUnsteppedStepsWithReasons) {

@@ -365,11 +365,24 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       send_reply(send, r);
       return;
     }
+    case ipc::MsgType::vci_request:
+      vci_.handle(c.vci, read_as<ipc::VciRequest>(data), send);
+      return;
     default:
       error(send, request_id, ipc::ErrorCode::unknown_type,
             fmt::format("message type {} is not a request", h.type));
       return;
   }
+}
+
+void ControlDispatcher::end_session(Session& session) {
+  for (auto& [id, sc] : session.channels) {
+    if (channel_closing) {
+      channel_closing(*sc.channel);
+    }
+  }
+  session.channels.clear();
+  vci_.close_all(session.vci);
 }
 
 }  // namespace canemu::daemon

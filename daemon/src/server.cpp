@@ -47,7 +47,7 @@ Server::Server(Simulation& sim, ServerOptions options)
   dispatcher_.client_count = [this] { return live_clients(); };
   dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
   dispatcher_.before_step = [this] { kick_all_channels(); };
-  dispatcher_.channel_opened = [this](Channel& ch) {
+  dispatcher_.channel_opened = [this](Doorbell& ch) {
     epoll_event ev{};
     ev.events = EPOLLIN;
     ev.data.fd = ch.doorbell_fd();
@@ -55,7 +55,7 @@ Server::Server(Simulation& sim, ServerOptions options)
       doorbells_[ch.doorbell_fd()] = &ch;
     }
   };
-  dispatcher_.channel_closing = [this](Channel& ch) {
+  dispatcher_.channel_closing = [this](Doorbell& ch) {
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, ch.doorbell_fd(), nullptr);
     doorbells_.erase(ch.doorbell_fd());
   };
@@ -281,23 +281,20 @@ int Server::run() {
 
 void Server::kick_all_channels() {
   for (auto& [fd, c] : clients_) {
-    for (auto& [id, sc] : c.session.channels) {
-      sc.channel->kick();
-    }
+    ControlDispatcher::for_each_ring(c.session, [](Doorbell& d) { d.kick(); });
   }
 }
 
 // A client whose ring positions make no sense is dropped; the others go on.
 void Server::check_channels() {
   for (auto& [fd, c] : clients_) {
-    for (auto& [id, sc] : c.session.channels) {
-      if (!c.closing && sc.channel->broken()) {
-        std::fprintf(stderr,
-                     "<4>canemud: client %u (%s): channel %u: ring corrupted; disconnecting\n",
-                     c.session.pid, c.session.name.c_str(), id);
+    ControlDispatcher::for_each_ring(c.session, [&c](Doorbell& d) {
+      if (!c.closing && d.broken()) {
+        std::fprintf(stderr, "<4>canemud: client %u (%s): a ring was corrupted; disconnecting\n",
+                     c.session.pid, c.session.name.c_str());
         c.closing = true;
       }
-    }
+    });
   }
 }
 
@@ -439,10 +436,9 @@ void Server::drop(int fd) {
   if (it == clients_.end()) {
     return;
   }
-  // Its channels stop their nodes and their devices go (notified after this batch).
-  for (auto& [id, sc] : it->second.session.channels) {
-    dispatcher_.channel_closing(*sc.channel);
-  }
+  // Its channels stop their nodes and their devices go (notified after this batch); what it
+  // opened through the VCI is closed.
+  dispatcher_.end_session(it->second.session);
   clients_.erase(it);
   if (!accepting_ && add(epoll_.get(), listen_.get())) {
     accepting_ = true;  // a descriptor is free again

@@ -6,6 +6,7 @@
 
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
 #include "canemu/firmware_model/can_fd_node.hpp"
+#include "canemu/firmware_model/can_fd_node.hpp"
 #include "canemu/firmware_model/sja1000_node.hpp"
 
 namespace canemu::daemon {
@@ -121,7 +122,7 @@ void Simulation::add_bus(const BusConfig& b) {
 std::optional<Simulation::NodeRef> Simulation::find_node(std::string_view name) {
   for (Controller& c : controllers_) {
     if (c.name == name) {
-      return NodeRef{c.bus, c.node, &c.controller()};
+      return NodeRef{c.bus, c.node->node(), &c.node->controller()};
     }
   }
   for (const Ephemeral& e : ephemeral_) {
@@ -347,29 +348,37 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     Controller c;
     c.name = fmt::format("{}:{}", d.name, i);
     c.bus = p.bus;
+    // The controller stays in reset (off the bus) until an application initializes and starts
+    // it through the VCI, as on a real adapter.
+    CanBus& bus = *buses_[p.bus].bus;
     if (d.model == DeviceModel::ixxat_usb_to_can) {
-      c.sja1000 = std::make_unique<Sja1000>();
-      c.sja1000->connect(*buses_[p.bus].bus);
-      // Programmed as the adapter firmware does at start: timing, accept all, operating mode.
-      c.sja1000->write(sja1000::BTR0, p.timing.btr0);
-      c.sja1000->write(sja1000::BTR1, p.timing.btr1);
-      for (uint8_t k = 0; k < 4; ++k) {
-        c.sja1000->write(static_cast<uint8_t>(sja1000::AMR0 + k), 0xFF);
-      }
-      c.sja1000->write(sja1000::MOD, 0);
-      c.node = c.sja1000->node();
+      c.node = std::make_unique<Sja1000Node>(scheduler_, bus);
     } else {
-      CanFdConfig fc;
-      fc.nominal = p.timing.nominal;
-      fc.data = p.timing.data;
-      c.fd = std::make_unique<CanFdController>(fc);
-      c.fd->connect(*buses_[p.bus].bus);
-      c.fd->start();
-      c.node = c.fd->node();
+      c.node = std::make_unique<CanFdNode>(scheduler_, bus);
     }
+    c.line = std::make_unique<vci::CanLine>(scheduler_, *c.node, vci::Clocks{}, scheduler_.now());
     controllers_.push_back(std::move(c));
   }
+  vci_ids_[d.name] = next_vci_id_++;
   return std::nullopt;
+}
+
+vci::CanLine* Simulation::vci_line(std::string_view device, uint32_t controller) {
+  const std::string name = fmt::format("{}:{}", device, controller);
+  for (Controller& c : controllers_) {
+    if (c.name == name) {
+      return c.line.get();
+    }
+  }
+  return nullptr;
+}
+
+std::string hardware_id(std::string_view device_name) {
+  uint32_t h = 2166136261U;  // FNV-1a
+  for (char ch : device_name) {
+    h = (h ^ static_cast<uint8_t>(ch)) * 16777619U;
+  }
+  return fmt::format("HW{:06}", h % 1'000'000);
 }
 
 namespace {
@@ -563,7 +572,7 @@ void Simulation::fill_status(ipc::StatusReply& r) {
     s.errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
   };
   for (Controller& c : controllers_) {
-    add_node(c.name, c.bus, c.controller(), c.node);
+    add_node(c.name, c.bus, c.node->controller(), c.node->node());
   }
   for (const Ephemeral& e : ephemeral_) {
     add_node(e.name + ":0", e.bus, e.node->controller(), e.node->node());
@@ -587,7 +596,12 @@ void Simulation::fill_devices(ipc::DeviceListReply& r) const {
     e.controller_count = static_cast<uint8_t>(d.controllers.size());
     for (std::size_t k = 0; k < d.controllers.size() && k < ipc::kMaxDeviceControllers; ++k) {
       ipc::copy_name(e.buses[k], d.controllers[k]);
+      e.controller_fd[k] = d.model == DeviceModel::ixxat_usb_to_can ? 0 : 1;
     }
+    if (auto id = vci_ids_.find(d.name); id != vci_ids_.end()) {
+      e.vci_id = id->second;
+    }
+    ipc::copy_name(e.hardware_id, hardware_id(d.name));
   }
   for (const Ephemeral& x : ephemeral_) {
     if (n == ipc::kMaxDevices) {

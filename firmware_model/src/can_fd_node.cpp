@@ -17,6 +17,7 @@ void CanFdNode::program(const HostedNodeSettings& settings) {
   c.nominal = settings.nominal;
   c.data = settings.data;
   c.listen_only = settings.listen_only;
+  c.fd_enabled = settings.fd;
   c.recovery = BusOffRecovery::on_restart;
   chip_.configure(c);
   chip_.confinement().reset();

@@ -2,28 +2,39 @@
 
 namespace canemu::model {
 
-void HostedNode::start(const HostedNodeSettings& settings, ControllerEvents* sink,
-                       TxSource source) {
+void HostedNode::configure(const HostedNodeSettings& settings, ControllerEvents* sink,
+                           TxSource source) {
   settings_ = settings;
   sink_ = nullptr;  // the counter reset below reports a state nobody asked about
   ++generation_;
+  running_ = false;
+  tx_loaded_ = false;
   program(settings);
   bus_.reset_stats(node());
   sink_ = sink;
   source_ = std::move(source);
+}
+
+void HostedNode::go_online() {
   running_ = true;
-  tx_loaded_ = false;
-  go_on_bus(settings);
+  go_on_bus(settings_);
+  if (controller().confinement().bus_off()) {
+    leave_bus_off(settings_);
+  }
   load_next();
 }
 
-void HostedNode::stop() {
+void HostedNode::go_offline() {
   running_ = false;
-  sink_ = nullptr;
-  source_ = nullptr;
   tx_loaded_ = false;
   ++generation_;
   go_off_bus();
+}
+
+void HostedNode::stop() {
+  go_offline();
+  sink_ = nullptr;
+  source_ = nullptr;
 }
 
 void HostedNode::restart() {

@@ -53,7 +53,8 @@ std::size_t size_of(MsgType type) {
                     CloseChannelReply, ChannelStatusRequest, ChannelStatusReply, DeviceListRequest,
                     DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest,
                     SubscribeReply, Notification, FaultLoadRequest, FaultLoadReply,
-                    FaultListRequest, FaultListReply, FaultClearRequest, FaultClearReply>(type);
+                    FaultListRequest, FaultListReply, FaultClearRequest, FaultClearReply,
+                    VciRequest, VciReply>(type);
 }
 
 }  // namespace

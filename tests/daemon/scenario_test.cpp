@@ -117,14 +117,25 @@ TEST(Scenario, RandomErrorsNeedABitErrorRateInRange) {
                 "s.toml:5:18: fault[0].bit_error_rate: must be above 0 and at most 0.1"}));
 }
 
-// The default configuration (can0 and can1 at 500 kbit/s, ixxat0 with a controller on each)
-// and an ephemeral SJA1000 "tester" on can0 that always has a frame to send.
+// The default configuration (can0 and can1 at 500 kbit/s, ixxat0 with a controller on each,
+// both started at 500 kbit/s as a VCI application would) and an ephemeral SJA1000 "tester" on
+// can0 that always has a frame to send.
 struct World {
   std::unique_ptr<Simulation> sim;
   HostedNode* tester = nullptr;
   Simulation::DeviceLease lease;
   World() {
     sim = std::move(*Simulation::build(*load_default_config()));
+    for (uint32_t k = 0; k < 2; ++k) {
+      vci::CanLine* line = sim->vci_line("ixxat0", k);
+      vci::LineInit init;
+      init.op_mode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
+      init.btr0 = 0x00;
+      init.btr1 = 0x1C;
+      EXPECT_EQ(line->open_control(), VCI_OK);
+      EXPECT_EQ(line->init_line(init), VCI_OK);
+      EXPECT_EQ(line->start_line(), VCI_OK);
+    }
     tester = &sim->spare_node(0);
     HostedNodeSettings s;
     s.btr0 = 0x00;

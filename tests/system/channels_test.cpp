@@ -150,6 +150,7 @@ TEST(Channels, ElementsThatAreNotFramesAreCountedAndReported) {
   Daemon d;
   auto c = connect(d);
   auto a = open(c, "can0", ipc::kChannelReportTx);
+  auto partner = open(c, "can0");  // acknowledges
   ipc::ChannelMessage bad = frame(0x800, {});  // 12 bits without the extended flag
   ASSERT_TRUE(a.send(bad));
   bad = frame(0x1, {});
@@ -175,6 +176,7 @@ TEST(Channels, ElementsThatAreNotFramesAreCountedAndReported) {
 TEST(Channels, AMismatchedBitRateDisruptsTheBusAndErrorsAreReported) {
   Daemon d;
   auto c = connect(d);
+  auto receiver = open(c, "can1");  // at the bus's 500 kbit/s
   client::ChannelOptions o;
   o.bus = "can1";
   o.bitrate = 250000;
@@ -332,13 +334,14 @@ TEST(Channels, AClientThatDiesIsCleanedUp) {
   // Its frames stay unsent; the bus goes on with a new client on the same node.
   auto c = connect(d);
   auto again = open(c, "can0", ipc::kChannelReportTx, "doomed");
+  auto partner = open(c, "can0");  // acknowledges
   ASSERT_TRUE(again.send(frame(0x43, {})));
   step(c, 1'000'000);
   const auto got = drain(again);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].id, 0x43u);
   const ipc::StatusReply s = status(c);
-  EXPECT_EQ(s.node_count, 3);
+  EXPECT_EQ(s.node_count, 4);  // ixxat0's two controllers, doomed's node again, the partner
   EXPECT_EQ(s.nodes[2].frames_sent, 1u);
 }
 

@@ -77,8 +77,20 @@ struct Cli {
   }
 };
 
+// A node on `bus` that acknowledges (the dump only listens, and configured adapters stay off
+// the bus until an application starts them).
+client::Channel partner_on(client::Connection& c, const std::string& bus) {
+  client::ChannelOptions o;
+  o.bus = bus;
+  auto ch = client::Channel::open(c, o);
+  EXPECT_TRUE(ch) << ch.error().message;
+  return std::move(*ch);
+}
+
 TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
   Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
   auto watcher = connect(d, "watcher");
   ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
   Cli dump(d, {"dump", "can0", "-n", "3"});
@@ -105,11 +117,12 @@ TEST(Cli, OnACanFdBusFdFramesGoOutWithTheRateSwitch) {
   ASSERT_NE(f, nullptr);
   std::fputs(
       "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\n"
-      "data_bitrate = 2000000\n\n"
-      "[[device]]\nname = \"acker\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n",
+      "data_bitrate = 2000000\n",
       f);
   std::fclose(f);
   Daemon d("stepped", {"--config=" + file});
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "fd0");
   auto watcher = connect(d, "watcher");
   ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
   Cli dump(d, {"dump", "fd0", "-n", "2"});
@@ -140,6 +153,8 @@ TEST(Cli, OnACanFdBusFdFramesGoOutWithTheRateSwitch) {
 // with their hits, cleared; a bad one is refused with its problems and changes nothing.
 TEST(Cli, FaultsLoadListInjectAndClear) {
   Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
   Cli load(d, {"fault", "load", CANEMU_SOURCE_DIR "/config/faults/corrupt-id.toml"});
   EXPECT_EQ(Cli::read_all(load.out), "scenario \"three CRC errors on 0x1A0\": 1 fault applied\n");
   EXPECT_EQ(load.wait(), 0);

@@ -18,6 +18,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/doorbell.hpp"
 #include "canemu/firmware_model/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/shm_ring.hpp"
@@ -29,7 +30,7 @@ struct ChannelStats {
   uint64_t tx_rejected = 0;  // transmit ring elements that were not frames the node can send
 };
 
-class Channel final : private model::ControllerEvents {
+class Channel final : private model::ControllerEvents, public Doorbell {
  public:
   struct Options {
     uint16_t flags = 0;  // ipc::kChannel*
@@ -58,12 +59,12 @@ class Channel final : private model::ControllerEvents {
   // What goes to the client with the OpenChannelReply, in the protocol's order.
   std::array<int, ipc::kChannelFdCount> client_fds() const;
   // The daemon's doorbell: readable when the client put frames while the node was idle.
-  int doorbell_fd() const { return tx_doorbell_.get(); }
+  int doorbell_fd() const override { return tx_doorbell_.get(); }
   // Called when the doorbell rang, or at any time (before a time step): the node takes a frame
   // if it is idle.
-  void kick();
+  void kick() override;
   // The client broke a ring (positions out of range); the server drops the client.
-  bool broken() const { return rx_.corrupted() || tx_.corrupted(); }
+  bool broken() const override { return rx_.corrupted() || tx_.corrupted(); }
 
  private:
   Channel(uint32_t id, std::string device, std::size_t bus, model::HostedNode& node, uint16_t flags,

@@ -14,35 +14,11 @@
 
 #include "canemu/daemon/channel.hpp"
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/ring_budget.hpp"
 #include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/vci_service.hpp"
 
 namespace canemu::daemon {
-
-// Ring memory counted against the daemon-wide limit while a channel lives.
-class RingBudget {
- public:
-  RingBudget() = default;
-  RingBudget(std::size_t* in_use, std::size_t bytes) : in_use_(in_use), bytes_(bytes) {
-    *in_use_ += bytes_;
-  }
-  RingBudget(RingBudget&& o) noexcept
-      : in_use_(std::exchange(o.in_use_, nullptr)), bytes_(o.bytes_) {}
-  RingBudget& operator=(RingBudget&& o) noexcept {
-    RingBudget old(std::move(*this));
-    in_use_ = std::exchange(o.in_use_, nullptr);
-    bytes_ = o.bytes_;
-    return *this;
-  }
-  ~RingBudget() {
-    if (in_use_ != nullptr) {
-      *in_use_ -= bytes_;
-    }
-  }
-
- private:
-  std::size_t* in_use_ = nullptr;
-  std::size_t bytes_ = 0;
-};
 
 // A channel and the ephemeral device it runs on; the device is unregistered after the channel
 // has stopped its node.
@@ -53,8 +29,6 @@ struct SessionChannel {
 };
 
 inline constexpr std::size_t kMaxChannelsPerClient = 16;
-// Shared memory of all channels' rings together.
-inline constexpr std::size_t kMaxRingBytes = std::size_t{256} << 20;
 
 // What the daemon knows of one client.
 struct Session {
@@ -65,13 +39,15 @@ struct Session {
   uint32_t events = 0;  // subscribed notifications (ipc::kEvent*)
   uint32_t next_channel = 1;
   std::map<uint32_t, SessionChannel> channels;
+  VciSession vci;
 };
 
 class ControlDispatcher {
  public:
   using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
 
-  ControlDispatcher(Simulation& sim, TimeSetting time) : sim_(sim), time_(time) {}
+  ControlDispatcher(Simulation& sim, TimeSetting time)
+      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_) {}
 
   // Called before a status reply: the server brings simulated time to "now" and forgets
   // clients that went away.
@@ -80,12 +56,27 @@ class ControlDispatcher {
   std::function<void(ipc::ClientListReply&)> fill_clients;
   // Called before a time step runs: the server lets every idle node take what its client put.
   std::function<void()> before_step;
-  // A channel was opened or is about to close (the server watches its doorbell).
-  std::function<void(Channel&)> channel_opened;
-  std::function<void(Channel&)> channel_closing;
+  // A channel (ephemeral or VCI) was opened or is about to close (the server watches its
+  // doorbell).
+  std::function<void(Doorbell&)> channel_opened;
+  std::function<void(Doorbell&)> channel_closing;
 
   // Handles one packet of `size` bytes; `send` gets each reply.
   void handle(Session& session, const uint8_t* data, std::size_t size, const Send& send);
+  // The client went away: everything it opened is closed (before its session is destroyed).
+  void end_session(Session& session);
+  // Calls f(doorbell) for every ring pair the session has.
+  template <class F>
+  static void for_each_ring(Session& session, F&& f) {
+    for (auto& [id, sc] : session.channels) {
+      f(static_cast<Doorbell&>(*sc.channel));
+    }
+    for (auto& [id, h] : session.vci.handles) {
+      if (VciPort* port = h->port(); port != nullptr) {
+        f(static_cast<Doorbell&>(*port));
+      }
+    }
+  }
 
  private:
   void error(const Send& send, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
@@ -95,6 +86,7 @@ class ControlDispatcher {
   Simulation& sim_;
   TimeSetting time_;
   std::size_t ring_bytes_in_use_ = 0;
+  VciService vci_;
 };
 
 }  // namespace canemu::daemon

@@ -79,7 +79,7 @@ class Server {
   std::vector<uint32_t> allowed_gids_;
   bool running_ = true;
   std::vector<uint8_t> buffer_;
-  std::map<int, Channel*> doorbells_;  // doorbell fd -> its channel
+  std::map<int, Doorbell*> doorbells_;  // doorbell fd -> its channel
   std::vector<ipc::Notification> pending_notifications_;
 };
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -17,6 +18,7 @@
 #include "canemu/firmware_model/fault_plan.hpp"
 #include "canemu/firmware_model/hosted_node.hpp"
 #include "canemu/firmware_model/sja1000.hpp"
+#include "canemu/firmware_model/vci/can_line.hpp"
 #include "canemu/ipc/protocol.hpp"
 
 namespace canemu::daemon {
@@ -34,6 +36,10 @@ std::optional<model::BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_
 std::optional<model::HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
                                                            uint32_t data_bitrate,
                                                            uint32_t sample_point);
+
+// The VCI hardware ID of a configured device: "HW" and six digits from its name, so that it
+// stays the same from run to run.
+std::string hardware_id(std::string_view device_name);
 
 // What a configuration reload did and what it left as it was, one line each.
 struct ReloadReport {
@@ -89,6 +95,11 @@ class Simulation {
   void fill_status(ipc::StatusReply& reply);
   // What a device list request shows: configured devices, then ephemeral ones.
   void fill_devices(ipc::DeviceListReply& reply) const;
+
+  // ---- VCI ----
+  // The adapter firmware of controller `controller` of the configured device `device`; nullptr
+  // if there is no such controller.
+  model::vci::CanLine* vci_line(std::string_view device, uint32_t controller);
 
   // ---- ephemeral devices ----
   // A stopped node on bus `bus`, ready to start (an SJA1000 on a classic bus, the CAN FD
@@ -165,12 +176,8 @@ class Simulation {
   struct Controller {
     std::string name;  // "device:N"
     std::size_t bus;
-    std::unique_ptr<model::Sja1000> sja1000;
-    std::unique_ptr<model::CanFdController> fd;
-    model::NodeId node;
-    model::CanController& controller() {
-      return sja1000 ? static_cast<model::CanController&>(*sja1000) : *fd;
-    }
+    std::unique_ptr<model::HostedNode> node;
+    std::unique_ptr<model::vci::CanLine> line;  // the adapter firmware driving it
   };
 
   struct Ephemeral {
@@ -189,6 +196,8 @@ class Simulation {
   // Per bus, the nodes made for ephemeral devices (in use or spare).
   std::vector<std::vector<std::unique_ptr<model::HostedNode>>> pools_;
   uint32_t generation_ = 0;
+  std::map<std::string, uint64_t, std::less<>> vci_ids_;  // configured device -> VciObjectId
+  uint64_t next_vci_id_ = 1;
 };
 
 }  // namespace canemu::daemon

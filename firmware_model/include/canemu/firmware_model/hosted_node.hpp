@@ -11,6 +11,7 @@
 
 #include <functional>
 #include <optional>
+#include <utility>
 
 #include "canemu/firmware_model/can_bus.hpp"
 #include "canemu/firmware_model/controller_events.hpp"
@@ -24,6 +25,7 @@ struct HostedNodeSettings {
   BitTiming nominal;  // CanFdNode: the arbitration-phase timing
   BitTiming data;     // CanFdNode: the data-phase timing of frames with BRS
   bool listen_only = false;
+  bool fd = true;  // CanFdNode: decodes and sends CAN FD frames (false: a classic controller)
   // After bus-off, the driver restarts the controller this long after the bus-off instant
   // (recovery then takes its 128 x 11 recessive bits). Zero: the node stays in bus-off until
   // restart().
@@ -41,10 +43,23 @@ class HostedNode : private ControllerEvents {
 
   // Clears the counters and statistics, programs the controller and puts it on the bus.
   // Events go to `sink` (may be nullptr); frames to send come from `source`.
-  void start(const HostedNodeSettings& settings, ControllerEvents* sink, TxSource source);
+  void start(const HostedNodeSettings& settings, ControllerEvents* sink, TxSource source) {
+    configure(settings, sink, std::move(source));
+    go_online();
+  }
   // Off the bus (a frame already on the wire completes without retransmission); the sink and
   // source are forgotten.
   void stop();
+
+  // The steps of start() and stop() apart, for a firmware that keeps its controller
+  // configured while it is off the bus (VCI InitLine, StartLine, StopLine):
+  // configure() is a hardware reset and programming (counters and statistics cleared), off the
+  // bus; go_online() joins the bus (from bus-off, recovery starts counting); go_offline()
+  // leaves it (a frame on the wire completes, a frame loaded but not started is dropped) and
+  // keeps the sink, the source and the settings.
+  void configure(const HostedNodeSettings& settings, ControllerEvents* sink, TxSource source);
+  void go_online();
+  void go_offline();
   bool running() const { return running_; }
   // True when start() may be called: stopped and no frame of this node on the wire.
   bool reusable() const { return !running_ && !bus_.in_flight(node()); }
@@ -56,6 +71,9 @@ class HostedNode : private ControllerEvents {
   // A frame is in the transmit buffer.
   bool transmitting() const { return tx_loaded_; }
   SimTime now() const { return bus_.now(); }
+  // This node's frame is on the wire (start of frame to the end of its frame or error frame).
+  bool frame_on_wire() const { return bus_.in_flight(node()); }
+  CanBus& bus() { return bus_; }
 
   virtual NodeId node() const = 0;
   virtual CanController& controller() = 0;
@@ -76,8 +94,6 @@ class HostedNode : private ControllerEvents {
   virtual bool buffer_free() = 0;
   virtual void load(const TxFrame& tx) = 0;
   virtual void release_received() = 0;
-
-  CanBus& bus() { return bus_; }
 
  private:
   void frame_received(SimTime at, const Frame& frame, bool own) override;

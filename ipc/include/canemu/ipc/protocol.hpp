@@ -57,6 +57,8 @@ enum class MsgType : uint16_t {
   fault_list_reply = 63,
   fault_clear_request = 64,
   fault_clear_reply = 65,
+  vci_request = 70,
+  vci_reply = 71,
 };
 
 // Why a request failed. Values are stable: clients show them by name.
@@ -270,8 +272,12 @@ struct DeviceEntry {
   uint8_t reserved = 0;
   uint32_t owner_pid = 0;                             // ephemeral devices: the client's pid
   char buses[kMaxDeviceControllers][kNameSize] = {};  // bus of each controller
+  uint64_t vci_id = 0;         // VCI devices: VciObjectId, unique while the daemon runs
+  char hardware_id[16] = {};   // VCI devices: "HW" and a serial number, stable across runs
+  uint8_t controller_fd[kMaxDeviceControllers] = {};  // 1: a CAN FD controller
+  uint32_t reserved2 = 0;
 };
-static_assert(sizeof(DeviceEntry) == 40 + 32 * kMaxDeviceControllers);
+static_assert(sizeof(DeviceEntry) == 40 + 32 * kMaxDeviceControllers + 32);
 
 struct DeviceListRequest {
   MsgHeader header;
@@ -403,6 +409,91 @@ struct Notification {
 };
 static_assert(sizeof(Notification) == 16 + 8 + 32);
 
+// ---- VCI (the IXXAT personality) ----
+//
+// One request type carries every call of the VCI APIs that reaches the adapter firmware
+// (firmware_model/vci/can_line.hpp): opening the control unit, a channel or the cyclic list of
+// a configured device's controller gives a handle (per connection); later calls name it.
+// The reply's hresult is the VCI result (VCI_OK or a VCI_E_* code); protocol-level problems
+// (a malformed request) get ErrorReply instead.
+enum class VciOp : uint16_t {
+  // On a controller (device + controller); the reply's handle is the new object.
+  control_open = 1,
+  channel_open = 2,  // flags: kVciV2, kVciExclusive
+  scheduler_open = 3,
+  // On any handle of a controller: capabilities and line status (VciLineInfo in the payload).
+  line_info = 4,
+  // Control unit.
+  control_init = 10,  // payload: CANINITLINE2 layout; flags kVciV2 (else only the BTR/opmode)
+  control_reset = 11,
+  control_start = 12,
+  control_stop = 13,
+  control_filter = 14,      // args: kind, select, mode, code, mask; values[0]: mode
+  controller_state = 15,    // values: error state (WireErrorState), tec, rec, line state
+  // Channels.
+  channel_init = 20,  // args: rx, tx capacity, ext list size, filter mode; reply: 5 descriptors
+  channel_activate = 21,
+  channel_deactivate = 22,
+  channel_status = 23,  // values: initialized, activated, rx_overrun; payload: VciChannelCounters
+  channel_filter = 24,  // as control_filter
+  // Cyclic transmit list.
+  scheduler_resume = 30,
+  scheduler_suspend = 31,
+  scheduler_reset = 32,
+  scheduler_add = 33,  // payload: CANCYCLICTXMSG2 layout; values[0]: index
+  scheduler_remove = 34,  // args[0]: index
+  scheduler_start = 35,   // args[0]: index, args[1]: count
+  scheduler_stop = 36,    // args[0]: index
+  scheduler_status = 37,  // payload: task state then 16 entry states
+  // Closing any handle.
+  close = 40,
+};
+
+// VciRequest.flags
+inline constexpr uint16_t kVciV2 = 0x0001;
+inline constexpr uint16_t kVciExclusive = 0x0002;
+
+inline constexpr std::size_t kVciPayloadSize = 192;
+
+struct VciRequest {
+  MsgHeader header;
+  uint16_t op = 0;  // VciOp
+  uint16_t flags = 0;
+  uint32_t handle = 0;
+  char device[kNameSize] = {};  // the open operations
+  uint32_t controller = 0;
+  uint32_t args[7] = {};
+  uint8_t payload[kVciPayloadSize] = {};
+};
+static_assert(sizeof(VciRequest) == 16 + 8 + 32 + 32 + kVciPayloadSize);
+
+struct VciReply {
+  MsgHeader header;
+  int32_t hresult = 0;
+  uint32_t handle = 0;
+  uint32_t values[6] = {};
+  uint8_t payload[kVciPayloadSize] = {};
+};
+static_assert(sizeof(VciReply) == 16 + 8 + 24 + kVciPayloadSize);
+
+// The payload of a line_info reply: the vendor structs' bytes, each at its own offset.
+inline constexpr std::size_t kVciCapsOffset = 0;         // CANCAPABILITIES (32 bytes)
+inline constexpr std::size_t kVciCaps2Offset = 32;       // CANCAPABILITIES2 (108)
+inline constexpr std::size_t kVciLineOffset = 140;       // CANLINESTATUS (8)
+inline constexpr std::size_t kVciLine2Offset = 148;      // CANLINESTATUS2 (40)
+static_assert(kVciLine2Offset + 40 <= kVciPayloadSize);
+
+// The payload of a channel_status reply.
+struct VciChannelCounters {
+  uint64_t received = 0;
+  uint64_t lost = 0;
+  uint64_t sent = 0;
+  uint64_t rejected = 0;
+  uint64_t dropped = 0;
+  uint64_t not_shown = 0;
+};
+static_assert(sizeof(VciChannelCounters) <= kVciPayloadSize);
+
 // The message type of each struct (and, in protocol.cpp, the size of each type).
 template <class T>
 inline constexpr MsgType type_of_v = MsgType{};
@@ -458,6 +549,10 @@ template <>
 inline constexpr MsgType type_of_v<FaultClearRequest> = MsgType::fault_clear_request;
 template <>
 inline constexpr MsgType type_of_v<FaultClearReply> = MsgType::fault_clear_reply;
+template <>
+inline constexpr MsgType type_of_v<VciRequest> = MsgType::vci_request;
+template <>
+inline constexpr MsgType type_of_v<VciReply> = MsgType::vci_reply;
 template <class T>
 constexpr MsgType type_of() {
   static_assert(type_of_v<T> != MsgType{}, "not a protocol message");

@@ -1,0 +1,186 @@
+// What the CAN halves of libvcinpl (CANMSG, BTR0/BTR1) and libvcinpl2 (CANMSG2, CANBTP) share:
+// opening and closing the control unit, channels and the cyclic list, the calls that differ
+// only in their structs, and the data path. Each library's file holds its extern "C" functions
+// and converts to and from these.
+#pragma once
+
+#include <cstring>
+
+#include "vci_core.hpp"
+
+namespace canemu::client::vci {
+
+inline Remote* remote_of(HANDLE h, Object::Kind kind) {
+  return static_cast<Remote*>(lookup(h, kind));
+}
+inline ChannelObj* channel_of(HANDLE h) {
+  return static_cast<ChannelObj*>(lookup(h, Object::Kind::channel));
+}
+
+// Opens a control unit (control), channel or cyclic list on bus `can_no` of device `hDevice`.
+inline HRESULT open_on_device(HANDLE hDevice, UINT32 can_no, Object::Kind kind, bool v2,
+                              bool exclusive, PHANDLE out) {
+  if (out == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *out = nullptr;
+  auto* dev = static_cast<Device*>(lookup(hDevice, Object::Kind::device));
+  if (dev == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  if (can_no >= dev->desc.controller_fd.size()) {
+    return VCI_E_INVALIDARG;
+  }
+  ipc::VciOp op = ipc::VciOp::control_open;
+  if (kind == Object::Kind::channel) {
+    op = ipc::VciOp::channel_open;
+  } else if (kind == Object::Kind::scheduler) {
+    op = ipc::VciOp::scheduler_open;
+  }
+  const uint16_t flags = static_cast<uint16_t>((v2 ? ipc::kVciV2 : 0) |
+                                               (exclusive ? ipc::kVciExclusive : 0));
+  uint32_t handle = 0;
+  if (HRESULT hr = Library::get().open_remote(op, flags, dev->desc, can_no, handle);
+      hr != VCI_OK) {
+    return hr;
+  }
+  if (kind == Object::Kind::channel) {
+    *out = register_object(std::make_unique<ChannelObj>(handle, dev->desc, can_no, v2));
+  } else {
+    *out = register_object(std::make_unique<Remote>(kind, handle, dev->desc, can_no));
+  }
+  return VCI_OK;
+}
+
+inline HRESULT close_handle(HANDLE h, Object::Kind kind) {
+  return unregister_object(h, kind) ? VCI_OK : VCI_E_INVHANDLE;
+}
+
+// One of the line-info structs (capabilities, line status) of any object on a controller.
+template <class T>
+HRESULT line_struct(HANDLE h, Object::Kind kind, std::size_t offset, T* out) {
+  Remote* r = remote_of(h, kind);
+  if (r == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  if (out == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  ipc::VciReply reply{};
+  if (HRESULT hr = Library::get().line_info(*r, reply); hr != VCI_OK) {
+    return hr;
+  }
+  std::memcpy(out, reply.payload + offset, sizeof(T));
+  return VCI_OK;
+}
+
+inline HRESULT simple_call(HANDLE h, Object::Kind kind, ipc::VciOp op,
+                           std::initializer_list<uint32_t> args = {},
+                           ipc::VciReply* reply = nullptr) {
+  Remote* r = remote_of(h, kind);
+  if (r == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  return Library::get().simple(*r, op, args, reply);
+}
+
+// Filter calls: kind as model FilterOp::Kind (0 get mode, 1 set mode, 2 acceptance, 3 add ids,
+// 4 remove ids).
+inline HRESULT filter_call(HANDLE h, Object::Kind kind, uint32_t op_kind, BOOL extended,
+                           uint8_t mode, UINT32 code, UINT32 mask, PUINT8 mode_out) {
+  Remote* r = remote_of(h, kind);
+  if (r == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  const ipc::VciOp op =
+      kind == Object::Kind::control ? ipc::VciOp::control_filter : ipc::VciOp::channel_filter;
+  return Library::get().filter(*r, op, op_kind, extended != 0, mode, code, mask, mode_out);
+}
+
+inline constexpr uint32_t kFilterGetMode = 0;
+inline constexpr uint32_t kFilterSetMode = 1;
+inline constexpr uint32_t kFilterAcceptance = 2;
+inline constexpr uint32_t kFilterAddIds = 3;
+inline constexpr uint32_t kFilterRemoveIds = 4;
+
+// Channel status: the line status (CANLINESTATUS or CANLINESTATUS2, at `line_offset`) and the
+// channel's own flags and fill levels.
+template <class Status>
+HRESULT channel_status(HANDLE h, std::size_t line_offset, Status* out) {
+  ChannelObj* c = channel_of(h);
+  if (c == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  if (out == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  ipc::VciReply info{};
+  ipc::VciReply status{};
+  if (HRESULT hr = Library::get().line_info(*c, info); hr != VCI_OK) {
+    return hr;
+  }
+  if (HRESULT hr = Library::get().simple(*c, ipc::VciOp::channel_status, {}, &status);
+      hr != VCI_OK) {
+    return hr;
+  }
+  Status s{};
+  std::memcpy(&s.sLineStatus, info.payload + line_offset, sizeof s.sLineStatus);
+  s.fActivated = status.values[1] != 0;
+  s.fRxOverrun = status.values[2] != 0;
+  s.bRxFifoLoad = rx_load(*c);
+  s.bTxFifoLoad = tx_load(*c);
+  *out = s;
+  return VCI_OK;
+}
+
+// The cyclic list's status (CANSCHEDULERSTATUS's two fields).
+inline HRESULT scheduler_status(HANDLE h, UINT8* task, UINT8* entries) {
+  ipc::VciReply reply{};
+  if (HRESULT hr = simple_call(h, Object::Kind::scheduler, ipc::VciOp::scheduler_status, {},
+                               &reply);
+      hr != VCI_OK) {
+    return hr;
+  }
+  CANSCHEDULERSTATUS s;
+  std::memcpy(&s, reply.payload, sizeof s);
+  *task = s.bTaskStat;
+  std::memcpy(entries, s.abMsgStat, sizeof s.abMsgStat);
+  return VCI_OK;
+}
+
+inline HRESULT scheduler_add(HANDLE h, const CANCYCLICTXMSG2& msg, PUINT32 index) {
+  if (index != nullptr) {
+    *index = 0xFFFFFFFFU;
+  }
+  Remote* r = remote_of(h, Object::Kind::scheduler);
+  if (r == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(ipc::VciOp::scheduler_add);
+  m.handle = r->handle;
+  std::memcpy(m.payload, &msg, sizeof msg);
+  ipc::VciReply reply{};
+  const HRESULT hr = Library::get().call(m, reply);
+  if (index != nullptr && hr == VCI_OK) {
+    *index = reply.values[0];
+  }
+  return hr;
+}
+
+template <class Init>
+HRESULT control_init(HANDLE h, const Init& init, bool v2) {
+  Remote* r = remote_of(h, Object::Kind::control);
+  if (r == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(ipc::VciOp::control_init);
+  m.flags = v2 ? ipc::kVciV2 : 0;
+  m.handle = r->handle;
+  std::memcpy(m.payload, &init, sizeof init);
+  ipc::VciReply reply{};
+  return Library::get().call(m, reply);
+}
+
+}  // namespace canemu::client::vci

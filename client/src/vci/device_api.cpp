@@ -1,0 +1,188 @@
+// The device half of the VCI C API, the same in libvcinpl and libvcinpl2: initialization, error
+// texts, identifiers, device enumeration and opening.
+#include <cstdio>
+#include <cstring>
+
+#include "vci_core.hpp"
+#include "vcinpl.h"
+
+using namespace canemu::client::vci;
+
+namespace {
+
+Device* device_of(HANDLE h) { return static_cast<Device*>(lookup(h, Object::Kind::device)); }
+Enumerator* enumerator_of(HANDLE h) {
+  return static_cast<Enumerator*>(lookup(h, Object::Kind::enumerator));
+}
+
+bool same_guid(const GUID& a, const GUID& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// REFVCIID and REFGUID are references in C++.
+const VCIID* ptr(REFVCIID r) { return &r; }
+const GUID* ptr(REFGUID r) { return &r; }
+
+}  // namespace
+
+extern "C" {
+
+HRESULT VCIAPI vciInitialize(void) {
+  // Nothing to set up until the first call that needs canemud: a program that only formats
+  // errors or converts identifiers runs without it.
+  return VCI_OK;
+}
+
+void VCIAPI vciFormatError(HRESULT hrError, PCHAR pszText, UINT32 dwLength) {
+  if (pszText == nullptr || dwLength == 0) {
+    return;
+  }
+  const std::string text = format_error(hrError);
+  std::snprintf(pszText, dwLength, "%s", text.c_str());
+}
+
+void VCIAPI vciFormatErrorA(HRESULT hrError, PCHAR pszText, UINT32 dwLength) {
+  vciFormatError(hrError, pszText, dwLength);
+}
+
+HRESULT VCIAPI vciEnumDeviceOpen(PHANDLE phEnum) {
+  if (phEnum == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *phEnum = nullptr;
+  auto e = std::make_unique<Enumerator>();
+  if (HRESULT hr = Library::get().list_devices(e->devices, &e->generation); hr != VCI_OK) {
+    return hr;
+  }
+  *phEnum = register_object(std::move(e));
+  return VCI_OK;
+}
+
+HRESULT VCIAPI vciEnumDeviceClose(HANDLE hEnum) {
+  return unregister_object(hEnum, Object::Kind::enumerator) ? VCI_OK : VCI_E_INVHANDLE;
+}
+
+HRESULT VCIAPI vciEnumDeviceNext(HANDLE hEnum, PVCIDEVICEINFO pInfo) {
+  Enumerator* e = enumerator_of(hEnum);
+  if (e == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  if (pInfo == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  if (e->next >= e->devices.size()) {
+    return VCI_E_NO_MORE_ITEMS;
+  }
+  *pInfo = e->devices[e->next++].info();
+  return VCI_OK;
+}
+
+HRESULT VCIAPI vciEnumDeviceReset(HANDLE hEnum) {
+  Enumerator* e = enumerator_of(hEnum);
+  if (e == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  // A fresh snapshot: devices that came or went since the last one show.
+  std::vector<DeviceDesc> devices;
+  uint32_t generation = 0;
+  if (HRESULT hr = Library::get().list_devices(devices, &generation); hr != VCI_OK) {
+    return hr;
+  }
+  e->devices = std::move(devices);
+  e->generation = generation;
+  e->next = 0;
+  return VCI_OK;
+}
+
+HRESULT VCIAPI vciEnumDeviceWaitEvent(HANDLE hEnum, UINT32 dwMsTimeout) {
+  Enumerator* e = enumerator_of(hEnum);
+  if (e == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  return Library::get().wait_device_change(e->generation, timeout_of(dwMsTimeout));
+}
+
+HRESULT VCIAPI vciFindDeviceByHwid(REFGUID rHwid, PVCIID pVciid) {
+  if (pVciid == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  std::vector<DeviceDesc> devices;
+  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
+    return hr;
+  }
+  for (const DeviceDesc& d : devices) {
+    const VCIDEVICEINFO info = d.info();
+    if (same_guid(info.UniqueHardwareId.AsGuid, *ptr(rHwid))) {
+      *pVciid = info.VciObjectId;
+      return VCI_OK;
+    }
+  }
+  return VCI_E_NO_MORE_ITEMS;
+}
+
+HRESULT VCIAPI vciFindDeviceByClass(REFGUID rClass, UINT32 dwInst, PVCIID pVciid) {
+  if (pVciid == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  std::vector<DeviceDesc> devices;
+  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
+    return hr;
+  }
+  UINT32 seen = 0;
+  for (const DeviceDesc& d : devices) {
+    if (same_guid(device_class(d.model), *ptr(rClass)) && seen++ == dwInst) {
+      *pVciid = d.info().VciObjectId;
+      return VCI_OK;
+    }
+  }
+  return VCI_E_NO_MORE_ITEMS;
+}
+
+HRESULT VCIAPI vciDeviceOpen(REFVCIID rVciid, PHANDLE phDevice) {
+  if (phDevice == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *phDevice = nullptr;
+  std::vector<DeviceDesc> devices;
+  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
+    return hr;
+  }
+  for (const DeviceDesc& d : devices) {
+    if (static_cast<INT64>(d.vci_id) == ptr(rVciid)->AsInt64) {
+      auto dev = std::make_unique<Device>();
+      dev->desc = d;
+      *phDevice = register_object(std::move(dev));
+      return VCI_OK;
+    }
+  }
+  set_detail("no device has that VCIID");
+  return VCI_E_INVALIDARG;
+}
+
+HRESULT VCIAPI vciDeviceClose(HANDLE hDevice) {
+  return unregister_object(hDevice, Object::Kind::device) ? VCI_OK : VCI_E_INVHANDLE;
+}
+
+HRESULT VCIAPI vciDeviceGetInfo(HANDLE hDevice, PVCIDEVICEINFO pInfo) {
+  Device* d = device_of(hDevice);
+  if (d == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  if (pInfo == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *pInfo = d->desc.info();
+  return VCI_OK;
+}
+
+HRESULT VCIAPI vciDeviceGetCaps(HANDLE hDevice, PVCIDEVICECAPS pCaps) {
+  Device* d = device_of(hDevice);
+  if (d == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  if (pCaps == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *pCaps = d->desc.caps();
+  return VCI_OK;
+}
+
+}  // extern "C"

@@ -1,0 +1,571 @@
+#include "vci_core.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "canemu/ipc/clock.hpp"
+
+namespace canemu::client::vci {
+
+namespace {
+
+thread_local std::string t_detail;
+
+struct Registry {
+  std::mutex mutex;
+  std::set<Object*> live;
+};
+
+Registry& registry() {
+  static Registry* r = new Registry;  // never destroyed: handles may outlive static teardown
+  return *r;
+}
+
+int64_t now_ms() { return ipc::monotonic_ns() / 1'000'000; }
+
+// Milliseconds left until `deadline_ms` (-1: forever).
+int left_ms(int64_t deadline_ms) {
+  if (deadline_ms < 0) {
+    return -1;
+  }
+  return static_cast<int>(std::max<int64_t>(0, deadline_ms - now_ms()));
+}
+
+}  // namespace
+
+void set_detail(std::string detail) { t_detail = std::move(detail); }
+
+std::string format_error(HRESULT hr) {
+  const auto code = static_cast<uint32_t>(hr);
+  std::string text;
+  switch (code) {
+    case static_cast<uint32_t>(VCI_OK):
+      text = "success";
+      break;
+    case static_cast<uint32_t>(VCI_E_UNEXPECTED):
+      text = "unexpected error";
+      break;
+    case static_cast<uint32_t>(VCI_E_NOT_IMPLEMENTED):
+      text = "function not implemented";
+      break;
+    case static_cast<uint32_t>(VCI_E_OUTOFMEMORY):
+      text = "not enough memory or resources";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVALIDARG):
+      text = "invalid argument";
+      break;
+    case static_cast<uint32_t>(VCI_E_NOINTERFACE):
+      text = "interface not supported";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVPOINTER):
+      text = "invalid pointer";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVHANDLE):
+      text = "invalid handle";
+      break;
+    case static_cast<uint32_t>(VCI_E_ABORT):
+      text = "operation aborted";
+      break;
+    case static_cast<uint32_t>(VCI_E_FAIL):
+      text = "operation failed";
+      break;
+    case static_cast<uint32_t>(VCI_E_ACCESSDENIED):
+      text = "access denied: the object is in use";
+      break;
+    case static_cast<uint32_t>(VCI_E_TIMEOUT):
+      text = "timeout";
+      break;
+    case static_cast<uint32_t>(VCI_E_BUSY):
+      text = "busy";
+      break;
+    case static_cast<uint32_t>(VCI_E_PENDING):
+      text = "pending";
+      break;
+    case static_cast<uint32_t>(VCI_E_NO_DATA):
+      text = "no data";
+      break;
+    case static_cast<uint32_t>(VCI_E_NO_MORE_ITEMS):
+      text = "no more items";
+      break;
+    case static_cast<uint32_t>(VCI_E_NOT_INITIALIZED):
+      text = "not initialized";
+      break;
+    case static_cast<uint32_t>(VCI_E_ALREADY_INITIALIZED):
+      text = "already initialized";
+      break;
+    case static_cast<uint32_t>(VCI_E_RXQUEUE_EMPTY):
+      text = "receive queue empty";
+      break;
+    case static_cast<uint32_t>(VCI_E_TXQUEUE_FULL):
+      text = "transmit queue full";
+      break;
+    case static_cast<uint32_t>(VCI_E_BUFFER_OVERFLOW):
+      text = "buffer too small";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVALID_STATE):
+      text = "invalid state";
+      break;
+    case static_cast<uint32_t>(VCI_E_OBJECT_ALREADY_EXISTS):
+      text = "object already exists";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVALID_INDEX):
+      text = "invalid index";
+      break;
+    case static_cast<uint32_t>(VCI_E_END_OF_FILE):
+      text = "end of file";
+      break;
+    case static_cast<uint32_t>(VCI_E_DISCONNECTED):
+      text = "disconnected: canemud cannot be reached";
+      break;
+    case static_cast<uint32_t>(VCI_E_WRONG_FLASHFWVERSION):
+      text = "wrong flash firmware version";
+      break;
+    default:
+      text = fmt::format("unknown error {:#010x}", code);
+      break;
+  }
+  if (hr != VCI_OK && !t_detail.empty()) {
+    text += " (" + t_detail + ")";
+  }
+  return text;
+}
+
+// ---------------------------------------------------------------- devices
+
+GUID device_class(uint8_t model) {
+  // canemu's own class identifiers, one per emulated adapter model.
+  GUID g{0x6a4c1e3bU, 0x2c0d, 0x4e7a, {0x9b, 0x41, 0x5d, 0x3f, 0x10, 0x8e, 0x77, 0xa2}};
+  g.Data4[7] = static_cast<UINT8>(g.Data4[7] + model);
+  return g;
+}
+
+VCIDEVICEINFO DeviceDesc::info() const {
+  VCIDEVICEINFO d{};
+  d.VciObjectId.AsInt64 = static_cast<INT64>(vci_id);
+  d.DeviceClass = device_class(model);
+  d.DriverMajorVersion = 1;
+  d.DriverMinorVersion = 0;
+  d.DriverBuildVersion = 0;
+  d.HardwareBranchVersion = 0;
+  d.HardwareMajorVersion = 1;
+  d.HardwareMinorVersion = 0;
+  d.HardwareBuildVersion = 0;
+  std::snprintf(d.UniqueHardwareId.AsChar, sizeof d.UniqueHardwareId.AsChar, "%s",
+                hardware_id.c_str());
+  const char* product = model == static_cast<uint8_t>(ipc::WireDeviceModel::ixxat_usb_to_can_fd)
+                            ? "USB-to-CAN FD"
+                            : "USB-to-CAN";
+  std::snprintf(d.Description, sizeof d.Description, "%s (canemu %s)", product, name.c_str());
+  std::snprintf(d.Manufacturer, sizeof d.Manufacturer, "canemu");
+  return d;
+}
+
+VCIDEVICECAPS DeviceDesc::caps() const {
+  VCIDEVICECAPS c{};
+  c.BusCtrlCount = static_cast<UINT16>(controller_fd.size());
+  for (std::size_t i = 0; i < controller_fd.size() && i < VCI_MAX_BUSCTRL; ++i) {
+    c.BusCtrlTypes[i] = static_cast<UINT16>(
+        VCI_BUS_CTRL(VCI_BUS_CAN, controller_fd[i] ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000));
+  }
+  return c;
+}
+
+// ---------------------------------------------------------------- handles
+
+void* register_object(std::unique_ptr<Object> object) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  Object* p = object.release();
+  r.live.insert(p);
+  return p;
+}
+
+Object* lookup(void* handle, Object::Kind kind) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  auto* p = static_cast<Object*>(handle);
+  if (r.live.count(p) == 0 || p->kind() != kind) {
+    return nullptr;
+  }
+  return p;
+}
+
+bool unregister_object(void* handle, Object::Kind kind) {
+  std::unique_ptr<Object> doomed;
+  {
+    Registry& r = registry();
+    std::lock_guard lock(r.mutex);
+    auto* p = static_cast<Object*>(handle);
+    if (r.live.count(p) == 0 || p->kind() != kind) {
+      return false;
+    }
+    r.live.erase(p);
+    doomed.reset(p);
+  }
+  return true;  // destroyed here, outside the registry's lock
+}
+
+Remote::~Remote() { Library::get().simple(*this, ipc::VciOp::close); }
+
+Rings::Rings(ipc::RingMemory rx_mem, ipc::RingMemory tx_mem, std::vector<ipc::UniqueFd>& fds,
+             bool with_tx)
+    : rx_memory(std::move(rx_mem)),
+      tx_memory(std::move(tx_mem)),
+      rx_event(std::move(fds[2])),
+      tx_writer_event(std::move(fds[3])),
+      doorbell(std::move(fds[4])),
+      rx(rx_memory, -1, rx_event.get()),
+      tx(tx_memory, doorbell.get(), tx_writer_event.get()),
+      has_tx(with_tx) {}
+
+// ---------------------------------------------------------------- requests
+
+Library& Library::get() {
+  static Library* lib = new Library;  // never destroyed: see registry()
+  return *lib;
+}
+
+HRESULT Library::connect() {
+  std::lock_guard lock(mutex_);
+  return connect_locked();
+}
+
+HRESULT Library::connect_locked() {
+  if (connection_) {
+    return VCI_OK;
+  }
+  auto c = Connection::open(ipc::socket_path(), "vci");
+  if (!c) {
+    set_detail(c.error().message);
+    return VCI_E_DISCONNECTED;
+  }
+  connection_.emplace(std::move(*c));
+  return VCI_OK;
+}
+
+HRESULT Library::call(ipc::VciRequest& request, ipc::VciReply& reply,
+                      std::vector<ipc::UniqueFd>* fds) {
+  std::lock_guard lock(mutex_);
+  if (HRESULT hr = connect_locked(); hr != VCI_OK) {
+    return hr;
+  }
+  request.header = ipc::make_message<ipc::VciRequest>().header;
+  auto r = connection_->call<ipc::VciRequest, ipc::VciReply>(request);
+  if (!r) {
+    set_detail(r.error().message);
+    connection_.reset();  // the next call connects again
+    return VCI_E_DISCONNECTED;
+  }
+  reply = *r;
+  if (fds != nullptr) {
+    *fds = connection_->take_fds();
+  }
+  return reply.hresult;
+}
+
+HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation) {
+  std::lock_guard lock(mutex_);
+  if (HRESULT hr = connect_locked(); hr != VCI_OK) {
+    return hr;
+  }
+  auto r = connection_->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
+      ipc::make_message<ipc::DeviceListRequest>());
+  if (!r) {
+    set_detail(r.error().message);
+    connection_.reset();
+    return VCI_E_DISCONNECTED;
+  }
+  out.clear();
+  for (uint16_t i = 0; i < r->count && i < ipc::kMaxDevices; ++i) {
+    const ipc::DeviceEntry& e = r->devices[i];
+    if (e.ephemeral != 0 || e.vci_id == 0) {
+      continue;  // not an adapter the VCI sees
+    }
+    DeviceDesc d;
+    d.name = ipc::name_of(e.name);
+    d.vci_id = e.vci_id;
+    d.hardware_id = ipc::name_of(e.hardware_id);
+    d.model = e.model;
+    for (uint8_t k = 0; k < e.controller_count && k < ipc::kMaxDeviceControllers; ++k) {
+      d.controller_fd.push_back(e.controller_fd[k] != 0);
+    }
+    out.push_back(std::move(d));
+  }
+  if (generation != nullptr) {
+    *generation = r->generation;
+  }
+  return VCI_OK;
+}
+
+HRESULT Library::wait_device_change(uint32_t generation, int timeout_ms) {
+  // A connection of its own: waiting must not hold the shared one.
+  auto c = Connection::open(ipc::socket_path(), "vci-enum");
+  if (!c) {
+    set_detail(c.error().message);
+    return VCI_E_DISCONNECTED;
+  }
+  if (auto s = c->subscribe(ipc::kEventDevices); !s) {
+    set_detail(s.error().message);
+    return VCI_E_DISCONNECTED;
+  }
+  uint32_t now = 0;
+  std::vector<DeviceDesc> ignored;
+  if (HRESULT hr = list_devices(ignored, &now); hr != VCI_OK) {
+    return hr;
+  }
+  if (now != generation) {
+    return VCI_OK;  // changed before we subscribed
+  }
+  return c->next_notification(timeout_ms) ? VCI_OK : VCI_E_TIMEOUT;
+}
+
+HRESULT Library::open_remote(ipc::VciOp op, uint16_t flags, const DeviceDesc& device,
+                             uint32_t controller, uint32_t& handle) {
+  ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(op);
+  m.flags = flags;
+  ipc::copy_name(m.device, device.name);
+  m.controller = controller;
+  ipc::VciReply r{};
+  const HRESULT hr = call(m, r);
+  handle = r.handle;
+  return hr;
+}
+
+HRESULT Library::simple(const Remote& object, ipc::VciOp op, std::initializer_list<uint32_t> args,
+                        ipc::VciReply* reply) {
+  ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(op);
+  m.handle = object.handle;
+  std::size_t i = 0;
+  for (uint32_t a : args) {
+    m.args[i++] = a;
+  }
+  ipc::VciReply r{};
+  const HRESULT hr = call(m, r);
+  if (reply != nullptr) {
+    *reply = r;
+  }
+  return hr;
+}
+
+HRESULT Library::line_info(const Remote& object, ipc::VciReply& reply) {
+  return simple(object, ipc::VciOp::line_info, {}, &reply);
+}
+
+HRESULT Library::filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool extended,
+                        uint8_t mode, uint32_t code, uint32_t mask, uint8_t* mode_out) {
+  ipc::VciReply r{};
+  const HRESULT hr = simple(
+      object, op,
+      {kind, static_cast<uint32_t>(extended ? CAN_FILTER_EXT : CAN_FILTER_STD), mode, code, mask},
+      &r);
+  if (mode_out != nullptr && hr == VCI_OK) {
+    *mode_out = static_cast<uint8_t>(r.values[0]);
+  }
+  return hr;
+}
+
+HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold,
+                              uint32_t tx, uint32_t tx_threshold, uint32_t filter_size,
+                              uint8_t filter_mode) {
+  ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(ipc::VciOp::channel_init);
+  m.handle = channel.handle;
+  m.args[0] = rx;
+  m.args[1] = tx;
+  m.args[2] = filter_size;
+  m.args[3] = filter_mode;
+  ipc::VciReply r{};
+  std::vector<ipc::UniqueFd> fds;
+  if (HRESULT hr = call(m, r, &fds); hr != VCI_OK) {
+    return hr;
+  }
+  const uint32_t element = channel.v2 ? sizeof(CANMSG2) : sizeof(CANMSG);
+  if (fds.size() != ipc::kChannelFdCount || r.values[2] != element) {
+    set_detail(fmt::format("canemud sent {} descriptors and {}-byte elements", fds.size(),
+                           r.values[2]));
+    return VCI_E_UNEXPECTED;
+  }
+  auto rx_mem = ipc::RingMemory::map(std::move(fds[0]));
+  auto tx_mem = ipc::RingMemory::map(std::move(fds[1]));
+  if (!rx_mem || !tx_mem || rx_mem->element_size() != element ||
+      tx_mem->element_size() != element) {
+    set_detail("the channel's rings could not be mapped");
+    return VCI_E_UNEXPECTED;
+  }
+  auto rings = std::make_unique<Rings>(std::move(*rx_mem), std::move(*tx_mem), fds, tx != 0);
+  rings->rx.set_threshold(std::max<uint32_t>(rx_threshold, 1));
+  rings->tx.set_threshold(std::max<uint32_t>(tx_threshold, 1));
+  channel.rings = std::move(rings);
+  return VCI_OK;
+}
+
+// ---------------------------------------------------------------- data path
+
+int timeout_of(uint32_t ms) {
+  return ms == 0xFFFFFFFFU ? -1 : static_cast<int>(std::min<uint32_t>(ms, 0x7FFFFFFF));
+}
+
+HRESULT channel_peek(ChannelObj& c, void* msg) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  switch (c.rings->rx.get(msg)) {
+    case ipc::RingStatus::ok:
+      return VCI_OK;
+    case ipc::RingStatus::empty:
+      return VCI_E_RXQUEUE_EMPTY;
+    default:
+      set_detail("the receive ring is corrupted");
+      return VCI_E_UNEXPECTED;
+  }
+}
+
+HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
+  HRESULT hr = channel_peek(c, msg);
+  if (hr != VCI_E_RXQUEUE_EMPTY || timeout_ms == 0) {
+    return hr == VCI_E_RXQUEUE_EMPTY ? VCI_E_TIMEOUT : hr;
+  }
+  ipc::RingReader& rx = c.rings->rx;
+  const int timeout = timeout_of(timeout_ms);
+  const int64_t deadline = timeout < 0 ? -1 : now_ms() + timeout;
+  // Waiting for one message whatever the application's threshold.
+  const uint32_t threshold = rx.threshold();
+  rx.set_threshold(1);
+  while (true) {
+    hr = channel_peek(c, msg);
+    if (hr != VCI_E_RXQUEUE_EMPTY) {
+      break;
+    }
+    const int left = left_ms(deadline);
+    if (left == 0 || !rx.wait(left)) {
+      hr = channel_peek(c, msg);
+      if (hr == VCI_E_RXQUEUE_EMPTY) {
+        hr = VCI_E_TIMEOUT;
+      }
+      break;
+    }
+  }
+  rx.set_threshold(threshold);
+  return hr;
+}
+
+HRESULT channel_post(ChannelObj& c, const void* msg) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  if (!c.rings->has_tx) {
+    return VCI_E_ACCESSDENIED;  // initialized without a transmit FIFO
+  }
+  switch (c.rings->tx.put(msg)) {
+    case ipc::RingStatus::ok:
+      return VCI_OK;
+    case ipc::RingStatus::full:
+      return VCI_E_TXQUEUE_FULL;
+    default:
+      set_detail("the transmit ring is corrupted");
+      return VCI_E_UNEXPECTED;
+  }
+}
+
+HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg) {
+  HRESULT hr = channel_post(c, msg);
+  if (hr != VCI_E_TXQUEUE_FULL || timeout_ms == 0) {
+    return hr;
+  }
+  ipc::RingWriter& tx = c.rings->tx;
+  const int timeout = timeout_of(timeout_ms);
+  const int64_t deadline = timeout < 0 ? -1 : now_ms() + timeout;
+  const uint32_t threshold = tx.threshold();
+  tx.set_threshold(1);
+  while (true) {
+    hr = channel_post(c, msg);
+    if (hr != VCI_E_TXQUEUE_FULL) {
+      break;
+    }
+    const int left = left_ms(deadline);
+    if (left == 0 || !tx.wait(left)) {
+      hr = channel_post(c, msg);
+      if (hr == VCI_E_TXQUEUE_FULL) {
+        hr = VCI_E_TIMEOUT;
+      }
+      break;
+    }
+  }
+  tx.set_threshold(threshold);
+  return hr;
+}
+
+HRESULT channel_read_many(ChannelObj& c, uint32_t timeout_ms, void* msgs, uint32_t count,
+                          uint32_t& done) {
+  done = 0;
+  if (count == 0) {
+    return VCI_OK;
+  }
+  auto* out = static_cast<uint8_t*>(msgs);
+  HRESULT hr = timeout_ms == 0 ? channel_peek(c, out) : channel_read(c, timeout_ms, out);
+  if (hr != VCI_OK) {
+    return hr;
+  }
+  const std::size_t size = c.rings->rx_memory.element_size();
+  for (done = 1; done < count; ++done) {
+    if (channel_peek(c, out + done * size) != VCI_OK) {
+      break;
+    }
+  }
+  return VCI_OK;
+}
+
+HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, uint32_t count,
+                          uint32_t& done) {
+  done = 0;
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  const auto* in = static_cast<const uint8_t*>(msgs);
+  const std::size_t size = c.rings->tx_memory.element_size();
+  for (; done < count; ++done) {
+    const HRESULT hr = timeout_ms == 0 ? channel_post(c, in + done * size)
+                                       : channel_send(c, timeout_ms, in + done * size);
+    if (hr != VCI_OK) {
+      return hr;
+    }
+  }
+  return VCI_OK;
+}
+
+HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  return c.rings->rx.wait(timeout_of(timeout_ms)) ? VCI_OK : VCI_E_TIMEOUT;
+}
+
+HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  return c.rings->tx.wait(timeout_of(timeout_ms)) ? VCI_OK : VCI_E_TIMEOUT;
+}
+
+uint8_t rx_load(const ChannelObj& c) {
+  if (!c.rings) {
+    return 0;
+  }
+  return static_cast<uint8_t>(uint64_t{c.rings->rx.fill_count()} * 100 /
+                              c.rings->rx_memory.capacity());
+}
+
+uint8_t tx_load(const ChannelObj& c) {
+  if (!c.rings || !c.rings->has_tx) {
+    return 0;
+  }
+  return static_cast<uint8_t>(uint64_t{c.rings->tx.fill_count()} * 100 /
+                              c.rings->tx_memory.capacity());
+}
+
+}  // namespace canemu::client::vci

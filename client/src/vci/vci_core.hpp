@@ -1,0 +1,162 @@
+// The machinery behind the VCI C libraries (libvcinpl.so, libvcinpl2.so) and the VCI C++ API:
+// one connection to canemud per process, the objects an application opened (a HANDLE is a
+// pointer to one; every HANDLE is checked against the live objects before use), and the
+// channels' rings in shared memory. The libraries only convert their structs and arguments.
+//
+// Thread safety: requests to canemud are serialized on one mutex; a channel's rings follow the
+// VCI rule (one reader and one writer thread at a time, the FIFO Lock/Unlock for more).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "canemu/ipc/shm_ring.hpp"
+#include "vci/cantype.h"
+#include "vci/vcierr.h"
+#include "vci/vcitype.h"
+
+namespace canemu::client::vci {
+
+// Text for a VCI result, with the detail of the last failure of this thread when it has one
+// (e.g. where canemud was looked for).
+std::string format_error(HRESULT hr);
+void set_detail(std::string detail);
+
+// A device as canemud lists it.
+struct DeviceDesc {
+  std::string name;
+  uint64_t vci_id = 0;
+  std::string hardware_id;
+  uint8_t model = 0;  // ipc::WireDeviceModel
+  std::vector<bool> controller_fd;
+  VCIDEVICEINFO info() const;
+  VCIDEVICECAPS caps() const;
+};
+
+// The device class GUIDs this library reports (ours; documented in docs/vci.md).
+GUID device_class(uint8_t model);
+
+class Object {
+ public:
+  enum class Kind : uint8_t { enumerator, device, control, channel, scheduler };
+  explicit Object(Kind kind) : kind_(kind) {}
+  virtual ~Object() = default;
+  Kind kind() const { return kind_; }
+
+ private:
+  Kind kind_;
+};
+
+// Handles (HANDLE values) of live objects.
+void* register_object(std::unique_ptr<Object> object);
+// The object behind `handle` if it is live and of `kind`; nullptr otherwise.
+Object* lookup(void* handle, Object::Kind kind);
+// Destroys it; false if it was not a live handle of `kind`.
+bool unregister_object(void* handle, Object::Kind kind);
+
+struct Enumerator : Object {
+  Enumerator() : Object(Kind::enumerator) {}
+  std::vector<DeviceDesc> devices;
+  std::size_t next = 0;
+  uint32_t generation = 0;
+};
+
+struct Device : Object {
+  Device() : Object(Kind::device) {}
+  DeviceDesc desc;
+};
+
+// An object canemud holds for us (control unit, channel, cyclic list); closed on destruction.
+struct Remote : Object {
+  Remote(Kind kind, uint32_t remote_handle, const DeviceDesc& on_device, uint32_t bus_no)
+      : Object(kind), handle(remote_handle), device(on_device), controller(bus_no) {}
+  ~Remote() override;
+  uint32_t handle;
+  DeviceDesc device;
+  uint32_t controller;
+};
+
+struct Rings {
+  Rings(ipc::RingMemory rx_mem, ipc::RingMemory tx_mem, std::vector<ipc::UniqueFd>& fds,
+        bool has_tx);
+  ipc::RingMemory rx_memory;
+  ipc::RingMemory tx_memory;
+  ipc::UniqueFd rx_event;
+  ipc::UniqueFd tx_writer_event;
+  ipc::UniqueFd doorbell;
+  ipc::RingReader rx;
+  ipc::RingWriter tx;
+  bool has_tx;
+};
+
+struct ChannelObj : Remote {
+  ChannelObj(uint32_t remote_handle, const DeviceDesc& on_device, uint32_t bus_no, bool is_v2)
+      : Remote(Kind::channel, remote_handle, on_device, bus_no), v2(is_v2) {}
+  bool v2;
+  std::unique_ptr<Rings> rings;
+};
+
+class Library {
+ public:
+  static Library& get();
+
+  // Connects if not connected. VCI_E_DISCONNECTED (with a detail saying where canemud was
+  // looked for and how to start it) when it cannot be reached.
+  HRESULT connect();
+  // One VCI request. `fds` receives the descriptors of the reply.
+  HRESULT call(ipc::VciRequest& request, ipc::VciReply& reply,
+               std::vector<ipc::UniqueFd>* fds = nullptr);
+  HRESULT list_devices(std::vector<DeviceDesc>& out, uint32_t* generation = nullptr);
+  // Waits until the device list changes (VCI_OK) or `timeout_ms` passes (VCI_E_TIMEOUT).
+  HRESULT wait_device_change(uint32_t generation, int timeout_ms);
+  // Opens a control unit, channel or cyclic list on controller `controller` of `device`.
+  HRESULT open_remote(ipc::VciOp op, uint16_t flags, const DeviceDesc& device,
+                      uint32_t controller, uint32_t& handle);
+  // A call on a remote object with no payload or arguments beyond `args`.
+  HRESULT simple(const Remote& object, ipc::VciOp op, std::initializer_list<uint32_t> args = {},
+                 ipc::VciReply* reply = nullptr);
+  HRESULT line_info(const Remote& object, ipc::VciReply& reply);
+  HRESULT filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool extended,
+                 uint8_t mode, uint32_t code, uint32_t mask, uint8_t* mode_out);
+  HRESULT init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold, uint32_t tx,
+                       uint32_t tx_threshold, uint32_t filter_size, uint8_t filter_mode);
+
+ private:
+  Library() = default;
+  HRESULT connect_locked();
+  std::mutex mutex_;
+  std::optional<Connection> connection_;
+};
+
+// --- channel data path (no daemon round trip) ---
+// Copies the next message (element size bytes) out; VCI_E_RXQUEUE_EMPTY when there is none.
+HRESULT channel_peek(ChannelObj& c, void* msg);
+// As channel_peek, waiting up to `timeout_ms` (INFINITE: 0xFFFFFFFF) for one.
+HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg);
+HRESULT channel_post(ChannelObj& c, const void* msg);
+HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg);
+// Up to `count` messages into `msgs` (an array of the channel's element type), waiting up to
+// `timeout_ms` for the first; `done` gets how many. VCI_E_TIMEOUT (or VCI_E_RXQUEUE_EMPTY
+// with no waiting) when none came.
+HRESULT channel_read_many(ChannelObj& c, uint32_t timeout_ms, void* msgs, uint32_t count,
+                          uint32_t& done);
+// Up to `count` messages from `msgs`, waiting up to `timeout_ms` for room; `done` gets how
+// many were queued. VCI_E_TIMEOUT (VCI_E_TXQUEUE_FULL with no waiting) when not all fit.
+HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, uint32_t count,
+                          uint32_t& done);
+HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms);
+HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms);
+// Fill levels in percent, for the channel status.
+uint8_t rx_load(const ChannelObj& c);
+uint8_t tx_load(const ChannelObj& c);
+
+int timeout_of(uint32_t ms);  // INFINITE -> -1
+
+}  // namespace canemu::client::vci

@@ -1,0 +1,81 @@
+// The VCI requests of the control protocol (ipc::VciRequest), answered: each client's handles
+// on the adapter firmware of configured devices (the control unit, channels with their rings,
+// the cyclic transmit list), checked against the client that owns them, and closed when the
+// client closes them or goes away.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <span>
+
+#include "canemu/daemon/ring_budget.hpp"
+#include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/vci_port.hpp"
+#include "canemu/ipc/protocol.hpp"
+
+namespace canemu::daemon {
+
+inline constexpr std::size_t kMaxVciHandlesPerClient = 64;
+inline constexpr std::size_t kMaxVciChannelsPerClient = 16;
+
+// One object a client opened. Closing it (destruction) releases it on the line.
+class VciHandle {
+ public:
+  enum class Kind : uint8_t { control, channel, scheduler };
+  VciHandle(Kind kind, model::vci::CanLine& line, model::vci::ChannelId channel, bool v2)
+      : kind_(kind), line_(line), channel_(channel), v2_(v2) {}
+  ~VciHandle();
+  VciHandle(const VciHandle&) = delete;
+  VciHandle& operator=(const VciHandle&) = delete;
+
+  Kind kind() const { return kind_; }
+  model::vci::CanLine& line() { return line_; }
+  model::vci::ChannelId channel() const { return channel_; }
+  bool v2() const { return v2_; }
+  VciPort* port() { return port_.get(); }
+  // A new port (channel initialization); returns the one it replaces.
+  std::unique_ptr<VciPort> replace_port(std::unique_ptr<VciPort> port, RingBudget budget);
+
+ private:
+  Kind kind_;
+  model::vci::CanLine& line_;
+  model::vci::ChannelId channel_;
+  bool v2_;
+  std::unique_ptr<VciPort> port_;
+  RingBudget budget_;
+};
+
+struct VciSession {
+  uint32_t next_handle = 1;
+  std::map<uint32_t, std::unique_ptr<VciHandle>> handles;
+};
+
+class VciService {
+ public:
+  using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
+  VciService(Simulation& sim, std::size_t& ring_bytes_in_use)
+      : sim_(sim), ring_bytes_in_use_(ring_bytes_in_use) {}
+
+  // A port's doorbell starts or stops being watched.
+  std::function<void(Doorbell&)> port_opened;
+  std::function<void(Doorbell&)> port_closing;
+
+  void handle(VciSession& session, const ipc::VciRequest& m, const Send& send);
+  // Everything the session opened, closed (the client went away).
+  void close_all(VciSession& session);
+
+ private:
+  void close(VciSession& session, uint32_t handle);
+  void open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r);
+  void init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,
+                    std::array<int, ipc::kChannelFdCount>& fds);
+  void control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r);
+  void scheduler(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r);
+
+  Simulation& sim_;
+  std::size_t& ring_bytes_in_use_;
+};
+
+}  // namespace canemu::daemon

@@ -1,0 +1,345 @@
+#include "canemu/daemon/vci_service.hpp"
+
+#include <cstring>
+
+#include <fmt/format.h>
+
+namespace canemu::daemon {
+
+namespace vci = model::vci;
+
+VciHandle::~VciHandle() {
+  switch (kind_) {
+    case Kind::control:
+      line_.close_control();
+      break;
+    case Kind::channel:
+      line_.close_channel(channel_);  // before the port goes: the line lets go of it
+      break;
+    case Kind::scheduler:
+      line_.close_scheduler();
+      break;
+  }
+}
+
+std::unique_ptr<VciPort> VciHandle::replace_port(std::unique_ptr<VciPort> port,
+                                                 RingBudget budget) {
+  std::unique_ptr<VciPort> old = std::move(port_);
+  port_ = std::move(port);
+  budget_ = std::move(budget);
+  return old;
+}
+
+namespace {
+
+template <class T>
+T payload_as(const ipc::VciRequest& m) {
+  static_assert(sizeof(T) <= ipc::kVciPayloadSize);
+  T t;
+  std::memcpy(&t, m.payload, sizeof t);
+  return t;
+}
+
+template <class T>
+void put_payload(ipc::VciReply& r, std::size_t offset, const T& t) {
+  std::memcpy(r.payload + offset, &t, sizeof t);
+}
+
+bool is_open(ipc::VciOp op) {
+  return op == ipc::VciOp::control_open || op == ipc::VciOp::channel_open ||
+         op == ipc::VciOp::scheduler_open;
+}
+
+vci::FilterResult filter_call(vci::CanLine& line, std::optional<vci::ChannelId> channel,
+                              const ipc::VciRequest& m) {
+  if (m.args[0] > static_cast<uint32_t>(vci::FilterOp::Kind::remove_ids)) {
+    return {VCI_E_INVALIDARG, 0};
+  }
+  vci::FilterOp op;
+  op.kind = static_cast<vci::FilterOp::Kind>(m.args[0]);
+  op.select = static_cast<uint8_t>(m.args[1]);
+  op.mode = static_cast<uint8_t>(m.args[2]);
+  op.code = m.args[3];
+  op.mask = m.args[4];
+  if (m.args[1] > 0xFF || m.args[2] > 0xFF) {
+    return {VCI_E_INVALIDARG, 0};
+  }
+  return line.filter(channel, op);
+}
+
+}  // namespace
+
+void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Send& send) {
+  auto r = ipc::make_message<ipc::VciReply>(m.header.request_id);
+  std::array<int, ipc::kChannelFdCount> fds{};
+  bool with_fds = false;
+  const auto op = static_cast<ipc::VciOp>(m.op);
+  if (is_open(op)) {
+    open(session, m, r);
+  } else if (auto it = session.handles.find(m.handle); it == session.handles.end()) {
+    r.hresult = VCI_E_INVALID_HANDLE;
+  } else if (op == ipc::VciOp::close) {
+    close(session, m.handle);
+    r.hresult = VCI_OK;
+  } else {
+    VciHandle& h = *it->second;
+    vci::CanLine& line = h.line();
+    r.handle = m.handle;
+    r.hresult = VCI_OK;
+    switch (op) {
+      case ipc::VciOp::line_info:
+        put_payload(r, ipc::kVciCapsOffset, line.capabilities());
+        put_payload(r, ipc::kVciCaps2Offset, line.capabilities2());
+        put_payload(r, ipc::kVciLineOffset, line.line_status());
+        put_payload(r, ipc::kVciLine2Offset, line.line_status2());
+        break;
+      case ipc::VciOp::controller_state: {
+        const vci::ControllerState s = line.controller_state();
+        r.values[0] = static_cast<uint32_t>(s.state);
+        r.values[1] = s.tec;
+        r.values[2] = s.rec;
+        r.values[3] = static_cast<uint32_t>(line.state());
+        break;
+      }
+      default:
+        if (h.kind() == VciHandle::Kind::control) {
+          control(h, m, r);
+        } else if (h.kind() == VciHandle::Kind::scheduler) {
+          scheduler(h, m, r);
+        } else if (op == ipc::VciOp::channel_init) {
+          init_channel(h, m, r, fds);
+          with_fds = r.hresult == VCI_OK;
+        } else if (op == ipc::VciOp::channel_activate) {
+          r.hresult = line.activate(h.channel());
+        } else if (op == ipc::VciOp::channel_deactivate) {
+          r.hresult = line.deactivate(h.channel());
+        } else if (op == ipc::VciOp::channel_status) {
+          const auto s = line.channel_status(h.channel());
+          r.values[0] = s->initialized ? 1 : 0;
+          r.values[1] = s->activated ? 1 : 0;
+          r.values[2] = s->rx_overrun ? 1 : 0;
+          const ipc::VciChannelCounters c{s->counters.received, s->counters.lost,
+                                          s->counters.sent,     s->counters.rejected,
+                                          s->counters.dropped,  s->counters.not_shown};
+          put_payload(r, 0, c);
+        } else if (op == ipc::VciOp::channel_filter) {
+          const vci::FilterResult f = filter_call(line, h.channel(), m);
+          r.hresult = f.hr;
+          r.values[0] = f.mode;
+        } else {
+          r.hresult = VCI_E_INVALID_HANDLE;  // not an operation of a channel
+        }
+        break;
+    }
+  }
+  send(&r, sizeof r, with_fds ? std::span<const int>(fds) : std::span<const int>());
+}
+
+void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {
+  const std::string device = ipc::name_of(m.device);
+  vci::CanLine* line = sim_.vci_line(device, m.controller);
+  if (line == nullptr) {
+    r.hresult = VCI_E_INVALIDARG;  // no such device or bus number
+    return;
+  }
+  if (session.handles.size() >= kMaxVciHandlesPerClient) {
+    r.hresult = VCI_E_OUTOFMEMORY;
+    return;
+  }
+  std::unique_ptr<VciHandle> h;
+  switch (static_cast<ipc::VciOp>(m.op)) {
+    case ipc::VciOp::control_open:
+      r.hresult = line->open_control();
+      if (r.hresult == VCI_OK) {
+        h = std::make_unique<VciHandle>(VciHandle::Kind::control, *line, 0, false);
+      }
+      break;
+    case ipc::VciOp::channel_open: {
+      std::size_t channels = 0;
+      for (const auto& [id, other] : session.handles) {
+        channels += other->kind() == VciHandle::Kind::channel ? 1 : 0;
+      }
+      if (channels >= kMaxVciChannelsPerClient) {
+        r.hresult = VCI_E_OUTOFMEMORY;
+        return;
+      }
+      const bool v2 = (m.flags & ipc::kVciV2) != 0;
+      auto id = line->open_channel((m.flags & ipc::kVciExclusive) != 0, v2);
+      if (!id) {
+        r.hresult = id.error();
+        return;
+      }
+      h = std::make_unique<VciHandle>(VciHandle::Kind::channel, *line, *id, v2);
+      r.hresult = VCI_OK;
+      break;
+    }
+    default:
+      r.hresult = line->open_scheduler();
+      if (r.hresult == VCI_OK) {
+        h = std::make_unique<VciHandle>(VciHandle::Kind::scheduler, *line, 0, false);
+      }
+      break;
+  }
+  if (!h) {
+    return;
+  }
+  uint32_t id = session.next_handle++;
+  while (id == 0 || session.handles.count(id) != 0) {
+    id = session.next_handle++;
+  }
+  session.handles[id] = std::move(h);
+  r.handle = id;
+}
+
+void VciService::init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,
+                              std::array<int, ipc::kChannelFdCount>& fds) {
+  const uint32_t rx = m.args[0];
+  const uint32_t tx = m.args[1];
+  if (rx == 0 || rx > 0xFFFF || tx > 0xFFFF) {
+    r.hresult = VCI_E_INVALIDARG;
+    return;
+  }
+  vci::CanLine& line = h.line();
+  if (line.channel_status(h.channel())->activated) {
+    r.hresult = VCI_E_INVALID_STATE;
+    return;
+  }
+  const std::size_t element = h.v2() ? sizeof(CANMSG2) : sizeof(CANMSG);
+  if (ring_bytes_in_use_ + (std::size_t{rx} + tx) * element > kMaxRingBytes) {
+    r.hresult = VCI_E_OUTOFMEMORY;
+    return;
+  }
+  auto port = VciPort::create(h.v2(), rx, tx, fmt::format("{}", h.channel()));
+  if (!port) {
+    r.hresult = VCI_E_OUTOFMEMORY;
+    return;
+  }
+  (*port)->attach(&line);
+  vci::ChannelSetup setup;
+  setup.ext_list_size = m.args[2];
+  setup.filter_mode = h.v2() ? static_cast<uint8_t>(m.args[3]) : CAN_FILTER_PASS;
+  if (h.v2() && m.args[3] > 0xFF) {
+    r.hresult = VCI_E_INVALIDARG;
+    return;
+  }
+  r.hresult = line.init_channel(h.channel(), setup, port->get());
+  if (r.hresult != VCI_OK) {
+    return;
+  }
+  VciPort& fresh = **port;
+  RingBudget budget(&ring_bytes_in_use_, fresh.bytes());
+  std::unique_ptr<VciPort> old = h.replace_port(std::move(*port), std::move(budget));
+  if (old && port_closing) {
+    port_closing(*old);
+  }
+  if (port_opened) {
+    port_opened(fresh);
+  }
+  r.values[0] = fresh.rx_capacity();
+  r.values[1] = tx == 0 ? 0 : fresh.tx_capacity();
+  r.values[2] = fresh.element_size();
+  fds = fresh.client_fds();
+}
+
+void VciService::control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r) {
+  vci::CanLine& line = h.line();
+  switch (static_cast<ipc::VciOp>(m.op)) {
+    case ipc::VciOp::control_init: {
+      vci::LineInit init;
+      if ((m.flags & ipc::kVciV2) != 0) {
+        const auto p = payload_as<CANINITLINE2>(m);
+        init.v2 = true;
+        init.op_mode = p.bOpMode;
+        init.ex_mode = p.bExMode;
+        init.sf_mode = p.bSFMode;
+        init.ef_mode = p.bEFMode;
+        init.sf_ids = p.dwSFIds;
+        init.ef_ids = p.dwEFIds;
+        init.sdr = p.sBtpSdr;
+        init.fdr = p.sBtpFdr;
+      } else {
+        const auto p = payload_as<CANINITLINE>(m);
+        init.op_mode = p.bOpMode;
+        init.btr0 = p.bBtReg0;
+        init.btr1 = p.bBtReg1;
+      }
+      r.hresult = line.init_line(init);
+      break;
+    }
+    case ipc::VciOp::control_reset:
+      r.hresult = line.reset_line();
+      break;
+    case ipc::VciOp::control_start:
+      r.hresult = line.start_line();
+      break;
+    case ipc::VciOp::control_stop:
+      r.hresult = line.stop_line();
+      break;
+    case ipc::VciOp::control_filter: {
+      const vci::FilterResult f = filter_call(line, std::nullopt, m);
+      r.hresult = f.hr;
+      r.values[0] = f.mode;
+      break;
+    }
+    default:
+      r.hresult = VCI_E_INVALID_HANDLE;  // not an operation of the control unit
+      break;
+  }
+}
+
+void VciService::scheduler(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r) {
+  vci::CanLine& line = h.line();
+  switch (static_cast<ipc::VciOp>(m.op)) {
+    case ipc::VciOp::scheduler_resume:
+      r.hresult = line.scheduler_resume();
+      break;
+    case ipc::VciOp::scheduler_suspend:
+      r.hresult = line.scheduler_suspend();
+      break;
+    case ipc::VciOp::scheduler_reset:
+      r.hresult = line.scheduler_reset();
+      break;
+    case ipc::VciOp::scheduler_add: {
+      auto index = line.scheduler_add(payload_as<CANCYCLICTXMSG2>(m));
+      r.hresult = index ? VCI_OK : index.error();
+      r.values[0] = index ? *index : 0xFFFFFFFFU;
+      break;
+    }
+    case ipc::VciOp::scheduler_remove:
+      r.hresult = line.scheduler_remove(m.args[0]);
+      break;
+    case ipc::VciOp::scheduler_start:
+      r.hresult = m.args[1] > 0xFFFF ? VCI_E_INVALIDARG
+                                     : line.scheduler_start(m.args[0],
+                                                            static_cast<uint16_t>(m.args[1]));
+      break;
+    case ipc::VciOp::scheduler_stop:
+      r.hresult = line.scheduler_stop(m.args[0]);
+      break;
+    case ipc::VciOp::scheduler_status:
+      put_payload(r, 0, line.scheduler_status());
+      break;
+    default:
+      r.hresult = VCI_E_INVALID_HANDLE;  // not an operation of the cyclic list
+      break;
+  }
+}
+
+void VciService::close(VciSession& session, uint32_t handle) {
+  auto it = session.handles.find(handle);
+  if (it == session.handles.end()) {
+    return;
+  }
+  if (VciPort* port = it->second->port(); port != nullptr && port_closing) {
+    port_closing(*port);
+  }
+  session.handles.erase(it);
+}
+
+void VciService::close_all(VciSession& session) {
+  while (!session.handles.empty()) {
+    close(session, session.handles.begin()->first);
+  }
+}
+
+}  // namespace canemu::daemon

@@ -233,11 +233,49 @@ HRESULT Library::connect() {
   return connect_locked();
 }
 
+HRESULT Library::failed(const ipc::IpcError& e) {
+  set_detail(e.message);
+  if (e.message.rfind("canemud: ", 0) == 0) {
+    return VCI_E_UNEXPECTED;  // the daemon refused the request; the connection is fine
+  }
+  connection_.reset();  // gone: the next call connects again
+  return VCI_E_DISCONNECTED;
+}
+
+HRESULT Library::reconnect(const std::string& socket) {
+  std::lock_guard lock(mutex_);
+  connection_.reset();
+  socket_ = socket;
+  return connect_locked();
+}
+
+HRESULT Library::step(int64_t ns, int64_t& now) {
+  std::lock_guard lock(mutex_);
+  if (HRESULT hr = connect_locked(); hr != VCI_OK) {
+    return hr;
+  }
+  // canemud takes steps of up to a minute; a longer one goes in pieces.
+  constexpr int64_t kMaxStep = int64_t{60} * 1'000'000'000;
+  while (ns > 0) {
+    auto m = ipc::make_message<ipc::TimeStepRequest>();
+    m.step_ns = std::min(ns, kMaxStep);
+    auto r = connection_->call<ipc::TimeStepRequest, ipc::TimeStepReply>(m);
+    if (!r) {
+      return r.error().message.find("not_stepped") != std::string::npos
+                 ? (set_detail(r.error().message), VCI_E_INVALID_STATE)
+                 : failed(r.error());
+    }
+    ns -= m.step_ns;
+    now = r->sim_time_ns;
+  }
+  return VCI_OK;
+}
+
 HRESULT Library::connect_locked() {
   if (connection_) {
     return VCI_OK;
   }
-  auto c = Connection::open(ipc::socket_path(), "vci");
+  auto c = Connection::open(ipc::socket_path(socket_), "vci");
   if (!c) {
     set_detail(c.error().message);
     return VCI_E_DISCONNECTED;
@@ -255,9 +293,7 @@ HRESULT Library::call(ipc::VciRequest& request, ipc::VciReply& reply,
   request.header = ipc::make_message<ipc::VciRequest>().header;
   auto r = connection_->call<ipc::VciRequest, ipc::VciReply>(request);
   if (!r) {
-    set_detail(r.error().message);
-    connection_.reset();  // the next call connects again
-    return VCI_E_DISCONNECTED;
+    return failed(r.error());
   }
   reply = *r;
   if (fds != nullptr) {
@@ -274,9 +310,7 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
   auto r = connection_->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
       ipc::make_message<ipc::DeviceListRequest>());
   if (!r) {
-    set_detail(r.error().message);
-    connection_.reset();
-    return VCI_E_DISCONNECTED;
+    return failed(r.error());
   }
   out.clear();
   for (uint16_t i = 0; i < r->count && i < ipc::kMaxDevices; ++i) {
@@ -302,7 +336,12 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
 
 HRESULT Library::wait_device_change(uint32_t generation, int timeout_ms) {
   // A connection of its own: waiting must not hold the shared one.
-  auto c = Connection::open(ipc::socket_path(), "vci-enum");
+  std::string socket;
+  {
+    std::lock_guard lock(mutex_);
+    socket = socket_;
+  }
+  auto c = Connection::open(ipc::socket_path(socket), "vci-enum");
   if (!c) {
     set_detail(c.error().message);
     return VCI_E_DISCONNECTED;

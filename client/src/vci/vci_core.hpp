@@ -110,6 +110,10 @@ class Library {
   // Connects if not connected. VCI_E_DISCONNECTED (with a detail saying where canemud was
   // looked for and how to start it) when it cannot be reached.
   HRESULT connect();
+  // Drops the connection and connects to `socket` (empty: the usual search) from now on.
+  HRESULT reconnect(const std::string& socket);
+  // Stepped time: runs the emulation `ns` further; `now` gets the simulated time after it.
+  HRESULT step(int64_t ns, int64_t& now);
   // One VCI request. `fds` receives the descriptors of the reply.
   HRESULT call(ipc::VciRequest& request, ipc::VciReply& reply,
                std::vector<ipc::UniqueFd>* fds = nullptr);
@@ -131,8 +135,11 @@ class Library {
  private:
   Library() = default;
   HRESULT connect_locked();
+  // A request that failed: its VCI result (the connection is dropped if it broke).
+  HRESULT failed(const ipc::IpcError& e);
   std::mutex mutex_;
   std::optional<Connection> connection_;
+  std::string socket_;  // empty: ipc::socket_path()'s search
 };
 
 // --- channel data path (no daemon round trip) ---

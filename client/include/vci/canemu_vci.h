@@ -1,0 +1,48 @@
+/*
+ * canemu's extensions to the VCI C API: not part of IXXAT's API, exported by both libvcinpl.so
+ * and libvcinpl2.so. Programs that must also build against IXXAT's libraries keep these calls
+ * behind their own switch.
+ */
+#ifndef CANEMU_VCI_H
+#define CANEMU_VCI_H
+
+#include "vcierr.h"
+#include "vcitype.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Error states of canemuGetControllerState. */
+#define CANEMU_STATE_ACTIVE 0  /* both counters below 96 */
+#define CANEMU_STATE_WARNING 1 /* a counter at 96 or above */
+#define CANEMU_STATE_PASSIVE 2 /* a counter at 128 or above */
+#define CANEMU_STATE_BUSOFF 3  /* transmit counter above 255 */
+
+/* Line states of canemuGetControllerState. */
+#define CANEMU_LINE_NOT_INITIALIZED 0
+#define CANEMU_LINE_OFFLINE 1
+#define CANEMU_LINE_ONLINE 2
+
+/* Talks to the canemud listening at pszSocket from now on (NULL: $CANEMU_SOCKET or the
+ * default path again). Objects opened on the previous daemon stay open there until closed.
+ * VCI_OK, or VCI_E_DISCONNECTED when nobody listens there. */
+HRESULT VCIAPI canemuConnect(const char* pszSocket);
+
+/* The error state, transmit and receive error counters and line state of the controller that
+ * hObject (a control unit, channel or cyclic list handle) belongs to. Any pointer may be NULL.
+ * VCI_OK, VCI_E_INVHANDLE. */
+HRESULT VCIAPI canemuGetControllerState(HANDLE hObject, PUINT8 pbErrorState, PUINT16 pwTec,
+                                        PUINT16 pwRec, PUINT8 pbLineState);
+
+/* Stepped time (canemud started with time = "stepped"): runs the emulation qwNanoseconds
+ * further; everything due in that span happens before the call returns. The simulated time
+ * after the step goes to *pqwNow (may be NULL). VCI_OK; VCI_E_INVALID_STATE when the daemon
+ * does not run in stepped time; VCI_E_INVALIDARG for 0. */
+HRESULT VCIAPI canemuStepTime(UINT64 qwNanoseconds, UINT64* pqwNow);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CANEMU_VCI_H */

@@ -1,0 +1,73 @@
+// What the VCI C API tests share: a canemud with a configuration of their own, stepped time
+// through the canemu extension, and a controller opened the way a VCI program opens it. Used
+// by the tests of libvcinpl and of libvcinpl2 (each built against its own header).
+#pragma once
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "canemu_vci.h"
+#include "daemon_process.hpp"
+
+namespace canemu::testing {
+
+// Two adapters, alpha and beta, each with one SJA1000 on the classic bus can0 (500 kbit/s).
+inline const char* const kTwoAdapters =
+    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
+    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
+    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
+
+// A configuration file in a fresh directory, removed with the object.
+class ConfigFile {
+ public:
+  explicit ConfigFile(const std::string& text) {
+    char dir[] = "/tmp/canemu-vci-XXXXXX";
+    dir_ = ::mkdtemp(dir);
+    path_ = dir_ + "/canemu.toml";
+    FILE* f = std::fopen(path_.c_str(), "w");
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  }
+  ~ConfigFile() {
+    ::unlink(path_.c_str());
+    ::rmdir(dir_.c_str());
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string dir_;
+  std::string path_;
+};
+
+// canemud in stepped time on `config`, and the VCI library pointed at it.
+struct VciDaemon {
+  ConfigFile config;
+  Daemon daemon;
+  explicit VciDaemon(const std::string& text = kTwoAdapters)
+      : config(text), daemon("stepped", {"--config=" + config.path()}) {
+    EXPECT_EQ(canemuConnect(daemon.socket().c_str()), VCI_OK);
+  }
+  ~VciDaemon() { canemuConnect(nullptr); }
+};
+
+// Runs simulated time `ns` further.
+inline void step_ns(uint64_t ns) {
+  UINT64 now = 0;
+  ASSERT_EQ(canemuStepTime(ns, &now), VCI_OK);
+}
+
+// Loads a fault scenario from `text` into the daemon.
+inline void load_faults(const Daemon& d, const std::string& text) {
+  auto c = connect(d, "faults");
+  auto m = ipc::make_message<ipc::FaultLoadRequest>();
+  ipc::copy_name(m.source, "test.toml");
+  m.length = static_cast<uint32_t>(text.size());
+  std::memcpy(m.text, text.data(), text.size());
+  auto r = c.call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(m);
+  ASSERT_TRUE(r) << r.error().message;
+}
+
+}  // namespace canemu::testing

@@ -1,0 +1,298 @@
+// The VCI "2" C API (libvcinpl2: CANMSG2, CANBTP) against a real canemud in stepped time: CAN
+// FD adapters, bit timing as CANBTP, filters and self reception on v2 channels.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "canemu/firmware_model/bit_timing_decoders.hpp"
+#include "canemu/firmware_model/wire_encoding.hpp"
+#include "vci_test_support.hpp"
+#include "vcinpl2.h"
+
+namespace canemu {
+namespace {
+
+using testing::step_ns;
+using testing::VciDaemon;
+
+// Two CAN FD adapters on an FD bus, and a classic one on a classic bus.
+const char* const kAdapters =
+    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
+    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
+    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
+
+constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
+constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
+CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) { return CANBTP{0, bps, ts1, ts2, 1, 0}; }
+const CANBTP kNominal = btp(500000, 14, 2);  // 16 quanta, sample point 87.5 %
+const CANBTP kData = btp(2000000, 8, 2);     // 10 quanta, 80 %
+
+HANDLE device_named(const std::string& name) {
+  HANDLE e = nullptr;
+  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
+  VCIDEVICEINFO info{};
+  HANDLE dev = nullptr;
+  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
+    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
+      EXPECT_EQ(vciDeviceOpen(info.VciObjectId, &dev), VCI_OK);
+    }
+  }
+  vciEnumDeviceClose(e);
+  return dev;
+}
+
+std::vector<CANMSG2> drain(HANDLE channel, bool data_only = true) {
+  std::vector<CANMSG2> got;
+  CANMSG2 m;
+  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
+    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+      got.push_back(m);
+    }
+  }
+  return got;
+}
+
+HANDLE channel_on(HANDLE dev, UINT32 filter_size, UINT8 filter_mode, bool activate = true) {
+  HANDLE ch = nullptr;
+  EXPECT_EQ(canChannelOpen(dev, 0, FALSE, &ch), VCI_OK);
+  EXPECT_EQ(canChannelInitialize(ch, 256, 1, 64, 1, filter_size, filter_mode), VCI_OK);
+  if (activate) {
+    EXPECT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
+  }
+  return ch;
+}
+
+// An FD adapter's controller initialized at 500 kbit/s / 2 Mbit/s, with one PASS channel.
+struct FdAdapter {
+  HANDLE device = nullptr;
+  HANDLE control = nullptr;
+  HANDLE channel = nullptr;
+  explicit FdAdapter(const std::string& name, bool start = true) {
+    device = device_named(name);
+    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
+    channel = channel_on(device, 0, CAN_FILTER_PASS);
+    CANBTP n = kNominal;
+    CANBTP f = kData;
+    EXPECT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
+                                   2048, &n, &f),
+              VCI_OK);
+    if (start) {
+      EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
+    }
+  }
+  ~FdAdapter() {
+    canChannelClose(channel);
+    canControlClose(control);
+    vciDeviceClose(device);
+  }
+  void post(const CANMSG2& m) const {
+    CANMSG2 copy = m;
+    ASSERT_EQ(canChannelPostMessage(channel, &copy), VCI_OK);
+  }
+};
+
+CANMSG2 msg(uint32_t id, std::vector<uint8_t> bytes, bool fd = false, bool brs = false) {
+  CANMSG2 m{};
+  m.dwMsgId = id;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
+  m.uMsgInfo.Bits.edl = fd ? 1 : 0;
+  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
+  std::memcpy(m.abData, bytes.data(), bytes.size());
+  return m;
+}
+
+// End of a frame sent at t = 0, in device ticks (us).
+UINT32 ticks_of(const model::Frame& f) {
+  const auto nominal = model::vci::decode_btp({0, 500000, 14, 2, 1, 0}, model::vci::kFdNominalRange,
+                                              model::vci::Phase::nominal);
+  const auto data = model::vci::decode_btp({0, 2000000, 8, 2, 1, 0}, model::vci::kFdDataRange,
+                                           model::vci::Phase::data);
+  return static_cast<UINT32>(model::frame_duration(model::encode(f), *nominal, *data).ns() / 1000);
+}
+
+TEST(Vci2CApi, FdFramesWithTheRateSwitchArriveAtTheirExactEnd) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  std::vector<uint8_t> twelve{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  alpha.post(msg(0x123, twelve, true, true));
+  step_ns(2'000'000);
+  const auto got = drain(beta.channel);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x123u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.esi, 0u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.dlc, 9u);  // 12 bytes
+  EXPECT_EQ(std::memcmp(got[0].abData, twelve.data(), twelve.size()), 0);
+  EXPECT_EQ(got[0].dwTime, ticks_of(*model::Frame::fd_frame(0x123, twelve, false, true)));
+}
+
+TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", false);
+  CANCAPABILITIES2 caps{};
+  ASSERT_EQ(canControlGetCaps(alpha.control, &caps), VCI_OK);
+  EXPECT_EQ(caps.wCtrlType, CAN_CTRL_IFICFD);
+  EXPECT_EQ(caps.wBusCoupling, CAN_BUSC_HIGHSPEED);
+  EXPECT_EQ(caps.dwFeatures & (CAN_FEATURE_EXTDATA | CAN_FEATURE_FASTDATA),
+            static_cast<UINT32>(CAN_FEATURE_EXTDATA | CAN_FEATURE_FASTDATA));
+  EXPECT_EQ(caps.dwCanClkFreq, 80'000'000u);
+  EXPECT_EQ(caps.dwTscClkFreq, 1'000'000u);
+  EXPECT_EQ(caps.dwTscDivisor, 1u);
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  EXPECT_EQ(s.bOpMode, kMode);
+  EXPECT_EQ(s.bExMode, kFd);
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 500000u);
+  EXPECT_EQ(s.sBtpFdr.dwBPS, 2000000u);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  // The classic adapter through the same interface: no FD modes.
+  HANDLE gamma = device_named("gamma");
+  HANDLE control = nullptr;
+  ASSERT_EQ(canControlOpen(gamma, 0, &control), VCI_OK);
+  ASSERT_EQ(canControlGetCaps(control, &caps), VCI_OK);
+  EXPECT_EQ(caps.wCtrlType, CAN_CTRL_SJA1000);
+  EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_EXTDATA, 0u);
+  CANBTP n = kNominal;
+  CANBTP f = kData;
+  EXPECT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
+                                 2048, &n, &f),
+            VCI_E_INVALIDARG);
+  CANBTP classic = btp(500000, 14, 2);  // 16 quanta of 125 ns: BTR0 0x00, BTR1 0x1C
+  ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &classic, nullptr),
+            VCI_OK);
+  canControlClose(control);
+  vciDeviceClose(gamma);
+}
+
+TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", false);
+  FdAdapter beta("beta");
+  HANDLE only = channel_on(alpha.device, 16, CAN_FILTER_INCL, false);
+  HANDLE except = channel_on(alpha.device, 16, CAN_FILTER_EXCL, false);
+  HANDLE nolist = channel_on(alpha.device, 0, CAN_FILTER_INCL, false);
+  // INCL: nothing through the acceptance filter, 0x123 on the list.
+  ASSERT_EQ(canChannelSetAccFilter(only, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE), VCI_OK);
+  ASSERT_EQ(canChannelAddFilterIds(only, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
+  // EXCL: the same list blocks 0x123 only.
+  ASSERT_EQ(canChannelSetAccFilter(except, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE), VCI_OK);
+  ASSERT_EQ(canChannelAddFilterIds(except, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
+  // No 29-bit list: IDs cannot be added, the acceptance filter still works.
+  EXPECT_EQ(canChannelAddFilterIds(nolist, TRUE, 0x1000 << 1, 0x3FFFFFFF), VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(canChannelSetAccFilter(nolist, TRUE, 0x1000 << 1, 0x3FFFFFFF), VCI_OK);
+  UINT8 mode = 0;
+  ASSERT_EQ(canChannelGetFilterMode(except, FALSE, &mode), VCI_OK);
+  EXPECT_EQ(mode, CAN_FILTER_EXCL);
+  for (HANDLE ch : {only, except, nolist}) {
+    ASSERT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
+  }
+  EXPECT_EQ(canChannelSetFilterMode(only, FALSE, CAN_FILTER_PASS, nullptr), VCI_E_INVALID_STATE);
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  beta.post(msg(0x122, {}));
+  beta.post(msg(0x123, {}));
+  CANMSG2 ext = msg(0x1000, {});
+  ext.uMsgInfo.Bits.ext = 1;
+  beta.post(ext);
+  step_ns(2'000'000);
+  auto ids = [](HANDLE ch) {
+    std::vector<std::pair<uint32_t, unsigned>> v;
+    for (const CANMSG2& m : drain(ch)) {
+      v.emplace_back(m.dwMsgId, m.uMsgInfo.Bits.afc);
+    }
+    return v;
+  };
+  using V = std::vector<std::pair<uint32_t, unsigned>>;
+  // The 29-bit filters were left alone: their acceptance filter is open, which passes 0x1000
+  // in INCL mode and blocks it in EXCL mode.
+  EXPECT_EQ(ids(only), (V{{0x123, CAN_ACCEPT_FILTER_2}, {0x1000, CAN_ACCEPT_FILTER_1}}));
+  EXPECT_EQ(ids(except), (V{{0x122, CAN_ACCEPT_PASSEXCL}}));
+  EXPECT_EQ(ids(nolist),
+            (V{{0x122, CAN_ACCEPT_FILTER_1}, {0x123, CAN_ACCEPT_FILTER_1},
+               {0x1000, CAN_ACCEPT_FILTER_1}}));
+  for (HANDLE ch : {only, except, nolist}) {
+    canChannelClose(ch);
+  }
+}
+
+TEST(Vci2CApi, OwnEchoesPassAnyFilterAndOthersNeedSrra) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  HANDLE sender = channel_on(alpha.device, 0, CAN_FILTER_LOCK);
+  HANDLE plain = channel_on(alpha.device, 0, CAN_FILTER_PASS);
+  HANDLE srra = channel_on(alpha.device, 0, CAN_FILTER_PASS | CAN_FILTER_SRRA);
+  CANMSG2 m = msg(0x42, {1, 2, 3});
+  m.uMsgInfo.Bits.srr = 1;
+  ASSERT_EQ(canChannelPostMessage(sender, &m), VCI_OK);
+  step_ns(2'000'000);
+  const auto own = drain(sender);
+  ASSERT_EQ(own.size(), 1u);
+  EXPECT_EQ(own[0].uMsgInfo.Bits.srr, 1u);
+  EXPECT_TRUE(drain(plain).empty());
+  const auto foreign = drain(srra);
+  ASSERT_EQ(foreign.size(), 1u);
+  EXPECT_EQ(foreign[0].dwMsgId, 0x42u);
+  EXPECT_EQ(foreign[0].uMsgInfo.Bits.srr, 0u);
+  EXPECT_EQ(foreign[0].dwTime, own[0].dwTime);
+  EXPECT_EQ(drain(beta.channel).size(), 1u);
+  for (HANDLE ch : {sender, plain, srra}) {
+    canChannelClose(ch);
+  }
+}
+
+TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData) {
+  VciDaemon d(kAdapters);
+  FdAdapter beta("beta");
+  HANDLE dev = device_named("alpha");
+  HANDLE control = nullptr;
+  ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
+  HANDLE ch = channel_on(dev, 0, CAN_FILTER_PASS);
+  CANBTP n = kNominal;
+  CANBTP f = kData;
+  ASSERT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_LOCK, CAN_FILTER_INCL, 2048,
+                                 2048, &n, &f),
+            VCI_OK);
+  UINT8 mode = 0;
+  ASSERT_EQ(canControlGetFilterMode(control, FALSE, &mode), VCI_OK);
+  EXPECT_EQ(mode, CAN_FILTER_LOCK);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  CANMSG2 m = msg(0x10, {1});
+  ASSERT_EQ(canChannelPostMessage(beta.channel, &m), VCI_OK);
+  step_ns(1'000'000);
+  const auto got = drain(ch, false);
+  ASSERT_EQ(got.size(), 1u);  // the INFO START passes, the frame does not
+  EXPECT_EQ(got[0].uMsgInfo.Bytes.bType, CAN_MSGTYPE_INFO);
+  // Back to INCL; the previous mode comes back.
+  ASSERT_EQ(canControlStart(control, FALSE), VCI_OK);
+  UINT8 previous = 0;
+  ASSERT_EQ(canControlSetFilterMode(control, FALSE, CAN_FILTER_INCL, &previous), VCI_OK);
+  EXPECT_EQ(previous, CAN_FILTER_LOCK);
+  // ResetLine restores the mode InitLine gave.
+  ASSERT_EQ(canControlReset(control), VCI_OK);
+  ASSERT_EQ(canControlGetFilterMode(control, FALSE, &mode), VCI_OK);
+  EXPECT_EQ(mode, CAN_FILTER_LOCK);
+  // With no 11-bit IDs the filter is off whatever its mode.
+  ASSERT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_LOCK, CAN_FILTER_LOCK, 0, 2048,
+                                 &n, &f),
+            VCI_OK);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  ASSERT_EQ(canChannelPostMessage(beta.channel, &m), VCI_OK);
+  step_ns(1'000'000);
+  const auto passed = drain(ch);
+  ASSERT_EQ(passed.size(), 1u);
+  EXPECT_EQ(passed[0].dwMsgId, 0x10u);
+  canChannelClose(ch);
+  canControlClose(control);
+  vciDeviceClose(dev);
+}
+
+}  // namespace
+}  // namespace canemu

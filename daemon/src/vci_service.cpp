@@ -76,6 +76,16 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
   const auto op = static_cast<ipc::VciOp>(m.op);
   if (is_open(op)) {
     open(session, m, r);
+  } else if (op == ipc::VciOp::line_info && m.handle == 0) {
+    // A socket's view (ICanSocket): no object of the controller needs to be open.
+    vci::CanLine* line = sim_.vci_line(ipc::name_of(m.device), m.controller);
+    r.hresult = line == nullptr ? VCI_E_INVALIDARG : VCI_OK;
+    if (line != nullptr) {
+      put_payload(r, ipc::kVciCapsOffset, line->capabilities());
+      put_payload(r, ipc::kVciCaps2Offset, line->capabilities2());
+      put_payload(r, ipc::kVciLineOffset, line->line_status());
+      put_payload(r, ipc::kVciLine2Offset, line->line_status2());
+    }
   } else if (auto it = session.handles.find(m.handle); it == session.handles.end()) {
     r.hresult = VCI_E_INVALID_HANDLE;
   } else if (op == ipc::VciOp::close) {

@@ -436,7 +436,7 @@ HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_thre
     set_detail("the channel's rings could not be mapped");
     return VCI_E_UNEXPECTED;
   }
-  auto rings = std::make_unique<Rings>(std::move(*rx_mem), std::move(*tx_mem), fds, tx != 0);
+  auto rings = std::make_shared<Rings>(std::move(*rx_mem), std::move(*tx_mem), fds, tx != 0);
   rings->rx.set_threshold(std::max<uint32_t>(rx_threshold, 1));
   rings->tx.set_threshold(std::max<uint32_t>(tx_threshold, 1));
   channel.rings = std::move(rings);

@@ -45,7 +45,7 @@ GUID device_class(uint8_t model);
 
 class Object {
  public:
-  enum class Kind : uint8_t { enumerator, device, control, channel, scheduler };
+  enum class Kind : uint8_t { enumerator, device, control, channel, scheduler, event };
   explicit Object(Kind kind) : kind_(kind) {}
   virtual ~Object() = default;
   Kind kind() const { return kind_; }
@@ -94,13 +94,16 @@ struct Rings {
   ipc::RingReader rx;
   ipc::RingWriter tx;
   bool has_tx;
+  // The C++ API hands out one IFifoReader and one IFifoWriter at a time.
+  std::atomic<bool> reader_out{false};
+  std::atomic<bool> writer_out{false};
 };
 
 struct ChannelObj : Remote {
   ChannelObj(uint32_t remote_handle, const DeviceDesc& on_device, uint32_t bus_no, bool is_v2)
       : Remote(Kind::channel, remote_handle, on_device, bus_no), v2(is_v2) {}
   bool v2;
-  std::unique_ptr<Rings> rings;
+  std::shared_ptr<Rings> rings;  // shared with the C++ API's FIFO objects
 };
 
 class Library {

@@ -421,7 +421,8 @@ enum class VciOp : uint16_t {
   control_open = 1,
   channel_open = 2,  // flags: kVciV2, kVciExclusive
   scheduler_open = 3,
-  // On any handle of a controller: capabilities and line status (VciLineInfo in the payload).
+  // On any handle of a controller, or (handle 0) on device + controller: capabilities and line
+  // status (the kVci*Offset structs in the payload).
   line_info = 4,
   // Control unit.
   control_init = 10,  // payload: CANINITLINE2 layout; flags kVciV2 (else only the BTR/opmode)

@@ -120,6 +120,8 @@ class RingWriter {
   bool wait(int timeout_ms) const { return own_.wait(timeout_ms); }
   void count_overrun() { hdr_->overruns.fetch_add(1, std::memory_order_relaxed); }
   bool corrupted() const { return corrupted_; }
+  // This side's event, for a thread that watches it on the side's behalf (VCI AssignEvent).
+  const RingEvent& own_event() const { return own_; }
 
  private:
   bool load_read(uint64_t& read) const;
@@ -155,6 +157,7 @@ class RingReader {
   void disarm() { own_.disarm(); }
   uint32_t overruns() const { return hdr_->overruns.load(std::memory_order_relaxed); }
   bool corrupted() const { return corrupted_; }
+  const RingEvent& own_event() const { return own_; }
 
  private:
   bool load_write(uint64_t& write) const;

@@ -1,0 +1,316 @@
+// The VCI C++ API (libvciapi: vcisdk.h) against a real canemud in stepped time: the guide's
+// walk-through (device manager, BAL, socket, channel, control unit, FIFOs with events), FIFO
+// semantics, identifiers and reference counting.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <poll.h>
+
+#include "canemu/firmware_model/wire_encoding.hpp"
+#include "vci_test_support.hpp"
+#include "vcisdk.h"
+
+namespace canemu {
+namespace {
+
+using testing::step_ns;
+using testing::VciDaemon;
+
+template <class T>
+struct Ref {  // releases what it holds
+  T* p = nullptr;
+  Ref() = default;
+  Ref(const Ref&) = delete;
+  Ref& operator=(const Ref&) = delete;
+  ~Ref() {
+    if (p != nullptr) {
+      p->Release();
+    }
+  }
+  T* operator->() const { return p; }
+  T** out() { return &p; }
+  PVOID* pv() { return reinterpret_cast<PVOID*>(&p); }
+};
+
+// Opens the adapter named `name` the way the guide's walk-through does.
+struct Adapter {
+  Ref<IVciDevice> device;
+  Ref<IBalObject> bal;
+  Ref<ICanSocket> socket;
+  Ref<ICanChannel> channel;
+  Ref<IFifoReader> reader;
+  Ref<IFifoWriter> writer;
+  Ref<ICanControl> control;
+  explicit Adapter(const std::string& name) {
+    Ref<IVciDeviceManager> manager;
+    EXPECT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+    Ref<IVciEnumDevice> e;
+    EXPECT_EQ(manager->EnumDevices(e.out()), VCI_OK);
+    VCIDEVICEINFO info{};
+    while (e->Next(1, &info, nullptr) == VCI_OK) {
+      if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
+        EXPECT_EQ(manager->OpenDevice(info.VciObjectId, device.out()), VCI_OK);
+      }
+    }
+    EXPECT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+    EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
+    EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
+    EXPECT_EQ(channel->Initialize(1024, 128), VCI_OK);
+    EXPECT_EQ(channel->GetReader(reader.out()), VCI_OK);
+    EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
+    EXPECT_EQ(channel->Activate(), VCI_OK);
+    EXPECT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
+    CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_ERRFRAME, 0, CAN_BT0_500KB, CAN_BT1_500KB};
+    EXPECT_EQ(control->InitLine(&init), VCI_OK);
+    EXPECT_EQ(control->StartLine(), VCI_OK);
+  }
+};
+
+CANMSG one_byte(UINT32 id, UINT8 b) {
+  CANMSG m{};
+  m.dwMsgId = id;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  m.abData[0] = b;
+  return m;
+}
+
+TEST(VciCppApi, TheWalkThroughSendsAndReceivesWithAnEvent) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  ASSERT_NE(event, nullptr);
+  ASSERT_EQ(beta.reader->SetThreshold(2), VCI_OK);  // the INFO START and the frame
+  ASSERT_EQ(beta.reader->AssignEvent(event), VCI_OK);
+  EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);
+  CANMSG m = one_byte(0x123, 0x5A);
+  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  step_ns(1'000'000);
+  EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0);
+  std::vector<CANMSG> got;
+  CANMSG r;
+  while (beta.reader->GetDataEntry(&r) == VCI_OK) {
+    got.push_back(r);
+  }
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].uMsgInfo.Bytes.bType, CAN_MSGTYPE_INFO);
+  EXPECT_EQ(got[1].dwMsgId, 0x123u);
+  EXPECT_EQ(got[1].abData[0], 0x5A);
+  // At its end of frame, in 1 us ticks: the frame's bits (stuff bits included) of 2 us each.
+  const auto frame = model::Frame::classic(0x123, std::vector<uint8_t>{0x5A});
+  EXPECT_EQ(got[1].dwTime, 2u * model::encode(*frame).length);
+  EXPECT_EQ(beta.reader->GetDataEntry(&r), VCI_E_RXQUEUE_EMPTY);
+  // Reading did not signal it again.
+  EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);
+  EXPECT_GE(canemuEventFd(event), 0);
+  EXPECT_EQ(beta.reader->AssignEvent(nullptr), VCI_OK);
+  EXPECT_TRUE(CloseHandle(event));
+}
+
+TEST(VciCppApi, ObjectsAreExclusiveWhereTheGuideSaysAndReferenceCounted) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Ref<ICanControl> second;
+  EXPECT_EQ(alpha.bal->OpenSocket(0, IID_ICanControl, second.pv()), VCI_E_ACCESSDENIED);
+  EXPECT_EQ(second.p, nullptr);
+  Ref<IFifoReader> another;
+  EXPECT_EQ(alpha.channel->GetReader(another.out()), VCI_E_ACCESSDENIED);
+  Ref<ICanScheduler> list;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  Ref<ICanScheduler2> list2;
+  EXPECT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler2, list2.pv()), VCI_E_ACCESSDENIED);
+  Ref<IUnknown> none;
+  EXPECT_EQ(alpha.bal->OpenSocket(1, IID_ICanSocket, none.pv()), VCI_E_INVALIDARG);
+  EXPECT_EQ(alpha.bal->OpenSocket(0, IID_IFifoReader, none.pv()), VCI_E_NOINTERFACE);
+  EXPECT_EQ(alpha.device->OpenComponent(IID_IBalObject, IID_IBalObject, none.pv()),
+            VCI_E_INVALIDARG);
+  // QueryInterface adds a reference; Release counts down.
+  Ref<IUnknown> unknown;
+  ASSERT_EQ(alpha.socket->QueryInterface(IID_IUnknown, unknown.pv()), VCI_OK);
+  EXPECT_EQ(alpha.socket->AddRef(), 3u);
+  EXPECT_EQ(alpha.socket->Release(), 2u);
+  Ref<ICanSocket2> other;
+  EXPECT_EQ(alpha.socket->QueryInterface(IID_ICanSocket2, other.pv()), VCI_E_NOINTERFACE);
+  EXPECT_EQ(other.p, nullptr);
+  // The socket's view needs nothing else open.
+  BALSOCKETINFO info{};
+  ASSERT_EQ(alpha.socket->GetSocketInfo(&info), VCI_OK);
+  EXPECT_EQ(info.BusNo, 0);
+  EXPECT_EQ(info.Type, (VCI_BUS_CAN << 8) | CAN_CTRL_SJA1000);
+  CANCAPABILITIES caps{};
+  ASSERT_EQ(alpha.socket->GetCapabilities(&caps), VCI_OK);
+  EXPECT_EQ(caps.wCtrlType, CAN_CTRL_SJA1000);
+  CANLINESTATUS line{};
+  ASSERT_EQ(alpha.socket->GetLineStatus(&line), VCI_OK);
+  EXPECT_EQ(line.bBtReg1, CAN_BT1_500KB);
+  BALFEATURES features{};
+  ASSERT_EQ(alpha.bal->GetFeatures(&features), VCI_OK);
+  EXPECT_EQ(features.BusSocketCount, 1);
+}
+
+TEST(VciCppApi, AStandAloneFifoKeepsOrderCountsAndSignalsOnWritesOnly) {
+  VciDaemon d;
+  VCIID id{};
+  Ref<IFifoWriter> writer;
+  ASSERT_EQ(VciCreateFifo(&id, 32, 16, IID_IFifoWriter, writer.pv()), VCI_OK);
+  Ref<IFifoReader> reader;
+  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
+  Ref<IFifoReader> twice;
+  EXPECT_EQ(VciAccessFifo(id, IID_IFifoReader, twice.pv()), VCI_E_ACCESSDENIED);
+  UINT16 capacity = 0;
+  UINT16 size = 0;
+  ASSERT_EQ(reader->GetCapacity(&capacity), VCI_OK);
+  ASSERT_EQ(reader->GetEntrySize(&size), VCI_OK);
+  EXPECT_GE(capacity, 32);
+  EXPECT_EQ(size, 16);
+  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  ASSERT_EQ(reader->SetThreshold(3), VCI_OK);
+  ASSERT_EQ(reader->AssignEvent(event), VCI_OK);
+  uint8_t element[16] = {};
+  for (uint8_t k = 1; k <= 5; ++k) {
+    element[0] = k;
+    ASSERT_EQ(writer->PutDataEntry(element), VCI_OK);
+  }
+  EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0);  // the third write crossed 3
+  UINT16 fill = 0;
+  UINT16 free_count = 0;
+  ASSERT_EQ(reader->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(reader->GetFreeCount(&free_count), VCI_OK);
+  EXPECT_EQ(fill, 5);
+  EXPECT_EQ(fill + free_count, capacity);
+  // Acquire five, release two: the next acquire starts at the third.
+  PVOID p = nullptr;
+  UINT16 count = 0;
+  ASSERT_EQ(reader->AcquireRead(&p, &count), VCI_OK);
+  EXPECT_EQ(count, 5);
+  EXPECT_EQ(static_cast<uint8_t*>(p)[0], 1);
+  ASSERT_EQ(reader->ReleaseRead(2), VCI_OK);
+  ASSERT_EQ(reader->AcquireRead(&p, &count), VCI_OK);
+  EXPECT_EQ(count, 3);
+  EXPECT_EQ(static_cast<uint8_t*>(p)[0], 3);
+  ASSERT_EQ(reader->ReleaseRead(0), VCI_OK);
+  ASSERT_EQ(reader->GetDataEntry(nullptr), VCI_OK);  // drops one
+  ASSERT_EQ(reader->GetDataEntry(element), VCI_OK);
+  EXPECT_EQ(element[0], 4);
+  EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);  // reads signal nothing
+  // Lock is recursive.
+  EXPECT_EQ(reader->Lock(), VCI_OK);
+  EXPECT_EQ(reader->Lock(), VCI_OK);
+  EXPECT_EQ(reader->Unlock(), VCI_OK);
+  EXPECT_EQ(reader->Unlock(), VCI_OK);
+  // Reset only with no reader and writer open.
+  Ref<IVciFifo2> fifo;
+  ASSERT_EQ(VciAccessFifo(id, IID_IVciFifo2, fifo.pv()), VCI_OK);
+  EXPECT_EQ(fifo->Reset(), VCI_E_ACCESSDENIED);
+  reader->AssignEvent(nullptr);
+  reader->Release();
+  reader.p = nullptr;
+  writer->Release();
+  writer.p = nullptr;
+  ASSERT_EQ(fifo->Reset(), VCI_OK);
+  ASSERT_EQ(fifo->GetFillCount(&fill), VCI_OK);
+  EXPECT_EQ(fill, 0);
+  CloseHandle(event);
+}
+
+TEST(VciCppApi, IdentifiersRoundTripThroughText) {
+  VCIID luid{};
+  luid.AsInt64 = 0x0123456789ABCDEF;
+  char text[40];
+  EXPECT_EQ(VciLuidToChar(luid, text, 16), VCI_E_BUFFER_OVERFLOW);
+  ASSERT_EQ(VciLuidToChar(luid, text, 17), VCI_OK);
+  EXPECT_STREQ(text, "0123456789ABCDEF");
+  VCIID back{};
+  ASSERT_EQ(VciCharToLuid(text, &back), VCI_OK);
+  EXPECT_EQ(back.AsInt64, luid.AsInt64);
+  char garbage[] = "not a luid";
+  EXPECT_EQ(VciCharToLuid(garbage, &back), VCI_E_FAIL);
+  EXPECT_EQ(VciGuidToChar(IID_ICanChannel, text, 38), VCI_E_BUFFER_OVERFLOW);
+  ASSERT_EQ(VciGuidToChar(IID_ICanChannel, text, 39), VCI_OK);
+  EXPECT_EQ(std::strlen(text), 38u);
+  GUID g{};
+  ASSERT_EQ(VciCharToGuid(text, &g), VCI_OK);
+  EXPECT_EQ(std::memcmp(&g, &IID_ICanChannel, sizeof g), 0);
+  EXPECT_EQ(VciCharToGuid(garbage, &g), VCI_E_FAIL);
+  char small[4];
+  EXPECT_EQ(VciFormatError(VCI_E_TIMEOUT, small, sizeof small), VCI_OK);
+  EXPECT_EQ(std::strlen(small), 3u);
+  EXPECT_EQ(VciFormatError(VCI_E_TIMEOUT, nullptr, 10), VCI_E_INVALIDARG);
+}
+
+TEST(VciCppApi, TheFdChannelSendsAnFdFrameThroughItsWriter) {
+  VciDaemon d(
+      "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
+      "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+      "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n");
+  struct Fd {
+    Ref<IVciDevice> device;
+    Ref<IBalObject> bal;
+    Ref<ICanSocket2> socket;
+    Ref<ICanChannel2> channel;
+    Ref<ICanControl2> control;
+    Ref<IFifoReader> reader;
+    Ref<IFifoWriter> writer;
+    explicit Fd(INT64 id) {
+      Ref<IVciDeviceManager> manager;
+      EXPECT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+      VCIID v{};
+      v.AsInt64 = id;
+      EXPECT_EQ(manager->OpenDevice(v, device.out()), VCI_OK);
+      EXPECT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+      EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
+      EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
+      EXPECT_EQ(channel->Initialize(256, 64, 0, CAN_FILTER_PASS), VCI_OK);
+      EXPECT_EQ(channel->GetReader(reader.out()), VCI_OK);
+      EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
+      EXPECT_EQ(channel->Activate(), VCI_OK);
+      EXPECT_EQ(channel->GetControl(control.out()), VCI_OK);
+      CANINITLINE2 init{};
+      init.bOpMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
+      init.bExMode = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
+      init.bSFMode = CAN_FILTER_PASS;
+      init.bEFMode = CAN_FILTER_PASS;
+      init.sBtpSdr = CANBTP{0, 500000, 14, 2, 1, 0};
+      init.sBtpFdr = CANBTP{0, 2000000, 8, 2, 1, 0};
+      EXPECT_EQ(control->InitLine(&init), VCI_OK);
+      EXPECT_EQ(control->StartLine(), VCI_OK);
+    }
+  };
+  Fd alpha(1);
+  Fd beta(2);
+  // The guide's own example: fdr without edl, written in place with AcquireWrite.
+  PCANMSG2 p = nullptr;
+  ASSERT_EQ(alpha.writer->AcquireWrite(reinterpret_cast<PVOID*>(&p), nullptr), VCI_OK);
+  std::memset(p, 0, sizeof *p);
+  p->dwMsgId = 0x1234;
+  p->uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  p->uMsgInfo.Bits.fdr = 1;
+  p->uMsgInfo.Bits.ext = 1;
+  p->uMsgInfo.Bits.dlc = 1;
+  p->abData[0] = 0x77;
+  ASSERT_EQ(alpha.writer->ReleaseWrite(1), VCI_OK);
+  step_ns(1'000'000);
+  std::vector<CANMSG2> got;
+  CANMSG2 m;
+  while (beta.reader->GetDataEntry(&m) == VCI_OK) {
+    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+      got.push_back(m);
+    }
+  }
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x1234u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(got[0].abData[0], 0x77);
+  CANCHANSTATUS2 s{};
+  ASSERT_EQ(beta.channel->GetStatus(&s), VCI_OK);
+  EXPECT_TRUE(s.fActivated);
+  EXPECT_EQ(s.sLineStatus.bExMode, CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA);
+}
+
+}  // namespace
+}  // namespace canemu

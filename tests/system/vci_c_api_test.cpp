@@ -529,6 +529,29 @@ TEST(VciCApi, TheTimeStampCounterAnnouncesItsOverflow) {
   EXPECT_EQ(got[1].dwTime, 0u);    // at 2^32 us the counter shows 0 again
 }
 
+// In real time a blocked reader wakes when the frame comes, and a writer's doorbell wakes the
+// daemon: no steps anywhere.
+TEST(VciCApi, InRealTimeAReaderBlocksUntilTheFrameComes) {
+  testing::ConfigFile config(testing::kTwoAdapters);
+  testing::Daemon daemon("realtime", {"--config=" + config.path()});
+  ASSERT_EQ(canemuConnect(daemon.socket().c_str()), VCI_OK);
+  {
+    Adapter alpha("alpha");
+    Adapter beta("beta");
+    CANMSG m;
+    ASSERT_EQ(canChannelReadMessage(beta.channel, 5000, &m), VCI_OK);  // INFO START
+    EXPECT_EQ(m.uMsgInfo.Bytes.bType, CAN_MSGTYPE_INFO);
+    CANMSG sent = data(0x321, {1, 2, 3});
+    ASSERT_EQ(canChannelSendMessage(alpha.channel, 1000, &sent), VCI_OK);
+    ASSERT_EQ(canChannelReadMessage(beta.channel, 5000, &m), VCI_OK);
+    EXPECT_EQ(m.dwMsgId, 0x321u);
+    EXPECT_EQ(m.uMsgInfo.Bits.dlc, 3u);
+    EXPECT_EQ(canChannelReadMessage(beta.channel, 50, &m), VCI_E_TIMEOUT);
+    EXPECT_EQ(canemuStepTime(1000, nullptr), VCI_E_INVALID_STATE);  // not stepped time
+  }
+  canemuConnect(nullptr);
+}
+
 TEST(VciCApi, WithoutCanemudEveryCallFailsAtOnceAndSaysWhere) {
   EXPECT_EQ(canemuConnect("/nonexistent/canemud.sock"), VCI_E_DISCONNECTED);
   HANDLE e = nullptr;

@@ -312,5 +312,26 @@ TEST(VciCppApi, TheFdChannelSendsAnFdFrameThroughItsWriter) {
   EXPECT_EQ(s.sLineStatus.bExMode, CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA);
 }
 
+// The guide's walk-through as a program of its own, built only from the public headers, run
+// against a canemud in real time.
+TEST(VciCppApi, TheWalkThroughProgramRunsUnchanged) {
+  testing::ConfigFile config(testing::kTwoAdapters);
+  testing::Daemon d("realtime", {"--config=" + config.path()});
+  const std::string command =
+      "CANEMU_SOCKET=" + d.socket() + " " + VCI_WALKTHROUGH_PATH + " 2>&1";
+  FILE* out = ::popen(command.c_str(), "r");
+  ASSERT_NE(out, nullptr);
+  std::string text;
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, out) != nullptr) {
+    text += buf;
+  }
+  EXPECT_EQ(::pclose(out), 0) << text;
+  EXPECT_EQ(text,
+            "adapter: USB-to-CAN (canemu alpha)\n"
+            "adapter: USB-to-CAN (canemu beta)\n"
+            "received: id 100 data 42\n");
+}
+
 }  // namespace
 }  // namespace canemu

@@ -47,7 +47,19 @@ class ControlDispatcher {
   using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
 
   ControlDispatcher(Simulation& sim, TimeSetting time)
-      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_) {}
+      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_) {
+    // VCI channels' doorbells are watched like those of ephemeral channels.
+    vci_.port_opened = [this](Doorbell& d) {
+      if (channel_opened) {
+        channel_opened(d);
+      }
+    };
+    vci_.port_closing = [this](Doorbell& d) {
+      if (channel_closing) {
+        channel_closing(d);
+      }
+    };
+  }
 
   // Called before a status reply: the server brings simulated time to "now" and forgets
   // clients that went away.

@@ -552,6 +552,23 @@ TEST(VciCApi, InRealTimeAReaderBlocksUntilTheFrameComes) {
   canemuConnect(nullptr);
 }
 
+// Two programs of their own (examples/vci_c_talk.c, plain C), each on its adapter.
+TEST(VciCApi, TwoProgramsOnTwoAdaptersTalkThroughTheCApi) {
+  testing::ConfigFile config(testing::kTwoAdapters);
+  testing::Daemon daemon("realtime", {"--config=" + config.path()});
+  const std::string env = "CANEMU_SOCKET=" + daemon.socket() + " ";
+  FILE* receiver = ::popen((env + VCI_C_TALK_PATH + " receive beta").c_str(), "r");
+  ASSERT_NE(receiver, nullptr);
+  char line[128] = {};
+  ASSERT_NE(std::fgets(line, sizeof line, receiver), nullptr);
+  EXPECT_STREQ(line, "ready\n");
+  const int sender = std::system((env + VCI_C_TALK_PATH + " send alpha 1A5 7E").c_str());
+  EXPECT_EQ(sender, 0);
+  ASSERT_NE(std::fgets(line, sizeof line, receiver), nullptr);
+  EXPECT_STREQ(line, "1A5#7E\n");
+  EXPECT_EQ(::pclose(receiver), 0);
+}
+
 TEST(VciCApi, WithoutCanemudEveryCallFailsAtOnceAndSaysWhere) {
   EXPECT_EQ(canemuConnect("/nonexistent/canemud.sock"), VCI_E_DISCONNECTED);
   HANDLE e = nullptr;

@@ -419,6 +419,12 @@ HRESULT CanLine::start_line() {
     return VCI_OK;
   }
   state_ = LineState::online;
+  // The first frame after the start is not delayed (docs/vci.md, delayed transmission): no
+  // frame has been handed to the controller since, not even one waiting for its delay.
+  loaded_once_ = false;
+  if (staged_) {
+    staged_not_before_ = scheduler_.now();
+  }
   send_info(CAN_INFO_START, ticks(scheduler_.now()));
   node_.go_online();
   update_status(scheduler_.now());
@@ -429,8 +435,16 @@ HRESULT CanLine::stop_line() {
   if (state_ != LineState::online) {
     return VCI_OK;
   }
+  const bool loaded_not_started = loaded_ && !node_.frame_on_wire();
   release_loaded(true);
   node_.go_offline();
+  if (loaded_not_started && staged_ && !loaded_ && node_.controller().pending_tx() != nullptr) {
+    // The controller kept its request through reset mode (the SJA1000 in bus-off holds it and
+    // sends it after recovery): the frame is still in the controller, it must not be loaded a
+    // second time.
+    loaded_ = staged_;
+    staged_.reset();
+  }
   state_ = LineState::offline;
   send_info(CAN_INFO_STOP, 0);
   update_status(scheduler_.now());
@@ -586,6 +600,17 @@ HRESULT CanLine::deactivate(ChannelId id) {
     return VCI_E_INVALID_HANDLE;
   }
   c->active = false;
+  if (staged_ && staged_->channel == id) {
+    // Taken from the FIFO but not yet handed to the controller (waiting for its delay): after
+    // Deactivate the channel transmits nothing more (spec 3.8), so it is dropped and counted.
+    count_dropped(*staged_);
+    staged_.reset();
+    if (delay_event_ != 0) {
+      scheduler_.cancel(delay_event_);
+      delay_event_ = 0;
+    }
+    node_.kick();  // another channel may send now
+  }
   return VCI_OK;
 }
 

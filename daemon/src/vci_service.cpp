@@ -34,7 +34,7 @@ namespace {
 
 template <class T>
 T payload_as(const ipc::VciRequest& m) {
-  static_assert(sizeof(T) <= ipc::kVciPayloadSize);
+  static_assert(sizeof(T) <= ipc::kVciRequestPayloadSize);
   T t;
   std::memcpy(&t, m.payload, sizeof t);
   return t;
@@ -65,6 +65,44 @@ vci::FilterResult filter_call(vci::CanLine& line, std::optional<vci::ChannelId> 
     return {VCI_E_INVALIDARG, 0};
   }
   return line.filter(channel, op);
+}
+
+// The table of a control_detect request as line initializations: BTR pairs (v1) or CANBTP
+// pairs (v2), listened to with both identifier widths.
+HRESULT start_detection(vci::CanLine& line, const ipc::VciRequest& m) {
+  std::vector<vci::LineInit> entries;
+  const uint8_t both = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
+  if ((m.flags & ipc::kVciV2) != 0) {
+    const auto t = payload_as<CANBTPTABLE>(m);
+    if (t.bCount == 0 || t.bCount > 64 || m.args[1] > 0xFF || m.args[2] > 0xFF) {
+      return VCI_E_INVALIDARG;
+    }
+    for (uint8_t i = 0; i < t.bCount; ++i) {
+      vci::LineInit e;
+      e.v2 = true;
+      e.op_mode = static_cast<uint8_t>((m.args[1] & ~CAN_OPMODE_LISTONLY) | both);
+      e.ex_mode = static_cast<uint8_t>(m.args[2]);
+      e.sdr = t.asBTP[i].sSdr;
+      e.fdr = t.asBTP[i].sFdr;
+      entries.push_back(e);
+    }
+  } else {
+    const auto t = payload_as<CANBTRTABLE>(m);
+    if (t.bCount == 0 || t.bCount > 64) {
+      return VCI_E_INVALIDARG;
+    }
+    for (uint8_t i = 0; i < t.bCount; ++i) {
+      vci::LineInit e;
+      e.op_mode = both;
+      e.btr0 = t.abBtr0[i];
+      e.btr1 = t.abBtr1[i];
+      entries.push_back(e);
+    }
+  }
+  if (m.args[0] == 0 || m.args[0] > 0xFFFF) {
+    return VCI_E_INVALIDARG;
+  }
+  return line.start_detection(entries, model::milliseconds(m.args[0]));
 }
 
 }  // namespace
@@ -289,6 +327,15 @@ void VciService::control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& 
       const vci::FilterResult f = filter_call(line, std::nullopt, m);
       r.hresult = f.hr;
       r.values[0] = f.mode;
+      break;
+    }
+    case ipc::VciOp::control_detect:
+      r.hresult = start_detection(line, m);
+      break;
+    case ipc::VciOp::control_detect_result: {
+      const vci::CanLine::Detection d = line.detection();
+      r.hresult = d.hr;
+      r.values[0] = d.index;
       break;
     }
     default:

@@ -2118,3 +2118,91 @@ TEST(VciCanLine, CyclicFramesShareTheControllerWithTheChannels) {
 
 }  // namespace
 }  // namespace canemu::model
+
+// ---------------------------------------------------------------- bit-rate detection
+
+namespace canemu::model {
+namespace {
+
+// Two SJA1000 stations talking at 250 kbit/s: one sends `frames` frames, the other acknowledges.
+struct Traffic250k {
+  Traffic250k(testing::BusFixture& b, int frames) : sender(b), acker(b) {
+    HostedNodeSettings s;
+    s.btr0 = 0x01;
+    s.btr1 = 0x1C;
+    sender.start(s);
+    acker.start(s);
+    for (int i = 0; i < frames; ++i) {
+      sender.queue.push_back(TxFrame{k123, false, false});
+    }
+    sender.node.kick();
+  }
+  testing::Station<Sja1000Node> sender;
+  testing::Station<Sja1000Node> acker;
+};
+
+std::vector<vci::LineInit> btr_table(std::vector<std::pair<uint8_t, uint8_t>> pairs) {
+  std::vector<vci::LineInit> t;
+  for (auto [btr0, btr1] : pairs) {
+    vci::LineInit e = v1_init();
+    e.btr0 = btr0;
+    e.btr1 = btr1;
+    t.push_back(e);
+  }
+  return t;
+}
+
+TEST(VciCanLine, DetectionFindsTheTableEntryThatDecodesTheTraffic) {
+  Rig r;
+  Traffic250k traffic(r.b, 200);
+  ASSERT_EQ(r.line.open_control(), VCI_OK);
+  // 500, 250, 125 kbit/s: the first sees errors in the 250 kbit/s frames and gives way at
+  // once; the second receives a frame.
+  ASSERT_EQ(r.line.start_detection(btr_table({{0x00, 0x1C}, {0x01, 0x1C}, {0x03, 0x1C}}),
+                                   milliseconds(10)),
+            VCI_OK);
+  EXPECT_EQ(r.line.detection().hr, VCI_E_PENDING);
+  EXPECT_EQ(r.line.start_detection(btr_table({{0x00, 0x1C}}), milliseconds(10)), VCI_E_BUSY);
+  EXPECT_EQ(r.line.init_line(v1_init()), VCI_E_BUSY);
+  r.b.run_until(5 * kMs);  // well under one entry's wait: errors, not silence, moved it on
+  EXPECT_EQ(r.line.detection().hr, VCI_OK);
+  EXPECT_EQ(r.line.detection().index, 1u);
+  EXPECT_EQ(r.line.state(), vci::LineState::not_initialized);
+  // The detector only listened: every frame was acknowledged by the other station.
+  const NodeStats& s = r.b.bus.stats(traffic.sender.node.node());
+  EXPECT_EQ(s.errors_as_transmitter.total(), 0u);
+  EXPECT_EQ(r.b.bus.stats(r.node.node()).frames_sent, 0u);
+  // Then the application initializes the line with what was found.
+  EXPECT_EQ(r.line.init_line(btr_table({{0x01, 0x1C}})[0]), VCI_OK);
+}
+
+TEST(VciCanLine, DetectionOnASilentBusTimesOutAfterEveryEntrysWait) {
+  Rig r;
+  ASSERT_EQ(r.line.open_control(), VCI_OK);
+  ASSERT_EQ(r.line.start_detection(btr_table({{0x00, 0x1C}, {0x01, 0x1C}}), milliseconds(10)),
+            VCI_OK);
+  r.b.run_until(20 * kMs - 1);
+  EXPECT_EQ(r.line.detection().hr, VCI_E_PENDING);
+  r.b.run_until(20 * kMs);
+  EXPECT_EQ(r.line.detection().hr, VCI_E_TIMEOUT);
+  EXPECT_EQ(r.line.state(), vci::LineState::not_initialized);
+}
+
+TEST(VciCanLine, DetectionIsRefusedOnlineAndEndedByResetLine) {
+  Rig r;
+  Port port;
+  r.online(port);
+  EXPECT_EQ(r.line.start_detection(btr_table({{0x00, 0x1C}}), milliseconds(10)),
+            VCI_E_INVALID_STATE);
+  ASSERT_EQ(r.line.stop_line(), VCI_OK);
+  EXPECT_EQ(r.line.start_detection({}, milliseconds(10)), VCI_E_INVALIDARG);
+  ASSERT_EQ(r.line.start_detection(btr_table({{0x00, 0x1C}}), milliseconds(10)), VCI_OK);
+  EXPECT_EQ(r.line.start_line(), VCI_E_BUSY);
+  ASSERT_EQ(r.line.reset_line(), VCI_OK);
+  EXPECT_EQ(r.line.detection().hr, VCI_E_ABORT);
+  r.b.run_until(50 * kMs);
+  EXPECT_EQ(r.line.detection().hr, VCI_E_ABORT);  // no timer of the cancelled run fires
+}
+
+}  // namespace
+}  // namespace canemu::model

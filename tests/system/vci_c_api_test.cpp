@@ -3,7 +3,9 @@
 // 1 us counted from canemud's start).
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstring>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -41,14 +43,14 @@ struct Adapter {
   HANDLE control = nullptr;
   HANDLE channel = nullptr;
   explicit Adapter(const std::string& name, bool start = true, UINT8 mode = kMode,
-                   UINT16 rx = 1024) {
+                   UINT16 rx = 1024, UINT8 btr0 = CAN_BT0_500KB, UINT8 btr1 = CAN_BT1_500KB) {
     const VCIID id = id_of(name);
     EXPECT_EQ(vciDeviceOpen(id, &device), VCI_OK);
     EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
     EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
     EXPECT_EQ(canChannelInitialize(channel, rx, 1, 64, 1), VCI_OK);
     EXPECT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
-    EXPECT_EQ(canControlInitialize(control, mode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
+    EXPECT_EQ(canControlInitialize(control, mode, btr0, btr1), VCI_OK);
     if (start) {
       EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
     }
@@ -567,6 +569,81 @@ TEST(VciCApi, TwoProgramsOnTwoAdaptersTalkThroughTheCApi) {
   ASSERT_NE(std::fgets(line, sizeof line, receiver), nullptr);
   EXPECT_STREQ(line, "1A5#7E\n");
   EXPECT_EQ(::pclose(receiver), 0);
+}
+
+// A program that does not know the bus's rate finds it: two adapters talk at 250 kbit/s, a
+// third listens with a table of rates. The call blocks while simulated time runs, so another
+// thread steps it.
+TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
+  VciDaemon d(std::string(testing::kTwoAdapters) +
+              "\n[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\n"
+              "controllers = [\"can0\"]\n");
+  Adapter beta("beta", true, kMode, 1024, CAN_BT0_250KB, CAN_BT1_250KB);
+  Adapter gamma("gamma", true, kMode, 1024, CAN_BT0_250KB, CAN_BT1_250KB);
+  HANDLE list = nullptr;
+  ASSERT_EQ(canSchedulerOpen(beta.device, 0, &list), VCI_OK);
+  CANCYCLICTXMSG m{};
+  m.wCycleTime = 1;  // a frame every millisecond
+  m.dwMsgId = 0x2A0;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  UINT32 index = 0;
+  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+  ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
+  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
+  HANDLE control = nullptr;
+  ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
+  UINT8 btr0[] = {CAN_BT0_500KB, CAN_BT0_250KB, CAN_BT0_125KB};
+  UINT8 btr1[] = {CAN_BT1_500KB, CAN_BT1_250KB, CAN_BT1_125KB};
+  INT32 found = -2;
+  std::atomic<bool> done{false};
+  HRESULT hr = VCI_E_UNEXPECTED;
+  std::thread detector([&] {
+    hr = canControlDetectBitrate(control, 100, 3, btr0, btr1, &found);
+    done = true;
+  });
+  for (int k = 0; k < 1000 && !done; ++k) {
+    step_ns(1'000'000);
+  }
+  detector.join();
+  EXPECT_EQ(hr, VCI_OK);
+  EXPECT_EQ(found, 1);
+  // With what it found, the third adapter receives the traffic.
+  ASSERT_EQ(canControlInitialize(control, kMode, btr0[found], btr1[found]), VCI_OK);
+  HANDLE ch = nullptr;
+  ASSERT_EQ(canChannelOpen(dev, 0, FALSE, &ch), VCI_OK);
+  ASSERT_EQ(canChannelInitialize(ch, 64, 1, 0, 0), VCI_OK);
+  ASSERT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  step_ns(5'000'000);
+  std::size_t frames = 0;
+  CANMSG got;
+  while (canChannelPeekMessage(ch, &got) == VCI_OK) {
+    frames += got.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA && got.dwMsgId == 0x2A0 ? 1 : 0;
+  }
+  EXPECT_GE(frames, 4u);
+  // On a bus nobody talks on, it gives up after each entry's wait.
+  ASSERT_EQ(canSchedulerActivate(list, FALSE), VCI_OK);
+  ASSERT_EQ(canControlReset(control), VCI_OK);
+  step_ns(5'000'000);
+  done = false;
+  std::thread silent([&] {
+    hr = canControlDetectBitrate(control, 10, 2, btr0, btr1, &found);
+    done = true;
+  });
+  for (int k = 0; k < 1000 && !done; ++k) {
+    step_ns(1'000'000);
+  }
+  silent.join();
+  EXPECT_EQ(hr, VCI_E_TIMEOUT);
+  EXPECT_EQ(found, -1);
+  canChannelClose(ch);
+  canControlClose(control);
+  canSchedulerClose(list);
+  vciDeviceClose(dev);
 }
 
 TEST(VciCApi, WithoutCanemudEveryCallFailsAtOnceAndSaysWhere) {

@@ -430,8 +430,20 @@ class Control final : public Com<Interface, iid> {
   }
 
   // ICanControl
-  HRESULT DetectBaud(UINT16, PCANBTRTABLE table) {
-    return table == nullptr ? VCI_E_INVALIDARG : VCI_E_NOT_IMPLEMENTED;
+  HRESULT DetectBaud(UINT16 timeout_ms, PCANBTRTABLE table) {
+    if (table == nullptr || table->bCount == 0 || table->bCount > 64) {
+      return VCI_E_INVALIDARG;
+    }
+    if (table->bIndex == CAN_OPMODE_LOWSPEED) {
+      return VCI_E_INVALIDARG;  // no low-speed transceiver on the emulated adapters
+    }
+    uint32_t index = 0;
+    const HRESULT hr =
+        Library::get().detect(*r_, false, table, sizeof *table, timeout_ms, 0, 0, index);
+    if (hr == VCI_OK) {
+      table->bIndex = static_cast<UINT8>(index);
+    }
+    return hr;
   }
   HRESULT InitLine(PCANINITLINE p) {
     return p == nullptr ? VCI_E_INVALIDARG : init_line(*r_, p, sizeof *p, false);
@@ -440,8 +452,17 @@ class Control final : public Com<Interface, iid> {
     return line_struct_of(bus_, r_.get(), canemu::ipc::kVciLineOffset, p);
   }
   // ICanControl2
-  HRESULT DetectBaud(UINT8, UINT8, UINT16, PCANBTPTABLE table) {
-    return table == nullptr ? VCI_E_INVALIDARG : VCI_E_NOT_IMPLEMENTED;
+  HRESULT DetectBaud(UINT8 op_mode, UINT8 ex_mode, UINT16 timeout_ms, PCANBTPTABLE table) {
+    if (table == nullptr || table->bCount == 0 || table->bCount > 64) {
+      return VCI_E_INVALIDARG;
+    }
+    uint32_t index = 0;
+    const HRESULT hr = Library::get().detect(*r_, true, table, sizeof *table, timeout_ms,
+                                             op_mode, ex_mode, index);
+    if (hr == VCI_OK) {
+      table->bIndex = static_cast<UINT8>(index);
+    }
+    return hr;
   }
   HRESULT InitLine(PCANINITLINE2 p) {
     return p == nullptr ? VCI_E_INVALIDARG : init_line(*r_, p, sizeof *p, true);

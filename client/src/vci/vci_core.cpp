@@ -4,6 +4,8 @@
 #include <cstring>
 #include <set>
 
+#include <time.h>
+
 #include <fmt/format.h>
 
 #include "canemu/ipc/clock.hpp"
@@ -406,6 +408,32 @@ HRESULT Library::filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool
     *mode_out = static_cast<uint8_t>(r.values[0]);
   }
   return hr;
+}
+
+HRESULT Library::detect(const Remote& control, bool v2, const void* table, std::size_t size,
+                         uint16_t timeout_ms, uint8_t op_mode, uint8_t ex_mode,
+                         uint32_t& index) {
+  ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(ipc::VciOp::control_detect);
+  m.flags = v2 ? ipc::kVciV2 : 0;
+  m.handle = control.handle;
+  m.args[0] = timeout_ms;
+  m.args[1] = op_mode;
+  m.args[2] = ex_mode;
+  std::memcpy(m.payload, table, std::min(size, sizeof m.payload));
+  ipc::VciReply r{};
+  if (HRESULT hr = call(m, r); hr != VCI_OK) {
+    return hr;
+  }
+  while (true) {
+    const HRESULT hr = simple(control, ipc::VciOp::control_detect_result, {}, &r);
+    if (hr != VCI_E_PENDING) {
+      index = r.values[0];
+      return hr;
+    }
+    const timespec pause{0, 1'000'000};
+    ::nanosleep(&pause, nullptr);
+  }
 }
 
 HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold,

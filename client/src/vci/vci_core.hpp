@@ -132,6 +132,11 @@ class Library {
   HRESULT line_info(const Remote& object, ipc::VciReply& reply);
   HRESULT filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool extended,
                  uint8_t mode, uint32_t code, uint32_t mask, uint8_t* mode_out);
+  // Bit-rate detection on a control unit: starts it with `table` (CANBTRTABLE, or with `v2`
+  // CANBTPTABLE) and waits for its end, asking canemud every millisecond (without holding the
+  // connection, so that another thread may step time meanwhile). `index` gets the entry found.
+  HRESULT detect(const Remote& control, bool v2, const void* table, std::size_t size,
+                 uint16_t timeout_ms, uint8_t op_mode, uint8_t ex_mode, uint32_t& index);
   HRESULT init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold, uint32_t tx,
                        uint32_t tx_threshold, uint32_t filter_size, uint8_t filter_mode);
 

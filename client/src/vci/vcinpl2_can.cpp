@@ -49,17 +49,23 @@ HRESULT VCIAPI canControlGetStatus(HANDLE hCanCtl, PCANLINESTATUS2 pStatus) {
 HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExMode,
                                        UINT16 wTimeout, UINT32 dwCount, PCANBTP paBtpSDR,
                                        PCANBTP paBtpFDR, PUINT32 pdwIndex) {
-  (void)bOpMode;
-  (void)bExMode;
-  (void)wTimeout;
-  (void)paBtpFDR;
-  if (remote_of(hCanCtl, Kind::control) == nullptr) {
+  Remote* r = remote_of(hCanCtl, Kind::control);
+  if (r == nullptr) {
     return VCI_E_INVHANDLE;
   }
-  if (dwCount == 0 || paBtpSDR == nullptr || pdwIndex == nullptr) {
+  if (dwCount == 0 || dwCount > 64 || paBtpSDR == nullptr || pdwIndex == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  return VCI_E_NOT_IMPLEMENTED;
+  CANBTPTABLE table{};
+  table.bCount = static_cast<UINT8>(dwCount);
+  for (UINT32 i = 0; i < dwCount; ++i) {
+    table.asBTP[i].sSdr = paBtpSDR[i];
+    if (paBtpFDR != nullptr) {
+      table.asBTP[i].sFdr = paBtpFDR[i];
+    }
+  }
+  return Library::get().detect(*r, true, &table, sizeof table, wTimeout, bOpMode, bExMode,
+                               *pdwIndex);
 }
 
 HRESULT VCIAPI canControlInitialize(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExMode, UINT8 bSFMode,

@@ -47,14 +47,23 @@ HRESULT VCIAPI canControlGetStatus(HANDLE hCanCtl, PCANLINESTATUS pStatus) {
 
 HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT16 wTimeout, UINT32 dwCount,
                                        PUINT8 pabBtr0, PUINT8 pabBtr1, PINT32 plIndex) {
-  (void)wTimeout;
-  if (remote_of(hCanCtl, Kind::control) == nullptr) {
+  Remote* r = remote_of(hCanCtl, Kind::control);
+  if (r == nullptr) {
     return VCI_E_INVHANDLE;
   }
-  if (dwCount == 0 || pabBtr0 == nullptr || pabBtr1 == nullptr || plIndex == nullptr) {
+  if (dwCount == 0 || dwCount > 64 || pabBtr0 == nullptr || pabBtr1 == nullptr ||
+      plIndex == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  return VCI_E_NOT_IMPLEMENTED;
+  CANBTRTABLE table{};
+  table.bCount = static_cast<UINT8>(dwCount);
+  std::memcpy(table.abBtr0, pabBtr0, dwCount);
+  std::memcpy(table.abBtr1, pabBtr1, dwCount);
+  uint32_t index = 0;
+  const HRESULT hr =
+      Library::get().detect(*r, false, &table, sizeof table, wTimeout, 0, 0, index);
+  *plIndex = hr == VCI_OK ? static_cast<INT32>(index) : -1;
+  return hr;
 }
 
 HRESULT VCIAPI canControlInitialize(HANDLE hCanCtl, UINT8 bMode, UINT8 bBtr0, UINT8 bBtr1) {

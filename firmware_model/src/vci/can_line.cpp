@@ -110,7 +110,7 @@ CanLine::CanLine(SimScheduler& scheduler, HostedNode& node, const Clocks& clocks
 }
 
 CanLine::~CanLine() {
-  for (EventId e : {overrun_event_, delay_event_, cyclic_event_}) {
+  for (EventId e : {overrun_event_, delay_event_, cyclic_event_, detect_event_}) {
     if (e != 0) {
       scheduler_.cancel(e);
     }
@@ -267,6 +267,9 @@ void CanLine::release_if_unused() {
   if (in_use()) {
     return;
   }
+  if (detecting_) {
+    finish_detection(VCI_E_ABORT, 0);
+  }
   node_.stop();
   loaded_.reset();
   staged_.reset();
@@ -379,6 +382,9 @@ void CanLine::count_dropped(const Loaded& l) {
 }
 
 HRESULT CanLine::init_line(const LineInit& init) {
+  if (detecting_) {
+    return VCI_E_BUSY;
+  }
   HRESULT hr = VCI_OK;
   const HostedNodeSettings settings = settings_for(init, hr);
   if (hr != VCI_OK) {
@@ -398,6 +404,9 @@ HRESULT CanLine::init_line(const LineInit& init) {
 }
 
 HRESULT CanLine::reset_line() {
+  if (detecting_) {
+    finish_detection(VCI_E_ABORT, 0);
+  }
   release_loaded(false);
   if (configured_) {
     node_.configure(settings_, this, [this] { return next_tx(); });
@@ -412,6 +421,9 @@ HRESULT CanLine::reset_line() {
 }
 
 HRESULT CanLine::start_line() {
+  if (detecting_) {
+    return VCI_E_BUSY;
+  }
   if (state_ == LineState::not_initialized) {
     return VCI_E_INVALID_STATE;
   }
@@ -768,6 +780,11 @@ std::optional<TxFrame> CanLine::next_tx() {
 }
 
 void CanLine::frame_received(SimTime at, const Frame& frame, bool own) {
+  if (detecting_) {
+    detecting_->found = true;  // this timing decodes the traffic
+    next_detection_entry();
+    return;
+  }
   if (own || state_ != LineState::online) {
     return;
   }
@@ -850,6 +867,10 @@ void CanLine::transmission_dropped(SimTime, const Frame&) {
 }
 
 void CanLine::bus_error(const BusErrorEvent& event) {
+  if (detecting_) {
+    next_detection_entry();  // this timing does not decode the traffic
+    return;
+  }
   if ((init_.op_mode & CAN_OPMODE_ERRFRAME) == 0) {
     return;
   }
@@ -867,6 +888,9 @@ void CanLine::bus_error(const BusErrorEvent& event) {
 }
 
 void CanLine::state_changed(SimTime at, ErrorState state, uint16_t, uint16_t) {
+  if (detecting_) {
+    return;
+  }
   error_state_ = state;
   update_status(at);
 }
@@ -874,6 +898,80 @@ void CanLine::state_changed(SimTime at, ErrorState state, uint16_t, uint16_t) {
 void CanLine::overrun(SimTime at, const Frame&) {
   controller_overrun_ = true;
   update_status(at);
+}
+
+// ---------------------------------------------------------------- bit-rate detection
+
+HRESULT CanLine::start_detection(const std::vector<LineInit>& entries, SimDuration per_entry) {
+  if (detecting_) {
+    return VCI_E_BUSY;
+  }
+  if (state_ == LineState::online) {
+    return VCI_E_INVALID_STATE;
+  }
+  if (entries.empty() || per_entry.ns() <= 0) {
+    return VCI_E_INVALIDARG;
+  }
+  Detecting d;
+  d.per_entry = per_entry;
+  for (const LineInit& e : entries) {
+    HRESULT hr = VCI_OK;
+    HostedNodeSettings s = settings_for(e, hr);
+    if (hr != VCI_OK) {
+      return hr;
+    }
+    s.listen_only = true;  // the detector never disturbs the traffic it listens to
+    d.settings.push_back(s);
+  }
+  release_loaded(false);
+  detecting_ = std::move(d);
+  detection_ = Detection{VCI_E_PENDING, 0};
+  state_ = LineState::not_initialized;
+  configured_ = false;
+  try_detection_entry(0);
+  return VCI_OK;
+}
+
+void CanLine::try_detection_entry(std::size_t i) {
+  if (i >= detecting_->settings.size()) {
+    finish_detection(VCI_E_TIMEOUT, 0);
+    return;
+  }
+  detecting_->current = i;
+  detecting_->moving_on = false;
+  node_.configure(detecting_->settings[i], this, [] { return std::optional<TxFrame>(); });
+  node_.go_online();
+  if (detect_event_ != 0) {
+    scheduler_.cancel(detect_event_);
+  }
+  detect_event_ =
+      scheduler_.schedule_at(scheduler_.now() + detecting_->per_entry, *this, kDetectNext);
+}
+
+void CanLine::next_detection_entry() {
+  if (detecting_->moving_on) {
+    return;
+  }
+  // Not from inside the bus's callbacks: the next entry (or the end) comes in an event of its
+  // own, at this instant.
+  detecting_->moving_on = true;
+  if (detect_event_ != 0) {
+    scheduler_.cancel(detect_event_);
+  }
+  detect_event_ = scheduler_.schedule_at(scheduler_.now(), *this, kDetectNext);
+}
+
+void CanLine::finish_detection(HRESULT hr, uint32_t index) {
+  if (detect_event_ != 0) {
+    scheduler_.cancel(detect_event_);
+    detect_event_ = 0;
+  }
+  detecting_.reset();
+  detection_ = Detection{hr, index};
+  node_.go_offline();
+  state_ = LineState::not_initialized;
+  configured_ = false;
+  error_state_ = ErrorState::active;
 }
 
 // ---------------------------------------------------------------- time stamps
@@ -898,6 +996,14 @@ void CanLine::on_event(SimTime now, uint64_t tag) {
     case kCyclicTick:
       cyclic_event_ = 0;
       cyclic_tick();
+      break;
+    case kDetectNext:
+      detect_event_ = 0;
+      if (detecting_ && detecting_->found) {
+        finish_detection(VCI_OK, static_cast<uint32_t>(detecting_->current));
+      } else if (detecting_) {
+        try_detection_entry(detecting_->current + 1);
+      }
       break;
     default:
       break;

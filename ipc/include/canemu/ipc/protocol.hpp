@@ -431,6 +431,12 @@ enum class VciOp : uint16_t {
   control_stop = 13,
   control_filter = 14,      // args: kind, select, mode, code, mask; values[0]: mode
   controller_state = 15,    // values: error state (WireErrorState), tec, rec, line state
+  // Bit-rate detection: payload CANBTRTABLE (or, kVciV2, CANBTPTABLE); args: timeout ms per
+  // entry, v2 operating mode, v2 extended mode. Starts it (VCI_OK) or refuses; the result
+  // comes from control_detect_result: VCI_E_PENDING while it runs, then VCI_OK with the index
+  // in values[0], or VCI_E_TIMEOUT.
+  control_detect = 16,
+  control_detect_result = 17,
   // Channels.
   channel_init = 20,  // args: rx, tx capacity, ext list size, filter mode; reply: 5 descriptors
   channel_activate = 21,
@@ -455,6 +461,7 @@ inline constexpr uint16_t kVciV2 = 0x0001;
 inline constexpr uint16_t kVciExclusive = 0x0002;
 
 inline constexpr std::size_t kVciPayloadSize = 192;
+inline constexpr std::size_t kVciRequestPayloadSize = 2056;  // a CANBTPTABLE fits
 
 struct VciRequest {
   MsgHeader header;
@@ -464,9 +471,9 @@ struct VciRequest {
   char device[kNameSize] = {};  // the open operations
   uint32_t controller = 0;
   uint32_t args[7] = {};
-  uint8_t payload[kVciPayloadSize] = {};
+  uint8_t payload[kVciRequestPayloadSize] = {};
 };
-static_assert(sizeof(VciRequest) == 16 + 8 + 32 + 32 + kVciPayloadSize);
+static_assert(sizeof(VciRequest) == 16 + 8 + 32 + 32 + kVciRequestPayloadSize);
 
 struct VciReply {
   MsgHeader header;

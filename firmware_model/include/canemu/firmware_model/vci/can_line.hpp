@@ -142,6 +142,20 @@ class CanLine final : private ControllerEvents, private EventHandler {
   uint32_t status_flags() const;
   ControllerState controller_state();
 
+  // --- bit-rate detection (DetectBaud) ---
+  // Listens (listen-only) with each entry's timing in turn until a frame decodes: an entry that
+  // sees bus errors gives way at once, one that sees nothing for `per_entry` too. Only while
+  // the line is not online; afterwards the line is not initialized. VCI_E_INVALID_STATE
+  // online, VCI_E_BUSY while a detection runs, VCI_E_INVALIDARG for an empty table or an entry
+  // the controller cannot run. Meanwhile init and start return VCI_E_BUSY; reset cancels it.
+  HRESULT start_detection(const std::vector<LineInit>& entries, SimDuration per_entry);
+  struct Detection {
+    HRESULT hr = VCI_E_INVALID_STATE;  // VCI_E_PENDING while it runs, then VCI_OK or
+                                       // VCI_E_TIMEOUT (VCI_E_ABORT when cancelled)
+    uint32_t index = 0;                // VCI_OK: the entry that decoded a frame
+  };
+  Detection detection() const { return detection_; }
+
   // --- channels ---
   tl::expected<ChannelId, HRESULT> open_channel(bool exclusive, bool v2);
   void close_channel(ChannelId id);
@@ -200,7 +214,7 @@ class CanLine final : private ControllerEvents, private EventHandler {
     CANMSG2 msg{};
     std::optional<ChannelId> channel;  // nothing: the cyclic list
   };
-  enum Tag : uint64_t { kTimeOverrun = 1, kCyclicTick = 2, kDelay = 3 };
+  enum Tag : uint64_t { kTimeOverrun = 1, kCyclicTick = 2, kDelay = 3, kDetectNext = 4 };
 
   bool in_use() const;
   void release_if_unused();
@@ -224,6 +238,10 @@ class CanLine final : private ControllerEvents, private EventHandler {
   std::optional<Loaded> take_from(Channel& c, bool hpm_only);
   std::optional<TxFrame> load(Loaded l);
   std::optional<TxFrame> to_frame(const CANMSG2& msg) const;
+
+  void try_detection_entry(std::size_t i);
+  void next_detection_entry();
+  void finish_detection(HRESULT hr, uint32_t index);
 
   void schedule_time_overrun();
   void stop_task();
@@ -266,6 +284,17 @@ class CanLine final : private ControllerEvents, private EventHandler {
   SimTime last_load_;
   bool loaded_once_ = false;
   EventId delay_event_ = 0;
+
+  struct Detecting {
+    std::vector<HostedNodeSettings> settings;
+    SimDuration per_entry;
+    std::size_t current = 0;
+    bool moving_on = false;  // the next entry (or the end) is scheduled
+    bool found = false;      // the current entry received a frame
+  };
+  std::optional<Detecting> detecting_;
+  Detection detection_;
+  EventId detect_event_ = 0;
 
   EventId overrun_event_ = 0;
   uint64_t time_overruns_ = 0;

@@ -1,8 +1,9 @@
 // libFuzzer target: canemud's control-message handling. The input is a sequence of packets,
 // each a 16-bit little-endian length and that many bytes, fed to one client session of a daemon
 // built from the embedded default configuration in stepped time. Every reply must be a valid
-// message, with ring descriptors exactly when it opens a channel, and nothing may crash. The
-// session ends with each input, so the channels it opened close again.
+// message, with ring descriptors exactly when it opens a channel (or initializes a VCI one),
+// and nothing may crash. The session ends with each input, so the channels and VCI objects it
+// opened close again.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -38,7 +39,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     ipc::MsgHeader h;
     std::memcpy(&h, reply, sizeof h);
     const bool opened = h.type == static_cast<uint16_t>(ipc::MsgType::open_channel_reply);
-    if (fds.size() != (opened ? ipc::kChannelFdCount : 0)) {
+    const bool vci = h.type == static_cast<uint16_t>(ipc::MsgType::vci_reply);
+    if (vci && !fds.empty()) {
+      ipc::VciReply r;
+      std::memcpy(&r, reply, sizeof r);
+      if (fds.size() != ipc::kChannelFdCount || r.hresult != 0) {
+        std::abort();  // a VCI channel's rings come with its successful initialization only
+      }
+    } else if (fds.size() != (opened ? ipc::kChannelFdCount : 0)) {
       std::abort();  // descriptors come with an opened channel, and only then
     }
   };
@@ -50,5 +58,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     dispatcher.handle(session, data + at, n, check_reply);
     at += n;
   }
+  dispatcher.end_session(session);
   return 0;
 }

@@ -102,7 +102,9 @@ CANMSG2 msg(uint32_t id, std::vector<uint8_t> bytes, bool fd = false, bool brs =
   m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
   m.uMsgInfo.Bits.edl = fd ? 1 : 0;
   m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
-  std::memcpy(m.abData, bytes.data(), bytes.size());
+  if (!bytes.empty()) {
+    std::memcpy(m.abData, bytes.data(), bytes.size());
+  }
   return m;
 }
 

@@ -91,7 +91,9 @@ CANMSG data(uint32_t id, std::vector<uint8_t> bytes, bool ext = false, bool rtr 
   m.uMsgInfo.Bits.dlc = static_cast<UINT8>(bytes.size()) & 0x0FU;
   m.uMsgInfo.Bits.ext = ext ? 1 : 0;
   m.uMsgInfo.Bits.rtr = rtr ? 1 : 0;
-  std::memcpy(m.abData, bytes.data(), bytes.size());
+  if (!bytes.empty()) {
+    std::memcpy(m.abData, bytes.data(), bytes.size());
+  }
   return m;
 }
 

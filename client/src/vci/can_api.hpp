@@ -37,11 +37,10 @@ inline HRESULT open_on_device(HANDLE hDevice, UINT32 can_no, Object::Kind kind, 
   } else if (kind == Object::Kind::scheduler) {
     op = ipc::VciOp::scheduler_open;
   }
-  const uint16_t flags = static_cast<uint16_t>((v2 ? ipc::kVciV2 : 0) |
-                                               (exclusive ? ipc::kVciExclusive : 0));
+  const uint16_t flags =
+      static_cast<uint16_t>((v2 ? ipc::kVciV2 : 0) | (exclusive ? ipc::kVciExclusive : 0));
   uint32_t handle = 0;
-  if (HRESULT hr = Library::get().open_remote(op, flags, dev->desc, can_no, handle);
-      hr != VCI_OK) {
+  if (HRESULT hr = Library::get().open_remote(op, flags, dev->desc, can_no, handle); hr != VCI_OK) {
     return hr;
   }
   if (kind == Object::Kind::channel) {
@@ -106,20 +105,16 @@ inline constexpr uint32_t kFilterRemoveIds = 4;
 // Channel status: the line status (CANLINESTATUS or CANLINESTATUS2, at `line_offset`) and the
 // channel's own flags and fill levels.
 template <class Status>
-HRESULT channel_status(HANDLE h, std::size_t line_offset, Status* out) {
-  ChannelObj* c = channel_of(h);
-  if (c == nullptr) {
-    return VCI_E_INVHANDLE;
-  }
+HRESULT channel_status_of(ChannelObj& c, std::size_t line_offset, Status* out) {
   if (out == nullptr) {
     return VCI_E_INVALIDARG;
   }
   ipc::VciReply info{};
   ipc::VciReply status{};
-  if (HRESULT hr = Library::get().line_info(*c, info); hr != VCI_OK) {
+  if (HRESULT hr = Library::get().line_info(c, info); hr != VCI_OK) {
     return hr;
   }
-  if (HRESULT hr = Library::get().simple(*c, ipc::VciOp::channel_status, {}, &status);
+  if (HRESULT hr = Library::get().simple(c, ipc::VciOp::channel_status, {}, &status);
       hr != VCI_OK) {
     return hr;
   }
@@ -127,17 +122,23 @@ HRESULT channel_status(HANDLE h, std::size_t line_offset, Status* out) {
   std::memcpy(&s.sLineStatus, info.payload + line_offset, sizeof s.sLineStatus);
   s.fActivated = status.values[1] != 0;
   s.fRxOverrun = status.values[2] != 0;
-  s.bRxFifoLoad = rx_load(*c);
-  s.bTxFifoLoad = tx_load(*c);
+  s.bRxFifoLoad = rx_load(c);
+  s.bTxFifoLoad = tx_load(c);
   *out = s;
   return VCI_OK;
+}
+
+template <class Status>
+HRESULT channel_status(HANDLE h, std::size_t line_offset, Status* out) {
+  ChannelObj* c = channel_of(h);
+  return c == nullptr ? VCI_E_INVHANDLE : channel_status_of(*c, line_offset, out);
 }
 
 // The cyclic list's status (CANSCHEDULERSTATUS's two fields).
 inline HRESULT scheduler_status(HANDLE h, UINT8* task, UINT8* entries) {
   ipc::VciReply reply{};
-  if (HRESULT hr = simple_call(h, Object::Kind::scheduler, ipc::VciOp::scheduler_status, {},
-                               &reply);
+  if (HRESULT hr =
+          simple_call(h, Object::Kind::scheduler, ipc::VciOp::scheduler_status, {}, &reply);
       hr != VCI_OK) {
     return hr;
   }

@@ -23,7 +23,9 @@ namespace {
 constexpr GUID guid(uint8_t n) {
   return GUID{0x3b1f7c02U, 0x6a5e, 0x4d21, {0x8c, 0x3a, 0x27, 0x90, 0x5e, 0x11, 0xc4, n}};
 }
-bool same(const GUID& a, const GUID& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same(const GUID& a, const GUID& b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
 }  // namespace
 
 extern "C" {
@@ -111,7 +113,9 @@ struct FifoSide {
   std::atomic<bool>* out = nullptr;  // one reader (writer) at a time
 };
 
-UINT16 u16(uint32_t v) { return static_cast<UINT16>(std::min<uint32_t>(v, 0xFFFF)); }
+UINT16 u16(uint32_t v) {
+  return static_cast<UINT16>(std::min<uint32_t>(v, 0xFFFF));
+}
 
 HRESULT ring_result(canemu::ipc::RingStatus s, HRESULT empty_or_full) {
   switch (s) {
@@ -127,10 +131,13 @@ HRESULT ring_result(canemu::ipc::RingStatus s, HRESULT empty_or_full) {
   }
 }
 
-class Reader final : public Com<IFifoReader, IID_IFifoReader> {
+// What a FIFO's reader and writer have in common: the lock, the event, the threshold and the
+// counts, on the ring `Ring` of their side.
+template <class Interface, const IID& iid, class Ring>
+class FifoEnd : public Com<Interface, iid> {
  public:
-  Reader(FifoSide side, canemu::ipc::RingReader& ring) : side_(std::move(side)), ring_(ring) {}
-  ~Reader() override {
+  FifoEnd(FifoSide side, Ring& ring) : side_(std::move(side)), ring_(ring) {}
+  ~FifoEnd() override {
     unwatch_ring_event(this);
     side_.out->store(false);
   }
@@ -155,29 +162,8 @@ class Reader final : public Com<IFifoReader, IID_IFifoReader> {
   HRESULT GetEntrySize(PUINT16 p) override { return put(p, side_.memory->element_size()); }
   HRESULT GetFillCount(PUINT16 p) override { return put(p, ring_.fill_count()); }
   HRESULT GetFreeCount(PUINT16 p) override { return put(p, ring_.free_count()); }
-  HRESULT GetDataEntry(PVOID pvData) override {
-    return ring_result(ring_.get(pvData), VCI_E_RXQUEUE_EMPTY);
-  }
-  HRESULT AcquireRead(PVOID* ppvData, PUINT16 pwCount) override {
-    const void* p = nullptr;
-    uint32_t n = 0;
-    const HRESULT hr = ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n),
-                                   VCI_E_RXQUEUE_EMPTY);
-    if (hr == VCI_OK) {
-      *ppvData = const_cast<void*>(p);
-      if (pwCount != nullptr) {
-        *pwCount = u16(n);
-      } else {
-        ring_.acquire(&p, &n);  // without a count, at most one may be released
-      }
-    }
-    return hr;
-  }
-  HRESULT ReleaseRead(UINT16 wCount) override {
-    return ring_result(ring_.release(wCount), VCI_E_INVALIDARG);
-  }
 
- private:
+ protected:
   static HRESULT put(PUINT16 p, uint32_t v) {
     if (p == nullptr) {
       return VCI_E_INVALIDARG;
@@ -186,38 +172,39 @@ class Reader final : public Com<IFifoReader, IID_IFifoReader> {
     return VCI_OK;
   }
   FifoSide side_;
-  canemu::ipc::RingReader& ring_;
+  Ring& ring_;
   std::recursive_mutex mutex_;
 };
 
-class Writer final : public Com<IFifoWriter, IID_IFifoWriter> {
+class Reader final : public FifoEnd<IFifoReader, IID_IFifoReader, canemu::ipc::RingReader> {
  public:
-  Writer(FifoSide side, canemu::ipc::RingWriter& ring) : side_(std::move(side)), ring_(ring) {}
-  ~Writer() override {
-    unwatch_ring_event(this);
-    side_.out->store(false);
+  using FifoEnd::FifoEnd;
+  HRESULT GetDataEntry(PVOID pvData) override {
+    return ring_result(ring_.get(pvData), VCI_E_RXQUEUE_EMPTY);
   }
-  HRESULT Lock() override {
-    mutex_.lock();
-    return VCI_OK;
+  HRESULT AcquireRead(PVOID* ppvData, PUINT16 pwCount) override {
+    const void* p = nullptr;
+    uint32_t n = 0;
+    const HRESULT hr =
+        ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n), VCI_E_RXQUEUE_EMPTY);
+    if (hr == VCI_OK) {
+      *ppvData = const_cast<void*>(p);
+      if (pwCount != nullptr) {
+        *pwCount = u16(n);
+      } else {
+        ring_.limit_acquired(1);  // without a count, one element may be released
+      }
+    }
+    return hr;
   }
-  HRESULT Unlock() override {
-    mutex_.unlock();
-    return VCI_OK;
+  HRESULT ReleaseRead(UINT16 wCount) override {
+    return ring_result(ring_.release(wCount), VCI_E_INVALIDARG);
   }
-  HRESULT AssignEvent(HANDLE hEvent) override {
-    watch_ring_event(this, ring_.own_event(), hEvent);
-    return VCI_OK;
-  }
-  HRESULT SetThreshold(UINT16 w) override {
-    ring_.set_threshold(w);
-    return VCI_OK;
-  }
-  HRESULT GetThreshold(PUINT16 p) override { return put(p, ring_.threshold()); }
-  HRESULT GetCapacity(PUINT16 p) override { return put(p, side_.memory->capacity()); }
-  HRESULT GetEntrySize(PUINT16 p) override { return put(p, side_.memory->element_size()); }
-  HRESULT GetFillCount(PUINT16 p) override { return put(p, ring_.fill_count()); }
-  HRESULT GetFreeCount(PUINT16 p) override { return put(p, ring_.free_count()); }
+};
+
+class Writer final : public FifoEnd<IFifoWriter, IID_IFifoWriter, canemu::ipc::RingWriter> {
+ public:
+  using FifoEnd::FifoEnd;
   HRESULT PutDataEntry(PVOID pvData) override {
     if (pvData == nullptr) {
       return VCI_E_INVALIDARG;
@@ -233,6 +220,8 @@ class Writer final : public Com<IFifoWriter, IID_IFifoWriter> {
       *ppvData = p;
       if (pwCount != nullptr) {
         *pwCount = u16(n);
+      } else {
+        ring_.limit_acquired(1);
       }
     }
     return hr;
@@ -240,18 +229,6 @@ class Writer final : public Com<IFifoWriter, IID_IFifoWriter> {
   HRESULT ReleaseWrite(UINT16 wCount) override {
     return ring_result(ring_.release(wCount), VCI_E_INVALIDARG);
   }
-
- private:
-  static HRESULT put(PUINT16 p, uint32_t v) {
-    if (p == nullptr) {
-      return VCI_E_INVALIDARG;
-    }
-    *p = u16(v);
-    return VCI_OK;
-  }
-  FifoSide side_;
-  canemu::ipc::RingWriter& ring_;
-  std::recursive_mutex mutex_;
 };
 
 HRESULT get_reader(const std::shared_ptr<Rings>& rings, IFifoReader** pp) {
@@ -343,17 +320,17 @@ HRESULT open_fifo(const std::shared_ptr<LocalFifo>& f, REFIID riid, PVOID* ppv) 
     if (f->reader_out.exchange(true)) {
       return VCI_E_ACCESSDENIED;
     }
-    return hand_out(static_cast<IFifoReader*>(
-                        new Reader(FifoSide{f, &f->memory, &f->reader_out}, f->reader)),
-                    ppv);
+    return hand_out(
+        static_cast<IFifoReader*>(new Reader(FifoSide{f, &f->memory, &f->reader_out}, f->reader)),
+        ppv);
   }
   if (same(riid, IID_IFifoWriter)) {
     if (f->writer_out.exchange(true)) {
       return VCI_E_ACCESSDENIED;
     }
-    return hand_out(static_cast<IFifoWriter*>(
-                        new Writer(FifoSide{f, &f->memory, &f->writer_out}, f->writer)),
-                    ppv);
+    return hand_out(
+        static_cast<IFifoWriter*>(new Writer(FifoSide{f, &f->memory, &f->writer_out}, f->writer)),
+        ppv);
   }
   if (same(riid, IID_IVciFifo)) {
     return hand_out(static_cast<IVciFifo*>(new FifoInfo<IVciFifo, IID_IVciFifo>(f)), ppv);
@@ -394,8 +371,8 @@ HRESULT line_struct_of(const Bus& bus, const Remote* remote, std::size_t offset,
   return hr;
 }
 
-HRESULT filter_of(const Remote& r, VciOp op, uint32_t kind, UINT8 select, UINT8 mode,
-                  UINT32 code, UINT32 mask, PUINT8 mode_out) {
+HRESULT filter_of(const Remote& r, VciOp op, uint32_t kind, UINT8 select, UINT8 mode, UINT32 code,
+                  UINT32 mask, PUINT8 mode_out) {
   if (select != CAN_FILTER_STD && select != CAN_FILTER_EXT) {
     return VCI_E_INVALIDARG;
   }
@@ -457,8 +434,8 @@ class Control final : public Com<Interface, iid> {
       return VCI_E_INVALIDARG;
     }
     uint32_t index = 0;
-    const HRESULT hr = Library::get().detect(*r_, true, table, sizeof *table, timeout_ms,
-                                             op_mode, ex_mode, index);
+    const HRESULT hr =
+        Library::get().detect(*r_, true, table, sizeof *table, timeout_ms, op_mode, ex_mode, index);
     if (hr == VCI_OK) {
       table->bIndex = static_cast<UINT8>(index);
     }
@@ -527,7 +504,9 @@ class Channel final : public Com<Interface, iid> {
     }
     return Library::get().init_channel(*c_, rx, 1, tx, 1, 0, CAN_FILTER_PASS);
   }
-  HRESULT GetStatus(PCANCHANSTATUS p) { return status(canemu::ipc::kVciLineOffset, p); }
+  HRESULT GetStatus(PCANCHANSTATUS p) {
+    return channel_status_of(*c_, canemu::ipc::kVciLineOffset, p);
+  }
   // ICanChannel2
   HRESULT Initialize(UINT32 rx, UINT32 tx, UINT32 filter_size, UINT8 mode) {
     if (rx == 0) {
@@ -535,7 +514,9 @@ class Channel final : public Com<Interface, iid> {
     }
     return Library::get().init_channel(*c_, rx, 1, tx, 1, filter_size, mode);
   }
-  HRESULT GetStatus(PCANCHANSTATUS2 p) { return status(canemu::ipc::kVciLine2Offset, p); }
+  HRESULT GetStatus(PCANCHANSTATUS2 p) {
+    return channel_status_of(*c_, canemu::ipc::kVciLine2Offset, p);
+  }
   HRESULT GetControl(PCANCONTROL2* pp) {
     if (!null_out(pp)) {
       return VCI_E_INVALIDARG;
@@ -567,27 +548,6 @@ class Channel final : public Com<Interface, iid> {
   }
 
  private:
-  template <class Status>
-  HRESULT status(std::size_t offset, Status* out) {
-    if (out == nullptr) {
-      return VCI_E_INVALIDARG;
-    }
-    Status s{};
-    if (HRESULT hr = line_struct_of(bus_, c_.get(), offset, &s.sLineStatus); hr != VCI_OK) {
-      return hr;
-    }
-    canemu::ipc::VciReply reply{};
-    if (HRESULT hr = Library::get().simple(*c_, VciOp::channel_status, {}, &reply);
-        hr != VCI_OK) {
-      return hr;
-    }
-    s.fActivated = reply.values[1] != 0;
-    s.fRxOverrun = reply.values[2] != 0;
-    s.bRxFifoLoad = rx_load(*c_);
-    s.bTxFifoLoad = tx_load(*c_);
-    *out = s;
-    return VCI_OK;
-  }
   Bus bus_;
   std::unique_ptr<ChannelObj> c_;
 };
@@ -597,7 +557,8 @@ using CanChannel2 = Channel<ICanChannel2, IID_ICanChannel2, true>;
 template <class Interface, const IID& iid, bool v2>
 class Scheduler final : public Com<Interface, iid> {
  public:
-  Scheduler(Bus bus, std::unique_ptr<Remote> remote) : bus_(std::move(bus)), r_(std::move(remote)) {}
+  Scheduler(Bus bus, std::unique_ptr<Remote> remote)
+      : bus_(std::move(bus)), r_(std::move(remote)) {}
   HRESULT Resume() override { return Library::get().simple(*r_, VciOp::scheduler_resume); }
   HRESULT Suspend() override { return Library::get().simple(*r_, VciOp::scheduler_suspend); }
   HRESULT Reset() override { return Library::get().simple(*r_, VciOp::scheduler_reset); }
@@ -753,14 +714,12 @@ class Bal final : public Com<IBalObject, IID_IBalObject> {
     const Bus bus{d_, bus_no};
     std::unique_ptr<Remote> r;
     if (same(riid, IID_ICanSocket)) {
-      return hand_out(static_cast<ICanSocket*>(
-                          new Socket<ICanSocket, IID_ICanSocket, false>(bus)),
+      return hand_out(static_cast<ICanSocket*>(new Socket<ICanSocket, IID_ICanSocket, false>(bus)),
                       ppv);
     }
     if (same(riid, IID_ICanSocket2)) {
-      return hand_out(static_cast<ICanSocket2*>(
-                          new Socket<ICanSocket2, IID_ICanSocket2, true>(bus)),
-                      ppv);
+      return hand_out(
+          static_cast<ICanSocket2*>(new Socket<ICanSocket2, IID_ICanSocket2, true>(bus)), ppv);
     }
     const bool control1 = same(riid, IID_ICanControl);
     const bool control2 = same(riid, IID_ICanControl2);
@@ -781,9 +740,10 @@ class Bal final : public Com<IBalObject, IID_IBalObject> {
       return hand_out(static_cast<ICanControl2*>(new CanControl2(bus, std::move(r))), ppv);
     }
     if (list1) {
-      return hand_out(static_cast<ICanScheduler*>(
-                          new Scheduler<ICanScheduler, IID_ICanScheduler, false>(bus, std::move(r))),
-                      ppv);
+      return hand_out(
+          static_cast<ICanScheduler*>(
+              new Scheduler<ICanScheduler, IID_ICanScheduler, false>(bus, std::move(r))),
+          ppv);
     }
     return hand_out(static_cast<ICanScheduler2*>(
                         new Scheduler<ICanScheduler2, IID_ICanScheduler2, true>(bus, std::move(r))),
@@ -912,18 +872,11 @@ class DeviceManager final : public Com<IVciDeviceManager, IID_IVciDeviceManager>
     if (!null_out(pp)) {
       return VCI_E_INVALIDARG;
     }
-    std::vector<DeviceDesc> devices;
-    if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
-      return hr;
+    HRESULT hr = VCI_OK;
+    if (auto d = device_by_id(id.AsInt64, hr)) {
+      *pp = new VciDevice(std::move(*d));
     }
-    for (const DeviceDesc& d : devices) {
-      if (static_cast<INT64>(d.vci_id) == id.AsInt64) {
-        *pp = new VciDevice(d);
-        return VCI_OK;
-      }
-    }
-    set_detail("no device has that VCIID");
-    return VCI_E_INVALIDARG;
+    return hr;
   }
 };
 
@@ -960,7 +913,9 @@ bool read_hex(const char*& p, int digits, uint64_t& out) {
 
 extern "C" {
 
-HRESULT VCIAPI VciInitialize(void) { return VCI_OK; }
+HRESULT VCIAPI VciInitialize(void) {
+  return VCI_OK;
+}
 
 HRESULT VCIAPI VciFormatError(HRESULT hrError, PTCHAR pszError, UINT32 dwLength) {
   if (pszError == nullptr || dwLength == 0) {
@@ -1069,35 +1024,22 @@ HRESULT VCIAPI VciQueryDeviceByHwid(REFGUID rHwid, IVciDevice** pp) {
   if (!null_out(pp)) {
     return VCI_E_INVALIDARG;
   }
-  std::vector<DeviceDesc> devices;
-  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
-    return hr;
+  HRESULT hr = VCI_OK;
+  if (auto d = device_by_hwid(rHwid, hr)) {
+    *pp = new VciDevice(std::move(*d));
   }
-  for (const DeviceDesc& d : devices) {
-    if (same(d.info().UniqueHardwareId.AsGuid, rHwid)) {
-      *pp = new VciDevice(d);
-      return VCI_OK;
-    }
-  }
-  return VCI_E_NO_MORE_ITEMS;
+  return hr;
 }
 
 HRESULT VCIAPI VciQueryDeviceByClass(REFGUID rClass, UINT32 dwInst, IVciDevice** pp) {
   if (!null_out(pp)) {
     return VCI_E_INVALIDARG;
   }
-  std::vector<DeviceDesc> devices;
-  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
-    return hr;
+  HRESULT hr = VCI_OK;
+  if (auto d = device_by_class(rClass, dwInst, hr)) {
+    *pp = new VciDevice(std::move(*d));
   }
-  UINT32 seen = 0;
-  for (const DeviceDesc& d : devices) {
-    if (same(device_class(d.model), rClass) && seen++ == dwInst) {
-      *pp = new VciDevice(d);
-      return VCI_OK;
-    }
-  }
-  return VCI_E_NO_MORE_ITEMS;
+  return hr;
 }
 
 HRESULT VCIAPI VciCreateFifo(PVCIID pResid, UINT16 wCapacity, UINT16 wElementSize, REFIID riid,

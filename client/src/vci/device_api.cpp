@@ -10,16 +10,20 @@ using namespace canemu::client::vci;
 
 namespace {
 
-Device* device_of(HANDLE h) { return static_cast<Device*>(lookup(h, Object::Kind::device)); }
+Device* device_of(HANDLE h) {
+  return static_cast<Device*>(lookup(h, Object::Kind::device));
+}
 Enumerator* enumerator_of(HANDLE h) {
   return static_cast<Enumerator*>(lookup(h, Object::Kind::enumerator));
 }
 
-bool same_guid(const GUID& a, const GUID& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
-
 // REFVCIID and REFGUID are references in C++.
-const VCIID* ptr(REFVCIID r) { return &r; }
-const GUID* ptr(REFGUID r) { return &r; }
+const VCIID* ptr(REFVCIID r) {
+  return &r;
+}
+const GUID* ptr(REFGUID r) {
+  return &r;
+}
 
 }  // namespace
 
@@ -104,36 +108,22 @@ HRESULT VCIAPI vciFindDeviceByHwid(REFGUID rHwid, PVCIID pVciid) {
   if (pVciid == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  std::vector<DeviceDesc> devices;
-  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
-    return hr;
+  HRESULT hr = VCI_OK;
+  if (auto d = device_by_hwid(*ptr(rHwid), hr)) {
+    *pVciid = d->info().VciObjectId;
   }
-  for (const DeviceDesc& d : devices) {
-    const VCIDEVICEINFO info = d.info();
-    if (same_guid(info.UniqueHardwareId.AsGuid, *ptr(rHwid))) {
-      *pVciid = info.VciObjectId;
-      return VCI_OK;
-    }
-  }
-  return VCI_E_NO_MORE_ITEMS;
+  return hr;
 }
 
 HRESULT VCIAPI vciFindDeviceByClass(REFGUID rClass, UINT32 dwInst, PVCIID pVciid) {
   if (pVciid == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  std::vector<DeviceDesc> devices;
-  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
-    return hr;
+  HRESULT hr = VCI_OK;
+  if (auto d = device_by_class(*ptr(rClass), dwInst, hr)) {
+    *pVciid = d->info().VciObjectId;
   }
-  UINT32 seen = 0;
-  for (const DeviceDesc& d : devices) {
-    if (same_guid(device_class(d.model), *ptr(rClass)) && seen++ == dwInst) {
-      *pVciid = d.info().VciObjectId;
-      return VCI_OK;
-    }
-  }
-  return VCI_E_NO_MORE_ITEMS;
+  return hr;
 }
 
 HRESULT VCIAPI vciDeviceOpen(REFVCIID rVciid, PHANDLE phDevice) {
@@ -141,20 +131,13 @@ HRESULT VCIAPI vciDeviceOpen(REFVCIID rVciid, PHANDLE phDevice) {
     return VCI_E_INVALIDARG;
   }
   *phDevice = nullptr;
-  std::vector<DeviceDesc> devices;
-  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
-    return hr;
+  HRESULT hr = VCI_OK;
+  if (auto d = device_by_id(ptr(rVciid)->AsInt64, hr)) {
+    auto dev = std::make_unique<Device>();
+    dev->desc = std::move(*d);
+    *phDevice = register_object(std::move(dev));
   }
-  for (const DeviceDesc& d : devices) {
-    if (static_cast<INT64>(d.vci_id) == ptr(rVciid)->AsInt64) {
-      auto dev = std::make_unique<Device>();
-      dev->desc = d;
-      *phDevice = register_object(std::move(dev));
-      return VCI_OK;
-    }
-  }
-  set_detail("no device has that VCIID");
-  return VCI_E_INVALIDARG;
+  return hr;
 }
 
 HRESULT VCIAPI vciDeviceClose(HANDLE hDevice) {

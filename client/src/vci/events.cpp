@@ -15,7 +15,9 @@
 
 namespace canemu::client::vci {
 
-EventObj::~EventObj() { ::close(fd); }
+EventObj::~EventObj() {
+  ::close(fd);
+}
 
 void EventObj::set() const {
   const uint64_t one = 1;
@@ -24,7 +26,9 @@ void EventObj::set() const {
 
 namespace {
 
-EventObj* event_of(HANDLE h) { return static_cast<EventObj*>(lookup(h, Object::Kind::event)); }
+EventObj* event_of(HANDLE h) {
+  return static_cast<EventObj*>(lookup(h, Object::Kind::event));
+}
 
 void drain(int fd) {
   uint64_t count = 0;
@@ -113,7 +117,9 @@ void watch_ring_event(const void* key, const ipc::RingEvent& ring_event, void* e
   }
 }
 
-void unwatch_ring_event(const void* key) { Pump::get().unwatch(key); }
+void unwatch_ring_event(const void* key) {
+  Pump::get().unwatch(key);
+}
 
 }  // namespace canemu::client::vci
 
@@ -160,9 +166,8 @@ UINT32 VCIAPI WaitForMultipleObjects(UINT32 nCount, const HANDLE* pHandles, BOOL
     }
     events.push_back(e);
   }
-  const int64_t deadline = dwMilliseconds == INFINITE
-                               ? -1
-                               : canemu::ipc::monotonic_ns() / 1'000'000 + dwMilliseconds;
+  const int64_t deadline =
+      dwMilliseconds == INFINITE ? -1 : canemu::ipc::monotonic_ns() / 1'000'000 + dwMilliseconds;
   auto left = [deadline] {
     return deadline < 0 ? -1
                         : static_cast<int>(std::max<int64_t>(

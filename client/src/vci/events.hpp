@@ -10,7 +10,8 @@
 namespace canemu::client::vci {
 
 struct EventObj : Object {
-  EventObj(int event_fd, bool manual_reset) : Object(Kind::event), fd(event_fd), manual(manual_reset) {}
+  EventObj(int event_fd, bool manual_reset)
+      : Object(Kind::event), fd(event_fd), manual(manual_reset) {}
   ~EventObj() override;
   int fd;
   bool manual;

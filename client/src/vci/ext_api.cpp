@@ -7,7 +7,8 @@ using namespace canemu::client::vci;
 namespace {
 
 Remote* any_remote(HANDLE h) {
-  for (Object::Kind kind : {Object::Kind::control, Object::Kind::channel, Object::Kind::scheduler}) {
+  for (Object::Kind kind :
+       {Object::Kind::control, Object::Kind::channel, Object::Kind::scheduler}) {
     if (Remote* r = remote_of(h, kind)) {
       return r;
     }

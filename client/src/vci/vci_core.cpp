@@ -26,7 +26,9 @@ Registry& registry() {
   return *r;
 }
 
-int64_t now_ms() { return ipc::monotonic_ns() / 1'000'000; }
+int64_t now_ms() {
+  return ipc::monotonic_ns() / 1'000'000;
+}
 
 // Milliseconds left until `deadline_ms` (-1: forever).
 int left_ms(int64_t deadline_ms) {
@@ -38,7 +40,9 @@ int left_ms(int64_t deadline_ms) {
 
 }  // namespace
 
-void set_detail(std::string detail) { t_detail = std::move(detail); }
+void set_detail(std::string detail) {
+  t_detail = std::move(detail);
+}
 
 std::string format_error(HRESULT hr) {
   const auto code = static_cast<uint32_t>(hr);
@@ -175,6 +179,52 @@ VCIDEVICECAPS DeviceDesc::caps() const {
   return c;
 }
 
+namespace {
+template <class Match>
+std::optional<DeviceDesc> device_where(Match match, HRESULT none, HRESULT& hr) {
+  std::vector<DeviceDesc> devices;
+  hr = Library::get().list_devices(devices);
+  if (hr != VCI_OK) {
+    return std::nullopt;
+  }
+  for (DeviceDesc& d : devices) {
+    if (match(d)) {
+      return std::move(d);
+    }
+  }
+  hr = none;
+  return std::nullopt;
+}
+bool same_guid(const GUID& a, const GUID& b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+}  // namespace
+
+std::optional<DeviceDesc> device_by_id(int64_t vci_id, HRESULT& hr) {
+  auto d = device_where(
+      [vci_id](const DeviceDesc& x) { return static_cast<int64_t>(x.vci_id) == vci_id; },
+      VCI_E_INVALIDARG, hr);
+  if (!d && hr == VCI_E_INVALIDARG) {
+    set_detail("no device has that VCIID");
+  }
+  return d;
+}
+
+std::optional<DeviceDesc> device_by_hwid(const GUID& hwid, HRESULT& hr) {
+  return device_where(
+      [&hwid](const DeviceDesc& x) { return same_guid(x.info().UniqueHardwareId.AsGuid, hwid); },
+      VCI_E_NO_MORE_ITEMS, hr);
+}
+
+std::optional<DeviceDesc> device_by_class(const GUID& cls, uint32_t instance, HRESULT& hr) {
+  uint32_t seen = 0;
+  return device_where(
+      [&](const DeviceDesc& x) {
+        return same_guid(device_class(x.model), cls) && seen++ == instance;
+      },
+      VCI_E_NO_MORE_ITEMS, hr);
+}
+
 // ---------------------------------------------------------------- handles
 
 void* register_object(std::unique_ptr<Object> object) {
@@ -210,7 +260,9 @@ bool unregister_object(void* handle, Object::Kind kind) {
   return true;  // destroyed here, outside the registry's lock
 }
 
-Remote::~Remote() { Library::get().simple(*this, ipc::VciOp::close); }
+Remote::~Remote() {
+  Library::get().simple(*this, ipc::VciOp::close);
+}
 
 Rings::Rings(ipc::RingMemory rx_mem, ipc::RingMemory tx_mem, std::vector<ipc::UniqueFd>& fds,
              bool with_tx)
@@ -411,8 +463,7 @@ HRESULT Library::filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool
 }
 
 HRESULT Library::detect(const Remote& control, bool v2, const void* table, std::size_t size,
-                         uint16_t timeout_ms, uint8_t op_mode, uint8_t ex_mode,
-                         uint32_t& index) {
+                        uint16_t timeout_ms, uint8_t op_mode, uint8_t ex_mode, uint32_t& index) {
   ipc::VciRequest m{};
   m.op = static_cast<uint16_t>(ipc::VciOp::control_detect);
   m.flags = v2 ? ipc::kVciV2 : 0;
@@ -436,9 +487,8 @@ HRESULT Library::detect(const Remote& control, bool v2, const void* table, std::
   }
 }
 
-HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold,
-                              uint32_t tx, uint32_t tx_threshold, uint32_t filter_size,
-                              uint8_t filter_mode) {
+HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold, uint32_t tx,
+                              uint32_t tx_threshold, uint32_t filter_size, uint8_t filter_mode) {
   ipc::VciRequest m{};
   m.op = static_cast<uint16_t>(ipc::VciOp::channel_init);
   m.handle = channel.handle;
@@ -453,8 +503,8 @@ HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_thre
   }
   const uint32_t element = channel.v2 ? sizeof(CANMSG2) : sizeof(CANMSG);
   if (fds.size() != ipc::kChannelFdCount || r.values[2] != element) {
-    set_detail(fmt::format("canemud sent {} descriptors and {}-byte elements", fds.size(),
-                           r.values[2]));
+    set_detail(
+        fmt::format("canemud sent {} descriptors and {}-byte elements", fds.size(), r.values[2]));
     return VCI_E_UNEXPECTED;
   }
   auto rx_mem = ipc::RingMemory::map(std::move(fds[0]));

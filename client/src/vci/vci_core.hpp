@@ -43,6 +43,13 @@ struct DeviceDesc {
 // The device class GUIDs this library reports (ours; documented in docs/vci.md).
 GUID device_class(uint8_t model);
 
+// A device of canemud's list by VCIID, by hardware ID, or the `instance`th of a class. `hr`
+// says why there is none: VCI_E_INVALIDARG (VCIID), VCI_E_NO_MORE_ITEMS (the others), or the
+// failure to reach canemud.
+std::optional<DeviceDesc> device_by_id(int64_t vci_id, HRESULT& hr);
+std::optional<DeviceDesc> device_by_hwid(const GUID& hwid, HRESULT& hr);
+std::optional<DeviceDesc> device_by_class(const GUID& cls, uint32_t instance, HRESULT& hr);
+
 class Object {
  public:
   enum class Kind : uint8_t { enumerator, device, control, channel, scheduler, event };
@@ -124,14 +131,14 @@ class Library {
   // Waits until the device list changes (VCI_OK) or `timeout_ms` passes (VCI_E_TIMEOUT).
   HRESULT wait_device_change(uint32_t generation, int timeout_ms);
   // Opens a control unit, channel or cyclic list on controller `controller` of `device`.
-  HRESULT open_remote(ipc::VciOp op, uint16_t flags, const DeviceDesc& device,
-                      uint32_t controller, uint32_t& handle);
+  HRESULT open_remote(ipc::VciOp op, uint16_t flags, const DeviceDesc& device, uint32_t controller,
+                      uint32_t& handle);
   // A call on a remote object with no payload or arguments beyond `args`.
   HRESULT simple(const Remote& object, ipc::VciOp op, std::initializer_list<uint32_t> args = {},
                  ipc::VciReply* reply = nullptr);
   HRESULT line_info(const Remote& object, ipc::VciReply& reply);
-  HRESULT filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool extended,
-                 uint8_t mode, uint32_t code, uint32_t mask, uint8_t* mode_out);
+  HRESULT filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool extended, uint8_t mode,
+                 uint32_t code, uint32_t mask, uint8_t* mode_out);
   // Bit-rate detection on a control unit: starts it with `table` (CANBTRTABLE, or with `v2`
   // CANBTPTABLE) and waits for its end, asking canemud every millisecond (without holding the
   // connection, so that another thread may step time meanwhile). `index` gets the entry found.

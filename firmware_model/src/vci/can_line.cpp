@@ -803,17 +803,24 @@ void CanLine::frame_received(SimTime at, const Frame& frame, bool own) {
       continue;
     }
     CANMSG2 copy = m;
-    if (c.filters) {
-      const uint8_t a = c.filters->accept(frame.id(), ext, frame.remote());
-      if (a == CAN_ACCEPT_REJECT) {
-        continue;
-      }
-      if (c.filters->select(ext).mode() != CAN_FILTER_PASS) {
-        copy.uMsgInfo.Bits.afc = a;
-      }
+    if (passes_channel_filter(c, frame, copy)) {
+      deliver(c, copy);
     }
-    deliver(c, copy);
   }
+}
+
+bool CanLine::passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg) const {
+  if (!c.filters) {
+    return true;  // v1 channels have no filter of their own
+  }
+  const uint8_t a = c.filters->accept(frame.id(), frame.extended(), frame.remote());
+  if (a == CAN_ACCEPT_REJECT) {
+    return false;
+  }
+  if (c.filters->select(frame.extended()).mode() != CAN_FILTER_PASS) {
+    msg.uMsgInfo.Bits.afc = a;  // the last stage that filters sets it
+  }
+  return true;
 }
 
 void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
@@ -833,7 +840,6 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
   // Self reception: the firmware hands the frame to the distributor again.
   CANMSG2 echo = data_message(frame, ticks(at));
   echo.uMsgInfo.Bits.srr = 1;
-  const bool ext = frame.extended();
   for (Channel& c : channels_) {
     if (!c.active) {
       continue;
@@ -848,14 +854,9 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
     // As if it came from another controller: through the channel's filter, srr cleared.
     CANMSG2 copy = echo;
     copy.uMsgInfo.Bits.srr = 0;
-    const uint8_t a = c.filters->accept(frame.id(), ext, frame.remote());
-    if (a == CAN_ACCEPT_REJECT) {
-      continue;
+    if (passes_channel_filter(c, frame, copy)) {
+      deliver(c, copy);
     }
-    if (c.filters->select(ext).mode() != CAN_FILTER_PASS) {
-      copy.uMsgInfo.Bits.afc = a;
-    }
-    deliver(c, copy);
   }
 }
 

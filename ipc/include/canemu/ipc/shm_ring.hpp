@@ -113,6 +113,9 @@ class RingWriter {
   RingStatus put(const void* element);                   // PutDataEntry
   RingStatus acquire(void** elements, uint32_t* count);  // AcquireWrite: contiguous free
   RingStatus release(uint32_t count);                    // ReleaseWrite
+  // The last acquire() counts as `n` elements at most (VCI: acquired without a count pointer,
+  // one element may be released).
+  void limit_acquired(uint32_t n) { acquired_ = acquired_ < n ? acquired_ : n; }
   uint32_t free_count() const;
   uint32_t fill_count() const;
   void set_threshold(uint32_t free_threshold);  // clamped to the capacity
@@ -146,6 +149,7 @@ class RingReader {
   RingStatus get(void* element);                               // GetDataEntry (nullptr: drop)
   RingStatus acquire(const void** elements, uint32_t* count);  // AcquireRead: contiguous filled
   RingStatus release(uint32_t count);                          // ReleaseRead
+  void limit_acquired(uint32_t n) { acquired_ = acquired_ < n ? acquired_ : n; }
   uint32_t fill_count() const;
   uint32_t free_count() const;
   void set_threshold(uint32_t fill_threshold);  // clamped to the capacity

@@ -221,6 +221,9 @@ class CanLine final : private ControllerEvents, private EventHandler {
   Channel* find(ChannelId id);
   const Channel* find(ChannelId id) const;
   void deliver(Channel& c, CANMSG2 msg);
+  // A v2 channel's own filter on a data frame: false when it blocks; sets afc unless the
+  // filter passes everything.
+  bool passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg) const;
   void broadcast(const CANMSG2& msg);  // to every active channel
   void send_info(uint8_t info, uint32_t time);
   void update_status(SimTime at);

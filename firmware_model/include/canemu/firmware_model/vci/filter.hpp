@@ -70,6 +70,7 @@ struct FilterPair {
   IdFilter std;
   IdFilter ext;
   IdFilter& select(bool extended) { return extended ? ext : std; }
+  const IdFilter& select(bool extended) const { return extended ? ext : std; }
   uint8_t accept(uint32_t id, bool extended, bool rtr) const {
     return (extended ? ext : std).accept(filter_value(id, rtr));
   }

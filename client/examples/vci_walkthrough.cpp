@@ -81,10 +81,14 @@ static BOOL TransmitByte(IFifoWriter* pWriter, UINT32 dwId, UINT8 bData) {
 }
 
 static void CloseLine(Line* pLine) {
-  if (pLine->pControl) pLine->pControl->Release();
-  if (pLine->pReader) pLine->pReader->Release();
-  if (pLine->pWriter) pLine->pWriter->Release();
-  if (pLine->pChannel) pLine->pChannel->Release();
+  if (pLine->pControl)
+    pLine->pControl->Release();
+  if (pLine->pReader)
+    pLine->pReader->Release();
+  if (pLine->pWriter)
+    pLine->pWriter->Release();
+  if (pLine->pChannel)
+    pLine->pChannel->Release();
 }
 
 int main() {

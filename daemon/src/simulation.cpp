@@ -6,7 +6,6 @@
 
 #include "canemu/firmware_model/bit_timing_decoders.hpp"
 #include "canemu/firmware_model/can_fd_node.hpp"
-#include "canemu/firmware_model/can_fd_node.hpp"
 #include "canemu/firmware_model/sja1000_node.hpp"
 
 namespace canemu::daemon {

@@ -27,8 +27,8 @@ tl::expected<std::unique_ptr<VciPort>, std::string> VciPort::create(bool v2, uin
                                                                     const std::string& name) {
   const uint32_t size = v2 ? sizeof(CANMSG2) : sizeof(CANMSG);
   auto rx = ipc::RingMemory::create(rx_capacity, size, "canemu-vci-rx-" + name);
-  auto tx = ipc::RingMemory::create(tx_capacity == 0 ? 1 : tx_capacity, size,
-                                    "canemu-vci-tx-" + name);
+  auto tx =
+      ipc::RingMemory::create(tx_capacity == 0 ? 1 : tx_capacity, size, "canemu-vci-tx-" + name);
   if (!rx || !tx) {
     return tl::unexpected(!rx ? rx.error().message : tx.error().message);
   }
@@ -107,7 +107,9 @@ std::optional<CANMSG2> VciPort::peek() {
   }
 }
 
-void VciPort::pop() { tx_.release(1); }
+void VciPort::pop() {
+  tx_.release(1);
+}
 
 void VciPort::kick() {
   // Always drained: a doorbell left readable would wake the loop at once, forever.

@@ -22,8 +22,7 @@ VciHandle::~VciHandle() {
   }
 }
 
-std::unique_ptr<VciPort> VciHandle::replace_port(std::unique_ptr<VciPort> port,
-                                                 RingBudget budget) {
+std::unique_ptr<VciPort> VciHandle::replace_port(std::unique_ptr<VciPort> port, RingBudget budget) {
   std::unique_ptr<VciPort> old = std::move(port_);
   port_ = std::move(port);
   budget_ = std::move(budget);
@@ -366,9 +365,9 @@ void VciService::scheduler(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply
       r.hresult = line.scheduler_remove(m.args[0]);
       break;
     case ipc::VciOp::scheduler_start:
-      r.hresult = m.args[1] > 0xFFFF ? VCI_E_INVALIDARG
-                                     : line.scheduler_start(m.args[0],
-                                                            static_cast<uint16_t>(m.args[1]));
+      r.hresult = m.args[1] > 0xFFFF
+                      ? VCI_E_INVALIDARG
+                      : line.scheduler_start(m.args[0], static_cast<uint16_t>(m.args[1]));
       break;
     case ipc::VciOp::scheduler_stop:
       r.hresult = line.scheduler_stop(m.args[0]);

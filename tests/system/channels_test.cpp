@@ -150,7 +150,7 @@ TEST(Channels, ElementsThatAreNotFramesAreCountedAndReported) {
   Daemon d;
   auto c = connect(d);
   auto a = open(c, "can0", ipc::kChannelReportTx);
-  auto partner = open(c, "can0");  // acknowledges
+  auto partner = open(c, "can0");              // acknowledges
   ipc::ChannelMessage bad = frame(0x800, {});  // 12 bits without the extended flag
   ASSERT_TRUE(a.send(bad));
   bad = frame(0x1, {});

@@ -27,7 +27,9 @@ const char* const kAdapters =
 
 constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
 constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
-CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) { return CANBTP{0, bps, ts1, ts2, 1, 0}; }
+CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) {
+  return CANBTP{0, bps, ts1, ts2, 1, 0};
+}
 const CANBTP kNominal = btp(500000, 14, 2);  // 16 quanta, sample point 87.5 %
 const CANBTP kData = btp(2000000, 8, 2);     // 10 quanta, 80 %
 
@@ -163,8 +165,8 @@ TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
   EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_EXTDATA, 0u);
   CANBTP n = kNominal;
   CANBTP f = kData;
-  EXPECT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
-                                 2048, &n, &f),
+  EXPECT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048, 2048,
+                                 &n, &f),
             VCI_E_INVALIDARG);
   CANBTP classic = btp(500000, 14, 2);  // 16 quanta of 125 ns: BTR0 0x00, BTR1 0x1C
   ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
@@ -216,9 +218,9 @@ TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
   // in INCL mode and blocks it in EXCL mode.
   EXPECT_EQ(ids(only), (V{{0x123, CAN_ACCEPT_FILTER_2}, {0x1000, CAN_ACCEPT_FILTER_1}}));
   EXPECT_EQ(ids(except), (V{{0x122, CAN_ACCEPT_PASSEXCL}}));
-  EXPECT_EQ(ids(nolist),
-            (V{{0x122, CAN_ACCEPT_FILTER_1}, {0x123, CAN_ACCEPT_FILTER_1},
-               {0x1000, CAN_ACCEPT_FILTER_1}}));
+  EXPECT_EQ(ids(nolist), (V{{0x122, CAN_ACCEPT_FILTER_1},
+                            {0x123, CAN_ACCEPT_FILTER_1},
+                            {0x1000, CAN_ACCEPT_FILTER_1}}));
   for (HANDLE ch : {only, except, nolist}) {
     canChannelClose(ch);
   }
@@ -259,8 +261,8 @@ TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData
   HANDLE ch = channel_on(dev, 0, CAN_FILTER_PASS);
   CANBTP n = kNominal;
   CANBTP f = kData;
-  ASSERT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_LOCK, CAN_FILTER_INCL, 2048,
-                                 2048, &n, &f),
+  ASSERT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_LOCK, CAN_FILTER_INCL, 2048, 2048,
+                                 &n, &f),
             VCI_OK);
   UINT8 mode = 0;
   ASSERT_EQ(canControlGetFilterMode(control, FALSE, &mode), VCI_OK);
@@ -282,9 +284,9 @@ TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData
   ASSERT_EQ(canControlGetFilterMode(control, FALSE, &mode), VCI_OK);
   EXPECT_EQ(mode, CAN_FILTER_LOCK);
   // With no 11-bit IDs the filter is off whatever its mode.
-  ASSERT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_LOCK, CAN_FILTER_LOCK, 0, 2048,
-                                 &n, &f),
-            VCI_OK);
+  ASSERT_EQ(
+      canControlInitialize(control, kMode, kFd, CAN_FILTER_LOCK, CAN_FILTER_LOCK, 0, 2048, &n, &f),
+      VCI_OK);
   ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
   ASSERT_EQ(canChannelPostMessage(beta.channel, &m), VCI_OK);
   step_ns(1'000'000);

@@ -5,8 +5,8 @@
 
 #include <atomic>
 #include <cstring>
-#include <thread>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "canemu/firmware_model/wire_encoding.hpp"
@@ -42,8 +42,8 @@ struct Adapter {
   HANDLE device = nullptr;
   HANDLE control = nullptr;
   HANDLE channel = nullptr;
-  explicit Adapter(const std::string& name, bool start = true, UINT8 mode = kMode,
-                   UINT16 rx = 1024, UINT8 btr0 = CAN_BT0_500KB, UINT8 btr1 = CAN_BT1_500KB) {
+  explicit Adapter(const std::string& name, bool start = true, UINT8 mode = kMode, UINT16 rx = 1024,
+                   UINT8 btr0 = CAN_BT0_500KB, UINT8 btr1 = CAN_BT1_500KB) {
     const VCIID id = id_of(name);
     EXPECT_EQ(vciDeviceOpen(id, &device), VCI_OK);
     EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
@@ -498,7 +498,7 @@ TEST(VciCApi, TheCyclicListSendsOnItsTicksAndIncrementsTheIdentifier) {
   EXPECT_EQ(bad, 0xFFFFFFFFu);
   ASSERT_EQ(canSchedulerStartMessage(list, index, 3), VCI_OK);
   step_ns(10'000'000);
-  EXPECT_TRUE(beta.frames().empty());  // the task is off until it is activated
+  EXPECT_TRUE(beta.frames().empty());                   // the task is off until it is activated
   ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);  // at t = 10 ms
   step_ns(20'000'000);
   const auto got = beta.frames();
@@ -529,8 +529,8 @@ TEST(VciCApi, TheTimeStampCounterAnnouncesItsOverflow) {
   const auto got = alpha.drain();
   ASSERT_EQ(got.size(), 2u);  // INFO START, then TIMEOVR
   EXPECT_EQ(got[1].uMsgInfo.Bytes.bType, CAN_MSGTYPE_TIMEOVR);
-  EXPECT_EQ(got[1].dwMsgId, 1u);   // one overflow
-  EXPECT_EQ(got[1].dwTime, 0u);    // at 2^32 us the counter shows 0 again
+  EXPECT_EQ(got[1].dwMsgId, 1u);  // one overflow
+  EXPECT_EQ(got[1].dwTime, 0u);   // at 2^32 us the counter shows 0 again
 }
 
 // In real time a blocked reader wakes when the frame comes, and a writer's doorbell wakes the

@@ -196,7 +196,7 @@ TEST(VciCppApi, AStandAloneFifoKeepsOrderCountsAndSignalsOnWritesOnly) {
   // Acquired without a count pointer, one element may be released.
   ASSERT_EQ(reader->AcquireRead(&p, nullptr), VCI_OK);
   EXPECT_EQ(reader->ReleaseRead(2), VCI_E_INVALIDARG);
-  ASSERT_EQ(reader->ReleaseRead(1), VCI_OK);  // the third
+  ASSERT_EQ(reader->ReleaseRead(1), VCI_OK);         // the third
   ASSERT_EQ(reader->GetDataEntry(nullptr), VCI_OK);  // drops the fourth
   ASSERT_EQ(reader->GetDataEntry(element), VCI_OK);
   EXPECT_EQ(element[0], 5);
@@ -321,8 +321,7 @@ TEST(VciCppApi, TheFdChannelSendsAnFdFrameThroughItsWriter) {
 TEST(VciCppApi, TheWalkThroughProgramRunsUnchanged) {
   testing::ConfigFile config(testing::kTwoAdapters);
   testing::Daemon d("realtime", {"--config=" + config.path()});
-  const std::string command =
-      "CANEMU_SOCKET=" + d.socket() + " " + VCI_WALKTHROUGH_PATH + " 2>&1";
+  const std::string command = "CANEMU_SOCKET=" + d.socket() + " " + VCI_WALKTHROUGH_PATH + " 2>&1";
   FILE* out = ::popen(command.c_str(), "r");
   ASSERT_NE(out, nullptr);
   std::string text;

@@ -24,9 +24,9 @@
 #ifndef CANEMU_VCI_VCINPL_H
 #define CANEMU_VCI_VCINPL_H
 
-#include "vcitype.h"
-#include "vcierr.h"
 #include "cantype.h"
+#include "vcierr.h"
+#include "vcitype.h"
 
 #ifndef VCIAPI
 #define VCIAPI
@@ -148,25 +148,21 @@ HRESULT VCIAPI canControlStart(HANDLE hCanCtl, BOOL fStart);
 
 /* Sets the acceptance code and mask of the 11-bit (fExtend FALSE) or 29-bit filter
  * (id in bits 1.., RTR in bit 0); VCI_OK, VCI_E_INVALID_STATE while the line runs. */
-HRESULT VCIAPI canControlSetAccFilter(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canControlSetAccFilter(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* Adds the ids selected by dwCode/dwMask (same bit layout) to the 11- or 29-bit filter
  * list; VCI_OK, VCI_E_INVALID_STATE while the line runs, an error when the list is full. */
-HRESULT VCIAPI canControlAddFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canControlAddFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* Removes the ids selected by dwCode/dwMask from the filter list; VCI_OK,
  * VCI_E_INVALID_STATE. */
-HRESULT VCIAPI canControlRemFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canControlRemFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* ---- CAN message channel ------------------------------------------------------------- */
 
 /* Opens a message channel on line dwCanNo (fExclusive TRUE: no other channel may exist);
  * VCI_OK, VCI_E_ACCESSDENIED, VCI_E_INVALIDARG for a line that does not exist. */
-HRESULT VCIAPI canChannelOpen(HANDLE hDevice, UINT32 dwCanNo, BOOL fExclusive,
-                              PHANDLE phCanChn);
+HRESULT VCIAPI canChannelOpen(HANDLE hDevice, UINT32 dwCanNo, BOOL fExclusive, PHANDLE phCanChn);
 
 /* Closes the channel and drops its FIFOs; VCI_OK, VCI_E_INVHANDLE. */
 HRESULT VCIAPI canChannelClose(HANDLE hCanChn);
@@ -236,20 +232,18 @@ HRESULT VCIAPI canChannelSendMsgMult(HANDLE hCanChn, UINT32 dwTimeout, CANMSG aC
  * before the array. Same codes as the *MsgMult functions. */
 
 /* Legacy bulk peek; VCI_OK, VCI_E_RXQUEUE_EMPTY. */
-HRESULT VCIAPI canChannelPeekMultipleMessages(HANDLE hCanChn, PUINT32 pdwCount,
-                                              CANMSG aCanMsg[]);
+HRESULT VCIAPI canChannelPeekMultipleMessages(HANDLE hCanChn, PUINT32 pdwCount, CANMSG aCanMsg[]);
 
 /* Legacy bulk post; VCI_OK, VCI_E_TXQUEUE_FULL. */
-HRESULT VCIAPI canChannelPostMultipleMessages(HANDLE hCanChn, PUINT32 pdwCount,
-                                              CANMSG aCanMsg[]);
+HRESULT VCIAPI canChannelPostMultipleMessages(HANDLE hCanChn, PUINT32 pdwCount, CANMSG aCanMsg[]);
 
 /* Legacy bulk read with timeout; VCI_OK, VCI_E_TIMEOUT, VCI_E_RXQUEUE_EMPTY. */
-HRESULT VCIAPI canChannelReadMultipleMessages(HANDLE hCanChn, UINT32 dwTimeout,
-                                              PUINT32 pdwCount, CANMSG aCanMsg[]);
+HRESULT VCIAPI canChannelReadMultipleMessages(HANDLE hCanChn, UINT32 dwTimeout, PUINT32 pdwCount,
+                                              CANMSG aCanMsg[]);
 
 /* Legacy bulk send with timeout; VCI_OK, VCI_E_TIMEOUT, VCI_E_TXQUEUE_FULL. */
-HRESULT VCIAPI canChannelSendMultipleMessages(HANDLE hCanChn, UINT32 dwTimeout,
-                                              PUINT32 pdwCount, CANMSG aCanMsg[]);
+HRESULT VCIAPI canChannelSendMultipleMessages(HANDLE hCanChn, UINT32 dwTimeout, PUINT32 pdwCount,
+                                              CANMSG aCanMsg[]);
 
 /* ---- cyclic transmit scheduler ------------------------------------------------------- */
 
@@ -277,8 +271,7 @@ HRESULT VCIAPI canSchedulerReset(HANDLE hCanShd);
 /* Adds a cyclic message (stopped) and stores its list index in *pdwIndex; VCI_OK,
  * VCI_E_INVALIDARG for a cycle time of 0 or above dwCmsMaxTicks, an error when all
  * CAN_MAX_CTX_MSGS (16) entries are used. */
-HRESULT VCIAPI canSchedulerAddMessage(HANDLE hCanShd, PCANCYCLICTXMSG pMessage,
-                                      PUINT32 pdwIndex);
+HRESULT VCIAPI canSchedulerAddMessage(HANDLE hCanShd, PCANCYCLICTXMSG pMessage, PUINT32 pdwIndex);
 
 /* Removes entry dwIndex; VCI_OK, VCI_E_INVALIDARG for an unused index. */
 HRESULT VCIAPI canSchedulerRemMessage(HANDLE hCanShd, UINT32 dwIndex);

@@ -21,9 +21,9 @@
 #ifndef CANEMU_VCI_VCINPL2_H
 #define CANEMU_VCI_VCINPL2_H
 
-#include "vcitype.h"
-#include "vcierr.h"
 #include "cantype.h"
+#include "vcierr.h"
+#include "vcitype.h"
 
 #ifndef VCIAPI
 #define VCIAPI
@@ -124,9 +124,9 @@ HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExM
  * (CAN_EXMODE_*), the mode (CAN_FILTER_*) and size of the line's 11/29-bit filter lists
  * and the SDR/FDR bit timing; the line stays stopped; VCI_OK, VCI_E_INVALIDARG for bad
  * timing or modes, VCI_E_ACCESSDENIED (python-can treats that one as success). */
-HRESULT VCIAPI canControlInitialize(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExMode,
-                                    UINT8 bSFMode, UINT8 bEFMode, UINT32 dwSFIds,
-                                    UINT32 dwEFIds, PCANBTP pBtpSDR, PCANBTP pBtpFDR);
+HRESULT VCIAPI canControlInitialize(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExMode, UINT8 bSFMode,
+                                    UINT8 bEFMode, UINT32 dwSFIds, UINT32 dwEFIds, PCANBTP pBtpSDR,
+                                    PCANBTP pBtpFDR);
 
 /* Stops the line and returns the controller to its uninitialized state; VCI_OK,
  * VCI_E_INVHANDLE. */
@@ -141,30 +141,25 @@ HRESULT VCIAPI canControlGetFilterMode(HANDLE hCanCtl, BOOL fExtend, PUINT8 pbMo
 
 /* Sets the mode of the line's 11- or 29-bit filter and stores the previous one in *pbPrev;
  * VCI_OK, VCI_E_INVALIDARG, VCI_E_INVALID_STATE while the line runs. */
-HRESULT VCIAPI canControlSetFilterMode(HANDLE hCanCtl, BOOL fExtend, UINT8 bMode,
-                                       PUINT8 pbPrev);
+HRESULT VCIAPI canControlSetFilterMode(HANDLE hCanCtl, BOOL fExtend, UINT8 bMode, PUINT8 pbPrev);
 
 /* Sets the acceptance code and mask of the line's 11- or 29-bit filter (id in bits 1..,
  * RTR in bit 0); VCI_OK, VCI_E_INVALID_STATE while the line runs. */
-HRESULT VCIAPI canControlSetAccFilter(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canControlSetAccFilter(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* Adds the ids selected by dwCode/dwMask to the line's filter list; VCI_OK,
  * VCI_E_INVALID_STATE, an error when the list is full. */
-HRESULT VCIAPI canControlAddFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canControlAddFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* Removes the ids selected by dwCode/dwMask from the line's filter list; VCI_OK,
  * VCI_E_INVALID_STATE. */
-HRESULT VCIAPI canControlRemFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canControlRemFilterIds(HANDLE hCanCtl, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* ---- CAN message channel ------------------------------------------------------------- */
 
 /* Opens a message channel on line dwCanNo (fExclusive TRUE: no other channel may exist);
  * VCI_OK, VCI_E_ACCESSDENIED, an error for a line that does not exist. */
-HRESULT VCIAPI canChannelOpen(HANDLE hDevice, UINT32 dwCanNo, BOOL fExclusive,
-                              PHANDLE phCanChn);
+HRESULT VCIAPI canChannelOpen(HANDLE hDevice, UINT32 dwCanNo, BOOL fExclusive, PHANDLE phCanChn);
 
 /* Closes the channel and drops its FIFOs; VCI_OK, VCI_E_INVHANDLE. */
 HRESULT VCIAPI canChannelClose(HANDLE hCanChn);
@@ -181,8 +176,8 @@ HRESULT VCIAPI canChannelGetStatus(HANDLE hCanChn, PCANCHANSTATUS2 pStatus);
  * filter (list size dwFilterSize, mode bFilterMode = CAN_FILTER_*, optionally
  * | CAN_FILTER_SRRA); VCI_OK, VCI_E_INVALIDARG, VCI_E_INVALID_STATE when active. */
 HRESULT VCIAPI canChannelInitialize(HANDLE hCanChn, UINT16 wRxFifoSize, UINT16 wRxThreshold,
-                                    UINT16 wTxFifoSize, UINT16 wTxThreshold,
-                                    UINT32 dwFilterSize, UINT8 bFilterMode);
+                                    UINT16 wTxFifoSize, UINT16 wTxThreshold, UINT32 dwFilterSize,
+                                    UINT8 bFilterMode);
 
 /* Stores the mode of the channel's 11- or 29-bit filter in *pbMode; VCI_OK,
  * VCI_E_INVHANDLE. */
@@ -190,23 +185,19 @@ HRESULT VCIAPI canChannelGetFilterMode(HANDLE hCanChn, BOOL fExtend, PUINT8 pbMo
 
 /* Sets the mode of the channel's 11- or 29-bit filter, previous one in *pbPrev; VCI_OK,
  * VCI_E_INVALIDARG, VCI_E_INVALID_STATE while active. */
-HRESULT VCIAPI canChannelSetFilterMode(HANDLE hCanChn, BOOL fExtend, UINT8 bMode,
-                                       PUINT8 pbPrev);
+HRESULT VCIAPI canChannelSetFilterMode(HANDLE hCanChn, BOOL fExtend, UINT8 bMode, PUINT8 pbPrev);
 
 /* Sets the acceptance code and mask of the channel's 11- or 29-bit filter; VCI_OK,
  * VCI_E_INVALID_STATE while active. */
-HRESULT VCIAPI canChannelSetAccFilter(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canChannelSetAccFilter(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* Adds the ids selected by dwCode/dwMask to the channel's filter list; VCI_OK,
  * VCI_E_INVALID_STATE, an error when the list is full. */
-HRESULT VCIAPI canChannelAddFilterIds(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canChannelAddFilterIds(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* Removes the ids selected by dwCode/dwMask from the channel's filter list; VCI_OK,
  * VCI_E_INVALID_STATE. */
-HRESULT VCIAPI canChannelRemFilterIds(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode,
-                                      UINT32 dwMask);
+HRESULT VCIAPI canChannelRemFilterIds(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode, UINT32 dwMask);
 
 /* Connects (fEnable TRUE) or disconnects the channel from the line; VCI_OK,
  * VCI_E_INVALID_STATE when not initialized. */
@@ -281,8 +272,7 @@ HRESULT VCIAPI canSchedulerReset(HANDLE hCanShd);
 /* Adds a cyclic message (stopped) and stores its list index in *pdwIndex; VCI_OK,
  * VCI_E_INVALIDARG for a cycle time of 0 or above dwCmsMaxTicks, an error when all
  * CAN_MAX_CTX_MSGS (16) entries are used. */
-HRESULT VCIAPI canSchedulerAddMessage(HANDLE hCanShd, PCANCYCLICTXMSG2 pMessage,
-                                      PUINT32 pdwIndex);
+HRESULT VCIAPI canSchedulerAddMessage(HANDLE hCanShd, PCANCYCLICTXMSG2 pMessage, PUINT32 pdwIndex);
 
 /* Removes entry dwIndex; VCI_OK, VCI_E_INVALIDARG for an unused index. */
 HRESULT VCIAPI canSchedulerRemMessage(HANDLE hCanShd, UINT32 dwIndex);

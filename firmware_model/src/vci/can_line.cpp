@@ -19,7 +19,8 @@ constexpr uint8_t kKnownOpModes =
     CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME | CAN_OPMODE_LISTONLY;
 
 // The SJA1000 seen through CANBTP: the prescaler counts periods of half the 16 MHz oscillator.
-constexpr BtpRange kSja1000Range{8'000'000, {kBtModeRaw, 1, 1, 1, 1, 0}, {kBtModeRaw, 64, 16, 8, 4, 0}};
+constexpr BtpRange kSja1000Range{
+    8'000'000, {kBtModeRaw, 1, 1, 1, 1, 0}, {kBtModeRaw, 64, 16, 8, 4, 0}};
 
 // Nanoseconds from a clock's zero to its tick `count` (a clock of `clock_hz` divided by
 // `divisor`), rounded up: the first instant at which the counter shows `count`.
@@ -79,7 +80,9 @@ uint8_t error_code(CanErrorType t) {
   return CAN_ERROR_OTHER;
 }
 
-Btp to_btp(const CANBTP& b) { return Btp{b.dwMode, b.dwBPS, b.wTS1, b.wTS2, b.wSJW, b.wTDO}; }
+Btp to_btp(const CANBTP& b) {
+  return Btp{b.dwMode, b.dwBPS, b.wTS1, b.wTS2, b.wSJW, b.wTDO};
+}
 
 // The raw CANBTP of SJA1000 bus timing registers.
 CANBTP btp_of_btr(uint8_t btr0, uint8_t btr1) {
@@ -184,7 +187,8 @@ CANCAPABILITIES2 CanLine::capabilities2() const {
 }
 
 uint32_t CanLine::ticks(SimTime t) const {
-  return static_cast<uint32_t>(ns_to_ticks((t - epoch_).ns(), clocks_.tsc_divisor, clocks_.clock_hz));
+  return static_cast<uint32_t>(
+      ns_to_ticks((t - epoch_).ns(), clocks_.tsc_divisor, clocks_.clock_hz));
 }
 
 uint32_t CanLine::status_flags() const {
@@ -248,7 +252,9 @@ ControllerState CanLine::controller_state() {
 
 // ---------------------------------------------------------------- control unit
 
-bool CanLine::in_use() const { return control_open_ || !channels_.empty() || scheduler_open_; }
+bool CanLine::in_use() const {
+  return control_open_ || !channels_.empty() || scheduler_open_;
+}
 
 HRESULT CanLine::open_control() {
   if (control_open_) {
@@ -634,7 +640,9 @@ std::optional<ChannelStatus> CanLine::channel_status(ChannelId id) const {
   return ChannelStatus{c->initialized, c->active, c->overrun, c->counters};
 }
 
-void CanLine::tx_ready() { node_.kick(); }
+void CanLine::tx_ready() {
+  node_.kick();
+}
 
 void CanLine::deliver(Channel& c, CANMSG2 msg) {
   if (!c.active || c.port == nullptr) {
@@ -979,7 +987,8 @@ void CanLine::finish_detection(HRESULT hr, uint32_t index) {
 
 void CanLine::schedule_time_overrun() {
   const Wide count = static_cast<Wide>(time_overruns_ + 1) << 32;
-  const SimTime at = epoch_ + SimDuration(ticks_to_ns(count, clocks_.tsc_divisor, clocks_.clock_hz));
+  const SimTime at =
+      epoch_ + SimDuration(ticks_to_ns(count, clocks_.tsc_divisor, clocks_.clock_hz));
   overrun_event_ = scheduler_.schedule_at(at, *this, kTimeOverrun);
 }
 
@@ -1192,8 +1201,8 @@ void increment(CANCYCLICTXMSG2& m) {
       ++m.abData[m.bByteIndex];
       break;
     case CAN_CTXMSG_INC_16: {
-      const uint16_t v = static_cast<uint16_t>(m.abData[m.bByteIndex] |
-                                               (m.abData[m.bByteIndex + 1] << 8)) + 1;
+      const uint16_t v =
+          static_cast<uint16_t>(m.abData[m.bByteIndex] | (m.abData[m.bByteIndex + 1] << 8)) + 1;
       m.abData[m.bByteIndex] = static_cast<UINT8>(v & 0xFF);
       m.abData[m.bByteIndex + 1] = static_cast<UINT8>(v >> 8);
       break;

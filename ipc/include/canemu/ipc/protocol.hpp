@@ -272,8 +272,8 @@ struct DeviceEntry {
   uint8_t reserved = 0;
   uint32_t owner_pid = 0;                             // ephemeral devices: the client's pid
   char buses[kMaxDeviceControllers][kNameSize] = {};  // bus of each controller
-  uint64_t vci_id = 0;         // VCI devices: VciObjectId, unique while the daemon runs
-  char hardware_id[16] = {};   // VCI devices: "HW" and a serial number, stable across runs
+  uint64_t vci_id = 0;        // VCI devices: VciObjectId, unique while the daemon runs
+  char hardware_id[16] = {};  // VCI devices: "HW" and a serial number, stable across runs
   uint8_t controller_fd[kMaxDeviceControllers] = {};  // 1: a CAN FD controller
   uint32_t reserved2 = 0;
 };
@@ -429,8 +429,8 @@ enum class VciOp : uint16_t {
   control_reset = 11,
   control_start = 12,
   control_stop = 13,
-  control_filter = 14,      // args: kind, select, mode, code, mask; values[0]: mode
-  controller_state = 15,    // values: error state (WireErrorState), tec, rec, line state
+  control_filter = 14,    // args: kind, select, mode, code, mask; values[0]: mode
+  controller_state = 15,  // values: error state (WireErrorState), tec, rec, line state
   // Bit-rate detection: payload CANBTRTABLE (or, kVciV2, CANBTPTABLE); args: timeout ms per
   // entry, v2 operating mode, v2 extended mode. Starts it (VCI_OK) or refuses; the result
   // comes from control_detect_result: VCI_E_PENDING while it runs, then VCI_OK with the index
@@ -447,7 +447,7 @@ enum class VciOp : uint16_t {
   scheduler_resume = 30,
   scheduler_suspend = 31,
   scheduler_reset = 32,
-  scheduler_add = 33,  // payload: CANCYCLICTXMSG2 layout; values[0]: index
+  scheduler_add = 33,     // payload: CANCYCLICTXMSG2 layout; values[0]: index
   scheduler_remove = 34,  // args[0]: index
   scheduler_start = 35,   // args[0]: index, args[1]: count
   scheduler_stop = 36,    // args[0]: index
@@ -485,10 +485,10 @@ struct VciReply {
 static_assert(sizeof(VciReply) == 16 + 8 + 24 + kVciPayloadSize);
 
 // The payload of a line_info reply: the vendor structs' bytes, each at its own offset.
-inline constexpr std::size_t kVciCapsOffset = 0;         // CANCAPABILITIES (32 bytes)
-inline constexpr std::size_t kVciCaps2Offset = 32;       // CANCAPABILITIES2 (108)
-inline constexpr std::size_t kVciLineOffset = 140;       // CANLINESTATUS (8)
-inline constexpr std::size_t kVciLine2Offset = 148;      // CANLINESTATUS2 (40)
+inline constexpr std::size_t kVciCapsOffset = 0;     // CANCAPABILITIES (32 bytes)
+inline constexpr std::size_t kVciCaps2Offset = 32;   // CANCAPABILITIES2 (108)
+inline constexpr std::size_t kVciLineOffset = 140;   // CANLINESTATUS (8)
+inline constexpr std::size_t kVciLine2Offset = 148;  // CANLINESTATUS2 (40)
 static_assert(kVciLine2Offset + 40 <= kVciPayloadSize);
 
 // The payload of a channel_status reply.

@@ -71,17 +71,17 @@ struct LineInit {
 using ChannelId = uint32_t;
 
 struct ChannelSetup {
-  uint32_t ext_list_size = 0;            // v2: 29-bit ID list size (0: no list)
+  uint32_t ext_list_size = 0;             // v2: 29-bit ID list size (0: no list)
   uint8_t filter_mode = CAN_FILTER_PASS;  // v2: both filters' mode, optionally | CAN_FILTER_SRRA
 };
 
 struct ChannelCounters {
-  uint64_t received = 0;     // messages stored in the receive FIFO
-  uint64_t lost = 0;         // messages the receive FIFO had no room for
-  uint64_t sent = 0;         // frames of this channel that went out
-  uint64_t rejected = 0;     // transmit FIFO entries that were not frames the line can send
-  uint64_t dropped = 0;      // single-shot frames given up
-  uint64_t not_shown = 0;    // v1 channels: CAN FD frames with more than 8 bytes
+  uint64_t received = 0;   // messages stored in the receive FIFO
+  uint64_t lost = 0;       // messages the receive FIFO had no room for
+  uint64_t sent = 0;       // frames of this channel that went out
+  uint64_t rejected = 0;   // transmit FIFO entries that were not frames the line can send
+  uint64_t dropped = 0;    // single-shot frames given up
+  uint64_t not_shown = 0;  // v1 channels: CAN FD frames with more than 8 bytes
 };
 
 struct ChannelStatus {
@@ -281,8 +281,8 @@ class CanLine final : private ControllerEvents, private EventHandler {
   bool exclusive_ = false;
   std::size_t rr_next_ = 0;  // the distributor's next channel
 
-  std::optional<Loaded> loaded_;   // the frame in the controller's transmit buffer
-  std::optional<Loaded> staged_;   // taken from a FIFO, waiting for its delay or a restart
+  std::optional<Loaded> loaded_;  // the frame in the controller's transmit buffer
+  std::optional<Loaded> staged_;  // taken from a FIFO, waiting for its delay or a restart
   SimTime staged_not_before_;
   SimTime last_load_;
   bool loaded_once_ = false;

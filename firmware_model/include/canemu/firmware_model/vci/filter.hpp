@@ -16,7 +16,9 @@
 
 namespace canemu::model::vci {
 
-constexpr uint32_t filter_value(uint32_t id, bool rtr) { return (id << 1) | (rtr ? 1U : 0U); }
+constexpr uint32_t filter_value(uint32_t id, bool rtr) {
+  return (id << 1) | (rtr ? 1U : 0U);
+}
 
 inline constexpr uint32_t kStdListCapacity = 4096;  // every 11-bit identifier, with and without RTR
 inline constexpr uint32_t kMaxExtListCapacity = 65536;

@@ -385,6 +385,7 @@ void Server::accept_clients() {
     }
     c.session.uid = cred.uid;
     c.session.pid = static_cast<uint32_t>(cred.pid);
+    c.session.vci.pid = c.session.pid;
     if (clients_.size() >= kMaxClients) {
       reply_error(c, 0, ipc::ErrorCode::permission_denied,
                   fmt::format("canemud serves at most {} clients", kMaxClients));

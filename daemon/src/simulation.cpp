@@ -355,18 +355,23 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     } else {
       c.node = std::make_unique<CanFdNode>(scheduler_, bus);
     }
-    c.line = std::make_unique<vci::CanLine>(scheduler_, *c.node, vci::Clocks{}, scheduler_.now());
+    c.line = std::make_shared<vci::CanLine>(scheduler_, *c.node, vci::Clocks{}, scheduler_.now());
     controllers_.push_back(std::move(c));
   }
   vci_ids_[d.name] = next_vci_id_++;
   return std::nullopt;
 }
 
-vci::CanLine* Simulation::vci_line(std::string_view device, uint32_t controller) {
+std::shared_ptr<vci::CanLine> Simulation::vci_line(std::string_view device, uint32_t controller) {
   const std::string name = fmt::format("{}:{}", device, controller);
   for (Controller& c : controllers_) {
     if (c.name == name) {
-      return c.line.get();
+      return c.line;
+    }
+  }
+  for (const Ephemeral& e : ephemeral_) {
+    if (e.line && e.name == device && controller == 0) {
+      return e.line;
     }
   }
   return nullptr;
@@ -613,6 +618,14 @@ void Simulation::fill_devices(ipc::DeviceListReply& r) const {
     e.ephemeral = 1;
     e.owner_pid = x.owner_pid;
     ipc::copy_name(e.buses[0], config_.buses[x.bus].name);
+    if (x.line) {  // a VCI adapter
+      const bool fd = x.line->fd_controller();
+      e.model = static_cast<uint8_t>(fd ? ipc::WireDeviceModel::ixxat_usb_to_can_fd
+                                        : ipc::WireDeviceModel::ixxat_usb_to_can);
+      e.controller_fd[0] = fd ? 1 : 0;
+      e.vci_id = x.vci_id;
+      ipc::copy_name(e.hardware_id, hardware_id(x.name));
+    }
   }
   r.count = static_cast<uint16_t>(n);
 }
@@ -663,9 +676,31 @@ std::string Simulation::unique_device_name(std::string_view prefix) const {
   }
 }
 
+Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t bus,
+                                                   uint32_t owner_pid) {
+  HostedNode& node = spare_node(bus);
+  auto line = std::make_shared<vci::CanLine>(scheduler_, node, vci::Clocks{}, scheduler_.now());
+  DeviceLease lease = add_ephemeral(name, bus, node, owner_pid);
+  ephemeral_.back().line = std::move(line);
+  ephemeral_.back().vci_id = next_vci_id_++;
+  return lease;
+}
+
+uint64_t Simulation::vci_id_of(std::string_view device) const {
+  if (auto it = vci_ids_.find(device); it != vci_ids_.end()) {
+    return it->second;
+  }
+  for (const Ephemeral& e : ephemeral_) {
+    if (e.line && e.name == device) {
+      return e.vci_id;
+    }
+  }
+  return 0;
+}
+
 Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t bus,
                                                   HostedNode& node, uint32_t owner_pid) {
-  ephemeral_.push_back(Ephemeral{name, bus, &node, owner_pid});
+  ephemeral_.push_back(Ephemeral{name, bus, &node, owner_pid, nullptr, 0});
   ++generation_;
   if (on_device_change) {
     on_device_change(ipc::NotificationKind::device_added, name);

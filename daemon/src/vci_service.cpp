@@ -11,13 +11,13 @@ namespace vci = model::vci;
 VciHandle::~VciHandle() {
   switch (kind_) {
     case Kind::control:
-      line_.close_control();
+      line_->close_control();
       break;
     case Kind::channel:
-      line_.close_channel(channel_);  // before the port goes: the line lets go of it
+      line_->close_channel(channel_);  // before the port goes: the line lets go of it
       break;
     case Kind::scheduler:
-      line_.close_scheduler();
+      line_->close_scheduler();
       break;
   }
 }
@@ -113,9 +113,14 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
   const auto op = static_cast<ipc::VciOp>(m.op);
   if (is_open(op)) {
     open(session, m, r);
+  } else if (op == ipc::VciOp::device_create) {
+    create_device(session, m, r);
+  } else if (op == ipc::VciOp::device_remove) {
+    // Only the client that created it; objects open on it stay usable until closed.
+    r.hresult = session.devices.erase(ipc::name_of(m.device)) == 1 ? VCI_OK : VCI_E_INVALIDARG;
   } else if (op == ipc::VciOp::line_info && m.handle == 0) {
     // A socket's view (ICanSocket): no object of the controller needs to be open.
-    vci::CanLine* line = sim_.vci_line(ipc::name_of(m.device), m.controller);
+    std::shared_ptr<vci::CanLine> line = sim_.vci_line(ipc::name_of(m.device), m.controller);
     r.hresult = line == nullptr ? VCI_E_INVALIDARG : VCI_OK;
     if (line != nullptr) {
       put_payload(r, ipc::kVciCapsOffset, line->capabilities());
@@ -184,7 +189,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
 
 void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {
   const std::string device = ipc::name_of(m.device);
-  vci::CanLine* line = sim_.vci_line(device, m.controller);
+  std::shared_ptr<vci::CanLine> line = sim_.vci_line(device, m.controller);
   if (line == nullptr) {
     r.hresult = VCI_E_INVALIDARG;  // no such device or bus number
     return;
@@ -198,7 +203,7 @@ void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciRep
     case ipc::VciOp::control_open:
       r.hresult = line->open_control();
       if (r.hresult == VCI_OK) {
-        h = std::make_unique<VciHandle>(VciHandle::Kind::control, *line, 0, false);
+        h = std::make_unique<VciHandle>(VciHandle::Kind::control, line, 0, false);
       }
       break;
     case ipc::VciOp::channel_open: {
@@ -216,14 +221,14 @@ void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciRep
         r.hresult = id.error();
         return;
       }
-      h = std::make_unique<VciHandle>(VciHandle::Kind::channel, *line, *id, v2);
+      h = std::make_unique<VciHandle>(VciHandle::Kind::channel, line, *id, v2);
       r.hresult = VCI_OK;
       break;
     }
     default:
       r.hresult = line->open_scheduler();
       if (r.hresult == VCI_OK) {
-        h = std::make_unique<VciHandle>(VciHandle::Kind::scheduler, *line, 0, false);
+        h = std::make_unique<VciHandle>(VciHandle::Kind::scheduler, line, 0, false);
       }
       break;
   }
@@ -396,6 +401,34 @@ void VciService::close_all(VciSession& session) {
   while (!session.handles.empty()) {
     close(session, session.handles.begin()->first);
   }
+  session.devices.clear();
+}
+
+void VciService::create_device(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {
+  char bus_name[ipc::kNameSize];
+  std::memcpy(bus_name, m.payload, sizeof bus_name);
+  const auto bus = sim_.bus_index(ipc::name_of(bus_name));
+  std::string name = ipc::name_of(m.device);
+  if (!bus || sim_.bus_config(*bus).kind == BusKind::lin) {
+    r.hresult = VCI_E_INVALIDARG;  // no CAN bus of that name
+    return;
+  }
+  if (session.devices.size() >= kMaxVciDevicesPerClient) {
+    r.hresult = VCI_E_OUTOFMEMORY;  // too many adapters on this connection
+    return;
+  }
+  if (name.empty()) {
+    name = sim_.unique_device_name("vci");
+  } else if (!valid_name(name) || sim_.device_exists(name)) {
+    r.hresult = VCI_E_INVALIDARG;  // the name is taken or not a valid name
+    return;
+  }
+  session.devices.emplace(name, sim_.add_vci_device(name, *bus, session.pid));
+  const uint64_t id = sim_.vci_id_of(name);
+  r.hresult = VCI_OK;
+  r.values[0] = static_cast<uint32_t>(id);
+  r.values[1] = static_cast<uint32_t>(id >> 32);
+  std::memcpy(r.payload, name.c_str(), std::min(name.size(), ipc::kNameSize - 1));
 }
 
 }  // namespace canemu::daemon

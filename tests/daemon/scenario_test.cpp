@@ -127,7 +127,7 @@ struct World {
   World() {
     sim = std::move(*Simulation::build(*load_default_config()));
     for (uint32_t k = 0; k < 2; ++k) {
-      vci::CanLine* line = sim->vci_line("ixxat0", k);
+      auto line = sim->vci_line("ixxat0", k);
       vci::LineInit init;
       init.op_mode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
       init.btr0 = 0x00;

@@ -648,6 +648,42 @@ TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
   vciDeviceClose(dev);
 }
 
+// An adapter made at run time on a named bus: enumerated and used like a configured one,
+// gone when removed or when its creator disconnects.
+TEST(VciCApi, AnAdapterCreatedOnANamedBusWorksLikeAConfiguredOne) {
+  VciDaemon d;
+  VCIID id{};
+  char name[32] = {};
+  ASSERT_EQ(canemuCreateDevice("can0", nullptr, &id, name, sizeof name), VCI_OK);
+  EXPECT_STREQ(name, "vci1");
+  EXPECT_EQ(id.AsInt64, 3);  // after the two configured adapters
+  EXPECT_EQ(id_of("vci1").AsInt64, 3);
+  EXPECT_EQ(canemuCreateDevice("nope", "x", nullptr, nullptr, 0), VCI_E_INVALIDARG);
+  EXPECT_EQ(canemuCreateDevice("can0", "alpha", nullptr, nullptr, 0), VCI_E_INVALIDARG);
+  {
+    Adapter alpha("alpha");
+    Adapter made("vci1");
+    made.post(data(0x77, {7}));
+    step_ns(1'000'000);
+    const auto got = alpha.frames();
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(got[0].dwMsgId, 0x77u);
+    EXPECT_EQ(got[0].dwTime, static_cast<UINT32>(bits_of(0x77, {7}) * kBitUs2));
+    // Removed from the list; what is open on it keeps working until closed.
+    ASSERT_EQ(canemuRemoveDevice("vci1"), VCI_OK);
+    EXPECT_EQ(id_of("vci1").AsInt64, 0);
+    made.post(data(0x78, {8}));
+    step_ns(1'000'000);
+    EXPECT_EQ(alpha.frames().size(), 1u);
+  }
+  EXPECT_EQ(canemuRemoveDevice("vci1"), VCI_E_INVALIDARG);  // gone already
+  // A new connection drops the old one: what it created goes with it.
+  ASSERT_EQ(canemuCreateDevice("can0", "mine", nullptr, nullptr, 0), VCI_OK);
+  EXPECT_NE(id_of("mine").AsInt64, 0);
+  ASSERT_EQ(canemuConnect(d.daemon.socket().c_str()), VCI_OK);
+  EXPECT_EQ(id_of("mine").AsInt64, 0);
+}
+
 TEST(VciCApi, WithoutCanemudEveryCallFailsAtOnceAndSaysWhere) {
   EXPECT_EQ(canemuConnect("/nonexistent/canemud.sock"), VCI_E_DISCONNECTED);
   HANDLE e = nullptr;

@@ -1,4 +1,7 @@
 // canemu's extensions of the VCI C API (canemu_vci.h), in both libraries.
+#include <cstdio>
+#include <cstring>
+
 #include "can_api.hpp"
 #include "canemu_vci.h"
 
@@ -48,6 +51,42 @@ HRESULT VCIAPI canemuGetControllerState(HANDLE hObject, PUINT8 pbErrorState, PUI
     *pbLineState = static_cast<UINT8>(reply.values[3]);
   }
   return VCI_OK;
+}
+
+HRESULT VCIAPI canemuCreateDevice(const char* pszBus, const char* pszName, PVCIID pVciid,
+                                  PCHAR pszNameOut, UINT32 cbNameOut) {
+  if (pszBus == nullptr || (pszNameOut != nullptr && cbNameOut < canemu::ipc::kNameSize)) {
+    return VCI_E_INVALIDARG;
+  }
+  canemu::ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(canemu::ipc::VciOp::device_create);
+  canemu::ipc::copy_name(m.device, pszName != nullptr ? pszName : "");
+  char bus[canemu::ipc::kNameSize] = {};
+  std::snprintf(bus, sizeof bus, "%s", pszBus);
+  std::memcpy(m.payload, bus, sizeof bus);
+  canemu::ipc::VciReply r{};
+  if (HRESULT hr = Library::get().call(m, r); hr != VCI_OK) {
+    return hr;
+  }
+  if (pVciid != nullptr) {
+    pVciid->AsInt64 = static_cast<INT64>(uint64_t{r.values[0]} | (uint64_t{r.values[1]} << 32));
+  }
+  if (pszNameOut != nullptr) {
+    std::snprintf(pszNameOut, cbNameOut, "%.*s", static_cast<int>(canemu::ipc::kNameSize - 1),
+                  reinterpret_cast<const char*>(r.payload));
+  }
+  return VCI_OK;
+}
+
+HRESULT VCIAPI canemuRemoveDevice(const char* pszName) {
+  if (pszName == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  canemu::ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(canemu::ipc::VciOp::device_remove);
+  canemu::ipc::copy_name(m.device, pszName);
+  canemu::ipc::VciReply r{};
+  return Library::get().call(m, r);
 }
 
 HRESULT VCIAPI canemuStepTime(UINT64 qwNanoseconds, UINT64* pqwNow) {

@@ -369,8 +369,8 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
   out.clear();
   for (uint16_t i = 0; i < r->count && i < ipc::kMaxDevices; ++i) {
     const ipc::DeviceEntry& e = r->devices[i];
-    if (e.ephemeral != 0 || e.vci_id == 0) {
-      continue;  // not an adapter the VCI sees
+    if (e.vci_id == 0) {
+      continue;  // not an adapter the VCI sees (an ephemeral channel's device)
     }
     DeviceDesc d;
     d.name = ipc::name_of(e.name);

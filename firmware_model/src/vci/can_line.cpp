@@ -109,6 +109,7 @@ CanLine::CanLine(SimScheduler& scheduler, HostedNode& node, const Clocks& clocks
       epoch_(epoch),
       filters_{IdFilter(false, kStdListCapacity, CAN_FILTER_INCL),
                IdFilter(true, CAN_FILTER_SIZE_EXT, CAN_FILTER_INCL)} {
+  node_.claim(true);
   schedule_time_overrun();
 }
 
@@ -119,6 +120,7 @@ CanLine::~CanLine() {
     }
   }
   node_.stop();
+  node_.claim(false);
 }
 
 // ---------------------------------------------------------------- capabilities and status

@@ -97,9 +97,10 @@ class Simulation {
   void fill_devices(ipc::DeviceListReply& reply) const;
 
   // ---- VCI ----
-  // The adapter firmware of controller `controller` of the configured device `device`; nullptr
-  // if there is no such controller.
-  model::vci::CanLine* vci_line(std::string_view device, uint32_t controller);
+  // The adapter firmware of controller `controller` of the VCI device `device` (configured, or
+  // ephemeral from add_vci_device); nullptr if there is no such controller. Shared: objects a
+  // client opened keep the firmware running after an ephemeral device has gone.
+  std::shared_ptr<model::vci::CanLine> vci_line(std::string_view device, uint32_t controller);
 
   // ---- ephemeral devices ----
   // A stopped node on bus `bus`, ready to start (an SJA1000 on a classic bus, the CAN FD
@@ -131,6 +132,12 @@ class Simulation {
   };
   DeviceLease add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node,
                             uint32_t owner_pid);
+  // An ephemeral VCI adapter named `name` with one controller on bus `bus` (an SJA1000 on a
+  // classic bus, the CAN FD controller on a CAN FD bus) and its firmware, listed with the
+  // configured adapters while the lease lives.
+  DeviceLease add_vci_device(std::string name, std::size_t bus, uint32_t owner_pid);
+  // The VciObjectId of a VCI device (configured or ephemeral); 0 if there is none.
+  uint64_t vci_id_of(std::string_view device) const;
   uint32_t device_generation() const { return generation_; }
   // Told of every device that comes or goes (ephemeral devices).
   std::function<void(ipc::NotificationKind, const std::string&)> on_device_change;
@@ -177,7 +184,7 @@ class Simulation {
     std::string name;  // "device:N"
     std::size_t bus;
     std::unique_ptr<model::HostedNode> node;
-    std::unique_ptr<model::vci::CanLine> line;  // the adapter firmware driving it
+    std::shared_ptr<model::vci::CanLine> line;  // the adapter firmware driving it
   };
 
   struct Ephemeral {
@@ -185,6 +192,8 @@ class Simulation {
     std::size_t bus;
     model::HostedNode* node;
     uint32_t owner_pid;
+    std::shared_ptr<model::vci::CanLine> line;  // VCI adapters only
+    uint64_t vci_id = 0;
   };
   void remove_ephemeral(const std::string& name);
 

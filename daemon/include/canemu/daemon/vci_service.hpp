@@ -24,14 +24,15 @@ inline constexpr std::size_t kMaxVciChannelsPerClient = 16;
 class VciHandle {
  public:
   enum class Kind : uint8_t { control, channel, scheduler };
-  VciHandle(Kind kind, model::vci::CanLine& line, model::vci::ChannelId channel, bool v2)
-      : kind_(kind), line_(line), channel_(channel), v2_(v2) {}
+  VciHandle(Kind kind, std::shared_ptr<model::vci::CanLine> line, model::vci::ChannelId channel,
+            bool v2)
+      : kind_(kind), line_(std::move(line)), channel_(channel), v2_(v2) {}
   ~VciHandle();
   VciHandle(const VciHandle&) = delete;
   VciHandle& operator=(const VciHandle&) = delete;
 
   Kind kind() const { return kind_; }
-  model::vci::CanLine& line() { return line_; }
+  model::vci::CanLine& line() { return *line_; }
   model::vci::ChannelId channel() const { return channel_; }
   bool v2() const { return v2_; }
   VciPort* port() { return port_.get(); }
@@ -40,16 +41,21 @@ class VciHandle {
 
  private:
   Kind kind_;
-  model::vci::CanLine& line_;
+  std::shared_ptr<model::vci::CanLine> line_;
   model::vci::ChannelId channel_;
   bool v2_;
   std::unique_ptr<VciPort> port_;
   RingBudget budget_;
 };
 
+inline constexpr std::size_t kMaxVciDevicesPerClient = 16;
+
 struct VciSession {
   uint32_t next_handle = 1;
   std::map<uint32_t, std::unique_ptr<VciHandle>> handles;
+  // Ephemeral adapters this client created, by name.
+  std::map<std::string, Simulation::DeviceLease> devices;
+  uint32_t pid = 0;
 };
 
 class VciService {
@@ -69,6 +75,7 @@ class VciService {
  private:
   void close(VciSession& session, uint32_t handle);
   void open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r);
+  void create_device(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r);
   void init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,
                     std::array<int, ipc::kChannelFdCount>& fds);
   void control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r);

@@ -61,8 +61,12 @@ class HostedNode : private ControllerEvents {
   void go_online();
   void go_offline();
   bool running() const { return running_; }
-  // True when start() may be called: stopped and no frame of this node on the wire.
-  bool reusable() const { return !running_ && !bus_.in_flight(node()); }
+  // True when start() may be called: stopped, nobody's (see claim()), and no frame of this node
+  // on the wire.
+  bool reusable() const { return !running_ && !claimed_ && !bus_.in_flight(node()); }
+  // A firmware that keeps the node while it is stopped (a VCI line) holds it claimed, so that
+  // the daemon does not hand it to another device.
+  void claim(bool claimed) { claimed_ = claimed; }
 
   // The source has frames: loads the next one if the transmit buffer is free.
   void kick() { load_next(); }
@@ -112,6 +116,7 @@ class HostedNode : private ControllerEvents {
   ControllerEvents* sink_ = nullptr;
   TxSource source_;
   bool running_ = false;
+  bool claimed_ = false;
   bool tx_loaded_ = false;
   uint64_t generation_ = 0;  // start() count: a restart scheduled before a stop is void
 };

@@ -454,6 +454,12 @@ enum class VciOp : uint16_t {
   scheduler_status = 37,  // payload: task state then 16 entry states
   // Closing any handle.
   close = 40,
+  // An ephemeral VCI adapter (one controller) on the bus named in the payload's first 32
+  // bytes, named `device` (empty: the daemon picks), alive while this connection is or until
+  // device_remove; the reply has its VciObjectId in values[0] (low) and values[1] (high) and
+  // its name in the payload.
+  device_create = 50,
+  device_remove = 51,  // `device`: one this connection created
 };
 
 // VciRequest.flags

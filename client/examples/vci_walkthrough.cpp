@@ -126,7 +126,7 @@ int main() {
   if (hResult == VCI_OK && rx.pReader->AssignEvent(hEvent) == VCI_OK &&
       TransmitByte(tx.pWriter, 0x100, 0x42)) {
     // Wait for the frame (the INFO message of the start may come first).
-    while (WaitForSingleObject(hEvent, 2000) == WAIT_OBJECT_0 && result != 0) {
+    while (result != 0 && WaitForSingleObject(hEvent, 2000) == WAIT_OBJECT_0) {
       CANMSG sCanMsg;
       while (rx.pReader->GetDataEntry(&sCanMsg) == VCI_OK) {
         if (sCanMsg.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {

@@ -316,6 +316,84 @@ TEST(VciCppApi, TheFdChannelSendsAnFdFrameThroughItsWriter) {
   EXPECT_EQ(s.sLineStatus.bExMode, CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA);
 }
 
+TEST(VciCppApi, AnEnumeratorsEventFiresWhenAnAdapterComes) {
+  VciDaemon d;
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  Ref<IVciEnumDevice> e;
+  ASSERT_EQ(manager->EnumDevices(e.out()), VCI_OK);
+  VCIDEVICEINFO infos[4] = {};
+  UINT32 fetched = 0;
+  EXPECT_EQ(e->Next(4, infos, nullptr), VCI_E_INVALIDARG);  // a count is needed for more than 1
+  ASSERT_EQ(e->Next(4, infos, &fetched), VCI_OK);
+  EXPECT_EQ(fetched, 2u);
+  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  ASSERT_EQ(e->AssignEvent(event), VCI_OK);
+  ASSERT_EQ(canemuCreateDevice("can0", "late", nullptr, nullptr, 0), VCI_OK);
+  EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0);
+  ASSERT_EQ(e->Reset(), VCI_OK);
+  ASSERT_EQ(e->Next(4, infos, &fetched), VCI_OK);
+  EXPECT_EQ(fetched, 3u);
+  EXPECT_STREQ(infos[2].Description, "USB-to-CAN (canemu late)");
+  ASSERT_EQ(e->Reset(), VCI_OK);
+  ASSERT_EQ(e->Skip(2), VCI_OK);
+  ASSERT_EQ(e->Next(1, infos, nullptr), VCI_OK);
+  EXPECT_STREQ(infos[0].Description, "USB-to-CAN (canemu late)");
+  EXPECT_EQ(e->Next(1, infos, nullptr), VCI_E_NO_MORE_ITEMS);
+  ASSERT_EQ(e->AssignEvent(nullptr), VCI_OK);
+  CloseHandle(event);
+}
+
+TEST(VciCppApi, DevicesAreFoundByHardwareIdAndByClass) {
+  VciDaemon d;
+  Adapter beta("beta");
+  VCIDEVICEINFO info{};
+  ASSERT_EQ(beta.device->GetDeviceInfo(&info), VCI_OK);
+  Ref<IVciDevice> by_hwid;
+  ASSERT_EQ(VciQueryDeviceByHwid(info.UniqueHardwareId.AsGuid, by_hwid.out()), VCI_OK);
+  VCIDEVICEINFO found{};
+  ASSERT_EQ(by_hwid->GetDeviceInfo(&found), VCI_OK);
+  EXPECT_EQ(found.VciObjectId.AsInt64, info.VciObjectId.AsInt64);
+  Ref<IVciDevice> second;
+  ASSERT_EQ(VciQueryDeviceByClass(info.DeviceClass, 1, second.out()), VCI_OK);
+  ASSERT_EQ(second->GetDeviceInfo(&found), VCI_OK);
+  EXPECT_STREQ(found.Description, "USB-to-CAN (canemu beta)");
+  Ref<IVciDevice> none;
+  EXPECT_EQ(VciQueryDeviceByClass(info.DeviceClass, 2, none.out()), VCI_E_NO_MORE_ITEMS);
+  EXPECT_EQ(none.p, nullptr);
+  VCIDEVICECAPS caps{};
+  ASSERT_EQ(beta.device->GetDeviceCaps(&caps), VCI_OK);
+  EXPECT_EQ(caps.BusCtrlCount, 1);
+  VCIVERSIONINFO version{};
+  ASSERT_EQ(VciGetVersion(&version), VCI_OK);
+  EXPECT_EQ(version.VciMajorVersion, 4u);
+}
+
+TEST(VciCppApi, AWritersEventFiresWhenTheControllerMakesRoom) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  UINT16 capacity = 0;
+  ASSERT_EQ(alpha.writer->GetCapacity(&capacity), VCI_OK);
+  for (UINT32 k = 0; k < 10; ++k) {
+    CANMSG m = one_byte(0x300 + k, static_cast<UINT8>(k));
+    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  }
+  UINT16 free_count = 0;
+  ASSERT_EQ(alpha.writer->GetFreeCount(&free_count), VCI_OK);
+  EXPECT_EQ(free_count + 10, capacity);
+  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  ASSERT_EQ(alpha.writer->SetThreshold(capacity), VCI_OK);  // all free again
+  ASSERT_EQ(alpha.writer->AssignEvent(event), VCI_OK);
+  EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);
+  step_ns(10'000'000);  // the line takes all ten
+  EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0);
+  ASSERT_EQ(alpha.writer->GetFreeCount(&free_count), VCI_OK);
+  EXPECT_EQ(free_count, capacity);
+  alpha.writer->AssignEvent(nullptr);
+  CloseHandle(event);
+}
+
 // The guide's walk-through as a program of its own, built only from the public headers, run
 // against a canemud in real time.
 TEST(VciCppApi, TheWalkThroughProgramRunsUnchanged) {

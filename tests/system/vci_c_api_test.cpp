@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -573,6 +574,16 @@ TEST(VciCApi, TwoProgramsOnTwoAdaptersTalkThroughTheCApi) {
   EXPECT_EQ(::pclose(receiver), 0);
 }
 
+// Steps simulated time a millisecond at a time until `done` (set by another thread that waits
+// for something in simulated time), for at most 30 s of wall time.
+void step_until(const std::atomic<bool>& done) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!done && std::chrono::steady_clock::now() < give_up) {
+    step_ns(1'000'000);
+  }
+  ASSERT_TRUE(done) << "the waiting call did not return";
+}
+
 // A program that does not know the bus's rate finds it: two adapters talk at 250 kbit/s, a
 // third listens with a table of rates. The call blocks while simulated time runs, so another
 // thread steps it.
@@ -607,9 +618,7 @@ TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
     hr = canControlDetectBitrate(control, 100, 3, btr0, btr1, &found);
     done = true;
   });
-  for (int k = 0; k < 1000 && !done; ++k) {
-    step_ns(1'000'000);
-  }
+  step_until(done);
   detector.join();
   EXPECT_EQ(hr, VCI_OK);
   EXPECT_EQ(found, 1);
@@ -636,9 +645,7 @@ TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
     hr = canControlDetectBitrate(control, 10, 2, btr0, btr1, &found);
     done = true;
   });
-  for (int k = 0; k < 1000 && !done; ++k) {
-    step_ns(1'000'000);
-  }
+  step_until(done);
   silent.join();
   EXPECT_EQ(hr, VCI_E_TIMEOUT);
   EXPECT_EQ(found, -1);

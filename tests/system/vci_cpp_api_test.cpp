@@ -381,7 +381,9 @@ TEST(VciCppApi, AWritersEventFiresWhenTheControllerMakesRoom) {
   }
   UINT16 free_count = 0;
   ASSERT_EQ(alpha.writer->GetFreeCount(&free_count), VCI_OK);
-  EXPECT_EQ(free_count + 10, capacity);
+  // Ten put; the line may have taken the first already (the writer rang its doorbell).
+  EXPECT_GE(free_count + 10, capacity);
+  EXPECT_LE(free_count + 9, capacity);
   HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
   ASSERT_EQ(alpha.writer->SetThreshold(capacity), VCI_OK);  // all free again
   ASSERT_EQ(alpha.writer->AssignEvent(event), VCI_OK);

@@ -287,7 +287,8 @@ void Server::kick_all_channels() {
 
 // A client whose ring positions make no sense is dropped; the others go on.
 void Server::check_channels() {
-  for (auto& [fd, c] : clients_) {
+  for (auto& entry : clients_) {
+    Client& c = entry.second;
     ControlDispatcher::for_each_ring(c.session, [&c](Doorbell& d) {
       if (!c.closing && d.broken()) {
         std::fprintf(stderr, "<4>canemud: client %u (%s): a ring was corrupted; disconnecting\n",

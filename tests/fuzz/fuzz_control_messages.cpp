@@ -43,8 +43,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (vci && !fds.empty()) {
       ipc::VciReply r;
       std::memcpy(&r, reply, sizeof r);
-      if (fds.size() != ipc::kChannelFdCount || r.hresult != 0) {
-        std::abort();  // a VCI channel's rings come with its successful initialization only
+      if ((fds.size() != ipc::kChannelFdCount && fds.size() != ipc::kFifoFdCount) ||
+          r.hresult != 0) {
+        std::abort();  // rings come with a successful channel or FIFO call only
       }
     } else if (fds.size() != (opened ? ipc::kChannelFdCount : 0)) {
       std::abort();  // descriptors come with an opened channel, and only then

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "canemu/firmware_model/wire_encoding.hpp"
 #include "vci_test_support.hpp"
@@ -394,6 +396,58 @@ TEST(VciCppApi, AWritersEventFiresWhenTheControllerMakesRoom) {
   EXPECT_EQ(free_count, capacity);
   alpha.writer->AssignEvent(nullptr);
   CloseHandle(event);
+}
+
+// A FIFO made with VciCreateFifo is reached from another process by its VCIID; there is one
+// reader and one writer in all processes together.
+TEST(VciCppApi, AFifoIsSharedBetweenProcessesWithOneReaderAndOneWriterInAll) {
+  VciDaemon d;
+  VCIID id{};
+  Ref<IFifoWriter> writer;
+  ASSERT_EQ(VciCreateFifo(&id, 16, 8, IID_IFifoWriter, writer.pv()), VCI_OK);
+  for (uint8_t k = 1; k <= 3; ++k) {
+    uint8_t e[8] = {k};
+    ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  }
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    // Another program: a connection of its own, the reader, the three elements in order.
+    if (canemuConnect(d.daemon.socket().c_str()) != VCI_OK) {
+      ::_exit(10);
+    }
+    IFifoReader* reader = nullptr;
+    if (VciAccessFifo(id, IID_IFifoReader, reinterpret_cast<PVOID*>(&reader)) != VCI_OK) {
+      ::_exit(11);
+    }
+    IFifoWriter* second = nullptr;
+    if (VciAccessFifo(id, IID_IFifoWriter, reinterpret_cast<PVOID*>(&second)) !=
+        VCI_E_ACCESSDENIED) {
+      ::_exit(12);  // the first program has the writer
+    }
+    for (uint8_t k = 1; k <= 3; ++k) {
+      uint8_t e[8] = {};
+      if (reader->GetDataEntry(e) != VCI_OK || e[0] != k) {
+        ::_exit(13);
+      }
+    }
+    reader->Release();
+    ::_exit(0);
+  }
+  int status = -1;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  // The reader is free again, and the FIFO empty.
+  Ref<IFifoReader> reader;
+  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
+  UINT16 fill = 1;
+  ASSERT_EQ(reader->GetFillCount(&fill), VCI_OK);
+  EXPECT_EQ(fill, 0);
+  VCIID unknown{};
+  unknown.AsInt64 = 999;
+  Ref<IVciFifo> none;
+  EXPECT_EQ(VciAccessFifo(unknown, IID_IVciFifo, none.pv()), VCI_E_INVALIDARG);
 }
 
 // The guide's walk-through as a program of its own, built only from the public headers, run

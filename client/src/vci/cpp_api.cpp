@@ -4,6 +4,7 @@
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -108,9 +109,9 @@ bool null_out(P** pp) {
 
 // What a reader or writer works on: a ring and who keeps it alive.
 struct FifoSide {
-  std::shared_ptr<void> owner;
+  std::shared_ptr<void> owner;  // keeps the ring's memory
   const canemu::ipc::RingMemory* memory = nullptr;
-  std::atomic<bool>* out = nullptr;  // one reader (writer) at a time
+  std::function<void()> release;  // gives the side back (one reader, one writer at a time)
 };
 
 UINT16 u16(uint32_t v) {
@@ -136,10 +137,13 @@ HRESULT ring_result(canemu::ipc::RingStatus s, HRESULT empty_or_full) {
 template <class Interface, const IID& iid, class Ring>
 class FifoEnd : public Com<Interface, iid> {
  public:
+  // On a ring view that lives elsewhere (a channel's), or on one of its own.
   FifoEnd(FifoSide side, Ring& ring) : side_(std::move(side)), ring_(ring) {}
+  FifoEnd(FifoSide side, std::unique_ptr<Ring> ring)
+      : side_(std::move(side)), own_(std::move(ring)), ring_(*own_) {}
   ~FifoEnd() override {
     unwatch_ring_event(this);
-    side_.out->store(false);
+    side_.release();
   }
   HRESULT Lock() override {
     mutex_.lock();
@@ -172,6 +176,7 @@ class FifoEnd : public Com<Interface, iid> {
     return VCI_OK;
   }
   FifoSide side_;
+  std::unique_ptr<Ring> own_;
   Ring& ring_;
   std::recursive_mutex mutex_;
 };
@@ -241,7 +246,8 @@ HRESULT get_reader(const std::shared_ptr<Rings>& rings, IFifoReader** pp) {
   if (rings->reader_out.exchange(true)) {
     return VCI_E_ACCESSDENIED;
   }
-  *pp = new Reader(FifoSide{rings, &rings->rx_memory, &rings->reader_out}, rings->rx);
+  *pp = new Reader(FifoSide{rings, &rings->rx_memory, [rings] { rings->reader_out = false; }},
+                   rings->rx);
   return VCI_OK;
 }
 
@@ -255,40 +261,83 @@ HRESULT get_writer(const std::shared_ptr<Rings>& rings, IFifoWriter** pp) {
   if (rings->writer_out.exchange(true)) {
     return VCI_E_ACCESSDENIED;
   }
-  *pp = new Writer(FifoSide{rings, &rings->tx_memory, &rings->writer_out}, rings->tx);
+  *pp = new Writer(FifoSide{rings, &rings->tx_memory, [rings] { rings->writer_out = false; }},
+                   rings->tx);
   return VCI_OK;
 }
 
-// A stand-alone FIFO (VciCreateFifo): a ring in this process's memory, both sides here.
-struct LocalFifo {
-  LocalFifo(canemu::ipc::RingMemory m, canemu::ipc::UniqueFd r, canemu::ipc::UniqueFd w)
-      : memory(std::move(m)),
-        reader_event(std::move(r)),
-        writer_event(std::move(w)),
-        reader(memory, writer_event.get(), reader_event.get()),
-        writer(memory, reader_event.get(), writer_event.get()) {}
+// A stand-alone FIFO (VciCreateFifo / VciAccessFifo): a ring canemud holds for the processes
+// that use it; each side (reader, writer) is taken from canemud, so there is one of each in all
+// processes together. A side's ring view is made when it is taken (the positions in shared
+// memory are where the last holder left them).
+struct SharedFifo {
+  uint64_t id = 0;
   canemu::ipc::RingMemory memory;
   canemu::ipc::UniqueFd reader_event;
   canemu::ipc::UniqueFd writer_event;
-  canemu::ipc::RingReader reader;
-  canemu::ipc::RingWriter writer;
-  std::atomic<bool> reader_out{false};
-  std::atomic<bool> writer_out{false};
+  uint32_t fill() const {
+    const auto* h = memory.header();
+    return static_cast<uint32_t>(h->write_pos.load(std::memory_order_acquire) -
+                                 h->read_pos.load(std::memory_order_acquire));
+  }
 };
 
 std::mutex g_fifos_mutex;
-std::map<int64_t, std::weak_ptr<LocalFifo>> g_fifos;
+std::map<uint64_t, std::weak_ptr<SharedFifo>> g_fifos;  // this process's views, by id
+
+enum Side : uint32_t { kReaderSide = 0, kWriterSide = 1 };
+
+HRESULT side_call(uint64_t id, Side side, bool take) {
+  canemu::ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(VciOp::fifo_side);
+  m.args[0] = static_cast<uint32_t>(id);
+  m.args[1] = static_cast<uint32_t>(id >> 32);
+  m.args[2] = side;
+  m.args[3] = take ? 1 : 0;
+  canemu::ipc::VciReply r{};
+  return Library::get().call(m, r);
+}
+
+// Creates (`create`: capacity and size) or reaches (`id`) a FIFO through canemud.
+HRESULT shared_fifo(VciOp op, uint32_t a0, uint32_t a1, std::shared_ptr<SharedFifo>& out) {
+  canemu::ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(op);
+  m.args[0] = a0;
+  m.args[1] = a1;
+  canemu::ipc::VciReply r{};
+  std::vector<canemu::ipc::UniqueFd> fds;
+  if (HRESULT hr = Library::get().call(m, r, &fds); hr != VCI_OK) {
+    return hr;
+  }
+  if (fds.size() != canemu::ipc::kFifoFdCount) {
+    return VCI_E_UNEXPECTED;
+  }
+  const uint64_t id = uint64_t{r.values[0]} | (uint64_t{r.values[1]} << 32);
+  std::lock_guard lock(g_fifos_mutex);
+  if (auto known = g_fifos[id].lock()) {
+    out = known;  // this process has it mapped already
+    return VCI_OK;
+  }
+  auto memory = canemu::ipc::RingMemory::map(std::move(fds[0]));
+  if (!memory) {
+    return VCI_E_UNEXPECTED;
+  }
+  out = std::make_shared<SharedFifo>(
+      SharedFifo{id, std::move(*memory), std::move(fds[1]), std::move(fds[2])});
+  g_fifos[id] = out;
+  return VCI_OK;
+}
 
 template <class Interface, const IID& iid>
 class FifoInfo : public Com<Interface, iid> {
  public:
-  explicit FifoInfo(std::shared_ptr<LocalFifo> f) : f_(std::move(f)) {}
+  explicit FifoInfo(std::shared_ptr<SharedFifo> f) : f_(std::move(f)) {}
   HRESULT GetCapacity(PUINT16 p) override { return put(p, f_->memory.capacity()); }
   HRESULT GetEntrySize(PUINT16 p) override { return put(p, f_->memory.element_size()); }
-  HRESULT GetFreeCount(PUINT16 p) override { return put(p, f_->writer.free_count()); }
-  HRESULT GetFillCount(PUINT16 p) override { return put(p, f_->reader.fill_count()); }
+  HRESULT GetFreeCount(PUINT16 p) override { return put(p, f_->memory.capacity() - f_->fill()); }
+  HRESULT GetFillCount(PUINT16 p) override { return put(p, f_->fill()); }
   HRESULT GetFillLevel(PUINT16 p) override {
-    return put(p, f_->reader.fill_count() * 100 / f_->memory.capacity());
+    return put(p, f_->fill() * 100 / f_->memory.capacity());
   }
 
  protected:
@@ -299,37 +348,49 @@ class FifoInfo : public Com<Interface, iid> {
     *p = u16(v);
     return VCI_OK;
   }
-  std::shared_ptr<LocalFifo> f_;
+  std::shared_ptr<SharedFifo> f_;
 };
 
 class Fifo2 final : public FifoInfo<IVciFifo2, IID_IVciFifo2> {
  public:
   using FifoInfo::FifoInfo;
   HRESULT Reset() override {
-    if (f_->reader_out || f_->writer_out) {
-      return VCI_E_ACCESSDENIED;  // a reader or writer is open
+    // Only while nobody anywhere has a reader or writer: both sides are taken for the time.
+    if (HRESULT hr = side_call(f_->id, kReaderSide, true); hr != VCI_OK) {
+      return hr;
     }
-    while (f_->reader.get(nullptr) == canemu::ipc::RingStatus::ok) {
+    if (HRESULT hr = side_call(f_->id, kWriterSide, true); hr != VCI_OK) {
+      side_call(f_->id, kReaderSide, false);
+      return hr;
     }
+    canemu::ipc::RingReader reader(f_->memory, f_->writer_event.get(), f_->reader_event.get());
+    while (reader.get(nullptr) == canemu::ipc::RingStatus::ok) {
+    }
+    side_call(f_->id, kWriterSide, false);
+    side_call(f_->id, kReaderSide, false);
     return VCI_OK;
   }
 };
 
-HRESULT open_fifo(const std::shared_ptr<LocalFifo>& f, REFIID riid, PVOID* ppv) {
-  if (same(riid, IID_IFifoReader)) {
-    if (f->reader_out.exchange(true)) {
-      return VCI_E_ACCESSDENIED;
+HRESULT open_fifo(const std::shared_ptr<SharedFifo>& f, REFIID riid, PVOID* ppv) {
+  const bool reader = same(riid, IID_IFifoReader);
+  if (reader || same(riid, IID_IFifoWriter)) {
+    const Side side = reader ? kReaderSide : kWriterSide;
+    if (HRESULT hr = side_call(f->id, side, true); hr != VCI_OK) {
+      return hr;
+    }
+    FifoSide fs{f, &f->memory, [f, side] { side_call(f->id, side, false); }};
+    if (reader) {
+      return hand_out(
+          static_cast<IFifoReader*>(new Reader(
+              std::move(fs), std::make_unique<canemu::ipc::RingReader>(
+                                 f->memory, f->writer_event.get(), f->reader_event.get()))),
+          ppv);
     }
     return hand_out(
-        static_cast<IFifoReader*>(new Reader(FifoSide{f, &f->memory, &f->reader_out}, f->reader)),
-        ppv);
-  }
-  if (same(riid, IID_IFifoWriter)) {
-    if (f->writer_out.exchange(true)) {
-      return VCI_E_ACCESSDENIED;
-    }
-    return hand_out(
-        static_cast<IFifoWriter*>(new Writer(FifoSide{f, &f->memory, &f->writer_out}, f->writer)),
+        static_cast<IFifoWriter*>(new Writer(
+            std::move(fs), std::make_unique<canemu::ipc::RingWriter>(
+                               f->memory, f->reader_event.get(), f->writer_event.get()))),
         ppv);
   }
   if (same(riid, IID_IVciFifo)) {
@@ -1047,38 +1108,24 @@ HRESULT VCIAPI VciCreateFifo(PVCIID pResid, UINT16 wCapacity, UINT16 wElementSiz
   if (!null_out(ppv) || pResid == nullptr || wCapacity == 0 || wElementSize == 0) {
     return VCI_E_INVALIDARG;
   }
-  auto memory = canemu::ipc::RingMemory::create(wCapacity, wElementSize, "canemu-vci-fifo");
-  auto r = canemu::ipc::make_eventfd();
-  auto w = canemu::ipc::make_eventfd();
-  if (!memory || !r || !w) {
-    return VCI_E_OUTOFMEMORY;
-  }
-  auto fifo = std::make_shared<LocalFifo>(std::move(*memory), std::move(*r), std::move(*w));
-  if (HRESULT hr = VciCreateLuid(pResid); hr != VCI_OK) {
+  std::shared_ptr<SharedFifo> fifo;
+  if (HRESULT hr = shared_fifo(VciOp::fifo_create, wCapacity, wElementSize, fifo); hr != VCI_OK) {
     return hr;
   }
-  if (HRESULT hr = open_fifo(fifo, riid, ppv); hr != VCI_OK) {
-    return hr;
-  }
-  std::lock_guard lock(g_fifos_mutex);
-  g_fifos[pResid->AsInt64] = fifo;
-  return VCI_OK;
+  pResid->AsInt64 = static_cast<INT64>(fifo->id);
+  return open_fifo(fifo, riid, ppv);
 }
 
 HRESULT VCIAPI VciAccessFifo(REFVCIID rResid, REFIID riid, PVOID* ppv) {
   if (!null_out(ppv)) {
     return VCI_E_INVALIDARG;
   }
-  std::shared_ptr<LocalFifo> fifo;
-  {
-    std::lock_guard lock(g_fifos_mutex);
-    auto it = g_fifos.find(rResid.AsInt64);
-    if (it != g_fifos.end()) {
-      fifo = it->second.lock();
-    }
-  }
-  if (!fifo) {
-    return VCI_E_INVALIDARG;  // no FIFO with that identifier (any more)
+  const auto id = static_cast<uint64_t>(rResid.AsInt64);
+  std::shared_ptr<SharedFifo> fifo;
+  if (HRESULT hr = shared_fifo(VciOp::fifo_access, static_cast<uint32_t>(id),
+                               static_cast<uint32_t>(id >> 32), fifo);
+      hr != VCI_OK) {
+    return hr;
   }
   return open_fifo(fifo, riid, ppv);
 }

@@ -29,6 +29,9 @@ inline constexpr std::size_t kMaxDeviceControllers = 4;
 inline constexpr std::size_t kMaxClients = 64;
 // Descriptors that come with an OpenChannelReply, in this order.
 inline constexpr std::size_t kChannelFdCount = 5;
+// Descriptors that come with a VCI FIFO (VciOp::fifo_create / fifo_access), in this order: the
+// ring's memory, the reader's eventfd, the writer's eventfd.
+inline constexpr std::size_t kFifoFdCount = 3;
 
 enum class MsgType : uint16_t {
   hello = 1,
@@ -460,6 +463,15 @@ enum class VciOp : uint16_t {
   // its name in the payload.
   device_create = 50,
   device_remove = 51,  // `device`: one this connection created
+  // Stand-alone FIFOs (VciCreateFifo / VciAccessFifo), shared by processes through canemud.
+  // fifo_create: args capacity, element size; fifo_access: args id (low, high). Both reply
+  // with the id in values[0..1], capacity and element size in values[2..3], and 3 descriptors:
+  // the ring, the reader's eventfd, the writer's eventfd. The FIFO lives while a connection
+  // holds it. fifo_side: args id (low, high), side (0 reader, 1 writer), 1 take / 0 give back;
+  // VCI_E_ACCESSDENIED when another holder has that side.
+  fifo_create = 60,
+  fifo_access = 61,
+  fifo_side = 62,
 };
 
 // VciRequest.flags

@@ -135,10 +135,9 @@ HRESULT channel_status(HANDLE h, std::size_t line_offset, Status* out) {
 }
 
 // The cyclic list's status (CANSCHEDULERSTATUS's two fields).
-inline HRESULT scheduler_status(HANDLE h, UINT8* task, UINT8* entries) {
+inline HRESULT scheduler_status_of(const Remote& list, UINT8* task, UINT8* entries) {
   ipc::VciReply reply{};
-  if (HRESULT hr =
-          simple_call(h, Object::Kind::scheduler, ipc::VciOp::scheduler_status, {}, &reply);
+  if (HRESULT hr = Library::get().simple(list, ipc::VciOp::scheduler_status, {}, &reply);
       hr != VCI_OK) {
     return hr;
   }
@@ -149,24 +148,46 @@ inline HRESULT scheduler_status(HANDLE h, UINT8* task, UINT8* entries) {
   return VCI_OK;
 }
 
-inline HRESULT scheduler_add(HANDLE h, const CANCYCLICTXMSG2& msg, PUINT32 index) {
-  if (index != nullptr) {
-    *index = 0xFFFFFFFFU;
-  }
+inline HRESULT scheduler_status(HANDLE h, UINT8* task, UINT8* entries) {
   Remote* r = remote_of(h, Object::Kind::scheduler);
-  if (r == nullptr) {
-    return VCI_E_INVHANDLE;
-  }
+  return r == nullptr ? VCI_E_INVHANDLE : scheduler_status_of(*r, task, entries);
+}
+
+// Adds `msg` to the list; `index` (may be null) gets its index, 0xFFFFFFFF on failure.
+inline HRESULT scheduler_add_of(const Remote& list, const CANCYCLICTXMSG2& msg, PUINT32 index) {
   ipc::VciRequest m{};
   m.op = static_cast<uint16_t>(ipc::VciOp::scheduler_add);
-  m.handle = r->handle;
+  m.handle = list.handle;
   std::memcpy(m.payload, &msg, sizeof msg);
   ipc::VciReply reply{};
   const HRESULT hr = Library::get().call(m, reply);
-  if (index != nullptr && hr == VCI_OK) {
-    *index = reply.values[0];
+  if (index != nullptr) {
+    *index = hr == VCI_OK ? reply.values[0] : 0xFFFFFFFFU;
   }
   return hr;
+}
+
+inline HRESULT scheduler_add(HANDLE h, const CANCYCLICTXMSG2& msg, PUINT32 index) {
+  Remote* r = remote_of(h, Object::Kind::scheduler);
+  if (r == nullptr) {
+    if (index != nullptr) {
+      *index = 0xFFFFFFFFU;
+    }
+    return VCI_E_INVHANDLE;
+  }
+  return scheduler_add_of(*r, msg, index);
+}
+
+// A classic cyclic message in the v2 layout the daemon takes.
+inline CANCYCLICTXMSG2 to_cyclic2(const CANCYCLICTXMSG& c) {
+  CANCYCLICTXMSG2 m{};
+  m.wCycleTime = c.wCycleTime;
+  m.bIncrMode = c.bIncrMode;
+  m.bByteIndex = c.bByteIndex;
+  m.dwMsgId = c.dwMsgId;
+  m.uMsgInfo = c.uMsgInfo;
+  std::memcpy(m.abData, c.abData, sizeof c.abData);
+  return m;
 }
 
 template <class Init>

@@ -634,20 +634,13 @@ class Scheduler final : public Com<Interface, iid> {
   }
   // ICanScheduler
   HRESULT GetStatus(PCANSCHEDULERSTATUS p) {
-    return p == nullptr ? VCI_E_INVALIDARG : list_status(&p->bTaskStat, p->abMsgStat);
+    return p == nullptr ? VCI_E_INVALIDARG : scheduler_status_of(*r_, &p->bTaskStat, p->abMsgStat);
   }
   HRESULT AddMessage(PCANCYCLICTXMSG p, PUINT32 index) {
     if (p == nullptr) {
       return failed_add(index);
     }
-    CANCYCLICTXMSG2 m{};
-    m.wCycleTime = p->wCycleTime;
-    m.bIncrMode = p->bIncrMode;
-    m.bByteIndex = p->bByteIndex;
-    m.dwMsgId = p->dwMsgId;
-    m.uMsgInfo = p->uMsgInfo;
-    std::memcpy(m.abData, p->abData, sizeof p->abData);
-    return add(m, index);
+    return scheduler_add_of(*r_, to_cyclic2(*p), index);
   }
   // ICanScheduler2
   HRESULT GetStatus(PCANSCHEDULERSTATUS2 p) {
@@ -658,10 +651,10 @@ class Scheduler final : public Com<Interface, iid> {
         hr != VCI_OK) {
       return hr;
     }
-    return list_status(&p->bTaskStat, p->abMsgStat);
+    return scheduler_status_of(*r_, &p->bTaskStat, p->abMsgStat);
   }
   HRESULT AddMessage(PCANCYCLICTXMSG2 p, PUINT32 index) {
-    return p == nullptr ? failed_add(index) : add(*p, index);
+    return p == nullptr ? failed_add(index) : scheduler_add_of(*r_, *p, index);
   }
 
  private:
@@ -670,30 +663,6 @@ class Scheduler final : public Com<Interface, iid> {
       *index = 0xFFFFFFFFU;
     }
     return VCI_E_INVALIDARG;
-  }
-  HRESULT add(const CANCYCLICTXMSG2& m, PUINT32 index) {
-    canemu::ipc::VciRequest req{};
-    req.op = static_cast<uint16_t>(VciOp::scheduler_add);
-    req.handle = r_->handle;
-    std::memcpy(req.payload, &m, sizeof m);
-    canemu::ipc::VciReply reply{};
-    const HRESULT hr = Library::get().call(req, reply);
-    if (index != nullptr) {
-      *index = hr == VCI_OK ? reply.values[0] : 0xFFFFFFFFU;
-    }
-    return hr;
-  }
-  HRESULT list_status(UINT8* task, UINT8* entries) {
-    canemu::ipc::VciReply reply{};
-    if (HRESULT hr = Library::get().simple(*r_, VciOp::scheduler_status, {}, &reply);
-        hr != VCI_OK) {
-      return hr;
-    }
-    CANSCHEDULERSTATUS s;
-    std::memcpy(&s, reply.payload, sizeof s);
-    *task = s.bTaskStat;
-    std::memcpy(entries, s.abMsgStat, sizeof s.abMsgStat);
-    return VCI_OK;
   }
   Bus bus_;
   std::unique_ptr<Remote> r_;

@@ -99,14 +99,7 @@ HRESULT VCIAPI canSchedulerAddMessage(HANDLE hCanShd, PCANCYCLICTXMSG pMessage, 
     }
     return VCI_E_INVALIDARG;
   }
-  CANCYCLICTXMSG2 m{};
-  m.wCycleTime = pMessage->wCycleTime;
-  m.bIncrMode = pMessage->bIncrMode;
-  m.bByteIndex = pMessage->bByteIndex;
-  m.dwMsgId = pMessage->dwMsgId;
-  m.uMsgInfo = pMessage->uMsgInfo;
-  std::memcpy(m.abData, pMessage->abData, sizeof pMessage->abData);
-  return scheduler_add(hCanShd, m, pdwIndex);
+  return scheduler_add(hCanShd, to_cyclic2(*pMessage), pdwIndex);
 }
 
 }  // extern "C"

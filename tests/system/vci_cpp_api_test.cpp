@@ -65,7 +65,8 @@ struct Adapter {
     EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
     EXPECT_EQ(channel->Activate(), VCI_OK);
     EXPECT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
-    CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_ERRFRAME, 0, CAN_BT0_500KB, CAN_BT1_500KB};
+    CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME, 0,
+                     CAN_BT0_500KB, CAN_BT1_500KB};
     EXPECT_EQ(control->InitLine(&init), VCI_OK);
     EXPECT_EQ(control->StartLine(), VCI_OK);
   }
@@ -448,6 +449,299 @@ TEST(VciCppApi, AFifoIsSharedBetweenProcessesWithOneReaderAndOneWriterInAll) {
   unknown.AsInt64 = 999;
   Ref<IVciFifo> none;
   EXPECT_EQ(VciAccessFifo(unknown, IID_IVciFifo, none.pv()), VCI_E_INVALIDARG);
+}
+
+// ---------------------------------------------------------------- the checklist through C++
+
+std::vector<CANMSG> drain(IFifoReader* reader, bool data_only) {
+  std::vector<CANMSG> got;
+  CANMSG m;
+  while (reader->GetDataEntry(&m) == VCI_OK) {
+    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+      got.push_back(m);
+    }
+  }
+  return got;
+}
+
+UINT32 end_of(uint32_t id, std::vector<uint8_t> data, bool ext = false) {
+  return 2u * model::encode(*model::Frame::classic(id, data, ext)).length;  // 2 us a bit
+}
+
+TEST(VciCppApi, TheControlUnitsStatesAndInfoMessages) {
+  VciDaemon d;
+  Adapter beta("beta");  // holds nothing of alpha
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  VCIID alpha_id{};
+  alpha_id.AsInt64 = 1;
+  Ref<IVciDevice> device;
+  ASSERT_EQ(manager->OpenDevice(alpha_id, device.out()), VCI_OK);
+  Ref<IBalObject> bal;
+  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  Ref<ICanControl> control;
+  ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
+  Ref<ICanSocket> socket;
+  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
+  Ref<ICanChannel> channel;
+  ASSERT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
+  CANCHANSTATUS cs{};
+  ASSERT_EQ(channel->GetStatus(&cs), VCI_OK);  // before Initialize
+  EXPECT_FALSE(cs.fActivated);
+  Ref<IFifoReader> early;
+  EXPECT_EQ(channel->GetReader(early.out()), VCI_E_NOT_INITIALIZED);
+  EXPECT_EQ(channel->Initialize(0, 16), VCI_E_INVALIDARG);
+  ASSERT_EQ(channel->Initialize(64, 16), VCI_OK);
+  Ref<IFifoReader> reader;
+  ASSERT_EQ(channel->GetReader(reader.out()), VCI_OK);
+  ASSERT_EQ(channel->Activate(), VCI_OK);
+  CANLINESTATUS s{};
+  ASSERT_EQ(control->GetLineStatus(&s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  EXPECT_EQ(control->StartLine(), VCI_E_INVALID_STATE);
+  CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED, 0, CAN_BT0_500KB, CAN_BT1_500KB};
+  ASSERT_EQ(control->InitLine(&init), VCI_OK);
+  step_ns(2'000'000);
+  ASSERT_EQ(control->StartLine(), VCI_OK);
+  CANMSG m = one_byte(0x5, 5);
+  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  step_ns(1'000'000);
+  ASSERT_EQ(control->StopLine(), VCI_OK);
+  ASSERT_EQ(control->ResetLine(), VCI_OK);
+  const auto got = drain(reader.p, false);
+  ASSERT_EQ(got.size(), 4u);
+  EXPECT_EQ(got[0].abData[0], CAN_INFO_START);
+  EXPECT_EQ(got[0].dwTime, 2000u);
+  EXPECT_EQ(got[1].dwMsgId, 0x5u);
+  EXPECT_EQ(got[1].dwTime, 2000u + end_of(0x5, {5}));
+  EXPECT_EQ(got[2].abData[0], CAN_INFO_STOP);
+  EXPECT_EQ(got[2].dwTime, 0u);
+  EXPECT_EQ(got[3].abData[0], CAN_INFO_RESET);
+  ASSERT_EQ(control->GetLineStatus(&s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+}
+
+TEST(VciCppApi, ALoneAdapterWarnsGoesPassiveAndAFaultTakesItBusOffUntilRestarted) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  CANMSG m = one_byte(0x10, 1);
+  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  step_ns(10'000'000);
+  std::size_t acks = 0;
+  std::vector<CANMSG> statuses;
+  for (const CANMSG& x : drain(alpha.reader.p, false)) {
+    if (x.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
+      acks += x.abData[0] == CAN_ERROR_ACK ? 1 : 0;
+    } else if (x.uMsgInfo.Bytes.bType == CAN_MSGTYPE_STATUS) {
+      statuses.push_back(x);
+    }
+  }
+  EXPECT_GT(acks, 16u);
+  ASSERT_EQ(statuses.size(), 1u);
+  EXPECT_EQ(statuses[0].abData[0] & CAN_STATUS_ERRLIM, CAN_STATUS_ERRLIM);
+  UINT8 state = 0;
+  UINT16 tec = 0;
+  ASSERT_EQ(canemuGetControllerState(alpha.control.p, &state, &tec, nullptr, nullptr), VCI_OK);
+  EXPECT_EQ(state, CANEMU_STATE_PASSIVE);
+  EXPECT_EQ(tec, 128);
+  // A partner comes; 32 injected bit errors take alpha bus-off.
+  Adapter beta("beta");
+  testing::load_faults(d.daemon,
+                       "[[fault]]\nat = \"0s\"\nbus = \"can0\"\nmatch = { from = \"alpha:0\" }\n"
+                       "effect = \"bit_error\"\ncount = 40\n");
+  step_ns(20'000'000);
+  ASSERT_EQ(canemuGetControllerState(alpha.control.p, &state, &tec, nullptr, nullptr), VCI_OK);
+  EXPECT_EQ(state, CANEMU_STATE_BUSOFF);
+  CANLINESTATUS s{};
+  ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
+  EXPECT_EQ(s.dwStatus & CAN_STATUS_BUSOFF, CAN_STATUS_BUSOFF);
+  // Restarted (the remaining 8 errors hit the retries), then it sends.
+  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
+  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
+  step_ns(20'000'000);
+  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
+  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
+  drain(beta.reader.p, false);
+  m = one_byte(0x11, 2);
+  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  step_ns(20'000'000);
+  bool seen = false;
+  for (const CANMSG& x : drain(beta.reader.p, true)) {
+    seen = seen || x.dwMsgId == 0x11;
+  }
+  EXPECT_TRUE(seen);
+}
+
+TEST(VciCppApi, V2ChannelFiltersInEveryModeForBothWidthsAndRtr) {
+  VciDaemon d;
+  Adapter beta("beta");
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  VCIID alpha_id{};
+  alpha_id.AsInt64 = 1;
+  Ref<IVciDevice> device;
+  ASSERT_EQ(manager->OpenDevice(alpha_id, device.out()), VCI_OK);
+  Ref<IBalObject> bal;
+  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  Ref<ICanSocket2> socket;
+  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
+  struct Ch {
+    Ref<ICanChannel2> ch;
+    Ref<IFifoReader> reader;
+  };
+  auto make = [&](Ch& c, UINT8 mode) {
+    ASSERT_EQ(socket->CreateChannel(FALSE, c.ch.out()), VCI_OK);
+    ASSERT_EQ(c.ch->Initialize(256, 0, 64, mode), VCI_OK);
+    ASSERT_EQ(c.ch->GetReader(c.reader.out()), VCI_OK);
+  };
+  Ch lock, pass, incl, excl;
+  make(lock, CAN_FILTER_LOCK);
+  make(pass, CAN_FILTER_PASS);
+  make(incl, CAN_FILTER_INCL);
+  make(excl, CAN_FILTER_EXCL);
+  for (Ch* c : {&incl, &excl}) {
+    for (UINT8 w : {UINT8{CAN_FILTER_STD}, UINT8{CAN_FILTER_EXT}}) {
+      ASSERT_EQ(c->ch->SetAccFilter(w, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE), VCI_OK);
+    }
+    ASSERT_EQ(c->ch->AddFilterIds(CAN_FILTER_STD, 0x123 << 1, 0xFFF), VCI_OK);  // data 0x123
+    ASSERT_EQ(c->ch->AddFilterIds(CAN_FILTER_EXT, (0x1234 << 1) | 1, 0x3FFFFFFF),
+              VCI_OK);  // remote 0x1234 (29 bit)
+  }
+  for (Ch* c : {&lock, &pass, &incl, &excl}) {
+    ASSERT_EQ(c->ch->Activate(), VCI_OK);
+  }
+  EXPECT_EQ(incl.ch->SetAccFilter(CAN_FILTER_STD, 0, 0), VCI_E_INVALID_STATE);
+  Ref<ICanControl2> control;
+  ASSERT_EQ(incl.ch->GetControl(control.out()), VCI_OK);
+  CANINITLINE2 init{};
+  init.bOpMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
+  init.bSFMode = CAN_FILTER_PASS;
+  init.bEFMode = CAN_FILTER_PASS;
+  init.dwSFIds = 2048;
+  init.dwEFIds = 2048;
+  init.sBtpSdr = CANBTP{0, 500000, 14, 2, 1, 0};
+  ASSERT_EQ(control->InitLine(&init), VCI_OK);
+  ASSERT_EQ(control->StartLine(), VCI_OK);
+  CANMSG a = one_byte(0x123, 1);
+  CANMSG b = one_byte(0x124, 2);
+  CANMSG r = one_byte(0x123, 0);  // remote 0x123: not on the list
+  r.uMsgInfo.Bits.rtr = 1;
+  r.uMsgInfo.Bits.dlc = 0;
+  CANMSG x = one_byte(0x1234, 0);  // remote 29-bit 0x1234: on the list
+  x.uMsgInfo.Bits.ext = 1;
+  x.uMsgInfo.Bits.rtr = 1;
+  x.uMsgInfo.Bits.dlc = 0;
+  for (CANMSG* m : {&a, &b, &r, &x}) {
+    ASSERT_EQ(beta.writer->PutDataEntry(m), VCI_OK);
+  }
+  step_ns(5'000'000);
+  auto ids = [](IFifoReader* reader) {
+    std::vector<std::pair<uint32_t, unsigned>> v;
+    CANMSG2 m;
+    while (reader->GetDataEntry(&m) == VCI_OK) {
+      if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+        v.emplace_back(m.dwMsgId | (m.uMsgInfo.Bits.rtr != 0 ? 0x80000000U : 0U),
+                       static_cast<unsigned>(m.uMsgInfo.Bits.afc));
+      }
+    }
+    return v;
+  };
+  using V = std::vector<std::pair<uint32_t, unsigned>>;
+  const unsigned all = CAN_ACCEPT_ALWAYS;
+  EXPECT_EQ(ids(lock.reader.p), V{});
+  EXPECT_EQ(ids(pass.reader.p),
+            (V{{0x123, all}, {0x124, all}, {0x80000123, all}, {0x80001234, all}}));
+  EXPECT_EQ(ids(incl.reader.p),
+            (V{{0x123, CAN_ACCEPT_FILTER_2}, {0x80001234, CAN_ACCEPT_FILTER_2}}));
+  EXPECT_EQ(ids(excl.reader.p),
+            (V{{0x124, CAN_ACCEPT_PASSEXCL}, {0x80000123, CAN_ACCEPT_PASSEXCL}}));
+}
+
+TEST(VciCppApi, EchoesOverrunAndDelayThroughTheFifos) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  drain(alpha.reader.p, false);
+  CANMSG own = one_byte(0x321, 7);
+  own.uMsgInfo.Bits.srr = 1;
+  ASSERT_EQ(alpha.writer->PutDataEntry(&own), VCI_OK);
+  CANMSG later = one_byte(0x322, 8);
+  later.dwTime = 500;  // 500 us after the echo's frame was handed over
+  ASSERT_EQ(alpha.writer->PutDataEntry(&later), VCI_OK);
+  step_ns(5'000'000);
+  const auto echo = drain(alpha.reader.p, true);
+  ASSERT_EQ(echo.size(), 1u);
+  EXPECT_EQ(echo[0].uMsgInfo.Bits.srr, 1u);
+  EXPECT_EQ(echo[0].dwTime, end_of(0x321, {7}));
+  const auto at_beta = drain(beta.reader.p, true);
+  ASSERT_EQ(at_beta.size(), 2u);
+  EXPECT_EQ(at_beta[1].dwTime, 500u + end_of(0x322, {8}));
+  // beta's receive FIFO holds 1024 or a little more; 1100 frames overflow it.
+  UINT16 capacity = 0;
+  ASSERT_EQ(beta.reader->GetCapacity(&capacity), VCI_OK);
+  for (int k = 0; k <= capacity; k += 64) {
+    for (int i = 0; i < 64; ++i) {
+      CANMSG m = one_byte(0x400, static_cast<UINT8>(i));
+      ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    }
+    step_ns(10'000'000);
+  }
+  CANCHANSTATUS s{};
+  ASSERT_EQ(beta.channel->GetStatus(&s), VCI_OK);
+  EXPECT_TRUE(s.fRxOverrun);
+  EXPECT_EQ(s.bRxFifoLoad, 100);
+  UINT16 fill = 0;
+  ASSERT_EQ(beta.reader->GetFillCount(&fill), VCI_OK);
+  EXPECT_EQ(fill, capacity);
+  drain(beta.reader.p, false);
+  CANMSG next = one_byte(0x401, 1);
+  ASSERT_EQ(alpha.writer->PutDataEntry(&next), VCI_OK);
+  step_ns(1'000'000);
+  const auto after = drain(beta.reader.p, true);
+  ASSERT_EQ(after.size(), 1u);
+  EXPECT_EQ(after[0].uMsgInfo.Bits.ovr, 1u);
+}
+
+TEST(VciCppApi, TheCyclicListThroughICanScheduler2AndTheTimerOverflow) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  Ref<ICanScheduler2> list;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler2, list.pv()), VCI_OK);
+  CANCYCLICTXMSG2 m{};
+  m.wCycleTime = 3;
+  m.bIncrMode = CAN_CTXMSG_INC_8;
+  m.bByteIndex = 0;
+  m.dwMsgId = 0x55;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  m.abData[0] = 0xFE;
+  UINT32 index = 0;
+  ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
+  ASSERT_EQ(list->StartMessage(index, 3), VCI_OK);
+  drain(beta.reader.p, false);
+  ASSERT_EQ(list->Resume(), VCI_OK);  // at t = 0
+  step_ns(20'000'000);
+  const auto got = drain(beta.reader.p, true);
+  ASSERT_EQ(got.size(), 3u);
+  const std::vector<uint8_t> values{0xFE, 0xFF, 0x00};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(got[k].abData[0], values[k]);
+    EXPECT_EQ(got[k].dwTime, 3'000u * (k + 1) + end_of(0x55, {values[k]})) << k;
+  }
+  CANSCHEDULERSTATUS2 s{};
+  ASSERT_EQ(list->GetStatus(&s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_RUNNING);
+  EXPECT_EQ(s.abMsgStat[index], CAN_CTXMSG_STAT_DONE);
+  ASSERT_EQ(list->Reset(), VCI_OK);
+  ASSERT_EQ(list->GetStatus(&s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
+  EXPECT_EQ(s.abMsgStat[index], CAN_CTXMSG_STAT_EMPTY);
+  step_ns(4'295'000'000'000 - 20'000'000);  // past 2^32 us
+  const auto overflow = drain(beta.reader.p, false);
+  ASSERT_EQ(overflow.size(), 1u);
+  EXPECT_EQ(overflow[0].uMsgInfo.Bytes.bType, CAN_MSGTYPE_TIMEOVR);
+  EXPECT_EQ(overflow[0].dwMsgId, 1u);
 }
 
 // The guide's walk-through as a program of its own, built only from the public headers, run

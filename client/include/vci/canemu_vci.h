@@ -30,8 +30,9 @@ extern "C" {
 HRESULT VCIAPI canemuConnect(const char* pszSocket);
 
 /* The error state, transmit and receive error counters and line state of the controller that
- * hObject (a control unit, channel or cyclic list handle) belongs to. Any pointer may be NULL.
- * VCI_OK, VCI_E_INVHANDLE. */
+ * hObject belongs to: a control unit, channel or cyclic list handle of the C API, or an
+ * ICanControl(2)*, ICanChannel(2)* or ICanScheduler(2)* of the C++ API. Any pointer may be
+ * NULL. VCI_OK, VCI_E_INVHANDLE. */
 HRESULT VCIAPI canemuGetControllerState(HANDLE hObject, PUINT8 pbErrorState, PUINT16 pwTec,
                                         PUINT16 pwRec, PUINT8 pbLineState);
 

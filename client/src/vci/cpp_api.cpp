@@ -453,7 +453,10 @@ HRESULT init_line(const Remote& r, const void* init, std::size_t size, bool v2) 
 template <class Interface, const IID& iid, bool v2>
 class Control final : public Com<Interface, iid> {
  public:
-  Control(Bus bus, std::unique_ptr<Remote> remote) : bus_(std::move(bus)), r_(std::move(remote)) {}
+  Control(Bus bus, std::unique_ptr<Remote> remote) : bus_(std::move(bus)), r_(std::move(remote)) {
+    register_alias(static_cast<Interface*>(this), r_.get());
+  }
+  ~Control() override { unregister_alias(static_cast<Interface*>(this)); }
   HRESULT ResetLine() override { return Library::get().simple(*r_, VciOp::control_reset); }
   HRESULT StartLine() override { return Library::get().simple(*r_, VciOp::control_start); }
   HRESULT StopLine() override { return Library::get().simple(*r_, VciOp::control_stop); }
@@ -552,7 +555,10 @@ template <class Interface, const IID& iid, bool v2>
 class Channel final : public Com<Interface, iid> {
  public:
   Channel(Bus bus, std::unique_ptr<Remote> remote)
-      : bus_(std::move(bus)), c_(static_cast<ChannelObj*>(remote.release())) {}
+      : bus_(std::move(bus)), c_(static_cast<ChannelObj*>(remote.release())) {
+    register_alias(static_cast<Interface*>(this), c_.get());
+  }
+  ~Channel() override { unregister_alias(static_cast<Interface*>(this)); }
   HRESULT GetReader(IFifoReader** pp) override { return get_reader(c_->rings, pp); }
   HRESULT GetWriter(IFifoWriter** pp) override { return get_writer(c_->rings, pp); }
   HRESULT Activate() override { return Library::get().simple(*c_, VciOp::channel_activate); }
@@ -618,8 +624,10 @@ using CanChannel2 = Channel<ICanChannel2, IID_ICanChannel2, true>;
 template <class Interface, const IID& iid, bool v2>
 class Scheduler final : public Com<Interface, iid> {
  public:
-  Scheduler(Bus bus, std::unique_ptr<Remote> remote)
-      : bus_(std::move(bus)), r_(std::move(remote)) {}
+  Scheduler(Bus bus, std::unique_ptr<Remote> remote) : bus_(std::move(bus)), r_(std::move(remote)) {
+    register_alias(static_cast<Interface*>(this), r_.get());
+  }
+  ~Scheduler() override { unregister_alias(static_cast<Interface*>(this)); }
   HRESULT Resume() override { return Library::get().simple(*r_, VciOp::scheduler_resume); }
   HRESULT Suspend() override { return Library::get().simple(*r_, VciOp::scheduler_suspend); }
   HRESULT Reset() override { return Library::get().simple(*r_, VciOp::scheduler_reset); }

@@ -9,6 +9,7 @@ using namespace canemu::client::vci;
 
 namespace {
 
+// A C API handle, or a C++ API object pointer.
 Remote* any_remote(HANDLE h) {
   for (Object::Kind kind :
        {Object::Kind::control, Object::Kind::channel, Object::Kind::scheduler}) {
@@ -16,7 +17,7 @@ Remote* any_remote(HANDLE h) {
       return r;
     }
   }
-  return nullptr;
+  return alias_of(h);
 }
 
 }  // namespace

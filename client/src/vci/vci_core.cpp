@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <map>
 #include <set>
 
 #include <time.h>
@@ -19,6 +20,7 @@ thread_local std::string t_detail;
 struct Registry {
   std::mutex mutex;
   std::set<Object*> live;
+  std::map<const void*, Remote*> aliases;
 };
 
 Registry& registry() {
@@ -258,6 +260,25 @@ bool unregister_object(void* handle, Object::Kind kind) {
     doomed.reset(p);
   }
   return true;  // destroyed here, outside the registry's lock
+}
+
+void register_alias(const void* key, Remote* remote) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  r.aliases[key] = remote;
+}
+
+void unregister_alias(const void* key) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  r.aliases.erase(key);
+}
+
+Remote* alias_of(const void* key) {
+  Registry& r = registry();
+  std::lock_guard lock(r.mutex);
+  auto it = r.aliases.find(key);
+  return it == r.aliases.end() ? nullptr : it->second;
 }
 
 Remote::~Remote() {

@@ -68,6 +68,13 @@ Object* lookup(void* handle, Object::Kind kind);
 // Destroys it; false if it was not a live handle of `kind`.
 bool unregister_object(void* handle, Object::Kind kind);
 
+struct Remote;
+// The C++ API's objects (ICanControl*, ICanChannel*, ICanScheduler* values) as names of the
+// remote object they hold, for the canemu extension calls that take a HANDLE.
+void register_alias(const void* key, Remote* remote);
+void unregister_alias(const void* key);
+Remote* alias_of(const void* key);
+
 struct Enumerator : Object {
   Enumerator() : Object(Kind::enumerator) {}
   std::vector<DeviceDesc> devices;

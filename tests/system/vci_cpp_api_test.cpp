@@ -744,6 +744,83 @@ TEST(VciCppApi, TheCyclicListThroughICanScheduler2AndTheTimerOverflow) {
   EXPECT_EQ(overflow[0].dwMsgId, 1u);
 }
 
+TEST(VciCppApi, ARemovedAdapterSignalsTheEnumeratorAndLeavesTheList) {
+  VciDaemon d;
+  ASSERT_EQ(canemuCreateDevice("can0", "brief", nullptr, nullptr, 0), VCI_OK);
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  Ref<IVciEnumDevice> e;
+  ASSERT_EQ(manager->EnumDevices(e.out()), VCI_OK);
+  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  ASSERT_EQ(e->AssignEvent(event), VCI_OK);
+  ASSERT_EQ(canemuRemoveDevice("brief"), VCI_OK);
+  EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0);
+  ASSERT_EQ(e->Reset(), VCI_OK);
+  VCIDEVICEINFO infos[4] = {};
+  UINT32 fetched = 0;
+  ASSERT_EQ(e->Next(4, infos, &fetched), VCI_OK);
+  EXPECT_EQ(fetched, 2u);  // alpha and beta only
+  e->AssignEvent(nullptr);
+  CloseHandle(event);
+}
+
+TEST(VciCppApi, ChannelsAreSharedUnlessOneIsExclusive) {
+  VciDaemon d;
+  Adapter alpha("alpha");  // holds a shared channel
+  Ref<ICanChannel> exclusive;
+  EXPECT_EQ(alpha.socket->CreateChannel(TRUE, exclusive.out()), VCI_E_ACCESSDENIED);
+  EXPECT_EQ(exclusive.p, nullptr);
+  Ref<ICanChannel> shared;
+  EXPECT_EQ(alpha.socket->CreateChannel(FALSE, shared.out()), VCI_OK);
+  // On beta, an exclusive channel shuts out every other.
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  VCIID beta_id{};
+  beta_id.AsInt64 = 2;
+  Ref<IVciDevice> beta;
+  ASSERT_EQ(manager->OpenDevice(beta_id, beta.out()), VCI_OK);
+  Ref<IBalObject> bal;
+  ASSERT_EQ(beta->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  Ref<ICanSocket> socket;
+  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
+  Ref<ICanChannel> first;
+  ASSERT_EQ(socket->CreateChannel(TRUE, first.out()), VCI_OK);
+  Ref<ICanChannel> second;
+  EXPECT_EQ(socket->CreateChannel(FALSE, second.out()), VCI_E_ACCESSDENIED);
+  first->Release();
+  first.p = nullptr;
+  EXPECT_EQ(socket->CreateChannel(FALSE, second.out()), VCI_OK);  // released: open again
+}
+
+TEST(VciCppApi, TheCyclicListRefusesBadEntriesAndASeventeenth) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Ref<ICanScheduler> list;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  CANCYCLICTXMSG m{};
+  m.wCycleTime = 10;
+  m.dwMsgId = 0x100;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  UINT32 index = 0;
+  for (UINT32 k = 0; k < 16; ++k) {
+    ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
+    EXPECT_EQ(index, k);
+  }
+  EXPECT_EQ(list->AddMessage(&m, &index), VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(index, 0xFFFFFFFFu);
+  ASSERT_EQ(list->RemMessage(3), VCI_OK);
+  m.wCycleTime = 0;
+  EXPECT_EQ(list->AddMessage(&m, &index), VCI_E_INVALIDARG);
+  m.wCycleTime = 10;
+  ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
+  EXPECT_EQ(index, 3u);  // the free slot
+  EXPECT_EQ(list->StartMessage(16, 1), VCI_E_INVALID_INDEX);
+  CANSCHEDULERSTATUS s{};
+  ASSERT_EQ(list->GetStatus(&s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);  // off after opening
+}
+
 // The guide's walk-through as a program of its own, built only from the public headers, run
 // against a canemud in real time.
 TEST(VciCppApi, TheWalkThroughProgramRunsUnchanged) {

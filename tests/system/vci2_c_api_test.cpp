@@ -298,5 +298,21 @@ TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData
   vciDeviceClose(dev);
 }
 
+TEST(Vci2CApi, AnErrorPassiveSendersFdFrameCarriesEsi) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  alpha.post(msg(0x42, {1, 2, 3}, true, true));
+  step_ns(10'000'000);  // alone: ACK errors up to TEC 128, error-passive
+  UINT8 state = 0;
+  ASSERT_EQ(canemuGetControllerState(alpha.control, &state, nullptr, nullptr, nullptr), VCI_OK);
+  ASSERT_EQ(state, CANEMU_STATE_PASSIVE);
+  FdAdapter beta("beta");
+  step_ns(10'000'000);
+  const auto got = drain(beta.channel);
+  ASSERT_FALSE(got.empty());
+  EXPECT_EQ(got[0].dwMsgId, 0x42u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.esi, 1u);  // sent while error-passive
+}
+
 }  // namespace
 }  // namespace canemu

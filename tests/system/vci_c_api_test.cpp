@@ -691,6 +691,42 @@ TEST(VciCApi, AnAdapterCreatedOnANamedBusWorksLikeAConfiguredOne) {
   EXPECT_EQ(id_of("mine").AsInt64, 0);
 }
 
+TEST(VciCApi, ADelayAboveTheMaximumIsClampedAndHighPriorityGoesFirst) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  CANCAPABILITIES caps{};
+  ASSERT_EQ(canChannelGetCaps(alpha.channel, &caps), VCI_OK);
+  ASSERT_EQ(caps.dwDtxMaxTicks, 65535u);
+  alpha.post(data(0x123, {0x11, 0x22}));
+  CANMSG far = data(0x123, {0x11, 0x22});
+  far.dwTime = 200'000;  // above the maximum: taken as 65535 ticks
+  alpha.post(far);
+  step_ns(100'000'000);
+  auto got = beta.frames();
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[1].dwTime, 65'535u + 124u);
+  // Two channels: a high-priority frame of the second overtakes the first's waiting frame (not
+  // the one already in the controller).
+  HANDLE second = nullptr;
+  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &second), VCI_OK);
+  ASSERT_EQ(canChannelInitialize(second, 64, 1, 16, 1), VCI_OK);
+  ASSERT_EQ(canChannelActivate(second, TRUE), VCI_OK);
+  alpha.post(data(0x201, {1}));
+  alpha.post(data(0x202, {2}));
+  step_ns(10'000);  // 0x201 is on the wire
+  CANMSG urgent = data(0x300, {3});
+  urgent.uMsgInfo.Bits.hpm = 1;
+  ASSERT_EQ(canChannelPostMessage(second, &urgent), VCI_OK);
+  step_ns(5'000'000);
+  std::vector<uint32_t> order;
+  for (const CANMSG& m : beta.frames()) {
+    order.push_back(m.dwMsgId);
+  }
+  EXPECT_EQ(order, (std::vector<uint32_t>{0x201, 0x300, 0x202}));
+  canChannelClose(second);
+}
+
 TEST(VciCApi, WithoutCanemudEveryCallFailsAtOnceAndSaysWhere) {
   EXPECT_EQ(canemuConnect("/nonexistent/canemud.sock"), VCI_E_DISCONNECTED);
   HANDLE e = nullptr;

@@ -3,8 +3,11 @@
 // semantics, identifiers and reference counting.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <poll.h>
@@ -819,6 +822,116 @@ TEST(VciCppApi, TheCyclicListRefusesBadEntriesAndASeventeenth) {
   CANSCHEDULERSTATUS s{};
   ASSERT_EQ(list->GetStatus(&s), VCI_OK);
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);  // off after opening
+}
+
+TEST(VciCppApi, TwoProcessesOpenTheSameBalAndAFifoRoundsToWholePages) {
+  VciDaemon d;
+  Adapter alpha("alpha");  // this process holds alpha's BAL, control unit and a channel
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    if (canemuConnect(d.daemon.socket().c_str()) != VCI_OK) {
+      ::_exit(10);
+    }
+    IVciDeviceManager* manager = nullptr;
+    IVciDevice* device = nullptr;
+    IBalObject* bal = nullptr;
+    ICanSocket* socket = nullptr;
+    ICanChannel* channel = nullptr;
+    VCIID id{};
+    id.AsInt64 = 1;
+    if (VciGetDeviceManager(&manager) != VCI_OK || manager->OpenDevice(id, &device) != VCI_OK ||
+        device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, reinterpret_cast<PVOID*>(&bal)) !=
+            VCI_OK ||
+        bal->OpenSocket(0, IID_ICanSocket, reinterpret_cast<PVOID*>(&socket)) != VCI_OK ||
+        socket->CreateChannel(FALSE, &channel) != VCI_OK) {
+      ::_exit(11);
+    }
+    ICanControl* control = nullptr;
+    if (bal->OpenSocket(0, IID_ICanControl, reinterpret_cast<PVOID*>(&control)) !=
+        VCI_E_ACCESSDENIED) {
+      ::_exit(12);  // the first process has the control unit
+    }
+    ::_exit(0);
+  }
+  int status = -1;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  // The guide's 32 elements of 16 bytes: one 4 KiB page holds the 256-byte header and 240.
+  VCIID fifo_id{};
+  Ref<IVciFifo> fifo;
+  ASSERT_EQ(VciCreateFifo(&fifo_id, 32, 16, IID_IVciFifo, fifo.pv()), VCI_OK);
+  UINT16 capacity = 0;
+  ASSERT_EQ(fifo->GetCapacity(&capacity), VCI_OK);
+  EXPECT_EQ(capacity, 240);
+}
+
+TEST(VciCppApi, AThreadWaitsForTheFifoLockTheOtherHolds) {
+  VciDaemon d;
+  VCIID id{};
+  Ref<IFifoReader> reader;
+  ASSERT_EQ(VciCreateFifo(&id, 16, 8, IID_IFifoReader, reader.pv()), VCI_OK);
+  std::vector<int> order;
+  std::atomic<bool> trying{false};
+  ASSERT_EQ(reader->Lock(), VCI_OK);
+  std::thread other([&] {
+    trying = true;
+    reader->Lock();  // waits for the main thread's Unlock
+    order.push_back(2);
+    reader->Unlock();
+  });
+  while (!trying) {
+    std::this_thread::yield();
+  }
+  order.push_back(1);
+  ASSERT_EQ(reader->Unlock(), VCI_OK);
+  other.join();
+  EXPECT_EQ(order, (std::vector<int>{1, 2}));
+}
+
+TEST(VciCppApi, AV2InitializedLineShowsItsTimingAsBtrAndDetectBaudTimesOutOnASilentBus) {
+  VciDaemon d;
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  VCIID alpha_id{};
+  alpha_id.AsInt64 = 1;
+  Ref<IVciDevice> device;
+  ASSERT_EQ(manager->OpenDevice(alpha_id, device.out()), VCI_OK);
+  Ref<IBalObject> bal;
+  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  Ref<ICanControl2> control;
+  ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl2, control.pv()), VCI_OK);
+  CANINITLINE2 init{};
+  init.bOpMode = CAN_OPMODE_STANDARD;
+  init.bSFMode = CAN_FILTER_PASS;
+  init.bEFMode = CAN_FILTER_PASS;
+  init.dwSFIds = 2048;
+  init.sBtpSdr = CANBTP{0, 500000, 14, 2, 1, 0};
+  ASSERT_EQ(control->InitLine(&init), VCI_OK);
+  Ref<ICanSocket> socket;
+  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
+  CANLINESTATUS s{};
+  ASSERT_EQ(socket->GetLineStatus(&s), VCI_OK);
+  EXPECT_EQ(s.bBtReg0, CAN_BT0_500KB);
+  EXPECT_EQ(s.bBtReg1, CAN_BT1_500KB);
+  ASSERT_EQ(control->ResetLine(), VCI_OK);
+  CANBTPTABLE table{};
+  table.bCount = 2;
+  table.asBTP[0].sSdr = CANBTP{0, 500000, 14, 2, 1, 0};
+  table.asBTP[1].sSdr = CANBTP{0, 250000, 14, 2, 1, 0};
+  std::atomic<bool> done{false};
+  HRESULT hr = VCI_OK;
+  std::thread detector([&] {
+    hr = control->DetectBaud(0, CAN_EXMODE_DISABLED, 10, &table);
+    done = true;
+  });
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!done && std::chrono::steady_clock::now() < give_up) {
+    step_ns(1'000'000);
+  }
+  detector.join();
+  EXPECT_EQ(hr, VCI_E_TIMEOUT);
 }
 
 // The guide's walk-through as a program of its own, built only from the public headers, run

@@ -727,6 +727,30 @@ TEST(VciCApi, ADelayAboveTheMaximumIsClampedAndHighPriorityGoesFirst) {
   canChannelClose(second);
 }
 
+// The enumerator's wait returns when an adapter comes; hardware IDs stay from run to run.
+TEST(VciCApi, AnEnumeratorWaitsForAdaptersAndHardwareIdsSurviveARestart) {
+  std::string first_hwid;
+  {
+    VciDaemon d;
+    HANDLE e = nullptr;
+    ASSERT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
+    EXPECT_EQ(vciEnumDeviceWaitEvent(e, 50), VCI_E_TIMEOUT);  // nothing changes
+    ASSERT_EQ(canemuCreateDevice("can0", "plugged", nullptr, nullptr, 0), VCI_OK);
+    EXPECT_EQ(vciEnumDeviceWaitEvent(e, 5000), VCI_OK);
+    VCIDEVICEINFO info{};
+    ASSERT_EQ(vciEnumDeviceNext(e, &info), VCI_OK);
+    first_hwid = info.UniqueHardwareId.AsChar;
+    vciEnumDeviceClose(e);
+  }
+  VciDaemon again;
+  HANDLE e = nullptr;
+  ASSERT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
+  VCIDEVICEINFO info{};
+  ASSERT_EQ(vciEnumDeviceNext(e, &info), VCI_OK);
+  EXPECT_EQ(first_hwid, info.UniqueHardwareId.AsChar);
+  vciEnumDeviceClose(e);
+}
+
 TEST(VciCApi, WithoutCanemudEveryCallFailsAtOnceAndSaysWhere) {
   EXPECT_EQ(canemuConnect("/nonexistent/canemud.sock"), VCI_E_DISCONNECTED);
   HANDLE e = nullptr;

@@ -934,6 +934,118 @@ TEST(VciCppApi, AV2InitializedLineShowsItsTimingAsBtrAndDetectBaudTimesOutOnASil
   EXPECT_EQ(hr, VCI_E_TIMEOUT);
 }
 
+TEST(VciCppApi, FifoEdgesFullEmptyInPlaceWritesLevelsAndThresholds) {
+  VciDaemon d;
+  VCIID id{};
+  Ref<IFifoWriter> writer;
+  ASSERT_EQ(VciCreateFifo(&id, 16, 8, IID_IFifoWriter, writer.pv()), VCI_OK);
+  Ref<IFifoReader> reader;
+  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
+  Ref<IVciFifo> info;
+  ASSERT_EQ(VciAccessFifo(id, IID_IVciFifo, info.pv()), VCI_OK);
+  UINT16 capacity = 0;
+  ASSERT_EQ(reader->GetCapacity(&capacity), VCI_OK);
+  UINT16 size = 0;
+  ASSERT_EQ(reader->GetEntrySize(&size), VCI_OK);
+  EXPECT_EQ(size, 8);
+  // Thresholds above the capacity are clamped.
+  ASSERT_EQ(reader->SetThreshold(0xFFFF), VCI_OK);
+  UINT16 threshold = 0;
+  ASSERT_EQ(reader->GetThreshold(&threshold), VCI_OK);
+  EXPECT_EQ(threshold, capacity);
+  // Reading an empty FIFO; acquiring without a place to put the pointer.
+  uint8_t e[8] = {};
+  EXPECT_EQ(reader->GetDataEntry(e), VCI_E_RXQUEUE_EMPTY);
+  PVOID p = nullptr;
+  UINT16 n = 0;
+  EXPECT_EQ(reader->AcquireRead(&p, &n), VCI_E_RXQUEUE_EMPTY);
+  EXPECT_EQ(reader->AcquireRead(nullptr, &n), VCI_E_INVALIDARG);
+  // Written in place: invisible until released.
+  ASSERT_EQ(writer->AcquireWrite(&p, &n), VCI_OK);
+  EXPECT_EQ(n, capacity);
+  static_cast<uint8_t*>(p)[0] = 0x42;
+  UINT16 fill = 1;
+  ASSERT_EQ(reader->GetFillCount(&fill), VCI_OK);
+  EXPECT_EQ(fill, 0);
+  ASSERT_EQ(writer->ReleaseWrite(1), VCI_OK);
+  ASSERT_EQ(reader->GetFillCount(&fill), VCI_OK);
+  EXPECT_EQ(fill, 1);
+  // Full: the writer is refused, nothing is overwritten; the level says 100 %.
+  for (UINT16 k = 1; k < capacity; ++k) {
+    e[0] = static_cast<uint8_t>(k);
+    ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  }
+  EXPECT_EQ(writer->PutDataEntry(e), VCI_E_TXQUEUE_FULL);
+  EXPECT_EQ(writer->AcquireWrite(&p, &n), VCI_E_TXQUEUE_FULL);
+  UINT16 level = 0;
+  ASSERT_EQ(info->GetFillLevel(&level), VCI_OK);
+  EXPECT_EQ(level, 100);
+  ASSERT_EQ(reader->GetDataEntry(e), VCI_OK);
+  EXPECT_EQ(e[0], 0x42);
+  // A second AssignEvent replaces the first.
+  HANDLE first = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  HANDLE second = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  ASSERT_EQ(reader->SetThreshold(1), VCI_OK);
+  ASSERT_EQ(reader->AssignEvent(first), VCI_OK);
+  ASSERT_EQ(reader->AssignEvent(second), VCI_OK);
+  e[0] = 0x99;
+  ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  EXPECT_EQ(WaitForSingleObject(second, 5000), WAIT_OBJECT_0);
+  EXPECT_EQ(WaitForSingleObject(first, 0), WAIT_TIMEOUT);
+  reader->AssignEvent(nullptr);
+  CloseHandle(first);
+  CloseHandle(second);
+}
+
+TEST(VciCppApi, TheChannelsControlIsExclusiveAListenOnlyLineNeverSendsAndBusLoadShows) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  // ICanChannel2::GetControl is the control unit, held by alpha's program already.
+  Ref<ICanSocket2> socket2;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
+  Ref<ICanChannel2> channel2;
+  ASSERT_EQ(socket2->CreateChannel(FALSE, channel2.out()), VCI_OK);
+  Ref<ICanControl2> control2;
+  EXPECT_EQ(channel2->GetControl(control2.out()), VCI_E_ACCESSDENIED);
+  EXPECT_EQ(control2.p, nullptr);
+  Ref<IUnknown> bal_unknown;
+  EXPECT_EQ(alpha.device->OpenComponent(CLSID_VCIBAL, IID_IUnknown, bal_unknown.pv()), VCI_OK);
+  UINT16 entry = 0;
+  ASSERT_EQ(alpha.reader->GetEntrySize(&entry), VCI_OK);
+  EXPECT_EQ(entry, sizeof(CANMSG));
+  // beta sends a frame every millisecond for a second: the load over the last second shows it.
+  Ref<ICanScheduler> list;
+  ASSERT_EQ(beta.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  CANCYCLICTXMSG c{};
+  c.wCycleTime = 1;
+  c.dwMsgId = 0x100;
+  c.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  c.uMsgInfo.Bits.dlc = 8;
+  UINT32 index = 0;
+  ASSERT_EQ(list->AddMessage(&c, &index), VCI_OK);
+  ASSERT_EQ(list->StartMessage(index, 0), VCI_OK);
+  ASSERT_EQ(list->Resume(), VCI_OK);
+  step_ns(1'000'000'000);
+  ASSERT_EQ(list->Suspend(), VCI_OK);
+  CANLINESTATUS s{};
+  ASSERT_EQ(beta.control->GetLineStatus(&s), VCI_OK);
+  // One 8-byte frame (about 111..135 bits, 2 us each, plus 3 bits of intermission) a
+  // millisecond: between 22 % and 28 % of the bus.
+  EXPECT_GE(s.bBusLoad, 22);
+  EXPECT_LE(s.bBusLoad, 28);
+  // Listen-only: what alpha posts never reaches the bus.
+  ASSERT_EQ(alpha.control->ResetLine(), VCI_OK);
+  CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_LISTONLY, 0, CAN_BT0_500KB, CAN_BT1_500KB};
+  ASSERT_EQ(alpha.control->InitLine(&init), VCI_OK);
+  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
+  CANMSG m = one_byte(0x7, 7);
+  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  drain(beta.reader.p, false);
+  step_ns(10'000'000);
+  EXPECT_TRUE(drain(beta.reader.p, true).empty());
+}
+
 // The guide's walk-through as a program of its own, built only from the public headers, run
 // against a canemud in real time.
 TEST(VciCppApi, TheWalkThroughProgramRunsUnchanged) {

@@ -75,6 +75,17 @@ struct Adapter {
   }
 };
 
+// The BAL of the adapter whose VciObjectId is `id`, opened through the device manager.
+void open_bal(INT64 id, Ref<IBalObject>& bal) {
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  VCIID vciid{};
+  vciid.AsInt64 = id;
+  Ref<IVciDevice> device;
+  ASSERT_EQ(manager->OpenDevice(vciid, device.out()), VCI_OK);
+  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+}
+
 CANMSG one_byte(UINT32 id, UINT8 b) {
   CANMSG m{};
   m.dwMsgId = id;
@@ -474,14 +485,8 @@ UINT32 end_of(uint32_t id, std::vector<uint8_t> data, bool ext = false) {
 TEST(VciCppApi, TheControlUnitsStatesAndInfoMessages) {
   VciDaemon d;
   Adapter beta("beta");  // holds nothing of alpha
-  Ref<IVciDeviceManager> manager;
-  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
-  VCIID alpha_id{};
-  alpha_id.AsInt64 = 1;
-  Ref<IVciDevice> device;
-  ASSERT_EQ(manager->OpenDevice(alpha_id, device.out()), VCI_OK);
   Ref<IBalObject> bal;
-  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_bal(1, bal));
   Ref<ICanControl> control;
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
   Ref<ICanSocket> socket;
@@ -578,14 +583,8 @@ TEST(VciCppApi, ALoneAdapterWarnsGoesPassiveAndAFaultTakesItBusOffUntilRestarted
 TEST(VciCppApi, V2ChannelFiltersInEveryModeForBothWidthsAndRtr) {
   VciDaemon d;
   Adapter beta("beta");
-  Ref<IVciDeviceManager> manager;
-  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
-  VCIID alpha_id{};
-  alpha_id.AsInt64 = 1;
-  Ref<IVciDevice> device;
-  ASSERT_EQ(manager->OpenDevice(alpha_id, device.out()), VCI_OK);
   Ref<IBalObject> bal;
-  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_bal(1, bal));
   Ref<ICanSocket2> socket;
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
   struct Ch {
@@ -776,14 +775,8 @@ TEST(VciCppApi, ChannelsAreSharedUnlessOneIsExclusive) {
   Ref<ICanChannel> shared;
   EXPECT_EQ(alpha.socket->CreateChannel(FALSE, shared.out()), VCI_OK);
   // On beta, an exclusive channel shuts out every other.
-  Ref<IVciDeviceManager> manager;
-  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
-  VCIID beta_id{};
-  beta_id.AsInt64 = 2;
-  Ref<IVciDevice> beta;
-  ASSERT_EQ(manager->OpenDevice(beta_id, beta.out()), VCI_OK);
   Ref<IBalObject> bal;
-  ASSERT_EQ(beta->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_bal(2, bal));
   Ref<ICanSocket> socket;
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
   Ref<ICanChannel> first;
@@ -892,14 +885,8 @@ TEST(VciCppApi, AThreadWaitsForTheFifoLockTheOtherHolds) {
 
 TEST(VciCppApi, AV2InitializedLineShowsItsTimingAsBtrAndDetectBaudTimesOutOnASilentBus) {
   VciDaemon d;
-  Ref<IVciDeviceManager> manager;
-  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
-  VCIID alpha_id{};
-  alpha_id.AsInt64 = 1;
-  Ref<IVciDevice> device;
-  ASSERT_EQ(manager->OpenDevice(alpha_id, device.out()), VCI_OK);
   Ref<IBalObject> bal;
-  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_bal(1, bal));
   Ref<ICanControl2> control;
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl2, control.pv()), VCI_OK);
   CANINITLINE2 init{};

@@ -23,7 +23,8 @@ build: configure
 
 test: deps build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
-	@if ls tests/python/test_*.py >/dev/null 2>&1; then .venv/bin/python -m pytest -q tests/python; fi
+	.venv/bin/python -m pytest -q -p no:cacheprovider tests/python
+	.venv-debian/bin/python -m pytest -q -p no:cacheprovider tests/python
 
 asan: deps
 	cmake -S . -B $(ASAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCANEMU_SANITIZE=ON \

@@ -2,7 +2,8 @@
 # Installs what canemu needs, idempotently:
 #   - the Debian packages listed in scripts/apt-packages.txt, or in the lists given as
 #     arguments (through sudo when not root);
-#   - a Python virtual environment at .venv from the pinned requirements.txt.
+#   - Python virtual environments: .venv (pinned PyPI packages from requirements.txt) and
+#     .venv-debian (Debian's python3-can), each with canemu's python-can interface.
 # A second run finds nothing to do and says so.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,17 +36,29 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # Debian's interpreter, not whatever python3 is first on PATH, so the venv is the same everywhere.
+# .venv: PyPI's pinned packages (requirements.txt) and canemu's python-can interface, editable.
+# .venv-debian: Debian's python3-can (4.1) and pytest, with the same interface on top.
 py=/usr/bin/python3
-stamp=.venv/.requirements.sha256
-want=$(sha256sum requirements.txt | cut -d' ' -f1)
-if [ ! -x .venv/bin/python ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
-  echo "deps: creating the Python venv at .venv from requirements.txt"
-  rm -rf .venv
-  "$py" -m venv .venv
-  .venv/bin/pip install --quiet --disable-pip-version-check -r requirements.txt
+want=$(cat requirements.txt client/python/pyproject.toml | sha256sum | cut -d' ' -f1)
+make_venv() {  # DIR, then venv options
+  local dir=$1
+  shift
+  local stamp=$dir/.requirements.sha256
+  if [ -x "$dir/bin/python" ] && [ "$(cat "$stamp" 2>/dev/null)" = "$want" ]; then
+    return
+  fi
+  echo "deps: creating the Python venv at $dir"
+  rm -rf "$dir"
+  "$py" -m venv "$@" "$dir"
+  if [ "$dir" = .venv ]; then
+    "$dir/bin/pip" install --quiet --disable-pip-version-check -r requirements.txt
+  fi
+  "$dir/bin/pip" install --quiet --disable-pip-version-check --no-deps -e client/python
   echo "$want" > "$stamp"
   did_something=1
-fi
+}
+make_venv .venv
+make_venv .venv-debian --system-site-packages
 
 if [ "$did_something" -eq 0 ]; then
   echo "deps: everything is already installed; nothing to do"

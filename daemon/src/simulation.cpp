@@ -605,6 +605,12 @@ void Simulation::fill_devices(ipc::DeviceListReply& r) const {
     if (auto id = vci_ids_.find(d.name); id != vci_ids_.end()) {
       e.vci_id = id->second;
     }
+    const std::string first = d.name + ":0";
+    for (const Controller& c : controllers_) {
+      if (c.name == first && c.line) {
+        e.epoch_ns = c.line->epoch().ns();
+      }
+    }
     ipc::copy_name(e.hardware_id, hardware_id(d.name));
   }
   for (const Ephemeral& x : ephemeral_) {
@@ -624,6 +630,7 @@ void Simulation::fill_devices(ipc::DeviceListReply& r) const {
                                         : ipc::WireDeviceModel::ixxat_usb_to_can);
       e.controller_fd[0] = fd ? 1 : 0;
       e.vci_id = x.vci_id;
+      e.epoch_ns = x.line->epoch().ns();
       ipc::copy_name(e.hardware_id, hardware_id(x.name));
     }
   }
@@ -679,7 +686,11 @@ std::string Simulation::unique_device_name(std::string_view prefix) const {
 Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t bus,
                                                    uint32_t owner_pid) {
   HostedNode& node = spare_node(bus);
-  auto line = std::make_shared<vci::CanLine>(scheduler_, node, vci::Clocks{}, scheduler_.now());
+  // Powered on at the last whole microsecond: the time stamps of every adapter then tick
+  // together (1 us), and the same frame carries the same time stamp on all of them.
+  const int64_t now_ns = scheduler_.now().ns();
+  const SimTime power_on = SimTime::from_ns(now_ns - now_ns % 1000);
+  auto line = std::make_shared<vci::CanLine>(scheduler_, node, vci::Clocks{}, power_on);
   DeviceLease lease = add_ephemeral(name, bus, node, owner_pid);
   ephemeral_.back().line = std::move(line);
   ephemeral_.back().vci_id = next_vci_id_++;

@@ -24,6 +24,40 @@ extern "C" {
 #define CANEMU_LINE_OFFLINE 1
 #define CANEMU_LINE_ONLINE 2
 
+/* Time modes of canemuGetTime. */
+#define CANEMU_TIME_REALTIME 0
+#define CANEMU_TIME_SCALED 1
+#define CANEMU_TIME_STEPPED 2
+
+/* Kinds of bus of CANEMU_BUSINFO. */
+#define CANEMU_BUS_CAN 0
+#define CANEMU_BUS_CANFD 1
+#define CANEMU_BUS_LIN 2
+
+#define CANEMU_MAX_CONTROLLERS 4
+
+/* A bus of canemud's configuration (48 bytes). */
+typedef struct _CANEMU_BUSINFO {
+  CHAR szName[32];
+  UINT8 bKind; /* CANEMU_BUS_* */
+  UINT8 abReserved[3];
+  UINT32 dwBitrate;     /* nominal bit rate, bit/s */
+  UINT32 dwDataBitrate; /* CAN FD data-phase bit rate, bit/s; 0 on other buses */
+  UINT32 dwReserved;
+} CANEMU_BUSINFO, *PCANEMU_BUSINFO;
+
+/* An adapter the VCI sees (184 bytes). */
+typedef struct _CANEMU_DEVICEINFO {
+  CHAR szName[32];
+  VCIID VciObjectId;
+  INT64 qwEpochNs;    /* simulated time of its power-on: its time stamps count from here */
+  UINT8 bControllers; /* CAN controllers, 1 .. CANEMU_MAX_CONTROLLERS */
+  UINT8 bEphemeral;   /* 1: made by canemuCreateDevice (by any process) */
+  UINT8 abFd[CANEMU_MAX_CONTROLLERS]; /* 1: controller N is a CAN FD controller */
+  UINT8 abReserved[2];
+  CHAR aszBus[CANEMU_MAX_CONTROLLERS][32]; /* the bus each controller is wired to */
+} CANEMU_DEVICEINFO, *PCANEMU_DEVICEINFO;
+
 /* Talks to the canemud listening at pszSocket from now on (NULL: $CANEMU_SOCKET or the
  * default path again). Objects opened on the previous daemon stay open there until closed.
  * VCI_OK, or VCI_E_DISCONNECTED when nobody listens there. */
@@ -53,6 +87,29 @@ HRESULT VCIAPI canemuCreateDevice(const char* pszBus, const char* pszName, PVCII
                                   PCHAR pszNameOut, UINT32 cbNameOut);
 /* Removes an adapter canemuCreateDevice made; objects open on it work until closed. */
 HRESULT VCIAPI canemuRemoveDevice(const char* pszName);
+
+/* The dwIndex-th bus of canemud's configuration (from 0), in configuration order. VCI_OK;
+ * VCI_E_NO_MORE_ITEMS past the last; VCI_E_INVALIDARG for a NULL pInfo. */
+HRESULT VCIAPI canemuEnumBuses(UINT32 dwIndex, PCANEMU_BUSINFO pInfo);
+
+/* The dwIndex-th adapter (from 0): the configured ones in configuration order, then the
+ * ephemeral ones in order of creation. Same results as canemuEnumBuses. */
+HRESULT VCIAPI canemuEnumDevices(UINT32 dwIndex, PCANEMU_DEVICEINFO pInfo);
+
+/* The adapter named pszName (configured or ephemeral). VCI_OK; VCI_E_NO_MORE_ITEMS when there
+ * is none; VCI_E_INVALIDARG for NULL arguments. */
+HRESULT VCIAPI canemuFindDevice(const char* pszName, PCANEMU_DEVICEINFO pInfo);
+
+/* canemud's simulated time in ns (may be NULL) and time mode, CANEMU_TIME_* (may be NULL). */
+HRESULT VCIAPI canemuGetTime(UINT64* pqwNow, PUINT8 pbTimeMode);
+
+/* A descriptor for poll/select/epoll that is readable whenever the receive FIFO of the
+ * initialized C API channel hCanChn holds messages (it may also be readable when it holds
+ * none: a read then finds it empty and the descriptor quiets down). Valid until the channel is
+ * initialized again or closed; the channel owns it (do not close it). VCI_OK;
+ * VCI_E_INVHANDLE; VCI_E_NOT_INITIALIZED before canChannelInitialize; VCI_E_INVALIDARG for a
+ * NULL pFd. */
+HRESULT VCIAPI canemuChannelEventFd(HANDLE hCanChn, int* pFd);
 
 #ifdef __cplusplus
 }

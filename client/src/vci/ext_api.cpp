@@ -1,6 +1,8 @@
 // canemu's extensions of the VCI C API (canemu_vci.h), in both libraries.
 #include <cstdio>
 #include <cstring>
+#include <memory>
+#include <vector>
 
 #include "can_api.hpp"
 #include "canemu_vci.h"
@@ -20,7 +22,25 @@ Remote* any_remote(HANDLE h) {
   return alias_of(h);
 }
 
+CANEMU_DEVICEINFO device_info(const DeviceDesc& d) {
+  CANEMU_DEVICEINFO info{};
+  std::snprintf(info.szName, sizeof info.szName, "%s", d.name.c_str());
+  info.VciObjectId.AsInt64 = static_cast<INT64>(d.vci_id);
+  info.qwEpochNs = d.epoch_ns;
+  info.bControllers = static_cast<UINT8>(d.controller_fd.size());
+  info.bEphemeral = d.ephemeral ? 1 : 0;
+  for (std::size_t k = 0; k < d.controller_fd.size() && k < CANEMU_MAX_CONTROLLERS; ++k) {
+    info.abFd[k] = d.controller_fd[k] ? 1 : 0;
+    std::snprintf(info.aszBus[k], sizeof info.aszBus[k], "%s",
+                  k < d.buses.size() ? d.buses[k].c_str() : "");
+  }
+  return info;
+}
+
 }  // namespace
+
+static_assert(sizeof(CANEMU_BUSINFO) == 48);
+static_assert(sizeof(CANEMU_DEVICEINFO) == 184);
 
 extern "C" {
 
@@ -101,6 +121,89 @@ HRESULT VCIAPI canemuStepTime(UINT64 qwNanoseconds, UINT64* pqwNow) {
   if (pqwNow != nullptr) {
     *pqwNow = static_cast<UINT64>(now);
   }
+  return VCI_OK;
+}
+
+HRESULT VCIAPI canemuEnumBuses(UINT32 dwIndex, PCANEMU_BUSINFO pInfo) {
+  if (pInfo == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  auto status = std::make_unique<canemu::ipc::StatusReply>();
+  if (HRESULT hr = Library::get().status(*status); hr != VCI_OK) {
+    return hr;
+  }
+  if (dwIndex >= status->bus_count || dwIndex >= canemu::ipc::kMaxStatusBuses) {
+    return VCI_E_NO_MORE_ITEMS;
+  }
+  const canemu::ipc::StatusBus& b = status->buses[dwIndex];
+  CANEMU_BUSINFO info{};
+  std::snprintf(info.szName, sizeof info.szName, "%s", canemu::ipc::name_of(b.name).c_str());
+  info.bKind = b.kind;
+  info.dwBitrate = b.bitrate;
+  info.dwDataBitrate = b.data_bitrate;
+  *pInfo = info;
+  return VCI_OK;
+}
+
+HRESULT VCIAPI canemuEnumDevices(UINT32 dwIndex, PCANEMU_DEVICEINFO pInfo) {
+  if (pInfo == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  std::vector<DeviceDesc> devices;
+  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
+    return hr;
+  }
+  if (dwIndex >= devices.size()) {
+    return VCI_E_NO_MORE_ITEMS;
+  }
+  *pInfo = device_info(devices[dwIndex]);
+  return VCI_OK;
+}
+
+HRESULT VCIAPI canemuFindDevice(const char* pszName, PCANEMU_DEVICEINFO pInfo) {
+  if (pszName == nullptr || pInfo == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  std::vector<DeviceDesc> devices;
+  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
+    return hr;
+  }
+  for (const DeviceDesc& d : devices) {
+    if (d.name == pszName) {
+      *pInfo = device_info(d);
+      return VCI_OK;
+    }
+  }
+  set_detail(std::string("no adapter is named \"") + pszName + "\"");
+  return VCI_E_NO_MORE_ITEMS;
+}
+
+HRESULT VCIAPI canemuGetTime(UINT64* pqwNow, PUINT8 pbTimeMode) {
+  auto status = std::make_unique<canemu::ipc::StatusReply>();
+  if (HRESULT hr = Library::get().status(*status); hr != VCI_OK) {
+    return hr;
+  }
+  if (pqwNow != nullptr) {
+    *pqwNow = static_cast<UINT64>(status->sim_time_ns);
+  }
+  if (pbTimeMode != nullptr) {
+    *pbTimeMode = status->time_mode;
+  }
+  return VCI_OK;
+}
+
+HRESULT VCIAPI canemuChannelEventFd(HANDLE hCanChn, int* pFd) {
+  ChannelObj* c = channel_of(hCanChn);
+  if (c == nullptr) {
+    return VCI_E_INVHANDLE;
+  }
+  if (pFd == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  if (!c->rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  *pFd = channel_poll_fd(*c);
   return VCI_OK;
 }
 

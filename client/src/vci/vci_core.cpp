@@ -6,6 +6,7 @@
 #include <set>
 
 #include <time.h>
+#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -400,12 +401,29 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
     d.model = e.model;
     for (uint8_t k = 0; k < e.controller_count && k < ipc::kMaxDeviceControllers; ++k) {
       d.controller_fd.push_back(e.controller_fd[k] != 0);
+      d.buses.push_back(ipc::name_of(e.buses[k]));
     }
+    d.ephemeral = e.ephemeral != 0;
+    d.epoch_ns = e.epoch_ns;
     out.push_back(std::move(d));
   }
   if (generation != nullptr) {
     *generation = r->generation;
   }
+  return VCI_OK;
+}
+
+HRESULT Library::status(ipc::StatusReply& out) {
+  std::lock_guard lock(mutex_);
+  if (HRESULT hr = connect_locked(); hr != VCI_OK) {
+    return hr;
+  }
+  auto r = connection_->call<ipc::StatusRequest, ipc::StatusReply>(
+      ipc::make_message<ipc::StatusRequest>());
+  if (!r) {
+    return failed(r.error());
+  }
+  out = *r;
   return VCI_OK;
 }
 
@@ -548,6 +566,32 @@ int timeout_of(uint32_t ms) {
   return ms == 0xFFFFFFFFU ? -1 : static_cast<int>(std::min<uint32_t>(ms, 0x7FFFFFFF));
 }
 
+namespace {
+// A pollable channel after a read found its ring empty or a blocking wait drained the eventfd:
+// arms the eventfd when the ring is empty (the next put writes it), makes it readable when
+// messages wait.
+void keep_pollable(ChannelObj& c) {
+  if (!c.pollable.load(std::memory_order_relaxed)) {
+    return;
+  }
+  ipc::RingReader& rx = c.rings->rx;
+  if (rx.fill_count() == 0) {
+    rx.disarm();  // drops stale wake-ups
+    if (rx.arm_unless_filled()) {
+      return;
+    }
+  }
+  const uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = ::write(c.rings->rx_event.get(), &one, sizeof one);
+}
+}  // namespace
+
+int channel_poll_fd(ChannelObj& c) {
+  c.pollable.store(true, std::memory_order_relaxed);
+  keep_pollable(c);
+  return c.rings->rx_event.get();
+}
+
 HRESULT channel_peek(ChannelObj& c, void* msg) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
@@ -556,6 +600,7 @@ HRESULT channel_peek(ChannelObj& c, void* msg) {
     case ipc::RingStatus::ok:
       return VCI_OK;
     case ipc::RingStatus::empty:
+      keep_pollable(c);
       return VCI_E_RXQUEUE_EMPTY;
     default:
       set_detail("the receive ring is corrupted");
@@ -589,6 +634,7 @@ HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
     }
   }
   rx.set_threshold(threshold);
+  keep_pollable(c);
   return hr;
 }
 
@@ -680,7 +726,9 @@ HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
   }
-  return c.rings->rx.wait(timeout_of(timeout_ms)) ? VCI_OK : VCI_E_TIMEOUT;
+  const bool signalled = c.rings->rx.wait(timeout_of(timeout_ms));
+  keep_pollable(c);
+  return signalled ? VCI_OK : VCI_E_TIMEOUT;
 }
 
 HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms) {

@@ -36,6 +36,9 @@ struct DeviceDesc {
   std::string hardware_id;
   uint8_t model = 0;  // ipc::WireDeviceModel
   std::vector<bool> controller_fd;
+  std::vector<std::string> buses;  // the bus of each controller
+  bool ephemeral = false;
+  int64_t epoch_ns = 0;  // simulated time of power-on, the time stamps' zero
   VCIDEVICEINFO info() const;
   VCIDEVICECAPS caps() const;
 };
@@ -118,6 +121,8 @@ struct ChannelObj : Remote {
       : Remote(Kind::channel, remote_handle, on_device, bus_no), v2(is_v2) {}
   bool v2;
   std::shared_ptr<Rings> rings;  // shared with the C++ API's FIFO objects
+  // canemuChannelEventFd was called: the receive eventfd is kept readable while messages wait.
+  std::atomic<bool> pollable{false};
 };
 
 class Library {
@@ -135,6 +140,8 @@ class Library {
   HRESULT call(ipc::VciRequest& request, ipc::VciReply& reply,
                std::vector<ipc::UniqueFd>* fds = nullptr);
   HRESULT list_devices(std::vector<DeviceDesc>& out, uint32_t* generation = nullptr);
+  // canemud's status: buses, simulated time and time mode.
+  HRESULT status(ipc::StatusReply& out);
   // Waits until the device list changes (VCI_OK) or `timeout_ms` passes (VCI_E_TIMEOUT).
   HRESULT wait_device_change(uint32_t generation, int timeout_ms);
   // Opens a control unit, channel or cyclic list on controller `controller` of `device`.
@@ -182,6 +189,9 @@ HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, 
                           uint32_t& done);
 HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms);
 HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms);
+// For canemuChannelEventFd: from now on the receive ring's eventfd is readable whenever messages
+// wait (and may be readable spuriously); returns it.
+int channel_poll_fd(ChannelObj& c);
 // Fill levels in percent, for the channel status.
 uint8_t rx_load(const ChannelObj& c);
 uint8_t tx_load(const ChannelObj& c);

@@ -279,8 +279,9 @@ struct DeviceEntry {
   char hardware_id[16] = {};  // VCI devices: "HW" and a serial number, stable across runs
   uint8_t controller_fd[kMaxDeviceControllers] = {};  // 1: a CAN FD controller
   uint32_t reserved2 = 0;
+  int64_t epoch_ns = 0;  // VCI devices: simulated time of power-on (their time stamps' zero)
 };
-static_assert(sizeof(DeviceEntry) == 40 + 32 * kMaxDeviceControllers + 32);
+static_assert(sizeof(DeviceEntry) == 40 + 32 * kMaxDeviceControllers + 40);
 
 struct DeviceListRequest {
   MsgHeader header;

@@ -122,6 +122,8 @@ class CanLine final : private ControllerEvents, private EventHandler {
   CanLine& operator=(const CanLine&) = delete;
 
   bool fd_controller() const { return node_.fd_capable(); }
+  // The adapter's power-on: its time stamps count from here.
+  SimTime epoch() const { return epoch_; }
   const Clocks& clocks() const { return clocks_; }
   CANCAPABILITIES capabilities() const;
   CANCAPABILITIES2 capabilities2() const;

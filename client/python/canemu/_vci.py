@@ -1,0 +1,323 @@
+"""ctypes bindings of canemu's VCI C API v2 (libvcinpl2.so) and its canemu extensions.
+
+Only what the python-can interface uses. The structs mirror cantype.h, vcitype.h and
+canemu_vci.h byte for byte (their sizes are checked when the module loads).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+from pathlib import Path
+from typing import Optional
+
+HRESULT = ctypes.c_uint32  # read unsigned: the VCI_E_* codes have the top bit set
+HANDLE = ctypes.c_void_p
+
+VCI_OK = 0
+
+
+def _code(n: int) -> int:
+    return 0xE0010000 | n
+
+
+VCI_E_TIMEOUT = _code(0x000B)
+VCI_E_INVALIDARG = _code(0x0004)
+VCI_E_ACCESSDENIED = _code(0x000A)
+VCI_E_NO_MORE_ITEMS = _code(0x000F)
+VCI_E_RXQUEUE_EMPTY = _code(0x0012)
+VCI_E_TXQUEUE_FULL = _code(0x0013)
+VCI_E_DISCONNECTED = _code(0x0019)
+VCI_E_INVALID_STATE = _code(0x0015)
+
+CAN_OPMODE_STANDARD = 0x01
+CAN_OPMODE_EXTENDED = 0x02
+CAN_OPMODE_ERRFRAME = 0x04
+CAN_OPMODE_LISTONLY = 0x08
+CAN_EXMODE_DISABLED = 0x00
+CAN_EXMODE_EXTDATA = 0x01
+CAN_EXMODE_FASTDATA = 0x02
+CAN_BTMODE_RAW = 0x01
+CAN_BTMODE_TSM = 0x02
+
+CAN_FILTER_LOCK = 0x01
+CAN_FILTER_PASS = 0x02
+CAN_FILTER_INCL = 0x03
+
+CAN_MSGTYPE_DATA = 0
+CAN_MSGTYPE_INFO = 1
+CAN_MSGTYPE_ERROR = 2
+CAN_MSGTYPE_STATUS = 3
+CAN_MSGTYPE_TIMEOVR = 5
+
+CAN_ERROR_STUFF = 1
+CAN_ERROR_FORM = 2
+CAN_ERROR_ACK = 3
+CAN_ERROR_BIT = 4
+CAN_ERROR_FDB = 5
+CAN_ERROR_CRC = 6
+
+CAN_STATUS_ERRLIM = 0x04
+CAN_STATUS_BUSOFF = 0x08
+
+CANEMU_STATE_ACTIVE = 0
+CANEMU_STATE_WARNING = 1
+CANEMU_STATE_PASSIVE = 2
+CANEMU_STATE_BUSOFF = 3
+
+CANEMU_LINE_ONLINE = 2
+
+CANEMU_TIME_REALTIME = 0
+CANEMU_TIME_SCALED = 1
+CANEMU_TIME_STEPPED = 2
+
+CANEMU_BUS_CAN = 0
+CANEMU_BUS_CANFD = 1
+CANEMU_BUS_LIN = 2
+
+CANEMU_MAX_CONTROLLERS = 4
+INFINITE = 0xFFFFFFFF
+
+# Data bytes of each DLC (ISO 11898-1).
+DLC_TO_LEN = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)
+
+
+def len_to_dlc(length: int) -> int:
+    for dlc, n in enumerate(DLC_TO_LEN):
+        if n >= length:
+            return dlc
+    raise ValueError(f"{length} data bytes do not fit a CAN FD frame (at most 64)")
+
+
+class VCIID(ctypes.Union):
+    _fields_ = [("AsInt64", ctypes.c_int64)]
+
+
+class CANBTP(ctypes.Structure):
+    _pack_ = 1
+    _fields_ = [
+        ("dwMode", ctypes.c_uint32),
+        ("dwBPS", ctypes.c_uint32),
+        ("wTS1", ctypes.c_uint16),
+        ("wTS2", ctypes.c_uint16),
+        ("wSJW", ctypes.c_uint16),
+        ("wTDO", ctypes.c_uint16),
+    ]
+
+
+class CANMSG2(ctypes.Structure):
+    _pack_ = 1
+    _fields_ = [
+        ("dwTime", ctypes.c_uint32),
+        ("_rsvd_", ctypes.c_uint32),
+        ("dwMsgId", ctypes.c_uint32),
+        # CANMSGINFO as its four bytes: type, flags2 (ssm hpm edl fdr esi), flags (dlc:4 ovr srr
+        # rtr ext), accept.
+        ("bType", ctypes.c_uint8),
+        ("bFlags2", ctypes.c_uint8),
+        ("bFlags", ctypes.c_uint8),
+        ("bAccept", ctypes.c_uint8),
+        ("abData", ctypes.c_uint8 * 64),
+    ]
+
+
+# CANMSGINFO bits in bFlags2 and bFlags.
+FLAGS2_SSM = 0x01
+FLAGS2_HPM = 0x02
+FLAGS2_EDL = 0x04
+FLAGS2_FDR = 0x08
+FLAGS2_ESI = 0x10
+FLAGS_DLC = 0x0F
+FLAGS_OVR = 0x10
+FLAGS_SRR = 0x20
+FLAGS_RTR = 0x40
+FLAGS_EXT = 0x80
+
+
+class CANCYCLICTXMSG2(ctypes.Structure):
+    _pack_ = 1
+    _fields_ = [
+        ("wCycleTime", ctypes.c_uint16),
+        ("bIncrMode", ctypes.c_uint8),
+        ("bByteIndex", ctypes.c_uint8),
+        ("dwMsgId", ctypes.c_uint32),
+        ("bType", ctypes.c_uint8),
+        ("bFlags2", ctypes.c_uint8),
+        ("bFlags", ctypes.c_uint8),
+        ("bAccept", ctypes.c_uint8),
+        ("abData", ctypes.c_uint8 * 64),
+    ]
+
+
+class CANEMU_BUSINFO(ctypes.Structure):
+    _fields_ = [
+        ("szName", ctypes.c_char * 32),
+        ("bKind", ctypes.c_uint8),
+        ("abReserved", ctypes.c_uint8 * 3),
+        ("dwBitrate", ctypes.c_uint32),
+        ("dwDataBitrate", ctypes.c_uint32),
+        ("dwReserved", ctypes.c_uint32),
+    ]
+
+
+class CANEMU_DEVICEINFO(ctypes.Structure):
+    _fields_ = [
+        ("szName", ctypes.c_char * 32),
+        ("VciObjectId", VCIID),
+        ("qwEpochNs", ctypes.c_int64),
+        ("bControllers", ctypes.c_uint8),
+        ("bEphemeral", ctypes.c_uint8),
+        ("abFd", ctypes.c_uint8 * CANEMU_MAX_CONTROLLERS),
+        ("abReserved", ctypes.c_uint8 * 2),
+        ("aszBus", (ctypes.c_char * 32) * CANEMU_MAX_CONTROLLERS),
+    ]
+
+
+for _struct, _size in (
+    (CANBTP, 16),
+    (CANMSG2, 80),
+    (CANCYCLICTXMSG2, 76),
+    (CANEMU_BUSINFO, 48),
+    (CANEMU_DEVICEINFO, 184),
+):
+    assert ctypes.sizeof(_struct) == _size, f"{_struct.__name__} is not {_size} bytes"
+
+
+class VciError(Exception):
+    """A VCI call failed: `hr` is its result, the message the library's text for it."""
+
+    def __init__(self, call: str, hr: int, text: str) -> None:
+        super().__init__(f"{call}: {text} (0x{hr:08X})")
+        self.call = call
+        self.hr = hr
+
+
+def _library_candidates() -> list:
+    """Where libvcinpl2.so is looked for, in order."""
+    names = []
+    libdir = os.environ.get("CANEMU_LIBDIR")
+    if libdir:
+        names.append(str(Path(libdir) / "libvcinpl2.so"))
+    # A source checkout: client/python/canemu -> the repository's build tree.
+    repo = Path(__file__).resolve().parents[3]
+    names.append(str(repo / "build" / "lib" / "libvcinpl2.so"))
+    names.append("libvcinpl2.so")  # the dynamic linker's search (an installed canemu)
+    return names
+
+
+_SIGNATURES = {
+    # name: (argument types)
+    "vciFormatError": (HRESULT, ctypes.c_char_p, ctypes.c_uint32),
+    "vciDeviceOpen": (ctypes.POINTER(VCIID), ctypes.POINTER(HANDLE)),
+    "vciDeviceClose": (HANDLE,),
+    "canControlOpen": (HANDLE, ctypes.c_uint32, ctypes.POINTER(HANDLE)),
+    "canControlClose": (HANDLE,),
+    "canControlInitialize": (
+        HANDLE,
+        ctypes.c_uint8,
+        ctypes.c_uint8,
+        ctypes.c_uint8,
+        ctypes.c_uint8,
+        ctypes.c_uint32,
+        ctypes.c_uint32,
+        ctypes.POINTER(CANBTP),
+        ctypes.POINTER(CANBTP),
+    ),
+    "canControlStart": (HANDLE, ctypes.c_int),
+    "canControlReset": (HANDLE,),
+    "canChannelOpen": (HANDLE, ctypes.c_uint32, ctypes.c_int, ctypes.POINTER(HANDLE)),
+    "canChannelClose": (HANDLE,),
+    "canChannelInitialize": (
+        HANDLE,
+        ctypes.c_uint16,
+        ctypes.c_uint16,
+        ctypes.c_uint16,
+        ctypes.c_uint16,
+        ctypes.c_uint32,
+        ctypes.c_uint8,
+    ),
+    "canChannelActivate": (HANDLE, ctypes.c_int),
+    "canChannelSetFilterMode": (
+        HANDLE,
+        ctypes.c_int,
+        ctypes.c_uint8,
+        ctypes.POINTER(ctypes.c_uint8),
+    ),
+    "canChannelSetAccFilter": (HANDLE, ctypes.c_int, ctypes.c_uint32, ctypes.c_uint32),
+    "canChannelAddFilterIds": (HANDLE, ctypes.c_int, ctypes.c_uint32, ctypes.c_uint32),
+    "canChannelPeekMessage": (HANDLE, ctypes.POINTER(CANMSG2)),
+    "canChannelReadMessage": (HANDLE, ctypes.c_uint32, ctypes.POINTER(CANMSG2)),
+    "canChannelPostMessage": (HANDLE, ctypes.POINTER(CANMSG2)),
+    "canChannelSendMessage": (HANDLE, ctypes.c_uint32, ctypes.POINTER(CANMSG2)),
+    "canSchedulerOpen": (HANDLE, ctypes.c_uint32, ctypes.POINTER(HANDLE)),
+    "canSchedulerClose": (HANDLE,),
+    "canSchedulerActivate": (HANDLE, ctypes.c_int),
+    "canSchedulerAddMessage": (
+        HANDLE,
+        ctypes.POINTER(CANCYCLICTXMSG2),
+        ctypes.POINTER(ctypes.c_uint32),
+    ),
+    "canSchedulerRemMessage": (HANDLE, ctypes.c_uint32),
+    "canSchedulerStartMessage": (HANDLE, ctypes.c_uint32, ctypes.c_uint16),
+    "canSchedulerStopMessage": (HANDLE, ctypes.c_uint32),
+    "canemuConnect": (ctypes.c_char_p,),
+    "canemuGetControllerState": (
+        HANDLE,
+        ctypes.POINTER(ctypes.c_uint8),
+        ctypes.POINTER(ctypes.c_uint16),
+        ctypes.POINTER(ctypes.c_uint16),
+        ctypes.POINTER(ctypes.c_uint8),
+    ),
+    "canemuStepTime": (ctypes.c_uint64, ctypes.POINTER(ctypes.c_uint64)),
+    "canemuCreateDevice": (
+        ctypes.c_char_p,
+        ctypes.c_char_p,
+        ctypes.POINTER(VCIID),
+        ctypes.c_char_p,
+        ctypes.c_uint32,
+    ),
+    "canemuRemoveDevice": (ctypes.c_char_p,),
+    "canemuEnumBuses": (ctypes.c_uint32, ctypes.POINTER(CANEMU_BUSINFO)),
+    "canemuEnumDevices": (ctypes.c_uint32, ctypes.POINTER(CANEMU_DEVICEINFO)),
+    "canemuFindDevice": (ctypes.c_char_p, ctypes.POINTER(CANEMU_DEVICEINFO)),
+    "canemuGetTime": (ctypes.POINTER(ctypes.c_uint64), ctypes.POINTER(ctypes.c_uint8)),
+    "canemuChannelEventFd": (HANDLE, ctypes.POINTER(ctypes.c_int)),
+}
+
+_lib: Optional[ctypes.CDLL] = None
+
+
+def lib() -> ctypes.CDLL:
+    """libvcinpl2.so, loaded once (OSError naming every place looked at when it is missing)."""
+    global _lib
+    if _lib is not None:
+        return _lib
+    tried = []
+    for name in _library_candidates():
+        try:
+            loaded = ctypes.CDLL(name)
+        except OSError as e:
+            tried.append(f"{name} ({e})")
+            continue
+        for func, args in _SIGNATURES.items():
+            f = getattr(loaded, func)
+            f.argtypes = args
+            f.restype = None if func == "vciFormatError" else HRESULT
+        _lib = loaded
+        return _lib
+    raise OSError(
+        "canemu's VCI library libvcinpl2.so was not found; build canemu (make build) or set "
+        "CANEMU_LIBDIR to the folder that holds it. Tried: " + "; ".join(tried)
+    )
+
+
+def error_text(hr: int) -> str:
+    buf = ctypes.create_string_buffer(512)
+    lib().vciFormatError(hr, buf, len(buf))
+    return buf.value.decode(errors="replace")
+
+
+def check(call: str, hr: int) -> None:
+    """Raises VciError for a failed call."""
+    if hr != VCI_OK:
+        raise VciError(call, hr, error_text(hr))

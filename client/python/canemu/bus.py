@@ -1,0 +1,836 @@
+"""python-can interface for canemu: `can.Bus(interface="canemu", channel=...)`.
+
+Every bus object is a program on an emulated IXXAT adapter, driven through canemu's VCI C API
+(libvcinpl2.so): a channel on one of the adapter's CAN controllers, and the controller's control
+unit when nobody else holds it. See docs/python.md.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import enum
+import logging
+import struct
+import threading
+import time
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import can
+from can import BusABC, BusState, Message
+from can.broadcastmanager import (
+    LimitedDurationCyclicSendTaskABC,
+    ModifiableCyclicTaskABC,
+    RestartableCyclicTaskABC,
+)
+
+from . import _timing, _vci
+from ._vci import VciError
+
+log = logging.getLogger("can.canemu")
+
+try:  # python-can 4.3 and later
+    from can import CanProtocol
+except ImportError:  # pragma: no cover - python-can 4.1 and 4.2
+    CanProtocol = None
+
+CanTimeoutError = getattr(can, "CanTimeoutError", can.CanOperationError)
+
+# SocketCAN's error frame layout (linux/can/error.h), which python-can's users know.
+CAN_ERR_CRTL = 0x00000004
+CAN_ERR_PROT = 0x00000008
+CAN_ERR_ACK = 0x00000020
+CAN_ERR_BUSOFF = 0x00000040
+CAN_ERR_BUSERROR = 0x00000080
+CAN_ERR_RESTARTED = 0x00000100
+CAN_ERR_CNT = 0x00000200
+CAN_ERR_CRTL_RX_WARNING = 0x04
+CAN_ERR_CRTL_TX_WARNING = 0x08
+CAN_ERR_CRTL_ACTIVE = 0x40
+CAN_ERR_PROT_BIT = 0x01
+CAN_ERR_PROT_FORM = 0x02
+CAN_ERR_PROT_STUFF = 0x04
+CAN_ERR_PROT_LOC_CRC_SEQ = 0x08
+CAN_ERR_PROT_LOC_ACK = 0x19
+
+# VCI error type -> (error class bits, protocol error type, location)
+_BUS_ERRORS = {
+    _vci.CAN_ERROR_BIT: (CAN_ERR_PROT, CAN_ERR_PROT_BIT, 0),
+    _vci.CAN_ERROR_FDB: (CAN_ERR_PROT, CAN_ERR_PROT_BIT, 0),
+    _vci.CAN_ERROR_STUFF: (CAN_ERR_PROT, CAN_ERR_PROT_STUFF, 0),
+    _vci.CAN_ERROR_FORM: (CAN_ERR_PROT, CAN_ERR_PROT_FORM, 0),
+    _vci.CAN_ERROR_CRC: (CAN_ERR_PROT, 0, CAN_ERR_PROT_LOC_CRC_SEQ),
+    _vci.CAN_ERROR_ACK: (CAN_ERR_ACK, 0, CAN_ERR_PROT_LOC_ACK),
+}
+
+class ControllerState(enum.IntEnum):
+    """The error state of the emulated controller (ISO 11898-1, with the warning limit)."""
+
+    ERROR_ACTIVE = _vci.CANEMU_STATE_ACTIVE
+    ERROR_WARNING = _vci.CANEMU_STATE_WARNING
+    ERROR_PASSIVE = _vci.CANEMU_STATE_PASSIVE
+    BUS_OFF = _vci.CANEMU_STATE_BUSOFF
+
+
+_BUS_STATES = {
+    _vci.CANEMU_STATE_ACTIVE: BusState.ACTIVE,
+    _vci.CANEMU_STATE_WARNING: BusState.ACTIVE,
+    _vci.CANEMU_STATE_PASSIVE: BusState.PASSIVE,
+    _vci.CANEMU_STATE_BUSOFF: BusState.ERROR,
+}
+
+_HEADER = struct.Struct("<IIIBBBB")  # dwTime, _rsvd_, dwMsgId, type, flags2, flags, accept
+_WAIT_SLICE_MS = 100  # blocking calls wait in slices so that Ctrl-C and shutdown get through
+_FILTER_LIST_SIZE = 2048  # 29-bit ID list of each channel
+
+
+def _operation_error(e: VciError) -> can.CanOperationError:
+    return can.CanOperationError(str(e), error_code=e.hr)
+
+
+def _initialization_error(e: VciError) -> can.CanInitializationError:
+    text = str(e)
+    if e.hr == _vci.VCI_E_DISCONNECTED:
+        text += (
+            "; canemud is not running or not reachable: start it with `make run` in the canemu "
+            "folder, `systemctl start canemu`, or `canemud --config FILE`, and set CANEMU_SOCKET "
+            "(or the bus's socket= argument) when it listens elsewhere"
+        )
+    return can.CanInitializationError(text, error_code=e.hr)
+
+
+def _call(name: str, *args) -> int:
+    """Calls a library function; VciError when it fails."""
+    hr = getattr(_vci.lib(), name)(*args)
+    _vci.check(name, hr)
+    return hr
+
+
+_offset_lock = threading.Lock()
+_offset: Optional[float] = None
+
+
+def _wall_offset() -> float:
+    """What is added to simulated seconds to make a time stamp: in real time the wall-clock
+    instant of simulated time 0 (measured once per daemon, so that every bus of the process
+    agrees), otherwise 0."""
+    global _offset
+    with _offset_lock:
+        if _offset is None:
+            before = time.time()
+            now_ns, mode = sim_time()
+            after = time.time()
+            realtime = mode == _vci.CANEMU_TIME_REALTIME
+            _offset = (before + after) / 2 - now_ns / 1e9 if realtime else 0.0
+        return _offset
+
+
+def connect(socket: Optional[str]) -> None:
+    """Talks to the canemud at `socket` from now on (None: $CANEMU_SOCKET or the default path).
+    The choice is for the whole process; buses opened before stay with their daemon."""
+    global _offset
+    with _offset_lock:
+        _offset = None
+    try:
+        _call("canemuConnect", socket.encode() if socket else None)
+    except VciError as e:
+        raise _initialization_error(e) from None
+
+
+def step(nanoseconds: int) -> int:
+    """Stepped time: runs canemud's emulation `nanoseconds` further; returns the simulated time
+    in ns after the step. CanOperationError when canemud does not run in stepped time."""
+    now = ctypes.c_uint64()
+    try:
+        _call("canemuStepTime", int(nanoseconds), ctypes.byref(now))
+    except VciError as e:
+        raise _operation_error(e) from None
+    return now.value
+
+
+def sim_time() -> Tuple[int, int]:
+    """(simulated time in ns, time mode: 0 real time, 1 scaled, 2 stepped)."""
+    now = ctypes.c_uint64()
+    mode = ctypes.c_uint8()
+    _call("canemuGetTime", ctypes.byref(now), ctypes.byref(mode))
+    return now.value, mode.value
+
+
+def buses() -> List[Dict[str, Any]]:
+    """canemud's buses: name, kind ("can", "can-fd", "lin"), bitrate, data_bitrate."""
+    kinds = {_vci.CANEMU_BUS_CAN: "can", _vci.CANEMU_BUS_CANFD: "can-fd", _vci.CANEMU_BUS_LIN: "lin"}
+    out = []
+    info = _vci.CANEMU_BUSINFO()
+    index = 0
+    while _vci.lib().canemuEnumBuses(index, ctypes.byref(info)) == _vci.VCI_OK:
+        out.append(
+            {
+                "name": info.szName.decode(),
+                "kind": kinds.get(info.bKind, "unknown"),
+                "bitrate": info.dwBitrate,
+                "data_bitrate": info.dwDataBitrate,
+            }
+        )
+        index += 1
+    return out
+
+
+def devices() -> List[_vci.CANEMU_DEVICEINFO]:
+    out = []
+    index = 0
+    while True:
+        info = _vci.CANEMU_DEVICEINFO()
+        if _vci.lib().canemuEnumDevices(index, ctypes.byref(info)) != _vci.VCI_OK:
+            return out
+        out.append(info)
+        index += 1
+
+
+class CanemuBus(BusABC):
+    """A node on a bus that canemud emulates.
+
+    :param channel: ``"DEVICE:N"`` for CAN controller N of a configured adapter (``"ixxat0:0"``)
+        or an adapter's name; a bus name (``"can0"``) for a new adapter of its own on that bus,
+        gone when the bus object shuts down.
+    :param bitrate: nominal bit rate in bit/s; default: the bus's configured one.
+    :param data_bitrate: CAN FD data-phase bit rate; default: the bus's configured one.
+    :param fd: send and receive CAN FD frames (needs a CAN FD bus).
+    :param timing: a ``can.BitTiming`` or ``can.BitTimingFd``; overrides the bit rates.
+    :param receive_own_messages: frames this bus sends come back from ``recv`` with
+        ``is_rx = False``.
+    :param listen_only: the controller only listens (no acknowledgement, no error flags).
+    :param auto_restart: a controller that went bus-off is started again (it then waits
+        128 x 11 recessive bits, as ISO 11898-1 says); False leaves it bus-off until
+        :meth:`restart`.
+    :param rx_fifo_size: receive FIFO of the channel, in messages.
+    :param tx_fifo_size: transmit FIFO, in messages; ``send`` waits while it is full.
+    :param socket: canemud's socket (default: $CANEMU_SOCKET, else its default path); applies
+        to the whole process.
+    """
+
+    def __init__(
+        self,
+        channel: Union[str, int],
+        can_filters=None,
+        receive_own_messages: bool = False,
+        bitrate: Optional[int] = None,
+        data_bitrate: Optional[int] = None,
+        fd: bool = False,
+        timing=None,
+        listen_only: bool = False,
+        auto_restart: bool = True,
+        rx_fifo_size: int = 4096,
+        tx_fifo_size: int = 256,
+        socket: Optional[str] = None,
+        **kwargs: Any,
+    ) -> None:
+        self._device = None
+        self._control = None
+        self._channel = None
+        self._scheduler = None
+        self._ephemeral: Optional[str] = None
+        self._channel_name = channel
+        self._poll_fd: Optional[int] = None
+        self._closed = False
+        self._receive_own = bool(receive_own_messages)
+        self._auto_restart = bool(auto_restart)
+        self._hw_filtered = True
+        self._was_bus_off = False
+        self._wraps = 0
+        self._last_ticks = 0
+        self._rx_lock = threading.Lock()
+        self._tx_lock = threading.Lock()
+        self._rx_msg = _vci.CANMSG2()
+        self._rx_view = memoryview(self._rx_msg).cast("B")
+        self._tx_msg = _vci.CANMSG2()
+        self._sched_lock = threading.Lock()
+        try:
+            _vci.lib()
+        except OSError as e:
+            raise can.CanInitializationError(str(e)) from None
+        try:
+            if socket is not None:
+                connect(socket)
+            self._open(str(channel), bitrate, data_bitrate, bool(fd), timing, listen_only,
+                       rx_fifo_size, tx_fifo_size)
+        except VciError as e:
+            self._close_handles()
+            raise _initialization_error(e) from None
+        except ValueError as e:
+            self._close_handles()
+            raise can.CanInitializationError(str(e)) from None
+        except BaseException:
+            self._close_handles()
+            raise
+        super().__init__(channel=channel, can_filters=can_filters, **kwargs)
+
+    # ---- opening ----
+
+    def _open(self, channel, bitrate, data_bitrate, fd, timing, listen_only, rx_size, tx_size):
+        info = _vci.CANEMU_DEVICEINFO()
+        device, _, number = channel.rpartition(":")
+        if device and number.isdigit():
+            controller = int(number)
+            _call("canemuFindDevice", device.encode(), ctypes.byref(info))
+        else:
+            controller = 0
+            if not self._find_bus(channel):
+                raise ValueError(self._unknown_channel(channel))
+            vciid = _vci.VCIID()
+            name = ctypes.create_string_buffer(32)
+            _call("canemuCreateDevice", channel.encode(), None, ctypes.byref(vciid), name, 32)
+            self._ephemeral = name.value.decode()
+            _call("canemuFindDevice", name.value, ctypes.byref(info))
+        if controller >= info.bControllers:
+            raise ValueError(
+                f"channel {channel!r}: adapter {info.szName.decode()} has "
+                f"{info.bControllers} CAN controller(s), numbered from 0"
+            )
+        self._device_name = info.szName.decode()
+        self._controller = controller
+        self._epoch_ns = info.qwEpochNs
+        self._fd_controller = bool(info.abFd[controller])
+        bus_name = info.aszBus[controller].value.decode()
+        bus = self._find_bus(bus_name) or {}
+        if bus.get("kind") == "lin":
+            raise ValueError(f"channel {channel!r} is on the LIN bus {bus_name}")
+        if fd and not self._fd_controller:
+            raise ValueError(
+                f"fd=True needs a CAN FD controller; {self._device_name}:{controller} on "
+                f"{bus_name} is a classic CAN controller"
+            )
+        self._fd = fd
+        self.channel_info = f"canemu {self._device_name}:{controller} on {bus_name}"
+        self._bus_name = bus_name
+        if CanProtocol is not None:
+            self._can_protocol = CanProtocol.CAN_FD if fd else CanProtocol.CAN_20
+
+        handle = _vci.HANDLE()
+        _call("vciDeviceOpen", ctypes.byref(info.VciObjectId), ctypes.byref(handle))
+        self._device = handle.value
+
+        handle = _vci.HANDLE()
+        _call("canChannelOpen", self._device, controller, 0, ctypes.byref(handle))
+        self._channel = handle.value
+        _call("canChannelInitialize", self._channel, rx_size, 1, tx_size, 1, _FILTER_LIST_SIZE,
+              _vci.CAN_FILTER_PASS)
+        _call("canChannelActivate", self._channel, 1)
+
+        handle = _vci.HANDLE()
+        hr = _vci.lib().canControlOpen(self._device, controller, ctypes.byref(handle))
+        if hr == _vci.VCI_E_ACCESSDENIED:
+            log.info("%s: another program controls the line; this bus only uses it",
+                     self.channel_info)
+        else:
+            _vci.check("canControlOpen", hr)
+            self._control = handle.value
+            self._init_line(bus, bitrate, data_bitrate, timing, listen_only)
+
+        self._time_offset = _wall_offset()
+
+    def _find_bus(self, name: str) -> Optional[Dict[str, Any]]:
+        for b in buses():
+            if b["name"] == name:
+                return b
+        return None
+
+    def _unknown_channel(self, channel: str) -> str:
+        names = [b["name"] for b in buses()]
+        adapters = [
+            f"{d.szName.decode()}:{k}" for d in devices() for k in range(d.bControllers)
+        ]
+        return (
+            f"channel {channel!r} is neither a bus nor DEVICE:N of an adapter of canemud "
+            f"(buses: {', '.join(names) or 'none'}; controllers: {', '.join(adapters) or 'none'})"
+        )
+
+    def _init_line(self, bus, bitrate, data_bitrate, timing, listen_only):
+        if timing is not None:
+            nominal, data = _timing.from_python_can(timing, self._fd_controller)
+            if data is None and self._fd_controller:
+                data = _timing.nominal_and_data(
+                    self._rate_of(nominal, True), None, True, False)[1]
+        else:
+            rate = int(bitrate) if bitrate else bus.get("bitrate", 500_000)
+            data_rate = int(data_bitrate) if data_bitrate else bus.get("data_bitrate") or rate
+            nominal, data = _timing.nominal_and_data(rate, data_rate, self._fd_controller,
+                                                     self._fd)
+        op_mode = _vci.CAN_OPMODE_STANDARD | _vci.CAN_OPMODE_EXTENDED | _vci.CAN_OPMODE_ERRFRAME
+        if listen_only:
+            op_mode |= _vci.CAN_OPMODE_LISTONLY
+        ex_mode = _vci.CAN_EXMODE_DISABLED
+        if self._fd:
+            ex_mode = _vci.CAN_EXMODE_EXTDATA | _vci.CAN_EXMODE_FASTDATA
+        _call(
+            "canControlInitialize",
+            self._control,
+            op_mode,
+            ex_mode,
+            _vci.CAN_FILTER_PASS,
+            _vci.CAN_FILTER_PASS,
+            0,
+            0,
+            ctypes.byref(nominal),
+            ctypes.byref(data) if data is not None else None,
+        )
+        _call("canControlStart", self._control, 1)
+
+    @staticmethod
+    def _rate_of(btp, fd_controller: bool) -> int:
+        clock = _timing.FD_CLOCK_HZ if fd_controller else _timing.CLASSIC_CLOCK_HZ
+        return clock // (btp.dwBPS * (1 + btp.wTS1 + btp.wTS2))
+
+    # ---- receiving ----
+
+    def fileno(self) -> int:
+        """A descriptor that is readable whenever messages wait (for select, Notifier,
+        asyncio)."""
+        if self._poll_fd is None:
+            fd = ctypes.c_int(-1)
+            try:
+                _call("canemuChannelEventFd", self._channel, ctypes.byref(fd))
+            except VciError as e:
+                raise _operation_error(e) from None
+            self._poll_fd = fd.value
+        return self._poll_fd
+
+    def _recv_internal(self, timeout: Optional[float]) -> Tuple[Optional[Message], bool]:
+        deadline = None if timeout is None else time.monotonic() + max(timeout, 0.0)
+        lib = _vci.lib()
+        with self._rx_lock:
+            while True:
+                if self._closed:
+                    return None, True
+                hr = lib.canChannelPeekMessage(self._channel, self._rx_msg)
+                if hr == _vci.VCI_E_RXQUEUE_EMPTY:
+                    if deadline is None:
+                        wait_ms = _WAIT_SLICE_MS
+                    else:
+                        left = deadline - time.monotonic()
+                        if left <= 0:
+                            return None, True
+                        wait_ms = min(_WAIT_SLICE_MS, max(1, int(left * 1000 + 0.999)))
+                    hr = lib.canChannelReadMessage(self._channel, wait_ms, self._rx_msg)
+                    if hr == _vci.VCI_E_TIMEOUT:
+                        continue
+                if hr != _vci.VCI_OK:
+                    raise _operation_error(VciError("canChannelReadMessage", hr,
+                                                    _vci.error_text(hr)))
+                msg, filtered = self._convert()
+                if msg is not None:
+                    return msg, filtered
+
+    def _timestamp(self, ticks: int) -> float:
+        if ticks < self._last_ticks:
+            self._wraps += 1
+        self._last_ticks = ticks
+        micros = (self._wraps << 32) | ticks
+        return (self._epoch_ns + micros * 1000) / 1e9 + self._time_offset
+
+    def _convert(self) -> Tuple[Optional[Message], bool]:
+        """The message in self._rx_msg as a python-can Message (None for those python-can has no
+        use for)."""
+        ticks, _, ident, kind, flags2, flags, _ = _HEADER.unpack_from(self._rx_view)
+        if kind == _vci.CAN_MSGTYPE_DATA:
+            dlc = flags & _vci.FLAGS_DLC
+            fd = bool(flags2 & _vci.FLAGS2_EDL)
+            remote = bool(flags & _vci.FLAGS_RTR) and not fd
+            length = 0 if remote else (_vci.DLC_TO_LEN[dlc] if fd else min(dlc, 8))
+            msg = Message(
+                timestamp=self._timestamp(ticks),
+                arbitration_id=ident,
+                is_extended_id=bool(flags & _vci.FLAGS_EXT),
+                is_remote_frame=remote,
+                is_fd=fd,
+                bitrate_switch=bool(flags2 & _vci.FLAGS2_FDR),
+                error_state_indicator=bool(flags2 & _vci.FLAGS2_ESI),
+                dlc=length if fd else dlc,
+                data=bytes(self._rx_view[16 : 16 + length]),
+                channel=self._channel_name,
+                is_rx=not flags & _vci.FLAGS_SRR,
+                check=False,
+            )
+            return msg, self._hw_filtered
+        if kind == _vci.CAN_MSGTYPE_ERROR:
+            return self._bus_error(ticks), True
+        if kind == _vci.CAN_MSGTYPE_STATUS:
+            return self._status_change(ticks, self._rx_view[16]), True
+        if kind == _vci.CAN_MSGTYPE_TIMEOVR:
+            self._wraps += 1
+            self._last_ticks = 0
+        return None, True
+
+    def _error_frame(self, ticks: int, ident: int, data: bytes) -> Message:
+        return Message(
+            timestamp=self._timestamp(ticks),
+            arbitration_id=ident,
+            is_error_frame=True,
+            dlc=8,
+            data=data,
+            channel=self._channel_name,
+        )
+
+    def _bus_error(self, ticks: int) -> Optional[Message]:
+        cls, prot, location = _BUS_ERRORS.get(self._rx_view[16], (CAN_ERR_PROT, 0, 0))
+        data = bytearray(8)
+        data[2] = prot
+        data[3] = location
+        return self._error_frame(ticks, cls | CAN_ERR_BUSERROR, bytes(data))
+
+    def _status_change(self, ticks: int, status: int) -> Optional[Message]:
+        """A STATUS message: the line's ERRLIM or BUSOFF flag changed."""
+        data = bytearray(8)
+        if status & _vci.CAN_STATUS_BUSOFF:
+            _, tec, rec, _ = self._controller_state()
+            data[6] = min(tec, 255)
+            data[7] = min(rec, 255)
+            if self._auto_restart and self._control is not None:
+                self.restart()
+            return self._error_frame(ticks, CAN_ERR_BUSOFF | CAN_ERR_CNT, bytes(data))
+        if status & _vci.CAN_STATUS_ERRLIM:
+            # The warning limit: which counter passed it is read now (it may have moved on).
+            _, tec, rec, _ = self._controller_state()
+            if tec >= 96:
+                data[1] |= CAN_ERR_CRTL_TX_WARNING
+            if rec >= 96 or tec < 96:
+                data[1] |= CAN_ERR_CRTL_RX_WARNING
+            ident = CAN_ERR_CRTL
+        else:
+            data[1] = CAN_ERR_CRTL_ACTIVE
+            ident = CAN_ERR_CRTL | (CAN_ERR_RESTARTED if self._was_bus_off else 0)
+        self._was_bus_off = False
+        return self._error_frame(ticks, ident, bytes(data))
+
+    # ---- state ----
+
+    def _controller_state(self) -> Tuple[int, int, int, int]:
+        state = ctypes.c_uint8()
+        tec = ctypes.c_uint16()
+        rec = ctypes.c_uint16()
+        line = ctypes.c_uint8()
+        try:
+            _call("canemuGetControllerState", self._channel, ctypes.byref(state),
+                  ctypes.byref(tec), ctypes.byref(rec), ctypes.byref(line))
+        except VciError as e:
+            raise _operation_error(e) from None
+        return state.value, tec.value, rec.value, line.value
+
+    @property
+    def state(self) -> BusState:
+        """The controller's error state in python-can's terms: ACTIVE while error-active (also
+        at the warning limit), PASSIVE while error-passive, ERROR while bus-off. See
+        :attr:`controller_state` for the four ISO 11898-1 states."""
+        return _BUS_STATES[self._controller_state()[0]]
+
+    @property
+    def controller_state(self) -> "ControllerState":
+        """ERROR_ACTIVE, ERROR_WARNING, ERROR_PASSIVE or BUS_OFF, from the controller."""
+        return ControllerState(self._controller_state()[0])
+
+    @state.setter
+    def state(self, new_state: BusState) -> None:
+        raise NotImplementedError("the state follows the controller; use listen_only=True")
+
+    def error_counters(self) -> Tuple[int, int]:
+        """(TEC, REC) of the controller."""
+        _, tec, rec, _ = self._controller_state()
+        return tec, rec
+
+    def restart(self) -> None:
+        """Starts the line again after bus-off (stop, start); the controller then waits for
+        128 x 11 recessive bits before it takes part again. Needs the control unit."""
+        if self._control is None:
+            raise can.CanOperationError(
+                f"{self.channel_info}: another program controls the line; it must restart it")
+        try:
+            _call("canControlStart", self._control, 0)
+            _call("canControlStart", self._control, 1)
+        except VciError as e:
+            raise _operation_error(e) from None
+        self._was_bus_off = True
+
+    # ---- sending ----
+
+    def _fill(self, out, msg: Message) -> None:
+        """Copies `msg` into the CANMSG2 (or CANCYCLICTXMSG2) `out`."""
+        length = len(msg.data)
+        flags2 = 0
+        if msg.is_fd:
+            if not self._fd:
+                raise can.CanOperationError(
+                    f"{self.channel_info}: a CAN FD frame needs a bus opened with fd=True")
+            dlc = _vci.len_to_dlc(length)
+            flags2 = _vci.FLAGS2_EDL | (_vci.FLAGS2_FDR if msg.bitrate_switch else 0)
+            padded = _vci.DLC_TO_LEN[dlc]
+        else:
+            if length > 8:
+                raise can.CanOperationError(
+                    f"a classic CAN frame carries at most 8 data bytes, not {length}")
+            dlc = msg.dlc if msg.is_remote_frame else length
+            if msg.is_remote_frame and not 0 <= dlc <= 8:
+                raise can.CanOperationError(f"a remote frame's DLC is 0..8, not {dlc}")
+            padded = length
+        limit = 0x1FFFFFFF if msg.is_extended_id else 0x7FF
+        if not 0 <= msg.arbitration_id <= limit:
+            raise can.CanOperationError(
+                f"identifier 0x{msg.arbitration_id:X} does not fit "
+                f"{'29' if msg.is_extended_id else '11'} bits")
+        flags = dlc
+        if msg.is_remote_frame and not msg.is_fd:
+            flags |= _vci.FLAGS_RTR
+        if msg.is_extended_id:
+            flags |= _vci.FLAGS_EXT
+        if self._receive_own and isinstance(out, _vci.CANMSG2):
+            flags |= _vci.FLAGS_SRR
+        out.dwMsgId = msg.arbitration_id
+        out.bType = _vci.CAN_MSGTYPE_DATA
+        out.bFlags2 = flags2
+        out.bFlags = flags
+        out.bAccept = 0
+        data = bytes(msg.data) + bytes(padded - length)
+        ctypes.memmove(out.abData, data, padded)
+
+    def send(self, msg: Message, timeout: Optional[float] = None) -> None:
+        """Queues `msg` in the transmit FIFO, waiting up to `timeout` seconds (None: as long as
+        it takes) while the FIFO is full. CanTimeoutError when it stays full."""
+        lib = _vci.lib()
+        with self._tx_lock:
+            out = self._tx_msg
+            out.dwTime = 0
+            self._fill(out, msg)
+            hr = lib.canChannelPostMessage(self._channel, out)
+            if hr == _vci.VCI_E_TXQUEUE_FULL:
+                hr = self._send_waiting(out, timeout)
+        if hr == _vci.VCI_OK:
+            return
+        if hr in (_vci.VCI_E_TIMEOUT, _vci.VCI_E_TXQUEUE_FULL):
+            raise CanTimeoutError(
+                f"{self.channel_info}: the transmit FIFO stayed full for {timeout} s "
+                f"(state {self.state.name})")
+        raise _operation_error(VciError("canChannelSendMessage", hr, _vci.error_text(hr)))
+
+    def _send_waiting(self, out, timeout: Optional[float]) -> int:
+        if self._auto_restart and self._control is not None:
+            if self._controller_state()[0] == _vci.CANEMU_STATE_BUSOFF:
+                self.restart()
+        lib = _vci.lib()
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while not self._closed:
+            if deadline is None:
+                wait_ms = _WAIT_SLICE_MS
+            else:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return _vci.VCI_E_TIMEOUT
+                wait_ms = min(_WAIT_SLICE_MS, max(1, int(left * 1000 + 0.999)))
+            hr = lib.canChannelSendMessage(self._channel, wait_ms, out)
+            if hr != _vci.VCI_E_TIMEOUT:
+                return hr
+        return _vci.VCI_E_TIMEOUT
+
+    # ---- filters ----
+
+    def _apply_filters(self, filters) -> None:
+        """Filters in the channel where the VCI filter can express them (one code/mask per
+        format, or ID lists that fit); python-can filters the rest in software."""
+        self._hw_filtered = True
+        if self._channel is None:
+            return
+        try:
+            _call("canChannelActivate", self._channel, 0)
+            try:
+                for extended in (False, True):
+                    if not self._set_channel_filter(filters, extended):
+                        self._hw_filtered = False
+            finally:
+                _call("canChannelActivate", self._channel, 1)
+        except VciError as e:
+            raise _operation_error(e) from None
+        if not self._hw_filtered:
+            # Both formats back to pass-all; python-can matches every filter in software.
+            _call("canChannelActivate", self._channel, 0)
+            for extended in (False, True):
+                _call("canChannelSetFilterMode", self._channel, int(extended),
+                      _vci.CAN_FILTER_PASS, None)
+            _call("canChannelActivate", self._channel, 1)
+
+    def _set_channel_filter(self, filters, extended: bool) -> bool:
+        h = self._channel
+        ext = int(extended)
+        if not filters:
+            _call("canChannelSetFilterMode", h, ext, _vci.CAN_FILTER_PASS, None)
+            return True
+        width = 0x1FFFFFFF if extended else 0x7FF
+        mine = [f for f in filters if f.get("extended", extended) == extended]
+        if not mine:
+            _call("canChannelSetFilterMode", h, ext, _vci.CAN_FILTER_LOCK, None)
+            return True
+        patterns = [
+            (((f["can_id"] & f["can_mask"]) & width) << 1, (f["can_mask"] & width) << 1)
+            for f in mine
+        ]
+        _call("canChannelSetFilterMode", h, ext, _vci.CAN_FILTER_INCL, None)
+        if len(patterns) == 1:
+            _call("canChannelSetAccFilter", h, ext, patterns[0][0], patterns[0][1])
+            return True
+        _call("canChannelSetAccFilter", h, ext, 0x80000000, 0xFFFFFFFF)  # accept none
+        for code, mask in patterns:
+            hr = _vci.lib().canChannelAddFilterIds(h, ext, code, mask)
+            if hr != _vci.VCI_OK:
+                return False  # does not fit the list: software
+        return True
+
+    # ---- cyclic transmission ----
+
+    def _send_periodic_internal(self, msgs, period: float, duration: Optional[float] = None,
+                                *args, **kwargs):
+        """The adapter's cyclic transmit list when it can do the job (one message, a period of
+        whole milliseconds up to 65.535 s, a repeat count up to 65535, no modifier callback);
+        python-can's software scheduler otherwise."""
+        messages = msgs if isinstance(msgs, (list, tuple)) else [msgs]
+        autostart = kwargs.get("autostart", args[0] if args else True)
+        modifier = kwargs.get("modifier_callback", args[1] if len(args) > 1 else None)
+        ticks = round(period * 1000)
+        repeat = 0 if duration is None else round(duration / period)
+        usable = (
+            len(messages) == 1
+            and modifier is None
+            and 1 <= ticks <= 0xFFFF
+            and abs(ticks - period * 1000) < 1e-6
+            and repeat <= 0xFFFF
+            and (duration is None or repeat >= 1)
+        )
+        if usable:
+            scheduler = self._open_scheduler()
+            if scheduler is not None:
+                task = CanemuCyclicTask(self, scheduler, messages[0], period, duration,
+                                        ticks, repeat)
+                if autostart:
+                    task.start()
+                return task
+        return super()._send_periodic_internal(msgs, period, duration, *args, **kwargs)
+
+    def _open_scheduler(self):
+        with self._sched_lock:
+            if self._scheduler is None:
+                handle = _vci.HANDLE()
+                hr = _vci.lib().canSchedulerOpen(self._device, self._controller,
+                                                 ctypes.byref(handle))
+                if hr != _vci.VCI_OK:
+                    log.info("%s: cyclic list not available (%s); software scheduling",
+                             self.channel_info, _vci.error_text(hr))
+                    return None
+                self._scheduler = handle.value
+                _call("canSchedulerActivate", self._scheduler, 1)
+            return self._scheduler
+
+    # ---- shutting down ----
+
+    def _close_handles(self) -> None:
+        lib = _vci.lib() if _vci._lib is not None else None
+        if lib is None:
+            return
+        for name, attr in (
+            ("canSchedulerClose", "_scheduler"),
+            ("canChannelClose", "_channel"),
+            ("canControlClose", "_control"),
+            ("vciDeviceClose", "_device"),
+        ):
+            handle = getattr(self, attr, None)
+            if handle is not None:
+                getattr(lib, name)(handle)
+                setattr(self, attr, None)
+        if self._ephemeral is not None:
+            lib.canemuRemoveDevice(self._ephemeral.encode())
+            self._ephemeral = None
+
+    def shutdown(self) -> None:
+        if self._closed:
+            return
+        super().shutdown()  # stops the periodic tasks first
+        self._closed = True
+        with self._rx_lock, self._tx_lock:
+            self._close_handles()
+
+    @staticmethod
+    def _detect_available_configs() -> List[Dict[str, Any]]:
+        """Every CAN controller of canemud's adapters (``"DEVICE:N"``) and every CAN bus (a new
+        adapter of its own), or nothing when canemud cannot be reached."""
+        try:
+            found_devices = devices()
+            found_buses = buses()
+        except OSError:
+            return []
+        kinds = {b["name"]: b["kind"] for b in found_buses}
+        configs: List[Dict[str, Any]] = []
+        for d in found_devices:
+            for k in range(d.bControllers):
+                configs.append({
+                    "interface": "canemu",
+                    "channel": f"{d.szName.decode()}:{k}",
+                    "fd": bool(d.abFd[k]),
+                    "bus": d.aszBus[k].value.decode(),
+                })
+        for b in found_buses:
+            if b["kind"] == "lin":
+                continue
+            configs.append({
+                "interface": "canemu",
+                "channel": b["name"],
+                "fd": kinds[b["name"]] == "can-fd",
+                "bitrate": b["bitrate"],
+            })
+        return configs
+
+
+class CanemuCyclicTask(LimitedDurationCyclicSendTaskABC, ModifiableCyclicTaskABC,
+                       RestartableCyclicTaskABC):
+    """A message in the adapter's cyclic transmit list (sent by the emulated firmware, with
+    the list's 1 ms ticks)."""
+
+    def __init__(self, bus: CanemuBus, scheduler, message: Message, period: float,
+                 duration: Optional[float], ticks: int, repeat: int) -> None:
+        super().__init__(message, period, duration)
+        self._bus = bus
+        self._scheduler = scheduler
+        self._ticks = ticks
+        self._repeat = repeat
+        self._index: Optional[int] = None
+        self._lock = threading.Lock()
+
+    def _entry(self) -> _vci.CANCYCLICTXMSG2:
+        entry = _vci.CANCYCLICTXMSG2()
+        entry.wCycleTime = self._ticks
+        self._bus._fill(entry, self.messages[0])
+        return entry
+
+    def start(self) -> None:
+        with self._lock:
+            if self._index is not None:
+                return
+            index = ctypes.c_uint32()
+            entry = self._entry()
+            try:
+                _call("canSchedulerAddMessage", self._scheduler, ctypes.byref(entry),
+                      ctypes.byref(index))
+                _call("canSchedulerStartMessage", self._scheduler, index.value, self._repeat)
+            except VciError as e:
+                raise _operation_error(e) from None
+            self._index = index.value
+
+    def stop(self) -> None:
+        with self._lock:
+            if self._index is None:
+                return
+            lib = _vci.lib()
+            lib.canSchedulerStopMessage(self._scheduler, self._index)
+            lib.canSchedulerRemMessage(self._scheduler, self._index)
+            self._index = None
+
+    def modify_data(self, messages: Union[Sequence[Message], Message]) -> None:
+        messages = self._check_and_convert_messages(messages)
+        self._check_modified_messages(messages)
+        running = self._index is not None
+        self.stop()
+        self.messages = messages
+        if running:
+            self.start()

@@ -208,6 +208,75 @@ def test_timing_argument_sets_the_controller(realtime_daemon):
         b.shutdown()
 
 
+def test_timing_from_another_clock_keeps_rate_and_sample_point(realtime_daemon):
+    # 500 kbit/s at 87.5 % described for a 16 MHz clock: made from the SJA1000's own clock.
+    timing = can.BitTiming(f_clock=16_000_000, brp=2, tseg1=13, tseg2=2, sjw=1)
+    a = can.Bus(interface="canemu", channel="can0", timing=timing)
+    b = can.Bus(interface="canemu", channel="can0")
+    try:
+        msg = can.Message(arbitration_id=0x67, data=[7], is_extended_id=False)
+        assert_same_frame(msg, exchange(a, b, msg))
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
+def test_fd_timing_argument(realtime_daemon):
+    if not hasattr(can, "BitTimingFd"):  # python-can before 4.2
+        with pytest.raises(AttributeError):
+            getattr(can, "BitTimingFd")
+        return
+    # fd0: 500 kbit/s nominal, 2 Mbit/s data, from the FD controller's 80 MHz.
+    timing = can.BitTimingFd(f_clock=80_000_000, nom_brp=2, nom_tseg1=63, nom_tseg2=16,
+                             nom_sjw=16, data_brp=1, data_tseg1=29, data_tseg2=10, data_sjw=10)
+    a = can.Bus(interface="canemu", channel="fd0", fd=True, timing=timing)
+    b = can.Bus(interface="canemu", channel="fd0", fd=True)
+    try:
+        msg = can.Message(arbitration_id=0x68, data=bytes(range(32)), is_fd=True,
+                          bitrate_switch=True, is_extended_id=False)
+        assert_same_frame(msg, exchange(a, b, msg))
+    finally:
+        a.shutdown()
+        b.shutdown()
+    with pytest.raises(can.CanInitializationError, match="needs a CAN FD controller"):
+        can.Bus(interface="canemu", channel="can0", timing=timing)
+
+
+def test_a_wrong_data_bitrate_breaks_fd_frames_with_bit_rate_switch(realtime_daemon):
+    a = can.Bus(interface="canemu", channel="fd0", fd=True, data_bitrate=4_000_000)
+    b = can.Bus(interface="canemu", channel="fd0", fd=True)
+    try:
+        a.send(can.Message(arbitration_id=0x69, data=bytes(16), is_fd=True, bitrate_switch=True,
+                           is_extended_id=False))
+        got = b.recv(TIMEOUT)
+        assert got is not None and got.is_error_frame
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
+def test_listen_only_receives_but_never_acknowledges(realtime_daemon):
+    listener = can.Bus(interface="canemu", channel="can0", listen_only=True)
+    sender = can.Bus(interface="canemu", channel="can0")
+    try:
+        sender.send(can.Message(arbitration_id=0x6A, data=[1], is_extended_id=False))
+        # Nobody acknowledges: the sender repeats until error-passive.
+        got = sender.recv(TIMEOUT)
+        assert got is not None and got.is_error_frame
+        assert got.arbitration_id & 0x20  # CAN_ERR_ACK
+        helper = can.Bus(interface="canemu", channel="can0")  # acknowledges from now on
+        try:
+            while (m := listener.recv(TIMEOUT)) is not None and m.is_error_frame:
+                pass
+            assert m is not None and m.arbitration_id == 0x6A
+        finally:
+            helper.shutdown()
+        assert listener.error_counters() == (0, 0)
+    finally:
+        listener.shutdown()
+        sender.shutdown()
+
+
 def test_a_wrong_bitrate_cannot_talk(realtime_daemon):
     # 250 kbit/s on a 500 kbit/s bus: the others see errors, not the frame.
     a = can.Bus(interface="canemu", channel="can0", bitrate=250_000)

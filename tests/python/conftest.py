@@ -4,6 +4,7 @@ socket and configuration, started from the build tree and stopped at the module'
 from __future__ import annotations
 
 import os
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -54,6 +55,19 @@ class Canemud(Daemon):
             files=files,
             canemud=str(CANEMUD),
         )
+
+
+def fault_load(daemon: Daemon, text: str) -> subprocess.CompletedProcess:
+    """`canemu fault load` of a scenario's text against `daemon` (its `at` times count from
+    now); the finished command."""
+    path = Path(daemon.dir, f"scenario-{len(list(Path(daemon.dir).glob('scenario-*')))}.toml")
+    path.write_text(text)
+    return subprocess.run(
+        [str(CANEMU_CLI), "--socket", daemon.socket, "fault", "load", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
 
 
 @pytest.fixture(scope="module")

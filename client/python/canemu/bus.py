@@ -299,7 +299,9 @@ class CanemuBus(BusABC):
                 f"{bus_name} is a classic CAN controller"
             )
         self._fd = fd
-        self.channel_info = f"canemu {self._device_name}:{controller} on {bus_name}"
+        #: The node's name in canemud (`canemu status`, fault scenarios' `node` and `from`).
+        self.node_name = f"{self._device_name}:{controller}"
+        self.channel_info = f"canemu {self.node_name} on {bus_name}"
         self._bus_name = bus_name
         if CanProtocol is not None:
             self._can_protocol = CanProtocol.CAN_FD if fd else CanProtocol.CAN_20

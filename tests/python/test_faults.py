@@ -1,0 +1,410 @@
+"""Every fault effect against a running canemud, loaded at run time with `canemu fault load`,
+seen through python-can: error frames, counters, states, frames that do or do not arrive.
+Stepped time, so every figure is exact; a fresh daemon per test."""
+
+from __future__ import annotations
+
+import can
+import pytest
+
+import canemu
+from canemu.bus import (
+    CAN_ERR_ACK,
+    CAN_ERR_BUSERROR,
+    CAN_ERR_BUSOFF,
+    CAN_ERR_CRTL,
+    CAN_ERR_CRTL_TX_WARNING,
+    CAN_ERR_PROT,
+    CAN_ERR_PROT_BIT,
+    CAN_ERR_PROT_FORM,
+    CAN_ERR_PROT_LOC_CRC_SEQ,
+    CAN_ERR_PROT_STUFF,
+)
+
+from conftest import Canemud, fault_load
+
+US = 1_000
+MS = 1_000_000
+
+
+@pytest.fixture
+def daemon():
+    d = Canemud("stepped")
+    yield d
+    d.stop()
+
+
+@pytest.fixture
+def nodes(daemon):
+    """Two nodes of their own on can0 (500 kbit/s), the line start messages taken."""
+    a = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+    b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+    drain(a)
+    drain(b)
+    yield a, b
+    a.shutdown()
+    b.shutdown()
+
+
+def drain(bus):
+    out = []
+    while (msg := bus.recv(0)) is not None:
+        out.append(msg)
+    return out
+
+
+def frames(msgs):
+    return [m for m in msgs if not m.is_error_frame]
+
+
+def bus_errors(msgs):
+    return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_BUSERROR]
+
+
+def load(daemon, text):
+    done = fault_load(daemon, text)
+    assert done.returncode == 0, done.stderr
+
+
+def msg(arbitration_id=0x123, data=(1, 2)):
+    return can.Message(arbitration_id=arbitration_id, data=list(data), is_extended_id=False)
+
+
+def now_ns():
+    return canemu.sim_time()[0]
+
+
+def test_bit_errors_take_the_sender_to_bus_off_at_the_32nd(daemon, nodes):
+    a, b = nodes
+    start = now_ns()
+    load(daemon, f"""
+[[fault]]
+at = "1ms"
+bus = "can0"
+match = {{ from = "{a.node_name}" }}
+effect = "bit_error"
+count = 32
+""")
+    a.send(msg())  # before the window: acknowledged, untouched
+    canemu.step(500 * US)
+    assert len(frames(drain(b))) == 1
+    canemu.step(600 * US)
+    a.send(msg())
+    canemu.step(50 * MS)
+    seen = drain(a)
+    errors = bus_errors(seen)
+    assert len(errors) == 32
+    assert all(e.arbitration_id == CAN_ERR_PROT | CAN_ERR_BUSERROR for e in errors)
+    assert all(e.data[2] == CAN_ERR_PROT_BIT for e in errors)
+    assert errors[0].timestamp >= (start + MS) / 1e9
+    warning = [m for m in seen if m.arbitration_id == CAN_ERR_CRTL]
+    assert len(warning) == 1 and seen.index(warning[0]) == 12  # TEC 96 after the 12th
+    assert seen[-1].arbitration_id & CAN_ERR_BUSOFF and seen[-1].data[6] == 255
+    assert a.controller_state == canemu.ControllerState.BUS_OFF
+    assert a.error_counters()[0] == 256
+    assert frames(drain(b)) == []
+
+
+def test_stuff_errors_are_detected_by_the_receivers(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x123, mask = 0x7FF }
+effect = "stuff_error"
+count = 3
+""")
+    a.send(msg(0x124))  # does not match
+    a.send(msg(0x123))
+    canemu.step(10 * MS)
+    got_b = drain(b)
+    assert [m.arbitration_id for m in frames(got_b)] == [0x124, 0x123]
+    errors_b = bus_errors(got_b)
+    assert len(errors_b) == 3
+    assert all(e.data[2] == CAN_ERR_PROT_STUFF for e in errors_b)
+    assert len(bus_errors(drain(a))) == 3
+    # Transmitter: +8 per error flag, -1 per success after them. Receiver: +1 for the error it
+    # detects, +8 because the transmitter's flag (started when it saw theirs) is still dominant
+    # right after its own, -1 for the success.
+    assert a.error_counters() == (3 * 8 - 1, 0)
+    assert b.error_counters() == (0, 3 * 9 - 1)
+
+
+def test_form_errors_at_the_crc_delimiter(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[[fault]]
+at = "0s"
+bus = "can0"
+effect = "form_error"
+count = 2
+""")
+    a.send(msg())
+    canemu.step(10 * MS)
+    got_b = drain(b)
+    assert len(frames(got_b)) == 1
+    errors_b = bus_errors(got_b)
+    assert len(errors_b) == 2 and all(e.data[2] == CAN_ERR_PROT_FORM for e in errors_b)
+    # The transmitter only notices at the ACK delimiter (the receivers' flag there), so its
+    # flag overruns theirs: receivers +1 +8 per error, as with stuff errors.
+    assert a.error_counters() == (2 * 8 - 1, 0)
+    assert b.error_counters() == (0, 2 * 9 - 1)
+
+
+def test_crc_error_leaves_the_frame_unacknowledged(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[[fault]]
+at = "0s"
+bus = "can0"
+effect = "crc_error"
+count = 1
+""")
+    a.send(msg())
+    canemu.step(10 * MS)
+    got_b = drain(b)
+    assert len(frames(got_b)) == 1  # the repetition
+    errors_b = bus_errors(got_b)
+    assert len(errors_b) == 1 and errors_b[0].data[3] == CAN_ERR_PROT_LOC_CRC_SEQ
+    errors_a = bus_errors(drain(a))
+    assert len(errors_a) == 1 and errors_a[0].arbitration_id & CAN_ERR_ACK
+    assert a.error_counters() == (8 - 1, 0)
+    assert b.error_counters() == (0, 0)
+
+
+def test_ack_errors_hit_only_the_matching_frames(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x123 }
+effect = "ack_error"
+count = 3
+""")
+    a.send(msg(0x100))
+    a.send(msg(0x123))
+    canemu.step(10 * MS)
+    assert [m.arbitration_id for m in frames(drain(b))] == [0x100, 0x123]
+    errors_a = bus_errors(drain(a))
+    assert len(errors_a) == 3
+    assert all(e.arbitration_id == CAN_ERR_ACK | CAN_ERR_BUSERROR for e in errors_a)
+    assert a.error_counters() == (3 * 8 - 1, 0)
+
+
+def test_ack_suppress_leaves_a_sender_error_passive_at_128(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[[fault]]
+at = "0s"
+bus = "can0"
+effect = "ack_suppress"
+duration = "1s"
+""")
+    a.send(msg())
+    canemu.step(500 * MS)
+    assert a.state == can.BusState.PASSIVE and a.error_counters() == (128, 0)
+    # Once the sender is error-passive its error flag is recessive: nobody else sees the ACK
+    # error, and the receivers take every repetition as a valid frame (ISO 11898-1).
+    got_b = frames(drain(b))
+    assert len(got_b) > 100 and {m.arbitration_id for m in got_b} == {0x123}
+    # 16 unacknowledged attempts made it passive; it goes on seeing its ACK errors.
+    errors_a = bus_errors(drain(a))
+    assert len(errors_a) > 16
+    assert all(e.arbitration_id == CAN_ERR_ACK | CAN_ERR_BUSERROR for e in errors_a)
+    canemu.step(600 * MS)  # acknowledged after the window: done, one off the TEC
+    assert a.error_counters() == (127, 0)
+    drain(b)
+    canemu.step(10 * MS)
+    assert frames(drain(b)) == []
+
+
+def test_stuck_dominant_bus(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[[fault]]
+at = "1ms"
+bus = "can0"
+effect = "stuck_dominant"
+duration = "200us"
+""")
+    canemu.step(5 * MS)
+    # 100 dominant bit times (bits 0..99) on an idle bus. Each node takes bit 0 for a start of
+    # frame; bit 5 should have been a stuff bit: stuff error (+1); its error flag is bits 6..11;
+    # bit 12, the first after it, is dominant (+8); so are the 14th dominant bit from the flag's
+    # start (bit 19, +8) and every 8th after it up to bit 99 (27..99: 10 x 8): REC 97.
+    for node in (a, b):
+        errors = bus_errors(drain(node))
+        assert errors and errors[0].data[2] == CAN_ERR_PROT_STUFF
+        assert node.error_counters() == (0, 97)
+    a.send(msg())  # the bus works again
+    canemu.step(MS)
+    assert len(frames(drain(b))) == 1
+
+
+def test_random_errors_are_the_same_for_the_same_seed(nodes, daemon):
+    scenario = """
+[scenario]
+seed = 11
+
+[[fault]]
+at = "0s"
+until = "200ms"
+bus = "can0"
+effect = "random_errors"
+bit_error_rate = 0.002
+"""
+
+    def run(a, b, d):
+        load(d, scenario)
+        for k in range(200):
+            a.send(msg(0x100 + k % 16, [k % 256]))
+        canemu.step(100 * MS)
+        errors = [(round(e.timestamp * 1e6), bytes(e.data)) for e in bus_errors(drain(a))]
+        received = [(round(m.timestamp * 1e6), m.arbitration_id) for m in frames(drain(b))]
+        return errors, received
+
+    first = run(*nodes, daemon)
+    errors, received = first
+    # Every frame arrives; one hit in the last bit of its EOF arrives twice (the receivers had
+    # taken it, the transmitter repeats it: ISO 11898-1's known double reception).
+    assert {k for _, k in received} == {0x100 + k for k in range(16)}
+    assert 200 <= len(received) <= 200 + len(errors)
+    # About one 60-bit frame in eight is hit at 0.002 per bit.
+    assert 10 <= len(errors) <= 50
+    again = Canemud("stepped")
+    try:
+        a = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+        b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+        drain(a)
+        drain(b)
+        assert run(a, b, again) == first
+        a.shutdown()
+        b.shutdown()
+    finally:
+        again.stop()
+
+
+def test_node_off_leaves_the_other_unacknowledged_until_it_is_back(daemon, nodes):
+    a, b = nodes
+    load(daemon, f"""
+[[fault]]
+at = "0s"
+until = "100ms"
+node = "{b.node_name}"
+effect = "node_off"
+""")
+    a.send(msg())
+    canemu.step(50 * MS)
+    assert a.error_counters() == (128, 0)
+    assert frames(drain(b)) == []
+    canemu.step(60 * MS)
+    assert len(frames(drain(b))) == 1
+    assert a.error_counters() == (127, 0)
+
+
+def test_node_on_plugs_a_node_in_again(daemon, nodes):
+    a, b = nodes
+    load(daemon, f"""
+[[fault]]
+at = "0s"
+node = "{b.node_name}"
+effect = "node_off"
+
+[[fault]]
+at = "30ms"
+node = "{b.node_name}"
+effect = "node_on"
+""")
+    a.send(msg())
+    canemu.step(29 * MS)
+    assert frames(drain(b)) == []
+    canemu.step(10 * MS)
+    assert len(frames(drain(b))) == 1
+
+
+def test_bus_off_is_forced_at_its_instant(daemon, nodes):
+    a, _ = nodes
+    start = now_ns()
+    load(daemon, f"""
+[[fault]]
+at = "1ms"
+node = "{a.node_name}"
+effect = "bus_off"
+""")
+    canemu.step(MS - 1)
+    assert a.state == can.BusState.ACTIVE
+    canemu.step(1)
+    assert a.state == can.BusState.ERROR
+    seen = drain(a)
+    assert seen[-1].arbitration_id & CAN_ERR_BUSOFF
+    assert round(seen[-1].timestamp * 1e9) == start + MS - (start + MS) % 1000
+    a.restart()
+    canemu.step(1408 * 2 * US)  # 128 x 11 recessive bits at 500 kbit/s
+    assert a.state == can.BusState.ACTIVE
+    assert a.error_counters() == (0, 0)
+
+
+def test_error_counters_are_set_and_the_state_follows(daemon, nodes):
+    a, _ = nodes
+    load(daemon, f"""
+[[fault]]
+at = "0s"
+node = "{a.node_name}"
+effect = "error_counters"
+tec = 100
+rec = 5
+""")
+    assert a.error_counters() == (100, 5)
+    assert a.controller_state == canemu.ControllerState.ERROR_WARNING
+    warning = [m for m in drain(a) if m.arbitration_id == CAN_ERR_CRTL]
+    assert len(warning) == 1 and warning[0].data[1] == CAN_ERR_CRTL_TX_WARNING
+    load(daemon, f"""
+[[fault]]
+at = "0s"
+node = "{a.node_name}"
+effect = "error_counters"
+tec = 130
+rec = 0
+""")
+    assert a.state == can.BusState.PASSIVE
+
+
+def test_oscillator_far_off_is_not_understood_until_it_is_back(daemon, nodes):
+    a, b = nodes
+    load(daemon, f"""
+[[fault]]
+at = "0s"
+until = "20ms"
+node = "{a.node_name}"
+effect = "oscillator"
+ppm = 30000
+""")
+    a.send(msg())
+    canemu.step(19 * MS)
+    got_b = drain(b)
+    assert frames(got_b) == []
+    assert bus_errors(got_b)
+    assert bus_errors(drain(a))
+    canemu.step(20 * MS)
+    assert len(frames(drain(b))) == 1
+
+
+def test_lin_effects_are_refused_whole_with_the_reason(daemon, nodes):
+    a, _ = nodes
+    done = fault_load(daemon, f"""
+[[fault]]
+at = "0s"
+node = "{a.node_name}"
+effect = "error_counters"
+tec = 50
+
+[[fault]]
+at = "0s"
+bus = "can0"
+effect = "lin_no_response"
+""")
+    assert done.returncode != 0
+    assert "lin_no_response" in done.stderr and "LIN" in done.stderr
+    assert a.error_counters() == (0, 0)  # nothing of it applied

@@ -354,6 +354,7 @@ struct InjectOptions {
   int tec = -1;
   int rec = -1;
   int ppm = 0;
+  std::string data;  // babble: hex bytes
 };
 
 int cmd_fault_inject(const std::string& socket, const InjectOptions& o) {
@@ -375,6 +376,16 @@ int cmd_fault_inject(const std::string& socket, const InjectOptions& o) {
   key("tec", o.tec >= 0 ? std::to_string(o.tec) : "");
   key("rec", o.rec >= 0 ? std::to_string(o.rec) : "");
   key("ppm", o.ppm ? std::to_string(o.ppm) : "");
+  if (o.effect == "babble") {  // --id, --ext and --data describe the flooding frame
+    key("id", o.id);
+    key("ext", o.ext ? "true" : "");
+    std::string bytes;
+    for (std::size_t i = 0; i < o.data.size(); i += 2) {
+      bytes += (bytes.empty() ? "0x" : ", 0x") + o.data.substr(i, 2);
+    }
+    key("data", o.data.empty() ? "" : "[" + bytes + "]");
+    return load_scenario_text(socket, "<command line>", text);
+  }
   std::string match;
   const auto part = [&](const std::string& k, const std::string& v) {
     if (!v.empty()) {
@@ -561,9 +572,9 @@ int main(int argc, char** argv) {
   fault_inject->add_option("--until", inject.until, "end of the window");
   fault_inject->add_option("--bus", inject.bus, "bus (frame and bus effects)");
   fault_inject->add_option("--node", inject.node, "node, DEVICE:N (node effects)");
-  fault_inject->add_option("--duration", inject.duration, "ack_suppress, stuck_dominant");
+  fault_inject->add_option("--duration", inject.duration, "ack_suppress, stuck_dominant, babble");
   fault_inject->add_option("--from", inject.from, "match: transmitting node");
-  fault_inject->add_option("--id", inject.id, "match: identifier (0x100)");
+  fault_inject->add_option("--id", inject.id, "match: identifier (0x100); babble: its frame's");
   fault_inject->add_option("--mask", inject.mask, "match: identifier mask (0x7FF)");
   fault_inject->add_flag("--ext", inject.ext, "match: extended frames only");
   fault_inject->add_flag("--std", inject.std_id, "match: standard frames only");
@@ -573,6 +584,7 @@ int main(int argc, char** argv) {
   fault_inject->add_option("--tec", inject.tec, "error_counters");
   fault_inject->add_option("--rec", inject.rec, "error_counters");
   fault_inject->add_option("--ppm", inject.ppm, "oscillator");
+  fault_inject->add_option("--data", inject.data, "babble: data bytes in hex (1122AABB)");
 
   auto* time = app.add_subcommand("time", "simulated time (stepped mode)");
   time->require_subcommand(1);

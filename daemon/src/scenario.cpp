@@ -24,12 +24,13 @@ constexpr NamedValue<FaultEffect> kEffects[] = {
     {FaultEffect::bus_off, "bus_off"},
     {FaultEffect::error_counters, "error_counters"},
     {FaultEffect::oscillator, "oscillator"},
+    {FaultEffect::babble, "babble"},
 };
 
 // Named by the language, not emulated yet: a scenario using them is refused with a reason.
 constexpr std::string_view kLaterEffects[] = {
-    "babble",           "line_error",     "lin_no_response", "lin_checksum_error",
-    "lin_parity_error", "lin_sync_error", "lin_bit_error",   "lin_wakeup"};
+    "line_error",     "lin_no_response", "lin_checksum_error", "lin_parity_error",
+    "lin_sync_error", "lin_bit_error",   "lin_wakeup"};
 
 bool is_frame_effect(FaultEffect e) {
   return e <= FaultEffect::ack_error;
@@ -96,6 +97,31 @@ void read_match(Checker& c, const toml::table& t, const std::string& path, Fault
   }
 }
 
+// babble's frame: id (11 bits, or 29 with ext = true), data (up to 8 bytes).
+void read_babble_frame(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
+  f.ext = boolean(c, t, path, "ext").value_or(false);
+  if (auto id = c.integer(t, path, "id", true, 0, f.ext ? 0x1FFFFFFF : 0x7FF)) {
+    f.id = static_cast<uint32_t>(*id);
+  }
+  const toml::node* n = t.get("data");
+  if (n == nullptr) {
+    return;  // no data bytes
+  }
+  const toml::array* a = n->as_array();
+  if (a == nullptr || a->size() > 8) {
+    c.error(*n, path + ".data", "must be an array of at most 8 bytes, e.g. [0x11, 0x22]");
+    return;
+  }
+  for (const toml::node& e : *a) {
+    const auto* v = e.as_integer();
+    if (v == nullptr || v->get() < 0 || v->get() > 255) {
+      c.error(e, path + ".data", "each element must be a byte (0..255)");
+      return;
+    }
+    f.data.push_back(static_cast<uint8_t>(v->get()));
+  }
+}
+
 void read_fault(Checker& c, const toml::table& t, const std::string& path, Scenario& s) {
   FaultSpec f;
   f.line = t.source().begin.line;
@@ -141,6 +167,9 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     if (f.effect == FaultEffect::oscillator) {
       allow({"ppm"});
     }
+    if (f.effect == FaultEffect::babble) {
+      allow({"id", "ext", "data", "duration"});
+    }
   }
   c.only_keys(t, path, keys, fmt::format("not a key of {} (known: ", to_string(f.effect)));
   if (auto at = duration(c, t, path, "at", true)) {
@@ -179,7 +208,7 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
       }
     }
   }
-  if (is_bus_effect(f.effect)) {
+  if (is_bus_effect(f.effect) || f.effect == FaultEffect::babble) {
     if (auto d = duration(c, t, path, "duration", true)) {
       f.duration_ns = *d;
       if (*d <= 0) {
@@ -211,6 +240,9 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     if (auto ppm = c.integer(t, path, "ppm", true, -500'000, 500'000)) {
       f.ppm = static_cast<int32_t>(*ppm);
     }
+  }
+  if (f.effect == FaultEffect::babble) {
+    read_babble_frame(c, t, path, f);
   }
   s.faults.push_back(f);
 }

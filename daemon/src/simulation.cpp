@@ -121,12 +121,12 @@ void Simulation::add_bus(const BusConfig& b) {
 std::optional<Simulation::NodeRef> Simulation::find_node(std::string_view name) {
   for (Controller& c : controllers_) {
     if (c.name == name) {
-      return NodeRef{c.bus, c.node->node(), &c.node->controller()};
+      return NodeRef{c.bus, c.node->node(), &c.node->controller(), c.node.get()};
     }
   }
   for (const Ephemeral& e : ephemeral_) {
     if (e.name == name || e.name + ":0" == name) {
-      return NodeRef{e.bus, e.node->node(), &e.node->controller()};
+      return NodeRef{e.bus, e.node->node(), &e.node->controller(), e.node};
     }
   }
   return std::nullopt;
@@ -290,6 +290,21 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
           fc.set_counters(off ? kBusOffLimit : tec, off ? fc.rec() : rec);
           b.counters_changed(n.node);
           fault_log(what);
+        });
+        break;
+      }
+      case FaultEffect::babble: {
+        HostedNode* hosted = plan[k].node->hosted;
+        const Frame frame = *Frame::classic(f.id, f.data, f.ext);  // checked by the parser
+        const SimDuration d(f.duration_ns);
+        when(at, [this, hosted, frame, d, what] {
+          if (hosted->babble(frame, scheduler_.now() + d)) {
+            fault_log(what);
+          } else {
+            fault_log(what +
+                      ": the node is not on the bus (its line is not started); nothing "
+                      "babbles");
+          }
         });
         break;
       }

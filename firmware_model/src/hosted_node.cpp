@@ -1,5 +1,7 @@
 #include "canemu/firmware_model/hosted_node.hpp"
 
+#include <utility>
+
 namespace canemu::model {
 
 void HostedNode::configure(const HostedNodeSettings& settings, ControllerEvents* sink,
@@ -9,6 +11,8 @@ void HostedNode::configure(const HostedNodeSettings& settings, ControllerEvents*
   ++generation_;
   running_ = false;
   tx_loaded_ = false;
+  babble_.reset();
+  babble_loaded_ = false;
   program(settings);
   bus_.reset_stats(node());
   sink_ = sink;
@@ -27,6 +31,7 @@ void HostedNode::go_online() {
 void HostedNode::go_offline() {
   running_ = false;
   tx_loaded_ = false;
+  babble_loaded_ = false;
   ++generation_;
   go_off_bus();
 }
@@ -43,8 +48,56 @@ void HostedNode::restart() {
   }
 }
 
+bool HostedNode::babble(const Frame& frame, SimTime until) {
+  if (!running_) {
+    return false;
+  }
+  babble_ = frame;
+  babble_until_ = until;
+  const uint64_t generation = generation_;
+  scheduler_.schedule_at(until, [this, generation](SimTime) {
+    if (generation == generation_) {
+      end_babble();
+    }
+  });
+  load_next();
+  return true;
+}
+
+void HostedNode::end_babble() {
+  if (!babble_ || now() < babble_until_) {
+    return;  // a later babble replaced this one
+  }
+  babble_.reset();
+  if (!babble_loaded_) {
+    return;
+  }
+  if (frame_on_wire()) {
+    abort_tx();  // completes, or fails, without a repetition; its end is reported then
+    return;
+  }
+  abort_tx();  // gone: the SJA1000 reports the drop at once, the FD controller does not
+  if (babble_loaded_) {
+    babble_loaded_ = false;
+    tx_loaded_ = false;
+  }
+  load_next();
+}
+
 void HostedNode::load_next() {
-  if (!running_ || tx_loaded_ || !source_ || !buffer_free()) {
+  if (!running_ || tx_loaded_ || !buffer_free()) {
+    return;
+  }
+  if (babble_ && now() >= babble_until_) {
+    babble_.reset();  // ended while the node was off the bus
+  }
+  if (babble_) {
+    tx_loaded_ = true;
+    babble_loaded_ = true;
+    load(TxFrame{*babble_, false, false});
+    return;
+  }
+  if (!source_) {
     return;
   }
   std::optional<TxFrame> next = source_();
@@ -64,6 +117,10 @@ void HostedNode::frame_received(SimTime at, const Frame& frame, bool own) {
 
 void HostedNode::frame_transmitted(SimTime at, const Frame& frame) {
   tx_loaded_ = false;
+  if (std::exchange(babble_loaded_, false)) {
+    load_next();
+    return;
+  }
   if (sink_ != nullptr) {
     sink_->frame_transmitted(at, frame);
   }
@@ -72,6 +129,10 @@ void HostedNode::frame_transmitted(SimTime at, const Frame& frame) {
 
 void HostedNode::transmission_dropped(SimTime at, const Frame& frame) {
   tx_loaded_ = false;
+  if (std::exchange(babble_loaded_, false)) {
+    load_next();
+    return;
+  }
   if (sink_ != nullptr) {
     sink_->transmission_dropped(at, frame);
   }
@@ -108,7 +169,7 @@ void HostedNode::overrun(SimTime at, const Frame& lost) {
 }
 
 void HostedNode::arbitration_lost(SimTime at, uint16_t bit) {
-  if (sink_ != nullptr) {
+  if (sink_ != nullptr && !babble_loaded_) {
     sink_->arbitration_lost(at, bit);
   }
 }

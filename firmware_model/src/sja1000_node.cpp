@@ -50,6 +50,10 @@ void Sja1000Node::load(const TxFrame& tx) {
   chip_.write(CMR, cmr);
 }
 
+void Sja1000Node::abort_tx() {
+  chip_.write(CMR, CMR_AT);
+}
+
 void Sja1000Node::release_received() {
   chip_.write(CMR, CMR_RRB);
 }

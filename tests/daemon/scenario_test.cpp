@@ -74,7 +74,7 @@ effect = "teleport"
 [[fault]]
 at = "1s"
 node = "x:0"
-effect = "babble"
+effect = "line_error"
 
 [[fault]]
 at = "1s"
@@ -96,8 +96,9 @@ tec = 300
                    "s.toml:6:1: fault[1].duration: missing (a string is required)",
                    "s.toml:14:10: fault[2].effect: \"teleport\" is not a fault effect (bit_error, "
                    "stuff_error, form_error, crc_error, ack_error, ack_suppress, stuck_dominant, "
-                   "random_errors, node_off, node_on, bus_off, error_counters, oscillator)",
-                   "s.toml:19:10: fault[3].effect: \"babble\" is not emulated yet",
+                   "random_errors, node_off, node_on, bus_off, error_counters, oscillator, "
+                   "babble)",
+                   "s.toml:19:10: fault[3].effect: \"line_error\" is not emulated yet",
                    "s.toml:25:15: fault[4].probability: must be above 0 and at most 1",
                    "s.toml:31:7: fault[5].tec: 300 is outside 0..255",
                    "s.toml:27:1: fault[5].rec: missing (an integer is required)",
@@ -105,6 +106,53 @@ tec = 300
   EXPECT_EQ(
       errors_of("[scenario]\nname = \"empty\"\n"),
       (std::vector<std::string>{"s.toml: no [[fault]] tables: a scenario needs at least one"}));
+}
+
+TEST(Scenario, BabbleNeedsItsFrameAndDuration) {
+  auto s = parse_scenario(R"([[fault]]
+at = "1s"
+node = "ixxat0:0"
+effect = "babble"
+id = 0x1ABCDEF
+ext = true
+data = [0xDE, 0xAD]
+duration = "10ms"
+)",
+                          "s.toml");
+  ASSERT_TRUE(s) << s.error().front();
+  const FaultSpec& f = s->faults.at(0);
+  EXPECT_EQ(f.effect, FaultEffect::babble);
+  EXPECT_EQ(f.node, "ixxat0:0");
+  EXPECT_EQ(f.id, 0x1ABCDEFu);
+  EXPECT_TRUE(f.ext);
+  EXPECT_EQ(f.data, (std::vector<uint8_t>{0xDE, 0xAD}));
+  EXPECT_EQ(f.duration_ns, 10'000'000);
+
+  const auto e = errors_of(R"([[fault]]
+at = "1s"
+node = "ixxat0:0"
+effect = "babble"
+id = 0x800
+data = [1, 2, 3, 4, 5, 6, 7, 8, 9]
+count = 3
+
+[[fault]]
+at = "1s"
+node = "ixxat0:0"
+effect = "babble"
+id = 0x10
+data = [256]
+duration = "1ms"
+)");
+  EXPECT_EQ(e, (std::vector<std::string>{
+                   "s.toml:7:1: fault[0].count: not a key of babble (known: at, effect, node, id, "
+                   "ext, data, duration)",
+                   "s.toml:1:1: fault[0].duration: missing (a string is required)",
+                   "s.toml:5:6: fault[0].id: 2048 is outside 0..2047",
+                   "s.toml:6:8: fault[0].data: must be an array of at most 8 bytes, e.g. [0x11, "
+                   "0x22]",
+                   "s.toml:14:9: fault[1].data: each element must be a byte (0..255)",
+               }));
 }
 
 TEST(Scenario, RandomErrorsNeedABitErrorRateInRange) {

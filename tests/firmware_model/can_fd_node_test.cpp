@@ -99,5 +99,24 @@ TEST(CanFdNode, AReusedNodeStartsWithClearedCounters) {
   EXPECT_EQ(r.log.received.size(), 1u);
 }
 
+// The FD controller withdraws a babbled copy without telling its driver: the node notices by
+// itself and lets its own traffic go.
+TEST(CanFdNode, ALoneBabblersLastCopyIsWithdrawnAndItsOwnFrameFollows) {
+  Bus b;
+  Station a(b);
+  a.start();
+  ASSERT_TRUE(a.node.babble(fd_frame(0x10, 8, true), SimTime::from_ns(3'000'000)));
+  a.send(fd_frame(0x20, 4, false));
+  b.run_until(2'900'000);
+  EXPECT_EQ(a.node.controller().confinement().tec(), 128);
+  b.run_until(3'100'000);
+  // The copy on the wire at 3 ms (if any) completes; then the node's own frame is loaded.
+  b.run_until(4'000'000);
+  EXPECT_TRUE(a.node.transmitting());
+  EXPECT_FALSE(a.node.babbling());
+  EXPECT_TRUE(a.log.dropped.empty());
+  EXPECT_TRUE(a.queue.empty());  // its frame left the queue for the controller
+}
+
 }  // namespace
 }  // namespace canemu::model

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "canemu/firmware_model/fault_plan.hpp"
+#include "canemu/firmware_model/wire_encoding.hpp"
 #include "hosted_station.hpp"
 
 namespace canemu::model {
@@ -238,6 +239,61 @@ TEST(Sja1000Node, AStoppedNodeTakesNoPartOnTheBus) {
   EXPECT_TRUE(r.log.received.empty());
   EXPECT_TRUE(a.log.sent.empty());  // nobody acknowledges
   EXPECT_EQ(b.bus.stats(r.node.node()).frames_received, 0u);
+}
+
+// A babbling idiot (fault injection): copies of one frame back to back for a window, its own
+// traffic waiting, the sink told nothing of the copies.
+TEST(Sja1000Node, BabblingFloodsBackToBackWhileItsOwnTrafficWaits) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  ASSERT_TRUE(a.node.babble(k123, SimTime::from_ns(300 * kBit)));
+  EXPECT_TRUE(a.node.babbling());
+  a.send(kZero);  // waits for the window's end
+  b.run_until(1000 * kBit);
+  // Copies start at 0, 65, 130, 195, 260 bit times (62 bits and 3 of intermission each); the
+  // one loaded at 322 (after the window) is not.
+  ASSERT_EQ(r.log.received.size(), 6u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(r.log.received[i].frame, k123) << i;
+    EXPECT_EQ(r.log.received[i].at, (62 + 65 * i) * kBit) << i;
+  }
+  EXPECT_EQ(r.log.received[5].frame, kZero);
+  EXPECT_EQ(r.log.received[5].at, (325 + encode(kZero).length) * kBit);
+  ASSERT_EQ(a.log.sent.size(), 1u);  // only its own frame reached its sink
+  EXPECT_EQ(a.log.sent[0].frame, kZero);
+  EXPECT_TRUE(a.log.dropped.empty());
+  EXPECT_FALSE(a.node.babbling());
+  EXPECT_EQ(b.bus.stats(a.node.node()).frames_sent, 6u);  // the bus counts every copy
+}
+
+TEST(Sja1000Node, ALoneBabblersLastCopyIsWithdrawnAtTheWindowsEnd) {
+  Bus b;
+  Station a(b);
+  a.start();
+  ASSERT_TRUE(a.node.babble(k123, SimTime::from_ns(5'000'000)));
+  b.run_until(4'000'000);
+  // Nobody acknowledges: the copy repeats, its errors count on the node's own counters and are
+  // reported like any bus error.
+  EXPECT_EQ(a.node.controller().confinement().tec(), 128);
+  EXPECT_FALSE(a.log.errors.empty());
+  b.run_until(6'000'000);
+  EXPECT_FALSE(a.node.transmitting());  // withdrawn at 5 ms, nothing of its own waits
+  EXPECT_TRUE(a.log.dropped.empty());
+  EXPECT_TRUE(a.log.sent.empty());
+  a.send(kZero);  // its own traffic goes again (unacknowledged, as before)
+  EXPECT_TRUE(a.node.transmitting());
+}
+
+TEST(Sja1000Node, OnlyANodeOnTheBusBabbles) {
+  Bus b;
+  Station a(b);
+  EXPECT_FALSE(a.node.babble(k123, SimTime::from_ns(1'000'000)));
+  EXPECT_FALSE(a.node.babbling());
+  a.start();
+  a.node.go_offline();
+  EXPECT_FALSE(a.node.babble(k123, SimTime::from_ns(1'000'000)));
 }
 
 }  // namespace

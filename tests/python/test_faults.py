@@ -4,6 +4,8 @@ Stepped time, so every figure is exact; a fresh daemon per test."""
 
 from __future__ import annotations
 
+import subprocess
+
 import can
 import pytest
 
@@ -21,7 +23,7 @@ from canemu.bus import (
     CAN_ERR_PROT_STUFF,
 )
 
-from conftest import Canemud, fault_load
+from conftest import CANEMU_CLI, Canemud, fault_load
 
 US = 1_000
 MS = 1_000_000
@@ -68,6 +70,10 @@ def load(daemon, text):
 
 def msg(arbitration_id=0x123, data=(1, 2)):
     return can.Message(arbitration_id=arbitration_id, data=list(data), is_extended_id=False)
+
+
+def ns(seconds):
+    return round(seconds * 1e9)
 
 
 def now_ns():
@@ -408,3 +414,95 @@ effect = "lin_no_response"
     assert done.returncode != 0
     assert "lin_no_response" in done.stderr and "LIN" in done.stderr
     assert a.error_counters() == (0, 0)  # nothing of it applied
+
+
+def test_babble_floods_the_bus_and_starves_the_others(daemon):
+    a = can.Bus(interface="canemu", channel="can0")
+    babbler = can.Bus(interface="canemu", channel="can0")
+    c = can.Bus(interface="canemu", channel="can0")
+    try:
+        for bus in (a, babbler, c):
+            drain(bus)
+        start = now_ns()
+        load(daemon, f"""
+[[fault]]
+at = "0s"
+node = "{babbler.node_name}"
+effect = "babble"
+id = 0x000
+data = [0xDE, 0xAD, 0xBE, 0xEF]
+duration = "1ms"
+""")
+        a.send(msg(0x123))  # loses arbitration to every copy
+        canemu.step(2 * MS)
+        got = frames(drain(c))
+        # Copies of 0x000#DEADBEEF (81 bits + 3 of intermission: 168 us) back to back from the
+        # scenario's start; every one that starts before 1 ms goes out: 6 (at 0 .. 840 us).
+        copies = [m for m in got if m.arbitration_id == 0]
+        assert len(copies) == 6
+        assert all(bytes(m.data) == b"\xde\xad\xbe\xef" for m in copies)
+        assert [ns(m.timestamp) - ns(copies[0].timestamp) for m in copies] == [
+            k * 168_000 for k in range(6)]
+        assert got[-1].arbitration_id == 0x123  # a's frame once the babbling stopped
+        assert ns(got[-1].timestamp) > start + MS
+        # The babbler's program sees nothing of it: no frames of its own, no errors.
+        assert [(m.arbitration_id, m.timestamp) for m in frames(drain(babbler))] == [
+            (m.arbitration_id, m.timestamp) for m in got if m.arbitration_id == 0x123]
+        assert babbler.error_counters() == (0, 0)
+    finally:
+        a.shutdown()
+        babbler.shutdown()
+        c.shutdown()
+
+
+def test_babble_needs_the_node_on_the_bus(daemon):
+    # ixxat0:0's line has not been started: nothing babbles, and the log says why.
+    c = can.Bus(interface="canemu", channel="can0")
+    try:
+        drain(c)
+        load(daemon, """
+[[fault]]
+at = "0s"
+node = "ixxat0:0"
+effect = "babble"
+id = 0x100
+duration = "1ms"
+""")
+        canemu.step(2 * MS)
+        assert frames(drain(c)) == []
+    finally:
+        c.shutdown()
+
+
+def test_babble_parameters_are_checked(daemon):
+    done = fault_load(daemon, """
+[[fault]]
+at = "0s"
+node = "ixxat0:0"
+effect = "babble"
+id = 0x800
+data = [1, 2, 3, 4, 5, 6, 7, 8, 9]
+""")
+    assert done.returncode != 0
+    assert "id" in done.stderr and "data" in done.stderr and "duration" in done.stderr
+
+
+def test_babble_injected_from_the_command_line(daemon):
+    babbler = can.Bus(interface="canemu", channel="can0")
+    c = can.Bus(interface="canemu", channel="can0")
+    try:
+        drain(c)
+        done = subprocess.run(
+            [str(CANEMU_CLI), "--socket", daemon.socket, "fault", "inject", "--effect", "babble",
+             "--node", babbler.node_name, "--id", "0x1ABCDEF", "--ext", "--data", "0102",
+             "--duration", "300us"],
+            capture_output=True, text=True, timeout=30)
+        assert done.returncode == 0, done.stderr
+        canemu.step(MS)
+        copies = frames(drain(c))
+        assert copies and all(
+            m.arbitration_id == 0x1ABCDEF and m.is_extended_id and bytes(m.data) == b"\x01\x02"
+            for m in copies)
+    finally:
+        babbler.shutdown()
+        c.shutdown()

@@ -30,6 +30,7 @@ enum class FaultEffect {
   bus_off,
   error_counters,
   oscillator,
+  babble,
 };
 std::string_view to_string(FaultEffect effect);
 
@@ -58,6 +59,9 @@ struct FaultSpec {
   uint16_t rec = 0;
   int32_t ppm = 0;            // oscillator
   double bit_error_rate = 0;  // random_errors
+  uint32_t id = 0;            // babble: the frame it floods
+  bool ext = false;
+  std::vector<uint8_t> data;
 };
 
 struct Scenario {

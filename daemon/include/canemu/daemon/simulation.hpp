@@ -154,6 +154,7 @@ class Simulation {
     std::size_t bus;
     model::NodeId node;
     model::CanController* controller;
+    model::HostedNode* hosted;
   };
   // A configured controller ("DEVICE:N") or an ephemeral device ("NAME" or "NAME:0").
   std::optional<NodeRef> find_node(std::string_view name);

@@ -26,6 +26,7 @@ class CanFdNode final : public HostedNode {
   void leave_bus_off(const HostedNodeSettings& settings) override;
   bool buffer_free() override { return chip_.tx_queued() == 0; }
   void load(const TxFrame& tx) override { chip_.submit(tx); }
+  void abort_tx() override { chip_.abort_pending(); }
   void release_received() override { chip_.receive(); }
 
   CanFdController chip_;

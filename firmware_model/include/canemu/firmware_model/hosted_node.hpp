@@ -74,6 +74,16 @@ class HostedNode : private ControllerEvents {
   void restart();
   // A frame is in the transmit buffer.
   bool transmitting() const { return tx_loaded_; }
+
+  // Fault injection, a babbling idiot: from now until `until` the node sends `frame` back to
+  // back, each copy as soon as arbitration lets it (errors and retransmissions as for any
+  // frame, on this node's counters). A frame of its own already in the transmit buffer goes
+  // first; the rest of its traffic waits until the babbling ends. At `until` a copy not yet on
+  // the wire is withdrawn (one on the wire completes). The sink hears nothing of the copies
+  // (nobody above asked for them) apart from bus errors and state changes, which are its
+  // controller's. False (and nothing happens) when the node is not on the bus.
+  bool babble(const Frame& frame, SimTime until);
+  bool babbling() const { return babble_.has_value(); }
   SimTime now() const { return bus_.now(); }
   // This node's frame is on the wire (start of frame to the end of its frame or error frame).
   bool frame_on_wire() const { return bus_.in_flight(node()); }
@@ -97,6 +107,9 @@ class HostedNode : private ControllerEvents {
   virtual void leave_bus_off(const HostedNodeSettings& settings) = 0;
   virtual bool buffer_free() = 0;
   virtual void load(const TxFrame& tx) = 0;
+  // Withdraws the loaded frame: gone if it has not started, else it completes without being
+  // repeated.
+  virtual void abort_tx() = 0;
   virtual void release_received() = 0;
 
  private:
@@ -109,6 +122,7 @@ class HostedNode : private ControllerEvents {
   void arbitration_lost(SimTime at, uint16_t bit) override;
 
   void load_next();
+  void end_babble();
 
   SimScheduler& scheduler_;
   CanBus& bus_;
@@ -118,7 +132,10 @@ class HostedNode : private ControllerEvents {
   bool running_ = false;
   bool claimed_ = false;
   bool tx_loaded_ = false;
-  uint64_t generation_ = 0;  // start() count: a restart scheduled before a stop is void
+  std::optional<Frame> babble_;  // while babbling
+  SimTime babble_until_;
+  bool babble_loaded_ = false;  // the loaded frame is a babbled copy
+  uint64_t generation_ = 0;     // start() count: a restart scheduled before a stop is void
 };
 
 }  // namespace canemu::model

@@ -26,6 +26,7 @@ class Sja1000Node final : public HostedNode {
   void leave_bus_off(const HostedNodeSettings& settings) override;
   bool buffer_free() override;
   void load(const TxFrame& tx) override;
+  void abort_tx() override;
   void release_received() override;
 
   Sja1000 chip_;

@@ -355,6 +355,7 @@ struct InjectOptions {
   int rec = -1;
   int ppm = 0;
   std::string data;  // babble: hex bytes
+  std::string wire;  // line_error: one, both
 };
 
 int cmd_fault_inject(const std::string& socket, const InjectOptions& o) {
@@ -376,6 +377,7 @@ int cmd_fault_inject(const std::string& socket, const InjectOptions& o) {
   key("tec", o.tec >= 0 ? std::to_string(o.tec) : "");
   key("rec", o.rec >= 0 ? std::to_string(o.rec) : "");
   key("ppm", o.ppm ? std::to_string(o.ppm) : "");
+  key("wire", o.wire.empty() ? "" : quoted(o.wire));
   if (o.effect == "babble") {  // --id, --ext and --data describe the flooding frame
     key("id", o.id);
     key("ext", o.ext ? "true" : "");
@@ -585,6 +587,7 @@ int main(int argc, char** argv) {
   fault_inject->add_option("--rec", inject.rec, "error_counters");
   fault_inject->add_option("--ppm", inject.ppm, "oscillator");
   fault_inject->add_option("--data", inject.data, "babble: data bytes in hex (1122AABB)");
+  fault_inject->add_option("--wire", inject.wire, "line_error: one (default) or both");
 
   auto* time = app.add_subcommand("time", "simulated time (stepped mode)");
   time->require_subcommand(1);

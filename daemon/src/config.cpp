@@ -28,6 +28,7 @@ using detail::NamedValue;
 
 constexpr NamedValue<BusKind> kBusKinds[] = {
     {BusKind::can, "can"}, {BusKind::can_fd, "can-fd"}, {BusKind::lin, "lin"}};
+constexpr NamedValue<bool> kTransceivers[] = {{false, "high-speed"}, {true, "low-speed"}};
 constexpr NamedValue<DeviceModel> kDeviceModels[] = {
     {DeviceModel::ixxat_usb_to_can, "ixxat-usb-to-can"},
     {DeviceModel::ixxat_usb_to_can_fd, "ixxat-usb-to-can-fd"}};
@@ -91,7 +92,8 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
 void read_buses(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
   c.for_each_table(root, "bus", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"name", "kind", "bitrate", "sample_point", "data_bitrate"});
+    c.only_keys(t, path,
+                {"name", "kind", "bitrate", "sample_point", "data_bitrate", "transceiver"});
     BusConfig bus;
     bus.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto name = read_name(c, t, path, names, "bus")) {
@@ -121,6 +123,16 @@ void read_buses(Checker& c, const toml::table& root, Config& cfg) {
                 "only a can-fd bus has a data bit rate");
       } else if (auto d = c.integer(t, path, "data_bitrate", false, bus.bitrate, 10'000'000)) {
         bus.data_bitrate = static_cast<uint32_t>(*d);
+      }
+    }
+    if (auto low = c.choice(t, path, "transceiver", false, kTransceivers, "transceiver")) {
+      bus.low_speed = *low;
+      if (*low && bus.kind != BusKind::can) {
+        c.error(*t.get("transceiver"), path + ".transceiver",
+                "low-speed (ISO 11898-3) transceivers are for classic CAN buses (kind = \"can\")");
+      } else if (*low && bus.bitrate > 125'000) {
+        c.error(*t.get("transceiver"), path + ".transceiver",
+                fmt::format("a low-speed bus runs at up to 125000 bit/s, not {}", bus.bitrate));
       }
     }
     cfg.buses.push_back(bus);
@@ -325,7 +337,8 @@ std::string summary(const Config& cfg) {
     if (b.data_bitrate != 0) {
       s += fmt::format(", data {} bit/s", b.data_bitrate);
     }
-    s += fmt::format(", sample point {:.1f} %)\n", b.sample_point / 10.0);
+    s += fmt::format(", sample point {:.1f} %{})\n", b.sample_point / 10.0,
+                     b.low_speed ? ", low-speed transceivers" : "");
   }
   for (const DeviceConfig& d : cfg.devices) {
     s += fmt::format("  device {} ({}):", d.name, to_string(d.model));

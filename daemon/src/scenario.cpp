@@ -25,12 +25,14 @@ constexpr NamedValue<FaultEffect> kEffects[] = {
     {FaultEffect::error_counters, "error_counters"},
     {FaultEffect::oscillator, "oscillator"},
     {FaultEffect::babble, "babble"},
+    {FaultEffect::line_error, "line_error"},
 };
+constexpr NamedValue<bool> kWires[] = {{false, "one"}, {true, "both"}};
 
 // Named by the language, not emulated yet: a scenario using them is refused with a reason.
-constexpr std::string_view kLaterEffects[] = {
-    "line_error",     "lin_no_response", "lin_checksum_error", "lin_parity_error",
-    "lin_sync_error", "lin_bit_error",   "lin_wakeup"};
+constexpr std::string_view kLaterEffects[] = {"lin_no_response",  "lin_checksum_error",
+                                              "lin_parity_error", "lin_sync_error",
+                                              "lin_bit_error",    "lin_wakeup"};
 
 bool is_frame_effect(FaultEffect e) {
   return e <= FaultEffect::ack_error;
@@ -158,8 +160,12 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     allow({"bus", "until", "bit_error_rate"});
   } else {
     allow({"node"});
-    if (f.effect == FaultEffect::node_off || f.effect == FaultEffect::oscillator) {
+    if (f.effect == FaultEffect::node_off || f.effect == FaultEffect::oscillator ||
+        f.effect == FaultEffect::line_error) {
       allow({"until"});
+    }
+    if (f.effect == FaultEffect::line_error) {
+      allow({"wire"});
     }
     if (f.effect == FaultEffect::error_counters) {
       allow({"tec", "rec"});
@@ -243,6 +249,9 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
   }
   if (f.effect == FaultEffect::babble) {
     read_babble_frame(c, t, path, f);
+  }
+  if (f.effect == FaultEffect::line_error) {
+    f.both_wires = c.choice(t, path, "wire", false, kWires, "wire fault").value_or(false);
   }
   s.faults.push_back(f);
 }

@@ -178,6 +178,13 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         continue;
       }
       r.bus = r.node->bus;
+      if (f.effect == FaultEffect::line_error && !config_.buses[r.bus].low_speed) {
+        where(
+            fmt::format("node {} is on {}, a high-speed bus; wire faults are emulated on "
+                        "low-speed buses (transceiver = \"low-speed\")",
+                        node_name, config_.buses[r.bus].name));
+        continue;
+      }
     }
     plan.push_back(r);
   }
@@ -308,6 +315,34 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         });
         break;
       }
+      case FaultEffect::line_error: {
+        // The fault-tolerant transceiver sees the wire fault and says so (BUSCERR on a VCI
+        // adapter). With one wire it goes on in single-wire mode; with both it is cut off.
+        const NodeId node = plan[k].node->node;
+        auto line = vci_line_of(plan[k].node->hosted);
+        const bool both = f.both_wires;
+        when(at, [this, &b, node, line, both, what] {
+          if (line) {
+            line->set_bus_coupling_error(true);
+          }
+          if (both) {
+            b.set_connected(node, false);
+          }
+          fault_log(what);
+        });
+        if (f.until_ns) {
+          when(start + SimDuration(*f.until_ns), [this, &b, node, line, both, what] {
+            if (line) {
+              line->set_bus_coupling_error(false);
+            }
+            if (both) {
+              b.set_connected(node, true);
+            }
+            fault_log(what + " ends");
+          });
+        }
+        break;
+      }
       case FaultEffect::oscillator: {
         const NodeId node = plan[k].node->node;
         const int32_t ppm = f.ppm;
@@ -371,10 +406,25 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
       c.node = std::make_unique<CanFdNode>(scheduler_, bus);
     }
     c.line = std::make_shared<vci::CanLine>(scheduler_, *c.node, vci::Clocks{}, scheduler_.now());
+    c.line->set_low_speed(config_.buses[p.bus].low_speed);
     controllers_.push_back(std::move(c));
   }
   vci_ids_[d.name] = next_vci_id_++;
   return std::nullopt;
+}
+
+std::shared_ptr<vci::CanLine> Simulation::vci_line_of(const HostedNode* node) const {
+  for (const Controller& c : controllers_) {
+    if (c.node.get() == node) {
+      return c.line;
+    }
+  }
+  for (const Ephemeral& e : ephemeral_) {
+    if (e.node == node) {
+      return e.line;
+    }
+  }
+  return nullptr;
 }
 
 std::shared_ptr<vci::CanLine> Simulation::vci_line(std::string_view device, uint32_t controller) {
@@ -706,6 +756,7 @@ Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t
   const int64_t now_ns = scheduler_.now().ns();
   const SimTime power_on = SimTime::from_ns(now_ns - now_ns % 1000);
   auto line = std::make_shared<vci::CanLine>(scheduler_, node, vci::Clocks{}, power_on);
+  line->set_low_speed(config_.buses[bus].low_speed);
   DeviceLease lease = add_ephemeral(name, bus, node, owner_pid);
   ephemeral_.back().line = std::move(line);
   ephemeral_.back().vci_id = next_vci_id_++;

@@ -92,7 +92,7 @@ HRESULT start_detection(vci::CanLine& line, const ipc::VciRequest& m) {
     }
     for (uint8_t i = 0; i < t.bCount; ++i) {
       vci::LineInit e;
-      e.op_mode = both;
+      e.op_mode = static_cast<uint8_t>(both | (m.args[1] & CAN_OPMODE_LOWSPEED));
       e.btr0 = t.abBtr0[i];
       e.btr1 = t.abBtr1[i];
       entries.push_back(e);

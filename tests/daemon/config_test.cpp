@@ -69,12 +69,29 @@ controllers = ["fd0"]
   EXPECT_EQ(c->devices[0].model, DeviceModel::ixxat_usb_to_can_fd);
 }
 
+TEST(Config, LowSpeedTransceiversOnSlowClassicBusesOnly) {
+  auto cfg = parse_config(
+      "[[bus]]\nname = \"body\"\nbitrate = 125000\ntransceiver = \"low-speed\"\n", "t.toml");
+  ASSERT_TRUE(cfg);
+  EXPECT_TRUE(cfg->buses.at(0).low_speed);
+  EXPECT_EQ(errors_of("[[bus]]\nname = \"b\"\nbitrate = 250000\ntransceiver = \"low-speed\"\n"),
+            (std::vector<std::string>{"t.toml:4:15: bus[0].transceiver: a low-speed bus runs at up "
+                                      "to 125000 bit/s, not 250000"}));
+  EXPECT_EQ(errors_of("[[bus]]\nname = \"b\"\nkind = \"can-fd\"\nbitrate = 125000\n"
+                      "transceiver = \"low-speed\"\n"),
+            (std::vector<std::string>{"t.toml:5:15: bus[0].transceiver: low-speed (ISO 11898-3) "
+                                      "transceivers are for classic CAN buses (kind = \"can\")"}));
+  EXPECT_EQ(errors_of("[[bus]]\nname = \"b\"\ntransceiver = \"slow\"\n"),
+            (std::vector<std::string>{"t.toml:3:15: bus[0].transceiver: \"slow\" is not a "
+                                      "transceiver (high-speed, low-speed)"}));
+}
+
 TEST(Config, UnknownKeysAreErrorsWithFileLineColumnAndKey) {
   const auto e = errors_of("[[bus]]\nname = \"can0\"\nspeed = 5\n");
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0],
             "t.toml:3:1: bus[0].speed: unknown key (known here: name, kind, bitrate, "
-            "sample_point, data_bitrate)");
+            "sample_point, data_bitrate, transceiver)");
   const auto top = errors_of("[buses]\n");
   ASSERT_EQ(top.size(), 1u);
   EXPECT_NE(top[0].find("t.toml:1:2: buses: unknown key"), std::string::npos) << top[0];

@@ -74,7 +74,7 @@ effect = "teleport"
 [[fault]]
 at = "1s"
 node = "x:0"
-effect = "line_error"
+effect = "lin_wakeup"
 
 [[fault]]
 at = "1s"
@@ -97,8 +97,9 @@ tec = 300
                    "s.toml:14:10: fault[2].effect: \"teleport\" is not a fault effect (bit_error, "
                    "stuff_error, form_error, crc_error, ack_error, ack_suppress, stuck_dominant, "
                    "random_errors, node_off, node_on, bus_off, error_counters, oscillator, "
-                   "babble)",
-                   "s.toml:19:10: fault[3].effect: \"line_error\" is not emulated yet",
+                   "babble, line_error)",
+                   "s.toml:19:10: fault[3].effect: \"lin_wakeup\" is not emulated yet (it comes "
+                   "with LIN)",
                    "s.toml:25:15: fault[4].probability: must be above 0 and at most 1",
                    "s.toml:31:7: fault[5].tec: 300 is outside 0..255",
                    "s.toml:27:1: fault[5].rec: missing (an integer is required)",

@@ -231,6 +231,44 @@ TEST(VciCanLine, CapabilitiesReportTheEmulatedClocksAndFeatures) {
   EXPECT_EQ(c2.dwDtxClkFreq, 1'000'000u);
 }
 
+TEST(VciCanLine, OnALowSpeedBusTheCouplingIsLowSpeedAndItsOpModeAccepted) {
+  Rig hs;
+  ASSERT_EQ(hs.line.open_control(), VCI_OK);
+  EXPECT_EQ(hs.line.init_line(v1_init(kOpAll | CAN_OPMODE_LOWSPEED)), VCI_E_INVALIDARG);
+  Rig r;
+  r.line.set_low_speed(true);
+  EXPECT_EQ(r.line.capabilities().wBusCoupling, CAN_BUSC_LOWSPEED);
+  EXPECT_EQ(r.line.capabilities2().wBusCoupling, CAN_BUSC_LOWSPEED);
+  r.init(kOpAll | CAN_OPMODE_LOWSPEED);
+  EXPECT_EQ(r.line.line_status().bOpMode, kOpAll | CAN_OPMODE_LOWSPEED);
+}
+
+// A wire fault the (fault-tolerant) transceiver reports: BUSCERR, one STATUS message when it
+// comes and one when it goes, and ResetLine does not clear it.
+TEST(VciCanLine, ABusCouplingErrorSetsBuscerrWithStatusMessages) {
+  Rig r;
+  r.line.set_low_speed(true);
+  Port p;
+  r.online(p);
+  r.b.run_until(1 * kMs);
+  r.line.set_bus_coupling_error(true);
+  EXPECT_EQ(r.line.line_status().dwStatus, static_cast<uint32_t>(CAN_STATUS_BUSCERR));
+  auto status = p.of_type(CAN_MSGTYPE_STATUS);
+  ASSERT_EQ(status.size(), 1u);
+  EXPECT_EQ(status[0].dwTime, 1000u);
+  EXPECT_EQ(status[0].abData[0], CAN_STATUS_BUSCERR);
+  ASSERT_EQ(r.line.reset_line(), VCI_OK);
+  EXPECT_EQ(r.line.line_status().dwStatus,
+            static_cast<uint32_t>(CAN_STATUS_BUSCERR | CAN_STATUS_ININIT));
+  EXPECT_EQ(p.of_type(CAN_MSGTYPE_STATUS).size(), 1u);  // unchanged: no message
+  r.b.run_until(2 * kMs);
+  r.line.set_bus_coupling_error(false);
+  status = p.of_type(CAN_MSGTYPE_STATUS);
+  ASSERT_EQ(status.size(), 2u);
+  EXPECT_EQ(status[1].dwTime, 2000u);
+  EXPECT_EQ(status[1].abData[0], CAN_STATUS_ININIT);
+}
+
 TEST(VciCanLine, StartLineBeforeInitLineIsAnInvalidState) {
   Rig r;
   ASSERT_EQ(r.line.open_control(), VCI_OK);

@@ -21,6 +21,7 @@ from canemu.bus import (
     CAN_ERR_PROT_FORM,
     CAN_ERR_PROT_LOC_CRC_SEQ,
     CAN_ERR_PROT_STUFF,
+    CAN_ERR_TRX,
 )
 
 from conftest import CANEMU_CLI, Canemud, fault_load
@@ -506,3 +507,78 @@ def test_babble_injected_from_the_command_line(daemon):
     finally:
         babbler.shutdown()
         c.shutdown()
+
+
+LOW_SPEED_BUS = """
+[[bus]]
+name = "body"
+kind = "can"
+bitrate = 125000
+transceiver = "low-speed"
+"""
+
+
+@pytest.fixture
+def low_speed(request):
+    d = Canemud("stepped", extra=LOW_SPEED_BUS)
+    a = can.Bus(interface="canemu", channel="body")
+    b = can.Bus(interface="canemu", channel="body")
+    drain(a)
+    drain(b)
+    yield d, a, b
+    a.shutdown()
+    b.shutdown()
+    d.stop()
+
+
+def test_line_error_on_one_wire_is_reported_and_traffic_goes_on(low_speed):
+    daemon, a, b = low_speed
+    load(daemon, f"""
+[[fault]]
+at = "1ms"
+until = "10ms"
+node = "{b.node_name}"
+effect = "line_error"
+""")
+    canemu.step(2 * MS)
+    trx = drain(b)
+    assert len(trx) == 1 and trx[0].is_error_frame and trx[0].arbitration_id == CAN_ERR_TRX
+    assert round(trx[0].timestamp * 1e9) == MS  # BUSCERR from 1 ms on (a STATUS message)
+    a.send(msg())  # single-wire mode: the frame still arrives, acknowledged
+    canemu.step(2 * MS)
+    assert len(frames(drain(b))) == 1
+    assert a.error_counters() == (0, 0)
+    canemu.step(10 * MS)  # the wire is back: BUSCERR cleared, nothing more to report
+    assert drain(b) == []
+
+
+def test_line_error_on_both_wires_cuts_the_node_off(low_speed):
+    daemon, a, b = low_speed
+    load(daemon, f"""
+[[fault]]
+at = "0s"
+until = "50ms"
+node = "{b.node_name}"
+effect = "line_error"
+wire = "both"
+""")
+    a.send(msg())
+    canemu.step(40 * MS)
+    got_b = drain(b)
+    assert [m.arbitration_id for m in got_b] == [CAN_ERR_TRX]  # only its own fault report
+    assert a.error_counters() == (128, 0)  # nobody acknowledges
+    canemu.step(20 * MS)
+    assert len(frames(drain(b))) == 1
+    assert a.error_counters() == (127, 0)
+
+
+def test_line_error_needs_a_low_speed_bus(daemon, nodes):
+    a, _ = nodes
+    done = fault_load(daemon, f"""
+[[fault]]
+at = "0s"
+node = "{a.node_name}"
+effect = "line_error"
+""")
+    assert done.returncode != 0
+    assert "high-speed bus" in done.stderr and "low-speed" in done.stderr

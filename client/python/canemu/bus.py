@@ -38,6 +38,7 @@ CanTimeoutError = getattr(can, "CanTimeoutError", can.CanOperationError)
 # SocketCAN's error frame layout (linux/can/error.h), which python-can's users know.
 CAN_ERR_CRTL = 0x00000004
 CAN_ERR_PROT = 0x00000008
+CAN_ERR_TRX = 0x00000010
 CAN_ERR_ACK = 0x00000020
 CAN_ERR_BUSOFF = 0x00000040
 CAN_ERR_BUSERROR = 0x00000080
@@ -78,6 +79,7 @@ _BUS_STATES = {
     _vci.CANEMU_STATE_BUSOFF: BusState.ERROR,
 }
 
+_REPORTED_STATUS = 0x02 | _vci.CAN_STATUS_ERRLIM | _vci.CAN_STATUS_BUSOFF | _vci.CAN_STATUS_BUSCERR
 _HEADER = struct.Struct("<IIIBBBB")  # dwTime, _rsvd_, dwMsgId, type, flags2, flags, accept
 _WAIT_SLICE_MS = 100  # blocking calls wait in slices so that Ctrl-C and shutdown get through
 _FILTER_LIST_SIZE = 2048  # 29-bit ID list of each channel
@@ -235,6 +237,7 @@ class CanemuBus(BusABC):
         self._auto_restart = bool(auto_restart)
         self._hw_filtered = True
         self._was_bus_off = False
+        self._last_status = 0
         self._wraps = 0
         self._last_ticks = 0
         self._rx_lock = threading.Lock()
@@ -479,8 +482,16 @@ class CanemuBus(BusABC):
         return self._error_frame(ticks, cls | CAN_ERR_BUSERROR, bytes(data))
 
     def _status_change(self, ticks: int, status: int) -> Optional[Message]:
-        """A STATUS message: the line's ERRLIM or BUSOFF flag changed."""
+        """A STATUS message: the line's ERRLIM, BUSOFF or BUSCERR flag changed."""
+        reported = status & _REPORTED_STATUS  # TXPEND and ININIT change without a message
+        changed = reported ^ self._last_status
+        self._last_status = reported
         data = bytearray(8)
+        if changed == _vci.CAN_STATUS_BUSCERR:
+            # The transceiver reports a wire fault (or its end: nothing to report then).
+            if not status & _vci.CAN_STATUS_BUSCERR:
+                return None
+            return self._error_frame(ticks, CAN_ERR_TRX, bytes(data))
         if status & _vci.CAN_STATUS_BUSOFF:
             _, tec, rec, _ = self._controller_state()
             data[6] = min(tec, 255)

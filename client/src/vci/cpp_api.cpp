@@ -475,12 +475,11 @@ class Control final : public Com<Interface, iid> {
     if (table == nullptr || table->bCount == 0 || table->bCount > 64) {
       return VCI_E_INVALIDARG;
     }
-    if (table->bIndex == CAN_OPMODE_LOWSPEED) {
-      return VCI_E_INVALIDARG;  // no low-speed transceiver on the emulated adapters
-    }
+    // bIndex CAN_OPMODE_LOWSPEED asks for the low-speed coupling (only on a low-speed bus).
+    const uint8_t op_mode = table->bIndex == CAN_OPMODE_LOWSPEED ? CAN_OPMODE_LOWSPEED : 0;
     uint32_t index = 0;
     const HRESULT hr =
-        Library::get().detect(*r_, false, table, sizeof *table, timeout_ms, 0, 0, index);
+        Library::get().detect(*r_, false, table, sizeof *table, timeout_ms, op_mode, 0, index);
     if (hr == VCI_OK) {
       table->bIndex = static_cast<UINT8>(index);
     }

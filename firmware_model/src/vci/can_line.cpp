@@ -13,7 +13,8 @@ namespace {
 constexpr int64_t kNsPerSecond = 1'000'000'000;
 // 128-bit intermediate products: tick counts times clock rates overflow 64 bits.
 __extension__ typedef unsigned __int128 Wide;
-constexpr uint32_t kReportedStatus = CAN_STATUS_OVRRUN | CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF;
+constexpr uint32_t kReportedStatus =
+    CAN_STATUS_OVRRUN | CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF | CAN_STATUS_BUSCERR;
 constexpr uint16_t kWarningLimit = 96;
 constexpr uint8_t kKnownOpModes =
     CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME | CAN_OPMODE_LISTONLY;
@@ -152,7 +153,7 @@ CANBTP to_canbtp(const Btp& b) {
 CANCAPABILITIES CanLine::capabilities() const {
   CANCAPABILITIES c{};
   c.wCtrlType = fd_controller() ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000;
-  c.wBusCoupling = CAN_BUSC_HIGHSPEED;
+  c.wBusCoupling = low_speed_ ? CAN_BUSC_LOWSPEED : CAN_BUSC_HIGHSPEED;
   c.dwFeatures = features(fd_controller());
   c.dwClockFreq = clocks_.clock_hz;
   c.dwTscDivisor = clocks_.tsc_divisor;
@@ -167,7 +168,7 @@ CANCAPABILITIES2 CanLine::capabilities2() const {
   CANCAPABILITIES2 c{};
   const bool fd = fd_controller();
   c.wCtrlType = fd ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000;
-  c.wBusCoupling = CAN_BUSC_HIGHSPEED;
+  c.wBusCoupling = low_speed_ ? CAN_BUSC_LOWSPEED : CAN_BUSC_HIGHSPEED;
   c.dwFeatures = features(fd);
   const BtpRange& nominal = fd ? kFdNominalRange : kSja1000Range;
   c.dwCanClkFreq = nominal.clock_hz;
@@ -210,7 +211,15 @@ uint32_t CanLine::status_flags() const {
   if (state_ != LineState::online) {
     s |= CAN_STATUS_ININIT;
   }
+  if (bus_coupling_error_) {
+    s |= CAN_STATUS_BUSCERR;
+  }
   return s;
+}
+
+void CanLine::set_bus_coupling_error(bool error) {
+  bus_coupling_error_ = error;
+  update_status(scheduler_.now());
 }
 
 CANLINESTATUS CanLine::line_status() const {
@@ -287,7 +296,7 @@ void CanLine::release_if_unused() {
   init_ = LineInit{};
   controller_overrun_ = false;
   error_state_ = ErrorState::active;
-  reported_status_ = 0;
+  reported_status_ = bus_coupling_error_ ? CAN_STATUS_BUSCERR : 0;  // the transceiver's own
   reset_filters();
   stop_task();
   for (CyclicEntry& e : cyclic_) {
@@ -298,8 +307,9 @@ void CanLine::release_if_unused() {
 HostedNodeSettings CanLine::settings_for(const LineInit& init, HRESULT& hr) const {
   HostedNodeSettings s;
   hr = VCI_E_INVALIDARG;
-  if ((init.op_mode & ~kKnownOpModes) != 0) {
-    return s;  // low-speed coupling and hardware bit-rate detection are not emulated
+  const uint8_t known_op = kKnownOpModes | (low_speed_ ? CAN_OPMODE_LOWSPEED : 0);
+  if ((init.op_mode & ~known_op) != 0) {
+    return s;  // hardware bit-rate detection is not emulated; low speed needs a low-speed bus
   }
   const bool fd = fd_controller();
   s.listen_only = (init.op_mode & CAN_OPMODE_LISTONLY) != 0;

@@ -24,6 +24,7 @@ struct BusConfig {
   uint32_t bitrate = 500000;    // nominal bit/s
   uint32_t sample_point = 875;  // per mille
   uint32_t data_bitrate = 0;    // can-fd: data-phase bit/s (0: no bit-rate switch)
+  bool low_speed = false;       // can: ISO 11898-3 fault-tolerant transceivers (<= 125 kbit/s)
   uint32_t line = 0;            // where it was declared
 };
 

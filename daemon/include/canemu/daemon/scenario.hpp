@@ -31,6 +31,7 @@ enum class FaultEffect {
   error_counters,
   oscillator,
   babble,
+  line_error,
 };
 std::string_view to_string(FaultEffect effect);
 
@@ -62,6 +63,7 @@ struct FaultSpec {
   uint32_t id = 0;            // babble: the frame it floods
   bool ext = false;
   std::vector<uint8_t> data;
+  bool both_wires = false;  // line_error: both wires broken (else one: single-wire mode)
 };
 
 struct Scenario {

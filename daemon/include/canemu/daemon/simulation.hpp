@@ -101,6 +101,8 @@ class Simulation {
   // ephemeral from add_vci_device); nullptr if there is no such controller. Shared: objects a
   // client opened keep the firmware running after an ephemeral device has gone.
   std::shared_ptr<model::vci::CanLine> vci_line(std::string_view device, uint32_t controller);
+  // The VCI firmware driving `node`, if a VCI adapter's.
+  std::shared_ptr<model::vci::CanLine> vci_line_of(const model::HostedNode* node) const;
 
   // ---- ephemeral devices ----
   // A stopped node on bus `bus`, ready to start (an SJA1000 on a classic bus, the CAN FD

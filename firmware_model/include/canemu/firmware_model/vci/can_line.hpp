@@ -125,6 +125,13 @@ class CanLine final : private ControllerEvents, private EventHandler {
   // The adapter's power-on: its time stamps count from here.
   SimTime epoch() const { return epoch_; }
   const Clocks& clocks() const { return clocks_; }
+  // The bus coupling: a low-speed, fault-tolerant transceiver (ISO 11898-3) instead of the
+  // high-speed one. Set once, before use, from the bus the adapter is wired to.
+  void set_low_speed(bool low_speed) { low_speed_ = low_speed; }
+  bool low_speed() const { return low_speed_; }
+  // The transceiver reports a wire fault (its error output): CAN_STATUS_BUSCERR while it lasts,
+  // with a STATUS message when it changes. Reset and InitLine do not clear it.
+  void set_bus_coupling_error(bool error);
   CANCAPABILITIES capabilities() const;
   CANCAPABILITIES2 capabilities2() const;
 
@@ -275,6 +282,8 @@ class CanLine final : private ControllerEvents, private EventHandler {
   bool control_open_ = false;
   FilterPair filters_;
   bool controller_overrun_ = false;  // CAN_STATUS_OVRRUN
+  bool low_speed_ = false;
+  bool bus_coupling_error_ = false;  // CAN_STATUS_BUSCERR
   uint32_t reported_status_ = 0;     // status bits last sent in a STATUS message
   ErrorState error_state_ = ErrorState::active;
 

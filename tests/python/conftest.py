@@ -57,6 +57,24 @@ class Canemud(Daemon):
         )
 
 
+def drain(bus) -> list:
+    """Every message waiting now, without waiting (in stepped time nothing more comes)."""
+    out = []
+    while (msg := bus.recv(0)) is not None:
+        out.append(msg)
+    return out
+
+
+def frames(msgs) -> list:
+    """The data and remote frames among `msgs` (no error frames)."""
+    return [m for m in msgs if not m.is_error_frame]
+
+
+def ns(seconds: float) -> int:
+    """A python-can time stamp in whole nanoseconds."""
+    return round(seconds * 1e9)
+
+
 def fault_load(daemon: Daemon, text: str) -> subprocess.CompletedProcess:
     """`canemu fault load` of a scenario's text against `daemon` (its `at` times count from
     now); the finished command."""

@@ -24,7 +24,7 @@ from canemu.bus import (
     CAN_ERR_TRX,
 )
 
-from conftest import CANEMU_CLI, Canemud, fault_load
+from conftest import CANEMU_CLI, Canemud, drain, fault_load, frames, ns
 
 US = 1_000
 MS = 1_000_000
@@ -49,17 +49,6 @@ def nodes(daemon):
     b.shutdown()
 
 
-def drain(bus):
-    out = []
-    while (msg := bus.recv(0)) is not None:
-        out.append(msg)
-    return out
-
-
-def frames(msgs):
-    return [m for m in msgs if not m.is_error_frame]
-
-
 def bus_errors(msgs):
     return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_BUSERROR]
 
@@ -71,10 +60,6 @@ def load(daemon, text):
 
 def msg(arbitration_id=0x123, data=(1, 2)):
     return can.Message(arbitration_id=arbitration_id, data=list(data), is_extended_id=False)
-
-
-def ns(seconds):
-    return round(seconds * 1e9)
 
 
 def now_ns():

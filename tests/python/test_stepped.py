@@ -24,7 +24,7 @@ from canemu.bus import (
     CAN_ERR_RESTARTED,
 )
 
-from conftest import CANEMU_CLI, Canemud
+from conftest import CANEMU_CLI, Canemud, drain, ns
 
 MS = 1_000_000
 CanTimeoutError = getattr(can, "CanTimeoutError", can.CanOperationError)
@@ -66,14 +66,6 @@ def pair(daemon):
     b.shutdown()
 
 
-def drain(bus):
-    """Every message waiting now (no waiting: time stands still)."""
-    out = []
-    while (msg := bus.recv(0)) is not None:
-        out.append(msg)
-    return out
-
-
 def frame_ns(frame: str, bitrate: int) -> int:
     """The frame's duration with intermission, from the wire model (`canemu calc frame`)."""
     text = subprocess.run(
@@ -81,10 +73,6 @@ def frame_ns(frame: str, bitrate: int) -> int:
         capture_output=True, text=True, check=True,
     ).stdout
     return int(re.search(r"(\d+) ns with intermission", text).group(1))
-
-
-def ns(seconds: float) -> int:
-    return round(seconds * 1e9)
 
 
 @pytest.mark.parametrize("bus_name,bitrate", [("can0", 500_000), ("can1", 125_000)])

@@ -106,20 +106,24 @@ class CANBTP(ctypes.Structure):
     ]
 
 
+# CANMSGINFO as its four bytes: type, flags2 (ssm hpm edl fdr esi), flags (dlc:4 ovr srr rtr
+# ext), accept; then the data field. The end of CANMSG2 and CANCYCLICTXMSG2.
+_INFO_AND_DATA = [
+    ("bType", ctypes.c_uint8),
+    ("bFlags2", ctypes.c_uint8),
+    ("bFlags", ctypes.c_uint8),
+    ("bAccept", ctypes.c_uint8),
+    ("abData", ctypes.c_uint8 * 64),
+]
+
+
 class CANMSG2(ctypes.Structure):
     _pack_ = 1
     _fields_ = [
         ("dwTime", ctypes.c_uint32),
         ("_rsvd_", ctypes.c_uint32),
         ("dwMsgId", ctypes.c_uint32),
-        # CANMSGINFO as its four bytes: type, flags2 (ssm hpm edl fdr esi), flags (dlc:4 ovr srr
-        # rtr ext), accept.
-        ("bType", ctypes.c_uint8),
-        ("bFlags2", ctypes.c_uint8),
-        ("bFlags", ctypes.c_uint8),
-        ("bAccept", ctypes.c_uint8),
-        ("abData", ctypes.c_uint8 * 64),
-    ]
+    ] + _INFO_AND_DATA
 
 
 # CANMSGINFO bits in bFlags2 and bFlags.
@@ -142,12 +146,7 @@ class CANCYCLICTXMSG2(ctypes.Structure):
         ("bIncrMode", ctypes.c_uint8),
         ("bByteIndex", ctypes.c_uint8),
         ("dwMsgId", ctypes.c_uint32),
-        ("bType", ctypes.c_uint8),
-        ("bFlags2", ctypes.c_uint8),
-        ("bFlags", ctypes.c_uint8),
-        ("bAccept", ctypes.c_uint8),
-        ("abData", ctypes.c_uint8 * 64),
-    ]
+    ] + _INFO_AND_DATA
 
 
 class CANEMU_BUSINFO(ctypes.Structure):

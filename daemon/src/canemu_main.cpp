@@ -75,10 +75,11 @@ int cmd_status(const std::string& socket, bool json) {
     for (uint16_t i = 0; i < s.bus_count; ++i) {
       const ipc::StatusBus& b = s.buses[i];
       out += fmt::format(
-          "{}{{\"name\":\"{}\",\"kind\":\"{}\",\"bitrate\":{},\"data_bitrate\":{},"
-          "\"load_percent\":{:.1f},\"frames\":{},\"error_frames\":{}}}",
-          i ? "," : "", ipc::name_of(b.name), b.kind < 3 ? kKinds[b.kind] : "?", b.bitrate,
-          b.data_bitrate, b.load_permille / 10.0, b.frames, b.error_frames);
+          "{}{{\"name\":\"{}\",\"kind\":\"{}\",\"transceiver\":\"{}\",\"bitrate\":{},"
+          "\"data_bitrate\":{},\"load_percent\":{:.1f},\"frames\":{},\"error_frames\":{}}}",
+          i ? "," : "", ipc::name_of(b.name), b.kind < 3 ? kKinds[b.kind] : "?",
+          b.low_speed ? "low-speed" : "high-speed", b.bitrate, b.data_bitrate,
+          b.load_permille / 10.0, b.frames, b.error_frames);
     }
     out += "],\"nodes\":[";
     for (uint16_t i = 0; i < s.node_count; ++i) {
@@ -121,9 +122,11 @@ int cmd_status(const std::string& socket, bool json) {
               "FRAMES", "ERRORS");
   for (uint16_t i = 0; i < s.bus_count; ++i) {
     const ipc::StatusBus& b = s.buses[i];
+    const std::string kind =
+        std::string(b.kind < 3 ? kKinds[b.kind] : "?") + (b.low_speed ? "-ls" : "");
     std::printf("%-12s %-7s %9u %9u %6.1f%% %10llu %8llu\n", ipc::name_of(b.name).c_str(),
-                b.kind < 3 ? kKinds[b.kind] : "?", b.bitrate, b.data_bitrate,
-                b.load_permille / 10.0, static_cast<unsigned long long>(b.frames),
+                kind.c_str(), b.bitrate, b.data_bitrate, b.load_permille / 10.0,
+                static_cast<unsigned long long>(b.frames),
                 static_cast<unsigned long long>(b.error_frames));
   }
   std::printf("%-14s %-12s %-14s %4s %4s %10s %10s %8s\n", "NODE", "BUS", "STATE", "TEC", "REC",

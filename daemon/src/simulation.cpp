@@ -616,6 +616,7 @@ void Simulation::fill_status(ipc::StatusReply& r) {
     ipc::StatusBus& s = r.buses[i];
     ipc::copy_name(s.name, config_.buses[i].name);
     s.kind = static_cast<uint8_t>(config_.buses[i].kind);
+    s.low_speed = config_.buses[i].low_speed ? 1 : 0;
     s.bitrate = config_.buses[i].bitrate;
     s.data_bitrate = config_.buses[i].data_bitrate;
     s.load_permille = static_cast<uint32_t>(b.bus->bus_load_percent(now) * 10 + 0.5);

@@ -518,6 +518,9 @@ def low_speed(request):
 
 def test_line_error_on_one_wire_is_reported_and_traffic_goes_on(low_speed):
     daemon, a, b = low_speed
+    body = [x for x in canemu.buses() if x["name"] == "body"]
+    assert body == [{"name": "body", "kind": "can", "transceiver": "low-speed",
+                     "bitrate": 125000, "data_bitrate": 0}]
     load(daemon, f"""
 [[fault]]
 at = "1ms"

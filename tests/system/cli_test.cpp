@@ -227,7 +227,10 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   EXPECT_EQ(j.substr(j.size() - 2), "}\n");
   EXPECT_NE(j.find("\"time_mode\":\"stepped\""), std::string::npos) << j;
   EXPECT_NE(j.find("\"sim_time_ns\":10000000"), std::string::npos) << j;
-  EXPECT_NE(j.find("{\"name\":\"can1\",\"kind\":\"can\",\"bitrate\":500000"), std::string::npos)
+  EXPECT_NE(
+      j.find(
+          "{\"name\":\"can1\",\"kind\":\"can\",\"transceiver\":\"high-speed\",\"bitrate\":500000"),
+      std::string::npos)
       << j;
   EXPECT_NE(j.find("{\"name\":\"probe\",\"model\":\"ephemeral\",\"ephemeral\":true"),
             std::string::npos)

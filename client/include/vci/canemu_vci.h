@@ -39,8 +39,9 @@ extern "C" {
 /* A bus of canemud's configuration (48 bytes). */
 typedef struct _CANEMU_BUSINFO {
   CHAR szName[32];
-  UINT8 bKind; /* CANEMU_BUS_* */
-  UINT8 abReserved[3];
+  UINT8 bKind;     /* CANEMU_BUS_* */
+  UINT8 bLowSpeed; /* 1: low-speed, fault-tolerant transceivers (ISO 11898-3) */
+  UINT8 abReserved[2];
   UINT32 dwBitrate;     /* nominal bit rate, bit/s */
   UINT32 dwDataBitrate; /* CAN FD data-phase bit rate, bit/s; 0 on other buses */
   UINT32 dwReserved;

@@ -153,7 +153,8 @@ class CANEMU_BUSINFO(ctypes.Structure):
     _fields_ = [
         ("szName", ctypes.c_char * 32),
         ("bKind", ctypes.c_uint8),
-        ("abReserved", ctypes.c_uint8 * 3),
+        ("bLowSpeed", ctypes.c_uint8),
+        ("abReserved", ctypes.c_uint8 * 2),
         ("dwBitrate", ctypes.c_uint32),
         ("dwDataBitrate", ctypes.c_uint32),
         ("dwReserved", ctypes.c_uint32),

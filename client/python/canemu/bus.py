@@ -158,7 +158,8 @@ def sim_time() -> Tuple[int, int]:
 
 
 def buses() -> List[Dict[str, Any]]:
-    """canemud's buses: name, kind ("can", "can-fd", "lin"), bitrate, data_bitrate."""
+    """canemud's buses: name, kind ("can", "can-fd", "lin"), transceiver ("high-speed",
+    "low-speed"), bitrate, data_bitrate."""
     kinds = {_vci.CANEMU_BUS_CAN: "can", _vci.CANEMU_BUS_CANFD: "can-fd", _vci.CANEMU_BUS_LIN: "lin"}
     out = []
     info = _vci.CANEMU_BUSINFO()
@@ -168,6 +169,7 @@ def buses() -> List[Dict[str, Any]]:
             {
                 "name": info.szName.decode(),
                 "kind": kinds.get(info.bKind, "unknown"),
+                "transceiver": "low-speed" if info.bLowSpeed else "high-speed",
                 "bitrate": info.dwBitrate,
                 "data_bitrate": info.dwDataBitrate,
             }

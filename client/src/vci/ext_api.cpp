@@ -139,6 +139,7 @@ HRESULT VCIAPI canemuEnumBuses(UINT32 dwIndex, PCANEMU_BUSINFO pInfo) {
   CANEMU_BUSINFO info{};
   std::snprintf(info.szName, sizeof info.szName, "%s", canemu::ipc::name_of(b.name).c_str());
   info.bKind = b.kind;
+  info.bLowSpeed = b.low_speed;
   info.dwBitrate = b.bitrate;
   info.dwDataBitrate = b.data_bitrate;
   *pInfo = info;

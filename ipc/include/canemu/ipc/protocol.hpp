@@ -125,8 +125,9 @@ enum class WireErrorState : uint8_t { active = 0, warning = 1, passive = 2, bus_
 
 struct StatusBus {
   char name[kNameSize] = {};
-  uint8_t kind = 0;  // WireBusKind
-  uint8_t reserved[3] = {};
+  uint8_t kind = 0;       // WireBusKind
+  uint8_t low_speed = 0;  // 1: ISO 11898-3 low-speed transceivers
+  uint8_t reserved[2] = {};
   uint32_t bitrate = 0;
   uint32_t data_bitrate = 0;
   uint32_t load_permille = 0;  // over the last second

@@ -4,18 +4,22 @@ in a fresh temporary folder, ready when it says it listens, killed on stop().
     with canemu.testing.Daemon(config_text) as daemon:
         bus = can.Bus(interface="canemu", channel="can0")
         ...
+        daemon.wait_log("fault: t=")      # a line of its log, waited for
+
+Its log (standard error) is read all the time by a thread of its own, so that a chatty daemon
+never blocks on a full pipe; `log` is what it wrote so far.
 """
 
 from __future__ import annotations
 
 import os
-import select
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
 from pathlib import Path
-from typing import Dict, Optional
+from typing import Dict, Optional, Sequence
 
 from .bus import connect
 
@@ -37,51 +41,91 @@ def find_canemud() -> str:
 class Daemon:
     """canemud as a child process.
 
-    :param config: the configuration's text (TOML).
+    :param config: the configuration's text (TOML); None: canemud's embedded default.
     :param files: more files for the configuration's folder (scenarios), name -> text.
     :param canemud: the program; default find_canemud().
     :param timeout: seconds to wait for it to listen.
+    :param args: more command-line arguments (for example ``["--time", "stepped"]``).
 
     The process talks to this daemon from now on (canemu.connect).
     """
 
     def __init__(
         self,
-        config: str,
+        config: Optional[str],
         files: Optional[Dict[str, str]] = None,
         canemud: Optional[str] = None,
         timeout: float = 10.0,
+        args: Sequence[str] = (),
     ) -> None:
         self.dir = tempfile.mkdtemp(prefix="canemu-")
         self.socket = os.path.join(self.dir, "canemud.sock")
-        self.config = os.path.join(self.dir, "canemu.toml")
+        self.config = os.path.join(self.dir, "canemu.toml") if config is not None else None
         for name, text in (files or {}).items():
             Path(self.dir, name).write_text(text)
-        Path(self.config).write_text(config)
-        self.proc = subprocess.Popen(
-            [canemud or find_canemud(), "--config", self.config, "--socket", self.socket],
-            stderr=subprocess.PIPE,
-            stdout=subprocess.DEVNULL,
-        )
-        self.log = b""
-        want = f"listening on {self.socket}".encode()
-        deadline = time.monotonic() + timeout
-        while want not in self.log:
-            left = deadline - time.monotonic()
-            if left <= 0 or not select.select([self.proc.stderr], [], [], left)[0]:
-                self.stop()
-                raise RuntimeError(f"canemud did not start: {self.log.decode(errors='replace')}")
-            chunk = os.read(self.proc.stderr.fileno(), 4096)
-            if not chunk:
-                self.stop()
-                raise RuntimeError(f"canemud exited: {self.log.decode(errors='replace')}")
-            self.log += chunk
+        command = [canemud or find_canemud(), "--socket", self.socket, *args]
+        if self.config is not None:
+            Path(self.config).write_text(config)
+            command += ["--config", self.config]
+        self._log = bytearray()
+        self._log_changed = threading.Condition()
+        self._eof = False
+        self.proc = subprocess.Popen(command, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL)
+        self._reader = threading.Thread(target=self._read_log, name="canemud-log", daemon=True)
+        self._reader.start()
+        try:
+            self.wait_log(f"listening on {self.socket}", timeout)
+        except RuntimeError as e:
+            self.stop()
+            raise RuntimeError(f"canemud did not start: {e}") from None
         connect(self.socket)
+
+    def _read_log(self) -> None:
+        fd = self.proc.stderr.fileno()
+        while True:
+            try:
+                chunk = os.read(fd, 65536)
+            except OSError:
+                chunk = b""
+            with self._log_changed:
+                if chunk:
+                    self._log += chunk
+                else:
+                    self._eof = True
+                self._log_changed.notify_all()
+            if not chunk:
+                return
+
+    @property
+    def log(self) -> str:
+        """Everything the daemon wrote to its standard error so far."""
+        with self._log_changed:
+            return self._log.decode(errors="replace")
+
+    def wait_log(self, text: str, timeout: float = 10.0, start: int = 0) -> str:
+        """Waits until the log, from character `start` on, holds `text`; returns the first whole
+        line that holds it. RuntimeError, with the log, when it does not come in `timeout`
+        seconds or the daemon ends first."""
+        deadline = time.monotonic() + timeout
+        with self._log_changed:
+            while True:
+                log = self._log.decode(errors="replace")
+                at = log.find(text, start)
+                if at >= 0:
+                    begin = log.rfind("\n", 0, at) + 1
+                    end = log.find("\n", at)
+                    return log[begin : end if end >= 0 else len(log)]
+                left = deadline - time.monotonic()
+                if self._eof or left <= 0:
+                    what = "it ended" if self._eof else f"not in {timeout} s"
+                    raise RuntimeError(f"{text!r} not logged ({what}); the log:\n{log}")
+                self._log_changed.wait(left)
 
     def stop(self) -> None:
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait()
+        self._reader.join(5)
         if self.proc.stderr is not None:
             self.proc.stderr.close()
         shutil.rmtree(self.dir, ignore_errors=True)

@@ -6,12 +6,16 @@
 #include <cstring>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
+#include <tl/expected.hpp>
 
 #include "canemu/client/channel.hpp"
 #include "canemu/client/connection.hpp"
@@ -41,6 +45,10 @@ std::optional<int64_t> parse_duration(const std::string& text) {
   return ns && *ns > 0 ? ns : std::nullopt;
 }
 
+void print_faults(const ipc::FaultListReply& r);
+std::string faults_json(const ipc::FaultListReply& r);
+tl::expected<ipc::FaultListReply, std::string> fault_list(client::Connection& c);
+
 int cmd_status(const std::string& socket, bool json) {
   auto c = client::Connection::open(ipc::socket_path(socket), "canemu status");
   if (!c) {
@@ -58,6 +66,10 @@ int cmd_status(const std::string& socket, bool json) {
       ipc::make_message<ipc::ClientListRequest>());
   if (!devices || !clients) {
     return fail(!devices ? devices.error().message : clients.error().message);
+  }
+  auto faults = fault_list(*c);
+  if (!faults) {
+    return fail(faults.error());
   }
   const auto device_buses = [](const ipc::DeviceEntry& d) {
     std::vector<std::string> buses;
@@ -111,7 +123,7 @@ int cmd_status(const std::string& socket, bool json) {
       out += fmt::format("{}{{\"name\":\"{}\",\"pid\":{},\"uid\":{},\"channels\":{}}}",
                          i ? "," : "", ipc::name_of(e.name), e.pid, e.uid, e.channels);
     }
-    out += "]}\n";
+    out += "],\"faults\":" + faults_json(*faults) + "}\n";
     std::fputs(out.c_str(), stdout);
     return 0;
   }
@@ -155,6 +167,9 @@ int cmd_status(const std::string& socket, bool json) {
   for (uint16_t i = 0; i < clients->count; ++i) {
     const ipc::ClientEntry& e = clients->clients[i];
     std::printf("%-20s %8u %8u %8u\n", ipc::name_of(e.name).c_str(), e.pid, e.uid, e.channels);
+  }
+  if (faults->total > 0) {
+    print_faults(*faults);
   }
   return 0;
 }
@@ -294,21 +309,14 @@ int cmd_fault_load(const std::string& socket, const std::string& file) {
   return load_scenario_text(socket, file, *text);
 }
 
-int cmd_fault_list(const std::string& socket) {
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
-  if (!c) {
-    return fail(c.error().message);
-  }
-  auto r = c->call<ipc::FaultListRequest, ipc::FaultListReply>(
-      ipc::make_message<ipc::FaultListRequest>());
-  if (!r) {
-    return fail(r.error().message);
-  }
-  constexpr const char* kFaultStates[] = {"pending", "active", "done", "cleared"};
+constexpr const char* kFaultStates[] = {"pending", "active", "done", "cleared"};
+
+// Every fault canemud applied, one line each (canemu fault list, canemu status).
+void print_faults(const ipc::FaultListReply& r) {
   std::printf("%-24s %5s %-15s %-12s %14s %14s %8s %8s %s\n", "SCENARIO", "LINE", "EFFECT",
               "TARGET", "AT", "UNTIL", "SEEN", "HITS", "STATE");
-  for (uint16_t i = 0; i < r->count; ++i) {
-    const ipc::FaultEntry& e = r->faults[i];
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::FaultEntry& e = r.faults[i];
     const std::string until =
         e.has_until ? fmt::format("{:.6f}", static_cast<double>(e.until_ns) / 1e9) : "-";
     std::printf("%-24s %5u %-15s %-12s %14.6f %14s %8llu %8llu %s\n",
@@ -317,9 +325,55 @@ int cmd_fault_list(const std::string& socket) {
                 static_cast<unsigned long long>(e.seen), static_cast<unsigned long long>(e.hits),
                 e.state < 4 ? kFaultStates[e.state] : "?");
   }
-  if (r->total > r->count) {
-    std::printf("(%u more not shown)\n", r->total - r->count);
+  if (r.total > r.count) {
+    std::printf("(%u more not shown)\n", r.total - r.count);
   }
+}
+
+// The same as a JSON array (toml++ writes it: names are escaped as JSON wants them).
+std::string faults_json(const ipc::FaultListReply& r) {
+  toml::array faults;
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::FaultEntry& e = r.faults[i];
+    toml::table t{{"scenario", ipc::name_of(e.scenario)},
+                  {"line", static_cast<int64_t>(e.line)},
+                  {"effect", ipc::name_of(e.effect)},
+                  {"target", ipc::name_of(e.target)},
+                  {"at_ns", e.at_ns},
+                  {"seen", static_cast<int64_t>(e.seen)},
+                  {"hits", static_cast<int64_t>(e.hits)},
+                  {"state", e.state < 4 ? kFaultStates[e.state] : "?"}};
+    if (e.has_until) {
+      t.insert("until_ns", e.until_ns);
+    }
+    faults.push_back(std::move(t));
+  }
+  std::ostringstream out;
+  out << toml::json_formatter{faults, toml::format_flags::none};
+  std::string text = out.str();
+  std::erase(text, '\n');
+  return text;
+}
+
+tl::expected<ipc::FaultListReply, std::string> fault_list(client::Connection& c) {
+  auto r = c.call<ipc::FaultListRequest, ipc::FaultListReply>(
+      ipc::make_message<ipc::FaultListRequest>());
+  if (!r) {
+    return tl::unexpected(r.error().message);
+  }
+  return *r;
+}
+
+int cmd_fault_list(const std::string& socket) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto r = fault_list(*c);
+  if (!r) {
+    return fail(r.error());
+  }
+  print_faults(*r);
   return 0;
 }
 
@@ -338,71 +392,154 @@ int cmd_fault_clear(const std::string& socket, const std::string& name) {
   return 0;
 }
 
-// One fault from the command line, in the scenario language's own keys.
+// One fault from the command line, in the scenario language's own keys. Strings stay as typed
+// (canemud checks them as it checks a file); numbers are read here.
 struct InjectOptions {
   std::string effect;
   std::string at = "0s";
-  std::string until;
-  std::string bus;
-  std::string node;
-  std::string duration;
-  std::string from;
-  std::string id;
-  std::string mask;
+  std::optional<std::string> until, bus, node, duration, from, wire;
+  std::optional<std::string> id, mask;  // 0x1A0 or 416
   bool ext = false;
   bool std_id = false;
-  uint32_t bit = 0;
-  uint64_t count = 0;
-  double probability = 0;
-  int tec = -1;
-  int rec = -1;
-  int ppm = 0;
-  std::string data;  // babble: hex bytes
-  std::string wire;  // line_error: one, both
+  bool rtr = false;
+  bool data_frame = false;
+  std::optional<int64_t> bit, tec, rec, ppm;
+  std::optional<std::string> count;  // a number or "all"
+  std::optional<double> probability, bit_error_rate;
+  std::optional<std::string> data;  // babble: hex bytes
 };
 
-int cmd_fault_inject(const std::string& socket, const InjectOptions& o) {
-  const auto quoted = [](const std::string& v) { return "\"" + v + "\""; };
-  std::string text = fmt::format("[scenario]\nname = \"inject-{}\"\n\n[[fault]]\n", ::getpid());
-  text += "effect = " + quoted(o.effect) + "\nat = " + quoted(o.at) + "\n";
-  const auto key = [&](const char* k, const std::string& v) {
-    if (!v.empty()) {
-      text += std::string(k) + " = " + v + "\n";
-    }
-  };
-  key("until", o.until.empty() ? "" : quoted(o.until));
-  key("bus", o.bus.empty() ? "" : quoted(o.bus));
-  key("node", o.node.empty() ? "" : quoted(o.node));
-  key("duration", o.duration.empty() ? "" : quoted(o.duration));
-  key("bit", o.bit ? std::to_string(o.bit) : "");
-  key("count", o.count ? std::to_string(o.count) : "");
-  key("probability", o.probability > 0 ? fmt::format("{}", o.probability) : "");
-  key("tec", o.tec >= 0 ? std::to_string(o.tec) : "");
-  key("rec", o.rec >= 0 ? std::to_string(o.rec) : "");
-  key("ppm", o.ppm ? std::to_string(o.ppm) : "");
-  key("wire", o.wire.empty() ? "" : quoted(o.wire));
-  if (o.effect == "babble") {  // --id, --ext and --data describe the flooding frame
-    key("id", o.id);
-    key("ext", o.ext ? "true" : "");
-    std::string bytes;
-    for (std::size_t i = 0; i < o.data.size(); i += 2) {
-      bytes += (bytes.empty() ? "0x" : ", 0x") + o.data.substr(i, 2);
-    }
-    key("data", o.data.empty() ? "" : "[" + bytes + "]");
-    return load_scenario_text(socket, "<command line>", text);
+// A non-negative integer option, "0x1A0" (hexadecimal) or "416" (decimal).
+tl::expected<int64_t, std::string> option_integer(const char* option, const std::string& text) {
+  const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
+  const std::string digits = hex ? text.substr(2) : text;
+  std::size_t used = 0;
+  int64_t value = -1;
+  try {
+    value = std::stoll(digits, &used, hex ? 16 : 10);
+  } catch (const std::exception&) {
+    used = 0;
   }
-  std::string match;
-  const auto part = [&](const std::string& k, const std::string& v) {
-    if (!v.empty()) {
-      match += (match.empty() ? "" : ", ") + k + " = " + v;
+  if (digits.empty() || used != digits.size() || value < 0 || !std::isxdigit(digits[0])) {
+    return tl::unexpected(fmt::format(
+        "{} '{}': not a number (0x1A0 for hexadecimal, 416 for decimal)", option, text));
+  }
+  return value;
+}
+
+// The scenario text of one injected fault: a file of the language (docs/faults.md), made with
+// toml++ so that every value is quoted and escaped as TOML wants it.
+tl::expected<std::string, std::string> inject_scenario(const InjectOptions& o) {
+  toml::table fault{{"effect", o.effect}, {"at", o.at}};
+  const auto text = [&](const char* key, const std::optional<std::string>& v) {
+    if (v) {
+      fault.insert(key, *v);
     }
   };
-  part("id", o.id);
-  part("mask", o.mask);
-  part("ext", o.ext ? "true" : o.std_id ? "false" : "");
-  part("from", o.from.empty() ? "" : quoted(o.from));
-  key("match", match.empty() ? "" : "{ " + match + " }");
-  return load_scenario_text(socket, "<command line>", text);
+  const auto number = [&](const char* key, const auto& v) {
+    if (v) {
+      fault.insert(key, *v);
+    }
+  };
+  text("until", o.until);
+  text("bus", o.bus);
+  text("node", o.node);
+  text("duration", o.duration);
+  text("wire", o.wire);
+  number("bit", o.bit);
+  number("tec", o.tec);
+  number("rec", o.rec);
+  number("ppm", o.ppm);
+  number("probability", o.probability);
+  number("bit_error_rate", o.bit_error_rate);
+  if (o.count) {
+    if (*o.count == "all") {
+      fault.insert("count", "all");
+    } else {
+      auto n = option_integer("--count", *o.count);
+      if (!n) {
+        return tl::unexpected(n.error());
+      }
+      fault.insert("count", *n);
+    }
+  }
+  std::optional<int64_t> id, mask;
+  for (auto [option, given, out] : {std::tuple{"--id", &o.id, &id}, {"--mask", &o.mask, &mask}}) {
+    if (*given) {
+      auto n = option_integer(option, **given);
+      if (!n) {
+        return tl::unexpected(n.error());
+      }
+      *out = *n;
+    }
+  }
+  if (o.ext && o.std_id) {
+    return tl::unexpected(std::string("--ext and --std: one or the other"));
+  }
+  if (o.rtr && o.data_frame) {
+    return tl::unexpected(std::string("--rtr and --data-frame: one or the other"));
+  }
+  if (o.effect == "babble") {  // --id, --ext and --data describe the flooding frame
+    if (o.std_id || o.rtr || o.data_frame || o.from || o.mask) {
+      return tl::unexpected(std::string(
+          "babble's frame is given by --id, --ext and --data; --std, --rtr, --data-frame, "
+          "--from and --mask match frames of other effects"));
+    }
+    number("id", id);
+    if (o.ext) {
+      fault.insert("ext", true);
+    }
+    if (o.data) {
+      const std::string& hex = *o.data;
+      toml::array bytes;
+      for (std::size_t i = 0; i < hex.size(); i += 2) {
+        auto byte = option_integer("--data", "0x" + hex.substr(i, 2));
+        if (!byte || hex.size() % 2 != 0) {
+          return tl::unexpected(
+              fmt::format("--data '{}': hexadecimal bytes, two digits each (1122AABB)", hex));
+        }
+        bytes.push_back(*byte);
+      }
+      fault.insert("data", std::move(bytes));
+    }
+  } else {
+    if (o.data) {
+      return tl::unexpected(std::string("--data: only babble sends a frame of its own"));
+    }
+    toml::table match;
+    if (id) {
+      match.insert("id", *id);
+    }
+    if (mask) {
+      match.insert("mask", *mask);
+    }
+    if (o.ext || o.std_id) {
+      match.insert("ext", o.ext);
+    }
+    if (o.rtr || o.data_frame) {
+      match.insert("rtr", o.rtr);
+    }
+    if (o.from) {
+      match.insert("from", *o.from);
+    }
+    if (!match.empty()) {
+      match.is_inline(true);
+      fault.insert("match", std::move(match));
+    }
+  }
+  toml::table scenario{{"scenario", toml::table{{"name", fmt::format("inject-{}", ::getpid())}}},
+                       {"fault", toml::array{std::move(fault)}}};
+  std::ostringstream out;
+  out << scenario << "\n";
+  return out.str();
+}
+
+int cmd_fault_inject(const std::string& socket, const InjectOptions& o) {
+  auto text = inject_scenario(o);
+  if (!text) {
+    return fail(text.error());
+  }
+  return load_scenario_text(socket, "<command line>", *text);
 }
 
 struct DumpOptions {
@@ -576,21 +713,31 @@ int main(int argc, char** argv) {
   fault_inject->add_option("--at", inject.at, "from now (default 0s)");
   fault_inject->add_option("--until", inject.until, "end of the window");
   fault_inject->add_option("--bus", inject.bus, "bus (frame and bus effects)");
-  fault_inject->add_option("--node", inject.node, "node, DEVICE:N (node effects)");
+  fault_inject->add_option("--node", inject.node, "node, DEVICE:N or a device's name");
   fault_inject->add_option("--duration", inject.duration, "ack_suppress, stuck_dominant, babble");
   fault_inject->add_option("--from", inject.from, "match: transmitting node");
   fault_inject->add_option("--id", inject.id, "match: identifier (0x100); babble: its frame's");
   fault_inject->add_option("--mask", inject.mask, "match: identifier mask (0x7FF)");
-  fault_inject->add_flag("--ext", inject.ext, "match: extended frames only");
+  fault_inject->add_flag("--ext", inject.ext, "match: extended frames only; babble: 29-bit id");
   fault_inject->add_flag("--std", inject.std_id, "match: standard frames only");
-  fault_inject->add_option("--bit", inject.bit, "frame bit where the error hits");
-  fault_inject->add_option("--count", inject.count, "matching frames to hit (default: all)");
+  fault_inject->add_flag("--rtr", inject.rtr, "match: remote frames only");
+  fault_inject->add_flag("--data-frame", inject.data_frame, "match: data frames only");
+  fault_inject->add_option("--bit", inject.bit, "frame bit where the error hits (SOF = 0)");
+  fault_inject->add_option("--count", inject.count, "matching frames to hit, or all (default)");
   fault_inject->add_option("--probability", inject.probability, "per matching frame");
+  fault_inject->add_option("--bit-error-rate", inject.bit_error_rate, "random_errors, per bit");
   fault_inject->add_option("--tec", inject.tec, "error_counters");
   fault_inject->add_option("--rec", inject.rec, "error_counters");
   fault_inject->add_option("--ppm", inject.ppm, "oscillator");
   fault_inject->add_option("--data", inject.data, "babble: data bytes in hex (1122AABB)");
   fault_inject->add_option("--wire", inject.wire, "line_error: one (default) or both");
+  fault_inject->footer(
+      "Examples:\n"
+      "  canemu fault inject --effect bit_error --bus can0 --id 0x1A0 --count 3\n"
+      "  canemu fault inject --effect random_errors --bus can0 --bit-error-rate 1e-4 --until 2s\n"
+      "  canemu fault inject --effect node_off --node ixxat0:1 --at 1s --until 1.5s\n"
+      "  canemu fault inject --effect babble --node ixxat0:0 --id 0 --data DEADBEEF "
+      "--duration 500ms");
 
   auto* time = app.add_subcommand("time", "simulated time (stepped mode)");
   time->require_subcommand(1);

@@ -56,7 +56,12 @@ int main(int argc, char** argv) {
     }
     return 1;
   }
-  // Fault scenarios of the configuration, applied from time 0.
+  // Fault scenarios of the configuration, applied from time 0 (logged when canemud runs).
+  if (!checking) {
+    (*sim)->on_fault_log = [](const std::string& line) {
+      std::fprintf(stderr, "<6>canemud: fault: %s\n", line.c_str());
+    };
+  }
   std::string scenarios;
   for (const std::string& scenario_file : config->scenario_files) {
     auto scenario = load_scenario_file(scenario_file);
@@ -88,9 +93,6 @@ int main(int argc, char** argv) {
   }
   std::fputs(summary(*config).c_str(), stderr);
   std::fputs(scenarios.c_str(), stderr);
-  (*sim)->on_fault_log = [](const std::string& line) {
-    std::fprintf(stderr, "<6>canemud: fault: %s\n", line.c_str());
-  };
   std::fprintf(stderr, "<6>canemud: listening on %s\n", server.socket_path().c_str());
   std::fprintf(stderr, "<6>canemud: try: CANEMU_SOCKET=%s build/bin/canemu status\n",
                server.socket_path().c_str());

@@ -113,9 +113,41 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
 
 void Simulation::add_bus(const BusConfig& b) {
   buses_.push_back(
-      Bus{std::make_unique<CanBus>(scheduler_, b.name), std::make_unique<FaultPlan>()});
+      Bus{std::make_unique<CanBus>(scheduler_, b.name), std::make_unique<FaultPlan>(), {}});
   buses_.back().bus->set_injector(buses_.back().faults.get());
+  const std::size_t index = buses_.size() - 1;
+  buses_.back().faults->on_hit = [this, index](std::size_t rule, const FrameContext& ctx,
+                                               const FrameFault&) {
+    frame_fault_hit(index, rule, ctx);
+  };
   pools_.emplace_back();
+}
+
+std::string Simulation::node_name(std::size_t bus, NodeId node) const {
+  for (const Controller& c : controllers_) {
+    if (c.bus == bus && c.node->node() == node) {
+      return c.name;
+    }
+  }
+  for (const Ephemeral& e : ephemeral_) {
+    if (e.bus == bus && e.node->node() == node) {
+      return e.name + ":0";
+    }
+  }
+  return fmt::format("node {} of {}", node, config_.buses[bus].name);
+}
+
+void Simulation::frame_fault_hit(std::size_t bus, std::size_t rule, const FrameContext& ctx) {
+  const FaultRule& r = buses_[bus].faults->rule(rule);
+  const std::string& label = buses_[bus].rule_labels[rule];
+  if (r.hits == 1) {
+    fault_log(fmt::format("{}: first hit, {} {:X} from {}", label,
+                          ctx.frame.extended() ? "frame (29-bit)" : "frame", ctx.frame.id(),
+                          node_name(bus, ctx.transmitter)));
+  }
+  if (r.count && r.hits == *r.count) {
+    fault_log(fmt::format("{}: done, {} hit{}", label, r.hits, r.hits == 1 ? "" : "s"));
+  }
 }
 
 std::optional<Simulation::NodeRef> Simulation::find_node(std::string_view name) {
@@ -192,6 +224,8 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
     return tl::unexpected(errors);
   }
   const uint64_t seed = s.seed.value_or(config_.simulation.seed);
+  fault_log(fmt::format("scenario \"{}\" ({}) applied: {} fault{}, seed {}", s.name, s.source,
+                        s.faults.size(), s.faults.size() == 1 ? "" : "s", seed));
   LoadedScenario loaded{s.name, {}, false};
   for (std::size_t k = 0; k < plan.size(); ++k) {
     const FaultSpec& f = *plan[k].spec;
@@ -212,8 +246,13 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         scheduler_.schedule_at(at, [guarded](SimTime) { guarded(); });
       }
     };
-    AppliedFault applied{f,     bus,          !f.node.empty() ? f.node : config_.buses[bus].name,
-                         start, std::nullopt, state};
+    AppliedFault applied{f,
+                         bus,
+                         !f.node.empty() ? f.node : config_.buses[bus].name,
+                         start,
+                         std::nullopt,
+                         state,
+                         plan[k].node ? plan[k].node->hosted : nullptr};
     CanBus& b = *buses_[bus].bus;
     const SimTime at = start + SimDuration(f.at_ns);
     const std::string what =
@@ -252,6 +291,17 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         rule.probability = f.probability;
         rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;  // each fault its own draws
         applied.rule = buses_[bus].faults->add(rule);
+        buses_[bus].rule_labels.push_back(what);
+        if (rule.until) {  // the end of its window, with what it did
+          const std::size_t index = *applied.rule;
+          when(*rule.until, [this, bus, index, what] {
+            const uint64_t hits = buses_[bus].faults->rule(index).hits;
+            const auto& count = buses_[bus].faults->rule(index).count;
+            if (!count || hits < *count) {
+              fault_log(fmt::format("{}: window over, {} hit{}", what, hits, hits == 1 ? "" : "s"));
+            }
+          });
+        }
         break;
       }
       case FaultEffect::ack_suppress: {
@@ -304,10 +354,11 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         HostedNode* hosted = plan[k].node->hosted;
         const Frame frame = *Frame::classic(f.id, f.data, f.ext);  // checked by the parser
         const SimDuration d(f.duration_ns);
-        when(at, [this, hosted, frame, d, what] {
+        when(at, [this, hosted, frame, d, what, state] {
           if (hosted->babble(frame, scheduler_.now() + d)) {
             fault_log(what);
           } else {
+            --state->fired;  // it did nothing
             fault_log(what +
                       ": the node is not on the bus (its line is not started); nothing "
                       "babbles");
@@ -575,10 +626,10 @@ std::vector<Simulation::FaultStatus> Simulation::fault_status() const {
         st.hits = rule.hits;
         over = over || (rule.count && rule.hits >= *rule.count);
         st.state = now.ns() < st.at_ns ? State::pending : over ? State::done : State::active;
-      } else if (a.state->fired == 0) {
+      } else if (now.ns() < st.at_ns) {
         st.state = State::pending;
-      } else {
-        st.state = st.until_ns && !over ? State::active : State::done;
+      } else {  // fired (or found nothing to act on: a babble on a node off the bus)
+        st.state = st.until_ns && !over && a.state->fired > 0 ? State::active : State::done;
       }
       if (a.state->cleared && st.state != State::done) {
         st.state = State::cleared;
@@ -603,6 +654,7 @@ std::size_t Simulation::clear_scenarios(std::string_view name) {
         buses_[a.bus].faults->disable(*a.rule);
       }
     }
+    fault_log(fmt::format("scenario \"{}\" cleared", sc.name));
   }
   return cleared;
 }
@@ -787,11 +839,37 @@ Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t 
 }
 
 void Simulation::remove_ephemeral(const std::string& name) {
+  for (const Ephemeral& e : ephemeral_) {
+    if (e.name == name) {
+      end_node_faults(e);
+    }
+  }
   std::erase_if(ephemeral_, [&](const Ephemeral& e) { return e.name == name; });
   ++generation_;
   if (on_device_change) {
     on_device_change(ipc::NotificationKind::device_removed, name);
   }
+}
+
+void Simulation::end_node_faults(const Ephemeral& e) {
+  // Faults that name the device end with it; its node, kept for a later device, comes back
+  // plugged in and on its nominal clock.
+  for (LoadedScenario& sc : scenarios_) {
+    for (AppliedFault& a : sc.faults) {
+      if (a.node != e.node || a.state->cleared) {
+        continue;
+      }
+      a.state->cleared = true;
+      if (a.rule) {
+        buses_[a.bus].faults->disable(*a.rule);
+      }
+      fault_log(fmt::format("scenario \"{}\" line {}: {}: ends, device {} is gone", sc.name,
+                            a.spec.line, to_string(a.spec.effect), e.name));
+    }
+  }
+  CanBus& bus = *buses_[e.bus].bus;
+  bus.set_connected(e.node->node(), true);
+  bus.set_oscillator_ppm(e.node->node(), 0);
 }
 
 Simulation::DeviceLease::~DeviceLease() {

@@ -6,7 +6,9 @@ namespace canemu::model {
 
 FrameFault FaultPlan::on_frame(const FrameContext& ctx) {
   std::optional<FrameFault> chosen;
-  for (FaultRule& r : rules_) {
+  std::size_t chosen_rule = 0;
+  for (std::size_t i = 0; i < rules_.size(); ++i) {
+    FaultRule& r = rules_[i];
     if (!r.enabled || ctx.sof < r.from || (r.until && ctx.sof >= *r.until)) {
       continue;
     }
@@ -33,12 +35,20 @@ FrameFault FaultPlan::on_frame(const FrameContext& ctx) {
       }
       r.hits++;
       chosen = FrameFault{CanErrorType::bit, static_cast<uint16_t>(k), false};
+      chosen_rule = i;
       continue;
     }
     r.hits++;
     chosen = r.fault;
+    chosen_rule = i;
   }
-  return chosen.value_or(FrameFault{});
+  if (!chosen) {
+    return FrameFault{};
+  }
+  if (on_hit) {
+    on_hit(chosen_rule, ctx, *chosen);
+  }
+  return *chosen;
 }
 
 double FaultPlan::draw(FaultRule& rule) {

@@ -428,3 +428,111 @@ TEST(ScenarioExamples, EveryShippedExampleAppliesToTheDefaultConfiguration) {
 
 }  // namespace
 }  // namespace canemu::daemon
+
+namespace canemu::daemon {
+namespace {
+
+// The log tells a scenario's life with simulated times: applied, a frame fault's first hit and
+// the hit that completes its count, a bus effect firing and ending, the clearing.
+TEST(ScenarioLog, TellsAppliedFirstHitDoneWindowOverAndCleared) {
+  World w;
+  std::vector<std::string> log;
+  w.sim->on_fault_log = [&](const std::string& line) { log.push_back(line); };
+  w.apply(R"([scenario]
+name = "life"
+
+[[fault]]
+at = "1ms"
+bus = "can0"
+match = { from = "tester" }
+effect = "stuff_error"
+count = 2
+
+[[fault]]
+at = "0s"
+until = "2ms"
+bus = "can0"
+match = { id = 0x7FF, mask = 0x7FF }
+effect = "crc_error"
+)");
+  w.run_until(3'000'000);
+  ASSERT_EQ(log.size(), 4u);
+  EXPECT_EQ(log[0], "t=0.000000000 s: scenario \"life\" (s.toml) applied: 2 faults, seed 1");
+  // The tester sends 0x123 (no data) back to back: 48 bit times (96 us) a frame with one stuff
+  // bit and intermission, so the first frame from 1 ms on starts at 1.056 ms; its repetition
+  // starts 35 bit times later (the frame up to the error, the error flags, their delimiter and
+  // intermission), and is hit too.
+  EXPECT_EQ(log[1],
+            "t=0.001056000 s: scenario \"life\" line 4: stuff_error: first hit, frame 123 from "
+            "tester:0");
+  EXPECT_EQ(log[2], "t=0.001126000 s: scenario \"life\" line 4: stuff_error: done, 2 hits");
+  EXPECT_EQ(log[3], "t=0.002000000 s: scenario \"life\" line 11: crc_error: window over, 0 hits");
+  EXPECT_EQ(w.sim->clear_scenarios("life"), 1u);
+  EXPECT_EQ(log.back(), "t=0.003000000 s: scenario \"life\" cleared");
+}
+
+// Faults that name an ephemeral device end when it goes; its node comes back plugged in and on
+// its nominal clock for the next device, which no fault of the old one touches.
+TEST(ScenarioEffects, FaultsOfADeviceThatGoesEndWithIt) {
+  World w;
+  std::vector<std::string> log;
+  w.sim->on_fault_log = [&](const std::string& line) { log.push_back(line); };
+  w.apply(R"([[fault]]
+at = "0s"
+until = "1s"
+node = "tester"
+effect = "node_off"
+
+[[fault]]
+at = "0s"
+node = "tester:0"
+effect = "oscillator"
+ppm = 100000
+
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { from = "tester" }
+effect = "bit_error"
+
+[[fault]]
+at = "500ms"
+node = "tester"
+effect = "bus_off"
+)");
+  w.run_until(1'000'000);
+  model::HostedNode& node = *w.tester;
+  EXPECT_FALSE(w.sim->bus(0).connected(node.node()));
+  node.stop();
+  w.lease = {};  // the device goes
+  EXPECT_TRUE(w.sim->bus(0).connected(node.node()));
+  using State = Simulation::FaultStatus::State;
+  std::vector<State> states;
+  for (const Simulation::FaultStatus& f : w.sim->fault_status()) {
+    states.push_back(f.state);
+  }
+  // The oscillator offset had fired (a one-time effect, done); the others stop.
+  EXPECT_EQ(states,
+            (std::vector<State>{State::cleared, State::done, State::cleared, State::cleared}));
+  EXPECT_EQ(w.sim->bus(0).stats(node.node()).errors_as_transmitter.total(), 0u);
+  ASSERT_GE(log.size(), 4u);
+  EXPECT_EQ(log[log.size() - 4],
+            "t=0.001000000 s: scenario \"s.toml\" line 1: node_off: ends, device tester is gone");
+  // The same node for a new device: it talks with ixxat0:0, nobody breaks its frames, and the
+  // bus_off due at 500 ms does not come.
+  ASSERT_EQ(&w.sim->spare_node(0), &node);
+  model::HostedNodeSettings s;
+  s.btr0 = 0x00;
+  s.btr1 = 0x1C;
+  node.start(s, nullptr, [] {
+    return model::TxFrame{*model::Frame::classic(0x100, {}), false, false};
+  });
+  w.lease = w.sim->add_ephemeral("next", 0, node, 0);
+  w.run_until(600'000'000);
+  EXPECT_GT(w.stats().frames_sent, 1000u);
+  EXPECT_EQ(w.stats().errors_as_transmitter.total(), 0u);
+  EXPECT_EQ(w.fc().state(), model::ErrorState::active);
+}
+
+}  // namespace
+}  // namespace canemu::daemon

@@ -504,3 +504,35 @@ TEST(FaultPlanProbability, ABitErrorRateHitsAtTheFirstBitDrawn) {
 
 }  // namespace
 }  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+// Every hit is told, with the rule that hit and the frame; frames no rule hits are not.
+TEST(FaultPlan, TellsEveryHitWithItsRuleAndFrame) {
+  const EncodedFrame bits = encode(testing::k123);
+  FaultPlan plan;
+  FaultRule miss;
+  miss.match.id = 0x456;
+  miss.match.mask = 0x7FF;
+  miss.fault.error = CanErrorType::crc;
+  plan.add(miss);
+  FaultRule hit;
+  hit.fault.error = CanErrorType::stuff;
+  hit.count = 2;
+  plan.add(hit);
+  std::vector<std::pair<std::size_t, int64_t>> told;
+  plan.on_hit = [&](std::size_t rule, const FrameContext& ctx, const FrameFault& fault) {
+    EXPECT_EQ(ctx.frame.id(), 0x123u);
+    EXPECT_EQ(fault.error, CanErrorType::stuff);
+    EXPECT_EQ(plan.rule(rule).hits, told.size() + 1);  // counted before it is told
+    told.emplace_back(rule, ctx.sof.ns());
+  };
+  for (int64_t t : {10, 20, 30}) {
+    plan.on_frame(FrameContext{SimTime::from_ns(t), 0, testing::k123, bits});
+  }
+  EXPECT_EQ(told, (std::vector<std::pair<std::size_t, int64_t>>{{1, 10}, {1, 20}}));
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -84,7 +84,9 @@ class Simulation {
   // unplugged). Returns the number of scenarios cleared.
   std::size_t clear_scenarios(std::string_view name);
 
-  // Told when a scheduled fault fires (bus and node effects), with the simulated time.
+  // Told, with the simulated time, when a scenario is applied or cleared, when a bus or node
+  // effect fires or ends, and when a frame fault hits its first frame, reaches its count or
+  // its window ends (each hit is in the bus trace and the counts, not the log).
   std::function<void(const std::string&)> on_fault_log;
 
   // Applies what can change while running (new buses and devices, the security lists, the
@@ -151,6 +153,7 @@ class Simulation {
   struct Bus {
     std::unique_ptr<model::CanBus> bus;
     std::unique_ptr<model::FaultPlan> faults;  // the bus's injector: frame faults of scenarios
+    std::vector<std::string> rule_labels;      // per rule of `faults`: its scenario and line
   };
   struct NodeRef {
     std::size_t bus;
@@ -160,7 +163,10 @@ class Simulation {
   };
   // A configured controller ("DEVICE:N") or an ephemeral device ("NAME" or "NAME:0").
   std::optional<NodeRef> find_node(std::string_view name);
+  // The name of node `node` of bus `bus` ("DEVICE:N", an ephemeral device's "NAME:0").
+  std::string node_name(std::size_t bus, model::NodeId node) const;
   void fault_log(const std::string& text);
+  void frame_fault_hit(std::size_t bus, std::size_t rule, const model::FrameContext& ctx);
   struct FaultSwitch {
     bool cleared = false;
     uint64_t fired = 0;
@@ -172,6 +178,7 @@ class Simulation {
     model::SimTime start;
     std::optional<std::size_t> rule;  // in the bus's FaultPlan
     std::shared_ptr<FaultSwitch> state;
+    const model::HostedNode* node = nullptr;  // the node it acts on or matches (`from`)
   };
   struct LoadedScenario {
     std::string name;
@@ -199,6 +206,7 @@ class Simulation {
     uint64_t vci_id = 0;
   };
   void remove_ephemeral(const std::string& name);
+  void end_node_faults(const Ephemeral& e);
 
   Config config_;
   model::SimScheduler scheduler_;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -58,6 +59,9 @@ class FaultPlan final : public FaultInjector {
   // The first rule that matches, still has hits left and wins its draw decides; every matching
   // rule counts the frame as seen.
   FrameFault on_frame(const FrameContext& ctx) override;
+
+  // Told of every hit: the rule's index (its hit already counted) and the frame it hits.
+  std::function<void(std::size_t rule, const FrameContext& ctx, const FrameFault& fault)> on_hit;
 
  private:
   static double draw(FaultRule& rule);  // uniform in [0, 1), splitmix64

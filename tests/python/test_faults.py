@@ -383,6 +383,36 @@ ppm = 30000
     assert len(frames(drain(b))) == 1
 
 
+def test_oscillator_talks_within_twice_the_tolerance_and_not_beyond(daemon, nodes):
+    # The interface's 500 kbit/s timing: 16 quanta, phase 1 of 13, phase 2 of 2, SJW 2. The
+    # receiver's df is the smaller of SJW / (20 x 16) = 0.625 % and 2 / (2 x (13 x 16 - 2)) =
+    # 0.485 %, and it decodes a rate off by at most 2 x df = 9709 ppm (docs/wire-model.md).
+    a, b = nodes
+    load(daemon, f"""
+[[fault]]
+at = "0s"
+until = "10ms"
+node = "{a.node_name}"
+effect = "oscillator"
+ppm = 9600
+
+[[fault]]
+at = "10ms"
+node = "{a.node_name}"
+effect = "oscillator"
+ppm = 9800
+""")
+    for k in range(10):
+        a.send(msg(0x100 + k, (k,) * 8))
+    canemu.step(10 * MS)
+    assert [m.arbitration_id for m in frames(drain(b))] == [0x100 + k for k in range(10)]
+    assert bus_errors(drain(a)) == [] and a.error_counters() == (0, 0)
+    assert b.error_counters() == (0, 0)
+    a.send(msg(0x200))
+    canemu.step(1 * MS)
+    assert frames(drain(b)) == [] and bus_errors(drain(a)) != []
+
+
 def test_lin_effects_are_refused_whole_with_the_reason(daemon, nodes):
     a, _ = nodes
     done = fault_load(daemon, f"""
@@ -456,6 +486,13 @@ duration = "1ms"
 """)
         canemu.step(2 * MS)
         assert frames(drain(c)) == []
+        daemon.wait_log("babble: the node is not on the bus (its line is not started); nothing "
+                        "babbles")
+        [row] = [line for line in subprocess.run(
+            [str(CANEMU_CLI), "--socket", daemon.socket, "fault", "list"],
+            capture_output=True, text=True, timeout=30, check=True).stdout.splitlines()
+            if "babble" in line]
+        assert row.split()[-3:] == ["0", "0", "done"]  # seen, hits: it did nothing
     finally:
         c.shutdown()
 

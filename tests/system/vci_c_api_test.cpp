@@ -324,6 +324,7 @@ TEST(VciCApi, ThirtyTwoBitErrorsDriveTheSenderBusOffAndARestartRecovers) {
   UINT16 tec = 0;
   ASSERT_EQ(canemuGetControllerState(alpha.control, &state, &tec, nullptr, nullptr), VCI_OK);
   EXPECT_EQ(state, CANEMU_STATE_BUSOFF);
+  EXPECT_EQ(tec, 256);  // 32 x 8, above 255
   EXPECT_TRUE(beta.frames().empty());
   // Stopped and started again: 128 x 11 recessive bits of recovery, then it sends.
   ASSERT_EQ(canControlStart(alpha.control, FALSE), VCI_OK);

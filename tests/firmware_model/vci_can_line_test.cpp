@@ -2121,7 +2121,7 @@ TEST(VciCanLine, TheListKeepsItsRhythmButSendsNothingWhileTheLineIsOffline) {
   EXPECT_EQ(r.ticks_of(0x100), (std::vector<int64_t>{2, 8, 10}));
 }
 
-TEST(VciCanLine, CyclicFramesWithSrrAreEchoedToV1ChannelsAndV2ChannelsWithSrra) {
+TEST(VciCanLine, CyclicFramesWithSrrAreEchoedWithSrrToV1ChannelsAndV2ChannelsWithSrra) {
   ListRig r;
   Port v2, srra;
   r.channel(v2, true, {0, CAN_FILTER_PASS});
@@ -2136,7 +2136,7 @@ TEST(VciCanLine, CyclicFramesWithSrrAreEchoedToV1ChannelsAndV2ChannelsWithSrra) 
   EXPECT_EQ(r.port.data()[0].uMsgInfo.Bits.srr, 1u);
   EXPECT_TRUE(v2.data().empty());
   ASSERT_EQ(srra.data().size(), 1u);
-  EXPECT_EQ(srra.data()[0].uMsgInfo.Bits.srr, 0u);
+  EXPECT_EQ(srra.data()[0].uMsgInfo.Bits.srr, 1u);  // the line's own frame, no channel's
   EXPECT_EQ(r.peer.log.received.size(), 1u);
 }
 

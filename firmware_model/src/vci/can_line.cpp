@@ -871,9 +871,11 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
     if (!c.srra) {
       continue;
     }
-    // As if it came from another controller: through the channel's filter, srr cleared.
+    // Another channel's frame: as if it came from another controller, through the channel's
+    // filter, srr cleared. The cyclic list's frames are no channel's but the line's own: they
+    // keep srr, so that a program can tell them from the bus's traffic.
     CANMSG2 copy = echo;
-    copy.uMsgInfo.Bits.srr = 0;
+    copy.uMsgInfo.Bits.srr = done.channel ? 0 : 1;
     if (passes_channel_filter(c, frame, copy)) {
       deliver(c, copy);
     }

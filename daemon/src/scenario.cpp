@@ -1,6 +1,7 @@
 #include "canemu/daemon/scenario.hpp"
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/ipc/protocol.hpp"
 #include "toml_checker.hpp"
 
 namespace canemu::daemon {
@@ -297,6 +298,12 @@ tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view
   if (s.name.empty()) {
     const std::size_t slash = source.find_last_of('/');
     s.name = source.substr(slash == std::string::npos ? 0 : slash + 1);
+  }
+  if (s.name.size() >= ipc::kScenarioNameSize) {  // the name `fault list` and `clear` use
+    return tl::unexpected(std::vector<std::string>{
+        fmt::format("{}: scenario name \"{}\": {} bytes; at most {} (the file name serves "
+                    "when [scenario] has no name)",
+                    source, s.name, s.name.size(), ipc::kScenarioNameSize - 1)});
   }
   return s;
 }

@@ -536,3 +536,24 @@ effect = "bus_off"
 
 }  // namespace
 }  // namespace canemu::daemon
+
+namespace canemu::daemon {
+namespace {
+
+// `fault list` and `fault clear` use the whole name: one that would not fit is refused.
+TEST(Scenario, ANameLongerThan63BytesIsRefused) {
+  const std::string fault = "\n[[fault]]\nat = \"0s\"\nbus = \"can0\"\neffect = \"bit_error\"\n";
+  const std::string fits(63, 'n');
+  auto ok = parse_scenario("[scenario]\nname = \"" + fits + "\"\n" + fault, "s.toml");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->name, fits);
+  auto long_name = parse_scenario("[scenario]\nname = \"" + fits + "x\"\n" + fault, "s.toml");
+  ASSERT_FALSE(long_name);
+  EXPECT_EQ(long_name.error(),
+            (std::vector<std::string>{"s.toml: scenario name \"" + fits +
+                                      "x\": 64 bytes; at most 63 (the file name serves when "
+                                      "[scenario] has no name)"}));
+}
+
+}  // namespace
+}  // namespace canemu::daemon

@@ -19,9 +19,11 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 1;
+inline constexpr uint16_t kProtocolVersion = 2;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
+// A fault scenario's name: up to 63 bytes and the terminating zero.
+inline constexpr std::size_t kScenarioNameSize = 64;
 inline constexpr std::size_t kMaxStatusBuses = 16;
 inline constexpr std::size_t kMaxStatusNodes = 128;
 inline constexpr std::size_t kMaxDevices = 64;
@@ -358,15 +360,15 @@ struct FaultLoadReply {
   MsgHeader header;
   uint32_t applied = 0;  // 1: applied; 0: rejected, see `errors`
   uint32_t faults = 0;
-  char name[kNameSize] = {};
+  char name[kScenarioNameSize] = {};
   char errors[4096] = {};  // one problem per line, with the line of the scenario text
 };
-static_assert(sizeof(FaultLoadReply) == 16 + 8 + 32 + 4096);
+static_assert(sizeof(FaultLoadReply) == 16 + 8 + kScenarioNameSize + 4096);
 
 enum class WireFaultState : uint8_t { pending = 0, active = 1, done = 2, cleared = 3 };
 
 struct FaultEntry {
-  char scenario[kNameSize] = {};
+  char scenario[kScenarioNameSize] = {};
   char effect[24] = {};
   char target[kNameSize] = {};  // bus or node
   uint32_t line = 0;
@@ -378,7 +380,7 @@ struct FaultEntry {
   uint64_t seen = 0;
   uint64_t hits = 0;
 };
-static_assert(sizeof(FaultEntry) == 32 + 24 + 32 + 8 + 32);
+static_assert(sizeof(FaultEntry) == kScenarioNameSize + 24 + 32 + 8 + 32);
 
 struct FaultListRequest {
   MsgHeader header;
@@ -395,9 +397,9 @@ static_assert(sizeof(FaultListReply) <= kMaxMessageSize);
 
 struct FaultClearRequest {
   MsgHeader header;
-  char scenario[kNameSize] = {};  // empty: every scenario
+  char scenario[kScenarioNameSize] = {};  // empty: every scenario
 };
-static_assert(sizeof(FaultClearRequest) == 48);
+static_assert(sizeof(FaultClearRequest) == 16 + kScenarioNameSize);
 
 struct FaultClearReply {
   MsgHeader header;

@@ -12,7 +12,11 @@ import pytest
 
 import canemu
 
+from conftest import Canemud
+
 TIMEOUT = 2.0
+CAN_ACCEPT_FILTER_1 = 0x01  # the channel's acceptance filter let the frame through
+CAN_ACCEPT_FILTER_2 = 0x02  # its ID list did
 
 
 @pytest.fixture
@@ -221,11 +225,84 @@ def test_timing_from_another_clock_keeps_rate_and_sample_point(realtime_daemon):
         b.shutdown()
 
 
+def only_errors(receiver, count: int = 20) -> None:
+    """The next `count` messages `receiver` gets are all error frames (none is a frame)."""
+    for _ in range(count):
+        got = receiver.recv(TIMEOUT)
+        assert got is not None and got.is_error_frame, got
+
+
+@pytest.mark.parametrize(
+    "timing",
+    [
+        # 250 kbit/s from the SJA1000's 8 MHz: 2 x 16 quanta, sample point 87.5 %.
+        dict(f_clock=8_000_000, brp=2, tseg1=13, tseg2=2, sjw=1),
+        # 250 kbit/s described for a 16 MHz clock: made from the SJA1000's own clock.
+        dict(f_clock=16_000_000, brp=4, tseg1=13, tseg2=2, sjw=1),
+    ],
+    ids=["controller-clock", "another-clock"],
+)
+def test_timing_at_another_rate_cannot_talk(realtime_daemon, timing):
+    # The timing wins over the bus's 500 kbit/s: the others see errors, never the frame.
+    a = can.Bus(interface="canemu", channel="can0", timing=can.BitTiming(**timing))
+    b = can.Bus(interface="canemu", channel="can0")
+    try:
+        a.send(can.Message(arbitration_id=0x78, data=[8], is_extended_id=False))
+        only_errors(b)
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
+# A can.BitTiming on the CAN FD controller (python-can 4.1 has no BitTimingFd): the nominal
+# phase; the data phase follows data_bitrate (default: the bus's 2 Mbit/s).
+FD_NOMINAL_500K = dict(f_clock=80_000_000, brp=10, tseg1=12, tseg2=3, sjw=1)
+FD_NOMINAL_250K = dict(f_clock=80_000_000, brp=20, tseg1=12, tseg2=3, sjw=1)
+
+
+def test_classic_timing_on_an_fd_controller_sets_the_nominal_phase(realtime_daemon):
+    a = can.Bus(interface="canemu", channel="fd0", fd=True,
+                timing=can.BitTiming(**FD_NOMINAL_500K))
+    b = can.Bus(interface="canemu", channel="fd0", fd=True)
+    try:
+        msg = can.Message(arbitration_id=0x6B, data=bytes(range(24)), is_fd=True,
+                          bitrate_switch=True, is_extended_id=False)
+        assert_same_frame(msg, exchange(a, b, msg))
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
+@pytest.mark.parametrize(
+    "timing,data_bitrate,brs",
+    [
+        (FD_NOMINAL_250K, None, False),  # nominal 250 kbit/s on a 500 kbit/s bus
+        (FD_NOMINAL_500K, 1_000_000, True),  # data phase at 1 Mbit/s on a 2 Mbit/s bus
+    ],
+    ids=["nominal", "data"],
+)
+def test_classic_timing_on_an_fd_controller_at_another_rate_cannot_talk(
+    realtime_daemon, timing, data_bitrate, brs
+):
+    rates = {} if data_bitrate is None else {"data_bitrate": data_bitrate}  # 4.1 wants no None
+    a = can.Bus(interface="canemu", channel="fd0", fd=True, timing=can.BitTiming(**timing),
+                **rates)
+    b = can.Bus(interface="canemu", channel="fd0", fd=True)
+    try:
+        a.send(can.Message(arbitration_id=0x6C, data=bytes(16), is_fd=True, bitrate_switch=brs,
+                           is_extended_id=False))
+        only_errors(b)
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
+needs_bit_timing_fd = pytest.mark.skipif(
+    not hasattr(can, "BitTimingFd"), reason="python-can before 4.2 has no BitTimingFd")
+
+
+@needs_bit_timing_fd
 def test_fd_timing_argument(realtime_daemon):
-    if not hasattr(can, "BitTimingFd"):  # python-can before 4.2
-        with pytest.raises(AttributeError):
-            getattr(can, "BitTimingFd")
-        return
     # fd0: 500 kbit/s nominal, 2 Mbit/s data, from the FD controller's 80 MHz.
     timing = can.BitTimingFd(f_clock=80_000_000, nom_brp=2, nom_tseg1=63, nom_tseg2=16,
                              nom_sjw=16, data_brp=1, data_tseg1=29, data_tseg2=10, data_sjw=10)
@@ -240,6 +317,30 @@ def test_fd_timing_argument(realtime_daemon):
         b.shutdown()
     with pytest.raises(can.CanInitializationError, match="needs a CAN FD controller"):
         can.Bus(interface="canemu", channel="can0", timing=timing)
+
+
+@needs_bit_timing_fd
+@pytest.mark.parametrize(
+    "nominal_brp,data_brp,brs",
+    [
+        (4, 1, False),  # nominal 250 kbit/s on a 500 kbit/s bus
+        (2, 2, True),  # data phase at 1 Mbit/s on a 2 Mbit/s bus
+    ],
+    ids=["nominal", "data"],
+)
+def test_fd_timing_at_another_rate_cannot_talk(realtime_daemon, nominal_brp, data_brp, brs):
+    timing = can.BitTimingFd(f_clock=80_000_000, nom_brp=nominal_brp, nom_tseg1=63,
+                             nom_tseg2=16, nom_sjw=16, data_brp=data_brp, data_tseg1=29,
+                             data_tseg2=10, data_sjw=10)
+    a = can.Bus(interface="canemu", channel="fd0", fd=True, timing=timing)
+    b = can.Bus(interface="canemu", channel="fd0", fd=True)
+    try:
+        a.send(can.Message(arbitration_id=0x6D, data=bytes(16), is_fd=True, bitrate_switch=brs,
+                           is_extended_id=False))
+        only_errors(b)
+    finally:
+        a.shutdown()
+        b.shutdown()
 
 
 def test_a_wrong_data_bitrate_breaks_fd_frames_with_bit_rate_switch(realtime_daemon):
@@ -306,6 +407,55 @@ def test_no_daemon_says_how_to_start_it(realtime_daemon):
         canemu.connect(realtime_daemon.socket)
 
 
+def test_at_most_16_buses_of_their_own_per_process(realtime_daemon):
+    buses = []
+    try:
+        for _ in range(16):
+            buses.append(can.Bus(interface="canemu", channel="can0"))
+        with pytest.raises(can.CanInitializationError, match="at most 16 adapters"):
+            can.Bus(interface="canemu", channel="can0")
+        buses.pop().shutdown()  # its adapter goes: room for one again
+        buses.append(can.Bus(interface="canemu", channel="can1"))
+    finally:
+        for bus in buses:
+            bus.shutdown()
+
+
+def test_failures_are_python_can_errors(realtime_daemon):
+    """Every public path maps the VCI's failures to python-can's exceptions (canemud gone
+    here): CanOperationError, CanInitializationError for a new bus; never the VciError."""
+    private = Canemud("realtime")  # the process talks to this one now
+    try:
+        bus = can.Bus(interface="canemu", channel="can0")
+        private.proc.kill()
+        private.proc.wait()
+        calls = {
+            "sim_time": canemu.sim_time,
+            "step": lambda: canemu.step(1000),
+            "buses": canemu.buses,
+            "state": lambda: bus.state,
+            "error_counters": bus.error_counters,
+            "restart": bus.restart,
+            "set_filters": lambda: bus.set_filters([{"can_id": 1, "can_mask": 0x7FF}]),
+            "send_periodic": lambda: bus.send_periodic(
+                can.Message(arbitration_id=1, is_extended_id=False), 0.01),
+        }
+        for name, call in calls.items():
+            try:
+                call()  # a VciError would leave the test here
+            except can.CanOperationError as e:
+                assert "disconnected" in str(e), name
+            else:
+                pytest.fail(f"{name} did not fail")
+        with pytest.raises(can.CanInitializationError, match="canemud is not running"):
+            can.Bus(interface="canemu", channel="can0")
+        assert can.detect_available_configs(["canemu"]) == []
+        bus.shutdown()
+    finally:
+        private.stop()
+        canemu.connect(realtime_daemon.socket)
+
+
 def test_detect_available_configs(realtime_daemon):
     configs = can.detect_available_configs(interfaces=["canemu"])
     channels = {c["channel"] for c in configs}
@@ -350,14 +500,82 @@ def receive_ids(sender, receiver, frames):
 FRAMES = [(0x100, False), (0x101, False), (0x200, False), (0x100, True), (0x1234567, True)]
 
 
-def test_one_filter_per_format_is_done_in_the_channel(pair):
+def channel_ids(sender, receiver, frames, marker=(0x7E0, False)):
+    """Like receive_ids, but what comes out of the receiver's channel itself (`_recv_internal`,
+    before python-can's software filter), each with the VCI's acceptance code (bAccept: which
+    stage of the channel's filter let it through); every one must say it was filtered in the
+    channel."""
+    for arbitration_id, extended in frames + [marker]:
+        sender.send(can.Message(arbitration_id=arbitration_id, is_extended_id=extended))
+    got = []
+    while True:
+        msg, filtered = receiver._recv_internal(TIMEOUT)
+        assert msg is not None, f"the marker did not come; got {got}"
+        assert filtered, msg
+        if (msg.arbitration_id, msg.is_extended_id) == marker:
+            return got
+        got.append((msg.arbitration_id, msg.is_extended_id, receiver._rx_msg.bAccept))
+
+
+def test_one_filter_per_format_is_the_channel_acceptance_filter(pair):
+    a, b = pair
+    b.set_filters([
+        {"can_id": 0x7E0, "can_mask": 0x7F0, "extended": False},
+        {"can_id": 0x1234560, "can_mask": 0x1FFFFFF0, "extended": True},
+    ])
+    assert b._hw_filtered
+    frames = [(0x100, False), (0x7E5, False), (0x7F0, False), (0x1234567, True),
+              (0x1234570, True), (0x7E5, True)]
+    # Only what matches comes out of the channel: the others never reach python-can.
+    assert channel_ids(a, b, frames) == [
+        (0x7E5, False, CAN_ACCEPT_FILTER_1),
+        (0x1234567, True, CAN_ACCEPT_FILTER_1),
+    ]
+
+
+def test_several_filters_of_a_format_go_into_the_channel_id_list(pair):
     a, b = pair
     b.set_filters([
         {"can_id": 0x100, "can_mask": 0x7FE, "extended": False},
         {"can_id": 0x7E0, "can_mask": 0x7FF, "extended": False},
     ])
-    assert receive_ids(a, b, FRAMES) == [(0x100, False), (0x101, False)]
     assert b._hw_filtered
+    assert channel_ids(a, b, FRAMES) == [(0x100, False, CAN_ACCEPT_FILTER_2),
+                                         (0x101, False, CAN_ACCEPT_FILTER_2)]
+    assert receive_ids(a, b, FRAMES) == [(0x100, False), (0x101, False)]
+
+
+def test_setting_filters_again_replaces_the_channel_filters(pair):
+    a, b = pair
+    marker = {"can_id": 0x7E0, "can_mask": 0x7FF, "extended": False}
+    b.set_filters([{"can_id": 0x100, "can_mask": 0x7FF, "extended": False}, marker,
+                   {"can_id": 0x1234567, "can_mask": 0x1FFFFFFF, "extended": True},
+                   {"can_id": 0x0000100, "can_mask": 0x1FFFFFFF, "extended": True}])
+    assert [f[:2] for f in channel_ids(a, b, FRAMES)] == [(0x100, False), (0x100, True),
+                                                           (0x1234567, True)]
+    # The second set: the IDs of the first no longer pass the channel.
+    b.set_filters([{"can_id": 0x200, "can_mask": 0x7FF, "extended": False}, marker,
+                   {"can_id": 0x0000100, "can_mask": 0x1FFFFFFF, "extended": True},
+                   {"can_id": 0x1ABCDEF, "can_mask": 0x1FFFFFFF, "extended": True}])
+    assert b._hw_filtered
+    assert [f[:2] for f in channel_ids(a, b, FRAMES)] == [(0x200, False), (0x100, True)]
+    # One filter per format now: the acceptance filter alone, the lists empty.
+    b.set_filters([marker, {"can_id": 0x1ABCDEF, "can_mask": 0x1FFFFFFF, "extended": True}])
+    assert channel_ids(a, b, FRAMES) == []
+    # No filters: everything passes again.
+    b.set_filters(None)
+    assert b._hw_filtered
+    assert [f[:2] for f in channel_ids(a, b, FRAMES)] == FRAMES
+
+
+def test_a_filter_with_identifier_bits_a_format_lacks_matches_none_of_it(pair):
+    a, b = pair
+    # No "extended": python-can applies it to both formats, but no 11-bit ID has bit 20 set.
+    b.set_filters([{"can_id": 0x100100, "can_mask": 0x1FFFFFFF},
+                   {"can_id": 0x7E0, "can_mask": 0x7FF, "extended": False}])
+    assert b._hw_filtered
+    assert channel_ids(a, b, [(0x100, False), (0x100100, True)]) == [
+        (0x100100, True, CAN_ACCEPT_FILTER_1)]
 
 
 def test_filter_without_format_applies_to_both(pair):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import re
 import subprocess
+import threading
 import time
 
 import can
@@ -16,8 +17,12 @@ from canemu.bus import (
     CAN_ERR_ACK,
     CAN_ERR_BUSERROR,
     CAN_ERR_BUSOFF,
+    CAN_ERR_CNT,
     CAN_ERR_CRTL,
     CAN_ERR_CRTL_ACTIVE,
+    CAN_ERR_CRTL_RX_PASSIVE,
+    CAN_ERR_CRTL_RX_WARNING,
+    CAN_ERR_CRTL_TX_PASSIVE,
     CAN_ERR_CRTL_TX_WARNING,
     CAN_ERR_PROT,
     CAN_ERR_PROT_BIT,
@@ -26,7 +31,10 @@ from canemu.bus import (
 
 from conftest import CANEMU_CLI, Canemud, drain, ns
 
+US = 1_000
 MS = 1_000_000
+PASSIVE_BITS = CAN_ERR_CRTL_TX_PASSIVE | CAN_ERR_CRTL_RX_PASSIVE
+WARNING_BITS = CAN_ERR_CRTL_TX_WARNING | CAN_ERR_CRTL_RX_WARNING
 CanTimeoutError = getattr(can, "CanTimeoutError", can.CanOperationError)
 
 SCENARIO = """
@@ -66,13 +74,42 @@ def pair(daemon):
     b.shutdown()
 
 
-def frame_ns(frame: str, bitrate: int) -> int:
-    """The frame's duration with intermission, from the wire model (`canemu calc frame`)."""
-    text = subprocess.run(
-        [str(CANEMU_CLI), "calc", "frame", frame, "--bitrate", str(bitrate)],
-        capture_output=True, text=True, check=True,
-    ).stdout
-    return int(re.search(r"(\d+) ns with intermission", text).group(1))
+def frame_ns(frame: str, bitrate: int, data_bitrate: int | None = None,
+             intermission: bool = True) -> int:
+    """The frame's duration, with its intermission or from SOF to the end of EOF, from the wire
+    model (`canemu calc frame`; CAN FD frames in cansend's syntax, 123##<flags><data>, flags 1
+    for bit-rate switch)."""
+    command = [str(CANEMU_CLI), "calc", "frame", frame, "--bitrate", str(bitrate)]
+    if data_bitrate is not None:
+        command += ["--data-bitrate", str(data_bitrate)]
+    text = subprocess.run(command, capture_output=True, text=True, check=True).stdout
+    pattern = r"(\d+) ns with intermission" if intermission else r": (\d+) ns \("
+    return int(re.search(pattern, text).group(1))
+
+
+def data_frames(msgs) -> list:
+    return [m for m in msgs if not m.is_error_frame]
+
+
+def state_frames(msgs) -> list:
+    """The controller-state error frames (CAN_ERR_CRTL) among `msgs`."""
+    return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_CRTL]
+
+
+def step_until(bus, done, slice_ns: int = 20 * US, limit_ns: int = 50 * MS) -> list:
+    """Steps time `slice_ns` at a time, reading `bus` after each step (as a program that keeps
+    up with the bus does), until `done(seen)` holds; everything read."""
+    seen: list = []
+    for _ in range(limit_ns // slice_ns):
+        canemu.step(slice_ns)
+        seen += drain(bus)
+        if done(seen):
+            return seen
+    raise AssertionError(f"not reached within {limit_ns} ns; read {seen}")
+
+
+def is_passive_frame(m) -> bool:
+    return m.is_error_frame and m.arbitration_id & CAN_ERR_CRTL and m.data[1] & PASSIVE_BITS
 
 
 @pytest.mark.parametrize("bus_name,bitrate", [("can0", 500_000), ("can1", 125_000)])
@@ -124,11 +161,19 @@ def test_lone_node_sees_ack_errors_and_goes_error_passive(daemon):
         bus_errors = [m for m in errors if m.arbitration_id & CAN_ERR_BUSERROR]
         assert len(bus_errors) > 16
         assert all(m.arbitration_id == CAN_ERR_ACK | CAN_ERR_BUSERROR for m in bus_errors)
-        # The warning limit (TEC 96) after the 12th error: one controller-state frame.
-        warnings = [m for m in errors if m.arbitration_id & CAN_ERR_CRTL]
+        # The warning limit (TEC 96) after the 12th error: one warning frame, from the status
+        # message, exactly there.
+        warnings = [m for m in state_frames(errors) if m.data[1] & WARNING_BITS]
         assert len(warnings) == 1
         assert warnings[0].data[1] == CAN_ERR_CRTL_TX_WARNING
         assert errors.index(warnings[0]) == 12
+        # Then one error-passive frame with the counters. (Read 10 ms late, as here, it comes
+        # at the first error after the warning frame: exactly at the 16th only for a reader
+        # that keeps up, see the next test.)
+        passive = [m for m in errors if is_passive_frame(m)]
+        assert len(passive) == 1 and errors.index(passive[0]) > 12
+        assert passive[0].arbitration_id == CAN_ERR_CRTL | CAN_ERR_CNT
+        assert (passive[0].data[6], passive[0].data[7]) == (128, 0)
         # An error-passive transmitter's ACK errors do not count: TEC stays at 128.
         assert a.state == can.BusState.PASSIVE
         assert a.controller_state == canemu.ControllerState.ERROR_PASSIVE
@@ -139,6 +184,81 @@ def test_lone_node_sees_ack_errors_and_goes_error_passive(daemon):
         assert len(gaps) == 1
     finally:
         a.shutdown()
+
+
+def test_error_passive_frame_comes_with_the_16th_ack_error(daemon):
+    a = can.Bus(interface="canemu", channel="can0")  # alone on can0: nobody acknowledges
+    try:
+        drain(a)
+        a.send(can.Message(arbitration_id=0x100, data=[1], is_extended_id=False))
+        # One attempt with its ACK error takes 128 us at 500 kbit/s; read every 20 us.
+        seen = step_until(a, lambda seen: any(is_passive_frame(m) for m in seen))
+        bus_errors = [m for m in seen if m.arbitration_id & CAN_ERR_BUSERROR]
+        assert all(m.arbitration_id == CAN_ERR_ACK | CAN_ERR_BUSERROR for m in bus_errors)
+        passive = [m for m in seen if is_passive_frame(m)]
+        assert len(passive) == 1
+        frame = passive[0]
+        # TEC 8 x 16 = 128: the 16th ACK error made the node error-passive. SocketCAN's frame:
+        # CAN_ERR_CRTL with TX_PASSIVE, and the counters (CAN_ERR_CNT).
+        assert len(bus_errors) == 16 and seen[-2] is bus_errors[15] and seen[-1] is frame
+        assert frame.arbitration_id == CAN_ERR_CRTL | CAN_ERR_CNT
+        assert frame.data[1] == CAN_ERR_CRTL_TX_PASSIVE
+        assert (frame.data[6], frame.data[7]) == (128, 0)
+        assert frame.timestamp == bus_errors[15].timestamp
+        assert a.error_counters() == (128, 0)
+        # The warning frame came once, with the 12th error.
+        warnings = [m for m in state_frames(seen) if m.data[1] & WARNING_BITS]
+        assert len(warnings) == 1 and seen.index(warnings[0]) == seen.index(bus_errors[11]) + 1
+        # Further ACK errors leave TEC at 128: no more state frames.
+        canemu.step(5 * MS)
+        later = drain(a)
+        assert len([m for m in later if m.arbitration_id & CAN_ERR_BUSERROR]) > 10
+        assert state_frames(later) == []
+    finally:
+        a.shutdown()
+
+
+@pytest.mark.parametrize("own", [True, False], ids=["echo", "no-echo"])
+def test_leaving_error_passive_gives_warning_then_active_frames(daemon, own):
+    a = can.Bus(interface="canemu", channel="can0", receive_own_messages=own)
+    b = None
+    try:
+        drain(a)
+        a.send(can.Message(arbitration_id=0x101, data=[1], is_extended_id=False))
+        step_until(a, lambda seen: any(is_passive_frame(m) for m in seen))
+        # A second node acknowledges from now on: the frame goes through, TEC 128 -> 127.
+        b = can.Bus(interface="canemu", channel="can0")
+        now = canemu.step(MS)
+        seen = drain(a)
+        back = state_frames(seen)
+        assert len(back) == 1
+        assert back[0].arbitration_id == CAN_ERR_CRTL | CAN_ERR_CNT
+        assert back[0].data[1] == CAN_ERR_CRTL_TX_WARNING
+        assert (back[0].data[6], back[0].data[7]) == (127, 0)
+        assert a.controller_state == canemu.ControllerState.ERROR_WARNING
+        if own:
+            # The echo of the frame that got through marks the instant.
+            echo = data_frames(seen)
+            assert len(echo) == 1 and not echo[0].is_rx and echo[0].arbitration_id == 0x101
+            assert seen.index(back[0]) == seen.index(echo[0]) + 1
+            assert back[0].timestamp == echo[0].timestamp
+        else:
+            # No message marks it: found when the FIFO ran empty, stamped with that instant.
+            assert data_frames(seen) == []
+            assert ns(back[0].timestamp) == now - now % US
+        # 32 more frames through: TEC 95, below the warning limit (the status message says it).
+        for k in range(32):
+            a.send(can.Message(arbitration_id=0x102, data=[k], is_extended_id=False))
+        canemu.step(20 * MS)
+        seen = drain(a)
+        assert [m.data[1] for m in state_frames(seen)] == [CAN_ERR_CRTL_ACTIVE]
+        assert state_frames(seen)[0].arbitration_id == CAN_ERR_CRTL
+        assert a.error_counters() == (95, 0)
+        assert len(data_frames(drain(b))) == 33
+    finally:
+        a.shutdown()
+        if b is not None:
+            b.shutdown()
 
 
 def test_bus_off_and_automatic_recovery(daemon):
@@ -195,6 +315,48 @@ def test_bus_off_stays_until_restart_without_auto_restart(daemon):
         b.shutdown()
 
 
+def test_gap_between_fd_frames_is_the_exact_frame_duration(daemon):
+    # fd0: 500 kbit/s nominal, 2 Mbit/s data.
+    a = can.Bus(interface="canemu", channel="fd0", fd=True)
+    b = can.Bus(interface="canemu", channel="fd0", fd=True)
+    try:
+        sent = [
+            ("123##01122", can.Message(arbitration_id=0x123, data=[0x11, 0x22], is_fd=True,
+                                        is_extended_id=False)),
+            ("123##11122", can.Message(arbitration_id=0x123, data=[0x11, 0x22], is_fd=True,
+                                        bitrate_switch=True, is_extended_id=False)),
+            ("1ABCDEF0##1" + "AA" * 64, can.Message(arbitration_id=0x1ABCDEF0, data=[0xAA] * 64,
+                                                     is_fd=True, bitrate_switch=True,
+                                                     is_extended_id=True)),
+            ("7FF##0" + "55" * 12, can.Message(arbitration_id=0x7FF, data=[0x55] * 12,
+                                                is_fd=True, is_extended_id=False)),
+            ("00000000##1", can.Message(arbitration_id=0, is_fd=True, bitrate_switch=True,
+                                        is_extended_id=True)),
+            ("321#0102", can.Message(arbitration_id=0x321, data=[1, 2], is_extended_id=False)),
+            ("0F0##1" + "00" * 20, can.Message(arbitration_id=0x0F0, data=[0] * 20, is_fd=True,
+                                               bitrate_switch=True, is_extended_id=False)),
+        ]
+        now = canemu.step(MS)  # both nodes online, the bus idle
+        drain(b)
+        for _, msg in sent:
+            a.send(msg)
+        canemu.step(20 * MS)
+        got = data_frames(drain(b))
+        assert [(m.arbitration_id, m.is_fd, m.bitrate_switch, len(m.data)) for m in got] == [
+            (m.arbitration_id, m.is_fd, m.bitrate_switch, len(m.data)) for _, m in sent]
+        # The first frame starts now; each next one a whole frame with intermission later. A
+        # data-phase bit is 500 ns, so an end need not fall on a whole microsecond: the time
+        # stamp is the adapter's microsecond in which it does.
+        end = now + frame_ns(sent[0][0], 500_000, 2_000_000, intermission=False)
+        for k, (text, _) in enumerate(sent):
+            if k:
+                end += frame_ns(text, 500_000, 2_000_000)
+            assert ns(got[k].timestamp) == end - end % US, text
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
 def test_cyclic_list_sends_with_exact_period_and_count(pair):
     a, b = pair
     msg = can.Message(arbitration_id=0x3C, data=[1, 2, 3], is_extended_id=False)
@@ -222,6 +384,74 @@ def test_send_waits_while_the_transmit_fifo_is_full(pair):
     canemu.step(5 * MS)  # frames leave; room again
     a.send(can.Message(arbitration_id=0x202, is_extended_id=False), timeout=0)
     assert len([m for m in drain(b) if not m.is_error_frame]) > 0
+
+
+def test_cyclic_list_frames_come_back_as_own_messages(daemon):
+    a = can.Bus(interface="canemu", channel="can0", receive_own_messages=True)
+    b = can.Bus(interface="canemu", channel="can0")
+    try:
+        canemu.step(50 * MS)  # what earlier tests left on can0 goes by
+        drain(a)
+        drain(b)
+        msg = can.Message(arbitration_id=0x3D, data=[1, 2, 3], is_extended_id=False)
+        task = a.send_periodic(msg, 0.01)
+        assert isinstance(task, canemu.CanemuCyclicTask)
+        canemu.step(45 * MS)
+        theirs = data_frames(drain(b))
+        own = data_frames(drain(a))
+        assert len(theirs) == 4 and all(m.is_rx for m in theirs)
+        assert len(own) == 4 and not any(m.is_rx for m in own)
+        assert [m.timestamp for m in own] == [m.timestamp for m in theirs]
+        assert all(bytes(m.data) == b"\x01\x02\x03" and m.arbitration_id == 0x3D for m in own)
+        # Another node's frame is received as such meanwhile.
+        b.send(can.Message(arbitration_id=0x3E, data=[9], is_extended_id=False))
+        task.modify_data(can.Message(arbitration_id=0x3D, data=[4, 5, 6], is_extended_id=False))
+        canemu.step(25 * MS)
+        got = data_frames(drain(a))
+        assert [(m.arbitration_id, m.is_rx) for m in got] == [(0x3E, True), (0x3D, False),
+                                                             (0x3D, False)]
+        assert bytes(got[-1].data) == b"\x04\x05\x06"
+        task.stop()
+        canemu.step(30 * MS)
+        assert data_frames(drain(a)) == []
+        drain(b)
+        # Long after the list stopped, the same content from another node is received.
+        canemu.step(200 * MS)
+        b.send(can.Message(arbitration_id=0x3D, data=[4, 5, 6], is_extended_id=False))
+        canemu.step(MS)
+        got = data_frames(drain(a))
+        assert len(got) == 1 and got[0].is_rx
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
+def test_send_without_timeout_waits_until_stepped_time_drains_the_fifo(pair):
+    a, b = pair
+    sent = 0
+    with pytest.raises(CanTimeoutError):
+        while sent < 10_000:
+            a.send(can.Message(arbitration_id=0x200, is_extended_id=False), timeout=0)
+            sent += 1
+    outcome: dict = {}
+
+    def blocked_send() -> None:
+        try:
+            a.send(can.Message(arbitration_id=0x203, is_extended_id=False), timeout=None)
+            outcome["sent"] = True
+        except Exception as e:  # reported below
+            outcome["error"] = e
+
+    thread = threading.Thread(target=blocked_send, daemon=True)
+    thread.start()
+    thread.join(0.2)
+    assert thread.is_alive(), outcome  # time stands still: the FIFO stays full
+    canemu.step(MS)  # a few frames leave: room again
+    thread.join(10.0)
+    assert not thread.is_alive() and outcome == {"sent": True}
+    canemu.step(100 * MS)
+    got = data_frames(drain(b))
+    assert len(got) == sent + 1 and got[-1].arbitration_id == 0x203
 
 
 def test_step_outside_stepped_time_is_refused(realtime_daemon):

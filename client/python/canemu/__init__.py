@@ -4,7 +4,16 @@ The interface registers itself with python-can through the ``can.interface`` ent
 package also offers canemud's time and topology to test code.
 """
 
-from .bus import CanemuBus, CanemuCyclicTask, ControllerState, buses, connect, sim_time, step
+from .bus import (
+    CanemuBus,
+    CanemuCyclicTask,
+    ControllerState,
+    buses,
+    connect,
+    devices,
+    sim_time,
+    step,
+)
 
 __all__ = [
     "CanemuBus",
@@ -12,6 +21,7 @@ __all__ = [
     "ControllerState",
     "buses",
     "connect",
+    "devices",
     "sim_time",
     "step",
 ]

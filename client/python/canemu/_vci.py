@@ -22,6 +22,7 @@ def _code(n: int) -> int:
 
 
 VCI_E_TIMEOUT = _code(0x000B)
+VCI_E_OUTOFMEMORY = _code(0x0003)
 VCI_E_INVALIDARG = _code(0x0004)
 VCI_E_ACCESSDENIED = _code(0x000A)
 VCI_E_NO_MORE_ITEMS = _code(0x000F)
@@ -43,6 +44,7 @@ CAN_BTMODE_TSM = 0x02
 CAN_FILTER_LOCK = 0x01
 CAN_FILTER_PASS = 0x02
 CAN_FILTER_INCL = 0x03
+CAN_FILTER_SRRA = 0x80  # flag of a v2 channel's filter mode: self-reception of the others too
 
 CAN_MSGTYPE_DATA = 0
 CAN_MSGTYPE_INFO = 1
@@ -77,6 +79,7 @@ CANEMU_BUS_CANFD = 1
 CANEMU_BUS_LIN = 2
 
 CANEMU_MAX_CONTROLLERS = 4
+CANEMU_MAX_EPHEMERAL = 16  # canemuCreateDevice: adapters per connection (process)
 INFINITE = 0xFFFFFFFF
 
 # Data bytes of each DLC (ISO 11898-1).
@@ -246,6 +249,7 @@ _SIGNATURES = {
     ),
     "canChannelSetAccFilter": (HANDLE, ctypes.c_int, ctypes.c_uint32, ctypes.c_uint32),
     "canChannelAddFilterIds": (HANDLE, ctypes.c_int, ctypes.c_uint32, ctypes.c_uint32),
+    "canChannelRemFilterIds": (HANDLE, ctypes.c_int, ctypes.c_uint32, ctypes.c_uint32),
     "canChannelPeekMessage": (HANDLE, ctypes.POINTER(CANMSG2)),
     "canChannelReadMessage": (HANDLE, ctypes.c_uint32, ctypes.POINTER(CANMSG2)),
     "canChannelPostMessage": (HANDLE, ctypes.POINTER(CANMSG2)),

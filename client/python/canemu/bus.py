@@ -7,13 +7,15 @@ unit when nobody else holds it. See docs/python.md.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import enum
 import logging
 import struct
 import threading
 import time
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from collections import deque
+from typing import Any, Deque, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 import can
 from can import BusABC, BusState, Message
@@ -46,6 +48,8 @@ CAN_ERR_RESTARTED = 0x00000100
 CAN_ERR_CNT = 0x00000200
 CAN_ERR_CRTL_RX_WARNING = 0x04
 CAN_ERR_CRTL_TX_WARNING = 0x08
+CAN_ERR_CRTL_RX_PASSIVE = 0x10
+CAN_ERR_CRTL_TX_PASSIVE = 0x20
 CAN_ERR_CRTL_ACTIVE = 0x40
 CAN_ERR_PROT_BIT = 0x01
 CAN_ERR_PROT_FORM = 0x02
@@ -85,11 +89,10 @@ _WAIT_SLICE_MS = 100  # blocking calls wait in slices so that Ctrl-C and shutdow
 _FILTER_LIST_SIZE = 2048  # 29-bit ID list of each channel
 
 
-def _operation_error(e: VciError) -> can.CanOperationError:
-    return can.CanOperationError(str(e), error_code=e.hr)
-
-
-def _initialization_error(e: VciError) -> can.CanInitializationError:
+def _can_error(e: VciError, initializing: bool = False) -> can.CanError:
+    """The python-can exception for a failed VCI call: CanInitializationError while a bus is
+    being made (or the process connects), CanOperationError otherwise. Every VciError that
+    reaches a caller of this package goes through here."""
     text = str(e)
     if e.hr == _vci.VCI_E_DISCONNECTED:
         text += (
@@ -97,7 +100,26 @@ def _initialization_error(e: VciError) -> can.CanInitializationError:
             "folder, `systemctl start canemu`, or `canemud --config FILE`, and set CANEMU_SOCKET "
             "(or the bus's socket= argument) when it listens elsewhere"
         )
-    return can.CanInitializationError(text, error_code=e.hr)
+    if initializing:
+        return can.CanInitializationError(text, error_code=e.hr)
+    return can.CanOperationError(text, error_code=e.hr)
+
+
+@contextlib.contextmanager
+def _vci_errors(initializing: bool = False) -> Iterator[None]:
+    """Turns a VciError raised inside the block into _can_error's exception."""
+    try:
+        yield
+    except VciError as e:
+        raise _can_error(e, initializing) from None
+
+
+def _payload_length(flags: int, flags2: int) -> int:
+    """Data bytes of a CAN message from its CANMSGINFO flags (a remote frame has none)."""
+    dlc = flags & _vci.FLAGS_DLC
+    if flags2 & _vci.FLAGS2_EDL:
+        return _vci.DLC_TO_LEN[dlc]
+    return 0 if flags & _vci.FLAGS_RTR else min(dlc, 8)
 
 
 def _call(name: str, *args) -> int:
@@ -119,7 +141,7 @@ def _wall_offset() -> float:
     with _offset_lock:
         if _offset is None:
             before = time.time()
-            now_ns, mode = sim_time()
+            now_ns, mode = _sim_time()
             after = time.time()
             realtime = mode == _vci.CANEMU_TIME_REALTIME
             _offset = (before + after) / 2 - now_ns / 1e9 if realtime else 0.0
@@ -132,39 +154,51 @@ def connect(socket: Optional[str]) -> None:
     global _offset
     with _offset_lock:
         _offset = None
-    try:
+    with _vci_errors(initializing=True):
         _call("canemuConnect", socket.encode() if socket else None)
-    except VciError as e:
-        raise _initialization_error(e) from None
 
 
 def step(nanoseconds: int) -> int:
     """Stepped time: runs canemud's emulation `nanoseconds` further; returns the simulated time
     in ns after the step. CanOperationError when canemud does not run in stepped time."""
     now = ctypes.c_uint64()
-    try:
+    with _vci_errors():
         _call("canemuStepTime", int(nanoseconds), ctypes.byref(now))
-    except VciError as e:
-        raise _operation_error(e) from None
     return now.value
 
 
-def sim_time() -> Tuple[int, int]:
-    """(simulated time in ns, time mode: 0 real time, 1 scaled, 2 stepped)."""
+def _sim_time() -> Tuple[int, int]:
     now = ctypes.c_uint64()
     mode = ctypes.c_uint8()
     _call("canemuGetTime", ctypes.byref(now), ctypes.byref(mode))
     return now.value, mode.value
 
 
-def buses() -> List[Dict[str, Any]]:
-    """canemud's buses: name, kind ("can", "can-fd", "lin"), transceiver ("high-speed",
-    "low-speed"), bitrate, data_bitrate."""
+def sim_time() -> Tuple[int, int]:
+    """(simulated time in ns, time mode: 0 real time, 1 scaled, 2 stepped).
+    CanOperationError when canemud cannot be asked."""
+    with _vci_errors():
+        return _sim_time()
+
+
+def _enumerate(call: str, info) -> Iterator[None]:
+    """Fills `info` with item 0, 1, ... of an enumeration call until it says there are no
+    more; VciError for any other failure (canemud gone)."""
+    index = 0
+    while True:
+        hr = getattr(_vci.lib(), call)(index, ctypes.byref(info))
+        if hr == _vci.VCI_E_NO_MORE_ITEMS:
+            return
+        _vci.check(call, hr)
+        yield
+        index += 1
+
+
+def _buses() -> List[Dict[str, Any]]:
     kinds = {_vci.CANEMU_BUS_CAN: "can", _vci.CANEMU_BUS_CANFD: "can-fd", _vci.CANEMU_BUS_LIN: "lin"}
     out = []
     info = _vci.CANEMU_BUSINFO()
-    index = 0
-    while _vci.lib().canemuEnumBuses(index, ctypes.byref(info)) == _vci.VCI_OK:
+    for _ in _enumerate("canemuEnumBuses", info):
         out.append(
             {
                 "name": info.szName.decode(),
@@ -174,19 +208,29 @@ def buses() -> List[Dict[str, Any]]:
                 "data_bitrate": info.dwDataBitrate,
             }
         )
-        index += 1
+    return out
+
+
+def buses() -> List[Dict[str, Any]]:
+    """canemud's buses: name, kind ("can", "can-fd", "lin"), transceiver ("high-speed",
+    "low-speed"), bitrate, data_bitrate. CanOperationError when canemud cannot be asked."""
+    with _vci_errors():
+        return _buses()
+
+
+def _devices() -> List[_vci.CANEMU_DEVICEINFO]:
+    out = []
+    info = _vci.CANEMU_DEVICEINFO()
+    for _ in _enumerate("canemuEnumDevices", info):
+        out.append(_vci.CANEMU_DEVICEINFO.from_buffer_copy(info))
     return out
 
 
 def devices() -> List[_vci.CANEMU_DEVICEINFO]:
-    out = []
-    index = 0
-    while True:
-        info = _vci.CANEMU_DEVICEINFO()
-        if _vci.lib().canemuEnumDevices(index, ctypes.byref(info)) != _vci.VCI_OK:
-            return out
-        out.append(info)
-        index += 1
+    """canemud's adapters, configured and ephemeral (CANEMU_DEVICEINFO). CanOperationError
+    when canemud cannot be asked."""
+    with _vci_errors():
+        return _devices()
 
 
 class CanemuBus(BusABC):
@@ -198,9 +242,11 @@ class CanemuBus(BusABC):
     :param bitrate: nominal bit rate in bit/s; default: the bus's configured one.
     :param data_bitrate: CAN FD data-phase bit rate; default: the bus's configured one.
     :param fd: send and receive CAN FD frames (needs a CAN FD bus).
-    :param timing: a ``can.BitTiming`` or ``can.BitTimingFd``; overrides the bit rates.
+    :param timing: a ``can.BitTiming`` or ``can.BitTimingFd``; overrides the bit rates (a
+        ``BitTiming`` on a CAN FD controller the nominal one: the data phase then follows
+        `data_bitrate`).
     :param receive_own_messages: frames this bus sends come back from ``recv`` with
-        ``is_rx = False``.
+        ``is_rx = False``, also those of the adapter's cyclic list (``send_periodic``).
     :param listen_only: the controller only listens (no acknowledgement, no error flags).
     :param auto_restart: a controller that went bus-off is started again (it then waits
         128 x 11 recessive bits, as ISO 11898-1 says); False leaves it bus-off until
@@ -238,8 +284,14 @@ class CanemuBus(BusABC):
         self._receive_own = bool(receive_own_messages)
         self._auto_restart = bool(auto_restart)
         self._hw_filtered = True
+        self._initializing = True
         self._was_bus_off = False
         self._last_status = 0
+        # The controller state the error frames have told so far (CANEMU_STATE_*), and the
+        # counters when it was last read.
+        self._reported = _vci.CANEMU_STATE_ACTIVE
+        self._counters = (0, 0)
+        self._pending: Deque[Message] = deque()  # error frames made but not yet returned
         self._wraps = 0
         self._last_ticks = 0
         self._rx_lock = threading.Lock()
@@ -257,16 +309,18 @@ class CanemuBus(BusABC):
                 connect(socket)
             self._open(str(channel), bitrate, data_bitrate, bool(fd), timing, listen_only,
                        rx_fifo_size, tx_fifo_size)
+            super().__init__(channel=channel, can_filters=can_filters, **kwargs)
         except VciError as e:
             self._close_handles()
-            raise _initialization_error(e) from None
+            raise _can_error(e, initializing=True) from None
         except ValueError as e:
             self._close_handles()
             raise can.CanInitializationError(str(e)) from None
         except BaseException:
             self._close_handles()
             raise
-        super().__init__(channel=channel, can_filters=can_filters, **kwargs)
+        finally:
+            self._initializing = False
 
     # ---- opening ----
 
@@ -282,7 +336,15 @@ class CanemuBus(BusABC):
                 raise ValueError(self._unknown_channel(channel))
             vciid = _vci.VCIID()
             name = ctypes.create_string_buffer(32)
-            _call("canemuCreateDevice", channel.encode(), None, ctypes.byref(vciid), name, 32)
+            hr = _vci.lib().canemuCreateDevice(channel.encode(), None, ctypes.byref(vciid),
+                                               name, 32)
+            if hr == _vci.VCI_E_OUTOFMEMORY:
+                raise ValueError(
+                    f"channel {channel!r}: canemud makes at most {_vci.CANEMU_MAX_EPHEMERAL} "
+                    f"adapters of their own per process, and this process has them all; shut "
+                    f"down bus objects it no longer needs, or open controllers of configured "
+                    f"adapters (\"DEVICE:N\")")
+            _vci.check("canemuCreateDevice", hr)
             self._ephemeral = name.value.decode()
             _call("canemuFindDevice", name.value, ctypes.byref(info))
         if controller >= info.bControllers:
@@ -318,8 +380,11 @@ class CanemuBus(BusABC):
         handle = _vci.HANDLE()
         _call("canChannelOpen", self._device, controller, 0, ctypes.byref(handle))
         self._channel = handle.value
+        # With receive_own_messages the channel also takes the cyclic list's echoes (SRRA):
+        # the firmware hands them only to channels that ask for every self-reception.
+        mode = _vci.CAN_FILTER_PASS | (_vci.CAN_FILTER_SRRA if self._receive_own else 0)
         _call("canChannelInitialize", self._channel, rx_size, 1, tx_size, 1, _FILTER_LIST_SIZE,
-              _vci.CAN_FILTER_PASS)
+              mode)
         _call("canChannelActivate", self._channel, 1)
 
         handle = _vci.HANDLE()
@@ -332,18 +397,31 @@ class CanemuBus(BusABC):
             self._control = handle.value
             self._init_line(bus, bitrate, data_bitrate, timing, listen_only)
 
+        # Where the error frames start: the controller as it is now (another program may hold
+        # a line that is already at the warning limit or error-passive).
+        state = ctypes.c_uint8()
+        tec = ctypes.c_uint16()
+        rec = ctypes.c_uint16()
+        _call("canemuGetControllerState", self._channel, ctypes.byref(state), ctypes.byref(tec),
+              ctypes.byref(rec), None)
+        self._reported = state.value
+        self._counters = (tec.value, rec.value)
+        if state.value != _vci.CANEMU_STATE_ACTIVE:
+            self._last_status |= _vci.CAN_STATUS_ERRLIM
+        if state.value == _vci.CANEMU_STATE_BUSOFF:
+            self._last_status |= _vci.CAN_STATUS_BUSOFF
         self._time_offset = _wall_offset()
 
     def _find_bus(self, name: str) -> Optional[Dict[str, Any]]:
-        for b in buses():
+        for b in _buses():
             if b["name"] == name:
                 return b
         return None
 
     def _unknown_channel(self, channel: str) -> str:
-        names = [b["name"] for b in buses()]
+        names = [b["name"] for b in _buses()]
         adapters = [
-            f"{d.szName.decode()}:{k}" for d in devices() for k in range(d.bControllers)
+            f"{d.szName.decode()}:{k}" for d in _devices() for k in range(d.bControllers)
         ]
         return (
             f"channel {channel!r} is neither a bus nor DEVICE:N of an adapter of canemud "
@@ -354,8 +432,11 @@ class CanemuBus(BusABC):
         if timing is not None:
             nominal, data = _timing.from_python_can(timing, self._fd_controller)
             if data is None and self._fd_controller:
-                data = _timing.nominal_and_data(
-                    self._rate_of(nominal, True), None, True, False)[1]
+                # A can.BitTiming gives the nominal phase only (python-can before 4.2 has no
+                # BitTimingFd): the data phase as without `timing`.
+                rate = self._rate_of(nominal, True)
+                data_rate = int(data_bitrate) if data_bitrate else bus.get("data_bitrate") or rate
+                data = _timing.nominal_and_data(rate, data_rate, True, self._fd)[1]
         else:
             rate = int(bitrate) if bitrate else bus.get("bitrate", 500_000)
             data_rate = int(data_bitrate) if data_bitrate else bus.get("data_bitrate") or rate
@@ -393,10 +474,8 @@ class CanemuBus(BusABC):
         asyncio)."""
         if self._poll_fd is None:
             fd = ctypes.c_int(-1)
-            try:
+            with _vci_errors():
                 _call("canemuChannelEventFd", self._channel, ctypes.byref(fd))
-            except VciError as e:
-                raise _operation_error(e) from None
             self._poll_fd = fd.value
         return self._poll_fd
 
@@ -405,10 +484,18 @@ class CanemuBus(BusABC):
         lib = _vci.lib()
         with self._rx_lock:
             while True:
+                if self._pending:
+                    return self._pending.popleft(), True
                 if self._closed:
                     return None, True
                 hr = lib.canChannelPeekMessage(self._channel, self._rx_msg)
                 if hr == _vci.VCI_E_RXQUEUE_EMPTY:
+                    if self._reported in (_vci.CANEMU_STATE_WARNING, _vci.CANEMU_STATE_PASSIVE):
+                        # Nothing marks a counter crossing 128 by itself (a fault setting the
+                        # counters, the own frame that got through): look now.
+                        self._check_passive(None)
+                        if self._pending:
+                            continue
                     if deadline is None:
                         wait_ms = _WAIT_SLICE_MS
                     else:
@@ -420,30 +507,42 @@ class CanemuBus(BusABC):
                     if hr == _vci.VCI_E_TIMEOUT:
                         continue
                 if hr != _vci.VCI_OK:
-                    raise _operation_error(VciError("canChannelReadMessage", hr,
-                                                    _vci.error_text(hr)))
+                    raise _can_error(VciError("canChannelReadMessage", hr, _vci.error_text(hr)))
                 msg, filtered = self._convert()
                 if msg is not None:
-                    return msg, filtered
+                    return msg, filtered  # what it caused (self._pending) comes next
 
-    def _timestamp(self, ticks: int) -> float:
+    def _sim_ns(self, ticks: int) -> int:
+        """The simulated time in ns of an adapter time stamp (microsecond ticks, 32 bits; the
+        wraps are counted as the messages come, in order)."""
         if ticks < self._last_ticks:
             self._wraps += 1
         self._last_ticks = ticks
-        micros = (self._wraps << 32) | ticks
-        return (self._epoch_ns + micros * 1000) / 1e9 + self._time_offset
+        return self._epoch_ns + ((self._wraps << 32) | ticks) * 1000
+
+    def _stamp(self, sim_ns: int) -> float:
+        return sim_ns / 1e9 + self._time_offset
+
+    def _now_ns(self) -> int:
+        """Simulated time now, on the adapter's microsecond grid."""
+        with _vci_errors():
+            now_ns, _ = _sim_time()
+        return now_ns - (now_ns - self._epoch_ns) % 1000
 
     def _convert(self) -> Tuple[Optional[Message], bool]:
         """The message in self._rx_msg as a python-can Message (None for those python-can has no
-        use for)."""
+        use for). Error frames that the message also causes go to self._pending, after it."""
         ticks, _, ident, kind, flags2, flags, _ = _HEADER.unpack_from(self._rx_view)
         if kind == _vci.CAN_MSGTYPE_DATA:
+            sim_ns = self._sim_ns(ticks)
             dlc = flags & _vci.FLAGS_DLC
             fd = bool(flags2 & _vci.FLAGS2_EDL)
             remote = bool(flags & _vci.FLAGS_RTR) and not fd
-            length = 0 if remote else (_vci.DLC_TO_LEN[dlc] if fd else min(dlc, 8))
+            length = _payload_length(flags, flags2)
+            data = bytes(self._rx_view[16 : 16 + length])
+            own = bool(flags & _vci.FLAGS_SRR)
             msg = Message(
-                timestamp=self._timestamp(ticks),
+                timestamp=self._stamp(sim_ns),
                 arbitration_id=ident,
                 is_extended_id=bool(flags & _vci.FLAGS_EXT),
                 is_remote_frame=remote,
@@ -451,24 +550,38 @@ class CanemuBus(BusABC):
                 bitrate_switch=bool(flags2 & _vci.FLAGS2_FDR),
                 error_state_indicator=bool(flags2 & _vci.FLAGS2_ESI),
                 dlc=length if fd else dlc,
-                data=bytes(self._rx_view[16 : 16 + length]),
+                data=data,
                 channel=self._channel_name,
-                is_rx=not flags & _vci.FLAGS_SRR,
+                is_rx=not own,
                 check=False,
             )
+            if self._reported == _vci.CANEMU_STATE_PASSIVE:
+                # A frame that got through lowers a counter: the one that made the node
+                # error-passive may have fallen below 128.
+                tec, rec = self._counters
+                if (tec >= 128 and own) or (rec >= 128 and not own):
+                    self._check_passive(sim_ns)
             return msg, self._hw_filtered
         if kind == _vci.CAN_MSGTYPE_ERROR:
-            return self._bus_error(ticks), True
+            sim_ns = self._sim_ns(ticks)
+            msg = self._bus_error(sim_ns)
+            if self._reported == _vci.CANEMU_STATE_WARNING:
+                self._check_passive(sim_ns)
+            return msg, True
         if kind == _vci.CAN_MSGTYPE_STATUS:
-            return self._status_change(ticks, self._rx_view[16]), True
+            sim_ns = self._sim_ns(ticks)
+            msg = self._status_change(sim_ns, self._rx_view[16])
+            if self._reported in (_vci.CANEMU_STATE_WARNING, _vci.CANEMU_STATE_PASSIVE):
+                self._check_passive(sim_ns)
+            return msg, True
         if kind == _vci.CAN_MSGTYPE_TIMEOVR:
             self._wraps += 1
             self._last_ticks = 0
         return None, True
 
-    def _error_frame(self, ticks: int, ident: int, data: bytes) -> Message:
+    def _error_frame(self, sim_ns: int, ident: int, data: bytes) -> Message:
         return Message(
-            timestamp=self._timestamp(ticks),
+            timestamp=self._stamp(sim_ns),
             arbitration_id=ident,
             is_error_frame=True,
             dlc=8,
@@ -476,15 +589,15 @@ class CanemuBus(BusABC):
             channel=self._channel_name,
         )
 
-    def _bus_error(self, ticks: int) -> Optional[Message]:
+    def _bus_error(self, sim_ns: int) -> Optional[Message]:
         cls, prot, location = _BUS_ERRORS.get(self._rx_view[16], (CAN_ERR_PROT, 0, 0))
         data = bytearray(8)
         data[2] = prot
         data[3] = location
-        return self._error_frame(ticks, cls | CAN_ERR_BUSERROR, bytes(data))
+        return self._error_frame(sim_ns, cls | CAN_ERR_BUSERROR, bytes(data))
 
-    def _status_change(self, ticks: int, status: int) -> Optional[Message]:
-        """A STATUS message: the line's ERRLIM, BUSOFF or BUSCERR flag changed."""
+    def _status_change(self, sim_ns: int, status: int) -> Optional[Message]:
+        """A STATUS message: the line's ERRLIM, BUSOFF, BUSCERR (or OVRRUN) flag changed."""
         reported = status & _REPORTED_STATUS  # TXPEND and ININIT change without a message
         changed = reported ^ self._last_status
         self._last_status = reported
@@ -493,14 +606,17 @@ class CanemuBus(BusABC):
             # The transceiver reports a wire fault (or its end: nothing to report then).
             if not status & _vci.CAN_STATUS_BUSCERR:
                 return None
-            return self._error_frame(ticks, CAN_ERR_TRX, bytes(data))
+            return self._error_frame(sim_ns, CAN_ERR_TRX, bytes(data))
+        if not changed & (_vci.CAN_STATUS_ERRLIM | _vci.CAN_STATUS_BUSOFF):
+            return None  # the controller's overrun flag: no state change
         if status & _vci.CAN_STATUS_BUSOFF:
             _, tec, rec, _ = self._controller_state()
             data[6] = min(tec, 255)
             data[7] = min(rec, 255)
+            self._reported = _vci.CANEMU_STATE_BUSOFF
             if self._auto_restart and self._control is not None:
                 self.restart()
-            return self._error_frame(ticks, CAN_ERR_BUSOFF | CAN_ERR_CNT, bytes(data))
+            return self._error_frame(sim_ns, CAN_ERR_BUSOFF | CAN_ERR_CNT, bytes(data))
         if status & _vci.CAN_STATUS_ERRLIM:
             # The warning limit: which counter passed it is read now (it may have moved on).
             _, tec, rec, _ = self._controller_state()
@@ -509,11 +625,40 @@ class CanemuBus(BusABC):
             if rec >= 96 or tec < 96:
                 data[1] |= CAN_ERR_CRTL_RX_WARNING
             ident = CAN_ERR_CRTL
+            self._reported = _vci.CANEMU_STATE_WARNING
         else:
             data[1] = CAN_ERR_CRTL_ACTIVE
             ident = CAN_ERR_CRTL | (CAN_ERR_RESTARTED if self._was_bus_off else 0)
+            self._reported = _vci.CANEMU_STATE_ACTIVE
         self._was_bus_off = False
-        return self._error_frame(ticks, ident, bytes(data))
+        return self._error_frame(sim_ns, ident, bytes(data))
+
+    def _check_passive(self, sim_ns: Optional[int]) -> None:
+        """Reads the controller and, when it crossed the error-passive limit (128) since the
+        last error frame said where it was, queues the error frame that tells it, SocketCAN's:
+        CAN_ERR_CRTL | CAN_ERR_CNT, data[1] TX_PASSIVE / RX_PASSIVE going in, TX_WARNING /
+        RX_WARNING coming back (the counter that is higher; both when equal), data[6], data[7]
+        TEC and REC. The VCI marks no such crossing, so the frame carries the time stamp of the
+        message at which it was found (`sim_ns`; None: now). Only between the warning limit and
+        bus-off: the status messages tell those exactly."""
+        state, tec, rec, _ = self._controller_state()
+        self._counters = (tec, rec)
+        if self._reported == _vci.CANEMU_STATE_WARNING and state >= _vci.CANEMU_STATE_PASSIVE:
+            # (Read bus-off: it went through error-passive; the bus-off status comes next.)
+            tx, rx = CAN_ERR_CRTL_TX_PASSIVE, CAN_ERR_CRTL_RX_PASSIVE
+            self._reported = _vci.CANEMU_STATE_PASSIVE
+        elif self._reported == _vci.CANEMU_STATE_PASSIVE and state < _vci.CANEMU_STATE_PASSIVE:
+            # Back below 128; at the warning limit until the status message says otherwise.
+            tx, rx = CAN_ERR_CRTL_TX_WARNING, CAN_ERR_CRTL_RX_WARNING
+            self._reported = _vci.CANEMU_STATE_WARNING
+        else:
+            return
+        data = bytearray(8)
+        data[1] = (tx if tec >= rec else 0) | (rx if rec >= tec else 0)
+        data[6] = min(tec, 255)
+        data[7] = min(rec, 255)
+        when = self._now_ns() if sim_ns is None else sim_ns
+        self._pending.append(self._error_frame(when, CAN_ERR_CRTL | CAN_ERR_CNT, bytes(data)))
 
     # ---- state ----
 
@@ -522,11 +667,9 @@ class CanemuBus(BusABC):
         tec = ctypes.c_uint16()
         rec = ctypes.c_uint16()
         line = ctypes.c_uint8()
-        try:
+        with _vci_errors(self._initializing):
             _call("canemuGetControllerState", self._channel, ctypes.byref(state),
                   ctypes.byref(tec), ctypes.byref(rec), ctypes.byref(line))
-        except VciError as e:
-            raise _operation_error(e) from None
         return state.value, tec.value, rec.value, line.value
 
     @property
@@ -556,11 +699,9 @@ class CanemuBus(BusABC):
         if self._control is None:
             raise can.CanOperationError(
                 f"{self.channel_info}: another program controls the line; it must restart it")
-        try:
+        with _vci_errors():
             _call("canControlStart", self._control, 0)
             _call("canControlStart", self._control, 1)
-        except VciError as e:
-            raise _operation_error(e) from None
         self._was_bus_off = True
 
     # ---- sending ----
@@ -594,8 +735,8 @@ class CanemuBus(BusABC):
             flags |= _vci.FLAGS_RTR
         if msg.is_extended_id:
             flags |= _vci.FLAGS_EXT
-        if self._receive_own and isinstance(out, _vci.CANMSG2):
-            flags |= _vci.FLAGS_SRR
+        if self._receive_own:
+            flags |= _vci.FLAGS_SRR  # self-reception (the cyclic list's too)
         out.dwMsgId = msg.arbitration_id
         out.bType = _vci.CAN_MSGTYPE_DATA
         out.bFlags2 = flags2
@@ -621,7 +762,7 @@ class CanemuBus(BusABC):
             raise CanTimeoutError(
                 f"{self.channel_info}: the transmit FIFO stayed full for {timeout} s "
                 f"(state {self.state.name})")
-        raise _operation_error(VciError("canChannelSendMessage", hr, _vci.error_text(hr)))
+        raise _can_error(VciError("canChannelSendMessage", hr, _vci.error_text(hr)))
 
     def _send_waiting(self, out, timeout: Optional[float]) -> int:
         if self._auto_restart and self._control is not None:
@@ -645,44 +786,52 @@ class CanemuBus(BusABC):
     # ---- filters ----
 
     def _apply_filters(self, filters) -> None:
-        """Filters in the channel where the VCI filter can express them (one code/mask per
-        format, or ID lists that fit); python-can filters the rest in software."""
-        self._hw_filtered = True
+        """Filters in the channel where the VCI filter can express them: a format's one
+        can_id/can_mask becomes the channel's acceptance filter for that format, several go
+        into its ID list. A set that does not fit the list (many wide 29-bit patterns) leaves
+        both formats open and python-can matches every filter in software (`_recv_internal`
+        says which). What an earlier call set is gone afterwards."""
         if self._channel is None:
+            self._hw_filtered = True
             return
-        try:
+        self._hw_filtered = False  # until the channel holds the new filters
+        with _vci_errors(self._initializing):
             _call("canChannelActivate", self._channel, 0)
             try:
-                for extended in (False, True):
-                    if not self._set_channel_filter(filters, extended):
-                        self._hw_filtered = False
+                fits = [self._set_channel_filter(filters, extended) for extended in (False, True)]
+                if not all(fits):
+                    for extended in (0, 1):
+                        _call("canChannelRemFilterIds", self._channel, extended, 0, 0)
+                        _call("canChannelSetFilterMode", self._channel, extended,
+                              _vci.CAN_FILTER_PASS, None)
             finally:
                 _call("canChannelActivate", self._channel, 1)
-        except VciError as e:
-            raise _operation_error(e) from None
-        if not self._hw_filtered:
-            # Both formats back to pass-all; python-can matches every filter in software.
-            _call("canChannelActivate", self._channel, 0)
-            for extended in (False, True):
-                _call("canChannelSetFilterMode", self._channel, int(extended),
-                      _vci.CAN_FILTER_PASS, None)
-            _call("canChannelActivate", self._channel, 1)
+        self._hw_filtered = all(fits)
 
     def _set_channel_filter(self, filters, extended: bool) -> bool:
+        """Sets the channel's filter of one format (the channel is inactive); False when the
+        filters do not fit its ID list. VciError when a call fails."""
         h = self._channel
         ext = int(extended)
+        # The ID list empties first (code 0, mask 0 selects every value): the IDs an earlier
+        # call listed must not pass any more.
+        _call("canChannelRemFilterIds", h, ext, 0, 0)
         if not filters:
             _call("canChannelSetFilterMode", h, ext, _vci.CAN_FILTER_PASS, None)
             return True
         width = 0x1FFFFFFF if extended else 0x7FF
-        mine = [f for f in filters if f.get("extended", extended) == extended]
-        if not mine:
+        patterns = []
+        for f in filters:
+            if f.get("extended", extended) != extended:
+                continue
+            can_id, can_mask = f["can_id"], f["can_mask"]
+            if can_id & can_mask & ~width:
+                continue  # wants identifier bits this format does not have: none of its frames
+            # Filter values are (ID << 1) | RTR; RTR is left free (python-can ignores it).
+            patterns.append(((can_id & can_mask & width) << 1, (can_mask & width) << 1))
+        if not patterns:
             _call("canChannelSetFilterMode", h, ext, _vci.CAN_FILTER_LOCK, None)
             return True
-        patterns = [
-            (((f["can_id"] & f["can_mask"]) & width) << 1, (f["can_mask"] & width) << 1)
-            for f in mine
-        ]
         _call("canChannelSetFilterMode", h, ext, _vci.CAN_FILTER_INCL, None)
         if len(patterns) == 1:
             _call("canChannelSetAccFilter", h, ext, patterns[0][0], patterns[0][1])
@@ -690,8 +839,9 @@ class CanemuBus(BusABC):
         _call("canChannelSetAccFilter", h, ext, 0x80000000, 0xFFFFFFFF)  # accept none
         for code, mask in patterns:
             hr = _vci.lib().canChannelAddFilterIds(h, ext, code, mask)
-            if hr != _vci.VCI_OK:
+            if hr == _vci.VCI_E_OUTOFMEMORY:
                 return False  # does not fit the list: software
+            _vci.check("canChannelAddFilterIds", hr)
         return True
 
     # ---- cyclic transmission ----
@@ -725,17 +875,27 @@ class CanemuBus(BusABC):
         return super()._send_periodic_internal(msgs, period, duration, *args, **kwargs)
 
     def _open_scheduler(self):
+        """The cyclic list's handle, opened and resumed on first use; None when another
+        program holds the list (or the adapter has none). CanOperationError when canemud is
+        gone or the list cannot be resumed."""
         with self._sched_lock:
             if self._scheduler is None:
                 handle = _vci.HANDLE()
                 hr = _vci.lib().canSchedulerOpen(self._device, self._controller,
                                                  ctypes.byref(handle))
+                if hr == _vci.VCI_E_DISCONNECTED:
+                    raise _can_error(VciError("canSchedulerOpen", hr, _vci.error_text(hr)))
                 if hr != _vci.VCI_OK:
                     log.info("%s: cyclic list not available (%s); software scheduling",
                              self.channel_info, _vci.error_text(hr))
                     return None
+                try:
+                    with _vci_errors():
+                        _call("canSchedulerActivate", handle.value, 1)
+                except can.CanError:
+                    _vci.lib().canSchedulerClose(handle.value)
+                    raise
                 self._scheduler = handle.value
-                _call("canSchedulerActivate", self._scheduler, 1)
             return self._scheduler
 
     # ---- shutting down ----
@@ -773,7 +933,7 @@ class CanemuBus(BusABC):
         try:
             found_devices = devices()
             found_buses = buses()
-        except OSError:
+        except (OSError, can.CanError):
             return []
         kinds = {b["name"]: b["kind"] for b in found_buses}
         configs: List[Dict[str, Any]] = []
@@ -824,12 +984,10 @@ class CanemuCyclicTask(LimitedDurationCyclicSendTaskABC, ModifiableCyclicTaskABC
                 return
             index = ctypes.c_uint32()
             entry = self._entry()
-            try:
+            with _vci_errors():
                 _call("canSchedulerAddMessage", self._scheduler, ctypes.byref(entry),
                       ctypes.byref(index))
                 _call("canSchedulerStartMessage", self._scheduler, index.value, self._repeat)
-            except VciError as e:
-                raise _operation_error(e) from None
             self._index = index.value
 
     def stop(self) -> None:

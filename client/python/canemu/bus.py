@@ -298,7 +298,10 @@ class CanemuBus(BusABC):
         self._tx_lock = threading.Lock()
         self._rx_msg = _vci.CANMSG2()
         self._rx_view = memoryview(self._rx_msg).cast("B")
+        self._rx_ref = ctypes.byref(self._rx_msg)  # made once: a call per frame is the hot path
         self._tx_msg = _vci.CANMSG2()
+        self._tx_view = memoryview(self._tx_msg).cast("B")
+        self._tx_ref = ctypes.byref(self._tx_msg)
         self._sched_lock = threading.Lock()
         try:
             _vci.lib()
@@ -488,7 +491,7 @@ class CanemuBus(BusABC):
                     return self._pending.popleft(), True
                 if self._closed:
                     return None, True
-                hr = lib.canChannelPeekMessage(self._channel, self._rx_msg)
+                hr = lib.canChannelPeekMessage(self._channel, self._rx_ref)
                 if hr == _vci.VCI_E_RXQUEUE_EMPTY:
                     if self._reported in (_vci.CANEMU_STATE_WARNING, _vci.CANEMU_STATE_PASSIVE):
                         # Nothing marks a counter crossing 128 by itself (a fault setting the
@@ -503,7 +506,7 @@ class CanemuBus(BusABC):
                         if left <= 0:
                             return None, True
                         wait_ms = min(_WAIT_SLICE_MS, max(1, int(left * 1000 + 0.999)))
-                    hr = lib.canChannelReadMessage(self._channel, wait_ms, self._rx_msg)
+                    hr = lib.canChannelReadMessage(self._channel, wait_ms, self._rx_ref)
                     if hr == _vci.VCI_E_TIMEOUT:
                         continue
                 if hr != _vci.VCI_OK:
@@ -538,11 +541,14 @@ class CanemuBus(BusABC):
             dlc = flags & _vci.FLAGS_DLC
             fd = bool(flags2 & _vci.FLAGS2_EDL)
             remote = bool(flags & _vci.FLAGS_RTR) and not fd
-            length = _payload_length(flags, flags2)
+            if fd:
+                length = _vci.DLC_TO_LEN[dlc]
+            else:
+                length = 0 if remote else (dlc if dlc < 8 else 8)
             data = bytes(self._rx_view[16 : 16 + length])
             own = bool(flags & _vci.FLAGS_SRR)
             msg = Message(
-                timestamp=self._stamp(sim_ns),
+                timestamp=sim_ns / 1e9 + self._time_offset,
                 arbitration_id=ident,
                 is_extended_id=bool(flags & _vci.FLAGS_EXT),
                 is_remote_frame=remote,
@@ -737,6 +743,13 @@ class CanemuBus(BusABC):
             flags |= _vci.FLAGS_EXT
         if self._receive_own:
             flags |= _vci.FLAGS_SRR  # self-reception (the cyclic list's too)
+        if out is self._tx_msg:  # the hot path: header and data in one go
+            _HEADER.pack_into(self._tx_view, 0, 0, 0, msg.arbitration_id, _vci.CAN_MSGTYPE_DATA,
+                              flags2, flags, 0)
+            self._tx_view[16 : 16 + length] = msg.data
+            if padded > length:
+                self._tx_view[16 + length : 16 + padded] = bytes(padded - length)
+            return
         out.dwMsgId = msg.arbitration_id
         out.bType = _vci.CAN_MSGTYPE_DATA
         out.bFlags2 = flags2
@@ -751,11 +764,10 @@ class CanemuBus(BusABC):
         lib = _vci.lib()
         with self._tx_lock:
             out = self._tx_msg
-            out.dwTime = 0
-            self._fill(out, msg)
-            hr = lib.canChannelPostMessage(self._channel, out)
+            self._fill(out, msg)  # dwTime 0: at once
+            hr = lib.canChannelPostMessage(self._channel, self._tx_ref)
             if hr == _vci.VCI_E_TXQUEUE_FULL:
-                hr = self._send_waiting(out, timeout)
+                hr = self._send_waiting(self._tx_ref, timeout)
         if hr == _vci.VCI_OK:
             return
         if hr in (_vci.VCI_E_TIMEOUT, _vci.VCI_E_TXQUEUE_FULL):

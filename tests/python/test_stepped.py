@@ -29,7 +29,7 @@ from canemu.bus import (
     CAN_ERR_RESTARTED,
 )
 
-from conftest import CANEMU_CLI, Canemud, drain, ns
+from conftest import CANEMU_CLI, Canemud, drain, frames, ns
 
 US = 1_000
 MS = 1_000_000
@@ -452,6 +452,30 @@ def test_send_without_timeout_waits_until_stepped_time_drains_the_fifo(pair):
     canemu.step(100 * MS)
     got = data_frames(drain(b))
     assert len(got) == sent + 1 and got[-1].arbitration_id == 0x203
+
+
+def test_time_stamps_stay_exact_past_the_adapters_32_bit_microsecond_counter():
+    # The adapter's time stamps are 32-bit microsecond ticks: they wrap after 4294.967296 s
+    # (with a TIMEOVR message). Frames before and after the wrap carry the simulated time.
+    d = Canemud("stepped")
+    a = can.Bus(interface="canemu", channel="can0")
+    b = can.Bus(interface="canemu", channel="can0")
+    try:
+        drain(a)
+        drain(b)
+        duration = frame_ns("100#00", 500_000, intermission=False)
+        for k in range(3):
+            canemu.step(2_000 * 10**9)
+            sent = canemu.sim_time()[0]
+            a.send(can.Message(arbitration_id=0x100, data=[0], is_extended_id=False))
+            canemu.step(1_000_000)
+            [got] = frames(drain(b))
+            assert round(got.timestamp * 1e9) == sent + duration
+        assert sent > 2**32 * 1000
+    finally:
+        a.shutdown()
+        b.shutdown()
+        d.stop()
 
 
 def test_step_outside_stepped_time_is_refused(realtime_daemon):

@@ -4,7 +4,10 @@ scenarios), in real time: every wait is a recv with a timeout."""
 from __future__ import annotations
 
 import asyncio
+import os
 import select
+import subprocess
+import sys
 import time
 
 import can
@@ -58,6 +61,23 @@ def assert_same_frame(sent, got):
 
 def test_the_interface_is_found_through_the_entry_point():
     assert can.interfaces.BACKENDS["canemu"] == ("canemu.bus", "CanemuBus")
+
+
+def test_a_program_that_never_imports_canemu_talks(realtime_daemon):
+    # Another process, as a user's program: python-can finds the interface by its entry point.
+    program = (
+        "import can, sys\n"
+        "a = can.Bus(interface='canemu', channel='can0')\n"
+        "b = can.Bus(interface='canemu', channel='can0')\n"
+        "a.send(can.Message(arbitration_id=0x321, data=[7], is_extended_id=False))\n"
+        "m = b.recv(5.0)\n"
+        "print(hex(m.arbitration_id), bytes(m.data).hex(), 'canemu' in sys.modules)\n"
+        "a.shutdown(); b.shutdown()\n"
+    )
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
+                          timeout=60, env={**os.environ, "CANEMU_SOCKET": realtime_daemon.socket})
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["0x321", "07", "True"]  # loaded by python-can, not by us
 
 
 def test_no_message(pair):

@@ -1099,6 +1099,9 @@ TEST(VciCanLine, ALoneTransmitterGetsAckErrorsErrlimAtTec96AndStaysErrorPassiveA
     EXPECT_EQ(e.abData[0], CAN_ERROR_ACK) << k;
     // TEC 8 (k + 1), at most 128: ERRLIM from the 12th error (TEC 96) on.
     EXPECT_EQ(e.abData[1], k < 11 ? CAN_STATUS_TXPEND : CAN_STATUS_TXPEND | CAN_STATUS_ERRLIM) << k;
+    // Beyond the dlc: REC and TEC after the error.
+    EXPECT_EQ(e.abData[3], 0) << k;
+    EXPECT_EQ(e.abData[4], std::min<std::size_t>(8 * (k + 1), 128)) << k;
   }
   // Error-active: ACK slot at bit 53, then 6 flag + 8 delimiter + 3 intermission bits: one
   // attempt every 54 + 17 = 71 bits.
@@ -1264,7 +1267,13 @@ TEST(VciCanLine, ReceiveErrorsGiveErrorMessagesWithTheirType) {
   for (const CANMSG2& e : errors) {
     EXPECT_EQ(e.abData[1], 0);  // REC far below 96, nothing to send
     EXPECT_EQ(info(e), (Info{CAN_MSGTYPE_ERROR, 0, 2, CAN_ACCEPT_ALWAYS}));
+    EXPECT_EQ(e.abData[4], 0);  // TEC
   }
+  // REC as the error is detected: +1 for it. The +8 for the transmitter's flag after the
+  // receiver's own (a dominant bit after its flag) comes later, within the error frame.
+  EXPECT_EQ(errors[0].abData[3], 1);
+  EXPECT_EQ(errors[1].abData[3], 1 + 9);
+  EXPECT_EQ(errors[2].abData[3], 1 + 18);
   EXPECT_EQ(p.data_ids(), std::vector<uint32_t>{0x123});  // the fourth attempt
 }
 

@@ -571,13 +571,20 @@ class CanemuBus(BusABC):
         if kind == _vci.CAN_MSGTYPE_ERROR:
             sim_ns = self._sim_ns(ticks)
             msg = self._bus_error(sim_ns)
+            # The counters as the error was detected (canemu's firmware writes REC and TEC
+            # beyond the message's dlc, docs/vci.md): the crossing at its instant.
+            counters = (self._rx_view[16 + 4], self._rx_view[16 + 3])
             if self._reported == _vci.CANEMU_STATE_WARNING:
-                self._check_passive(sim_ns)
+                self._check_passive(sim_ns, counters)
+            else:
+                self._counters = counters
             return msg, True
         if kind == _vci.CAN_MSGTYPE_STATUS:
             sim_ns = self._sim_ns(ticks)
             msg = self._status_change(sim_ns, self._rx_view[16])
-            if self._reported in (_vci.CANEMU_STATE_WARNING, _vci.CANEMU_STATE_PASSIVE):
+            if self._reported == _vci.CANEMU_STATE_WARNING:
+                self._check_passive(sim_ns, self._counters)  # those of the last ERROR message
+            elif self._reported == _vci.CANEMU_STATE_PASSIVE:
                 self._check_passive(sim_ns)
             return msg, True
         if kind == _vci.CAN_MSGTYPE_TIMEOVR:
@@ -639,15 +646,22 @@ class CanemuBus(BusABC):
         self._was_bus_off = False
         return self._error_frame(sim_ns, ident, bytes(data))
 
-    def _check_passive(self, sim_ns: Optional[int]) -> None:
-        """Reads the controller and, when it crossed the error-passive limit (128) since the
-        last error frame said where it was, queues the error frame that tells it, SocketCAN's:
-        CAN_ERR_CRTL | CAN_ERR_CNT, data[1] TX_PASSIVE / RX_PASSIVE going in, TX_WARNING /
-        RX_WARNING coming back (the counter that is higher; both when equal), data[6], data[7]
-        TEC and REC. The VCI marks no such crossing, so the frame carries the time stamp of the
-        message at which it was found (`sim_ns`; None: now). Only between the warning limit and
+    def _check_passive(self, sim_ns: Optional[int],
+                       counters: Optional[Tuple[int, int]] = None) -> None:
+        """When the controller crossed the error-passive limit (128) since the last error frame
+        said where it was, queues the error frame that tells it, SocketCAN's: CAN_ERR_CRTL |
+        CAN_ERR_CNT, data[1] TX_PASSIVE / RX_PASSIVE going in, TX_WARNING / RX_WARNING coming
+        back (the counter that is higher; both when equal), data[6], data[7] TEC and REC.
+        `counters` (TEC, REC) are those an ERROR message carries, exact at its instant; without
+        them the controller is read now, and the frame carries the time stamp of the message at
+        which the crossing was found (`sim_ns`; None: now). Only between the warning limit and
         bus-off: the status messages tell those exactly."""
-        state, tec, rec, _ = self._controller_state()
+        if counters is not None:
+            tec, rec = counters
+            state = (_vci.CANEMU_STATE_PASSIVE if max(tec, rec) >= 128
+                     else _vci.CANEMU_STATE_WARNING)
+        else:
+            state, tec, rec, _ = self._controller_state()
         self._counters = (tec, rec)
         if self._reported == _vci.CANEMU_STATE_WARNING and state >= _vci.CANEMU_STATE_PASSIVE:
             # (Read bus-off: it went through error-passive; the bus-off status comes next.)

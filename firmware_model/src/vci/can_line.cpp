@@ -907,6 +907,10 @@ void CanLine::bus_error(const BusErrorEvent& event) {
   CANMSG2 m = event_message(CAN_MSGTYPE_ERROR, ticks(event.at), CAN_MSGID_ERROR, 2);
   m.abData[0] = error_code(event.type);
   m.abData[1] = static_cast<UINT8>(status & 0xFF);
+  // Beyond the dlc, a canemu addition the manuals are silent on: the counters after the error
+  // (REC, TEC; 255 stands for more), from which a program can tell the error-passive limit.
+  m.abData[3] = static_cast<UINT8>(std::min<uint16_t>(event.rec, 255));
+  m.abData[4] = static_cast<UINT8>(std::min<uint16_t>(event.tec, 255));
   broadcast(m);
 }
 

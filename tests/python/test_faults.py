@@ -575,6 +575,12 @@ effect = "line_error"
     assert a.error_counters() == (0, 0)
     canemu.step(10 * MS)  # the wire is back: BUSCERR cleared, nothing more to report
     assert drain(b) == []
+    ends = daemon.wait_log("line_error ends")
+    assert "fault: t=0.010000000 s: " in ends
+    listed = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, "fault", "list"],
+                            capture_output=True, text=True, timeout=30, check=True).stdout
+    [row] = [line for line in listed.splitlines() if "line_error" in line]
+    assert row.split()[-2:] == ["2", "done"]  # fired twice: the fault and its end
 
 
 def test_line_error_on_both_wires_cuts_the_node_off(low_speed):

@@ -7,8 +7,10 @@ import os
 import subprocess
 from pathlib import Path
 
+import can
 import pytest
 
+from canemu.bus import CAN_ERR_BUSERROR
 from canemu.testing import Daemon
 
 REPO = Path(__file__).resolve().parents[2]
@@ -100,3 +102,35 @@ def stepped_daemon():
     d = Canemud("stepped")
     yield d
     d.stop()
+
+
+@pytest.fixture
+def daemon():
+    """A fresh canemud in stepped time for the test (modules with a daemon of their own
+    override it)."""
+    d = Canemud("stepped")
+    yield d
+    d.stop()
+
+
+@pytest.fixture
+def nodes(daemon):
+    """Two nodes of their own on can0 (500 kbit/s), the line start messages taken."""
+    a = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+    b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+    drain(a)
+    drain(b)
+    yield a, b
+    a.shutdown()
+    b.shutdown()
+
+
+def bus_errors(msgs) -> list:
+    """The bus-error frames among `msgs`."""
+    return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_BUSERROR]
+
+
+def load(daemon: Daemon, text: str) -> None:
+    """`canemu fault load` of a scenario that must be applied."""
+    done = fault_load(daemon, text)
+    assert done.returncode == 0, done.stderr

@@ -30,7 +30,7 @@ from canemu.bus import (
 )
 from canemu.testing import Daemon
 
-from conftest import CANEMU_CLI, CANEMUD, REPO, drain, frames, ns
+from conftest import CANEMU_CLI, CANEMUD, REPO, bus_errors, drain, frames, ns
 
 EXAMPLES = REPO / "config" / "faults"
 US = 1_000
@@ -161,10 +161,6 @@ def run_to(t_ns: int, *buses, chunk: int = 250 * MS) -> list:
 
 def msg(arbitration_id: int, data=(1, 2)) -> can.Message:
     return can.Message(arbitration_id=arbitration_id, data=list(data), is_extended_id=False)
-
-
-def bus_errors(msgs) -> list:
-    return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_BUSERROR]
 
 
 def is_ack_error(m) -> bool:

@@ -15,32 +15,15 @@ import can
 import pytest
 
 import canemu
-from canemu.bus import CAN_ERR_BUSERROR, CAN_ERR_PROT_BIT, CAN_ERR_PROT_STUFF
+from canemu.bus import CAN_ERR_PROT_BIT, CAN_ERR_PROT_STUFF
 
-from conftest import CANEMU_CLI, Canemud, drain, fault_load, frames
+from conftest import CANEMU_CLI, Canemud, bus_errors, drain, fault_load, frames, load
 
 US = 1_000
 MS = 1_000_000
 BIT = 2 * US  # at 500 kbit/s
 
 
-@pytest.fixture
-def daemon():
-    d = Canemud("stepped")
-    yield d
-    d.stop()
-
-
-@pytest.fixture
-def nodes(daemon):
-    """Two nodes of their own on can0 (500 kbit/s), the line start messages taken."""
-    a = can.Bus(interface="canemu", channel="can0", auto_restart=False)
-    b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
-    drain(a)
-    drain(b)
-    yield a, b
-    a.shutdown()
-    b.shutdown()
 
 
 def cli(daemon, *args, check=True) -> subprocess.CompletedProcess:
@@ -55,10 +38,6 @@ def cli(daemon, *args, check=True) -> subprocess.CompletedProcess:
     return done
 
 
-def load(daemon, text):
-    done = fault_load(daemon, text)
-    assert done.returncode == 0, done.stderr
-
 
 def status(daemon) -> dict:
     return json.loads(cli(daemon, "status", "--json").stdout)
@@ -67,9 +46,6 @@ def status(daemon) -> dict:
 def faults(daemon) -> list:
     return status(daemon)["faults"]
 
-
-def bus_errors(msgs):
-    return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_BUSERROR]
 
 
 def msg(arbitration_id=0x123, data=(1, 2), remote=False):

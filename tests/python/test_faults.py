@@ -24,38 +24,14 @@ from canemu.bus import (
     CAN_ERR_TRX,
 )
 
-from conftest import CANEMU_CLI, Canemud, drain, fault_load, frames, ns
+from conftest import CANEMU_CLI, Canemud, bus_errors, drain, fault_load, frames, load, ns
 
 US = 1_000
 MS = 1_000_000
 
 
-@pytest.fixture
-def daemon():
-    d = Canemud("stepped")
-    yield d
-    d.stop()
 
 
-@pytest.fixture
-def nodes(daemon):
-    """Two nodes of their own on can0 (500 kbit/s), the line start messages taken."""
-    a = can.Bus(interface="canemu", channel="can0", auto_restart=False)
-    b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
-    drain(a)
-    drain(b)
-    yield a, b
-    a.shutdown()
-    b.shutdown()
-
-
-def bus_errors(msgs):
-    return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_BUSERROR]
-
-
-def load(daemon, text):
-    done = fault_load(daemon, text)
-    assert done.returncode == 0, done.stderr
 
 
 def msg(arbitration_id=0x123, data=(1, 2)):

@@ -541,14 +541,11 @@ class CanemuBus(BusABC):
             dlc = flags & _vci.FLAGS_DLC
             fd = bool(flags2 & _vci.FLAGS2_EDL)
             remote = bool(flags & _vci.FLAGS_RTR) and not fd
-            if fd:
-                length = _vci.DLC_TO_LEN[dlc]
-            else:
-                length = 0 if remote else (dlc if dlc < 8 else 8)
+            length = _payload_length(flags, flags2)
             data = bytes(self._rx_view[16 : 16 + length])
             own = bool(flags & _vci.FLAGS_SRR)
             msg = Message(
-                timestamp=sim_ns / 1e9 + self._time_offset,
+                timestamp=sim_ns / 1e9 + self._time_offset,  # _stamp, inline: the hot path
                 arbitration_id=ident,
                 is_extended_id=bool(flags & _vci.FLAGS_EXT),
                 is_remote_frame=remote,
@@ -726,8 +723,9 @@ class CanemuBus(BusABC):
 
     # ---- sending ----
 
-    def _fill(self, out, msg: Message) -> None:
-        """Copies `msg` into the CANMSG2 (or CANCYCLICTXMSG2) `out`."""
+    def _wire_fields(self, msg: Message) -> Tuple[int, int, bytes]:
+        """`msg` checked and in the VCI's terms: (bFlags, bFlags2, data padded to its DLC).
+        CanOperationError naming what does not fit."""
         length = len(msg.data)
         flags2 = 0
         if msg.is_fd:
@@ -757,28 +755,19 @@ class CanemuBus(BusABC):
             flags |= _vci.FLAGS_EXT
         if self._receive_own:
             flags |= _vci.FLAGS_SRR  # self-reception (the cyclic list's too)
-        if out is self._tx_msg:  # the hot path: header and data in one go
-            _HEADER.pack_into(self._tx_view, 0, 0, 0, msg.arbitration_id, _vci.CAN_MSGTYPE_DATA,
-                              flags2, flags, 0)
-            self._tx_view[16 : 16 + length] = msg.data
-            if padded > length:
-                self._tx_view[16 + length : 16 + padded] = bytes(padded - length)
-            return
-        out.dwMsgId = msg.arbitration_id
-        out.bType = _vci.CAN_MSGTYPE_DATA
-        out.bFlags2 = flags2
-        out.bFlags = flags
-        out.bAccept = 0
-        data = bytes(msg.data) + bytes(padded - length)
-        ctypes.memmove(out.abData, data, padded)
+        data = bytes(msg.data)
+        return flags, flags2, data + bytes(padded - length) if padded > length else data
 
     def send(self, msg: Message, timeout: Optional[float] = None) -> None:
         """Queues `msg` in the transmit FIFO, waiting up to `timeout` seconds (None: as long as
         it takes) while the FIFO is full. CanTimeoutError when it stays full."""
         lib = _vci.lib()
         with self._tx_lock:
-            out = self._tx_msg
-            self._fill(out, msg)  # dwTime 0: at once
+            flags, flags2, data = self._wire_fields(msg)
+            # The CANMSG2 header (dwTime 0: at once) and data in one go: the hot path.
+            _HEADER.pack_into(self._tx_view, 0, 0, 0, msg.arbitration_id, _vci.CAN_MSGTYPE_DATA,
+                              flags2, flags, 0)
+            self._tx_view[16 : 16 + len(data)] = data
             hr = lib.canChannelPostMessage(self._channel, self._tx_ref)
             if hr == _vci.VCI_E_TXQUEUE_FULL:
                 hr = self._send_waiting(self._tx_ref, timeout)
@@ -999,9 +988,13 @@ class CanemuCyclicTask(LimitedDurationCyclicSendTaskABC, ModifiableCyclicTaskABC
         self._lock = threading.Lock()
 
     def _entry(self) -> _vci.CANCYCLICTXMSG2:
+        msg = self.messages[0]
         entry = _vci.CANCYCLICTXMSG2()
         entry.wCycleTime = self._ticks
-        self._bus._fill(entry, self.messages[0])
+        entry.dwMsgId = msg.arbitration_id
+        entry.bType = _vci.CAN_MSGTYPE_DATA
+        entry.bFlags, entry.bFlags2, data = self._bus._wire_fields(msg)
+        ctypes.memmove(entry.abData, data, len(data))
         return entry
 
     def start(self) -> None:

@@ -431,27 +431,22 @@ tl::expected<int64_t, std::string> option_integer(const char* option, const std:
 // toml++ so that every value is quoted and escaped as TOML wants it.
 tl::expected<std::string, std::string> inject_scenario(const InjectOptions& o) {
   toml::table fault{{"effect", o.effect}, {"at", o.at}};
-  const auto text = [&](const char* key, const std::optional<std::string>& v) {
+  const auto put = [&](const char* key, const auto& v) {  // an option that was given
     if (v) {
       fault.insert(key, *v);
     }
   };
-  const auto number = [&](const char* key, const auto& v) {
-    if (v) {
-      fault.insert(key, *v);
-    }
-  };
-  text("until", o.until);
-  text("bus", o.bus);
-  text("node", o.node);
-  text("duration", o.duration);
-  text("wire", o.wire);
-  number("bit", o.bit);
-  number("tec", o.tec);
-  number("rec", o.rec);
-  number("ppm", o.ppm);
-  number("probability", o.probability);
-  number("bit_error_rate", o.bit_error_rate);
+  put("until", o.until);
+  put("bus", o.bus);
+  put("node", o.node);
+  put("duration", o.duration);
+  put("wire", o.wire);
+  put("bit", o.bit);
+  put("tec", o.tec);
+  put("rec", o.rec);
+  put("ppm", o.ppm);
+  put("probability", o.probability);
+  put("bit_error_rate", o.bit_error_rate);
   if (o.count) {
     if (*o.count == "all") {
       fault.insert("count", "all");
@@ -485,18 +480,24 @@ tl::expected<std::string, std::string> inject_scenario(const InjectOptions& o) {
           "babble's frame is given by --id, --ext and --data; --std, --rtr, --data-frame, "
           "--from and --mask match frames of other effects"));
     }
-    number("id", id);
+    put("id", id);
     if (o.ext) {
       fault.insert("ext", true);
     }
     if (o.data) {
       const std::string& hex = *o.data;
+      const auto bad = [&] {
+        return tl::unexpected(
+            fmt::format("--data '{}': hexadecimal bytes, two digits each (1122AABB)", hex));
+      };
+      if (hex.size() % 2 != 0) {
+        return bad();
+      }
       toml::array bytes;
       for (std::size_t i = 0; i < hex.size(); i += 2) {
         auto byte = option_integer("--data", "0x" + hex.substr(i, 2));
-        if (!byte || hex.size() % 2 != 0) {
-          return tl::unexpected(
-              fmt::format("--data '{}': hexadecimal bytes, two digits each (1122AABB)", hex));
+        if (!byte) {
+          return bad();
         }
         bytes.push_back(*byte);
       }

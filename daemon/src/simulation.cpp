@@ -113,7 +113,7 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
 
 void Simulation::add_bus(const BusConfig& b) {
   buses_.push_back(
-      Bus{std::make_unique<CanBus>(scheduler_, b.name), std::make_unique<FaultPlan>(), {}});
+      Bus{std::make_unique<CanBus>(scheduler_, b.name), std::make_unique<FaultPlan>()});
   buses_.back().bus->set_injector(buses_.back().faults.get());
   const std::size_t index = buses_.size() - 1;
   buses_.back().faults->on_hit = [this, index](std::size_t rule, const FrameContext& ctx,
@@ -137,15 +137,36 @@ std::string Simulation::node_name(std::size_t bus, NodeId node) const {
   return fmt::format("node {} of {}", node, config_.buses[bus].name);
 }
 
+namespace {
+
+// How the log names a fault: its scenario, line and effect.
+std::string fault_label(std::string_view scenario, const FaultSpec& f) {
+  return fmt::format("scenario \"{}\" line {}: {}", scenario, f.line, to_string(f.effect));
+}
+
+}  // namespace
+
 void Simulation::frame_fault_hit(std::size_t bus, std::size_t rule, const FrameContext& ctx) {
   const FaultRule& r = buses_[bus].faults->rule(rule);
-  const std::string& label = buses_[bus].rule_labels[rule];
-  if (r.hits == 1) {
+  const bool first = r.hits == 1;
+  const bool done = r.count && r.hits == *r.count;
+  if (!first && !done) {
+    return;  // single hits are in the trace and the counts
+  }
+  std::string label;
+  for (const LoadedScenario& sc : scenarios_) {
+    for (const AppliedFault& a : sc.faults) {
+      if (a.bus == bus && a.rule == rule) {
+        label = fault_label(sc.name, a.spec);
+      }
+    }
+  }
+  if (first) {
     fault_log(fmt::format("{}: first hit, {} {:X} from {}", label,
                           ctx.frame.extended() ? "frame (29-bit)" : "frame", ctx.frame.id(),
                           node_name(bus, ctx.transmitter)));
   }
-  if (r.count && r.hits == *r.count) {
+  if (done) {
     fault_log(fmt::format("{}: done, {} hit{}", label, r.hits, r.hits == 1 ? "" : "s"));
   }
 }
@@ -255,8 +276,7 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
                          plan[k].node ? plan[k].node->hosted : nullptr};
     CanBus& b = *buses_[bus].bus;
     const SimTime at = start + SimDuration(f.at_ns);
-    const std::string what =
-        fmt::format("scenario \"{}\" line {}: {}", s.name, f.line, to_string(f.effect));
+    const std::string what = fault_label(s.name, f);
     switch (f.effect) {
       case FaultEffect::bit_error:
       case FaultEffect::stuff_error:
@@ -291,7 +311,6 @@ tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Sc
         rule.probability = f.probability;
         rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;  // each fault its own draws
         applied.rule = buses_[bus].faults->add(rule);
-        buses_[bus].rule_labels.push_back(what);
         if (rule.until) {  // the end of its window, with what it did
           const std::size_t index = *applied.rule;
           when(*rule.until, [this, bus, index, what] {
@@ -863,8 +882,7 @@ void Simulation::end_node_faults(const Ephemeral& e) {
       if (a.rule) {
         buses_[a.bus].faults->disable(*a.rule);
       }
-      fault_log(fmt::format("scenario \"{}\" line {}: {}: ends, device {} is gone", sc.name,
-                            a.spec.line, to_string(a.spec.effect), e.name));
+      fault_log(fmt::format("{}: ends, device {} is gone", fault_label(sc.name, a.spec), e.name));
     }
   }
   CanBus& bus = *buses_[e.bus].bus;

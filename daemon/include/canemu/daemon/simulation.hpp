@@ -153,7 +153,6 @@ class Simulation {
   struct Bus {
     std::unique_ptr<model::CanBus> bus;
     std::unique_ptr<model::FaultPlan> faults;  // the bus's injector: frame faults of scenarios
-    std::vector<std::string> rule_labels;      // per rule of `faults`: its scenario and line
   };
   struct NodeRef {
     std::size_t bus;

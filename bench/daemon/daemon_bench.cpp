@@ -20,7 +20,7 @@
 #include "../../tests/support/canemud_process.hpp"
 #include "../support/latency.hpp"
 #include "canemu/client/channel.hpp"
-#include "canemu/firmware_model/wire_encoding.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
 
 namespace {
 

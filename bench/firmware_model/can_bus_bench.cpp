@@ -6,8 +6,8 @@
 #include <deque>
 #include <random>
 
-#include "canemu/firmware_model/bit_timing_decoders.hpp"
-#include "canemu/firmware_model/can_bus.hpp"
+#include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
 
 namespace {
 

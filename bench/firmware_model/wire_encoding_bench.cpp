@@ -5,8 +5,8 @@
 #include <random>
 #include <vector>
 
-#include "canemu/firmware_model/bit_timing_decoders.hpp"
-#include "canemu/firmware_model/wire_encoding.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
 
 namespace {
 

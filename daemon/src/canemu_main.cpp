@@ -22,8 +22,8 @@
 #include "canemu/daemon/channel.hpp"
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/frame_text.hpp"
-#include "canemu/firmware_model/bit_timing_decoders.hpp"
-#include "canemu/firmware_model/wire_encoding.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
 
 namespace {
 

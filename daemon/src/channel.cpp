@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "canemu/firmware_model/sja1000.hpp"
+#include "canemu/firmware_model/chips/sja1000/sja1000.hpp"
 
 namespace canemu::daemon {
 

@@ -4,9 +4,10 @@
 
 #include <fmt/format.h>
 
-#include "canemu/firmware_model/bit_timing_decoders.hpp"
-#include "canemu/firmware_model/can_fd_node.hpp"
-#include "canemu/firmware_model/sja1000_node.hpp"
+#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
+#include "canemu/firmware_model/chips/can_fd/can_fd_node.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
+#include "canemu/firmware_model/chips/sja1000/sja1000_node.hpp"
 
 namespace canemu::daemon {
 
@@ -37,9 +38,10 @@ std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate,
   return best;
 }
 
-std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point, vci::Phase phase) {
-  const vci::BtpRange& range =
-      phase == vci::Phase::nominal ? vci::kFdNominalRange : vci::kFdDataRange;
+std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
+                                       ixxat::Phase phase) {
+  const ixxat::BtpRange& range =
+      phase == ixxat::Phase::nominal ? ixxat::kFdNominalRange : ixxat::kFdDataRange;
   std::optional<BitTiming> best;
   int best_error = 1 << 30;
   for (uint32_t prescaler = range.min.bps; prescaler <= range.max.bps; ++prescaler) {
@@ -54,9 +56,9 @@ std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point, 
     const auto ts2 = static_cast<uint16_t>(
         std::max<uint64_t>(range.min.ts2, quanta - (quanta * sample_point + 500) / 1000));
     const auto ts1 = static_cast<uint16_t>(quanta - 1 - ts2);
-    auto t = vci::decode_btp(vci::Btp{vci::kBtModeRaw, prescaler, ts1, ts2,
-                                      static_cast<uint16_t>(std::min<uint16_t>(ts2, 4)), 0},
-                             range, phase);
+    auto t = ixxat::decode_btp(ixxat::Btp{ixxat::kBtModeRaw, prescaler, ts1, ts2,
+                                          static_cast<uint16_t>(std::min<uint16_t>(ts2, 4)), 0},
+                               range, phase);
     if (!t) {
       continue;
     }
@@ -83,8 +85,8 @@ std::optional<HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
     s.nominal = *sja1000::decode_btr(btr->first, btr->second);
     return s;
   }
-  const auto nominal = fd_timing_for(bitrate, sample_point, vci::Phase::nominal);
-  const auto data = fd_timing_for(data_bitrate, sample_point, vci::Phase::data);
+  const auto nominal = fd_timing_for(bitrate, sample_point, ixxat::Phase::nominal);
+  const auto data = fd_timing_for(data_bitrate, sample_point, ixxat::Phase::data);
   if (!nominal || !data) {
     return std::nullopt;
   }
@@ -475,7 +477,8 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     } else {
       c.node = std::make_unique<CanFdNode>(scheduler_, bus);
     }
-    c.line = std::make_shared<vci::CanLine>(scheduler_, *c.node, vci::Clocks{}, scheduler_.now());
+    c.line =
+        std::make_shared<ixxat::CanLine>(scheduler_, *c.node, ixxat::Clocks{}, scheduler_.now());
     c.line->set_low_speed(config_.buses[p.bus].low_speed);
     controllers_.push_back(std::move(c));
   }
@@ -483,7 +486,7 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
   return std::nullopt;
 }
 
-std::shared_ptr<vci::CanLine> Simulation::vci_line_of(const HostedNode* node) const {
+std::shared_ptr<ixxat::CanLine> Simulation::vci_line_of(const HostedNode* node) const {
   for (const Controller& c : controllers_) {
     if (c.node.get() == node) {
       return c.line;
@@ -497,7 +500,7 @@ std::shared_ptr<vci::CanLine> Simulation::vci_line_of(const HostedNode* node) co
   return nullptr;
 }
 
-std::shared_ptr<vci::CanLine> Simulation::vci_line(std::string_view device, uint32_t controller) {
+std::shared_ptr<ixxat::CanLine> Simulation::vci_line(std::string_view device, uint32_t controller) {
   const std::string name = fmt::format("{}:{}", device, controller);
   for (Controller& c : controllers_) {
     if (c.name == name) {
@@ -827,7 +830,7 @@ Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t
   // together (1 us), and the same frame carries the same time stamp on all of them.
   const int64_t now_ns = scheduler_.now().ns();
   const SimTime power_on = SimTime::from_ns(now_ns - now_ns % 1000);
-  auto line = std::make_shared<vci::CanLine>(scheduler_, node, vci::Clocks{}, power_on);
+  auto line = std::make_shared<ixxat::CanLine>(scheduler_, node, ixxat::Clocks{}, power_on);
   line->set_low_speed(config_.buses[bus].low_speed);
   DeviceLease lease = add_ephemeral(name, bus, node, owner_pid);
   ephemeral_.back().line = std::move(line);

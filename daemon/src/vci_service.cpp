@@ -6,7 +6,7 @@
 
 namespace canemu::daemon {
 
-namespace vci = model::vci;
+namespace ixxat = model::ixxat;
 
 VciHandle::~VciHandle() {
   switch (kind_) {
@@ -49,13 +49,13 @@ bool is_open(ipc::VciOp op) {
          op == ipc::VciOp::scheduler_open;
 }
 
-vci::FilterResult filter_call(vci::CanLine& line, std::optional<vci::ChannelId> channel,
-                              const ipc::VciRequest& m) {
-  if (m.args[0] > static_cast<uint32_t>(vci::FilterOp::Kind::remove_ids)) {
+ixxat::FilterResult filter_call(ixxat::CanLine& line, std::optional<ixxat::ChannelId> channel,
+                                const ipc::VciRequest& m) {
+  if (m.args[0] > static_cast<uint32_t>(ixxat::FilterOp::Kind::remove_ids)) {
     return {VCI_E_INVALIDARG, 0};
   }
-  vci::FilterOp op;
-  op.kind = static_cast<vci::FilterOp::Kind>(m.args[0]);
+  ixxat::FilterOp op;
+  op.kind = static_cast<ixxat::FilterOp::Kind>(m.args[0]);
   op.select = static_cast<uint8_t>(m.args[1]);
   op.mode = static_cast<uint8_t>(m.args[2]);
   op.code = m.args[3];
@@ -68,8 +68,8 @@ vci::FilterResult filter_call(vci::CanLine& line, std::optional<vci::ChannelId> 
 
 // The table of a control_detect request as line initializations: BTR pairs (v1) or CANBTP
 // pairs (v2), listened to with both identifier widths.
-HRESULT start_detection(vci::CanLine& line, const ipc::VciRequest& m) {
-  std::vector<vci::LineInit> entries;
+HRESULT start_detection(ixxat::CanLine& line, const ipc::VciRequest& m) {
+  std::vector<ixxat::LineInit> entries;
   const uint8_t both = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
   if ((m.flags & ipc::kVciV2) != 0) {
     const auto t = payload_as<CANBTPTABLE>(m);
@@ -77,7 +77,7 @@ HRESULT start_detection(vci::CanLine& line, const ipc::VciRequest& m) {
       return VCI_E_INVALIDARG;
     }
     for (uint8_t i = 0; i < t.bCount; ++i) {
-      vci::LineInit e;
+      ixxat::LineInit e;
       e.v2 = true;
       e.op_mode = static_cast<uint8_t>((m.args[1] & ~CAN_OPMODE_LISTONLY) | both);
       e.ex_mode = static_cast<uint8_t>(m.args[2]);
@@ -91,7 +91,7 @@ HRESULT start_detection(vci::CanLine& line, const ipc::VciRequest& m) {
       return VCI_E_INVALIDARG;
     }
     for (uint8_t i = 0; i < t.bCount; ++i) {
-      vci::LineInit e;
+      ixxat::LineInit e;
       e.op_mode = static_cast<uint8_t>(both | (m.args[1] & CAN_OPMODE_LOWSPEED));
       e.btr0 = t.abBtr0[i];
       e.btr1 = t.abBtr1[i];
@@ -124,7 +124,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
     r.hresult = session.devices.erase(ipc::name_of(m.device)) == 1 ? VCI_OK : VCI_E_INVALIDARG;
   } else if (op == ipc::VciOp::line_info && m.handle == 0) {
     // A socket's view (ICanSocket): no object of the controller needs to be open.
-    std::shared_ptr<vci::CanLine> line = sim_.vci_line(ipc::name_of(m.device), m.controller);
+    std::shared_ptr<ixxat::CanLine> line = sim_.vci_line(ipc::name_of(m.device), m.controller);
     r.hresult = line == nullptr ? VCI_E_INVALIDARG : VCI_OK;
     if (line != nullptr) {
       put_payload(r, ipc::kVciCapsOffset, line->capabilities());
@@ -139,7 +139,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
     r.hresult = VCI_OK;
   } else {
     VciHandle& h = *it->second;
-    vci::CanLine& line = h.line();
+    ixxat::CanLine& line = h.line();
     r.handle = m.handle;
     r.hresult = VCI_OK;
     switch (op) {
@@ -150,7 +150,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
         put_payload(r, ipc::kVciLine2Offset, line.line_status2());
         break;
       case ipc::VciOp::controller_state: {
-        const vci::ControllerState s = line.controller_state();
+        const ixxat::ControllerState s = line.controller_state();
         r.values[0] = static_cast<uint32_t>(s.state);
         r.values[1] = s.tec;
         r.values[2] = s.rec;
@@ -179,7 +179,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
                                           s->counters.dropped,  s->counters.not_shown};
           put_payload(r, 0, c);
         } else if (op == ipc::VciOp::channel_filter) {
-          const vci::FilterResult f = filter_call(line, h.channel(), m);
+          const ixxat::FilterResult f = filter_call(line, h.channel(), m);
           r.hresult = f.hr;
           r.values[0] = f.mode;
         } else {
@@ -197,7 +197,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
 
 void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {
   const std::string device = ipc::name_of(m.device);
-  std::shared_ptr<vci::CanLine> line = sim_.vci_line(device, m.controller);
+  std::shared_ptr<ixxat::CanLine> line = sim_.vci_line(device, m.controller);
   if (line == nullptr) {
     r.hresult = VCI_E_INVALIDARG;  // no such device or bus number
     return;
@@ -259,7 +259,7 @@ void VciService::init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciRe
     r.hresult = VCI_E_INVALIDARG;
     return;
   }
-  vci::CanLine& line = h.line();
+  ixxat::CanLine& line = h.line();
   if (line.channel_status(h.channel())->activated) {
     r.hresult = VCI_E_INVALID_STATE;
     return;
@@ -275,7 +275,7 @@ void VciService::init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciRe
     return;
   }
   (*port)->attach(&line);
-  vci::ChannelSetup setup;
+  ixxat::ChannelSetup setup;
   setup.ext_list_size = m.args[2];
   setup.filter_mode = h.v2() ? static_cast<uint8_t>(m.args[3]) : CAN_FILTER_PASS;
   if (h.v2() && m.args[3] > 0xFF) {
@@ -302,10 +302,10 @@ void VciService::init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciRe
 }
 
 void VciService::control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r) {
-  vci::CanLine& line = h.line();
+  ixxat::CanLine& line = h.line();
   switch (static_cast<ipc::VciOp>(m.op)) {
     case ipc::VciOp::control_init: {
-      vci::LineInit init;
+      ixxat::LineInit init;
       if ((m.flags & ipc::kVciV2) != 0) {
         const auto p = payload_as<CANINITLINE2>(m);
         init.v2 = true;
@@ -336,7 +336,7 @@ void VciService::control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& 
       r.hresult = line.stop_line();
       break;
     case ipc::VciOp::control_filter: {
-      const vci::FilterResult f = filter_call(line, std::nullopt, m);
+      const ixxat::FilterResult f = filter_call(line, std::nullopt, m);
       r.hresult = f.hr;
       r.values[0] = f.mode;
       break;
@@ -345,7 +345,7 @@ void VciService::control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& 
       r.hresult = start_detection(line, m);
       break;
     case ipc::VciOp::control_detect_result: {
-      const vci::CanLine::Detection d = line.detection();
+      const ixxat::CanLine::Detection d = line.detection();
       r.hresult = d.hr;
       r.values[0] = d.index;
       break;
@@ -357,7 +357,7 @@ void VciService::control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& 
 }
 
 void VciService::scheduler(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r) {
-  vci::CanLine& line = h.line();
+  ixxat::CanLine& line = h.line();
   switch (static_cast<ipc::VciOp>(m.op)) {
     case ipc::VciOp::scheduler_resume:
       r.hresult = line.scheduler_resume();

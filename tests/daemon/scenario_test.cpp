@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "canemu/daemon/simulation.hpp"
-#include "canemu/firmware_model/sja1000_node.hpp"
+#include "canemu/firmware_model/chips/sja1000/sja1000_node.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -177,7 +177,7 @@ struct World {
     sim = std::move(*Simulation::build(*load_default_config()));
     for (uint32_t k = 0; k < 2; ++k) {
       auto line = sim->vci_line("ixxat0", k);
-      vci::LineInit init;
+      ixxat::LineInit init;
       init.op_mode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
       init.btr0 = 0x00;
       init.btr1 = 0x1C;

@@ -5,7 +5,7 @@
 #include <deque>
 #include <vector>
 
-#include "canemu/firmware_model/hosted_node.hpp"
+#include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "test_controller.hpp"
 
 namespace canemu::model::testing {

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "canemu/firmware_model/bit_timing_decoders.hpp"
-#include "canemu/firmware_model/can_bus.hpp"
-#include "canemu/firmware_model/fault_plan.hpp"
+#include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/bus/fault_plan.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
 
 namespace canemu::model::testing {
 

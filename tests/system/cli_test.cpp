@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "canemu/client/channel.hpp"
-#include "canemu/firmware_model/wire_encoding.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "daemon_process.hpp"
 
 extern char** environ;

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "canemu/firmware_model/bit_timing_decoders.hpp"
-#include "canemu/firmware_model/wire_encoding.hpp"
+#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "vci_test_support.hpp"
 #include "vcinpl2.h"
 
@@ -112,10 +112,10 @@ CANMSG2 msg(uint32_t id, std::vector<uint8_t> bytes, bool fd = false, bool brs =
 
 // End of a frame sent at t = 0, in device ticks (us).
 UINT32 ticks_of(const model::Frame& f) {
-  const auto nominal = model::vci::decode_btp({0, 500000, 14, 2, 1, 0}, model::vci::kFdNominalRange,
-                                              model::vci::Phase::nominal);
-  const auto data = model::vci::decode_btp({0, 2000000, 8, 2, 1, 0}, model::vci::kFdDataRange,
-                                           model::vci::Phase::data);
+  const auto nominal = model::ixxat::decode_btp(
+      {0, 500000, 14, 2, 1, 0}, model::ixxat::kFdNominalRange, model::ixxat::Phase::nominal);
+  const auto data = model::ixxat::decode_btp({0, 2000000, 8, 2, 1, 0}, model::ixxat::kFdDataRange,
+                                             model::ixxat::Phase::data);
   return static_cast<UINT32>(model::frame_duration(model::encode(f), *nominal, *data).ns() / 1000);
 }
 

@@ -10,7 +10,7 @@
 #include <thread>
 #include <vector>
 
-#include "canemu/firmware_model/wire_encoding.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "vci_test_support.hpp"
 #include "vcinpl.h"
 

@@ -14,7 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "canemu/firmware_model/wire_encoding.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "vci_test_support.hpp"
 #include "vcisdk.h"
 

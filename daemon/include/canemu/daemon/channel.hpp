@@ -19,7 +19,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/doorbell.hpp"
-#include "canemu/firmware_model/hosted_node.hpp"
+#include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/shm_ring.hpp"
 

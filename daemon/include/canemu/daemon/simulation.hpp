@@ -13,12 +13,13 @@
 
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/scenario.hpp"
-#include "canemu/firmware_model/can_bus.hpp"
-#include "canemu/firmware_model/can_fd_controller.hpp"
-#include "canemu/firmware_model/fault_plan.hpp"
-#include "canemu/firmware_model/hosted_node.hpp"
-#include "canemu/firmware_model/sja1000.hpp"
-#include "canemu/firmware_model/vci/can_line.hpp"
+#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
+#include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
+#include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/bus/fault_plan.hpp"
+#include "canemu/firmware_model/chips/can_fd/can_fd_controller.hpp"
+#include "canemu/firmware_model/chips/hosted_node.hpp"
+#include "canemu/firmware_model/chips/sja1000/sja1000.hpp"
 #include "canemu/ipc/protocol.hpp"
 
 namespace canemu::daemon {
@@ -28,7 +29,7 @@ namespace canemu::daemon {
 std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate, uint32_t sample_point);
 // The emulated CAN FD controller's timing for a rate in one phase (80 MHz clock).
 std::optional<model::BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
-                                              model::vci::Phase phase);
+                                              model::ixxat::Phase phase);
 // The timing a controller needs: for an SJA1000 (`fd` false) the BTR0/BTR1 values for
 // `bitrate` and their decoded timing; for the CAN FD controller the nominal timing for
 // `bitrate` and the data timing for `data_bitrate`. Nothing if the clock cannot make a rate
@@ -102,9 +103,9 @@ class Simulation {
   // The adapter firmware of controller `controller` of the VCI device `device` (configured, or
   // ephemeral from add_vci_device); nullptr if there is no such controller. Shared: objects a
   // client opened keep the firmware running after an ephemeral device has gone.
-  std::shared_ptr<model::vci::CanLine> vci_line(std::string_view device, uint32_t controller);
+  std::shared_ptr<model::ixxat::CanLine> vci_line(std::string_view device, uint32_t controller);
   // The VCI firmware driving `node`, if a VCI adapter's.
-  std::shared_ptr<model::vci::CanLine> vci_line_of(const model::HostedNode* node) const;
+  std::shared_ptr<model::ixxat::CanLine> vci_line_of(const model::HostedNode* node) const;
 
   // ---- ephemeral devices ----
   // A stopped node on bus `bus`, ready to start (an SJA1000 on a classic bus, the CAN FD
@@ -193,7 +194,7 @@ class Simulation {
     std::string name;  // "device:N"
     std::size_t bus;
     std::unique_ptr<model::HostedNode> node;
-    std::shared_ptr<model::vci::CanLine> line;  // the adapter firmware driving it
+    std::shared_ptr<model::ixxat::CanLine> line;  // the adapter firmware driving it
   };
 
   struct Ephemeral {
@@ -201,7 +202,7 @@ class Simulation {
     std::size_t bus;
     model::HostedNode* node;
     uint32_t owner_pid;
-    std::shared_ptr<model::vci::CanLine> line;  // VCI adapters only
+    std::shared_ptr<model::ixxat::CanLine> line;  // VCI adapters only
     uint64_t vci_id = 0;
   };
   void remove_ephemeral(const std::string& name);

@@ -1,4 +1,4 @@
-// A VCI channel's FIFOs in shared memory, as the adapter firmware (model::vci::CanLine) sees
+// A VCI channel's FIFOs in shared memory, as the adapter firmware (model::ixxat::CanLine) sees
 // them: the receive FIFO it writes and the transmit FIFO it reads. Elements are the vendor
 // structs themselves: CANMSG (20 bytes) for v1 channels, CANMSG2 (80 bytes) for v2 channels, so
 // the client library hands them to the application as they are.
@@ -17,20 +17,20 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/doorbell.hpp"
-#include "canemu/firmware_model/vci/can_line.hpp"
+#include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/shm_ring.hpp"
 
 namespace canemu::daemon {
 
-class VciPort final : public model::vci::ChannelPort, public Doorbell {
+class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
  public:
   // Rings of at least `rx_capacity` / `tx_capacity` elements (at most 65535 each).
   static tl::expected<std::unique_ptr<VciPort>, std::string> create(bool v2, uint32_t rx_capacity,
                                                                     uint32_t tx_capacity,
                                                                     const std::string& name);
   // The line the port's transmit ring feeds (told when the doorbell rings).
-  void attach(model::vci::CanLine* line) { line_ = line; }
+  void attach(model::ixxat::CanLine* line) { line_ = line; }
 
   uint32_t element_size() const { return rx_memory_.element_size(); }
   uint32_t rx_capacity() const { return rx_memory_.capacity(); }
@@ -39,7 +39,7 @@ class VciPort final : public model::vci::ChannelPort, public Doorbell {
   // What goes to the client, in the order of ipc::OpenChannelReply's descriptors.
   std::array<int, ipc::kChannelFdCount> client_fds() const;
 
-  // --- model::vci::ChannelPort ---
+  // --- model::ixxat::ChannelPort ---
   bool put(const CANMSG2& msg) override;
   std::optional<CANMSG2> peek() override;
   void pop() override;
@@ -54,7 +54,7 @@ class VciPort final : public model::vci::ChannelPort, public Doorbell {
           ipc::UniqueFd tx_writer_event, ipc::UniqueFd doorbell);
 
   bool v2_;
-  model::vci::CanLine* line_ = nullptr;
+  model::ixxat::CanLine* line_ = nullptr;
   ipc::RingMemory rx_memory_;
   ipc::RingMemory tx_memory_;
   ipc::UniqueFd rx_event_;         // the client's reader waits on it

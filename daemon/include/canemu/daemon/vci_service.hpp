@@ -26,7 +26,7 @@ inline constexpr std::size_t kMaxVciChannelsPerClient = 16;
 class VciHandle {
  public:
   enum class Kind : uint8_t { control, channel, scheduler };
-  VciHandle(Kind kind, std::shared_ptr<model::vci::CanLine> line, model::vci::ChannelId channel,
+  VciHandle(Kind kind, std::shared_ptr<model::ixxat::CanLine> line, model::ixxat::ChannelId channel,
             bool v2)
       : kind_(kind), line_(std::move(line)), channel_(channel), v2_(v2) {}
   ~VciHandle();
@@ -34,8 +34,8 @@ class VciHandle {
   VciHandle& operator=(const VciHandle&) = delete;
 
   Kind kind() const { return kind_; }
-  model::vci::CanLine& line() { return *line_; }
-  model::vci::ChannelId channel() const { return channel_; }
+  model::ixxat::CanLine& line() { return *line_; }
+  model::ixxat::ChannelId channel() const { return channel_; }
   bool v2() const { return v2_; }
   VciPort* port() { return port_.get(); }
   // A new port (channel initialization); returns the one it replaces.
@@ -43,8 +43,8 @@ class VciHandle {
 
  private:
   Kind kind_;
-  std::shared_ptr<model::vci::CanLine> line_;
-  model::vci::ChannelId channel_;
+  std::shared_ptr<model::ixxat::CanLine> line_;
+  model::ixxat::ChannelId channel_;
   bool v2_;
   std::unique_ptr<VciPort> port_;
   RingBudget budget_;

@@ -1,0 +1,299 @@
+// The CAN bus engine: arbitration, acknowledgement, error signalling and fault confinement
+// between the controllers attached to one bus, in simulated time.
+//
+// What is exact and what is approximated is in docs/bus-engine.md. In short: a frame without
+// errors is resolved at its start of frame from the bit sequences of all transmitters
+// (arbitration bit by bit, wired-AND), and completes at the end of its EOF; nobody pays per
+// bit. When any node detects an error, the bits from the first detection to the end of the
+// error delimiter are simulated one by one for every node (error flags, superposition,
+// delimiters, the counter rules that depend on what each node sees).
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "canemu/firmware_model/bus/can_controller.hpp"
+#include "canemu/firmware_model/sim/sim_scheduler.hpp"
+
+namespace canemu::model {
+
+class CanBus;
+
+// What an injection does to one frame.
+struct FrameFault {
+  std::optional<CanErrorType> error;  // corrupt the frame: who detects what, see docs
+  std::optional<uint16_t> bit;        // where (frame bit index); a default per type otherwise
+  bool suppress_ack = false;          // no node acknowledges this frame
+};
+
+struct FrameContext {
+  SimTime sof;
+  NodeId transmitter;
+  const Frame& frame;
+  const EncodedFrame& bits;
+};
+
+// Consulted by the bus at its injection points. The default does nothing.
+class FaultInjector {
+ public:
+  virtual ~FaultInjector() = default;
+  // Whenever the bus is free and about to look for transmitters: node-level faults (unplug,
+  // oscillator, counters) applied here take effect from this start of frame on.
+  virtual void before_arbitration(SimTime /*now*/, CanBus& /*bus*/) {}
+  // At every start of frame that wins arbitration.
+  virtual FrameFault on_frame(const FrameContext&) { return {}; }
+};
+
+struct ErrorCounts {
+  uint64_t bit = 0, stuff = 0, form = 0, crc = 0, ack = 0;
+  uint64_t& operator[](CanErrorType t);
+  uint64_t total() const { return bit + stuff + form + crc + ack; }
+};
+
+struct StateChange {
+  SimTime at;
+  ErrorState state;
+};
+
+struct NodeStats {
+  uint64_t frames_sent = 0;
+  uint64_t frames_received = 0;
+  uint64_t arbitration_lost = 0;
+  uint64_t tx_dropped = 0;
+  ErrorCounts errors_as_transmitter;
+  ErrorCounts errors_as_receiver;
+  std::vector<StateChange> state_changes;
+};
+
+// One line of what happened on the wire, for traces and tests.
+struct BusEvent {
+  enum class Kind : uint8_t { frame, error_frame, bus_held };
+  Kind kind = Kind::frame;
+  SimTime start;  // SOF (or start of the dominant hold)
+  SimTime end;    // end of EOF, or end of the error delimiter
+  NodeId transmitter = 0;
+  std::optional<Frame> frame;
+  uint16_t error_bit = 0;  // first detection
+};
+
+class CanBus final : private EventHandler {
+ public:
+  CanBus(SimScheduler& scheduler, std::string name);
+  ~CanBus();
+  CanBus(const CanBus&) = delete;
+  CanBus& operator=(const CanBus&) = delete;
+
+  const std::string& name() const { return name_; }
+  SimTime now() const { return scheduler_.now(); }
+  // Whether `node`'s pending frame is on the wire right now (from its start of frame to the end
+  // of the frame or error frame).
+  bool in_flight(NodeId node) const;
+
+  NodeId attach(CanController& controller);
+  std::size_t node_count() const { return nodes_.size(); }
+
+  // The controller has a new or changed pending_tx() (or wants to try again).
+  void tx_changed(NodeId node);
+  // Something the bus asks the controller changed: timing(), participating(), listen_only(),
+  // self_test(), fd_capable() or bus_off_recovery(). The bus caches these and reads them again
+  // only after this call, so a controller must make it whenever one of them changes.
+  void controller_changed(NodeId node);
+  // A controller with BusOffRecovery::on_restart was restarted: recovery counting begins.
+  void restart(NodeId node);
+  // The controller's counters were written directly (SJA1000 RXERR/TXERR in reset mode): the
+  // state they give is reported as any other change.
+  void counters_changed(NodeId node);
+
+  // --- fault injection (programmatic API) ---
+  void set_injector(FaultInjector* injector) { injector_ = injector; }
+  // Transceiver unplugged (false) or back (true).
+  void set_connected(NodeId node, bool connected);
+  bool connected(NodeId node) const { return nodes_[node].connected; }
+  void set_oscillator_ppm(NodeId node, int32_t ppm);
+  // No node acknowledges anything from now until `until`.
+  void suppress_acks_until(SimTime until) { ack_suppressed_until_ = until; }
+  // The bus is held dominant from `from` for `duration` (a shorted or stuck transceiver).
+  void hold_dominant(SimTime from, SimDuration duration);
+
+  // --- observation ---
+  const NodeStats& stats(NodeId node) const { return nodes_[node].stats; }
+  // Zeroes a node's statistics (a reused node starts afresh).
+  void reset_stats(NodeId node) { nodes_[node].stats = NodeStats{}; }
+  // Busy time (start of frame to end of intermission) over the second before `now`, percent.
+  double bus_load_percent(SimTime now) const;
+  uint64_t frames_on_bus() const { return frames_on_bus_; }
+  uint64_t error_frames_on_bus() const { return error_frames_on_bus_; }
+  // Called for every frame and error frame, in order.
+  std::function<void(const BusEvent&)> on_bus_event;
+
+ private:
+  struct Node {
+    CanController* controller = nullptr;
+    FaultConfinement* fc = nullptr;  // the controller's counters (a stable reference)
+    // Cached controller properties, read again after controller_changed().
+    bool props_known = false;
+    bool participating = true;
+    bool timing_valid = true;  // a bit time that is not zero
+    bool listen_only = false;
+    bool self_test = false;
+    bool fd_capable = false;
+    BusOffRecovery recovery = BusOffRecovery::automatic;
+    bool connected = true;
+    int32_t oscillator_ppm = 0;
+    SimTime ready_at;  // suspend transmission of error-passive transmitters
+    // pending_tx() and its encoding, cached until the controller reports a change or the bus
+    // finishes with the frame.
+    bool tx_known = false;
+    const TxFrame* tx = nullptr;
+    bool encoded_valid = false;
+    EncodedFrame encoded;
+    ErrorState last_state = ErrorState::active;
+    // Timing as last seen (controller timing plus injected oscillator offset) and what follows
+    // from it; refreshed when it changes.
+    NodeTiming timing;
+    TimingProfile profile;
+    int64_t bit_ns = 0;  // nominal bit time when it is a whole number of ns (no ppm offset), or 0
+    bool timing_known = false;
+    uint16_t reported_tec = 0;  // counters at the last state report
+    uint16_t reported_rec = 0;
+    // Bus-off recovery bookkeeping.
+    SimTime recovery_from;  // recessive bits count from here
+    EventId recovery_event = 0;
+    NodeStats stats;
+  };
+
+  struct Participant;  // a node's view during one frame (can_bus.cpp)
+
+  // Events the bus schedules on itself, by tag.
+  enum EventTag : uint64_t { kAttempt = 1, kFrameEnd = 2, kBusFree = 3 };
+  void on_event(SimTime now, uint64_t tag) override;
+
+  // The frame on the bus between its start and its completion.
+  struct Completion {
+    SimTime eof_end;
+    SimTime ifs_end;
+    SimTime last_dominant_end;
+    BitTiming nominal;
+    int32_t ppm = 0;
+    // The transmitters' frames (in_flight_ order): their pending_tx(), valid until they are told
+    // the frame is done.
+    std::vector<const TxFrame*> sent;
+    // Arbitration losses of this frame: node, bit, end of that bit. Reported at the end of the
+    // frame (or of its error frame), each with its own instant.
+    struct Loss {
+      NodeId node;
+      uint16_t bit;
+      uint16_t destuffed_bit;
+      SimTime at;
+      bool single_shot;  // as requested when the frame started
+    };
+    std::vector<Loss> losses;
+  };
+
+  NodeTiming timing_of(const Node& n) const;
+  const Node& refresh_timing(NodeId id);
+  // Cached controller state, loaded on first use after a change (fast paths inline).
+  Node& refresh(NodeId id) {
+    Node& n = nodes_[id];
+    if (!n.props_known) {
+      load_props(n);
+    }
+    return n;
+  }
+  const TxFrame* pending(Node& n) {
+    if (!n.tx_known) {
+      load_tx(n);
+    }
+    return n.tx;
+  }
+  const EncodedFrame& encoded_tx(NodeId id) {
+    Node& n = nodes_[id];
+    if (!n.encoded_valid) {
+      load_encoding(n);
+    }
+    return n.encoded;
+  }
+  bool on_bus(const Node& n) const {
+    return n.connected && n.participating && n.timing_valid && !n.fc->bus_off();
+  }
+  bool can_transmit(Node& n) { return on_bus(n) && !n.listen_only && pending(n) != nullptr; }
+  bool decodes(NodeId tx, NodeId rx, bool brs) {
+    const std::size_t n = nodes_.size();
+    if (decodes_cache_.size() == 2 * n * n) {
+      const int8_t c = decodes_cache_[(brs ? n * n : 0) + tx * n + rx];
+      if (c >= 0) {
+        return c == 1;
+      }
+    }
+    return decodes_slow(tx, rx, brs);
+  }
+  void load_props(Node& n);
+  void load_tx(Node& n);
+  void load_encoding(Node& n);
+  bool decodes_slow(NodeId tx, NodeId rx, bool brs);
+
+  static void forget_tx(Node& n) {
+    n.tx_known = false;
+    n.encoded_valid = false;
+  }
+
+  void schedule_attempt(SimTime at);
+  void attempt(SimTime now);
+  void run_frame(SimTime sof);
+  void finish_success(SimTime sof, NodeId tx, const BitTiming& nominal, const BitTiming& data);
+  void complete_success(SimTime eof_end);
+  void report_losses();
+  void run_error_phase(SimTime sof, std::vector<Participant>& parts, const EncodedFrame* bits,
+                       const BitTiming& nominal, const BitTiming& data, uint16_t first_bit);
+  void run_hold(SimTime now);
+
+  void bus_released(SimTime last_dominant_end, SimTime idle_at);
+  void account_recessive(SimTime dominant_start);
+  void arm_recovery(NodeId id);
+  void recovery_check(NodeId id, SimTime now);
+  void report_state(NodeId id, SimTime at);
+  void recovered(NodeId id, SimTime at);
+  // Whole bits of `node`'s own bit time in `span`, rounded to the nearest bit.
+  uint64_t bits_in(NodeId node, SimDuration span);
+  void record_busy(SimTime start, SimTime end);
+
+  SimScheduler& scheduler_;
+  std::string name_;
+  std::vector<Node> nodes_;
+  FaultInjector* injector_ = nullptr;
+  SimTime ack_suppressed_until_;
+
+  // Bus activity.
+  bool busy_ = false;
+  // Set whenever a node may have begun bus-off recovery; cleared when a look finds none, so the
+  // per-frame recovery bookkeeping costs nothing on a healthy bus.
+  bool maybe_recovering_ = false;
+  std::vector<NodeId> in_flight_;  // transmitters of the current activity
+  SimTime free_at_;                // end of intermission of the last activity
+  SimTime last_dominant_end_;      // recessive run on the wire started here
+  EventId attempt_event_ = 0;
+  bool attempt_pending_ = false;
+  SimTime attempt_at_;
+  std::vector<std::pair<SimTime, SimDuration>> holds_;  // pending dominant holds
+
+  // Scratch space reused from frame to frame, and the frame in flight.
+  std::vector<NodeId> contenders_;
+  std::vector<NodeId> active_;
+  std::vector<std::pair<NodeId, uint16_t>> lost_;
+  std::vector<std::pair<NodeId, uint16_t>> collisions_;
+  std::vector<Participant> parts_;
+  Completion completion_;
+  // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
+  std::vector<int8_t> decodes_cache_;
+
+  std::deque<std::pair<SimTime, SimTime>> busy_intervals_;
+  uint64_t frames_on_bus_ = 0;
+  uint64_t error_frames_on_bus_ = 0;
+};
+
+}  // namespace canemu::model

@@ -1,0 +1,111 @@
+// A queue of timed events, ordered by (time, insertion order).
+//
+// Two events at the same instant always come out in the order they were pushed, so a run
+// depends only on its inputs, never on heap layout or addresses. Cancellation marks the entry
+// and leaves it in the heap; it is dropped when it reaches the top. Cancelling looks the entry
+// up linearly: a simulation island holds a handful of pending events, not thousands.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "canemu/firmware_model/sim/sim_time.hpp"
+
+namespace canemu::model {
+
+using EventId = uint64_t;
+
+template <class Payload>
+class EventQueue {
+ public:
+  struct Entry {
+    SimTime time;
+    EventId id = 0;
+    Payload payload;
+    bool cancelled = false;
+  };
+
+  EventId push(SimTime time, Payload payload) {
+    const EventId id = next_id_++;
+    heap_.push_back(Entry{time, id, std::move(payload), false});
+    std::push_heap(heap_.begin(), heap_.end(), later);
+    ++live_;
+    return id;
+  }
+
+  // Returns false if the event already ran, was cancelled, or never existed.
+  bool cancel(EventId id) {
+    for (Entry& e : heap_) {
+      if (e.id == id && !e.cancelled) {
+        e.cancelled = true;
+        --live_;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // The payload of a pending event, or nullptr.
+  const Payload* find(EventId id) const {
+    for (const Entry& e : heap_) {
+      if (e.id == id && !e.cancelled) {
+        return &e.payload;
+      }
+    }
+    return nullptr;
+  }
+
+  bool empty() const { return live_ == 0; }
+  std::size_t size() const { return live_; }
+
+  std::optional<SimTime> next_time() {
+    drop_cancelled();
+    if (heap_.empty()) {
+      return std::nullopt;
+    }
+    return heap_.front().time;
+  }
+
+  // Removes and returns the earliest event, if any.
+  std::optional<Entry> pop() { return pop_due(SimTime::from_ns(INT64_MAX)); }
+
+  // Removes and returns the earliest event if it is due at or before `limit`.
+  std::optional<Entry> pop_due(SimTime limit) {
+    drop_cancelled();
+    if (heap_.empty() || heap_.front().time > limit) {
+      return std::nullopt;
+    }
+    std::pop_heap(heap_.begin(), heap_.end(), later);
+    Entry e = std::move(heap_.back());
+    heap_.pop_back();
+    --live_;
+    return e;
+  }
+
+ private:
+  // Heap comparator: "a comes out after b".
+  static bool later(const Entry& a, const Entry& b) {
+    if (a.time != b.time) {
+      return a.time > b.time;
+    }
+    return a.id > b.id;
+  }
+
+  void drop_cancelled() {
+    while (!heap_.empty() && heap_.front().cancelled) {
+      std::pop_heap(heap_.begin(), heap_.end(), later);
+      heap_.pop_back();
+    }
+  }
+
+  std::vector<Entry> heap_;
+  EventId next_id_ = 1;
+  std::size_t live_ = 0;
+};
+
+}  // namespace canemu::model

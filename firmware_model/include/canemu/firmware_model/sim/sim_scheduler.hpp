@@ -1,0 +1,92 @@
+// Clock sources and the scheduler that runs a simulation island's events in time order.
+//
+// Contract: the daemon (or a test) owns a ClockSource and calls SimScheduler::run_until() with
+// its current time; the scheduler runs every event due up to that instant, in (time, insertion)
+// order, and tells the caller when the next one is due so it can arm a timer. Events may
+// schedule further events, including at the current instant (they run in the same call).
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "canemu/firmware_model/sim/event_queue.hpp"
+#include "canemu/firmware_model/sim/sim_time.hpp"
+
+namespace canemu::model {
+
+// Where simulated "now" comes from. The daemon implements realtime and scaled sources over
+// CLOCK_MONOTONIC; the model only ships the stepped one.
+class ClockSource {
+ public:
+  virtual ~ClockSource() = default;
+  virtual SimTime now() const = 0;
+};
+
+// Time that moves only when told to: stepped mode and tests.
+class SteppedClock final : public ClockSource {
+ public:
+  SimTime now() const override { return now_; }
+  void advance(SimDuration d) {
+    if (d.ns() > 0) {
+      now_ += d;
+    }
+  }
+  // Moves to `t` if it is later than now; time never goes backwards.
+  void advance_to(SimTime t) {
+    if (t > now_) {
+      now_ = t;
+    }
+  }
+
+ private:
+  SimTime now_;
+};
+
+// A long-lived object that receives events by tag: the cheap way to schedule the events that
+// recur all the time (a bus's end of frame), without a std::function per event.
+class EventHandler {
+ public:
+  virtual void on_event(SimTime now, uint64_t tag) = 0;
+
+ protected:
+  ~EventHandler() = default;
+};
+
+class SimScheduler {
+ public:
+  using Action = std::function<void(SimTime)>;
+
+  SimTime now() const { return now_; }
+
+  // Schedules `action` at `at`; an instant in the past runs at the next run_until(), at now().
+  EventId schedule_at(SimTime at, Action action);
+  // Schedules handler.on_event(now, tag) at `at`. The handler must outlive the event.
+  EventId schedule_at(SimTime at, EventHandler& handler, uint64_t tag);
+  EventId schedule_after(SimDuration delay, Action action) {
+    return schedule_at(now_ + delay, std::move(action));
+  }
+  bool cancel(EventId id);
+
+  std::optional<SimTime> next_event_time() { return queue_.next_time(); }
+  std::size_t pending() const { return queue_.size(); }
+
+  // Runs every event due at or before `limit`, then sets now() to `limit` (never backwards).
+  // Returns the number of events run.
+  std::size_t run_until(SimTime limit);
+
+ private:
+  // Heap entries stay small: a handler and a tag, or an index into the slots of std::function
+  // actions.
+  struct Target {
+    EventHandler* handler = nullptr;
+    uint64_t tag = 0;  // handler's tag, or the action's slot
+  };
+  EventQueue<Target> queue_;
+  std::vector<Action> actions_;
+  std::vector<std::size_t> free_slots_;
+  SimTime now_;
+};
+
+}  // namespace canemu::model

@@ -1,0 +1,632 @@
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+
+namespace canemu::model {
+
+namespace {
+
+// CRC generator polynomials without their top bit (ISO 11898-1:2015, 10.4.2.6).
+constexpr uint32_t kCrc15Poly = 0x4599;
+constexpr uint32_t kCrc17Poly = 0x1685B;
+constexpr uint32_t kCrc21Poly = 0x102899;
+
+uint64_t to_big_endian(uint64_t v) {
+  if constexpr (std::endian::native == std::endian::little) {
+    return __builtin_bswap64(v);
+  }
+  return v;
+}
+
+// Population count without a library call on CPUs where the compiler may not use POPCNT.
+uint32_t count_ones(uint64_t x) {
+  x = x - ((x >> 1) & 0x5555555555555555ULL);
+  x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0FULL;
+  return static_cast<uint32_t>((x * 0x0101010101010101ULL) >> 56);
+}
+
+// Gray code of the stuff count (0..7) in bits 3..1 and its even parity in bit 0.
+constexpr std::array<uint8_t, 8> kStuffCountCode{0x0, 0x3, 0x6, 0x5, 0xC, 0xF, 0xA, 0x9};
+
+// A bit string, first bit in the most significant position of the first word, so that fields
+// are appended and runs found with word operations rather than bit by bit. Words past the end
+// are not initialised (zeroing them costs more than the encoding): appending assigns a word
+// when it starts one, and only bits before `size` are ever read.
+struct BitString {
+  EncodedFrame::Bits words;
+  uint32_t size = 0;
+
+  // Appends the low `count` (1..64) bits of `value`, most significant first.
+  void append(uint64_t value, uint32_t count) {
+    const uint64_t v = value << (64 - count);
+    const uint32_t off = size & 63;
+    const std::size_t w = size >> 6;
+    if (off == 0) {
+      words[w] = v;
+    } else {
+      words[w] |= v >> off;
+      if (off + count > 64) {
+        words[w + 1] = v << (64 - off);
+      }
+    }
+    size += count;
+    // Keep the bits after the end of the last word zero, so the next append can OR into it.
+    if ((size & 63) != 0) {
+      words[size >> 6] &= ~uint64_t{0} << (64 - (size & 63));
+    }
+  }
+  void append_bit(bool bit) { append(bit ? 1u : 0u, 1); }
+  // Appends zeros up to `new_size`.
+  void pad_to(uint32_t new_size) {
+    while (size < new_size) {
+      append(0, new_size - size < 64 ? new_size - size : 64);
+    }
+  }
+  void pop_back() {
+    --size;
+    words[size >> 6] &= ~(uint64_t{1} << (63 - (size & 63)));
+  }
+
+  bool bit(uint32_t i) const { return (words[i >> 6] >> (63 - (i & 63))) & 1u; }
+
+  // Bits i..i+63 (i < size), most significant first; bits past the end read as 0 once sealed.
+  uint64_t window(uint32_t i) const {
+    const std::size_t w = i >> 6;
+    const uint32_t off = i & 63;
+    if (off == 0) {
+      return words[w];
+    }
+    return (words[w] << off) | (words[w + 1] >> (64 - off));
+  }
+
+  // Zeroes the word a window at the last bit may read past the end.
+  void seal() {
+    const std::size_t next = (size & 63) == 0 ? size >> 6 : (size >> 6) + 1;
+    if (next < words.size()) {
+      words[next] = 0;
+    }
+  }
+
+  // The 8 bits i..i+7 (i + 8 <= size).
+  uint32_t byte_at(uint32_t i) const {
+    const std::size_t w = i >> 6;
+    const uint32_t off = i & 63;
+    uint64_t v = words[w] << off;
+    if (off > 56) {
+      v |= words[w + 1] >> (64 - off);
+    }
+    return static_cast<uint32_t>(v >> 56);
+  }
+
+  // Copies the used words into `out`; words after them keep what they had.
+  void store(EncodedFrame::Bits& out) const {
+    const std::size_t used = (size + 63) / 64;
+    for (std::size_t w = 0; w < used; ++w) {
+      out[w] = words[w];
+    }
+  }
+};
+
+// Up to 128 bits in one register pair: the destuffed bits of a classic frame (at most
+// 39 + 64 + 15 = 118), so that windows and bits are shifts instead of memory reads.
+struct ShortBits {
+  uint128 bits = 0;  // first bit at bit 127
+  uint32_t size = 0;
+
+  void append(uint64_t value, uint32_t count) {
+    bits |= (uint128{value} << (128 - count)) >> size;
+    size += count;
+  }
+  bool bit(uint32_t i) const { return static_cast<uint64_t>(bits >> (127 - i)) & 1u; }
+  uint64_t window(uint32_t i) const { return static_cast<uint64_t>((bits << i) >> 64); }
+  uint32_t byte_at(uint32_t i) const { return static_cast<uint32_t>((bits << i) >> 120); }
+  void seal() {}
+};
+
+// Table-driven CRC over a bit string (MSB first), 16 bits per step. The register after 16
+// input bits is linear in (register, input): it equals feeding (top 16 register bits ^ input)
+// into a cleared register, plus the register shifted left by 16 when it is wider than 16 bits.
+// That 16-bit feed splits into two 256-entry tables, looked up in parallel.
+template <uint32_t Width, uint32_t Poly>
+struct Crc {
+  static constexpr uint32_t kMask = (1u << Width) - 1;
+
+  static constexpr uint32_t step_bit(uint32_t crc, bool bit) {
+    const uint32_t feedback = (bit ^ ((crc >> (Width - 1)) & 1u)) ? Poly : 0u;
+    return ((crc << 1) & kMask) ^ feedback;
+  }
+  static constexpr uint32_t feed16(uint32_t v) {
+    uint32_t crc = 0;
+    for (int i = 15; i >= 0; --i) {
+      crc = step_bit(crc, (v >> i) & 1u);
+    }
+    return crc;
+  }
+  static constexpr std::array<uint32_t, 256> make_table(uint32_t shift) {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t i = 0; i < 256; ++i) {
+      t[i] = feed16(i << shift);
+    }
+    return t;
+  }
+  static constexpr std::array<uint32_t, 256> kHigh = make_table(8);
+  static constexpr std::array<uint32_t, 256> kLow = make_table(0);
+
+  template <class Bits>
+  static uint32_t over(const Bits& s, uint32_t bits, uint32_t crc) {
+    uint32_t i = 0;
+    for (; i + 16 <= bits; i += 16) {
+      const uint32_t input = (s.byte_at(i) << 8) | s.byte_at(i + 8);
+      const uint32_t top = Width >= 16 ? crc >> (Width - 16) : crc << (16 - Width);
+      const uint32_t idx = (top ^ input) & 0xFFFF;
+      const uint32_t rest = Width > 16 ? (crc << 16) & kMask : 0u;
+      crc = rest ^ kHigh[idx >> 8] ^ kLow[idx & 0xFF];
+    }
+    for (; i < bits; ++i) {
+      crc = step_bit(crc, s.bit(i));
+    }
+    return crc;
+  }
+};
+
+using Crc15 = Crc<15, kCrc15Poly>;
+using Crc17 = Crc<17, kCrc17Poly>;
+using Crc21 = Crc<21, kCrc21Poly>;
+
+// Builds SOF..data, destuffed (field positions: EncodedFrame::fields()).
+template <class Bits>
+void build_header_and_data(const Frame& frame, Bits& d) {
+  const bool fd = frame.fd();
+  const uint32_t rtr = frame.remote() ? 1u : 0u;  // RRS of CAN FD is always dominant
+  if (frame.extended()) {
+    // SOF, base ID, SRR, IDE, extended ID, RTR/RRS, FDF (r1), r0/res
+    d.append((uint64_t{frame.id() >> 18} << 2) | 0x3u, 14);  // SOF (0), ID-28..18, SRR, IDE
+    d.append((uint64_t{frame.id() & 0x3FFFF} << 3) | (rtr << 2) | (fd ? 0x2u : 0x0u), 21);
+  } else {
+    // SOF, ID, RTR/RRS, IDE, FDF (r0), [res]
+    d.append((uint64_t{frame.id()} << 3) | (rtr << 2) | (fd ? 0x1u : 0x0u), 15);
+    if (fd) {
+      d.append(0, 1);
+    }
+  }
+  if (fd) {
+    d.append((frame.brs() ? 2u : 0u) | (frame.esi() ? 1u : 0u), 2);
+  }
+  d.append(frame.dlc(), 4);
+  const auto data = frame.data();
+  if (!data.empty()) {
+    std::size_t i = 0;
+    for (; i + 8 <= data.size(); i += 8) {
+      uint64_t v;
+      std::memcpy(&v, data.data() + i, 8);
+      d.append(to_big_endian(v), 64);
+    }
+    for (; i < data.size(); ++i) {
+      d.append(data[i], 8);
+    }
+  }
+}
+
+// Dynamic bit stuffing of `d` into the frame bits `s`, marking stuff bits in `m`: after five
+// equal bits a complementary bit, which starts the next run. `last_may_stuff` is false for
+// CAN FD, where no dynamic stuff bit follows the last bit before the CRC field.
+//
+// Runs are found a 64-bit window at a time (bit j equals bit j + 1 for four j in a row), and the
+// bits between two stuff bits are copied as one block, so the cost grows with the number of
+// stuff bits, not with the number of bits.
+// Frame positions of two destuffed bits, worked out while stuffing.
+struct Probes {
+  std::array<uint32_t, 2> destuffed{UINT32_MAX, UINT32_MAX};
+  std::array<uint16_t, 2> stuffed{};
+};
+
+template <class Bits>
+void stuff(Bits& d, bool last_may_stuff, BitString& s, BitString& m, Probes& probes) {
+  // Both outputs start empty and grow in step; their bits are gathered in registers and stored
+  // a word at a time.
+  struct Writer {
+    EncodedFrame::Bits& bits;
+    EncodedFrame::Bits& marks;
+    std::size_t w = 0;
+    uint64_t acc_bits = 0;
+    uint64_t acc_marks = 0;
+    uint32_t n = 0;  // bits in the accumulators, from the top
+
+    // Appends `count` (1..64) bits and as many stuff marks; neither value has bits above count.
+    void put(uint64_t v, uint64_t mark, uint32_t count) {
+      const uint32_t space = 64 - n;
+      if (count < space) {
+        acc_bits |= v << (space - count);
+        acc_marks |= mark << (space - count);
+        n += count;
+        return;
+      }
+      const uint32_t rest = count - space;
+      bits[w] = acc_bits | (v >> rest);
+      marks[w] = acc_marks | (mark >> rest);
+      ++w;
+      acc_bits = rest != 0 ? v << (64 - rest) : 0;
+      acc_marks = rest != 0 ? mark << (64 - rest) : 0;
+      n = rest;
+    }
+    void copy(const Bits& from, uint32_t begin, uint32_t count) {
+      while (count > 0) {
+        const uint32_t c = count < 64 ? count : 64;
+        put(from.window(begin) >> (64 - c), 0, c);
+        begin += c;
+        count -= c;
+      }
+    }
+    void close(BitString& a, BitString& b) {
+      if (n != 0) {
+        bits[w] = acc_bits;
+        marks[w] = acc_marks;
+      }
+      a.size = b.size = static_cast<uint32_t>(w * 64 + n);
+    }
+  };
+
+  d.seal();
+  Writer out{s.words, m.words};
+  const uint32_t n = d.size;
+  const uint32_t last_allowed = last_may_stuff ? n - 1 : n - 2;  // highest bit a stuff may follow
+  uint32_t pos = 0;                                              // next destuffed bit to copy
+  uint32_t count = 0;                                            // stuff bits so far
+  auto settle = [&](uint32_t upto) {  // probes at or before destuffed bit `upto`
+    for (std::size_t k = 0; k < 2; ++k) {
+      if (probes.destuffed[k] <= upto) {
+        probes.stuffed[k] = static_cast<uint16_t>(probes.destuffed[k] + count);
+        probes.destuffed[k] = UINT32_MAX;
+      }
+    }
+  };
+  while (true) {
+    uint32_t p = UINT32_MAX;  // the destuffed bit after which the next stuff bit goes
+    if (pos > 0 && pos + 3 < n) {
+      // Right after a stuff bit, that bit is the first of the run: four more like it suffice.
+      const uint64_t four = d.window(pos) >> 60;
+      if (four == (d.bit(pos - 1) ? 0x0u : 0xFu)) {
+        p = pos + 3;
+      }
+    }
+    for (uint32_t i = pos; p == UINT32_MAX && i + 4 < n; i += 60) {
+      const uint64_t x = d.window(i);
+      const uint64_t eq = ~(x ^ (x << 1));  // bit 63 - j: bit j equals bit j + 1
+      const uint64_t runs = eq & (eq << 1) & (eq << 2) & (eq << 3) & (~uint64_t{0} << 4);
+      if (runs != 0) {
+        p = i + static_cast<uint32_t>(__builtin_clzll(runs)) + 4;
+      }
+    }
+    if (p >= n || p > last_allowed) {
+      out.copy(d, pos, n - pos);
+      break;
+    }
+    settle(p);
+    out.copy(d, pos, p + 1 - pos);
+    out.put(d.bit(p) ? 0u : 1u, 1u, 1);
+    ++count;
+    pos = p + 1;
+  }
+  settle(UINT32_MAX - 1);
+  out.close(s, m);
+}
+
+// CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits.
+void finish(BitString& s, BitString& m, EncodedFrame& out) {
+  out.crc_delimiter_index = static_cast<uint16_t>(s.size);
+  s.append(0x3FF, 3 + kEofBits);
+  out.length = static_cast<uint16_t>(s.size);
+  s.store(out.level);
+  m.pad_to(s.size);
+  m.store(out.stuff);
+}
+
+// The destuffed positions of the bits the bus engine needs on every frame: the end of the
+// arbitration field and BRS. Field order (build_header_and_data): standard SOF, ID, RTR/RRS,
+// IDE, FDF, [res, BRS]; extended SOF, ID, SRR, IDE, ID-ext, RTR/RRS, FDF, res, [BRS].
+Probes probes_for(const EncodedFrame& out) {
+  Probes p;
+  p.destuffed[0] = out.extended ? 33 : 13;
+  if (out.fd) {
+    p.destuffed[1] = out.extended ? 35 : 16;
+  }
+  return p;
+}
+
+void apply(const Probes& p, EncodedFrame& out) {
+  out.arbitration_end = p.stuffed[0];
+  if (out.fd) {
+    out.brs_index = p.stuffed[1];
+  }
+}
+
+void encode_classic(const Frame& frame, EncodedFrame& out) {
+  ShortBits d;
+  build_header_and_data(frame, d);
+  // CRC-15 over the destuffed bits; the CRC sequence is then stuffed like the rest.
+  const uint32_t crc = Crc15::over(d, d.size, 0);
+  d.append(crc, 15);
+  BitString s;
+  BitString m;
+  Probes probes = probes_for(out);
+  stuff(d, true, s, m, probes);
+  apply(probes, out);
+  out.dynamic_stuff_bits = static_cast<uint16_t>(s.size - d.size);
+  out.crc = crc;
+  out.crc_bits = 15;
+  finish(s, m, out);
+}
+
+void encode_fd(const Frame& frame, EncodedFrame& out) {
+  BitString d;
+  build_header_and_data(frame, d);
+  BitString s;
+  BitString m;
+  Probes probes = probes_for(out);
+  stuff(d, false, s, m, probes);
+  apply(probes, out);
+  const uint32_t count = s.size - d.size;
+  out.dynamic_stuff_bits = static_cast<uint16_t>(count);
+
+  // Stuff count field: a fixed stuff bit, the Gray-coded count and its parity (in the CRC).
+  auto fixed_stuff = [&] {
+    const uint32_t at = s.size;
+    s.append_bit(!s.bit(at - 1));
+    m.pad_to(at);
+    m.append(1, 1);
+    ++out.fixed_stuff_bits;
+  };
+  const uint32_t dynamic_end = s.size;
+  out.stuff_count_begin = static_cast<uint16_t>(dynamic_end);
+  fixed_stuff();
+  out.stuff_count = static_cast<uint8_t>(count % 8);
+  const uint8_t code = kStuffCountCode[out.stuff_count];
+  s.append(code, 4);
+
+  // ISO CAN FD: CRC over the stuffed bits SOF..data (dynamic stuff bits included) and the
+  // stuff count, starting with the top bit set; fixed stuff bits are not part of it.
+  const bool crc21 = frame.length() > 16;
+  const uint8_t width = crc21 ? 21 : 17;
+  uint32_t crc =
+      crc21 ? Crc21::over(s, dynamic_end, 1u << 20) : Crc17::over(s, dynamic_end, 1u << 16);
+  for (int i = 3; i >= 0; --i) {
+    const bool b = (code >> i) & 1u;
+    crc = crc21 ? Crc21::step_bit(crc, b) : Crc17::step_bit(crc, b);
+  }
+  // A fixed stuff bit, the complement of the bit before it, precedes every four CRC bits.
+  for (int i = width - 1; i >= 0; --i) {
+    if ((width - 1 - i) % 4 == 0) {
+      fixed_stuff();
+    }
+    s.append_bit((crc >> i) & 1u);
+  }
+  out.crc = crc;
+  out.crc_bits = width;
+  finish(s, m, out);
+}
+
+}  // namespace
+
+std::string_view to_string(Field field) {
+  switch (field) {
+    case Field::sof:
+      return "SOF";
+    case Field::base_id:
+      return "ID";
+    case Field::srr:
+      return "SRR";
+    case Field::ide:
+      return "IDE";
+    case Field::ext_id:
+      return "ID-ext";
+    case Field::rtr:
+      return "RTR";
+    case Field::rrs:
+      return "RRS";
+    case Field::fdf:
+      return "FDF";
+    case Field::res:
+      return "res";
+    case Field::brs:
+      return "BRS";
+    case Field::esi:
+      return "ESI";
+    case Field::dlc:
+      return "DLC";
+    case Field::data:
+      return "data";
+    case Field::stuff_count:
+      return "SBC";
+    case Field::crc:
+      return "CRC";
+    case Field::crc_delimiter:
+      return "CRC-del";
+    case Field::ack_slot:
+      return "ACK";
+    case Field::ack_delimiter:
+      return "ACK-del";
+    case Field::eof:
+      return "EOF";
+  }
+  return "?";
+}
+
+uint16_t EncodedFrame::stuffed_index(uint16_t destuffed) const {
+  // The frame index s of a destuffed bit has exactly `destuffed` non-stuff bits before it and is
+  // not a stuff bit itself.
+  auto stuff_before = [this](uint32_t s) {
+    uint32_t n = 0;
+    for (uint32_t w = 0; w < s / 64; ++w) {
+      n += count_ones(stuff[w]);
+    }
+    if (s % 64 != 0) {
+      n += count_ones(stuff[s / 64] >> (64 - s % 64));
+    }
+    return n;
+  };
+  uint32_t s = destuffed;
+  while (true) {
+    const uint32_t t = destuffed + stuff_before(s);
+    if (t > s) {
+      s = t;
+    } else if (is_stuff(s)) {
+      ++s;
+    } else {
+      return static_cast<uint16_t>(s);
+    }
+  }
+}
+
+uint16_t EncodedFrame::destuffed_index(uint16_t i) const {
+  uint32_t n = 0;
+  for (uint32_t w = 0; w < i / 64u; ++w) {
+    n += count_ones(stuff[w]);
+  }
+  if (i % 64 != 0) {
+    n += count_ones(stuff[i / 64] >> (64 - i % 64));
+  }
+  return static_cast<uint16_t>(i - n);
+}
+
+uint8_t EncodedFrame::fields(std::array<FieldSpan, 19>& out) const {
+  uint8_t n = 0;
+  auto at = [&](Field f, uint32_t index) { out[n++] = FieldSpan{f, static_cast<uint16_t>(index)}; };
+  auto destuffed = [&](Field f, uint32_t d) { at(f, stuffed_index(static_cast<uint16_t>(d))); };
+  const Field rtr = fd ? Field::rrs : Field::rtr;
+  uint32_t d = 0;
+  destuffed(Field::sof, 0);
+  destuffed(Field::base_id, 1);
+  if (extended) {
+    destuffed(Field::srr, 12);
+    destuffed(Field::ide, 13);
+    destuffed(Field::ext_id, 14);
+    destuffed(rtr, 32);
+    destuffed(Field::fdf, 33);
+    destuffed(Field::res, 34);
+    d = 35;
+  } else {
+    destuffed(rtr, 12);
+    destuffed(Field::ide, 13);
+    destuffed(Field::fdf, 14);
+    d = 15;
+    if (fd) {
+      destuffed(Field::res, 15);
+      d = 16;
+    }
+  }
+  if (fd) {
+    destuffed(Field::brs, d);
+    destuffed(Field::esi, d + 1);
+    d += 2;
+  }
+  destuffed(Field::dlc, d);
+  d += 4;
+  if (data_bytes > 0) {
+    destuffed(Field::data, d);
+    d += 8u * data_bytes;
+  }
+  if (fd) {
+    at(Field::stuff_count, stuff_count_begin);
+    at(Field::crc, stuff_count_begin + 5u);
+  } else {
+    destuffed(Field::crc, d);
+  }
+  at(Field::crc_delimiter, crc_delimiter_index);
+  at(Field::ack_slot, crc_delimiter_index + 1u);
+  at(Field::ack_delimiter, crc_delimiter_index + 2u);
+  at(Field::eof, crc_delimiter_index + 3u);
+  return n;
+}
+
+uint16_t EncodedFrame::field_begin(Field field) const {
+  std::array<FieldSpan, 19> f;
+  const uint8_t n = fields(f);
+  for (uint8_t k = 0; k < n; ++k) {
+    if (f[k].field == field) {
+      return f[k].begin;
+    }
+  }
+  return length;
+}
+
+Field EncodedFrame::field_at(std::size_t i) const {
+  std::array<FieldSpan, 19> f;
+  const uint8_t n = fields(f);
+  Field result = Field::sof;
+  for (uint8_t k = 0; k < n && f[k].begin <= i; ++k) {
+    result = f[k].field;
+  }
+  return result;
+}
+
+std::string EncodedFrame::to_string() const {
+  std::string s(length, '0');
+  for (std::size_t i = 0; i < length; ++i) {
+    if (level_at(i)) {
+      s[i] = '1';
+    }
+  }
+  return s;
+}
+
+void encode(const Frame& frame, EncodedFrame& out) {
+  out.dynamic_stuff_bits = 0;
+  out.fixed_stuff_bits = 0;
+  out.extended = frame.extended();
+  out.data_bytes = static_cast<uint8_t>(frame.length());
+  out.brs_index = 0;
+  out.stuff_count = 0;
+  out.fd = frame.fd();
+  out.brs = frame.brs();
+  if (frame.fd()) {
+    encode_fd(frame, out);
+  } else {
+    encode_classic(frame, out);
+  }
+}
+
+BitCounts bit_counts(const EncodedFrame& frame) {
+  if (!frame.brs) {
+    return BitCounts{frame.length, 0};
+  }
+  // Data phase: from the bit after BRS up to the bit before the CRC delimiter.
+  const uint32_t data = frame.crc_delimiter_index - frame.brs_index - 1u;
+  return BitCounts{frame.length - data, data};
+}
+
+SimDuration frame_prefix_duration(const EncodedFrame& frame, const BitTiming& nominal,
+                                  const BitTiming& data, uint32_t bits) {
+  if (!frame.brs || bits <= frame.brs_index) {
+    return nominal.bits_duration(bits);
+  }
+  // Nominal bits before BRS; BRS = nominal quanta up to its sample point, then data phase 2;
+  // data bits; CRC delimiter = data quanta up to its sample point, then nominal phase 2; nominal
+  // bits after it. A prefix ending inside the data phase ends on a whole data bit.
+  uint64_t nominal_quanta =
+      uint64_t{frame.brs_index} * nominal.quanta_per_bit() + (1u + nominal.tseg1);
+  uint64_t data_quanta = data.tseg2;
+  const uint32_t data_end = std::min<uint32_t>(bits, frame.crc_delimiter_index);
+  data_quanta += uint64_t{data_end - frame.brs_index - 1u} * data.quanta_per_bit();
+  if (bits > frame.crc_delimiter_index) {
+    data_quanta += 1u + data.tseg1;
+    nominal_quanta += nominal.tseg2;
+    nominal_quanta += uint64_t{bits - frame.crc_delimiter_index - 1u} * nominal.quanta_per_bit();
+  }
+  return quanta_duration(nominal, nominal_quanta, data, data_quanta);
+}
+
+SimDuration frame_duration(const EncodedFrame& frame, const BitTiming& nominal,
+                           const BitTiming& data) {
+  return frame_prefix_duration(frame, nominal, data, frame.length);
+}
+
+EncodedFrame encode(const Frame& frame) {
+  EncodedFrame out;
+  encode(frame, out);
+  return out;
+}
+
+}  // namespace canemu::model

@@ -1,0 +1,56 @@
+#include "canemu/firmware_model/sim/sim_scheduler.hpp"
+
+#include <algorithm>
+
+namespace canemu::model {
+
+EventId SimScheduler::schedule_at(SimTime at, Action action) {
+  std::size_t slot;
+  if (!free_slots_.empty()) {
+    slot = free_slots_.back();
+    free_slots_.pop_back();
+    actions_[slot] = std::move(action);
+  } else {
+    slot = actions_.size();
+    actions_.push_back(std::move(action));
+  }
+  return queue_.push(std::max(at, now_), Target{nullptr, slot});
+}
+
+EventId SimScheduler::schedule_at(SimTime at, EventHandler& handler, uint64_t tag) {
+  return queue_.push(std::max(at, now_), Target{&handler, tag});
+}
+
+bool SimScheduler::cancel(EventId id) {
+  const Target* t = queue_.find(id);
+  if (t == nullptr) {
+    return false;
+  }
+  if (t->handler == nullptr) {
+    actions_[t->tag] = nullptr;
+    free_slots_.push_back(t->tag);
+  }
+  return queue_.cancel(id);
+}
+
+std::size_t SimScheduler::run_until(SimTime limit) {
+  limit = std::max(limit, now_);  // time never goes backwards
+  std::size_t ran = 0;
+  while (auto entry = queue_.pop_due(limit)) {
+    now_ = std::max(now_, entry->time);
+    const Target t = entry->payload;
+    if (t.handler != nullptr) {
+      t.handler->on_event(now_, t.tag);
+    } else {
+      Action action = std::move(actions_[t.tag]);
+      actions_[t.tag] = nullptr;
+      free_slots_.push_back(t.tag);
+      action(now_);
+    }
+    ++ran;
+  }
+  now_ = limit;
+  return ran;
+}
+
+}  // namespace canemu::model

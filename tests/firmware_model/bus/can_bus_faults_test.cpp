@@ -1,0 +1,538 @@
+// Faults on the bus and the counter rules that depend on what each node sees: injected errors of
+// every type, bus-off and its recovery, bit-rate mismatch, unplugged nodes, dominant holds.
+#include <gtest/gtest.h>
+
+#include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/bus/fault_plan.hpp"
+#include "test_controller.hpp"
+
+namespace canemu::model {
+namespace {
+
+using testing::frame;
+using testing::k123;
+using testing::kBit;
+using testing::kZero;
+using testing::TestController;
+using Fixture = testing::BusFixture;
+
+FaultRule rule(CanErrorType type, std::optional<uint64_t> count = std::nullopt) {
+  FaultRule r;
+  r.fault.error = type;
+  r.count = count;
+  return r;
+}
+
+TEST(CanBusFaults, ThirtyTwoBitErrorsDriveTheSenderBusOffAndItRecoversAfter128x11Bits) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  f.plan.add(rule(CanErrorType::bit, 32));
+  std::vector<BusEvent> events;
+  f.bus.on_bus_event = [&](const BusEvent& e) { events.push_back(e); };
+  a.send(k123);
+  f.run_until(100'000'000);
+  ASSERT_EQ(a.errors.size(), 32u);
+  for (std::size_t k = 0; k < 32; ++k) {
+    EXPECT_EQ(a.errors[k].type, CanErrorType::bit);
+    EXPECT_EQ(a.errors[k].role, ErrorRole::transmitter);
+    EXPECT_EQ(a.errors[k].bit, 13);  // default: first bit after the arbitration field
+    EXPECT_EQ(a.errors[k].tec, std::min<uint16_t>(256, static_cast<uint16_t>(8 * (k + 1))));
+  }
+  // Receiver: one stuff error per error frame, never a dominant bit right after its flag.
+  EXPECT_EQ(b.errors.size(), 32u);
+  EXPECT_EQ(b.errors[0].type, CanErrorType::stuff);
+  // States: warning at TEC 96, passive at 128, bus-off at 256, active after recovery.
+  ASSERT_EQ(a.states.size(), 4u);
+  EXPECT_EQ(a.states[0].state, ErrorState::warning);
+  EXPECT_EQ(a.states[1].state, ErrorState::passive);
+  EXPECT_EQ(a.states[2].state, ErrorState::bus_off);
+  EXPECT_EQ(a.states[2].at, a.errors[31].at);
+  EXPECT_EQ(a.states[3].state, ErrorState::active);
+  // Recovery: 128 x 11 recessive bits after the last dominant bit of the 32nd error frame, which
+  // ends with its 8-bit delimiter.
+  ASSERT_GE(events.size(), 33u);
+  const BusEvent& last_error = events[31];
+  EXPECT_EQ(last_error.kind, BusEvent::Kind::error_frame);
+  const int64_t last_dominant = last_error.end.ns() - 8 * kBit;
+  EXPECT_EQ(a.states[3].at.ns(), last_dominant + 128 * 11 * kBit);
+  EXPECT_EQ(a.fc.tec(), 0);
+  // Then the frame, still pending, goes out.
+  ASSERT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(b.received[0].frame, k123);
+  EXPECT_EQ(events[32].kind, BusEvent::Kind::frame);
+  EXPECT_EQ(events[32].start, a.states[3].at);
+  EXPECT_EQ(b.fc.rec(), 31);  // 32 errors, one success
+}
+
+TEST(CanBusFaults, ControllerThatRecoversOnlyOnRestartWaitsForIt) {
+  Fixture f;
+  TestController a, b;
+  a.recovery = BusOffRecovery::on_restart;
+  a.attach_to(f.bus);
+  b.attach_to(f.bus);
+  f.plan.add(rule(CanErrorType::bit, 32));
+  a.send(k123);
+  f.run_until(50'000'000);
+  EXPECT_TRUE(a.fc.bus_off());
+  EXPECT_TRUE(b.received.empty());
+  const int64_t restart_at = 50'000'000;
+  f.bus.restart(a.id());
+  f.run_until(100'000'000);
+  ASSERT_EQ(a.states.back().state, ErrorState::active);
+  EXPECT_EQ(a.states.back().at.ns(), restart_at + 128 * 11 * kBit);
+  EXPECT_EQ(b.received.size(), 1u);
+}
+
+TEST(CanBusFaults, RecoveryCountsElevenRecessiveBitsBetweenOtherNodesFrames) {
+  // While other nodes keep the bus busy, each frame leaves one sequence of 11 recessive bits
+  // (ACK delimiter, EOF and intermission), so recovery takes 128 frames.
+  Fixture f;
+  TestController victim, talker, listener;
+  for (auto* n : {&victim, &talker, &listener}) {
+    n->attach_to(f.bus);
+  }
+  victim.fc.set_counters(256, 0);
+  f.bus.restart(victim.id());
+  ASSERT_TRUE(victim.fc.recovering());
+  for (int i = 0; i < 200; ++i) {
+    talker.send(k123);
+  }
+  f.run_until(127 * 65 * kBit);
+  EXPECT_TRUE(victim.fc.bus_off());
+  EXPECT_EQ(victim.fc.recovery_sequences_left(), 1u);
+  f.run_until(129 * 65 * kBit);
+  EXPECT_FALSE(victim.fc.bus_off());
+  // One report of the recovery, at the start of the frame after the 128th sequence.
+  ASSERT_EQ(victim.states.size(), 1u);
+  EXPECT_EQ(victim.states[0].state, ErrorState::active);
+  EXPECT_EQ(victim.states[0].at.ns(), 128 * 65 * kBit);
+  EXPECT_EQ(f.bus.stats(victim.id()).state_changes.size(), 1u);
+}
+
+TEST(CanBusFaults, ASlowOscillatorStillCountsElevenBitsBetweenFrames) {
+  // At -3000 ppm the 11 recessive bits between two frames measure 10.97 of the node's bits;
+  // counting to the nearest bit, recovery still takes 128 frames.
+  Fixture f;
+  TestController victim, talker, listener;
+  for (auto* n : {&victim, &talker, &listener}) {
+    n->attach_to(f.bus);
+  }
+  f.bus.set_oscillator_ppm(victim.id(), -3000);
+  victim.fc.set_counters(256, 0);
+  f.bus.restart(victim.id());
+  for (int i = 0; i < 200; ++i) {
+    talker.send(k123);
+  }
+  f.run_until(129 * 65 * kBit);
+  EXPECT_FALSE(victim.fc.bus_off());
+}
+
+TEST(CanBusFaults, ReceiversRejectAFrameWhoseLastButOneEofBitIsDominant) {
+  Fixture f;
+  TestController tx(f.bus), rx(f.bus);
+  FaultRule r = rule(CanErrorType::bit, 1);
+  r.fault.bit = 59;  // EOF bit 5: the transmitter's flag starts at EOF bit 6
+  f.plan.add(r);
+  tx.send(k123);
+  f.run_until(1'000'000);
+  ASSERT_EQ(rx.errors.size(), 1u);
+  EXPECT_EQ(rx.errors[0].type, CanErrorType::form);
+  EXPECT_EQ(rx.errors[0].bit, 60);
+  EXPECT_EQ(rx.received.size(), 1u);  // only the retransmission
+}
+
+TEST(CanBusFaults, AnErrorInTheLastEofBitLeavesReceiversWithTheFrameTwice) {
+  // The transmitter's flag starts at the last EOF bit: receivers have already accepted the
+  // frame (at the last-but-one EOF bit), and the retransmission arrives again, as on a real bus.
+  Fixture f;
+  TestController tx(f.bus), rx(f.bus);
+  FaultRule r = rule(CanErrorType::bit, 1);
+  r.fault.bit = 60;
+  f.plan.add(r);
+  tx.send(k123);
+  f.run_until(1'000'000);
+  ASSERT_EQ(rx.received.size(), 2u);
+  EXPECT_EQ(rx.received[0].at.ns(), 62 * kBit);  // delivered at the end of EOF
+  EXPECT_EQ(tx.sent.size(), 1u);
+}
+
+TEST(CanBusFaults, SelfReceptionWorksWhenTheFrameSucceedsDespiteAPassiveFlag) {
+  Fixture f;
+  TestController tx, rx;
+  TestController slow(testing::timing_250k());
+  for (auto* n : {&tx, &rx, &slow}) {
+    n->attach_to(f.bus);
+  }
+  slow.fc.set_counters(0, 200);  // error-passive: its flag does not disturb the others
+  tx.send(k123, false, /*self_reception=*/true);
+  f.run_until(1'000'000);
+  EXPECT_FALSE(slow.errors.empty());
+  ASSERT_EQ(tx.received.size(), 1u);
+  EXPECT_TRUE(tx.received[0].own);
+  EXPECT_EQ(tx.received[0].at.ns(), 62 * kBit);
+  EXPECT_EQ(rx.received.size(), 1u);
+}
+
+TEST(CanBusFaults, ZeroLengthHoldsChangeNothing) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  f.bus.hold_dominant(SimTime::from_ns(0), SimDuration(0));
+  f.run_until(1'000'000);
+  EXPECT_TRUE(a.errors.empty());
+  EXPECT_EQ(f.bus.error_frames_on_bus(), 0u);
+}
+
+TEST(CanBusFaults, CrcErrorOnEveryReceiverEndsInAnAckErrorForTheTransmitter) {
+  Fixture f;
+  TestController tx, r1, r2;
+  for (auto* n : {&tx, &r1, &r2}) {
+    n->attach_to(f.bus);
+  }
+  f.plan.add(rule(CanErrorType::crc, 1));
+  tx.send(k123);
+  f.run_until(1'000'000);
+  // Receivers with a CRC error give no ACK, so the transmitter detects an ACK error at the ACK
+  // slot (bit 53) and flags from the ACK delimiter; the receivers flag one bit later (after the
+  // ACK delimiter, as for any CRC error) and their flags end after the transmitter's: +1 each.
+  ASSERT_EQ(r1.errors.size(), 1u);
+  EXPECT_EQ(r1.errors[0].type, CanErrorType::crc);
+  EXPECT_EQ(r1.errors[0].bit, 54);
+  EXPECT_EQ(r1.errors[0].rec, 1);
+  EXPECT_EQ(r1.fc.rec(), 0);  // then the retransmission succeeds: -1
+  EXPECT_EQ(r2.fc.rec(), 0);
+  ASSERT_EQ(tx.errors.size(), 1u);
+  EXPECT_EQ(tx.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(tx.errors[0].bit, 53);
+  EXPECT_EQ(tx.fc.tec(), 8 - 1);
+  EXPECT_EQ(r1.received.size(), 1u);
+}
+
+TEST(CanBusFaults, InjectedStuffErrorIsDetectedByReceiversAtTheChosenBit) {
+  Fixture f;
+  TestController tx(f.bus), rx(f.bus);
+  FaultRule r = rule(CanErrorType::stuff, 1);
+  r.fault.bit = 30;
+  f.plan.add(r);
+  tx.send(k123);
+  f.run_until(1'000'000);
+  ASSERT_GE(rx.errors.size(), 1u);
+  EXPECT_EQ(rx.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(rx.errors[0].bit, 30);
+  EXPECT_EQ(rx.errors[0].at.ns(), 31 * kBit);
+  ASSERT_EQ(tx.errors.size(), 1u);
+  EXPECT_EQ(tx.errors[0].type, CanErrorType::bit);
+  EXPECT_EQ(tx.fc.tec(), 8 - 1);
+  EXPECT_EQ(rx.received.size(), 1u);
+}
+
+TEST(CanBusFaults, InjectedFormErrorHitsTheCrcDelimiterByDefault) {
+  Fixture f;
+  TestController tx(f.bus), rx(f.bus);
+  f.plan.add(rule(CanErrorType::form, 1));
+  tx.send(k123);
+  f.run_until(1'000'000);
+  ASSERT_GE(rx.errors.size(), 1u);
+  EXPECT_EQ(rx.errors[0].type, CanErrorType::form);
+  EXPECT_EQ(rx.errors[0].bit, encode(k123).crc_delimiter_index);
+  EXPECT_EQ(to_string(rx.errors[0].field), "CRC-del");
+}
+
+TEST(CanBusFaults, AckErrorOnOneFrameCostsTheTransmitterEightAndTheReceiverOne) {
+  Fixture f;
+  TestController tx(f.bus), rx(f.bus);
+  f.plan.add(rule(CanErrorType::ack, 1));
+  tx.send(k123);
+  f.run_until(1'000'000);
+  ASSERT_EQ(tx.errors.size(), 1u);
+  EXPECT_EQ(tx.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(tx.errors[0].bit, 53);  // ACK slot: 62 bits, CRC delimiter at 52
+  ASSERT_EQ(rx.errors.size(), 1u);
+  EXPECT_EQ(rx.errors[0].type, CanErrorType::form);  // the flag in the ACK delimiter
+  EXPECT_EQ(rx.errors[0].bit, 54);
+  EXPECT_EQ(rx.fc.rec(), 0);  // +1, then -1 for the retransmission
+  EXPECT_EQ(tx.fc.tec(), 7);
+  EXPECT_EQ(rx.received.size(), 1u);
+}
+
+TEST(CanBusFaults, PassiveTransmitterWithAckErrorAndNoDominantBitKeepsItsCounter) {
+  Fixture f;
+  TestController lone(f.bus);
+  lone.fc.set_counters(130, 0);
+  lone.send(kZero, /*single_shot=*/true);
+  f.run_until(1'000'000);
+  ASSERT_EQ(lone.errors.size(), 1u);
+  EXPECT_EQ(lone.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(lone.fc.tec(), 130);
+}
+
+TEST(CanBusFaults, UnpluggedNodeLeavesTheOtherUnacknowledged) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  f.bus.set_connected(b.id(), false);
+  a.send(kZero);
+  f.run_until(3 * 59 * kBit - 1);
+  EXPECT_EQ(a.errors.size(), 3u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::ack);
+  EXPECT_TRUE(b.received.empty());
+  EXPECT_TRUE(b.errors.empty());
+  f.bus.set_connected(b.id(), true);
+  f.run_until(10 * 59 * kBit);
+  EXPECT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(a.fc.tec(), 3 * 8 - 1);
+}
+
+TEST(CanBusFaults, NodeAtAnotherBitRateDestroysFramesUntilItIsErrorPassive) {
+  Fixture f;
+  TestController a, b;
+  TestController slow(testing::timing_250k());
+  for (auto* n : {&a, &b, &slow}) {
+    n->attach_to(f.bus);
+  }
+  a.send(k123);
+  f.run_until(20'000'000);
+  // The slow node detects a stuff error at the end of the arbitration field (bit 13) and, while
+  // error-active, destroys every frame; it sees a dominant bit after each of its flags: +9.
+  ASSERT_GE(slow.errors.size(), 15u);
+  EXPECT_EQ(slow.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(slow.errors[0].bit, 13);
+  EXPECT_EQ(a.errors.size(), 15u);  // 15 frames destroyed: REC of the slow node 15 x 9 = 135
+  EXPECT_EQ(a.errors[0].type, CanErrorType::bit);
+  ASSERT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(a.fc.tec(), 15 * 8 - 1);
+  EXPECT_EQ(b.fc.rec(), 15 - 1);
+  EXPECT_TRUE(slow.received.empty());
+  EXPECT_GE(slow.fc.rec(), 128);
+  EXPECT_EQ(slow.fc.state(), ErrorState::passive);
+}
+
+TEST(CanBusFaults, OscillatorOffsetBeyondToleranceStopsDecoding) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  f.bus.set_oscillator_ppm(b.id(), 7000);  // beyond 2 x 0.3125 %
+  a.send(k123);
+  f.run_until(200'000);
+  EXPECT_TRUE(b.received.empty());
+  ASSERT_FALSE(b.errors.empty());
+  f.bus.set_oscillator_ppm(b.id(), 3000);  // within tolerance
+  f.run_until(10'000'000);
+  EXPECT_EQ(b.received.size(), 1u);
+}
+
+TEST(CanBusFaults, DominantHoldOnAnIdleBusRaisesReceiveCountersBySequences) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  f.bus.hold_dominant(SimTime::from_ns(0), SimDuration(100 * kBit));
+  f.run_until(1'000'000);
+  // Seen as a start of frame: stuff error at the sixth dominant bit (+1), a dominant bit after
+  // the flag (+8), then the 14th dominant bit from the flag's start and every 8 more (+8 each:
+  // bits 19, 27, ..., 99).
+  ASSERT_EQ(a.errors.size(), 1u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(a.errors[0].bit, 5);
+  EXPECT_FALSE(a.errors[0].in_frame);
+  EXPECT_EQ(a.fc.rec(), 1 + 8 + 11 * 8);
+  EXPECT_EQ(b.fc.rec(), 1 + 8 + 11 * 8);
+}
+
+TEST(CanBusFaults, RecessiveStuffBitOverwrittenInArbitrationCostsTheTransmitterNothing) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  // kZero's bit 5 is a recessive stuff bit inside the identifier.
+  ASSERT_TRUE(encode(kZero).is_stuff(5));
+  f.bus.hold_dominant(SimTime::from_ns(5 * kBit), SimDuration(kBit));
+  a.send(kZero);
+  f.run_until(300'000);
+  ASSERT_GE(a.errors.size(), 1u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(a.errors[0].role, ErrorRole::transmitter);
+  EXPECT_EQ(a.errors[0].tec, 0);
+}
+
+TEST(CanBusFaults, AckSuppressionLeavesALoneSenderPassiveAtTec128) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  f.bus.suppress_acks_until(SimTime::from_ns(1'000'000'000));
+  a.send(kZero);
+  f.run_until(500'000'000);
+  EXPECT_EQ(a.fc.tec(), 128);
+  EXPECT_EQ(a.fc.state(), ErrorState::passive);
+  EXPECT_TRUE(a.sent.empty());
+  // While the sender is error-active its flag in the ACK delimiter destroys the frame for b
+  // (form error, REC + 1). Once it is passive its flag is recessive: b finds nothing wrong and
+  // takes every retransmission as a new frame, as real receivers do. Without its ACK sent, b's
+  // counter does not fall.
+  EXPECT_EQ(b.errors.size(), 16u);
+  EXPECT_EQ(b.fc.rec(), 16);
+  ASSERT_GT(b.received.size(), 100u);
+  EXPECT_EQ(b.received.back().frame, kZero);
+}
+
+TEST(CanBusFaults, BusLoadIsBusyTimeOverTheLastSecond) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  for (int i = 0; i < 10000; ++i) {
+    a.send(kZero);
+  }
+  f.run_until(1'000'000'000);
+  // 53 bits per frame (with intermission) back to back: the bus never idles.
+  EXPECT_NEAR(f.bus.bus_load_percent(SimTime::from_ns(1'000'000'000)), 100.0, 0.01);
+  f.run_until(2'500'000'000);
+  EXPECT_EQ(f.bus.bus_load_percent(SimTime::from_ns(2'500'000'000)), 0.0);
+}
+
+TEST(CanBusFaults, InjectorActsBeforeArbitrationAtFrameBoundaries) {
+  // An injector that unplugs node b from 1 ms on: the first frame that starts after that
+  // instant goes unacknowledged.
+  struct Unplug final : FaultInjector {
+    NodeId node = 0;
+    std::vector<int64_t> calls;
+    void before_arbitration(SimTime now, CanBus& bus) override {
+      calls.push_back(now.ns());
+      if (now.ns() >= 1'000'000 && bus.connected(node)) {
+        bus.set_connected(node, false);
+      }
+    }
+  };
+  SimScheduler sched;
+  CanBus bus(sched, "can0");
+  Unplug unplug;
+  bus.set_injector(&unplug);
+  TestController a, b;
+  a.attach_to(bus);
+  b.attach_to(bus);
+  unplug.node = b.id();
+  for (int i = 0; i < 20; ++i) {
+    a.send(k123);
+  }
+  sched.run_until(SimTime::from_ns(1'200'000));
+  // 65 bits per frame with intermission: frames start at 0, 130 us, ..., 1040 us; the one at
+  // 1040 us is the first after 1 ms and fails.
+  EXPECT_EQ(b.received.size(), 8u);
+  ASSERT_FALSE(a.errors.empty());
+  EXPECT_EQ(a.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(a.errors[0].at.ns(), 1'040'000 + 54 * kBit);
+  EXPECT_GE(unplug.calls.size(), 9u);
+}
+
+TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  FaultRule r = rule(CanErrorType::bit, 2);
+  r.match.transmitter = a.id();
+  r.match.id = 0x120;
+  r.match.mask = 0x7F0;
+  r.match.extended = false;
+  r.skip = 1;  // from the second matching frame
+  const std::size_t idx = f.plan.add(r);
+  a.send(frame(0x123, {}));
+  a.send(frame(0x124, {}));
+  a.send(frame(0x200, {}));
+  b.send(frame(0x125, {}));
+  f.run_until(10'000'000);
+  EXPECT_EQ(f.plan.rule(idx).hits, 2u);
+  EXPECT_EQ(a.errors.size(), 2u);  // the first retry of 0x124 and the one after it
+  EXPECT_EQ(b.errors.size(), 2u);
+  EXPECT_EQ(a.sent.size(), 3u);
+  EXPECT_TRUE(b.sent.size() == 1u);
+}
+
+}  // namespace
+}  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+// Rules with a probability draw from their own seeded generator: the same seed hits the same
+// frames, another seed others, and the share hit is near the probability.
+TEST(FaultPlanProbability, DrawsFromTheSeedAndRepeats) {
+  const Frame f = testing::k123;
+  const EncodedFrame bits = encode(f);
+  auto hits = [&](uint64_t seed) {
+    FaultPlan plan;
+    FaultRule r;
+    r.fault.error = CanErrorType::bit;
+    r.probability = 0.25;
+    r.seed = seed;
+    plan.add(r);
+    std::vector<bool> hit;
+    for (int i = 0; i < 4000; ++i) {
+      hit.push_back(plan.on_frame(FrameContext{SimTime::from_ns(i), 0, f, bits}).error.has_value());
+    }
+    EXPECT_EQ(plan.rule(0).seen, 4000u);
+    EXPECT_EQ(plan.rule(0).hits, static_cast<uint64_t>(std::count(hit.begin(), hit.end(), true)));
+    return hit;
+  };
+  const auto a = hits(7);
+  EXPECT_EQ(a, hits(7));
+  EXPECT_NE(a, hits(8));
+  const auto n = std::count(a.begin(), a.end(), true);
+  EXPECT_GT(n, 900);  // 1000 expected; 4 standard deviations is 110
+  EXPECT_LT(n, 1100);
+}
+
+}  // namespace
+}  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+// A bit error rate: the first bit hit (geometric over the frame's bits) becomes a bit error at
+// that bit; frames with no bit hit pass untouched.
+TEST(FaultPlanProbability, ABitErrorRateHitsAtTheFirstBitDrawn) {
+  const Frame f = testing::k123;
+  const EncodedFrame bits = encode(f);
+  FaultPlan plan;
+  FaultRule r;
+  r.bit_error_rate = 0.01;
+  r.seed = 11;
+  plan.add(r);
+  int hit = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const FrameFault ff = plan.on_frame(FrameContext{SimTime::from_ns(i), 0, f, bits});
+    if (ff.error) {
+      ++hit;
+      EXPECT_EQ(*ff.error, CanErrorType::bit);
+      ASSERT_TRUE(ff.bit);
+      EXPECT_LT(*ff.bit, bits.length);
+    }
+  }
+  // 1 - 0.99^62 = 46 % of the frames; 4 standard deviations is 126 of 4000.
+  EXPECT_GT(hit, 1840 - 130);
+  EXPECT_LT(hit, 1840 + 130);
+  EXPECT_EQ(plan.rule(0).hits, static_cast<uint64_t>(hit));
+}
+
+}  // namespace
+}  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+// Every hit is told, with the rule that hit and the frame; frames no rule hits are not.
+TEST(FaultPlan, TellsEveryHitWithItsRuleAndFrame) {
+  const EncodedFrame bits = encode(testing::k123);
+  FaultPlan plan;
+  FaultRule miss;
+  miss.match.id = 0x456;
+  miss.match.mask = 0x7FF;
+  miss.fault.error = CanErrorType::crc;
+  plan.add(miss);
+  FaultRule hit;
+  hit.fault.error = CanErrorType::stuff;
+  hit.count = 2;
+  plan.add(hit);
+  std::vector<std::pair<std::size_t, int64_t>> told;
+  plan.on_hit = [&](std::size_t rule, const FrameContext& ctx, const FrameFault& fault) {
+    EXPECT_EQ(ctx.frame.id(), 0x123u);
+    EXPECT_EQ(fault.error, CanErrorType::stuff);
+    EXPECT_EQ(plan.rule(rule).hits, told.size() + 1);  // counted before it is told
+    told.emplace_back(rule, ctx.sof.ns());
+  };
+  for (int64_t t : {10, 20, 30}) {
+    plan.on_frame(FrameContext{SimTime::from_ns(t), 0, testing::k123, bits});
+  }
+  EXPECT_EQ(told, (std::vector<std::pair<std::size_t, int64_t>>{{1, 10}, {1, 20}}));
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -1,0 +1,154 @@
+#include "canemu/firmware_model/bus/frame.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <vector>
+
+namespace canemu::model {
+namespace {
+
+TEST(FrameDlc, ClassicCodesAboveEightMeanEightBytes) {
+  for (uint8_t dlc = 0; dlc <= 8; ++dlc) {
+    EXPECT_EQ(dlc_to_length(dlc, false), dlc);
+  }
+  for (uint8_t dlc = 9; dlc <= 15; ++dlc) {
+    EXPECT_EQ(dlc_to_length(dlc, false), 8u);
+  }
+}
+
+TEST(FrameDlc, FdCodesFollowTheIsoLengthTable) {
+  const std::array<std::size_t, 16> expected{0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64};
+  for (uint8_t dlc = 0; dlc <= 15; ++dlc) {
+    EXPECT_EQ(dlc_to_length(dlc, true), expected[dlc]) << "DLC " << int{dlc};
+    EXPECT_EQ(length_to_dlc(expected[dlc], true), dlc);
+  }
+  EXPECT_FALSE(length_to_dlc(13, true).has_value());
+  EXPECT_FALSE(length_to_dlc(9, false).has_value());
+}
+
+TEST(Frame, ClassicFrameDerivesItsDlcFromTheData) {
+  const std::vector<uint8_t> data{1, 2, 3};
+  auto f = Frame::classic(0x123, data);
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_EQ(f->id(), 0x123u);
+  EXPECT_EQ(f->dlc(), 3);
+  EXPECT_EQ(f->length(), 3u);
+  EXPECT_FALSE(f->extended());
+  EXPECT_FALSE(f->fd());
+  EXPECT_EQ(std::vector<uint8_t>(f->data().begin(), f->data().end()), data);
+}
+
+TEST(Frame, ClassicFrameMayUseDlcAboveEightWithEightBytes) {
+  const std::array<uint8_t, 8> data{};
+  FrameSpec spec;
+  spec.id = 1;
+  spec.dlc = 15;
+  spec.data = data;
+  auto f = Frame::create(spec);
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_EQ(f->dlc(), 15);
+  EXPECT_EQ(f->length(), 8u);
+}
+
+TEST(Frame, RejectsAnIdentifierTooWideForItsFormat) {
+  auto f = Frame::classic(0x800, {});
+  ASSERT_FALSE(f);
+  EXPECT_EQ(f.error().code, ModelErrc::invalid_identifier);
+  EXPECT_EQ(f.error().message, "identifier 0x800 does not fit 11 bits (maximum 0x7FF)");
+  EXPECT_TRUE(Frame::classic(0x1FFFFFFF, {}, true));
+  auto ext = Frame::classic(0x20000000, {}, true);
+  ASSERT_FALSE(ext);
+  EXPECT_EQ(ext.error().message, "identifier 0x20000000 does not fit 29 bits (maximum 0x1FFFFFFF)");
+}
+
+TEST(Frame, RejectsRemoteFramesInCanFd) {
+  FrameSpec spec;
+  spec.remote = true;
+  spec.fd = true;
+  auto f = Frame::create(spec);
+  ASSERT_FALSE(f);
+  EXPECT_EQ(f.error().code, ModelErrc::invalid_flags);
+  EXPECT_NE(f.error().message.find("remote"), std::string::npos);
+}
+
+TEST(Frame, RejectsBrsAndEsiOnClassicFrames) {
+  FrameSpec spec;
+  spec.brs = true;
+  auto brs = Frame::create(spec);
+  ASSERT_FALSE(brs);
+  EXPECT_EQ(brs.error().message, "BRS is a CAN FD bit: it needs fd set");
+  spec.brs = false;
+  spec.esi = true;
+  auto esi = Frame::create(spec);
+  ASSERT_FALSE(esi);
+  EXPECT_EQ(esi.error().message, "ESI is a CAN FD bit: it needs fd set");
+}
+
+TEST(Frame, RejectsDlcOutOfRange) {
+  FrameSpec spec;
+  spec.dlc = 16;
+  spec.remote = true;
+  auto f = Frame::create(spec);
+  ASSERT_FALSE(f);
+  EXPECT_EQ(f.error().code, ModelErrc::invalid_dlc);
+  EXPECT_EQ(f.error().message, "DLC 16 is out of range 0..15");
+}
+
+TEST(Frame, RejectsDataThatDisagreesWithTheDlc) {
+  const std::array<uint8_t, 3> data{};
+  FrameSpec spec;
+  spec.dlc = 4;
+  spec.data = data;
+  auto f = Frame::create(spec);
+  ASSERT_FALSE(f);
+  EXPECT_EQ(f.error().code, ModelErrc::data_length_mismatch);
+  EXPECT_EQ(f.error().message, "DLC 4 means 4 data bytes, but 3 were given");
+}
+
+TEST(Frame, RejectsFdPayloadLengthsThatNoDlcGives) {
+  const std::vector<uint8_t> data(13);
+  auto f = Frame::fd_frame(0x10, data);
+  ASSERT_FALSE(f);
+  EXPECT_EQ(f.error().code, ModelErrc::data_length_mismatch);
+  EXPECT_NE(f.error().message.find("no DLC gives 13 data bytes"), std::string::npos);
+}
+
+TEST(Frame, RejectsMoreThanEightBytesInAClassicFrame) {
+  const std::vector<uint8_t> data(12);
+  auto f = Frame::classic(0x10, data);
+  ASSERT_FALSE(f);
+  EXPECT_EQ(f.error().message, "12 data bytes exceed the 8 bytes of a classic frame");
+}
+
+TEST(Frame, RemoteFrameKeepsItsDlcButCarriesNoData) {
+  FrameSpec spec;
+  spec.id = 0x7FF;
+  spec.remote = true;
+  spec.dlc = 8;
+  auto f = Frame::create(spec);
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_EQ(f->dlc(), 8);
+  EXPECT_EQ(f->length(), 0u);
+  const std::array<uint8_t, 1> data{};
+  spec.data = data;
+  auto bad = Frame::create(spec);
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.error().message, "a remote frame carries no data, but 1 bytes were given");
+}
+
+TEST(Frame, FramesCompareByContent) {
+  const std::array<uint8_t, 2> a{1, 2};
+  const std::array<uint8_t, 2> b{1, 3};
+  EXPECT_EQ(*Frame::classic(5, a), *Frame::classic(5, a));
+  EXPECT_FALSE(*Frame::classic(5, a) == *Frame::classic(5, b));
+  EXPECT_FALSE(*Frame::classic(5, a) == *Frame::classic(5, a, true));
+}
+
+TEST(ModelErrc, EveryCodeHasAName) {
+  EXPECT_EQ(to_string(ModelErrc::invalid_identifier), "invalid_identifier");
+  EXPECT_EQ(to_string(ModelErrc::timing_not_realizable), "timing_not_realizable");
+}
+
+}  // namespace
+}  // namespace canemu::model

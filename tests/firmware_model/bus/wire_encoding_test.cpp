@@ -1,0 +1,312 @@
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
+
+namespace canemu::model {
+namespace {
+
+Frame make(const FrameSpec& spec) {
+  auto f = Frame::create(spec);
+  EXPECT_TRUE(f) << f.error().message;
+  return *f;
+}
+
+std::vector<uint8_t> bytes(std::initializer_list<int> v) {
+  return std::vector<uint8_t>(v.begin(), v.end());
+}
+
+// Hand-checked: 34 dominant bits (CRC-15 of all-zero bits is 0), a recessive stuff bit after
+// every five, then CRC delimiter, ACK slot (sent recessive), ACK delimiter, 7 EOF bits.
+TEST(WireEncoding, AllZeroStandardFrameIsTheHandCheckedSequence) {
+  FrameSpec spec;
+  const EncodedFrame e = encode(make(spec));
+  EXPECT_EQ(e.to_string(),
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "00000"
+            "1"
+            "0000"
+            "1"
+            "1"
+            "1"
+            "1111111");
+  EXPECT_EQ(e.crc, 0u);
+  EXPECT_EQ(e.crc_bits, 15);
+  EXPECT_EQ(e.dynamic_stuff_bits, 6);
+  EXPECT_EQ(e.length, 50);
+  for (std::size_t i : {5u, 11u, 17u, 23u, 29u, 35u}) {
+    EXPECT_TRUE(e.is_stuff(i)) << i;
+  }
+  EXPECT_FALSE(e.is_stuff(4));
+}
+
+// Golden vectors: tests/firmware_model/golden/can_reference.py, an independent string-based
+// encoder (CRC by polynomial division), with the arguments given in each comment.
+struct Golden {
+  const char* recipe;
+  FrameSpec spec;
+  std::vector<uint8_t> data;
+  const char* bits;
+};
+
+class WireEncodingGolden : public ::testing::TestWithParam<int> {};
+
+std::vector<Golden> goldens() {
+  std::vector<Golden> g;
+  auto add = [&](const char* recipe, FrameSpec spec, std::vector<uint8_t> data, const char* bits) {
+    g.push_back(Golden{recipe, spec, std::move(data), bits});
+  };
+  FrameSpec s;
+  s.id = 0x123;
+  add("123 2 1122", s, bytes({0x11, 0x22}),
+      "00010010001100000110000100010010001000001100101101111111111111");
+  s = {};
+  s.id = 0x1ABCDEF0;
+  s.extended = true;
+  add("1ABCDEF0 4 DEADBEEF ext", s, bytes({0xDE, 0xAD, 0xBE, 0xEF}),
+      "0110101011111010011011110111100000100010011011110101011011011111001110111110101010001011111"
+      "111111111");
+  s = {};
+  s.id = 0x7FF;
+  s.remote = true;
+  s.dlc = 8;
+  add("7FF 8 - rtr", s, {}, "01111101111101100100001000001111011011111111111");
+  s = {};
+  s.id = 0x555;
+  s.fd = true;
+  s.brs = true;
+  add("555 9 000102030405060708090A0B fd brs", s, bytes({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}),
+      "0101010101010010101001000001000001000001100000101000001001100000110000010010100000111000001"
+      "011100001000001001001000010100000110110010100011001010011101110101111111111");
+  s = {};
+  s.fd = true;
+  add("000 0 - fd", s, {}, "00000100000100001000001001010100011010010010101111011111111111");
+  return g;
+}
+
+TEST_P(WireEncodingGolden, MatchesTheReferenceEncoderBitForBit) {
+  Golden g = goldens()[static_cast<std::size_t>(GetParam())];
+  g.spec.data = g.data;
+  EXPECT_EQ(encode(make(g.spec)).to_string(), g.bits) << "recipe: can_reference.py " << g.recipe;
+}
+
+INSTANTIATE_TEST_SUITE_P(Vectors, WireEncodingGolden, ::testing::Range(0, 5));
+
+TEST(WireEncoding, FdFrameWith64BytesUsesCrc21AndSevenFixedStuffBits) {
+  std::vector<uint8_t> data(64);
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    data[i] = static_cast<uint8_t>(i * 37);
+  }
+  FrameSpec s;
+  s.id = 0x1F00F00F;
+  s.extended = true;
+  s.fd = true;
+  s.brs = true;
+  s.esi = true;
+  s.data = data;
+  const EncodedFrame e = encode(make(s));
+  EXPECT_EQ(e.crc_bits, 21);
+  EXPECT_EQ(e.fixed_stuff_bits, 7);
+  EXPECT_EQ(e.stuff_count, e.dynamic_stuff_bits % 8);
+  // SBC field: fixed stuff bit, Gray code, even parity over the Gray bits.
+  const uint16_t sbc = e.field_begin(Field::stuff_count);
+  EXPECT_TRUE(e.is_stuff(sbc));
+  int ones = 0;
+  for (int i = 1; i <= 4; ++i) {
+    ones += e.level_at(sbc + i);
+  }
+  EXPECT_EQ(ones % 2, 0);
+  // 41 header + 512 data + dynamic stuff + 33 CRC field + 9 tail.
+  EXPECT_EQ(e.length, 41 + 512 + e.dynamic_stuff_bits + 33 + 9);
+}
+
+TEST(WireEncoding, FdFramesUpTo16BytesUseCrc17AndSixFixedStuffBits) {
+  std::vector<uint8_t> data(16, 0xA5);
+  FrameSpec s;
+  s.fd = true;
+  s.data = data;
+  const EncodedFrame e = encode(make(s));
+  EXPECT_EQ(e.crc_bits, 17);
+  EXPECT_EQ(e.fixed_stuff_bits, 6);
+  EXPECT_EQ(e.length, 22 + 128 + e.dynamic_stuff_bits + 28 + 9);
+}
+
+TEST(WireEncoding, FieldsOfAStandardFrameAreWhereTheStandardPutsThem) {
+  FrameSpec s;
+  s.id = 0x123;
+  const auto data = bytes({0x11, 0x22});
+  s.data = data;
+  const EncodedFrame e = encode(make(s));
+  // 0 00100100011 0 0 0 0010: one stuff bit after the five zeros of RTR..DLC.
+  EXPECT_EQ(e.field_begin(Field::sof), 0);
+  EXPECT_EQ(e.field_begin(Field::base_id), 1);
+  EXPECT_EQ(e.field_begin(Field::rtr), 12);
+  EXPECT_EQ(e.arbitration_end, 13);
+  EXPECT_EQ(e.field_begin(Field::ide), 13);
+  EXPECT_EQ(e.field_begin(Field::fdf), 14);
+  EXPECT_EQ(e.field_begin(Field::dlc), 15);
+  EXPECT_EQ(e.field_begin(Field::data), 20);
+  EXPECT_EQ(e.field_at(17), Field::dlc);
+  EXPECT_TRUE(e.is_stuff(17));
+  EXPECT_EQ(e.field_begin(Field::srr), e.length);  // absent
+  EXPECT_EQ(e.field_begin(Field::eof), e.length - 7);
+  EXPECT_EQ(e.crc_delimiter_index, e.length - 10);
+  EXPECT_EQ(to_string(e.field_at(e.length - 1)), "EOF");
+}
+
+TEST(WireEncoding, ArbitrationFieldOfAnExtendedFrameEndsAfterRtr) {
+  FrameSpec s;
+  s.id = 0x15555555;
+  s.extended = true;
+  const EncodedFrame e = encode(make(s));
+  EXPECT_EQ(e.field_begin(Field::srr), 12);
+  EXPECT_EQ(e.field_begin(Field::ext_id), 14);
+  EXPECT_EQ(e.field_begin(Field::rtr), 32);
+  EXPECT_EQ(e.arbitration_end, 33);
+}
+
+TEST(WireEncoding, NoStuffBitFollowsTheLastDataBitOfAnFdFrame) {
+  // Four dominant DLC bits end a run of five zeros at the last control bit of an empty FD frame
+  // (see the golden "000 0 - fd"): the fixed stuff bit comes instead of a dynamic one.
+  FrameSpec s;
+  s.fd = true;
+  const EncodedFrame e = encode(make(s));
+  const uint16_t sbc = e.field_begin(Field::stuff_count);
+  EXPECT_EQ(e.dynamic_stuff_bits, 3);
+  EXPECT_FALSE(e.level_at(sbc - 1));
+  EXPECT_FALSE(e.is_stuff(sbc - 1));
+  EXPECT_TRUE(e.is_stuff(sbc));
+  EXPECT_TRUE(e.level_at(sbc));
+}
+
+TEST(WireEncoding, ReusingTheOutputGivesTheSameBits) {
+  std::vector<uint8_t> big(64, 0xFF);
+  FrameSpec s;
+  s.fd = true;
+  s.data = big;
+  EncodedFrame out;
+  encode(make(s), out);
+  FrameSpec small;
+  small.id = 0x123;
+  encode(make(small), out);
+  EXPECT_EQ(out.to_string(), encode(make(small)).to_string());
+  EXPECT_EQ(out.fixed_stuff_bits, 0);
+}
+
+// Property check over many frames: never six equal bits in the stuffed part, lengths between
+// the kernel's bounds, and the bits agree with the counters.
+TEST(WireEncoding, RandomFramesObeyTheStuffRuleAndTheKernelBounds) {
+  std::mt19937 rng(7);
+  for (int n = 0; n < 3000; ++n) {
+    FrameSpec s;
+    s.fd = rng() % 2;
+    s.extended = rng() % 2;
+    s.brs = s.fd && rng() % 2;
+    s.remote = !s.fd && rng() % 5 == 0;
+    s.id = s.extended ? rng() & kMaxExtendedId : rng() & kMaxStandardId;
+    const auto dlc = static_cast<uint8_t>(rng() % 16);
+    s.dlc = dlc;
+    std::vector<uint8_t> data(s.remote ? 0 : dlc_to_length(dlc, s.fd));
+    for (auto& b : data) {
+      b = (rng() % 3 == 0) ? static_cast<uint8_t>(rng() % 2 ? 0xFF : 0x00)
+                           : static_cast<uint8_t>(rng());
+    }
+    s.data = data;
+    const Frame f = make(s);
+    const EncodedFrame e = encode(f);
+    const uint16_t stuffed_end = s.fd ? e.field_begin(Field::stuff_count) : e.crc_delimiter_index;
+    int run = 0;
+    bool last = true;
+    int stuff = 0;
+    for (uint16_t i = 0; i < stuffed_end; ++i) {
+      run = e.level_at(i) == last ? run + 1 : 1;
+      last = e.level_at(i);
+      ASSERT_LE(run, 5) << "frame " << n << " bit " << i;
+      stuff += e.is_stuff(i);
+    }
+    ASSERT_EQ(stuff, e.dynamic_stuff_bits);
+    const uint32_t with_ifs = e.length + kIntermissionBits;
+    ASSERT_GE(with_ifs, frame_length_bound(s.fd, s.extended, f.length(), Stuffing::none));
+    ASSERT_LE(with_ifs, frame_length_bound(s.fd, s.extended, f.length(), Stuffing::worst_case));
+    for (uint16_t i = e.crc_delimiter_index; i < e.length; ++i) {
+      ASSERT_TRUE(e.level_at(i));
+    }
+  }
+}
+
+TEST(FrameLengthBound, ReproducesTheKernelTable) {
+  EXPECT_EQ(frame_length_bound(false, false, 8, Stuffing::none), 111u);
+  EXPECT_EQ(frame_length_bound(false, false, 8, Stuffing::worst_case), 135u);
+  EXPECT_EQ(frame_length_bound(false, true, 8, Stuffing::none), 131u);
+  EXPECT_EQ(frame_length_bound(false, true, 8, Stuffing::worst_case), 160u);
+  EXPECT_EQ(frame_length_bound(true, false, 64, Stuffing::none), 579u);
+  EXPECT_EQ(frame_length_bound(true, false, 64, Stuffing::worst_case), 712u);
+  EXPECT_EQ(frame_length_bound(true, true, 64, Stuffing::none), 598u);
+  EXPECT_EQ(frame_length_bound(true, true, 64, Stuffing::worst_case), 736u);
+  // Davis et al.: 55 + 10n and 80 + 10n for classic frames.
+  for (std::size_t n = 0; n <= 8; ++n) {
+    EXPECT_EQ(frame_length_bound(false, false, n, Stuffing::worst_case), 55 + 10 * n);
+    EXPECT_EQ(frame_length_bound(false, true, n, Stuffing::worst_case), 80 + 10 * n);
+  }
+}
+
+TEST(FrameDuration, ClassicFrameTakesItsBitsTimesTheBitTime) {
+  const BitTiming t500k = *sja1000::decode_btr(0x00, 0x1C);
+  FrameSpec s;
+  const EncodedFrame e = encode(make(s));
+  EXPECT_EQ(bit_counts(e).nominal, 50u);
+  EXPECT_EQ(bit_counts(e).data, 0u);
+  EXPECT_EQ(frame_duration(e, t500k).ns(), 50 * 2000);
+  EXPECT_EQ(intermission_duration(t500k).ns(), 6000);
+  const BitTiming t1m = *sja1000::decode_btr(0x00, 0x14);
+  EXPECT_EQ(frame_duration(e, t1m).ns(), 50'000);
+}
+
+TEST(FrameDuration, BitRateSwitchTimesBrsAndCrcDelimiterAtTheirSamplePoints) {
+  // 500 kbit/s nominal: 80 MHz / 10 = 125 ns quanta, 1 + 13 + 2. 2 Mbit/s data: 12.5 ns quanta,
+  // 1 + 29 + 10.
+  const BitTiming nominal =
+      *ixxat::decode_btp({0, 500000, 14, 2, 1, 0}, ixxat::kFdNominalRange, ixxat::Phase::nominal);
+  const BitTiming data =
+      *ixxat::decode_btp({0, 2000000, 30, 10, 1, 0}, ixxat::kFdDataRange, ixxat::Phase::data);
+  FrameSpec s;
+  s.id = 0x555;
+  s.fd = true;
+  s.brs = true;
+  const auto payload = bytes({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11});
+  s.data = payload;
+  const EncodedFrame e = encode(make(s));
+  ASSERT_EQ(e.length, 166);
+  EXPECT_EQ(e.brs_index, 16);
+  EXPECT_EQ(e.crc_delimiter_index, 156);
+  EXPECT_EQ(bit_counts(e).nominal, 27u);
+  EXPECT_EQ(bit_counts(e).data, 139u);
+  // 16 nominal bits, BRS = 14 nominal quanta + 10 data quanta, 139 data bits, CRC delimiter =
+  // 30 data quanta + 2 nominal quanta, then ACK, ACK delimiter and EOF at the nominal rate.
+  const int64_t expected = 16 * 2000 + (14 * 125 + 125) + 139 * 500 + (375 + 2 * 125) + 9 * 2000;
+  EXPECT_EQ(expected, 122'000);
+  EXPECT_EQ(frame_duration(e, nominal, data).ns(), expected);
+  // Without BRS the same frame runs at the nominal rate throughout.
+  s.brs = false;
+  const EncodedFrame slow = encode(make(s));
+  EXPECT_EQ(bit_counts(slow).data, 0u);
+  EXPECT_EQ(frame_duration(slow, nominal, data).ns(), int64_t{slow.length} * 2000);
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -1,0 +1,449 @@
+// The SJA1000 seen the way software sees it: chips on one bus, programmed and read through their
+// PeliCAN registers.
+#include "canemu/firmware_model/chips/sja1000/sja1000.hpp"
+
+#include <gtest/gtest.h>
+
+#include "test_controller.hpp"
+
+namespace canemu::model {
+namespace {
+
+using namespace sja1000;
+using testing::frame;
+using testing::kBit;
+using Bus = testing::BusFixture;
+
+struct Chip {
+  Sja1000 chip;
+  int interrupts = 0;
+  Chip() {
+    chip.on_interrupt = [this](SimTime) { ++interrupts; };
+  }
+  // On `bus`, in reset mode.
+  explicit Chip(Bus& bus) : Chip() { chip.connect(bus.bus); }
+  // Reset mode: 500 kbit/s, accept everything, all interrupts, then operating mode.
+  void start(uint8_t mod_bits = 0) {
+    chip.write(BTR0, 0x00);
+    chip.write(BTR1, 0x1C);
+    for (uint8_t i = 0; i < 4; ++i) {
+      chip.write(static_cast<uint8_t>(AMR0 + i), 0xFF);
+    }
+    chip.write(IER, 0xFF);
+    chip.write(MOD, static_cast<uint8_t>(mod_bits | MOD_RM));
+    chip.write(MOD, mod_bits);
+  }
+  void load(const Frame& f) {
+    std::array<uint8_t, 13> bytes;
+    const std::size_t n = pack_frame(f, bytes);
+    for (std::size_t k = 0; k < n; ++k) {
+      chip.write(static_cast<uint8_t>(FRAME + k), bytes[k]);
+    }
+  }
+  void send(const Frame& f, uint8_t command = CMR_TR) {
+    load(f);
+    chip.write(CMR, command);
+  }
+  std::optional<Frame> receive() {
+    if (!(chip.read(SR) & SR_RBS)) {
+      return std::nullopt;
+    }
+    std::array<uint8_t, 13> bytes;
+    for (uint8_t k = 0; k < 13; ++k) {
+      bytes[k] = chip.read(static_cast<uint8_t>(FRAME + k));
+    }
+    chip.write(CMR, CMR_RRB);
+    return unpack_frame(bytes.data());
+  }
+};
+
+TEST(Sja1000, StartsInResetModeWithTheDatasheetResetValues) {
+  Sja1000 c;
+  EXPECT_EQ(c.read(MOD), MOD_RM);
+  EXPECT_EQ(c.read(SR), 0x3C);  // TBS, TCS, RS, TS
+  EXPECT_EQ(c.read(IR), 0x00);
+  EXPECT_EQ(c.read(EWLR), 96);
+  EXPECT_EQ(c.read(RXERR), 0);
+  EXPECT_EQ(c.read(TXERR), 0);
+  EXPECT_EQ(c.read(RMC), 0);
+  EXPECT_EQ(c.read(CDR) & 0x80, 0x80);
+  EXPECT_FALSE(c.participating());
+}
+
+TEST(Sja1000, AHardwareResetRestoresTheResetValues) {
+  Bus b;
+  Chip a(b);
+  a.start();
+  a.chip.write(MOD, MOD_RM);
+  a.chip.write(EWLR, 10);
+  a.chip.write(TXERR, 200);
+  a.chip.write(ACR0, 0x12);
+  a.chip.write(AMR0, 0x00);
+  a.chip.hardware_reset();
+  EXPECT_EQ(a.chip.read(MOD), MOD_RM);
+  EXPECT_EQ(a.chip.read(SR), 0x3C);
+  EXPECT_EQ(a.chip.read(IER), 0x00);
+  EXPECT_EQ(a.chip.read(EWLR), 96);
+  EXPECT_EQ(a.chip.read(TXERR), 0);
+  EXPECT_EQ(a.chip.read(BTR0), 0x00);
+  EXPECT_EQ(a.chip.read(ACR0), 0x00);
+  EXPECT_EQ(a.chip.read(AMR0), 0xFF);
+  EXPECT_EQ(a.chip.confinement().state(), ErrorState::active);
+}
+
+TEST(Sja1000, TimingAndFiltersAreWritableInResetModeOnly) {
+  Chip a;
+  a.start();
+  a.chip.write(BTR0, 0x03);
+  a.chip.write(EWLR, 10);
+  EXPECT_EQ(a.chip.read(BTR0), 0x00);
+  EXPECT_EQ(a.chip.read(EWLR), 96);
+  a.chip.write(MOD, MOD_RM);
+  a.chip.write(BTR0, 0x03);
+  EXPECT_EQ(a.chip.read(BTR0), 0x03);
+  EXPECT_EQ(a.chip.timing().nominal.bit_rate(), (BitRate{125000, 1}));
+}
+
+TEST(Sja1000, TwoChipsExchangeAFrameThroughTheirRegisters) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start();
+  const Frame f = frame(0x123, {0x11, 0x22});
+  a.send(f);
+  EXPECT_EQ(a.chip.read(SR) & (SR_TBS | SR_TCS), 0);  // locked, not complete
+  b.run_until(62 * kBit - 1);
+  EXPECT_EQ(r.chip.read(RMC), 0);
+  b.run_until(62 * kBit);
+  // Receiver: RI, one message, the PeliCAN layout in the receive window.
+  EXPECT_EQ(r.chip.read(IR), IR_RI);
+  EXPECT_EQ(r.chip.read(RMC), 1);
+  EXPECT_EQ(r.chip.read(FRAME), 0x02);      // SFF, no RTR, DLC 2
+  EXPECT_EQ(r.chip.read(FRAME + 1), 0x24);  // ID.28-21
+  EXPECT_EQ(r.chip.read(FRAME + 2), 0x60);  // ID.20-18, RTR 0
+  EXPECT_EQ(r.chip.read(FRAME + 3), 0x11);
+  EXPECT_EQ(r.receive(), f);
+  EXPECT_EQ(r.chip.read(RMC), 0);
+  EXPECT_EQ(r.chip.read(SR) & SR_RBS, 0);
+  EXPECT_EQ(r.chip.read(IR) & IR_RI, 0);
+  // Transmitter: TI, buffer released, transmission complete.
+  EXPECT_EQ(a.chip.read(IR), IR_TI);
+  EXPECT_EQ(a.chip.read(SR) & (SR_TBS | SR_TCS), SR_TBS | SR_TCS);
+  EXPECT_EQ(a.interrupts, 1);
+}
+
+TEST(Sja1000, SingleAcceptanceFilterPassesOnlyTheProgrammedIdentifier) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start(MOD_AFM);
+  r.chip.write(MOD, MOD_RM | MOD_AFM);
+  // 0x123: ACR0 = 0x24, ACR1 = 0x60; RTR and the unused nibble and both data bytes don't care.
+  const uint8_t acr[4] = {0x24, 0x60, 0, 0};
+  const uint8_t amr[4] = {0x00, 0x1F, 0xFF, 0xFF};
+  for (uint8_t i = 0; i < 4; ++i) {
+    r.chip.write(static_cast<uint8_t>(ACR0 + i), acr[i]);
+    r.chip.write(static_cast<uint8_t>(AMR0 + i), amr[i]);
+  }
+  r.chip.write(MOD, MOD_AFM);
+  a.send(frame(0x124, {1}));
+  b.run_until(1'000'000);
+  a.send(frame(0x123, {2}));
+  b.run_until(2'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 1);
+  EXPECT_EQ(r.receive(), frame(0x123, {2}));
+}
+
+TEST(Sja1000, DualFilterOnExtendedFramesComparesTheUpperSixteenIdentifierBits) {
+  const std::array<uint8_t, 4> acr{0x12, 0x34, 0xAB, 0xCD};
+  const std::array<uint8_t, 4> amr{0x00, 0x00, 0x00, 0x00};
+  const Frame f1 = frame((0x1234u << 13) | 0x1FFF, {}, true);  // filter 1, low bits ignored
+  const Frame f2 = frame(0xABCDu << 13, {}, true);             // filter 2
+  const Frame no = frame(0x1235u << 13, {}, true);
+  EXPECT_TRUE(accepts(acr, amr, false, f1));
+  EXPECT_TRUE(accepts(acr, amr, false, f2));
+  EXPECT_FALSE(accepts(acr, amr, false, no));
+}
+
+TEST(Sja1000, DualFilterOnStandardFramesUsesTheFirstDataByteInFilterOne) {
+  // Filter 1: ID 0x123, first data byte 0x5A (high nibble in ACR1, low nibble in ACR3).
+  // Filter 2 (ACR2, ACR3 high nibble) set to an identifier that never comes.
+  const std::array<uint8_t, 4> acr{0x24, 0x65, 0xFF, 0xFA};
+  const std::array<uint8_t, 4> amr{0x00, 0x10, 0x00, 0x10};
+  EXPECT_TRUE(accepts(acr, amr, false, frame(0x123, {0x5A})));
+  EXPECT_FALSE(accepts(acr, amr, false, frame(0x123, {0x5B})));
+  EXPECT_TRUE(accepts(acr, amr, false, frame(0x123, {})));  // no data byte: not compared
+  EXPECT_FALSE(accepts(acr, amr, false, frame(0x124, {0x5A})));
+}
+
+TEST(Sja1000, FullReceiveFifoOverrunsKeepingTheOldestFrames) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start();
+  // An 8-byte standard frame takes 11 FIFO bytes: five fit in 64, the sixth overruns.
+  for (uint8_t i = 0; i < 7; ++i) {
+    a.send(frame(0x100 + i, {i, 1, 2, 3, 4, 5, 6, 7}));
+    b.run_until((i + 1) * 1'000'000);
+  }
+  EXPECT_EQ(r.chip.read(RMC), 5);
+  EXPECT_TRUE(r.chip.read(SR) & SR_DOS);
+  EXPECT_TRUE(r.chip.read(IR) & IR_DOI);
+  for (uint8_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(r.receive(), frame(0x100 + i, {i, 1, 2, 3, 4, 5, 6, 7}));
+  }
+  EXPECT_FALSE(r.receive().has_value());
+  r.chip.write(CMR, CMR_CDO);
+  EXPECT_FALSE(r.chip.read(SR) & SR_DOS);
+  // Frames keep arriving once there is room again.
+  a.send(frame(0x200, {}));
+  b.run_until(10'000'000);
+  EXPECT_EQ(r.receive(), frame(0x200, {}));
+}
+
+TEST(Sja1000, ListenOnlyChipNeitherAcknowledgesNorCounts) {
+  Bus b;
+  Chip a(b), l(b);
+  a.start();
+  l.start(MOD_LOM);
+  a.send(frame(0x123, {1}));
+  b.run_until(1'000'000);
+  EXPECT_GT(a.chip.read(TXERR), 0);
+  EXPECT_EQ(l.chip.read(RXERR), 0);
+  // The transmitter's error code capture: ACK slot, "other" error, while transmitting.
+  const uint8_t ecc = a.chip.read(ECC);
+  EXPECT_EQ(ecc >> 6, 3);
+  EXPECT_EQ((ecc >> 5) & 1, 0);
+  EXPECT_EQ(ecc & 0x1F, 0x19);
+  EXPECT_TRUE(a.chip.read(IR) & IR_BEI);
+}
+
+TEST(Sja1000, SelfReceptionRequestReceivesTheOwnFrame) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start();
+  a.send(frame(0x321, {9}), CMR_SRR);
+  b.run_until(1'000'000);
+  EXPECT_EQ(a.receive(), frame(0x321, {9}));
+  EXPECT_EQ(r.receive(), frame(0x321, {9}));
+}
+
+TEST(Sja1000, SelfTestModeWithSelfReceptionWorksAlone) {
+  Bus b;
+  Chip a(b);
+  a.start(MOD_STM);
+  a.send(frame(0x321, {9}), CMR_SRR);
+  b.run_until(1'000'000);
+  EXPECT_EQ(a.receive(), frame(0x321, {9}));
+  EXPECT_EQ(a.chip.read(TXERR), 0);
+}
+
+TEST(Sja1000, SingleShotIsTriedOnceAndReleasesTheBufferIncomplete) {
+  Bus b;
+  Chip a(b);
+  a.start();
+  a.send(frame(0x123, {1}), CMR_TR | CMR_AT);
+  b.run_until(10'000'000);
+  EXPECT_EQ(a.chip.read(TXERR), 8);
+  EXPECT_EQ(a.chip.read(SR) & (SR_TBS | SR_TCS), SR_TBS);
+  EXPECT_TRUE(a.chip.read(IR) & IR_TI);
+  EXPECT_EQ(b.bus.error_frames_on_bus(), 1u);
+}
+
+TEST(Sja1000, AbortBeforeTheStartOfFrameCancelsTheRequest) {
+  Bus b;
+  Chip a(b), busy(b), r(b);
+  for (auto* c : {&a, &busy, &r}) {
+    c->start();
+  }
+  busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));
+  b.run_until(10 * kBit);  // the other chip's frame is on the wire
+  a.send(frame(0x7FF, {}));
+  a.chip.write(CMR, CMR_AT);
+  EXPECT_EQ(a.chip.read(SR) & (SR_TBS | SR_TCS), SR_TBS);
+  b.run_until(2'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 1);  // only the other chip's frame
+}
+
+TEST(Sja1000, ArbitrationLostCaptureHoldsTheBitNumberUntilRead) {
+  Bus b;
+  Chip a(b), w(b), r(b);
+  for (auto* c : {&a, &w, &r}) {
+    c->start();
+  }
+  a.send(frame(0x123, {}));  // 001 0010 0011
+  w.send(frame(0x000, {}));  // loses nothing: wins at ID.26
+  b.run_until(1'000'000);
+  EXPECT_TRUE(a.chip.read(IR) & IR_ALI);
+  EXPECT_EQ(a.chip.read(ALC), 2);  // ID.26 is bit number 2
+  EXPECT_EQ(r.chip.read(RMC), 2);  // both frames went out in the end
+}
+
+TEST(Sja1000, BusOffSetsResetModeAndRecoversAfterTheHostRestartsIt) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start();
+  FaultRule rule;
+  rule.fault.error = CanErrorType::bit;
+  rule.count = 32;
+  b.plan.add(rule);
+  a.send(frame(0x123, {1}));
+  b.run_until(20'000'000);
+  EXPECT_EQ(a.chip.read(SR) & (SR_BS | SR_ES), SR_BS | SR_ES);
+  EXPECT_EQ(a.chip.read(MOD) & MOD_RM, MOD_RM);
+  EXPECT_EQ(a.chip.read(TXERR), 127);
+  EXPECT_TRUE(a.chip.read(IR) & IR_EI);
+  EXPECT_EQ(r.chip.read(RMC), 0);
+  // Host clears reset mode at 20 ms: 128 x 11 bits later the chip is error-active again and
+  // the frame still in its transmit buffer goes out.
+  a.chip.write(MOD, 0);
+  b.run_until(20'000'000 + 128 * 11 * kBit - 1);
+  EXPECT_TRUE(a.chip.read(SR) & SR_BS);
+  b.run_until(20'000'000 + 128 * 11 * kBit);
+  EXPECT_FALSE(a.chip.read(SR) & SR_BS);
+  EXPECT_EQ(a.chip.read(TXERR), 0);
+  EXPECT_TRUE(a.chip.read(IR) & IR_EI);
+  b.run_until(30'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 1);
+}
+
+TEST(Sja1000, ErrorWarningLimitIsProgrammable) {
+  Bus b;
+  Chip a(b);
+  a.chip.write(EWLR, 16);
+  a.start();
+  a.send(frame(0x123, {1}));
+  b.run_until(59 * kBit + 100 * kBit);  // two unacknowledged attempts: TXERR 16
+  EXPECT_EQ(a.chip.read(TXERR), 16);
+  EXPECT_TRUE(a.chip.read(SR) & SR_ES);
+  EXPECT_TRUE(a.chip.read(IR) & IR_EI);
+}
+
+TEST(Sja1000, ErrorCountersAreWritableInResetModeAnd255StartsBusOff) {
+  Sja1000 c;
+  c.write(RXERR, 100);
+  c.write(TXERR, 50);
+  EXPECT_EQ(c.read(RXERR), 100);
+  EXPECT_EQ(c.read(TXERR), 50);
+  c.write(TXERR, 255);
+  EXPECT_TRUE(c.read(SR) & SR_BS);
+}
+
+TEST(Sja1000FrameFormat, PacksAndUnpacksBothFormats) {
+  std::array<uint8_t, 13> bytes;
+  const Frame ext = frame(0x1ABCDEF0, {1, 2, 3}, true);
+  EXPECT_EQ(pack_frame(ext, bytes), 8u);
+  EXPECT_EQ(bytes[0], 0x83);
+  EXPECT_EQ(bytes[1], 0xD5);  // ID.28-21
+  EXPECT_EQ(bytes[4], 0x80);  // ID.4-0 = 10000, RTR 0
+  EXPECT_EQ(unpack_frame(bytes.data()), ext);
+  FrameSpec s;
+  s.id = 0x7FF;
+  s.remote = true;
+  s.dlc = 4;
+  const Frame rtr = *Frame::create(s);
+  EXPECT_EQ(pack_frame(rtr, bytes), 3u);
+  EXPECT_EQ(bytes[0], 0x44);
+  EXPECT_EQ(bytes[2], 0xF0);
+  EXPECT_EQ(unpack_frame(bytes.data()), rtr);
+}
+
+}  // namespace
+}  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+using namespace sja1000;
+
+TEST(Sja1000Interrupts, SourcesDisabledInIerSetNoIrBits) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start();
+  r.chip.write(MOD, MOD_RM);
+  r.chip.write(IER, IR_TI);  // receive interrupt disabled
+  r.chip.write(MOD, 0);
+  a.send(frame(0x123, {1}));
+  b.run_until(1'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 1);
+  EXPECT_EQ(r.chip.read(IR), 0);
+  EXPECT_EQ(r.interrupts, 0);
+  r.chip.write(IER, IR_RI);  // RI follows the FIFO: enabling it now shows the message
+  EXPECT_EQ(r.chip.read(IR), IR_RI);
+  EXPECT_EQ(r.interrupts, 1);
+}
+
+TEST(Sja1000Interrupts, ArbitrationLostCaptureHoldsUntilReadAndRaisesAliOnce) {
+  Bus b;
+  Chip a(b), w(b), v(b), r(b);
+  for (auto* c : {&a, &w, &v, &r}) {
+    c->start();
+  }
+  a.send(frame(0x123, {}));  // 001 0010 0011
+  w.send(frame(0x000, {}));  // beats a at ID.26 (ALC 2)
+  v.send(frame(0x120, {}));  // then beats a at ID.19 (ALC 9)
+  b.run_until(1'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 3);
+  EXPECT_TRUE(a.chip.read(IR) & IR_ALI);
+  EXPECT_EQ(a.chip.read(ALC), 2);  // the first loss, held; the second was not captured
+  // Read: armed again. The next loss is captured.
+  v.send(frame(0x120, {}));
+  a.send(frame(0x123, {}));
+  b.run_until(2'000'000);
+  EXPECT_TRUE(a.chip.read(IR) & IR_ALI);
+  EXPECT_EQ(a.chip.read(ALC), 9);
+}
+
+TEST(Sja1000Interrupts, ErrorInterruptFollowsTheEsBitNotTheErrorPassiveState) {
+  Bus b;
+  Chip a(b);
+  a.chip.write(EWLR, 200);
+  a.start();
+  a.send(frame(0x123, {1}));
+  b.run_until(20'000'000);  // alone: TXERR climbs to 128 and stays
+  EXPECT_EQ(a.chip.read(TXERR), 128);
+  const uint8_t ir = a.chip.read(IR);
+  EXPECT_TRUE(ir & IR_EPI);  // error-passive reached
+  EXPECT_FALSE(ir & IR_EI);  // ES (TXERR >= 200) never set
+  EXPECT_FALSE(a.chip.read(SR) & SR_ES);
+}
+
+TEST(Sja1000Interrupts, Writing255ToTxerrStartsABusOffThatTheHostSees) {
+  Bus b;
+  Chip a(b);
+  a.chip.write(IER, 0xFF);
+  a.chip.write(TXERR, 255);
+  EXPECT_TRUE(a.chip.read(SR) & SR_BS);
+  EXPECT_TRUE(a.chip.read(IR) & IR_EI);
+  EXPECT_EQ(a.chip.read(RXERR), 0);
+  EXPECT_EQ(b.bus.stats(a.chip.node()).state_changes.back().state, ErrorState::bus_off);
+  // Leaving reset mode starts the recovery: 128 x 11 bit times on the idle bus.
+  a.chip.write(BTR0, 0x00);
+  a.chip.write(BTR1, 0x1C);
+  a.chip.write(MOD, 0);
+  b.run_until(128 * 11 * kBit);
+  EXPECT_FALSE(a.chip.read(SR) & SR_BS);
+  EXPECT_EQ(a.chip.read(TXERR), 0);
+}
+
+TEST(Sja1000, EnteringResetModeDropsAPendingRequest) {
+  Bus b;
+  Chip a(b), busy(b), r(b);
+  for (auto* c : {&a, &busy, &r}) {
+    c->start();
+  }
+  busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));
+  b.run_until(10 * kBit);
+  a.send(frame(0x7FF, {}));  // waits for the bus
+  a.chip.write(MOD, MOD_RM);
+  EXPECT_TRUE(a.chip.read(SR) & SR_TBS);
+  a.chip.write(MOD, 0);
+  b.run_until(2'000'000);
+  EXPECT_EQ(r.chip.read(RMC), 1);  // only the other chip's frame
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -1,0 +1,135 @@
+#include "canemu/firmware_model/sim/event_queue.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "canemu/firmware_model/sim/sim_scheduler.hpp"
+
+namespace canemu::model {
+namespace {
+
+TEST(SimTime, DurationsConvertExactly) {
+  EXPECT_EQ(microseconds(3).ns(), 3'000);
+  EXPECT_EQ(milliseconds(2).ns(), 2'000'000);
+  EXPECT_EQ(seconds(1).ns(), 1'000'000'000);
+  const SimTime t = SimTime::from_ns(100) + microseconds(1);
+  EXPECT_EQ(t.ns(), 1'100);
+  EXPECT_EQ((t - SimTime::from_ns(100)).ns(), 1'000);
+}
+
+TEST(EventQueue, PopsInTimeOrder) {
+  EventQueue<int> q;
+  q.push(SimTime::from_ns(30), 3);
+  q.push(SimTime::from_ns(10), 1);
+  q.push(SimTime::from_ns(20), 2);
+  std::vector<int> got;
+  while (auto e = q.pop()) {
+    got.push_back(e->payload);
+  }
+  EXPECT_EQ(got, (std::vector<int>{1, 2, 3}));
+}
+
+TEST(EventQueue, EqualTimesComeOutInInsertionOrder) {
+  EventQueue<int> q;
+  for (int i = 0; i < 100; ++i) {
+    q.push(SimTime::from_ns(5), i);
+  }
+  for (int i = 0; i < 100; ++i) {
+    auto e = q.pop();
+    ASSERT_TRUE(e);
+    EXPECT_EQ(e->payload, i);
+  }
+  EXPECT_TRUE(q.empty());
+}
+
+TEST(EventQueue, CancelledEventsNeverComeOut) {
+  EventQueue<std::string> q;
+  q.push(SimTime::from_ns(1), "a");
+  const EventId b = q.push(SimTime::from_ns(2), "b");
+  q.push(SimTime::from_ns(3), "c");
+  EXPECT_TRUE(q.cancel(b));
+  EXPECT_FALSE(q.cancel(b));
+  EXPECT_EQ(q.size(), 2u);
+  EXPECT_EQ(q.pop()->payload, "a");
+  EXPECT_EQ(q.next_time(), SimTime::from_ns(3));
+  EXPECT_EQ(q.pop()->payload, "c");
+  EXPECT_FALSE(q.pop());
+  EXPECT_FALSE(q.cancel(12345));
+}
+
+TEST(EventQueue, CancellingTheEarliestExposesTheNext) {
+  EventQueue<int> q;
+  const EventId first = q.push(SimTime::from_ns(1), 1);
+  q.push(SimTime::from_ns(9), 2);
+  q.cancel(first);
+  EXPECT_EQ(q.next_time(), SimTime::from_ns(9));
+}
+
+TEST(SteppedClock, AdvancesOnlyForwardAndOnlyWhenTold) {
+  SteppedClock clock;
+  EXPECT_EQ(clock.now().ns(), 0);
+  clock.advance(milliseconds(10));
+  EXPECT_EQ(clock.now().ns(), 10'000'000);
+  clock.advance_to(SimTime::from_ns(5));
+  EXPECT_EQ(clock.now().ns(), 10'000'000);
+  clock.advance(SimDuration(-5));
+  EXPECT_EQ(clock.now().ns(), 10'000'000);
+}
+
+TEST(SimScheduler, RunsDueEventsInOrderAndStopsAtTheLimit) {
+  SimScheduler s;
+  std::vector<std::pair<int, int64_t>> trace;
+  s.schedule_at(SimTime::from_ns(300), [&](SimTime t) { trace.emplace_back(3, t.ns()); });
+  s.schedule_at(SimTime::from_ns(100), [&](SimTime t) { trace.emplace_back(1, t.ns()); });
+  s.schedule_at(SimTime::from_ns(100), [&](SimTime t) { trace.emplace_back(2, t.ns()); });
+  EXPECT_EQ(s.run_until(SimTime::from_ns(200)), 2u);
+  EXPECT_EQ(s.now().ns(), 200);
+  EXPECT_EQ(s.next_event_time(), SimTime::from_ns(300));
+  EXPECT_EQ(s.run_until(SimTime::from_ns(300)), 1u);
+  EXPECT_EQ(trace, (std::vector<std::pair<int, int64_t>>{{1, 100}, {2, 100}, {3, 300}}));
+}
+
+TEST(SimScheduler, EventsScheduledWhileRunningRunInTheSameCallWhenDue) {
+  SimScheduler s;
+  std::vector<int64_t> times;
+  std::function<void(SimTime)> tick = [&](SimTime t) {
+    times.push_back(t.ns());
+    if (times.size() < 5) {
+      s.schedule_after(nanoseconds(10), tick);
+    }
+  };
+  s.schedule_at(SimTime::from_ns(0), tick);
+  s.run_until(SimTime::from_ns(25));
+  EXPECT_EQ(times, (std::vector<int64_t>{0, 10, 20}));
+  s.run_until(SimTime::from_ns(1000));
+  EXPECT_EQ(times, (std::vector<int64_t>{0, 10, 20, 30, 40}));
+  EXPECT_EQ(s.pending(), 0u);
+}
+
+TEST(SimScheduler, AnEventInThePastRunsAtNowAndTimeNeverGoesBack) {
+  SimScheduler s;
+  s.run_until(SimTime::from_ns(500));
+  int64_t ran_at = -1;
+  s.schedule_at(SimTime::from_ns(100), [&](SimTime t) { ran_at = t.ns(); });
+  s.run_until(SimTime::from_ns(400));
+  EXPECT_EQ(ran_at, 500);
+  EXPECT_EQ(s.now().ns(), 500);
+}
+
+TEST(SimScheduler, SameInputsGiveTheSameTrace) {
+  auto run = [] {
+    SimScheduler s;
+    std::vector<int> order;
+    for (int i = 0; i < 50; ++i) {
+      s.schedule_at(SimTime::from_ns((i * 7) % 13), [&order, i](SimTime) { order.push_back(i); });
+    }
+    s.run_until(SimTime::from_ns(100));
+    return order;
+  };
+  EXPECT_EQ(run(), run());
+}
+
+}  // namespace
+}  // namespace canemu::model

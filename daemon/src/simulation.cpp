@@ -13,80 +13,23 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
-std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate,
-                                                           uint32_t sample_point) {
-  std::optional<std::pair<uint8_t, uint8_t>> best;
-  int best_error = 1 << 30;
-  for (uint8_t brp = 0; brp < 64; ++brp) {
-    for (uint8_t t2 = 1; t2 < 8; ++t2) {
-      for (uint8_t t1 = 0; t1 < 16; ++t1) {
-        const uint8_t btr0 = brp;
-        const uint8_t btr1 = static_cast<uint8_t>((t2 << 4) | t1);
-        auto t = sja1000::decode_btr(btr0, btr1);
-        if (!t || !(t->bit_rate() == BitRate{bitrate, 1})) {
-          continue;
-        }
-        const int error =
-            std::abs(static_cast<int>(t->sample_point_permille()) - static_cast<int>(sample_point));
-        if (error < best_error) {
-          best_error = error;
-          best = std::make_pair(btr0, btr1);
-        }
-      }
-    }
-  }
-  return best;
-}
-
-std::optional<BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
-                                       ixxat::Phase phase) {
-  const ixxat::BtpRange& range =
-      phase == ixxat::Phase::nominal ? ixxat::kFdNominalRange : ixxat::kFdDataRange;
-  std::optional<BitTiming> best;
-  int best_error = 1 << 30;
-  for (uint32_t prescaler = range.min.bps; prescaler <= range.max.bps; ++prescaler) {
-    const uint64_t per_bit = uint64_t{bitrate} * prescaler;
-    if (range.clock_hz % per_bit != 0) {
-      continue;
-    }
-    const uint64_t quanta = range.clock_hz / per_bit;
-    if (quanta < 4 || quanta > 1u + range.max.ts1 + range.max.ts2) {
-      continue;
-    }
-    const auto ts2 = static_cast<uint16_t>(
-        std::max<uint64_t>(range.min.ts2, quanta - (quanta * sample_point + 500) / 1000));
-    const auto ts1 = static_cast<uint16_t>(quanta - 1 - ts2);
-    auto t = ixxat::decode_btp(ixxat::Btp{ixxat::kBtModeRaw, prescaler, ts1, ts2,
-                                          static_cast<uint16_t>(std::min<uint16_t>(ts2, 4)), 0},
-                               range, phase);
-    if (!t) {
-      continue;
-    }
-    const int error =
-        std::abs(static_cast<int>(t->sample_point_permille()) - static_cast<int>(sample_point));
-    if (error < best_error) {
-      best_error = error;
-      best = *t;
-    }
-  }
-  return best;
-}
-
 std::optional<HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
                                                     uint32_t data_bitrate, uint32_t sample_point) {
   HostedNodeSettings s;
   if (!fd) {
-    const auto btr = sja1000_btr_for(bitrate, sample_point);
+    const auto btr = sja1000::btr_for(bitrate, sample_point);
     if (!btr) {
       return std::nullopt;
     }
-    s.btr0 = btr->first;
-    s.btr1 = btr->second;
-    s.nominal = *sja1000::decode_btr(btr->first, btr->second);
+    s.btr0 = btr->btr0;
+    s.btr1 = btr->btr1;
+    s.nominal = *sja1000::decode_btr(btr->btr0, btr->btr1);
     return s;
   }
-  const auto nominal = fd_timing_for(bitrate, sample_point, ixxat::Phase::nominal);
-  const auto data = fd_timing_for(data_bitrate, sample_point, ixxat::Phase::data);
+  const auto nominal =
+      ixxat::timing_for(bitrate, sample_point, ixxat::kFdNominalRange, ixxat::Phase::nominal);
+  const auto data =
+      ixxat::timing_for(data_bitrate, sample_point, ixxat::kFdDataRange, ixxat::Phase::data);
   if (!nominal || !data) {
     return std::nullopt;
   }

@@ -24,12 +24,6 @@
 
 namespace canemu::daemon {
 
-// SJA1000 BTR0/BTR1 at 16 MHz for `bitrate`, with the sample point closest to `sample_point`
-// (per mille); nothing if no register values give that rate exactly.
-std::optional<std::pair<uint8_t, uint8_t>> sja1000_btr_for(uint32_t bitrate, uint32_t sample_point);
-// The emulated CAN FD controller's timing for a rate in one phase (80 MHz clock).
-std::optional<model::BitTiming> fd_timing_for(uint32_t bitrate, uint32_t sample_point,
-                                              model::ixxat::Phase phase);
 // The timing a controller needs: for an SJA1000 (`fd` false) the BTR0/BTR1 values for
 // `bitrate` and their decoded timing; for the CAN FD controller the nominal timing for
 // `bitrate` and the data timing for `data_bitrate`. Nothing if the clock cannot make a rate

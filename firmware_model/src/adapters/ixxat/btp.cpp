@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "bus/timing_errors.hpp"
 
 namespace canemu::model::ixxat {
@@ -87,6 +89,39 @@ Result<BitTiming> decode_btp(const Btp& btp, const BtpRange& range, Phase phase)
   t.sjw = raw->sjw;
   t.samples = (raw->mode & kBtModeTsm) ? 3 : 1;
   return t;
+}
+
+std::optional<BitTiming> timing_for(uint32_t bitrate, uint32_t sample_point_permille,
+                                    const BtpRange& range, Phase phase) {
+  std::optional<BitTiming> best;
+  uint32_t best_error = UINT32_MAX;
+  for (uint32_t prescaler = range.min.bps; prescaler <= range.max.bps; ++prescaler) {
+    const uint64_t per_bit = uint64_t{bitrate} * prescaler;
+    if (per_bit == 0 || range.clock_hz % per_bit != 0) {
+      continue;
+    }
+    const uint64_t quanta = range.clock_hz / per_bit;
+    if (quanta < 4 || quanta > 1u + range.max.ts1 + range.max.ts2) {
+      continue;
+    }
+    const auto ts2 = static_cast<uint16_t>(
+        std::max<uint64_t>(range.min.ts2, quanta - (quanta * sample_point_permille + 500) / 1000));
+    const auto ts1 = static_cast<uint16_t>(quanta - 1 - ts2);
+    auto t = decode_btp(
+        Btp{kBtModeRaw, prescaler, ts1, ts2, static_cast<uint16_t>(std::min<uint16_t>(ts2, 4)), 0},
+        range, phase);
+    if (!t) {
+      continue;
+    }
+    const uint32_t point = t->sample_point_permille();
+    const uint32_t error = point > sample_point_permille ? point - sample_point_permille
+                                                         : sample_point_permille - point;
+    if (error < best_error) {
+      best_error = error;
+      best = *t;
+    }
+  }
+  return best;
 }
 
 }  // namespace canemu::model::ixxat

@@ -87,13 +87,16 @@ Btp to_btp(const CANBTP& b) {
 }
 
 // The raw CANBTP of SJA1000 bus timing registers.
+// The raw CANBTP of an SJA1000 timing: the prescaler counts the chip's 8 MHz CAN clock (half the
+// oscillator), so BRP + 1.
 CANBTP btp_of_btr(uint8_t btr0, uint8_t btr1) {
+  const BitTiming t = sja1000::timing_from_btr(btr0, btr1);
   CANBTP b{};
-  b.dwMode = CAN_BTMODE_RAW | ((btr1 & 0x80) != 0 ? CAN_BTMODE_TSM : 0);
-  b.dwBPS = (btr0 & 0x3FU) + 1;
-  b.wTS1 = static_cast<UINT16>((btr1 & 0x0F) + 1);
-  b.wTS2 = static_cast<UINT16>(((btr1 >> 4) & 0x07) + 1);
-  b.wSJW = static_cast<UINT16>((btr0 >> 6) + 1);
+  b.dwMode = CAN_BTMODE_RAW | (t.samples == 3 ? CAN_BTMODE_TSM : 0);
+  b.dwBPS = t.prescaler / 2;
+  b.wTS1 = static_cast<UINT16>(t.tseg1);
+  b.wTS2 = static_cast<UINT16>(t.tseg2);
+  b.wSJW = static_cast<UINT16>(t.sjw);
   return b;
 }
 

@@ -37,4 +37,29 @@ Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz)
   return t;
 }
 
+std::optional<Btr> btr_for(uint32_t bitrate, uint32_t sample_point_permille,
+                           uint32_t oscillator_hz) {
+  std::optional<Btr> best;
+  uint32_t best_error = UINT32_MAX;
+  for (uint8_t brp = 0; brp < 64; ++brp) {
+    for (uint8_t t2 = 1; t2 < 8; ++t2) {
+      for (uint8_t t1 = 0; t1 < 16; ++t1) {
+        const Btr btr{brp, static_cast<uint8_t>((t2 << 4) | t1)};
+        auto t = decode_btr(btr.btr0, btr.btr1, oscillator_hz);
+        if (!t || !(t->bit_rate() == BitRate{bitrate, 1})) {
+          continue;
+        }
+        const uint32_t point = t->sample_point_permille();
+        const uint32_t error = point > sample_point_permille ? point - sample_point_permille
+                                                             : sample_point_permille - point;
+        if (error < best_error) {
+          best_error = error;
+          best = btr;
+        }
+      }
+    }
+  }
+  return best;
+}
+
 }  // namespace canemu::model::sja1000

@@ -100,3 +100,33 @@ TEST(VciBtp, AControllerWithoutFastDataHasNoDataPhase) {
 
 }  // namespace
 }  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+TEST(VciTimingFor, UsesTheSmallestPrescalerWithTheSamplePointAskedFor) {
+  const auto t = ixxat::timing_for(500'000, 800, ixxat::kFdNominalRange, ixxat::Phase::nominal);
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->prescaler, 1u);
+  EXPECT_EQ(t->tseg1, 127u);
+  EXPECT_EQ(t->tseg2, 32u);
+  EXPECT_EQ(t->sjw, 4u);
+  EXPECT_EQ(t->sample_point_permille(), 800u);
+}
+
+TEST(VciTimingFor, DataPhaseRatesComeFromTheDataRanges) {
+  const auto t = ixxat::timing_for(2'000'000, 800, ixxat::kFdDataRange, ixxat::Phase::data);
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->bit_rate(), (BitRate{2'000'000, 1}));
+  EXPECT_EQ(t->prescaler, 1u);  // 40 quanta: 1 + 31 + 8
+  EXPECT_EQ(t->tseg1, 31u);
+  EXPECT_EQ(t->tseg2, 8u);
+}
+
+TEST(VciTimingFor, FindsNothingWhenTheClockCannotMakeTheRate) {
+  EXPECT_FALSE(ixxat::timing_for(3, 800, ixxat::kFdNominalRange, ixxat::Phase::nominal));
+  EXPECT_FALSE(ixxat::timing_for(0, 800, ixxat::kFdNominalRange, ixxat::Phase::nominal));
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -78,3 +78,27 @@ TEST(Sja1000Btr, RejectsSjwLongerThanPhaseSegmentTwo) {
 
 }  // namespace
 }  // namespace canemu::model
+
+namespace canemu::model {
+namespace {
+
+TEST(Sja1000BtrFor, FindsIxxatsFiveHundredKbitValuesForAnEightySevenAndAHalfPercentSamplePoint) {
+  EXPECT_EQ(sja1000::btr_for(500'000, 875), (sja1000::Btr{0x00, 0x1C}));
+}
+
+TEST(Sja1000BtrFor, PrefersTheSamplePointClosestToTheOneAskedFor) {
+  const auto btr = sja1000::btr_for(125'000, 750);
+  ASSERT_TRUE(btr);
+  const auto t = sja1000::decode_btr(btr->btr0, btr->btr1);
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->bit_rate(), (BitRate{125'000, 1}));
+  EXPECT_EQ(t->sample_point_permille(), 750u);
+}
+
+TEST(Sja1000BtrFor, FindsNothingForARateTheOscillatorCannotMake) {
+  EXPECT_FALSE(sja1000::btr_for(7, 875));
+  EXPECT_FALSE(sja1000::btr_for(2'000'000, 875));  // 8 quanta at least: 1 Mbit/s is the top
+}
+
+}  // namespace
+}  // namespace canemu::model

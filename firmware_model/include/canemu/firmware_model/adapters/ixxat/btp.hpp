@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "canemu/firmware_model/bus/bit_timing.hpp"
 #include "canemu/firmware_model/sim/model_error.hpp"
@@ -45,5 +46,11 @@ Result<BitTiming> decode_btp(const Btp& btp, const BtpRange& range, Phase phase)
 
 // The raw form decode_btp() converts a bit/s CANBTP to; raw values pass through unchanged.
 Result<Btp> to_raw(const Btp& btp, const BtpRange& range, Phase phase);
+
+// The raw timing of a controller with `range` for `bitrate` in one phase, with the sample point
+// closest to `sample_point_permille` (SJW up to 4); nothing if the clock cannot make the rate
+// exactly within the ranges.
+std::optional<BitTiming> timing_for(uint32_t bitrate, uint32_t sample_point_permille,
+                                    const BtpRange& range, Phase phase);
 
 }  // namespace canemu::model::ixxat

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "canemu/firmware_model/bus/bit_timing.hpp"
 #include "canemu/firmware_model/sim/model_error.hpp"
@@ -20,5 +21,17 @@ Result<BitTiming> decode_btr(uint8_t btr0, uint8_t btr1,
 // What the chip does with any register values, valid or not: the chip model runs with it, and
 // the bus decides whether anybody can decode such a node.
 BitTiming timing_from_btr(uint8_t btr0, uint8_t btr1, uint32_t oscillator_hz = kIxxatOscillatorHz);
+
+struct Btr {
+  uint8_t btr0 = 0;
+  uint8_t btr1 = 0;
+  friend bool operator==(const Btr&, const Btr&) = default;
+};
+
+// The valid register values that give exactly `bitrate`, with the sample point closest to
+// `sample_point_permille` (ties: the smallest prescaler, then the shortest TSEG2, then the
+// shortest TSEG1); nothing if no values give that rate exactly. SJW is 1.
+std::optional<Btr> btr_for(uint32_t bitrate, uint32_t sample_point_permille,
+                           uint32_t oscillator_hz = kIxxatOscillatorHz);
 
 }  // namespace canemu::model::sja1000

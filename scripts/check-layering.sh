@@ -1,28 +1,118 @@
 #!/usr/bin/env bash
-# Checks the dependency rules of ARCHITECTURE.md that a grep can see:
-# firmware_model is pure (no I/O, threads, wall clocks, logging) and includes nothing of ours
-# but itself.
+# Checks the dependency rules of ARCHITECTURE.md that a grep can see. Usage:
+#   check-layering.sh [ROOT]      check the tree at ROOT (default: this repository)
+#   check-layering.sh --self-test plant one violation of each rule in a scratch tree and check
+#                                 that every one is reported
 set -u
-root=${1:-$(dirname "$0")/..}
-cd "$root" || exit 2
-forbidden='#include *<(thread|mutex|condition_variable|future|atomic|fstream|iostream|cstdio|stdio\.h|ctime|time\.h|filesystem|sys/[a-z_]+\.h|unistd\.h|fcntl\.h|pthread\.h|syslog\.h)>'
-bad=$(grep -rnE "$forbidden" firmware_model || true)
-# Deterministic PRNGs from <random> and chrono durations are fine; their wall-clock and
-# entropy sources are not.
-bad+=$(grep -rnE '(steady_clock|system_clock|high_resolution_clock|random_device|getenv|std::cout|std::cerr)' firmware_model || true)
-ours=$(grep -rnE '#include *[<"]canemu/' firmware_model | grep -v 'canemu/firmware_model/' || true)
-status=0
-if [ -n "$bad" ]; then
-  echo "firmware_model must not do I/O, threading, wall-clock time or logging:"; echo "$bad"; status=1
+
+# Every include line under DIR (recursively) that matches the extended regex PATTERN.
+includes() {  # DIR PATTERN
+  [ -d "$1" ] || return 0
+  grep -rnE --include='*.[ch]' --include='*.[ch]pp' --include='*.inc' "#include *[<\"]$2" "$1" || true
+}
+
+check() {
+  local root=$1 status=0
+  cd "$root" || return 2
+  local fm=firmware_model inc=firmware_model/include/canemu/firmware_model src=firmware_model/src
+  report() {  # MESSAGE FINDINGS
+    if [ -n "$2" ]; then
+      echo "$1"
+      echo "$2"
+      status=1
+    fi
+  }
+
+  # 1. The model is pure: no I/O, threads, wall clocks, entropy or logging.
+  local forbidden='(thread|mutex|condition_variable|future|atomic|fstream|iostream|cstdio|stdio\.h|ctime|time\.h|filesystem|sys/[a-z_]+\.h|unistd\.h|fcntl\.h|pthread\.h|syslog\.h)>'
+  local bad
+  bad=$(includes $fm "$forbidden")
+  bad+=$(grep -rnE '(steady_clock|system_clock|high_resolution_clock|random_device|getenv|std::cout|std::cerr)' $fm || true)
+  report "firmware_model must not do I/O, threading, wall-clock time or logging:" "$bad"
+
+  # 2. The model includes nothing of ours but itself.
+  report "firmware_model may include only its own headers:" \
+    "$(includes $fm 'canemu/' | grep -v 'canemu/firmware_model/')"
+
+  # 3. Rooms of the model: sim <- bus <- chips <- adapters. A room includes only rooms below it
+  #    (public headers by their canemu/firmware_model/ path, private ones by their src/ path).
+  local room below
+  for room in sim bus chips; do
+    case $room in
+      sim) below='sim' ;;
+      bus) below='sim|bus' ;;
+      chips) below='sim|bus|chips' ;;
+    esac
+    report "firmware_model/$room may include only $below:" \
+      "$( (includes $inc/$room 'canemu/firmware_model/'; includes $src/$room 'canemu/firmware_model/') |
+          grep -vE "canemu/firmware_model/($below)/")$( (includes $inc/$room '(sim|bus|chips|adapters)/'
+          includes $src/$room '(sim|bus|chips|adapters)/') | grep -vE "[<\"](canemu/firmware_model/)?($below)/")"
+  done
+
+  # 4. The vendor data-type headers are a leaf: they include only each other and the C library.
+  report "firmware_model/include/vci (the vendor headers) may include only each other:" \
+    "$(includes $fm/include/vci '' | grep -vE '#include *[<"]((vci/)?[a-z0-9]+\.h|std[a-z]+\.h)[">]')"
+
+  # 5. ipc includes only ipc; the client libraries only client and ipc; the CLI (client/tools)
+  #    also the model, never the daemon; the daemon never the client.
+  report "ipc may include only ipc:" "$(includes ipc 'canemu/(firmware_model|daemon|client)/')"
+  report "client libraries may include only client and ipc:" \
+    "$(includes client 'canemu/(firmware_model|daemon)/' | grep -v '^client/tools/')"
+  report "client/tools may include client, ipc and the model, never the daemon:" \
+    "$(includes client/tools 'canemu/daemon/')"
+  report "the daemon may not include the client:" "$(includes daemon 'canemu/client/')"
+
+  [ $status -eq 0 ] &&
+    echo "layering: the model is pure and layered (sim <- bus <- chips <- adapters), the vendor headers are a leaf, ipc/client/tools/daemon keep their arrows"
+  return $status
+}
+
+self_test() {
+  local here scratch failures=0
+  here=$(cd "$(dirname "$0")/.." && pwd)
+  scratch=$(mktemp -d)
+  trap 'rm -rf "$scratch"' RETURN
+  # One violation per rule, each planted in a fresh copy of the real tree's sources.
+  local -a cases=(
+    "firmware_model/src/bus/planted.cpp|#include <thread>"
+    "firmware_model/src/bus/planted.cpp|#include \"canemu/ipc/protocol.hpp\""
+    "firmware_model/include/canemu/firmware_model/chips/planted.hpp|#include \"canemu/firmware_model/adapters/ixxat/can_line.hpp\""
+    "firmware_model/src/chips/planted.cpp|#include \"adapters/ixxat/x.hpp\""
+    "firmware_model/include/canemu/firmware_model/bus/planted.hpp|#include \"canemu/firmware_model/chips/hosted_node.hpp\""
+    "firmware_model/include/canemu/firmware_model/sim/planted.hpp|#include \"canemu/firmware_model/bus/frame.hpp\""
+    "firmware_model/include/vci/planted.h|#include \"canemu/firmware_model/bus/frame.hpp\""
+    "ipc/src/planted.cpp|#include \"canemu/client/channel.hpp\""
+    "client/src/planted.cpp|#include \"canemu/firmware_model/bus/frame.hpp\""
+    "client/tools/canemu/planted.cpp|#include \"canemu/daemon/config.hpp\""
+    "daemon/src/planted.cpp|#include \"canemu/client/channel.hpp\""
+  )
+  local c file line
+  for c in "${cases[@]}"; do
+    file=${c%%|*}
+    line=${c#*|}
+    rm -rf "$scratch/tree"
+    mkdir -p "$scratch/tree"
+    (cd "$here" && git ls-files -z firmware_model ipc client daemon | xargs -0 cp --parents -t "$scratch/tree")
+    mkdir -p "$scratch/tree/$(dirname "$file")"
+    echo "$line" >"$scratch/tree/$file"
+    if (check "$scratch/tree" >/dev/null); then
+      echo "self-test: not reported: $line in $file"
+      failures=$((failures + 1))
+    fi
+  done
+  rm -rf "$scratch/tree"
+  mkdir -p "$scratch/tree"
+  (cd "$here" && git ls-files -z firmware_model ipc client daemon | xargs -0 cp --parents -t "$scratch/tree")
+  if ! (check "$scratch/tree" >/dev/null); then
+    echo "self-test: the unchanged tree is reported"
+    failures=$((failures + 1))
+  fi
+  [ $failures -eq 0 ] && echo "self-test: every planted violation was reported (${#cases[@]} rules)"
+  return $((failures > 0))
+}
+
+if [ "${1:-}" = "--self-test" ]; then
+  self_test
+else
+  check "${1:-$(dirname "$0")/..}"
 fi
-if [ -n "$ours" ]; then
-  echo "firmware_model may include only its own headers:"; echo "$ours"; status=1
-fi
-# ipc depends on libc only; client on ipc only (never on model types).
-upward=$(grep -rnE '#include *[<"]canemu/(firmware_model|daemon|client)/' ipc 2>/dev/null || true)
-upward+=$(grep -rnE '#include *[<"]canemu/(firmware_model|daemon)/' client 2>/dev/null || true)
-if [ -n "$upward" ]; then
-  echo "ipc may include only ipc; client only client and ipc:"; echo "$upward"; status=1
-fi
-[ $status -eq 0 ] && echo "layering: firmware_model is pure, ipc and client stay below the model"
-exit $status

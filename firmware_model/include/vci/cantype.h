@@ -3,7 +3,8 @@
  *
  * This project's own declarations, binary-compatible with the CAN layouts of the IXXAT VCI SDK
  * (VCI V4, including the CAN FD "2" structures). Valid C11 and C++.
- * Reference: /work/shared/spec/vci-cpp-digest.md sections 3.6-3.19 and Appendices A and B.
+ * Reference: the IXXAT "VCI: C++ Software Design Guide" section 8.3 (CAN data types) and 5.2 (CAN
+ * interface); numeric values the guide leaves out follow the vendor SDK (docs/vci.md).
  *
  * Packing: every structure is byte-packed (pack 1), as in the SDK.
  */

@@ -3,7 +3,8 @@
  *
  * This project's own declarations, binary-compatible with the LIN layouts of the IXXAT VCI SDK
  * (VCI V4). Valid C11 and C++.
- * Reference: /work/shared/spec/vci-cpp-digest.md section 4.5 and Appendices A and B.
+ * Reference: the IXXAT "VCI: C++ Software Design Guide" section 8.4 (LIN data types); numeric
+ * values the guide leaves out follow the vendor SDK (docs/vci.md).
  *
  * Packing: every structure is byte-packed (pack 1), as in the SDK.
  */

@@ -5,7 +5,8 @@
  * (VCI V4). They give the Windows-style type names the SDK uses, the identifier types (LUID,
  * GUID, VCIID), the version, device and BAL information structures, and the bus/controller
  * type word helpers. Shared by the firmware model, the daemon and the client libraries; valid
- * C11 and C++. Reference: /work/shared/spec/vci-cpp-digest.md sections 5.3-5.4, Appendix A.
+ * C11 and C++. Reference: the IXXAT "VCI: C++ Software Design Guide" sections 8.1 and 8.2
+ * (device and BAL structures).
  *
  * Packing: every structure is byte-packed (pack 1); VCIID uses pack 8, as the SDK does.
  */

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "canemu/firmware_model/adapters/sorcus/bit_params.hpp"
 #include "canemu/firmware_model/chips/sja1000/sja1000.hpp"
 #include "test_controller.hpp"
 
@@ -214,6 +215,8 @@ TEST(I82527, BitTimingCountsInTheSystemClockAndIsWritableOnlyWithCce) {
   c.write(BIT_TIMING0, 0x03);
   c.write(BIT_TIMING1, 0x1C);
   EXPECT_EQ(c.timing().nominal.bit_rate(), (BitRate{125'000, 1}));
+  // The same timing as the X-CAN-2i driver's parameters for that row give.
+  EXPECT_EQ(c.timing().nominal, *sorcus::decode_sorcus(sorcus::kXCan2i, {500, 13, 2, 1, 1}));
   c.write(CONTROL, CONTROL_INI);
   c.write(BIT_TIMING0, 0x00);
   EXPECT_EQ(c.read(BIT_TIMING0), 0x03);

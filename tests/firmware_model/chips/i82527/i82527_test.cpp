@@ -157,6 +157,14 @@ struct Sja {
   }
 };
 
+// What the chip tells the firmware model above it.
+struct Listener : ControllerEvents {
+  std::vector<Frame> received, transmitted, lost;
+  void frame_received(SimTime, const Frame& f, bool) override { received.push_back(f); }
+  void frame_transmitted(SimTime, const Frame& f) override { transmitted.push_back(f); }
+  void overrun(SimTime, const Frame& f) override { lost.push_back(f); }
+};
+
 TEST(I82527, StartsInitialisingWithEveryFlagResetAndNoCounterRegisters) {
   I82527 c;
   EXPECT_EQ(c.read(CONTROL), CONTROL_INI);
@@ -440,6 +448,8 @@ TEST(I82527, MessageFifteenKeepsASecondFrameInItsShadowAndTheThirdOverwritesIt) 
   a.setup(3, 0x012, false, true, {3});
   r.setup(15, 0x000, false, false, {}, RXIE);
   r.set_masks(0x7FF, 0x1FFFFFFF, 0);  // message 15 takes every standard data frame
+  Listener heard;
+  r.chip.set_listener(&heard);
   a.chip.write(CONTROL, CONTROL_INI | CONTROL_IE | CONTROL_EIE);
   a.request(1);
   a.request(2);
@@ -456,6 +466,8 @@ TEST(I82527, MessageFifteenKeepsASecondFrameInItsShadowAndTheThirdOverwritesIt) 
   // register, and MsgLst says so.
   EXPECT_EQ(r.stored(15), f1);
   EXPECT_EQ(r.ctrl1(15), 0x5A);
+  EXPECT_EQ(heard.received, (std::vector<Frame>{f1, f2, f3}));
+  EXPECT_EQ(heard.lost, std::vector<Frame>{f2});
   // The driver reads, then resets IntPnd and NewDat: the shadow moves in at that instant.
   const int64_t t = 1'000'000;
   b.run_until(t);

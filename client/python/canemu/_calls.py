@@ -14,7 +14,8 @@ from ._vci import VciError
 
 CanTimeoutError = getattr(can, "CanTimeoutError", can.CanOperationError)
 
-_HEADER = struct.Struct("<IIIBBBB")  # CANMSG2: dwTime, _rsvd_, dwMsgId, type, flags2, flags, accept
+# The head of a CANMSG2: dwTime, _rsvd_, dwMsgId, type, flags2, flags, accept.
+_HEADER = struct.Struct("<IIIBBBB")
 _WAIT_SLICE_MS = 100  # blocking calls wait in slices so that Ctrl-C and shutdown get through
 
 

@@ -11,7 +11,6 @@ from typing import Any, Dict, Iterator, List, Optional, Tuple
 from . import _vci
 from ._calls import _call, _vci_errors
 
-
 _offset_lock = threading.Lock()
 _offset: Optional[float] = None
 

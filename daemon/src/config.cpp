@@ -12,6 +12,8 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "canemu/ipc/duration.hpp"
+#include "canemu/ipc/protocol.hpp"
 #include "toml_checker.hpp"
 
 namespace canemu::daemon {
@@ -30,8 +32,8 @@ constexpr NamedValue<BusKind> kBusKinds[] = {
     {BusKind::can, "can"}, {BusKind::can_fd, "can-fd"}, {BusKind::lin, "lin"}};
 constexpr NamedValue<bool> kTransceivers[] = {{false, "high-speed"}, {true, "low-speed"}};
 constexpr NamedValue<DeviceModel> kDeviceModels[] = {
-    {DeviceModel::ixxat_usb_to_can, "ixxat-usb-to-can"},
-    {DeviceModel::ixxat_usb_to_can_fd, "ixxat-usb-to-can-fd"}};
+    {DeviceModel::ixxat_usb_to_can, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can)},
+    {DeviceModel::ixxat_usb_to_can_fd, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can_fd)}};
 
 // The required key "name" of a [[bus]] or [[device]] table: valid, and unique among `names`.
 std::optional<std::string> read_name(Checker& c, const toml::table& t, const std::string& path,
@@ -206,32 +208,7 @@ tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text)
 }
 
 std::optional<int64_t> parse_duration(std::string_view text) {
-  std::size_t i = 0;
-  int dots = 0;
-  bool digits = false;
-  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.')) {
-    dots += text[i] == '.';
-    digits = digits || text[i] != '.';
-    ++i;
-  }
-  if (!digits || dots > 1) {
-    return std::nullopt;
-  }
-  double value = 0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + i, value);
-  if (ec != std::errc{} || end != text.data() + i) {
-    return std::nullopt;
-  }
-  const std::string_view unit = text.substr(i);
-  const double scale = unit == "ns"   ? 1
-                       : unit == "us" ? 1e3
-                       : unit == "ms" ? 1e6
-                       : unit == "s"  ? 1e9
-                                      : 0;
-  if (scale == 0 || value * scale > 9.0e18) {
-    return std::nullopt;
-  }
-  return static_cast<int64_t>(value * scale + 0.5);
+  return ipc::parse_duration(text);
 }
 
 bool valid_name(std::string_view s) {

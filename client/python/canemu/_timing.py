@@ -1,5 +1,8 @@
 """Bit timing for the emulated controllers: bit rates and python-can's BitTiming/BitTimingFd
-turned into the raw CANBTP values the VCI v2 interface takes."""
+turned into the raw CANBTP values the VCI v2 interface takes.
+
+The controller's clock and the ranges of its timing values are the library's: the
+CANCAPABILITIES2 that canControlGetCaps reports (Limits.of); nothing here knows them."""
 
 from __future__ import annotations
 
@@ -7,10 +10,6 @@ from dataclasses import dataclass
 from typing import Optional, Tuple
 
 from . import _vci
-
-# The clocks CANBTP counts with (docs/vci.md): SJA1000 8 MHz, CAN FD controller 80 MHz.
-CLASSIC_CLOCK_HZ = 8_000_000
-FD_CLOCK_HZ = 80_000_000
 
 
 @dataclass(frozen=True)
@@ -20,10 +19,42 @@ class Range:
     tseg2: Tuple[int, int]
     sjw: Tuple[int, int]
 
+    @classmethod
+    def of(cls, low: "_vci.CANBTP", high: "_vci.CANBTP") -> "Range":
+        """The range between two raw CANBTPs (dwBPS is the prescaler)."""
+        return cls(
+            brp=(low.dwBPS, high.dwBPS),
+            tseg1=(low.wTS1, high.wTS1),
+            tseg2=(low.wTS2, high.wTS2),
+            sjw=(low.wSJW, high.wSJW),
+        )
 
-CLASSIC = Range(brp=(1, 64), tseg1=(1, 16), tseg2=(1, 8), sjw=(1, 4))
-FD_NOMINAL = Range(brp=(1, 1024), tseg1=(1, 256), tseg2=(2, 128), sjw=(1, 128))
-FD_DATA = Range(brp=(1, 32), tseg1=(1, 32), tseg2=(1, 16), sjw=(1, 16))
+
+@dataclass(frozen=True)
+class Limits:
+    """A controller's CAN clock and timing ranges: `data` is None for a classic CAN controller
+    (no fast data rate)."""
+
+    clock_hz: int
+    nominal: Range
+    data: Optional[Range]
+
+    @classmethod
+    def of(cls, caps: "_vci.CANCAPABILITIES2") -> "Limits":
+        fast = caps.sFdrRangeMax.dwBPS != 0  # all 0 without a fast data rate
+        return cls(
+            clock_hz=caps.dwCanClkFreq,
+            nominal=Range.of(caps.sSdrRangeMin, caps.sSdrRangeMax),
+            data=Range.of(caps.sFdrRangeMin, caps.sFdrRangeMax) if fast else None,
+        )
+
+    @property
+    def fd(self) -> bool:
+        return self.data is not None
+
+    def bitrate(self, btp: "_vci.CANBTP") -> int:
+        """The bit rate of a raw CANBTP on this controller."""
+        return self.clock_hz // (btp.dwBPS * (1 + btp.wTS1 + btp.wTS2))
 
 
 def _inside(value: int, bounds: Tuple[int, int]) -> bool:
@@ -65,12 +96,11 @@ def _percent_to_fraction(value: float) -> float:
     return value / 100.0 if value > 1.0 else value
 
 
-def from_python_can(timing, fd_controller: bool):
+def from_python_can(timing, limits: Limits):
     """(nominal CANBTP, data CANBTP or None) for a can.BitTiming or can.BitTimingFd."""
-    clock = FD_CLOCK_HZ if fd_controller else CLASSIC_CLOCK_HZ
-    nominal_limits = FD_NOMINAL if fd_controller else CLASSIC
+    clock = limits.clock_hz
     if hasattr(timing, "nom_brp"):  # BitTimingFd
-        if not fd_controller:
+        if limits.data is None:
             raise ValueError("a BitTimingFd needs a CAN FD controller; this one is classic CAN")
         nominal = _one_phase(
             timing.f_clock,
@@ -81,7 +111,7 @@ def from_python_can(timing, fd_controller: bool):
             timing.nom_bitrate,
             timing.nom_sample_point,
             clock,
-            nominal_limits,
+            limits.nominal,
             "nominal timing",
         )
         data = _one_phase(
@@ -93,7 +123,7 @@ def from_python_can(timing, fd_controller: bool):
             timing.data_bitrate,
             timing.data_sample_point,
             clock,
-            FD_DATA,
+            limits.data,
             "data timing",
         )
         with_tdo(data)
@@ -108,7 +138,7 @@ def from_python_can(timing, fd_controller: bool):
         timing.bitrate,
         timing.sample_point,
         clock,
-        nominal_limits,
+        limits.nominal,
         "timing",
     )
     if getattr(timing, "nof_samples", 1) == 3:
@@ -147,14 +177,12 @@ def with_tdo(data) -> None:
     data.wTDO = offset if offset <= 255 else 0
 
 
-def nominal_and_data(
-    bitrate: int, data_bitrate: Optional[int], fd_controller: bool, fd: bool
-):
+def nominal_and_data(bitrate: int, data_bitrate: Optional[int], limits: Limits, fd: bool):
     """The CANBTPs for a nominal bit rate and, with `fd`, a data bit rate."""
-    if fd_controller:
-        nominal = from_bitrate(bitrate, 0.8, FD_CLOCK_HZ, FD_NOMINAL, "bitrate")
+    if limits.data is not None:
+        nominal = from_bitrate(bitrate, 0.8, limits.clock_hz, limits.nominal, "bitrate")
         data_rate = data_bitrate if fd and data_bitrate else bitrate
-        data = from_bitrate(data_rate, 0.75, FD_CLOCK_HZ, FD_DATA, "data_bitrate")
+        data = from_bitrate(data_rate, 0.75, limits.clock_hz, limits.data, "data_bitrate")
         with_tdo(data)
         return nominal, data
-    return from_bitrate(bitrate, 0.875, CLASSIC_CLOCK_HZ, CLASSIC, "bitrate"), None
+    return from_bitrate(bitrate, 0.875, limits.clock_hz, limits.nominal, "bitrate"), None

@@ -109,6 +109,31 @@ class CANBTP(ctypes.Structure):
     ]
 
 
+class CANCAPABILITIES2(ctypes.Structure):
+    """What a controller can do, as canControlGetCaps reports it: among others its CAN clock
+    and the raw ranges of its nominal (SDR) and data (FDR) bit timing."""
+
+    _pack_ = 1
+    _fields_ = [
+        ("wCtrlType", ctypes.c_uint16),
+        ("wBusCoupling", ctypes.c_uint16),
+        ("dwFeatures", ctypes.c_uint32),
+        ("dwCanClkFreq", ctypes.c_uint32),
+        ("sSdrRangeMin", CANBTP),
+        ("sSdrRangeMax", CANBTP),
+        ("sFdrRangeMin", CANBTP),
+        ("sFdrRangeMax", CANBTP),
+        ("dwTscClkFreq", ctypes.c_uint32),
+        ("dwTscDivisor", ctypes.c_uint32),
+        ("dwCmsClkFreq", ctypes.c_uint32),
+        ("dwCmsDivisor", ctypes.c_uint32),
+        ("dwCmsMaxTicks", ctypes.c_uint32),
+        ("dwDtxClkFreq", ctypes.c_uint32),
+        ("dwDtxDivisor", ctypes.c_uint32),
+        ("dwDtxMaxTicks", ctypes.c_uint32),
+    ]
+
+
 # CANMSGINFO as its four bytes: type, flags2 (ssm hpm edl fdr esi), flags (dlc:4 ovr srr rtr
 # ext), accept; then the data field. The end of CANMSG2 and CANCYCLICTXMSG2.
 _INFO_AND_DATA = [
@@ -179,6 +204,7 @@ class CANEMU_DEVICEINFO(ctypes.Structure):
 
 for _struct, _size in (
     (CANBTP, 16),
+    (CANCAPABILITIES2, 108),
     (CANMSG2, 80),
     (CANCYCLICTXMSG2, 76),
     (CANEMU_BUSINFO, 48),
@@ -216,6 +242,7 @@ _SIGNATURES = {
     "vciDeviceClose": (HANDLE,),
     "canControlOpen": (HANDLE, ctypes.c_uint32, ctypes.POINTER(HANDLE)),
     "canControlClose": (HANDLE,),
+    "canControlGetCaps": (HANDLE, ctypes.POINTER(CANCAPABILITIES2)),
     "canControlInitialize": (
         HANDLE,
         ctypes.c_uint8,

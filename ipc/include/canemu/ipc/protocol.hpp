@@ -123,6 +123,30 @@ struct StatusRequest {
 
 enum class WireTimeMode : uint8_t { realtime = 0, scaled = 1, stepped = 2 };
 enum class WireBusKind : uint8_t { can = 0, can_fd = 1, lin = 2 };
+
+// Names as configuration files and `canemu status` write them; "?" for a value that is none.
+constexpr std::string_view to_string(WireTimeMode mode) {
+  switch (mode) {
+    case WireTimeMode::realtime:
+      return "realtime";
+    case WireTimeMode::scaled:
+      return "scaled";
+    case WireTimeMode::stepped:
+      return "stepped";
+  }
+  return "?";
+}
+constexpr std::string_view to_string(WireBusKind kind) {
+  switch (kind) {
+    case WireBusKind::can:
+      return "can";
+    case WireBusKind::can_fd:
+      return "can-fd";
+    case WireBusKind::lin:
+      return "lin";
+  }
+  return "?";
+}
 enum class WireErrorState : uint8_t { active = 0, warning = 1, passive = 2, bus_off = 3 };
 
 struct StatusBus {
@@ -270,6 +294,20 @@ enum class WireDeviceModel : uint8_t {
   ephemeral = 2
 };
 
+// A device model's name: the `model` key of a configuration's [[device]], and what
+// `canemu status` shows; "?" for a value that is none of them.
+constexpr std::string_view to_string(WireDeviceModel model) {
+  switch (model) {
+    case WireDeviceModel::ixxat_usb_to_can:
+      return "ixxat-usb-to-can";
+    case WireDeviceModel::ixxat_usb_to_can_fd:
+      return "ixxat-usb-to-can-fd";
+    case WireDeviceModel::ephemeral:
+      return "ephemeral";
+  }
+  return "?";
+}
+
 struct DeviceEntry {
   char name[kNameSize] = {};
   uint8_t model = 0;  // WireDeviceModel
@@ -366,6 +404,21 @@ struct FaultLoadReply {
 static_assert(sizeof(FaultLoadReply) == 16 + 8 + kScenarioNameSize + 4096);
 
 enum class WireFaultState : uint8_t { pending = 0, active = 1, done = 2, cleared = 3 };
+
+// A fault's state as `canemu fault list` shows it; "?" for a value that is none.
+constexpr std::string_view to_string(WireFaultState state) {
+  switch (state) {
+    case WireFaultState::pending:
+      return "pending";
+    case WireFaultState::active:
+      return "active";
+    case WireFaultState::done:
+      return "done";
+    case WireFaultState::cleared:
+      return "cleared";
+  }
+  return "?";
+}
 
 struct FaultEntry {
   char scenario[kScenarioNameSize] = {};

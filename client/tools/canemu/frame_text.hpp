@@ -7,9 +7,10 @@
 #include <string>
 #include <string_view>
 
+#include "canemu/firmware_model/bus/frame.hpp"
 #include "canemu/ipc/channel_message.hpp"
 
-namespace canemu::daemon {
+namespace canemu::cli {
 
 // A frame to send from cansend syntax: <id>#<data>, <id>#R[<len>], <id>##<flags><data>; 3 hex
 // digits make an 11-bit identifier, 8 a 29-bit one; data as hex pairs, optionally separated by
@@ -23,4 +24,8 @@ std::string candump_frame(const ipc::ChannelMessage& m);
 // One line of a candump -L log: `(seconds.microseconds) bus frame`.
 std::string candump_line(const ipc::ChannelMessage& m, std::string_view bus);
 
-}  // namespace canemu::daemon
+// The wire model's frame of a message of kind `frame`: its identifier, flags, DLC and data
+// checked as canemud checks a frame a channel sends (Frame::create); an error for anything else.
+model::Result<model::Frame> to_frame(const ipc::ChannelMessage& m);
+
+}  // namespace canemu::cli

@@ -1,13 +1,13 @@
-#include "canemu/daemon/frame_text.hpp"
+#include "frame_text.hpp"
 
 #include <cctype>
 #include <cstring>
 
 #include <fmt/format.h>
 
-#include "canemu/daemon/channel.hpp"
+#include "canemu/firmware_model/bus/can_error.hpp"
 
-namespace canemu::daemon {
+namespace canemu::cli {
 
 namespace {
 
@@ -116,12 +116,34 @@ std::optional<ipc::ChannelMessage> parse_cansend(std::string_view text, std::str
     m.dlc = *dlc;
   }
   // Everything else (identifier range, flag combinations) as the daemon will check it.
-  auto checked = to_tx_frame(m);
+  auto checked = to_frame(m);
   if (!checked) {
     error = checked.error().message;
     return std::nullopt;
   }
   return m;
+}
+
+model::Result<model::Frame> to_frame(const ipc::ChannelMessage& m) {
+  if (m.kind != static_cast<uint8_t>(ipc::ChannelMessageKind::frame)) {
+    return model::model_error(model::ModelErrc::invalid_flags,
+                              fmt::format("message kind {} is not a frame", m.kind));
+  }
+  if (m.dlc > model::kMaxDlc) {
+    return model::model_error(model::ModelErrc::invalid_dlc,
+                              fmt::format("DLC {} is above 15", m.dlc));
+  }
+  model::FrameSpec spec;
+  spec.id = m.id;
+  spec.extended = (m.flags & ipc::kMsgExtended) != 0;
+  spec.remote = (m.flags & ipc::kMsgRemote) != 0;
+  spec.fd = (m.flags & ipc::kMsgFd) != 0;
+  spec.brs = (m.flags & ipc::kMsgBrs) != 0;
+  spec.esi = (m.flags & ipc::kMsgEsi) != 0;
+  spec.dlc = m.dlc;
+  spec.data =
+      std::span<const uint8_t>(m.data, spec.remote ? 0 : model::dlc_to_length(m.dlc, spec.fd));
+  return model::Frame::create(spec);
 }
 
 std::string candump_frame(const ipc::ChannelMessage& m) {
@@ -192,4 +214,4 @@ std::string candump_line(const ipc::ChannelMessage& m, std::string_view bus) {
                      candump_frame(m));
 }
 
-}  // namespace canemu::daemon
+}  // namespace canemu::cli

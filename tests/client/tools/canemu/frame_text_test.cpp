@@ -1,8 +1,8 @@
-#include "canemu/daemon/frame_text.hpp"
+#include "frame_text.hpp"
 
 #include <gtest/gtest.h>
 
-namespace canemu::daemon {
+namespace canemu::cli {
 namespace {
 
 ipc::ChannelMessage parse(std::string_view text) {
@@ -106,4 +106,4 @@ TEST(FrameText, WritesErrorsAsSocketCanErrorFrames) {
 }
 
 }  // namespace
-}  // namespace canemu::daemon
+}  // namespace canemu::cli

@@ -1,0 +1,145 @@
+"""Receiving: the channel's messages as python-can Messages, with adapter time stamps turned
+into simulated (or wall-clock) seconds."""
+
+from __future__ import annotations
+
+import ctypes
+import time
+from typing import Optional, Tuple
+
+from can import Message
+
+from . import _vci
+from ._calls import _HEADER, _WAIT_SLICE_MS, _call, _can_error, _vci_errors
+from ._daemon import _sim_time
+from ._state import _StateMixin
+from ._vci import VciError
+
+
+def _payload_length(flags: int, flags2: int) -> int:
+    """Data bytes of a CAN message from its CANMSGINFO flags (a remote frame has none)."""
+    dlc = flags & _vci.FLAGS_DLC
+    if flags2 & _vci.FLAGS2_EDL:
+        return _vci.DLC_TO_LEN[dlc]
+    return 0 if flags & _vci.FLAGS_RTR else min(dlc, 8)
+
+
+class _ReceiveMixin(_StateMixin):
+    """CanemuBus's receive side: the error frames a message causes come from _StateMixin."""
+
+    def fileno(self) -> int:
+        """A descriptor that is readable whenever messages wait (for select, Notifier,
+        asyncio)."""
+        if self._poll_fd is None:
+            fd = ctypes.c_int(-1)
+            with _vci_errors():
+                _call("canemuChannelEventFd", self._channel, ctypes.byref(fd))
+            self._poll_fd = fd.value
+        return self._poll_fd
+
+    def _recv_internal(self, timeout: Optional[float]) -> Tuple[Optional[Message], bool]:
+        deadline = None if timeout is None else time.monotonic() + max(timeout, 0.0)
+        lib = _vci.lib()
+        with self._rx_lock:
+            while True:
+                if self._pending:
+                    return self._pending.popleft(), True
+                if self._closed:
+                    return None, True
+                hr = lib.canChannelPeekMessage(self._channel, self._rx_ref)
+                if hr == _vci.VCI_E_RXQUEUE_EMPTY:
+                    if self._reported in (_vci.CANEMU_STATE_WARNING, _vci.CANEMU_STATE_PASSIVE):
+                        # Nothing marks a counter crossing 128 by itself (a fault setting the
+                        # counters, the own frame that got through): look now.
+                        self._check_passive(None)
+                        if self._pending:
+                            continue
+                    if deadline is None:
+                        wait_ms = _WAIT_SLICE_MS
+                    else:
+                        left = deadline - time.monotonic()
+                        if left <= 0:
+                            return None, True
+                        wait_ms = min(_WAIT_SLICE_MS, max(1, int(left * 1000 + 0.999)))
+                    hr = lib.canChannelReadMessage(self._channel, wait_ms, self._rx_ref)
+                    if hr == _vci.VCI_E_TIMEOUT:
+                        continue
+                if hr != _vci.VCI_OK:
+                    raise _can_error(VciError("canChannelReadMessage", hr, _vci.error_text(hr)))
+                msg, filtered = self._convert()
+                if msg is not None:
+                    return msg, filtered  # what it caused (self._pending) comes next
+
+    def _sim_ns(self, ticks: int) -> int:
+        """The simulated time in ns of an adapter time stamp (microsecond ticks, 32 bits; the
+        wraps are counted as the messages come, in order)."""
+        if ticks < self._last_ticks:
+            self._wraps += 1
+        self._last_ticks = ticks
+        return self._epoch_ns + ((self._wraps << 32) | ticks) * 1000
+
+    def _stamp(self, sim_ns: int) -> float:
+        return sim_ns / 1e9 + self._time_offset
+
+    def _now_ns(self) -> int:
+        """Simulated time now, on the adapter's microsecond grid."""
+        with _vci_errors():
+            now_ns, _ = _sim_time()
+        return now_ns - (now_ns - self._epoch_ns) % 1000
+
+    def _convert(self) -> Tuple[Optional[Message], bool]:
+        """The message in self._rx_msg as a python-can Message (None for those python-can has no
+        use for). Error frames that the message also causes go to self._pending, after it."""
+        ticks, _, ident, kind, flags2, flags, _ = _HEADER.unpack_from(self._rx_view)
+        if kind == _vci.CAN_MSGTYPE_DATA:
+            sim_ns = self._sim_ns(ticks)
+            dlc = flags & _vci.FLAGS_DLC
+            fd = bool(flags2 & _vci.FLAGS2_EDL)
+            remote = bool(flags & _vci.FLAGS_RTR) and not fd
+            length = _payload_length(flags, flags2)
+            data = bytes(self._rx_view[16 : 16 + length])
+            own = bool(flags & _vci.FLAGS_SRR)
+            msg = Message(
+                timestamp=sim_ns / 1e9 + self._time_offset,  # _stamp, inline: the hot path
+                arbitration_id=ident,
+                is_extended_id=bool(flags & _vci.FLAGS_EXT),
+                is_remote_frame=remote,
+                is_fd=fd,
+                bitrate_switch=bool(flags2 & _vci.FLAGS2_FDR),
+                error_state_indicator=bool(flags2 & _vci.FLAGS2_ESI),
+                dlc=length if fd else dlc,
+                data=data,
+                channel=self._channel_name,
+                is_rx=not own,
+                check=False,
+            )
+            if self._reported == _vci.CANEMU_STATE_PASSIVE:
+                # A frame that got through lowers a counter: the one that made the node
+                # error-passive may have fallen below 128.
+                tec, rec = self._counters
+                if (tec >= 128 and own) or (rec >= 128 and not own):
+                    self._check_passive(sim_ns)
+            return msg, self._hw_filtered
+        if kind == _vci.CAN_MSGTYPE_ERROR:
+            sim_ns = self._sim_ns(ticks)
+            msg = self._bus_error(sim_ns)
+            # The counters as the error was detected (canemu's firmware writes REC and TEC
+            # beyond the message's dlc, docs/vci.md): the crossing at its instant.
+            counters = (self._rx_view[16 + 4], self._rx_view[16 + 3])
+            if self._reported == _vci.CANEMU_STATE_WARNING:
+                self._check_passive(sim_ns, counters)
+            else:
+                self._counters = counters
+            return msg, True
+        if kind == _vci.CAN_MSGTYPE_STATUS:
+            sim_ns = self._sim_ns(ticks)
+            msg = self._status_change(sim_ns, self._rx_view[16])
+            if self._reported == _vci.CANEMU_STATE_WARNING:
+                self._check_passive(sim_ns, self._counters)  # those of the last ERROR message
+            elif self._reported == _vci.CANEMU_STATE_PASSIVE:
+                self._check_passive(sim_ns)
+            return msg, True
+        if kind == _vci.CAN_MSGTYPE_TIMEOVR:
+            self._wraps += 1
+            self._last_ticks = 0
+        return None, True

@@ -1,0 +1,83 @@
+// canemu dump: a bus's frames and errors as a candump -L log, from a listen-only channel of an
+// ephemeral device, until interrupted or --count lines.
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "canemu/client/channel.hpp"
+#include "canemu/client/connection.hpp"
+#include "command.hpp"
+#include "frame_text.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+
+void on_stop_signal(int) {
+  g_stop = 1;
+}
+
+struct DumpOptions {
+  std::string bus;
+  uint32_t bitrate = 0;
+  uint64_t count = 0;  // 0: until interrupted
+  bool no_errors = false;
+};
+
+int run_dump(const std::string& socket, const DumpOptions& o) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu dump");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  client::ChannelOptions co;
+  co.bus = o.bus;
+  co.bitrate = o.bitrate;
+  co.flags = ipc::kChannelListenOnly | (o.no_errors ? 0 : ipc::kChannelReportErrors);
+  co.rx_capacity = 4096;
+  auto ch = client::Channel::open(*c, co);
+  if (!ch) {
+    return fail(ch.error().message);
+  }
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  std::fprintf(stderr, "canemu: listening on %s as %s (listen-only, %u bit/s)\n", o.bus.c_str(),
+               ch->device().c_str(), ch->info().bitrate);
+  uint64_t printed = 0;
+  while (!g_stop && (o.count == 0 || printed < o.count)) {
+    auto m = ch->receive(200);
+    if (!m) {
+      continue;
+    }
+    if (m->lost_before != 0) {
+      std::fprintf(stderr, "canemu: %u message(s) lost: the output did not keep up\n",
+                   m->lost_before);
+    }
+    const std::string frame = candump_frame(*m);
+    if (frame.empty()) {
+      continue;
+    }
+    std::printf("%s\n", candump_line(*m, o.bus).c_str());
+    std::fflush(stdout);
+    ++printed;
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command add_dump(CLI::App& app, const std::string& socket) {
+  auto* dump = app.add_subcommand("dump", "print a bus's frames and errors as a candump -L log");
+  auto o = std::make_shared<DumpOptions>();
+  dump->add_option("BUS", o->bus, "bus name")->required();
+  dump->add_option("--bitrate", o->bitrate, "the listener's bit/s (default: the bus's)");
+  dump->add_option("-n,--count", o->count, "stop after this many lines");
+  dump->add_flag("--no-errors", o->no_errors, "frames only, no error frames");
+  return {dump, [&socket, o] { return run_dump(socket, *o); }};
+}
+
+}  // namespace canemu::cli

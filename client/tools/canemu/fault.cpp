@@ -1,0 +1,133 @@
+// canemu fault: load a scenario file, list the applied faults, clear a scenario, or inject one
+// fault from the command line (docs/faults.md).
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "command.hpp"
+#include "fault_inject.hpp"
+#include "fault_table.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+// Sends a scenario's text; prints what was applied or every problem.
+int load_scenario_text(const std::string& socket, const std::string& source,
+                       const std::string& text) {
+  if (text.size() > ipc::kMaxScenarioText) {
+    return fail(fmt::format("{}: {} bytes; a scenario sent to canemud is at most {}", source,
+                            text.size(), ipc::kMaxScenarioText));
+  }
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto m = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+  ipc::copy_name(m->source, source);
+  m->length = static_cast<uint32_t>(text.size());
+  std::memcpy(m->text, text.data(), text.size());
+  auto r = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*m);
+  if (!r) {
+    return fail(r.error().message);
+  }
+  if (!r->applied) {
+    std::fputs(ipc::name_of(r->errors).c_str(), stderr);
+    return fail("scenario rejected; nothing of it applied");
+  }
+  std::printf("scenario \"%s\": %u fault%s applied\n", ipc::name_of(r->name).c_str(), r->faults,
+              r->faults == 1 ? "" : "s");
+  return 0;
+}
+
+int run_load(const std::string& socket, const std::string& file) {
+  std::ifstream in(file);
+  if (!in) {
+    return fail(fmt::format("{}: cannot be read", file));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return load_scenario_text(socket, file, text.str());
+}
+
+int run_list(const std::string& socket) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto r = fault_list(*c);
+  if (!r) {
+    return fail(r.error());
+  }
+  print_faults(*r);
+  return 0;
+}
+
+int run_clear(const std::string& socket, const std::string& name) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto m = ipc::make_message<ipc::FaultClearRequest>();
+  ipc::copy_name(m.scenario, name == "all" ? std::string() : name);
+  auto r = c->call<ipc::FaultClearRequest, ipc::FaultClearReply>(m);
+  if (!r) {
+    return fail(r.error().message);
+  }
+  std::printf("%u scenario%s cleared\n", r->cleared, r->cleared == 1 ? "" : "s");
+  return 0;
+}
+
+int run_inject(const std::string& socket, const InjectOptions& o) {
+  auto text = inject_scenario(o);
+  if (!text) {
+    return fail(text.error());
+  }
+  return load_scenario_text(socket, "<command line>", *text);
+}
+
+struct FaultOptions {
+  std::string file;
+  std::string name = "all";
+  InjectOptions inject;
+};
+
+}  // namespace
+
+Command add_fault(CLI::App& app, const std::string& socket) {
+  auto* fault = app.add_subcommand("fault", "fault scenarios (docs/faults.md)");
+  fault->require_subcommand(1);
+  auto o = std::make_shared<FaultOptions>();
+  auto* load = fault->add_subcommand("load", "apply a scenario file from now on");
+  load->add_option("FILE", o->file, "scenario (TOML)")->required();
+  auto* list = fault->add_subcommand("list", "every fault applied, with its hits and state");
+  auto* clear = fault->add_subcommand("clear", "stop a scenario's faults (NAME or all)");
+  clear->add_option("NAME", o->name, "scenario name, or all (default)");
+  auto* inject = fault->add_subcommand("inject", "one fault from the command line");
+  add_inject_options(*inject, o->inject);
+  return {fault, [&socket, o, load, list, clear, inject] {
+            if (*load) {
+              return run_load(socket, o->file);
+            }
+            if (*list) {
+              return run_list(socket);
+            }
+            if (*clear) {
+              return run_clear(socket, o->name);
+            }
+            if (*inject) {
+              return run_inject(socket, o->inject);
+            }
+            return 1;
+          }};
+}
+
+}  // namespace canemu::cli

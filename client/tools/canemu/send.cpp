@@ -1,0 +1,129 @@
+// canemu send: frames in cansend syntax onto a bus, through a channel of an ephemeral device;
+// each confirmed frame printed as candump would log it.
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "canemu/client/channel.hpp"
+#include "canemu/client/connection.hpp"
+#include "command.hpp"
+#include "frame_text.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+struct SendOptions {
+  std::string bus;
+  std::vector<std::string> frames;
+  uint32_t bitrate = 0;
+  std::string step;
+  int timeout_ms = 2000;
+};
+
+int run_send(const std::string& socket, const SendOptions& o) {
+  std::vector<ipc::ChannelMessage> messages;
+  for (const std::string& text : o.frames) {
+    std::string error;
+    auto m = parse_cansend(text, error);
+    if (!m) {
+      return fail(fmt::format("'{}': {}", text, error));
+    }
+    messages.push_back(*m);
+  }
+  std::optional<int64_t> step_ns;
+  if (!o.step.empty()) {
+    step_ns = parse_positive_duration(o.step);
+    if (!step_ns) {
+      return fail(fmt::format("'{}' is not a duration (examples: 150ns, 20us, 10ms, 2s)", o.step));
+    }
+  }
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu send");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto s = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  if (!s) {
+    return fail(s.error().message);
+  }
+  const bool stepped = s->time_mode == static_cast<uint8_t>(ipc::WireTimeMode::stepped);
+  if (stepped && !step_ns) {
+    return fail(
+        "simulated time is stepped: frames go out only while time moves; add --step "
+        "DURATION to step after queueing them");
+  }
+  if (!stepped && step_ns) {
+    return fail("--step needs stepped time; canemud runs " +
+                std::string(ipc::to_string(static_cast<ipc::WireTimeMode>(s->time_mode))));
+  }
+  client::ChannelOptions co;
+  co.bus = o.bus;
+  co.bitrate = o.bitrate;
+  co.flags = ipc::kChannelReportTx;
+  co.tx_capacity = static_cast<uint32_t>(messages.size());
+  auto ch = client::Channel::open(*c, co);
+  if (!ch) {
+    return fail(ch.error().message);
+  }
+  for (const ipc::ChannelMessage& m : messages) {
+    auto sent = ch->send(m, o.timeout_ms);
+    if (!sent) {
+      return fail(sent.error().message);
+    }
+  }
+  if (step_ns) {
+    auto req = ipc::make_message<ipc::TimeStepRequest>();
+    req.step_ns = *step_ns;
+    auto r = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+    if (!r) {
+      return fail(r.error().message);
+    }
+  }
+  // One confirmation per frame: sent (printed as candump would log it) or given up.
+  int failed = 0;
+  for (std::size_t done = 0; done < messages.size();) {
+    auto m = ch->receive(stepped ? 0 : o.timeout_ms);
+    if (!m) {
+      return fail(
+          fmt::format("{} of {} frame(s) not sent {}: is a node on {} acknowledging at "
+                      "{} bit/s?",
+                      messages.size() - done, messages.size(),
+                      stepped ? "within the step" : "in time", o.bus, ch->info().bitrate));
+    }
+    if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_done)) {
+      m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
+      std::printf("%s\n", candump_line(*m, o.bus).c_str());
+      ++done;
+    } else if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped)) {
+      m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
+      std::fprintf(stderr,
+                   "canemu: %s: not sent (given up after an error, or a CAN FD frame on a classic "
+                   "CAN bus)\n",
+                   candump_frame(*m).c_str());
+      ++failed;
+      ++done;
+    }
+  }
+  return failed == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+Command add_send(CLI::App& app, const std::string& socket) {
+  auto* send = app.add_subcommand("send", "send frames on a bus, e.g. 'send can0 123#1122'");
+  auto o = std::make_shared<SendOptions>();
+  send->add_option("BUS", o->bus, "bus name")->required();
+  send->add_option("FRAME", o->frames, "cansend syntax: 123#1122, 12345678#R4, 123##1AABB")
+      ->required();
+  send->add_option("--bitrate", o->bitrate, "the sender's bit/s (default: the bus's)");
+  send->add_option("--step", o->step, "stepped time: step this long after queueing");
+  send->add_option("--timeout", o->timeout_ms, "ms to wait for the frames (default 2000)");
+  return {send, [&socket, o] { return run_send(socket, *o); }};
+}
+
+}  // namespace canemu::cli

@@ -1,0 +1,178 @@
+// canemu status: buses with load, nodes with state and counters, devices, clients and faults,
+// as tables or as one JSON object.
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/firmware_model/bus/can_error.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "command.hpp"
+#include "fault_table.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+// The wire's error states are the model's, in the model's order.
+static_assert(static_cast<uint8_t>(ipc::WireErrorState::bus_off) ==
+              static_cast<uint8_t>(model::ErrorState::bus_off));
+
+std::string state_name(uint8_t state) {
+  return std::string(model::to_string(static_cast<model::ErrorState>(state)));
+}
+std::string kind_name(uint8_t kind) {
+  return std::string(ipc::to_string(static_cast<ipc::WireBusKind>(kind)));
+}
+std::string model_name(uint8_t model) {
+  return std::string(ipc::to_string(static_cast<ipc::WireDeviceModel>(model)));
+}
+
+std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
+  std::vector<std::string> buses;
+  for (uint8_t k = 0; k < d.controller_count && k < ipc::kMaxDeviceControllers; ++k) {
+    buses.push_back(ipc::name_of(d.buses[k]));
+  }
+  return buses;
+}
+
+void print_json(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
+                const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
+                const ipc::FaultListReply& faults) {
+  std::string out = fmt::format(
+      "{{\"server_pid\":{},\"time_mode\":\"{}\",\"time_scale\":{},\"sim_time_ns\":{},"
+      "\"clients\":{},\"buses\":[",
+      c.server_pid(), mode, s.time_scale, s.sim_time_ns, s.client_count);
+  for (uint16_t i = 0; i < s.bus_count; ++i) {
+    const ipc::StatusBus& b = s.buses[i];
+    out += fmt::format(
+        "{}{{\"name\":\"{}\",\"kind\":\"{}\",\"transceiver\":\"{}\",\"bitrate\":{},"
+        "\"data_bitrate\":{},\"load_percent\":{:.1f},\"frames\":{},\"error_frames\":{}}}",
+        i ? "," : "", ipc::name_of(b.name), kind_name(b.kind),
+        b.low_speed ? "low-speed" : "high-speed", b.bitrate, b.data_bitrate, b.load_permille / 10.0,
+        b.frames, b.error_frames);
+  }
+  out += "],\"nodes\":[";
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    const ipc::StatusNode& n = s.nodes[i];
+    out += fmt::format(
+        "{}{{\"name\":\"{}\",\"bus\":\"{}\",\"state\":\"{}\",\"tec\":{},\"rec\":{},"
+        "\"frames_sent\":{},\"frames_received\":{},\"errors\":{}}}",
+        i ? "," : "", ipc::name_of(n.name),
+        n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : "?", state_name(n.state), n.tec,
+        n.rec, n.frames_sent, n.frames_received, n.errors);
+  }
+  out += "],\"devices\":[";
+  for (uint16_t i = 0; i < devices.count; ++i) {
+    const ipc::DeviceEntry& d = devices.devices[i];
+    std::string buses;
+    for (const std::string& b : device_buses(d)) {
+      buses += fmt::format("{}\"{}\"", buses.empty() ? "" : ",", b);
+    }
+    out += fmt::format(
+        "{}{{\"name\":\"{}\",\"model\":\"{}\",\"ephemeral\":{},"
+        "\"owner_pid\":{},\"buses\":[{}]}}",
+        i ? "," : "", ipc::name_of(d.name), model_name(d.model), d.ephemeral ? "true" : "false",
+        d.owner_pid, buses);
+  }
+  out += "],\"client_list\":[";
+  for (uint16_t i = 0; i < clients.count; ++i) {
+    const ipc::ClientEntry& e = clients.clients[i];
+    out += fmt::format("{}{{\"name\":\"{}\",\"pid\":{},\"uid\":{},\"channels\":{}}}", i ? "," : "",
+                       ipc::name_of(e.name), e.pid, e.uid, e.channels);
+  }
+  out += "],\"faults\":" + faults_json(faults) + "}\n";
+  std::fputs(out.c_str(), stdout);
+}
+
+void print_tables(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
+                  const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
+                  const ipc::FaultListReply& faults) {
+  std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
+              mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
+              s.client_count == 1 ? "" : "s");
+  std::printf("%-12s %-7s %9s %9s %7s %10s %8s\n", "BUS", "KIND", "BITRATE", "DATA", "LOAD",
+              "FRAMES", "ERRORS");
+  for (uint16_t i = 0; i < s.bus_count; ++i) {
+    const ipc::StatusBus& b = s.buses[i];
+    const std::string kind = kind_name(b.kind) + (b.low_speed ? "-ls" : "");
+    std::printf("%-12s %-7s %9u %9u %6.1f%% %10llu %8llu\n", ipc::name_of(b.name).c_str(),
+                kind.c_str(), b.bitrate, b.data_bitrate, b.load_permille / 10.0,
+                static_cast<unsigned long long>(b.frames),
+                static_cast<unsigned long long>(b.error_frames));
+  }
+  std::printf("%-14s %-12s %-14s %4s %4s %10s %10s %8s\n", "NODE", "BUS", "STATE", "TEC", "REC",
+              "SENT", "RECEIVED", "ERRORS");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    const ipc::StatusNode& n = s.nodes[i];
+    std::printf("%-14s %-12s %-14s %4u %4u %10llu %10llu %8llu\n", ipc::name_of(n.name).c_str(),
+                n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name).c_str() : "?",
+                state_name(n.state).c_str(), n.tec, n.rec,
+                static_cast<unsigned long long>(n.frames_sent),
+                static_cast<unsigned long long>(n.frames_received),
+                static_cast<unsigned long long>(n.errors));
+  }
+  std::printf("%-14s %-20s %-8s %s\n", "DEVICE", "MODEL", "OWNER", "BUSES");
+  for (uint16_t i = 0; i < devices.count; ++i) {
+    const ipc::DeviceEntry& d = devices.devices[i];
+    std::string buses;
+    for (const std::string& b : device_buses(d)) {
+      buses += (buses.empty() ? "" : " ") + b;
+    }
+    std::printf("%-14s %-20s %-8s %s\n", ipc::name_of(d.name).c_str(), model_name(d.model).c_str(),
+                d.ephemeral ? std::to_string(d.owner_pid).c_str() : "config", buses.c_str());
+  }
+  std::printf("%-20s %8s %8s %8s\n", "CLIENT", "PID", "UID", "CHANNELS");
+  for (uint16_t i = 0; i < clients.count; ++i) {
+    const ipc::ClientEntry& e = clients.clients[i];
+    std::printf("%-20s %8u %8u %8u\n", ipc::name_of(e.name).c_str(), e.pid, e.uid, e.channels);
+  }
+  if (faults.total > 0) {
+    print_faults(faults);
+  }
+}
+
+int run_status(const std::string& socket, bool json) {
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu status");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto reply =
+      c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  if (!reply) {
+    return fail(reply.error().message);
+  }
+  auto devices = c->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
+      ipc::make_message<ipc::DeviceListRequest>());
+  auto clients = c->call<ipc::ClientListRequest, ipc::ClientListReply>(
+      ipc::make_message<ipc::ClientListRequest>());
+  if (!devices || !clients) {
+    return fail(!devices ? devices.error().message : clients.error().message);
+  }
+  auto faults = fault_list(*c);
+  if (!faults) {
+    return fail(faults.error());
+  }
+  const std::string mode(ipc::to_string(static_cast<ipc::WireTimeMode>(reply->time_mode)));
+  if (json) {
+    print_json(*c, *reply, mode, *devices, *clients, *faults);
+  } else {
+    print_tables(*c, *reply, mode, *devices, *clients, *faults);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command add_status(CLI::App& app, const std::string& socket) {
+  auto* status = app.add_subcommand("status", "buses with load, nodes with state and counters");
+  auto json = std::make_shared<bool>(false);
+  status->add_flag("--json", *json, "one JSON object instead of tables");
+  return {status, [&socket, json] { return run_status(socket, *json); }};
+}
+
+}  // namespace canemu::cli

@@ -1,0 +1,48 @@
+// canemu time step: advance canemud's simulated time (stepped mode).
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "canemu/client/connection.hpp"
+#include "command.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+int run_step(const std::string& socket, const std::string& duration) {
+  const auto ns = parse_positive_duration(duration);
+  if (!ns) {
+    return fail(fmt::format("'{}' is not a duration (examples: 150ns, 20us, 10ms, 2s)", duration));
+  }
+  auto c = client::Connection::open(ipc::socket_path(socket), "canemu time");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto req = ipc::make_message<ipc::TimeStepRequest>();
+  req.step_ns = *ns;
+  auto reply = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+  if (!reply) {
+    return fail(reply.error().message);
+  }
+  std::printf("simulated time %.9f s (%llu events)\n",
+              static_cast<double>(reply->sim_time_ns) / 1e9,
+              static_cast<unsigned long long>(reply->events_run));
+  return 0;
+}
+
+}  // namespace
+
+Command add_time(CLI::App& app, const std::string& socket) {
+  auto* time = app.add_subcommand("time", "simulated time (stepped mode)");
+  time->require_subcommand(1);
+  auto* step = time->add_subcommand("step", "advance simulated time, e.g. 'time step 10ms'");
+  auto duration = std::make_shared<std::string>();
+  step->add_option("DURATION", *duration, "150ns, 20us, 10ms, 2s")->required();
+  return {time, [&socket, duration] { return run_step(socket, *duration); }};
+}
+
+}  // namespace canemu::cli

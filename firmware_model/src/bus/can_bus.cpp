@@ -1,17 +1,12 @@
 #include "canemu/firmware_model/bus/can_bus.hpp"
 
 #include <algorithm>
-#include <cassert>
-#include <tuple>
 
 namespace canemu::model {
 
 namespace {
 
-constexpr uint32_t kErrorFlagBits = 6;
-constexpr uint32_t kErrorDelimiterBits = 8;
 constexpr uint32_t kSuspendBits = 8;
-constexpr uint32_t kMaxHeldBits = 1'000'000;
 
 // A duration measured by a node whose oscillator runs `ppm` fast takes proportionally less time.
 SimDuration with_ppm(SimDuration d, int32_t ppm) {
@@ -22,53 +17,7 @@ SimDuration with_ppm(SimDuration d, int32_t ppm) {
   return SimDuration((d.ns() * 1'000'000 + den / 2) / den);
 }
 
-uint16_t stuffed_end(const EncodedFrame& e) {
-  return e.fd ? e.field_begin(Field::stuff_count) : e.crc_delimiter_index;
-}
-
-// Default positions of injected errors, clamped to where such an error can be detected.
-uint16_t place_injected(const EncodedFrame& e, CanErrorType type, std::optional<uint16_t> bit) {
-  const uint16_t ack_slot = static_cast<uint16_t>(e.crc_delimiter_index + 1);
-  switch (type) {
-    case CanErrorType::bit:
-      return std::clamp<uint16_t>(bit.value_or(e.arbitration_end), e.arbitration_end,
-                                  static_cast<uint16_t>(e.length - 2));
-    case CanErrorType::stuff:
-      return std::clamp<uint16_t>(bit.value_or(e.arbitration_end), e.arbitration_end,
-                                  static_cast<uint16_t>(stuffed_end(e) - 1));
-    case CanErrorType::form: {
-      // Fixed-form bits: CRC delimiter, ACK delimiter, EOF but its last bit.
-      const uint16_t k = bit.value_or(e.crc_delimiter_index);
-      if (k == e.crc_delimiter_index || (k > ack_slot && k + 1 < e.length)) {
-        return k;
-      }
-      return e.crc_delimiter_index;
-    }
-    case CanErrorType::crc:
-      return static_cast<uint16_t>(ack_slot + 1);  // flagged after the ACK delimiter
-    case CanErrorType::ack:
-      return ack_slot;
-  }
-  return e.arbitration_end;
-}
-
 }  // namespace
-
-// First bit where two frames differ, within the shorter one.
-static std::optional<uint16_t> first_difference(const EncodedFrame& a, const EncodedFrame& b) {
-  const uint32_t len = std::min(a.length, b.length);
-  for (uint32_t w = 0; w * 64 < len; ++w) {
-    const uint64_t x = a.level[w] ^ b.level[w];
-    if (x != 0) {
-      const uint32_t at = w * 64 + static_cast<uint32_t>(__builtin_clzll(x));
-      if (at < len) {
-        return static_cast<uint16_t>(at);
-      }
-      return std::nullopt;
-    }
-  }
-  return std::nullopt;
-}
 
 uint64_t& ErrorCounts::operator[](CanErrorType t) {
   switch (t) {
@@ -85,19 +34,6 @@ uint64_t& ErrorCounts::operator[](CanErrorType t) {
   }
   return bit;
 }
-
-// One node's part in one bus activity.
-struct CanBus::Participant {
-  NodeId id = 0;
-  bool transmitter = false;
-  bool drives = true;   // false for listen-only nodes
-  bool decodes = true;  // timing and format let it follow the frame
-  bool acks = false;
-  bool passive = false;  // error-passive when the activity started: its flags are recessive
-  bool self_test = false;
-  const EncodedFrame* bits = nullptr;                        // what it sends (transmitters)
-  std::optional<std::pair<CanErrorType, uint16_t>> planned;  // detection it will make
-};
 
 CanBus::CanBus(SimScheduler& scheduler, std::string name)
     : scheduler_(scheduler), name_(std::move(name)) {}
@@ -307,7 +243,7 @@ void CanBus::attempt(SimTime now) {
   if (injector_ != nullptr) {
     injector_->before_arbitration(now, *this);
   }
-  std::vector<NodeId>& contenders = contenders_;
+  std::vector<Arbitration::Contender>& contenders = contenders_;
   contenders.clear();
   std::optional<SimTime> next_ready;
   for (NodeId id = 0; id < nodes_.size(); ++id) {
@@ -319,7 +255,7 @@ void CanBus::attempt(SimTime now) {
       next_ready = next_ready ? std::min(*next_ready, n.ready_at) : n.ready_at;
       continue;
     }
-    contenders.push_back(id);
+    contenders.push_back(Arbitration::Contender{id, &encoded_tx(id)});
   }
   if (contenders.empty()) {
     if (next_ready) {
@@ -334,49 +270,8 @@ void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
-  // Arbitration. The wired-AND makes the bus carry the lexicographically smallest of the
-  // contenders' bit sequences (dominant, 0, wins every comparison), so each contender drops out
-  // at its first difference from the winner's: inside its arbitration field that is a lost
-  // arbitration, after it a collision (a bit error, which the error simulation plays out).
-  std::vector<NodeId>& active = active_;
-  std::vector<std::pair<NodeId, uint16_t>>& lost = lost_;
-  std::vector<std::pair<NodeId, uint16_t>>& collisions = collisions_;
-  active.clear();
-  lost.clear();
-  collisions.clear();
-  NodeId winner = contenders_.front();
-  const EncodedFrame* best = &encoded_tx(winner);
-  for (std::size_t k = 1; k < contenders_.size(); ++k) {
-    const NodeId c = contenders_[k];
-    const EncodedFrame& ec = encoded_tx(c);
-    // First bit first: comparing words as numbers is comparing bit sequences. (Bits past the
-    // end of a frame only count when two frames are equal up to there, that is, identical.)
-    std::size_t w = 0;
-    while (w + 1 < ec.level.size() && ec.level[w] == best->level[w]) {
-      ++w;
-    }
-    if (ec.level[w] < best->level[w]) {
-      winner = c;
-      best = &ec;
-    }
-  }
-  active.push_back(winner);
-  for (NodeId c : contenders_) {
-    if (c == winner) {
-      continue;
-    }
-    const EncodedFrame& ec = encoded_tx(c);
-    const auto d = first_difference(ec, *best);
-    if (!d) {
-      active.push_back(c);  // the same frame: sent together
-    } else if (*d < ec.arbitration_end) {
-      lost.emplace_back(c, *d);
-    } else {
-      active.push_back(c);
-      collisions.emplace_back(c, *d);
-    }
-  }
-
+  arbitration_.resolve(contenders_);
+  const std::vector<NodeId>& active = arbitration_.senders();
   const NodeId tx = active.front();
   in_flight_.assign(active.begin(), active.end());
   const TxFrame& tx_frame = *pending(nodes_[tx]);
@@ -395,7 +290,7 @@ void CanBus::run_frame(SimTime sof) {
   };
 
   completion_.losses.clear();
-  for (const auto& [id, bit] : lost) {
+  for (const auto& [id, bit] : arbitration_.lost()) {
     Node& n = nodes_[id];
     completion_.losses.push_back(Completion::Loss{id, bit, encoded_tx(id).destuffed_index(bit),
                                                   bit_end(bit), pending(n)->single_shot});
@@ -407,62 +302,31 @@ void CanBus::run_frame(SimTime sof) {
   if (injector_ != nullptr) {
     fault = injector_->on_frame(FrameContext{sof, tx, tx_frame.frame, e});
   }
-  const bool acks_suppressed = fault.suppress_ack || sof < ack_suppressed_until_ ||
-                               (fault.error && *fault.error == CanErrorType::ack);
-  std::vector<Participant>& parts = parts_;
+  const FrameRoles roles(e, fault, sof < ack_suppressed_until_);
+  std::vector<BusParticipant>& parts = parts_;
   parts.resize(nodes_.size());
   std::size_t count = 0;
-  bool any_ack = false;
-  bool any_planned = !collisions.empty();
   for (NodeId id = 0; id < nodes_.size(); ++id) {
     Node& n = refresh(id);
     if (!on_bus(n)) {
       continue;
     }
-    Participant& p = parts[count++];
-    p = Participant{};
-    p.id = id;
-    p.transmitter = std::find(active.begin(), active.end(), id) != active.end();
-    p.drives = !n.listen_only;
-    p.passive = n.fc->error_passive();
-    p.self_test = n.self_test;
-    if (p.transmitter) {
-      p.bits = &encoded_tx(id);
-      const auto c = std::find_if(collisions.begin(), collisions.end(),
-                                  [&](auto& x) { return x.first == id; });
-      if (c != collisions.end()) {
-        p.planned = std::make_pair(CanErrorType::bit, c->second);
-      } else if (fault.error && *fault.error == CanErrorType::bit) {
-        p.planned =
-            std::make_pair(CanErrorType::bit, place_injected(e, CanErrorType::bit, fault.bit));
-      }
+    const NodeFacts facts{id, n.listen_only, n.fc->error_passive(), n.self_test};
+    BusParticipant& p = parts[count++];
+    if (std::find(active.begin(), active.end(), id) != active.end()) {
+      p = roles.sender(facts, encoded_tx(id), arbitration_.collision_of(id));
+    } else if (tx_frame.frame.fd() && !n.fd_capable) {
+      p = roles.receiver(facts, FrameRoles::Decoding::not_fd);
     } else {
-      if (tx_frame.frame.fd() && !n.fd_capable) {
-        p.decodes = false;
-        p.planned = std::make_pair(CanErrorType::form,
-                                   static_cast<uint16_t>(e.field_begin(Field::fdf) + 1));
-      } else if (!decodes(tx, id, tx_frame.frame.brs())) {
-        p.decodes = false;
-        p.planned = std::make_pair(CanErrorType::stuff, e.arbitration_end);
-      } else if (fault.error && *fault.error != CanErrorType::bit &&
-                 *fault.error != CanErrorType::ack) {
-        p.planned = std::make_pair(*fault.error, place_injected(e, *fault.error, fault.bit));
-      }
-      p.acks = p.decodes && p.drives && !acks_suppressed &&
-               !(p.planned && p.planned->first == CanErrorType::crc);
-      any_ack = any_ack || p.acks;
+      p = roles.receiver(facts, decodes(tx, id, tx_frame.frame.brs())
+                                    ? FrameRoles::Decoding::ok
+                                    : FrameRoles::Decoding::timing);
     }
-    any_planned = any_planned || p.planned.has_value();
   }
   parts.resize(count);
 
+  std::optional<uint16_t> first_bit = roles.first_detection(parts);
   // A dominant hold that overlaps the frame disturbs it.
-  std::optional<uint16_t> first_bit;
-  for (const auto& p : parts) {
-    if (p.planned) {
-      first_bit = first_bit ? std::min(*first_bit, p.planned->second) : p.planned->second;
-    }
-  }
   const SimTime frame_end = holds_.empty() ? sof : bit_end(e.length - 1u);
   for (const auto& [from, duration] : holds_) {
     if (from < frame_end && from + duration > sof) {
@@ -474,14 +338,7 @@ void CanBus::run_frame(SimTime sof) {
       first_bit = first_bit ? std::min(*first_bit, k) : k;
     }
   }
-  const bool self_test = std::any_of(parts.begin(), parts.end(), [](const Participant& p) {
-    return p.transmitter && p.self_test;
-  });
-  if (!any_ack && !self_test) {
-    const uint16_t ack_slot = static_cast<uint16_t>(e.crc_delimiter_index + 1);
-    first_bit = first_bit ? std::min(*first_bit, ack_slot) : ack_slot;
-  }
-  if (!first_bit && !any_planned) {
+  if (!first_bit) {
     finish_success(sof, tx, nominal, data);
     return;
   }
@@ -492,7 +349,7 @@ void CanBus::run_frame(SimTime sof) {
     }
     scheduler_.schedule_at(latest, [this](SimTime) { report_losses(); });
   }
-  run_error_phase(sof, parts, &e, nominal, data, first_bit.value_or(e.crc_delimiter_index));
+  run_error_phase(sof, parts, &e, nominal, data, *first_bit);
 }
 
 void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
@@ -517,7 +374,7 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
     c.sent.push_back(pending(nodes_[id]));
   }
   frames_on_bus_++;
-  record_busy(sof, c.ifs_end);
+  bus_load_.record(sof, c.ifs_end);
   if (on_bus_event) {
     on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.sent.front()->frame, 0});
   }
@@ -529,7 +386,7 @@ void CanBus::complete_success(SimTime eof_end) {
   report_losses();
   // Receivers first: the frame they get is the transmitter's, which it may drop once told.
   const Frame& frame = c.sent.front()->frame;
-  for (const Participant& p : parts_) {
+  for (const BusParticipant& p : parts_) {
     if (p.transmitter || !p.decodes) {
       continue;
     }
@@ -567,7 +424,7 @@ void CanBus::run_hold(SimTime now) {
   busy_ = true;
   in_flight_.clear();
   account_recessive(now);
-  std::vector<Participant> parts;
+  std::vector<BusParticipant> parts;
   BitTiming nominal;
   bool have_timing = false;
   for (NodeId id = 0; id < nodes_.size(); ++id) {
@@ -575,7 +432,7 @@ void CanBus::run_hold(SimTime now) {
     if (!on_bus(n)) {
       continue;
     }
-    Participant p;
+    BusParticipant p;
     p.id = id;
     p.drives = !n.listen_only;
     p.passive = n.fc->error_passive();
@@ -599,293 +456,18 @@ void CanBus::run_hold(SimTime now) {
   run_error_phase(now, parts, nullptr, nominal, nominal, 0);
 }
 
-void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const EncodedFrame* e,
-                             const BitTiming& nominal, const BitTiming& data, uint16_t first_bit) {
-  // Bit times: the frame's own (with its rate switch) up to the first detection, then the
-  // nominal rate: error flags and delimiters always run at the nominal rate.
-  const SimTime error_start =
-      e != nullptr ? sof + frame_prefix_duration(*e, nominal, data, first_bit) : sof;
-  const SimDuration bit_time = nominal.bits_duration(1);
-  auto bit_end = [&](uint32_t i) {
-    if (e != nullptr && i < first_bit) {
-      return sof + frame_prefix_duration(*e, nominal, data, i + 1);
-    }
-    return error_start + SimDuration(bit_time.ns() * (int64_t{i} - first_bit + 1));
-  };
-  auto held = [&](uint32_t i) {
-    const SimTime end = bit_end(i);
-    const SimTime start = end - (e != nullptr && i < first_bit ? SimDuration(0) : bit_time);
-    for (const auto& [from, duration] : holds_) {
-      if (from < end && from + duration > start) {
-        return true;
-      }
-    }
-    return false;
-  };
-
-  enum class Phase : uint8_t { frame, flag, wait_recessive, delimiter, done };
-  struct State {
-    Phase phase = Phase::frame;
-    bool is_tx = false;
-    uint32_t flag_start = 0;
-    uint32_t flag_end = 0;   // last bit of the flag
-    uint32_t equal_run = 0;  // passive flag: equal bits seen since the flag started
-    bool equal_level = true;
-    uint32_t dominant_run = 0;  // consecutive dominant bits (rule 6)
-    uint32_t delimiter = 0;
-    bool passive_ack_pending = false;  // ACK-error exception still possible
-    bool validated = false;
-    bool detected = false;
-    uint32_t done_at = 0;
-  };
-  std::vector<State> st(parts.size());
-  for (std::size_t k = 0; k < parts.size(); ++k) {
-    st[k].is_tx = parts[k].transmitter;
-  }
-
-  // Timed actions, applied in order when their instant comes.
-  struct Action {
-    SimTime at;
-    NodeId node;
-    enum class Kind : uint8_t { error, severe, arbitration_lost, tx_ok, rx_ok } kind;
-    CanErrorType type = CanErrorType::bit;
-    ErrorRole role = ErrorRole::receiver;
-    uint16_t bit = 0;
-    bool count = true;  // apply the counter change of the rule
-    bool in_frame = true;
-    Field field = Field::sof;
-    uint16_t destuffed_bit = 0;
-    bool extended = false;
-  };
-  std::vector<Action> actions;
-
-  const uint16_t length = e != nullptr ? e->length : 0;
-  const uint16_t ack_slot = e != nullptr ? static_cast<uint16_t>(e->crc_delimiter_index + 1) : 0;
-  const uint16_t stuff_end = e != nullptr ? stuffed_end(*e) : UINT16_MAX;
-
-  // The bus before the first detection is the frame as sent, with the ACK if anybody gives it.
-  bool any_ack = false;
-  for (const auto& p : parts) {
-    any_ack = any_ack || p.acks;
-  }
-  auto frame_bit = [&](uint32_t i) {
-    if (e == nullptr || i >= length) {
-      return true;
-    }
-    if (i == ack_slot) {
-      return !any_ack;
-    }
-    return e->level_at(i);
-  };
-  bool last_level = true;
-  uint32_t run = 0;
-  for (uint32_t i = 0; i < first_bit; ++i) {
-    const bool b = frame_bit(i);
-    run = b == last_level ? run + 1 : 1;
-    last_level = b;
-  }
-
-  auto detect = [&](std::size_t k, uint32_t i, CanErrorType type, bool count) {
-    State& s = st[k];
-    const Participant& p = parts[k];
-    s.detected = true;
-    s.phase = Phase::flag;
-    s.flag_start = i + 1;
-    s.equal_run = 0;
-    s.dominant_run = 0;
-    const bool passive_ack = s.is_tx && p.passive && type == CanErrorType::ack;
-    s.passive_ack_pending = passive_ack;
-    const EncodedFrame* seen = s.is_tx && p.bits != nullptr ? p.bits : e;
-    const bool inside = seen != nullptr && i < seen->length;
-    actions.push_back(Action{
-        bit_end(i), p.id, Action::Kind::error, type,
-        s.is_tx ? ErrorRole::transmitter : ErrorRole::receiver, static_cast<uint16_t>(i),
-        count && p.drives && !passive_ack, e != nullptr, inside ? seen->field_at(i) : Field::eof,
-        inside ? seen->destuffed_index(static_cast<uint16_t>(i)) : static_cast<uint16_t>(i),
-        seen != nullptr && seen->field_begin(Field::srr) < seen->length});
-  };
-
-  const uint32_t max_bits = 4096 + static_cast<uint32_t>(length);
-  uint32_t last_dominant = first_bit;  // last bit the bus was dominant
-  uint32_t i = first_bit;
-  for (;; ++i) {
-    // What each node drives.
-    bool bus = true;
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-      const State& s = st[k];
-      const Participant& p = parts[k];
-      if (!p.drives) {
-        continue;
-      }
-      bool out = true;
-      if (s.phase == Phase::frame) {
-        if (s.is_tx && p.bits != nullptr && i < p.bits->length) {
-          out = p.bits->level_at(i);
-        } else if (!s.is_tx && p.acks && i == ack_slot && e != nullptr) {
-          out = false;
-        }
-      } else if (s.phase == Phase::flag && !p.passive && i < s.flag_start + kErrorFlagBits) {
-        out = false;
-      }
-      bus = bus && out;
-    }
-    if (held(i)) {
-      bus = false;
-    }
-    const bool prev_bus = last_level;
-    run = bus == last_level ? run + 1 : 1;
-    last_level = bus;
-    if (!bus) {
-      last_dominant = i;
-    }
-
-    // What each node makes of it.
-    bool all_done = true;
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-      State& s = st[k];
-      const Participant& p = parts[k];
-      switch (s.phase) {
-        case Phase::frame: {
-          if (p.planned && p.planned->second == i) {
-            detect(k, i, p.planned->first, true);
-            break;
-          }
-          if (s.is_tx && p.bits != nullptr && i < p.bits->length) {
-            const bool sent = p.bits->level_at(i);
-            if (i == ack_slot) {
-              if (bus && !p.self_test) {
-                detect(k, i, CanErrorType::ack, true);
-              }
-            } else if (sent != bus) {
-              if (sent && i < p.bits->arbitration_end) {
-                if (p.bits->is_stuff(i)) {
-                  // A recessive stuff bit overwritten in arbitration: stuff error, no TEC
-                  // increment (rule 3, exception 2).
-                  detect(k, i, CanErrorType::stuff, false);
-                } else {
-                  s.is_tx = false;  // lost arbitration: it receives from here on
-                  actions.push_back(Action{bit_end(i), p.id, Action::Kind::arbitration_lost,
-                                           CanErrorType::bit, ErrorRole::transmitter,
-                                           static_cast<uint16_t>(i), false, true, Field::sof,
-                                           p.bits->destuffed_index(static_cast<uint16_t>(i))});
-                }
-              } else {
-                detect(k, i, CanErrorType::bit, true);
-              }
-            } else if (i + 1u == p.bits->length) {
-              s.phase = Phase::done;  // sent the whole frame without seeing an error
-              s.done_at = i;
-              actions.push_back(Action{bit_end(i), p.id, Action::Kind::tx_ok});
-            }
-            break;
-          }
-          // Receiver (or a node that has nothing to send while the bus is held).
-          if (i < stuff_end && run >= 6) {
-            detect(k, i, CanErrorType::stuff, true);
-          } else if (e != nullptr && !bus &&
-                     (i == e->crc_delimiter_index || (i > ack_slot && i + 1u < length))) {
-            // Fixed-form bits: CRC delimiter, ACK delimiter, EOF up to its last-but-one bit (a
-            // dominant last bit is an overload condition for receivers, not modelled).
-            detect(k, i, CanErrorType::form, true);
-          } else if (e != nullptr && e->fd && i >= stuff_end && i < e->crc_delimiter_index &&
-                     e->is_stuff(i) && bus == prev_bus) {
-            detect(k, i, CanErrorType::form, true);  // fixed stuff bit with the wrong level
-          } else if (e != nullptr && i + 2u == length) {
-            // Valid for receivers once the last-but-one bit of EOF is through without error;
-            // delivered at the end of EOF like any frame.
-            if (p.decodes) {
-              s.validated = true;
-              // Rule 8 needs the ACK sent: a node that could not give it keeps its counter.
-              actions.push_back(Action{bit_end(i + 1), p.id, Action::Kind::rx_ok, CanErrorType::bit,
-                                       ErrorRole::receiver, static_cast<uint16_t>(i), p.acks});
-            }
-            s.phase = Phase::done;
-            s.done_at = i;
-          }
-          break;
-        }
-        case Phase::flag: {
-          if (!p.passive) {
-            if (i + 1 >= s.flag_start + kErrorFlagBits) {
-              s.phase = Phase::wait_recessive;
-              s.flag_end = i;
-              s.dominant_run = kErrorFlagBits;
-            }
-            break;
-          }
-          // Passive flag: done after six equal consecutive bits, whatever their level.
-          if (!bus && s.passive_ack_pending) {
-            // A dominant bit during the passive flag: the ACK-error exception no longer holds.
-            s.passive_ack_pending = false;
-            actions.push_back(Action{bit_end(i), p.id, Action::Kind::severe, CanErrorType::ack,
-                                     ErrorRole::transmitter, static_cast<uint16_t>(i), true, true});
-          }
-          s.equal_run = (s.equal_run > 0 && bus == s.equal_level) ? s.equal_run + 1 : 1;
-          s.equal_level = bus;
-          if (s.equal_run >= kErrorFlagBits) {
-            s.phase = Phase::wait_recessive;
-            s.flag_end = i;
-            s.dominant_run = 0;
-          }
-          break;
-        }
-        case Phase::wait_recessive: {
-          if (bus) {
-            s.phase = Phase::delimiter;
-            s.delimiter = 1;
-            break;
-          }
-          ++s.dominant_run;
-          // Rule 2: a receiver sees a dominant bit right after its own error flag.
-          if (!s.is_tx && i == s.flag_end + 1 && p.drives) {
-            actions.push_back(Action{bit_end(i), p.id, Action::Kind::severe, CanErrorType::bit,
-                                     ErrorRole::receiver, static_cast<uint16_t>(i), true, true});
-          }
-          // Rule 6: 14 dominant bits from an active flag's start (8 after a passive flag), and
-          // every 8 more.
-          const uint32_t first = p.passive ? 8u : 14u;
-          if (s.dominant_run >= first && (s.dominant_run - first) % 8 == 0 && p.drives) {
-            actions.push_back(Action{bit_end(i), p.id, Action::Kind::severe, CanErrorType::bit,
-                                     s.is_tx ? ErrorRole::transmitter : ErrorRole::receiver,
-                                     static_cast<uint16_t>(i), true, true});
-          }
-          break;
-        }
-        case Phase::delimiter: {
-          if (bus) {
-            if (++s.delimiter >= kErrorDelimiterBits) {
-              s.phase = Phase::done;
-              s.done_at = i;
-            }
-          } else {
-            s.phase = Phase::wait_recessive;  // not modelled: overload after an error frame
-            s.dominant_run = 1;
-          }
-          break;
-        }
-        case Phase::done:
-          break;
-      }
-      all_done = all_done && s.phase == Phase::done;
-    }
-    // A hold keeps everybody waiting for recessive bits for as long as it lasts (up to a
-    // million bit times per activity; docs/bus-engine.md).
-    if ((all_done && !held(i + 1)) || (i >= max_bits && !held(i + 1)) ||
-        i >= max_bits + kMaxHeldBits) {
-      break;
-    }
-  }
-  // The error frame ends with the last node's delimiter; a hold keeps the bus until it ends.
-  const uint32_t end_bit = i;
-  const SimTime end = bit_end(end_bit);
-  const SimTime ifs_end = end + nominal.bits_duration(kIntermissionBits);
-  const SimTime dominant_end = bit_end(last_dominant);
+void CanBus::run_error_phase(SimTime sof, std::span<const BusParticipant> parts,
+                             const EncodedFrame* e, const BitTiming& nominal, const BitTiming& data,
+                             uint16_t first_bit) {
+  ErrorPhase::Outcome out = ErrorPhase({sof, e, nominal, data, first_bit, holds_}, parts).run();
+  const SimTime ifs_end = out.ifs_end;
+  const SimTime dominant_end = out.dominant_end;
   error_frames_on_bus_++;
-  record_busy(sof, ifs_end);
+  bus_load_.record(sof, ifs_end);
   if (on_bus_event) {
     BusEvent ev{e != nullptr ? BusEvent::Kind::error_frame : BusEvent::Kind::bus_held,
                 sof,
-                end,
+                out.end,
                 0,
                 std::nullopt,
                 first_bit};
@@ -899,104 +481,97 @@ void CanBus::run_error_phase(SimTime sof, std::vector<Participant>& parts, const
     on_bus_event(ev);
   }
 
-  std::stable_sort(actions.begin(), actions.end(),
-                   [](const Action& a, const Action& b) { return a.at < b.at; });
   // Frames the receivers validated before the error reached them (last EOF bit) are delivered.
   std::optional<Frame> frame;
-  std::vector<bool> was_passive(parts.size());
   for (const auto& p : parts) {
     if (p.transmitter && e != nullptr) {
       frame = nodes_[p.id].controller->pending_tx()->frame;
     }
   }
-  for (const Action& a : actions) {
-    scheduler_.schedule_at(a.at, [this, a, frame, e_present = e != nullptr](SimTime now) {
-      Node& n = nodes_[a.node];
-      FaultConfinement& fc = n.controller->confinement();
-      switch (a.kind) {
-        case Action::Kind::error: {
-          if (a.count) {
-            a.role == ErrorRole::transmitter ? fc.transmitter_error()
-                                             : fc.receiver_detected_error();
-          }
-          (a.role == ErrorRole::transmitter ? n.stats.errors_as_transmitter
-                                            : n.stats.errors_as_receiver)[a.type]++;
-          BusErrorEvent ev;
-          ev.at = now;
-          ev.type = a.type;
-          ev.role = a.role;
-          ev.bit = a.bit;
-          ev.in_frame = a.in_frame && e_present;
-          ev.field = a.field;
-          ev.destuffed_bit = a.destuffed_bit;
-          ev.extended_frame = a.extended;
-          ev.tec = fc.tec();
-          ev.rec = fc.rec();
-          n.controller->on_error(ev);
-          break;
-        }
-        case Action::Kind::severe:
-          a.role == ErrorRole::transmitter ? fc.dominant_sequence(ErrorRole::transmitter)
-                                           : fc.receiver_severe_error();
-          break;
-        case Action::Kind::arbitration_lost:
-          n.stats.arbitration_lost++;
-          n.controller->on_arbitration_lost(now, a.bit, a.destuffed_bit);
-          break;
-        case Action::Kind::tx_ok: {
-          fc.transmit_succeeded();
-          n.stats.frames_sent++;
-          const TxFrame* t = pending(n);
-          if (t != nullptr && t->self_reception) {
-            n.stats.frames_received++;
-            n.controller->on_frame(now, t->frame, true);
-          }
-          forget_tx(n);
-          n.controller->on_tx_done(now);
-          break;
-        }
-        case Action::Kind::rx_ok:
-          if (a.count) {
-            fc.receive_succeeded();
-          }
-          if (frame) {
-            n.stats.frames_received++;
-            n.controller->on_frame(now, *frame, false);
-          }
-          break;
-      }
-      report_state(a.node, now);
-    });
+  for (const ErrorPhase::Action& a : out.actions) {
+    scheduler_.schedule_at(a.at, [this, a, frame](SimTime now) { apply(now, a, frame); });
   }
   // At the end of the error frame: transmitters that did not succeed retry (or drop a single
   // shot); error-passive transmitters suspend; the bus is free after the intermission.
-  std::vector<std::pair<NodeId, bool>> transmitters;  // (node, succeeded)
-  for (std::size_t k = 0; k < parts.size(); ++k) {
-    if (parts[k].transmitter) {
-      const bool ok = !st[k].detected && st[k].phase == Phase::done;
-      transmitters.emplace_back(parts[k].id, ok);
-    }
-  }
-  scheduler_.schedule_at(end, [this, transmitters, ifs_end, nominal](SimTime now) {
-    for (const auto& [id, ok] : transmitters) {
-      Node& n = nodes_[id];
-      FaultConfinement& fc = n.controller->confinement();
-      if (fc.error_passive()) {
-        n.ready_at = ifs_end + nominal.bits_duration(kSuspendBits);
-      }
-      if (ok) {
-        continue;
-      }
-      const TxFrame* p = n.controller->pending_tx();
-      if (p != nullptr && p->single_shot) {
-        n.stats.tx_dropped++;
-        forget_tx(n);
-        n.controller->on_tx_dropped(now);
-      }
-    }
-  });
+  scheduler_.schedule_at(
+      out.end, [this, transmitters = std::move(out.transmitters), ifs_end, nominal](SimTime now) {
+        for (const auto& [id, ok] : transmitters) {
+          Node& n = nodes_[id];
+          FaultConfinement& fc = n.controller->confinement();
+          if (fc.error_passive()) {
+            n.ready_at = ifs_end + nominal.bits_duration(kSuspendBits);
+          }
+          if (ok) {
+            continue;
+          }
+          const TxFrame* p = n.controller->pending_tx();
+          if (p != nullptr && p->single_shot) {
+            n.stats.tx_dropped++;
+            forget_tx(n);
+            n.controller->on_tx_dropped(now);
+          }
+        }
+      });
   scheduler_.schedule_at(
       ifs_end, [this, dominant_end, ifs_end](SimTime) { bus_released(dominant_end, ifs_end); });
+}
+
+void CanBus::apply(SimTime now, const ErrorPhase::Action& a, const std::optional<Frame>& frame) {
+  using Kind = ErrorPhase::Action::Kind;
+  Node& n = nodes_[a.node];
+  FaultConfinement& fc = n.controller->confinement();
+  switch (a.kind) {
+    case Kind::error: {
+      if (a.count) {
+        a.role == ErrorRole::transmitter ? fc.transmitter_error() : fc.receiver_detected_error();
+      }
+      (a.role == ErrorRole::transmitter ? n.stats.errors_as_transmitter
+                                        : n.stats.errors_as_receiver)[a.type]++;
+      BusErrorEvent ev;
+      ev.at = now;
+      ev.type = a.type;
+      ev.role = a.role;
+      ev.bit = a.bit;
+      ev.in_frame = a.in_frame;
+      ev.field = a.field;
+      ev.destuffed_bit = a.destuffed_bit;
+      ev.extended_frame = a.extended;
+      ev.tec = fc.tec();
+      ev.rec = fc.rec();
+      n.controller->on_error(ev);
+      break;
+    }
+    case Kind::severe:
+      a.role == ErrorRole::transmitter ? fc.dominant_sequence(ErrorRole::transmitter)
+                                       : fc.receiver_severe_error();
+      break;
+    case Kind::arbitration_lost:
+      n.stats.arbitration_lost++;
+      n.controller->on_arbitration_lost(now, a.bit, a.destuffed_bit);
+      break;
+    case Kind::tx_ok: {
+      fc.transmit_succeeded();
+      n.stats.frames_sent++;
+      const TxFrame* t = pending(n);
+      if (t != nullptr && t->self_reception) {
+        n.stats.frames_received++;
+        n.controller->on_frame(now, t->frame, true);
+      }
+      forget_tx(n);
+      n.controller->on_tx_done(now);
+      break;
+    }
+    case Kind::rx_ok:
+      if (a.count) {
+        fc.receive_succeeded();
+      }
+      if (frame) {
+        n.stats.frames_received++;
+        n.controller->on_frame(now, *frame, false);
+      }
+      break;
+  }
+  report_state(a.node, now);
 }
 
 void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
@@ -1132,26 +707,6 @@ void CanBus::report_state(NodeId id, SimTime at) {
     }
   }
   n.controller->on_state_change(at, s);
-}
-
-void CanBus::record_busy(SimTime start, SimTime end) {
-  busy_intervals_.emplace_back(start, end);
-  while (!busy_intervals_.empty() && busy_intervals_.front().second < end - seconds(2)) {
-    busy_intervals_.pop_front();
-  }
-}
-
-double CanBus::bus_load_percent(SimTime now) const {
-  const SimTime from = now - seconds(1);
-  int64_t busy = 0;
-  for (const auto& [start, end] : busy_intervals_) {
-    const SimTime a = std::max(start, from);
-    const SimTime b = std::min(end, now);
-    if (b > a) {
-      busy += (b - a).ns();
-    }
-  }
-  return 100.0 * static_cast<double>(busy) / 1e9;
 }
 
 }  // namespace canemu::model

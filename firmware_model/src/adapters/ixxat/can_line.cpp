@@ -3,41 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-
-#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
-#include "canemu/firmware_model/chips/sja1000/btr.hpp"
+#include <tuple>
 
 namespace canemu::model::ixxat {
 
 namespace {
 
-constexpr int64_t kNsPerSecond = 1'000'000'000;
-// 128-bit intermediate products: tick counts times clock rates overflow 64 bits.
-__extension__ typedef unsigned __int128 Wide;
 constexpr uint32_t kReportedStatus =
     CAN_STATUS_OVRRUN | CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF | CAN_STATUS_BUSCERR;
 constexpr uint16_t kWarningLimit = 96;
-constexpr uint8_t kKnownOpModes =
-    CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME | CAN_OPMODE_LISTONLY;
-
-// The SJA1000 seen through CANBTP: the prescaler counts periods of half the 16 MHz oscillator.
-constexpr BtpRange kSja1000Range{
-    8'000'000, {kBtModeRaw, 1, 1, 1, 1, 0}, {kBtModeRaw, 64, 16, 8, 4, 0}};
-
-// Nanoseconds from a clock's zero to its tick `count` (a clock of `clock_hz` divided by
-// `divisor`), rounded up: the first instant at which the counter shows `count`.
-int64_t ticks_to_ns(Wide count, uint32_t divisor, uint32_t clock_hz) {
-  const Wide num = count * divisor * kNsPerSecond;
-  return static_cast<int64_t>((num + clock_hz - 1) / clock_hz);
-}
-
-uint64_t ns_to_ticks(int64_t ns, uint32_t divisor, uint32_t clock_hz) {
-  if (ns <= 0) {
-    return 0;
-  }
-  const Wide num = static_cast<Wide>(ns) * clock_hz;
-  return static_cast<uint64_t>(num / (static_cast<Wide>(divisor) * kNsPerSecond));
-}
 
 CANMSG2 event_message(uint8_t type, uint32_t time, uint32_t id, uint8_t dlc) {
   CANMSG2 m{};
@@ -82,29 +56,6 @@ uint8_t error_code(CanErrorType t) {
   return CAN_ERROR_OTHER;
 }
 
-Btp to_btp(const CANBTP& b) {
-  return Btp{b.dwMode, b.dwBPS, b.wTS1, b.wTS2, b.wSJW, b.wTDO};
-}
-
-// The raw CANBTP of SJA1000 bus timing registers.
-// The raw CANBTP of an SJA1000 timing: the prescaler counts the chip's 8 MHz CAN clock (half the
-// oscillator), so BRP + 1.
-CANBTP btp_of_btr(uint8_t btr0, uint8_t btr1) {
-  const BitTiming t = sja1000::timing_from_btr(btr0, btr1);
-  CANBTP b{};
-  b.dwMode = CAN_BTMODE_RAW | (t.samples == 3 ? CAN_BTMODE_TSM : 0);
-  b.dwBPS = t.prescaler / 2;
-  b.wTS1 = static_cast<UINT16>(t.tseg1);
-  b.wTS2 = static_cast<UINT16>(t.tseg2);
-  b.wSJW = static_cast<UINT16>(t.sjw);
-  return b;
-}
-
-uint32_t payload_length(const CANMSG2& m) {
-  const auto& b = m.uMsgInfo.Bits;
-  return static_cast<uint32_t>(dlc_to_length(static_cast<uint8_t>(b.dlc), b.edl || b.fdr));
-}
-
 }  // namespace
 
 CanLine::CanLine(SimScheduler& scheduler, HostedNode& node, const Clocks& clocks, SimTime epoch)
@@ -113,13 +64,15 @@ CanLine::CanLine(SimScheduler& scheduler, HostedNode& node, const Clocks& clocks
       clocks_(clocks),
       epoch_(epoch),
       filters_{IdFilter(false, kStdListCapacity, CAN_FILTER_INCL),
-               IdFilter(true, CAN_FILTER_SIZE_EXT, CAN_FILTER_INCL)} {
+               IdFilter(true, CAN_FILTER_SIZE_EXT, CAN_FILTER_INCL)},
+      detector_(scheduler, node, *this, [this] { detection_ended(); }),
+      cyclic_(scheduler, clocks_, *this) {
   node_.claim(true);
   schedule_time_overrun();
 }
 
 CanLine::~CanLine() {
-  for (EventId e : {overrun_event_, delay_event_, cyclic_event_, detect_event_}) {
+  for (EventId e : {overrun_event_, delay_event_}) {
     if (e != 0) {
       scheduler_.cancel(e);
     }
@@ -128,70 +81,7 @@ CanLine::~CanLine() {
   node_.claim(false);
 }
 
-// ---------------------------------------------------------------- capabilities and status
-
-namespace {
-uint32_t features(bool fd) {
-  uint32_t f = CAN_FEATURE_STDANDEXT | CAN_FEATURE_RMTFRAME | CAN_FEATURE_ERRFRAME |
-               CAN_FEATURE_BUSLOAD | CAN_FEATURE_IDFILTER | CAN_FEATURE_LISTONLY |
-               CAN_FEATURE_SCHEDULER | CAN_FEATURE_DELAYEDTX | CAN_FEATURE_SINGLESHOT |
-               CAN_FEATURE_HIGHPRIOR;
-  if (fd) {
-    f |= CAN_FEATURE_EXTDATA | CAN_FEATURE_FASTDATA | CAN_FEATURE_ISOFRAME;
-  }
-  return f;
-}
-
-CANBTP to_canbtp(const Btp& b) {
-  CANBTP c{};
-  c.dwMode = b.mode;
-  c.dwBPS = b.bps;
-  c.wTS1 = b.ts1;
-  c.wTS2 = b.ts2;
-  c.wSJW = b.sjw;
-  c.wTDO = b.tdo;
-  return c;
-}
-}  // namespace
-
-CANCAPABILITIES CanLine::capabilities() const {
-  CANCAPABILITIES c{};
-  c.wCtrlType = fd_controller() ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000;
-  c.wBusCoupling = low_speed_ ? CAN_BUSC_LOWSPEED : CAN_BUSC_HIGHSPEED;
-  c.dwFeatures = features(fd_controller());
-  c.dwClockFreq = clocks_.clock_hz;
-  c.dwTscDivisor = clocks_.tsc_divisor;
-  c.dwCmsDivisor = clocks_.cms_divisor;
-  c.dwCmsMaxTicks = clocks_.cms_max_ticks;
-  c.dwDtxDivisor = clocks_.dtx_divisor;
-  c.dwDtxMaxTicks = clocks_.dtx_max_ticks;
-  return c;
-}
-
-CANCAPABILITIES2 CanLine::capabilities2() const {
-  CANCAPABILITIES2 c{};
-  const bool fd = fd_controller();
-  c.wCtrlType = fd ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000;
-  c.wBusCoupling = low_speed_ ? CAN_BUSC_LOWSPEED : CAN_BUSC_HIGHSPEED;
-  c.dwFeatures = features(fd);
-  const BtpRange& nominal = fd ? kFdNominalRange : kSja1000Range;
-  c.dwCanClkFreq = nominal.clock_hz;
-  c.sSdrRangeMin = to_canbtp(nominal.min);
-  c.sSdrRangeMax = to_canbtp(nominal.max);
-  if (fd) {
-    c.sFdrRangeMin = to_canbtp(kFdDataRange.min);
-    c.sFdrRangeMax = to_canbtp(kFdDataRange.max);
-  }
-  c.dwTscClkFreq = clocks_.clock_hz;
-  c.dwTscDivisor = clocks_.tsc_divisor;
-  c.dwCmsClkFreq = clocks_.clock_hz;
-  c.dwCmsDivisor = clocks_.cms_divisor;
-  c.dwCmsMaxTicks = clocks_.cms_max_ticks;
-  c.dwDtxClkFreq = clocks_.clock_hz;
-  c.dwDtxDivisor = clocks_.dtx_divisor;
-  c.dwDtxMaxTicks = clocks_.dtx_max_ticks;
-  return c;
-}
+// ---------------------------------------------------------------- status
 
 uint32_t CanLine::ticks(SimTime t) const {
   return static_cast<uint32_t>(
@@ -268,7 +158,7 @@ ControllerState CanLine::controller_state() {
 // ---------------------------------------------------------------- control unit
 
 bool CanLine::in_use() const {
-  return control_open_ || !channels_.empty() || scheduler_open_;
+  return control_open_ || !distributor_.empty() || scheduler_open_;
 }
 
 HRESULT CanLine::open_control() {
@@ -288,13 +178,10 @@ void CanLine::release_if_unused() {
   if (in_use()) {
     return;
   }
-  if (detecting_) {
-    finish_detection(VCI_E_ABORT, 0);
-  }
+  detector_.cancel();
   node_.stop();
   loaded_.reset();
   staged_.reset();
-  cyclic_pending_.reset();
   state_ = LineState::not_initialized;
   configured_ = false;
   init_ = LineInit{};
@@ -302,69 +189,7 @@ void CanLine::release_if_unused() {
   error_state_ = ErrorState::active;
   reported_status_ = bus_coupling_error_ ? CAN_STATUS_BUSCERR : 0;  // the transceiver's own
   reset_filters();
-  stop_task();
-  for (CyclicEntry& e : cyclic_) {
-    e = CyclicEntry{};
-  }
-}
-
-HostedNodeSettings CanLine::settings_for(const LineInit& init, HRESULT& hr) const {
-  HostedNodeSettings s;
-  hr = VCI_E_INVALIDARG;
-  const uint8_t known_op = kKnownOpModes | (low_speed_ ? CAN_OPMODE_LOWSPEED : 0);
-  if ((init.op_mode & ~known_op) != 0) {
-    return s;  // hardware bit-rate detection is not emulated; low speed needs a low-speed bus
-  }
-  const bool fd = fd_controller();
-  s.listen_only = (init.op_mode & CAN_OPMODE_LISTONLY) != 0;
-  if (!init.v2) {
-    s.btr0 = init.btr0;
-    s.btr1 = init.btr1;
-    if (fd) {
-      auto t = sja1000::decode_btr(init.btr0, init.btr1);
-      if (!t) {
-        return s;
-      }
-      s.nominal = *t;
-      s.data = *t;
-    }
-    s.fd = false;
-    hr = VCI_OK;
-    return s;
-  }
-  if (!valid_filter_mode(init.sf_mode) || !valid_filter_mode(init.ef_mode)) {
-    return s;
-  }
-  const uint8_t known_ex = fd ? (CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA) : 0;
-  if ((init.ex_mode & ~known_ex) != 0) {
-    return s;  // FD modes on a classic controller; non-ISO frames are not emulated
-  }
-  const BtpRange& range = fd ? kFdNominalRange : kSja1000Range;
-  auto nominal = decode_btp(to_btp(init.sdr), range, Phase::nominal);
-  if (!nominal) {
-    return s;
-  }
-  s.nominal = *nominal;
-  s.data = *nominal;
-  if (!fd) {
-    auto raw = to_raw(to_btp(init.sdr), range, Phase::nominal);
-    if (!raw) {
-      return s;
-    }
-    s.btr0 = static_cast<uint8_t>(((raw->sjw - 1) << 6) | (raw->bps - 1));
-    s.btr1 = static_cast<uint8_t>(((raw->mode & kBtModeTsm) != 0 ? 0x80 : 0) |
-                                  ((raw->ts2 - 1) << 4) | (raw->ts1 - 1));
-  }
-  if ((init.ex_mode & CAN_EXMODE_FASTDATA) != 0) {
-    auto data = decode_btp(to_btp(init.fdr), kFdDataRange, Phase::data);
-    if (!data) {
-      return s;
-    }
-    s.data = *data;
-  }
-  s.fd = (init.ex_mode & (CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA)) != 0;
-  hr = VCI_OK;
-  return s;
+  cyclic_.clear();
 }
 
 void CanLine::reset_filters() {
@@ -397,26 +222,23 @@ void CanLine::release_loaded(bool keep) {
 
 void CanLine::count_dropped(const Loaded& l) {
   if (l.channel) {
-    if (Channel* c = find(*l.channel)) {
-      ++c->counters.dropped;
-    }
+    distributor_.count_dropped(*l.channel);
   }
 }
 
 HRESULT CanLine::init_line(const LineInit& init) {
-  if (detecting_) {
+  if (detector_.running()) {
     return VCI_E_BUSY;
   }
-  HRESULT hr = VCI_OK;
-  const HostedNodeSettings settings = settings_for(init, hr);
-  if (hr != VCI_OK) {
-    return hr;
+  const auto settings = line_settings(init, fd_controller(), low_speed_);
+  if (!settings) {
+    return settings.error();
   }
   release_loaded(false);
   init_ = init;
-  settings_ = settings;
+  settings_ = *settings;
   configured_ = true;
-  node_.configure(settings, this, [this] { return next_tx(); });
+  node_.configure(settings_, this, [this] { return next_tx(); });
   state_ = LineState::offline;
   controller_overrun_ = false;
   error_state_ = ErrorState::active;
@@ -426,9 +248,7 @@ HRESULT CanLine::init_line(const LineInit& init) {
 }
 
 HRESULT CanLine::reset_line() {
-  if (detecting_) {
-    finish_detection(VCI_E_ABORT, 0);
-  }
+  detector_.cancel();
   release_loaded(false);
   if (configured_) {
     node_.configure(settings_, this, [this] { return next_tx(); });
@@ -443,7 +263,7 @@ HRESULT CanLine::reset_line() {
 }
 
 HRESULT CanLine::start_line() {
-  if (detecting_) {
+  if (detector_.running()) {
     return VCI_E_BUSY;
   }
   if (state_ == LineState::not_initialized) {
@@ -488,7 +308,7 @@ HRESULT CanLine::stop_line() {
 void CanLine::send_info(uint8_t info, uint32_t time) {
   CANMSG2 m = event_message(CAN_MSGTYPE_INFO, time, CAN_MSGID_INFO, 1);
   m.abData[0] = info;
-  broadcast(m);
+  distributor_.broadcast(m);
 }
 
 void CanLine::update_status(SimTime at) {
@@ -499,7 +319,7 @@ void CanLine::update_status(SimTime at) {
   reported_status_ = now;
   CANMSG2 m = event_message(CAN_MSGTYPE_STATUS, ticks(at), CAN_MSGID_STATUS, 1);
   m.abData[0] = static_cast<UINT8>(status_flags() & 0xFF);
-  broadcast(m);
+  distributor_.broadcast(m);
 }
 
 // ---------------------------------------------------------------- filters
@@ -508,18 +328,11 @@ FilterResult CanLine::filter(std::optional<ChannelId> channel, const FilterOp& o
   FilterPair* pair = &filters_;
   bool busy = state_ == LineState::online;
   if (channel) {
-    Channel* c = find(*channel);
-    if (c == nullptr) {
-      return {VCI_E_INVALID_HANDLE, 0};
+    auto f = distributor_.filters(*channel);
+    if (!f) {
+      return {f.error(), 0};
     }
-    if (!c->v2) {
-      return {VCI_E_NOT_IMPLEMENTED, 0};
-    }
-    if (!c->filters) {
-      return {VCI_E_NOT_INITIALIZED, 0};
-    }
-    pair = &*c->filters;
-    busy = c->active;
+    std::tie(pair, busy) = *f;
   }
   if (op.select != CAN_FILTER_STD && op.select != CAN_FILTER_EXT) {
     return {VCI_E_INVALIDARG, 0};
@@ -551,90 +364,37 @@ FilterResult CanLine::filter(std::optional<ChannelId> channel, const FilterOp& o
 
 // ---------------------------------------------------------------- channels
 
-CanLine::Channel* CanLine::find(ChannelId id) {
-  for (Channel& c : channels_) {
-    if (c.id == id) {
-      return &c;
-    }
-  }
-  return nullptr;
-}
-
-const CanLine::Channel* CanLine::find(ChannelId id) const {
-  return const_cast<CanLine*>(this)->find(id);
-}
-
 tl::expected<ChannelId, HRESULT> CanLine::open_channel(bool exclusive, bool v2) {
-  if (exclusive_ || (exclusive && !channels_.empty())) {
-    return tl::unexpected(VCI_E_ACCESSDENIED);
-  }
-  Channel c;
-  c.id = next_channel_id_++;
-  c.v2 = v2;
-  channels_.push_back(std::move(c));
-  exclusive_ = exclusive;
-  return channels_.back().id;
+  return distributor_.open(exclusive, v2);
 }
 
 void CanLine::close_channel(ChannelId id) {
   if (staged_ && staged_->channel == id) {
     staged_.reset();
   }
-  std::erase_if(channels_, [id](const Channel& c) { return c.id == id; });
-  if (channels_.empty()) {
-    exclusive_ = false;
-  }
+  distributor_.close(id);
   release_if_unused();
 }
 
 HRESULT CanLine::init_channel(ChannelId id, const ChannelSetup& setup, ChannelPort* port) {
-  Channel* c = find(id);
-  if (c == nullptr) {
-    return VCI_E_INVALID_HANDLE;
-  }
-  if (c->active) {
-    return VCI_E_INVALID_STATE;
-  }
-  if (c->v2) {
-    const uint8_t mode = setup.filter_mode & static_cast<uint8_t>(~CAN_FILTER_SRRA);
-    if (!valid_filter_mode(mode)) {
-      return VCI_E_INVALIDARG;
-    }
-    c->srra = (setup.filter_mode & CAN_FILTER_SRRA) != 0;
-    c->filters.emplace(FilterPair{IdFilter(false, kStdListCapacity, mode),
-                                  IdFilter(true, setup.ext_list_size, mode)});
-  }
-  if (staged_ && staged_->channel == id) {
+  const HRESULT hr = distributor_.init(id, setup, port);
+  if (hr == VCI_OK && staged_ && staged_->channel == id) {
     staged_.reset();  // it came from the FIFO that goes now
   }
-  c->port = port;
-  c->initialized = true;
-  c->overrun = false;
-  c->lost_pending = false;
-  c->counters = ChannelCounters{};
-  return VCI_OK;
+  return hr;
 }
 
 HRESULT CanLine::activate(ChannelId id) {
-  Channel* c = find(id);
-  if (c == nullptr) {
-    return VCI_E_INVALID_HANDLE;
+  const HRESULT hr = distributor_.activate(id);
+  if (hr == VCI_OK) {
+    node_.kick();
   }
-  if (!c->initialized) {
-    return VCI_E_NOT_INITIALIZED;
-  }
-  c->active = true;
-  node_.kick();
-  return VCI_OK;
+  return hr;
 }
 
 HRESULT CanLine::deactivate(ChannelId id) {
-  Channel* c = find(id);
-  if (c == nullptr) {
-    return VCI_E_INVALID_HANDLE;
-  }
-  c->active = false;
-  if (staged_ && staged_->channel == id) {
+  const HRESULT hr = distributor_.deactivate(id);
+  if (hr == VCI_OK && staged_ && staged_->channel == id) {
     // Taken from the FIFO but not yet handed to the controller (waiting for its delay): after
     // Deactivate the channel transmits nothing more (spec 3.8), so it is dropped and counted.
     count_dropped(*staged_);
@@ -645,46 +405,15 @@ HRESULT CanLine::deactivate(ChannelId id) {
     }
     node_.kick();  // another channel may send now
   }
-  return VCI_OK;
+  return hr;
 }
 
 std::optional<ChannelStatus> CanLine::channel_status(ChannelId id) const {
-  const Channel* c = find(id);
-  if (c == nullptr) {
-    return std::nullopt;
-  }
-  return ChannelStatus{c->initialized, c->active, c->overrun, c->counters};
+  return distributor_.status(id);
 }
 
 void CanLine::tx_ready() {
   node_.kick();
-}
-
-void CanLine::deliver(Channel& c, CANMSG2 msg) {
-  if (!c.active || c.port == nullptr) {
-    return;
-  }
-  if (!c.v2 && msg.uMsgInfo.Bits.type == CAN_MSGTYPE_DATA && payload_length(msg) > 8) {
-    ++c.counters.not_shown;  // a CANMSG has no room for it
-    return;
-  }
-  if (c.lost_pending) {
-    msg.uMsgInfo.Bits.ovr = 1;
-  }
-  if (c.port->put(msg)) {
-    ++c.counters.received;
-    c.lost_pending = false;
-  } else {
-    ++c.counters.lost;
-    c.overrun = true;
-    c.lost_pending = true;
-  }
-}
-
-void CanLine::broadcast(const CANMSG2& msg) {
-  for (Channel& c : channels_) {
-    deliver(c, msg);
-  }
 }
 
 // ---------------------------------------------------------------- transmission
@@ -721,39 +450,6 @@ std::optional<TxFrame> CanLine::to_frame(const CANMSG2& msg) const {
   return TxFrame{*frame, b.ssm != 0, false};
 }
 
-std::optional<CanLine::Loaded> CanLine::take_from(Channel& c, bool hpm_only) {
-  if (!c.active || c.port == nullptr) {
-    return std::nullopt;
-  }
-  while (std::optional<CANMSG2> m = c.port->peek()) {
-    if (!to_frame(*m)) {
-      c.port->pop();
-      ++c.counters.rejected;  // not a frame this line can send: dropped, counted
-      continue;
-    }
-    if (hpm_only && m->uMsgInfo.Bits.hpm == 0) {
-      return std::nullopt;
-    }
-    c.port->pop();
-    return Loaded{*m, c.id};
-  }
-  return std::nullopt;
-}
-
-std::optional<CanLine::Loaded> CanLine::pick_from_channels() {
-  const std::size_t n = channels_.size();
-  for (bool hpm_only : {true, false}) {
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t i = (rr_next_ + k) % n;
-      if (auto l = take_from(channels_[i], hpm_only)) {
-        rr_next_ = (i + 1) % n;
-        return l;
-      }
-    }
-  }
-  return std::nullopt;
-}
-
 std::optional<TxFrame> CanLine::load(Loaded l) {
   std::optional<TxFrame> tx = to_frame(l.msg);
   if (!tx) {
@@ -771,19 +467,18 @@ std::optional<TxFrame> CanLine::next_tx() {
     return std::nullopt;
   }
   const SimTime now = scheduler_.now();
-  if (cyclic_pending_) {
-    Loaded l = *cyclic_pending_;
-    cyclic_pending_.reset();
-    if (auto tx = load(std::move(l))) {
+  if (std::optional<CANMSG2> m = cyclic_.take()) {
+    if (auto tx = load(Loaded{*m, std::nullopt})) {
       return tx;
     }
     ++cyclic_rejected_;
   }
   if (!staged_) {
-    staged_ = pick_from_channels();
-    if (!staged_) {
+    auto m = distributor_.take([this](const CANMSG2& msg) { return to_frame(msg).has_value(); });
+    if (!m) {
       return std::nullopt;
     }
+    staged_ = Loaded{m->first, m->second};
     staged_not_before_ = now;
     const uint32_t delay = std::min(staged_->msg.dwTime, clocks_.dtx_max_ticks);
     if (delay > 0 && loaded_once_) {
@@ -804,9 +499,8 @@ std::optional<TxFrame> CanLine::next_tx() {
 }
 
 void CanLine::frame_received(SimTime at, const Frame& frame, bool own) {
-  if (detecting_) {
-    detecting_->found = true;  // this timing decodes the traffic
-    next_detection_entry();
+  if (detector_.running()) {
+    detector_.frame_received();
     return;
   }
   if (own || state_ != LineState::online) {
@@ -822,29 +516,7 @@ void CanLine::frame_received(SimTime at, const Frame& frame, bool own) {
   }
   CANMSG2 m = data_message(frame, ticks(at));
   m.uMsgInfo.Bits.afc = afc;
-  for (Channel& c : channels_) {
-    if (!c.active) {
-      continue;
-    }
-    CANMSG2 copy = m;
-    if (passes_channel_filter(c, frame, copy)) {
-      deliver(c, copy);
-    }
-  }
-}
-
-bool CanLine::passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg) const {
-  if (!c.filters) {
-    return true;  // v1 channels have no filter of their own
-  }
-  const uint8_t a = c.filters->accept(frame.id(), frame.extended(), frame.remote());
-  if (a == CAN_ACCEPT_REJECT) {
-    return false;
-  }
-  if (c.filters->select(frame.extended()).mode() != CAN_FILTER_PASS) {
-    msg.uMsgInfo.Bits.afc = a;  // the last stage that filters sets it
-  }
-  return true;
+  distributor_.distribute(frame, m);
 }
 
 void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
@@ -854,9 +526,7 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
   const Loaded done = *loaded_;
   loaded_.reset();
   if (done.channel) {
-    if (Channel* c = find(*done.channel)) {
-      ++c->counters.sent;
-    }
+    distributor_.count_sent(*done.channel);
   }
   if (done.msg.uMsgInfo.Bits.srr == 0) {
     return;  // invisible to the other channels
@@ -864,26 +534,7 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
   // Self reception: the firmware hands the frame to the distributor again.
   CANMSG2 echo = data_message(frame, ticks(at));
   echo.uMsgInfo.Bits.srr = 1;
-  for (Channel& c : channels_) {
-    if (!c.active) {
-      continue;
-    }
-    if (!c.v2 || (done.channel && c.id == *done.channel)) {
-      deliver(c, echo);
-      continue;
-    }
-    if (!c.srra) {
-      continue;
-    }
-    // Another channel's frame: as if it came from another controller, through the channel's
-    // filter, srr cleared. The cyclic list's frames are no channel's but the line's own: they
-    // keep srr, so that a program can tell them from the bus's traffic.
-    CANMSG2 copy = echo;
-    copy.uMsgInfo.Bits.srr = done.channel ? 0 : 1;
-    if (passes_channel_filter(c, frame, copy)) {
-      deliver(c, copy);
-    }
-  }
+  distributor_.echo(frame, echo, done.channel);
 }
 
 void CanLine::transmission_dropped(SimTime, const Frame&) {
@@ -894,8 +545,8 @@ void CanLine::transmission_dropped(SimTime, const Frame&) {
 }
 
 void CanLine::bus_error(const BusErrorEvent& event) {
-  if (detecting_) {
-    next_detection_entry();  // this timing does not decode the traffic
+  if (detector_.running()) {
+    detector_.bus_error();
     return;
   }
   if ((init_.op_mode & CAN_OPMODE_ERRFRAME) == 0) {
@@ -915,11 +566,11 @@ void CanLine::bus_error(const BusErrorEvent& event) {
   // (REC, TEC; 255 stands for more), from which a program can tell the error-passive limit.
   m.abData[3] = static_cast<UINT8>(std::min<uint16_t>(event.rec, 255));
   m.abData[4] = static_cast<UINT8>(std::min<uint16_t>(event.tec, 255));
-  broadcast(m);
+  distributor_.broadcast(m);
 }
 
 void CanLine::state_changed(SimTime at, ErrorState state, uint16_t, uint16_t) {
-  if (detecting_) {
+  if (detector_.running()) {
     return;
   }
   error_state_ = state;
@@ -934,7 +585,7 @@ void CanLine::overrun(SimTime at, const Frame&) {
 // ---------------------------------------------------------------- bit-rate detection
 
 HRESULT CanLine::start_detection(const std::vector<LineInit>& entries, SimDuration per_entry) {
-  if (detecting_) {
+  if (detector_.running()) {
     return VCI_E_BUSY;
   }
   if (state_ == LineState::online) {
@@ -943,63 +594,22 @@ HRESULT CanLine::start_detection(const std::vector<LineInit>& entries, SimDurati
   if (entries.empty() || per_entry.ns() <= 0) {
     return VCI_E_INVALIDARG;
   }
-  Detecting d;
-  d.per_entry = per_entry;
+  std::vector<HostedNodeSettings> settings;
   for (const LineInit& e : entries) {
-    HRESULT hr = VCI_OK;
-    HostedNodeSettings s = settings_for(e, hr);
-    if (hr != VCI_OK) {
-      return hr;
+    const auto s = line_settings(e, fd_controller(), low_speed_);
+    if (!s) {
+      return s.error();
     }
-    s.listen_only = true;  // the detector never disturbs the traffic it listens to
-    d.settings.push_back(s);
+    settings.push_back(*s);
   }
   release_loaded(false);
-  detecting_ = std::move(d);
-  detection_ = Detection{VCI_E_PENDING, 0};
   state_ = LineState::not_initialized;
   configured_ = false;
-  try_detection_entry(0);
+  detector_.start(std::move(settings), per_entry);
   return VCI_OK;
 }
 
-void CanLine::try_detection_entry(std::size_t i) {
-  if (i >= detecting_->settings.size()) {
-    finish_detection(VCI_E_TIMEOUT, 0);
-    return;
-  }
-  detecting_->current = i;
-  detecting_->moving_on = false;
-  node_.configure(detecting_->settings[i], this, [] { return std::optional<TxFrame>(); });
-  node_.go_online();
-  if (detect_event_ != 0) {
-    scheduler_.cancel(detect_event_);
-  }
-  detect_event_ =
-      scheduler_.schedule_at(scheduler_.now() + detecting_->per_entry, *this, kDetectNext);
-}
-
-void CanLine::next_detection_entry() {
-  if (detecting_->moving_on) {
-    return;
-  }
-  // Not from inside the bus's callbacks: the next entry (or the end) comes in an event of its
-  // own, at this instant.
-  detecting_->moving_on = true;
-  if (detect_event_ != 0) {
-    scheduler_.cancel(detect_event_);
-  }
-  detect_event_ = scheduler_.schedule_at(scheduler_.now(), *this, kDetectNext);
-}
-
-void CanLine::finish_detection(HRESULT hr, uint32_t index) {
-  if (detect_event_ != 0) {
-    scheduler_.cancel(detect_event_);
-    detect_event_ = 0;
-  }
-  detecting_.reset();
-  detection_ = Detection{hr, index};
-  node_.go_offline();
+void CanLine::detection_ended() {
   state_ = LineState::not_initialized;
   configured_ = false;
   error_state_ = ErrorState::active;
@@ -1008,7 +618,7 @@ void CanLine::finish_detection(HRESULT hr, uint32_t index) {
 // ---------------------------------------------------------------- time stamps
 
 void CanLine::schedule_time_overrun() {
-  const Wide count = static_cast<Wide>(time_overruns_ + 1) << 32;
+  const uint128 count = static_cast<uint128>(time_overruns_ + 1) << 32;
   const SimTime at =
       epoch_ + SimDuration(ticks_to_ns(count, clocks_.tsc_divisor, clocks_.clock_hz));
   overrun_event_ = scheduler_.schedule_at(at, *this, kTimeOverrun);
@@ -1018,24 +628,12 @@ void CanLine::on_event(SimTime now, uint64_t tag) {
   switch (tag) {
     case kTimeOverrun:
       ++time_overruns_;
-      broadcast(event_message(CAN_MSGTYPE_TIMEOVR, ticks(now), 1, 0));
+      distributor_.broadcast(event_message(CAN_MSGTYPE_TIMEOVR, ticks(now), 1, 0));
       schedule_time_overrun();
       break;
     case kDelay:
       delay_event_ = 0;
       node_.kick();
-      break;
-    case kCyclicTick:
-      cyclic_event_ = 0;
-      cyclic_tick();
-      break;
-    case kDetectNext:
-      detect_event_ = 0;
-      if (detecting_ && detecting_->found) {
-        finish_detection(VCI_OK, static_cast<uint32_t>(detecting_->current));
-      } else if (detecting_) {
-        try_detection_entry(detecting_->current + 1);
-      }
       break;
     default:
       break;
@@ -1049,228 +647,13 @@ HRESULT CanLine::open_scheduler() {
     return VCI_E_ACCESSDENIED;
   }
   scheduler_open_ = true;
-  stop_task();  // the task is off after the list is opened
+  cyclic_.suspend();  // the task is off after the list is opened
   return VCI_OK;
 }
 
 void CanLine::close_scheduler() {
   scheduler_open_ = false;
   release_if_unused();
-}
-
-void CanLine::stop_task() {
-  task_running_ = false;
-  if (cyclic_event_ != 0) {
-    scheduler_.cancel(cyclic_event_);
-    cyclic_event_ = 0;
-  }
-}
-
-HRESULT CanLine::scheduler_resume() {
-  if (task_running_) {
-    return VCI_OK;
-  }
-  task_running_ = true;
-  task_epoch_ = scheduler_.now();
-  last_tick_ = 0;
-  for (CyclicEntry& e : cyclic_) {
-    if (e.started) {
-      e.due = e.msg.wCycleTime;
-    }
-  }
-  schedule_cyclic();
-  return VCI_OK;
-}
-
-HRESULT CanLine::scheduler_suspend() {
-  stop_task();
-  return VCI_OK;
-}
-
-HRESULT CanLine::scheduler_reset() {
-  stop_task();
-  for (CyclicEntry& e : cyclic_) {
-    e = CyclicEntry{};
-  }
-  return VCI_OK;
-}
-
-tl::expected<uint32_t, HRESULT> CanLine::scheduler_add(const CANCYCLICTXMSG2& msg) {
-  if (msg.wCycleTime == 0 || msg.wCycleTime > clocks_.cms_max_ticks ||
-      msg.uMsgInfo.Bits.type != CAN_MSGTYPE_DATA) {
-    return tl::unexpected(VCI_E_INVALIDARG);
-  }
-  const bool fd = msg.uMsgInfo.Bits.edl != 0 || msg.uMsgInfo.Bits.fdr != 0;
-  const uint32_t length =
-      msg.uMsgInfo.Bits.rtr != 0 && !fd
-          ? 0
-          : static_cast<uint32_t>(dlc_to_length(static_cast<uint8_t>(msg.uMsgInfo.Bits.dlc), fd));
-  const uint32_t max_id = msg.uMsgInfo.Bits.ext != 0 ? kMaxExtendedId : kMaxStandardId;
-  if (msg.dwMsgId > max_id) {
-    return tl::unexpected(VCI_E_INVALIDARG);
-  }
-  switch (msg.bIncrMode) {
-    case CAN_CTXMSG_INC_NO:
-    case CAN_CTXMSG_INC_ID:
-      break;
-    case CAN_CTXMSG_INC_8:
-      if (msg.bByteIndex >= length) {
-        return tl::unexpected(VCI_E_INVALIDARG);
-      }
-      break;
-    case CAN_CTXMSG_INC_16:
-      if (msg.bByteIndex + 1U >= length) {
-        return tl::unexpected(VCI_E_INVALIDARG);
-      }
-      break;
-    default:
-      return tl::unexpected(VCI_E_INVALIDARG);
-  }
-  for (uint32_t i = 0; i < cyclic_.size(); ++i) {
-    if (cyclic_[i].status == CAN_CTXMSG_STAT_EMPTY) {
-      cyclic_[i] = CyclicEntry{};
-      cyclic_[i].status = CAN_CTXMSG_STAT_DONE;
-      cyclic_[i].msg = msg;
-      cyclic_[i].order = ++cyclic_order_;
-      return i;
-    }
-  }
-  return tl::unexpected(VCI_E_OUTOFMEMORY);
-}
-
-HRESULT CanLine::scheduler_remove(uint32_t index) {
-  if (index >= cyclic_.size() || cyclic_[index].status == CAN_CTXMSG_STAT_EMPTY) {
-    return VCI_E_INVALID_INDEX;
-  }
-  cyclic_[index] = CyclicEntry{};
-  schedule_cyclic();
-  return VCI_OK;
-}
-
-HRESULT CanLine::scheduler_start(uint32_t index, uint16_t count) {
-  if (index >= cyclic_.size() || cyclic_[index].status == CAN_CTXMSG_STAT_EMPTY) {
-    return VCI_E_INVALID_INDEX;
-  }
-  CyclicEntry& e = cyclic_[index];
-  e.started = true;
-  e.status = CAN_CTXMSG_STAT_BUSY;
-  e.endless = count == 0;
-  e.remaining = count;
-  if (task_running_) {
-    e.due = cyclic_tick_now() + e.msg.wCycleTime;
-    schedule_cyclic();
-  }
-  return VCI_OK;
-}
-
-HRESULT CanLine::scheduler_stop(uint32_t index) {
-  if (index >= cyclic_.size() || cyclic_[index].status == CAN_CTXMSG_STAT_EMPTY) {
-    return VCI_E_INVALID_INDEX;
-  }
-  cyclic_[index].started = false;
-  cyclic_[index].status = CAN_CTXMSG_STAT_DONE;
-  schedule_cyclic();
-  return VCI_OK;
-}
-
-CANSCHEDULERSTATUS CanLine::scheduler_status() const {
-  CANSCHEDULERSTATUS s{};
-  s.bTaskStat = task_running_ ? CAN_CTXTSK_STAT_RUNNING : CAN_CTXTSK_STAT_STOPPED;
-  for (std::size_t i = 0; i < cyclic_.size(); ++i) {
-    s.abMsgStat[i] = cyclic_[i].status;
-  }
-  return s;
-}
-
-uint64_t CanLine::cyclic_tick_now() const {
-  return ns_to_ticks((scheduler_.now() - task_epoch_).ns(), clocks_.cms_divisor, clocks_.clock_hz);
-}
-
-SimTime CanLine::cyclic_tick_time(uint64_t tick) const {
-  return task_epoch_ + SimDuration(ticks_to_ns(tick, clocks_.cms_divisor, clocks_.clock_hz));
-}
-
-void CanLine::schedule_cyclic() {
-  if (cyclic_event_ != 0) {
-    scheduler_.cancel(cyclic_event_);
-    cyclic_event_ = 0;
-  }
-  if (!task_running_) {
-    return;
-  }
-  std::optional<uint64_t> next;
-  for (const CyclicEntry& e : cyclic_) {
-    if (e.started && (!next || e.due < *next)) {
-      next = e.due;
-    }
-  }
-  if (!next) {
-    return;
-  }
-  next_tick_ = std::max(*next, last_tick_ + 1);
-  cyclic_event_ = scheduler_.schedule_at(cyclic_tick_time(next_tick_), *this, kCyclicTick);
-}
-
-namespace {
-void increment(CANCYCLICTXMSG2& m) {
-  switch (m.bIncrMode) {
-    case CAN_CTXMSG_INC_ID: {
-      const uint32_t wrap = m.uMsgInfo.Bits.ext != 0 ? (kMaxExtendedId + 1) : (kMaxStandardId + 1);
-      m.dwMsgId = (m.dwMsgId + 1) % wrap;
-      break;
-    }
-    case CAN_CTXMSG_INC_8:
-      ++m.abData[m.bByteIndex];
-      break;
-    case CAN_CTXMSG_INC_16: {
-      const uint16_t v =
-          static_cast<uint16_t>(m.abData[m.bByteIndex] | (m.abData[m.bByteIndex + 1] << 8)) + 1;
-      m.abData[m.bByteIndex] = static_cast<UINT8>(v & 0xFF);
-      m.abData[m.bByteIndex + 1] = static_cast<UINT8>(v >> 8);
-      break;
-    }
-    default:
-      break;
-  }
-}
-}  // namespace
-
-void CanLine::cyclic_tick() {
-  const uint64_t tick = next_tick_;
-  last_tick_ = tick;
-  if (state_ != LineState::online) {
-    // The list keeps its rhythm but sends nothing while the line is not online.
-    for (CyclicEntry& e : cyclic_) {
-      while (e.started && e.due <= tick) {
-        e.due += e.msg.wCycleTime;
-      }
-    }
-  } else if (!cyclic_pending_) {
-    // One frame per tick: the entry due longest, the older one on a tie. The others wait for
-    // the next free tick; their rhythm stays.
-    CyclicEntry* pick = nullptr;
-    for (CyclicEntry& e : cyclic_) {
-      if (e.started && e.due <= tick &&
-          (pick == nullptr || e.due < pick->due || (e.due == pick->due && e.order < pick->order))) {
-        pick = &e;
-      }
-    }
-    if (pick != nullptr) {
-      CANMSG2 m{};
-      m.dwMsgId = pick->msg.dwMsgId;
-      m.uMsgInfo = pick->msg.uMsgInfo;
-      std::memcpy(m.abData, pick->msg.abData, sizeof(m.abData));
-      cyclic_pending_ = Loaded{m, std::nullopt};
-      increment(pick->msg);
-      pick->due += pick->msg.wCycleTime;
-      if (!pick->endless && --pick->remaining == 0) {
-        pick->started = false;
-        pick->status = CAN_CTXMSG_STAT_DONE;
-      }
-      node_.kick();
-    }
-  }
-  schedule_cyclic();
 }
 
 }  // namespace canemu::model::ixxat

@@ -7,29 +7,31 @@
 // bit. When any node detects an error, the bits from the first detection to the end of the
 // error delimiter are simulated one by one for every node (error flags, superposition,
 // delimiters, the counter rules that depend on what each node sees).
+//
+// CanBus owns the timeline, the nodes' cached state, fault confinement bookkeeping and bus-off
+// recovery; the decisions within one frame are separate pieces it drives: Arbitration (who
+// sends), FrameRoles (who acknowledges, who will detect what), ErrorPhase (the bits from the
+// first detection on) and BusLoad.
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include "canemu/firmware_model/bus/arbitration.hpp"
+#include "canemu/firmware_model/bus/bus_load.hpp"
 #include "canemu/firmware_model/bus/can_controller.hpp"
+#include "canemu/firmware_model/bus/error_phase.hpp"
+#include "canemu/firmware_model/bus/frame_roles.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 
 namespace canemu::model {
 
 class CanBus;
-
-// What an injection does to one frame.
-struct FrameFault {
-  std::optional<CanErrorType> error;  // corrupt the frame: who detects what, see docs
-  std::optional<uint16_t> bit;        // where (frame bit index); a default per type otherwise
-  bool suppress_ack = false;          // no node acknowledges this frame
-};
 
 struct FrameContext {
   SimTime sof;
@@ -125,7 +127,7 @@ class CanBus final : private EventHandler {
   // Zeroes a node's statistics (a reused node starts afresh).
   void reset_stats(NodeId node) { nodes_[node].stats = NodeStats{}; }
   // Busy time (start of frame to end of intermission) over the second before `now`, percent.
-  double bus_load_percent(SimTime now) const;
+  double bus_load_percent(SimTime now) const { return bus_load_.percent(now); }
   uint64_t frames_on_bus() const { return frames_on_bus_; }
   uint64_t error_frames_on_bus() const { return error_frames_on_bus_; }
   // Called for every frame and error frame, in order.
@@ -166,8 +168,6 @@ class CanBus final : private EventHandler {
     EventId recovery_event = 0;
     NodeStats stats;
   };
-
-  struct Participant;  // a node's view during one frame (can_bus.cpp)
 
   // Events the bus schedules on itself, by tag.
   enum EventTag : uint64_t { kAttempt = 1, kFrameEnd = 2, kBusFree = 3 };
@@ -248,8 +248,10 @@ class CanBus final : private EventHandler {
   void finish_success(SimTime sof, NodeId tx, const BitTiming& nominal, const BitTiming& data);
   void complete_success(SimTime eof_end);
   void report_losses();
-  void run_error_phase(SimTime sof, std::vector<Participant>& parts, const EncodedFrame* bits,
+  // Plays the bits from `first_bit` on (ErrorPhase) and schedules what follows from them.
+  void run_error_phase(SimTime sof, std::span<const BusParticipant> parts, const EncodedFrame* bits,
                        const BitTiming& nominal, const BitTiming& data, uint16_t first_bit);
+  void apply(SimTime now, const ErrorPhase::Action& action, const std::optional<Frame>& frame);
   void run_hold(SimTime now);
 
   void bus_released(SimTime last_dominant_end, SimTime idle_at);
@@ -260,7 +262,6 @@ class CanBus final : private EventHandler {
   void recovered(NodeId id, SimTime at);
   // Whole bits of `node`'s own bit time in `span`, rounded to the nearest bit.
   uint64_t bits_in(NodeId node, SimDuration span);
-  void record_busy(SimTime start, SimTime end);
 
   SimScheduler& scheduler_;
   std::string name_;
@@ -279,19 +280,17 @@ class CanBus final : private EventHandler {
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   SimTime attempt_at_;
-  std::vector<std::pair<SimTime, SimDuration>> holds_;  // pending dominant holds
+  std::vector<DominantHold> holds_;  // pending dominant holds
 
   // Scratch space reused from frame to frame, and the frame in flight.
-  std::vector<NodeId> contenders_;
-  std::vector<NodeId> active_;
-  std::vector<std::pair<NodeId, uint16_t>> lost_;
-  std::vector<std::pair<NodeId, uint16_t>> collisions_;
-  std::vector<Participant> parts_;
+  std::vector<Arbitration::Contender> contenders_;
+  Arbitration arbitration_;
+  std::vector<BusParticipant> parts_;
   Completion completion_;
   // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
   std::vector<int8_t> decodes_cache_;
 
-  std::deque<std::pair<SimTime, SimTime>> busy_intervals_;
+  BusLoad bus_load_;
   uint64_t frames_on_bus_ = 0;
   uint64_t error_frames_on_bus_ = 0;
 };

@@ -1,0 +1,130 @@
+// The channels of a VCI controller and the firmware's distributor between them
+// (spec/vci-cpp-digest.md 3.7-3.9, 3.11; decisions in docs/vci.md): opening (exclusive or
+// shared), initialization with the channel's FIFOs and, on v2 channels, its own filters and
+// SRRA; activation; every message for the channels (event messages to all, received frames
+// through each v2 channel's filter, self-reception echoes by the rules of v1 and v2 channels);
+// and, for transmission, the next message from the channels' transmit FIFOs: high-priority
+// messages first, the channels in turn.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <tl/expected.hpp>
+
+#include "canemu/firmware_model/adapters/ixxat/filter.hpp"
+#include "canemu/firmware_model/bus/frame.hpp"
+#include "vci/cantype.h"
+#include "vci/vcierr.h"
+
+namespace canemu::model::ixxat {
+
+// A channel's FIFOs as the firmware sees them.
+class ChannelPort {
+ public:
+  virtual ~ChannelPort() = default;
+  // Stores a message in the receive FIFO; false when it is full (the message is then lost).
+  virtual bool put(const CANMSG2& msg) = 0;
+  // The message at the head of the transmit FIFO, left in place; nothing when it is empty or
+  // the channel has no transmit FIFO.
+  virtual std::optional<CANMSG2> peek() = 0;
+  virtual void pop() = 0;
+};
+
+using ChannelId = uint32_t;
+
+struct ChannelSetup {
+  uint32_t ext_list_size = 0;             // v2: 29-bit ID list size (0: no list)
+  uint8_t filter_mode = CAN_FILTER_PASS;  // v2: both filters' mode, optionally | CAN_FILTER_SRRA
+};
+
+struct ChannelCounters {
+  uint64_t received = 0;   // messages stored in the receive FIFO
+  uint64_t lost = 0;       // messages the receive FIFO had no room for
+  uint64_t sent = 0;       // frames of this channel that went out
+  uint64_t rejected = 0;   // transmit FIFO entries that were not frames the line can send
+  uint64_t dropped = 0;    // single-shot frames given up
+  uint64_t not_shown = 0;  // v1 channels: CAN FD frames with more than 8 bytes
+};
+
+struct ChannelStatus {
+  bool initialized = false;
+  bool activated = false;
+  bool rx_overrun = false;  // sticky until the channel is initialized again
+  ChannelCounters counters;
+};
+
+class Distributor {
+ public:
+  // --- the channels ---
+  // VCI_E_ACCESSDENIED next to an exclusive channel, or for an exclusive one next to others.
+  tl::expected<ChannelId, HRESULT> open(bool exclusive, bool v2);
+  void close(ChannelId id);
+  bool empty() const { return channels_.empty(); }
+  // The channel's FIFOs are `port` (not owned; valid until the channel is closed or
+  // initialized again); counters and overrun cleared. Only while inactive.
+  HRESULT init(ChannelId id, const ChannelSetup& setup, ChannelPort* port);
+  HRESULT activate(ChannelId id);
+  HRESULT deactivate(ChannelId id);
+  std::optional<ChannelStatus> status(ChannelId id) const;
+  // A v2 channel's filters and whether the channel is active, for a filter call; the error
+  // for an unknown (VCI_E_INVALID_HANDLE), v1 (VCI_E_NOT_IMPLEMENTED) or uninitialized
+  // (VCI_E_NOT_INITIALIZED) channel.
+  tl::expected<std::pair<FilterPair*, bool>, HRESULT> filters(ChannelId id);
+
+  // --- to the channels ---
+  // To every active channel (INFO, STATUS, ERROR, TIMEOVR messages). A receive FIFO without
+  // room loses the message: counted, the channel's overrun set, the next stored message
+  // marked ovr.
+  void broadcast(const CANMSG2& msg);
+  // A received data frame the control unit's filter passed, as `msg`: to every active channel
+  // whose own filter passes it; the last stage that filters sets afc.
+  void distribute(const Frame& frame, const CANMSG2& msg);
+  // Self reception of `frame`, sent from channel `from` (nothing: the cyclic list), as `echo`
+  // (srr set): every v1 channel and the sender get it as it is; other v2 channels with SRRA
+  // through their filter, srr cleared unless the frame is the cyclic list's.
+  void echo(const Frame& frame, const CANMSG2& echo, std::optional<ChannelId> from);
+
+  // --- from the channels ---
+  // The next message to send and its channel: high-priority messages first, then any, the
+  // channels in turn after the one that sent last. Messages `sendable` refuses are taken from
+  // their FIFO and counted as rejected. A high-priority message never overtakes the messages
+  // ahead of it in its FIFO.
+  std::optional<std::pair<CANMSG2, ChannelId>> take(
+      const std::function<bool(const CANMSG2&)>& sendable);
+  void count_sent(ChannelId id);
+  void count_dropped(ChannelId id);
+
+ private:
+  struct Channel {
+    ChannelId id = 0;
+    bool v2 = false;
+    bool initialized = false;
+    bool active = false;
+    bool srra = false;
+    bool overrun = false;       // fRxOverrun
+    bool lost_pending = false;  // the next stored message gets ovr
+    ChannelPort* port = nullptr;
+    std::optional<FilterPair> filters;  // v2
+    ChannelCounters counters;
+  };
+
+  Channel* find(ChannelId id);
+  const Channel* find(ChannelId id) const;
+  void deliver(Channel& c, CANMSG2 msg);
+  // A v2 channel's own filter on a data frame: false when it blocks; sets afc unless the
+  // filter passes everything.
+  static bool passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg);
+  std::optional<std::pair<CANMSG2, ChannelId>> take_from(
+      Channel& c, bool hpm_only, const std::function<bool(const CANMSG2&)>& sendable);
+
+  std::vector<Channel> channels_;
+  ChannelId next_id_ = 1;
+  bool exclusive_ = false;
+  std::size_t rr_next_ = 0;  // the channel to look at first
+};
+
+}  // namespace canemu::model::ixxat

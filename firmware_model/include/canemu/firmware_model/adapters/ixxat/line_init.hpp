@@ -1,0 +1,52 @@
+// How InitLine programs a VCI line's controller, and what the line reports it can do
+// (spec/vci-cpp-digest.md 3.4-3.5; decisions in docs/vci.md). Pure functions of the request,
+// the controller (SJA1000 or the CAN FD controller), the bus coupling and the clocks.
+#pragma once
+
+#include <cstdint>
+
+#include <tl/expected.hpp>
+
+#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
+#include "canemu/firmware_model/adapters/ixxat/clocks.hpp"
+#include "canemu/firmware_model/adapters/ixxat/filter.hpp"
+#include "canemu/firmware_model/chips/hosted_node.hpp"
+#include "vci/cantype.h"
+#include "vci/vcierr.h"
+
+namespace canemu::model::ixxat {
+
+// CANINITLINE (v2 false) or CANINITLINE2 (v2 true).
+struct LineInit {
+  bool v2 = false;
+  uint8_t op_mode = CAN_OPMODE_STANDARD;
+  uint8_t ex_mode = CAN_EXMODE_DISABLED;
+  uint8_t sf_mode = CAN_FILTER_INCL;  // v2: default and reset mode of the 11-bit filter
+  uint8_t ef_mode = CAN_FILTER_INCL;
+  uint32_t sf_ids = kStdListCapacity;  // v2: 0 means no 11-bit filtering at all
+  uint32_t ef_ids = CAN_FILTER_SIZE_EXT;
+  uint8_t btr0 = 0;  // v1
+  uint8_t btr1 = 0;
+  CANBTP sdr{};  // v2
+  CANBTP fdr{};
+};
+
+// The SJA1000 seen through CANBTP: the prescaler counts periods of half the 16 MHz oscillator.
+inline constexpr BtpRange kSja1000BtpRange{
+    8'000'000, {kBtModeRaw, 1, 1, 1, 1, 0}, {kBtModeRaw, 64, 16, 8, 4, 0}};
+
+// The controller settings `init` asks for, on the CAN FD controller (`fd_controller`) or an
+// SJA1000, wired to a low-speed bus or not. VCI_E_INVALIDARG for a mode the line does not have
+// (low speed on a high-speed bus, hardware bit-rate detection, FD modes on a classic
+// controller, non-ISO frames), an invalid filter mode or a timing the controller cannot run.
+// v2 timings on an SJA1000 also give its BTR0/BTR1.
+tl::expected<HostedNodeSettings, HRESULT> line_settings(const LineInit& init, bool fd_controller,
+                                                        bool low_speed);
+
+// The raw CANBTP of SJA1000 bus timing registers (what CANLINESTATUS2 shows for a v1 init).
+CANBTP btp_of_btr(uint8_t btr0, uint8_t btr1);
+
+CANCAPABILITIES capabilities(bool fd_controller, bool low_speed, const Clocks& clocks);
+CANCAPABILITIES2 capabilities2(bool fd_controller, bool low_speed, const Clocks& clocks);
+
+}  // namespace canemu::model::ixxat

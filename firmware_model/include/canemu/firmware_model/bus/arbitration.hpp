@@ -1,0 +1,70 @@
+// Arbitration at one start of frame (docs/bus-engine.md, "Timeline of a frame").
+//
+// The wired-AND makes the bus carry the lexicographically smallest of the contenders' bit
+// sequences (dominant, 0, wins every comparison), so each contender drops out at its first
+// difference from the winner's: inside its arbitration field that is a lost arbitration, after
+// it a collision (a bit error, which ErrorPhase plays out). A contender whose frame is the
+// winner's, bit for bit, sends it together with the winner.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "canemu/firmware_model/bus/can_controller.hpp"
+
+namespace canemu::model {
+
+class Arbitration {
+ public:
+  struct Contender {
+    NodeId node = 0;
+    const EncodedFrame* bits = nullptr;  // what it sends; must outlive the results
+  };
+  struct AtBit {
+    NodeId node = 0;
+    uint16_t bit = 0;  // frame bit index, SOF = 0, stuff bits counted
+  };
+
+  // Resolves one start of frame among `contenders` (at least one). Of identical frames, the
+  // first in `contenders` is the winner. The results below stay until the next call.
+  void resolve(std::span<const Contender> contenders);
+
+  // The nodes that send: the winner first, then, in contender order, those with the winner's
+  // frame and those that collide with it.
+  const std::vector<NodeId>& senders() const { return senders_; }
+  NodeId winner() const { return senders_.front(); }
+  const EncodedFrame& winning_bits() const { return *winning_bits_; }
+  // Contenders that lost arbitration, with the bit at which they did, in contender order.
+  const std::vector<AtBit>& lost() const { return lost_; }
+  // Senders whose frame departs from the winner's after the arbitration field, at that bit.
+  const std::vector<AtBit>& collisions() const { return collisions_; }
+  // The bit at which `node`'s frame collides with the winner's, if it does.
+  std::optional<uint16_t> collision_of(NodeId node) const;
+
+  // First bit where two frames differ, within the shorter one.
+  static std::optional<uint16_t> first_difference(const EncodedFrame& a, const EncodedFrame& b) {
+    const uint32_t len = std::min(a.length, b.length);
+    for (uint32_t w = 0; w * 64 < len; ++w) {
+      const uint64_t x = a.level[w] ^ b.level[w];
+      if (x != 0) {
+        const uint32_t at = w * 64 + static_cast<uint32_t>(__builtin_clzll(x));
+        if (at < len) {
+          return static_cast<uint16_t>(at);
+        }
+        return std::nullopt;
+      }
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::vector<NodeId> senders_;
+  const EncodedFrame* winning_bits_ = nullptr;
+  std::vector<AtBit> lost_;
+  std::vector<AtBit> collisions_;
+};
+
+}  // namespace canemu::model

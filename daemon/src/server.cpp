@@ -19,6 +19,7 @@
 #include <fmt/format.h>
 #include <systemd/sd-daemon.h>
 
+#include "canemu/daemon/log.hpp"
 #include "canemu/ipc/clock.hpp"
 
 namespace canemu::daemon {
@@ -143,14 +144,14 @@ void Server::resolve_security() {
     if (const passwd* pw = ::getpwnam(u.c_str())) {
       allowed_uids_.push_back(pw->pw_uid);
     } else {
-      std::fprintf(stderr, "<4>canemud: [security] user \"%s\" does not exist\n", u.c_str());
+      log::warning("[security] user \"{}\" does not exist", u);
     }
   }
   for (const std::string& g : sim_.config().security.allowed_groups) {
     if (const group* gr = ::getgrnam(g.c_str())) {
       allowed_gids_.push_back(gr->gr_gid);
     } else {
-      std::fprintf(stderr, "<4>canemud: [security] group \"%s\" does not exist\n", g.c_str());
+      log::warning("[security] group \"{}\" does not exist", g);
     }
   }
 }
@@ -161,9 +162,9 @@ void Server::reload() {
   auto fresh = file.empty() ? load_default_config() : load_config_file(file);
   if (!fresh) {
     for (const std::string& e : fresh.error()) {
-      std::fprintf(stderr, "<3>canemud: reload: %s\n", e.c_str());
+      log::error("reload: {}", e);
     }
-    std::fprintf(stderr, "<4>canemud: reload: configuration rejected; nothing changed\n");
+    log::warning("reload: configuration rejected; nothing changed");
   } else {
     if (options_.time_override) {
       fresh->simulation.time = *options_.time_override;
@@ -171,14 +172,13 @@ void Server::reload() {
     const ReloadReport r = sim_.reload(*fresh);
     resolve_security();
     for (const std::string& line : r.applied) {
-      std::fprintf(stderr, "<6>canemud: reload: %s\n", line.c_str());
+      log::info("reload: {}", line);
     }
     for (const std::string& line : r.refused) {
-      std::fprintf(stderr, "<4>canemud: reload: not applied: %s\n", line.c_str());
+      log::warning("reload: not applied: {}", line);
     }
-    std::fprintf(stderr, "<6>canemud: reload of %s done: %zu change%s applied, %zu not\n",
-                 fresh->source.c_str(), r.applied.size(), r.applied.size() == 1 ? "" : "s",
-                 r.refused.size());
+    log::info("reload of {} done: {} change{} applied, {} not", fresh->source, r.applied.size(),
+              r.applied.size() == 1 ? "" : "s", r.refused.size());
   }
   sd_notify(0, "READY=1");
 }
@@ -216,7 +216,7 @@ void Server::arm_timer() {
     }
   }
   if (::timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr) != 0) {
-    std::fprintf(stderr, "<3>canemud: timerfd_settime: %s\n", std::strerror(errno));
+    log::error("timerfd_settime: {}", std::strerror(errno));
   }
 }
 
@@ -230,7 +230,7 @@ int Server::run() {
       if (errno == EINTR) {
         continue;
       }
-      std::fprintf(stderr, "<3>canemud: epoll_wait: %s\n", std::strerror(errno));
+      log::error("epoll_wait: {}", std::strerror(errno));
       return 1;
     }
     for (int i = 0; i < n; ++i) {
@@ -261,7 +261,7 @@ int Server::run() {
           if (si.ssi_signo == SIGHUP) {
             reload();
           } else {
-            std::fprintf(stderr, "<6>canemud: signal %u, stopping\n", si.ssi_signo);
+            log::info("signal {}, stopping", si.ssi_signo);
             sd_notify(0, "STOPPING=1");
             running_ = false;
           }
@@ -291,8 +291,8 @@ void Server::check_channels() {
     Client& c = entry.second;
     ControlDispatcher::for_each_ring(c.session, [&c](Doorbell& d) {
       if (!c.closing && d.broken()) {
-        std::fprintf(stderr, "<4>canemud: client %u (%s): a ring was corrupted; disconnecting\n",
-                     c.session.pid, c.session.name.c_str());
+        log::warning("client {} ({}): a ring was corrupted; disconnecting", c.session.pid,
+                     c.session.name);
         c.closing = true;
       }
     });
@@ -373,7 +373,7 @@ void Server::accept_clients() {
         // listening socket that stays readable.
         ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, listen_.get(), nullptr);
         accepting_ = false;
-        std::fprintf(stderr, "<4>canemud: out of file descriptors; not accepting for now\n");
+        log::warning("out of file descriptors; not accepting for now");
       }
       return;  // EAGAIN: no more; other errors: the client is gone already
     }

@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/log.hpp"
+
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/chips/can_fd/can_fd_node.hpp"
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
@@ -131,10 +133,7 @@ std::optional<Simulation::NodeRef> Simulation::find_node(std::string_view name) 
 }
 
 void Simulation::fault_log(const std::string& text) {
-  if (on_fault_log) {
-    on_fault_log(
-        fmt::format("t={:.9f} s: {}", static_cast<double>(scheduler_.now().ns()) / 1e9, text));
-  }
+  log::info(log::At{"fault", scheduler_.now()}, "{}", text);
 }
 
 tl::expected<void, std::vector<std::string>> Simulation::apply_scenario(const Scenario& s,

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 
+#include "canemu/daemon/log.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/firmware_model/chips/sja1000/sja1000_node.hpp"
 
@@ -436,8 +437,8 @@ namespace {
 // the hit that completes its count, a bus effect firing and ending, the clearing.
 TEST(ScenarioLog, TellsAppliedFirstHitDoneWindowOverAndCleared) {
   World w;
-  std::vector<std::string> log;
-  w.sim->on_fault_log = [&](const std::string& line) { log.push_back(line); };
+  log::Capture capture;
+  const std::vector<std::string>& log = capture.lines();
   w.apply(R"([scenario]
 name = "life"
 
@@ -457,26 +458,33 @@ effect = "crc_error"
 )");
   w.run_until(3'000'000);
   ASSERT_EQ(log.size(), 4u);
-  EXPECT_EQ(log[0], "t=0.000000000 s: scenario \"life\" (s.toml) applied: 2 faults, seed 1");
+  EXPECT_EQ(
+      log[0],
+      "<6>canemud: fault: t=0.000000000 s: scenario \"life\" (s.toml) applied: 2 faults, seed 1");
   // The tester sends 0x123 (no data) back to back: 48 bit times (96 us) a frame with one stuff
   // bit and intermission, so the first frame from 1 ms on starts at 1.056 ms; its repetition
   // starts 35 bit times later (the frame up to the error, the error flags, their delimiter and
   // intermission), and is hit too.
   EXPECT_EQ(log[1],
-            "t=0.001056000 s: scenario \"life\" line 4: stuff_error: first hit, frame 123 from "
+            "<6>canemud: fault: t=0.001056000 s: scenario \"life\" line 4: stuff_error: first hit, "
+            "frame 123 from "
             "tester:0");
-  EXPECT_EQ(log[2], "t=0.001126000 s: scenario \"life\" line 4: stuff_error: done, 2 hits");
-  EXPECT_EQ(log[3], "t=0.002000000 s: scenario \"life\" line 11: crc_error: window over, 0 hits");
+  EXPECT_EQ(
+      log[2],
+      "<6>canemud: fault: t=0.001126000 s: scenario \"life\" line 4: stuff_error: done, 2 hits");
+  EXPECT_EQ(log[3],
+            "<6>canemud: fault: t=0.002000000 s: scenario \"life\" line 11: crc_error: window "
+            "over, 0 hits");
   EXPECT_EQ(w.sim->clear_scenarios("life"), 1u);
-  EXPECT_EQ(log.back(), "t=0.003000000 s: scenario \"life\" cleared");
+  EXPECT_EQ(log.back(), "<6>canemud: fault: t=0.003000000 s: scenario \"life\" cleared");
 }
 
 // Faults that name an ephemeral device end when it goes; its node comes back plugged in and on
 // its nominal clock for the next device, which no fault of the old one touches.
 TEST(ScenarioEffects, FaultsOfADeviceThatGoesEndWithIt) {
   World w;
-  std::vector<std::string> log;
-  w.sim->on_fault_log = [&](const std::string& line) { log.push_back(line); };
+  log::Capture capture;
+  const std::vector<std::string>& log = capture.lines();
   w.apply(R"([[fault]]
 at = "0s"
 until = "1s"
@@ -517,7 +525,8 @@ effect = "bus_off"
   EXPECT_EQ(w.sim->bus(0).stats(node.node()).errors_as_transmitter.total(), 0u);
   ASSERT_GE(log.size(), 4u);
   EXPECT_EQ(log[log.size() - 4],
-            "t=0.001000000 s: scenario \"s.toml\" line 1: node_off: ends, device tester is gone");
+            "<6>canemud: fault: t=0.001000000 s: scenario \"s.toml\" line 1: node_off: ends, "
+            "device tester is gone");
   // The same node for a new device: it talks with ixxat0:0, nobody breaks its frames, and the
   // bus_off due at 500 ms does not come.
   ASSERT_EQ(&w.sim->spare_node(0), &node);

@@ -57,7 +57,10 @@ class Simulation {
 
   // Resolves the scenario's buses and nodes and applies every fault, its times counted from
   // `start`. Nothing is applied when a name does not resolve; the errors say which, with the
-  // scenario file's line.
+  // scenario file's line. The log ("fault: t=...") tells, with the simulated time, when a
+  // scenario is applied or cleared, when a bus or node effect fires or ends, and when a frame
+  // fault hits its first frame, reaches its count or its window ends (each hit is in the bus
+  // trace and the counts, not the log).
   tl::expected<void, std::vector<std::string>> apply_scenario(const Scenario& scenario,
                                                               model::SimTime start);
   // Every fault applied so far, with what it did.
@@ -78,11 +81,6 @@ class Simulation {
   // matching, scheduled effects do not fire. Effects that fired stay (an unplugged node stays
   // unplugged). Returns the number of scenarios cleared.
   std::size_t clear_scenarios(std::string_view name);
-
-  // Told, with the simulated time, when a scenario is applied or cleared, when a bus or node
-  // effect fires or ends, and when a frame fault hits its first frame, reaches its count or
-  // its window ends (each hit is in the bus trace and the counts, not the log).
-  std::function<void(const std::string&)> on_fault_log;
 
   // Applies what can change while running (new buses and devices, the security lists, the
   // wake-up tuning) from `fresh`, a configuration already checked, and reports the rest.

@@ -14,7 +14,7 @@
 
 #include "../support/latency.hpp"
 #include "canemu/ipc/channel_message.hpp"
-#include "canemu/ipc/shm_ring.hpp"
+#include "canemu/ipc/ring_pair.hpp"
 
 namespace {
 
@@ -28,18 +28,16 @@ constexpr std::size_t kSamples = 5000;
 constexpr int64_t kGapNs = 200'000;  // between messages: the reader is asleep again by then
 
 void BM_RingOneWayLatencyBlocking(benchmark::State& state) {
-  auto memory = RingMemory::create(1024, sizeof(ChannelMessage), "bench-latency");
-  auto reader_event = make_eventfd();
-  auto writer_event = make_eventfd();
+  auto ring = SharedRing::create(1024, sizeof(ChannelMessage), "bench-latency");
   SharedSamples samples(kSamples);
-  if (!memory || !reader_event || !writer_event || !samples.valid()) {
+  if (!ring || !samples.valid()) {
     state.SkipWithError("setup failed");
     return;
   }
   for (auto _ : state) {
     const pid_t child = ::fork();
     if (child == 0) {
-      RingReader r(*memory, writer_event->get(), reader_event->get());
+      RingReader r = ring->reader();
       ChannelMessage m;
       for (std::size_t i = 0; i < kSamples;) {
         if (r.get(&m) == RingStatus::ok) {
@@ -50,7 +48,7 @@ void BM_RingOneWayLatencyBlocking(benchmark::State& state) {
       }
       ::_exit(0);
     }
-    RingWriter w(*memory, reader_event->get(), writer_event->get());
+    RingWriter w = ring->writer();
     ChannelMessage m;
     for (std::size_t i = 0; i < kSamples; ++i) {
       sleep_ns(kGapNs);

@@ -429,22 +429,17 @@ void VciService::fifo(VciSession& session, const ipc::VciRequest& m, ipc::VciRep
       r.hresult = VCI_E_OUTOFMEMORY;
       return;
     }
-    auto memory = ipc::RingMemory::create(capacity, size, "canemu-vci-fifo");
-    auto reader_event = ipc::make_eventfd();
-    auto writer_event = ipc::make_eventfd();
-    if (!memory || !reader_event || !writer_event) {
+    auto ring = ipc::SharedRing::create(capacity, size, "canemu-vci-fifo");
+    if (!ring) {
       r.hresult = VCI_E_OUTOFMEMORY;
       return;
     }
     id = next_fifo_id_++;
-    const std::size_t bytes = std::size_t{memory->capacity()} * memory->element_size();
-    fifos_.emplace(id, SharedFifo{std::move(*memory),
-                                  std::move(*reader_event),
-                                  std::move(*writer_event),
-                                  RingBudget(&ring_bytes_in_use_, bytes),
-                                  {},
-                                  nullptr,
-                                  nullptr});
+    const std::size_t bytes =
+        std::size_t{ring->memory().capacity()} * ring->memory().element_size();
+    fifos_.emplace(
+        id,
+        SharedFifo{std::move(*ring), RingBudget(&ring_bytes_in_use_, bytes), {}, nullptr, nullptr});
   }
   auto it = fifos_.find(id);
   if (it == fifos_.end()) {
@@ -481,9 +476,10 @@ void VciService::fifo(VciSession& session, const ipc::VciRequest& m, ipc::VciRep
   r.hresult = VCI_OK;
   r.values[0] = static_cast<uint32_t>(id);
   r.values[1] = static_cast<uint32_t>(id >> 32);
-  r.values[2] = f.memory.capacity();
-  r.values[3] = f.memory.element_size();
-  fds = {f.memory.fd(), f.reader_event.get(), f.writer_event.get()};
+  r.values[2] = f.ring.memory().capacity();
+  r.values[3] = f.ring.memory().element_size();
+  const auto ring_fds = f.ring.fds();
+  fds.assign(ring_fds.begin(), ring_fds.end());
 }
 
 void VciService::release_fifos(VciSession& session) {

@@ -88,9 +88,7 @@ class VciService {
 
   // A FIFO processes share: its ring and events, who holds it, who has each side.
   struct SharedFifo {
-    ipc::RingMemory memory;
-    ipc::UniqueFd reader_event;
-    ipc::UniqueFd writer_event;
+    ipc::SharedRing ring;
     RingBudget budget;
     std::set<const VciSession*> holders;
     const VciSession* reader = nullptr;

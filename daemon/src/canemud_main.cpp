@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
   for (const std::string& scenario_file : config->scenario_files) {
     auto scenario = load_scenario_file(scenario_file);
     auto applied =
-        scenario ? (*sim)->apply_scenario(*scenario, canemu::model::SimTime{})
+        scenario ? (*sim)->scenarios().apply(*scenario, canemu::model::SimTime{})
                  : tl::expected<void, std::vector<std::string>>(tl::unexpected(scenario.error()));
     if (!applied) {
       for (const std::string& e : applied.error()) {

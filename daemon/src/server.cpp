@@ -60,11 +60,11 @@ Server::Server(Simulation& sim, ServerOptions options)
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, ch.doorbell_fd(), nullptr);
     doorbells_.erase(ch.doorbell_fd());
   };
-  sim_.on_device_change = [this](ipc::NotificationKind kind, const std::string& name) {
+  sim_.devices().on_change = [this](ipc::NotificationKind kind, const std::string& name) {
     // Sent after the current batch of events: a device can go while its client is dropped.
     auto n = ipc::make_message<ipc::Notification>(0);
     n.kind = static_cast<uint32_t>(kind);
-    n.generation = sim_.device_generation();
+    n.generation = sim_.devices().generation();
     ipc::copy_name(n.device, name);
     pending_notifications_.push_back(n);
   };
@@ -74,7 +74,7 @@ Server::~Server() {
   for (auto& [fd, c] : clients_) {
     c.session.channels.clear();
   }
-  sim_.on_device_change = nullptr;
+  sim_.devices().on_change = nullptr;
   if (listen_.valid()) {
     ::unlink(options_.socket_path.c_str());
   }

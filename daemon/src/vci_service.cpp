@@ -124,7 +124,8 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
     r.hresult = session.devices.erase(ipc::name_of(m.device)) == 1 ? VCI_OK : VCI_E_INVALIDARG;
   } else if (op == ipc::VciOp::line_info && m.handle == 0) {
     // A socket's view (ICanSocket): no object of the controller needs to be open.
-    std::shared_ptr<ixxat::CanLine> line = sim_.vci_line(ipc::name_of(m.device), m.controller);
+    std::shared_ptr<ixxat::CanLine> line =
+        sim_.devices().vci_line(ipc::name_of(m.device), m.controller);
     r.hresult = line == nullptr ? VCI_E_INVALIDARG : VCI_OK;
     if (line != nullptr) {
       put_payload(r, ipc::kVciCapsOffset, line->capabilities());
@@ -197,7 +198,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
 
 void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {
   const std::string device = ipc::name_of(m.device);
-  std::shared_ptr<ixxat::CanLine> line = sim_.vci_line(device, m.controller);
+  std::shared_ptr<ixxat::CanLine> line = sim_.devices().vci_line(device, m.controller);
   if (line == nullptr) {
     r.hresult = VCI_E_INVALIDARG;  // no such device or bus number
     return;
@@ -517,13 +518,13 @@ void VciService::create_device(VciSession& session, const ipc::VciRequest& m, ip
     return;
   }
   if (name.empty()) {
-    name = sim_.unique_device_name("vci");
-  } else if (!valid_name(name) || sim_.device_exists(name)) {
+    name = sim_.devices().unique_name("vci");
+  } else if (!valid_name(name) || sim_.devices().exists(name)) {
     r.hresult = VCI_E_INVALIDARG;  // the name is taken or not a valid name
     return;
   }
   session.devices.emplace(name, sim_.add_vci_device(name, *bus, session.pid));
-  const uint64_t id = sim_.vci_id_of(name);
+  const uint64_t id = sim_.devices().vci_id_of(name);
   r.hresult = VCI_OK;
   r.values[0] = static_cast<uint32_t>(id);
   r.values[1] = static_cast<uint32_t>(id >> 32);

@@ -116,7 +116,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
     open(session, m, r);
   } else if (op == ipc::VciOp::fifo_create || op == ipc::VciOp::fifo_access ||
              op == ipc::VciOp::fifo_side) {
-    fifo(session, m, r, fifo_fds);
+    fifos_.handle(&session, m, r, fifo_fds);
   } else if (op == ipc::VciOp::device_create) {
     create_device(session, m, r);
   } else if (op == ipc::VciOp::device_remove) {
@@ -411,97 +411,7 @@ void VciService::close_all(VciSession& session) {
     close(session, session.handles.begin()->first);
   }
   session.devices.clear();
-  release_fifos(session);
-}
-
-void VciService::fifo(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r,
-                      std::vector<int>& fds) {
-  const auto op = static_cast<ipc::VciOp>(m.op);
-  uint64_t id = uint64_t{m.args[0]} | (uint64_t{m.args[1]} << 32);
-  if (op == ipc::VciOp::fifo_create) {
-    const uint32_t capacity = m.args[0];
-    const uint32_t size = m.args[1];
-    if (capacity == 0 || capacity > 0xFFFF || size == 0 || size > 0xFFFF) {
-      r.hresult = VCI_E_INVALIDARG;
-      return;
-    }
-    if (session.fifos.size() >= kMaxVciFifosPerClient ||
-        ring_bytes_in_use_ + std::size_t{capacity} * size > kMaxRingBytes) {
-      r.hresult = VCI_E_OUTOFMEMORY;
-      return;
-    }
-    auto ring = ipc::SharedRing::create(capacity, size, "canemu-vci-fifo");
-    if (!ring) {
-      r.hresult = VCI_E_OUTOFMEMORY;
-      return;
-    }
-    id = next_fifo_id_++;
-    const std::size_t bytes =
-        std::size_t{ring->memory().capacity()} * ring->memory().element_size();
-    fifos_.emplace(
-        id,
-        SharedFifo{std::move(*ring), RingBudget(&ring_bytes_in_use_, bytes), {}, nullptr, nullptr});
-  }
-  auto it = fifos_.find(id);
-  if (it == fifos_.end()) {
-    r.hresult = VCI_E_INVALIDARG;  // no FIFO with that id (any more)
-    return;
-  }
-  SharedFifo& f = it->second;
-  if (op == ipc::VciOp::fifo_side) {
-    if (f.holders.count(&session) == 0 || m.args[2] > 1) {
-      r.hresult = VCI_E_INVALIDARG;
-      return;
-    }
-    const VciSession*& side = m.args[2] == 0 ? f.reader : f.writer;
-    if (m.args[3] != 0) {
-      r.hresult = side == nullptr ? VCI_OK : VCI_E_ACCESSDENIED;
-      if (side == nullptr) {
-        side = &session;
-      }
-    } else {
-      r.hresult = side == &session ? VCI_OK : VCI_E_INVALIDARG;
-      if (side == &session) {
-        side = nullptr;
-      }
-    }
-    return;
-  }
-  if (op == ipc::VciOp::fifo_access && f.holders.count(&session) == 0 &&
-      session.fifos.size() >= kMaxVciFifosPerClient) {
-    r.hresult = VCI_E_OUTOFMEMORY;
-    return;
-  }
-  f.holders.insert(&session);
-  session.fifos.insert(id);
-  r.hresult = VCI_OK;
-  r.values[0] = static_cast<uint32_t>(id);
-  r.values[1] = static_cast<uint32_t>(id >> 32);
-  r.values[2] = f.ring.memory().capacity();
-  r.values[3] = f.ring.memory().element_size();
-  const auto ring_fds = f.ring.fds();
-  fds.assign(ring_fds.begin(), ring_fds.end());
-}
-
-void VciService::release_fifos(VciSession& session) {
-  for (uint64_t id : session.fifos) {
-    auto it = fifos_.find(id);
-    if (it == fifos_.end()) {
-      continue;
-    }
-    SharedFifo& f = it->second;
-    f.holders.erase(&session);
-    if (f.reader == &session) {
-      f.reader = nullptr;
-    }
-    if (f.writer == &session) {
-      f.writer = nullptr;
-    }
-    if (f.holders.empty()) {
-      fifos_.erase(it);
-    }
-  }
-  session.fifos.clear();
+  fifos_.release(&session);
 }
 
 void VciService::create_device(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {

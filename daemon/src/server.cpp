@@ -5,9 +5,7 @@
 #include <csignal>
 #include <cstring>
 
-#include <grp.h>
 #include <poll.h>
-#include <pwd.h>
 #include <sys/epoll.h>
 #include <sys/prctl.h>
 #include <sys/signalfd.h>
@@ -110,7 +108,7 @@ ipc::IpcResult<void> Server::open() {
       !add(epoll_.get(), signals_.get())) {
     return tl::unexpected(sys("epoll_ctl"));
   }
-  resolve_security();
+  access_.resolve(sim_.config().security);
   // Under systemd with WatchdogSec=: a ping every half period, from the loop itself, so a
   // stalled loop gets the daemon restarted.
   uint64_t watchdog_us = 0;
@@ -136,26 +134,6 @@ ipc::IpcResult<void> Server::open() {
   return {};
 }
 
-// Users and groups of [security] are resolved at start and on reload, never per connection.
-void Server::resolve_security() {
-  allowed_uids_.clear();
-  allowed_gids_.clear();
-  for (const std::string& u : sim_.config().security.allowed_users) {
-    if (const passwd* pw = ::getpwnam(u.c_str())) {
-      allowed_uids_.push_back(pw->pw_uid);
-    } else {
-      log::warning("[security] user \"{}\" does not exist", u);
-    }
-  }
-  for (const std::string& g : sim_.config().security.allowed_groups) {
-    if (const group* gr = ::getgrnam(g.c_str())) {
-      allowed_gids_.push_back(gr->gr_gid);
-    } else {
-      log::warning("[security] group \"{}\" does not exist", g);
-    }
-  }
-}
-
 void Server::reload() {
   sd_notify(0, "RELOADING=1");
   const std::string& file = options_.config_file;
@@ -170,7 +148,7 @@ void Server::reload() {
       fresh->simulation.time = *options_.time_override;
     }
     const ReloadReport r = sim_.reload(*fresh);
-    resolve_security();
+    access_.resolve(sim_.config().security);
     for (const std::string& line : r.applied) {
       log::info("reload: {}", line);
     }
@@ -333,37 +311,6 @@ void Server::fill_clients(ipc::ClientListReply& r) {
   r.count = static_cast<uint16_t>(n);
 }
 
-bool Server::allowed(int fd, uint32_t uid) const {
-  if (uid == 0 || uid == ::geteuid()) {
-    return true;
-  }
-  if (std::find(allowed_uids_.begin(), allowed_uids_.end(), uid) != allowed_uids_.end()) {
-    return true;
-  }
-  if (allowed_gids_.empty()) {
-    return false;
-  }
-  // The peer's groups from the kernel (SO_PEERGROUPS): no user database lookups in the loop.
-  std::vector<gid_t> groups(64);
-  socklen_t len = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
-  if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &len) != 0) {
-    if (errno != ERANGE) {
-      return false;
-    }
-    groups.resize(len / sizeof(gid_t));
-    if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &len) != 0) {
-      return false;
-    }
-  }
-  groups.resize(len / sizeof(gid_t));
-  for (gid_t g : groups) {
-    if (std::find(allowed_gids_.begin(), allowed_gids_.end(), g) != allowed_gids_.end()) {
-      return true;
-    }
-  }
-  return false;
-}
-
 void Server::accept_clients() {
   while (true) {
     const int fd = ::accept4(listen_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
@@ -392,7 +339,7 @@ void Server::accept_clients() {
                   fmt::format("canemud serves at most {} clients", kMaxClients));
       continue;
     }
-    if (!allowed(fd, c.session.uid)) {
+    if (!access_.allowed(fd, c.session.uid)) {
       reply_error(
           c, 0, ipc::ErrorCode::permission_denied,
           fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid));

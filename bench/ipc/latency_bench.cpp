@@ -14,7 +14,7 @@
 
 #include "../support/latency.hpp"
 #include "canemu/ipc/channel_message.hpp"
-#include "canemu/ipc/ring_pair.hpp"
+#include "canemu/ipc/shm_ring.hpp"
 
 namespace {
 
@@ -28,16 +28,18 @@ constexpr std::size_t kSamples = 5000;
 constexpr int64_t kGapNs = 200'000;  // between messages: the reader is asleep again by then
 
 void BM_RingOneWayLatencyBlocking(benchmark::State& state) {
-  auto ring = SharedRing::create(1024, sizeof(ChannelMessage), "bench-latency");
+  auto memory = RingMemory::create(1024, sizeof(ChannelMessage), "bench-latency");
+  auto reader_event = make_eventfd();
+  auto writer_event = make_eventfd();
   SharedSamples samples(kSamples);
-  if (!ring || !samples.valid()) {
+  if (!memory || !reader_event || !writer_event || !samples.valid()) {
     state.SkipWithError("setup failed");
     return;
   }
   for (auto _ : state) {
     const pid_t child = ::fork();
     if (child == 0) {
-      RingReader r = ring->reader();
+      RingReader r(*memory, writer_event->get(), reader_event->get());
       ChannelMessage m;
       for (std::size_t i = 0; i < kSamples;) {
         if (r.get(&m) == RingStatus::ok) {
@@ -48,7 +50,7 @@ void BM_RingOneWayLatencyBlocking(benchmark::State& state) {
       }
       ::_exit(0);
     }
-    RingWriter w = ring->writer();
+    RingWriter w(*memory, reader_event->get(), writer_event->get());
     ChannelMessage m;
     for (std::size_t i = 0; i < kSamples; ++i) {
       sleep_ns(kGapNs);

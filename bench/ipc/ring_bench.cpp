@@ -6,12 +6,13 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <optional>
 
 #include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "canemu/ipc/ring_pair.hpp"
+#include "canemu/ipc/shm_ring.hpp"
 
 namespace {
 
@@ -24,8 +25,20 @@ struct Message {
   uint8_t bytes[kElement];
 };
 
-IpcResult<SharedRing> make_ring(const char* name) {
-  return SharedRing::create(1024, kElement, name);
+struct Ring {
+  RingMemory memory;
+  UniqueFd reader_event;
+  UniqueFd writer_event;
+};
+
+std::optional<Ring> make_ring(const char* name) {
+  auto memory = RingMemory::create(1024, kElement, name);
+  auto reader_event = make_eventfd();
+  auto writer_event = make_eventfd();
+  if (!memory || !reader_event || !writer_event) {
+    return std::nullopt;
+  }
+  return Ring{std::move(*memory), std::move(*reader_event), std::move(*writer_event)};
 }
 
 // Runs `produce` in a forked child and `consume` (which takes kCount elements and returns a
@@ -57,7 +70,7 @@ void BM_RingTwoProcessesBusyPoll(benchmark::State& state) {
   run_between_processes(
       state,
       [&] {
-        RingWriter w = ring->writer();
+        RingWriter w(ring->memory, ring->reader_event.get(), ring->writer_event.get());
         Message m{};
         for (uint64_t i = 0; i < kCount;) {
           std::memcpy(m.bytes, &i, sizeof i);
@@ -67,7 +80,7 @@ void BM_RingTwoProcessesBusyPoll(benchmark::State& state) {
         }
       },
       [&] {
-        RingReader r = ring->reader();
+        RingReader r(ring->memory, ring->writer_event.get(), ring->reader_event.get());
         Message m{};
         uint64_t check = 0;
         for (uint64_t got = 0; got < kCount;) {
@@ -94,7 +107,7 @@ void BM_RingTwoProcessesBusyPollRuns(benchmark::State& state) {
   run_between_processes(
       state,
       [&] {
-        RingWriter w = ring->writer();
+        RingWriter w(ring->memory, ring->reader_event.get(), ring->writer_event.get());
         for (uint64_t i = 0; i < kCount;) {
           void* slots = nullptr;
           uint32_t n = 0;
@@ -110,7 +123,7 @@ void BM_RingTwoProcessesBusyPollRuns(benchmark::State& state) {
         }
       },
       [&] {
-        RingReader r = ring->reader();
+        RingReader r(ring->memory, ring->writer_event.get(), ring->reader_event.get());
         uint64_t check = 0;
         for (uint64_t got = 0; got < kCount;) {
           const void* slots = nullptr;

@@ -48,36 +48,23 @@ Result<Channel> Channel::open(Connection& connection, const ChannelOptions& o) {
                                                        "elements for a channel",
                                                        fds.size(), reply->element_size)});
   }
-  auto rx = ipc::RingMemory::map(std::move(fds[0]));
-  if (!rx) {
-    return tl::unexpected(rx.error());
+  auto rings = ipc::RingPair::map(std::move(fds), sizeof(ipc::ChannelMessage));
+  if (!rings) {
+    return tl::unexpected(rings.error());
   }
-  auto tx = ipc::RingMemory::map(std::move(fds[1]));
-  if (!tx) {
-    return tl::unexpected(tx.error());
-  }
-  if (rx->element_size() != sizeof(ipc::ChannelMessage) ||
-      tx->element_size() != sizeof(ipc::ChannelMessage)) {
-    return tl::unexpected(IpcError{EPROTO, "ring element size is not a ChannelMessage"});
-  }
-  return Channel(std::make_unique<State>(&connection, *reply, int64_t{o.spin_us} * 1000,
-                                         std::move(*rx), std::move(*tx), fds));
+  return Channel(
+      std::make_unique<State>(&connection, *reply, int64_t{o.spin_us} * 1000, std::move(*rings)));
 }
 
 Channel::State::State(Connection* c, const ipc::OpenChannelReply& reply, int64_t spin,
-                      ipc::RingMemory rxm, ipc::RingMemory txm, std::vector<ipc::UniqueFd>& fds)
+                      ipc::RingPair pair)
     : connection(c),
       info(reply),
       device(ipc::name_of(reply.device)),
       spin_ns(spin),
-      rx_memory(std::move(rxm)),
-      tx_memory(std::move(txm)),
-      rx_event(std::move(fds[2])),
-      tx_writer_event(std::move(fds[3])),
-      tx_doorbell(std::move(fds[4])),
-      // The daemon never waits on the receive ring's writer side: no eventfd there.
-      rx(rx_memory, -1, rx_event.get()),
-      tx(tx_memory, tx_doorbell.get(), tx_writer_event.get()) {}
+      rings(std::move(pair)),
+      rx(rings.rx().reader()),
+      tx(rings.tx().writer()) {}
 
 Channel::Channel(Channel&& o) noexcept = default;
 

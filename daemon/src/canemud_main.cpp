@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/log.hpp"
 #include "canemu/daemon/scenario.hpp"
 #include "canemu/daemon/server.hpp"
 #include "canemu/daemon/simulation.hpp"
@@ -56,17 +57,16 @@ int main(int argc, char** argv) {
     }
     return 1;
   }
-  // Fault scenarios of the configuration, applied from time 0 (logged when canemud runs).
-  if (!checking) {
-    (*sim)->on_fault_log = [](const std::string& line) {
-      std::fprintf(stderr, "<6>canemud: fault: %s\n", line.c_str());
-    };
+  // Fault scenarios of the configuration, applied from time 0 (logged when canemud runs; a
+  // check prints its report on stdout and logs warnings and errors only).
+  if (checking) {
+    log::set_max_level(log::Level::warning);
   }
   std::string scenarios;
   for (const std::string& scenario_file : config->scenario_files) {
     auto scenario = load_scenario_file(scenario_file);
     auto applied =
-        scenario ? (*sim)->apply_scenario(*scenario, canemu::model::SimTime{})
+        scenario ? (*sim)->scenarios().apply(*scenario, canemu::model::SimTime{})
                  : tl::expected<void, std::vector<std::string>>(tl::unexpected(scenario.error()));
     if (!applied) {
       for (const std::string& e : applied.error()) {
@@ -88,13 +88,12 @@ int main(int argc, char** argv) {
   Server server(**sim, ServerOptions{canemu::ipc::socket_path(socket), config->simulation.time,
                                      config_file, time_override});
   if (auto opened = server.open(); !opened) {
-    std::fprintf(stderr, "<3>canemud: %s\n", opened.error().message.c_str());
+    log::error("{}", opened.error().message);
     return 1;
   }
   std::fputs(summary(*config).c_str(), stderr);
   std::fputs(scenarios.c_str(), stderr);
-  std::fprintf(stderr, "<6>canemud: listening on %s\n", server.socket_path().c_str());
-  std::fprintf(stderr, "<6>canemud: try: CANEMU_SOCKET=%s build/bin/canemu status\n",
-               server.socket_path().c_str());
+  log::info("listening on {}", server.socket_path());
+  log::info("try: CANEMU_SOCKET={} build/bin/canemu status", server.socket_path());
   return server.run();
 }

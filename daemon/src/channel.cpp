@@ -55,50 +55,31 @@ Result<TxFrame> to_tx_frame(const ipc::ChannelMessage& m) {
 tl::expected<std::unique_ptr<Channel>, std::string> Channel::open(
     uint32_t id, std::string device, std::size_t bus, HostedNode& node,
     const HostedNodeSettings& settings, const Options& options) {
-  auto rx = ipc::RingMemory::create(options.rx_capacity, sizeof(ipc::ChannelMessage),
-                                    "canemu-rx-" + device);
-  auto tx = ipc::RingMemory::create(options.tx_capacity, sizeof(ipc::ChannelMessage),
-                                    "canemu-tx-" + device);
-  if (!rx || !tx) {
-    return tl::unexpected(!rx ? rx.error().message : tx.error().message);
+  auto rings = ipc::RingPair::create(options.rx_capacity, options.tx_capacity,
+                                     sizeof(ipc::ChannelMessage), "canemu", device);
+  if (!rings) {
+    return tl::unexpected(rings.error().message);
   }
-  auto rx_event = ipc::make_eventfd();
-  auto tx_writer_event = ipc::make_eventfd();
-  auto doorbell = ipc::make_eventfd();
-  if (!rx_event || !tx_writer_event || !doorbell) {
-    return tl::unexpected(std::string("eventfd: out of descriptors"));
-  }
-  std::unique_ptr<Channel> c(new Channel(id, std::move(device), bus, node, options.flags,
-                                         std::move(*rx), std::move(*tx), std::move(*rx_event),
-                                         std::move(*tx_writer_event), std::move(*doorbell)));
+  std::unique_ptr<Channel> c(
+      new Channel(id, std::move(device), bus, node, options.flags, std::move(*rings)));
   Channel* self = c.get();
   node.start(settings, self, [self] { return self->next_tx(); });
   return c;
 }
 
 Channel::Channel(uint32_t id, std::string device, std::size_t bus, HostedNode& node, uint16_t flags,
-                 ipc::RingMemory rx_memory, ipc::RingMemory tx_memory, ipc::UniqueFd rx_event,
-                 ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell)
+                 ipc::RingPair rings)
     : id_(id),
       device_(std::move(device)),
       bus_(bus),
       node_(node),
       flags_(flags),
-      rx_memory_(std::move(rx_memory)),
-      tx_memory_(std::move(tx_memory)),
-      rx_event_(std::move(rx_event)),
-      tx_writer_event_(std::move(tx_writer_event)),
-      tx_doorbell_(std::move(tx_doorbell)),
-      rx_(rx_memory_, rx_event_.get(), -1),
-      tx_(tx_memory_, tx_writer_event_.get(), tx_doorbell_.get()) {}
+      rings_(std::move(rings)),
+      rx_(rings_.rx().writer()),
+      tx_(rings_.tx().reader()) {}
 
 Channel::~Channel() {
   node_.stop();
-}
-
-std::array<int, ipc::kChannelFdCount> Channel::client_fds() const {
-  return {rx_memory_.fd(), tx_memory_.fd(), rx_event_.get(), tx_writer_event_.get(),
-          tx_doorbell_.get()};
 }
 
 void Channel::kick() {
@@ -153,7 +134,7 @@ bool Channel::reject(ipc::ChannelMessage& m) {
     // A client feeding nothing but junk gets a turn per loop iteration, not the loop: ring its
     // own doorbell so the next iteration goes on from here.
     const uint64_t one = 1;
-    [[maybe_unused]] const ssize_t n = ::write(tx_doorbell_.get(), &one, sizeof one);
+    [[maybe_unused]] const ssize_t n = ::write(doorbell_fd(), &one, sizeof one);
     return false;
   }
   return true;

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/status.hpp"
+
 namespace canemu::daemon {
 
 void ControlDispatcher::error(const Send& send, uint32_t request_id, ipc::ErrorCode code,
@@ -49,11 +51,11 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   }
   std::string device = ipc::name_of(m.device);
   if (device.empty()) {
-    device = sim_.unique_device_name("eph");
+    device = sim_.devices().unique_name("eph");
   } else if (!valid_name(device)) {
     error(send, rid, ipc::ErrorCode::bad_argument, fmt::format("device names {}", kNameRule));
     return;
-  } else if (sim_.device_exists(device)) {
+  } else if (sim_.devices().exists(device)) {
     error(send, rid, ipc::ErrorCode::name_in_use,
           fmt::format("a device named \"{}\" exists", device));
     return;
@@ -212,7 +214,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
         before_status();
       }
       auto r = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>(request_id));
-      sim_.fill_status(*r);
+      fill_status(sim_, *r);
       r->time_mode = static_cast<uint8_t>(time_.mode == TimeMode::realtime ? 0
                                           : time_.mode == TimeMode::scaled ? 1
                                                                            : 2);
@@ -270,7 +272,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::device_list_request: {
       auto r = std::make_unique<ipc::DeviceListReply>(
           ipc::make_message<ipc::DeviceListReply>(request_id));
-      sim_.fill_devices(*r);
+      fill_device_list(sim_, *r);
       send_reply(send, *r);
       return;
     }
@@ -297,7 +299,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
         auto scenario = parse_scenario(std::string_view(m->text, m->length), source);
         if (!scenario) {
           problems = scenario.error();
-        } else if (auto applied = sim_.apply_scenario(*scenario, sim_.scheduler().now());
+        } else if (auto applied = sim_.scenarios().apply(*scenario, sim_.scheduler().now());
                    !applied) {
           problems = applied.error();
         } else {
@@ -317,9 +319,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::fault_list_request: {
       auto r =
           std::make_unique<ipc::FaultListReply>(ipc::make_message<ipc::FaultListReply>(request_id));
-      const auto faults = sim_.fault_status();
+      const auto faults = sim_.scenarios().status();
       r->total = static_cast<uint16_t>(std::min<std::size_t>(faults.size(), UINT16_MAX));
-      for (const Simulation::FaultStatus& f : faults) {
+      for (const ScenarioRunner::FaultStatus& f : faults) {
         if (r->count == ipc::kMaxFaults) {
           break;
         }
@@ -341,7 +343,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::fault_clear_request: {
       const auto m = read_as<ipc::FaultClearRequest>(data);
       const std::string name = ipc::name_of(m.scenario);
-      const std::size_t cleared = sim_.clear_scenarios(name);
+      const std::size_t cleared = sim_.scenarios().clear(name);
       if (cleared == 0 && !name.empty()) {
         error(send, request_id, ipc::ErrorCode::bad_argument,
               fmt::format("no scenario named \"{}\" to clear", name));

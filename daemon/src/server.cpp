@@ -5,9 +5,7 @@
 #include <csignal>
 #include <cstring>
 
-#include <grp.h>
 #include <poll.h>
-#include <pwd.h>
 #include <sys/epoll.h>
 #include <sys/prctl.h>
 #include <sys/signalfd.h>
@@ -19,6 +17,7 @@
 #include <fmt/format.h>
 #include <systemd/sd-daemon.h>
 
+#include "canemu/daemon/log.hpp"
 #include "canemu/ipc/clock.hpp"
 
 namespace canemu::daemon {
@@ -59,11 +58,11 @@ Server::Server(Simulation& sim, ServerOptions options)
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, ch.doorbell_fd(), nullptr);
     doorbells_.erase(ch.doorbell_fd());
   };
-  sim_.on_device_change = [this](ipc::NotificationKind kind, const std::string& name) {
+  sim_.devices().on_change = [this](ipc::NotificationKind kind, const std::string& name) {
     // Sent after the current batch of events: a device can go while its client is dropped.
     auto n = ipc::make_message<ipc::Notification>(0);
     n.kind = static_cast<uint32_t>(kind);
-    n.generation = sim_.device_generation();
+    n.generation = sim_.devices().generation();
     ipc::copy_name(n.device, name);
     pending_notifications_.push_back(n);
   };
@@ -73,7 +72,7 @@ Server::~Server() {
   for (auto& [fd, c] : clients_) {
     c.session.channels.clear();
   }
-  sim_.on_device_change = nullptr;
+  sim_.devices().on_change = nullptr;
   if (listen_.valid()) {
     ::unlink(options_.socket_path.c_str());
   }
@@ -109,7 +108,7 @@ ipc::IpcResult<void> Server::open() {
       !add(epoll_.get(), signals_.get())) {
     return tl::unexpected(sys("epoll_ctl"));
   }
-  resolve_security();
+  access_.resolve(sim_.config().security);
   // Under systemd with WatchdogSec=: a ping every half period, from the loop itself, so a
   // stalled loop gets the daemon restarted.
   uint64_t watchdog_us = 0;
@@ -135,50 +134,29 @@ ipc::IpcResult<void> Server::open() {
   return {};
 }
 
-// Users and groups of [security] are resolved at start and on reload, never per connection.
-void Server::resolve_security() {
-  allowed_uids_.clear();
-  allowed_gids_.clear();
-  for (const std::string& u : sim_.config().security.allowed_users) {
-    if (const passwd* pw = ::getpwnam(u.c_str())) {
-      allowed_uids_.push_back(pw->pw_uid);
-    } else {
-      std::fprintf(stderr, "<4>canemud: [security] user \"%s\" does not exist\n", u.c_str());
-    }
-  }
-  for (const std::string& g : sim_.config().security.allowed_groups) {
-    if (const group* gr = ::getgrnam(g.c_str())) {
-      allowed_gids_.push_back(gr->gr_gid);
-    } else {
-      std::fprintf(stderr, "<4>canemud: [security] group \"%s\" does not exist\n", g.c_str());
-    }
-  }
-}
-
 void Server::reload() {
   sd_notify(0, "RELOADING=1");
   const std::string& file = options_.config_file;
   auto fresh = file.empty() ? load_default_config() : load_config_file(file);
   if (!fresh) {
     for (const std::string& e : fresh.error()) {
-      std::fprintf(stderr, "<3>canemud: reload: %s\n", e.c_str());
+      log::error("reload: {}", e);
     }
-    std::fprintf(stderr, "<4>canemud: reload: configuration rejected; nothing changed\n");
+    log::warning("reload: configuration rejected; nothing changed");
   } else {
     if (options_.time_override) {
       fresh->simulation.time = *options_.time_override;
     }
     const ReloadReport r = sim_.reload(*fresh);
-    resolve_security();
+    access_.resolve(sim_.config().security);
     for (const std::string& line : r.applied) {
-      std::fprintf(stderr, "<6>canemud: reload: %s\n", line.c_str());
+      log::info("reload: {}", line);
     }
     for (const std::string& line : r.refused) {
-      std::fprintf(stderr, "<4>canemud: reload: not applied: %s\n", line.c_str());
+      log::warning("reload: not applied: {}", line);
     }
-    std::fprintf(stderr, "<6>canemud: reload of %s done: %zu change%s applied, %zu not\n",
-                 fresh->source.c_str(), r.applied.size(), r.applied.size() == 1 ? "" : "s",
-                 r.refused.size());
+    log::info("reload of {} done: {} change{} applied, {} not", fresh->source, r.applied.size(),
+              r.applied.size() == 1 ? "" : "s", r.refused.size());
   }
   sd_notify(0, "READY=1");
 }
@@ -216,7 +194,7 @@ void Server::arm_timer() {
     }
   }
   if (::timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr) != 0) {
-    std::fprintf(stderr, "<3>canemud: timerfd_settime: %s\n", std::strerror(errno));
+    log::error("timerfd_settime: {}", std::strerror(errno));
   }
 }
 
@@ -230,7 +208,7 @@ int Server::run() {
       if (errno == EINTR) {
         continue;
       }
-      std::fprintf(stderr, "<3>canemud: epoll_wait: %s\n", std::strerror(errno));
+      log::error("epoll_wait: {}", std::strerror(errno));
       return 1;
     }
     for (int i = 0; i < n; ++i) {
@@ -261,7 +239,7 @@ int Server::run() {
           if (si.ssi_signo == SIGHUP) {
             reload();
           } else {
-            std::fprintf(stderr, "<6>canemud: signal %u, stopping\n", si.ssi_signo);
+            log::info("signal {}, stopping", si.ssi_signo);
             sd_notify(0, "STOPPING=1");
             running_ = false;
           }
@@ -291,8 +269,8 @@ void Server::check_channels() {
     Client& c = entry.second;
     ControlDispatcher::for_each_ring(c.session, [&c](Doorbell& d) {
       if (!c.closing && d.broken()) {
-        std::fprintf(stderr, "<4>canemud: client %u (%s): a ring was corrupted; disconnecting\n",
-                     c.session.pid, c.session.name.c_str());
+        log::warning("client {} ({}): a ring was corrupted; disconnecting", c.session.pid,
+                     c.session.name);
         c.closing = true;
       }
     });
@@ -333,37 +311,6 @@ void Server::fill_clients(ipc::ClientListReply& r) {
   r.count = static_cast<uint16_t>(n);
 }
 
-bool Server::allowed(int fd, uint32_t uid) const {
-  if (uid == 0 || uid == ::geteuid()) {
-    return true;
-  }
-  if (std::find(allowed_uids_.begin(), allowed_uids_.end(), uid) != allowed_uids_.end()) {
-    return true;
-  }
-  if (allowed_gids_.empty()) {
-    return false;
-  }
-  // The peer's groups from the kernel (SO_PEERGROUPS): no user database lookups in the loop.
-  std::vector<gid_t> groups(64);
-  socklen_t len = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
-  if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &len) != 0) {
-    if (errno != ERANGE) {
-      return false;
-    }
-    groups.resize(len / sizeof(gid_t));
-    if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &len) != 0) {
-      return false;
-    }
-  }
-  groups.resize(len / sizeof(gid_t));
-  for (gid_t g : groups) {
-    if (std::find(allowed_gids_.begin(), allowed_gids_.end(), g) != allowed_gids_.end()) {
-      return true;
-    }
-  }
-  return false;
-}
-
 void Server::accept_clients() {
   while (true) {
     const int fd = ::accept4(listen_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
@@ -373,7 +320,7 @@ void Server::accept_clients() {
         // listening socket that stays readable.
         ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, listen_.get(), nullptr);
         accepting_ = false;
-        std::fprintf(stderr, "<4>canemud: out of file descriptors; not accepting for now\n");
+        log::warning("out of file descriptors; not accepting for now");
       }
       return;  // EAGAIN: no more; other errors: the client is gone already
     }
@@ -392,7 +339,7 @@ void Server::accept_clients() {
                   fmt::format("canemud serves at most {} clients", kMaxClients));
       continue;
     }
-    if (!allowed(fd, c.session.uid)) {
+    if (!access_.allowed(fd, c.session.uid)) {
       reply_error(
           c, 0, ipc::ErrorCode::permission_denied,
           fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid));

@@ -26,42 +26,18 @@ tl::expected<std::unique_ptr<VciPort>, std::string> VciPort::create(bool v2, uin
                                                                     uint32_t tx_capacity,
                                                                     const std::string& name) {
   const uint32_t size = v2 ? sizeof(CANMSG2) : sizeof(CANMSG);
-  auto rx = ipc::RingMemory::create(rx_capacity, size, "canemu-vci-rx-" + name);
-  auto tx =
-      ipc::RingMemory::create(tx_capacity == 0 ? 1 : tx_capacity, size, "canemu-vci-tx-" + name);
-  if (!rx || !tx) {
-    return tl::unexpected(!rx ? rx.error().message : tx.error().message);
+  // A channel without a transmit FIFO still gets a ring of one page: the descriptors are the
+  // same for every channel.
+  auto rings = ipc::RingPair::create(rx_capacity, tx_capacity == 0 ? 1 : tx_capacity, size,
+                                     "canemu-vci", name);
+  if (!rings) {
+    return tl::unexpected(rings.error().message);
   }
-  auto rx_event = ipc::make_eventfd();
-  auto tx_writer_event = ipc::make_eventfd();
-  auto doorbell = ipc::make_eventfd();
-  if (!rx_event || !tx_writer_event || !doorbell) {
-    return tl::unexpected(std::string("eventfd: out of descriptors"));
-  }
-  return std::unique_ptr<VciPort>(new VciPort(v2, std::move(*rx), std::move(*tx),
-                                              std::move(*rx_event), std::move(*tx_writer_event),
-                                              std::move(*doorbell)));
+  return std::unique_ptr<VciPort>(new VciPort(v2, std::move(*rings)));
 }
 
-VciPort::VciPort(bool v2, ipc::RingMemory rx_memory, ipc::RingMemory tx_memory,
-                 ipc::UniqueFd rx_event, ipc::UniqueFd tx_writer_event, ipc::UniqueFd doorbell)
-    : v2_(v2),
-      rx_memory_(std::move(rx_memory)),
-      tx_memory_(std::move(tx_memory)),
-      rx_event_(std::move(rx_event)),
-      tx_writer_event_(std::move(tx_writer_event)),
-      doorbell_(std::move(doorbell)),
-      rx_(rx_memory_, rx_event_.get(), -1),
-      tx_(tx_memory_, tx_writer_event_.get(), doorbell_.get()) {}
-
-std::size_t VciPort::bytes() const {
-  return (std::size_t{rx_memory_.capacity()} + tx_memory_.capacity()) * rx_memory_.element_size();
-}
-
-std::array<int, ipc::kChannelFdCount> VciPort::client_fds() const {
-  return {rx_memory_.fd(), tx_memory_.fd(), rx_event_.get(), tx_writer_event_.get(),
-          doorbell_.get()};
-}
+VciPort::VciPort(bool v2, ipc::RingPair rings)
+    : v2_(v2), rings_(std::move(rings)), rx_(rings_.rx().writer()), tx_(rings_.tx().reader()) {}
 
 bool VciPort::put(const CANMSG2& msg) {
   ipc::RingStatus status;

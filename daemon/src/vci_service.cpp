@@ -116,7 +116,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
     open(session, m, r);
   } else if (op == ipc::VciOp::fifo_create || op == ipc::VciOp::fifo_access ||
              op == ipc::VciOp::fifo_side) {
-    fifo(session, m, r, fifo_fds);
+    fifos_.handle(&session, m, r, fifo_fds);
   } else if (op == ipc::VciOp::device_create) {
     create_device(session, m, r);
   } else if (op == ipc::VciOp::device_remove) {
@@ -124,7 +124,8 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
     r.hresult = session.devices.erase(ipc::name_of(m.device)) == 1 ? VCI_OK : VCI_E_INVALIDARG;
   } else if (op == ipc::VciOp::line_info && m.handle == 0) {
     // A socket's view (ICanSocket): no object of the controller needs to be open.
-    std::shared_ptr<ixxat::CanLine> line = sim_.vci_line(ipc::name_of(m.device), m.controller);
+    std::shared_ptr<ixxat::CanLine> line =
+        sim_.devices().vci_line(ipc::name_of(m.device), m.controller);
     r.hresult = line == nullptr ? VCI_E_INVALIDARG : VCI_OK;
     if (line != nullptr) {
       put_payload(r, ipc::kVciCapsOffset, line->capabilities());
@@ -197,7 +198,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
 
 void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {
   const std::string device = ipc::name_of(m.device);
-  std::shared_ptr<ixxat::CanLine> line = sim_.vci_line(device, m.controller);
+  std::shared_ptr<ixxat::CanLine> line = sim_.devices().vci_line(device, m.controller);
   if (line == nullptr) {
     r.hresult = VCI_E_INVALIDARG;  // no such device or bus number
     return;
@@ -410,101 +411,7 @@ void VciService::close_all(VciSession& session) {
     close(session, session.handles.begin()->first);
   }
   session.devices.clear();
-  release_fifos(session);
-}
-
-void VciService::fifo(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r,
-                      std::vector<int>& fds) {
-  const auto op = static_cast<ipc::VciOp>(m.op);
-  uint64_t id = uint64_t{m.args[0]} | (uint64_t{m.args[1]} << 32);
-  if (op == ipc::VciOp::fifo_create) {
-    const uint32_t capacity = m.args[0];
-    const uint32_t size = m.args[1];
-    if (capacity == 0 || capacity > 0xFFFF || size == 0 || size > 0xFFFF) {
-      r.hresult = VCI_E_INVALIDARG;
-      return;
-    }
-    if (session.fifos.size() >= kMaxVciFifosPerClient ||
-        ring_bytes_in_use_ + std::size_t{capacity} * size > kMaxRingBytes) {
-      r.hresult = VCI_E_OUTOFMEMORY;
-      return;
-    }
-    auto memory = ipc::RingMemory::create(capacity, size, "canemu-vci-fifo");
-    auto reader_event = ipc::make_eventfd();
-    auto writer_event = ipc::make_eventfd();
-    if (!memory || !reader_event || !writer_event) {
-      r.hresult = VCI_E_OUTOFMEMORY;
-      return;
-    }
-    id = next_fifo_id_++;
-    const std::size_t bytes = std::size_t{memory->capacity()} * memory->element_size();
-    fifos_.emplace(id, SharedFifo{std::move(*memory),
-                                  std::move(*reader_event),
-                                  std::move(*writer_event),
-                                  RingBudget(&ring_bytes_in_use_, bytes),
-                                  {},
-                                  nullptr,
-                                  nullptr});
-  }
-  auto it = fifos_.find(id);
-  if (it == fifos_.end()) {
-    r.hresult = VCI_E_INVALIDARG;  // no FIFO with that id (any more)
-    return;
-  }
-  SharedFifo& f = it->second;
-  if (op == ipc::VciOp::fifo_side) {
-    if (f.holders.count(&session) == 0 || m.args[2] > 1) {
-      r.hresult = VCI_E_INVALIDARG;
-      return;
-    }
-    const VciSession*& side = m.args[2] == 0 ? f.reader : f.writer;
-    if (m.args[3] != 0) {
-      r.hresult = side == nullptr ? VCI_OK : VCI_E_ACCESSDENIED;
-      if (side == nullptr) {
-        side = &session;
-      }
-    } else {
-      r.hresult = side == &session ? VCI_OK : VCI_E_INVALIDARG;
-      if (side == &session) {
-        side = nullptr;
-      }
-    }
-    return;
-  }
-  if (op == ipc::VciOp::fifo_access && f.holders.count(&session) == 0 &&
-      session.fifos.size() >= kMaxVciFifosPerClient) {
-    r.hresult = VCI_E_OUTOFMEMORY;
-    return;
-  }
-  f.holders.insert(&session);
-  session.fifos.insert(id);
-  r.hresult = VCI_OK;
-  r.values[0] = static_cast<uint32_t>(id);
-  r.values[1] = static_cast<uint32_t>(id >> 32);
-  r.values[2] = f.memory.capacity();
-  r.values[3] = f.memory.element_size();
-  fds = {f.memory.fd(), f.reader_event.get(), f.writer_event.get()};
-}
-
-void VciService::release_fifos(VciSession& session) {
-  for (uint64_t id : session.fifos) {
-    auto it = fifos_.find(id);
-    if (it == fifos_.end()) {
-      continue;
-    }
-    SharedFifo& f = it->second;
-    f.holders.erase(&session);
-    if (f.reader == &session) {
-      f.reader = nullptr;
-    }
-    if (f.writer == &session) {
-      f.writer = nullptr;
-    }
-    if (f.holders.empty()) {
-      fifos_.erase(it);
-    }
-  }
-  session.fifos.clear();
+  fifos_.release(&session);
 }
 
 void VciService::create_device(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r) {
@@ -521,13 +428,13 @@ void VciService::create_device(VciSession& session, const ipc::VciRequest& m, ip
     return;
   }
   if (name.empty()) {
-    name = sim_.unique_device_name("vci");
-  } else if (!valid_name(name) || sim_.device_exists(name)) {
+    name = sim_.devices().unique_name("vci");
+  } else if (!valid_name(name) || sim_.devices().exists(name)) {
     r.hresult = VCI_E_INVALIDARG;  // the name is taken or not a valid name
     return;
   }
   session.devices.emplace(name, sim_.add_vci_device(name, *bus, session.pid));
-  const uint64_t id = sim_.vci_id_of(name);
+  const uint64_t id = sim_.devices().vci_id_of(name);
   r.hresult = VCI_OK;
   r.values[0] = static_cast<uint32_t>(id);
   r.values[1] = static_cast<uint32_t>(id >> 32);

@@ -20,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   if (scenario) {
     auto sim = std::move(*Simulation::build(*load_default_config()));
-    if (auto applied = sim->apply_scenario(*scenario, canemu::model::SimTime{}); applied) {
+    if (auto applied = sim->scenarios().apply(*scenario, canemu::model::SimTime{}); applied) {
       sim->scheduler().run_until(canemu::model::SimTime::from_ns(5'000'000));
     } else if (applied.error().empty()) {
       std::abort();

@@ -246,8 +246,9 @@ HRESULT get_reader(const std::shared_ptr<Rings>& rings, IFifoReader** pp) {
   if (rings->reader_out.exchange(true)) {
     return VCI_E_ACCESSDENIED;
   }
-  *pp = new Reader(FifoSide{rings, &rings->rx_memory, [rings] { rings->reader_out = false; }},
-                   rings->rx);
+  *pp = new Reader(
+      FifoSide{rings, &rings->pair.rx().memory(), [rings] { rings->reader_out = false; }},
+      rings->rx);
   return VCI_OK;
 }
 
@@ -261,8 +262,9 @@ HRESULT get_writer(const std::shared_ptr<Rings>& rings, IFifoWriter** pp) {
   if (rings->writer_out.exchange(true)) {
     return VCI_E_ACCESSDENIED;
   }
-  *pp = new Writer(FifoSide{rings, &rings->tx_memory, [rings] { rings->writer_out = false; }},
-                   rings->tx);
+  *pp = new Writer(
+      FifoSide{rings, &rings->pair.tx().memory(), [rings] { rings->writer_out = false; }},
+      rings->tx);
   return VCI_OK;
 }
 
@@ -272,11 +274,10 @@ HRESULT get_writer(const std::shared_ptr<Rings>& rings, IFifoWriter** pp) {
 // memory are where the last holder left them).
 struct SharedFifo {
   uint64_t id = 0;
-  canemu::ipc::RingMemory memory;
-  canemu::ipc::UniqueFd reader_event;
-  canemu::ipc::UniqueFd writer_event;
+  canemu::ipc::SharedRing ring;
+  const canemu::ipc::RingMemory& memory() const { return ring.memory(); }
   uint32_t fill() const {
-    const auto* h = memory.header();
+    const auto* h = ring.memory().header();
     return static_cast<uint32_t>(h->write_pos.load(std::memory_order_acquire) -
                                  h->read_pos.load(std::memory_order_acquire));
   }
@@ -318,12 +319,12 @@ HRESULT shared_fifo(VciOp op, uint32_t a0, uint32_t a1, std::shared_ptr<SharedFi
     out = known;  // this process has it mapped already
     return VCI_OK;
   }
-  auto memory = canemu::ipc::RingMemory::map(std::move(fds[0]));
-  if (!memory) {
+  auto ring =
+      canemu::ipc::SharedRing::map(std::move(fds[0]), std::move(fds[1]), std::move(fds[2]), 0);
+  if (!ring) {
     return VCI_E_UNEXPECTED;
   }
-  out = std::make_shared<SharedFifo>(
-      SharedFifo{id, std::move(*memory), std::move(fds[1]), std::move(fds[2])});
+  out = std::make_shared<SharedFifo>(SharedFifo{id, std::move(*ring)});
   g_fifos[id] = out;
   return VCI_OK;
 }
@@ -332,12 +333,12 @@ template <class Interface, const IID& iid>
 class FifoInfo : public Com<Interface, iid> {
  public:
   explicit FifoInfo(std::shared_ptr<SharedFifo> f) : f_(std::move(f)) {}
-  HRESULT GetCapacity(PUINT16 p) override { return put(p, f_->memory.capacity()); }
-  HRESULT GetEntrySize(PUINT16 p) override { return put(p, f_->memory.element_size()); }
-  HRESULT GetFreeCount(PUINT16 p) override { return put(p, f_->memory.capacity() - f_->fill()); }
+  HRESULT GetCapacity(PUINT16 p) override { return put(p, f_->memory().capacity()); }
+  HRESULT GetEntrySize(PUINT16 p) override { return put(p, f_->memory().element_size()); }
+  HRESULT GetFreeCount(PUINT16 p) override { return put(p, f_->memory().capacity() - f_->fill()); }
   HRESULT GetFillCount(PUINT16 p) override { return put(p, f_->fill()); }
   HRESULT GetFillLevel(PUINT16 p) override {
-    return put(p, f_->fill() * 100 / f_->memory.capacity());
+    return put(p, f_->fill() * 100 / f_->memory().capacity());
   }
 
  protected:
@@ -363,7 +364,7 @@ class Fifo2 final : public FifoInfo<IVciFifo2, IID_IVciFifo2> {
       side_call(f_->id, kReaderSide, false);
       return hr;
     }
-    canemu::ipc::RingReader reader(f_->memory, f_->writer_event.get(), f_->reader_event.get());
+    canemu::ipc::RingReader reader = f_->ring.reader();
     while (reader.get(nullptr) == canemu::ipc::RingStatus::ok) {
     }
     side_call(f_->id, kWriterSide, false);
@@ -379,18 +380,16 @@ HRESULT open_fifo(const std::shared_ptr<SharedFifo>& f, REFIID riid, PVOID* ppv)
     if (HRESULT hr = side_call(f->id, side, true); hr != VCI_OK) {
       return hr;
     }
-    FifoSide fs{f, &f->memory, [f, side] { side_call(f->id, side, false); }};
+    FifoSide fs{f, &f->memory(), [f, side] { side_call(f->id, side, false); }};
     if (reader) {
       return hand_out(
           static_cast<IFifoReader*>(new Reader(
-              std::move(fs), std::make_unique<canemu::ipc::RingReader>(
-                                 f->memory, f->writer_event.get(), f->reader_event.get()))),
+              std::move(fs), std::make_unique<canemu::ipc::RingReader>(f->ring.reader()))),
           ppv);
     }
     return hand_out(
-        static_cast<IFifoWriter*>(new Writer(
-            std::move(fs), std::make_unique<canemu::ipc::RingWriter>(
-                               f->memory, f->reader_event.get(), f->writer_event.get()))),
+        static_cast<IFifoWriter*>(
+            new Writer(std::move(fs), std::make_unique<canemu::ipc::RingWriter>(f->ring.writer()))),
         ppv);
   }
   if (same(riid, IID_IVciFifo)) {

@@ -286,16 +286,8 @@ Remote::~Remote() {
   Library::get().simple(*this, ipc::VciOp::close);
 }
 
-Rings::Rings(ipc::RingMemory rx_mem, ipc::RingMemory tx_mem, std::vector<ipc::UniqueFd>& fds,
-             bool with_tx)
-    : rx_memory(std::move(rx_mem)),
-      tx_memory(std::move(tx_mem)),
-      rx_event(std::move(fds[2])),
-      tx_writer_event(std::move(fds[3])),
-      doorbell(std::move(fds[4])),
-      rx(rx_memory, -1, rx_event.get()),
-      tx(tx_memory, doorbell.get(), tx_writer_event.get()),
-      has_tx(with_tx) {}
+Rings::Rings(ipc::RingPair mapped, bool with_tx)
+    : pair(std::move(mapped)), rx(pair.rx().reader()), tx(pair.tx().writer()), has_tx(with_tx) {}
 
 // ---------------------------------------------------------------- requests
 
@@ -546,14 +538,12 @@ HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_thre
         fmt::format("canemud sent {} descriptors and {}-byte elements", fds.size(), r.values[2]));
     return VCI_E_UNEXPECTED;
   }
-  auto rx_mem = ipc::RingMemory::map(std::move(fds[0]));
-  auto tx_mem = ipc::RingMemory::map(std::move(fds[1]));
-  if (!rx_mem || !tx_mem || rx_mem->element_size() != element ||
-      tx_mem->element_size() != element) {
+  auto mapped = ipc::RingPair::map(std::move(fds), element);
+  if (!mapped) {
     set_detail("the channel's rings could not be mapped");
     return VCI_E_UNEXPECTED;
   }
-  auto rings = std::make_shared<Rings>(std::move(*rx_mem), std::move(*tx_mem), fds, tx != 0);
+  auto rings = std::make_shared<Rings>(std::move(*mapped), tx != 0);
   rings->rx.set_threshold(std::max<uint32_t>(rx_threshold, 1));
   rings->tx.set_threshold(std::max<uint32_t>(tx_threshold, 1));
   channel.rings = std::move(rings);
@@ -582,14 +572,14 @@ void keep_pollable(ChannelObj& c) {
     }
   }
   const uint64_t one = 1;
-  [[maybe_unused]] const ssize_t n = ::write(c.rings->rx_event.get(), &one, sizeof one);
+  [[maybe_unused]] const ssize_t n = ::write(c.rings->pair.rx().reader_event(), &one, sizeof one);
 }
 }  // namespace
 
 int channel_poll_fd(ChannelObj& c) {
   c.pollable.store(true, std::memory_order_relaxed);
   keep_pollable(c);
-  return c.rings->rx_event.get();
+  return c.rings->pair.rx().reader_event();
 }
 
 HRESULT channel_peek(ChannelObj& c, void* msg) {
@@ -695,7 +685,7 @@ HRESULT channel_read_many(ChannelObj& c, uint32_t timeout_ms, void* msgs, uint32
   if (hr != VCI_OK) {
     return hr;
   }
-  const std::size_t size = c.rings->rx_memory.element_size();
+  const std::size_t size = c.rings->pair.element_size();
   for (done = 1; done < count; ++done) {
     if (channel_peek(c, out + done * size) != VCI_OK) {
       break;
@@ -711,7 +701,7 @@ HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, 
     return VCI_E_NOT_INITIALIZED;
   }
   const auto* in = static_cast<const uint8_t*>(msgs);
-  const std::size_t size = c.rings->tx_memory.element_size();
+  const std::size_t size = c.rings->pair.element_size();
   for (; done < count; ++done) {
     const HRESULT hr = timeout_ms == 0 ? channel_post(c, in + done * size)
                                        : channel_send(c, timeout_ms, in + done * size);
@@ -743,7 +733,7 @@ uint8_t rx_load(const ChannelObj& c) {
     return 0;
   }
   return static_cast<uint8_t>(uint64_t{c.rings->rx.fill_count()} * 100 /
-                              c.rings->rx_memory.capacity());
+                              c.rings->pair.rx().memory().capacity());
 }
 
 uint8_t tx_load(const ChannelObj& c) {
@@ -751,7 +741,7 @@ uint8_t tx_load(const ChannelObj& c) {
     return 0;
   }
   return static_cast<uint8_t>(uint64_t{c.rings->tx.fill_count()} * 100 /
-                              c.rings->tx_memory.capacity());
+                              c.rings->pair.tx().memory().capacity());
 }
 
 }  // namespace canemu::client::vci

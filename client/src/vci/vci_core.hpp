@@ -17,7 +17,7 @@
 
 #include "canemu/client/connection.hpp"
 #include "canemu/ipc/protocol.hpp"
-#include "canemu/ipc/shm_ring.hpp"
+#include "canemu/ipc/ring_pair.hpp"
 #include "vci/cantype.h"
 #include "vci/vcierr.h"
 #include "vci/vcitype.h"
@@ -101,14 +101,9 @@ struct Remote : Object {
 };
 
 struct Rings {
-  Rings(ipc::RingMemory rx_mem, ipc::RingMemory tx_mem, std::vector<ipc::UniqueFd>& fds,
-        bool has_tx);
-  ipc::RingMemory rx_memory;
-  ipc::RingMemory tx_memory;
-  ipc::UniqueFd rx_event;
-  ipc::UniqueFd tx_writer_event;
-  ipc::UniqueFd doorbell;
-  ipc::RingReader rx;
+  Rings(ipc::RingPair mapped, bool has_tx);
+  ipc::RingPair pair;
+  ipc::RingReader rx;  // this process's views: it reads the receive FIFO, writes the transmit one
   ipc::RingWriter tx;
   bool has_tx;
   // The C++ API hands out one IFifoReader and one IFifoWriter at a time.

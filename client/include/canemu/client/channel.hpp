@@ -16,7 +16,7 @@
 
 #include "canemu/client/connection.hpp"
 #include "canemu/ipc/channel_message.hpp"
-#include "canemu/ipc/shm_ring.hpp"
+#include "canemu/ipc/ring_pair.hpp"
 
 namespace canemu::client {
 
@@ -54,11 +54,11 @@ class Channel {
   ipc::RingWriter& tx() { return s_->tx; }
   // The eventfd signalled when the receive ring reaches its threshold while this side waits
   // (see RingReader::arm_unless_filled for use in a poll loop).
-  int rx_event_fd() const { return s_->rx_event.get(); }
+  int rx_event_fd() const { return s_->rings.rx().reader_event(); }
   // The shared headers and the daemon's doorbell, for tools and tests that need the raw ring.
-  ipc::RingHeader* rx_header() const { return s_->rx_memory.header(); }
-  ipc::RingHeader* tx_header() const { return s_->tx_memory.header(); }
-  int tx_doorbell_fd() const { return s_->tx_doorbell.get(); }
+  ipc::RingHeader* rx_header() const { return s_->rings.rx().memory().header(); }
+  ipc::RingHeader* tx_header() const { return s_->rings.tx().memory().header(); }
+  int tx_doorbell_fd() const { return s_->rings.tx().reader_event(); }
 
   void lock() { s_->mutex.lock(); }
   void unlock() { s_->mutex.unlock(); }
@@ -75,18 +75,13 @@ class Channel {
  private:
   // Everything in one place that does not move, since the ring views point into the mappings.
   struct State {
-    State(Connection* c, const ipc::OpenChannelReply& reply, int64_t spin, ipc::RingMemory rxm,
-          ipc::RingMemory txm, std::vector<ipc::UniqueFd>& fds);
+    State(Connection* c, const ipc::OpenChannelReply& reply, int64_t spin, ipc::RingPair pair);
     Connection* connection;  // nullptr once closed
     ipc::OpenChannelReply info;
     std::string device;
     int64_t spin_ns;
-    ipc::RingMemory rx_memory;
-    ipc::RingMemory tx_memory;
-    ipc::UniqueFd rx_event;
-    ipc::UniqueFd tx_writer_event;
-    ipc::UniqueFd tx_doorbell;
-    ipc::RingReader rx;
+    ipc::RingPair rings;
+    ipc::RingReader rx;  // the client's views: it reads the receive ring, writes the transmit ring
     ipc::RingWriter tx;
     std::mutex mutex;
   };

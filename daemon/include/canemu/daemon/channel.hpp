@@ -21,7 +21,7 @@
 #include "canemu/daemon/doorbell.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
-#include "canemu/ipc/shm_ring.hpp"
+#include "canemu/ipc/ring_pair.hpp"
 
 namespace canemu::daemon {
 
@@ -52,14 +52,14 @@ class Channel final : private model::ControllerEvents, public Doorbell {
   std::size_t bus() const { return bus_; }
   model::HostedNode& node() { return node_; }
   const ChannelStats& stats() const { return stats_; }
-  uint32_t rx_capacity() const { return rx_memory_.capacity(); }
-  uint32_t tx_capacity() const { return tx_memory_.capacity(); }
+  uint32_t rx_capacity() const { return rings_.rx().memory().capacity(); }
+  uint32_t tx_capacity() const { return rings_.tx().memory().capacity(); }
   uint32_t rx_fill() const { return rx_.fill_count(); }
 
   // What goes to the client with the OpenChannelReply, in the protocol's order.
-  std::array<int, ipc::kChannelFdCount> client_fds() const;
+  std::array<int, ipc::kChannelFdCount> client_fds() const { return rings_.fds(); }
   // The daemon's doorbell: readable when the client put frames while the node was idle.
-  int doorbell_fd() const override { return tx_doorbell_.get(); }
+  int doorbell_fd() const override { return rings_.tx().reader_event(); }
   // Called when the doorbell rang, or at any time (before a time step): the node takes a frame
   // if it is idle.
   void kick() override;
@@ -68,8 +68,7 @@ class Channel final : private model::ControllerEvents, public Doorbell {
 
  private:
   Channel(uint32_t id, std::string device, std::size_t bus, model::HostedNode& node, uint16_t flags,
-          ipc::RingMemory rx_memory, ipc::RingMemory tx_memory, ipc::UniqueFd rx_event,
-          ipc::UniqueFd tx_writer_event, ipc::UniqueFd tx_doorbell);
+          ipc::RingPair rings);
 
   std::optional<model::TxFrame> next_tx();
   // Counts and reports a transmit element the node cannot send; false when this kick has
@@ -89,12 +88,8 @@ class Channel final : private model::ControllerEvents, public Doorbell {
   std::size_t bus_;
   model::HostedNode& node_;
   uint16_t flags_;
-  ipc::RingMemory rx_memory_;
-  ipc::RingMemory tx_memory_;
-  ipc::UniqueFd rx_event_;         // the client's reader waits on it
-  ipc::UniqueFd tx_writer_event_;  // the client's writer waits on it for room
-  ipc::UniqueFd tx_doorbell_;      // the daemon's reader sleeps on it
-  ipc::RingWriter rx_;
+  ipc::RingPair rings_;
+  ipc::RingWriter rx_;  // canemud's views: it writes the receive ring, reads the transmit ring
   ipc::RingReader tx_;
   ChannelStats stats_;
   uint32_t lost_pending_ = 0;  // lost since the last message that made it into the ring

@@ -1,6 +1,6 @@
 // Fault scenarios: TOML files of timed faults (docs/faults.md). parse_scenario() checks a file
-// whole (every problem with file, line and key); Simulation::apply_scenario() resolves its bus
-// and node names and applies all of it, or none.
+// whole (every problem with file, line and key); ScenarioRunner::apply() resolves its bus and
+// node names and applies all of it, or none.
 #pragma once
 
 #include <cstdint>

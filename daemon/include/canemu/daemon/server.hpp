@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "canemu/daemon/access_policy.hpp"
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/control_dispatcher.hpp"
 #include "canemu/daemon/simulation.hpp"
@@ -54,8 +55,6 @@ class Server {
   void drop_closing();
   void handle(Client& c, const std::vector<uint8_t>& packet);
   void reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
-  bool allowed(int fd, uint32_t uid) const;
-  void resolve_security();
   void reload();
   void kick_all_channels();
   void check_channels();
@@ -75,8 +74,7 @@ class Server {
   int64_t last_wake_ns_ = 0;  // CLOCK_MONOTONIC of the loop's last wake-up
   int64_t deadline_ns_ = 0;   // of the armed timer (0: none)
   bool accepting_ = true;
-  std::vector<uint32_t> allowed_uids_;
-  std::vector<uint32_t> allowed_gids_;
+  AccessPolicy access_;
   bool running_ = true;
   std::vector<uint8_t> buffer_;
   std::map<int, Doorbell*> doorbells_;  // doorbell fd -> its channel

@@ -19,7 +19,7 @@
 #include "canemu/daemon/doorbell.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/ipc/protocol.hpp"
-#include "canemu/ipc/shm_ring.hpp"
+#include "canemu/ipc/ring_pair.hpp"
 
 namespace canemu::daemon {
 
@@ -32,12 +32,12 @@ class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
   // The line the port's transmit ring feeds (told when the doorbell rings).
   void attach(model::ixxat::CanLine* line) { line_ = line; }
 
-  uint32_t element_size() const { return rx_memory_.element_size(); }
-  uint32_t rx_capacity() const { return rx_memory_.capacity(); }
-  uint32_t tx_capacity() const { return tx_memory_.capacity(); }
-  std::size_t bytes() const;
+  uint32_t element_size() const { return rings_.element_size(); }
+  uint32_t rx_capacity() const { return rings_.rx().memory().capacity(); }
+  uint32_t tx_capacity() const { return rings_.tx().memory().capacity(); }
+  std::size_t bytes() const { return rings_.element_bytes(); }
   // What goes to the client, in the order of ipc::OpenChannelReply's descriptors.
-  std::array<int, ipc::kChannelFdCount> client_fds() const;
+  std::array<int, ipc::kChannelFdCount> client_fds() const { return rings_.fds(); }
 
   // --- model::ixxat::ChannelPort ---
   bool put(const CANMSG2& msg) override;
@@ -45,22 +45,17 @@ class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
   void pop() override;
 
   // --- Doorbell ---
-  int doorbell_fd() const override { return doorbell_.get(); }
+  int doorbell_fd() const override { return rings_.tx().reader_event(); }
   void kick() override;
   bool broken() const override { return rx_.corrupted() || tx_.corrupted(); }
 
  private:
-  VciPort(bool v2, ipc::RingMemory rx_memory, ipc::RingMemory tx_memory, ipc::UniqueFd rx_event,
-          ipc::UniqueFd tx_writer_event, ipc::UniqueFd doorbell);
+  VciPort(bool v2, ipc::RingPair rings);
 
   bool v2_;
   model::ixxat::CanLine* line_ = nullptr;
-  ipc::RingMemory rx_memory_;
-  ipc::RingMemory tx_memory_;
-  ipc::UniqueFd rx_event_;         // the client's reader waits on it
-  ipc::UniqueFd tx_writer_event_;  // the client's writer waits on it for room
-  ipc::UniqueFd doorbell_;         // the daemon's reader sleeps on it
-  ipc::RingWriter rx_;
+  ipc::RingPair rings_;
+  ipc::RingWriter rx_;  // canemud's views: it writes the receive FIFO, reads the transmit FIFO
   ipc::RingReader tx_;
   bool armed_ = false;  // sleeping on the doorbell
 };

@@ -8,12 +8,12 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <set>
 #include <span>
 #include <vector>
 
 #include "canemu/daemon/ring_budget.hpp"
 #include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/vci_fifos.hpp"
 #include "canemu/daemon/vci_port.hpp"
 #include "canemu/ipc/protocol.hpp"
 
@@ -52,15 +52,11 @@ class VciHandle {
 
 inline constexpr std::size_t kMaxVciDevicesPerClient = 16;
 
-inline constexpr std::size_t kMaxVciFifosPerClient = 64;
-
 struct VciSession {
   uint32_t next_handle = 1;
   std::map<uint32_t, std::unique_ptr<VciHandle>> handles;
   // Ephemeral adapters this client created, by name.
   std::map<std::string, Simulation::DeviceLease> devices;
-  // Stand-alone FIFOs this client holds (VciCreateFifo / VciAccessFifo), by id.
-  std::set<uint64_t> fifos;
   uint32_t pid = 0;
 };
 
@@ -68,7 +64,7 @@ class VciService {
  public:
   using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
   VciService(Simulation& sim, std::size_t& ring_bytes_in_use)
-      : sim_(sim), ring_bytes_in_use_(ring_bytes_in_use) {}
+      : sim_(sim), ring_bytes_in_use_(ring_bytes_in_use), fifos_(ring_bytes_in_use) {}
 
   // A port's doorbell starts or stops being watched.
   std::function<void(Doorbell&)> port_opened;
@@ -82,22 +78,6 @@ class VciService {
   void close(VciSession& session, uint32_t handle);
   void open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r);
   void create_device(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r);
-  // Stand-alone FIFOs: create, access (both give the descriptors), take or give back a side.
-  void fifo(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r, std::vector<int>& fds);
-  void release_fifos(VciSession& session);
-
-  // A FIFO processes share: its ring and events, who holds it, who has each side.
-  struct SharedFifo {
-    ipc::RingMemory memory;
-    ipc::UniqueFd reader_event;
-    ipc::UniqueFd writer_event;
-    RingBudget budget;
-    std::set<const VciSession*> holders;
-    const VciSession* reader = nullptr;
-    const VciSession* writer = nullptr;
-  };
-  std::map<uint64_t, SharedFifo> fifos_;
-  uint64_t next_fifo_id_ = 1;
   void init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,
                     std::array<int, ipc::kChannelFdCount>& fds);
   void control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r);
@@ -105,6 +85,7 @@ class VciService {
 
   Simulation& sim_;
   std::size_t& ring_bytes_in_use_;
+  VciFifos fifos_;  // stand-alone FIFOs, held by sessions
 };
 
 }  // namespace canemu::daemon

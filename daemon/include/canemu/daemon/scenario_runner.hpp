@@ -1,0 +1,132 @@
+// Fault scenarios on the running world (docs/faults.md). apply() resolves a scenario's bus and
+// node names against the buses and the device registry, all or nothing, then puts its frame
+// faults into the bus's FaultPlan (the runner is every bus's injector) and schedules its bus and
+// node effects on the scheduler. status() says what each fault did (`canemu fault list`),
+// clear() stops a scenario, device_gone() ends the faults of an ephemeral device that goes.
+//
+// The log ("<6>canemud: fault: t=SECONDS s: ...") tells, with the simulated time, when a
+// scenario is applied or cleared, when a bus or node effect fires or ends, and when a frame
+// fault hits its first frame, reaches its count or its window ends; each single hit is in the
+// bus trace and the counts, not the log.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <tl/expected.hpp>
+
+#include "canemu/daemon/config.hpp"
+#include "canemu/daemon/device_registry.hpp"
+#include "canemu/daemon/scenario.hpp"
+#include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/bus/fault_plan.hpp"
+#include "canemu/firmware_model/sim/sim_scheduler.hpp"
+
+namespace canemu::daemon {
+
+class ScenarioRunner {
+ public:
+  // Scenarios without a seed of their own use `default_seed` ([simulation] seed). The
+  // scheduler and the registry must outlive the runner.
+  ScenarioRunner(model::SimScheduler& scheduler, const DeviceRegistry& devices,
+                 uint64_t default_seed)
+      : scheduler_(scheduler), devices_(devices), default_seed_(default_seed) {}
+  ScenarioRunner(const ScenarioRunner&) = delete;
+  ScenarioRunner& operator=(const ScenarioRunner&) = delete;
+
+  // Bus number `bus_count()` from now on, configured as `config`: the runner becomes its fault
+  // injector. The bus must outlive the runner.
+  void add_bus(model::CanBus& bus, const BusConfig& config);
+  std::size_t bus_count() const { return buses_.size(); }
+
+  // Resolves the scenario's buses and nodes and applies every fault, its times counted from
+  // `start`. Nothing is applied when a name does not resolve; the errors say which, with the
+  // scenario file's line.
+  tl::expected<void, std::vector<std::string>> apply(const Scenario& scenario,
+                                                     model::SimTime start);
+
+  // Every fault applied so far, with what it did.
+  struct FaultStatus {
+    enum class State : uint8_t { pending, active, done, cleared };
+    std::string scenario;
+    uint32_t line;
+    FaultEffect effect;
+    std::string target;  // bus, or node
+    int64_t at_ns;       // absolute simulated time
+    std::optional<int64_t> until_ns;
+    uint64_t seen;  // frame effects: matching frames; others: 0
+    uint64_t hits;  // frame effects: frames hit; others: times fired
+    State state;
+  };
+  std::vector<FaultStatus> status() const;
+
+  // Clears the faults of the scenario named `name` (empty: of every scenario): frame rules stop
+  // matching, scheduled effects do not fire. Effects that fired stay (an unplugged node stays
+  // unplugged). Returns the number of scenarios cleared.
+  std::size_t clear(std::string_view name);
+
+  // The ephemeral device `device` with node `node` on bus `bus` is going: the faults that act
+  // on the node or match its frames end, and the node, kept for a later device, is plugged in
+  // and on its nominal clock again.
+  void device_gone(std::string_view device, std::size_t bus, const model::HostedNode& node);
+
+ private:
+  struct Bus {
+    model::CanBus* bus;
+    BusConfig config;
+    std::unique_ptr<model::FaultPlan> faults;  // frame faults of the scenarios
+  };
+  // Shared by a fault's scheduled actions: whether it was cleared, how often it fired.
+  struct FaultSwitch {
+    bool cleared = false;
+    uint64_t fired = 0;
+  };
+  struct AppliedFault {
+    FaultSpec spec;
+    std::size_t bus;
+    std::string target;
+    model::SimTime start;
+    std::optional<std::size_t> rule;  // in the bus's FaultPlan
+    std::shared_ptr<FaultSwitch> state;
+    const model::HostedNode* node = nullptr;  // the node it acts on or matches (`from`)
+  };
+  struct LoadedScenario {
+    std::string name;
+    std::vector<AppliedFault> faults;
+    bool cleared = false;
+  };
+  // A fault's bus and node, resolved.
+  struct Resolved {
+    const FaultSpec* spec;
+    std::size_t bus = 0;
+    std::optional<DeviceRegistry::NodeRef> node;  // node effects; frame effects with match.from
+  };
+
+  std::optional<std::size_t> bus_index(std::string_view name) const;
+  tl::expected<std::vector<Resolved>, std::vector<std::string>> resolve(const Scenario& s) const;
+  // Puts fault `k` of scenario `name` to work: a frame rule, or scheduled effects.
+  void arm(const std::string& name, const Resolved& r, std::size_t k, uint64_t seed,
+           AppliedFault& applied);
+  void add_frame_rule(const Resolved& r, std::size_t k, uint64_t seed, const std::string& what,
+                      AppliedFault& applied);
+  // Runs `fire` at `at` (at once if due) unless the fault is cleared by then.
+  void when(model::SimTime at, const std::shared_ptr<FaultSwitch>& state,
+            std::function<void()> fire);
+  void frame_fault_hit(std::size_t bus, std::size_t rule, const model::FrameContext& ctx);
+  std::string node_name(std::size_t bus, model::NodeId node) const;
+  void log(const std::string& text) const;
+
+  model::SimScheduler& scheduler_;
+  const DeviceRegistry& devices_;
+  uint64_t default_seed_;
+  std::vector<Bus> buses_;
+  std::vector<LoadedScenario> scenarios_;
+};
+
+}  // namespace canemu::daemon

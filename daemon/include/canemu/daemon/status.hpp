@@ -1,0 +1,16 @@
+// What the control protocol reports of the world: `canemu status` (buses with their load and
+// counts, every device's nodes with their error state and counts) and the device list (the VCI
+// device manager's view: configured adapters, then ephemeral devices). Entries beyond the
+// replies' fixed arrays are left out; the device list's total counts them all.
+#pragma once
+
+#include "canemu/ipc/protocol.hpp"
+
+namespace canemu::daemon {
+
+class Simulation;
+
+void fill_status(const Simulation& sim, ipc::StatusReply& reply);
+void fill_device_list(const Simulation& sim, ipc::DeviceListReply& reply);
+
+}  // namespace canemu::daemon

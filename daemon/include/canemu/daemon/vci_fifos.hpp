@@ -1,0 +1,56 @@
+// Stand-alone VCI FIFOs (VciCreateFifo / VciAccessFifo, ipc::VciOp::fifo_*): rings canemud holds
+// for the processes that share them. A client creates one and gets its id and descriptors;
+// other clients reach it by that id. Each side (reader, writer) is taken by one client at a
+// time, so there is one reader and one writer in all processes together. A FIFO lives while a
+// client holds it; its memory counts against the daemon-wide ring budget.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <set>
+#include <vector>
+
+#include "canemu/daemon/ring_budget.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "canemu/ipc/ring_pair.hpp"
+
+namespace canemu::daemon {
+
+inline constexpr std::size_t kMaxVciFifosPerClient = 64;
+
+class VciFifos {
+ public:
+  // Who holds FIFOs: a client's session, by address (never dereferenced).
+  using Holder = const void*;
+
+  explicit VciFifos(std::size_t& ring_bytes_in_use) : ring_bytes_in_use_(ring_bytes_in_use) {}
+
+  // Answers fifo_create (args: capacity, element size), fifo_access (args: the id's low and
+  // high words) and fifo_side (args: the id's words, side 0 reader / 1 writer, 1 take / 0 give
+  // back) for `holder` in `r`. Create and access give the id, capacity and element size in r.values
+  // and the descriptors (ipc::kFifoFdCount) in `fds`.
+  void handle(Holder holder, const ipc::VciRequest& m, ipc::VciReply& r, std::vector<int>& fds);
+  // `holder` is gone: it gives back its sides, and a FIFO nobody holds any more is freed.
+  void release(Holder holder);
+
+  std::size_t count() const { return fifos_.size(); }
+
+ private:
+  struct SharedFifo {
+    ipc::SharedRing ring;
+    RingBudget budget;
+    std::set<Holder> holders;
+    Holder reader = nullptr;
+    Holder writer = nullptr;
+  };
+  std::size_t held_by(Holder holder) const;
+  void side(Holder holder, SharedFifo& f, const ipc::VciRequest& m, ipc::VciReply& r);
+
+  std::size_t& ring_bytes_in_use_;
+  std::map<uint64_t, SharedFifo> fifos_;
+  std::map<Holder, std::set<uint64_t>> held_;  // the FIFOs each holder holds
+  uint64_t next_id_ = 1;
+};
+
+}  // namespace canemu::daemon

@@ -1,0 +1,415 @@
+#include "canemu/daemon/scenario_runner.hpp"
+
+#include <fmt/format.h>
+
+#include "canemu/daemon/log.hpp"
+
+namespace canemu::daemon {
+
+using namespace canemu::model;
+
+namespace {
+
+// How the log names a fault: its scenario, line and effect.
+std::string fault_label(std::string_view scenario, const FaultSpec& f) {
+  return fmt::format("scenario \"{}\" line {}: {}", scenario, f.line, to_string(f.effect));
+}
+
+}  // namespace
+
+void ScenarioRunner::add_bus(CanBus& bus, const BusConfig& config) {
+  buses_.push_back(Bus{&bus, config, std::make_unique<FaultPlan>()});
+  bus.set_injector(buses_.back().faults.get());
+  const std::size_t index = buses_.size() - 1;
+  buses_.back().faults->on_hit = [this, index](std::size_t rule, const FrameContext& ctx,
+                                               const FrameFault&) {
+    frame_fault_hit(index, rule, ctx);
+  };
+}
+
+std::optional<std::size_t> ScenarioRunner::bus_index(std::string_view name) const {
+  for (std::size_t i = 0; i < buses_.size(); ++i) {
+    if (buses_[i].config.name == name) {
+      return i;
+    }
+  }
+  return std::nullopt;
+}
+
+std::string ScenarioRunner::node_name(std::size_t bus, NodeId node) const {
+  if (auto name = devices_.node_name(bus, node)) {
+    return *name;
+  }
+  return fmt::format("node {} of {}", node, buses_[bus].config.name);
+}
+
+void ScenarioRunner::log(const std::string& text) const {
+  log::info(log::At{"fault", scheduler_.now()}, "{}", text);
+}
+
+void ScenarioRunner::frame_fault_hit(std::size_t bus, std::size_t rule, const FrameContext& ctx) {
+  const FaultRule& r = buses_[bus].faults->rule(rule);
+  const bool first = r.hits == 1;
+  const bool done = r.count && r.hits == *r.count;
+  if (!first && !done) {
+    return;  // single hits are in the trace and the counts
+  }
+  std::string label;
+  for (const LoadedScenario& sc : scenarios_) {
+    for (const AppliedFault& a : sc.faults) {
+      if (a.bus == bus && a.rule == rule) {
+        label = fault_label(sc.name, a.spec);
+      }
+    }
+  }
+  if (first) {
+    log(fmt::format("{}: first hit, {} {:X} from {}", label,
+                    ctx.frame.extended() ? "frame (29-bit)" : "frame", ctx.frame.id(),
+                    node_name(bus, ctx.transmitter)));
+  }
+  if (done) {
+    log(fmt::format("{}: done, {} hit{}", label, r.hits, r.hits == 1 ? "" : "s"));
+  }
+}
+
+tl::expected<std::vector<ScenarioRunner::Resolved>, std::vector<std::string>>
+ScenarioRunner::resolve(const Scenario& s) const {
+  std::vector<Resolved> plan;
+  std::vector<std::string> errors;
+  for (const FaultSpec& f : s.faults) {
+    Resolved r{&f, 0, std::nullopt};
+    const auto where = [&](std::string_view what) {
+      errors.push_back(fmt::format("{}:{}: {}: {}", s.source, f.line, to_string(f.effect), what));
+    };
+    if (!f.bus.empty()) {
+      if (auto b = bus_index(f.bus)) {
+        r.bus = *b;
+        if (buses_[*b].config.kind == BusKind::lin) {
+          where(fmt::format("bus {} is a LIN bus; CAN faults need a CAN bus", f.bus));
+          continue;
+        }
+      } else {
+        where(fmt::format("no bus named \"{}\"", f.bus));
+        continue;
+      }
+    }
+    const std::string& node_name = !f.node.empty() ? f.node : f.match.from;
+    if (!node_name.empty()) {
+      r.node = devices_.find_node(node_name);
+      if (!r.node) {
+        where(fmt::format("no node named \"{}\" (configured nodes are DEVICE:N)", node_name));
+        continue;
+      }
+      if (!f.bus.empty() && r.node->bus != r.bus) {
+        where(fmt::format("node {} is not on bus {}", node_name, f.bus));
+        continue;
+      }
+      r.bus = r.node->bus;
+      if (f.effect == FaultEffect::line_error && !buses_[r.bus].config.low_speed) {
+        where(
+            fmt::format("node {} is on {}, a high-speed bus; wire faults are emulated on "
+                        "low-speed buses (transceiver = \"low-speed\")",
+                        node_name, buses_[r.bus].config.name));
+        continue;
+      }
+    }
+    plan.push_back(r);
+  }
+  if (!errors.empty()) {
+    return tl::unexpected(errors);
+  }
+  return plan;
+}
+
+tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenario& s,
+                                                                   SimTime start) {
+  auto plan = resolve(s);  // all or nothing
+  if (!plan) {
+    return tl::unexpected(plan.error());
+  }
+  const uint64_t seed = s.seed.value_or(default_seed_);
+  log(fmt::format("scenario \"{}\" ({}) applied: {} fault{}, seed {}", s.name, s.source,
+                  s.faults.size(), s.faults.size() == 1 ? "" : "s", seed));
+  LoadedScenario loaded{s.name, {}, false};
+  for (std::size_t k = 0; k < plan->size(); ++k) {
+    const Resolved& r = (*plan)[k];
+    const FaultSpec& f = *r.spec;
+    AppliedFault applied{f,
+                         r.bus,
+                         !f.node.empty() ? f.node : buses_[r.bus].config.name,
+                         start,
+                         std::nullopt,
+                         std::make_shared<FaultSwitch>(),
+                         r.node ? r.node->node : nullptr};
+    arm(s.name, r, k, seed, applied);
+    loaded.faults.push_back(std::move(applied));
+  }
+  scenarios_.push_back(std::move(loaded));
+  return {};
+}
+
+void ScenarioRunner::when(SimTime at, const std::shared_ptr<FaultSwitch>& state,
+                          std::function<void()> fire) {
+  // A fault due now takes effect at once (before any frame that starts now); later ones when
+  // due, unless cleared by then.
+  auto guarded = [state, fire = std::move(fire)] {
+    if (!state->cleared) {
+      ++state->fired;
+      fire();
+    }
+  };
+  if (at <= scheduler_.now()) {
+    guarded();
+  } else {
+    scheduler_.schedule_at(at, [guarded](SimTime) { guarded(); });
+  }
+}
+
+void ScenarioRunner::add_frame_rule(const Resolved& r, std::size_t k, uint64_t seed,
+                                    const std::string& what, AppliedFault& applied) {
+  const FaultSpec& f = *r.spec;
+  FaultRule rule;
+  if (r.node) {
+    rule.match.transmitter = r.node->node->node();
+  }
+  rule.match.id = f.match.id;
+  rule.match.mask = f.match.mask;
+  rule.match.extended = f.match.ext;
+  rule.match.remote = f.match.rtr;
+  if (f.effect == FaultEffect::random_errors) {
+    rule.bit_error_rate = f.bit_error_rate;  // the rule picks the bit per frame
+  } else if (f.effect == FaultEffect::ack_error) {
+    rule.fault.suppress_ack = true;
+  } else {
+    rule.fault.error = f.effect == FaultEffect::bit_error     ? CanErrorType::bit
+                       : f.effect == FaultEffect::stuff_error ? CanErrorType::stuff
+                       : f.effect == FaultEffect::form_error  ? CanErrorType::form
+                                                              : CanErrorType::crc;
+    rule.fault.bit = f.bit;
+  }
+  rule.count = f.count;
+  rule.from = applied.start + SimDuration(f.at_ns);
+  if (f.until_ns) {
+    rule.until = applied.start + SimDuration(*f.until_ns);
+  }
+  rule.probability = f.probability;
+  rule.seed = seed * 0x9E3779B97F4A7C15ull + k + 1;  // each fault its own draws
+  FaultPlan& faults = *buses_[r.bus].faults;
+  applied.rule = faults.add(rule);
+  if (rule.until) {  // the end of its window, with what it did
+    const std::size_t index = *applied.rule;
+    when(*rule.until, applied.state, [this, &faults, index, what] {
+      const uint64_t hits = faults.rule(index).hits;
+      const auto& count = faults.rule(index).count;
+      if (!count || hits < *count) {
+        log(fmt::format("{}: window over, {} hit{}", what, hits, hits == 1 ? "" : "s"));
+      }
+    });
+  }
+}
+
+void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t k, uint64_t seed,
+                         AppliedFault& applied) {
+  const FaultSpec& f = *r.spec;
+  const std::shared_ptr<FaultSwitch>& state = applied.state;
+  CanBus& b = *buses_[r.bus].bus;
+  const SimTime start = applied.start;
+  const SimTime at = start + SimDuration(f.at_ns);
+  const std::string what = fault_label(name, f);
+  switch (f.effect) {
+    case FaultEffect::bit_error:
+    case FaultEffect::stuff_error:
+    case FaultEffect::form_error:
+    case FaultEffect::crc_error:
+    case FaultEffect::ack_error:
+    case FaultEffect::random_errors:
+      add_frame_rule(r, k, seed, what, applied);
+      break;
+    case FaultEffect::ack_suppress: {
+      const SimTime until = at + SimDuration(f.duration_ns);
+      when(at, state, [this, &b, until, what] {
+        b.suppress_acks_until(until);
+        log(what);
+      });
+      break;
+    }
+    case FaultEffect::stuck_dominant: {
+      const SimDuration d(f.duration_ns);
+      when(at, state, [this, &b, d, what] {
+        b.hold_dominant(scheduler_.now(), d);
+        log(what);
+      });
+      break;
+    }
+    case FaultEffect::node_off:
+    case FaultEffect::node_on: {
+      const NodeId node = r.node->node->node();
+      const bool on = f.effect == FaultEffect::node_on;
+      when(at, state, [this, &b, node, on, what] {
+        b.set_connected(node, on);
+        log(what);
+      });
+      if (!on && f.until_ns) {
+        when(start + SimDuration(*f.until_ns), state, [this, &b, node, what] {
+          b.set_connected(node, true);
+          log(what + " ends");
+        });
+      }
+      break;
+    }
+    case FaultEffect::bus_off:
+    case FaultEffect::error_counters: {
+      HostedNode* hosted = r.node->node;
+      const bool off = f.effect == FaultEffect::bus_off;
+      const uint16_t tec = f.tec;
+      const uint16_t rec = f.rec;
+      when(at, state, [this, &b, hosted, off, tec, rec, what] {
+        FaultConfinement& fc = hosted->controller().confinement();
+        fc.set_counters(off ? kBusOffLimit : tec, off ? fc.rec() : rec);
+        b.counters_changed(hosted->node());
+        log(what);
+      });
+      break;
+    }
+    case FaultEffect::babble: {
+      HostedNode* hosted = r.node->node;
+      const Frame frame = *Frame::classic(f.id, f.data, f.ext);  // checked by the parser
+      const SimDuration d(f.duration_ns);
+      when(at, state, [this, hosted, frame, d, what, state] {
+        if (hosted->babble(frame, scheduler_.now() + d)) {
+          log(what);
+        } else {
+          --state->fired;  // it did nothing
+          log(what +
+              ": the node is not on the bus (its line is not started); nothing "
+              "babbles");
+        }
+      });
+      break;
+    }
+    case FaultEffect::line_error: {
+      // The fault-tolerant transceiver sees the wire fault and says so (BUSCERR on a VCI
+      // adapter). With one wire it goes on in single-wire mode; with both it is cut off.
+      const NodeId node = r.node->node->node();
+      auto line = devices_.vci_line_of(r.node->node);
+      const bool both = f.both_wires;
+      when(at, state, [this, &b, node, line, both, what] {
+        if (line) {
+          line->set_bus_coupling_error(true);
+        }
+        if (both) {
+          b.set_connected(node, false);
+        }
+        log(what);
+      });
+      if (f.until_ns) {
+        when(start + SimDuration(*f.until_ns), state, [this, &b, node, line, both, what] {
+          if (line) {
+            line->set_bus_coupling_error(false);
+          }
+          if (both) {
+            b.set_connected(node, true);
+          }
+          log(what + " ends");
+        });
+      }
+      break;
+    }
+    case FaultEffect::oscillator: {
+      const NodeId node = r.node->node->node();
+      const int32_t ppm = f.ppm;
+      when(at, state, [this, &b, node, ppm, what] {
+        b.set_oscillator_ppm(node, ppm);
+        log(what);
+      });
+      if (f.until_ns) {
+        when(start + SimDuration(*f.until_ns), state, [this, &b, node, what] {
+          b.set_oscillator_ppm(node, 0);
+          log(what + " ends");
+        });
+      }
+      break;
+    }
+  }
+}
+
+std::vector<ScenarioRunner::FaultStatus> ScenarioRunner::status() const {
+  using State = FaultStatus::State;
+  std::vector<FaultStatus> out;
+  const SimTime now = scheduler_.now();
+  for (const LoadedScenario& sc : scenarios_) {
+    for (const AppliedFault& a : sc.faults) {
+      const FaultSpec& f = a.spec;
+      FaultStatus st{sc.name,
+                     f.line,
+                     f.effect,
+                     a.target,
+                     (a.start + SimDuration(f.at_ns)).ns(),
+                     std::nullopt,
+                     0,
+                     a.state->fired,
+                     State::pending};
+      if (f.until_ns) {
+        st.until_ns = (a.start + SimDuration(*f.until_ns)).ns();
+      } else if (f.duration_ns > 0) {
+        st.until_ns = st.at_ns + f.duration_ns;
+      }
+      bool over = st.until_ns && now.ns() >= *st.until_ns;
+      if (a.rule) {
+        const FaultRule& rule = buses_[a.bus].faults->rule(*a.rule);
+        st.seen = rule.seen;
+        st.hits = rule.hits;
+        over = over || (rule.count && rule.hits >= *rule.count);
+        st.state = now.ns() < st.at_ns ? State::pending : over ? State::done : State::active;
+      } else if (now.ns() < st.at_ns) {
+        st.state = State::pending;
+      } else {  // fired (or found nothing to act on: a babble on a node off the bus)
+        st.state = st.until_ns && !over && a.state->fired > 0 ? State::active : State::done;
+      }
+      if (a.state->cleared && st.state != State::done) {
+        st.state = State::cleared;
+      }
+      out.push_back(st);
+    }
+  }
+  return out;
+}
+
+std::size_t ScenarioRunner::clear(std::string_view name) {
+  std::size_t cleared = 0;
+  for (LoadedScenario& sc : scenarios_) {
+    if (sc.cleared || (!name.empty() && sc.name != name)) {
+      continue;
+    }
+    sc.cleared = true;
+    ++cleared;
+    for (AppliedFault& a : sc.faults) {
+      a.state->cleared = true;
+      if (a.rule) {
+        buses_[a.bus].faults->disable(*a.rule);
+      }
+    }
+    log(fmt::format("scenario \"{}\" cleared", sc.name));
+  }
+  return cleared;
+}
+
+void ScenarioRunner::device_gone(std::string_view device, std::size_t bus, const HostedNode& node) {
+  for (LoadedScenario& sc : scenarios_) {
+    for (AppliedFault& a : sc.faults) {
+      if (a.node != &node || a.state->cleared) {
+        continue;
+      }
+      a.state->cleared = true;
+      if (a.rule) {
+        buses_[a.bus].faults->disable(*a.rule);
+      }
+      log(fmt::format("{}: ends, device {} is gone", fault_label(sc.name, a.spec), device));
+    }
+  }
+  CanBus& b = *buses_[bus].bus;
+  b.set_connected(node.node(), true);
+  b.set_oscillator_ppm(node.node(), 0);
+}
+
+}  // namespace canemu::daemon

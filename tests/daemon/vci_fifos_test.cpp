@@ -1,0 +1,113 @@
+// Stand-alone VCI FIFOs between clients: created by one, reached by id by others, one reader
+// and one writer in all, freed (and its memory given back) when nobody holds it.
+#include "canemu/daemon/vci_fifos.hpp"
+
+#include <gtest/gtest.h>
+
+#include "vci/vcierr.h"
+
+namespace canemu::daemon {
+namespace {
+
+struct Fifos {
+  std::size_t ring_bytes = 0;
+  VciFifos fifos{ring_bytes};
+  int a = 0;  // two clients, by address
+  int b = 0;
+
+  ipc::VciReply call(VciFifos::Holder who, ipc::VciOp op, uint32_t a0, uint32_t a1, uint32_t a2 = 0,
+                     uint32_t a3 = 0, std::vector<int>* fds = nullptr) {
+    ipc::VciRequest m{};
+    m.op = static_cast<uint16_t>(op);
+    m.args[0] = a0;
+    m.args[1] = a1;
+    m.args[2] = a2;
+    m.args[3] = a3;
+    ipc::VciReply r{};
+    std::vector<int> unused;
+    fifos.handle(who, m, r, fds != nullptr ? *fds : unused);
+    return r;
+  }
+  ipc::VciReply create(VciFifos::Holder who, uint32_t capacity, uint32_t size,
+                       std::vector<int>* fds = nullptr) {
+    return call(who, ipc::VciOp::fifo_create, capacity, size, 0, 0, fds);
+  }
+  ipc::VciReply access(VciFifos::Holder who, uint64_t id, std::vector<int>* fds = nullptr) {
+    return call(who, ipc::VciOp::fifo_access, static_cast<uint32_t>(id),
+                static_cast<uint32_t>(id >> 32), 0, 0, fds);
+  }
+  HRESULT side(VciFifos::Holder who, uint64_t id, uint32_t which, bool take) {
+    return call(who, ipc::VciOp::fifo_side, static_cast<uint32_t>(id),
+                static_cast<uint32_t>(id >> 32), which, take ? 1 : 0)
+        .hresult;
+  }
+};
+
+TEST(VciFifos, CreatingGivesTheIdTheRoundedCapacityAndTheThreeDescriptors) {
+  Fifos f;
+  std::vector<int> fds;
+  const ipc::VciReply r = f.create(&f.a, 32, 20, &fds);
+  ASSERT_EQ(r.hresult, VCI_OK);
+  EXPECT_EQ(r.values[0], 1u);  // id, low word
+  EXPECT_EQ(r.values[1], 0u);
+  EXPECT_EQ(r.values[2], 192u);  // one page: (4096 - 256) / 20
+  EXPECT_EQ(r.values[3], 20u);
+  ASSERT_EQ(fds.size(), ipc::kFifoFdCount);
+  EXPECT_EQ(f.ring_bytes, 192u * 20);
+  EXPECT_EQ(f.create(&f.a, 1, 8).values[0], 2u);
+  EXPECT_EQ(f.fifos.count(), 2u);
+}
+
+TEST(VciFifos, BadSizesAndUnknownIdsAreInvalidArguments) {
+  Fifos f;
+  EXPECT_EQ(f.create(&f.a, 0, 20).hresult, VCI_E_INVALIDARG);
+  EXPECT_EQ(f.create(&f.a, 0x10000, 20).hresult, VCI_E_INVALIDARG);
+  EXPECT_EQ(f.create(&f.a, 8, 0).hresult, VCI_E_INVALIDARG);
+  EXPECT_EQ(f.access(&f.a, 99).hresult, VCI_E_INVALIDARG);
+  EXPECT_EQ(f.side(&f.a, 99, 0, true), VCI_E_INVALIDARG);
+  EXPECT_EQ(f.fifos.count(), 0u);
+}
+
+TEST(VciFifos, EachSideHasOneHolderAtATimeAmongAllClients) {
+  Fifos f;
+  const uint64_t id = f.create(&f.a, 8, 8).values[0];
+  EXPECT_EQ(f.side(&f.b, id, 0, true), VCI_E_INVALIDARG);  // b does not hold the FIFO yet
+  ASSERT_EQ(f.access(&f.b, id).hresult, VCI_OK);
+  EXPECT_EQ(f.side(&f.a, id, 0, true), VCI_OK);  // a reads
+  EXPECT_EQ(f.side(&f.b, id, 0, true), VCI_E_ACCESSDENIED);
+  EXPECT_EQ(f.side(&f.b, id, 1, true), VCI_OK);             // b writes
+  EXPECT_EQ(f.side(&f.b, id, 0, false), VCI_E_INVALIDARG);  // not b's to give back
+  EXPECT_EQ(f.side(&f.a, id, 0, false), VCI_OK);
+  EXPECT_EQ(f.side(&f.b, id, 0, true), VCI_OK);
+  EXPECT_EQ(f.side(&f.a, id, 2, true), VCI_E_INVALIDARG);  // sides are 0 and 1
+}
+
+TEST(VciFifos, AFifoLivesWhileAClientHoldsItAndALeavingClientGivesBackItsSides) {
+  Fifos f;
+  const uint64_t id = f.create(&f.a, 8, 8).values[0];
+  ASSERT_EQ(f.access(&f.b, id).hresult, VCI_OK);
+  ASSERT_EQ(f.side(&f.a, id, 1, true), VCI_OK);
+  const std::size_t bytes = f.ring_bytes;
+  f.fifos.release(&f.a);
+  EXPECT_EQ(f.fifos.count(), 1u);  // b still holds it
+  EXPECT_EQ(f.ring_bytes, bytes);
+  EXPECT_EQ(f.side(&f.b, id, 1, true), VCI_OK);  // a's writer side was given back
+  f.fifos.release(&f.b);
+  EXPECT_EQ(f.fifos.count(), 0u);
+  EXPECT_EQ(f.ring_bytes, 0u);
+  EXPECT_EQ(f.access(&f.a, id).hresult, VCI_E_INVALIDARG);  // gone for good
+}
+
+TEST(VciFifos, AClientHoldsAtMost64) {
+  Fifos f;
+  for (std::size_t k = 0; k < kMaxVciFifosPerClient; ++k) {
+    ASSERT_EQ(f.create(&f.a, 1, 8).hresult, VCI_OK);
+  }
+  EXPECT_EQ(f.create(&f.a, 1, 8).hresult, VCI_E_OUTOFMEMORY);
+  const uint64_t other = f.create(&f.b, 1, 8).values[0];
+  EXPECT_EQ(f.access(&f.a, other).hresult, VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(f.access(&f.a, 1).hresult, VCI_OK);  // one it holds already is no new one
+}
+
+}  // namespace
+}  // namespace canemu::daemon

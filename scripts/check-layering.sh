@@ -45,13 +45,16 @@ check() {
     esac
     report "firmware_model/$room may include only $below:" \
       "$( (includes $inc/$room 'canemu/firmware_model/'; includes $src/$room 'canemu/firmware_model/') |
-          grep -vE "canemu/firmware_model/($below)/")$( (includes $inc/$room '(sim|bus|chips|adapters)/'
+          grep -vE "#include *[<\"]canemu/firmware_model/($below)/")$( (includes $inc/$room '(sim|bus|chips|adapters)/'
           includes $src/$room '(sim|bus|chips|adapters)/') | grep -vE "[<\"](canemu/firmware_model/)?($below)/")"
   done
 
-  # 4. The vendor data-type headers are a leaf: they include only each other and the C library.
-  report "firmware_model/include/vci (the vendor headers) may include only each other:" \
-    "$(includes $fm/include/vci '' | grep -vE '#include *[<"]((vci/)?[a-z0-9]+\.h|std[a-z]+\.h)[">]')"
+  # 4. The vendor data-type headers (VCI, SORCUS) are a leaf: they include only each other and the C library.
+  local vendor
+  for vendor in vci sorcus; do
+    report "firmware_model/include/$vendor (vendor headers) may include only each other:" \
+      "$(includes $fm/include/$vendor '' | grep -vE "#include *[<\"](($vendor/)?[a-z0-9_]+\.h|std[a-z]+\.h)[\">]")"
+  done
 
   # 5. ipc includes only ipc; the client libraries only client and ipc; the CLI (client/tools)
   #    also the model, never the daemon; the daemon never the client.

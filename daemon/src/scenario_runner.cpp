@@ -291,10 +291,12 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
       // The fault-tolerant transceiver sees the wire fault and says so (BUSCERR on a VCI
       // adapter). With one wire it goes on in single-wire mode; with both it is cut off.
       const NodeId node = r.node->node->node();
-      auto line = devices_.vci_line_of(r.node->node);
+      // Held weakly: the adapter (and its line) may go before the fault ends, and a queued
+      // event must not keep a line alive past its device or the simulation.
+      const std::weak_ptr<model::ixxat::CanLine> weak_line = devices_.vci_line_of(r.node->node);
       const bool both = f.both_wires;
-      when(at, state, [this, &b, node, line, both, what] {
-        if (line) {
+      when(at, state, [this, &b, node, weak_line, both, what] {
+        if (auto line = weak_line.lock()) {
           line->set_bus_coupling_error(true);
         }
         if (both) {
@@ -303,8 +305,8 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
         log(what);
       });
       if (f.until_ns) {
-        when(start + SimDuration(*f.until_ns), state, [this, &b, node, line, both, what] {
-          if (line) {
+        when(start + SimDuration(*f.until_ns), state, [this, &b, node, weak_line, both, what] {
+          if (auto line = weak_line.lock()) {
             line->set_bus_coupling_error(false);
           }
           if (both) {

@@ -589,3 +589,21 @@ effect = "line_error"
 """)
     assert done.returncode != 0
     assert "high-speed bus" in done.stderr and "low-speed" in done.stderr
+
+
+def test_canemud_stops_cleanly_while_a_line_error_is_still_to_end(low_speed):
+    """The scheduled end of a line error must not keep the adapter's line alive past the
+    simulation (canemud used to crash at SIGTERM with such a fault pending)."""
+    daemon, a, b = low_speed
+    load(daemon, f"""
+[[fault]]
+at = "1ms"
+until = "10s"
+node = "{b.node_name}"
+effect = "line_error"
+""")
+    canemu.step(2 * MS)
+    assert [m.arbitration_id for m in drain(b)] == [CAN_ERR_TRX]
+    a.shutdown()
+    b.shutdown()
+    assert daemon.stop() == 0

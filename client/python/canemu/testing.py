@@ -121,14 +121,30 @@ class Daemon:
                     raise RuntimeError(f"{text!r} not logged ({what}); the log:\n{log}")
                 self._log_changed.wait(left)
 
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait()
+    def stop(self, timeout: float = 10.0) -> int:
+        """Stops canemud as systemd would (SIGTERM) and returns its exit status; SIGKILL only
+        when it does not end within `timeout` seconds. RuntimeError, with its log, when a
+        daemon that was running ends other than cleanly (a crash at shutdown is a bug), after
+        the cleanup."""
+        running = self.proc.poll() is None
+        killed = False
+        if running:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+                killed = True
         self._reader.join(5)
         if self.proc.stderr is not None:
             self.proc.stderr.close()
         shutil.rmtree(self.dir, ignore_errors=True)
+        status = self.proc.returncode
+        if running and (killed or status != 0):
+            why = f"did not stop within {timeout} s" if killed else f"exited with status {status}"
+            raise RuntimeError(f"canemud {why} on SIGTERM; its log:\n{self.log}")
+        return status
 
     def __enter__(self) -> "Daemon":
         return self

@@ -4,8 +4,8 @@
  * This project's own declarations, binary-compatible with the IXXAT VCI SDK (VCI V4): every
  * method returns an HRESULT; VCI_OK is success and each VCI_E_* error is 0xE0010000 | n
  * (severity "error" 0xC0000000, customer flag 0x20000000, facility VCI 0x0001).
- * Reference: the IXXAT "VCI: C++ Software Design Guide", the error codes of each method in section 7;
- * numeric values follow the vendor SDK (docs/vci.md).
+ * Reference: the IXXAT "VCI: C++ Software Design Guide", the error codes of each method in section
+ * 7; numeric values follow the vendor SDK (docs/vci.md).
  */
 #ifndef CANEMU_VCI_VCIERR_H
 #define CANEMU_VCI_VCIERR_H

@@ -353,7 +353,7 @@ void I82527::on_tx_done(SimTime at) {
       }
       // TXIE: IntPnd after the successful transmission (decision: also for the remote frame of
       // a receive object). An object that answered a remote frame interrupts only
-      // now, not when the remote frame came (digest §1.3, SL-CANi footnote 1).
+      // now, not when the remote frame came (X-CAN-2i manual §10.9.2.5, SL-CANi footnote 1).
       if (o.flag0(TXIE)) {
         o.set0(INTPND, true);
       }
@@ -418,8 +418,8 @@ void I82527::on_frame(SimTime at, const Frame& frame, bool /*own*/) {
   // The first matching object by number takes the frame: data frames go to receive objects
   // (DIR = 0), remote frames to transmit objects (DIR = 1). Object 15 comes last.
   // Decision: object 15 is receive-only and its DIR bit chooses which kind it stores (0: data
-  // frames, 1: remote frames), the original 82527's one-kind-only message 15 (digest §1.8) as
-  // the SORCUS buffer 15 uses it (Data-only or Remote-only, digest §1.5).
+  // frames, 1: remote frames), the original 82527's one-kind-only message 15 (datasheet; Linux
+  // cc770) as the SORCUS buffer 15 uses it (Data-only or Remote-only, X-CAN-2i manual §10.9.2.8).
   uint8_t taker = 0;
   for (uint8_t n = 1; n <= kObjects && taker == 0; ++n) {
     const MessageObject& o = object(n);

@@ -472,8 +472,8 @@ static_assert(sizeof(Notification) == 16 + 8 + 32);
 // ---- VCI (the IXXAT personality) ----
 //
 // One request type carries every call of the VCI APIs that reaches the adapter firmware
-// (firmware_model/vci/can_line.hpp): opening the control unit, a channel or the cyclic list of
-// a configured device's controller gives a handle (per connection); later calls name it.
+// (firmware_model adapters/ixxat/can_line.hpp): opening the control unit, a channel or the cyclic
+// list of a configured device's controller gives a handle (per connection); later calls name it.
 // The reply's hresult is the VCI result (VCI_OK or a VCI_E_* code); protocol-level problems
 // (a malformed request) get ErrorReply instead.
 enum class VciOp : uint16_t {

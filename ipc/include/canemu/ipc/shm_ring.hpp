@@ -1,5 +1,5 @@
 // A single-producer single-consumer ring of fixed-size elements in shared memory, with the VCI
-// FIFO semantics (spec/vci-cpp-digest.md section 2): capacity at least the request,
+// FIFO semantics (VCI C++ guide 4 and 7.4.1): capacity at least the request,
 // PutDataEntry/GetDataEntry, AcquireWrite/ReleaseWrite, AcquireRead/ReleaseRead, fill and free
 // counts, and threshold events signalled only on the opposite side's access.
 //

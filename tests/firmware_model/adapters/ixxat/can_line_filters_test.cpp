@@ -1,5 +1,5 @@
 // The message filters of the control unit and of v2 channels as the line applies them
-// (spec/vci-cpp-digest.md 3.10, docs/vci.md); the filter itself is tested in filter_test.
+// (VCI C++ guide 5.2.4, docs/vci.md); the filter itself is tested in filter_test.
 #include <gtest/gtest.h>
 
 #include <cstring>

@@ -1,4 +1,4 @@
-// The VCI firmware of one CAN controller (spec/vci-cpp-digest.md 3.5-3.19, docs/vci.md "The
+// The VCI firmware of one CAN controller (VCI C++ guide 5.2, 8.3, docs/vci.md "The
 // controller's firmware"): the control unit's states and INFO messages, line status, ERROR,
 // STATUS and TIMEOVR messages. The line drives a hosted SJA1000 on a simulated bus with a peer
 // station. The other topics: can_line_transmit_test (transmission), can_line_filters_test,

@@ -1,4 +1,4 @@
-// Transmission through the VCI firmware (spec/vci-cpp-digest.md 3.8, docs/vci.md): frames from
+// Transmission through the VCI firmware (VCI C++ guide 5.2.2, docs/vci.md): frames from
 // the channels' transmit FIFOs to the controller, delayed, single-shot and high-priority
 // transmission, the distributor's turns.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// The cyclic transmit list (cyclic_list.hpp, spec/vci-cpp-digest.md 3.13, docs/vci.md): through
+// The cyclic transmit list (cyclic_list.hpp, VCI C++ guide 5.2.5, docs/vci.md): through
 // the line on a bus, and the CyclicList on its own with a scripted line.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The VCI message filters (spec/vci-cpp-digest.md 3.10, docs/vci.md "Filters"): filter values,
+// The VCI message filters (VCI C++ guide 5.2.4, docs/vci.md "Filters"): filter values,
 // the four modes, acceptance filter and ID list, the afc codes, list capacity and the pair of
 // 11-bit and 29-bit filters.
 #include "canemu/firmware_model/adapters/ixxat/filter.hpp"

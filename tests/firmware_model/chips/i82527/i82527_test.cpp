@@ -213,7 +213,7 @@ TEST(I82527, BitTimingCountsInTheSystemClockAndIsWritableOnlyWithCce) {
   EXPECT_EQ(c.timing().nominal.clock_hz, 8'000'000u);
   EXPECT_EQ(c.timing().nominal.prescaler, 1u);
   EXPECT_EQ(c.timing().nominal.quanta_per_bit(), 16u);
-  // The X-CAN-2i CiA table rows at 125 ns (digest §2.4): 10 kbit/s = 0x67/0x2F (tq 5 us,
+  // The X-CAN-2i CiA table rows at 125 ns (the manual's CiA table): 10 kbit/s = 0x67/0x2F (tq 5 us,
   // 16 + 3 + 1 quanta, SJW 2), 125 kbit/s = 0x03/0x1C.
   c.write(BIT_TIMING0, 0x67);
   c.write(BIT_TIMING1, 0x2F);
@@ -354,7 +354,8 @@ TEST(I82527, TransmitObjectAnswersAMatchingRemoteFrameByItself) {
   b.run_until(answered);
   EXPECT_EQ(s.received(), (std::vector<Frame>{rtr, answer}));
   ASSERT_EQ(a.interrupts.size(), 1u);
-  EXPECT_EQ(a.interrupts[0].at.ns(), answered);  // after the answer, as digest §1.3 says
+  EXPECT_EQ(a.interrupts[0].at.ns(),
+            answered);  // after the answer, as the X-CAN-2i manual §10.9.2.5 says
   EXPECT_EQ(a.interrupts[0].value, interrupt_for_message(2));
   EXPECT_EQ(a.ctrl1(2), 0x55);  // RmtPnd and TxRqst reset (NewDat was never set)
   ASSERT_EQ(r.interrupts.size(), 1u);

@@ -1,4 +1,4 @@
-// Bit-rate detection (ICanControl::DetectBaud, spec/vci-cpp-digest.md 3.6; decisions in
+// Bit-rate detection (ICanControl::DetectBaud, VCI C++ guide 7.6.3; decisions in
 // docs/vci.md): the controller listens, listen-only, with each candidate timing in turn until a
 // frame decodes. An entry that sees a bus error gives way at once (its timing does not decode
 // the traffic), one that sees nothing for the time given too. Then the controller is off the

@@ -1,4 +1,4 @@
-// The IXXAT VCI firmware for one CAN controller of an adapter (spec/vci-cpp-digest.md 3): the
+// The IXXAT VCI firmware for one CAN controller of an adapter (VCI C++ guide 5.2): the
 // control unit (not initialized / offline / online, InitLine, ResetLine, StartLine, StopLine
 // with their INFO messages, line status), the message filters of the control unit and of v2
 // channels, the channels with the distributor between them, self reception, delayed, single

@@ -1,4 +1,4 @@
-// The time bases of an emulated IXXAT adapter (CANCAPABILITIES, spec/vci-cpp-digest.md 3.4) and
+// The time bases of an emulated IXXAT adapter (CANCAPABILITIES, VCI C++ guide 8.3.1-8.3.2) and
 // the conversion between their ticks and simulated time. Every counter is a clock of `clock_hz`
 // divided by its divisor: time stamps (tsc), the cyclic list (cms), transmit delays (dtx).
 #pragma once

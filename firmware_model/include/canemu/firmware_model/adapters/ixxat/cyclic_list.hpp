@@ -1,4 +1,4 @@
-// The cyclic transmit list of a VCI controller (ICanScheduler, spec/vci-cpp-digest.md 3.13;
+// The cyclic transmit list of a VCI controller (ICanScheduler, VCI C++ guide 5.2.5, 7.6.7-7.6.8;
 // decisions in docs/vci.md): 16 entries, each sent every wCycleTime ticks of the list's clock
 // (Clocks::cms_divisor) while the task runs, endlessly or a given number of times, with
 // auto-increment of the identifier or of an 8- or 16-bit data field after each frame.

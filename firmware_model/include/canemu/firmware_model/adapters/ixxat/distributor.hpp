@@ -1,5 +1,5 @@
 // The channels of a VCI controller and the firmware's distributor between them
-// (spec/vci-cpp-digest.md 3.7-3.9, 3.11; decisions in docs/vci.md): opening (exclusive or
+// (VCI C++ guide 5.2.2, 7.6.5-7.6.6; decisions in docs/vci.md): opening (exclusive or
 // shared), initialization with the channel's FIFOs and, on v2 channels, its own filters and
 // SRRA; activation; every message for the channels (event messages to all, received frames
 // through each v2 channel's filter, self-reception echoes by the rules of v1 and v2 channels);

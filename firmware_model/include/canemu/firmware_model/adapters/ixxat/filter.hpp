@@ -1,4 +1,4 @@
-// The message filters of the VCI firmware (spec/vci-cpp-digest.md 3.10): one for 11-bit and
+// The message filters of the VCI firmware (VCI C++ guide 5.2.4, 8.3.14): one for 11-bit and
 // one for 29-bit identifiers, on the control unit and on every v2 channel. Each has an operating
 // mode (LOCK, PASS, INCL, EXCL), an acceptance filter (code and mask) and an ID list. Filter
 // values are (identifier << 1) | RTR; a mask bit of 1 makes the bit relevant.

@@ -1,5 +1,5 @@
 // How InitLine programs a VCI line's controller, and what the line reports it can do
-// (spec/vci-cpp-digest.md 3.4-3.5; decisions in docs/vci.md). Pure functions of the request,
+// (VCI C++ guide 5.2.3, 8.3.6-8.3.7; decisions in docs/vci.md). Pure functions of the request,
 // the controller (SJA1000 or the CAN FD controller), the bus coupling and the clocks.
 #pragma once
 

@@ -4,8 +4,8 @@
 // interrupt register, and the error counters kept inside as the silicon does (not readable).
 //
 // The SORCUS adapter firmware models program it through read()/write() as their driver does.
-// Register names copy the Intel datasheet mnemonics; the map is the one of
-// ../shared/spec/sorcus-digest.md §1.8 (cross-checked with Linux cc770). The decisions where the
+// Register names copy the Intel datasheet mnemonics; the map is the one of the Intel 82527
+// datasheet (cross-checked with the Linux cc770 driver). The decisions where the
 // datasheet as we have it is silent are marked `Decision:` and listed in docs/i82527.md.
 //
 // Not modelled: the CC770's additions (readable error counters, EAF), sleep and wake-up (WAKE
@@ -30,7 +30,7 @@ namespace canemu::model {
 
 namespace i82527 {
 
-// Register addresses (datasheet "Address Map"; digest §1.8). Message object n (1..15) occupies
+// Register addresses (datasheet "Address Map"). Message object n (1..15) occupies
 // n * 0x10 .. n * 0x10 + 0x0E; the 16th byte of each row holds the registers below.
 enum Reg : uint8_t {
   CONTROL = 0x00,
@@ -92,7 +92,7 @@ constexpr uint8_t interrupt_for_message(uint8_t n) {  // n = 1..14 -> 3..16
 }
 
 // The crystal the model assumes unless told otherwise; with DSC set it gives the 8 MHz system
-// clock (125 ns period) of the X-CAN-2i (digest §1 table, §2.1).
+// clock (125 ns period) of the X-CAN-2i (X-CAN-2i manual, bit timing).
 inline constexpr uint32_t kDefaultCrystalHz = 16'000'000;
 
 }  // namespace i82527
@@ -126,7 +126,7 @@ class I82527 final : public CanController {
 
   // --- CanController ---
   // The error counters are inside confinement(), for the model and its tests only: the 82527
-  // has no register to read them (digest §1.8).
+  // has no register to read them (datasheet; Linux cc770).
   NodeTiming timing() const override;
   bool participating() const override { return !(control_ & i82527::CONTROL_INI); }
   BusOffRecovery bus_off_recovery() const override { return BusOffRecovery::on_restart; }

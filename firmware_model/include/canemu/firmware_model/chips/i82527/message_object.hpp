@@ -2,8 +2,8 @@
 // control registers of 2-bit flag pairs, the arbitration registers, the message configuration
 // and eight data bytes; and the identifier/mask encoding they share with the mask registers.
 //
-// Source: the register map of the SORCUS digest §1.8 (Intel 82527 datasheet, "Message Objects",
-// cross-checked there with the Linux cc770 driver); behaviour the digest leaves open is decided
+// Source: the register map of the Intel 82527 datasheet (, "Message Objects",
+// cross-checked with the Linux cc770 driver); behaviour the datasheet leaves open is decided
 // in i82527.hpp and docs/i82527.md. Register and bit names copy the datasheet mnemonics.
 #pragma once
 

@@ -2,7 +2,7 @@
 // control registers of 2-bit flag pairs, the arbitration registers, the message configuration
 // and eight data bytes; and the identifier/mask encoding they share with the mask registers.
 //
-// Source: the register map of the Intel 82527 datasheet (, "Message Objects",
+// Source: the register map of the Intel 82527 datasheet ("Message Objects",
 // cross-checked with the Linux cc770 driver); behaviour the datasheet leaves open is decided
 // in i82527.hpp and docs/i82527.md. Register and bit names copy the datasheet mnemonics.
 #pragma once

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
+#include <cstring>
 #include <fstream>
 #include <initializer_list>
 #include <optional>
@@ -280,10 +282,13 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   return cfg;
 }
 
-std::optional<std::string> read_text_file(const std::string& path) {
+tl::expected<std::string, std::string> read_text_file(const std::string& path) {
+  errno = 0;
   std::ifstream in(path);
   if (!in) {
-    return std::nullopt;
+    const int error = errno;
+    return tl::unexpected(fmt::format("{}: cannot be read ({})", path,
+                                      error != 0 ? std::strerror(error) : "unknown reason"));
   }
   std::stringstream ss;
   ss << in.rdbuf();
@@ -293,7 +298,7 @@ std::optional<std::string> read_text_file(const std::string& path) {
 tl::expected<Config, ConfigErrors> load_config_file(const std::string& path) {
   auto text = read_text_file(path);
   if (!text) {
-    return tl::unexpected(ConfigErrors{fmt::format("{}: cannot be read", path)});
+    return tl::unexpected(ConfigErrors{text.error()});
   }
   return parse_config(*text, path);
 }

@@ -311,7 +311,7 @@ tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view
 tl::expected<Scenario, std::vector<std::string>> load_scenario_file(const std::string& path) {
   auto text = read_text_file(path);
   if (!text) {
-    return tl::unexpected(std::vector<std::string>{fmt::format("{}: cannot be read", path)});
+    return tl::unexpected(std::vector<std::string>{text.error()});
   }
   return parse_scenario(*text, path);
 }

@@ -163,7 +163,8 @@ TEST(Config, SyntaxErrorsNameTheirPlace) {
 TEST(Config, MissingFileIsAClearError) {
   auto c = load_config_file("/nonexistent/canemu.toml");
   ASSERT_FALSE(c);
-  EXPECT_EQ(c.error().front(), "/nonexistent/canemu.toml: cannot be read");
+  EXPECT_EQ(c.error().front(),
+            "/nonexistent/canemu.toml: cannot be read (No such file or directory)");
 }
 
 TEST(TimeSetting, ParsesTheThreeModes) {

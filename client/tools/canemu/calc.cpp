@@ -61,9 +61,38 @@ int run_frame(const std::string& text, uint32_t bitrate, uint32_t data_bitrate) 
   return 0;
 }
 
-int run_bittiming(const std::string& btr0, const std::string& btr1) {
-  const auto t = model::sja1000::decode_btr(static_cast<uint8_t>(std::stoul(btr0, nullptr, 16)),
-                                            static_cast<uint8_t>(std::stoul(btr1, nullptr, 16)));
+// A register value in hex: one or two digits, optionally after 0x.
+std::optional<uint8_t> parse_register(std::string text) {
+  if (text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X')) {
+    text = text.substr(2);
+  }
+  if (text.empty() || text.size() > 2) {
+    return std::nullopt;
+  }
+  unsigned value = 0;
+  for (char ch : text) {
+    const int digit = ch >= '0' && ch <= '9'   ? ch - '0'
+                      : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10
+                      : ch >= 'A' && ch <= 'F' ? ch - 'A' + 10
+                                               : -1;
+    if (digit < 0) {
+      return std::nullopt;
+    }
+    value = value * 16 + static_cast<unsigned>(digit);
+  }
+  return static_cast<uint8_t>(value);
+}
+
+int run_bittiming(const std::string& btr0_text, const std::string& btr1_text) {
+  const auto btr0 = parse_register(btr0_text);
+  const auto btr1 = parse_register(btr1_text);
+  if (!btr0 || !btr1) {
+    return fail(
+        fmt::format("'{}' is not a register value: BTR0 and BTR1 are two hex digits each "
+                    "(example: canemu calc bittiming 00 1C)",
+                    !btr0 ? btr0_text : btr1_text));
+  }
+  const auto t = model::sja1000::decode_btr(*btr0, *btr1);
   if (!t) {
     return fail(t.error().message);
   }
@@ -92,9 +121,13 @@ Command add_calc(CLI::App& app) {
   auto* frame = calc->add_subcommand("frame", "exact bits and duration of a frame, e.g. 123#1122");
   frame->add_option("FRAME", o->frame, "cansend syntax: 123#1122, 12345678#R, 123##1AABB")
       ->required();
-  frame->add_option("--bitrate", o->bitrate, "nominal bit/s (default 500000)");
-  frame->add_option("--data-bitrate", o->data_bitrate,
-                    "data-phase bit/s for BRS (default 2000000)");
+  // The ranges canemud accepts for a bus (docs/configuration.md).
+  frame->add_option("--bitrate", o->bitrate, "nominal bit/s, 5000..1000000 (default 500000)")
+      ->check(CLI::Range(5'000u, 1'000'000u));
+  frame
+      ->add_option("--data-bitrate", o->data_bitrate,
+                   "data-phase bit/s for BRS, up to 10000000 (default 2000000)")
+      ->check(CLI::Range(5'000u, 10'000'000u));
   auto* bt = calc->add_subcommand("bittiming", "decode SJA1000 BTR0 BTR1 (hex), e.g. 00 1C");
   bt->add_option("BTR0", o->btr0, "hex")->required();
   bt->add_option("BTR1", o->btr1, "hex")->required();

@@ -1,10 +1,60 @@
 #include "command.hpp"
 
+#include <time.h>
+
+#include <chrono>
 #include <cstdio>
+#include <thread>
 
 #include "canemu/ipc/duration.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "frame_text.hpp"
 
 namespace canemu::cli {
+
+double g_connect_wait_s = 0;
+
+client::Result<client::Connection> connect(const std::string& socket, const std::string& name) {
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(g_connect_wait_s));
+  for (;;) {
+    auto c = client::Connection::open(ipc::socket_path(socket), name);
+    if (c || std::chrono::steady_clock::now() >= deadline) {
+      return c;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
+namespace {
+
+int64_t wall_ns() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+}  // namespace
+
+client::Result<TimeBase> time_base(client::Connection& c, bool sim_time) {
+  const int64_t before = wall_ns();
+  auto s = c.call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  const int64_t after = wall_ns();
+  if (!s) {
+    return tl::unexpected(s.error());
+  }
+  if (sim_time || s->time_mode != static_cast<uint8_t>(ipc::WireTimeMode::realtime)) {
+    return TimeBase{};
+  }
+  return TimeBase{before + (after - before) / 2 - s->sim_time_ns, true};
+}
+
+std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base) {
+  ipc::ChannelMessage stamped = m;
+  stamped.timestamp_ns = m.timestamp_ns + base.offset_ns;
+  return candump_line(stamped, bus);
+}
 
 int fail(const std::string& message) {
   std::fprintf(stderr, "canemu: %s\n", message.c_str());

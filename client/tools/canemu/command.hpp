@@ -7,6 +7,9 @@
 #include <optional>
 #include <string>
 
+#include "canemu/client/connection.hpp"
+#include "canemu/ipc/channel_message.hpp"
+
 namespace CLI {
 class App;
 }
@@ -25,10 +28,31 @@ struct Command {
 // command runs.
 Command add_status(CLI::App& app, const std::string& socket);
 Command add_send(CLI::App& app, const std::string& socket);
+Command add_gen(CLI::App& app, const std::string& socket);
 Command add_dump(CLI::App& app, const std::string& socket);
 Command add_fault(CLI::App& app, const std::string& socket);
 Command add_time(CLI::App& app, const std::string& socket);
 Command add_calc(CLI::App& app);
+
+// How long connect() keeps trying while nobody listens on the socket (the global --wait option),
+// in seconds; 0: one try.
+extern double g_connect_wait_s;
+
+// A connection to canemud at `socket` (empty: the default path) as client `name`, retried every
+// 50 ms for up to g_connect_wait_s seconds while the daemon is not there yet.
+client::Result<client::Connection> connect(const std::string& socket, const std::string& name);
+
+// What is added to simulated time to print a time stamp, as python-can's interface does: in real
+// time the wall-clock (epoch) instant of simulated time 0, measured once; in stepped and scaled
+// time, or with `sim_time`, nothing (simulated seconds).
+struct TimeBase {
+  int64_t offset_ns = 0;
+  bool wall_clock = false;
+};
+client::Result<TimeBase> time_base(client::Connection& c, bool sim_time);
+
+// One line of a candump -L log with the time stamp on `base`.
+std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base);
 
 // Prints "canemu: <message>" to stderr; returns the exit code of a failed command (1).
 int fail(const std::string& message);

@@ -1,5 +1,6 @@
-// canemu dump: a bus's frames and errors as a candump -L log, from a listen-only channel of an
-// ephemeral device, until interrupted or --count lines.
+// canemu dump: a bus's frames and errors as a candump -L log, from a channel of an ephemeral
+// device, until interrupted or --count lines. Like candump on a real interface, its controller
+// is active and acknowledges what it receives; --listen-only makes it a silent observer.
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -27,26 +28,34 @@ struct DumpOptions {
   uint32_t bitrate = 0;
   uint64_t count = 0;  // 0: until interrupted
   bool no_errors = false;
+  bool listen_only = false;
+  bool sim_time = false;
 };
 
 int run_dump(const std::string& socket, const DumpOptions& o) {
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu dump");
+  auto c = connect(socket, "canemu dump");
   if (!c) {
     return fail(c.error().message);
   }
   client::ChannelOptions co;
   co.bus = o.bus;
   co.bitrate = o.bitrate;
-  co.flags = ipc::kChannelListenOnly | (o.no_errors ? 0 : ipc::kChannelReportErrors);
+  co.flags = static_cast<uint16_t>((o.listen_only ? ipc::kChannelListenOnly : 0) |
+                                   (o.no_errors ? 0 : ipc::kChannelReportErrors));
   co.rx_capacity = 4096;
   auto ch = client::Channel::open(*c, co);
   if (!ch) {
     return fail(ch.error().message);
   }
+  const auto base = time_base(*c, o.sim_time);
+  if (!base) {
+    return fail(base.error().message);
+  }
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
-  std::fprintf(stderr, "canemu: listening on %s as %s (listen-only, %u bit/s)\n", o.bus.c_str(),
-               ch->device().c_str(), ch->info().bitrate);
+  std::fprintf(stderr, "canemu: listening on %s as %s (%s, %u bit/s, time stamps in %s)\n",
+               o.bus.c_str(), ch->device().c_str(), o.listen_only ? "listen-only" : "acknowledging",
+               ch->info().bitrate, base->wall_clock ? "wall-clock seconds" : "simulated seconds");
   uint64_t printed = 0;
   while (!g_stop && (o.count == 0 || printed < o.count)) {
     auto m = ch->receive(200);
@@ -61,7 +70,7 @@ int run_dump(const std::string& socket, const DumpOptions& o) {
     if (frame.empty()) {
       continue;
     }
-    std::printf("%s\n", candump_line(*m, o.bus).c_str());
+    std::printf("%s\n", log_line(*m, o.bus, *base).c_str());
     std::fflush(stdout);
     ++printed;
   }
@@ -77,6 +86,10 @@ Command add_dump(CLI::App& app, const std::string& socket) {
   dump->add_option("--bitrate", o->bitrate, "the listener's bit/s (default: the bus's)");
   dump->add_option("-n,--count", o->count, "stop after this many lines");
   dump->add_flag("--no-errors", o->no_errors, "frames only, no error frames");
+  dump->add_flag("-l,--listen-only", o->listen_only,
+                 "a silent observer: no acknowledgements, no error flags");
+  dump->add_flag("--sim-time", o->sim_time,
+                 "time stamps in simulated seconds (default in real time: wall-clock seconds)");
   return {dump, [&socket, o] { return run_dump(socket, *o); }};
 }
 

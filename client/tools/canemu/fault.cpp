@@ -1,9 +1,11 @@
 // canemu fault: load a scenario file, list the applied faults, clear a scenario, or inject one
 // fault from the command line (docs/faults.md).
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -20,6 +22,9 @@ namespace canemu::cli {
 
 namespace {
 
+// The source name of a scenario that `fault inject` built.
+const std::string kInjectSource = "<command line>";
+
 // Sends a scenario's text; prints what was applied or every problem.
 int load_scenario_text(const std::string& socket, const std::string& source,
                        const std::string& text) {
@@ -27,7 +32,7 @@ int load_scenario_text(const std::string& socket, const std::string& source,
     return fail(fmt::format("{}: {} bytes; a scenario sent to canemud is at most {}", source,
                             text.size(), ipc::kMaxScenarioText));
   }
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  auto c = connect(socket, "canemu fault");
   if (!c) {
     return fail(c.error().message);
   }
@@ -40,7 +45,12 @@ int load_scenario_text(const std::string& socket, const std::string& source,
     return fail(r.error().message);
   }
   if (!r->applied) {
-    std::fputs(ipc::name_of(r->errors).c_str(), stderr);
+    std::string errors = ipc::name_of(r->errors);
+    if (source == kInjectSource) {
+      // The scenario was written from the options: its line numbers mean nothing to the user.
+      errors = std::regex_replace(errors, std::regex(kInjectSource + ":[0-9]+(:[0-9]+)?: "), "");
+    }
+    std::fputs(errors.c_str(), stderr);
     return fail("scenario rejected; nothing of it applied");
   }
   std::printf("scenario \"%s\": %u fault%s applied\n", ipc::name_of(r->name).c_str(), r->faults,
@@ -49,9 +59,12 @@ int load_scenario_text(const std::string& socket, const std::string& source,
 }
 
 int run_load(const std::string& socket, const std::string& file) {
+  errno = 0;
   std::ifstream in(file);
   if (!in) {
-    return fail(fmt::format("{}: cannot be read", file));
+    const int error = errno;
+    return fail(fmt::format("{}: cannot be read ({})", file,
+                            error != 0 ? std::strerror(error) : "unknown reason"));
   }
   std::stringstream text;
   text << in.rdbuf();
@@ -59,7 +72,7 @@ int run_load(const std::string& socket, const std::string& file) {
 }
 
 int run_list(const std::string& socket) {
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  auto c = connect(socket, "canemu fault");
   if (!c) {
     return fail(c.error().message);
   }
@@ -72,7 +85,7 @@ int run_list(const std::string& socket) {
 }
 
 int run_clear(const std::string& socket, const std::string& name) {
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu fault");
+  auto c = connect(socket, "canemu fault");
   if (!c) {
     return fail(c.error().message);
   }
@@ -91,7 +104,7 @@ int run_inject(const std::string& socket, const InjectOptions& o) {
   if (!text) {
     return fail(text.error());
   }
-  return load_scenario_text(socket, "<command line>", *text);
+  return load_scenario_text(socket, kInjectSource, *text);
 }
 
 struct FaultOptions {

@@ -24,6 +24,7 @@ struct SendOptions {
   uint32_t bitrate = 0;
   std::string step;
   int timeout_ms = 2000;
+  bool sim_time = false;
 };
 
 int run_send(const std::string& socket, const SendOptions& o) {
@@ -43,7 +44,7 @@ int run_send(const std::string& socket, const SendOptions& o) {
       return fail(fmt::format("'{}' is not a duration (examples: 150ns, 20us, 10ms, 2s)", o.step));
     }
   }
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu send");
+  auto c = connect(socket, "canemu send");
   if (!c) {
     return fail(c.error().message);
   }
@@ -60,6 +61,10 @@ int run_send(const std::string& socket, const SendOptions& o) {
   if (!stepped && step_ns) {
     return fail("--step needs stepped time; canemud runs " +
                 std::string(ipc::to_string(static_cast<ipc::WireTimeMode>(s->time_mode))));
+  }
+  const auto base = time_base(*c, o.sim_time);
+  if (!base) {
+    return fail(base.error().message);
   }
   client::ChannelOptions co;
   co.bus = o.bus;
@@ -97,7 +102,7 @@ int run_send(const std::string& socket, const SendOptions& o) {
     }
     if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_done)) {
       m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
-      std::printf("%s\n", candump_line(*m, o.bus).c_str());
+      std::printf("%s\n", log_line(*m, o.bus, *base).c_str());
       ++done;
     } else if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped)) {
       m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
@@ -122,7 +127,10 @@ Command add_send(CLI::App& app, const std::string& socket) {
       ->required();
   send->add_option("--bitrate", o->bitrate, "the sender's bit/s (default: the bus's)");
   send->add_option("--step", o->step, "stepped time: step this long after queueing");
-  send->add_option("--timeout", o->timeout_ms, "ms to wait for the frames (default 2000)");
+  send->add_option("--timeout", o->timeout_ms, "ms to wait for the frames (default 2000)")
+      ->check(CLI::Range(0, 3'600'000));
+  send->add_flag("--sim-time", o->sim_time,
+                 "time stamps in simulated seconds (default in real time: wall-clock seconds)");
   return {send, [&socket, o] { return run_send(socket, *o); }};
 }
 

@@ -137,7 +137,7 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
 }
 
 int run_status(const std::string& socket, bool json) {
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu status");
+  auto c = connect(socket, "canemu status");
   if (!c) {
     return fail(c.error().message);
   }

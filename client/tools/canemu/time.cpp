@@ -18,7 +18,7 @@ int run_step(const std::string& socket, const std::string& duration) {
   if (!ns) {
     return fail(fmt::format("'{}' is not a duration (examples: 150ns, 20us, 10ms, 2s)", duration));
   }
-  auto c = client::Connection::open(ipc::socket_path(socket), "canemu time");
+  auto c = connect(socket, "canemu time");
   if (!c) {
     return fail(c.error().message);
   }

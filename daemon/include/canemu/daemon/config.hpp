@@ -49,8 +49,8 @@ struct TimeSetting {
 tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text);
 std::string to_string(const TimeSetting& time);
 
-// The whole of a text file; nothing if it cannot be read.
-std::optional<std::string> read_text_file(const std::string& path);
+// The whole of a text file; or "PATH: cannot be read (reason)".
+tl::expected<std::string, std::string> read_text_file(const std::string& path);
 
 // "150ns", "20us", "10ms", "2s", "1.5ms": a duration in ns, at least 0 and at most about 285
 // years; nothing if the text is not one.

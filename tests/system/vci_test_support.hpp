@@ -1,8 +1,11 @@
-// What the VCI C API tests share: a canemud with a configuration of their own, stepped time
-// through the canemu extension, and a controller opened the way a VCI program opens it. Used
-// by the tests of libvcinpl and of libvcinpl2 (each built against its own header).
+// What the VCI tests share: a canemud with a configuration of their own, stepped time through
+// the canemu extension, and faults loaded into it. Used by the tests of libvcinpl, libvcinpl2
+// and libvciapi (each built against its own header); what only one API's tests share is in
+// vci_c_test_support.hpp and vci_cpp_test_support.hpp.
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -57,6 +60,16 @@ struct VciDaemon {
 inline void step_ns(uint64_t ns) {
   UINT64 now = 0;
   ASSERT_EQ(canemuStepTime(ns, &now), VCI_OK);
+}
+
+// Steps simulated time a millisecond at a time until `done` (set by another thread that waits
+// for something in simulated time), for at most 30 s of wall time.
+inline void step_until(const std::atomic<bool>& done) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!done && std::chrono::steady_clock::now() < give_up) {
+    step_ns(1'000'000);
+  }
+  ASSERT_TRUE(done) << "the waiting call did not return";
 }
 
 // Loads a fault scenario from `text` into the daemon.

@@ -1,0 +1,220 @@
+// The channel data path of the VCI libraries: reading and writing a channel's rings in shared
+// memory, waiting on their eventfds, without a round trip to canemud.
+#include <algorithm>
+
+#include <unistd.h>
+
+#include "canemu/ipc/clock.hpp"
+#include "vci_core.hpp"
+
+namespace canemu::client::vci {
+
+namespace {
+
+int64_t now_ms() {
+  return ipc::monotonic_ns() / 1'000'000;
+}
+
+// Milliseconds left until `deadline_ms` (-1: forever).
+int left_ms(int64_t deadline_ms) {
+  if (deadline_ms < 0) {
+    return -1;
+  }
+  return static_cast<int>(std::max<int64_t>(0, deadline_ms - now_ms()));
+}
+
+}  // namespace
+
+int timeout_of(uint32_t ms) {
+  return ms == 0xFFFFFFFFU ? -1 : static_cast<int>(std::min<uint32_t>(ms, 0x7FFFFFFF));
+}
+
+namespace {
+// A pollable channel after a read found its ring empty or a blocking wait drained the eventfd:
+// arms the eventfd when the ring is empty (the next put writes it), makes it readable when
+// messages wait.
+void keep_pollable(ChannelObj& c) {
+  if (!c.pollable.load(std::memory_order_relaxed)) {
+    return;
+  }
+  ipc::RingReader& rx = c.rings->rx;
+  if (rx.fill_count() == 0) {
+    rx.disarm();  // drops stale wake-ups
+    if (rx.arm_unless_filled()) {
+      return;
+    }
+  }
+  const uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = ::write(c.rings->pair.rx().reader_event(), &one, sizeof one);
+}
+}  // namespace
+
+int channel_poll_fd(ChannelObj& c) {
+  c.pollable.store(true, std::memory_order_relaxed);
+  keep_pollable(c);
+  return c.rings->pair.rx().reader_event();
+}
+
+HRESULT channel_peek(ChannelObj& c, void* msg) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  switch (c.rings->rx.get(msg)) {
+    case ipc::RingStatus::ok:
+      return VCI_OK;
+    case ipc::RingStatus::empty:
+      keep_pollable(c);
+      return VCI_E_RXQUEUE_EMPTY;
+    default:
+      set_detail("the receive ring is corrupted");
+      return VCI_E_UNEXPECTED;
+  }
+}
+
+HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
+  HRESULT hr = channel_peek(c, msg);
+  if (hr != VCI_E_RXQUEUE_EMPTY || timeout_ms == 0) {
+    return hr == VCI_E_RXQUEUE_EMPTY ? VCI_E_TIMEOUT : hr;
+  }
+  ipc::RingReader& rx = c.rings->rx;
+  const int timeout = timeout_of(timeout_ms);
+  const int64_t deadline = timeout < 0 ? -1 : now_ms() + timeout;
+  // Waiting for one message whatever the application's threshold.
+  const uint32_t threshold = rx.threshold();
+  rx.set_threshold(1);
+  while (true) {
+    hr = channel_peek(c, msg);
+    if (hr != VCI_E_RXQUEUE_EMPTY) {
+      break;
+    }
+    const int left = left_ms(deadline);
+    if (left == 0 || !rx.wait(left)) {
+      hr = channel_peek(c, msg);
+      if (hr == VCI_E_RXQUEUE_EMPTY) {
+        hr = VCI_E_TIMEOUT;
+      }
+      break;
+    }
+  }
+  rx.set_threshold(threshold);
+  keep_pollable(c);
+  return hr;
+}
+
+HRESULT channel_post(ChannelObj& c, const void* msg) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  if (!c.rings->has_tx) {
+    return VCI_E_ACCESSDENIED;  // initialized without a transmit FIFO
+  }
+  switch (c.rings->tx.put(msg)) {
+    case ipc::RingStatus::ok:
+      return VCI_OK;
+    case ipc::RingStatus::full:
+      return VCI_E_TXQUEUE_FULL;
+    default:
+      set_detail("the transmit ring is corrupted");
+      return VCI_E_UNEXPECTED;
+  }
+}
+
+HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg) {
+  HRESULT hr = channel_post(c, msg);
+  if (hr != VCI_E_TXQUEUE_FULL || timeout_ms == 0) {
+    return hr;
+  }
+  ipc::RingWriter& tx = c.rings->tx;
+  const int timeout = timeout_of(timeout_ms);
+  const int64_t deadline = timeout < 0 ? -1 : now_ms() + timeout;
+  const uint32_t threshold = tx.threshold();
+  tx.set_threshold(1);
+  while (true) {
+    hr = channel_post(c, msg);
+    if (hr != VCI_E_TXQUEUE_FULL) {
+      break;
+    }
+    const int left = left_ms(deadline);
+    if (left == 0 || !tx.wait(left)) {
+      hr = channel_post(c, msg);
+      if (hr == VCI_E_TXQUEUE_FULL) {
+        hr = VCI_E_TIMEOUT;
+      }
+      break;
+    }
+  }
+  tx.set_threshold(threshold);
+  return hr;
+}
+
+HRESULT channel_read_many(ChannelObj& c, uint32_t timeout_ms, void* msgs, uint32_t count,
+                          uint32_t& done) {
+  done = 0;
+  if (count == 0) {
+    return VCI_OK;
+  }
+  auto* out = static_cast<uint8_t*>(msgs);
+  HRESULT hr = timeout_ms == 0 ? channel_peek(c, out) : channel_read(c, timeout_ms, out);
+  if (hr != VCI_OK) {
+    return hr;
+  }
+  const std::size_t size = c.rings->pair.element_size();
+  for (done = 1; done < count; ++done) {
+    if (channel_peek(c, out + done * size) != VCI_OK) {
+      break;
+    }
+  }
+  return VCI_OK;
+}
+
+HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, uint32_t count,
+                          uint32_t& done) {
+  done = 0;
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  const auto* in = static_cast<const uint8_t*>(msgs);
+  const std::size_t size = c.rings->pair.element_size();
+  for (; done < count; ++done) {
+    const HRESULT hr = timeout_ms == 0 ? channel_post(c, in + done * size)
+                                       : channel_send(c, timeout_ms, in + done * size);
+    if (hr != VCI_OK) {
+      return hr;
+    }
+  }
+  return VCI_OK;
+}
+
+HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  const bool signalled = c.rings->rx.wait(timeout_of(timeout_ms));
+  keep_pollable(c);
+  return signalled ? VCI_OK : VCI_E_TIMEOUT;
+}
+
+HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms) {
+  if (!c.rings) {
+    return VCI_E_NOT_INITIALIZED;
+  }
+  return c.rings->tx.wait(timeout_of(timeout_ms)) ? VCI_OK : VCI_E_TIMEOUT;
+}
+
+uint8_t rx_load(const ChannelObj& c) {
+  if (!c.rings) {
+    return 0;
+  }
+  return static_cast<uint8_t>(uint64_t{c.rings->rx.fill_count()} * 100 /
+                              c.rings->pair.rx().memory().capacity());
+}
+
+uint8_t tx_load(const ChannelObj& c) {
+  if (!c.rings || !c.rings->has_tx) {
+    return 0;
+  }
+  return static_cast<uint8_t>(uint64_t{c.rings->tx.fill_count()} * 100 /
+                              c.rings->pair.tx().memory().capacity());
+}
+
+}  // namespace canemu::client::vci

@@ -1,0 +1,116 @@
+// The text of VCI results (VciFormatError, vciFormatError) and the detail of the last failure
+// of each thread that goes with it.
+#include <string>
+
+#include <fmt/format.h>
+
+#include "vci_core.hpp"
+
+namespace canemu::client::vci {
+
+namespace {
+
+thread_local std::string t_detail;
+
+}  // namespace
+
+void set_detail(std::string detail) {
+  t_detail = std::move(detail);
+}
+
+std::string format_error(HRESULT hr) {
+  const auto code = static_cast<uint32_t>(hr);
+  std::string text;
+  switch (code) {
+    case static_cast<uint32_t>(VCI_OK):
+      text = "success";
+      break;
+    case static_cast<uint32_t>(VCI_E_UNEXPECTED):
+      text = "unexpected error";
+      break;
+    case static_cast<uint32_t>(VCI_E_NOT_IMPLEMENTED):
+      text = "function not implemented";
+      break;
+    case static_cast<uint32_t>(VCI_E_OUTOFMEMORY):
+      text = "not enough memory or resources";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVALIDARG):
+      text = "invalid argument";
+      break;
+    case static_cast<uint32_t>(VCI_E_NOINTERFACE):
+      text = "interface not supported";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVPOINTER):
+      text = "invalid pointer";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVHANDLE):
+      text = "invalid handle";
+      break;
+    case static_cast<uint32_t>(VCI_E_ABORT):
+      text = "operation aborted";
+      break;
+    case static_cast<uint32_t>(VCI_E_FAIL):
+      text = "operation failed";
+      break;
+    case static_cast<uint32_t>(VCI_E_ACCESSDENIED):
+      text = "access denied: the object is in use";
+      break;
+    case static_cast<uint32_t>(VCI_E_TIMEOUT):
+      text = "timeout";
+      break;
+    case static_cast<uint32_t>(VCI_E_BUSY):
+      text = "busy";
+      break;
+    case static_cast<uint32_t>(VCI_E_PENDING):
+      text = "pending";
+      break;
+    case static_cast<uint32_t>(VCI_E_NO_DATA):
+      text = "no data";
+      break;
+    case static_cast<uint32_t>(VCI_E_NO_MORE_ITEMS):
+      text = "no more items";
+      break;
+    case static_cast<uint32_t>(VCI_E_NOT_INITIALIZED):
+      text = "not initialized";
+      break;
+    case static_cast<uint32_t>(VCI_E_ALREADY_INITIALIZED):
+      text = "already initialized";
+      break;
+    case static_cast<uint32_t>(VCI_E_RXQUEUE_EMPTY):
+      text = "receive queue empty";
+      break;
+    case static_cast<uint32_t>(VCI_E_TXQUEUE_FULL):
+      text = "transmit queue full";
+      break;
+    case static_cast<uint32_t>(VCI_E_BUFFER_OVERFLOW):
+      text = "buffer too small";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVALID_STATE):
+      text = "invalid state";
+      break;
+    case static_cast<uint32_t>(VCI_E_OBJECT_ALREADY_EXISTS):
+      text = "object already exists";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVALID_INDEX):
+      text = "invalid index";
+      break;
+    case static_cast<uint32_t>(VCI_E_END_OF_FILE):
+      text = "end of file";
+      break;
+    case static_cast<uint32_t>(VCI_E_DISCONNECTED):
+      text = "disconnected: canemud cannot be reached";
+      break;
+    case static_cast<uint32_t>(VCI_E_WRONG_FLASHFWVERSION):
+      text = "wrong flash firmware version";
+      break;
+    default:
+      text = fmt::format("unknown error {:#010x}", code);
+      break;
+  }
+  if (hr != VCI_OK && !t_detail.empty()) {
+    text += " (" + t_detail + ")";
+  }
+  return text;
+}
+
+}  // namespace canemu::client::vci

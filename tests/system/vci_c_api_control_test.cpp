@@ -1,0 +1,314 @@
+// The control unit of the classic VCI C API (libvcinpl: BTR0/BTR1) against a real canemud in
+// stepped time: line states and their announcements, error states, bus-off and restart, the
+// acceptance filter, bit-rate detection and the time stamp counter's overflow.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "vci_c_test_support.hpp"
+#include "vcinpl.h"
+
+namespace canemu {
+namespace {
+
+using testing::Adapter;
+using testing::data;
+using testing::id_of;
+using testing::kMode;
+using testing::step_ns;
+using testing::step_until;
+using testing::VciDaemon;
+
+TEST(VciCApi, TheControlUnitGoesThroughItsStatesAndAnnouncesThem) {
+  VciDaemon d;
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
+  HANDLE control = nullptr;
+  HANDLE second = nullptr;
+  ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
+  EXPECT_EQ(canControlOpen(dev, 0, &second), VCI_E_ACCESSDENIED);
+  CANLINESTATUS s{};
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  EXPECT_EQ(canControlStart(control, TRUE), VCI_E_INVALID_STATE);
+  HANDLE ch = nullptr;
+  ASSERT_EQ(canChannelOpen(dev, 0, FALSE, &ch), VCI_OK);
+  EXPECT_EQ(canChannelActivate(ch, TRUE), VCI_E_NOT_INITIALIZED);
+  EXPECT_EQ(canChannelInitialize(ch, 0, 1, 16, 1), VCI_E_INVALIDARG);
+  ASSERT_EQ(canChannelInitialize(ch, 64, 1, 16, 1), VCI_OK);
+  ASSERT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
+  ASSERT_EQ(canControlInitialize(control, kMode, CAN_BT0_250KB, CAN_BT1_250KB), VCI_OK);
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.bOpMode, kMode);
+  EXPECT_EQ(s.bBtReg0, CAN_BT0_250KB);
+  EXPECT_EQ(s.bBtReg1, CAN_BT1_250KB);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  step_ns(1'000'000);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, 0u);
+  step_ns(500'000);
+  ASSERT_EQ(canControlStart(control, FALSE), VCI_OK);
+  ASSERT_EQ(canControlReset(control), VCI_OK);
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  // INFO messages: start at its instant (1000 ticks of 1 us), stop and reset with time 0.
+  std::vector<CANMSG> got;
+  CANMSG m;
+  while (canChannelReadMessage(ch, 0, &m) == VCI_OK) {
+    got.push_back(m);
+  }
+  ASSERT_EQ(got.size(), 3u);
+  for (const CANMSG& info : got) {
+    EXPECT_EQ(info.uMsgInfo.Bytes.bType, CAN_MSGTYPE_INFO);
+    EXPECT_EQ(info.dwMsgId, CAN_MSGID_INFO);
+    EXPECT_EQ(info.uMsgInfo.Bits.dlc, 1u);
+  }
+  EXPECT_EQ(got[0].abData[0], CAN_INFO_START);
+  EXPECT_EQ(got[0].dwTime, 1000u);
+  EXPECT_EQ(got[1].abData[0], CAN_INFO_STOP);
+  EXPECT_EQ(got[1].dwTime, 0u);
+  EXPECT_EQ(got[2].abData[0], CAN_INFO_RESET);
+  EXPECT_EQ(canChannelReadMessage(ch, 0, &m), VCI_E_TIMEOUT);
+  EXPECT_EQ(canChannelPeekMessage(ch, &m), VCI_E_RXQUEUE_EMPTY);
+  // Released, the control unit can be opened again.
+  EXPECT_EQ(canControlClose(control), VCI_OK);
+  EXPECT_EQ(canControlOpen(dev, 0, &second), VCI_OK);
+  canControlClose(second);
+  canChannelClose(ch);
+  vciDeviceClose(dev);
+}
+
+TEST(VciCApi, ALoneAdapterSeesAckErrorsWarningAndErrorPassive) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  alpha.post(data(0x10, {1}));
+  step_ns(10'000'000);
+  std::vector<CANMSG> errors;
+  std::vector<CANMSG> statuses;
+  for (const CANMSG& m : alpha.drain()) {
+    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
+      errors.push_back(m);
+    } else if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_STATUS) {
+      statuses.push_back(m);
+    }
+  }
+  // Every attempt misses its ACK. The 12th error takes TEC to 96 (warning), the 16th to 128
+  // (error-passive), where an error-passive transmitter's ACK errors stop counting.
+  ASSERT_GT(errors.size(), 16u);
+  for (std::size_t k = 0; k < errors.size(); ++k) {
+    EXPECT_EQ(errors[k].dwMsgId, CAN_MSGID_ERROR);
+    EXPECT_EQ(errors[k].abData[0], CAN_ERROR_ACK) << k;
+    EXPECT_EQ((errors[k].abData[1] & CAN_STATUS_ERRLIM) != 0, k >= 11) << k;
+  }
+  ASSERT_EQ(statuses.size(), 1u);
+  EXPECT_EQ(statuses[0].abData[0] & CAN_STATUS_ERRLIM, CAN_STATUS_ERRLIM);
+  EXPECT_EQ(statuses[0].dwTime, errors[11].dwTime);
+  UINT8 state = 0;
+  UINT16 tec = 0;
+  UINT16 rec = 0;
+  UINT8 line = 0;
+  ASSERT_EQ(canemuGetControllerState(alpha.channel, &state, &tec, &rec, &line), VCI_OK);
+  EXPECT_EQ(state, CANEMU_STATE_PASSIVE);
+  EXPECT_EQ(tec, 128);
+  EXPECT_EQ(rec, 0);
+  EXPECT_EQ(line, CANEMU_LINE_ONLINE);
+  CANLINESTATUS s{};
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ERRLIM | CAN_STATUS_TXPEND));
+}
+
+TEST(VciCApi, WithoutErrorFramesModeNoErrorMessagesButStatusStillComes) {
+  VciDaemon d;
+  Adapter alpha("alpha", true, CAN_OPMODE_STANDARD);
+  alpha.post(data(0x10, {1}));
+  step_ns(10'000'000);
+  std::size_t errors = 0;
+  std::size_t statuses = 0;
+  for (const CANMSG& m : alpha.drain()) {
+    errors += m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR ? 1 : 0;
+    statuses += m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_STATUS ? 1 : 0;
+  }
+  EXPECT_EQ(errors, 0u);
+  EXPECT_EQ(statuses, 1u);
+}
+
+TEST(VciCApi, ThirtyTwoBitErrorsDriveTheSenderBusOffAndARestartRecovers) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  testing::load_faults(d.daemon,
+                       "[[fault]]\nat = \"0s\"\nbus = \"can0\"\nmatch = { from = \"alpha:0\" }\n"
+                       "effect = \"bit_error\"\ncount = 32\n");
+  alpha.post(data(0x10, {1}));
+  step_ns(20'000'000);
+  std::vector<CANMSG> errors;
+  std::vector<CANMSG> statuses;
+  for (const CANMSG& m : alpha.drain()) {
+    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
+      errors.push_back(m);
+    } else if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_STATUS) {
+      statuses.push_back(m);
+    }
+  }
+  ASSERT_EQ(errors.size(), 32u);
+  for (const CANMSG& e : errors) {
+    EXPECT_EQ(e.abData[0], CAN_ERROR_BIT);
+  }
+  EXPECT_EQ(errors.back().abData[1] & CAN_STATUS_BUSOFF, CAN_STATUS_BUSOFF);
+  ASSERT_EQ(statuses.size(), 2u);  // warning at the 12th error, bus-off at the 32nd
+  EXPECT_EQ(statuses[0].abData[0] & (CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF), CAN_STATUS_ERRLIM);
+  EXPECT_EQ(statuses[1].abData[0] & CAN_STATUS_BUSOFF, CAN_STATUS_BUSOFF);
+  EXPECT_EQ(statuses[1].dwTime, errors.back().dwTime);
+  UINT8 state = 0;
+  UINT16 tec = 0;
+  ASSERT_EQ(canemuGetControllerState(alpha.control, &state, &tec, nullptr, nullptr), VCI_OK);
+  EXPECT_EQ(state, CANEMU_STATE_BUSOFF);
+  EXPECT_EQ(tec, 256);  // 32 x 8, above 255
+  EXPECT_TRUE(beta.frames().empty());
+  // Stopped and started again: 128 x 11 recessive bits of recovery, then it sends.
+  ASSERT_EQ(canControlStart(alpha.control, FALSE), VCI_OK);
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  alpha.post(data(0x11, {2}));
+  step_ns(10'000'000);
+  ASSERT_EQ(canemuGetControllerState(alpha.control, &state, &tec, nullptr, nullptr), VCI_OK);
+  EXPECT_EQ(state, CANEMU_STATE_ACTIVE);
+  const auto got = beta.frames();
+  ASSERT_FALSE(got.empty());
+  EXPECT_EQ(got.back().dwMsgId, 0x11u);
+  CANLINESTATUS s{};
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus & (CAN_STATUS_BUSOFF | CAN_STATUS_ERRLIM), 0u);
+}
+
+TEST(VciCApi, TheControlUnitsFilterPassesOnlyWhatItAccepts) {
+  VciDaemon d;
+  Adapter alpha("alpha", false);
+  Adapter beta("beta");
+  // IDs 0x100..0x103 without RTR: code 001 0000 0000 0, mask 111 1111 1100 1.
+  ASSERT_EQ(canControlSetAccFilter(alpha.control, FALSE, 0x200, 0xFF9), VCI_OK);
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  EXPECT_EQ(canControlSetAccFilter(alpha.control, FALSE, 0, 0), VCI_E_INVALID_STATE);
+  for (uint32_t id = 0x100; id <= 0x104; ++id) {
+    beta.post(data(id, {}));
+  }
+  beta.post(data(0x100, {}, false, true));
+  beta.post(data(0x1ABCDE, {}, true));  // the 29-bit filter is still open
+  step_ns(5'000'000);
+  std::vector<uint32_t> ids;
+  for (const CANMSG& m : alpha.frames()) {
+    ids.push_back(m.dwMsgId);
+    EXPECT_EQ(m.uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_1);
+  }
+  EXPECT_EQ(ids, (std::vector<uint32_t>{0x100, 0x101, 0x102, 0x103, 0x1ABCDE}));
+  // Offline again: only the ID list decides, with one ID in it.
+  ASSERT_EQ(canControlStart(alpha.control, FALSE), VCI_OK);
+  ASSERT_EQ(canControlSetAccFilter(alpha.control, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
+            VCI_OK);
+  ASSERT_EQ(canControlAddFilterIds(alpha.control, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  beta.post(data(0x122, {}));
+  beta.post(data(0x123, {}));
+  step_ns(5'000'000);
+  const auto listed = alpha.frames();
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0].dwMsgId, 0x123u);
+  EXPECT_EQ(listed[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
+  // Removed again: nothing passes.
+  ASSERT_EQ(canControlStart(alpha.control, FALSE), VCI_OK);
+  ASSERT_EQ(canControlRemFilterIds(alpha.control, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  beta.post(data(0x123, {}));
+  step_ns(5'000'000);
+  EXPECT_TRUE(alpha.frames().empty());
+}
+
+// A program that does not know the bus's rate finds it: two adapters talk at 250 kbit/s, a
+// third listens with a table of rates. The call blocks while simulated time runs, so another
+// thread steps it.
+TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
+  VciDaemon d(std::string(testing::kTwoAdapters) +
+              "\n[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\n"
+              "controllers = [\"can0\"]\n");
+  Adapter beta("beta", true, kMode, 1024, CAN_BT0_250KB, CAN_BT1_250KB);
+  Adapter gamma("gamma", true, kMode, 1024, CAN_BT0_250KB, CAN_BT1_250KB);
+  HANDLE list = nullptr;
+  ASSERT_EQ(canSchedulerOpen(beta.device, 0, &list), VCI_OK);
+  CANCYCLICTXMSG m{};
+  m.wCycleTime = 1;  // a frame every millisecond
+  m.dwMsgId = 0x2A0;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  UINT32 index = 0;
+  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+  ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
+  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
+  HANDLE control = nullptr;
+  ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
+  UINT8 btr0[] = {CAN_BT0_500KB, CAN_BT0_250KB, CAN_BT0_125KB};
+  UINT8 btr1[] = {CAN_BT1_500KB, CAN_BT1_250KB, CAN_BT1_125KB};
+  INT32 found = -2;
+  std::atomic<bool> done{false};
+  HRESULT hr = VCI_E_UNEXPECTED;
+  std::thread detector([&] {
+    hr = canControlDetectBitrate(control, 100, 3, btr0, btr1, &found);
+    done = true;
+  });
+  step_until(done);
+  detector.join();
+  EXPECT_EQ(hr, VCI_OK);
+  EXPECT_EQ(found, 1);
+  // With what it found, the third adapter receives the traffic.
+  ASSERT_EQ(canControlInitialize(control, kMode, btr0[found], btr1[found]), VCI_OK);
+  HANDLE ch = nullptr;
+  ASSERT_EQ(canChannelOpen(dev, 0, FALSE, &ch), VCI_OK);
+  ASSERT_EQ(canChannelInitialize(ch, 64, 1, 0, 0), VCI_OK);
+  ASSERT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  step_ns(5'000'000);
+  std::size_t frames = 0;
+  CANMSG got;
+  while (canChannelPeekMessage(ch, &got) == VCI_OK) {
+    frames += got.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA && got.dwMsgId == 0x2A0 ? 1 : 0;
+  }
+  EXPECT_GE(frames, 4u);
+  // On a bus nobody talks on, it gives up after each entry's wait.
+  ASSERT_EQ(canSchedulerActivate(list, FALSE), VCI_OK);
+  ASSERT_EQ(canControlReset(control), VCI_OK);
+  step_ns(5'000'000);
+  done = false;
+  std::thread silent([&] {
+    hr = canControlDetectBitrate(control, 10, 2, btr0, btr1, &found);
+    done = true;
+  });
+  step_until(done);
+  silent.join();
+  EXPECT_EQ(hr, VCI_E_TIMEOUT);
+  EXPECT_EQ(found, -1);
+  canChannelClose(ch);
+  canControlClose(control);
+  canSchedulerClose(list);
+  vciDeviceClose(dev);
+}
+
+TEST(VciCApi, TheTimeStampCounterAnnouncesItsOverflow) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  step_ns(4'295'000'000'000);  // past 2^32 us
+  const auto got = alpha.drain();
+  ASSERT_EQ(got.size(), 2u);  // INFO START, then TIMEOVR
+  EXPECT_EQ(got[1].uMsgInfo.Bytes.bType, CAN_MSGTYPE_TIMEOVR);
+  EXPECT_EQ(got[1].dwMsgId, 1u);  // one overflow
+  EXPECT_EQ(got[1].dwTime, 0u);   // at 2^32 us the counter shows 0 again
+}
+
+}  // namespace
+}  // namespace canemu

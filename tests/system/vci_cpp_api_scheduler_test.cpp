@@ -1,0 +1,92 @@
+// The cyclic list of the VCI C++ API (ICanScheduler, ICanScheduler2) against a real canemud in
+// stepped time: messages on their cycles, the timer overflow, and the entries it refuses.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "vci_cpp_test_support.hpp"
+#include "vcisdk.h"
+
+namespace canemu {
+namespace {
+
+using testing::Adapter;
+using testing::drain;
+using testing::end_of;
+using testing::Ref;
+using testing::step_ns;
+using testing::VciDaemon;
+
+TEST(VciCppApi, TheCyclicListThroughICanScheduler2AndTheTimerOverflow) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  Ref<ICanScheduler2> list;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler2, list.pv()), VCI_OK);
+  CANCYCLICTXMSG2 m{};
+  m.wCycleTime = 3;
+  m.bIncrMode = CAN_CTXMSG_INC_8;
+  m.bByteIndex = 0;
+  m.dwMsgId = 0x55;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  m.abData[0] = 0xFE;
+  UINT32 index = 0;
+  ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
+  ASSERT_EQ(list->StartMessage(index, 3), VCI_OK);
+  drain(beta.reader.p, false);
+  ASSERT_EQ(list->Resume(), VCI_OK);  // at t = 0
+  step_ns(20'000'000);
+  const auto got = drain(beta.reader.p, true);
+  ASSERT_EQ(got.size(), 3u);
+  const std::vector<uint8_t> values{0xFE, 0xFF, 0x00};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(got[k].abData[0], values[k]);
+    EXPECT_EQ(got[k].dwTime, 3'000u * (k + 1) + end_of(0x55, {values[k]})) << k;
+  }
+  CANSCHEDULERSTATUS2 s{};
+  ASSERT_EQ(list->GetStatus(&s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_RUNNING);
+  EXPECT_EQ(s.abMsgStat[index], CAN_CTXMSG_STAT_DONE);
+  ASSERT_EQ(list->Reset(), VCI_OK);
+  ASSERT_EQ(list->GetStatus(&s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
+  EXPECT_EQ(s.abMsgStat[index], CAN_CTXMSG_STAT_EMPTY);
+  step_ns(4'295'000'000'000 - 20'000'000);  // past 2^32 us
+  const auto overflow = drain(beta.reader.p, false);
+  ASSERT_EQ(overflow.size(), 1u);
+  EXPECT_EQ(overflow[0].uMsgInfo.Bytes.bType, CAN_MSGTYPE_TIMEOVR);
+  EXPECT_EQ(overflow[0].dwMsgId, 1u);
+}
+
+TEST(VciCppApi, TheCyclicListRefusesBadEntriesAndASeventeenth) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Ref<ICanScheduler> list;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  CANCYCLICTXMSG m{};
+  m.wCycleTime = 10;
+  m.dwMsgId = 0x100;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  UINT32 index = 0;
+  for (UINT32 k = 0; k < 16; ++k) {
+    ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
+    EXPECT_EQ(index, k);
+  }
+  EXPECT_EQ(list->AddMessage(&m, &index), VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(index, 0xFFFFFFFFu);
+  ASSERT_EQ(list->RemMessage(3), VCI_OK);
+  m.wCycleTime = 0;
+  EXPECT_EQ(list->AddMessage(&m, &index), VCI_E_INVALIDARG);
+  m.wCycleTime = 10;
+  ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
+  EXPECT_EQ(index, 3u);  // the free slot
+  EXPECT_EQ(list->StartMessage(16, 1), VCI_E_INVALID_INDEX);
+  CANSCHEDULERSTATUS s{};
+  ASSERT_EQ(list->GetStatus(&s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);  // off after opening
+}
+
+}  // namespace
+}  // namespace canemu

@@ -1,0 +1,105 @@
+// What the tests of the VCI C++ API (libvciapi: vcisdk.h) share: references that release what
+// they hold, an adapter opened the way the guide's walk-through opens it, and messages and
+// their time on the wire.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "vci_test_support.hpp"
+#include "vcisdk.h"
+
+namespace canemu::testing {
+
+template <class T>
+struct Ref {  // releases what it holds
+  T* p = nullptr;
+  Ref() = default;
+  Ref(const Ref&) = delete;
+  Ref& operator=(const Ref&) = delete;
+  ~Ref() {
+    if (p != nullptr) {
+      p->Release();
+    }
+  }
+  T* operator->() const { return p; }
+  T** out() { return &p; }
+  PVOID* pv() { return reinterpret_cast<PVOID*>(&p); }
+};
+
+// Opens the adapter named `name` the way the guide's walk-through does.
+struct Adapter {
+  Ref<IVciDevice> device;
+  Ref<IBalObject> bal;
+  Ref<ICanSocket> socket;
+  Ref<ICanChannel> channel;
+  Ref<IFifoReader> reader;
+  Ref<IFifoWriter> writer;
+  Ref<ICanControl> control;
+  explicit Adapter(const std::string& name) {
+    Ref<IVciDeviceManager> manager;
+    EXPECT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+    Ref<IVciEnumDevice> e;
+    EXPECT_EQ(manager->EnumDevices(e.out()), VCI_OK);
+    VCIDEVICEINFO info{};
+    while (e->Next(1, &info, nullptr) == VCI_OK) {
+      if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
+        EXPECT_EQ(manager->OpenDevice(info.VciObjectId, device.out()), VCI_OK);
+      }
+    }
+    EXPECT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+    EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
+    EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
+    EXPECT_EQ(channel->Initialize(1024, 128), VCI_OK);
+    EXPECT_EQ(channel->GetReader(reader.out()), VCI_OK);
+    EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
+    EXPECT_EQ(channel->Activate(), VCI_OK);
+    EXPECT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
+    CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME, 0,
+                     CAN_BT0_500KB, CAN_BT1_500KB};
+    EXPECT_EQ(control->InitLine(&init), VCI_OK);
+    EXPECT_EQ(control->StartLine(), VCI_OK);
+  }
+};
+
+// The BAL of the adapter whose VciObjectId is `id`, opened through the device manager.
+inline void open_bal(INT64 id, Ref<IBalObject>& bal) {
+  Ref<IVciDeviceManager> manager;
+  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  VCIID vciid{};
+  vciid.AsInt64 = id;
+  Ref<IVciDevice> device;
+  ASSERT_EQ(manager->OpenDevice(vciid, device.out()), VCI_OK);
+  ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
+}
+
+inline CANMSG one_byte(UINT32 id, UINT8 b) {
+  CANMSG m{};
+  m.dwMsgId = id;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  m.abData[0] = b;
+  return m;
+}
+
+// What `reader` holds, taken out (`data_only`: only the data frames).
+inline std::vector<CANMSG> drain(IFifoReader* reader, bool data_only) {
+  std::vector<CANMSG> got;
+  CANMSG m;
+  while (reader->GetDataEntry(&m) == VCI_OK) {
+    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+      got.push_back(m);
+    }
+  }
+  return got;
+}
+
+// The end of a classic frame sent at t = 0, in device ticks (us) at 500 kbit/s.
+inline UINT32 end_of(uint32_t id, std::vector<uint8_t> data, bool ext = false) {
+  return 2u * model::encode(*model::Frame::classic(id, data, ext)).length;  // 2 us a bit
+}
+
+}  // namespace canemu::testing

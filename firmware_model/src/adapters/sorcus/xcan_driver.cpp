@@ -1,0 +1,629 @@
+// The X-CAN-2i MDD's driver side: how it programs each 82527 (bit timing, buffers, buffer 15
+// and its mask), plans the buffers, sends through own, exclusive and temporary buffers and the
+// FIFO, and serves the interrupt (status, buffers 1..14, buffer 15).
+#include <algorithm>
+
+#include "canemu/firmware_model/adapters/sorcus/xcan_module.hpp"
+
+namespace canemu::model::sorcus {
+
+using namespace i82527;
+
+namespace {
+
+constexpr uint8_t kRunControl = CONTROL_IE | CONTROL_SIE | CONTROL_EIE;
+constexpr uint8_t kLastBuffer = 14;
+
+}  // namespace
+
+// --- chip set-up ---
+
+void XcanModule::init_chip(unsigned i) {
+  I82527& chip = ifaces_[i].chip;
+  // As the driver starts the chip: configuration access with INI; the 16 MHz crystal halved
+  // (DSC) to the 8 MHz / 125 ns system clock; the global masks "every bit must match" (buffers
+  // 1..14 match their object's ID exactly, digest §6.20); every object invalid.
+  chip.write(CONTROL, CONTROL_CCE | CONTROL_INI);
+  chip.write(CPU_INTERFACE, CPUIF_DSC);
+  const auto s = encode_id(0x7FF, false);
+  const auto e = encode_id(0x1FFFFFFF, true);
+  for (uint8_t k = 0; k < 4; ++k) {
+    if (k < 2) {
+      chip.write(static_cast<uint8_t>(GMS + k), s[k]);
+    }
+    chip.write(static_cast<uint8_t>(GML + k), e[k]);
+    chip.write(static_cast<uint8_t>(MSG15_MASK + k), e[k]);
+  }
+  for (uint8_t n = 1; n <= kObjects; ++n) {
+    chip.write(message(n) + CTRL0, pair_write(0, MSGVAL | TXIE | RXIE | INTPND));
+    chip.write(message(n) + CTRL1, pair_write(0, RMTPND | TXRQST | CPUUPD | NEWDAT));
+  }
+  chip.write(CONTROL, kRunControl | CONTROL_INI);
+  program_timing(i);
+}
+
+void XcanModule::program_timing(unsigned i) {
+  Interface& f = ifaces_[i];
+  const XCAN_BITPARAMS& p = f.params;
+  // XCAN_BITPARAMS -> BIT_TIMING0/1 (the SJA1000 field layout, tq = (BRP + 1) x 125 ns):
+  // BTR0 = (SJW - 1) << 6 | BRP, BTR1 = SAM << 7 | (TSEG2 - 1) << 4 | (TSEG1 - 1).
+  // Example: 500 kbit/s (125 ns, 13, 2, 1, 1) -> 00 1C, the digest §2.4 table.
+  const auto btr0 = static_cast<uint8_t>(((p.Tsjw - 1u) << 6) | (p.Tq / 125u - 1u));
+  const auto btr1 =
+      static_cast<uint8_t>((p.SpB == 3 ? 0x80u : 0u) | ((p.Tseg2 - 1u) << 4) | (p.Tseg1 - 1u));
+  const uint8_t control = f.chip.read(CONTROL);
+  f.chip.write(CONTROL, control | CONTROL_CCE | CONTROL_INI);
+  f.chip.write(BIT_TIMING0, btr0);
+  f.chip.write(BIT_TIMING1, btr1);
+  f.chip.write(CONTROL, control & ~CONTROL_CCE);
+}
+
+void XcanModule::bus_on(unsigned i) {
+  Interface& f = ifaces_[i];
+  // «Nach dem Öffnen des ersten Kanals zu einem Sende- oder Empfangsobjekt ist der Bus
+  // standardmäßig eingeschaltet.» Decision: unless the bus-control device switched it already.
+  if (!f.controlled) {
+    f.chip.write(CONTROL, kRunControl);
+  }
+}
+
+ULONG XcanModule::bus_state(unsigned i) {
+  Interface& f = ifaces_[i];
+  const uint8_t s = f.chip.read(STATUS) & (STATUS_WARN | STATUS_BOFF);
+  // Reading STATUS ends a status change interrupt the driver has not served yet: serve it.
+  f.chip.write(STATUS, LEC_UNUSED);
+  USHORT flags = 0;
+  if (!(f.chip.read(CONTROL) & CONTROL_INI) && !(s & STATUS_BOFF)) {
+    flags |= XCAN_BUS_ON;
+  }
+  if (s & STATUS_WARN) {
+    flags |= XCAN_BUS_HEAVY;
+  }
+  if (s & STATUS_BOFF) {
+    flags |= XCAN_BUS_OFF;
+  }
+  if (f.line_error) {
+    flags |= XCAN_LINE_ERROR;
+  }
+  return XCAN_STATUS(flags, f.last_lec);
+}
+
+// --- the buffer plan ---
+
+int XcanModule::find_object(const Interface& f, uint32_t id, bool extended) const {
+  for (std::size_t k = 0; k < f.objects.size(); ++k) {
+    const Object& o = f.objects[k];
+    if (o.role != Role::general && o.id == id && o.extended == extended) {
+      return static_cast<int>(k);
+    }
+  }
+  return -1;
+}
+
+std::vector<int> XcanModule::buffer15_objects(const Interface& f) const {
+  std::vector<int> out;
+  for (std::size_t k = 0; k < f.objects.size(); ++k) {
+    if (f.objects[k].buffer == 15) {
+      out.push_back(static_cast<int>(k));
+    }
+  }
+  return out;
+}
+
+AcceptanceFilter XcanModule::buffer15_filter(unsigned i) const {
+  const Interface& f = ifaces_[i];
+  std::vector<uint32_t> ids;
+  bool ext = false;
+  for (const int k : buffer15_objects(f)) {
+    ids.push_back(f.objects[static_cast<std::size_t>(k)].id);
+    ext = f.objects[static_cast<std::size_t>(k)].extended;
+  }
+  if (ids.empty()) {
+    return AcceptanceFilter{};
+  }
+  return automatic_filter(ids, ext);
+}
+
+void XcanModule::plan(unsigned i) {
+  Interface& f = ifaces_[i];
+  // Decision (digest §1.4, §7.15): the plan is made again on every new object. Up to 14
+  // objects each has a buffer of its own among 1..14. From the 15th on, exclusive objects
+  // (and the general-ID channel) keep one of 1..13, passive non-exclusive objects go to buffer
+  // 15, everything else uses the temporary pool; a buffer an object leaves stays loaded with
+  // it as a temporary buffer (its pending request, if any, completes there).
+  f.shared = f.objects.size() > 14;
+  const uint8_t limit = f.shared ? 13 : kLastBuffer;
+  for (std::size_t k = 0; k < f.objects.size(); ++k) {
+    Object& o = f.objects[k];
+    const bool own = !f.shared || o.excl;
+    if (own && o.buffer >= 1 && o.buffer <= limit) {
+      continue;
+    }
+    if (o.buffer >= 1 && o.buffer <= kLastBuffer) {
+      f.buffers[o.buffer - 1].permanent = false;  // left: a cached temporary buffer now
+    }
+    o.buffer = 0;
+    if (!own) {
+      const bool passive = o.role == Role::passive_send || o.role == Role::passive_receive;
+      o.buffer = passive ? 15 : 0;
+      continue;
+    }
+    // The lowest buffer that is no object's own; a free one before one that is busy.
+    uint8_t pick = 0;
+    for (int pass = 0; pass < 2 && pick == 0; ++pass) {
+      for (uint8_t n = 1; n <= limit; ++n) {
+        const Buffer& b = f.buffers[n - 1];
+        if (!b.permanent && (pass == 1 || !b.busy)) {
+          pick = n;
+          break;
+        }
+      }
+    }
+    Buffer& b = f.buffers[pick - 1];
+    if (b.busy) {
+      // The request on it goes back to the head of the FIFO.
+      f.fifo.push_front(b.sending);
+      b.busy = false;
+    }
+    if (b.owner >= 0 && b.owner != static_cast<int>(k)) {
+      // The cached object is no longer here.
+    }
+    b.owner = static_cast<int>(k);
+    b.permanent = true;
+    o.buffer = pick;
+    program_object(i, pick, static_cast<int>(k));
+  }
+  program_buffer15(i);
+}
+
+void XcanModule::program_object(unsigned i, uint8_t n, int object) {
+  Interface& f = ifaces_[i];
+  const Object& o = f.objects[static_cast<std::size_t>(object)];
+  I82527& chip = f.chip;
+  const uint8_t base = message(n);
+  const bool send =
+      o.role == Role::active_send || o.role == Role::passive_send || o.role == Role::general;
+  chip.write(base + CTRL0, pair_write(0, MSGVAL | INTPND));
+  chip.write(base + CTRL1,
+             pair_write(send ? CPUUPD : 0,
+                        static_cast<uint8_t>(RMTPND | TXRQST | NEWDAT | (send ? 0 : MSGLST))));
+  if (o.role == Role::general) {
+    chip.write(base + CTRL0, pair_write(TXIE | RXIE, 0));  // loaded per message
+    return;
+  }
+  const auto arb = encode_id(o.id, o.extended);
+  for (uint8_t k = 0; k < 4; ++k) {
+    chip.write(static_cast<uint8_t>(base + ARB0 + k), arb[k]);
+  }
+  chip.write(base + CONFIG,
+             static_cast<uint8_t>((o.size << kConfigDlcShift) | (send ? CONFIG_DIR : 0) |
+                                  (o.extended ? CONFIG_XTD : 0)));
+  for (uint8_t k = 0; k < 8; ++k) {
+    chip.write(static_cast<uint8_t>(base + DATA0 + k), o.data[k]);
+  }
+  chip.write(base + CTRL0, pair_write(MSGVAL | TXIE | RXIE, 0));
+  if (o.role == Role::passive_send) {
+    // A passive send object answers remote frames in hardware: CPUUpd reset. An active-only
+    // send object keeps CPUUpd set between its own requests, so it answers none.
+    chip.write(base + CTRL1, pair_write(0, CPUUPD));
+  }
+}
+
+void XcanModule::program_buffer15(unsigned i) {
+  Interface& f = ifaces_[i];
+  I82527& chip = f.chip;
+  const uint8_t base = message(15);
+  chip.write(base + CTRL0, pair_write(0, MSGVAL | INTPND));
+  chip.write(base + CTRL1, pair_write(0, RMTPND | TXRQST | MSGLST | NEWDAT));
+  const std::vector<int> in15 = buffer15_objects(f);
+  bool ext = false;
+  bool remote = f.filter_remote;
+  AcceptanceFilter filter;
+  if (!in15.empty()) {
+    const Object& first = f.objects[static_cast<std::size_t>(in15.front())];
+    ext = first.extended;
+    remote = first.role == Role::passive_send;
+    filter = buffer15_filter(i);
+    if (f.manual_mask) {
+      // The manual mask only opens bits (checked when it was written); with objects added
+      // since, the automatic mask's zeros stay zeros.
+      filter.acc &= *f.manual_mask;
+    }
+  } else if (f.filter_channel != 0) {
+    ext = extended_format(f, channels_.at(f.filter_channel).cps);
+    // «Sind alle Bits der Bitmaske =0, bedeutet dies folglich, dass alle Identifizier-Werte über
+    // den Nur-Empfangspuffer empfangen werden.»
+    filter.acc = f.manual_mask.value_or(0xFFFFFFFFu) & id_width_mask(ext);
+    filter.idm = (f.filter_id == XCAN_AUTO_ID ? 0 : f.filter_id) & id_width_mask(ext);
+  } else {
+    return;  // buffer 15 unused
+  }
+  // Mask and identifier in the 82527's layout; message 15's mask register is in the extended
+  // layout, whose first 11 bits are the standard one's.
+  const auto mask = encode_id(filter.acc, ext);
+  const auto arb = encode_id(filter.idm, ext);
+  for (uint8_t k = 0; k < 4; ++k) {
+    chip.write(static_cast<uint8_t>(MSG15_MASK + k), mask[k]);
+    chip.write(static_cast<uint8_t>(base + ARB0 + k), arb[k]);
+  }
+  // DIR on message 15 chooses remote frames (the model's 82527, docs/i82527.md): «Nur-
+  // Empfangspuffer» for Remote frames with passive send objects, Data frames otherwise.
+  chip.write(base + CONFIG,
+             static_cast<uint8_t>((remote ? CONFIG_DIR : 0) | (ext ? CONFIG_XTD : 0)));
+  chip.write(base + CTRL0, pair_write(MSGVAL | RXIE, TXIE));
+}
+
+// --- sending ---
+
+void XcanModule::update_data(unsigned i, const Object& o) {
+  Interface& f = ifaces_[i];
+  // The buffers that hold the object (its own, or a temporary one caching it) get the data
+  // under CPUUpd, so a remote frame meanwhile is answered with the old or the new data whole.
+  for (uint8_t n = 1; n <= kLastBuffer; ++n) {
+    const Buffer& b = f.buffers[n - 1];
+    if (b.owner < 0 || &f.objects[static_cast<std::size_t>(b.owner)] != &o) {
+      continue;
+    }
+    const uint8_t base = message(n);
+    const bool held = pair_is_set(f.chip.read(base + CTRL1), CPUUPD);
+    f.chip.write(base + CTRL1, pair_write(CPUUPD));
+    for (uint8_t k = 0; k < 8; ++k) {
+      f.chip.write(static_cast<uint8_t>(base + DATA0 + k), o.data[k]);
+    }
+    const uint8_t config = f.chip.read(base + CONFIG);
+    f.chip.write(base + CONFIG,
+                 static_cast<uint8_t>((config & 0x0F) | (o.size << kConfigDlcShift)));
+    if (!held) {
+      f.chip.write(base + CTRL1, pair_write(0, CPUUPD));
+    }
+  }
+}
+
+uint32_t XcanModule::request(unsigned i, Request r) {
+  Interface& f = ifaces_[i];
+  if (f.error_bits & STATUS_BOFF) {
+    return ERR_XCAN_NOT_READY;  // Decision: a bus-off interface takes no send requests
+  }
+  const Object& o = f.objects[static_cast<std::size_t>(r.object)];
+  if (o.buffer >= 1 && o.buffer <= kLastBuffer) {
+    Buffer& b = f.buffers[o.buffer - 1];
+    if (r.message && b.busy) {
+      // The general-ID channel's buffer holds one message at a time; the next waits.
+      if (f.fifo.size() >= kFifoDepth) {
+        return ERR_XCAN_FIFO_FULL;
+      }
+      f.fifo.push_back(r);
+      return ERR_OK;
+    }
+    // Decision: a request on an own buffer that is still busy merges with the pending one:
+    // the frame that goes carries the newest data (the 82527's CPUUpd protocol).
+    start_on(i, o.buffer, r);
+    return ERR_OK;
+  }
+  // The temporary pool: the buffer that still caches the object, else the lowest free one.
+  uint8_t pick = 0;
+  for (uint8_t n = 1; n <= kLastBuffer; ++n) {
+    const Buffer& b = f.buffers[n - 1];
+    if (!b.permanent && !b.busy && b.owner == r.object) {
+      pick = n;
+      break;
+    }
+  }
+  for (uint8_t n = 1; n <= kLastBuffer && pick == 0; ++n) {
+    const Buffer& b = f.buffers[n - 1];
+    if (!b.permanent && !b.busy) {
+      pick = n;
+    }
+  }
+  if (pick == 0) {
+    // «…wird die Nachricht in den FIFO-Puffer des MDD eingetragen.» Decision: the FIFO holds
+    // the object, not its data (as SL-CANi): the data that go are those current when it leaves.
+    if (f.fifo.size() >= kFifoDepth) {
+      return ERR_XCAN_FIFO_FULL;
+    }
+    f.fifo.push_back(r);
+    return ERR_OK;
+  }
+  start_on(i, pick, r);
+  return ERR_OK;
+}
+
+void XcanModule::start_on(unsigned i, uint8_t n, const Request& r) {
+  Interface& f = ifaces_[i];
+  Buffer& b = f.buffers[n - 1];
+  I82527& chip = f.chip;
+  const uint8_t base = message(n);
+  const Object& o = f.objects[static_cast<std::size_t>(r.object)];
+  if (r.message) {
+    // A general-ID message: identifier, format, DLC and data loaded for this one frame.
+    const XCAN_MESSAGE& m = *r.message;
+    const bool ext = (m.usFlags & XCAN_29BIT_ID) != 0;
+    const bool remote = (m.usFlags & XCAN_REMOTE) != 0;
+    chip.write(base + CTRL0, pair_write(0, MSGVAL | INTPND));
+    chip.write(base + CTRL1, pair_write(0, RMTPND | TXRQST | CPUUPD | NEWDAT));
+    const auto arb = encode_id(m.ulCanId, ext);
+    for (uint8_t k = 0; k < 4; ++k) {
+      chip.write(static_cast<uint8_t>(base + ARB0 + k), arb[k]);
+    }
+    // Decision: a remote message's usDataSize is its DLC. Its buffer is a receive object
+    // (DIR = 0) for the remote frame; the answer it would catch is read only by the filter
+    // channel (buffer 15), so the buffer goes invalid after the transmission.
+    chip.write(base + CONFIG,
+               static_cast<uint8_t>((m.usDataSize << kConfigDlcShift) | (remote ? 0 : CONFIG_DIR) |
+                                    (ext ? CONFIG_XTD : 0)));
+    for (uint8_t k = 0; k < 8; ++k) {
+      chip.write(static_cast<uint8_t>(base + DATA0 + k), m.aucData[k]);
+    }
+    chip.write(base + CTRL0, pair_write(MSGVAL | TXIE, RXIE));
+    chip.write(base + CTRL1, pair_write(TXRQST | NEWDAT, CPUUPD));
+  } else {
+    const bool send = o.role == Role::active_send || o.role == Role::passive_send;
+    if (b.owner != r.object) {
+      // Loading the object into the buffer (Not modelled: the few µs it takes).
+      b.owner = r.object;
+      program_object(i, n, r.object);
+    } else if (send) {
+      update_data(i, o);
+    }
+    if (send) {
+      chip.write(base + CTRL1, pair_write(TXRQST | NEWDAT, CPUUPD));
+    } else {
+      chip.write(base + CTRL1, pair_write(TXRQST));  // a receive object sends a remote frame
+    }
+  }
+  b.busy = true;
+  b.sending = r;
+}
+
+// --- the interrupt ---
+
+void XcanModule::service(unsigned i) {
+  Interface& f = ifaces_[i];
+  // Served until the interrupt register reads 0; serving one source may raise the next (message
+  // 15's shadow register moving in).
+  for (int guard = 0; guard < 64; ++guard) {
+    const uint8_t v = f.chip.read(INTERRUPT);
+    if (v == INTERRUPT_NONE) {
+      return;
+    }
+    if (v == INTERRUPT_STATUS) {
+      serve_status(i);
+    } else if (v == INTERRUPT_MSG15) {
+      serve_buffer15(i);
+    } else {
+      serve_buffer(i, static_cast<uint8_t>(v - 2));
+    }
+  }
+}
+
+void XcanModule::serve_status(unsigned i) {
+  Interface& f = ifaces_[i];
+  const uint8_t s = f.chip.read(STATUS);
+  const uint8_t lec = s & STATUS_LEC;
+  if (lec != LEC_NONE && lec != LEC_UNUSED) {
+    f.last_lec = lec;  // the high word of the state word: the 82527's codes are the manual's
+  }
+  f.chip.write(STATUS, LEC_UNUSED);  // TXOK, RXOK reset; LEC 7 shows whether a new code comes
+  const uint8_t bits = s & (STATUS_WARN | STATUS_BOFF);
+  const uint8_t rising = bits & ~f.error_bits;
+  f.error_bits = bits;
+  // «Ein Fehlerstand > 96 wird als 'Stark gestörter Bus' interpretiert und genau wie der
+  // Übergang in die Betriebsart 'Bus-Off' mit einem Interrupt signalisiert.» The 82527's WARN
+  // is that level (decision: its limit, 96, as the chip has it). One callback per rise of WARN
+  // or BOFF; none when they fall (decision: the manual names only these two events).
+  if (rising != 0) {
+    error_callback(i);
+  }
+  if (rising & STATUS_BOFF) {
+    // Requests waiting for a buffer stay; the bus-off interface takes no new ones.
+  }
+}
+
+void XcanModule::error_callback(unsigned i) {
+  const ULONG state = bus_state(i);
+  for (const auto& [h, c] : channels_) {
+    if (c.iface == i && c.kind == Kind::bus_control) {
+      XcanCallback cb;
+      cb.arg = CallbackArg::status;
+      cb.status = state;
+      emit(h, c, cb);
+    }
+  }
+}
+
+Frame XcanModule::read_frame(unsigned i, uint8_t n, bool remote) {
+  MessageObject o;
+  for (uint8_t k = 0; k < kObjectBytes; ++k) {
+    o.write(k, ifaces_[i].chip.read(static_cast<uint8_t>(message(n) + k)));
+  }
+  return o.frame_as(remote);
+}
+
+void XcanModule::serve_buffer(unsigned i, uint8_t n) {
+  Interface& f = ifaces_[i];
+  I82527& chip = f.chip;
+  const uint8_t base = message(n);
+  chip.write(base + CTRL0, pair_write(0, INTPND));
+  const uint8_t ctrl1 = chip.read(base + CTRL1);
+  const bool transmit = (chip.read(base + CONFIG) & CONFIG_DIR) != 0;
+  const Buffer& b = f.buffers[n - 1];
+  if (!transmit && pair_is_set(ctrl1, NEWDAT)) {
+    const Frame frame = read_frame(i, n, false);
+    chip.write(base + CTRL1, pair_write(0, NEWDAT | MSGLST));
+    if (b.busy && !pair_is_set(ctrl1, TXRQST)) {
+      tx_done(i, n);  // its remote frame went before the answer came
+    }
+    if (b.owner >= 0) {
+      received(i, b.owner, frame);
+    }
+    return;
+  }
+  if (!pair_is_set(ctrl1, TXRQST)) {
+    tx_done(i, n);
+  }
+}
+
+void XcanModule::tx_done(unsigned i, uint8_t n) {
+  Interface& f = ifaces_[i];
+  Buffer& b = f.buffers[n - 1];
+  if (b.busy) {
+    b.busy = false;
+    const Request r = b.sending;
+    b.sending = Request{};
+    if (r.message && (r.message->usFlags & XCAN_REMOTE)) {
+      f.chip.write(message(n) + CTRL0, pair_write(0, MSGVAL));
+    }
+    finished(i, r);
+  } else if (b.owner >= 0) {
+    const Object& o = f.objects[static_cast<std::size_t>(b.owner)];
+    if (o.role == Role::passive_send) {
+      finished(i, Request{b.owner, false, std::nullopt});  // answered a remote frame by itself
+    }
+  }
+  if (b.owner >= 0 && f.objects[static_cast<std::size_t>(b.owner)].role == Role::active_send) {
+    f.chip.write(message(n) + CTRL1, pair_write(CPUUPD));
+  }
+  next_from_fifo(i, n);
+}
+
+void XcanModule::next_from_fifo(unsigned i, uint8_t n) {
+  Interface& f = ifaces_[i];
+  Buffer& b = f.buffers[n - 1];
+  if (b.busy) {
+    return;
+  }
+  for (auto it = f.fifo.begin(); it != f.fifo.end(); ++it) {
+    const Object& o = f.objects[static_cast<std::size_t>(it->object)];
+    const bool fits = b.permanent ? o.buffer == n : o.buffer == 0 || o.buffer == 15;
+    if (fits) {
+      const Request r = *it;
+      f.fifo.erase(it);
+      start_on(i, n, r);
+      return;
+    }
+  }
+}
+
+void XcanModule::finished(unsigned i, const Request& r) {
+  Interface& f = ifaces_[i];
+  Object& o = f.objects[static_cast<std::size_t>(r.object)];
+  if (r.remote) {
+    return;  // a remote request: the answer ends it
+  }
+  ++o.count;
+  if (!o.no_int) {
+    for (const auto& [h, c] : channels_) {
+      if (c.iface == i && c.object == r.object) {
+        emit(h, c, XcanCallback{});
+      }
+    }
+  }
+  complete_waiters(i, r.object, false, {});
+}
+
+void XcanModule::received(unsigned i, int object, const Frame& frame) {
+  Interface& f = ifaces_[i];
+  Object& o = f.objects[static_cast<std::size_t>(object)];
+  if (o.role != Role::active_receive && o.role != Role::passive_receive) {
+    return;
+  }
+  o.size = frame.dlc() > 8 ? 8 : frame.dlc();
+  std::fill(o.data.begin(), o.data.end(), uint8_t{0});
+  std::copy_n(frame.data().begin(), o.size, o.data.begin());
+  ++o.count;
+  const std::vector<uint8_t> data(o.data.begin(), o.data.begin() + o.size);
+  for (auto& [h, c] : channels_) {
+    if (c.iface != i || c.object != object) {
+      continue;
+    }
+    c.new_data = true;
+    if (o.role == Role::passive_receive || c.start_pending) {
+      c.start_pending = false;
+      XcanCallback cb;
+      cb.arg = CallbackArg::data;
+      cb.size = o.size;
+      cb.data = o.data;
+      emit(h, c, cb);
+    }
+  }
+  complete_waiters(i, object, true, data);
+}
+
+void XcanModule::serve_buffer15(unsigned i) {
+  Interface& f = ifaces_[i];
+  I82527& chip = f.chip;
+  const uint8_t base = message(15);
+  const bool remote = (chip.read(base + CONFIG) & CONFIG_DIR) != 0;
+  const Frame frame = read_frame(i, 15, remote);
+  // IntPnd first, then NewDat and MsgLst: resetting NewDat lets the shadow register's frame in
+  // (which raises the next interrupt).
+  chip.write(base + CTRL0, pair_write(0, INTPND));
+  chip.write(base + CTRL1, pair_write(0, NEWDAT | MSGLST));
+  const int k = find_object(f, frame.id(), frame.extended());
+  if (k < 0) {
+    unconfigured(i, frame);
+    return;
+  }
+  const Object& o = f.objects[static_cast<std::size_t>(k)];
+  if (remote) {
+    if (o.role == Role::passive_send) {
+      // Strategy C: the driver loads the object into a temporary buffer and sends its data.
+      (void)request(i, Request{k, false, std::nullopt});
+    }
+    return;
+  }
+  received(i, k, frame);
+}
+
+void XcanModule::unconfigured(unsigned i, const Frame& frame) {
+  Interface& f = ifaces_[i];
+  // «…werden zwar vom MDD verworfen, belasten aber dennoch die CPU», unless a filter channel
+  // is open: its callback gets every unconfigured message that passed.
+  const Channel* c = f.filter_channel != 0 ? find(f.filter_channel) : nullptr;
+  if (c == nullptr || !c->callback) {
+    ++f.discarded;
+    return;
+  }
+  XcanCallback cb;
+  cb.arg = CallbackArg::message;
+  cb.message.ulCanId = frame.id();
+  cb.message.usFlags = static_cast<USHORT>((frame.extended() ? XCAN_29BIT_ID : 0) |
+                                           (frame.remote() ? XCAN_REMOTE : 0));
+  // «usDataSize … 0 wenn der Nur-Empfangspuffer für Remote-Frames konfiguriert ist»
+  cb.message.usDataSize = frame.remote() ? 0 : static_cast<USHORT>(frame.data().size());
+  if (!frame.remote()) {
+    std::copy(frame.data().begin(), frame.data().end(), cb.message.aucData);
+  }
+  emit(f.filter_channel, *c, cb);
+}
+
+BufferView XcanModule::buffer(unsigned i, uint8_t n) const {
+  const Interface& f = ifaces_[i];
+  BufferView v;
+  if (n == 15) {
+    const std::vector<int> in15 = buffer15_objects(f);
+    if (!in15.empty() || f.filter_channel != 0) {
+      v.use = BufferView::Use::receive_only;
+    }
+    return v;
+  }
+  const Buffer& b = f.buffers[n - 1];
+  v.busy = b.busy;
+  if (b.owner < 0) {
+    return v;
+  }
+  const Object& o = f.objects[static_cast<std::size_t>(b.owner)];
+  if (o.role != Role::general) {
+    v.id = o.id;
+  }
+  if (!b.permanent) {
+    v.use = BufferView::Use::temporary;
+  } else if (o.role == Role::general) {
+    v.use = BufferView::Use::general;
+  } else {
+    v.use = f.shared ? BufferView::Use::exclusive : BufferView::Use::own;
+  }
+  return v;
+}
+
+}  // namespace canemu::model::sorcus

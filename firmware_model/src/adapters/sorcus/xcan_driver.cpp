@@ -300,6 +300,21 @@ uint32_t XcanModule::request(unsigned i, Request r) {
     start_on(i, o.buffer, r);
     return ERR_OK;
   }
+  // Decision: a request for an object that already waits, in a temporary buffer or in the
+  // FIFO, merges with it (one frame goes, with the data current when it leaves).
+  for (uint8_t n = 1; n <= kLastBuffer; ++n) {
+    const Buffer& b = f.buffers[n - 1];
+    if (!b.permanent && b.busy && b.owner == r.object && !b.sending.message &&
+        b.sending.remote == r.remote) {
+      start_on(i, n, r);
+      return ERR_OK;
+    }
+  }
+  for (const Request& q : f.fifo) {
+    if (q.object == r.object && !q.message && q.remote == r.remote) {
+      return ERR_OK;
+    }
+  }
   // The temporary pool: the buffer that still caches the object, else the lowest free one.
   uint8_t pick = 0;
   for (uint8_t n = 1; n <= kLastBuffer; ++n) {

@@ -3,6 +3,7 @@
 // channel calls a client makes. Instants are in ns at 500 kbit/s (2000 ns per bit).
 #pragma once
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -113,7 +114,7 @@ struct Xcan {
     msg.ulCanId = id;
     msg.usFlags = flags;
     msg.usDataSize = static_cast<USHORT>(data.size());
-    std::memcpy(msg.aucData, data.data(), data.size());
+    std::memcpy(msg.aucData, data.data(), std::min<std::size_t>(data.size(), 8));
     return m.write_block(h, bytes(msg)).error;
   }
 };

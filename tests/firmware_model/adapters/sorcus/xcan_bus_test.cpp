@@ -272,6 +272,11 @@ TEST(XcanBus, AnInterfaceAndAnSja1000ExchangeDataAndRemoteFramesBothWays) {
   EXPECT_EQ(on_bus, (std::vector<Frame>{data_frame(0x100, {0xA0}), data_frame(0x102, {0xC0, 0xC1}),
                                         remote_frame(0x103, 0)}));
   ASSERT_EQ(x.peer.log.sent.size(), 3u);
+  // Both started together; 100h won the arbitration, 101h followed right after it.
+  EXPECT_EQ(x.peer.log.received[0].at, frame_ns(data_frame(0x100, {0xA0})));
+  EXPECT_EQ(x.peer.log.sent[0].frame, data_frame(0x101, {0xB0}));
+  EXPECT_EQ(x.peer.log.sent[0].at,
+            x.peer.log.received[0].at + kIntermission + frame_ns(data_frame(0x101, {0xB0})));
   EXPECT_EQ(x.read(passive_receive), (Bytes{0xB0}));
   ASSERT_EQ(x.sink.completions.size(), 1u);
   EXPECT_EQ(x.sink.completions[0].data, (Bytes{0xD0, 0xD1, 0xD2}));

@@ -208,6 +208,7 @@ TEST(XcanObjects, PassiveReceiveCallsBackOnEachFrameAndAReadGivesTheLatest) {
   const Frame b = data_frame(0x400, {0x02, 0x03});
   x.peer.send(a);
   x.peer.send(b);
+  x.peer.send(data_frame(0x401, {0x09}));  // its own buffer matches 400h exactly
   x.run_until(1'000'000);
   ASSERT_EQ(x.sink.callbacks.size(), 2u);
   EXPECT_EQ(x.sink.callbacks[0].at.ns(), frame_ns(a));

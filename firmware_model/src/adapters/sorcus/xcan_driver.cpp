@@ -133,22 +133,28 @@ void XcanModule::plan(unsigned i) {
   // it as a temporary buffer (its pending request, if any, completes there).
   f.shared = f.objects.size() > 14;
   const uint8_t limit = f.shared ? 13 : kLastBuffer;
-  for (std::size_t k = 0; k < f.objects.size(); ++k) {
-    Object& o = f.objects[k];
-    const bool own = !f.shared || o.excl;
-    if (own && o.buffer >= 1 && o.buffer <= limit) {
+  auto keeps_own = [&](const Object& o) {
+    return (!f.shared || o.excl) && o.buffer >= 1 && o.buffer <= limit;
+  };
+  // First every object that leaves its buffer, so the buffers they free can be given out.
+  for (Object& o : f.objects) {
+    if (keeps_own(o)) {
       continue;
     }
     if (o.buffer >= 1 && o.buffer <= kLastBuffer) {
       f.buffers[o.buffer - 1].permanent = false;  // left: a cached temporary buffer now
     }
-    o.buffer = 0;
-    if (!own) {
-      const bool passive = o.role == Role::passive_send || o.role == Role::passive_receive;
-      o.buffer = passive ? 15 : 0;
+    const bool passive = o.role == Role::passive_send || o.role == Role::passive_receive;
+    o.buffer = f.shared && !o.excl && passive ? 15 : 0;
+  }
+  // Then a buffer for every object that needs one of its own.
+  for (std::size_t k = 0; k < f.objects.size(); ++k) {
+    Object& o = f.objects[k];
+    if ((f.shared && !o.excl) || keeps_own(o)) {
       continue;
     }
-    // The lowest buffer that is no object's own; a free one before one that is busy.
+    // The lowest buffer that is no object's own; a free one before one that is busy. There is
+    // always one: at most 13 objects are exclusive, at most 14 exist without the shared plan.
     uint8_t pick = 0;
     for (int pass = 0; pass < 2 && pick == 0; ++pass) {
       for (uint8_t n = 1; n <= limit; ++n) {
@@ -164,9 +170,6 @@ void XcanModule::plan(unsigned i) {
       // The request on it goes back to the head of the FIFO.
       f.fifo.push_front(b.sending);
       b.busy = false;
-    }
-    if (b.owner >= 0 && b.owner != static_cast<int>(k)) {
-      // The cached object is no longer here.
     }
     b.owner = static_cast<int>(k);
     b.permanent = true;

@@ -109,6 +109,8 @@ class XcanModule {
   // Decision: objects per interface, the limit behind ERR_XCAN_NO_MEMORY.
   static constexpr std::size_t kMaxObjects = 1024;
 
+  // `scheduler` is the buses' (interrupt service and timeouts run on it); `sink` outlives the
+  // module. The module's chips stay attached to their buses: it lives as long as they run.
   XcanModule(SimScheduler& scheduler, XcanVariant variant, XcanSink& sink);
   ~XcanModule();
   XcanModule(const XcanModule&) = delete;

@@ -67,13 +67,13 @@ void XcanModule::bus_on(unsigned i) {
   }
 }
 
-ULONG XcanModule::bus_state(unsigned i) {
-  Interface& f = ifaces_[i];
-  const uint8_t s = f.chip.read(STATUS) & (STATUS_WARN | STATUS_BOFF);
-  // Reading STATUS ends a status change interrupt the driver has not served yet: serve it.
-  f.chip.write(STATUS, LEC_UNUSED);
+ULONG XcanModule::bus_state(unsigned i) const {
+  const Interface& f = ifaces_[i];
+  // WARN and BOFF as the interrupt service last saw them: a query does not touch the status
+  // register (reading it would end a status change interrupt).
+  const uint8_t s = f.error_bits;
   USHORT flags = 0;
-  if (!(f.chip.read(CONTROL) & CONTROL_INI) && !(s & STATUS_BOFF)) {
+  if (f.chip.participating() && !(s & STATUS_BOFF)) {  // INI clear
     flags |= XCAN_BUS_ON;
   }
   if (s & STATUS_WARN) {

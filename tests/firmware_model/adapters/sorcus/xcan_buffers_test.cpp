@@ -331,3 +331,83 @@ TEST(XcanBuffers, TheGeneralIdChannelSendsAnyMessageAndTheRemoteAnswerReachesThe
 
 }  // namespace
 }  // namespace canemu::model::sorcus
+
+namespace canemu::model::sorcus {
+namespace {
+
+TEST(XcanBuffers, AnExclusiveObjectInBufferFourteenMovesBelowItAtTheFifteenthObject) {
+  Xcan x;
+  open_many(x, DEVICE_BUS_OUT, 0x100, 13);
+  x.open(Xcan::cps(DEVICE_BUS_IN, 0x300, XCAN_EXCL_BUFFER));
+  EXPECT_EQ(x.m.buffer(0, 14).id, 0x300u);
+  x.open(Xcan::cps(DEVICE_BUS_OUT, 0x200));
+  // Buffer 14 is never exclusive in the shared plan: the object takes the lowest buffer the
+  // others left.
+  EXPECT_EQ(x.m.buffer(0, 1).use, Use::exclusive);
+  EXPECT_EQ(x.m.buffer(0, 1).id, 0x300u);
+  EXPECT_EQ(x.m.buffer(0, 14).use, Use::temporary);
+  x.bus_control();
+  x.peer.send(data_frame(0x300, {0x33}));
+  x.run_until(1'000'000);
+  ASSERT_EQ(x.sink.callbacks.size(), 1u);
+  EXPECT_EQ(x.sink.callbacks[0].data[0], 0x33);
+}
+
+TEST(XcanBuffers, AFullFifoRefusesFurtherRequests) {
+  Xcan x;
+  x.bus_control(1);  // interface 1 is alone: no transmission ever ends, the buffers stay busy
+  std::vector<ChannelHandle> h;
+  for (ULONG k = 0; k < 14 + XcanModule::kFifoDepth + 1; ++k) {
+    h.push_back(x.open(Xcan::cps(DEVICE_BUS_OUT, 0x100 + k, 0, 0, 1)));
+  }
+  for (std::size_t k = 0; k < 14 + XcanModule::kFifoDepth; ++k) {
+    EXPECT_EQ(x.write(h[k], {0x01}), uint32_t{ERR_OK}) << k;
+  }
+  EXPECT_EQ(x.m.fifo_size(1), XcanModule::kFifoDepth);
+  EXPECT_EQ(x.write(h.back(), {0x01}), uint32_t{ERR_XCAN_FIFO_FULL});
+}
+
+TEST(XcanBuffers, MixedFormatObjectsOfBothWidthsShareAnInterface) {
+  Xcan x;
+  XCAN_BITPARAMS p = testing::params_500k();
+  p.MsgFormat = XCAN_MIXED_FORMAT;
+  x.bus_control(0, p);
+  const ChannelHandle std_out = x.open(Xcan::cps(DEVICE_BUS_OUT, 0x123));
+  const ChannelHandle ext_out = x.open(Xcan::cps(DEVICE_BUS_OUT, 0x123, XCAN_29BIT_ID));
+  const ChannelHandle ext_in = x.open(Xcan::cps(DEVICE_BUS_IN, 0x1ABCDE, XCAN_29BIT_ID));
+  EXPECT_EQ(x.m.object_count(0), 3u);  // 123h in 11 and in 29 bits are two objects
+  x.write(std_out, {0x01});
+  x.write(ext_out, {0x02});
+  x.peer.send(data_frame(0x1ABCDE, {0x03}, true));
+  x.peer.send(data_frame(0x1ABCDE, {0x04}));  // 11-bit 1ABCDEh does not exist: no object
+  x.run_until(2'000'000);
+  ASSERT_EQ(x.peer.log.received.size(), 2u);
+  EXPECT_EQ(x.peer.log.received[0].frame, data_frame(0x123, {0x01}));  // lower buffer first
+  EXPECT_EQ(x.peer.log.received[1].frame, data_frame(0x123, {0x02}, true));
+  EXPECT_EQ(x.read(ext_in), (std::vector<uint8_t>{0x03}));
+}
+
+TEST(XcanBuffers, TheGeneralIdChannelWithNoIntWaitsForEachMessage) {
+  Xcan x;
+  x.bus_control();
+  EXPECT_EQ(x.m.open_channel(
+                   Xcan::cps(DEVICE_BUS_OUT, XCAN_GENERAL_ID, _CP_EXCLUSIVE | XCAN_NO_INT, 0), true)
+                .error(),
+            uint32_t{ERR_XCAN_INVALID_CPS});  // «1 ... 65535»
+  const ChannelHandle g =
+      x.open(Xcan::cps(DEVICE_BUS_OUT, XCAN_GENERAL_ID, _CP_EXCLUSIVE | XCAN_NO_INT, 5000));
+  XCAN_MESSAGE msg{};
+  msg.ulCanId = 0x7AB;
+  msg.usDataSize = 1;
+  const Reply r = x.m.write_block(g, testing::bytes(msg));
+  ASSERT_TRUE(r.pending.has_value());
+  x.run_until(1'000'000);
+  ASSERT_EQ(x.sink.completions.size(), 1u);
+  EXPECT_EQ(x.sink.completions[0].error, uint32_t{ERR_OK});
+  EXPECT_EQ(x.sink.completions[0].at.ns(), frame_ns(data_frame(0x7AB, {0})));
+  EXPECT_TRUE(x.sink.callbacks.empty());
+  EXPECT_EQ(x.m.info(g, INFO_XCAN_MSG_COUNT).value(), 1u);
+}
+
+}  // namespace
+}  // namespace canemu::model::sorcus

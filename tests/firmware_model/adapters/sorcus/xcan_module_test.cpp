@@ -310,3 +310,28 @@ TEST(XcanObjects, WrongServicesForAChannelAreRefused) {
 
 }  // namespace
 }  // namespace canemu::model::sorcus
+
+namespace canemu::model::sorcus {
+namespace {
+
+TEST(XcanObjects, AZeroTimeoutWaitsForNothing) {
+  testing::Xcan x;
+  x.bus_control();
+  const ChannelHandle out = x.open(testing::Xcan::cps(DEVICE_BUS_OUT, 0x123, XCAN_NO_INT, 0));
+  const Reply w = x.m.write_block(out, std::vector<uint8_t>{0x01});
+  EXPECT_EQ(w.error, uint32_t{ERR_OK});
+  EXPECT_FALSE(w.pending.has_value());
+  const ChannelHandle in =
+      x.open(testing::Xcan::cps(DEVICE_BUS_IN, 0x300, XCAN_REMOTE | XCAN_NO_INT, 0));
+  const Reply r = x.m.read_block(in);
+  EXPECT_EQ(r.error, uint32_t{ERR_OK});
+  EXPECT_FALSE(r.pending.has_value());
+  EXPECT_TRUE(r.data.empty());  // nothing has come yet; the remote frame goes all the same
+  x.run_until(1'000'000);
+  ASSERT_EQ(x.peer.log.received.size(), 2u);
+  EXPECT_EQ(x.peer.log.received[1].frame, testing::remote_frame(0x300, 0));
+  EXPECT_TRUE(x.sink.completions.empty());
+}
+
+}  // namespace
+}  // namespace canemu::model::sorcus

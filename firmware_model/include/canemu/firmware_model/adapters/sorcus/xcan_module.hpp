@@ -144,7 +144,7 @@ class XcanModule {
   std::size_t object_count(unsigned i) const { return ifaces_[i].objects.size(); }
   // Frames buffer 15 took that matched no object and went to no filter channel.
   uint64_t discarded(unsigned i) const { return ifaces_[i].discarded; }
-  ULONG bus_state(unsigned i);
+  ULONG bus_state(unsigned i) const;
 
  private:
   enum class Kind : uint8_t { bus_control, filter, object, general };

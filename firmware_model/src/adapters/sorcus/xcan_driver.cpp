@@ -288,35 +288,37 @@ uint32_t XcanModule::request(unsigned i, Request r) {
     return ERR_XCAN_NOT_READY;  // Decision: a bus-off interface takes no send requests
   }
   const Object& o = f.objects[static_cast<std::size_t>(r.object)];
-  if (o.buffer >= 1 && o.buffer <= kLastBuffer) {
-    Buffer& b = f.buffers[o.buffer - 1];
-    if (r.message && b.busy) {
-      // The general-ID channel's buffer holds one message at a time; the next waits.
-      if (f.fifo.size() >= kFifoDepth) {
-        return ERR_XCAN_FIFO_FULL;
-      }
-      f.fifo.push_back(r);
-      return ERR_OK;
+  auto enqueue = [&f](const Request& q) {
+    if (f.fifo.size() >= kFifoDepth) {
+      return uint32_t{ERR_XCAN_FIFO_FULL};
     }
-    // Decision: a request on an own buffer that is still busy merges with the pending one:
-    // the frame that goes carries the newest data (the 82527's CPUUpd protocol).
+    f.fifo.push_back(q);
+    return uint32_t{ERR_OK};
+  };
+  // Decision: a request for an object that already waits in the FIFO merges with it (one frame
+  // goes, with the data current when it leaves); so does a remote request while the object's
+  // remote frame is still pending (one answer serves both). A data frame for an object whose
+  // buffer is still busy waits in the FIFO and follows, so that each write sends its own data
+  // (the buffer's registers change only when the frame before has gone).
+  if (!r.message) {
+    for (const Request& q : f.fifo) {
+      if (q.object == r.object && !q.message && q.remote == r.remote) {
+        return ERR_OK;
+      }
+    }
+    for (uint8_t n = 1; n <= kLastBuffer; ++n) {
+      const Buffer& b = f.buffers[n - 1];
+      if (b.busy && b.owner == r.object && !b.sending.message) {
+        return r.remote && b.sending.remote ? uint32_t{ERR_OK} : enqueue(r);
+      }
+    }
+  }
+  if (o.buffer >= 1 && o.buffer <= kLastBuffer) {
+    if (f.buffers[o.buffer - 1].busy) {
+      return enqueue(r);  // the general-ID channel's next message
+    }
     start_on(i, o.buffer, r);
     return ERR_OK;
-  }
-  // Decision: a request for an object that already waits, in a temporary buffer or in the
-  // FIFO, merges with it (one frame goes, with the data current when it leaves).
-  for (uint8_t n = 1; n <= kLastBuffer; ++n) {
-    const Buffer& b = f.buffers[n - 1];
-    if (!b.permanent && b.busy && b.owner == r.object && !b.sending.message &&
-        b.sending.remote == r.remote) {
-      start_on(i, n, r);
-      return ERR_OK;
-    }
-  }
-  for (const Request& q : f.fifo) {
-    if (q.object == r.object && !q.message && q.remote == r.remote) {
-      return ERR_OK;
-    }
   }
   // The temporary pool: the buffer that still caches the object, else the lowest free one.
   uint8_t pick = 0;
@@ -336,11 +338,7 @@ uint32_t XcanModule::request(unsigned i, Request r) {
   if (pick == 0) {
     // «…wird die Nachricht in den FIFO-Puffer des MDD eingetragen.» Decision: the FIFO holds
     // the object, not its data (as SL-CANi): the data that go are those current when it leaves.
-    if (f.fifo.size() >= kFifoDepth) {
-      return ERR_XCAN_FIFO_FULL;
-    }
-    f.fifo.push_back(r);
-    return ERR_OK;
+    return enqueue(r);
   }
   start_on(i, pick, r);
   return ERR_OK;
@@ -432,9 +430,6 @@ void XcanModule::serve_status(unsigned i) {
   if (rising != 0) {
     error_callback(i);
   }
-  if (rising & STATUS_BOFF) {
-    // Requests waiting for a buffer stay; the bus-off interface takes no new ones.
-  }
 }
 
 void XcanModule::error_callback(unsigned i) {
@@ -510,10 +505,17 @@ void XcanModule::next_from_fifo(unsigned i, uint8_t n) {
   if (b.busy) {
     return;
   }
+  auto busy_elsewhere = [&f](int object) {
+    return std::any_of(f.buffers.begin(), f.buffers.end(), [object](const Buffer& x) {
+      return x.busy && x.owner == object && !x.sending.message;
+    });
+  };
   for (auto it = f.fifo.begin(); it != f.fifo.end(); ++it) {
     const Object& o = f.objects[static_cast<std::size_t>(it->object)];
     const bool fits = b.permanent ? o.buffer == n : o.buffer == 0 || o.buffer == 15;
-    if (fits) {
+    // An object whose frame is still pending in another buffer waits, so its frames keep
+    // their order.
+    if (fits && (it->message || !busy_elsewhere(it->object))) {
       const Request r = *it;
       f.fifo.erase(it);
       start_on(i, n, r);

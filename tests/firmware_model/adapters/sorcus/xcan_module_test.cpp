@@ -335,3 +335,29 @@ TEST(XcanObjects, AZeroTimeoutWaitsForNothing) {
 
 }  // namespace
 }  // namespace canemu::model::sorcus
+
+namespace canemu::model::sorcus {
+namespace {
+
+TEST(XcanObjects, TwoWritesInARowSendTwoFramesEachWithItsData) {
+  testing::Xcan x;
+  x.bus_control();
+  const ChannelHandle h = x.open(testing::Xcan::cps(DEVICE_BUS_OUT, 0x123));
+  EXPECT_EQ(x.write(h, {0x01}), uint32_t{ERR_OK});
+  EXPECT_EQ(x.write(h, {0x02}), uint32_t{ERR_OK});  // waits for the first to go
+  EXPECT_EQ(x.write(h, {0x03}), uint32_t{ERR_OK});  // merges with the waiting one
+  EXPECT_EQ(x.m.fifo_size(0), 1u);
+  x.run_until(1'000'000);
+  const Frame a = testing::data_frame(0x123, {0x01});
+  const Frame b = testing::data_frame(0x123, {0x03});
+  ASSERT_EQ(x.peer.log.received.size(), 2u);
+  EXPECT_EQ(x.peer.log.received[0].frame, a);
+  EXPECT_EQ(x.peer.log.received[1].frame, b);
+  EXPECT_EQ(x.peer.log.received[1].at,
+            testing::frame_ns(a) + testing::kIntermission + testing::frame_ns(b));
+  EXPECT_EQ(x.sink.callbacks.size(), 2u);
+  EXPECT_EQ(x.m.info(h, INFO_XCAN_MSG_COUNT).value(), 2u);
+}
+
+}  // namespace
+}  // namespace canemu::model::sorcus

@@ -118,6 +118,7 @@ class XcanModule {
 
   // Wires interface `i` (0 or 1) to `bus`; before any channel of it is opened.
   void connect(unsigned i, CanBus& bus);
+  XcanVariant variant() const { return variant_; }
   bool low_speed(unsigned i) const;
   I82527& chip(unsigned i) { return ifaces_[i].chip; }
   // The low-speed transceiver reports a line fault (the daemon's line_error fault): it goes on

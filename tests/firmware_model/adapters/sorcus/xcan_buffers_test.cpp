@@ -329,12 +329,6 @@ TEST(XcanBuffers, TheGeneralIdChannelSendsAnyMessageAndTheRemoteAnswerReachesThe
   EXPECT_EQ(on_filter[0].message.aucData[2], 0xA3);
 }
 
-}  // namespace
-}  // namespace canemu::model::sorcus
-
-namespace canemu::model::sorcus {
-namespace {
-
 TEST(XcanBuffers, AnExclusiveObjectInBufferFourteenMovesBelowItAtTheFifteenthObject) {
   Xcan x;
   open_many(x, DEVICE_BUS_OUT, 0x100, 13);

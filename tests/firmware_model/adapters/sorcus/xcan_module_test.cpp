@@ -308,12 +308,6 @@ TEST(XcanObjects, WrongServicesForAChannelAreRefused) {
   EXPECT_EQ(x.m.info(in, INFO_DEVICE).error(), uint32_t{ERR_XCAN_WRONG_TYPE});
 }
 
-}  // namespace
-}  // namespace canemu::model::sorcus
-
-namespace canemu::model::sorcus {
-namespace {
-
 TEST(XcanObjects, AZeroTimeoutWaitsForNothing) {
   testing::Xcan x;
   x.bus_control();
@@ -333,12 +327,6 @@ TEST(XcanObjects, AZeroTimeoutWaitsForNothing) {
   EXPECT_TRUE(x.sink.completions.empty());
 }
 
-}  // namespace
-}  // namespace canemu::model::sorcus
-
-namespace canemu::model::sorcus {
-namespace {
-
 TEST(XcanObjects, TwoWritesInARowSendTwoFramesEachWithItsData) {
   testing::Xcan x;
   x.bus_control();
@@ -357,6 +345,20 @@ TEST(XcanObjects, TwoWritesInARowSendTwoFramesEachWithItsData) {
             testing::frame_ns(a) + testing::kIntermission + testing::frame_ns(b));
   EXPECT_EQ(x.sink.callbacks.size(), 2u);
   EXPECT_EQ(x.m.info(h, INFO_XCAN_MSG_COUNT).value(), 2u);
+}
+
+TEST(XcanObjects, APassiveSendObjectAnswersWithTheDataWrittenWhileTheRemoteFrameWasOnTheWire) {
+  testing::Xcan x;
+  x.bus_control();
+  const ChannelHandle h = x.open(testing::Xcan::cps(DEVICE_BUS_OUT, 0x200, XCAN_REMOTE));
+  x.write(h, {0x01});
+  const Frame request = testing::remote_frame(0x200, 1);
+  x.peer.send(request);
+  x.run_until(testing::frame_ns(request) / 2);
+  x.write(h, {0x09});  // mid-frame: valid when the remote frame has come
+  x.run_until(1'000'000);
+  ASSERT_EQ(x.peer.log.received.size(), 1u);
+  EXPECT_EQ(x.peer.log.received[0].frame, testing::data_frame(0x200, {0x09}));
 }
 
 }  // namespace

@@ -224,7 +224,7 @@ class XcanModule {
   void complete_waiters(unsigned i, int object, bool read, const std::vector<uint8_t>& data);
   void cancel_waiters(ChannelHandle h);
 
-  // xcan_module.cpp: channels
+  // xcan_module.cpp: channels; xcan_services.cpp: services
   tl::expected<ChannelHandle, uint32_t> open_object(const CPS_XCAN& cps, bool callback);
   uint32_t validate_object_cps(const Interface& f, const CPS_XCAN& cps, Role& role,
                                bool& extended) const;
@@ -234,7 +234,7 @@ class XcanModule {
   void reset_interface(unsigned i);
   uint32_t write_bitparams(unsigned i, std::span<const uint8_t> data);
 
-  // xcan_driver.cpp: the chip, the buffers, the interrupt
+  // xcan_driver.cpp: the chip, the buffers; xcan_interrupt.cpp: the interrupt
   void init_chip(unsigned i);
   void program_timing(unsigned i);
   void bus_on(unsigned i);

@@ -140,11 +140,15 @@ class XcanModule {
 
   // --- views ---
   BufferView buffer(unsigned i, uint8_t n) const;  // n = 1..15
+  // The automatic filter of the objects in buffer 15 ({0, 0} without any); a manual mask is
+  // not in it.
   AcceptanceFilter buffer15_filter(unsigned i) const;
   std::size_t fifo_size(unsigned i) const { return ifaces_[i].fifo.size(); }
+  // Objects on the interface; the general-ID channel's buffer counts as one.
   std::size_t object_count(unsigned i) const { return ifaces_[i].objects.size(); }
   // Frames buffer 15 took that matched no object and went to no filter channel.
   uint64_t discarded(unsigned i) const { return ifaces_[i].discarded; }
+  // The state word INFO_DEVICE gives (XCAN_STATUS: flags, last error code).
   ULONG bus_state(unsigned i) const;
 
  private:

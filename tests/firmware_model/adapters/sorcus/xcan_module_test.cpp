@@ -78,6 +78,23 @@ TEST(XcanObjects, ActiveSendWithNoIntTimesOutAfterUsTimeoutWhenNobodyAcknowledge
   EXPECT_EQ(x.m.info(h, INFO_XCAN_MSG_COUNT).value(), 0u);
 }
 
+TEST(XcanObjects, ATimedOutSendIsNotWithdrawnAndGoesOnceSomebodyAcknowledges) {
+  Xcan x;
+  x.bus_control();
+  x.peer.node.stop();  // nobody acknowledges
+  const ChannelHandle h = x.open(Xcan::cps(DEVICE_BUS_OUT, 0x123, XCAN_NO_INT, 700));
+  ASSERT_TRUE(x.m.write_block(h, Bytes{0x01}).pending.has_value());
+  x.run_until(1'000'000);
+  ASSERT_EQ(x.sink.completions.size(), 1u);
+  EXPECT_EQ(x.sink.completions[0].error, uint32_t{ERR_XCAN_TIMEOUT});
+  x.peer.start();
+  x.run_until(3'000'000);
+  ASSERT_EQ(x.peer.log.received.size(), 1u);
+  EXPECT_EQ(x.peer.log.received[0].frame, data_frame(0x123, {0x01}));
+  EXPECT_EQ(x.m.info(h, INFO_XCAN_MSG_COUNT).value(), 1u);
+  EXPECT_EQ(x.sink.completions.size(), 1u);  // the request had ended already
+}
+
 TEST(XcanObjects, ActiveSendCmdStartSendsThePreviousDataAgain) {
   Xcan x;
   x.bus_control();

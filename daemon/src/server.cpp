@@ -1,5 +1,7 @@
 #include "canemu/daemon/server.hpp"
 
+#include <algorithm>
+
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -305,7 +307,12 @@ void Server::fill_clients(ipc::ClientListReply& r) {
       ipc::copy_name(e.name, c.session.name);
       e.pid = c.session.pid;
       e.uid = c.session.uid;
-      e.channels = static_cast<uint32_t>(c.session.channels.size());
+      // Channels of ephemeral devices and VCI channels alike.
+      const auto vci_channels =
+          std::count_if(c.session.vci.handles.begin(), c.session.vci.handles.end(),
+                        [](const auto& h) { return h.second->kind() == VciHandle::Kind::channel; });
+      e.channels =
+          static_cast<uint32_t>(c.session.channels.size()) + static_cast<uint32_t>(vci_channels);
     }
   }
   r.count = static_cast<uint16_t>(n);

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
 
 #include <time.h>
 
@@ -59,11 +62,44 @@ HRESULT Library::step(int64_t ns, int64_t& now) {
   return VCI_OK;
 }
 
+namespace {
+
+// How canemu status names this process: the program (argv[0]'s last part), with its script or
+// module for an interpreter ("python3 -m can.player", "python3 talk.py"), and the API: "(VCI)".
+// Read from /proc/self/cmdline; "vci" when that cannot be read.
+std::string client_name() {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::vector<std::string> args;
+  for (std::string arg; std::getline(in, arg, '\0');) {
+    args.push_back(arg);
+  }
+  if (args.empty()) {
+    return "vci";
+  }
+  const auto base = [](const std::string& path) {
+    const std::size_t slash = path.find_last_of('/');
+    return slash == std::string::npos ? path : path.substr(slash + 1);
+  };
+  std::string name = base(args[0]);
+  if (name.rfind("python", 0) == 0 && args.size() > 1) {
+    if (args[1] == "-m" && args.size() > 2) {
+      name += " -m " + args[2];
+    } else if (args[1].empty() || args[1][0] != '-') {
+      name += " " + base(args[1]);
+    }
+  }
+  const std::string suffix = " (VCI)";
+  const std::size_t room = ipc::kNameSize - 1 - suffix.size();
+  return (name.size() > room ? name.substr(0, room) : name) + suffix;
+}
+
+}  // namespace
+
 HRESULT Library::connect_locked() {
   if (connection_) {
     return VCI_OK;
   }
-  auto c = Connection::open(ipc::socket_path(socket_), "vci");
+  auto c = Connection::open(ipc::socket_path(socket_), client_name());
   if (!c) {
     set_detail(c.error().message);
     return VCI_E_DISCONNECTED;

@@ -51,7 +51,17 @@ int main(int argc, char** argv) {
     return 2;
   }
   sending = strcmp(argv[1], "send") == 0;
-  if ((hr = vciInitialize()) != VCI_OK || (hr = find(argv[2], &id)) != VCI_OK) {
+  if ((hr = vciInitialize()) != VCI_OK) {
+    return fail("canemud", hr);
+  }
+  if ((hr = find(argv[2], &id)) == VCI_E_NO_MORE_ITEMS) {
+    fprintf(stderr,
+            "no adapter named %s: canemud's configuration has no [[device]] of that name "
+            "(config/examples/two-adapters.toml has alpha and beta)\n",
+            argv[2]);
+    return 1;
+  }
+  if (hr != VCI_OK) {
     return fail("adapter", hr);
   }
   if ((hr = vciDeviceOpen(&id, &hDevice)) != VCI_OK ||

@@ -3,11 +3,14 @@
 
 Every ```console block of the page is an example to run. In it, a line starting with `$ ` is a
 command; the lines under it, up to the next command or the end of the block, are what it prints
-(standard output and standard error together). A command ending in `&` runs in the background:
-the lines under it are the whole output of that process, whenever it comes (the runner waits
-for the process at the end of the page, up to --timeout seconds). A line `...` stands for any
-number of lines; `...` inside a line stands for any text. Nothing under a command: its output is
-not compared. Blocks tagged ```sh or ```python are for reading and are not run.
+(standard output and standard error together). A command ending in `&` runs in the background as
+a job of the session (a simple command, so that `kill %?name` and `wait` work as in a
+terminal); the next command starts once it has printed its first line (as a user waits to see
+a program come up), and the lines under it are the whole output of that process, whenever it
+comes (the runner waits for it at the end of the page, up to --timeout seconds). A line `...`
+stands for any number of lines; `...` inside a line stands for any text; runs of blanks count
+as one. Nothing under a command: its output is not compared. Blocks tagged ```sh or ```python
+are for reading and are not run.
 
 All blocks of one page run in one bash session, in order, in a scratch directory that holds
 `build`, `config`, `client` and `.venv` as links to the repository's, so that `export`, `cd`
@@ -15,7 +18,8 @@ and files written by one command are seen by the next. Background processes stil
 the end of the page are stopped. The page fails at the first command whose output differs, with
 both texts.
 
-Usage: run_examples.py PAGE.md [--repo DIR] [--timeout S]
+Usage: run_examples.py PAGE.md [--repo DIR] [--build DIR] [--timeout S] [--show]
+(--build: what `build` stands for, default the repository's build/)
 """
 
 from __future__ import annotations
@@ -68,8 +72,13 @@ def parse(page: str) -> list[Command]:
     return commands
 
 
+def squeeze(line: str) -> str:
+    """Runs of blanks count as one (a table's column widths are not the point of an example)."""
+    return " ".join(line.split())
+
+
 def line_pattern(expected: str) -> re.Pattern:
-    parts = [re.escape(p) for p in expected.split("...")]
+    parts = [re.escape(p) for p in squeeze(expected).split("...")]
     return re.compile("^" + ".*".join(parts) + "$")
 
 
@@ -81,19 +90,25 @@ def matches(expected: list[str], actual: list[str]) -> bool:
             return j == len(actual)
         if expected[i].strip() == "...":
             return any(go(i + 1, k) for k in range(j, len(actual) + 1))
-        return j < len(actual) and bool(line_pattern(expected[i]).match(actual[j])) and go(i + 1, j + 1)
+        return (j < len(actual) and bool(line_pattern(expected[i]).match(squeeze(actual[j])))
+                and go(i + 1, j + 1))
 
     return go(0, 0)
 
 
-def script_for(commands: list[Command], logs: Path) -> str:
+def script_for(commands: list[Command], logs: Path, timeout: float) -> str:
     lines = ["set +e", "exec 2>&1"]
     for n, c in enumerate(commands):
         lines.append(f"echo {MARK}{n}")
         if c.background:
             log = logs / f"bg{n}.log"
-            lines.append(f"( {c.text} ) > {shlex.quote(str(log))} 2>&1 &")
+            q = shlex.quote(str(log))
+            lines.append(f"{c.text} > {q} 2>&1 &")
             lines.append(f"echo $! > {shlex.quote(str(logs / f'bg{n}.pid'))}")
+            # As a user waits to see a program say it is up before typing on: the next command
+            # starts once this one printed its first line (or ended), at most --timeout seconds.
+            lines.append(f"for _ in $(seq {int(timeout * 100)}); do [ -s {q} ] && break; "
+                         f"kill -0 $! 2>/dev/null || break; sleep 0.01; done")
         else:
             lines.append(c.text)
     lines.append(f"echo {MARK}end")
@@ -107,7 +122,8 @@ def stop(pid: int) -> None:
         pass
 
 
-def run_page(page_path: Path, repo: Path, timeout: float) -> int:
+def run_page(page_path: Path, repo: Path, timeout: float, show: bool = False,
+             build: Path | None = None) -> int:
     commands = parse(page_path.read_text())
     if not commands:
         print(f"{page_path}: no ```console examples")
@@ -116,9 +132,10 @@ def run_page(page_path: Path, repo: Path, timeout: float) -> int:
         work = Path(scratch)
         logs = work / ".logs"
         logs.mkdir()
-        for name in ("build", "config", "client", ".venv"):
+        for name in ("config", "client", ".venv"):
             if (repo / name).exists():
                 (work / name).symlink_to(repo / name)
+        (work / "build").symlink_to(build or repo / "build")
         env = dict(os.environ)
         env.pop("CANEMU_SOCKET", None)
         proc = subprocess.Popen(
@@ -132,7 +149,7 @@ def run_page(page_path: Path, repo: Path, timeout: float) -> int:
             start_new_session=True,
         )
         try:
-            out, _ = proc.communicate(script_for(commands, logs), timeout=timeout * 4)
+            out, _ = proc.communicate(script_for(commands, logs, timeout), timeout=timeout * 4)
         except subprocess.TimeoutExpired:
             stop(proc.pid)
             print(f"{page_path}: the examples did not finish within {timeout * 4:.0f} s")
@@ -160,7 +177,13 @@ def run_page(page_path: Path, repo: Path, timeout: float) -> int:
                 actual = (logs / f"bg{n}.log").read_text().splitlines() if c.expected else []
             else:
                 actual = outputs.get(n, [])
-            if c.expected and not matches(c.expected, [a.rstrip() for a in actual]):
+            if c.background and not c.expected and show:
+                log = logs / f"bg{n}.log"
+                actual = log.read_text().splitlines() if log.exists() else []
+            if show:
+                print(f"$ {c.text}{' &' if c.background else ''}")
+                print("\n".join(actual))
+            if c.expected and not show and not matches(c.expected, [a.rstrip() for a in actual]):
                 failures += 1
                 print(f"{page_path}:{c.line}: $ {c.text}{' &' if c.background else ''}")
                 print("  expected:")
@@ -168,8 +191,9 @@ def run_page(page_path: Path, repo: Path, timeout: float) -> int:
                 print("  got:")
                 print("\n".join("    " + a for a in actual) or "    (nothing)")
                 break
-        for pid_file in logs.glob("bg*.pid"):
-            stop(int(pid_file.read_text()))
+        # Whatever the page left running (its session's process group: the shell started a new
+        # session, and its background jobs stay in it).
+        stop(proc.pid)
         ran = len(commands)
         print(f"{page_path}: {ran} commands, {'all as shown' if not failures else 'FAILED'}")
         return 1 if failures else 0
@@ -200,9 +224,13 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("page", type=Path)
     parser.add_argument("--repo", type=Path, default=Path(__file__).resolve().parents[2])
+    parser.add_argument("--build", type=Path, default=None)
     parser.add_argument("--timeout", type=float, default=20.0)
+    parser.add_argument("--show", action="store_true",
+                        help="print what every command printed (to write a page's examples)")
     args = parser.parse_args()
-    return run_page(args.page, args.repo.resolve(), args.timeout)
+    return run_page(args.page, args.repo.resolve(), args.timeout, args.show,
+                    args.build.resolve() if args.build else None)
 
 
 if __name__ == "__main__":

@@ -709,4 +709,19 @@ void CanBus::report_state(NodeId id, SimTime at) {
   n.controller->on_state_change(at, s);
 }
 
+bool withdraw_tx(CanBus* bus, NodeId node, std::optional<TxFrame>& tx) {
+  if (!tx) {
+    return false;
+  }
+  if (bus != nullptr && bus->in_flight(node)) {
+    tx->single_shot = true;
+    return false;
+  }
+  tx.reset();
+  if (bus != nullptr) {
+    bus->tx_changed(node);
+  }
+  return true;
+}
+
 }  // namespace canemu::model

@@ -26,18 +26,8 @@ SimTime I82527::now() const {
 }
 
 void I82527::hardware_reset() {
-  if (tx_) {
-    if (bus_ != nullptr && bus_->in_flight(node_)) {
-      tx_->single_shot = true;  // on the wire: completes, is not repeated, updates no object
-      tx_object_ = 0;
-    } else {
-      tx_.reset();
-      tx_object_ = 0;
-      if (bus_ != nullptr) {
-        bus_->tx_changed(node_);
-      }
-    }
-  }
+  withdraw_tx(bus_, node_, tx_);  // one on the wire completes and updates no object
+  tx_object_ = 0;
   control_ = CONTROL_INI;
   status_ = 0;
   cpu_interface_ = 0;

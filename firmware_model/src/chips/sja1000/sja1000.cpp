@@ -251,15 +251,9 @@ void Sja1000::command(uint8_t cmr) {
       }
     }
   } else if ((cmr & CMR_AT) && tx_) {
-    if (bus_ != nullptr && bus_->in_flight(node_)) {
-      tx_->single_shot = true;  // the frame on the wire completes, but is not repeated
-    } else {
-      const Frame f = tx_->frame;
-      tx_.reset();
+    const Frame f = tx_->frame;
+    if (withdraw_tx(bus_, node_, tx_)) {
       tx_complete_ = false;
-      if (bus_ != nullptr) {
-        bus_->tx_changed(node_);
-      }
       set_ir(IR_TI, at);
       if (listener_ != nullptr) {
         listener_->transmission_dropped(at, f);
@@ -278,16 +272,7 @@ void Sja1000::enter_reset() {
   mod_ |= MOD_RM;
   // Reset mode drops the pending request and empties the FIFO. Not modelled: aborting a frame
   // already on the wire (its outcome is fixed at its start of frame); it is not repeated.
-  if (tx_) {
-    if (bus_ != nullptr && bus_->in_flight(node_)) {
-      tx_->single_shot = true;
-    } else {
-      tx_.reset();
-      if (bus_ != nullptr) {
-        bus_->tx_changed(node_);
-      }
-    }
-  }
+  withdraw_tx(bus_, node_, tx_);
   tx_complete_ = true;
   rbsa_ = 0;
   fifo_used_ = 0;

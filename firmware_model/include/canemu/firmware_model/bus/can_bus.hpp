@@ -295,4 +295,10 @@ class CanBus final : private EventHandler {
   uint64_t error_frames_on_bus_ = 0;
 };
 
+// A controller withdraws its pending frame `tx` (an abort command, a reset). One already on the
+// wire completes, since its outcome was fixed at its start of frame, but is not repeated: `tx`
+// stays, now single shot, and the result is false. One not yet started is gone: `tx` is
+// cleared, the bus (if any) is told, and the result is true.
+bool withdraw_tx(CanBus* bus, NodeId node, std::optional<TxFrame>& tx);
+
 }  // namespace canemu::model

@@ -50,8 +50,9 @@ def test_a_send_then_exit_program_loses_nothing(realtime):
         "import can\n"
         "with can.Bus(interface='canemu', channel='can0') as bus:\n"
         "    for k in range(1000):\n"
+        "        tail = bytes([0xA5, 0x5A, k & 0xFF, 0x3C])\n"
         "        bus.send(can.Message(arbitration_id=0x123, is_extended_id=False,\n"
-        "                             data=k.to_bytes(4, 'big') + bytes([0xA5, 0x5A, k & 0xFF, 0x3C])))\n"
+        "                             data=k.to_bytes(4, 'big') + tail))\n"
     )
     receiver = can.Bus(interface="canemu", channel="can0")
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,

@@ -30,10 +30,20 @@ def tool_env(daemon) -> dict:
 
 class Tool:
     """`python -m MODULE ARGS` with its standard output and error read into `output` (through
-    a pseudo-terminal of `rows` x `cols` when `pty` is set, as curses needs one)."""
+    a pseudo-terminal of `rows` x `cols` when `pty_size` is given, as curses needs one).
+    Every tool started is in `Tool.running` until finish(); kill_all() ends those left."""
+
+    running: List["Tool"] = []
+
+    @classmethod
+    def kill_all(cls) -> None:
+        for tool in list(cls.running):
+            tool.proc.kill()
+            tool.finish()
 
     def __init__(self, daemon, module: str, args: List[str], pty_size=None, cwd=None) -> None:
         self.output = ""
+        Tool.running.append(self)
         self._changed = threading.Condition()
         command = [sys.executable, "-m", module, *args]
         if pty_size is None:
@@ -98,6 +108,8 @@ class Tool:
                 self.proc.kill()
                 self.proc.wait()
         self._reader.join(timeout)
+        if self in Tool.running:
+            Tool.running.remove(self)
         if self._write_fd is not None:
             os.close(self._write_fd)
         elif self.proc.stdout:
@@ -111,6 +123,8 @@ class Tool:
         deadline = time.monotonic() + timeout
         sleeping = 0
         while sleeping < 2:
+            if self.proc.poll() is not None:
+                raise AssertionError(f"{self.proc.args} ended:\n{self.output}")
             state = stat.read_text().rsplit(")", 1)[1].split()[0]
             sleeping = sleeping + 1 if state == "S" else 0
             if time.monotonic() > deadline:
@@ -155,3 +169,50 @@ def same_frames(got, sent) -> bool:
 
 def python_can_at_least(major: int, minor: int) -> bool:
     return CAN_VERSION >= (major, minor)
+
+
+_ESCAPE = re.compile(
+    r"\x1b\[([0-9;?]*)([A-Za-z@])|\x1b[()][0-9A-Za-z]|\x1b[=>78]|[\r\n\b]|[^\x1b\r\n\b]")
+
+
+def screen(output: str, rows: int, cols: int) -> List[str]:
+    """The terminal's lines after `output` (what curses drew): cursor addressing (H, f, d, G,
+    A-D), clearing (J, K) and text; other control sequences change nothing visible here."""
+    cells = [[" "] * cols for _ in range(rows)]
+    row = col = 0
+    for m in _ESCAPE.finditer(output):
+        text = m.group(0)
+        if m.group(2):
+            params = [int(p) if p.isdigit() else 0 for p in m.group(1).lstrip("?").split(";")]
+            n = params[0] or 1
+            kind = m.group(2)
+            if kind in "Hf":
+                row = (params[0] or 1) - 1
+                col = ((params[1] if len(params) > 1 else 0) or 1) - 1
+            elif kind == "d":
+                row = n - 1
+            elif kind == "G":
+                col = n - 1
+            elif kind == "A":
+                row -= n
+            elif kind == "B":
+                row += n
+            elif kind == "C":
+                col += n
+            elif kind == "D":
+                col -= n
+            elif kind == "J" and params[0] == 2:
+                cells = [[" "] * cols for _ in range(rows)]
+            elif kind == "K":
+                cells[row][col:] = [" "] * (cols - col)
+            row, col = max(0, min(row, rows - 1)), max(0, min(col, cols - 1))
+        elif text == "\r":
+            col = 0
+        elif text == "\n":
+            row = min(row + 1, rows - 1)
+        elif text == "\b":
+            col = max(0, col - 1)
+        elif not text.startswith("\x1b"):
+            cells[row][col] = text
+            col = min(col + 1, cols - 1)
+    return ["".join(line).rstrip() for line in cells]

@@ -21,7 +21,6 @@ from typing import List
 import can
 
 TIMEOUT = 20.0
-CAN_VERSION = tuple(int(p) for p in re.findall(r"\d+", can.__version__)[:2])
 
 
 def tool_env(daemon) -> dict:
@@ -165,10 +164,6 @@ def receive_frames(bus, count: int, timeout: float = TIMEOUT) -> list:
 def same_frames(got, sent) -> bool:
     return [(m.arbitration_id, m.is_extended_id, bytes(m.data)) for m in got] == [
         (m.arbitration_id, m.is_extended_id, bytes(m.data)) for m in sent]
-
-
-def python_can_at_least(major: int, minor: int) -> bool:
-    return CAN_VERSION >= (major, minor)
 
 
 _ESCAPE = re.compile(

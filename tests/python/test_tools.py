@@ -328,3 +328,12 @@ def test_the_bridge_carries_frames_between_two_buses(realtime_daemon):
     bridge.interrupt()
     assert bridge.finish() == 0, bridge.output
     assert "CAN Bridge (Stopped on" in bridge.output
+
+
+def test_an_error_frame_handed_to_send_is_not_put_on_the_bus(sender, receiver):
+    # can.bridge forwards the error frames it receives; they are no frames to send.
+    sender.send(can.Message(arbitration_id=0xA0, is_error_frame=True, dlc=8, data=bytes(8)))
+    sender.send(can.Message(arbitration_id=0x42, data=[4, 2], is_extended_id=False))
+    got = receiver.recv(TIMEOUT)
+    assert (got.arbitration_id, got.is_error_frame, bytes(got.data)) == (0x42, False, b"\x04\x02")
+

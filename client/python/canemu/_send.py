@@ -4,6 +4,7 @@ FIFO."""
 from __future__ import annotations
 
 import ctypes
+import logging
 import time
 from typing import Optional, Tuple
 
@@ -26,6 +27,8 @@ _FD_DATA_BITS = 680
 _DRAIN_FACTOR = 1.5
 _DRAIN_MARGIN_NS = 50_000_000
 _DRAIN_POLL_S = 0.002  # between two looks at the FIFO while it drains
+
+log = logging.getLogger("can.canemu")
 
 
 class _SendMixin:
@@ -70,7 +73,13 @@ class _SendMixin:
 
     def send(self, msg: Message, timeout: Optional[float] = None) -> None:
         """Queues `msg` in the transmit FIFO, waiting up to `timeout` seconds (None: as long as
-        it takes) while the FIFO is full. CanTimeoutError when it stays full."""
+        it takes) while the FIFO is full. CanTimeoutError when it stays full. An error frame
+        (what can.bridge and `can.player --error-frames` pass on) is not sent: a controller
+        signals errors it detects, it cannot send one at will (fault scenarios make errors,
+        docs/faults.md)."""
+        if msg.is_error_frame:
+            log.debug("%s: error frame not sent: %s", self.channel_info, msg)
+            return
         lib = _vci.lib()
         self._tx_flushed = False
         with self._tx_lock:

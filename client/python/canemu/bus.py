@@ -355,19 +355,21 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         if self._closed:
             return
         super().shutdown()  # stops the periodic tasks first
-        if self._channel is not None and not self._tx_flushed:
-            try:
-                left, why = self._drain_tx()
-            except VciError as e:  # canemud gone: nothing can be sent any more
-                left, why = 0, ""
-                log.warning("%s: shutdown could not drain the transmit FIFO: %s",
-                            self.channel_info, e)
-            if left:
-                log.warning("%s: shutdown discards %d frame(s) not sent: %s",
-                            self.channel_info, left, why)
-        self._closed = True
-        with self._rx_lock, self._tx_lock:
-            self._close_handles()
+        try:
+            if self._channel is not None and not self._tx_flushed:
+                try:
+                    left, why = self._drain_tx()
+                except VciError as e:  # canemud gone: nothing can be sent any more
+                    left, why = 0, ""
+                    log.warning("%s: shutdown could not drain the transmit FIFO: %s",
+                                self.channel_info, e)
+                if left:
+                    log.warning("%s: shutdown discards %d frame(s) not sent: %s",
+                                self.channel_info, left, why)
+        finally:  # also when Ctrl-C ends the wait
+            self._closed = True
+            with self._rx_lock, self._tx_lock:
+                self._close_handles()
 
     @staticmethod
     def _detect_available_configs() -> List[Dict[str, Any]]:

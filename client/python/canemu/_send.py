@@ -3,6 +3,8 @@ FIFO."""
 
 from __future__ import annotations
 
+import ctypes
+import logging
 import time
 from typing import Optional, Tuple
 
@@ -10,14 +12,29 @@ import can
 from can import Message
 
 from . import _vci
-from ._calls import _HEADER, _WAIT_SLICE_MS, CanTimeoutError, _can_error
+from ._calls import _HEADER, _WAIT_SLICE_MS, CanTimeoutError, _call, _can_error
+from ._daemon import _sim_time
 from ._vci import VciError
+
+# The longest frames in bits, with the most stuff bits and the intermission: a classic frame
+# with a 29-bit identifier and 8 bytes; a CAN FD frame's nominal-rate part and its data phase
+# of 64 bytes (CRC-21 with its fixed stuff bits).
+_CLASSIC_BITS = 160
+_FD_NOMINAL_BITS = 75
+_FD_DATA_BITS = 680
+# What the drain at shutdown allows on top of the frames' own time (simulated): error frames,
+# suspend transmission, frames of other nodes that win arbitration.
+_DRAIN_FACTOR = 1.5
+_DRAIN_MARGIN_NS = 50_000_000
+_DRAIN_POLL_S = 0.002  # between two looks at the FIFO while it drains
+
+log = logging.getLogger("can.canemu")
 
 
 class _SendMixin:
     """CanemuBus's transmit side. Uses the bus's _channel, _control, _fd, _receive_own,
-    _auto_restart, _closed, _tx_lock and its transmit buffer; state and restart come from
-    _StateMixin."""
+    _auto_restart, _closed, _tx_lock, _tx_flushed, _listen_only, _bitrate, _data_bitrate,
+    _tx_capacity and its transmit buffer; state and restart come from _StateMixin."""
 
     def _wire_fields(self, msg: Message) -> Tuple[int, int, bytes]:
         """`msg` checked and in the VCI's terms: (bFlags, bFlags2, data padded to its DLC).
@@ -56,8 +73,15 @@ class _SendMixin:
 
     def send(self, msg: Message, timeout: Optional[float] = None) -> None:
         """Queues `msg` in the transmit FIFO, waiting up to `timeout` seconds (None: as long as
-        it takes) while the FIFO is full. CanTimeoutError when it stays full."""
+        it takes) while the FIFO is full. CanTimeoutError when it stays full. An error frame
+        (what can.bridge and `can.player --error-frames` pass on) is not sent: a controller
+        signals errors it detects, it cannot send one at will (fault scenarios make errors,
+        docs/faults.md)."""
+        if msg.is_error_frame:
+            log.debug("%s: error frame not sent: %s", self.channel_info, msg)
+            return
         lib = _vci.lib()
+        self._tx_flushed = False
         with self._tx_lock:
             flags, flags2, data = self._wire_fields(msg)
             # The CANMSG2 header (dwTime 0: at once) and data in one go: the hot path.
@@ -93,3 +117,82 @@ class _SendMixin:
             if hr != _vci.VCI_E_TIMEOUT:
                 return hr
         return _vci.VCI_E_TIMEOUT
+
+    # ---- draining at shutdown ----
+
+    def _tx_status(self) -> Tuple[int, int]:
+        """(transmit FIFO load in percent, the line's CAN_STATUS_* flags)."""
+        status = _vci.CANCHANSTATUS2()
+        _call("canChannelGetStatus", self._channel, ctypes.byref(status))
+        return status.bTxFifoLoad, status.sLineStatus.dwStatus
+
+    def _tx_at_most(self, load: int, line: int) -> int:
+        """The most frames still to send that `load` (the FIFO's fill level in percent, all the
+        VCI tells) and the controller's TXPEND allow."""
+        return ((load + 1) * self._tx_capacity - 1) // 100 + (line & _vci.CAN_STATUS_TXPEND)
+
+    def _tx_count_left(self) -> int:
+        """The frames not sent, exactly, for a channel about to close: the channel is
+        deactivated (canemud takes nothing more from its FIFO), the FIFO's free places are
+        counted by filling them with INFO messages (never frames: the firmware drops them),
+        and the frame the controller holds is added."""
+        _call("canChannelActivate", self._channel, 0)
+        placeholder = _vci.CANMSG2()
+        placeholder_ref = ctypes.byref(placeholder)
+        _HEADER.pack_into(memoryview(placeholder).cast("B"), 0, 0, 0, 0, _vci.CAN_MSGTYPE_INFO,
+                          0, 0, 0)
+        lib = _vci.lib()
+        free = 0
+        while lib.canChannelPostMessage(self._channel, placeholder_ref) == _vci.VCI_OK:
+            free += 1
+        line = self._tx_status()[1]
+        return self._tx_capacity - free + (line & _vci.CAN_STATUS_TXPEND)
+
+    def _frame_ns(self) -> int:
+        """The time the longest frame this bus sends takes on the wire, in ns."""
+        if self._fd:
+            return (_FD_NOMINAL_BITS * 1_000_000_000 // self._bitrate
+                    + _FD_DATA_BITS * 1_000_000_000 // self._data_bitrate)
+        return _CLASSIC_BITS * 1_000_000_000 // self._bitrate
+
+    def _drain_tx(self) -> Tuple[int, str]:
+        """Lets the frames in the transmit FIFO (and the controller) go out before the channel
+        closes. Returns (0, "") when nothing is left, else (how many frames are left, why).
+        The wait is bounded in simulated time: the time the frames queued at the start need on
+        the wire at the bus's rates (as if all were the longest frames), times
+        _DRAIN_FACTOR, plus _DRAIN_MARGIN_NS. Nothing is waited for when nothing can send:
+        in stepped time (time moves only when the program steps it), on a listen-only line, or
+        a line that is stopped or bus-off."""
+        empty_reads = 0
+        deadline_ns = None
+        while True:
+            load, line = self._tx_status()
+            stuck = ("the line is listen-only" if self._listen_only
+                     else "the controller is bus-off" if line & _vci.CAN_STATUS_BUSOFF
+                     else "the line is stopped" if line & _vci.CAN_STATUS_ININIT else "")
+            if stuck:
+                left = self._tx_count_left()
+                return left, stuck if left else ""
+            if load == 0 and not line & _vci.CAN_STATUS_TXPEND:
+                # A running line takes the next frame in the instant the last one ends, so it
+                # is done when it holds none and the FIFO shows none (below 1 %: at most two
+                # frames, which a running line would have taken). Twice in a row: the second
+                # look is answered after canemud saw the doorbell of a frame posted before the
+                # first.
+                empty_reads += 1
+                if empty_reads == 2:
+                    return 0, ""
+                continue
+            empty_reads = 0
+            now_ns, mode = _sim_time()
+            if mode == _vci.CANEMU_TIME_STEPPED:
+                return self._tx_count_left(), "in stepped time nothing moves at shutdown"
+            if deadline_ns is None:
+                frames = self._tx_at_most(load, line)
+                bound_ns = int(frames * self._frame_ns() * _DRAIN_FACTOR) + _DRAIN_MARGIN_NS
+                deadline_ns = now_ns + bound_ns
+            elif now_ns >= deadline_ns:
+                return self._tx_count_left(), (
+                    f"they did not get through within {bound_ns / 1e9:.3f} s of bus time (is "
+                    f"a node acknowledging?)")
+            time.sleep(_DRAIN_POLL_S)

@@ -65,8 +65,8 @@ _REPORTED_STATUS = 0x02 | _vci.CAN_STATUS_ERRLIM | _vci.CAN_STATUS_BUSOFF | _vci
 
 class _StateMixin:
     """CanemuBus's error state and error frames. Uses the bus's _channel, _control,
-    _channel_name, _reported, _counters, _last_status, _was_bus_off, _auto_restart, _pending,
-    _initializing; _stamp and _now_ns come from _ReceiveMixin."""
+    _listen_only, _start_line, _channel_name, _reported, _counters, _last_status, _was_bus_off,
+    _auto_restart, _pending, _initializing; _stamp and _now_ns come from _ReceiveMixin."""
 
     def _error_frame(self, sim_ns: int, ident: int, data: bytes) -> Message:
         return Message(
@@ -171,9 +171,12 @@ class _StateMixin:
     @property
     def state(self) -> BusState:
         """The controller's error state in python-can's terms: ACTIVE while error-active (also
-        at the warning limit), PASSIVE while error-passive, ERROR while bus-off. See
-        :attr:`controller_state` for the four ISO 11898-1 states."""
-        return _BUS_STATES[self._controller_state()[0]]
+        at the warning limit), PASSIVE while error-passive or listen-only, ERROR while bus-off.
+        See :attr:`controller_state` for the four ISO 11898-1 states."""
+        state = _BUS_STATES[self._controller_state()[0]]
+        if self._listen_only and state == BusState.ACTIVE:
+            return BusState.PASSIVE
+        return state
 
     @property
     def controller_state(self) -> "ControllerState":
@@ -182,7 +185,23 @@ class _StateMixin:
 
     @state.setter
     def state(self, new_state: BusState) -> None:
-        raise NotImplementedError("the state follows the controller; use listen_only=True")
+        """PASSIVE: the controller only listens (no acknowledgement, no error flags, nothing
+        sent: frames wait in the transmit FIFO); ACTIVE: it takes part again. Either way the
+        line is initialized again with the same bit timing, so the controller starts
+        error-active with both counters 0. ERROR cannot be set. Needs the control unit."""
+        if new_state not in (BusState.ACTIVE, BusState.PASSIVE):
+            raise ValueError(f"only BusState.ACTIVE and BusState.PASSIVE can be set, not "
+                             f"{new_state}")
+        if self._control is None:
+            raise can.CanOperationError(
+                f"{self.channel_info}: another program controls the line; it sets its mode")
+        with _vci_errors():
+            _call("canControlStart", self._control, 0)
+            self._start_line(new_state == BusState.PASSIVE)
+        self._reported = _vci.CANEMU_STATE_ACTIVE
+        self._counters = (0, 0)
+        self._last_status = 0
+        self._was_bus_off = False
 
     def error_counters(self) -> Tuple[int, int]:
         """(TEC, REC) of the controller."""

@@ -59,8 +59,10 @@ CAN_ERROR_BIT = 4
 CAN_ERROR_FDB = 5
 CAN_ERROR_CRC = 6
 
+CAN_STATUS_TXPEND = 0x01
 CAN_STATUS_ERRLIM = 0x04
 CAN_STATUS_BUSOFF = 0x08
+CAN_STATUS_ININIT = 0x10
 CAN_STATUS_BUSCERR = 0x20
 
 CANEMU_STATE_ACTIVE = 0
@@ -131,6 +133,33 @@ class CANCAPABILITIES2(ctypes.Structure):
         ("dwDtxClkFreq", ctypes.c_uint32),
         ("dwDtxDivisor", ctypes.c_uint32),
         ("dwDtxMaxTicks", ctypes.c_uint32),
+    ]
+
+
+class CANLINESTATUS2(ctypes.Structure):
+    _pack_ = 1
+    _fields_ = [
+        ("bOpMode", ctypes.c_uint8),
+        ("bExMode", ctypes.c_uint8),
+        ("bBusLoad", ctypes.c_uint8),
+        ("bReserved", ctypes.c_uint8),
+        ("sBtpSdr", CANBTP),
+        ("sBtpFdr", CANBTP),
+        ("dwStatus", ctypes.c_uint32),
+    ]
+
+
+class CANCHANSTATUS2(ctypes.Structure):
+    """A channel's status (canChannelGetStatus): the line's status and the FIFOs' fill levels,
+    in percent of their capacity."""
+
+    _pack_ = 1
+    _fields_ = [
+        ("sLineStatus", CANLINESTATUS2),
+        ("fActivated", ctypes.c_uint8),
+        ("fRxOverrun", ctypes.c_uint8),
+        ("bRxFifoLoad", ctypes.c_uint8),
+        ("bTxFifoLoad", ctypes.c_uint8),
     ]
 
 
@@ -268,6 +297,7 @@ _SIGNATURES = {
         ctypes.c_uint8,
     ),
     "canChannelActivate": (HANDLE, ctypes.c_int),
+    "canChannelGetStatus": (HANDLE, ctypes.POINTER(CANCHANSTATUS2)),
     "canChannelSetFilterMode": (
         HANDLE,
         ctypes.c_int,

@@ -61,6 +61,14 @@ except ImportError:  # pragma: no cover - python-can 4.1 and 4.2
 _FILTER_LIST_SIZE = 2048  # 29-bit ID list of each channel
 
 
+def _fifo_capacity(requested: int) -> int:
+    """The messages a channel's FIFO of `requested` CANMSG2 holds: a ring of a 256-byte header
+    and the messages, rounded up to whole 4 KiB pages (docs/vci.md), at most 65535."""
+    size, page, header = ctypes.sizeof(_vci.CANMSG2), 4096, 256
+    pages = -(-(header + requested * size) // page)
+    return min((pages * page - header) // size, 65535)
+
+
 class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
     """A node on a bus that canemud emulates.
 
@@ -131,6 +139,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._tx_view = memoryview(self._tx_msg).cast("B")
         self._tx_ref = ctypes.byref(self._tx_msg)
         self._sched_lock = threading.Lock()
+        self._listen_only = bool(listen_only)
+        self._tx_flushed = False
         try:
             _vci.lib()
         except OSError as e:
@@ -201,6 +211,11 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self.node_name = f"{self._device_name}:{controller}"
         self.channel_info = f"canemu {self.node_name} on {bus_name}"
         self._bus_name = bus_name
+        # The line's rates as the bus runs them (what this bus sets when it holds the control
+        # unit): the drain at shutdown reckons with them.
+        self._bitrate = bus.get("bitrate") or 500_000
+        self._data_bitrate = bus.get("data_bitrate") or self._bitrate
+        self._tx_capacity = _fifo_capacity(tx_size)
         if CanProtocol is not None:
             self._can_protocol = CanProtocol.CAN_FD if fd else CanProtocol.CAN_20
 
@@ -276,6 +291,15 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
             rate = int(bitrate) if bitrate else bus.get("bitrate", 500_000)
             data_rate = int(data_bitrate) if data_bitrate else bus.get("data_bitrate") or rate
             nominal, data = _timing.nominal_and_data(rate, data_rate, limits, self._fd)
+        self._nominal, self._data = nominal, data
+        self._bitrate = limits.bitrate(nominal)
+        if data is not None:
+            self._data_bitrate = limits.bitrate(data)
+        self._start_line(listen_only)
+
+    def _start_line(self, listen_only: bool) -> None:
+        """(Re)initializes the line with the bit timing chosen at opening, listen-only or not,
+        and starts it. The controller is reset: error counters 0, error-active."""
         op_mode = _vci.CAN_OPMODE_STANDARD | _vci.CAN_OPMODE_EXTENDED | _vci.CAN_OPMODE_ERRFRAME
         if listen_only:
             op_mode |= _vci.CAN_OPMODE_LISTONLY
@@ -291,10 +315,11 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
             _vci.CAN_FILTER_PASS,
             0,
             0,
-            ctypes.byref(nominal),
-            ctypes.byref(data) if data is not None else None,
+            ctypes.byref(self._nominal),
+            ctypes.byref(self._data) if self._data is not None else None,
         )
         _call("canControlStart", self._control, 1)
+        self._listen_only = listen_only
 
     # ---- shutting down ----
 
@@ -316,13 +341,35 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
             lib.canemuRemoveDevice(self._ephemeral.encode())
             self._ephemeral = None
 
+    def flush_tx_buffer(self) -> None:
+        """Gives up the frames queued so far: ``shutdown()`` then closes without waiting for
+        them (a ``send`` afterwards makes it wait again). The VCI has no call that empties a
+        running channel's transmit FIFO, so until then they may still go out."""
+        self._tx_flushed = True
+
     def shutdown(self) -> None:
+        """Stops the periodic tasks, lets the transmit FIFO drain (see _SendMixin._drain_tx:
+        bounded by the time its frames need on the bus; frames left are named in a warning on
+        the "can.canemu" logger), closes the channel and control unit and removes the adapter
+        this bus made. ``flush_tx_buffer()`` before it discards the queued frames instead."""
         if self._closed:
             return
         super().shutdown()  # stops the periodic tasks first
-        self._closed = True
-        with self._rx_lock, self._tx_lock:
-            self._close_handles()
+        try:
+            if self._channel is not None and not self._tx_flushed:
+                try:
+                    left, why = self._drain_tx()
+                except VciError as e:  # canemud gone: nothing can be sent any more
+                    left, why = 0, ""
+                    log.warning("%s: shutdown could not drain the transmit FIFO: %s",
+                                self.channel_info, e)
+                if left:
+                    log.warning("%s: shutdown discards %d frame(s) not sent: %s",
+                                self.channel_info, left, why)
+        finally:  # also when Ctrl-C ends the wait
+            self._closed = True
+            with self._rx_lock, self._tx_lock:
+                self._close_handles()
 
     @staticmethod
     def _detect_available_configs() -> List[Dict[str, Any]]:

@@ -59,12 +59,13 @@ def msg(arbitration_id=0x123, data=(1, 2), remote=False):
 
 
 class Dump:
-    """`canemu dump BUS` running beside the test: ready once it says it listens; lines() reads
-    what it printed, up to a given line or a given number of lines, with a timeout."""
+    """`canemu dump BUS --listen-only` (a silent observer) running beside the test: ready once
+    it says it listens; lines() reads what it printed, up to a given line or a given number of
+    lines, with a timeout."""
 
     def __init__(self, daemon, bus="can0"):
         self.proc = subprocess.Popen(
-            [str(CANEMU_CLI), "--socket", daemon.socket, "dump", bus],
+            [str(CANEMU_CLI), "--socket", daemon.socket, "dump", bus, "--listen-only"],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
         )

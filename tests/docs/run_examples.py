@@ -13,7 +13,7 @@ as one. Nothing under a command: its output is not compared. Blocks tagged ```sh
 are for reading and are not run.
 
 All blocks of one page run in one bash session, in order, in a scratch directory that holds
-`build`, `config`, `client` and `.venv` as links to the repository's, so that `export`, `cd`
+`build`, `config`, `client`, `docs` and `.venv` as links to the repository's, so that `export`, `cd`
 and files written by one command are seen by the next. Background processes still running at
 the end of the page are stopped. The page fails at the first command whose output differs, with
 both texts.
@@ -132,7 +132,7 @@ def run_page(page_path: Path, repo: Path, timeout: float, show: bool = False,
         work = Path(scratch)
         logs = work / ".logs"
         logs.mkdir()
-        for name in ("config", "client", ".venv"):
+        for name in ("config", "client", "docs", ".venv"):
             if (repo / name).exists():
                 (work / name).symlink_to(repo / name)
         (work / "build").symlink_to(build or repo / "build")

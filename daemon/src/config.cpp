@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <charconv>
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
@@ -31,7 +30,9 @@ using detail::name_of;
 using detail::NamedValue;
 
 constexpr NamedValue<BusKind> kBusKinds[] = {
-    {BusKind::can, "can"}, {BusKind::can_fd, "can-fd"}, {BusKind::lin, "lin"}};
+    {BusKind::can, ipc::to_string(ipc::WireBusKind::can)},
+    {BusKind::can_fd, ipc::to_string(ipc::WireBusKind::can_fd)},
+    {BusKind::lin, ipc::to_string(ipc::WireBusKind::lin)}};
 constexpr NamedValue<bool> kTransceivers[] = {{false, "high-speed"}, {true, "low-speed"}};
 constexpr NamedValue<DeviceModel> kDeviceModels[] = {
     {DeviceModel::ixxat_usb_to_can, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can)},

@@ -373,7 +373,9 @@ TEST(XcanBuffers, MixedFormatObjectsOfBothWidthsShareAnInterface) {
   x.write(std_out, {0x01});
   x.write(ext_out, {0x02});
   x.peer.send(data_frame(0x1ABCDE, {0x03}, true));
-  x.peer.send(data_frame(0x1ABCDE, {0x04}));  // 11-bit 1ABCDEh does not exist: no object
+  // The 11-bit frame with the 29-bit identifier's base (1ABCDEh >> 18 = 6h): the object's XTD
+  // tells the formats apart, so nobody takes it.
+  x.peer.send(data_frame(0x006, {0x04}));
   x.run_until(2'000'000);
   ASSERT_EQ(x.peer.log.received.size(), 2u);
   EXPECT_EQ(x.peer.log.received[0].frame, data_frame(0x123, {0x01}));  // lower buffer first

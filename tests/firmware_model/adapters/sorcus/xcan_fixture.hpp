@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 #include "canemu/firmware_model/adapters/sorcus/xcan_module.hpp"
@@ -37,8 +38,13 @@ inline Frame remote_frame(uint32_t id, uint8_t dlc = 0, bool extended = false) {
   spec.dlc = dlc;
   return *Frame::create(spec);
 }
+// A valid classic data frame; a test that asks for an impossible one stops here, loudly.
 inline Frame data_frame(uint32_t id, std::vector<uint8_t> data, bool extended = false) {
-  return *Frame::classic(id, data, extended);
+  auto frame = Frame::classic(id, data, extended);
+  if (!frame) {
+    throw std::invalid_argument("data_frame: " + frame.error().message);
+  }
+  return *frame;
 }
 
 inline XCAN_BITPARAMS params_500k() {

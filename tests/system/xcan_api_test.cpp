@@ -12,6 +12,9 @@
 #include <thread>
 #include <vector>
 
+#include <spawn.h>
+#include <sys/wait.h>
+
 #include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 #include "xcan.h"
@@ -76,6 +79,21 @@ int64_t remote_bits(uint32_t id, uint8_t dlc) {
   spec.remote = true;
   spec.dlc = dlc;
   return static_cast<int64_t>(model::encode(*model::Frame::create(spec)).length);
+}
+
+// Runs the canemu command line on the daemon's socket to its end; its exit status.
+int run_canemu(const testing::Daemon& d, std::vector<std::string> args) {
+  args.insert(args.begin(), {CANEMU_PATH, "--socket", d.socket()});
+  std::vector<char*> argv;
+  for (std::string& a : args) {
+    argv.push_back(a.data());
+  }
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, nullptr, nullptr, argv.data(), environ), 0);
+  int status = -1;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 ULONG status_of(const Seen& s) {
@@ -239,6 +257,38 @@ TEST(XcanApi, PassiveSendObjectAnswersRemoteFramesWithTheDataOfThatInstant) {
   ULONG count = 0;
   EXPECT_EQ(max_channel_info(passive, INFO_XCAN_MSG_COUNT, &count), ERR_OK);
   EXPECT_EQ(count, 2u);
+}
+
+// The remote frames come from `canemu send`, a process of its own with an ephemeral node on
+// can0, which steps time itself; alpha sees the request and the answer.
+TEST(XcanApi, PassiveSendObjectAnswersAnotherProcessWithTheDataOfThatInstant) {
+  XcanDaemon x;
+  Adapter alpha("alpha");
+  const MAX_HANDLE passive = x.open(cps(DEVICE_BUS_OUT, 0x300, XCAN_REMOTE));
+  uint8_t first[2] = {0x11, 0x22};
+  ULONG size = 2;
+  ASSERT_EQ(max_write_channel_block(passive, &size, first), ERR_OK);
+  step_ns(1'000'000);
+  ASSERT_EQ(run_canemu(x.vci.daemon, {"send", "can0", "300#R2", "--step", "1ms"}), 0);
+  auto got = alpha.frames();
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].dwMsgId, 0x300u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.rtr, 1u);
+  EXPECT_EQ(got[1].dwMsgId, 0x300u);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.rtr, 0u);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.dlc, 2u);
+  EXPECT_EQ(got[1].abData[0], 0x11);
+  EXPECT_EQ(got[1].abData[1], 0x22);
+  // The answer follows the request after the intermission.
+  EXPECT_EQ(got[1].dwTime - got[0].dwTime,
+            static_cast<UINT32>((3 + bits_of(0x300, {0x11, 0x22})) * kBitUs2));
+  uint8_t second[2] = {0x33, 0x44};
+  ASSERT_EQ(max_write_channel_block(passive, &size, second), ERR_OK);
+  ASSERT_EQ(run_canemu(x.vci.daemon, {"send", "can0", "300#R2", "--step", "1ms"}), 0);
+  got = alpha.frames();
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[1].abData[0], 0x33);
+  EXPECT_EQ(got[1].abData[1], 0x44);
 }
 
 TEST(XcanApi, ActiveReceiveObjectAsksByRemoteFrameAndGetsTheAnswer) {

@@ -7,7 +7,7 @@
  *
  * Sends COUNT (default 3) data frames with SEND_ID (each waits until it went, at most 50 ms),
  * printing every frame with RECEIVE_ID that comes meanwhile and the bus state on errors. The
- * bit rate is 125 kbit/s: run it against a bus configured with bitrate = 125000. Built with
+ * bit rate is 500 kbit/s, as on the buses of canemud's default configuration. Built with
  *   cc xcan_talk.c $(pkg-config --cflags --libs canemu-xcan)
  */
 #include <stdio.h>
@@ -49,7 +49,7 @@ static int check(ULONG Error, const char* what) {
 int main(int argc, char** argv) {
   MAX_HANDLE hModul, hMDD, hBus, hSend, hReceive;
   CPS_XCAN cps;
-  XCAN_BITPARAMS bits = {500, 12, 3, 1, 1, 0, 11}; /* 16 x 500 ns: 125 kbit/s */
+  XCAN_BITPARAMS bits = {125, 12, 3, 1, 1, 0, 11}; /* 16 x 125 ns: 500 kbit/s */
   ULONG Error, ulSize, count = 0;
   USHORT usChannel;
   int i, n;

@@ -383,5 +383,63 @@ TEST(XcanApi, BitRateMismatchGivesErrorCallbacksAndBusOffUntilStopAndStart) {
   EXPECT_EQ(got[0].abData[0], 0x55);
 }
 
+// The example program as a user runs it (stepped time moved by this test): its three frames
+// reach alpha, alpha's answer reaches its receive object's callback.
+TEST(XcanApi, TheExampleTalksWithAnIxxatAdapter) {
+  XcanDaemon x;
+  Adapter alpha("alpha");
+  int out[2];
+  ASSERT_EQ(::pipe(out), 0);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, out[1], 1);
+  posix_spawn_file_actions_addclose(&actions, out[0]);
+  std::vector<std::string> args = {XCAN_TALK_PATH, "xcan0", "0", "0x100", "0x200", "3"};
+  std::vector<char*> argv;
+  for (std::string& a : args) {
+    argv.push_back(a.data());
+  }
+  argv.push_back(nullptr);
+  std::vector<std::string> env_text = {"CANEMU_SOCKET=" + x.vci.daemon.socket()};
+  std::vector<char*> env = {env_text[0].data(), nullptr};
+  pid_t pid = -1;
+  ASSERT_EQ(::posix_spawn(&pid, XCAN_TALK_PATH, &actions, nullptr, argv.data(), env.data()), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(out[1]);
+  std::vector<CANMSG> frames;
+  bool answered = false;
+  int status = -1;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (::waitpid(pid, &status, WNOHANG) == 0 && std::chrono::steady_clock::now() < give_up) {
+    step_ns(1'000'000);
+    for (const CANMSG& m : alpha.frames()) {
+      frames.push_back(m);
+      if (!answered) {
+        alpha.post(data(0x200, {0xAB}));
+        answered = true;
+      }
+    }
+  }
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  std::string text;
+  char buf[256];
+  ssize_t n;
+  while ((n = ::read(out[0], buf, sizeof buf)) > 0) {
+    text.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(out[0]);
+  ASSERT_EQ(frames.size(), 3u);
+  for (UINT8 k = 0; k < 3; ++k) {
+    EXPECT_EQ(frames[k].dwMsgId, 0x100u);
+    EXPECT_EQ(frames[k].uMsgInfo.Bits.dlc, 4u);
+    EXPECT_EQ(frames[k].abData[3], k);
+  }
+  // The callback prints on the library's thread, the count on the main thread.
+  EXPECT_TRUE(text == "channel 5: 1 bytes: AB\n3 frames sent\n" ||
+              text == "3 frames sent\nchannel 5: 1 bytes: AB\n")
+      << text;
+}
+
 }  // namespace
 }  // namespace canemu

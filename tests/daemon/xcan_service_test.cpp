@@ -109,6 +109,28 @@ effect = "line_error"
   EXPECT_EQ(XCAN_STATUS_FLAGS(x.bus_state(1)) & XCAN_LINE_ERROR, 0u);
 }
 
+TEST(XcanNodes, ABusOffFaultTakesTheInterfaceOffAtItsInstant) {
+  auto m = world();
+  model::sorcus::XcanModule& x = m->devices().find_xcan("xcan0")->module();
+  CPS_XCAN send{};
+  send.usDevice = DEVICE_BUS_OUT;
+  send.ulCanID = 0x100;
+  ASSERT_TRUE(x.open_channel(send, false));  // the bus is on from the first object
+  auto s = parse_scenario(R"([[fault]]
+at = "1ms"
+node = "xcan0:0"
+effect = "bus_off"
+)",
+                          "s.toml");
+  ASSERT_TRUE(s) << s.error().front();
+  ASSERT_TRUE(m->scenarios().apply(*s, m->scheduler().now()));
+  m->scheduler().run_until(model::SimTime::from_ns(999'999));
+  EXPECT_EQ(XCAN_STATUS_FLAGS(x.bus_state(0)), XCAN_BUS_ON);
+  m->scheduler().run_until(model::SimTime::from_ns(1'000'000));
+  EXPECT_EQ(XCAN_STATUS_FLAGS(x.bus_state(0)) & XCAN_BUS_OFF, XCAN_BUS_OFF);
+  EXPECT_TRUE(x.chip(0).confinement().bus_off());
+}
+
 TEST(XcanNodes, AnInterfaceCannotBabble) {
   auto m = world();
   auto s = parse_scenario(R"([[fault]]

@@ -48,7 +48,8 @@ typedef void (*MAX_CALLBACK)(MAX_HANDLE hChan, ULONG ulSize, const void* pData);
 XCANAPI ULONG canemu_open_module(const char* pszDevice, MAX_HANDLE* phModul);
 
 /* canemu: talk to the canemud listening at `pszSocket` from now on (NULL: the usual search);
- * drops the connection and every handle of this process. ERR_OK once connected (NULL: always). */
+ * drops the connection and every handle of this process. ERR_OK once connected (NULL: always).
+ * Not while another thread of the process is in a function of this library. */
 XCANAPI ULONG canemu_xcan_connect(const char* pszSocket);
 
 /* Loads the MDD: slot 1, layer 0, program number 0x803A (mxcan2); the manual's

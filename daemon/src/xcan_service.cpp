@@ -29,7 +29,9 @@ void protocol_error(const XcanService::Send& send, uint32_t request_id, ipc::Err
 
 void put_data(ipc::XcanReply& r, const std::vector<uint8_t>& data) {
   r.size = static_cast<uint16_t>(std::min(data.size(), ipc::kXcanDataSize));
-  std::memcpy(r.data, data.data(), r.size);
+  if (r.size > 0) {  // an empty vector's data() may be null
+    std::memcpy(r.data, data.data(), r.size);
+  }
 }
 
 }  // namespace

@@ -142,7 +142,9 @@ XCANAPI ULONG max_read_channel_block(MAX_HANDLE hChan, ULONG* pulSize, void* pDa
   if (reply.size > *pulSize) {
     return ERR_XCAN_DATA_SIZE;
   }
-  std::memcpy(pData, reply.data, reply.size);
+  if (reply.size > 0) {
+    std::memcpy(pData, reply.data, reply.size);
+  }
   *pulSize = reply.size;
   return ERR_OK;
 }

@@ -125,9 +125,11 @@ ULONG Library::call(ipc::XcanRequest& request, ipc::XcanReply& reply) {
     waiters_.erase(request.header.request_id);
     return ERR_XCAN_NO_DAEMON;
   }
-  replied_.wait(lock, [&] { return w.done || broken_; });
+  // The receive thread ends every wait: with the reply, or as lost when the connection breaks
+  // (a later connection of another thread cannot leave this one waiting).
+  replied_.wait(lock, [&] { return w.done; });
   waiters_.erase(request.header.request_id);
-  if (!w.done) {
+  if (w.lost) {
     return ERR_XCAN_NO_DAEMON;
   }
   if (w.refused) {
@@ -170,6 +172,10 @@ void Library::receive_loop(int fd) {
   }
   std::lock_guard lock(mutex_);
   broken_ = true;
+  for (auto& [id, w] : waiters_) {
+    w->done = true;
+    w->lost = true;
+  }
   replied_.notify_all();
 }
 

@@ -53,6 +53,7 @@ class Library {
   struct Waiter {
     bool done = false;
     bool refused = false;
+    bool lost = false;  // the connection broke before the reply came
     ipc::XcanReply reply{};
   };
   struct Queued {

@@ -305,9 +305,26 @@ TEST(XcanService, ASessionThatGoesReleasesItsChannelsForOthers) {
   general.usDevice = DEVICE_BUS_OUT;
   general.usFlags = _CP_EXCLUSIVE;
   general.ulCanID = XCAN_GENERAL_ID;
-  EXPECT_EQ(x.call(first, open(general)).error, ERR_OK);
+  general.usFlags = _CP_EXCLUSIVE | XCAN_NO_INT;
+  general.usTimeout = 1000;
+  const uint32_t h = x.call(first, open(general)).channel;
   EXPECT_EQ(x.call(second, open(general)).error, ERR_XCAN_CHANNEL_BUSY);
+  // The first client goes while its send waits (nobody acknowledges): nothing is answered to
+  // anybody, now or at the timeout.
+  auto write = request(ipc::XcanOp::write_block, h);
+  XCAN_MESSAGE message{};
+  message.ulCanId = 0x123;
+  std::memcpy(write.data, &message, sizeof message);
+  write.size = sizeof message;
+  x.sent.clear();
+  x.service.handle(first, write, x.send);
+  EXPECT_TRUE(x.sent.empty());
   x.service.close_all(first);
+  EXPECT_TRUE(first.channels.empty());
+  EXPECT_TRUE(first.outbox.empty());
+  x.sim->scheduler().run_until(model::SimTime::from_ns(5'000'000));
+  EXPECT_TRUE(first.outbox.empty());
+  EXPECT_TRUE(second.outbox.empty());
   EXPECT_EQ(x.call(second, open(general)).error, ERR_OK);
 }
 

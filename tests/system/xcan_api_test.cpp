@@ -303,6 +303,9 @@ TEST(XcanApi, ActiveReceiveObjectAsksByRemoteFrameAndGetsTheAnswer) {
   ASSERT_EQ(asked.size(), 1u);
   EXPECT_EQ(asked[0].dwMsgId, 0x400u);
   EXPECT_EQ(asked[0].uMsgInfo.Bits.rtr, 1u);
+  // Asked for at 1 ms, with the DLC of the data the object holds: none yet.
+  EXPECT_EQ(asked[0].uMsgInfo.Bits.dlc, 0u);
+  EXPECT_EQ(asked[0].dwTime, static_cast<UINT32>(1000 + remote_bits(0x400, 0) * kBitUs2));
   alpha.post(data(0x400, {0x09, 0x0A, 0x0B}));
   step_ns(1'000'000);
   const auto seen = wait_seen(1);
@@ -381,6 +384,49 @@ TEST(XcanApi, BitRateMismatchGivesErrorCallbacksAndBusOffUntilStopAndStart) {
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x100u);
   EXPECT_EQ(got[0].abData[0], 0x55);
+}
+
+XCAN_MESSAGE message_of(const Seen& s) {
+  XCAN_MESSAGE m{};
+  EXPECT_EQ(s.bytes.size(), sizeof m);
+  std::memcpy(&m, s.bytes.data(), std::min(sizeof m, s.bytes.size()));
+  return m;
+}
+
+// The general-ID channel asks alpha by remote frame; the answer, like any frame no object
+// takes, reaches the acceptance-filter device's callback as an XCAN_MESSAGE.
+TEST(XcanApi, GeneralIdRemoteFrameAndTheAnswerThroughTheAcceptanceFilter) {
+  XcanDaemon x;
+  Adapter alpha("alpha");
+  CPS_XCAN filter_cps = cps(DEVICE_CTRL, XCAN_AUTO_ID);
+  filter_cps.usIndexFirst = filter_cps.usIndexLast = 0;
+  const MAX_HANDLE filter = x.open(filter_cps, record);
+  ASSERT_EQ(max_write_channel_ulong(filter, 0), ERR_OK);  // mask 0: every identifier
+  const MAX_HANDLE general = x.open(cps(DEVICE_BUS_OUT, XCAN_GENERAL_ID, _CP_EXCLUSIVE));
+  step_ns(1'000'000);
+  XCAN_MESSAGE ask{};
+  ask.ulCanId = 0x321;
+  ask.usDataSize = 1;
+  ask.usFlags = XCAN_REMOTE;
+  ULONG size = sizeof ask;
+  ASSERT_EQ(max_write_channel_block(general, &size, &ask), ERR_OK);
+  step_ns(1'000'000);
+  const auto asked = alpha.frames();
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0].dwMsgId, 0x321u);
+  EXPECT_EQ(asked[0].uMsgInfo.Bits.rtr, 1u);
+  EXPECT_EQ(asked[0].uMsgInfo.Bits.dlc, 1u);
+  EXPECT_EQ(asked[0].dwTime, static_cast<UINT32>(1000 + remote_bits(0x321, 1) * kBitUs2));
+  alpha.post(data(0x321, {0x77}));
+  step_ns(1'000'000);
+  const auto seen = wait_seen(1);
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0].channel, filter);
+  const XCAN_MESSAGE got = message_of(seen[0]);
+  EXPECT_EQ(got.ulCanId, 0x321u);
+  EXPECT_EQ(got.usDataSize, 1u);
+  EXPECT_EQ(got.usFlags, 0u);
+  EXPECT_EQ(got.aucData[0], 0x77);
 }
 
 // The example program as a user runs it (stepped time moved by this test): its three frames

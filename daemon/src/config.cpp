@@ -36,7 +36,8 @@ constexpr NamedValue<BusKind> kBusKinds[] = {
 constexpr NamedValue<bool> kTransceivers[] = {{false, "high-speed"}, {true, "low-speed"}};
 constexpr NamedValue<DeviceModel> kDeviceModels[] = {
     {DeviceModel::ixxat_usb_to_can, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can)},
-    {DeviceModel::ixxat_usb_to_can_fd, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can_fd)}};
+    {DeviceModel::ixxat_usb_to_can_fd, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can_fd)},
+    {DeviceModel::sorcus_x_can_2i, ipc::to_string(ipc::WireDeviceModel::sorcus_x_can_2i)}};
 
 // The required key "name" of a [[bus]] or [[device]] table: valid, and unique among `names`.
 std::optional<std::string> read_name(Checker& c, const toml::table& t, const std::string& path,
@@ -144,6 +145,34 @@ void read_buses(Checker& c, const toml::table& root, Config& cfg) {
   });
 }
 
+// An X-CAN-2i: two interfaces on classic CAN buses, and a variant for their transceivers (/H
+// both high-speed, /F both low-speed, /M interface 0 high-speed and interface 1 low-speed).
+void check_xcan(Checker& c, const toml::node& ctl, const std::string& path, const Config& cfg,
+                const DeviceConfig& dev) {
+  if (dev.controllers.size() != 2) {
+    c.error(ctl, path + ".controllers",
+            fmt::format("{} controllers; an X-CAN-2i has 2 interfaces", dev.controllers.size()));
+    return;
+  }
+  const BusConfig* b0 = cfg.bus(dev.controllers[0]);
+  const BusConfig* b1 = cfg.bus(dev.controllers[1]);
+  if (b0 == nullptr || b1 == nullptr) {
+    return;  // said above
+  }
+  for (const BusConfig* b : {b0, b1}) {
+    if (b->kind == BusKind::can_fd) {
+      c.error(
+          ctl, path + ".controllers",
+          fmt::format("\"{}\" is a CAN FD bus; the 82527 is a classic CAN controller", b->name));
+    }
+  }
+  if (b0->low_speed && !b1->low_speed) {
+    c.error(ctl, path + ".controllers",
+            "interface 0 low-speed and interface 1 high-speed: no X-CAN-2i variant has that "
+            "(/M has interface 0 high-speed)");
+  }
+}
+
 void read_devices(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
   c.for_each_table(root, "device", [&](const toml::table& t, const std::string& path) {
@@ -174,6 +203,9 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
         }
       }
       dev.controllers = *buses;
+      if (dev.model == DeviceModel::sorcus_x_can_2i) {
+        check_xcan(c, *ctl, path, cfg, dev);
+      }
     }
     cfg.devices.push_back(dev);
   });

@@ -243,6 +243,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       model::SimScheduler& s = sim_.scheduler();
       r.events_run = s.run_until(s.now() + model::SimDuration(m.step_ns));
       r.sim_time_ns = s.now().ns();
+      if (after_step) {
+        after_step();
+      }
       send_reply(send, r);
       return;
     }
@@ -370,6 +373,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::vci_request:
       vci_.handle(c.vci, read_as<ipc::VciRequest>(data), send);
       return;
+    case ipc::MsgType::xcan_request:
+      xcan_.handle(c.xcan, read_as<ipc::XcanRequest>(data), send);
+      return;
     default:
       error(send, request_id, ipc::ErrorCode::unknown_type,
             fmt::format("message type {} is not a request", h.type));
@@ -385,6 +391,7 @@ void ControlDispatcher::end_session(Session& session) {
   }
   session.channels.clear();
   vci_.close_all(session.vci);
+  xcan_.close_all(session.xcan);
 }
 
 }  // namespace canemu::daemon

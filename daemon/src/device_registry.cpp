@@ -46,11 +46,23 @@ const DeviceRegistry::Ephemeral* DeviceRegistry::find_ephemeral(std::string_view
   return nullptr;
 }
 
+std::shared_ptr<XcanDevice> DeviceRegistry::find_xcan(std::string_view name) const {
+  for (const Xcan& x : xcan_) {
+    if (x.config.name == name) {
+      return x.device;
+    }
+  }
+  return nullptr;
+}
+
 bool DeviceRegistry::exists(std::string_view name) const {
   for (const Configured& d : configured_) {
     if (d.config.name == name) {
       return true;
     }
+  }
+  if (find_xcan(name) != nullptr) {
+    return true;
   }
   return find_ephemeral(name) != nullptr;
 }
@@ -68,13 +80,21 @@ std::optional<DeviceRegistry::NodeRef> DeviceRegistry::find_node(std::string_vie
   for (const Configured& d : configured_) {
     for (const Controller& c : d.controllers) {
       if (c.name == name) {
-        return NodeRef{c.bus, c.node.get()};
+        return NodeRef{c.bus, c.node.get(), c.node->node(), &c.node->controller(), nullptr, 0};
       }
     }
   }
   for (const Ephemeral& e : ephemeral_) {
     if (e.name == name || e.name + ":0" == name) {
-      return NodeRef{e.bus, e.node};
+      return NodeRef{e.bus, e.node, e.node->node(), &e.node->controller(), nullptr, 0};
+    }
+  }
+  for (const Xcan& x : xcan_) {
+    for (unsigned i = 0; i < x.buses.size(); ++i) {
+      if (fmt::format("{}:{}", x.config.name, i) == name) {
+        model::I82527& chip = x.device->module().chip(i);
+        return NodeRef{x.buses[i], nullptr, chip.node(), &chip, x.device, i};
+      }
     }
   }
   return std::nullopt;
@@ -91,6 +111,13 @@ std::optional<std::string> DeviceRegistry::node_name(std::size_t bus, model::Nod
   for (const Ephemeral& e : ephemeral_) {
     if (e.bus == bus && e.node->node() == node) {
       return e.name + ":0";
+    }
+  }
+  for (const Xcan& x : xcan_) {
+    for (unsigned i = 0; i < x.buses.size(); ++i) {
+      if (x.buses[i] == bus && x.device->module().chip(i).node() == node) {
+        return fmt::format("{}:{}", x.config.name, i);
+      }
     }
   }
   return std::nullopt;

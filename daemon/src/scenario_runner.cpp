@@ -105,6 +105,13 @@ ScenarioRunner::resolve(const Scenario& s) const {
         continue;
       }
       r.bus = r.node->bus;
+      if (f.effect == FaultEffect::babble && r.node->node == nullptr) {
+        where(
+            fmt::format("node {} is an X-CAN-2i interface; its module sends only what its "
+                        "objects ask for, so it cannot babble",
+                        node_name));
+        continue;
+      }
       if (f.effect == FaultEffect::line_error && !buses_[r.bus].config.low_speed) {
         where(
             fmt::format("node {} is on {}, a high-speed bus; wire faults are emulated on "
@@ -170,7 +177,7 @@ void ScenarioRunner::add_frame_rule(const Resolved& r, std::size_t k, uint64_t s
   const FaultSpec& f = *r.spec;
   FaultRule rule;
   if (r.node) {
-    rule.match.transmitter = r.node->node->node();
+    rule.match.transmitter = r.node->id;
   }
   rule.match.id = f.match.id;
   rule.match.mask = f.match.mask;
@@ -243,7 +250,7 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
     }
     case FaultEffect::node_off:
     case FaultEffect::node_on: {
-      const NodeId node = r.node->node->node();
+      const NodeId node = r.node->id;
       const bool on = f.effect == FaultEffect::node_on;
       when(at, state, [this, &b, node, on, what] {
         b.set_connected(node, on);
@@ -259,14 +266,15 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
     }
     case FaultEffect::bus_off:
     case FaultEffect::error_counters: {
-      HostedNode* hosted = r.node->node;
+      model::CanController* controller = r.node->controller;
+      const NodeId node = r.node->id;
       const bool off = f.effect == FaultEffect::bus_off;
       const uint16_t tec = f.tec;
       const uint16_t rec = f.rec;
-      when(at, state, [this, &b, hosted, off, tec, rec, what] {
-        FaultConfinement& fc = hosted->controller().confinement();
+      when(at, state, [this, &b, controller, node, off, tec, rec, what] {
+        FaultConfinement& fc = controller->confinement();
         fc.set_counters(off ? kBusOffLimit : tec, off ? fc.rec() : rec);
-        b.counters_changed(hosted->node());
+        b.counters_changed(node);
         log(what);
       });
       break;
@@ -290,14 +298,21 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
     case FaultEffect::line_error: {
       // The fault-tolerant transceiver sees the wire fault and says so (BUSCERR on a VCI
       // adapter). With one wire it goes on in single-wire mode; with both it is cut off.
-      const NodeId node = r.node->node->node();
+      const NodeId node = r.node->id;
       // Held weakly: the adapter (and its line) may go before the fault ends, and a queued
       // event must not keep a line alive past its device or the simulation.
-      const std::weak_ptr<model::ixxat::CanLine> weak_line = devices_.vci_line_of(r.node->node);
+      const std::weak_ptr<model::ixxat::CanLine> weak_line =
+          r.node->node != nullptr ? devices_.vci_line_of(r.node->node) : nullptr;
+      // An X-CAN-2i interface: its module's transceiver reports it (XCAN_LINE_ERROR).
+      const std::weak_ptr<XcanDevice> weak_xcan = r.node->xcan;
+      const unsigned iface = r.node->iface;
       const bool both = f.both_wires;
-      when(at, state, [this, &b, node, weak_line, both, what] {
+      when(at, state, [this, &b, node, weak_line, weak_xcan, iface, both, what] {
         if (auto line = weak_line.lock()) {
           line->set_bus_coupling_error(true);
+        }
+        if (auto xcan = weak_xcan.lock()) {
+          xcan->module().set_line_error(iface, true);
         }
         if (both) {
           b.set_connected(node, false);
@@ -305,20 +320,24 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
         log(what);
       });
       if (f.until_ns) {
-        when(start + SimDuration(*f.until_ns), state, [this, &b, node, weak_line, both, what] {
-          if (auto line = weak_line.lock()) {
-            line->set_bus_coupling_error(false);
-          }
-          if (both) {
-            b.set_connected(node, true);
-          }
-          log(what + " ends");
-        });
+        when(start + SimDuration(*f.until_ns), state,
+             [this, &b, node, weak_line, weak_xcan, iface, both, what] {
+               if (auto line = weak_line.lock()) {
+                 line->set_bus_coupling_error(false);
+               }
+               if (auto xcan = weak_xcan.lock()) {
+                 xcan->module().set_line_error(iface, false);
+               }
+               if (both) {
+                 b.set_connected(node, true);
+               }
+               log(what + " ends");
+             });
       }
       break;
     }
     case FaultEffect::oscillator: {
-      const NodeId node = r.node->node->node();
+      const NodeId node = r.node->id;
       const int32_t ppm = f.ppm;
       when(at, state, [this, &b, node, ppm, what] {
         b.set_oscillator_ppm(node, ppm);

@@ -48,6 +48,7 @@ Server::Server(Simulation& sim, ServerOptions options)
   dispatcher_.client_count = [this] { return live_clients(); };
   dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
   dispatcher_.before_step = [this] { kick_all_channels(); };
+  dispatcher_.after_step = [this] { send_outboxes(); };
   dispatcher_.channel_opened = [this](Doorbell& ch) {
     epoll_event ev{};
     ev.events = EPOLLIN;
@@ -253,6 +254,7 @@ int Server::run() {
       }
     }
     check_channels();
+    send_outboxes();
     drop_closing();
     send_notifications();
   }
@@ -276,6 +278,20 @@ void Server::check_channels() {
         c.closing = true;
       }
     });
+  }
+}
+
+// Sent in the order they were made; a client that does not read them is dropped.
+void Server::send_outboxes() {
+  for (auto& [fd, c] : clients_) {
+    std::deque<std::vector<uint8_t>>& out = c.session.xcan.outbox;
+    while (!out.empty() && !c.closing) {
+      if (!ipc::send_packet(fd, out.front().data(), out.front().size())) {
+        c.closing = true;
+      }
+      out.pop_front();
+    }
+    out.clear();
   }
 }
 

@@ -71,6 +71,9 @@ std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {
 }
 
 std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
+  if (d.model == DeviceModel::sorcus_x_can_2i) {
+    return add_xcan(d);
+  }
   // Every controller's timing first, so that a device is added whole or not at all.
   std::vector<std::size_t> buses;
   for (const std::string& bus_name : d.controllers) {
@@ -110,6 +113,43 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     controllers.push_back(std::move(c));
   }
   devices_.add_configured(d, std::move(controllers));
+  return std::nullopt;
+}
+
+// The module programs its chips itself (XCAN_BITPARAMS from a client, 20 kbit/s until then), so
+// the buses' rates are not checked here.
+std::optional<std::string> Simulation::add_xcan(const DeviceConfig& d) {
+  DeviceRegistry::Xcan x;
+  x.config = d;
+  for (const std::string& bus_name : d.controllers) {
+    const std::size_t bus = *bus_index(bus_name);
+    const BusConfig& bc = config_.buses[bus];
+    if (bc.kind != BusKind::can) {
+      return fmt::format("{}:{}: device {}: bus {} is not a classic CAN bus", config_.source,
+                         d.line, d.name, bc.name);
+    }
+    x.buses.push_back(bus);
+  }
+  if (x.buses.size() != 2) {
+    return fmt::format("{}:{}: device {}: an X-CAN-2i has 2 interfaces", config_.source, d.line,
+                       d.name);
+  }
+  const bool low0 = config_.buses[x.buses[0]].low_speed;
+  const bool low1 = config_.buses[x.buses[1]].low_speed;
+  if (low0 && !low1) {
+    return fmt::format(
+        "{}:{}: device {}: no X-CAN-2i variant has interface 0 low-speed and 1 "
+        "high-speed",
+        config_.source, d.line, d.name);
+  }
+  const auto variant = low0   ? model::sorcus::XcanVariant::f
+                       : low1 ? model::sorcus::XcanVariant::m
+                              : model::sorcus::XcanVariant::h;
+  x.device = std::make_shared<XcanDevice>(d.name, scheduler_, variant);
+  for (unsigned i = 0; i < 2; ++i) {
+    x.device->module().connect(i, *buses_[x.buses[i]]);
+  }
+  devices_.add_xcan(std::move(x));
   return std::nullopt;
 }
 

@@ -1,5 +1,6 @@
 #include "canemu/daemon/status.hpp"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <string>
 
@@ -27,21 +28,25 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
     s.error_frames = b.error_frames_on_bus();
   }
   std::size_t n = 0;
-  auto add_node = [&](const std::string& name, std::size_t bus, HostedNode& node) {
+  auto add_controller = [&](const std::string& name, std::size_t bus, CanController& controller,
+                            NodeId id) {
     if (n == ipc::kMaxStatusNodes) {
       return;
     }
     ipc::StatusNode& s = r.nodes[n++];
     ipc::copy_name(s.name, name);
     s.bus = static_cast<uint16_t>(bus);
-    FaultConfinement& fc = node.controller().confinement();
+    FaultConfinement& fc = controller.confinement();
     s.state = static_cast<uint8_t>(fc.state());
     s.tec = fc.tec();
     s.rec = fc.rec();
-    const NodeStats& st = sim.bus(bus).stats(node.node());
+    const NodeStats& st = sim.bus(bus).stats(id);
     s.frames_sent = st.frames_sent;
     s.frames_received = st.frames_received;
     s.errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
+  };
+  auto add_node = [&](const std::string& name, std::size_t bus, HostedNode& node) {
+    add_controller(name, bus, node.controller(), node.node());
   };
   const DeviceRegistry& devices = sim.devices();
   for (const DeviceRegistry::Configured& d : devices.configured()) {
@@ -51,6 +56,14 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
   }
   for (const DeviceRegistry::Ephemeral& e : devices.ephemeral()) {
     add_node(e.name + ":0", e.bus, *e.node);
+  }
+  // X-CAN-2i interfaces: the 82527's counters are the model's (the chip shows them to nobody
+  // else).
+  for (const DeviceRegistry::Xcan& x : devices.xcan()) {
+    for (unsigned i = 0; i < x.buses.size(); ++i) {
+      model::I82527& chip = x.device->module().chip(i);
+      add_controller(fmt::format("{}:{}", x.config.name, i), x.buses[i], chip, chip.node());
+    }
   }
   r.node_count = static_cast<uint16_t>(n);
 }

@@ -54,7 +54,7 @@ std::size_t size_of(MsgType type) {
                     DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest,
                     SubscribeReply, Notification, FaultLoadRequest, FaultLoadReply,
                     FaultListRequest, FaultListReply, FaultClearRequest, FaultClearReply,
-                    VciRequest, VciReply>(type);
+                    VciRequest, VciReply, XcanRequest, XcanReply, XcanCallbackMsg>(type);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // libFuzzer target: canemud's control-message handling. The input is a sequence of packets,
 // each a 16-bit little-endian length and that many bytes, fed to one client session of a daemon
-// built from the embedded default configuration in stepped time. Every reply must be a valid
+// built from the embedded default configuration and an X-CAN-2i "xcan0" on its buses, in stepped
+// time. Every reply must be a valid
 // message, with ring descriptors exactly when it opens a channel (or initializes a VCI one),
 // and nothing may crash. The session ends with each input, so the channels and VCI objects it
 // opened close again.
@@ -9,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <string>
 
 #include "canemu/daemon/control_dispatcher.hpp"
 
@@ -18,7 +20,13 @@ using namespace canemu;
 
 daemon::Simulation& simulation() {
   static std::unique_ptr<daemon::Simulation> sim = [] {
-    auto config = daemon::load_default_config();
+    const std::string text = std::string(daemon::embedded_default_config()) +
+                             "\n[[device]]\nname = \"xcan0\"\nmodel = \"sorcus-x-can-2i\"\n"
+                             "controllers = [\"can0\", \"can1\"]\n";
+    auto config = daemon::parse_config(text, "fuzz.toml");
+    if (!config) {
+      std::abort();
+    }
     auto built = daemon::Simulation::build(*config);
     return std::move(*built);
   }();
@@ -40,6 +48,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::memcpy(&h, reply, sizeof h);
     const bool opened = h.type == static_cast<uint16_t>(ipc::MsgType::open_channel_reply);
     const bool vci = h.type == static_cast<uint16_t>(ipc::MsgType::vci_reply);
+    if (h.type == static_cast<uint16_t>(ipc::MsgType::xcan_reply) ||
+        h.type == static_cast<uint16_t>(ipc::MsgType::xcan_callback)) {
+      if (!fds.empty()) {
+        std::abort();  // X-CAN services never pass descriptors
+      }
+      return;
+    }
     if (vci && !fds.empty()) {
       ipc::VciReply r;
       std::memcpy(&r, reply, sizeof r);

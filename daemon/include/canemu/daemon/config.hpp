@@ -28,8 +28,9 @@ struct BusConfig {
   uint32_t line = 0;            // where it was declared
 };
 
-// Adapter models the daemon can emulate.
-enum class DeviceModel { ixxat_usb_to_can, ixxat_usb_to_can_fd };
+// Adapter models the daemon can emulate. The X-CAN-2i module has exactly two interfaces; its
+// variant (/H, /F, /M) follows from the transceivers of their buses.
+enum class DeviceModel { ixxat_usb_to_can, ixxat_usb_to_can_fd, sorcus_x_can_2i };
 std::string_view to_string(DeviceModel model);
 
 struct DeviceConfig {

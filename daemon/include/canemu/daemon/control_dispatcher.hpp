@@ -17,6 +17,7 @@
 #include "canemu/daemon/ring_budget.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/vci_service.hpp"
+#include "canemu/daemon/xcan_service.hpp"
 
 namespace canemu::daemon {
 
@@ -40,6 +41,7 @@ struct Session {
   uint32_t next_channel = 1;
   std::map<uint32_t, SessionChannel> channels;
   VciSession vci;
+  XcanSession xcan;
 };
 
 class ControlDispatcher {
@@ -47,7 +49,7 @@ class ControlDispatcher {
   using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
 
   ControlDispatcher(Simulation& sim, TimeSetting time)
-      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_) {
+      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_), xcan_(sim) {
     // VCI channels' doorbells are watched like those of ephemeral channels.
     vci_.port_opened = [this](Doorbell& d) {
       if (channel_opened) {
@@ -68,6 +70,9 @@ class ControlDispatcher {
   std::function<void(ipc::ClientListReply&)> fill_clients;
   // Called before a time step runs: the server lets every idle node take what its client put.
   std::function<void()> before_step;
+  // Called after a time step ran, before its reply: the server sends what the step made for
+  // its clients (X-CAN callbacks and the ends of blocking services).
+  std::function<void()> after_step;
   // A channel (ephemeral or VCI) was opened or is about to close (the server watches its
   // doorbell).
   std::function<void(Doorbell&)> channel_opened;
@@ -99,6 +104,7 @@ class ControlDispatcher {
   TimeSetting time_;
   std::size_t ring_bytes_in_use_ = 0;
   VciService vci_;
+  XcanService xcan_;
 };
 
 }  // namespace canemu::daemon

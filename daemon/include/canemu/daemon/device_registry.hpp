@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/xcan_device.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
@@ -50,14 +51,29 @@ class DeviceRegistry {
     std::shared_ptr<model::ixxat::CanLine> line;  // VCI adapters only
     uint64_t vci_id = 0;                          // VCI adapters only
   };
+  // A configured SORCUS X-CAN-2i; its interface N is the node "NAME:N" on buses[N].
+  struct Xcan {
+    DeviceConfig config;
+    std::vector<std::size_t> buses;
+    std::shared_ptr<XcanDevice> device;
+  };
   struct NodeRef {
     std::size_t bus;
-    model::HostedNode* node;
+    model::HostedNode* node;  // nullptr for an X-CAN interface (the module drives its chip)
+    model::NodeId id = 0;
+    model::CanController* controller = nullptr;
+    std::shared_ptr<XcanDevice> xcan;  // an X-CAN interface: its device and `iface`
+    unsigned iface = 0;
   };
 
   // A configured device, with its controllers in configuration order. Not counted as a change:
   // at start-up nobody is told; a reload announces it.
   void add_configured(DeviceConfig config, std::vector<Controller> controllers);
+  void add_xcan(Xcan device) { xcan_.push_back(std::move(device)); }
+  const std::vector<Xcan>& xcan() const { return xcan_; }
+  // The X-CAN-2i named `name`, or nullptr.
+  std::shared_ptr<XcanDevice> find_xcan(std::string_view name) const;
+
   // An ephemeral device with its one node; a VCI adapter when `line` is set.
   void add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node, uint32_t owner_pid,
                      std::shared_ptr<model::ixxat::CanLine> line = nullptr);
@@ -92,6 +108,7 @@ class DeviceRegistry {
  private:
   std::vector<Configured> configured_;
   std::vector<Ephemeral> ephemeral_;
+  std::vector<Xcan> xcan_;
   uint32_t generation_ = 0;
   uint64_t next_vci_id_ = 1;
 };

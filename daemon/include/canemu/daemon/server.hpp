@@ -59,6 +59,7 @@ class Server {
   void kick_all_channels();
   void check_channels();
   void send_notifications();
+  void send_outboxes();
   void fill_clients(ipc::ClientListReply& r);
 
   Simulation& sim_;

@@ -109,6 +109,7 @@ class Simulation {
   // Builds a device whose buses exist; an error (and nothing added) if a controller cannot run
   // its bus's timing.
   std::optional<std::string> add_device(const DeviceConfig& d);
+  std::optional<std::string> add_xcan(const DeviceConfig& d);
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).

@@ -1,0 +1,89 @@
+// The machinery behind libxcan.so: one connection to canemud per process with a receive
+// thread (replies go to the thread that waits for them, so blocking services of several threads
+// can wait at once; callbacks go to the channel's function), the buffered-callback thread, and
+// the handles an application holds (modules, MDDs, channels).
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "xcan.h"
+
+namespace canemu::client::xcan {
+
+class Library {
+ public:
+  static Library& get();
+  ~Library();
+
+  enum class Kind : uint8_t { module, mdd, channel };
+  struct Handle {
+    Kind kind = Kind::module;
+    std::string device;
+    uint32_t remote = 0;  // channel: canemud's channel id
+    MAX_CALLBACK callback = nullptr;
+  };
+
+  // Drops the connection and every handle; `socket` (empty: the usual search) from now on.
+  // Connects at once unless `socket` is empty.
+  ULONG reconnect(const std::string& socket);
+
+  // A new handle; 0 when there is no room.
+  MAX_HANDLE add(Handle h);
+  std::optional<Handle> find(MAX_HANDLE h, Kind kind);
+  void remove(MAX_HANDLE h);
+
+  // One request: ERR_OK with the reply (its `error` is the MDD's), ERR_XCAN_NO_DAEMON when
+  // canemud cannot be reached or the connection broke, ERR_XCAN_NO_MODULE when canemud refused
+  // the request (ErrorReply: no such device, malformed).
+  ULONG call(ipc::XcanRequest& request, ipc::XcanReply& reply);
+
+ private:
+  Library() = default;
+  struct Waiter {
+    bool done = false;
+    bool refused = false;
+    bool lost = false;  // the connection broke before the reply came
+    ipc::XcanReply reply{};
+  };
+  struct Queued {
+    MAX_HANDLE channel;
+    MAX_CALLBACK callback;
+    ipc::XcanCallbackMsg message;
+  };
+  ULONG connect_locked();
+  void receive_loop(int fd);
+  void callback_loop();
+  void deliver(const ipc::XcanCallbackMsg& m);
+  static void invoke(MAX_HANDLE channel, MAX_CALLBACK callback, const ipc::XcanCallbackMsg& m);
+  void disconnect_locked();
+
+  std::mutex mutex_;
+  std::condition_variable replied_;
+  std::optional<Connection> connection_;
+  std::string socket_;
+  std::thread receiver_;
+  bool broken_ = false;
+  uint32_t next_request_ = 0;
+  std::map<uint32_t, Waiter*> waiters_;
+  std::map<MAX_HANDLE, Handle> handles_;
+  MAX_HANDLE next_handle_ = 1;
+
+  std::mutex queue_mutex_;
+  std::condition_variable queued_;
+  std::deque<Queued> queue_;
+  bool stopping_ = false;
+  std::thread caller_;
+};
+
+}  // namespace canemu::client::xcan

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Builds the X-CAN-2i example (client/examples/xcan_talk.c) with nothing but what pkg-config
+# says for the build tree (one include directory, one library) and runs it where no canemud
+# listens: it must say so with the library's code.
+# Usage: pkg_config_test.sh SOURCE_DIR BUILD_DIR PKG_CONFIG C_COMPILER [BUILD_FLAGS]
+# BUILD_FLAGS: what a sanitized build's programs need (-fsanitize=...), nothing of the API.
+set -euo pipefail
+source_dir=$1
+build=$2
+pkg_config=$3
+cc=$4
+build_flags=${5:-}
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+export PKG_CONFIG_PATH=$build/lib/pkgconfig
+
+flags=$("$pkg_config" --cflags --libs canemu-xcan)
+echo "canemu-xcan: $flags"
+# shellcheck disable=SC2086 # the flags are words
+"$cc" -std=c11 -Wall -Wextra -Werror $build_flags "$source_dir/client/examples/xcan_talk.c" \
+  $flags -o "$out/xcan_talk"
+
+status=0
+got=$(CANEMU_SOCKET="$out/nobody.sock" LD_LIBRARY_PATH=$build/lib \
+  "$out/xcan_talk" xcan0 0 0x100 0x200 2>&1) || status=$?
+want="xcan_talk: module: error 0x60"
+if [ "$status" != 1 ] || [ "$got" != "$want" ]; then
+  printf 'xcan_talk exited %s printing\n  %s\nnot 1 printing\n  %s\n' "$status" "$got" "$want"
+  exit 1
+fi

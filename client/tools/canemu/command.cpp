@@ -44,10 +44,17 @@ client::Result<TimeBase> time_base(client::Connection& c, bool sim_time) {
   if (!s) {
     return tl::unexpected(s.error());
   }
-  if (sim_time || s->time_mode != static_cast<uint8_t>(ipc::WireTimeMode::realtime)) {
-    return TimeBase{};
+  const auto mode = static_cast<ipc::WireTimeMode>(s->time_mode);
+  if (sim_time || mode != ipc::WireTimeMode::realtime) {
+    return TimeBase{0, false, mode};
   }
-  return TimeBase{before + (after - before) / 2 - s->sim_time_ns, true};
+  return TimeBase{before + (after - before) / 2 - s->sim_time_ns, true, mode};
+}
+
+client::Result<ipc::TimeStepReply> step_time(client::Connection& c, int64_t ns) {
+  auto req = ipc::make_message<ipc::TimeStepRequest>();
+  req.step_ns = ns;
+  return c.call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
 }
 
 std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base) {

@@ -9,6 +9,7 @@
 
 #include "canemu/client/connection.hpp"
 #include "canemu/ipc/channel_message.hpp"
+#include "canemu/ipc/protocol.hpp"
 
 namespace CLI {
 class App;
@@ -45,11 +46,17 @@ client::Result<client::Connection> connect(const std::string& socket, const std:
 // What is added to simulated time to print a time stamp, as python-can's interface does: in real
 // time the wall-clock (epoch) instant of simulated time 0, measured once; in stepped and scaled
 // time, or with `sim_time`, nothing (simulated seconds).
+// It also gives canemud's time mode, read in the same status request.
 struct TimeBase {
   int64_t offset_ns = 0;
   bool wall_clock = false;
+  ipc::WireTimeMode mode = ipc::WireTimeMode::realtime;
+  bool stepped() const { return mode == ipc::WireTimeMode::stepped; }
 };
 client::Result<TimeBase> time_base(client::Connection& c, bool sim_time);
+
+// Moves canemud's stepped time on by `ns`; the daemon's error text on failure.
+client::Result<ipc::TimeStepReply> step_time(client::Connection& c, int64_t ns);
 
 // One line of a candump -L log with the time stamp on `base`.
 std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base);

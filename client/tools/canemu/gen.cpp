@@ -210,15 +210,11 @@ int run_gen(const std::string& socket, const GenOptions& o) {
   if (!c) {
     return fail(c.error().message);
   }
-  auto s = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
-  if (!s) {
-    return fail(s.error().message);
-  }
-  const bool stepped = s->time_mode == static_cast<uint8_t>(ipc::WireTimeMode::stepped);
   const auto base = time_base(*c, o.sim_time);
   if (!base) {
     return fail(base.error().message);
   }
+  const bool stepped = base->stepped();
   client::ChannelOptions co;
   co.bus = o.bus;
   co.bitrate = o.bitrate;
@@ -263,9 +259,7 @@ int run_gen(const std::string& socket, const GenOptions& o) {
     }
     ++queued;
     if (stepped) {
-      auto req = ipc::make_message<ipc::TimeStepRequest>();
-      req.step_ns = step_ns;
-      auto r = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+      auto r = step_time(*c, step_ns);
       if (!r) {
         return fail(r.error().message);
       }
@@ -278,9 +272,7 @@ int run_gen(const std::string& socket, const GenOptions& o) {
   // time in 10 ms steps (256 frames at 5 kbit/s take about 7 s); otherwise up to --timeout.
   for (int round = 0; sent + dropped < queued && round < 1000; ++round) {
     if (stepped) {
-      auto req = ipc::make_message<ipc::TimeStepRequest>();
-      req.step_ns = 10'000'000;
-      auto r = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+      auto r = step_time(*c, 10'000'000);
       if (!r) {
         return fail(r.error().message);
       }

@@ -48,11 +48,11 @@ int run_send(const std::string& socket, const SendOptions& o) {
   if (!c) {
     return fail(c.error().message);
   }
-  auto s = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
-  if (!s) {
-    return fail(s.error().message);
+  const auto base = time_base(*c, o.sim_time);
+  if (!base) {
+    return fail(base.error().message);
   }
-  const bool stepped = s->time_mode == static_cast<uint8_t>(ipc::WireTimeMode::stepped);
+  const bool stepped = base->stepped();
   if (stepped && !step_ns) {
     return fail(
         "simulated time is stepped: frames go out only while time moves; add --step "
@@ -60,11 +60,7 @@ int run_send(const std::string& socket, const SendOptions& o) {
   }
   if (!stepped && step_ns) {
     return fail("--step needs stepped time; canemud runs " +
-                std::string(ipc::to_string(static_cast<ipc::WireTimeMode>(s->time_mode))));
-  }
-  const auto base = time_base(*c, o.sim_time);
-  if (!base) {
-    return fail(base.error().message);
+                std::string(ipc::to_string(base->mode)));
   }
   client::ChannelOptions co;
   co.bus = o.bus;
@@ -82,9 +78,7 @@ int run_send(const std::string& socket, const SendOptions& o) {
     }
   }
   if (step_ns) {
-    auto req = ipc::make_message<ipc::TimeStepRequest>();
-    req.step_ns = *step_ns;
-    auto r = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+    auto r = step_time(*c, *step_ns);
     if (!r) {
       return fail(r.error().message);
     }

@@ -22,9 +22,7 @@ int run_step(const std::string& socket, const std::string& duration) {
   if (!c) {
     return fail(c.error().message);
   }
-  auto req = ipc::make_message<ipc::TimeStepRequest>();
-  req.step_ns = *ns;
-  auto reply = c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+  auto reply = step_time(*c, *ns);
   if (!reply) {
     return fail(reply.error().message);
   }

@@ -52,6 +52,26 @@ XCANAPI ULONG canemu_open_module(const char* pszDevice, MAX_HANDLE* phModul);
  * Not while another thread of the process is in a function of this library. */
 XCANAPI ULONG canemu_xcan_connect(const char* pszSocket);
 
+/* canemu: one CAN interface of an X-CAN-2i in canemud's configuration (72 bytes). */
+typedef struct CANEMU_XCAN_INTERFACE {
+  char szDevice[32]; /* its module: the [[device]] name (canemu_open_module) */
+  char szBus[32];    /* the bus its 82527 is wired to */
+  USHORT usChannel;  /* CPS_XCAN.usChannel: 0 or 1 */
+  USHORT usLowSpeed; /* 1: the low-speed fault-tolerant transceiver */
+  ULONG ulBitrate;   /* the bus's configured bit rate in bit/s */
+} CANEMU_XCAN_INTERFACE;
+
+/* canemu: the ulIndex-th (from 0) interface of canemud's X-CAN-2i modules: the modules in
+ * configuration order, each with interface 0 then 1. ERR_OK; ERR_XCAN_NO_MODULE after the last
+ * (or for a NULL pInfo); ERR_XCAN_NO_DAEMON. */
+XCANAPI ULONG canemu_xcan_enum_interfaces(ULONG ulIndex, CANEMU_XCAN_INTERFACE* pInfo);
+
+/* canemu: called inside a callback function, the simulated instant of the event it reports
+ * (ns since canemud's start; the end of the frame, or the error), as canemu's time stamps
+ * count. ERR_OK; ERR_XCAN_NOT_READY when the calling thread is not in a callback (or for a
+ * NULL pullTime). */
+XCANAPI ULONG canemu_xcan_callback_time(unsigned long long* pullTime);
+
 /* Loads the MDD: slot 1, layer 0, program number 0x803A (mxcan2); the manual's
  * `max_load_mdd (hModul, 1, 0, 0, 0x803A, NULL, &hMDD)`. */
 XCANAPI ULONG max_load_mdd(MAX_HANDLE hModul, USHORT usSlot, USHORT usLayer, USHORT usReserved,
@@ -75,6 +95,9 @@ XCANAPI ULONG max_clear_error(MAX_HANDLE hChan);
 
 #ifdef __cplusplus
 }
+static_assert(sizeof(CANEMU_XCAN_INTERFACE) == 72, "CANEMU_XCAN_INTERFACE must be 72 bytes");
+#elif defined(__STDC_VERSION__) && (__STDC_VERSION__ >= 201112L)
+_Static_assert(sizeof(CANEMU_XCAN_INTERFACE) == 72, "CANEMU_XCAN_INTERFACE must be 72 bytes");
 #endif
 
 #endif /* CANEMU_SORCUS_XCAN_H */

@@ -13,6 +13,7 @@ from ._calls import _call, _vci_errors
 
 _offset_lock = threading.Lock()
 _offset: Optional[float] = None
+_socket: Optional[str] = None  # what connect() chose (None: $CANEMU_SOCKET or the default)
 
 
 def _wall_offset() -> float:
@@ -33,11 +34,17 @@ def _wall_offset() -> float:
 def connect(socket: Optional[str]) -> None:
     """Talks to the canemud at `socket` from now on (None: $CANEMU_SOCKET or the default path).
     The choice is for the whole process; buses opened before stay with their daemon."""
-    global _offset
+    global _offset, _socket
     with _offset_lock:
         _offset = None
     with _vci_errors(initializing=True):
         _call("canemuConnect", socket.encode() if socket else None)
+    _socket = socket  # libxcan follows when an X-CAN-2i is next asked for (_xcan.use_socket)
+
+
+def current_socket() -> Optional[str]:
+    """The socket connect() chose for the process (None: the default search)."""
+    return _socket
 
 
 def step(nanoseconds: int) -> int:

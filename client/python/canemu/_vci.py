@@ -251,16 +251,16 @@ class VciError(Exception):
         self.hr = hr
 
 
-def _library_candidates() -> list:
-    """Where libvcinpl2.so is looked for, in order."""
+def _library_candidates(filename: str = "libvcinpl2.so") -> list:
+    """Where one of canemu's libraries is looked for, in order."""
     names = []
     libdir = os.environ.get("CANEMU_LIBDIR")
     if libdir:
-        names.append(str(Path(libdir) / "libvcinpl2.so"))
+        names.append(str(Path(libdir) / filename))
     # A source checkout: client/python/canemu -> the repository's build tree.
     repo = Path(__file__).resolve().parents[3]
-    names.append(str(repo / "build" / "lib" / "libvcinpl2.so"))
-    names.append("libvcinpl2.so")  # the dynamic linker's search (an installed canemu)
+    names.append(str(repo / "build" / "lib" / filename))
+    names.append(filename)  # the dynamic linker's search (an installed canemu)
     return names
 
 

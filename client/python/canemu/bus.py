@@ -21,10 +21,11 @@ from typing import Any, Deque, Dict, List, Optional, Union
 import can
 from can import BusABC, Message
 
-from . import _timing, _vci
+from . import _timing, _vci, _xcan, xcan_bus
 from ._calls import CanTimeoutError, _call, _can_error  # noqa: F401 (importable from here)
 from ._cyclic import CanemuCyclicTask, _CyclicMixin
 from ._daemon import _buses, _devices, _wall_offset, buses, connect, devices, sim_time, step
+from ._daemon import current_socket as _current_socket
 from ._filters import _FilterMixin
 from ._receive import _ReceiveMixin
 from ._send import _SendMixin
@@ -50,6 +51,7 @@ from ._state import (  # noqa: F401 (SocketCAN's error frame constants, importab
     ControllerState,
 )
 from ._vci import VciError
+from .xcan_bus import XcanBus
 
 log = logging.getLogger("can.canemu")
 
@@ -67,6 +69,24 @@ def _fifo_capacity(requested: int) -> int:
     size, page, header = ctypes.sizeof(_vci.CANMSG2), 4096, 256
     pages = -(-(header + requested * size) // page)
     return min((pages * page - header) // size, 65535)
+
+
+def _is_xcan_channel(channel: Any, socket: Optional[str]) -> bool:
+    """Whether `channel` ("DEVICE:N") names an interface of an X-CAN-2i rather than an IXXAT
+    adapter's controller. Only asked of canemud when no VCI adapter has that name."""
+    device, _, number = str(channel).rpartition(":")
+    if not device or not number.isdigit():
+        return False
+    try:
+        if socket is not None:
+            connect(socket)
+        info = _vci.CANEMU_DEVICEINFO()
+        if _vci.lib().canemuFindDevice(device.encode(), ctypes.byref(info)) == _vci.VCI_OK:
+            return False
+        _xcan.use_socket(_current_socket())
+        return xcan_bus.is_module(str(channel))
+    except (OSError, can.CanError, _xcan.XcanError):
+        return False  # the VCI path reports it
 
 
 class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
@@ -92,6 +112,14 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
     :param socket: canemud's socket (default: $CANEMU_SOCKET, else its default path); applies
         to the whole process.
     """
+
+    def __new__(cls, *args: Any, **kwargs: Any):
+        """A channel "DEVICE:N" of a SORCUS X-CAN-2i makes an XcanBus (xcan_bus.py) instead."""
+        if cls is CanemuBus:
+            channel = args[0] if args else kwargs.get("channel")
+            if _is_xcan_channel(channel, kwargs.get("socket")):
+                return XcanBus(*args, **kwargs)
+        return super().__new__(cls)
 
     def __init__(
         self,
@@ -390,6 +418,10 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
                     "fd": bool(d.abFd[k]),
                     "bus": d.aszBus[k].value.decode(),
                 })
+        try:
+            configs.extend(xcan_bus.available_configs())
+        except (OSError, _xcan.XcanError):
+            pass  # no libxcan.so, or canemud went meanwhile
         for b in found_buses:
             if b["kind"] == "lin":
                 continue

@@ -47,6 +47,30 @@ XCANAPI ULONG canemu_xcan_connect(const char* pszSocket) {
   return Library::get().reconnect(pszSocket != nullptr ? pszSocket : "");
 }
 
+XCANAPI ULONG canemu_xcan_enum_interfaces(ULONG ulIndex, CANEMU_XCAN_INTERFACE* pInfo) {
+  if (pInfo == nullptr) {
+    return ERR_XCAN_NO_MODULE;
+  }
+  std::vector<CANEMU_XCAN_INTERFACE> found;
+  if (ULONG e = Library::get().interfaces(found); e != ERR_OK) {
+    return e;
+  }
+  if (ulIndex >= found.size()) {
+    return ERR_XCAN_NO_MODULE;
+  }
+  *pInfo = found[ulIndex];
+  return ERR_OK;
+}
+
+XCANAPI ULONG canemu_xcan_callback_time(unsigned long long* pullTime) {
+  const auto at = Library::callback_time();
+  if (!at || pullTime == nullptr) {
+    return ERR_XCAN_NOT_READY;
+  }
+  *pullTime = static_cast<unsigned long long>(*at);
+  return ERR_OK;
+}
+
 XCANAPI ULONG canemu_open_module(const char* pszDevice, MAX_HANDLE* phModul) {
   if (pszDevice == nullptr || phModul == nullptr || std::strlen(pszDevice) >= ipc::kNameSize) {
     return ERR_XCAN_NO_MODULE;

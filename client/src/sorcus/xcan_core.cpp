@@ -1,5 +1,7 @@
 #include "xcan_core.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <cstring>
 
 #include <sys/socket.h>
@@ -11,7 +13,9 @@ namespace canemu::client::xcan {
 
 namespace {
 constexpr std::size_t kMaxHandles = 4096;
-}
+// The callback this thread is running (canemu_xcan_callback_time), or none.
+thread_local const ipc::XcanCallbackMsg* t_callback = nullptr;
+}  // namespace
 
 Library& Library::get() {
   static Library library;
@@ -206,7 +210,75 @@ void Library::deliver(const ipc::XcanCallbackMsg& m) {
   queued_.notify_one();
 }
 
+std::optional<int64_t> Library::callback_time() {
+  if (t_callback == nullptr) {
+    return std::nullopt;
+  }
+  return t_callback->sim_time_ns;
+}
+
+ULONG Library::interfaces(std::vector<CANEMU_XCAN_INTERFACE>& out) {
+  std::string socket;
+  {
+    std::lock_guard lock(mutex_);
+    socket = socket_;
+  }
+  auto c = Connection::open(ipc::socket_path(socket), "xcan");
+  if (!c) {
+    return ERR_XCAN_NO_DAEMON;
+  }
+  auto status =
+      c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  if (!status) {
+    return ERR_XCAN_NO_DAEMON;
+  }
+  // The status lists every node as "device:N"; the modules among their devices are those that
+  // canemud says are X-CAN-2i.
+  std::map<std::string, bool> is_xcan;
+  const uint16_t buses = std::min<uint16_t>(status->bus_count, ipc::kMaxStatusBuses);
+  const uint16_t nodes = std::min<uint16_t>(status->node_count, ipc::kMaxStatusNodes);
+  for (uint16_t k = 0; k < nodes; ++k) {
+    const ipc::StatusNode& n = status->nodes[k];
+    const std::string name = ipc::name_of(n.name);
+    const auto colon = name.rfind(':');
+    if (colon == std::string::npos || n.bus >= buses) {
+      continue;
+    }
+    const std::string device = name.substr(0, colon);
+    const std::string number = name.substr(colon + 1);
+    if (number != "0" && number != "1") {
+      continue;
+    }
+    auto known = is_xcan.find(device);
+    if (known == is_xcan.end()) {
+      auto m = ipc::make_message<ipc::XcanRequest>();
+      m.op = static_cast<uint16_t>(ipc::XcanOp::module_check);
+      ipc::copy_name(m.device, device);
+      auto r = c->call<ipc::XcanRequest, ipc::XcanReply>(m);
+      known = is_xcan.emplace(device, r.has_value()).first;
+    }
+    if (!known->second) {
+      continue;
+    }
+    const ipc::StatusBus& b = status->buses[n.bus];
+    CANEMU_XCAN_INTERFACE info{};
+    std::snprintf(info.szDevice, sizeof info.szDevice, "%s", device.c_str());
+    std::snprintf(info.szBus, sizeof info.szBus, "%s", ipc::name_of(b.name).c_str());
+    info.usChannel = static_cast<USHORT>(number[0] - '0');
+    info.usLowSpeed = b.low_speed;
+    info.ulBitrate = b.bitrate;
+    out.push_back(info);
+  }
+  return ERR_OK;
+}
+
 void Library::invoke(MAX_HANDLE channel, MAX_CALLBACK callback, const ipc::XcanCallbackMsg& m) {
+  const ipc::XcanCallbackMsg* outer = t_callback;  // a direct callback may run in a buffered one
+  t_callback = &m;
+  struct Restore {
+    const ipc::XcanCallbackMsg* outer;
+    ~Restore() { t_callback = outer; }
+  } restore{outer};
   switch (static_cast<ipc::XcanCallbackArg>(m.arg)) {
     case ipc::XcanCallbackArg::data:
       callback(channel, m.size, m.data);

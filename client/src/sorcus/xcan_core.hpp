@@ -48,6 +48,13 @@ class Library {
   // the request (ErrorReply: no such device, malformed).
   ULONG call(ipc::XcanRequest& request, ipc::XcanReply& reply);
 
+  // canemud's X-CAN-2i interfaces (canemu_xcan_enum_interfaces), asked on a connection of
+  // their own (the status reply does not pass through the receive thread).
+  ULONG interfaces(std::vector<CANEMU_XCAN_INTERFACE>& out);
+
+  // The simulated instant of the callback running on this thread, if one is.
+  static std::optional<int64_t> callback_time();
+
  private:
   Library() = default;
   struct Waiter {

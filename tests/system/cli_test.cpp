@@ -253,6 +253,33 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
             "point 87.5 %, SJW 1, 1 sample per bit\n");
   EXPECT_EQ(btr.wait(), 0);
 
+  // A LIN frame: its protected identifier, the enhanced checksum, the times at 19200 bit/s.
+  Cli lin(d, {"calc", "lin", "10#1122"});
+  EXPECT_EQ(Cli::read_all(lin.out),
+            "break    13 dominant bits, delimiter 1 recessive bit\n"
+            "sync     0x55\n"
+            "PID      0x50 (ID 0x10, parity P0 1 P1 0)\n"
+            "data     11 22\n"
+            "checksum 0x7C (enhanced)\n"
+            "bits: 64 (header 34, response 30)\n"
+            "at 19200 bit/s: 3333333 ns (header 1770833 ns); nominal 3333333 ns, at most "
+            "4666666 ns (1.4 x)\n");
+  EXPECT_EQ(lin.wait(), 0);
+  Cli lin_spaced(d, {"calc", "lin", "3C#00", "--bitrate", "20000", "--break-bits", "20",
+                     "--interbyte-bits", "1", "--response-space-bits", "2"});
+  const std::string spaced = Cli::read_all(lin_spaced.out);
+  // 20 + 1 + 10 + 1 + 10 header bits; 2 + 10 + 1 + 10 response bits: whole 50 us bits.
+  EXPECT_NE(spaced.find("checksum 0xFF (classic)\nbits: 65 (header 42, response 23)\n"
+                        "at 20000 bit/s: 3250000 ns (header 2100000 ns)"),
+            std::string::npos)
+      << spaced;
+  EXPECT_EQ(lin_spaced.wait(), 0);
+  Cli bad_lin(d, {"calc", "lin", "40#11"});
+  EXPECT_EQ(Cli::read_all(bad_lin.err),
+            "canemu: '40#11': the identifier is hex 0..3F (examples: 10#1122, "
+            "3C#0000000000000000, 21 for a header alone)\n");
+  EXPECT_EQ(bad_lin.wait(), 1);
+
   Cli bad_step(d, {"time", "step", "soon"});
   EXPECT_EQ(Cli::read_all(bad_step.err),
             "canemu: 'soon' is not a duration (examples: 150ns, 20us, 10ms, 2s)\n");

@@ -1,15 +1,17 @@
-// canemu calc: offline calculations on the wire model: a frame's exact bits and duration, and
-// the bit timing of SJA1000 BTR0/BTR1 values.
+// canemu calc: offline calculations on the wire model: a CAN frame's exact bits and duration, a
+// LIN frame's fields and times, and the bit timing of SJA1000 BTR0/BTR1 values.
 #include <array>
 #include <cstdio>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
 #include "canemu/firmware_model/bus/bit_timing.hpp"
+#include "canemu/firmware_model/bus/lin_frame.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
 #include "command.hpp"
@@ -105,6 +107,95 @@ int run_bittiming(const std::string& btr0_text, const std::string& btr1_text) {
   return 0;
 }
 
+// A LIN frame as ID#DATA: a hex identifier 0..3F, then up to 8 data bytes in hex (none: a
+// header alone).
+struct LinText {
+  uint8_t id = 0;
+  std::vector<uint8_t> data;
+};
+
+std::optional<LinText> parse_lin(const std::string& text, std::string& error) {
+  const auto hash = text.find('#');
+  const std::string id_text = text.substr(0, hash);
+  const std::string data_text = hash == std::string::npos ? "" : text.substr(hash + 1);
+  unsigned id = 0;
+  if (id_text.empty() || id_text.size() > 2 ||
+      id_text.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos ||
+      (id = static_cast<unsigned>(std::stoul(id_text, nullptr, 16))) > model::lin::kMaxId) {
+    error = "the identifier is hex 0..3F";
+    return std::nullopt;
+  }
+  if (data_text.size() % 2 != 0 || data_text.size() > 2 * model::lin::kMaxData) {
+    error = "the data are 1 to 8 bytes of two hex digits each";
+    return std::nullopt;
+  }
+  LinText out;
+  out.id = static_cast<uint8_t>(id);
+  for (std::size_t k = 0; k < data_text.size(); k += 2) {
+    const auto byte = parse_register(data_text.substr(k, 2));
+    if (!byte) {
+      error = fmt::format("'{}' is not a hex byte", data_text.substr(k, 2));
+      return std::nullopt;
+    }
+    out.data.push_back(*byte);
+  }
+  return out;
+}
+
+struct LinOptions {
+  std::string frame;
+  uint32_t bitrate = 19200;
+  bool classic = false;
+  model::lin::Layout layout;
+};
+
+int run_lin(const LinOptions& o) {
+  namespace lin = model::lin;
+  std::string error;
+  const auto f = parse_lin(o.frame, error);
+  if (!f) {
+    return fail(
+        fmt::format("'{}': {} (examples: 10#1122, 3C#0000000000000000, 21 for a header "
+                    "alone)",
+                    o.frame, error));
+  }
+  lin::Layout layout = o.layout;
+  layout.bitrate = o.bitrate;
+  const auto n = static_cast<uint32_t>(f->data.size());
+  const lin::FrameBits bits = lin::frame_bits(layout, n);
+  const uint8_t pid = lin::protected_id(f->id);
+  std::printf("break    %u dominant bits, delimiter %u recessive bit%s\n", layout.break_bits,
+              layout.delimiter_bits, layout.delimiter_bits == 1 ? "" : "s");
+  std::printf("sync     0x%02X\n", lin::kSyncByte);
+  std::printf("PID      0x%02X (ID 0x%02X, parity P0 %u P1 %u)\n", pid, f->id, (pid >> 6) & 1u,
+              (pid >> 7) & 1u);
+  const auto ns = [&](uint64_t b) {
+    return static_cast<long long>(lin::bits_duration(b, o.bitrate).ns());
+  };
+  if (n == 0) {
+    std::printf("bits: header %u\nat %u bit/s: header %lld ns\n", bits.header_end, o.bitrate,
+                ns(bits.header_end));
+    return 0;
+  }
+  std::string data;
+  for (uint8_t b : f->data) {
+    data += fmt::format("{:02X} ", b);
+  }
+  data.pop_back();
+  const auto kind =
+      lin::effective_checksum(o.classic ? lin::Checksum::classic : lin::Checksum::enhanced, f->id);
+  std::printf("data     %s\n", data.c_str());
+  std::printf("checksum 0x%02X (%s)\n", lin::checksum(kind, f->id, f->data),
+              kind == lin::Checksum::enhanced ? "enhanced" : "classic");
+  std::printf("bits: %u (header %u, response %u)\n", bits.response_end, bits.header_end,
+              bits.response_end - bits.header_end);
+  std::printf("at %u bit/s: %lld ns (header %lld ns); nominal %lld ns, at most %lld ns (1.4 x)\n",
+              o.bitrate, ns(bits.response_end), ns(bits.header_end),
+              ns(lin::kNominalHeaderBits + lin::nominal_response_bits(n)),
+              static_cast<long long>(lin::maximum_frame_duration(n, o.bitrate).ns()));
+  return 0;
+}
+
 struct CalcOptions {
   std::string frame;
   uint32_t bitrate = 500000;
@@ -131,9 +222,29 @@ Command add_calc(CLI::App& app) {
   auto* bt = calc->add_subcommand("bittiming", "decode SJA1000 BTR0 BTR1 (hex), e.g. 00 1C");
   bt->add_option("BTR0", o->btr0, "hex")->required();
   bt->add_option("BTR1", o->btr1, "hex")->required();
-  return {calc, [o, frame, bt] {
+  auto l = std::make_shared<LinOptions>();
+  auto* lin = calc->add_subcommand("lin", "a LIN frame's fields and exact times, e.g. 10#1122");
+  lin->add_option("FRAME", l->frame, "ID#DATA in hex: 10#1122; an ID alone for a header")
+      ->required();
+  lin->add_option("--bitrate", l->bitrate, "bit/s, 1000..20000 (default 19200)")
+      ->check(CLI::Range(1'000u, 20'000u));
+  lin->add_flag("--classic", l->classic, "the classic checksum (LIN 1.x; default enhanced)");
+  lin->add_option("--break-bits", l->layout.break_bits, "dominant bits of the break, 13..30")
+      ->check(CLI::Range(13u, 30u));
+  lin->add_option("--delimiter-bits", l->layout.delimiter_bits, "break delimiter, 1..14 bits")
+      ->check(CLI::Range(1u, 14u));
+  lin->add_option("--interbyte-bits", l->layout.interbyte_bits,
+                  "space between characters, 0..10 bits")
+      ->check(CLI::Range(0u, 10u));
+  lin->add_option("--response-space-bits", l->layout.response_space_bits,
+                  "space between header and response, 0..10 bits")
+      ->check(CLI::Range(0u, 10u));
+  return {calc, [o, l, frame, bt, lin] {
             if (*frame) {
               return run_frame(o->frame, o->bitrate, o->data_bitrate);
+            }
+            if (*lin) {
+              return run_lin(*l);
             }
             if (*bt) {
               return run_bittiming(o->btr0, o->btr1);

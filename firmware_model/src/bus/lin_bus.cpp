@@ -245,6 +245,9 @@ void LinBus::header_end(SimTime now) {
   std::vector<Tx> txs;
   if (!f.no_response) {
     for (LinNodeId n : synced_) {
+      if (n == f.silent) {
+        continue;
+      }
       std::optional<Response> r = n == current_.from && current_.response
                                       ? current_.response
                                       : nodes_[n].node->respond(current_.id);

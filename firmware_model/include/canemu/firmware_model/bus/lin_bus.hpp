@@ -96,6 +96,7 @@ struct FrameFaults {
   bool checksum_error = false;      // the responder sends a wrong checksum
   bool response_bit_error = false;  // a bit of the first response character flips: the
                                     // responder sees a bit error and stops there
+  LinNodeId silent = kNoNode;       // this responder does not answer (it is switched off)
 };
 
 class LinFaultSource {

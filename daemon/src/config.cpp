@@ -15,6 +15,7 @@
 
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "lin_config_reader.hpp"
 #include "toml_checker.hpp"
 
 namespace canemu::daemon {
@@ -284,11 +285,12 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   }
   Config cfg;
   cfg.source = std::move(source);
-  c.only_keys(root, "", {"simulation", "security", "bus", "device", "scenario"});
+  c.only_keys(root, "", {"simulation", "security", "bus", "device", "lin_node", "scenario"});
   read_simulation(c, root, cfg);
   read_security(c, root, cfg);
   read_buses(c, root, cfg);
   read_devices(c, root, cfg);
+  detail::read_lin_nodes(c, root, cfg);
   c.for_each_table(root, "scenario", [&](const toml::table& t, const std::string& path) {
     c.only_keys(t, path, {"file"});
     if (auto file = c.string(t, path, "file", true)) {
@@ -361,6 +363,11 @@ std::string summary(const Config& cfg) {
       s += fmt::format(" {}:{} on {}", d.name, i, d.controllers[i]);
     }
     s += "\n";
+  }
+  for (const LinNodeConfig& n : cfg.lin_nodes) {
+    s += fmt::format("  lin node {} on {} ({}{})\n", n.name, n.bus,
+                     n.schedule.empty() ? "responder" : "commander, schedule " + n.schedule,
+                     n.powered ? "" : ", switched off");
   }
   return s;
 }

@@ -13,6 +13,8 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/lin_config.hpp"
+
 namespace canemu::daemon {
 
 enum class BusKind { can, can_fd, lin };
@@ -86,6 +88,7 @@ struct Config {
   std::vector<std::string> scenario_files;
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
+  std::vector<LinNodeConfig> lin_nodes;  // [[lin_node]]: simulated LIN nodes
 
   const BusConfig* bus(std::string_view name) const;
 };

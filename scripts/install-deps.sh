@@ -37,9 +37,10 @@ fi
 
 # Debian's interpreter, not whatever python3 is first on PATH, so the venv is the same everywhere.
 # .venv: PyPI's pinned packages (requirements.txt) and canemu's python-can interface, editable.
-# .venv-debian: Debian's python3-can (4.1) and pytest, with the same interface on top.
+# .venv-debian: Debian's python3-can (4.1) and pytest, with the same interface on top, and the
+#   LDF import's packages (requirements-lin.txt).
 py=/usr/bin/python3
-want=$(cat requirements.txt client/python/pyproject.toml | sha256sum | cut -d' ' -f1)
+want=$(cat requirements.txt requirements-lin.txt client/python/pyproject.toml | sha256sum | cut -d' ' -f1)
 make_venv() {  # DIR, then venv options
   local dir=$1
   shift
@@ -52,6 +53,8 @@ make_venv() {  # DIR, then venv options
   "$py" -m venv "$@" "$dir"
   if [ "$dir" = .venv ]; then
     "$dir/bin/pip" install --quiet --disable-pip-version-check -r requirements.txt
+  else
+    "$dir/bin/pip" install --quiet --disable-pip-version-check -r requirements-lin.txt
   fi
   "$dir/bin/pip" install --quiet --disable-pip-version-check --no-deps -e client/python
   echo "$want" > "$stamp"

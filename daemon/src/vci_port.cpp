@@ -87,6 +87,12 @@ void VciPort::pop() {
   tx_.release(1);
 }
 
+void VciPort::defer() {
+  // The doorbell rings by itself: the loop serves the other clients, then kicks this port.
+  tx_.wake_self();
+  armed_ = true;
+}
+
 void VciPort::kick() {
   // Always drained: a doorbell left readable would wake the loop at once, forever.
   tx_.disarm();

@@ -186,7 +186,9 @@ RingMemory::~RingMemory() {
 
 void RingEvent::signal() const {
   flag->store(1, std::memory_order_seq_cst);
-  if (waiting->load(std::memory_order_seq_cst) != 0 && eventfd >= 0) {
+  // One write per arming: the waiter arms again before it sleeps again, so a peer that keeps
+  // its waiting flag set cannot make this side write the eventfd for every element.
+  if (waiting->exchange(0, std::memory_order_seq_cst) != 0 && eventfd >= 0) {
     const uint64_t one = 1;
     [[maybe_unused]] const ssize_t n = ::write(eventfd, &one, sizeof one);
   }

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+
 #include <cstring>
 
 #include <csignal>
@@ -79,6 +81,37 @@ TEST(ShmRing, AReaderArmedForAPollLoopGetsItsEventfdWrittenOnce) {
   ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
   EXPECT_FALSE(readable());  // disarmed again
   EXPECT_EQ(p.reader.fill_count(), 2u);
+}
+
+// A peer that keeps its waiting flag set (a hostile or broken client) still gets one eventfd
+// write per arming, not one per element: the writer disarms it with the write.
+TEST(ShmRing, AWaitingFlagKeptSetCostsOneEventfdWriteNotOnePerElement) {
+  auto p = make(64);
+  std::atomic<uint32_t>& waiting = p.memory.header()->reader_waiting;
+  waiting.store(1);
+  for (uint32_t i = 0; i < 50; ++i) {
+    const Element e = element(i);
+    ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+    if (i < 10) {
+      waiting.store(1);  // the peer sets it again and again without sleeping
+    }
+  }
+  uint64_t writes = 0;
+  ASSERT_EQ(::read(p.reader_event.get(), &writes, sizeof writes),
+            static_cast<ssize_t>(sizeof writes));
+  EXPECT_EQ(writes, 11u);  // once per setting of the flag, none for the 39 puts after
+  EXPECT_EQ(waiting.load(), 0u);
+}
+
+// wake_self(): the reader's own eventfd becomes readable, so a poll loop comes back to it.
+TEST(ShmRing, AReaderWakesItselfForTheNextRoundOfItsPollLoop) {
+  auto p = make(32);
+  pollfd q{p.reader_event.get(), POLLIN, 0};
+  EXPECT_EQ(::poll(&q, 1, 0), 0);
+  p.reader.wake_self();
+  EXPECT_EQ(::poll(&q, 1, 0), 1);
+  p.reader.disarm();
+  EXPECT_EQ(::poll(&q, 1, 0), 0);
 }
 
 TEST(ShmRing, ElementsComeOutInOrderAndCountsFollow) {

@@ -43,6 +43,7 @@ class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
   bool put(const CANMSG2& msg) override;
   std::optional<CANMSG2> peek() override;
   void pop() override;
+  void defer() override;
 
   // --- Doorbell ---
   int doorbell_fd() const override { return rings_.tx().reader_event(); }

@@ -95,6 +95,8 @@ struct RingEvent {
   std::atomic<uint32_t>* waiting = nullptr;
   int eventfd = -1;
 
+  // Sets the flag and, if the other side armed (waiting), writes the eventfd once and
+  // disarms it.
   void signal() const;
   // Returns true if signalled within `timeout_ms` (-1: forever); resets the event.
   bool wait(int timeout_ms) const;
@@ -159,6 +161,12 @@ class RingReader {
   // Returns false (and stays disarmed) when there is something to read.
   bool arm_unless_filled();
   void disarm() { own_.disarm(); }
+  // Makes the own eventfd readable (armed and signalled): a poll loop comes back to this ring
+  // in its next round, after the other descriptors it serves.
+  void wake_self() const {
+    own_.arm();
+    own_.signal();
+  }
   uint32_t overruns() const { return hdr_->overruns.load(std::memory_order_relaxed); }
   bool corrupted() const { return corrupted_; }
   const RingEvent& own_event() const { return own_; }

@@ -521,5 +521,35 @@ TEST(Distributor, TakeDropsAndCountsWhatTheLineCannotSend) {
   EXPECT_FALSE(d.take(not_two).has_value());  // inactive channels send nothing
 }
 
+// A FIFO full of messages the line refuses does not hold the firmware: after kRejectBudget of
+// them in one call the port is deferred and the other channels get their turn.
+TEST(Distributor, AFloodOfRefusedMessagesIsTakenInSharesAndTheOthersGoOn) {
+  ixxat::Distributor d;
+  Port junk;
+  Port good;
+  active_channel(d, junk, false);
+  active_channel(d, good, false);
+  const uint32_t budget = ixxat::Distributor::kRejectBudget;
+  for (uint32_t i = 0; i < 3 * budget; ++i) {
+    junk.tx.push_back(msg(0x2));
+  }
+  junk.tx.push_back(msg(0x7));
+  good.tx = {msg(0x5)};
+  const auto not_two = [](const CANMSG2& m) { return m.dwMsgId != 0x2; };
+  auto first = d.take(not_two);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_EQ(first->first.dwMsgId, 0x5u);  // the good channel's frame, not held up
+  EXPECT_EQ(junk.deferred, 1);
+  EXPECT_EQ(junk.tx.size(), 2 * budget + 1);
+  // Each later call takes another share, until the junk is gone and its frame comes.
+  EXPECT_FALSE(d.take(not_two).has_value());
+  EXPECT_FALSE(d.take(not_two).has_value());
+  EXPECT_EQ(junk.deferred, 3);
+  auto last = d.take(not_two);
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(last->first.dwMsgId, 0x7u);
+  EXPECT_EQ(junk.deferred, 3);
+}
+
 }  // namespace
 }  // namespace canemu::model

@@ -30,6 +30,7 @@ constexpr uint32_t kExtMask = 0x3FFFFFFF;
 // A channel's FIFOs: the transmit FIFO the test fills, a bounded receive FIFO.
 struct Port final : ixxat::ChannelPort {
   explicit Port(std::size_t rx_capacity = 1024) : capacity(rx_capacity) {}
+  int deferred = 0;  // times the firmware deferred this port
   bool put(const CANMSG2& m) override {
     if (rx.size() >= capacity) {
       return false;
@@ -44,6 +45,7 @@ struct Port final : ixxat::ChannelPort {
     return tx.front();
   }
   void pop() override { tx.pop_front(); }
+  void defer() override { ++deferred; }
 
   std::vector<CANMSG2> of_type(uint8_t type) const {
     std::vector<CANMSG2> out;

@@ -32,6 +32,9 @@ class ChannelPort {
   // the channel has no transmit FIFO.
   virtual std::optional<CANMSG2> peek() = 0;
   virtual void pop() = 0;
+  // The firmware stopped reading with messages left (it took its share of this round): the
+  // port must make sure it is asked again, after its host has served the others.
+  virtual void defer() {}
 };
 
 using ChannelId = uint32_t;
@@ -93,8 +96,12 @@ class Distributor {
   // channels in turn after the one that sent last. Messages `sendable` refuses are taken from
   // their FIFO and counted as rejected. A high-priority message never overtakes the messages
   // ahead of it in its FIFO.
+  // At most kRejectBudget refused messages are taken from one FIFO per call: a channel that
+  // fills its FIFO with messages the line cannot send as fast as they are taken is deferred
+  // (ChannelPort::defer) instead of holding the firmware.
   std::optional<std::pair<CANMSG2, ChannelId>> take(
       const std::function<bool(const CANMSG2&)>& sendable);
+  static constexpr uint32_t kRejectBudget = 1024;
   void count_sent(ChannelId id);
   void count_dropped(ChannelId id);
 
@@ -118,8 +125,10 @@ class Distributor {
   // A v2 channel's own filter on a data frame: false when it blocks; sets afc unless the
   // filter passes everything.
   static bool passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg);
+  // `deferred`: set when the channel's share of refused messages ran out.
   std::optional<std::pair<CANMSG2, ChannelId>> take_from(
-      Channel& c, bool hpm_only, const std::function<bool(const CANMSG2&)>& sendable);
+      Channel& c, bool hpm_only, const std::function<bool(const CANMSG2&)>& sendable,
+      bool& deferred);
 
   std::vector<Channel> channels_;
   ChannelId next_id_ = 1;

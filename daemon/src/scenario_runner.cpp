@@ -1,5 +1,7 @@
 #include "canemu/daemon/scenario_runner.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "canemu/daemon/log.hpp"
@@ -13,6 +15,21 @@ namespace {
 // How the log names a fault: its scenario, line and effect.
 std::string fault_label(std::string_view scenario, const FaultSpec& f) {
   return fmt::format("scenario \"{}\" line {}: {}", scenario, f.line, to_string(f.effect));
+}
+
+// The effects that become a rule in their bus's FaultPlan.
+bool is_frame_rule(FaultEffect e) {
+  switch (e) {
+    case FaultEffect::bit_error:
+    case FaultEffect::stuff_error:
+    case FaultEffect::form_error:
+    case FaultEffect::crc_error:
+    case FaultEffect::ack_error:
+    case FaultEffect::random_errors:
+      return true;
+    default:
+      return false;
+  }
 }
 
 }  // namespace
@@ -133,6 +150,25 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
   auto plan = resolve(s);  // all or nothing
   if (!plan) {
     return tl::unexpected(plan.error());
+  }
+  const auto in_force = static_cast<std::size_t>(std::count_if(
+      scenarios_.begin(), scenarios_.end(), [](const LoadedScenario& l) { return !l.cleared; }));
+  if (in_force >= kMaxScenarios) {
+    return tl::unexpected(std::vector<std::string>{
+        fmt::format("{}: {} scenarios are in force already, the most canemud holds; clear one "
+                    "first (canemu fault clear NAME)",
+                    s.source, in_force)});
+  }
+  std::vector<std::size_t> new_rules(buses_.size(), 0);
+  for (const Resolved& r : *plan) {
+    new_rules[r.bus] += is_frame_rule(r.spec->effect) ? 1 : 0;
+  }
+  for (std::size_t b = 0; b < buses_.size(); ++b) {
+    if (buses_[b].faults->size() + new_rules[b] > kMaxRulesPerBus) {
+      return tl::unexpected(std::vector<std::string>{fmt::format(
+          "{}: bus {} would have {} frame fault rules; at most {} are in force on a bus", s.source,
+          buses_[b].config.name, buses_[b].faults->size() + new_rules[b], kMaxRulesPerBus)});
+    }
   }
   const uint64_t seed = s.seed.value_or(default_seed_);
   log(fmt::format("scenario \"{}\" ({}) applied: {} fault{}, seed {}", s.name, s.source,
@@ -377,10 +413,11 @@ std::vector<ScenarioRunner::FaultStatus> ScenarioRunner::status() const {
       }
       bool over = st.until_ns && now.ns() >= *st.until_ns;
       if (a.rule) {
-        const FaultRule& rule = buses_[a.bus].faults->rule(*a.rule);
-        st.seen = rule.seen;
-        st.hits = rule.hits;
-        over = over || (rule.count && rule.hits >= *rule.count);
+        const FaultPlan& plan = *buses_[a.bus].faults;
+        const bool live = plan.contains(*a.rule);
+        st.seen = live ? plan.rule(*a.rule).seen : a.final_seen;
+        st.hits = live ? plan.rule(*a.rule).hits : a.final_hits;
+        over = over || (a.spec.count && st.hits >= *a.spec.count);
         st.state = now.ns() < st.at_ns ? State::pending : over ? State::done : State::active;
       } else if (now.ns() < st.at_ns) {
         st.state = State::pending;
@@ -406,13 +443,33 @@ std::size_t ScenarioRunner::clear(std::string_view name) {
     ++cleared;
     for (AppliedFault& a : sc.faults) {
       a.state->cleared = true;
-      if (a.rule) {
-        buses_[a.bus].faults->disable(*a.rule);
-      }
+      retire(a);
     }
     log(fmt::format("scenario \"{}\" cleared", sc.name));
   }
+  // Cleared scenarios stay for `fault list`, the newest kKeptCleared of them.
+  std::size_t kept = 0;
+  for (auto it = scenarios_.rbegin(); it != scenarios_.rend(); ++it) {
+    kept += it->cleared ? 1 : 0;
+  }
+  for (auto it = scenarios_.begin(); it != scenarios_.end() && kept > kKeptCleared;) {
+    if (it->cleared) {
+      it = scenarios_.erase(it);
+      --kept;
+    } else {
+      ++it;
+    }
+  }
   return cleared;
+}
+
+void ScenarioRunner::retire(AppliedFault& a) {
+  FaultPlan& plan = *buses_[a.bus].faults;
+  if (a.rule && plan.contains(*a.rule)) {
+    a.final_seen = plan.rule(*a.rule).seen;
+    a.final_hits = plan.rule(*a.rule).hits;
+    plan.remove(*a.rule);
+  }
 }
 
 void ScenarioRunner::device_gone(std::string_view device, std::size_t bus, const HostedNode& node) {
@@ -422,9 +479,7 @@ void ScenarioRunner::device_gone(std::string_view device, std::size_t bus, const
         continue;
       }
       a.state->cleared = true;
-      if (a.rule) {
-        buses_[a.bus].faults->disable(*a.rule);
-      }
+      retire(a);
       log(fmt::format("{}: ends, device {} is gone", fault_label(sc.name, a.spec), device));
     }
   }

@@ -383,3 +383,85 @@ effect = "bus_off"
 
 }  // namespace
 }  // namespace canemu::daemon
+
+namespace canemu::daemon {
+namespace {
+
+constexpr std::string_view kOneRule = R"([scenario]
+name = "cycle"
+
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x7FF, mask = 0x7FF }
+effect = "crc_error"
+)";
+
+// Loading and clearing again and again leaves nothing behind: the cleared rules leave their
+// bus's plan, at most kKeptCleared cleared scenarios stay listed, and the counts of a cleared
+// fault are kept in its listing.
+TEST(ScenarioBounds, TenThousandLoadAndClearCyclesLeaveNothingBehind) {
+  World w;
+  auto s = parse_scenario(kOneRule, "s.toml");
+  ASSERT_TRUE(s);
+  for (int k = 0; k < 10'000; ++k) {
+    ASSERT_TRUE(w.sim->scenarios().apply(*s, w.sim->scheduler().now()));
+    ASSERT_EQ(w.sim->scenarios().clear("cycle"), 1u);
+  }
+  const auto listed = w.sim->scenarios().status();
+  EXPECT_EQ(listed.size(), ScenarioRunner::kKeptCleared);
+  for (const auto& f : listed) {
+    EXPECT_EQ(f.state, ScenarioRunner::FaultStatus::State::cleared);
+  }
+  // Still working: a new scenario's rule hits as before.
+  w.apply(R"([scenario]
+name = "after"
+
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { from = "tester" }
+effect = "stuff_error"
+count = 3
+)");
+  w.run_until(2'000'000);
+  const auto after = w.sim->scenarios().status();
+  ASSERT_EQ(after.size(), ScenarioRunner::kKeptCleared + 1);
+  EXPECT_EQ(after.back().hits, 3u);
+  EXPECT_EQ(w.sim->scenarios().clear("after"), 1u);
+  const auto kept = w.sim->scenarios().status();
+  EXPECT_EQ(kept.size(), ScenarioRunner::kKeptCleared);
+  EXPECT_EQ(kept.back().scenario, "after");
+  EXPECT_EQ(kept.back().hits, 3u);  // counted when it left the plan
+  EXPECT_EQ(kept.back().state, ScenarioRunner::FaultStatus::State::done);
+}
+
+TEST(ScenarioBounds, ScenariosInForceAndRulesPerBusAreBounded) {
+  World w;
+  auto s = parse_scenario(kOneRule, "s.toml");
+  ASSERT_TRUE(s);
+  for (std::size_t k = 0; k < ScenarioRunner::kMaxScenarios; ++k) {
+    ASSERT_TRUE(w.sim->scenarios().apply(*s, w.sim->scheduler().now()));
+  }
+  auto refused = w.sim->scenarios().apply(*s, w.sim->scheduler().now());
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error(),
+            std::vector<std::string>{"s.toml: 64 scenarios are in force already, the most "
+                                     "canemud holds; clear one first (canemu fault clear NAME)"});
+  EXPECT_EQ(w.sim->scenarios().clear(""), ScenarioRunner::kMaxScenarios);
+  // One scenario with more rules on a bus than the bound: refused whole.
+  std::string many = "[scenario]\nname = \"many\"\n";
+  for (std::size_t k = 0; k <= ScenarioRunner::kMaxRulesPerBus; ++k) {
+    many += "\n[[fault]]\nat = \"0s\"\nbus = \"can1\"\neffect = \"crc_error\"\n";
+  }
+  auto big = parse_scenario(many, "many.toml");
+  ASSERT_TRUE(big);
+  auto too_many = w.sim->scenarios().apply(*big, w.sim->scheduler().now());
+  ASSERT_FALSE(too_many);
+  EXPECT_EQ(too_many.error(),
+            std::vector<std::string>{"many.toml: bus can1 would have 1025 frame fault rules; at "
+                                     "most 1024 are in force on a bus"});
+}
+
+}  // namespace
+}  // namespace canemu::daemon

@@ -1,5 +1,6 @@
 #include "canemu/firmware_model/bus/fault_plan.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace canemu::model {
@@ -46,9 +47,27 @@ FrameFault FaultPlan::on_frame(const FrameContext& ctx) {
     return FrameFault{};
   }
   if (on_hit) {
-    on_hit(chosen_rule, ctx, *chosen);
+    on_hit(ids_[chosen_rule], ctx, *chosen);
   }
   return *chosen;
+}
+
+std::size_t FaultPlan::index_of(std::size_t id) const {
+  return static_cast<std::size_t>(std::lower_bound(ids_.begin(), ids_.end(), id) - ids_.begin());
+}
+
+bool FaultPlan::contains(std::size_t id) const {
+  const std::size_t i = index_of(id);
+  return i < ids_.size() && ids_[i] == id;
+}
+
+void FaultPlan::remove(std::size_t id) {
+  if (!contains(id)) {
+    return;
+  }
+  const auto i = static_cast<std::ptrdiff_t>(index_of(id));
+  rules_.erase(rules_.begin() + i);
+  ids_.erase(ids_.begin() + i);
 }
 
 double FaultPlan::draw(FaultRule& rule) {

@@ -71,6 +71,12 @@ class ScenarioRunner {
   // unplugged). Returns the number of scenarios cleared.
   std::size_t clear(std::string_view name);
 
+  // Bounds on what clients can pile up (docs/faults.md): scenarios in force at once, frame
+  // rules per bus, and cleared scenarios kept for `canemu fault list` (the oldest go first).
+  static constexpr std::size_t kMaxScenarios = 64;
+  static constexpr std::size_t kMaxRulesPerBus = 1024;
+  static constexpr std::size_t kKeptCleared = 32;
+
   // The ephemeral device `device` with node `node` on bus `bus` is going: the faults that act
   // on the node or match its frames end, and the node, kept for a later device, is plugged in
   // and on its nominal clock again.
@@ -92,9 +98,11 @@ class ScenarioRunner {
     std::size_t bus;
     std::string target;
     model::SimTime start;
-    std::optional<std::size_t> rule;  // in the bus's FaultPlan
+    std::optional<std::size_t> rule;  // in the bus's FaultPlan (while it is there)
     std::shared_ptr<FaultSwitch> state;
     const model::HostedNode* node = nullptr;  // the node it acts on or matches (`from`)
+    uint64_t final_seen = 0;                  // the rule's counts when it left the plan
+    uint64_t final_hits = 0;
   };
   struct LoadedScenario {
     std::string name;
@@ -109,6 +117,8 @@ class ScenarioRunner {
   };
 
   std::optional<std::size_t> bus_index(std::string_view name) const;
+  // A fault's frame rule leaves its bus's plan (its counts kept in the fault).
+  void retire(AppliedFault& a);
   tl::expected<std::vector<Resolved>, std::vector<std::string>> resolve(const Scenario& s) const;
   // Puts fault `k` of scenario `name` to work: a frame rule, or scheduled effects.
   void arm(const std::string& name, const Resolved& r, std::size_t k, uint64_t seed,

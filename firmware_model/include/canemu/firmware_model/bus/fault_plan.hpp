@@ -44,29 +44,43 @@ struct FaultRule {
   bool enabled = true;  // a cleared rule stays (its counts with it) but matches nothing
 };
 
+// Rules are named by the id add() gives (0, 1, 2, ... in the order they were added), which
+// stays theirs when others are removed.
 class FaultPlan final : public FaultInjector {
  public:
   std::size_t add(FaultRule rule) {
     rule.rng = rule.seed;
     rules_.push_back(rule);
-    return rules_.size() - 1;
+    ids_.push_back(next_id_);
+    return next_id_++;
   }
-  const FaultRule& rule(std::size_t i) const { return rules_[i]; }
-  void disable(std::size_t i) { rules_[i].enabled = false; }
+  // The rule `id` (it must be there).
+  const FaultRule& rule(std::size_t id) const { return rules_[index_of(id)]; }
+  bool contains(std::size_t id) const;
+  // A disabled rule stays (its counts with it) but matches nothing.
+  void disable(std::size_t id) { rules_[index_of(id)].enabled = false; }
+  // Gone: no frame scans it any more.
+  void remove(std::size_t id);
   std::size_t size() const { return rules_.size(); }
-  void clear() { rules_.clear(); }
+  void clear() {
+    rules_.clear();
+    ids_.clear();
+  }
 
   // The first rule that matches, still has hits left and wins its draw decides; every matching
   // rule counts the frame as seen.
   FrameFault on_frame(const FrameContext& ctx) override;
 
-  // Told of every hit: the rule's index (its hit already counted) and the frame it hits.
+  // Told of every hit: the rule's id (its hit already counted) and the frame it hits.
   std::function<void(std::size_t rule, const FrameContext& ctx, const FrameFault& fault)> on_hit;
 
  private:
   static double draw(FaultRule& rule);  // uniform in [0, 1), splitmix64
+  std::size_t index_of(std::size_t id) const;
 
   std::vector<FaultRule> rules_;
+  std::vector<std::size_t> ids_;  // ascending, beside rules_
+  std::size_t next_id_ = 0;
 };
 
 }  // namespace canemu::model

@@ -203,7 +203,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::hello: {
       const auto m = read_as<ipc::Hello>(data);
       c.greeted = true;
-      c.name = ipc::name_of(m.client_name);
+      c.name = ipc::printable_name_of(m.client_name);  // shown in tables, JSON and logs
       auto r = ipc::make_message<ipc::HelloReply>(request_id);
       r.server_pid = static_cast<uint32_t>(::getpid());
       send_reply(send, r);

@@ -1,6 +1,7 @@
 // The canemu command line against a real canemud: send and dump in stepped time.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -195,6 +196,24 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
   EXPECT_EQ(none.wait(), 1);
 }
 
+// A client's name is the peer's choice: canemud keeps printable ASCII only, and the JSON
+// escapes quotes, so a name can neither add a field nor break a line or a table row.
+TEST(Cli, HostileClientNameCannotForgeStatusFields) {
+  Daemon d;
+  auto c = connect(d, "x\",\"uid\":0\n\x1b[2J");
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_EQ(std::count(j.begin(), j.end(), '\n'), 1) << j;
+  EXPECT_EQ(j.find('\x1b'), std::string::npos) << j;
+  EXPECT_NE(j.find("\"name\" : \"x\\\",\\\"uid\\\":0??[2J\""), std::string::npos) << j;
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("x\",\"uid\":0??[2J"), std::string::npos) << t;
+  EXPECT_EQ(t.find('\x1b'), std::string::npos) << t;
+}
+
 // status (text and JSON), time step and calc, as a user types them.
 TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   Daemon d;
@@ -227,14 +246,15 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   ASSERT_FALSE(j.empty());
   EXPECT_EQ(j.front(), '{');
   EXPECT_EQ(j.substr(j.size() - 2), "}\n");
-  EXPECT_NE(j.find("\"time_mode\":\"stepped\""), std::string::npos) << j;
-  EXPECT_NE(j.find("\"sim_time_ns\":10000000"), std::string::npos) << j;
-  EXPECT_NE(
-      j.find(
-          "{\"name\":\"can1\",\"kind\":\"can\",\"transceiver\":\"high-speed\",\"bitrate\":500000"),
-      std::string::npos)
+  // toml++ writes it: keys sorted, `"key" : value`.
+  EXPECT_NE(j.find("\"time_mode\" : \"stepped\""), std::string::npos) << j;
+  EXPECT_NE(j.find("\"sim_time_ns\" : 10000000"), std::string::npos) << j;
+  EXPECT_NE(j.find("{\"bitrate\" : 500000,\"data_bitrate\" : 0,\"error_frames\" : 0,\"frames\" : "
+                   "0,\"kind\" : \"can\",\"load_percent\" : 0.0,\"name\" : \"can1\","
+                   "\"transceiver\" : \"high-speed\"}"),
+            std::string::npos)
       << j;
-  EXPECT_NE(j.find("{\"name\":\"probe\",\"model\":\"ephemeral\",\"ephemeral\":true"),
+  EXPECT_NE(j.find("\"ephemeral\" : true,\"model\" : \"ephemeral\",\"name\" : \"probe\""),
             std::string::npos)
       << j;
 

@@ -87,12 +87,26 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
   if (t == nullptr) {
     return;
   }
-  c.only_keys(*t, "security", {"allowed_users", "allowed_groups"});
+  c.only_keys(*t, "security", {"allowed_users", "allowed_groups", "socket_mode", "socket_group"});
   if (auto v = c.strings(*t, "security", "allowed_users")) {
     cfg.security.allowed_users = *v;
   }
   if (auto v = c.strings(*t, "security", "allowed_groups")) {
     cfg.security.allowed_groups = *v;
+  }
+  // Permission bits read as octal, so the error says them in octal too.
+  if (const toml::node* n = t->get("socket_mode")) {
+    const auto* mode = n->as_integer();
+    if (mode == nullptr || mode->get() < 0 || mode->get() > 0777) {
+      c.error(*n, "security.socket_mode",
+              mode == nullptr ? std::string("must be an integer (octal, such as 0o660)")
+                              : fmt::format("0o{:o} is outside 0o000..0o777", mode->get()));
+    } else {
+      cfg.security.socket_mode = static_cast<uint32_t>(mode->get());
+    }
+  }
+  if (auto group = c.string(*t, "security", "socket_group", false)) {
+    cfg.security.socket_group = *group;
   }
 }
 

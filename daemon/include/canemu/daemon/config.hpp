@@ -74,9 +74,19 @@ struct SimulationConfig {
   uint32_t spin_us = 20;
 };
 
+// The group the packages create (systemd/canemu.sysusers): its members may connect by default.
+inline constexpr const char* kServiceGroup = "canemu";
+
 struct SecurityConfig {
   std::vector<std::string> allowed_users;
-  std::vector<std::string> allowed_groups;
+  // Members (primary or supplementary) of these groups may connect; the group the packages
+  // install (canemu.sysusers) by default.
+  std::vector<std::string> allowed_groups{kServiceGroup};
+  // The control socket's permission bits and group when canemud creates it (not when systemd
+  // passes it: canemud.socket's SocketMode= and SocketGroup= decide then). A group that does not
+  // exist leaves the socket in canemud's own group, with a warning.
+  uint32_t socket_mode = 0660;
+  std::string socket_group = kServiceGroup;
 };
 
 struct Config {

@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 SOURCES = $(shell git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.h' '*.c' '*.inc' 2>/dev/null)
 
-.PHONY: all deps configure build test asan bench fuzz format format-check run clean
+.PHONY: all deps configure build test asan bench fuzz format format-check run clean install package
 
 all: build
 
@@ -20,6 +20,16 @@ configure: $(BUILD_DIR)/build.ninja
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+# Installs under PREFIX (default /usr; the configuration goes to /etc/canemu then, else
+# PREFIX/etc/canemu) into DESTDIR if set. docs/security.md, "Installing".
+PREFIX ?= /usr
+install: build
+	DESTDIR=$(DESTDIR) cmake --install $(BUILD_DIR) --prefix $(PREFIX)
+
+# A Debian package in $(BUILD_DIR): canemu_VERSION_ARCH.deb.
+package: build
+	cd $(BUILD_DIR) && cpack -G DEB
 
 test: deps build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)

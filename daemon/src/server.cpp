@@ -407,6 +407,7 @@ void Server::accept_clients() {
     c.session.gid = cred.gid;
     c.session.pid = static_cast<uint32_t>(cred.pid);
     c.session.vci.pid = c.session.pid;
+    c.session.vci.uid = c.session.uid;
     if (clients_.size() >= kMaxClients) {
       reply_error(c, 0, ipc::ErrorCode::permission_denied,
                   fmt::format("canemud serves at most {} clients", kMaxClients));

@@ -16,9 +16,26 @@
 
 namespace canemu::daemon {
 
+namespace {
+
+// The groups named, by gid; names that do not exist are logged (except the default group).
+std::vector<uint32_t> resolve_groups(const std::vector<std::string>& names, const char* key) {
+  std::vector<uint32_t> gids;
+  for (const std::string& g : names) {
+    if (const group* gr = ::getgrnam(g.c_str())) {
+      gids.push_back(gr->gr_gid);
+    } else if (g != kServiceGroup) {
+      // (The default group missing is normal on a machine without the packages' sysusers file.)
+      log::warning("[security] {}: group \"{}\" does not exist", key, g);
+    }
+  }
+  return gids;
+}
+
+}  // namespace
+
 void AccessPolicy::resolve(const SecurityConfig& security) {
   uids_.clear();
-  gids_.clear();
   for (const std::string& u : security.allowed_users) {
     if (const passwd* pw = ::getpwnam(u.c_str())) {
       uids_.push_back(pw->pw_uid);
@@ -26,14 +43,8 @@ void AccessPolicy::resolve(const SecurityConfig& security) {
       log::warning("[security] user \"{}\" does not exist", u);
     }
   }
-  for (const std::string& g : security.allowed_groups) {
-    if (const group* gr = ::getgrnam(g.c_str())) {
-      gids_.push_back(gr->gr_gid);
-    } else if (g != kServiceGroup) {
-      // (The default group missing is normal on a machine without the packages' sysusers file.)
-      log::warning("[security] group \"{}\" does not exist", g);
-    }
-  }
+  gids_ = resolve_groups(security.allowed_groups, "allowed_groups");
+  admin_gids_ = resolve_groups(security.admin_groups, "admin_groups");
 }
 
 bool AccessPolicy::allowed(int fd, uint32_t uid, uint32_t gid) const {
@@ -43,10 +54,18 @@ bool AccessPolicy::allowed(int fd, uint32_t uid, uint32_t gid) const {
   if (std::find(uids_.begin(), uids_.end(), uid) != uids_.end()) {
     return true;
   }
-  if (gids_.empty()) {
+  return in_groups(fd, gid, gids_);
+}
+
+bool AccessPolicy::admin(int fd, uint32_t uid, uint32_t gid) const {
+  return uid == 0 || uid == ::geteuid() || in_groups(fd, gid, admin_gids_);
+}
+
+bool AccessPolicy::in_groups(int fd, uint32_t gid, const std::vector<uint32_t>& gids) {
+  if (gids.empty()) {
     return false;
   }
-  if (std::find(gids_.begin(), gids_.end(), gid) != gids_.end()) {
+  if (std::find(gids.begin(), gids.end(), gid) != gids.end()) {
     return true;  // the primary group, which SO_PEERGROUPS need not list
   }
   // The peer's groups from the kernel (SO_PEERGROUPS): no user database lookups in the loop.
@@ -63,7 +82,7 @@ bool AccessPolicy::allowed(int fd, uint32_t uid, uint32_t gid) const {
   }
   groups.resize(len / sizeof(gid_t));
   for (gid_t g : groups) {
-    if (std::find(gids_.begin(), gids_.end(), g) != gids_.end()) {
+    if (std::find(gids.begin(), gids.end(), g) != gids.end()) {
       return true;
     }
   }

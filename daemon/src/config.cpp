@@ -87,7 +87,11 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
   if (t == nullptr) {
     return;
   }
-  c.only_keys(*t, "security", {"allowed_users", "allowed_groups", "socket_mode", "socket_group"});
+  c.only_keys(*t, "security",
+              {"allowed_users", "allowed_groups", "admin_groups", "socket_mode", "socket_group"});
+  if (auto v = c.strings(*t, "security", "admin_groups")) {
+    cfg.security.admin_groups = *v;
+  }
   if (auto v = c.strings(*t, "security", "allowed_users")) {
     cfg.security.allowed_users = *v;
   }

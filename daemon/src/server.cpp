@@ -413,6 +413,7 @@ void Server::accept_clients() {
                   fmt::format("canemud serves at most {} clients", kMaxClients));
       continue;
     }
+    c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
     if (!access_.allowed(fd, c.session.uid, c.session.gid)) {
       c.refused =
           fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid);
@@ -428,6 +429,7 @@ void Server::accept_clients() {
 // After a reload: a client the new [security] no longer allows is told why and dropped.
 void Server::drop_revoked_clients() {
   for (auto& [fd, c] : clients_) {
+    c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
     if (!c.closing && c.refused.empty() && !access_.allowed(fd, c.session.uid, c.session.gid)) {
       log::warning("reload: uid {} (pid {}, \"{}\") is no longer allowed; connection closed",
                    c.session.uid, c.session.pid, c.session.name);

@@ -51,10 +51,11 @@ TEST(AccessPolicy, ListedUsersAreResolvedToUidsAndUnknownNamesAreLoggedAndLeftOu
   policy.resolve(security);
   EXPECT_EQ(policy.uids(), std::vector<uint32_t>{0});
   EXPECT_TRUE(policy.gids().empty());
-  EXPECT_EQ(capture.lines(),
-            (std::vector<std::string>{
-                "<4>canemud: [security] user \"no-such-user-canemu\" does not exist",
-                "<4>canemud: [security] group \"no-such-group-canemu\" does not exist"}));
+  EXPECT_EQ(
+      capture.lines(),
+      (std::vector<std::string>{
+          "<4>canemud: [security] user \"no-such-user-canemu\" does not exist",
+          "<4>canemud: [security] allowed_groups: group \"no-such-group-canemu\" does not exist"}));
   security.allowed_users.clear();
   policy.resolve(security);  // a reload replaces the lists
   EXPECT_TRUE(policy.uids().empty());

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -171,6 +173,64 @@ TEST(Access, AReloadThatRevokesAPeerDropsItsConnection) {
   for (int fd : {connected[0], connected[1], go_on[0], go_on[1]}) {
     ::close(fd);
   }
+}
+
+// Fault scenarios belong to the user who loaded them: another user's client cannot clear one by
+// name (permission_denied with the reason) nor by "all" (it is left and counted); a member of
+// [security] admin_groups and root clear every one.
+TEST(Access, AUserClearsOnlyItsOwnScenariosAndAnAdminClearsAll) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  const group* admins = ::getgrnam("adm");
+  ASSERT_NE(admins, nullptr) << "the machine has no group \"adm\"";
+  const gid_t adm = admins->gr_gid;
+  rig.write(
+      "allowed_groups = [\"users\"]\nadmin_groups = [\"adm\"]\nsocket_mode = 0o666\n"
+      "socket_group = \"\"\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  const std::string socket = d.socket();
+  const std::string text =
+      "[scenario]\nname = \"mine\"\n\n[[fault]]\nat = \"1s\"\nbus = \"can0\"\n"
+      "effect = \"crc_error\"\n";
+  // Returns 0 when loaded, 1 when not.
+  const auto load = [&] {
+    auto c = client::Connection::open(socket, "loader");
+    if (!c) {
+      return 1;
+    }
+    auto m = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+    m->length = static_cast<uint32_t>(text.size());
+    std::memcpy(m->text, text.data(), text.size());
+    auto r = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*m);
+    return r && r->applied == 1 ? 0 : 1;
+  };
+  // Returns 10 + cleared + 20 * refused, 1 when refused with the reason, 2 on other failures.
+  const auto clear = [&](const std::string& name) {
+    return [&socket, name] {
+      auto c = client::Connection::open(socket, "clearer");
+      if (!c) {
+        return 2;
+      }
+      auto m = ipc::make_message<ipc::FaultClearRequest>();
+      ipc::copy_name(m.scenario, name);
+      auto r = c->call<ipc::FaultClearRequest, ipc::FaultClearReply>(m);
+      if (!r) {
+        return r.error().message.find("is not yours to clear") != std::string::npos ? 1 : 2;
+      }
+      return static_cast<int>(10 + r->cleared + 20 * r->refused);
+    };
+  };
+  constexpr uid_t kOther = 65533;
+  ASSERT_EQ(as_user(kNobody, rig.users, {}, load), 0);
+  EXPECT_EQ(as_user(kOther, rig.users, {}, clear("mine")), 1);
+  EXPECT_EQ(as_user(kOther, rig.users, {}, clear("")), 10 + 0 + 20 * 1);
+  EXPECT_EQ(as_user(kNobody, rig.users, {}, clear("mine")), 10 + 1);  // its own
+  ASSERT_EQ(as_user(kNobody, rig.users, {}, load), 0);
+  EXPECT_EQ(as_user(kOther, rig.users, {adm}, clear("")), 10 + 1);  // an admin
 }
 
 }  // namespace

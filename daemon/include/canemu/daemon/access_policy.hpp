@@ -22,6 +22,9 @@ class AccessPolicy {
   // Whether the peer on the connected AF_UNIX socket `fd`, whose uid and primary gid are `uid`
   // and `gid`, may connect.
   bool allowed(int fd, uint32_t uid, uint32_t gid) const;
+  // Whether that peer is an administrator: root, canemud's own user, or a member of
+  // `admin_groups` (it may clear every fault scenario).
+  bool admin(int fd, uint32_t uid, uint32_t gid) const;
   // Gives the socket file at `path` the configured mode and group. Returns what went wrong, or
   // an empty string; a group that does not exist is a warning in the log, not an error.
   static std::string apply_socket_permissions(const std::string& path,
@@ -31,8 +34,12 @@ class AccessPolicy {
   const std::vector<uint32_t>& gids() const { return gids_; }
 
  private:
+  // Whether the peer's primary group `gid` or one of its supplementary groups is in `gids`.
+  static bool in_groups(int fd, uint32_t gid, const std::vector<uint32_t>& gids);
+
   std::vector<uint32_t> uids_;
   std::vector<uint32_t> gids_;
+  std::vector<uint32_t> admin_gids_;
 };
 
 }  // namespace canemu::daemon

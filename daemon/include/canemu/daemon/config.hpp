@@ -82,6 +82,9 @@ struct SecurityConfig {
   // Members (primary or supplementary) of these groups may connect; the group the packages
   // install (canemu.sysusers) by default.
   std::vector<std::string> allowed_groups{kServiceGroup};
+  // Members of these groups (besides root and canemud's own user) may clear every client's fault
+  // scenarios and the configuration's; others clear their own user's only.
+  std::vector<std::string> admin_groups;
   // The control socket's permission bits and group when canemud creates it (not when systemd
   // passes it: canemud.socket's SocketMode= and SocketGroup= decide then). A group that does not
   // exist leaves the socket in canemud's own group, with a warning.

@@ -214,6 +214,38 @@ TEST(Cli, HostileClientNameCannotForgeStatusFields) {
   EXPECT_EQ(t.find('\x1b'), std::string::npos) << t;
 }
 
+// canemu metrics: the Prometheus text format, one family after the other, labels escaped.
+TEST(Cli, MetricsSpeakThePrometheusTextFormat) {
+  Daemon d;
+  Cli step(d, {"time", "step", "10ms"});
+  EXPECT_EQ(step.wait(), 0);
+  Cli metrics(d, {"metrics"});
+  const std::string m = Cli::read_all(metrics.out);
+  EXPECT_EQ(metrics.wait(), 0);
+  for (const char* line :
+       {"# HELP canemu_sim_time_seconds Simulated time.\n"
+        "# TYPE canemu_sim_time_seconds gauge\n"
+        "canemu_sim_time_seconds 0.010000000\n",
+        "# TYPE canemu_bus_frames_total counter\n",
+        "canemu_bus_bitrate_bits_per_second{bus=\"can0\",kind=\"can\"} 500000\n",
+        "canemu_bus_load_ratio{bus=\"can1\"} 0.000\n",
+        "canemu_node_error_state{node=\"ixxat0:0\",bus=\"can0\",state=\"error-active\"} 1\n",
+        "canemu_node_error_state{node=\"ixxat0:0\",bus=\"can0\",state=\"bus-off\"} 0\n",
+        "canemu_node_tec{node=\"ixxat0:1\",bus=\"can1\"} 0\n",
+        "# TYPE canemu_fault_hits_total counter\n"}) {
+    EXPECT_NE(m.find(line), std::string::npos) << line << "\nin:\n" << m;
+  }
+  // Every line is a comment or `name{labels} value`.
+  std::size_t start = 0;
+  while (start < m.size()) {
+    const std::size_t end = m.find('\n', start);
+    ASSERT_NE(end, std::string::npos);
+    const std::string line = m.substr(start, end - start);
+    EXPECT_TRUE(line.rfind("# ", 0) == 0 || line.rfind("canemu_", 0) == 0) << line;
+    start = end + 1;
+  }
+}
+
 // status (text and JSON), time step and calc, as a user types them.
 TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   Daemon d;

@@ -28,6 +28,7 @@ struct Command {
 // control socket as given on the command line (empty: the default); it is read when the
 // command runs.
 Command add_status(CLI::App& app, const std::string& socket);
+Command add_metrics(CLI::App& app, const std::string& socket);
 Command add_send(CLI::App& app, const std::string& socket);
 Command add_gen(CLI::App& app, const std::string& socket);
 Command add_dump(CLI::App& app, const std::string& socket);

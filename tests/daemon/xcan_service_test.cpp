@@ -51,10 +51,19 @@ TEST(XcanConfig, TheVariantFollowsTheTransceiversOfTheTwoBuses) {
       "[[device]]\nname = \"x\"\nmodel = \"sorcus-x-can-2i\"\ncontrollers = [\"can0\", "
       "\"can0\"]\n");
   EXPECT_EQ(h->devices().find_xcan("x")->module().variant(), XcanVariant::h);
-  // Not a VCI device: the VCI device list does not show it.
+  // In the device list with its model and buses, without a VCI object id (the VCI's device
+  // enumeration leaves it out).
   auto r = ipc::make_message<ipc::DeviceListReply>();
   fill_device_list(*h, r);
-  EXPECT_EQ(r.total, 0u);
+  EXPECT_EQ(r.total, 1u);
+  ASSERT_EQ(r.count, 1u);
+  EXPECT_EQ(ipc::name_of(r.devices[0].name), "x");
+  EXPECT_EQ(r.devices[0].model, static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_x_can_2i));
+  EXPECT_EQ(r.devices[0].controller_count, 2u);
+  EXPECT_EQ(ipc::name_of(r.devices[0].buses[0]), "can0");
+  EXPECT_EQ(ipc::name_of(r.devices[0].buses[1]), "can0");
+  EXPECT_EQ(r.devices[0].vci_id, 0u);
+  EXPECT_EQ(r.devices[0].ephemeral, 0u);
 }
 
 TEST(XcanConfig, TwoClassicBusesInAnOrderAVariantHas) {

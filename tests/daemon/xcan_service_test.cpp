@@ -83,6 +83,25 @@ TEST(XcanConfig, TwoClassicBusesInAnOrderAVariantHas) {
                                      "the 82527 is a classic CAN controller"});
 }
 
+// mdd_version gates what the manual marks «ab MDD Version 3.C» (docs/sorcus.md); 3.C unless set.
+TEST(XcanConfig, TheMddVersionIsTheManualsNumberAndOnlyAModuleHasOne) {
+  EXPECT_EQ(world()->devices().find_xcan("xcan0")->module().mdd_version(), model::sorcus::kMdd3C);
+  auto old = world(std::string(kConfig) + "mdd_version = \"3.B\"\n");
+  EXPECT_EQ(old->devices().find_xcan("xcan0")->module().mdd_version(),
+            (model::sorcus::MddVersion{3, 'B'}));
+  const std::string head =
+      "[[device]]\nname = \"x\"\nmodel = \"sorcus-x-can-2i\"\ncontrollers = [\"hs\", \"hs\"]\n";
+  EXPECT_EQ(
+      errors_of(head + "mdd_version = \"3C\"\n"),
+      std::vector<std::string>{"x.toml:22:15: device[0].mdd_version: \"3C\": a version as the "
+                               "manual writes it, a digit, a dot and a capital letter "
+                               "(\"3.C\")"});
+  EXPECT_EQ(errors_of("[[device]]\nname = \"i\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = "
+                      "[\"hs\"]\nmdd_version = \"3.C\"\n"),
+            std::vector<std::string>{"x.toml:22:15: device[0].mdd_version: only an X-CAN-2i "
+                                     "(sorcus-x-can-2i) has an MDD"});
+}
+
 TEST(XcanNodes, StatusShowsBothInterfacesOnTheirBuses) {
   auto m = world();
   auto r = ipc::make_message<ipc::StatusReply>();

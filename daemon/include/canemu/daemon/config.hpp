@@ -39,6 +39,7 @@ struct DeviceConfig {
   std::string name;
   DeviceModel model = DeviceModel::ixxat_usb_to_can;
   std::vector<std::string> controllers;  // bus name per controller
+  std::string mdd_version;               // sorcus-x-can-2i: "N.L"; empty: "3.C"
   uint32_t line = 0;
 };
 

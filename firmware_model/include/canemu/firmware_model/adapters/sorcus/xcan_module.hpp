@@ -23,10 +23,13 @@
 // with XCAN_NO_INT, an active receive read) answer Reply::pending and complete later through
 // XcanSink::completed, so the daemon can block its client without a thread in the model.
 //
+// The MDD's version (MddVersion, 3.C unless set) gates what the manual marks «ab MDD Version
+// 3.C»: INFO_XCAN_MSG_COUNT of send objects, XCAN_NEW_ONLY, the general-ID send channel.
+//
 // Every decision where the manual is silent is marked `Decision:` and listed in docs/sorcus.md.
 // Not modelled: the few µs a buffer load takes (loads are instantaneous), the NI-Task's queue
-// (the sink gets every callback at once, flagged sync or buffered), MDD version gating (the
-// model is an MDD >= 3.C), the 82527 bug that sends a remote frame with ID 0.
+// (the sink gets every callback at once, flagged sync or buffered), the 82527 bug that sends a
+// remote frame with ID 0.
 #pragma once
 
 #include <array>
@@ -40,6 +43,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/firmware_model/adapters/sorcus/acceptance.hpp"
+#include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/firmware_model/chips/i82527/i82527.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 #include "sorcus/xcan_types.h"
@@ -119,6 +123,11 @@ class XcanModule {
   // Wires interface `i` (0 or 1) to `bus`; before any channel of it is opened.
   void connect(unsigned i, CanBus& bus);
   XcanVariant variant() const { return variant_; }
+  // The MDD's version; before any channel is opened. Before 3.C: no INFO_XCAN_MSG_COUNT on
+  // send objects (ERR_XCAN_WRONG_TYPE), no XCAN_NEW_ONLY and no general-ID channel
+  // (ERR_XCAN_INVALID_CPS).
+  void set_mdd_version(MddVersion v) { mdd_version_ = v; }
+  MddVersion mdd_version() const { return mdd_version_; }
   bool low_speed(unsigned i) const;
   I82527& chip(unsigned i) { return ifaces_[i].chip; }
   // The low-speed transceiver reports a line fault (the daemon's line_error fault): it goes on
@@ -265,6 +274,7 @@ class XcanModule {
 
   SimScheduler& scheduler_;
   XcanVariant variant_;
+  MddVersion mdd_version_ = kMdd3C;
   XcanSink& sink_;
   std::array<Interface, XCAN_INTERFACES> ifaces_;
   std::map<ChannelHandle, Channel> channels_;

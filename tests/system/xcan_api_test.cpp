@@ -94,8 +94,9 @@ TEST(XcanApi, ModuleAndMddAreCheckedByName) {
   canemu_xcan_connect(nullptr);
 }
 
-// The VCI's device enumeration shows the IXXAT adapters only: an X-CAN-2i is no VCI device.
-TEST(XcanApi, TheVciDeviceListLeavesTheModuleOut) {
+// The VCI's device enumeration shows the IXXAT adapters only: an X-CAN-2i is no VCI device;
+// libxcan's enumeration shows the module's two interfaces.
+TEST(XcanApi, TheVciListsTheAdaptersAndLibxcanTheModulesInterfaces) {
   VciDaemon d(kConfig);
   HANDLE e = nullptr;
   ASSERT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
@@ -108,6 +109,20 @@ TEST(XcanApi, TheVciDeviceListLeavesTheModuleOut) {
   ASSERT_EQ(found.size(), 2u);
   EXPECT_NE(found[0].find("(canemu alpha)"), std::string::npos) << found[0];
   EXPECT_NE(found[1].find("(canemu beta)"), std::string::npos) << found[1];
+
+  ASSERT_EQ(canemu_xcan_connect(d.daemon.socket().c_str()), ERR_OK);
+  for (USHORT k = 0; k < 2; ++k) {
+    CANEMU_XCAN_INTERFACE iface{};
+    ASSERT_EQ(canemu_xcan_enum_interfaces(k, &iface), ERR_OK);
+    EXPECT_STREQ(iface.szDevice, "xcan0");
+    EXPECT_STREQ(iface.szBus, k == 0 ? "can0" : "can1");
+    EXPECT_EQ(iface.usChannel, k);
+    EXPECT_EQ(iface.usLowSpeed, 0u);
+    EXPECT_EQ(iface.ulBitrate, 500000u);
+  }
+  CANEMU_XCAN_INTERFACE none{};
+  EXPECT_EQ(canemu_xcan_enum_interfaces(2, &none), ERR_XCAN_NO_MODULE);
+  canemu_xcan_connect(nullptr);
 }
 
 TEST(XcanApi, DataFramesBothWaysWithAnIxxatAdapter) {

@@ -212,9 +212,10 @@ TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
   Cli json(d, {"status", "--json"});
   const std::string j = Cli::read_all(json.out);
   EXPECT_EQ(json.wait(), 0);
-  EXPECT_NE(j.find("{\"name\":\"xcan0\",\"model\":\"sorcus-x-can-2i\",\"ephemeral\":false,"
-                   "\"owner_pid\":0,\"buses\":[\"can0\",\"can1\"]}"),
-            std::string::npos)
+  EXPECT_NE(
+      j.find("{\"name\":\"xcan0\",\"model\":\"sorcus-x-can-2i\",\"ephemeral\":false,"
+             "\"owner_pid\":0,\"buses\":[\"can0\",\"can1\"],\"nodes\":[\"xcan0:0\",\"xcan0:1\"]}"),
+      std::string::npos)
       << j;
   EXPECT_NE(j.find("{\"name\":\"xcan0:1\",\"bus\":\"can1\",\"state\":\"error-active\""),
             std::string::npos)

@@ -69,15 +69,19 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
   out += "],\"devices\":[";
   for (uint16_t i = 0; i < devices.count; ++i) {
     const ipc::DeviceEntry& d = devices.devices[i];
+    // Controller (interface) N is the node NAME:N on the N-th bus.
+    const std::vector<std::string> on = device_buses(d);
     std::string buses;
-    for (const std::string& b : device_buses(d)) {
-      buses += fmt::format("{}\"{}\"", buses.empty() ? "" : ",", b);
+    std::string nodes;
+    for (std::size_t k = 0; k < on.size(); ++k) {
+      buses += fmt::format("{}\"{}\"", k ? "," : "", on[k]);
+      nodes += fmt::format("{}\"{}:{}\"", k ? "," : "", ipc::name_of(d.name), k);
     }
     out += fmt::format(
         "{}{{\"name\":\"{}\",\"model\":\"{}\",\"ephemeral\":{},"
-        "\"owner_pid\":{},\"buses\":[{}]}}",
+        "\"owner_pid\":{},\"buses\":[{}],\"nodes\":[{}]}}",
         i ? "," : "", ipc::name_of(d.name), model_name(d.model), d.ephemeral ? "true" : "false",
-        d.owner_pid, buses);
+        d.owner_pid, buses, nodes);
   }
   out += "],\"client_list\":[";
   for (uint16_t i = 0; i < clients.count; ++i) {

@@ -178,7 +178,7 @@ void check_xcan(Checker& c, const toml::node& ctl, const std::string& path, cons
 void read_devices(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
   c.for_each_table(root, "device", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"name", "model", "controllers", "mdd_version"});
+    c.only_keys(t, path, {"name", "model", "controllers", "mdd_version", "buffer_load_time"});
     DeviceConfig dev;
     dev.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto name = read_name(c, t, path, names, "device")) {
@@ -220,6 +220,18 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
                             *version));
       } else {
         dev.mdd_version = *version;
+      }
+    }
+    if (auto load = c.string(t, path, "buffer_load_time", false)) {
+      const toml::node& n = *t.get("buffer_load_time");
+      const std::optional<int64_t> ns = parse_duration(*load);
+      if (dev.model != DeviceModel::sorcus_x_can_2i) {
+        c.error(n, path + ".buffer_load_time", "only an X-CAN-2i (sorcus-x-can-2i) loads buffers");
+      } else if (!ns || *ns > 1'000'000) {
+        c.error(n, path + ".buffer_load_time",
+                fmt::format("\"{}\": a duration from \"0us\" to \"1ms\" (\"5us\")", *load));
+      } else {
+        dev.buffer_load_ns = *ns;
       }
     }
     cfg.devices.push_back(dev);

@@ -102,6 +102,22 @@ TEST(XcanConfig, TheMddVersionIsTheManualsNumberAndOnlyAModuleHasOne) {
                                      "(sorcus-x-can-2i) has an MDD"});
 }
 
+// buffer_load_time: how long loading a buffer takes (docs/sorcus.md, checklist 6); 0 unless set.
+TEST(XcanConfig, TheBufferLoadTimeIsADurationUpToAMillisecond) {
+  EXPECT_EQ(world()->devices().find_xcan("xcan0")->module().buffer_load_time(), 0);
+  auto slow = world(std::string(kConfig) + "buffer_load_time = \"5us\"\n");
+  EXPECT_EQ(slow->devices().find_xcan("xcan0")->module().buffer_load_time(), 5'000);
+  const std::string head =
+      "[[device]]\nname = \"x\"\nmodel = \"sorcus-x-can-2i\"\ncontrollers = [\"hs\", \"hs\"]\n";
+  EXPECT_EQ(errors_of(head + "buffer_load_time = \"2ms\"\n"),
+            std::vector<std::string>{"x.toml:22:20: device[0].buffer_load_time: \"2ms\": a "
+                                     "duration from \"0us\" to \"1ms\" (\"5us\")"});
+  EXPECT_EQ(errors_of("[[device]]\nname = \"i\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = "
+                      "[\"hs\"]\nbuffer_load_time = \"5us\"\n"),
+            std::vector<std::string>{"x.toml:22:20: device[0].buffer_load_time: only an X-CAN-2i "
+                                     "(sorcus-x-can-2i) loads buffers"});
+}
+
 TEST(XcanNodes, StatusShowsBothInterfacesOnTheirBuses) {
   auto m = world();
   auto r = ipc::make_message<ipc::StatusReply>();

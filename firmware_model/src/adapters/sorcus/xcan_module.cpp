@@ -40,6 +40,9 @@ XcanModule::~XcanModule() {
   for (const Waiter& w : waiters_) {
     scheduler_.cancel(w.timeout);
   }
+  for (const auto& [token, id] : loads_) {
+    scheduler_.cancel(id);
+  }
 }
 
 void XcanModule::connect(unsigned i, CanBus& bus) {

@@ -246,6 +246,33 @@ TEST(Cli, MetricsSpeakThePrometheusTextFormat) {
   }
 }
 
+// A SORCUS X-CAN-2i module is a DEVICE row like an IXXAT adapter's (model, buses), and its
+// interfaces are nodes NAME:0 and NAME:1 (config/examples/x-can-2i.toml).
+TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
+  Daemon d("stepped", {"--config", CANEMU_SOURCE_DIR "/config/examples/x-can-2i.toml"});
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1\n"
+                   "xcan0          sorcus-x-can-2i      config   can0 can1\n"),
+            std::string::npos)
+      << t;
+  EXPECT_NE(t.find("xcan0:0        can0         error-active      0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("xcan0:1        can1         error-active      0    0"), std::string::npos) << t;
+
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("{\"buses\" : [\"can0\",\"can1\"],\"ephemeral\" : false,\"model\" : "
+                   "\"sorcus-x-can-2i\",\"name\" : \"xcan0\",\"nodes\" : [\"xcan0:0\",\"xcan0:1\"],"
+                   "\"owner_pid\" : 0}"),
+            std::string::npos)
+      << j;
+  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"error-active\""),
+            std::string::npos)
+      << j;
+}
+
 // status (text and JSON), time step and calc, as a user types them.
 TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   Daemon d;

@@ -56,7 +56,8 @@ std::string bus_of(const ipc::StatusReply& s, const ipc::StatusNode& n) {
 std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults) {
   Exposition e;
   e.family("canemu_sim_time_seconds", "gauge", "Simulated time.");
-  e.sample("canemu_sim_time_seconds", "", fmt::format("{:.9f}", static_cast<double>(s.sim_time_ns) / 1e9));
+  e.sample("canemu_sim_time_seconds", "",
+           fmt::format("{:.9f}", static_cast<double>(s.sim_time_ns) / 1e9));
   e.family("canemu_clients", "gauge", "Connected clients.");
   e.sample("canemu_clients", "", s.client_count);
 

@@ -74,15 +74,20 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
   toml::array device_list;
   for (uint16_t i = 0; i < devices.count; ++i) {
     const ipc::DeviceEntry& d = devices.devices[i];
+    // Controller (interface) N is the node NAME:N on the N-th bus.
     toml::array device_buses_json;
-    for (const std::string& b : device_buses(d)) {
-      device_buses_json.push_back(b);
+    toml::array device_nodes_json;
+    const std::vector<std::string> on = device_buses(d);
+    for (std::size_t k = 0; k < on.size(); ++k) {
+      device_buses_json.push_back(on[k]);
+      device_nodes_json.push_back(fmt::format("{}:{}", ipc::name_of(d.name), k));
     }
     device_list.push_back(toml::table{{"name", ipc::name_of(d.name)},
                                       {"model", model_name(d.model)},
                                       {"ephemeral", d.ephemeral != 0},
                                       {"owner_pid", i64(d.owner_pid)},
-                                      {"buses", std::move(device_buses_json)}});
+                                      {"buses", std::move(device_buses_json)},
+                                      {"nodes", std::move(device_nodes_json)}});
   }
   toml::array client_list;
   for (uint16_t i = 0; i < clients.count; ++i) {

@@ -39,6 +39,8 @@ struct DeviceConfig {
   std::string name;
   DeviceModel model = DeviceModel::ixxat_usb_to_can;
   std::vector<std::string> controllers;  // bus name per controller
+  std::string mdd_version;               // sorcus-x-can-2i: "N.L"; empty: "3.C"
+  int64_t buffer_load_ns = 0;            // sorcus-x-can-2i: loading a buffer takes this long
   uint32_t line = 0;
 };
 

@@ -50,10 +50,12 @@ fuzz: deps
 	@scripts/install-deps.sh scripts/apt-packages-fuzz.txt
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	  -DCANEMU_FUZZ=ON -DCANEMU_WERROR=OFF -DCANEMU_BUILD_TESTS=OFF -DCANEMU_BUILD_BENCH=OFF
-	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_control_messages fuzz_config
-	@mkdir -p $(FUZZ_DIR)/corpus/control $(FUZZ_DIR)/corpus/config
+	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_control_messages fuzz_rings fuzz_config
+	@mkdir -p $(FUZZ_DIR)/corpus/control $(FUZZ_DIR)/corpus/rings $(FUZZ_DIR)/corpus/config
 	$(FUZZ_DIR)/bin/fuzz_control_messages -max_total_time=$(FUZZ_SECONDS) -max_len=20000 \
 	  $(FUZZ_DIR)/corpus/control tests/fuzz/corpus/control
+	$(FUZZ_DIR)/bin/fuzz_rings -max_total_time=$(FUZZ_SECONDS) -max_len=4096 -timeout=10 \
+	  $(FUZZ_DIR)/corpus/rings tests/fuzz/corpus/rings
 	$(FUZZ_DIR)/bin/fuzz_config -max_total_time=$(FUZZ_SECONDS) -max_len=4096 \
 	  $(FUZZ_DIR)/corpus/config tests/fuzz/corpus/config
 

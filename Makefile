@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 SOURCES = $(shell git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.h' '*.c' '*.inc' 2>/dev/null)
 
-.PHONY: all deps configure build test asan bench fuzz format format-check run clean install package
+.PHONY: all deps configure build test asan bench fuzz soak format format-check run clean install package
 
 all: build
 
@@ -58,6 +58,12 @@ fuzz: deps
 	  $(FUZZ_DIR)/corpus/rings tests/fuzz/corpus/rings
 	$(FUZZ_DIR)/bin/fuzz_config -max_total_time=$(FUZZ_SECONDS) -max_len=4096 \
 	  $(FUZZ_DIR)/corpus/config tests/fuzz/corpus/config
+
+# Clients that come, go and get killed against canemud in real time for SOAK_SECONDS; checks
+# that nothing leaks or stalls (tests/soak/soak.py; figures as JSON on stdout).
+SOAK_SECONDS ?= 60
+soak: deps build
+	.venv/bin/python tests/soak/soak.py --seconds $(SOAK_SECONDS) --build $(BUILD_DIR)
 
 # Benchmarks write one JSON file each into $(BUILD_DIR)/bench-results/.
 bench: deps build

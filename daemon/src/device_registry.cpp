@@ -12,8 +12,10 @@ std::string hardware_id(std::string_view device_name) {
   return fmt::format("HW{:06}", h % 1'000'000);
 }
 
-void DeviceRegistry::add_configured(DeviceConfig config, std::vector<Controller> controllers) {
-  configured_.push_back(Configured{std::move(config), std::move(controllers), next_vci_id_++});
+void DeviceRegistry::add_configured(DeviceConfig config, std::vector<Controller> controllers,
+                                    std::vector<LinController> lin) {
+  configured_.push_back(
+      Configured{std::move(config), std::move(controllers), next_vci_id_++, std::move(lin)});
 }
 
 void DeviceRegistry::add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node,
@@ -132,6 +134,18 @@ std::shared_ptr<model::ixxat::CanLine> DeviceRegistry::vci_line(std::string_view
   }
   const Ephemeral* e = find_ephemeral(device);
   return e != nullptr && controller == 0 ? e->line : nullptr;
+}
+
+std::shared_ptr<model::ixxat::LinLine> DeviceRegistry::vci_lin_line(std::string_view device,
+                                                                    uint32_t controller) const {
+  for (const Configured& d : configured_) {
+    if (d.config.name == device) {
+      const std::size_t can = d.controllers.size();
+      return controller >= can && controller - can < d.lin.size() ? d.lin[controller - can].line
+                                                                  : nullptr;
+    }
+  }
+  return nullptr;
 }
 
 std::shared_ptr<model::ixxat::CanLine> DeviceRegistry::vci_line_of(

@@ -4,6 +4,7 @@
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
+#include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
 #include "canemu/firmware_model/chips/can_fd/can_fd_node.hpp"
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
 #include "canemu/firmware_model/chips/sja1000/sja1000_node.hpp"
@@ -57,6 +58,13 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
 
 void Simulation::add_bus(const BusConfig& b) {
   buses_.push_back(std::make_unique<CanBus>(scheduler_, b.name));
+  std::unique_ptr<lin::LinBus> lin_bus;
+  if (b.kind == BusKind::lin) {
+    lin::Layout layout;
+    layout.bitrate = b.bitrate;
+    lin_bus = std::make_unique<lin::LinBus>(scheduler_, layout);
+  }
+  lin_buses_.push_back(std::move(lin_bus));
   nodes_.add_bus(*buses_.back(), b.kind == BusKind::can_fd);
   scenarios_.add_bus(*buses_.back(), b);
 }
@@ -94,6 +102,10 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     }
     buses.push_back(bus);
   }
+  std::vector<DeviceRegistry::LinController> lin;
+  if (auto error = lin_controllers(d, lin)) {
+    return error;
+  }
   std::vector<DeviceRegistry::Controller> controllers;
   for (std::size_t i = 0; i < buses.size(); ++i) {
     DeviceRegistry::Controller c;
@@ -112,7 +124,24 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     c.line->set_low_speed(config_.buses[c.bus].low_speed);
     controllers.push_back(std::move(c));
   }
-  devices_.add_configured(d, std::move(controllers));
+  devices_.add_configured(d, std::move(controllers), std::move(lin));
+  return std::nullopt;
+}
+
+std::optional<std::string> Simulation::lin_controllers(
+    const DeviceConfig& d, std::vector<DeviceRegistry::LinController>& out) {
+  for (std::size_t i = 0; i < d.lin.size(); ++i) {
+    const std::size_t bus = *bus_index(d.lin[i]);
+    if (lin_buses_[bus] == nullptr) {  // checked against the bus as it runs
+      return fmt::format("{}:{}: device {}: bus {} is not a LIN bus", config_.source, d.line,
+                         d.name, d.lin[i]);
+    }
+    // Offline until an application initializes and starts it, as on a real adapter.
+    out.push_back(DeviceRegistry::LinController{
+        fmt::format("{}:{}", d.name, d.controllers.size() + i), bus,
+        std::make_shared<ixxat::LinLine>(scheduler_, *lin_buses_[bus], ixxat::Clocks{},
+                                         scheduler_.now())});
+  }
   return std::nullopt;
 }
 
@@ -161,7 +190,7 @@ bool same(const BusConfig& a, const BusConfig& b) {
 }
 
 bool same(const DeviceConfig& a, const DeviceConfig& b) {
-  return a.name == b.name && a.model == b.model && a.controllers == b.controllers;
+  return a.name == b.name && a.model == b.model && a.controllers == b.controllers && a.lin == b.lin;
 }
 
 template <class T>

@@ -23,6 +23,15 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
     s.low_speed = c.low_speed ? 1 : 0;
     s.bitrate = c.bitrate;
     s.data_bitrate = c.data_bitrate;
+    if (const lin::LinBus* lin = sim.lin_bus(i)) {
+      // A LIN bus: frames whole, frames with an error, and its load since the start.
+      const lin::LinBusStats& st = lin->stats();
+      s.frames = st.frames;
+      s.error_frames = st.errors;
+      s.load_permille =
+          now.ns() > 0 ? static_cast<uint32_t>((st.busy_ns * 1000 + now.ns() / 2) / now.ns()) : 0;
+      continue;
+    }
     s.load_permille = static_cast<uint32_t>(b.bus_load_percent(now) * 10 + 0.5);
     s.frames = b.frames_on_bus();
     s.error_frames = b.error_frames_on_bus();
@@ -52,6 +61,19 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
   for (const DeviceRegistry::Configured& d : devices.configured()) {
     for (const DeviceRegistry::Controller& c : d.controllers) {
       add_node(c.name, c.bus, *c.node);
+    }
+    for (const DeviceRegistry::LinController& c : d.lin) {
+      if (n == ipc::kMaxStatusNodes) {
+        break;
+      }
+      ipc::StatusNode& s = r.nodes[n++];
+      ipc::copy_name(s.name, c.name);
+      s.bus = static_cast<uint16_t>(c.bus);
+      s.lin = static_cast<uint8_t>(c.line->online() ? ipc::WireLinState::online
+                                                    : ipc::WireLinState::offline);
+      s.frames_sent = c.line->stats().frames_sent;
+      s.frames_received = c.line->stats().frames_received;
+      s.errors = c.line->stats().errors;
     }
   }
   for (const DeviceRegistry::Ephemeral& e : devices.ephemeral()) {
@@ -83,10 +105,17 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
     e.model = static_cast<uint8_t>(c.model == DeviceModel::ixxat_usb_to_can
                                        ? ipc::WireDeviceModel::ixxat_usb_to_can
                                        : ipc::WireDeviceModel::ixxat_usb_to_can_fd);
-    e.controller_count = static_cast<uint8_t>(c.controllers.size());
-    for (std::size_t k = 0; k < c.controllers.size() && k < ipc::kMaxDeviceControllers; ++k) {
-      ipc::copy_name(e.buses[k], c.controllers[k]);
-      e.controller_fd[k] = c.model == DeviceModel::ixxat_usb_to_can ? 0 : 1;
+    std::vector<std::string> buses = c.controllers;
+    buses.insert(buses.end(), c.lin.begin(), c.lin.end());
+    e.controller_count =
+        static_cast<uint8_t>(std::min<std::size_t>(buses.size(), ipc::kMaxDeviceControllers));
+    for (std::size_t k = 0; k < e.controller_count; ++k) {
+      ipc::copy_name(e.buses[k], buses[k]);
+      const auto kind = k >= c.controllers.size() ? ipc::WireControllerKind::lin
+                        : c.model == DeviceModel::ixxat_usb_to_can
+                            ? ipc::WireControllerKind::can
+                            : ipc::WireControllerKind::can_fd;
+      e.controller_fd[k] = static_cast<uint8_t>(kind);
     }
     e.vci_id = d.vci_id;
     if (!d.controllers.empty() && d.controllers[0].line) {

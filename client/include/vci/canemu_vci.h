@@ -52,9 +52,9 @@ typedef struct _CANEMU_DEVICEINFO {
   CHAR szName[32];
   VCIID VciObjectId;
   INT64 qwEpochNs;    /* simulated time of its power-on: its time stamps count from here */
-  UINT8 bControllers; /* CAN controllers, 1 .. CANEMU_MAX_CONTROLLERS */
+  UINT8 bControllers; /* controllers (CAN, then LIN), 1 .. CANEMU_MAX_CONTROLLERS */
   UINT8 bEphemeral;   /* 1: made by canemuCreateDevice (by any process) */
-  UINT8 abFd[CANEMU_MAX_CONTROLLERS]; /* 1: controller N is a CAN FD controller */
+  UINT8 abFd[CANEMU_MAX_CONTROLLERS]; /* controller N: 0 CAN, 1 CAN FD, 2 LIN controller */
   UINT8 abReserved[2];
   CHAR aszBus[CANEMU_MAX_CONTROLLERS][32]; /* the bus each controller is wired to */
 } CANEMU_DEVICEINFO, *PCANEMU_DEVICEINFO;

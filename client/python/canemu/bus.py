@@ -412,6 +412,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         configs: List[Dict[str, Any]] = []
         for d in found_devices:
             for k in range(d.bControllers):
+                if d.abFd[k] == _vci.CANEMU_LIN_CONTROLLER:
+                    continue  # a LIN controller: python-can has no LIN
                 configs.append({
                     "interface": "canemu",
                     "channel": f"{d.szName.decode()}:{k}",

@@ -39,6 +39,9 @@ struct DeviceConfig {
   std::string name;
   DeviceModel model = DeviceModel::ixxat_usb_to_can;
   std::vector<std::string> controllers;  // bus name per controller
+  // IXXAT adapters: the LIN bus of each LIN controller. They are numbered after the CAN
+  // controllers ("DEVICE:N" with N = controllers.size() + i, and the VCI's bus number N).
+  std::vector<std::string> lin;
   uint32_t line = 0;
 };
 

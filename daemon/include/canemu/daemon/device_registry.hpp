@@ -21,6 +21,7 @@
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/xcan_device.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
+#include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 
@@ -38,10 +39,17 @@ class DeviceRegistry {
     std::unique_ptr<model::HostedNode> node;
     std::shared_ptr<model::ixxat::CanLine> line;  // the adapter firmware driving it
   };
+  // A LIN controller of an IXXAT adapter, numbered after the adapter's CAN controllers.
+  struct LinController {
+    std::string name;  // "DEVICE:N"
+    std::size_t bus;
+    std::shared_ptr<model::ixxat::LinLine> line;  // the adapter firmware with the controller
+  };
   struct Configured {
     DeviceConfig config;
     std::vector<Controller> controllers;  // controller N is config.controllers[N]'s
     uint64_t vci_id;
+    std::vector<LinController> lin;  // controller controllers.size() + i is config.lin[i]'s
   };
   struct Ephemeral {
     std::string name;
@@ -68,7 +76,8 @@ class DeviceRegistry {
 
   // A configured device, with its controllers in configuration order. Not counted as a change:
   // at start-up nobody is told; a reload announces it.
-  void add_configured(DeviceConfig config, std::vector<Controller> controllers);
+  void add_configured(DeviceConfig config, std::vector<Controller> controllers,
+                      std::vector<LinController> lin = {});
   void add_xcan(Xcan device) { xcan_.push_back(std::move(device)); }
   const std::vector<Xcan>& xcan() const { return xcan_; }
   // The X-CAN-2i named `name`, or nullptr.
@@ -96,6 +105,10 @@ class DeviceRegistry {
   // has gone.
   std::shared_ptr<model::ixxat::CanLine> vci_line(std::string_view device,
                                                   uint32_t controller) const;
+  // The LIN firmware of controller `controller` (the VCI's bus number: after the CAN
+  // controllers) of the VCI device `device`; nullptr if it is not a LIN controller.
+  std::shared_ptr<model::ixxat::LinLine> vci_lin_line(std::string_view device,
+                                                      uint32_t controller) const;
   // The firmware driving `node`, if a VCI adapter's.
   std::shared_ptr<model::ixxat::CanLine> vci_line_of(const model::HostedNode* node) const;
   // The VciObjectId of a VCI device; 0 if there is none.

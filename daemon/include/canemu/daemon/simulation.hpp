@@ -22,6 +22,7 @@
 #include "canemu/daemon/node_pool.hpp"
 #include "canemu/daemon/scenario_runner.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/bus/lin_bus.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 
@@ -57,6 +58,9 @@ class Simulation {
   const model::CanBus& bus(std::size_t i) const { return *buses_[i]; }
   std::optional<std::size_t> bus_index(std::string_view name) const;
   const BusConfig& bus_config(std::size_t i) const { return config_.buses[i]; }
+  // The LIN engine of bus i; nullptr unless it is a LIN bus (whose CanBus carries nothing).
+  model::lin::LinBus* lin_bus(std::size_t i) { return lin_buses_[i].get(); }
+  const model::lin::LinBus* lin_bus(std::size_t i) const { return lin_buses_[i].get(); }
 
   DeviceRegistry& devices() { return devices_; }
   const DeviceRegistry& devices() const { return devices_; }
@@ -110,12 +114,16 @@ class Simulation {
   // its bus's timing.
   std::optional<std::string> add_device(const DeviceConfig& d);
   std::optional<std::string> add_xcan(const DeviceConfig& d);
+  // The device's LIN controllers (config `lin`), on LIN buses that exist.
+  std::optional<std::string> lin_controllers(const DeviceConfig& d,
+                                             std::vector<DeviceRegistry::LinController>& out);
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).
   Config config_;
   model::SimScheduler scheduler_;
   std::vector<std::unique_ptr<model::CanBus>> buses_;
+  std::vector<std::unique_ptr<model::lin::LinBus>> lin_buses_;  // per bus; null for CAN buses
   NodePool nodes_;
   DeviceRegistry devices_;
   ScenarioRunner scenarios_;

@@ -260,7 +260,7 @@ TEST(VciCLin, WriteMessageNeverWaits) {  // 145
   ASSERT_EQ(master.write(true, lin_data(0x01, {1})), VCI_OK);
   EXPECT_EQ(master.write(true, lin_data(0x02, {2})), VCI_E_TXQUEUE_FULL);
   EXPECT_EQ(master.write(true, lin_type(LIN_MSGTYPE_SLEEP)), VCI_E_TXQUEUE_FULL);
-  step_to(2'000'000);  // the frame (44 bits, 2.29 ms) is still on the wire
+  step_to(2'000'000);  // the frame (54 bits, 2.81 ms) is still on the wire
   EXPECT_EQ(master.write(true, lin_data(0x02, {2})), VCI_E_TXQUEUE_FULL);
   step_to(1'000'000);
   EXPECT_EQ(master.write(true, lin_data(0x02, {2})), VCI_OK);

@@ -1,5 +1,7 @@
 #include "canemu/daemon/simulation.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
@@ -49,6 +51,12 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
     if (auto error = sim->add_device(d)) {
       errors.push_back(*error);
     }
+  }
+  // The configuration reader checked that each node's bus is a LIN bus.
+  for (const LinNodeConfig& n : sim->config_.lin_nodes) {
+    const std::size_t bus = *sim->bus_index(n.bus);
+    sim->lin_nodes_.push_back(
+        make_lin_node(n, bus, *sim->lin_buses_[bus], sim->config_.buses[bus].bitrate));
   }
   if (!errors.empty()) {
     return tl::unexpected(errors);
@@ -260,6 +268,14 @@ ReloadReport Simulation::reload(const Config& fresh) {
       devices_.announce(ipc::NotificationKind::device_added, d.name);
       r.applied.push_back(fmt::format("device {}: added", d.name));
     }
+  }
+  const bool same_lin_nodes =
+      fresh.lin_nodes.size() == config_.lin_nodes.size() &&
+      std::equal(fresh.lin_nodes.begin(), fresh.lin_nodes.end(), config_.lin_nodes.begin(),
+                 [](const LinNodeConfig& a, const LinNodeConfig& b) { return a.same_as(b); });
+  if (!same_lin_nodes) {
+    r.refused.push_back(
+        "lin_node: the simulated LIN nodes stay as they are (a restart changes them)");
   }
   if (fresh.security.allowed_users != config_.security.allowed_users ||
       fresh.security.allowed_groups != config_.security.allowed_groups) {

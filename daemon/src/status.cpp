@@ -79,6 +79,21 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
   for (const DeviceRegistry::Ephemeral& e : devices.ephemeral()) {
     add_node(e.name + ":0", e.bus, *e.node);
   }
+  // Simulated LIN nodes: powered (online) or switched off; sent: headers and responses.
+  for (const SimulatedLinNode& l : sim.lin_nodes()) {
+    if (n == ipc::kMaxStatusNodes) {
+      break;
+    }
+    ipc::StatusNode& s = r.nodes[n++];
+    ipc::copy_name(s.name, l.name);
+    s.bus = static_cast<uint16_t>(l.bus);
+    s.lin = static_cast<uint8_t>(l.ecu->powered() ? ipc::WireLinState::online
+                                                  : ipc::WireLinState::offline);
+    const lin::EcuCounters& c = l.ecu->counters();
+    s.frames_sent = c.headers + c.responses;
+    s.frames_received = c.frames;
+    s.errors = c.errors;
+  }
   // X-CAN-2i interfaces: the 82527's counters are the model's (the chip shows them to nobody
   // else).
   for (const DeviceRegistry::Xcan& x : devices.xcan()) {

@@ -330,5 +330,82 @@ TEST(VciCLin, TheMicrosecondCounterWrapsWithATimeOverrunMessage) {  // 149
   EXPECT_EQ(got[0].dwTime, 0U);
 }
 
+// ---- with simulated nodes ([[lin_node]]): the program is the only real node ----
+
+// A commander (bcm) runs a schedule of two slots, 10 ms each: 0x10 (answered by the program)
+// and 0x11 (answered by the commander itself).
+const char* const kWithCommander =
+    "[[bus]]\nname = \"can0\"\nkind = \"can\"\n\n"
+    "[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n\n"
+    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n"
+    "lin = [\"lin0\"]\n\n"
+    "[[lin_node]]\nname = \"bcm\"\nbus = \"lin0\"\nschedule = \"normal\"\n\n"
+    "[[lin_node.schedules]]\nname = \"normal\"\n"
+    "slots = [{ frame = 0x10, delay = \"10ms\" }, { frame = 0x11, delay = \"10ms\" }]\n\n"
+    "[[lin_node.response]]\nid = 0x11\ndata = [0x55]\nchecksum = \"classic\"\n";
+
+TEST(VciCLinNodes, AProgramAnswersASimulatedCommandersScheduleAtItsSlotTimes) {
+  VciDaemon d(kWithCommander);
+  LinAdapter slave("alpha");
+  ASSERT_EQ(slave.write(false, lin_data(0x10, {0xA1, 0xA2})), VCI_OK);
+  step_to(45'000'000);  // slots at 0, 10, 20, 30 and 40 ms
+  const int64_t ms = 1'000'000;
+  EXPECT_EQ(slave.texts(),
+            (Texts{frame_text(stamp(frame_end(0, 2)), 0x10, {0xA1, 0xA2}, true, true),
+                   frame_text(stamp(frame_end(10 * ms, 1)), 0x11, {0x55}, false, false),
+                   frame_text(stamp(frame_end(20 * ms, 2)), 0x10, {0xA1, 0xA2}, true, true),
+                   frame_text(stamp(frame_end(30 * ms, 1)), 0x11, {0x55}, false, false),
+                   frame_text(stamp(frame_end(40 * ms, 2)), 0x10, {0xA1, 0xA2}, true, true)}));
+  // canemu status: the simulated commander sent 5 headers and 2 responses of its own.
+  auto c = connect(d.daemon);
+  const ipc::StatusReply s = status(c);
+  ASSERT_EQ(s.node_count, 3);  // alpha:0, alpha:1 (LIN), bcm
+  EXPECT_EQ(ipc::name_of(s.nodes[2].name), "bcm");
+  EXPECT_EQ(s.nodes[2].bus, 1);
+  EXPECT_EQ(s.nodes[2].lin, static_cast<uint8_t>(ipc::WireLinState::online));
+  EXPECT_EQ(s.nodes[2].frames_sent, 7U);
+  EXPECT_EQ(s.nodes[2].frames_received, 5U);
+  EXPECT_EQ(ipc::name_of(s.nodes[1].name), "alpha:1");
+  EXPECT_EQ(s.nodes[1].frames_sent, 3U);  // its responses
+  EXPECT_EQ(s.nodes[1].frames_received, 2U);
+  EXPECT_EQ(s.buses[1].frames, 5U);
+  EXPECT_EQ(s.buses[1].error_frames, 0U);
+}
+
+// Simulated responders: one answers 0x20 (enhanced), one 0x21 (classic), one is switched off.
+const char* const kWithResponders =
+    "[[bus]]\nname = \"can0\"\nkind = \"can\"\n\n"
+    "[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n\n"
+    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n"
+    "lin = [\"lin0\"]\n\n"
+    "[[lin_node]]\nname = \"doorleft\"\nbus = \"lin0\"\n\n"
+    "[[lin_node.response]]\nid = 0x20\ndata = [0x01, 0x02]\n\n"
+    "[[lin_node]]\nname = \"doorright\"\nbus = \"lin0\"\n\n"
+    "[[lin_node.response]]\nid = 0x21\ndata = [0x03]\nchecksum = \"classic\"\n\n"
+    "[[lin_node]]\nname = \"seat\"\nbus = \"lin0\"\npowered = false\n\n"
+    "[[lin_node.response]]\nid = 0x22\ndata = [0x04]\n";
+
+TEST(VciCLinNodes, SimulatedRespondersAnswerAProgramsHeaders) {
+  VciDaemon d(kWithResponders);
+  LinAdapter master("alpha", LIN_OPMODE_MASTER | LIN_OPMODE_ERRORS);
+  const int64_t t0 = step_to(1'000'000);
+  ASSERT_EQ(master.write(true, lin_data(0x20, {}, true, true)), VCI_OK);
+  const int64_t t1 = step_to(10'000'000);
+  ASSERT_EQ(master.write(true, lin_data(0x21, {}, true, true)), VCI_OK);
+  const int64_t t2 = step_to(10'000'000);
+  ASSERT_EQ(master.write(true, lin_data(0x22, {}, true, true)), VCI_OK);  // the seat is off
+  step_to(20'000'000);
+  EXPECT_EQ(master.texts(),
+            (Texts{frame_text(stamp(frame_end(t0, 2)), 0x20, {0x01, 0x02}, true, false),
+                   frame_text(stamp(frame_end(t1, 1)), 0x21, {0x03}, false, false),
+                   event_text(stamp(no_response_at(t2)), LIN_MSGTYPE_ERROR, LIN_ERROR_SLNORE, 0)}));
+  auto c = connect(d.daemon);
+  const ipc::StatusReply s = status(c);
+  ASSERT_EQ(s.node_count, 5);
+  EXPECT_EQ(ipc::name_of(s.nodes[4].name), "seat");
+  EXPECT_EQ(s.nodes[4].lin, static_cast<uint8_t>(ipc::WireLinState::offline));
+  EXPECT_EQ(s.nodes[2].frames_sent, 1U);  // doorleft's response
+}
+
 }  // namespace
 }  // namespace canemu::testing

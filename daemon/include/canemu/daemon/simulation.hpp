@@ -19,6 +19,7 @@
 
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/device_registry.hpp"
+#include "canemu/daemon/lin_nodes.hpp"
 #include "canemu/daemon/node_pool.hpp"
 #include "canemu/daemon/scenario_runner.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
@@ -61,6 +62,9 @@ class Simulation {
   // The LIN engine of bus i; nullptr unless it is a LIN bus (whose CanBus carries nothing).
   model::lin::LinBus* lin_bus(std::size_t i) { return lin_buses_[i].get(); }
   const model::lin::LinBus* lin_bus(std::size_t i) const { return lin_buses_[i].get(); }
+
+  // The simulated LIN nodes ([[lin_node]]), in configuration order.
+  const std::vector<SimulatedLinNode>& lin_nodes() const { return lin_nodes_; }
 
   DeviceRegistry& devices() { return devices_; }
   const DeviceRegistry& devices() const { return devices_; }
@@ -124,6 +128,7 @@ class Simulation {
   model::SimScheduler scheduler_;
   std::vector<std::unique_ptr<model::CanBus>> buses_;
   std::vector<std::unique_ptr<model::lin::LinBus>> lin_buses_;  // per bus; null for CAN buses
+  std::vector<SimulatedLinNode> lin_nodes_;                     // on lin_buses_ (gone before them)
   NodePool nodes_;
   DeviceRegistry devices_;
   ScenarioRunner scenarios_;

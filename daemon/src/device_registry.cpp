@@ -26,9 +26,16 @@ void DeviceRegistry::add_ephemeral(std::string name, std::size_t bus, model::Hos
   announce(ipc::NotificationKind::device_added, name);
 }
 
+void DeviceRegistry::add_lin_ephemeral(std::string name, std::size_t bus, uint32_t owner_pid,
+                                       std::shared_ptr<model::ixxat::LinLine> line) {
+  lin_ephemeral_.push_back(LinEphemeral{name, bus, owner_pid, std::move(line), next_vci_id_++});
+  announce(ipc::NotificationKind::device_added, name);
+}
+
 void DeviceRegistry::remove_ephemeral(std::string_view name) {
   const std::string gone(name);
   std::erase_if(ephemeral_, [&](const Ephemeral& e) { return e.name == gone; });
+  std::erase_if(lin_ephemeral_, [&](const LinEphemeral& e) { return e.name == gone; });
   announce(ipc::NotificationKind::device_removed, gone);
 }
 
@@ -65,6 +72,11 @@ bool DeviceRegistry::exists(std::string_view name) const {
   }
   if (find_xcan(name) != nullptr) {
     return true;
+  }
+  for (const LinEphemeral& e : lin_ephemeral_) {
+    if (e.name == name) {
+      return true;
+    }
   }
   return find_ephemeral(name) != nullptr;
 }
@@ -145,6 +157,11 @@ std::shared_ptr<model::ixxat::LinLine> DeviceRegistry::vci_lin_line(std::string_
                                                                   : nullptr;
     }
   }
+  for (const LinEphemeral& e : lin_ephemeral_) {
+    if (e.name == device) {
+      return controller == 0 ? e.line : nullptr;
+    }
+  }
   return nullptr;
 }
 
@@ -169,6 +186,11 @@ uint64_t DeviceRegistry::vci_id_of(std::string_view device) const {
   for (const Configured& d : configured_) {
     if (d.config.name == device) {
       return d.vci_id;
+    }
+  }
+  for (const LinEphemeral& l : lin_ephemeral_) {
+    if (l.name == device) {
+      return l.vci_id;
     }
   }
   const Ephemeral* e = find_ephemeral(device);

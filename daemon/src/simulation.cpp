@@ -300,11 +300,17 @@ Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t 
 
 Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t bus,
                                                    uint32_t owner_pid) {
-  HostedNode& node = nodes_.spare(bus);
   // Powered on at the last whole microsecond: the time stamps of every adapter then tick
   // together (1 us), and the same frame carries the same time stamp on all of them.
   const int64_t now_ns = scheduler_.now().ns();
   const SimTime power_on = SimTime::from_ns(now_ns - now_ns % 1000);
+  if (lin_buses_[bus] != nullptr) {  // an adapter with one LIN controller
+    devices_.add_lin_ephemeral(
+        name, bus, owner_pid,
+        std::make_shared<ixxat::LinLine>(scheduler_, *lin_buses_[bus], ixxat::Clocks{}, power_on));
+    return DeviceLease(this, std::move(name));
+  }
+  HostedNode& node = nodes_.spare(bus);
   auto line = std::make_shared<ixxat::CanLine>(scheduler_, node, ixxat::Clocks{}, power_on);
   line->set_low_speed(config_.buses[bus].low_speed);
   devices_.add_ephemeral(name, bus, node, owner_pid, std::move(line));

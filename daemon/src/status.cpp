@@ -57,27 +57,34 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
   auto add_node = [&](const std::string& name, std::size_t bus, HostedNode& node) {
     add_controller(name, bus, node.controller(), node.node());
   };
+  // A LIN controller: online or offline, and what it did (no error counters).
+  auto add_lin = [&](const std::string& name, std::size_t bus, const ixxat::LinLine& line) {
+    if (n == ipc::kMaxStatusNodes) {
+      return;
+    }
+    ipc::StatusNode& s = r.nodes[n++];
+    ipc::copy_name(s.name, name);
+    s.bus = static_cast<uint16_t>(bus);
+    s.lin = static_cast<uint8_t>(line.online() ? ipc::WireLinState::online
+                                               : ipc::WireLinState::offline);
+    s.frames_sent = line.stats().frames_sent;
+    s.frames_received = line.stats().frames_received;
+    s.errors = line.stats().errors;
+  };
   const DeviceRegistry& devices = sim.devices();
   for (const DeviceRegistry::Configured& d : devices.configured()) {
     for (const DeviceRegistry::Controller& c : d.controllers) {
       add_node(c.name, c.bus, *c.node);
     }
     for (const DeviceRegistry::LinController& c : d.lin) {
-      if (n == ipc::kMaxStatusNodes) {
-        break;
-      }
-      ipc::StatusNode& s = r.nodes[n++];
-      ipc::copy_name(s.name, c.name);
-      s.bus = static_cast<uint16_t>(c.bus);
-      s.lin = static_cast<uint8_t>(c.line->online() ? ipc::WireLinState::online
-                                                    : ipc::WireLinState::offline);
-      s.frames_sent = c.line->stats().frames_sent;
-      s.frames_received = c.line->stats().frames_received;
-      s.errors = c.line->stats().errors;
+      add_lin(c.name, c.bus, *c.line);
     }
   }
   for (const DeviceRegistry::Ephemeral& e : devices.ephemeral()) {
     add_node(e.name + ":0", e.bus, *e.node);
+  }
+  for (const DeviceRegistry::LinEphemeral& e : devices.lin_ephemeral()) {
+    add_lin(e.name + ":0", e.bus, *e.line);
   }
   // Simulated LIN nodes: powered (online) or switched off; sent: headers and responses.
   for (const SimulatedLinNode& l : sim.lin_nodes()) {
@@ -108,7 +115,8 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
 void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
   const DeviceRegistry& devices = sim.devices();
   r.generation = devices.generation();
-  r.total = static_cast<uint16_t>(devices.configured().size() + devices.ephemeral().size());
+  r.total = static_cast<uint16_t>(devices.configured().size() + devices.ephemeral().size() +
+                                  devices.lin_ephemeral().size());
   std::size_t n = 0;
   for (const DeviceRegistry::Configured& d : devices.configured()) {
     if (n == ipc::kMaxDevices) {
@@ -158,6 +166,22 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
       e.epoch_ns = x.line->epoch().ns();
       ipc::copy_name(e.hardware_id, hardware_id(x.name));
     }
+  }
+  for (const DeviceRegistry::LinEphemeral& x : devices.lin_ephemeral()) {
+    if (n == ipc::kMaxDevices) {
+      break;
+    }
+    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::copy_name(e.name, x.name);
+    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::ixxat_usb_to_can);
+    e.controller_count = 1;
+    e.ephemeral = 1;
+    e.owner_pid = x.owner_pid;
+    ipc::copy_name(e.buses[0], sim.bus_config(x.bus).name);
+    e.controller_fd[0] = static_cast<uint8_t>(ipc::WireControllerKind::lin);
+    e.vci_id = x.vci_id;
+    e.epoch_ns = x.line->epoch().ns();
+    ipc::copy_name(e.hardware_id, hardware_id(x.name));
   }
   r.count = static_cast<uint16_t>(n);
 }

@@ -428,8 +428,8 @@ void VciService::create_device(VciSession& session, const ipc::VciRequest& m, ip
   std::memcpy(bus_name, m.payload, sizeof bus_name);
   const auto bus = sim_.bus_index(ipc::name_of(bus_name));
   std::string name = ipc::name_of(m.device);
-  if (!bus || sim_.bus_config(*bus).kind == BusKind::lin) {
-    r.hresult = VCI_E_INVALIDARG;  // no CAN bus of that name
+  if (!bus) {
+    r.hresult = VCI_E_INVALIDARG;  // no bus of that name
     return;
   }
   if (session.devices.size() >= kMaxVciDevicesPerClient) {

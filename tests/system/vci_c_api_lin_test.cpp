@@ -330,6 +330,49 @@ TEST(VciCLin, TheMicrosecondCounterWrapsWithATimeOverrunMessage) {  // 149
   EXPECT_EQ(got[0].dwTime, 0U);
 }
 
+TEST(VciCLin, AProgramMakesAnAdapterOfItsOwnOnALinBus) {
+  VciDaemon d(kLinAdapters);
+  VCIID id{};
+  char name[32] = {};
+  ASSERT_EQ(canemuCreateDevice("lin0", "mylin", &id, name, sizeof name), VCI_OK);
+  EXPECT_STREQ(name, "mylin");
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpen(id, &dev), VCI_OK);
+  VCIDEVICECAPS caps{};
+  ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
+  EXPECT_EQ(caps.BusCtrlCount, 1);
+  EXPECT_EQ(caps.BusCtrlTypes[0], VCI_LIN_CTRL(LIN_CTRL_UNKNOWN));
+  HANDLE control = nullptr;
+  HANDLE monitor = nullptr;
+  ASSERT_EQ(linControlOpen(dev, 0, &control), VCI_OK);
+  ASSERT_EQ(linMonitorOpen(dev, 0, FALSE, &monitor), VCI_OK);
+  ASSERT_EQ(linMonitorInitialize(monitor, 16, 1), VCI_OK);
+  ASSERT_EQ(linMonitorActivate(monitor, TRUE), VCI_OK);
+  ASSERT_EQ(linControlInitialize(control, LIN_OPMODE_MASTER, kRate), VCI_OK);
+  ASSERT_EQ(linControlStart(control, TRUE), VCI_OK);
+  LinAdapter slave("alpha");
+  ASSERT_EQ(slave.write(false, lin_data(0x33, {0x99})), VCI_OK);
+  const int64_t t0 = step_to(1'000'000);
+  LINMSG header = lin_data(0x33, {}, true, true);
+  ASSERT_EQ(linControlWriteMessage(control, TRUE, &header), VCI_OK);
+  step_to(10'000'000);
+  LINMSG m{};
+  ASSERT_EQ(linMonitorPeekMessage(monitor, &m), VCI_OK);  // the start
+  ASSERT_EQ(linMonitorPeekMessage(monitor, &m), VCI_OK);
+  EXPECT_EQ(text_of(m), frame_text(stamp(frame_end(t0, 1)), 0x33, {0x99}, true, false));
+  EXPECT_EQ(canControlOpen(dev, 0, &control), VCI_E_INVALIDARG);  // not a CAN controller
+  auto c = connect(d.daemon);
+  const ipc::StatusReply s = status(c);
+  ASSERT_EQ(s.node_count, 7);  // three adapters' two controllers, then mylin:0
+  EXPECT_EQ(ipc::name_of(s.nodes[6].name), "mylin:0");
+  EXPECT_EQ(s.nodes[6].lin, static_cast<uint8_t>(ipc::WireLinState::online));
+  EXPECT_EQ(s.nodes[6].frames_sent, 1U);
+  linMonitorClose(monitor);
+  linControlClose(control);
+  vciDeviceClose(dev);
+  EXPECT_EQ(canemuRemoveDevice("mylin"), VCI_OK);
+}
+
 // ---- with simulated nodes ([[lin_node]]): the program is the only real node ----
 
 // A commander (bcm) runs a schedule of two slots, 10 ms each: 0x10 (answered by the program)

@@ -59,6 +59,14 @@ class DeviceRegistry {
     std::shared_ptr<model::ixxat::CanLine> line;  // VCI adapters only
     uint64_t vci_id = 0;                          // VCI adapters only
   };
+  // An ephemeral VCI adapter with one LIN controller (controller 0, "NAME:0") on a LIN bus.
+  struct LinEphemeral {
+    std::string name;
+    std::size_t bus;
+    uint32_t owner_pid;
+    std::shared_ptr<model::ixxat::LinLine> line;
+    uint64_t vci_id = 0;
+  };
   // A configured SORCUS X-CAN-2i; its interface N is the node "NAME:N" on buses[N].
   struct Xcan {
     DeviceConfig config;
@@ -86,12 +94,16 @@ class DeviceRegistry {
   // An ephemeral device with its one node; a VCI adapter when `line` is set.
   void add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node, uint32_t owner_pid,
                      std::shared_ptr<model::ixxat::CanLine> line = nullptr);
+  void add_lin_ephemeral(std::string name, std::size_t bus, uint32_t owner_pid,
+                         std::shared_ptr<model::ixxat::LinLine> line);
+  // Removes the ephemeral device `name`, CAN or LIN.
   void remove_ephemeral(std::string_view name);
   // Counts a change and tells on_change (add_ephemeral and remove_ephemeral do so themselves).
   void announce(ipc::NotificationKind kind, const std::string& name);
 
   const std::vector<Configured>& configured() const { return configured_; }
   const std::vector<Ephemeral>& ephemeral() const { return ephemeral_; }  // in order of creation
+  const std::vector<LinEphemeral>& lin_ephemeral() const { return lin_ephemeral_; }
   const Ephemeral* find_ephemeral(std::string_view name) const;
   bool exists(std::string_view name) const;
   // A name no device has: `prefix` followed by the smallest number from 1 on.
@@ -121,6 +133,7 @@ class DeviceRegistry {
  private:
   std::vector<Configured> configured_;
   std::vector<Ephemeral> ephemeral_;
+  std::vector<LinEphemeral> lin_ephemeral_;
   std::vector<Xcan> xcan_;
   uint32_t generation_ = 0;
   uint64_t next_vci_id_ = 1;

@@ -103,8 +103,8 @@ class Simulation {
   DeviceLease add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node,
                             uint32_t owner_pid);
   // An ephemeral VCI adapter named `name` with one controller on bus `bus` (an SJA1000 on a
-  // classic bus, the CAN FD controller on a CAN FD bus) and its firmware, listed with the
-  // configured adapters while the lease lives.
+  // classic bus, the CAN FD controller on a CAN FD bus, a LIN controller on a LIN bus) and its
+  // firmware, listed with the configured adapters while the lease lives.
   DeviceLease add_vci_device(std::string name, std::size_t bus, uint32_t owner_pid);
 
  private:

@@ -146,42 +146,41 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
     }
     ipc::copy_name(e.hardware_id, hardware_id(c.name));
   }
-  for (const DeviceRegistry::Ephemeral& x : devices.ephemeral()) {
+  // An ephemeral device's entry: one controller on `bus`, of the client `owner_pid`; a VCI
+  // adapter when `vci_id` is set.
+  auto add_ephemeral = [&](const std::string& name, std::size_t bus, uint32_t owner_pid,
+                           uint64_t vci_id, SimTime epoch) -> ipc::DeviceEntry* {
     if (n == ipc::kMaxDevices) {
-      break;
+      return nullptr;
     }
     ipc::DeviceEntry& e = r.devices[n++];
-    ipc::copy_name(e.name, x.name);
-    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::ephemeral);
+    ipc::copy_name(e.name, name);
+    e.model = static_cast<uint8_t>(vci_id != 0 ? ipc::WireDeviceModel::ixxat_usb_to_can
+                                               : ipc::WireDeviceModel::ephemeral);
     e.controller_count = 1;
     e.ephemeral = 1;
-    e.owner_pid = x.owner_pid;
-    ipc::copy_name(e.buses[0], sim.bus_config(x.bus).name);
-    if (x.line) {  // a VCI adapter
-      const bool fd = x.line->fd_controller();
-      e.model = static_cast<uint8_t>(fd ? ipc::WireDeviceModel::ixxat_usb_to_can_fd
-                                        : ipc::WireDeviceModel::ixxat_usb_to_can);
-      e.controller_fd[0] = fd ? 1 : 0;
-      e.vci_id = x.vci_id;
-      e.epoch_ns = x.line->epoch().ns();
-      ipc::copy_name(e.hardware_id, hardware_id(x.name));
+    e.owner_pid = owner_pid;
+    ipc::copy_name(e.buses[0], sim.bus_config(bus).name);
+    if (vci_id != 0) {
+      e.vci_id = vci_id;
+      e.epoch_ns = epoch.ns();
+      ipc::copy_name(e.hardware_id, hardware_id(name));
+    }
+    return &e;
+  };
+  for (const DeviceRegistry::Ephemeral& x : devices.ephemeral()) {
+    ipc::DeviceEntry* e = add_ephemeral(x.name, x.bus, x.owner_pid, x.line ? x.vci_id : 0,
+                                        x.line ? x.line->epoch() : SimTime{});
+    if (e != nullptr && x.line && x.line->fd_controller()) {
+      e->model = static_cast<uint8_t>(ipc::WireDeviceModel::ixxat_usb_to_can_fd);
+      e->controller_fd[0] = static_cast<uint8_t>(ipc::WireControllerKind::can_fd);
     }
   }
   for (const DeviceRegistry::LinEphemeral& x : devices.lin_ephemeral()) {
-    if (n == ipc::kMaxDevices) {
-      break;
+    ipc::DeviceEntry* e = add_ephemeral(x.name, x.bus, x.owner_pid, x.vci_id, x.line->epoch());
+    if (e != nullptr) {
+      e->controller_fd[0] = static_cast<uint8_t>(ipc::WireControllerKind::lin);
     }
-    ipc::DeviceEntry& e = r.devices[n++];
-    ipc::copy_name(e.name, x.name);
-    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::ixxat_usb_to_can);
-    e.controller_count = 1;
-    e.ephemeral = 1;
-    e.owner_pid = x.owner_pid;
-    ipc::copy_name(e.buses[0], sim.bus_config(x.bus).name);
-    e.controller_fd[0] = static_cast<uint8_t>(ipc::WireControllerKind::lin);
-    e.vci_id = x.vci_id;
-    e.epoch_ns = x.line->epoch().ns();
-    ipc::copy_name(e.hardware_id, hardware_id(x.name));
   }
   r.count = static_cast<uint16_t>(n);
 }

@@ -25,6 +25,69 @@ void VciLinPort::put(const LINMSG& msg) {
   }
 }
 
+namespace {
+
+void put_lin_info(const ixxat::LinLine& line, ipc::VciReply& r) {
+  const LINCAPABILITIES caps = line.capabilities();
+  const LINLINESTATUS status = line.line_status();
+  std::memcpy(r.payload + ipc::kVciCapsOffset, &caps, sizeof caps);
+  std::memcpy(r.payload + ipc::kVciLineOffset, &status, sizeof status);
+}
+
+// The calls of a control unit; VCI_E_INVALID_HANDLE for any other.
+HRESULT control_call(ixxat::LinLine& line, const ipc::VciRequest& m) {
+  switch (static_cast<ipc::VciOp>(m.op)) {
+    case ipc::VciOp::lin_init: {
+      if (m.args[0] > 0xFF || m.args[1] > 0xFFFF) {
+        return VCI_E_INVALIDARG;
+      }
+      LININITLINE init{};
+      init.bOpMode = static_cast<uint8_t>(m.args[0]);
+      init.wBitrate = static_cast<uint16_t>(m.args[1]);
+      return line.init_line(init);
+    }
+    case ipc::VciOp::lin_reset:
+      return line.reset_line();
+    case ipc::VciOp::lin_start:
+      return line.start_line();
+    case ipc::VciOp::lin_stop:
+      return line.stop_line();
+    case ipc::VciOp::lin_write: {
+      LINMSG msg;
+      std::memcpy(&msg, m.payload, sizeof msg);
+      return m.args[0] > 1 ? VCI_E_INVALIDARG : line.write_message(m.args[0] == 1, msg);
+    }
+    default:
+      return VCI_E_INVALID_HANDLE;
+  }
+}
+
+// The calls of a monitor but its initialization; VCI_E_INVALID_HANDLE for any other.
+HRESULT monitor_call(ixxat::LinLine& line, ixxat::MonitorId id, const ipc::VciRequest& m,
+                     ipc::VciReply& r) {
+  switch (static_cast<ipc::VciOp>(m.op)) {
+    case ipc::VciOp::lin_monitor_activate:
+      return line.activate(id);
+    case ipc::VciOp::lin_monitor_deactivate:
+      return line.deactivate(id);
+    case ipc::VciOp::lin_monitor_status: {
+      const auto s = line.monitor_state(id);
+      r.values[0] = s->initialized ? 1 : 0;
+      r.values[1] = s->activated ? 1 : 0;
+      r.values[2] = s->rx_overrun ? 1 : 0;
+      ipc::VciChannelCounters c{};
+      c.received = s->received;
+      c.lost = s->lost;
+      std::memcpy(r.payload, &c, sizeof c);
+      return VCI_OK;
+    }
+    default:
+      return VCI_E_INVALID_HANDLE;
+  }
+}
+
+}  // namespace
+
 bool VciService::is_lin(ipc::VciOp op) {
   const auto v = static_cast<uint16_t>(op);
   return v >= static_cast<uint16_t>(ipc::VciOp::lin_control_open) &&
@@ -43,10 +106,7 @@ void VciService::lin(VciSession& session, const ipc::VciRequest& m, ipc::VciRepl
     auto line = sim_.devices().vci_lin_line(ipc::name_of(m.device), m.controller);
     r.hresult = line == nullptr ? VCI_E_INVALIDARG : VCI_OK;
     if (line != nullptr) {
-      const LINCAPABILITIES caps = line->capabilities();
-      const LINLINESTATUS status = line->line_status();
-      std::memcpy(r.payload + ipc::kVciCapsOffset, &caps, sizeof caps);
-      std::memcpy(r.payload + ipc::kVciLineOffset, &status, sizeof status);
+      put_lin_info(*line, r);
     }
     return;
   }
@@ -89,88 +149,17 @@ void VciService::lin_open(VciSession& session, const ipc::VciRequest& m, ipc::Vc
 
 void VciService::lin_call(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,
                           std::array<int, ipc::kChannelFdCount>& fds, bool& with_fds) {
-  ixxat::LinLine& line = h.lin();
   const auto op = static_cast<ipc::VciOp>(m.op);
-  const bool control = h.kind() == VciHandle::Kind::lin_control;
-  r.hresult = VCI_OK;
-  switch (op) {
-    case ipc::VciOp::lin_info: {
-      const LINCAPABILITIES caps = line.capabilities();
-      const LINLINESTATUS status = line.line_status();
-      std::memcpy(r.payload + ipc::kVciCapsOffset, &caps, sizeof caps);
-      std::memcpy(r.payload + ipc::kVciLineOffset, &status, sizeof status);
-      return;
-    }
-    case ipc::VciOp::lin_init:
-      if (control) {
-        if (m.args[0] > 0xFF || m.args[1] > 0xFFFF) {
-          r.hresult = VCI_E_INVALIDARG;
-          return;
-        }
-        LININITLINE init{};
-        init.bOpMode = static_cast<uint8_t>(m.args[0]);
-        init.wBitrate = static_cast<uint16_t>(m.args[1]);
-        r.hresult = line.init_line(init);
-        return;
-      }
-      break;
-    case ipc::VciOp::lin_reset:
-      if (control) {
-        r.hresult = line.reset_line();
-        return;
-      }
-      break;
-    case ipc::VciOp::lin_start:
-      if (control) {
-        r.hresult = line.start_line();
-        return;
-      }
-      break;
-    case ipc::VciOp::lin_stop:
-      if (control) {
-        r.hresult = line.stop_line();
-        return;
-      }
-      break;
-    case ipc::VciOp::lin_write:
-      if (control) {
-        LINMSG msg;
-        std::memcpy(&msg, m.payload, sizeof msg);
-        r.hresult = m.args[0] > 1 ? VCI_E_INVALIDARG : line.write_message(m.args[0] == 1, msg);
-        return;
-      }
-      break;
-    case ipc::VciOp::lin_monitor_init:
-      if (!control) {
-        lin_monitor_init(h, m, r, fds, with_fds);
-        return;
-      }
-      break;
-    case ipc::VciOp::lin_monitor_activate:
-    case ipc::VciOp::lin_monitor_deactivate:
-      if (!control) {
-        r.hresult = op == ipc::VciOp::lin_monitor_activate ? line.activate(h.monitor())
-                                                           : line.deactivate(h.monitor());
-        return;
-      }
-      break;
-    case ipc::VciOp::lin_monitor_status:
-      if (!control) {
-        const auto s = line.monitor_state(h.monitor());
-        r.values[0] = s->initialized ? 1 : 0;
-        r.values[1] = s->activated ? 1 : 0;
-        r.values[2] = s->rx_overrun ? 1 : 0;
-        ipc::VciChannelCounters c{};
-        c.received = s->received;
-        c.lost = s->lost;
-        std::memcpy(r.payload, &c, sizeof c);
-        return;
-      }
-      break;
-    default:
-      break;
+  if (op == ipc::VciOp::lin_info) {
+    put_lin_info(h.lin(), r);
+    r.hresult = VCI_OK;
+  } else if (h.kind() == VciHandle::Kind::lin_control) {
+    r.hresult = control_call(h.lin(), m);
+  } else if (op == ipc::VciOp::lin_monitor_init) {
+    lin_monitor_init(h, m, r, fds, with_fds);
+  } else {
+    r.hresult = monitor_call(h.lin(), h.monitor(), m, r);
   }
-  r.hresult = VCI_E_INVALID_HANDLE;  // not an operation of this object
 }
 
 void VciService::lin_monitor_init(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,

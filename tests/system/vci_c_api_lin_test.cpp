@@ -35,23 +35,9 @@ struct LinAdapter {
     vciDeviceClose(device);
   }
   std::vector<LINMSG> drain() const {
-    std::vector<LINMSG> got;
-    LINMSG m;
-    while (linMonitorPeekMessage(monitor, &m) == VCI_OK) {
-      got.push_back(m);
-    }
-    return got;
+    return drain_with([this](LINMSG& m) { return linMonitorPeekMessage(monitor, &m) == VCI_OK; });
   }
-  // What arrived after the start's info message, as text.
-  std::vector<std::string> texts() const {
-    std::vector<std::string> got;
-    for (const LINMSG& m : drain()) {
-      if (!(m.uMsgInfo.Bytes.bType == LIN_MSGTYPE_INFO && m.abData[0] == LIN_INFO_START)) {
-        got.push_back(text_of(m));
-      }
-    }
-    return got;
-  }
+  std::vector<std::string> texts() const { return texts_but_start(drain()); }
   HRESULT write(bool send, LINMSG m) const { return linControlWriteMessage(control, send, &m); }
 };
 

@@ -14,18 +14,9 @@ namespace {
 
 // The BAL of the adapter named `name`.
 void bal_of(const std::string& name, Ref<IBalObject>& bal) {
-  Ref<IVciDeviceManager> manager;
-  ASSERT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
-  Ref<IVciEnumDevice> e;
-  ASSERT_EQ(manager->EnumDevices(e.out()), VCI_OK);
-  VCIDEVICEINFO info{};
-  while (e->Next(1, &info, nullptr) == VCI_OK) {
-    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-      open_bal(info.VciObjectId.AsInt64, bal);
-      return;
-    }
-  }
-  FAIL() << "no adapter " << name;
+  const INT64 id = vci_id_named(name);
+  ASSERT_NE(id, 0) << "no adapter " << name;
+  open_bal(id, bal);
 }
 
 // An adapter's LIN controller opened the way the guide describes: socket, monitor (FIFO
@@ -53,23 +44,9 @@ struct LinAdapter {
     }
   }
   std::vector<LINMSG> drain() const {
-    std::vector<LINMSG> got;
-    LINMSG m;
-    while (reader->GetDataEntry(&m) == VCI_OK) {
-      got.push_back(m);
-    }
-    return got;
+    return drain_with([this](LINMSG& m) { return reader->GetDataEntry(&m) == VCI_OK; });
   }
-  // What arrived after the start's info message, as text.
-  std::vector<std::string> texts() const {
-    std::vector<std::string> got;
-    for (const LINMSG& m : drain()) {
-      if (!(m.uMsgInfo.Bytes.bType == LIN_MSGTYPE_INFO && m.abData[0] == LIN_INFO_START)) {
-        got.push_back(text_of(m));
-      }
-    }
-    return got;
-  }
+  std::vector<std::string> texts() const { return texts_but_start(drain()); }
   HRESULT write(bool send, LINMSG m) const { return control->WriteMessage(send, &m); }
 };
 

@@ -103,6 +103,28 @@ inline std::string text_of(const LINMSG& m) {
   return s;
 }
 
+// Every message `take` gives (it returns false when there is none left).
+template <class Take>
+std::vector<LINMSG> drain_with(Take take) {
+  std::vector<LINMSG> got;
+  LINMSG m;
+  while (take(m)) {
+    got.push_back(m);
+  }
+  return got;
+}
+
+// The messages as text, but for the start's info message.
+inline std::vector<std::string> texts_but_start(const std::vector<LINMSG>& messages) {
+  std::vector<std::string> got;
+  for (const LINMSG& m : messages) {
+    if (!(m.uMsgInfo.Bytes.bType == LIN_MSGTYPE_INFO && m.abData[0] == LIN_INFO_START)) {
+      got.push_back(text_of(m));
+    }
+  }
+  return got;
+}
+
 // What a monitor should get: a data frame (flags: ecs, sor) or an event (info, error, ...).
 inline std::string frame_text(uint32_t time, uint8_t id, std::vector<uint8_t> bytes, bool ecs,
                               bool sor) {

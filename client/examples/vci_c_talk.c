@@ -2,6 +2,9 @@
  * Two programs, two adapters, one bus, through the VCI C API (libvcinpl):
  *   vci_c_talk receive ADAPTER        waits up to 5 s for a data frame and prints it
  *   vci_c_talk send ADAPTER ID BYTE   sends one frame with one data byte
+ *   vci_c_talk lin ADAPTER ID BYTE    a LIN responder on the adapter's first LIN controller:
+ *                                     answers the header ID with BYTE and prints the first
+ *                                     three frames or errors it sees (docs/lin.md)
  * ADAPTER is the canemu device name (as in "USB-to-CAN (canemu NAME)"). Plain C99.
  */
 #include <stdio.h>
@@ -38,6 +41,56 @@ static HRESULT find(const char* name, VCIID* id) {
   return hr;
 }
 
+/* A LIN responder: the response table holds ID -> BYTE; prints what the bus shows. */
+static int lin_responder(HANDLE hDevice, UINT8 id, UINT8 byte) {
+  HANDLE hControl = NULL;
+  HANDLE hMonitor = NULL;
+  VCIDEVICECAPS caps;
+  LINMSG msg;
+  HRESULT hr;
+  UINT32 no = 0;
+  int seen = 0;
+  if ((hr = vciDeviceGetCaps(hDevice, &caps)) != VCI_OK) {
+    return fail("caps", hr);
+  }
+  while (no < caps.BusCtrlCount && VCI_BUS_TYPE(caps.BusCtrlTypes[no]) != VCI_BUS_LIN) {
+    ++no; /* LIN controllers come after the CAN ones */
+  }
+  memset(&msg, 0, sizeof msg);
+  msg.uMsgInfo.Bytes.bPid = id;
+  msg.uMsgInfo.Bytes.bType = LIN_MSGTYPE_DATA;
+  msg.uMsgInfo.Bytes.bDlen = 1;
+  msg.uMsgInfo.Bits.ecs = 1;
+  msg.abData[0] = byte;
+  if ((hr = linMonitorOpen(hDevice, no, FALSE, &hMonitor)) != VCI_OK ||
+      (hr = linMonitorInitialize(hMonitor, 64, 1)) != VCI_OK ||
+      (hr = linMonitorActivate(hMonitor, TRUE)) != VCI_OK ||
+      (hr = linControlOpen(hDevice, no, &hControl)) != VCI_OK ||
+      (hr = linControlInitialize(hControl, LIN_OPMODE_ERRORS, 19200)) != VCI_OK ||
+      (hr = linControlWriteMessage(hControl, FALSE, &msg)) != VCI_OK ||
+      (hr = linControlStart(hControl, TRUE)) != VCI_OK) {
+    return fail("LIN", hr);
+  }
+  printf("ready\n");
+  fflush(stdout);
+  while (seen < 3) {
+    if ((hr = linMonitorReadMessage(hMonitor, 5000, &msg)) != VCI_OK) {
+      return fail("receive", hr);
+    }
+    if (msg.uMsgInfo.Bytes.bType == LIN_MSGTYPE_DATA) {
+      printf("%u us: %02X#%02X%s\n", (unsigned)msg.dwTime, msg.uMsgInfo.Bytes.bPid, msg.abData[0],
+             msg.uMsgInfo.Bits.sor ? " (mine)" : "");
+      ++seen;
+    } else if (msg.uMsgInfo.Bytes.bType == LIN_MSGTYPE_ERROR) {
+      printf("%u us: error %u\n", (unsigned)msg.dwTime, msg.abData[0]);
+      ++seen;
+    }
+  }
+  linControlClose(hControl);
+  linMonitorClose(hMonitor);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   HANDLE hDevice = NULL;
   HANDLE hControl = NULL;
@@ -46,8 +99,9 @@ int main(int argc, char** argv) {
   CANMSG msg;
   HRESULT hr;
   int sending;
-  if (argc < 3 || (strcmp(argv[1], "send") == 0 && argc != 5)) {
-    fprintf(stderr, "usage: vci_c_talk receive ADAPTER | send ADAPTER ID BYTE\n");
+  if (argc < 3 || (strcmp(argv[1], "receive") != 0 && argc != 5)) {
+    fprintf(stderr,
+            "usage: vci_c_talk receive ADAPTER | send ADAPTER ID BYTE | lin ADAPTER ID BYTE\n");
     return 2;
   }
   sending = strcmp(argv[1], "send") == 0;
@@ -63,6 +117,15 @@ int main(int argc, char** argv) {
   }
   if (hr != VCI_OK) {
     return fail("adapter", hr);
+  }
+  if (strcmp(argv[1], "lin") == 0) {
+    if ((hr = vciDeviceOpen(&id, &hDevice)) != VCI_OK) {
+      return fail("open", hr);
+    }
+    const int rc = lin_responder(hDevice, (UINT8)strtoul(argv[3], NULL, 16),
+                                 (UINT8)strtoul(argv[4], NULL, 16));
+    vciDeviceClose(hDevice);
+    return rc;
   }
   if ((hr = vciDeviceOpen(&id, &hDevice)) != VCI_OK ||
       (hr = canChannelOpen(hDevice, 0, FALSE, &hChannel)) != VCI_OK ||

@@ -193,10 +193,43 @@ void check_xcan(Checker& c, const toml::node& ctl, const std::string& path, cons
   }
 }
 
+// `lin = ["lin0", ...]`: an IXXAT adapter's LIN controllers, each on a LIN bus; with the CAN
+// controllers at most ipc::kMaxDeviceControllers in all.
+void read_lin_controllers(Checker& c, const toml::table& t, const std::string& path,
+                          const Config& cfg, DeviceConfig& dev) {
+  const toml::node* lin = t.get("lin");
+  if (lin == nullptr) {
+    return;
+  }
+  auto buses = c.strings(t, path, "lin");
+  if (!buses) {
+    return;
+  }
+  if (dev.model == DeviceModel::sorcus_x_can_2i) {
+    c.error(*lin, path + ".lin", "an X-CAN-2i has no LIN controller");
+    return;
+  }
+  for (const std::string& b : *buses) {
+    const BusConfig* bus = cfg.bus(b);
+    if (bus == nullptr) {
+      c.error(*lin, path + ".lin", fmt::format("no bus is named \"{}\"", b));
+    } else if (bus->kind != BusKind::lin) {
+      c.error(*lin, path + ".lin", fmt::format("\"{}\" is not a LIN bus (kind = \"lin\")", b));
+    }
+  }
+  if (dev.controllers.size() + buses->size() > ipc::kMaxDeviceControllers) {
+    c.error(*lin, path + ".lin",
+            fmt::format("{} CAN and {} LIN controllers; an adapter has at most {} in all",
+                        dev.controllers.size(), buses->size(), ipc::kMaxDeviceControllers));
+  }
+  dev.lin = *buses;
+}
+
 void read_devices(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
   c.for_each_table(root, "device", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"name", "model", "controllers", "mdd_version", "buffer_load_time"});
+    c.only_keys(t, path,
+                {"name", "model", "controllers", "lin", "mdd_version", "buffer_load_time"});
     DeviceConfig dev;
     dev.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto name = read_name(c, t, path, names, "device")) {
@@ -252,6 +285,7 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
         dev.buffer_load_ns = *ns;
       }
     }
+    read_lin_controllers(c, t, path, cfg, dev);
     cfg.devices.push_back(dev);
   });
 }
@@ -346,7 +380,7 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   });
   std::size_t controllers = 0;
   for (const DeviceConfig& d : cfg.devices) {
-    controllers += d.controllers.size();
+    controllers += d.controllers.size() + d.lin.size();
   }
   if (cfg.buses.size() > kMaxBuses) {
     c.error(root.source(), "bus", fmt::format("{} buses; at most {}", cfg.buses.size(), kMaxBuses));
@@ -398,6 +432,10 @@ std::string summary(const Config& cfg) {
     if (b.data_bitrate != 0) {
       s += fmt::format(", data {} bit/s", b.data_bitrate);
     }
+    if (b.kind == BusKind::lin) {
+      s += ")\n";  // a LIN node samples each bit once, in its middle
+      continue;
+    }
     s += fmt::format(", sample point {:.1f} %{})\n", b.sample_point / 10.0,
                      b.low_speed ? ", low-speed transceivers" : "");
   }
@@ -405,6 +443,9 @@ std::string summary(const Config& cfg) {
     s += fmt::format("  device {} ({}):", d.name, to_string(d.model));
     for (std::size_t i = 0; i < d.controllers.size(); ++i) {
       s += fmt::format(" {}:{} on {}", d.name, i, d.controllers[i]);
+    }
+    for (std::size_t i = 0; i < d.lin.size(); ++i) {
+      s += fmt::format(" {}:{} on {} (LIN)", d.name, d.controllers.size() + i, d.lin[i]);
     }
     s += "\n";
   }

@@ -12,8 +12,10 @@ std::string hardware_id(std::string_view device_name) {
   return fmt::format("HW{:06}", h % 1'000'000);
 }
 
-void DeviceRegistry::add_configured(DeviceConfig config, std::vector<Controller> controllers) {
-  configured_.push_back(Configured{std::move(config), std::move(controllers), next_vci_id_++});
+void DeviceRegistry::add_configured(DeviceConfig config, std::vector<Controller> controllers,
+                                    std::vector<LinController> lin) {
+  configured_.push_back(
+      Configured{std::move(config), std::move(controllers), next_vci_id_++, std::move(lin)});
 }
 
 void DeviceRegistry::add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node,
@@ -24,9 +26,16 @@ void DeviceRegistry::add_ephemeral(std::string name, std::size_t bus, model::Hos
   announce(ipc::NotificationKind::device_added, name);
 }
 
+void DeviceRegistry::add_lin_ephemeral(std::string name, std::size_t bus, uint32_t owner_pid,
+                                       std::shared_ptr<model::ixxat::LinLine> line) {
+  lin_ephemeral_.push_back(LinEphemeral{name, bus, owner_pid, std::move(line), next_vci_id_++});
+  announce(ipc::NotificationKind::device_added, name);
+}
+
 void DeviceRegistry::remove_ephemeral(std::string_view name) {
   const std::string gone(name);
   std::erase_if(ephemeral_, [&](const Ephemeral& e) { return e.name == gone; });
+  std::erase_if(lin_ephemeral_, [&](const LinEphemeral& e) { return e.name == gone; });
   announce(ipc::NotificationKind::device_removed, gone);
 }
 
@@ -63,6 +72,11 @@ bool DeviceRegistry::exists(std::string_view name) const {
   }
   if (find_xcan(name) != nullptr) {
     return true;
+  }
+  for (const LinEphemeral& e : lin_ephemeral_) {
+    if (e.name == name) {
+      return true;
+    }
   }
   return find_ephemeral(name) != nullptr;
 }
@@ -134,6 +148,23 @@ std::shared_ptr<model::ixxat::CanLine> DeviceRegistry::vci_line(std::string_view
   return e != nullptr && controller == 0 ? e->line : nullptr;
 }
 
+std::shared_ptr<model::ixxat::LinLine> DeviceRegistry::vci_lin_line(std::string_view device,
+                                                                    uint32_t controller) const {
+  for (const Configured& d : configured_) {
+    if (d.config.name == device) {
+      const std::size_t can = d.controllers.size();
+      return controller >= can && controller - can < d.lin.size() ? d.lin[controller - can].line
+                                                                  : nullptr;
+    }
+  }
+  for (const LinEphemeral& e : lin_ephemeral_) {
+    if (e.name == device) {
+      return controller == 0 ? e.line : nullptr;
+    }
+  }
+  return nullptr;
+}
+
 std::shared_ptr<model::ixxat::CanLine> DeviceRegistry::vci_line_of(
     const model::HostedNode* node) const {
   for (const Configured& d : configured_) {
@@ -155,6 +186,11 @@ uint64_t DeviceRegistry::vci_id_of(std::string_view device) const {
   for (const Configured& d : configured_) {
     if (d.config.name == device) {
       return d.vci_id;
+    }
+  }
+  for (const LinEphemeral& l : lin_ephemeral_) {
+    if (l.name == device) {
+      return l.vci_id;
     }
   }
   const Ephemeral* e = find_ephemeral(device);

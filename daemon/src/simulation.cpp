@@ -1,9 +1,12 @@
 #include "canemu/daemon/simulation.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
+#include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
 #include "canemu/firmware_model/chips/can_fd/can_fd_node.hpp"
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
 #include "canemu/firmware_model/chips/sja1000/sja1000_node.hpp"
@@ -49,6 +52,12 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
       errors.push_back(*error);
     }
   }
+  // The configuration reader checked that each node's bus is a LIN bus.
+  for (const LinNodeConfig& n : sim->config_.lin_nodes) {
+    const std::size_t bus = *sim->bus_index(n.bus);
+    sim->lin_nodes_.push_back(
+        make_lin_node(n, bus, *sim->lin_buses_[bus], sim->config_.buses[bus].bitrate));
+  }
   if (!errors.empty()) {
     return tl::unexpected(errors);
   }
@@ -57,6 +66,13 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
 
 void Simulation::add_bus(const BusConfig& b) {
   buses_.push_back(std::make_unique<CanBus>(scheduler_, b.name));
+  std::unique_ptr<lin::LinBus> lin_bus;
+  if (b.kind == BusKind::lin) {
+    lin::Layout layout;
+    layout.bitrate = b.bitrate;
+    lin_bus = std::make_unique<lin::LinBus>(scheduler_, layout);
+  }
+  lin_buses_.push_back(std::move(lin_bus));
   nodes_.add_bus(*buses_.back(), b.kind == BusKind::can_fd);
   scenarios_.add_bus(*buses_.back(), b);
 }
@@ -94,6 +110,10 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     }
     buses.push_back(bus);
   }
+  std::vector<DeviceRegistry::LinController> lin;
+  if (auto error = lin_controllers(d, lin)) {
+    return error;
+  }
   std::vector<DeviceRegistry::Controller> controllers;
   for (std::size_t i = 0; i < buses.size(); ++i) {
     DeviceRegistry::Controller c;
@@ -112,7 +132,24 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     c.line->set_low_speed(config_.buses[c.bus].low_speed);
     controllers.push_back(std::move(c));
   }
-  devices_.add_configured(d, std::move(controllers));
+  devices_.add_configured(d, std::move(controllers), std::move(lin));
+  return std::nullopt;
+}
+
+std::optional<std::string> Simulation::lin_controllers(
+    const DeviceConfig& d, std::vector<DeviceRegistry::LinController>& out) {
+  for (std::size_t i = 0; i < d.lin.size(); ++i) {
+    const std::size_t bus = *bus_index(d.lin[i]);
+    if (lin_buses_[bus] == nullptr) {  // checked against the bus as it runs
+      return fmt::format("{}:{}: device {}: bus {} is not a LIN bus", config_.source, d.line,
+                         d.name, d.lin[i]);
+    }
+    // Offline until an application initializes and starts it, as on a real adapter.
+    out.push_back(DeviceRegistry::LinController{
+        fmt::format("{}:{}", d.name, d.controllers.size() + i), bus,
+        std::make_shared<ixxat::LinLine>(scheduler_, *lin_buses_[bus], ixxat::Clocks{},
+                                         scheduler_.now())});
+  }
   return std::nullopt;
 }
 
@@ -167,7 +204,7 @@ bool same(const BusConfig& a, const BusConfig& b) {
 
 bool same(const DeviceConfig& a, const DeviceConfig& b) {
   return a.name == b.name && a.model == b.model && a.controllers == b.controllers &&
-         a.mdd_version == b.mdd_version && a.buffer_load_ns == b.buffer_load_ns;
+         a.lin == b.lin && a.mdd_version == b.mdd_version && a.buffer_load_ns == b.buffer_load_ns;
 }
 
 template <class T>
@@ -238,6 +275,14 @@ ReloadReport Simulation::reload(const Config& fresh) {
       r.applied.push_back(fmt::format("device {}: added", d.name));
     }
   }
+  const bool same_lin_nodes =
+      fresh.lin_nodes.size() == config_.lin_nodes.size() &&
+      std::equal(fresh.lin_nodes.begin(), fresh.lin_nodes.end(), config_.lin_nodes.begin(),
+                 [](const LinNodeConfig& a, const LinNodeConfig& b) { return a.same_as(b); });
+  if (!same_lin_nodes) {
+    r.refused.push_back(
+        "lin_node: the simulated LIN nodes stay as they are (a restart changes them)");
+  }
   if (fresh.security.allowed_users != config_.security.allowed_users ||
       fresh.security.allowed_groups != config_.security.allowed_groups) {
     config_.security = fresh.security;
@@ -261,11 +306,17 @@ Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t 
 
 Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t bus,
                                                    uint32_t owner_pid) {
-  HostedNode& node = nodes_.spare(bus);
   // Powered on at the last whole microsecond: the time stamps of every adapter then tick
   // together (1 us), and the same frame carries the same time stamp on all of them.
   const int64_t now_ns = scheduler_.now().ns();
   const SimTime power_on = SimTime::from_ns(now_ns - now_ns % 1000);
+  if (lin_buses_[bus] != nullptr) {  // an adapter with one LIN controller
+    devices_.add_lin_ephemeral(
+        name, bus, owner_pid,
+        std::make_shared<ixxat::LinLine>(scheduler_, *lin_buses_[bus], ixxat::Clocks{}, power_on));
+    return DeviceLease(this, std::move(name));
+  }
+  HostedNode& node = nodes_.spare(bus);
   auto line = std::make_shared<ixxat::CanLine>(scheduler_, node, ixxat::Clocks{}, power_on);
   line->set_low_speed(config_.buses[bus].low_speed);
   devices_.add_ephemeral(name, bus, node, owner_pid, std::move(line));

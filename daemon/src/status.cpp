@@ -23,6 +23,15 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
     s.low_speed = c.low_speed ? 1 : 0;
     s.bitrate = c.bitrate;
     s.data_bitrate = c.data_bitrate;
+    if (const lin::LinBus* lin = sim.lin_bus(i)) {
+      // A LIN bus: frames whole, frames with an error, and its load since the start.
+      const lin::LinBusStats& st = lin->stats();
+      s.frames = st.frames;
+      s.error_frames = st.errors;
+      s.load_permille =
+          now.ns() > 0 ? static_cast<uint32_t>((st.busy_ns * 1000 + now.ns() / 2) / now.ns()) : 0;
+      continue;
+    }
     s.load_permille = static_cast<uint32_t>(b.bus_load_percent(now) * 10 + 0.5);
     s.frames = b.frames_on_bus();
     s.error_frames = b.error_frames_on_bus();
@@ -48,14 +57,49 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
   auto add_node = [&](const std::string& name, std::size_t bus, HostedNode& node) {
     add_controller(name, bus, node.controller(), node.node());
   };
+  // A LIN controller: online or offline, and what it did (no error counters).
+  auto add_lin = [&](const std::string& name, std::size_t bus, const ixxat::LinLine& line) {
+    if (n == ipc::kMaxStatusNodes) {
+      return;
+    }
+    ipc::StatusNode& s = r.nodes[n++];
+    ipc::copy_name(s.name, name);
+    s.bus = static_cast<uint16_t>(bus);
+    s.lin = static_cast<uint8_t>(line.online() ? ipc::WireLinState::online
+                                               : ipc::WireLinState::offline);
+    s.frames_sent = line.stats().frames_sent;
+    s.frames_received = line.stats().frames_received;
+    s.errors = line.stats().errors;
+  };
   const DeviceRegistry& devices = sim.devices();
   for (const DeviceRegistry::Configured& d : devices.configured()) {
     for (const DeviceRegistry::Controller& c : d.controllers) {
       add_node(c.name, c.bus, *c.node);
     }
+    for (const DeviceRegistry::LinController& c : d.lin) {
+      add_lin(c.name, c.bus, *c.line);
+    }
   }
   for (const DeviceRegistry::Ephemeral& e : devices.ephemeral()) {
     add_node(e.name + ":0", e.bus, *e.node);
+  }
+  for (const DeviceRegistry::LinEphemeral& e : devices.lin_ephemeral()) {
+    add_lin(e.name + ":0", e.bus, *e.line);
+  }
+  // Simulated LIN nodes: powered (online) or switched off; sent: headers and responses.
+  for (const SimulatedLinNode& l : sim.lin_nodes()) {
+    if (n == ipc::kMaxStatusNodes) {
+      break;
+    }
+    ipc::StatusNode& s = r.nodes[n++];
+    ipc::copy_name(s.name, l.name);
+    s.bus = static_cast<uint16_t>(l.bus);
+    s.lin = static_cast<uint8_t>(l.ecu->powered() ? ipc::WireLinState::online
+                                                  : ipc::WireLinState::offline);
+    const lin::EcuCounters& c = l.ecu->counters();
+    s.frames_sent = c.headers + c.responses;
+    s.frames_received = c.frames;
+    s.errors = c.errors;
   }
   // X-CAN-2i interfaces: the 82527's counters are the model's (the chip shows them to nobody
   // else).
@@ -72,7 +116,7 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
   const DeviceRegistry& devices = sim.devices();
   r.generation = devices.generation();
   r.total = static_cast<uint16_t>(devices.configured().size() + devices.xcan().size() +
-                                  devices.ephemeral().size());
+                                  devices.ephemeral().size() + devices.lin_ephemeral().size());
   std::size_t n = 0;
   for (const DeviceRegistry::Configured& d : devices.configured()) {
     if (n == ipc::kMaxDevices) {
@@ -84,10 +128,17 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
     e.model = static_cast<uint8_t>(c.model == DeviceModel::ixxat_usb_to_can
                                        ? ipc::WireDeviceModel::ixxat_usb_to_can
                                        : ipc::WireDeviceModel::ixxat_usb_to_can_fd);
-    e.controller_count = static_cast<uint8_t>(c.controllers.size());
-    for (std::size_t k = 0; k < c.controllers.size() && k < ipc::kMaxDeviceControllers; ++k) {
-      ipc::copy_name(e.buses[k], c.controllers[k]);
-      e.controller_fd[k] = c.model == DeviceModel::ixxat_usb_to_can ? 0 : 1;
+    std::vector<std::string> buses = c.controllers;
+    buses.insert(buses.end(), c.lin.begin(), c.lin.end());
+    e.controller_count =
+        static_cast<uint8_t>(std::min<std::size_t>(buses.size(), ipc::kMaxDeviceControllers));
+    for (std::size_t k = 0; k < e.controller_count; ++k) {
+      ipc::copy_name(e.buses[k], buses[k]);
+      const auto kind = k >= c.controllers.size() ? ipc::WireControllerKind::lin
+                        : c.model == DeviceModel::ixxat_usb_to_can
+                            ? ipc::WireControllerKind::can
+                            : ipc::WireControllerKind::can_fd;
+      e.controller_fd[k] = static_cast<uint8_t>(kind);
     }
     e.vci_id = d.vci_id;
     if (!d.controllers.empty() && d.controllers[0].line) {
@@ -110,25 +161,40 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
       ipc::copy_name(e.buses[k], x.config.controllers[k]);
     }
   }
-  for (const DeviceRegistry::Ephemeral& x : devices.ephemeral()) {
+  // An ephemeral device's entry: one controller on `bus`, of the client `owner_pid`; a VCI
+  // adapter when `vci_id` is set.
+  auto add_ephemeral = [&](const std::string& name, std::size_t bus, uint32_t owner_pid,
+                           uint64_t vci_id, SimTime epoch) -> ipc::DeviceEntry* {
     if (n == ipc::kMaxDevices) {
-      break;
+      return nullptr;
     }
     ipc::DeviceEntry& e = r.devices[n++];
-    ipc::copy_name(e.name, x.name);
-    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::ephemeral);
+    ipc::copy_name(e.name, name);
+    e.model = static_cast<uint8_t>(vci_id != 0 ? ipc::WireDeviceModel::ixxat_usb_to_can
+                                               : ipc::WireDeviceModel::ephemeral);
     e.controller_count = 1;
     e.ephemeral = 1;
-    e.owner_pid = x.owner_pid;
-    ipc::copy_name(e.buses[0], sim.bus_config(x.bus).name);
-    if (x.line) {  // a VCI adapter
-      const bool fd = x.line->fd_controller();
-      e.model = static_cast<uint8_t>(fd ? ipc::WireDeviceModel::ixxat_usb_to_can_fd
-                                        : ipc::WireDeviceModel::ixxat_usb_to_can);
-      e.controller_fd[0] = fd ? 1 : 0;
-      e.vci_id = x.vci_id;
-      e.epoch_ns = x.line->epoch().ns();
-      ipc::copy_name(e.hardware_id, hardware_id(x.name));
+    e.owner_pid = owner_pid;
+    ipc::copy_name(e.buses[0], sim.bus_config(bus).name);
+    if (vci_id != 0) {
+      e.vci_id = vci_id;
+      e.epoch_ns = epoch.ns();
+      ipc::copy_name(e.hardware_id, hardware_id(name));
+    }
+    return &e;
+  };
+  for (const DeviceRegistry::Ephemeral& x : devices.ephemeral()) {
+    ipc::DeviceEntry* e = add_ephemeral(x.name, x.bus, x.owner_pid, x.line ? x.vci_id : 0,
+                                        x.line ? x.line->epoch() : SimTime{});
+    if (e != nullptr && x.line && x.line->fd_controller()) {
+      e->model = static_cast<uint8_t>(ipc::WireDeviceModel::ixxat_usb_to_can_fd);
+      e->controller_fd[0] = static_cast<uint8_t>(ipc::WireControllerKind::can_fd);
+    }
+  }
+  for (const DeviceRegistry::LinEphemeral& x : devices.lin_ephemeral()) {
+    ipc::DeviceEntry* e = add_ephemeral(x.name, x.bus, x.owner_pid, x.vci_id, x.line->epoch());
+    if (e != nullptr) {
+      e->controller_fd[0] = static_cast<uint8_t>(ipc::WireControllerKind::lin);
     }
   }
   r.count = static_cast<uint16_t>(n);

@@ -19,6 +19,12 @@ VciHandle::~VciHandle() {
     case Kind::scheduler:
       line_->close_scheduler();
       break;
+    case Kind::lin_control:
+      lin_->close_control();
+      break;
+    case Kind::lin_monitor:
+      lin_->close_monitor(monitor_);  // before the port goes: the line lets go of it
+      break;
   }
 }
 
@@ -112,7 +118,9 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
   bool with_fds = false;
   std::vector<int> fifo_fds;
   const auto op = static_cast<ipc::VciOp>(m.op);
-  if (is_open(op)) {
+  if (is_lin(op)) {
+    lin(session, m, r, fds, with_fds);
+  } else if (is_open(op)) {
     open(session, m, r);
   } else if (op == ipc::VciOp::fifo_create || op == ipc::VciOp::fifo_access ||
              op == ipc::VciOp::fifo_side) {
@@ -138,6 +146,8 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
   } else if (op == ipc::VciOp::close) {
     close(session, m.handle);
     r.hresult = VCI_OK;
+  } else if (it->second->is_lin()) {
+    r.hresult = VCI_E_INVALID_HANDLE;  // not an operation of a LIN object
   } else {
     VciHandle& h = *it->second;
     ixxat::CanLine& line = h.line();
@@ -216,11 +226,7 @@ void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciRep
       }
       break;
     case ipc::VciOp::channel_open: {
-      std::size_t channels = 0;
-      for (const auto& [id, other] : session.handles) {
-        channels += other->kind() == VciHandle::Kind::channel ? 1 : 0;
-      }
-      if (channels >= kMaxVciChannelsPerClient) {
+      if (receivers(session) >= kMaxVciChannelsPerClient) {
         r.hresult = VCI_E_OUTOFMEMORY;
         return;
       }
@@ -241,9 +247,12 @@ void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciRep
       }
       break;
   }
-  if (!h) {
-    return;
+  if (h) {
+    add_handle(session, std::move(h), r);
   }
+}
+
+void VciService::add_handle(VciSession& session, std::unique_ptr<VciHandle> h, ipc::VciReply& r) {
   uint32_t id = session.next_handle++;
   while (id == 0 || session.handles.count(id) != 0) {
     id = session.next_handle++;
@@ -419,8 +428,8 @@ void VciService::create_device(VciSession& session, const ipc::VciRequest& m, ip
   std::memcpy(bus_name, m.payload, sizeof bus_name);
   const auto bus = sim_.bus_index(ipc::name_of(bus_name));
   std::string name = ipc::name_of(m.device);
-  if (!bus || sim_.bus_config(*bus).kind == BusKind::lin) {
-    r.hresult = VCI_E_INVALIDARG;  // no CAN bus of that name
+  if (!bus) {
+    r.hresult = VCI_E_INVALIDARG;  // no bus of that name
     return;
   }
   if (session.devices.size() >= kMaxVciDevicesPerClient) {

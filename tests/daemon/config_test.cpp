@@ -11,18 +11,22 @@ std::vector<std::string> errors_of(std::string_view text) {
   return c ? std::vector<std::string>{} : c.error();
 }
 
-TEST(Config, EmbeddedDefaultHasTwoBusesAndOneAdapterWithTwoControllers) {
+TEST(Config, EmbeddedDefaultHasTwoCanBusesALinBusAndOneAdapterOnAllThree) {
   auto c = load_default_config();
   ASSERT_TRUE(c) << c.error().front();
   EXPECT_EQ(c->source, "<embedded default>");
-  ASSERT_EQ(c->buses.size(), 2u);
-  for (const BusConfig& b : c->buses) {
-    EXPECT_EQ(b.kind, BusKind::can);
-    EXPECT_EQ(b.bitrate, 500000u);
+  ASSERT_EQ(c->buses.size(), 3u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(c->buses[i].kind, BusKind::can);
+    EXPECT_EQ(c->buses[i].bitrate, 500000u);
   }
+  EXPECT_EQ(c->buses[2].name, "lin0");
+  EXPECT_EQ(c->buses[2].kind, BusKind::lin);
+  EXPECT_EQ(c->buses[2].bitrate, 19200u);
   ASSERT_EQ(c->devices.size(), 1u);
   EXPECT_EQ(c->devices[0].model, DeviceModel::ixxat_usb_to_can);
   EXPECT_EQ(c->devices[0].controllers, (std::vector<std::string>{"can0", "can1"}));
+  EXPECT_EQ(c->devices[0].lin, (std::vector<std::string>{"lin0"}));
   EXPECT_EQ(c->simulation.time.mode, TimeMode::realtime);
 }
 

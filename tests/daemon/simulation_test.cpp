@@ -30,12 +30,12 @@ TEST(SimulationReload, AddsNewBusesAndDevicesAndTellsOfTheDevice) {
   EXPECT_EQ(r.applied, (std::vector<std::string>{"bus can2: added (can at 250000 bit/s)",
                                                  "device ixxat1: added"}));
   EXPECT_TRUE(r.refused.empty());
-  EXPECT_EQ(sim->bus_count(), 3u);
-  EXPECT_EQ(sim->bus_index("can2"), 2u);
-  EXPECT_EQ(sim->scenarios().bus_count(), 3u);
+  EXPECT_EQ(sim->bus_count(), 4u);
+  EXPECT_EQ(sim->bus_index("can2"), 3u);
+  EXPECT_EQ(sim->scenarios().bus_count(), 4u);
   EXPECT_EQ(sim->devices().vci_id_of("ixxat1"), 2u);
   ASSERT_TRUE(sim->devices().find_node("ixxat1:0"));
-  EXPECT_EQ(sim->devices().find_node("ixxat1:0")->bus, 2u);
+  EXPECT_EQ(sim->devices().find_node("ixxat1:0")->bus, 3u);
   EXPECT_EQ(told, (std::vector<std::string>{"ixxat1"}));
   EXPECT_EQ(sim->devices().generation(), 1u);
 }

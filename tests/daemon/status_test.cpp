@@ -26,9 +26,12 @@ TEST(DeviceList, ShowsConfiguredAdaptersThenEphemeralDevicesWithTheirIds) {
   const ipc::DeviceEntry& a = r.devices[0];
   EXPECT_EQ(ipc::name_of(a.name), "ixxat0");
   EXPECT_EQ(a.model, static_cast<uint8_t>(ipc::WireDeviceModel::ixxat_usb_to_can));
-  EXPECT_EQ(a.controller_count, 2u);
+  EXPECT_EQ(a.controller_count, 3u);  // two CAN controllers, then the LIN one
   EXPECT_EQ(ipc::name_of(a.buses[0]), "can0");
   EXPECT_EQ(ipc::name_of(a.buses[1]), "can1");
+  EXPECT_EQ(ipc::name_of(a.buses[2]), "lin0");
+  EXPECT_EQ(a.controller_fd[1], static_cast<uint8_t>(ipc::WireControllerKind::can));
+  EXPECT_EQ(a.controller_fd[2], static_cast<uint8_t>(ipc::WireControllerKind::lin));
   EXPECT_EQ(a.vci_id, 1u);
   EXPECT_EQ(a.epoch_ns, 0);
   EXPECT_EQ(a.ephemeral, 0u);
@@ -56,19 +59,27 @@ TEST(Status, ListsTheBusesThenEveryDevicesNodes) {
   auto r = ipc::make_message<ipc::StatusReply>();
   fill_status(*sim, r);
   EXPECT_EQ(r.sim_time_ns, 5'000'000);
-  ASSERT_EQ(r.bus_count, 2u);
+  ASSERT_EQ(r.bus_count, 3u);
   EXPECT_EQ(ipc::name_of(r.buses[0].name), "can0");
   EXPECT_EQ(r.buses[1].bitrate, 500'000u);
   EXPECT_EQ(r.buses[1].kind, static_cast<uint8_t>(BusKind::can));
   EXPECT_EQ(r.buses[0].load_permille, 0u);
-  ASSERT_EQ(r.node_count, 3u);
+  EXPECT_EQ(ipc::name_of(r.buses[2].name), "lin0");
+  EXPECT_EQ(r.buses[2].kind, static_cast<uint8_t>(BusKind::lin));
+  EXPECT_EQ(r.buses[2].bitrate, 19'200u);
+  EXPECT_EQ(r.buses[2].frames, 0u);
+  ASSERT_EQ(r.node_count, 4u);
   EXPECT_EQ(ipc::name_of(r.nodes[0].name), "ixxat0:0");
+  EXPECT_EQ(r.nodes[0].lin, static_cast<uint8_t>(ipc::WireLinState::none));
   EXPECT_EQ(ipc::name_of(r.nodes[1].name), "ixxat0:1");
   EXPECT_EQ(r.nodes[1].bus, 1u);
-  EXPECT_EQ(ipc::name_of(r.nodes[2].name), "eph1:0");
-  EXPECT_EQ(r.nodes[2].bus, 1u);
-  EXPECT_EQ(r.nodes[2].state, static_cast<uint8_t>(model::ErrorState::active));
-  EXPECT_EQ(r.nodes[2].tec, 0u);
+  EXPECT_EQ(ipc::name_of(r.nodes[2].name), "ixxat0:2");  // the LIN controller, offline
+  EXPECT_EQ(r.nodes[2].bus, 2u);
+  EXPECT_EQ(r.nodes[2].lin, static_cast<uint8_t>(ipc::WireLinState::offline));
+  EXPECT_EQ(ipc::name_of(r.nodes[3].name), "eph1:0");
+  EXPECT_EQ(r.nodes[3].bus, 1u);
+  EXPECT_EQ(r.nodes[3].state, static_cast<uint8_t>(model::ErrorState::active));
+  EXPECT_EQ(r.nodes[3].tec, 0u);
 }
 
 }  // namespace

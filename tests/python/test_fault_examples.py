@@ -48,7 +48,7 @@ def start_default_daemon() -> Daemon:
     d = Daemon(None, canemud=str(CANEMUD), args=["--time", "stepped"])
     assert canemu.sim_time() == (0, 2)  # stepped, nothing run yet
     assert [(b["name"], b["kind"], b["bitrate"]) for b in canemu.buses()] == [
-        ("can0", "can", 500_000), ("can1", "can", 500_000)]
+        ("can0", "can", 500_000), ("can1", "can", 500_000), ("lin0", "lin", 19_200)]
     return d
 
 

@@ -3,15 +3,18 @@ LIN nodes, checked by canemud's own configuration reader."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+import canemu
 from canemu import ldf
 
-from conftest import CANEMUD, REPO
+from canemu.testing import Daemon
+from conftest import BUILD, CANEMUD, REPO
 
 DOORS = REPO / "tests" / "data" / "lin" / "doors.ldf"
 LIN_BUS = '[[bus]]\nname = "lin0"\nkind = "lin"\nbitrate = 19200\n\n'
@@ -74,3 +77,33 @@ def test_mistakes_are_named(tmp_path):
                               "--bus", "lin0"], capture_output=True, text=True)
     assert missing.returncode == 1
     assert "none.ldf" in missing.stderr and "Traceback" not in missing.stderr
+
+
+def test_an_ldf_cluster_runs_with_a_real_program_as_one_responder():
+    """doors.ldf imported: canemud plays the BCM (its Normal schedule: 0x10, 0x20, 0x21, 10 ms
+    each) and DoorLeft; a VCI program on the adapter's LIN controller plays DoorRight (0x21)."""
+    nodes = subprocess.run([sys.executable, "-m", "canemu.ldf", str(DOORS), "--bus", "lin0",
+                            "--real", "DoorRight"], capture_output=True, text=True,
+                           check=True).stdout
+    adapter = ('[[bus]]\nname = "can0"\nkind = "can"\n\n[[device]]\nname = "ixxat0"\n'
+               'model = "ixxat-usb-to-can"\ncontrollers = ["can0"]\nlin = ["lin0"]\n\n')
+    daemon = Daemon('[simulation]\ntime = "stepped"\n\n' + LIN_BUS + adapter + nodes,
+                    canemud=str(CANEMUD))
+    program = None
+    try:
+        env = dict(os.environ, CANEMU_SOCKET=daemon.socket)
+        program = subprocess.Popen([str(BUILD / "bin" / "vci_c_talk"), "lin", "ixxat0", "21", "32"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                   env=env)
+        assert program.stdout.readline() == "ready\n"
+        assert canemu.step(30_000_000) == 30_000_000
+        out, _ = program.communicate(timeout=10)
+        # Each frame's time stamp is the end of its checksum: 34 + 10 x (bytes + 1) bits from
+        # its slot's start at 19200 bit/s (BodyCommand 2 bytes, LeftStatus 3, the program's 1).
+        assert out.splitlines() == ["3333 us: 10#00", "13854 us: 20#00",
+                                    "22812 us: 21#32 (mine)"]
+        assert program.returncode == 0
+    finally:
+        if program is not None and program.poll() is None:
+            program.kill()
+        daemon.stop()

@@ -26,10 +26,14 @@ TEST(Canemud, ServesTheEmbeddedDefaultAndStepsTimeExactly) {
   const ipc::StatusReply s = status(c);
   EXPECT_EQ(s.time_mode, static_cast<uint8_t>(ipc::WireTimeMode::stepped));
   EXPECT_EQ(s.sim_time_ns, 0);
-  ASSERT_EQ(s.bus_count, 2);
+  ASSERT_EQ(s.bus_count, 3);
   EXPECT_EQ(ipc::name_of(s.buses[0].name), "can0");
   EXPECT_EQ(s.buses[1].bitrate, 500000u);
-  ASSERT_EQ(s.node_count, 2);
+  EXPECT_EQ(ipc::name_of(s.buses[2].name), "lin0");
+  EXPECT_EQ(s.buses[2].bitrate, 19200u);
+  ASSERT_EQ(s.node_count, 3);
+  EXPECT_EQ(ipc::name_of(s.nodes[2].name), "ixxat0:2");
+  EXPECT_EQ(s.nodes[2].lin, static_cast<uint8_t>(ipc::WireLinState::offline));
   EXPECT_EQ(ipc::name_of(s.nodes[1].name), "ixxat0:1");
   EXPECT_EQ(s.nodes[1].bus, 1);
   EXPECT_EQ(s.nodes[0].state, static_cast<uint8_t>(ipc::WireErrorState::active));
@@ -95,7 +99,7 @@ TEST(Canemud, MalformedMessagesGetErrorsAndOthersAreStillServed) {
   std::vector<uint8_t> huge(ipc::kMaxMessageSize + 100, 0xAB);
   ASSERT_TRUE(ipc::send_packet(raw->get(), huge.data(), huge.size()));
   // The well-behaved client is served all along.
-  EXPECT_EQ(status(good).bus_count, 2);
+  EXPECT_EQ(status(good).bus_count, 3);
 }
 
 TEST(Canemud, AClientThatGoesAwayIsForgotten) {
@@ -256,7 +260,7 @@ TEST(Canemud, AClientThatAsksAndLeavesAtOnceDoesNotHurtTheDaemon) {
     ASSERT_TRUE(ipc::send_message(c->fd(), req));
     // c closes here, before reading the reply
   }
-  EXPECT_EQ(status(keeper).bus_count, 2);
+  EXPECT_EQ(status(keeper).bus_count, 3);
   EXPECT_EQ(status(keeper).client_count, 1);
 }
 
@@ -266,7 +270,7 @@ TEST(Canemud, ASecondDaemonDoesNotStealALiveSocket) {
   ASSERT_FALSE(second);
   EXPECT_NE(second.error().message.find("another canemud is listening"), std::string::npos);
   auto c = connect(d);
-  EXPECT_EQ(status(c).bus_count, 2);
+  EXPECT_EQ(status(c).bus_count, 3);
 }
 
 TEST(Canemud, NobodyListeningIsAClearError) {
@@ -330,7 +334,7 @@ TEST(Canemud, TakesTheSocketSystemdPassesAndLeavesItsFileToSystemd) {
   ASSERT_TRUE(d.read_until("listening on " + path)) << d.log;
   auto c = client::Connection::open(path, "activated");
   ASSERT_TRUE(c) << c.error().message;
-  EXPECT_EQ(status(*c).bus_count, 2);
+  EXPECT_EQ(status(*c).bus_count, 3);  // can0, can1, lin0
   EXPECT_EQ(d.stop(), 0);
   struct stat st {};
   ASSERT_EQ(::stat(path.c_str(), &st), 0) << "the file is systemd's";

@@ -84,10 +84,10 @@ TEST(Channels, FramesGoBetweenClientsAtTheirExactSimulatedInstants) {
   }
   // Both ephemeral nodes show in the status, with their counts.
   const ipc::StatusReply s = status(ca);
-  ASSERT_EQ(s.node_count, 4);
-  EXPECT_EQ(ipc::name_of(s.nodes[2].name), a.device() + ":0");
-  EXPECT_EQ(s.nodes[2].frames_sent, 3u);
-  EXPECT_EQ(s.nodes[3].frames_received, 3u);
+  ASSERT_EQ(s.node_count, 5);  // after ixxat0's three controllers
+  EXPECT_EQ(ipc::name_of(s.nodes[3].name), a.device() + ":0");
+  EXPECT_EQ(s.nodes[3].frames_sent, 3u);
+  EXPECT_EQ(s.nodes[4].frames_received, 3u);
   auto st = b.status();
   ASSERT_TRUE(st) << st.error().message;
   EXPECT_EQ(st->frames_received, 3u);
@@ -253,7 +253,7 @@ TEST(Channels, BadOpenAndCloseRequestsAreRefusedByName) {
   ASSERT_FALSE(cr);
   EXPECT_NE(cr.error().message.find("no_such_channel"), std::string::npos);
   // Nothing of it left a device behind.
-  EXPECT_EQ(status(c).node_count, 2);
+  EXPECT_EQ(status(c).node_count, 3);
 }
 
 TEST(Channels, DevicesComeAndGoWithNotifications) {
@@ -272,7 +272,7 @@ TEST(Channels, DevicesComeAndGoWithNotifications) {
     ASSERT_TRUE(list);
     ASSERT_EQ(list->count, 2);
     EXPECT_EQ(ipc::name_of(list->devices[0].name), "ixxat0");
-    EXPECT_EQ(list->devices[0].controller_count, 2);
+    EXPECT_EQ(list->devices[0].controller_count, 3);  // and the LIN controller
     EXPECT_EQ(ipc::name_of(list->devices[0].buses[1]), "can1");
     EXPECT_EQ(ipc::name_of(list->devices[1].name), "tester");
     EXPECT_EQ(list->devices[1].ephemeral, 1);
@@ -289,7 +289,7 @@ TEST(Channels, DevicesComeAndGoWithNotifications) {
   ASSERT_TRUE(removed);
   EXPECT_EQ(removed->kind, static_cast<uint32_t>(ipc::NotificationKind::device_removed));
   EXPECT_EQ(ipc::name_of(removed->device), "tester");
-  EXPECT_EQ(status(watcher).node_count, 2);
+  EXPECT_EQ(status(watcher).node_count, 3);
 }
 
 // A client killed while its channel is busy: its device goes, and a new client reuses the node.
@@ -341,8 +341,8 @@ TEST(Channels, AClientThatDiesIsCleanedUp) {
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].id, 0x43u);
   const ipc::StatusReply s = status(c);
-  EXPECT_EQ(s.node_count, 4);  // ixxat0's two controllers, doomed's node again, the partner
-  EXPECT_EQ(s.nodes[2].frames_sent, 1u);
+  EXPECT_EQ(s.node_count, 5);  // ixxat0's three controllers, doomed's node again, the partner
+  EXPECT_EQ(s.nodes[3].frames_sent, 1u);
 }
 
 // A client that writes nonsense into its ring positions is disconnected; others go on.
@@ -371,7 +371,7 @@ TEST(Channels, CorruptedRingPositionsDisconnectOnlyThatClient) {
     auto n = ipc::receive_packet(bad.fd(), buffer, 5000);
     ASSERT_TRUE(n) << n.error().message;
     EXPECT_EQ(*n, 0u) << which;
-    EXPECT_EQ(status(good).node_count, 3) << which;
+    EXPECT_EQ(status(good).node_count, 4) << which;
   }
 }
 
@@ -392,7 +392,7 @@ TEST(Channels, AFloodOfJunkIsRejectedWithoutHoldingTheLoop) {
     ASSERT_TRUE(junk->send(bad));
   }
   step(c, 1'000'000);
-  EXPECT_EQ(status(other).bus_count, 2);
+  EXPECT_EQ(status(other).bus_count, 3);
   uint64_t rejected = 0;
   for (int k = 0; k < 1000 && rejected < 2000; ++k) {
     auto st = junk->status();

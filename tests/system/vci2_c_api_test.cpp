@@ -13,6 +13,7 @@
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "vci_lin_test_support.hpp"
 #include "vci_test_support.hpp"
 #include "vcinpl2.h"
 
@@ -381,6 +382,49 @@ TEST(Vci2CApi, AJunkFloodDoesNotDelayAnotherClientsAnswers) {
     vciDeviceClose(gamma);
   }
   canemuConnect(nullptr);
+}
+
+// libvcinpl2 has the LIN functions of libvcinpl (vcinpl_lin.h): a master's header, a slave's
+// answer, a monitor that reads several messages at once (vci_c_api_lin_test.cpp has the rest).
+TEST(Vci2C, LinMasterAndSlaveExchangeAFrame) {
+  using namespace testing;
+  VciDaemon d(kLinAdapters);
+  HANDLE devs[2] = {device_named("alpha"), device_named("beta")};
+  HANDLE controls[2] = {};
+  HANDLE monitors[2] = {};
+  for (int i = 0; i < 2; ++i) {
+    ASSERT_EQ(linControlOpen(devs[i], kLinNo, &controls[i]), VCI_OK);
+    ASSERT_EQ(linMonitorOpen(devs[i], kLinNo, FALSE, &monitors[i]), VCI_OK);
+    ASSERT_EQ(linMonitorInitialize(monitors[i], 16, 1), VCI_OK);
+    ASSERT_EQ(linMonitorActivate(monitors[i], TRUE), VCI_OK);
+    ASSERT_EQ(
+        linControlInitialize(controls[i], i == 0 ? LIN_OPMODE_MASTER : LIN_OPMODE_SLAVE, kRate),
+        VCI_OK);
+    ASSERT_EQ(linControlStart(controls[i], TRUE), VCI_OK);
+  }
+  LINMSG response = lin_data(0x2A, {0xDE, 0xAD}, true);
+  ASSERT_EQ(linControlWriteMessage(controls[1], FALSE, &response), VCI_OK);
+  const int64_t t0 = step_to(1'000'000);
+  LINMSG header = lin_data(0x2A, {}, true, true);
+  ASSERT_EQ(linControlWriteMessage(controls[0], TRUE, &header), VCI_OK);
+  step_to(10'000'000);
+  LINMSG got[4] = {};
+  UINT32 done = 0;
+  ASSERT_EQ(linMonitorReadMsgMult(monitors[0], 100, got, 4, &done), VCI_OK);
+  ASSERT_EQ(done, 2U);  // the start's info message, the frame
+  EXPECT_EQ(text_of(got[1]), frame_text(stamp(frame_end(t0, 2)), 0x2A, {0xDE, 0xAD}, true, false));
+  ASSERT_EQ(linMonitorPeekMsgMult(monitors[1], got, 4, &done), VCI_OK);
+  ASSERT_EQ(done, 2U);
+  EXPECT_EQ(text_of(got[1]), frame_text(stamp(frame_end(t0, 2)), 0x2A, {0xDE, 0xAD}, true, true));
+  EXPECT_EQ(linMonitorPeekMsgMult(monitors[1], got, 4, &done), VCI_E_RXQUEUE_EMPTY);
+  EXPECT_EQ(done, 0U);
+  EXPECT_EQ(linMonitorWaitRxEvent(monitors[1], 0), VCI_OK);  // the writes signalled it
+  EXPECT_EQ(linMonitorWaitRxEvent(monitors[1], 0), VCI_E_TIMEOUT);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(linMonitorClose(monitors[i]), VCI_OK);
+    EXPECT_EQ(linControlClose(controls[i]), VCI_OK);
+    vciDeviceClose(devs[i]);
+  }
 }
 
 }  // namespace

@@ -30,6 +30,21 @@ struct Ref {  // releases what it holds
   PVOID* pv() { return reinterpret_cast<PVOID*>(&p); }
 };
 
+// The VciObjectId of the adapter named `name` (0 if there is none), from the device manager.
+inline INT64 vci_id_named(const std::string& name) {
+  Ref<IVciDeviceManager> manager;
+  EXPECT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
+  Ref<IVciEnumDevice> e;
+  EXPECT_EQ(manager->EnumDevices(e.out()), VCI_OK);
+  VCIDEVICEINFO info{};
+  while (e->Next(1, &info, nullptr) == VCI_OK) {
+    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
+      return info.VciObjectId.AsInt64;
+    }
+  }
+  return 0;
+}
+
 // Opens the adapter named `name` the way the guide's walk-through does.
 struct Adapter {
   Ref<IVciDevice> device;
@@ -42,14 +57,9 @@ struct Adapter {
   explicit Adapter(const std::string& name) {
     Ref<IVciDeviceManager> manager;
     EXPECT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
-    Ref<IVciEnumDevice> e;
-    EXPECT_EQ(manager->EnumDevices(e.out()), VCI_OK);
-    VCIDEVICEINFO info{};
-    while (e->Next(1, &info, nullptr) == VCI_OK) {
-      if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-        EXPECT_EQ(manager->OpenDevice(info.VciObjectId, device.out()), VCI_OK);
-      }
-    }
+    VCIID id{};
+    id.AsInt64 = vci_id_named(name);
+    EXPECT_EQ(manager->OpenDevice(id, device.out()), VCI_OK);
     EXPECT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
     EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
     EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);

@@ -52,9 +52,9 @@ typedef struct _CANEMU_DEVICEINFO {
   CHAR szName[32];
   VCIID VciObjectId;
   INT64 qwEpochNs;    /* simulated time of its power-on: its time stamps count from here */
-  UINT8 bControllers; /* CAN controllers, 1 .. CANEMU_MAX_CONTROLLERS */
+  UINT8 bControllers; /* controllers (CAN, then LIN), 1 .. CANEMU_MAX_CONTROLLERS */
   UINT8 bEphemeral;   /* 1: made by canemuCreateDevice (by any process) */
-  UINT8 abFd[CANEMU_MAX_CONTROLLERS]; /* 1: controller N is a CAN FD controller */
+  UINT8 abFd[CANEMU_MAX_CONTROLLERS]; /* controller N: 0 CAN, 1 CAN FD, 2 LIN controller */
   UINT8 abReserved[2];
   CHAR aszBus[CANEMU_MAX_CONTROLLERS][32]; /* the bus each controller is wired to */
 } CANEMU_DEVICEINFO, *PCANEMU_DEVICEINFO;
@@ -77,13 +77,13 @@ HRESULT VCIAPI canemuGetControllerState(HANDLE hObject, PUINT8 pbErrorState, PUI
  * does not run in stepped time; VCI_E_INVALIDARG for 0. */
 HRESULT VCIAPI canemuStepTime(UINT64 qwNanoseconds, UINT64* pqwNow);
 
-/* A new adapter with one CAN controller on the bus named pszBus (an SJA1000 on a classic bus,
- * the CAN FD controller on a CAN FD bus), enumerated like the configured ones from now on and
- * gone when this process disconnects or calls canemuRemoveDevice. pszName NULL or empty:
- * canemud picks a name ("vci1", ...). Its VCIID goes to *pVciid (may be NULL), its name to
- * pszNameOut (cbNameOut bytes, at least 32; may be NULL). VCI_OK; VCI_E_INVALIDARG for an
- * unknown bus or a name that is taken or not a-z, 0-9, '_', '-' (1 to 28); VCI_E_OUTOFMEMORY
- * after 16 on one connection. */
+/* A new adapter with one controller on the bus named pszBus (an SJA1000 on a classic bus,
+ * the CAN FD controller on a CAN FD bus, a LIN controller on a LIN bus), enumerated like the
+ * configured ones from now on and gone when this process disconnects or calls canemuRemoveDevice.
+ * pszName NULL or empty: canemud picks a name ("vci1", ...). Its VCIID goes to *pVciid (may be
+ * NULL), its name to pszNameOut (cbNameOut bytes, at least 32; may be NULL). VCI_OK;
+ * VCI_E_INVALIDARG for an unknown bus or a name that is taken or not a-z, 0-9, '_', '-' (1 to 28);
+ * VCI_E_OUTOFMEMORY after 16 on one connection. */
 HRESULT VCIAPI canemuCreateDevice(const char* pszBus, const char* pszName, PVCIID pVciid,
                                   PCHAR pszNameOut, UINT32 cbNameOut);
 /* Removes an adapter canemuCreateDevice made; objects open on it work until closed. */

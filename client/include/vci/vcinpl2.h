@@ -23,6 +23,7 @@
 
 #include "cantype.h"
 #include "vcierr.h"
+#include "vcinpl_lin.h" /* the LIN functions */
 #include "vcitype.h"
 
 #ifndef VCIAPI

@@ -12,6 +12,7 @@
 
 #include "canemu_events.h"
 #include "cantype.h"
+#include "lintype.h"
 #include "vcierr.h"
 #include "vcitype.h"
 
@@ -48,6 +49,9 @@ extern VCIAPI_DATA const IID IID_IFifoReader;
 extern VCIAPI_DATA const IID IID_IFifoWriter;
 extern VCIAPI_DATA const IID IID_IVciFifo;
 extern VCIAPI_DATA const IID IID_IVciFifo2;
+extern VCIAPI_DATA const IID IID_ILinSocket;
+extern VCIAPI_DATA const IID IID_ILinControl;
+extern VCIAPI_DATA const IID IID_ILinMonitor;
 extern VCIAPI_DATA const CLSID CLSID_VCIBAL;
 }
 
@@ -215,6 +219,43 @@ struct ICanScheduler2 : IUnknown {
   virtual HRESULT RemMessage(UINT32 dwIndex) = 0;
   virtual HRESULT StartMessage(UINT32 dwIndex, UINT16 wRepeat) = 0;
   virtual HRESULT StopMessage(UINT32 dwIndex) = 0;
+};
+
+/* LIN (VCI C++ guide 5.3, 7.7): IBalObject::OpenSocket with IID_ILinSocket or IID_ILinControl
+ * on a LIN controller's bus number (after the adapter's CAN controllers). A socket creates
+ * monitors; a monitor's reader gives LINMSGs. bPid carries the 6-bit identifier (0..63). */
+struct ILinControl : IUnknown {
+  /* Resets first; bOpMode LIN_OPMODE_MASTER / LIN_OPMODE_ERRORS, wBitrate 1000..20000 or
+   * LIN_BITRATE_AUTO (slave). */
+  virtual HRESULT InitLine(PLININITLINE pInitParam) = 0;
+  /* Stops the controller and empties the response table. */
+  virtual HRESULT ResetLine() = 0;
+  virtual HRESULT StartLine() = 0;
+  virtual HRESULT StopLine() = 0;
+  virtual HRESULT GetLineStatus(PLINLINESTATUS pStatus) = 0;
+  /* fSend FALSE: a response table entry; TRUE: transmit (never waits; VCI_E_TXQUEUE_FULL while
+   * the previous one is not done). */
+  virtual HRESULT WriteMessage(BOOL fSend, PLINMSG pLinMsg) = 0;
+};
+
+struct ILinMonitor : IUnknown {
+  /* A receive FIFO of at least wFifoSize LINMSGs (0: VCI_E_INVALIDARG). */
+  virtual HRESULT Initialize(UINT16 wFifoSize) = 0;
+  virtual HRESULT Activate() = 0;
+  virtual HRESULT Deactivate() = 0;
+  /* After Initialize; one reader at a time. */
+  virtual HRESULT GetReader(IFifoReader** ppReader) = 0;
+  virtual HRESULT GetStatus(PLINMONITORSTATUS pStatus) = 0;
+};
+typedef ILinMonitor* PLINMONITOR;
+
+struct ILinSocket : IUnknown {
+  virtual HRESULT GetSocketInfo(PBALSOCKETINFO pSocketInfo) = 0;
+  virtual HRESULT GetCapabilities(PLINCAPABILITIES pLinCaps) = 0;
+  virtual HRESULT GetLineStatus(PLINLINESTATUS pLineStatus) = 0;
+  /* fExclusive TRUE: only when no other monitor exists, and none can be created while it
+   * lives; VCI_E_ACCESSDENIED otherwise. */
+  virtual HRESULT CreateMonitor(BOOL fExclusive, PLINMONITOR* ppMonitor) = 0;
 };
 
 extern "C" {

@@ -81,6 +81,7 @@ CANEMU_BUS_CANFD = 1
 CANEMU_BUS_LIN = 2
 
 CANEMU_MAX_CONTROLLERS = 4
+CANEMU_LIN_CONTROLLER = 2  # CANEMU_DEVICEINFO.abFd of a LIN controller
 CANEMU_MAX_EPHEMERAL = 16  # canemuCreateDevice: adapters per connection (process)
 INFINITE = 0xFFFFFFFF
 

@@ -201,8 +201,11 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
             _call("canemuFindDevice", device.encode(), ctypes.byref(info))
         else:
             controller = 0
-            if not self._find_bus(channel):
+            found = self._find_bus(channel)
+            if not found:
                 raise ValueError(self._unknown_channel(channel))
+            if found.get("kind") == "lin":  # before canemud makes a LIN adapter for nothing
+                raise ValueError(f"channel {channel!r} is on the LIN bus {channel}")
             vciid = _vci.VCIID()
             name = ctypes.create_string_buffer(32)
             hr = _vci.lib().canemuCreateDevice(channel.encode(), None, ctypes.byref(vciid),
@@ -412,6 +415,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         configs: List[Dict[str, Any]] = []
         for d in found_devices:
             for k in range(d.bControllers):
+                if d.abFd[k] == _vci.CANEMU_LIN_CONTROLLER:
+                    continue  # a LIN controller: python-can has no LIN
                 configs.append({
                     "interface": "canemu",
                     "channel": f"{d.szName.decode()}:{k}",

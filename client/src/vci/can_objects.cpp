@@ -284,15 +284,7 @@ template <class Interface, const IID& iid, bool v2>
 class Socket final : public Com<Interface, iid> {
  public:
   explicit Socket(Bus bus) : bus_(std::move(bus)) {}
-  HRESULT GetSocketInfo(PBALSOCKETINFO p) override {
-    if (p == nullptr) {
-      return VCI_E_INVALIDARG;
-    }
-    p->Obid.AsInt64 = static_cast<INT64>((bus_.device.vci_id << 8) | bus_.no);
-    p->Type = bus_.device.caps().BusCtrlTypes[bus_.no];
-    p->BusNo = static_cast<UINT16>(bus_.no);
-    return VCI_OK;
-  }
+  HRESULT GetSocketInfo(PBALSOCKETINFO p) override { return socket_info(bus_, p); }
   // ICanSocket
   HRESULT GetCapabilities(PCANCAPABILITIES p) {
     return line_struct_of(bus_, nullptr, canemu::ipc::kVciCapsOffset, p);
@@ -332,6 +324,16 @@ class Socket final : public Com<Interface, iid> {
 };
 
 }  // namespace
+
+HRESULT socket_info(const Bus& bus, PBALSOCKETINFO p) {
+  if (p == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  p->Obid.AsInt64 = static_cast<INT64>((bus.device.vci_id << 8) | bus.no);
+  p->Type = bus.device.caps().BusCtrlTypes[bus.no];
+  p->BusNo = static_cast<UINT16>(bus.no);
+  return VCI_OK;
+}
 
 HRESULT open_socket(const Bus& bus, REFIID riid, PVOID* ppv) {
   std::unique_ptr<Remote> r;

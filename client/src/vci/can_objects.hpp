@@ -18,4 +18,10 @@ struct Bus {
 // its arguments are checked); VCI_E_NOINTERFACE for any other interface.
 HRESULT open_socket(const Bus& bus, REFIID riid, PVOID* ppv);
 
+// The same for a LIN controller (lin_objects.cpp): ILinSocket or ILinControl.
+HRESULT open_lin_socket(const Bus& bus, REFIID riid, PVOID* ppv);
+
+// ICanSocket::GetSocketInfo and ILinSocket::GetSocketInfo.
+HRESULT socket_info(const Bus& bus, PBALSOCKETINFO p);
+
 }  // namespace canemu::client::vci::cpp

@@ -48,6 +48,9 @@ const IID IID_IFifoReader = guid(13);
 const IID IID_IFifoWriter = guid(14);
 const IID IID_IVciFifo = guid(15);
 const IID IID_IVciFifo2 = guid(16);
+const IID IID_ILinSocket = guid(17);
+const IID IID_ILinControl = guid(18);
+const IID IID_ILinMonitor = guid(19);
 const CLSID CLSID_VCIBAL = guid(0x80);
 }
 

@@ -42,7 +42,9 @@ VCIDEVICECAPS DeviceDesc::caps() const {
   c.BusCtrlCount = static_cast<UINT16>(controller_fd.size());
   for (std::size_t i = 0; i < controller_fd.size() && i < VCI_MAX_BUSCTRL; ++i) {
     c.BusCtrlTypes[i] = static_cast<UINT16>(
-        VCI_BUS_CTRL(VCI_BUS_CAN, controller_fd[i] ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000));
+        controller_lin[i]
+            ? VCI_LIN_CTRL(LIN_CTRL_UNKNOWN)
+            : VCI_BUS_CTRL(VCI_BUS_CAN, controller_fd[i] ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000));
   }
   return c;
 }

@@ -10,6 +10,7 @@
 
 #include "can_objects.hpp"
 #include "com.hpp"
+#include "lin_core.hpp"
 
 namespace canemu::client::vci::cpp {
 
@@ -36,6 +37,9 @@ class Bal final : public Com<IBalObject, IID_IBalObject> {
     }
     if (bus_no >= d_.controller_fd.size()) {
       return VCI_E_INVALIDARG;
+    }
+    if (is_lin_controller(d_, bus_no)) {
+      return open_lin_socket(Bus{d_, bus_no}, riid, ppv);
     }
     return open_socket(Bus{d_, bus_no}, riid, ppv);
   }

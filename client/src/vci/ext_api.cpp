@@ -30,7 +30,7 @@ CANEMU_DEVICEINFO device_info(const DeviceDesc& d) {
   info.bControllers = static_cast<UINT8>(d.controller_fd.size());
   info.bEphemeral = d.ephemeral ? 1 : 0;
   for (std::size_t k = 0; k < d.controller_fd.size() && k < CANEMU_MAX_CONTROLLERS; ++k) {
-    info.abFd[k] = d.controller_fd[k] ? 1 : 0;
+    info.abFd[k] = d.controller_lin[k] ? 2 : d.controller_fd[k] ? 1 : 0;
     std::snprintf(info.aszBus[k], sizeof info.aszBus[k], "%s",
                   k < d.buses.size() ? d.buses[k].c_str() : "");
   }

@@ -150,7 +150,9 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
     d.hardware_id = ipc::name_of(e.hardware_id);
     d.model = e.model;
     for (uint8_t k = 0; k < e.controller_count && k < ipc::kMaxDeviceControllers; ++k) {
-      d.controller_fd.push_back(e.controller_fd[k] != 0);
+      const auto kind = static_cast<ipc::WireControllerKind>(e.controller_fd[k]);
+      d.controller_fd.push_back(kind == ipc::WireControllerKind::can_fd);
+      d.controller_lin.push_back(kind == ipc::WireControllerKind::lin);
       d.buses.push_back(ipc::name_of(e.buses[k]));
     }
     d.ephemeral = e.ephemeral != 0;
@@ -285,12 +287,25 @@ HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_thre
   m.args[1] = tx;
   m.args[2] = filter_size;
   m.args[3] = filter_mode;
+  return map_rings(channel, m, tx != 0, rx_threshold, tx_threshold);
+}
+
+HRESULT Library::init_lin_monitor(ChannelObj& monitor, uint32_t rx, uint32_t rx_threshold) {
+  ipc::VciRequest m{};
+  m.op = static_cast<uint16_t>(ipc::VciOp::lin_monitor_init);
+  m.handle = monitor.handle;
+  m.args[0] = rx;
+  return map_rings(monitor, m, false, rx_threshold, 1);
+}
+
+HRESULT Library::map_rings(ChannelObj& channel, ipc::VciRequest& m, bool has_tx,
+                           uint32_t rx_threshold, uint32_t tx_threshold) {
   ipc::VciReply r{};
   std::vector<ipc::UniqueFd> fds;
   if (HRESULT hr = call(m, r, &fds); hr != VCI_OK) {
     return hr;
   }
-  const uint32_t element = channel.v2 ? sizeof(CANMSG2) : sizeof(CANMSG);
+  const uint32_t element = channel.element_size();
   if (fds.size() != ipc::kChannelFdCount || r.values[2] != element) {
     set_detail(
         fmt::format("canemud sent {} descriptors and {}-byte elements", fds.size(), r.values[2]));
@@ -301,7 +316,7 @@ HRESULT Library::init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_thre
     set_detail("the channel's rings could not be mapped");
     return VCI_E_UNEXPECTED;
   }
-  auto rings = std::make_shared<Rings>(std::move(*mapped), tx != 0);
+  auto rings = std::make_shared<Rings>(std::move(*mapped), has_tx);
   rings->rx.set_threshold(std::max<uint32_t>(rx_threshold, 1));
   rings->tx.set_threshold(std::max<uint32_t>(tx_threshold, 1));
   channel.rings = std::move(rings);

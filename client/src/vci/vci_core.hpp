@@ -19,6 +19,7 @@
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/ring_pair.hpp"
 #include "vci/cantype.h"
+#include "vci/lintype.h"
 #include "vci/vcierr.h"
 #include "vci/vcitype.h"
 
@@ -34,9 +35,10 @@ struct DeviceDesc {
   std::string name;
   uint64_t vci_id = 0;
   std::string hardware_id;
-  uint8_t model = 0;  // ipc::WireDeviceModel
-  std::vector<bool> controller_fd;
-  std::vector<std::string> buses;  // the bus of each controller
+  uint8_t model = 0;                 // ipc::WireDeviceModel
+  std::vector<bool> controller_fd;   // per controller (CAN, then LIN)
+  std::vector<bool> controller_lin;  // a LIN controller
+  std::vector<std::string> buses;    // the bus of each controller
   bool ephemeral = false;
   int64_t epoch_ns = 0;  // simulated time of power-on, the time stamps' zero
   VCIDEVICEINFO info() const;
@@ -55,7 +57,16 @@ std::optional<DeviceDesc> device_by_class(const GUID& cls, uint32_t instance, HR
 
 class Object {
  public:
-  enum class Kind : uint8_t { enumerator, device, control, channel, scheduler, event };
+  enum class Kind : uint8_t {
+    enumerator,
+    device,
+    control,
+    channel,
+    scheduler,
+    event,
+    lin_control,
+    lin_monitor
+  };
   explicit Object(Kind kind) : kind_(kind) {}
   virtual ~Object() = default;
   Kind kind() const { return kind_; }
@@ -111,10 +122,17 @@ struct Rings {
   std::atomic<bool> writer_out{false};
 };
 
+// A CAN channel, or (Kind::lin_monitor) a LIN monitor: a channel with LINMSG elements and no
+// transmit FIFO, read by the same code.
 struct ChannelObj : Remote {
-  ChannelObj(uint32_t remote_handle, const DeviceDesc& on_device, uint32_t bus_no, bool is_v2)
-      : Remote(Kind::channel, remote_handle, on_device, bus_no), v2(is_v2) {}
+  ChannelObj(uint32_t remote_handle, const DeviceDesc& on_device, uint32_t bus_no, bool is_v2,
+             Kind kind = Kind::channel)
+      : Remote(kind, remote_handle, on_device, bus_no), v2(is_v2) {}
   bool v2;
+  // The elements: LINMSG for a monitor, CANMSG2 (v2) or CANMSG.
+  uint32_t element_size() const {
+    return kind() == Kind::lin_monitor ? sizeof(LINMSG) : v2 ? sizeof(CANMSG2) : sizeof(CANMSG);
+  }
   std::shared_ptr<Rings> rings;  // shared with the C++ API's FIFO objects
   // canemuChannelEventFd was called: the receive eventfd is kept readable while messages wait.
   std::atomic<bool> pollable{false};
@@ -155,12 +173,18 @@ class Library {
                  uint16_t timeout_ms, uint8_t op_mode, uint8_t ex_mode, uint32_t& index);
   HRESULT init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold, uint32_t tx,
                        uint32_t tx_threshold, uint32_t filter_size, uint8_t filter_mode);
+  // A LIN monitor's receive FIFO of at least `rx` LINMSGs.
+  HRESULT init_lin_monitor(ChannelObj& monitor, uint32_t rx, uint32_t rx_threshold);
 
  private:
   Library() = default;
   HRESULT connect_locked();
   // A request that failed: its VCI result (the connection is dropped if it broke).
   HRESULT failed(const ipc::IpcError& e);
+  // Sends an initialization `m` of `channel` (a channel or monitor) and maps the rings of its
+  // reply.
+  HRESULT map_rings(ChannelObj& channel, ipc::VciRequest& m, bool has_tx, uint32_t rx_threshold,
+                    uint32_t tx_threshold);
   std::mutex mutex_;
   std::optional<Connection> connection_;
   std::string socket_;  // empty: ipc::socket_path()'s search

@@ -1,6 +1,7 @@
-// canemu dump: a bus's frames and errors as a candump -L log, from a channel of an ephemeral
-// device, until interrupted or --count lines. Like candump on a real interface, its controller
-// is active and acknowledges what it receives; --listen-only makes it a silent observer.
+// canemu dump: a bus's frames and errors as a candump -L log (a LIN bus: lin_dump.hpp), from a
+// channel of an ephemeral device, until interrupted or --count lines. Like candump on a real
+// interface, its controller is active and acknowledges what it receives; --listen-only makes it a
+// silent observer.
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -12,6 +13,7 @@
 #include "canemu/client/connection.hpp"
 #include "command.hpp"
 #include "frame_text.hpp"
+#include "lin_dump.hpp"
 
 namespace canemu::cli {
 
@@ -37,6 +39,19 @@ int run_dump(const std::string& socket, const DumpOptions& o) {
   if (!c) {
     return fail(c.error().message);
   }
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  auto s = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  for (uint16_t i = 0; s && i < s->bus_count; ++i) {
+    if (ipc::name_of(s->buses[i].name) == o.bus &&
+        s->buses[i].kind == static_cast<uint8_t>(ipc::WireBusKind::lin)) {
+      const auto base = time_base(*c, o.sim_time);
+      if (!base) {
+        return fail(base.error().message);
+      }
+      return run_lin_dump(*c, o.bus, o.bitrate, o.count, *base, g_stop);
+    }
+  }
   client::ChannelOptions co;
   co.bus = o.bus;
   co.bitrate = o.bitrate;
@@ -51,8 +66,6 @@ int run_dump(const std::string& socket, const DumpOptions& o) {
   if (!base) {
     return fail(base.error().message);
   }
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
   std::fprintf(stderr, "canemu: listening on %s as %s (%s, %u bit/s, time stamps in %s)\n",
                o.bus.c_str(), ch->device().c_str(), o.listen_only ? "listen-only" : "acknowledging",
                ch->info().bitrate, base->wall_clock ? "wall-clock seconds" : "simulated seconds");
@@ -83,7 +96,8 @@ Command add_dump(CLI::App& app, const std::string& socket) {
   auto* dump = app.add_subcommand("dump", "print a bus's frames and errors as a candump -L log");
   auto o = std::make_shared<DumpOptions>();
   dump->add_option("BUS", o->bus, "bus name")->required();
-  dump->add_option("--bitrate", o->bitrate, "the listener's bit/s (default: the bus's)");
+  dump->add_option("--bitrate", o->bitrate,
+                   "the listener's bit/s (default: the bus's; on a LIN bus each header's)");
   dump->add_option("-n,--count", o->count, "stop after this many lines");
   dump->add_flag("--no-errors", o->no_errors, "frames only, no error frames");
   dump->add_flag("-l,--listen-only", o->listen_only,

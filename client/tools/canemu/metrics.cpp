@@ -49,6 +49,10 @@ class Exposition {
   std::string text_;
 };
 
+bool is_lin(const ipc::StatusNode& n) {
+  return static_cast<ipc::WireLinState>(n.lin) != ipc::WireLinState::none;
+}
+
 std::string bus_of(const ipc::StatusReply& s, const ipc::StatusNode& n) {
   return n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?");
 }
@@ -91,11 +95,22 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults)
            "1 for the node's fault confinement state, 0 for the others.");
   for (uint16_t i = 0; i < s.node_count; ++i) {
     const ipc::StatusNode& n = s.nodes[i];
+    if (is_lin(n)) {
+      continue;  // LIN nodes have no fault confinement: canemu_lin_node_online
+    }
     for (uint8_t st = 0; st <= static_cast<uint8_t>(model::ErrorState::bus_off); ++st) {
       e.sample("canemu_node_error_state",
                fmt::format("{},state=\"{}\"", node_label(n),
                            model::to_string(static_cast<model::ErrorState>(st))),
                n.state == st ? 1 : 0);
+    }
+  }
+  e.family("canemu_lin_node_online", "gauge", "1 while a LIN node takes part in the bus.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    const ipc::StatusNode& n = s.nodes[i];
+    if (is_lin(n)) {
+      e.sample("canemu_lin_node_online", node_label(n),
+               static_cast<ipc::WireLinState>(n.lin) == ipc::WireLinState::online ? 1 : 0);
     }
   }
   e.family("canemu_node_tec", "gauge", "Transmit error counter.");

@@ -23,8 +23,17 @@ namespace {
 static_assert(static_cast<uint8_t>(ipc::WireErrorState::bus_off) ==
               static_cast<uint8_t>(model::ErrorState::bus_off));
 
-std::string state_name(uint8_t state) {
-  return std::string(model::to_string(static_cast<model::ErrorState>(state)));
+// A CAN node's error state; a LIN controller's "online" or "offline".
+std::string state_name(const ipc::StatusNode& n) {
+  switch (static_cast<ipc::WireLinState>(n.lin)) {
+    case ipc::WireLinState::none:
+      break;
+    case ipc::WireLinState::offline:
+      return "offline";
+    case ipc::WireLinState::online:
+      return "online";
+  }
+  return std::string(model::to_string(static_cast<model::ErrorState>(n.state)));
 }
 std::string kind_name(uint8_t kind) {
   return std::string(ipc::to_string(static_cast<ipc::WireBusKind>(kind)));
@@ -64,7 +73,7 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
     nodes.push_back(toml::table{
         {"name", ipc::name_of(n.name)},
         {"bus", n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?")},
-        {"state", state_name(n.state)},
+        {"state", state_name(n)},
         {"tec", i64(n.tec)},
         {"rec", i64(n.rec)},
         {"frames_sent", i64(n.frames_sent)},
@@ -132,8 +141,7 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
     const ipc::StatusNode& n = s.nodes[i];
     std::printf("%-14s %-12s %-14s %4u %4u %10llu %10llu %8llu\n", ipc::name_of(n.name).c_str(),
                 n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name).c_str() : "?",
-                state_name(n.state).c_str(), n.tec, n.rec,
-                static_cast<unsigned long long>(n.frames_sent),
+                state_name(n).c_str(), n.tec, n.rec, static_cast<unsigned long long>(n.frames_sent),
                 static_cast<unsigned long long>(n.frames_received),
                 static_cast<unsigned long long>(n.errors));
   }

@@ -17,6 +17,9 @@
  * Constants
  * ------------------------------------------------------------------------------------------ */
 
+/* Controller type (VCI_LIN_CTRL(type) in VCIDEVICECAPS.BusCtrlTypes) */
+#define LIN_CTRL_UNKNOWN 0 /* unknown (the only one the emulation reports) */
+
 /* Controller features (LINCAPABILITIES.dwFeatures) */
 #define LIN_FEATURE_MASTER 0x0001   /* master mode */
 #define LIN_FEATURE_AUTORATE 0x0002 /* automatic bit-rate detection */

@@ -41,6 +41,9 @@ struct DeviceConfig {
   std::vector<std::string> controllers;  // bus name per controller
   std::string mdd_version;               // sorcus-x-can-2i: "N.L"; empty: "3.C"
   int64_t buffer_load_ns = 0;            // sorcus-x-can-2i: loading a buffer takes this long
+  // IXXAT adapters: the LIN bus of each LIN controller. They are numbered after the CAN
+  // controllers ("DEVICE:N" with N = controllers.size() + i, and the VCI's bus number N).
+  std::vector<std::string> lin;
   uint32_t line = 0;
 };
 

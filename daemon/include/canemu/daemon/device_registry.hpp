@@ -21,6 +21,7 @@
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/xcan_device.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
+#include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 
@@ -38,10 +39,17 @@ class DeviceRegistry {
     std::unique_ptr<model::HostedNode> node;
     std::shared_ptr<model::ixxat::CanLine> line;  // the adapter firmware driving it
   };
+  // A LIN controller of an IXXAT adapter, numbered after the adapter's CAN controllers.
+  struct LinController {
+    std::string name;  // "DEVICE:N"
+    std::size_t bus;
+    std::shared_ptr<model::ixxat::LinLine> line;  // the adapter firmware with the controller
+  };
   struct Configured {
     DeviceConfig config;
     std::vector<Controller> controllers;  // controller N is config.controllers[N]'s
     uint64_t vci_id;
+    std::vector<LinController> lin;  // controller controllers.size() + i is config.lin[i]'s
   };
   struct Ephemeral {
     std::string name;
@@ -50,6 +58,14 @@ class DeviceRegistry {
     uint32_t owner_pid;
     std::shared_ptr<model::ixxat::CanLine> line;  // VCI adapters only
     uint64_t vci_id = 0;                          // VCI adapters only
+  };
+  // An ephemeral VCI adapter with one LIN controller (controller 0, "NAME:0") on a LIN bus.
+  struct LinEphemeral {
+    std::string name;
+    std::size_t bus;
+    uint32_t owner_pid;
+    std::shared_ptr<model::ixxat::LinLine> line;
+    uint64_t vci_id = 0;
   };
   // A configured SORCUS X-CAN-2i; its interface N is the node "NAME:N" on buses[N].
   struct Xcan {
@@ -68,7 +84,8 @@ class DeviceRegistry {
 
   // A configured device, with its controllers in configuration order. Not counted as a change:
   // at start-up nobody is told; a reload announces it.
-  void add_configured(DeviceConfig config, std::vector<Controller> controllers);
+  void add_configured(DeviceConfig config, std::vector<Controller> controllers,
+                      std::vector<LinController> lin = {});
   void add_xcan(Xcan device) { xcan_.push_back(std::move(device)); }
   const std::vector<Xcan>& xcan() const { return xcan_; }
   // The X-CAN-2i named `name`, or nullptr.
@@ -77,12 +94,16 @@ class DeviceRegistry {
   // An ephemeral device with its one node; a VCI adapter when `line` is set.
   void add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node, uint32_t owner_pid,
                      std::shared_ptr<model::ixxat::CanLine> line = nullptr);
+  void add_lin_ephemeral(std::string name, std::size_t bus, uint32_t owner_pid,
+                         std::shared_ptr<model::ixxat::LinLine> line);
+  // Removes the ephemeral device `name`, CAN or LIN.
   void remove_ephemeral(std::string_view name);
   // Counts a change and tells on_change (add_ephemeral and remove_ephemeral do so themselves).
   void announce(ipc::NotificationKind kind, const std::string& name);
 
   const std::vector<Configured>& configured() const { return configured_; }
   const std::vector<Ephemeral>& ephemeral() const { return ephemeral_; }  // in order of creation
+  const std::vector<LinEphemeral>& lin_ephemeral() const { return lin_ephemeral_; }
   const Ephemeral* find_ephemeral(std::string_view name) const;
   bool exists(std::string_view name) const;
   // A name no device has: `prefix` followed by the smallest number from 1 on.
@@ -96,6 +117,10 @@ class DeviceRegistry {
   // has gone.
   std::shared_ptr<model::ixxat::CanLine> vci_line(std::string_view device,
                                                   uint32_t controller) const;
+  // The LIN firmware of controller `controller` (the VCI's bus number: after the CAN
+  // controllers) of the VCI device `device`; nullptr if it is not a LIN controller.
+  std::shared_ptr<model::ixxat::LinLine> vci_lin_line(std::string_view device,
+                                                      uint32_t controller) const;
   // The firmware driving `node`, if a VCI adapter's.
   std::shared_ptr<model::ixxat::CanLine> vci_line_of(const model::HostedNode* node) const;
   // The VciObjectId of a VCI device; 0 if there is none.
@@ -108,6 +133,7 @@ class DeviceRegistry {
  private:
   std::vector<Configured> configured_;
   std::vector<Ephemeral> ephemeral_;
+  std::vector<LinEphemeral> lin_ephemeral_;
   std::vector<Xcan> xcan_;
   uint32_t generation_ = 0;
   uint64_t next_vci_id_ = 1;

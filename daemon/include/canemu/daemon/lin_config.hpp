@@ -15,6 +15,7 @@ struct LinResponseConfig {
   std::vector<uint8_t> data;               // 1..8 bytes
   bool enhanced = true;                    // the checksum: enhanced (LIN 2.x) or classic
   std::optional<uint8_t> event_triggered;  // may go in this event-triggered frame
+  bool operator==(const LinResponseConfig&) const = default;
 };
 
 struct LinSlotConfig {
@@ -23,11 +24,13 @@ struct LinSlotConfig {
   uint8_t id = 0;               // unconditional, event-triggered: the header's identifier
   std::vector<uint8_t> frames;  // event-triggered: associated frames; sporadic: candidates
   int64_t delay_ns = 0;
+  bool operator==(const LinSlotConfig&) const = default;
 };
 
 struct LinScheduleConfig {
   std::string name;
   std::vector<LinSlotConfig> slots;
+  bool operator==(const LinScheduleConfig&) const = default;
 };
 
 struct LinNodeConfig {
@@ -39,6 +42,11 @@ struct LinNodeConfig {
   std::vector<LinResponseConfig> responses;
   std::vector<LinScheduleConfig> schedules;
   uint32_t line = 0;
+  // The same node (where it was declared aside).
+  bool same_as(const LinNodeConfig& o) const {
+    return name == o.name && bus == o.bus && bitrate == o.bitrate && powered == o.powered &&
+           schedule == o.schedule && responses == o.responses && schedules == o.schedules;
+  }
 };
 
 }  // namespace canemu::daemon

@@ -19,9 +19,11 @@
 
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/device_registry.hpp"
+#include "canemu/daemon/lin_nodes.hpp"
 #include "canemu/daemon/node_pool.hpp"
 #include "canemu/daemon/scenario_runner.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/bus/lin_bus.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 
@@ -57,6 +59,12 @@ class Simulation {
   const model::CanBus& bus(std::size_t i) const { return *buses_[i]; }
   std::optional<std::size_t> bus_index(std::string_view name) const;
   const BusConfig& bus_config(std::size_t i) const { return config_.buses[i]; }
+  // The LIN engine of bus i; nullptr unless it is a LIN bus (whose CanBus carries nothing).
+  model::lin::LinBus* lin_bus(std::size_t i) { return lin_buses_[i].get(); }
+  const model::lin::LinBus* lin_bus(std::size_t i) const { return lin_buses_[i].get(); }
+
+  // The simulated LIN nodes ([[lin_node]]), in configuration order.
+  const std::vector<SimulatedLinNode>& lin_nodes() const { return lin_nodes_; }
 
   DeviceRegistry& devices() { return devices_; }
   const DeviceRegistry& devices() const { return devices_; }
@@ -95,8 +103,8 @@ class Simulation {
   DeviceLease add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node,
                             uint32_t owner_pid);
   // An ephemeral VCI adapter named `name` with one controller on bus `bus` (an SJA1000 on a
-  // classic bus, the CAN FD controller on a CAN FD bus) and its firmware, listed with the
-  // configured adapters while the lease lives.
+  // classic bus, the CAN FD controller on a CAN FD bus, a LIN controller on a LIN bus) and its
+  // firmware, listed with the configured adapters while the lease lives.
   DeviceLease add_vci_device(std::string name, std::size_t bus, uint32_t owner_pid);
 
  private:
@@ -110,12 +118,17 @@ class Simulation {
   // its bus's timing.
   std::optional<std::string> add_device(const DeviceConfig& d);
   std::optional<std::string> add_xcan(const DeviceConfig& d);
+  // The device's LIN controllers (config `lin`), on LIN buses that exist.
+  std::optional<std::string> lin_controllers(const DeviceConfig& d,
+                                             std::vector<DeviceRegistry::LinController>& out);
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).
   Config config_;
   model::SimScheduler scheduler_;
   std::vector<std::unique_ptr<model::CanBus>> buses_;
+  std::vector<std::unique_ptr<model::lin::LinBus>> lin_buses_;  // per bus; null for CAN buses
+  std::vector<SimulatedLinNode> lin_nodes_;                     // on lin_buses_ (gone before them)
   NodePool nodes_;
   DeviceRegistry devices_;
   ScenarioRunner scenarios_;

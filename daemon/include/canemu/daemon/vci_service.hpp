@@ -14,6 +14,7 @@
 #include "canemu/daemon/ring_budget.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/vci_fifos.hpp"
+#include "canemu/daemon/vci_lin_port.hpp"
 #include "canemu/daemon/vci_port.hpp"
 #include "canemu/ipc/protocol.hpp"
 
@@ -25,16 +26,28 @@ inline constexpr std::size_t kMaxVciChannelsPerClient = 16;
 // One object a client opened. Closing it (destruction) releases it on the line.
 class VciHandle {
  public:
-  enum class Kind : uint8_t { control, channel, scheduler };
+  enum class Kind : uint8_t { control, channel, scheduler, lin_control, lin_monitor };
   VciHandle(Kind kind, std::shared_ptr<model::ixxat::CanLine> line, model::ixxat::ChannelId channel,
             bool v2)
       : kind_(kind), line_(std::move(line)), channel_(channel), v2_(v2) {}
+  // A LIN control unit (lin_control) or monitor `monitor` (lin_monitor).
+  VciHandle(Kind kind, std::shared_ptr<model::ixxat::LinLine> lin, model::ixxat::MonitorId monitor)
+      : kind_(kind), channel_(0), v2_(false), lin_(std::move(lin)), monitor_(monitor) {}
   ~VciHandle();
   VciHandle(const VciHandle&) = delete;
   VciHandle& operator=(const VciHandle&) = delete;
 
   Kind kind() const { return kind_; }
-  model::ixxat::CanLine& line() { return *line_; }
+  bool is_lin() const { return kind_ == Kind::lin_control || kind_ == Kind::lin_monitor; }
+  model::ixxat::CanLine& line() { return *line_; }  // CAN handles only
+  model::ixxat::LinLine& lin() { return *lin_; }    // LIN handles only
+  model::ixxat::MonitorId monitor() const { return monitor_; }
+  VciLinPort* lin_port() { return lin_port_.get(); }
+  // A monitor's new receive FIFO (initialization); the old one goes.
+  void replace_lin_port(std::unique_ptr<VciLinPort> port, RingBudget budget) {
+    lin_port_ = std::move(port);
+    lin_budget_ = std::move(budget);
+  }
   model::ixxat::ChannelId channel() const { return channel_; }
   bool v2() const { return v2_; }
   VciPort* port() { return port_.get(); }
@@ -48,6 +61,10 @@ class VciHandle {
   bool v2_;
   std::unique_ptr<VciPort> port_;
   RingBudget budget_;
+  std::shared_ptr<model::ixxat::LinLine> lin_;
+  model::ixxat::MonitorId monitor_ = 0;
+  std::unique_ptr<VciLinPort> lin_port_;
+  RingBudget lin_budget_;
 };
 
 inline constexpr std::size_t kMaxVciDevicesPerClient = 16;
@@ -60,6 +77,15 @@ struct VciSession {
   uint32_t pid = 0;
   uint32_t uid = 0;
 };
+
+// The session's CAN channels and LIN monitors (each has rings): at most kMaxVciChannelsPerClient.
+inline std::size_t receivers(const VciSession& session) {
+  std::size_t n = 0;
+  for (const auto& [id, h] : session.handles) {
+    n += h->kind() == VciHandle::Kind::channel || h->kind() == VciHandle::Kind::lin_monitor ? 1 : 0;
+  }
+  return n;
+}
 
 class VciService {
  public:
@@ -83,6 +109,18 @@ class VciService {
                     std::array<int, ipc::kChannelFdCount>& fds);
   void control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r);
   void scheduler(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r);
+  // LIN (vci_lin.cpp): opening a control unit or monitor, and the calls on them. `fds` gets a
+  // monitor's descriptors (lin_monitor_init), `with_fds` says so.
+  static bool is_lin(ipc::VciOp op);
+  void lin(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r,
+           std::array<int, ipc::kChannelFdCount>& fds, bool& with_fds);
+  void lin_open(VciSession& session, const ipc::VciRequest& m, ipc::VciReply& r);
+  void lin_call(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,
+                std::array<int, ipc::kChannelFdCount>& fds, bool& with_fds);
+  void lin_monitor_init(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& r,
+                        std::array<int, ipc::kChannelFdCount>& fds, bool& with_fds);
+  // A new handle of `session` for `h`; its number in r.handle.
+  static void add_handle(VciSession& session, std::unique_ptr<VciHandle> h, ipc::VciReply& r);
 
   Simulation& sim_;
   std::size_t& ring_bytes_in_use_;

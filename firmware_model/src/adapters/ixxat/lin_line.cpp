@@ -59,6 +59,25 @@ uint32_t LinLine::ticks(SimTime t) const {
 
 // ---------------------------------------------------------------- the control unit
 
+HRESULT LinLine::open_control() {
+  if (control_open_) {
+    return VCI_E_ACCESSDENIED;
+  }
+  control_open_ = true;
+  return VCI_OK;
+}
+
+void LinLine::close_control() {
+  control_open_ = false;
+  release_if_unused();
+}
+
+void LinLine::release_if_unused() {
+  if (!control_open_ && monitors_.empty()) {
+    reset_line();  // nobody hears the info message
+  }
+}
+
 HRESULT LinLine::init_line(const LININITLINE& init) {
   if ((init.bOpMode & ~(LIN_OPMODE_MASTER | LIN_OPMODE_ERRORS)) != 0 || init.bReserved != 0) {
     return VCI_E_INVALIDARG;
@@ -194,6 +213,7 @@ void LinLine::close_monitor(MonitorId id) {
   if (monitors_.empty()) {
     exclusive_ = false;
   }
+  release_if_unused();
 }
 
 LinLine::Monitor* LinLine::find(MonitorId id) {
@@ -291,6 +311,8 @@ void LinLine::on_lin(const lin::Event& e, bool own_response) {
   const uint32_t time = ticks(e.at);
   switch (e.kind) {
     case lin::Event::Kind::frame: {
+      ++(own_response || e.sender == controller_.node() ? stats_.frames_sent
+                                                        : stats_.frames_received);
       LINMSG m{};
       m.dwTime = time;
       m.uMsgInfo.Bytes.bPid = e.id;
@@ -303,6 +325,7 @@ void LinLine::on_lin(const lin::Event& e, bool own_response) {
       return;
     }
     case lin::Event::Kind::error:
+      ++stats_.errors;
       if (op_mode_ & LIN_OPMODE_ERRORS) {
         broadcast(event_message(LIN_MSGTYPE_ERROR, time, vci_error(e.error), status_byte()));
       }

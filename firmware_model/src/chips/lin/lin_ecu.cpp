@@ -174,7 +174,9 @@ std::optional<Response> LinEcu::respond(uint8_t id) {
 }
 
 void LinEcu::on_lin_event(const Event& e) {
-  seen_.push_back(e);
+  if (recording_) {
+    seen_.push_back(e);
+  }
   const bool awaited = et_pending_ && e.id == *et_pending_ && e.sender == id_;
   if (awaited) {
     et_pending_.reset();

@@ -153,6 +153,8 @@ constexpr std::string_view to_string(WireBusKind kind) {
   return "?";
 }
 enum class WireErrorState : uint8_t { active = 0, warning = 1, passive = 2, bus_off = 3 };
+// A LIN controller's state in StatusNode.lin (it has no error counters).
+enum class WireLinState : uint8_t { none = 0, offline = 1, online = 2 };
 
 struct StatusBus {
   char name[kNameSize] = {};
@@ -170,8 +172,8 @@ static_assert(sizeof(StatusBus) == 64);
 struct StatusNode {
   char name[kNameSize] = {};  // "device:N"
   uint16_t bus = 0;           // index into the reply's buses
-  uint8_t state = 0;          // WireErrorState
-  uint8_t reserved = 0;
+  uint8_t state = 0;          // WireErrorState (CAN nodes)
+  uint8_t lin = 0;            // WireLinState: 0 for a CAN node
   uint16_t tec = 0;
   uint16_t rec = 0;
   uint64_t frames_sent = 0;
@@ -316,6 +318,10 @@ constexpr std::string_view to_string(WireDeviceModel model) {
   return "?";
 }
 
+// DeviceEntry.controller_fd: what each controller is. IXXAT adapters list their CAN
+// controllers first, then their LIN controllers.
+enum class WireControllerKind : uint8_t { can = 0, can_fd = 1, lin = 2 };
+
 struct DeviceEntry {
   char name[kNameSize] = {};
   uint8_t model = 0;  // WireDeviceModel
@@ -326,7 +332,7 @@ struct DeviceEntry {
   char buses[kMaxDeviceControllers][kNameSize] = {};  // bus of each controller
   uint64_t vci_id = 0;        // VCI devices: VciObjectId, unique while the daemon runs
   char hardware_id[16] = {};  // VCI devices: "HW" and a serial number, stable across runs
-  uint8_t controller_fd[kMaxDeviceControllers] = {};  // 1: a CAN FD controller
+  uint8_t controller_fd[kMaxDeviceControllers] = {};  // WireControllerKind
   uint32_t reserved2 = 0;
   int64_t epoch_ns = 0;  // VCI devices: simulated time of power-on (their time stamps' zero)
 };

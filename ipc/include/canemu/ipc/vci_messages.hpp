@@ -69,6 +69,25 @@ enum class VciOp : uint16_t {
   fifo_create = 60,
   fifo_access = 61,
   fifo_side = 62,
+  // LIN (an IXXAT adapter's LIN controller, firmware_model adapters/ixxat/lin_line.hpp):
+  // `controller` is its bus number, after the adapter's CAN controllers.
+  lin_control_open = 70,
+  lin_monitor_open = 71,  // flags: kVciExclusive
+  // On any LIN handle, or (handle 0) on device + controller: LINCAPABILITIES at kVciCapsOffset,
+  // LINLINESTATUS at kVciLineOffset.
+  lin_info = 72,
+  lin_init = 73,  // args: bOpMode, wBitrate (LININITLINE)
+  lin_reset = 74,
+  lin_start = 75,
+  lin_stop = 76,
+  lin_write = 77,  // args[0]: 1 send, 0 response table; payload: LINMSG
+  // args[0]: receive FIFO capacity (1..65535); reply as channel_init (values: rx capacity, 0,
+  // element size 16; kChannelFdCount descriptors, the transmit ring unused).
+  lin_monitor_init = 78,
+  lin_monitor_activate = 79,
+  lin_monitor_deactivate = 80,
+  // values: initialized, activated, rx_overrun; payload: VciChannelCounters (received, lost).
+  lin_monitor_status = 81,
 };
 
 // VciRequest.flags

@@ -33,6 +33,13 @@ class LinMonitorPort {
 
 using MonitorId = uint32_t;
 
+// What the controller did while online, for status displays.
+struct LinLineStats {
+  uint64_t frames_sent = 0;      // frames it sent the header or the response of
+  uint64_t frames_received = 0;  // frames of other nodes
+  uint64_t errors = 0;           // errors it saw (reported or not)
+};
+
 struct LinMonitorState {
   bool initialized = false;
   bool activated = false;
@@ -55,6 +62,11 @@ class LinLine final : private lin::LinController::Listener, private EventHandler
   LinLine& operator=(const LinLine&) = delete;
 
   // --- the control unit ---
+  // One application at a time: VCI_E_ACCESSDENIED while another holds it. When the last
+  // control unit or monitor closes, the controller is reset (a started controller keeps
+  // running while monitors are open).
+  HRESULT open_control();
+  void close_control();
   HRESULT init_line(const LININITLINE& init);
   HRESULT reset_line();
   HRESULT start_line();
@@ -76,7 +88,10 @@ class LinLine final : private lin::LinController::Listener, private EventHandler
   std::optional<LinMonitorState> monitor_state(MonitorId id) const;
 
   lin::LinController& controller() { return controller_; }
+  const lin::LinController& controller() const { return controller_; }
   uint32_t ticks(SimTime t) const;
+  SimTime epoch() const { return epoch_; }
+  const LinLineStats& stats() const { return stats_; }
 
  private:
   struct Monitor {
@@ -97,6 +112,7 @@ class LinLine final : private lin::LinController::Listener, private EventHandler
   Monitor* find(MonitorId id);
   const Monitor* find(MonitorId id) const;
   void schedule_time_overrun();
+  void release_if_unused();
 
   SimScheduler& scheduler_;
   lin::LinController controller_;
@@ -108,8 +124,10 @@ class LinLine final : private lin::LinController::Listener, private EventHandler
   std::vector<Monitor> monitors_;
   MonitorId next_monitor_ = 1;
   bool exclusive_ = false;
+  bool control_open_ = false;
   uint64_t time_overruns_ = 0;
   std::optional<EventId> overrun_event_;
+  LinLineStats stats_;
 };
 
 }  // namespace canemu::model::ixxat

@@ -74,8 +74,11 @@ class LinEcu final : public LinNode, private EventHandler {
   const std::string& running_schedule() const { return running_; }
 
   const EcuCounters& counters() const { return counters_; }
+  // What it saw, kept while recording (on from the start; a node that runs for long, as in
+  // canemud, turns it off and keeps only its counters).
   const std::vector<Event>& seen() const { return seen_; }
   void clear_seen() { seen_.clear(); }
+  void set_recording(bool on) { recording_ = on; }
   LinNodeId node() const { return id_; }
 
   // LinNode
@@ -106,6 +109,7 @@ class LinEcu final : public LinNode, private EventHandler {
   std::vector<uint8_t> et_slot_frames_;  // its associated frames
   std::optional<EventId> timer_;
   std::vector<Event> seen_;
+  bool recording_ = true;
   EcuCounters counters_;
 };
 

@@ -1,0 +1,52 @@
+// canemu dump's lines for LIN monitor messages: frames with their protected identifier and
+// checksum (computed here by hand), errors, wake-ups, and what a dump leaves out.
+#include "lin_dump.hpp"
+
+#include <gtest/gtest.h>
+
+namespace canemu::cli {
+namespace {
+
+LINMSG msg(uint8_t type, uint8_t pid, std::vector<uint8_t> data, bool ecs = true) {
+  LINMSG m{};
+  m.uMsgInfo.Bytes.bType = type;
+  m.uMsgInfo.Bytes.bPid = pid;
+  m.uMsgInfo.Bytes.bDlen = static_cast<uint8_t>(data.size());
+  m.uMsgInfo.Bits.ecs = ecs ? 1 : 0;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    m.abData[i] = data[i];
+  }
+  return m;
+}
+
+TEST(LinDump, FramesShowTheirProtectedIdentifierAndChecksum) {
+  // 10h: P0 = 0, P1 = !(ID4) = 0 -> PID 50h (bit 6 from ID4); enhanced: ~(50h + 01h) = AEh.
+  EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_DATA, 0x10, {0x01, 0x00}), 3'333'000, "lin0"),
+            "(0000000000.003333) lin0 10#0100 pid 50 enhanced checksum AE");
+  // Classic over 42h alone: BDh. 21h: P0 = 1 ^ 0 ^ 0 ^ 0 = 1, P1 = !(0 ^ 0 ^ 0 ^ 1) = 0 -> 61h.
+  EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_DATA, 0x21, {0x42}, false), 1'234'567'890'123, "lin1"),
+            "(0000001234.567890) lin1 21#42 pid 61 classic checksum BD");
+  // The go-to-sleep command: 3Ch (PID 3Ch), classic, 00 FF x 7: ~(00h + 7 x FFh, carries
+  // added back) = 00h.
+  EXPECT_EQ(
+      lin_line(msg(LIN_MSGTYPE_DATA, 0x3C, {0, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}, false), 0,
+               "lin0"),
+      "(0000000000.000000) lin0 3C#00FFFFFFFFFFFFFF pid 3C classic checksum 00 go-to-sleep");
+}
+
+TEST(LinDump, ErrorsAndWakeUpsAreNamedAndTheRestLeftOut) {
+  LINMSG e = msg(LIN_MSGTYPE_ERROR, 0xFF, {});
+  e.abData[0] = LIN_ERROR_SLNORE;
+  EXPECT_EQ(lin_line(e, 8'333'000, "lin0"), "(0000000000.008333) lin0 error no-response");
+  e.abData[0] = LIN_ERROR_CHKSUM;
+  EXPECT_EQ(lin_line(e, 0, "lin0"), "(0000000000.000000) lin0 error checksum");
+  e.abData[0] = LIN_ERROR_NOBUS;
+  EXPECT_EQ(lin_line(e, 0, "lin0"), "(0000000000.000000) lin0 error no-bus-activity");
+  EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_WAKEUP, 0xFF, {}), 250'000, "lin0"),
+            "(0000000000.000250) lin0 wake-up");
+  EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_INFO, 0xFF, {LIN_INFO_START}), 0, "lin0"), "");
+  EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_TMOVR, 0xFF, {}), 0, "lin0"), "");
+}
+
+}  // namespace
+}  // namespace canemu::cli

@@ -1,5 +1,5 @@
-// canemu status: buses with load, nodes with state and counters, devices, clients and faults,
-// as tables or as one JSON object.
+// canemu status: buses with load, nodes with state and counters, devices, clients, faults and
+// recorders and bridges, as tables or as one JSON object.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -9,8 +9,8 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
-#include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "capture_table.hpp"
 #include "command.hpp"
 #include "fault_table.hpp"
 
@@ -18,13 +18,6 @@ namespace canemu::cli {
 
 namespace {
 
-// The wire's error states are the model's, in the model's order.
-static_assert(static_cast<uint8_t>(ipc::WireErrorState::bus_off) ==
-              static_cast<uint8_t>(model::ErrorState::bus_off));
-
-std::string state_name(uint8_t state) {
-  return std::string(model::to_string(static_cast<model::ErrorState>(state)));
-}
 std::string kind_name(uint8_t kind) {
   return std::string(ipc::to_string(static_cast<ipc::WireBusKind>(kind)));
 }
@@ -42,7 +35,8 @@ std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
 
 void print_json(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
                 const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                const ipc::FaultListReply& faults) {
+                const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
+                const ipc::BridgeListReply& bridges) {
   std::string out = fmt::format(
       "{{\"server_pid\":{},\"time_mode\":\"{}\",\"time_scale\":{},\"sim_time_ns\":{},"
       "\"clients\":{},\"buses\":[",
@@ -85,13 +79,15 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
     out += fmt::format("{}{{\"name\":\"{}\",\"pid\":{},\"uid\":{},\"channels\":{}}}", i ? "," : "",
                        ipc::name_of(e.name), e.pid, e.uid, e.channels);
   }
-  out += "],\"faults\":" + faults_json(faults) + "}\n";
+  out += "],\"faults\":" + faults_json(faults) + ",\"recorders\":" + recorders_json(recorders) +
+         ",\"bridges\":" + bridges_json(bridges) + "}\n";
   std::fputs(out.c_str(), stdout);
 }
 
 void print_tables(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
                   const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                  const ipc::FaultListReply& faults) {
+                  const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
+                  const ipc::BridgeListReply& bridges) {
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
               s.client_count == 1 ? "" : "s");
@@ -134,6 +130,12 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
   if (faults.total > 0) {
     print_faults(faults);
   }
+  if (recorders.count > 0) {
+    print_recorders(recorders);
+  }
+  if (bridges.count > 0) {
+    print_bridges(bridges);
+  }
 }
 
 int run_status(const std::string& socket, bool json) {
@@ -157,11 +159,18 @@ int run_status(const std::string& socket, bool json) {
   if (!faults) {
     return fail(faults.error());
   }
+  auto recorders = c->call<ipc::RecorderListRequest, ipc::RecorderListReply>(
+      ipc::make_message<ipc::RecorderListRequest>());
+  auto bridges = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
+      ipc::make_message<ipc::BridgeListRequest>());
+  if (!recorders || !bridges) {
+    return fail(!recorders ? recorders.error().message : bridges.error().message);
+  }
   const std::string mode(ipc::to_string(static_cast<ipc::WireTimeMode>(reply->time_mode)));
   if (json) {
-    print_json(*c, *reply, mode, *devices, *clients, *faults);
+    print_json(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
   } else {
-    print_tables(*c, *reply, mode, *devices, *clients, *faults);
+    print_tables(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
   }
   return 0;
 }

@@ -1,0 +1,138 @@
+// Recordings against a real canemud in stepped time: canemu dump --format pcap, canemu record,
+// and the daemon's own [[recorder]] with its line in canemu status.
+#include <stdlib.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "cli_process.hpp"
+#include "daemon_process.hpp"
+
+namespace canemu {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::connect;
+using testing::Daemon;
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "canemu-capture-XXXXXX").string();
+    path = ::mkdtemp(pattern.data());
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string hex(const std::string& bytes) {
+  std::string s;
+  for (unsigned char b : bytes) {
+    char two[3];
+    std::snprintf(two, sizeof two, "%02X", b);
+    s += two;
+  }
+  return s;
+}
+
+// The frames of Cli.SendAndDumpSpeakCanUtilsSyntax: each at the end of its EOF.
+const std::vector<std::string> kFrames = {"123#1122", "12345678#R4"};
+constexpr const char* kLog =
+    "(0000000000.000124) can0 123#1122\n"
+    "(0000000000.000258) can0 12345678#R4\n";
+
+TEST(CliCapture, DumpWritesPcapWithTheSimulatedInstants) {
+  TempDir dir;
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  auto watcher = connect(d, "watcher");
+  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
+  const std::string file = (dir.path / "can0.pcap").string();
+  Cli dump(d, {"dump", "can0", "--format", "pcap", "-o", file, "-n", "2"});
+  ASSERT_TRUE(watcher.next_notification(10'000));
+  Cli send(d, {"send", "can0", kFrames[0], kFrames[1], "--step", "1ms"});
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  EXPECT_EQ(dump.wait(), 0) << Cli::read_all(dump.err);
+  EXPECT_EQ(hex(read_file(file)),
+            "4D3CB2A1020004000000000000000000"
+            "48000000E3000000"
+            // 0.000124000 s, 16 bytes: 0x123, len 2, 11 22
+            "0000000060E401001000000010000000"
+            "00000123020000001122000000000000"
+            // 0.000258000 s: 0x12345678 | EFF | RTR, len 4
+            "00000000D0EF03001000000010000000"
+            "D2345678040000000000000000000000");
+}
+
+TEST(CliCapture, RecordListensOnlyAndWritesACandumpLog) {
+  TempDir dir;
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  auto watcher = connect(d, "watcher");
+  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
+  const std::string file = (dir.path / "can0.log").string();
+  Cli record(d, {"record", "can0", "-o", file, "-n", "2"});
+  ASSERT_TRUE(watcher.next_notification(10'000));
+  Cli send(d, {"send", "can0", kFrames[0], kFrames[1], "--step", "1ms"});
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  EXPECT_EQ(record.wait(), 0);
+  EXPECT_EQ(Cli::read_all(record.err),
+            "canemu: listening on can0 as eph2 (listen-only, 500000 bit/s, time stamps in "
+            "simulated seconds)\ncanemu: 2 frame(s) recorded in " +
+                file + " (candump)\n");
+  EXPECT_EQ(read_file(file), kLog);
+
+  Cli bad(d, {"record", "can0", "-o", "/nonexistent-dir/x.log"});
+  EXPECT_EQ(bad.wait(), 1);
+  EXPECT_NE(Cli::read_all(bad.err).find("open /nonexistent-dir/x.log: No such file or directory"),
+            std::string::npos);
+}
+
+TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
+  TempDir dir;
+  const fs::path config = dir.path / "canemu.toml";
+  std::ofstream(config) << "[[bus]]\nname = \"can0\"\n"
+                           "[[recorder]]\nbus = \"can0\"\npath = \"can0.log\"\n"
+                           "[[recorder]]\nbus = \"can0\"\npath = \"can0.pcap\"\n";
+  Daemon d("stepped", {"--config", config.string()});
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  Cli send(d, {"send", "can0", kFrames[0], kFrames[1], "--step", "1ms"});
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  // Written when the step ended, before its reply.
+  EXPECT_EQ(read_file(dir.path / "can0.log"), kLog);
+  EXPECT_EQ(read_file(dir.path / "can0.pcap").size(), 24u + 2 * 32);
+
+  Cli status(d, {"status"});
+  const std::string text = Cli::read_all(status.out);
+  EXPECT_EQ(status.wait(), 0);
+  EXPECT_NE(text.find("RECORDER     FORMAT      FRAMES        BYTES ROTATED     LOST FILE\n"
+                      "can0         candump          2           71       0        0 " +
+                      (dir.path / "can0.log").string() + "\n"),
+            std::string::npos)
+      << text;
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_NE(
+      j.find("\"recorders\":[{\"bus\":\"can0\",\"path\":\"" + (dir.path / "can0.log").string() +
+             "\",\"format\":\"candump\",\"errors\":true,\"frames\":2,\"bytes\":71,"
+             "\"rotations\":0,\"lost\":0,\"error\":\"\"},"),
+      std::string::npos)
+      << j;
+}
+
+}  // namespace
+}  // namespace canemu

@@ -94,7 +94,7 @@ tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeC
   const auto bus = bus_index(b.bus);
   auto port = open_can_raw(b.interface, bus && config_.buses[*bus].kind == BusKind::can_fd);
   if (!port) {
-    return tl::unexpected("bridge of " + b.bus + " to " + port.error());
+    return tl::unexpected("bridge to " + port.error());
   }
   return add_bridge(b, std::move(*port));
 }

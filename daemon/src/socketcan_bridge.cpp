@@ -126,7 +126,7 @@ tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interfa
   }
   ipc::UniqueFd s(::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW));
   if (!s.valid()) {
-    return failed("socket(PF_CAN, SOCK_RAW, CAN_RAW)");
+    return failed("socket(PF_CAN)");
   }
   const unsigned index = ::if_nametoindex(interface.c_str());
   if (index == 0) {

@@ -115,6 +115,21 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
   // Written when the step ended, before its reply.
   EXPECT_EQ(read_file(dir.path / "can0.log"), kLog);
   EXPECT_EQ(read_file(dir.path / "can0.pcap").size(), 24u + 2 * 32);
+  // Wireshark reads the capture back (tshark is in scripts/apt-packages.txt).
+  const std::string command = "tshark -r " + (dir.path / "can0.pcap").string() +
+                              " -T fields -e frame.time_relative -e can.id -e can.flags.xtd"
+                              " -e can.flags.rtr -e can.len -e data.data 2>/dev/null";
+  FILE* tshark = ::popen(command.c_str(), "r");
+  ASSERT_NE(tshark, nullptr);
+  std::string fields;
+  char line[256];
+  while (std::fgets(line, sizeof line, tshark) != nullptr) {
+    fields += line;
+  }
+  EXPECT_EQ(::pclose(tshark), 0) << "tshark missing? make deps installs it";
+  EXPECT_EQ(fields,
+            "0.000000000\t291\t0\t0\t2\t1122\n"
+            "0.000134000\t305419896\t1\t1\t4\t00000000\n");
 
   Cli status(d, {"status"});
   const std::string text = Cli::read_all(status.out);
@@ -132,6 +147,28 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
              "\"rotations\":0,\"lost\":0,\"error\":\"\"},"),
       std::string::npos)
       << j;
+}
+
+// canemu bridge against canemud on a host whose kernel may have no CAN at all: every failure
+// says which interface and why; the bridge itself is tested in tests/daemon and tests/guest.
+TEST(CliBridge, AddListAndRemoveSayWhatIsWrong) {
+  Daemon d;
+  Cli add(d, {"bridge", "add", "can0", "vcan-none"});
+  EXPECT_EQ(add.wait(), 1);
+  EXPECT_NE(Cli::read_all(add.err).find("canemu: canemud: bad_argument: bridge to vcan-none: "),
+            std::string::npos);
+  Cli nobus(d, {"bridge", "add", "can9", "vcan0"});
+  EXPECT_EQ(nobus.wait(), 1);
+  EXPECT_NE(Cli::read_all(nobus.err).find("no bus named \"can9\""), std::string::npos);
+  Cli badname(d, {"bridge", "add", "can0", "a/b"});
+  EXPECT_EQ(badname.wait(), 1);
+  EXPECT_NE(Cli::read_all(badname.err).find("\"a/b\" is not an interface name"), std::string::npos);
+  Cli list(d, {"bridge", "list", "--json"});
+  EXPECT_EQ(Cli::read_all(list.out), "[]\n");
+  EXPECT_EQ(list.wait(), 0);
+  Cli remove(d, {"bridge", "remove", "vcan0"});
+  EXPECT_EQ(remove.wait(), 1);
+  EXPECT_NE(Cli::read_all(remove.err).find("no bridge on interface \"vcan0\""), std::string::npos);
 }
 
 }  // namespace

@@ -60,6 +60,8 @@ class Simulation {
   const model::CanBus& bus(std::size_t i) const { return *buses_[i]; }
   std::optional<std::size_t> bus_index(std::string_view name) const;
   const BusConfig& bus_config(std::size_t i) const { return config_.buses[i]; }
+  // The timing of a node on bus `bus` at the bus's rates (nothing if no controller runs them).
+  std::optional<model::HostedNodeSettings> bus_timing(std::size_t bus) const;
 
   DeviceRegistry& devices() { return devices_; }
   const DeviceRegistry& devices() const { return devices_; }
@@ -131,8 +133,6 @@ class Simulation {
   std::optional<std::string> add_device(const DeviceConfig& d);
   std::optional<std::string> add_xcan(const DeviceConfig& d);
   std::optional<std::string> add_recorder(const RecorderConfig& r);
-  // The timing of a node on bus `bus` at the bus's rates (nothing if no controller runs them).
-  std::optional<model::HostedNodeSettings> bus_timing(std::size_t bus) const;
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).

@@ -35,13 +35,28 @@ SocketCanBridge::~SocketCanBridge() {
 
 void SocketCanBridge::kick() {
   uint8_t buffer[ipc::socketcan::kCanFdMtu + 1];
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(uint32_t))];
   for (int i = 0; i < kMaxReadsPerKick; ++i) {
-    const ssize_t n = ::recv(port_.get(), buffer, sizeof buffer, MSG_DONTWAIT);
+    iovec iov{buffer, sizeof buffer};
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(port_.get(), &msg, MSG_DONTWAIT);
     if (n < 0 && errno == EINTR) {
       continue;
     }
     if (n <= 0) {
       break;  // nothing more (EAGAIN), or the interface went away: nothing to read
+    }
+    // SO_RXQ_OVFL: the kernel's count of frames it dropped for this socket, so far.
+    for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+        uint32_t dropped = 0;
+        std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
+        stats_.kernel_dropped = dropped;
+      }
     }
     accept(buffer, static_cast<std::size_t>(n));
   }
@@ -135,6 +150,15 @@ tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interfa
   const int on = 1;
   if (fd && ::setsockopt(s.get(), SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on) != 0) {
     return failed("setsockopt CAN_RAW_FD_FRAMES");
+  }
+  if (::setsockopt(s.get(), SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on) != 0) {
+    return failed("setsockopt SO_RXQ_OVFL");
+  }
+  // Room for bursts (cangen -g 0) while the loop is busy: 4 MiB where the daemon may raise the
+  // limit (CAP_NET_ADMIN), else net.core.rmem_max. Drops beyond it are counted (SO_RXQ_OVFL).
+  const int bytes = 4 << 20;
+  if (::setsockopt(s.get(), SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof bytes) != 0) {
+    ::setsockopt(s.get(), SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
   }
   sockaddr_can addr{};
   addr.can_family = AF_CAN;

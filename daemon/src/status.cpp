@@ -159,6 +159,7 @@ void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
     e.queue_dropped = st.queue_dropped;
     e.rejected = st.rejected;
     e.tx_failed = st.tx_failed;
+    e.kernel_dropped = st.kernel_dropped;
   }
 }
 

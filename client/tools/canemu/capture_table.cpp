@@ -62,20 +62,17 @@ std::string recorders_json(const ipc::RecorderListReply& r) {
 }
 
 void print_bridges(const ipc::BridgeListReply& r) {
-  std::printf("%-12s %-10s %-14s %4s %4s %10s %10s %7s %8s %8s %8s %8s\n", "BRIDGE", "INTERFACE",
-              "STATE", "TEC", "REC", "TO-IF", "FROM-IF", "ERRORS", "IF-DROP", "Q-DROP", "REJECTED",
-              "FAILED");
+  std::printf("%-12s %-10s %-14s %4s %4s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
+              "INTERFACE", "STATE", "TEC", "REC", "TO-IF", "FROM-IF", "ERRORS", "IF-DROP", "K-DROP",
+              "Q-DROP", "REJECTED", "FAILED");
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::BridgeEntry& e = r.bridges[i];
-    std::printf(
-        "%-12s %-10s %-14s %4u %4u %10llu %10llu %7llu %8llu %8llu %8llu %8llu\n",
-        ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(), state_name(e.state).c_str(),
-        e.tec, e.rec, static_cast<unsigned long long>(e.to_interface),
-        static_cast<unsigned long long>(e.from_interface),
-        static_cast<unsigned long long>(e.error_frames_written),
-        static_cast<unsigned long long>(e.to_interface_dropped),
-        static_cast<unsigned long long>(e.queue_dropped),
-        static_cast<unsigned long long>(e.rejected), static_cast<unsigned long long>(e.tx_failed));
+    const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+    std::printf("%-12s %-10s %-14s %4u %4u %10llu %10llu %7llu %8llu %8llu %8llu %8llu %8llu\n",
+                ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(),
+                state_name(e.state).c_str(), e.tec, e.rec, n(e.to_interface), n(e.from_interface),
+                n(e.error_frames_written), n(e.to_interface_dropped), n(e.kernel_dropped),
+                n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
   }
 }
 
@@ -87,11 +84,11 @@ std::string bridges_json(const ipc::BridgeListReply& r) {
         "{}{{\"kind\":\"socketcan\",\"bus\":\"{}\",\"interface\":\"{}\",\"error_frames\":{},"
         "\"state\":\"{}\",\"tec\":{},\"rec\":{},\"queued\":{},\"to_interface\":{},"
         "\"from_interface\":{},\"error_frames_written\":{},\"to_interface_dropped\":{},"
-        "\"queue_dropped\":{},\"rejected\":{},\"tx_failed\":{}}}",
+        "\"kernel_dropped\":{},\"queue_dropped\":{},\"rejected\":{},\"tx_failed\":{}}}",
         i ? "," : "", ipc::name_of(e.bus), json_escaped(ipc::name_of(e.interface)),
         e.error_frames ? "true" : "false", state_name(e.state), e.tec, e.rec, e.queued,
         e.to_interface, e.from_interface, e.error_frames_written, e.to_interface_dropped,
-        e.queue_dropped, e.rejected, e.tx_failed);
+        e.kernel_dropped, e.queue_dropped, e.rejected, e.tx_failed);
   }
   return out + "]";
 }

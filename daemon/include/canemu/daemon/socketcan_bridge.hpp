@@ -40,9 +40,11 @@ struct BridgeStats {
   uint64_t error_frames = 0;          // error frames written to the interface
   uint64_t to_interface_dropped = 0;  // the interface refused them (buffer full, down)
   uint64_t queue_dropped = 0;         // from the interface while the queue was full
-  uint64_t rejected = 0;   // from the interface but not a frame this bus carries (FD on a
-                           // classic bus, error frames, bad lengths, identifiers)
-  uint64_t tx_failed = 0;  // queued but given up by the node (single shot never; bus-off)
+  uint64_t rejected = 0;        // from the interface but not a frame this bus carries (FD on a
+                                // classic bus, error frames, bad lengths, identifiers)
+  uint64_t tx_failed = 0;       // queued but given up by the node (bus-off)
+  uint64_t kernel_dropped = 0;  // dropped by the kernel before the bridge read them (its
+                                // socket's receive buffer was full: SO_RXQ_OVFL)
 };
 
 struct BridgeOptions {

@@ -85,8 +85,9 @@ struct BridgeEntry {
   uint64_t queue_dropped = 0;
   uint64_t rejected = 0;
   uint64_t tx_failed = 0;
+  uint64_t kernel_dropped = 0;  // dropped by the kernel before the bridge read them
 };
-static_assert(sizeof(BridgeEntry) == 64 + 16 + 56);
+static_assert(sizeof(BridgeEntry) == 64 + 16 + 64);
 
 struct BridgeListReply {
   MsgHeader header;

@@ -2,14 +2,12 @@
 // simulated instants, and never lose frames silently.
 #include "canemu/daemon/recorder.hpp"
 
-#include <stdlib.h>
-
 #include <deque>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <gtest/gtest.h>
+
+#include "../support/temp_dir.hpp"
 
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/status.hpp"
@@ -20,21 +18,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "canemu-recorder-XXXXXX").string();
-    path = ::mkdtemp(pattern.data());
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
-
-std::string read_all(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::read_file;
+using testing::TempDir;
 
 std::unique_ptr<Simulation> world(const std::string& recorders) {
   const std::string text = std::string(embedded_default_config()) + recorders;
@@ -94,9 +79,9 @@ TEST(Recorder, WritesEveryFrameOfItsBusAtItsSimulatedInstant) {
   sim->scheduler().run_until(model::SimTime::from_ns(10'000'000));
   EXPECT_TRUE(sim->flush_recorders().empty());
   ASSERT_EQ(t.receiver.at_ns.size(), 3u);
-  EXPECT_EQ(read_all(dir.path / "can0.log"), stamp(t.receiver.at_ns[0]) + " can0 123#1122\n" +
-                                                 stamp(t.receiver.at_ns[1]) + " can0 1ABCDEF0#\n" +
-                                                 stamp(t.receiver.at_ns[2]) + " can0 7FF#01\n");
+  EXPECT_EQ(read_file(dir.path / "can0.log"), stamp(t.receiver.at_ns[0]) + " can0 123#1122\n" +
+                                                  stamp(t.receiver.at_ns[1]) + " can0 1ABCDEF0#\n" +
+                                                  stamp(t.receiver.at_ns[2]) + " can0 7FF#01\n");
   ipc::RecorderListReply list{};
   fill_recorder_list(*sim, list);
   ASSERT_EQ(list.count, 1);
@@ -124,7 +109,7 @@ TEST(Recorder, RecordsErrorFramesAsCandumpEShowsThem) {
   tx.kick();
   sim->scheduler().run_until(model::SimTime::from_ns(1'000'000));
   sim->flush_recorders();
-  const std::string log = read_all(dir.path / "can0.log");
+  const std::string log = read_file(dir.path / "can0.log");
   ASSERT_FALSE(log.empty());
   EXPECT_EQ(log.find("100#AA"), std::string::npos) << log;
   for (std::size_t at = 0; at < log.size(); at = log.find('\n', at) + 1) {
@@ -139,7 +124,7 @@ TEST(Recorder, WritesPcapWhenThePathSaysSo) {
   Traffic t(*sim, {frame(0x123, {0x11, 0x22})});
   sim->scheduler().run_until(model::SimTime::from_ns(1'000'000));
   sim->flush_recorders();
-  const std::string bytes = read_all(dir.path / "can0.pcap");
+  const std::string bytes = read_file(dir.path / "can0.pcap");
   ASSERT_EQ(bytes.size(), 24u + 16 + 16);
   EXPECT_EQ(static_cast<uint8_t>(bytes[20]), 227);
   EXPECT_EQ(static_cast<uint32_t>(static_cast<uint8_t>(bytes[28])) |

@@ -214,9 +214,8 @@ TEST(SocketCanBridge, ErrorFramesOnlyWhenAskedFor) {
   auto sim = world(kClassic);
   Interface quiet;
   Interface loud;
-  // Two bridges of one bus on two interfaces; nobody else acknowledges, so each bridge's own
-  // frame... is acknowledged by the other bridge. A frame from an ECU at the wrong rate makes
-  // errors every node sees.
+  // Two bridges of one bus on two interfaces, one with error frames. A node at 250 kbit/s on
+  // the 500 kbit/s bus makes errors that both bridges' nodes detect.
   ASSERT_TRUE(sim->add_bridge({"socketcan", "can0", "vcan0", false, 0}, std::move(quiet.bridge)));
   auto b = sim->add_bridge({"socketcan", "can0", "vcan1", true, 0}, std::move(loud.bridge));
   ASSERT_TRUE(b);

@@ -4,31 +4,18 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <gtest/gtest.h>
+
+#include "../support/temp_dir.hpp"
 
 namespace canemu::ipc {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "canemu-capture-XXXXXX").string();
-    path = ::mkdtemp(pattern.data());
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
-
-std::string read_all(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::read_file;
+using testing::TempDir;
 
 socketcan::Frame frame(uint32_t id, uint8_t len) {
   socketcan::Frame f;
@@ -86,7 +73,7 @@ TEST(CaptureWriter, WritesCandumpLogLines) {
     EXPECT_EQ(w->frames(), 2u);
     EXPECT_EQ(w->lost(), 0u);
   }
-  EXPECT_EQ(read_all(path),
+  EXPECT_EQ(read_file(path),
             "(0000000001.000250) can0 123#1011\n"
             "(0000000002.500000) can0 12345678#\n");
 }
@@ -103,7 +90,7 @@ TEST(CaptureWriter, WritesPcapThatReadsBack) {
     fd.flags = socketcan::kFdBrs;
     w->record(1'000'000'001, fd);
   }  // the destructor flushes
-  const std::string bytes = read_all(path);
+  const std::string bytes = read_file(path);
   EXPECT_EQ(bytes.size(), 24u + 16 + 16 + 16 + 72);
   EXPECT_EQ(parse_pcap(bytes),
             (std::vector<PcapRecord>{{0, 7, 0x7FF, 16, 8}, {1, 1, 0x100, 72, 64}}));
@@ -121,10 +108,10 @@ TEST(CaptureWriter, RotatesBySizeKeepingNumberedFiles) {
   EXPECT_TRUE(w->flush());
   EXPECT_EQ(w->rotations(), 3u);
   EXPECT_EQ(w->frames(), 7u);
-  EXPECT_EQ(read_all(path), "(0000000006.000000) can0 106#1011\n");
-  EXPECT_EQ(read_all(dir.path / "can0.log.1"),
+  EXPECT_EQ(read_file(path), "(0000000006.000000) can0 106#1011\n");
+  EXPECT_EQ(read_file(dir.path / "can0.log.1"),
             "(0000000004.000000) can0 104#1011\n(0000000005.000000) can0 105#1011\n");
-  EXPECT_EQ(read_all(dir.path / "can0.log.2"),
+  EXPECT_EQ(read_file(dir.path / "can0.log.2"),
             "(0000000002.000000) can0 102#1011\n(0000000003.000000) can0 103#1011\n");
   EXPECT_FALSE(fs::exists(dir.path / "can0.log.3"));  // the oldest went
 }
@@ -138,9 +125,9 @@ TEST(CaptureWriter, EveryRotatedPcapFileHasItsHeader) {
     w->record(i, frame(0x200 + static_cast<uint32_t>(i), 1));
   }
   EXPECT_TRUE(w->flush());
-  EXPECT_EQ(parse_pcap(read_all(dir.path / "can0.pcap.1")),
+  EXPECT_EQ(parse_pcap(read_file(dir.path / "can0.pcap.1")),
             (std::vector<PcapRecord>{{0, 0, 0x200, 16, 1}, {0, 1, 0x201, 16, 1}}));
-  EXPECT_EQ(parse_pcap(read_all(path)), (std::vector<PcapRecord>{{0, 2, 0x202, 16, 1}}));
+  EXPECT_EQ(parse_pcap(read_file(path)), (std::vector<PcapRecord>{{0, 2, 0x202, 16, 1}}));
 }
 
 TEST(CaptureWriter, AFullDiskCountsTheLostFramesAndSaysWhy) {

@@ -1,14 +1,14 @@
 // Recordings against a real canemud in stepped time: canemu dump --format pcap, canemu record,
 // and the daemon's own [[recorder]] with its line in canemu status.
-#include <stdlib.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "../support/temp_dir.hpp"
 
 #include "cli_process.hpp"
 #include "daemon_process.hpp"
@@ -20,21 +20,8 @@ namespace fs = std::filesystem;
 using testing::connect;
 using testing::Daemon;
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "canemu-capture-XXXXXX").string();
-    path = ::mkdtemp(pattern.data());
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::read_file;
+using testing::TempDir;
 
 std::string hex(const std::string& bytes) {
   std::string s;

@@ -59,6 +59,7 @@ done
 ip link add dev vcan0 type vcan && ip link set vcan0 up
 ip link add dev vcan1 type vcan && ip link set vcan1 mtu 72 up
 ip link add dev vcan2 type vcan && ip link set vcan2 up
+ip link add dev vcan3 type vcan && ip link set vcan3 up
 
 cat > /tmp/canemu.toml <<'TOML'
 [[bus]]
@@ -70,6 +71,10 @@ bitrate = 500000
 data_bitrate = 2000000
 [[bus]]
 name = "can1"
+[[device]]
+name = "ixxat0"
+model = "ixxat-usb-to-can"
+controllers = ["can0"]
 [[bridge]]
 kind = "socketcan"
 bus = "can0"
@@ -167,6 +172,53 @@ wait_for reached $((before + 3000))
 result every_frame_sent_or_counted "3000" "$(($(accounted) - before))"
 kill $ack
 canemu bridge list
+
+# 7. A VCI program (the VCI C API's example, on the emulated adapter ixxat0 of can0) and
+# can-utils on vcan0 see each other's frames.
+n=$(receivers vcan0)
+candump -L -n 1 vcan0 >/tmp/t7 &
+pid=$!
+wait_for more_receivers vcan0 "$n"
+vci_c_talk send ixxat0 321 5A
+wait_pid $pid
+vci_c_talk receive ixxat0 >/tmp/t7b 2>&1 &
+pid=$!
+wait_for grep -q ready /tmp/t7b
+cansend vcan0 1A0#7E
+wait_pid $pid
+result a_vci_program_and_can_utils_see_each_other "vcan0 321#5A
+ready
+1A0#7E" "$(cut -d' ' -f2- /tmp/t7)
+$(cat /tmp/t7b)"
+
+# 8. A bridge added while canemud runs: cansequence from vcan3 through can0 to vcan0 loses
+# nothing (1000 frames, within the bridge's queue); then the bridge is removed.
+written() {  # frames the bridge of $1 wrote to its interface
+  canemu bridge list --json | tr '}' '\n' | grep "\"$1\"" | sed 's/.*"to_interface":\([0-9]*\).*/\1/'
+}
+wrote() {  # INTERFACE COUNT
+  [ "$(written "$1")" -ge "$2" ]
+}
+canemu bridge add can0 vcan3 >/tmp/t8
+n=$(receivers vcan0)
+cansequence -r --quit=1 vcan0 >/tmp/t8.rx 2>&1 &
+rx=$!
+wait_for more_receivers vcan0 "$n"
+start=$(written vcan0)
+cansequence -p --loop=1000 vcan3
+wait_for wrote vcan0 $((start + 1000))
+alive=lost
+kill -0 $rx 2>/dev/null && alive="nothing lost"
+kill $rx
+[ "$alive" = lost ] && cat /tmp/t8.rx
+canemu bridge remove vcan3 >>/tmp/t8
+result cansequence_through_a_bridge_added_at_run_time "can0 bridged to vcan3
+$((start + 1000)) nothing lost
+bridge on vcan3 removed
+0" "$(head -1 /tmp/t8)
+$(written vcan0) $alive
+$(tail -1 /tmp/t8)
+$(canemu bridge list --json | grep -c vcan3)"
 
 canemu status
 echo "GUEST-RESULT: $pass passed, $fail failed"

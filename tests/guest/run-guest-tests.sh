@@ -44,7 +44,7 @@ done
 for m in can can-raw can-bcm can-gw can-dev vcan vxcan; do
   cp "$(find "$modules" -name "$m.ko")" "$root/lib/modules/"
 done
-for tool in candump cansend cangen cansequence canbusload; do
+for tool in candump cansend cangen cansequence canbusload; do  # libc only
   cp "$x/usr/bin/$tool" "$root/usr/bin/"
 done
 # canemud, canemu and can-utils with the shared libraries they load (the host's).
@@ -58,6 +58,7 @@ copy_with_libs() {
 copy_with_libs "$build/bin/canemud"
 copy_with_libs "$build/bin/canemu"
 copy_with_libs "$x/usr/bin/candump"
+copy_with_libs "$build/bin/vci_c_talk"
 mkdir -p "$root/lib64"
 cp -L /lib64/ld-linux-x86-64.so.2 "$root/lib64/"
 cp "$src/tests/guest/guest-tests.sh" "$root/guest-tests.sh"

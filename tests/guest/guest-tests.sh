@@ -220,5 +220,24 @@ $(written vcan0) $alive
 $(tail -1 /tmp/t8)
 $(canemu bridge list --json | grep -c vcan3)"
 
+# 9. A SocketCAN program and an emulated adapter at the wrong bit rate on one bus: the adapter
+# (a dump at 250 kbit/s on the 500 kbit/s bus can1) cannot decode the frame cansend puts on
+# vcan2 and reports errors; its error flags destroy the frame, the bridge's node retransmits,
+# and with error_frames the bridge shows its own errors on vcan2 (docs/concepts.md: nodes whose
+# timing disagrees cannot decode each other).
+canemu dump can1 --bitrate 250000 -n 1 >/tmp/t9 2>/tmp/t9.err &
+pid=$!
+wait_for listening /tmp/t9.err
+n=$(receivers vcan2)
+candump -L -n 2 vcan2,#1FFFFFFF >/tmp/t9b &  # cansend's frame (the kernel's local echo), then
+cd=$!                                        # the bridge's first error frame
+wait_for more_receivers vcan2 "$n"
+cansend vcan2 123#1122
+wait_pid $pid
+wait_pid $cd
+result a_socketcan_program_and_an_adapter_at_the_wrong_rate "can1 200002 vcan2 123#1122 vcan2 200002" \
+  "$(cut -d' ' -f2- /tmp/t9 | cut -c1-11) $(head -1 /tmp/t9b | cut -d' ' -f2-) $(tail -1 /tmp/t9b | cut -d' ' -f2- | cut -c1-12)"
+canemu bridge remove vcan2 >/dev/null
+
 canemu status
 echo "GUEST-RESULT: $pass passed, $fail failed"

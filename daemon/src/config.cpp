@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "capture_config_reader.hpp"
@@ -88,12 +89,30 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
   if (t == nullptr) {
     return;
   }
-  c.only_keys(*t, "security", {"allowed_users", "allowed_groups"});
+  c.only_keys(*t, "security",
+              {"allowed_users", "allowed_groups", "admin_groups", "socket_mode", "socket_group"});
+  if (auto v = c.strings(*t, "security", "admin_groups")) {
+    cfg.security.admin_groups = *v;
+  }
   if (auto v = c.strings(*t, "security", "allowed_users")) {
     cfg.security.allowed_users = *v;
   }
   if (auto v = c.strings(*t, "security", "allowed_groups")) {
     cfg.security.allowed_groups = *v;
+  }
+  // Permission bits read as octal, so the error says them in octal too.
+  if (const toml::node* n = t->get("socket_mode")) {
+    const auto* mode = n->as_integer();
+    if (mode == nullptr || mode->get() < 0 || mode->get() > 0777) {
+      c.error(*n, "security.socket_mode",
+              mode == nullptr ? std::string("must be an integer (octal, such as 0o660)")
+                              : fmt::format("0o{:o} is outside 0o000..0o777", mode->get()));
+    } else {
+      cfg.security.socket_mode = static_cast<uint32_t>(mode->get());
+    }
+  }
+  if (auto group = c.string(*t, "security", "socket_group", false)) {
+    cfg.security.socket_group = *group;
   }
 }
 
@@ -178,7 +197,7 @@ void check_xcan(Checker& c, const toml::node& ctl, const std::string& path, cons
 void read_devices(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
   c.for_each_table(root, "device", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"name", "model", "controllers"});
+    c.only_keys(t, path, {"name", "model", "controllers", "mdd_version", "buffer_load_time"});
     DeviceConfig dev;
     dev.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto name = read_name(c, t, path, names, "device")) {
@@ -207,6 +226,31 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
       dev.controllers = *buses;
       if (dev.model == DeviceModel::sorcus_x_can_2i) {
         check_xcan(c, *ctl, path, cfg, dev);
+      }
+    }
+    if (auto version = c.string(t, path, "mdd_version", false)) {
+      const toml::node& n = *t.get("mdd_version");
+      if (dev.model != DeviceModel::sorcus_x_can_2i) {
+        c.error(n, path + ".mdd_version", "only an X-CAN-2i (sorcus-x-can-2i) has an MDD");
+      } else if (!model::sorcus::MddVersion::parse(*version)) {
+        c.error(n, path + ".mdd_version",
+                fmt::format("\"{}\": a version as the manual writes it, a digit, a dot and a "
+                            "capital letter (\"3.C\")",
+                            *version));
+      } else {
+        dev.mdd_version = *version;
+      }
+    }
+    if (auto load = c.string(t, path, "buffer_load_time", false)) {
+      const toml::node& n = *t.get("buffer_load_time");
+      const std::optional<int64_t> ns = parse_duration(*load);
+      if (dev.model != DeviceModel::sorcus_x_can_2i) {
+        c.error(n, path + ".buffer_load_time", "only an X-CAN-2i (sorcus-x-can-2i) loads buffers");
+      } else if (!ns || *ns > 1'000'000) {
+        c.error(n, path + ".buffer_load_time",
+                fmt::format("\"{}\": a duration from \"0us\" to \"1ms\" (\"5us\")", *load));
+      } else {
+        dev.buffer_load_ns = *ns;
       }
     }
     cfg.devices.push_back(dev);

@@ -229,7 +229,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::hello: {
       const auto m = read_as<ipc::Hello>(data);
       c.greeted = true;
-      c.name = ipc::name_of(m.client_name);
+      c.name = ipc::printable_name_of(m.client_name);  // shown in tables, JSON and logs
       auto r = ipc::make_message<ipc::HelloReply>(request_id);
       r.server_pid = static_cast<uint32_t>(::getpid());
       send_reply(send, r);
@@ -363,7 +363,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
         auto scenario = parse_scenario(std::string_view(m->text, m->length), source);
         if (!scenario) {
           problems = scenario.error();
-        } else if (auto applied = sim_.scenarios().apply(*scenario, sim_.scheduler().now());
+        } else if (auto applied = sim_.scenarios().apply(*scenario, sim_.scheduler().now(), c.uid);
                    !applied) {
           problems = applied.error();
         } else {
@@ -407,7 +407,19 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::fault_clear_request: {
       const auto m = read_as<ipc::FaultClearRequest>(data);
       const std::string name = ipc::name_of(m.scenario);
-      const std::size_t cleared = sim_.scenarios().clear(name);
+      // A client clears its own user's scenarios; an admin clears every one.
+      const auto may = [&c](const ScenarioRunner::Owner& owner) {
+        return c.admin || (owner && *owner == c.uid);
+      };
+      std::size_t refused = 0;
+      const std::size_t cleared = sim_.scenarios().clear(name, may, &refused);
+      if (cleared == 0 && refused > 0 && !name.empty()) {
+        error(send, request_id, ipc::ErrorCode::permission_denied,
+              fmt::format("scenario \"{}\" is not yours to clear: only the user who loaded it, "
+                          "root, canemud's own user and members of [security] admin_groups may",
+                          name));
+        return;
+      }
       if (cleared == 0 && !name.empty()) {
         error(send, request_id, ipc::ErrorCode::bad_argument,
               fmt::format("no scenario named \"{}\" to clear", name));
@@ -415,6 +427,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       }
       auto r = ipc::make_message<ipc::FaultClearReply>(request_id);
       r.cleared = static_cast<uint32_t>(cleared);
+      r.refused = static_cast<uint32_t>(refused);
       send_reply(send, r);
       return;
     }

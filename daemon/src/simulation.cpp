@@ -246,6 +246,11 @@ std::optional<std::string> Simulation::add_xcan(const DeviceConfig& d) {
                        : low1 ? model::sorcus::XcanVariant::m
                               : model::sorcus::XcanVariant::h;
   x.device = std::make_shared<XcanDevice>(d.name, scheduler_, variant);
+  x.device->module().set_buffer_load_time(d.buffer_load_ns);
+  if (!d.mdd_version.empty()) {
+    x.device->module().set_mdd_version(
+        model::sorcus::MddVersion::parse(d.mdd_version).value_or(model::sorcus::kMdd3C));
+  }
   for (unsigned i = 0; i < 2; ++i) {
     x.device->module().connect(i, *buses_[x.buses[i]]);
   }
@@ -261,7 +266,8 @@ bool same(const BusConfig& a, const BusConfig& b) {
 }
 
 bool same(const DeviceConfig& a, const DeviceConfig& b) {
-  return a.name == b.name && a.model == b.model && a.controllers == b.controllers;
+  return a.name == b.name && a.model == b.model && a.controllers == b.controllers &&
+         a.mdd_version == b.mdd_version && a.buffer_load_ns == b.buffer_load_ns;
 }
 
 bool same(const std::vector<RecorderConfig>& a, const std::vector<RecorderConfig>& b) {

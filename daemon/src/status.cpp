@@ -71,7 +71,8 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
 void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
   const DeviceRegistry& devices = sim.devices();
   r.generation = devices.generation();
-  r.total = static_cast<uint16_t>(devices.configured().size() + devices.ephemeral().size());
+  r.total = static_cast<uint16_t>(devices.configured().size() + devices.xcan().size() +
+                                  devices.ephemeral().size());
   std::size_t n = 0;
   for (const DeviceRegistry::Configured& d : devices.configured()) {
     if (n == ipc::kMaxDevices) {
@@ -93,6 +94,21 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
       e.epoch_ns = d.controllers[0].line->epoch().ns();
     }
     ipc::copy_name(e.hardware_id, hardware_id(c.name));
+  }
+  // X-CAN-2i modules: no VCI object id (the VCI's device list leaves them out); their
+  // interfaces are the nodes NAME:0 and NAME:1.
+  for (const DeviceRegistry::Xcan& x : devices.xcan()) {
+    if (n == ipc::kMaxDevices) {
+      break;
+    }
+    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::copy_name(e.name, x.config.name);
+    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_x_can_2i);
+    e.controller_count = static_cast<uint8_t>(x.config.controllers.size());
+    for (std::size_t k = 0; k < x.config.controllers.size() && k < ipc::kMaxDeviceControllers;
+         ++k) {
+      ipc::copy_name(e.buses[k], x.config.controllers[k]);
+    }
   }
   for (const DeviceRegistry::Ephemeral& x : devices.ephemeral()) {
     if (n == ipc::kMaxDevices) {

@@ -194,7 +194,7 @@ $(cat /tmp/t7b)"
 # 8. A bridge added while canemud runs: cansequence from vcan3 through can0 to vcan0 loses
 # nothing (1000 frames, within the bridge's queue); then the bridge is removed.
 written() {  # frames the bridge of $1 wrote to its interface
-  canemu bridge list --json | tr '}' '\n' | grep "\"$1\"" | sed 's/.*"to_interface":\([0-9]*\).*/\1/'
+  canemu bridge list --json | tr '}' '\n' | grep "\"$1\"" | sed 's/.*"to_interface" *: *\([0-9]*\).*/\1/'
 }
 wrote() {  # INTERFACE COUNT
   [ "$(written "$1")" -ge "$2" ]

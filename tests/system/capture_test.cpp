@@ -128,11 +128,11 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
       << text;
   Cli json(d, {"status", "--json"});
   const std::string j = Cli::read_all(json.out);
-  EXPECT_NE(
-      j.find("\"recorders\":[{\"bus\":\"can0\",\"path\":\"" + (dir.path / "can0.log").string() +
-             "\",\"format\":\"candump\",\"errors\":true,\"frames\":2,\"bytes\":71,"
-             "\"rotations\":0,\"lost\":0,\"error\":\"\"},"),
-      std::string::npos)
+  EXPECT_NE(j.find("\"recorders\" : [{\"bus\" : \"can0\",\"bytes\" : 71,\"error\" : \"\","
+                   "\"errors\" : true,\"format\" : \"candump\",\"frames\" : 2,\"lost\" : 0,"
+                   "\"path\" : \"" +
+                   (dir.path / "can0.log").string() + "\",\"rotations\" : 0},"),
+            std::string::npos)
       << j;
 }
 

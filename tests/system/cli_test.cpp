@@ -1,6 +1,7 @@
 // The canemu command line against a real canemud: send and dump in stepped time.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -126,6 +127,83 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
   EXPECT_EQ(none.wait(), 1);
 }
 
+// A client's name is the peer's choice: canemud keeps printable ASCII only, and the JSON
+// escapes quotes, so a name can neither add a field nor break a line or a table row.
+TEST(Cli, HostileClientNameCannotForgeStatusFields) {
+  Daemon d;
+  auto c = connect(d, "x\",\"uid\":0\n\x1b[2J");
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_EQ(std::count(j.begin(), j.end(), '\n'), 1) << j;
+  EXPECT_EQ(j.find('\x1b'), std::string::npos) << j;
+  EXPECT_NE(j.find("\"name\" : \"x\\\",\\\"uid\\\":0??[2J\""), std::string::npos) << j;
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("x\",\"uid\":0??[2J"), std::string::npos) << t;
+  EXPECT_EQ(t.find('\x1b'), std::string::npos) << t;
+}
+
+// canemu metrics: the Prometheus text format, one family after the other, labels escaped.
+TEST(Cli, MetricsSpeakThePrometheusTextFormat) {
+  Daemon d;
+  Cli step(d, {"time", "step", "10ms"});
+  EXPECT_EQ(step.wait(), 0);
+  Cli metrics(d, {"metrics"});
+  const std::string m = Cli::read_all(metrics.out);
+  EXPECT_EQ(metrics.wait(), 0);
+  for (const char* line :
+       {"# HELP canemu_sim_time_seconds Simulated time.\n"
+        "# TYPE canemu_sim_time_seconds gauge\n"
+        "canemu_sim_time_seconds 0.010000000\n",
+        "# TYPE canemu_bus_frames_total counter\n",
+        "canemu_bus_bitrate_bits_per_second{bus=\"can0\",kind=\"can\"} 500000\n",
+        "canemu_bus_load_ratio{bus=\"can1\"} 0.000\n",
+        "canemu_node_error_state{node=\"ixxat0:0\",bus=\"can0\",state=\"error-active\"} 1\n",
+        "canemu_node_error_state{node=\"ixxat0:0\",bus=\"can0\",state=\"bus-off\"} 0\n",
+        "canemu_node_tec{node=\"ixxat0:1\",bus=\"can1\"} 0\n",
+        "# TYPE canemu_fault_hits_total counter\n"}) {
+    EXPECT_NE(m.find(line), std::string::npos) << line << "\nin:\n" << m;
+  }
+  // Every line is a comment or `name{labels} value`.
+  std::size_t start = 0;
+  while (start < m.size()) {
+    const std::size_t end = m.find('\n', start);
+    ASSERT_NE(end, std::string::npos);
+    const std::string line = m.substr(start, end - start);
+    EXPECT_TRUE(line.rfind("# ", 0) == 0 || line.rfind("canemu_", 0) == 0) << line;
+    start = end + 1;
+  }
+}
+
+// A SORCUS X-CAN-2i module is a DEVICE row like an IXXAT adapter's (model, buses), and its
+// interfaces are nodes NAME:0 and NAME:1 (config/examples/x-can-2i.toml).
+TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
+  Daemon d("stepped", {"--config", CANEMU_SOURCE_DIR "/config/examples/x-can-2i.toml"});
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1\n"
+                   "xcan0          sorcus-x-can-2i      config   can0 can1\n"),
+            std::string::npos)
+      << t;
+  EXPECT_NE(t.find("xcan0:0        can0         error-active      0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("xcan0:1        can1         error-active      0    0"), std::string::npos) << t;
+
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("{\"buses\" : [\"can0\",\"can1\"],\"ephemeral\" : false,\"model\" : "
+                   "\"sorcus-x-can-2i\",\"name\" : \"xcan0\",\"nodes\" : [\"xcan0:0\",\"xcan0:1\"],"
+                   "\"owner_pid\" : 0}"),
+            std::string::npos)
+      << j;
+  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"error-active\""),
+            std::string::npos)
+      << j;
+}
+
 // status (text and JSON), time step and calc, as a user types them.
 TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   Daemon d;
@@ -158,14 +236,15 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   ASSERT_FALSE(j.empty());
   EXPECT_EQ(j.front(), '{');
   EXPECT_EQ(j.substr(j.size() - 2), "}\n");
-  EXPECT_NE(j.find("\"time_mode\":\"stepped\""), std::string::npos) << j;
-  EXPECT_NE(j.find("\"sim_time_ns\":10000000"), std::string::npos) << j;
-  EXPECT_NE(
-      j.find(
-          "{\"name\":\"can1\",\"kind\":\"can\",\"transceiver\":\"high-speed\",\"bitrate\":500000"),
-      std::string::npos)
+  // toml++ writes it: keys sorted, `"key" : value`.
+  EXPECT_NE(j.find("\"time_mode\" : \"stepped\""), std::string::npos) << j;
+  EXPECT_NE(j.find("\"sim_time_ns\" : 10000000"), std::string::npos) << j;
+  EXPECT_NE(j.find("{\"bitrate\" : 500000,\"data_bitrate\" : 0,\"error_frames\" : 0,\"frames\" : "
+                   "0,\"kind\" : \"can\",\"load_percent\" : 0.0,\"name\" : \"can1\","
+                   "\"transceiver\" : \"high-speed\"}"),
+            std::string::npos)
       << j;
-  EXPECT_NE(j.find("{\"name\":\"probe\",\"model\":\"ephemeral\",\"ephemeral\":true"),
+  EXPECT_NE(j.find("\"ephemeral\" : true,\"model\" : \"ephemeral\",\"name\" : \"probe\""),
             std::string::npos)
       << j;
 

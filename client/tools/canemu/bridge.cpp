@@ -9,6 +9,7 @@
 #include "canemu/ipc/protocol.hpp"
 #include "capture_table.hpp"
 #include "command.hpp"
+#include "fault_table.hpp"
 
 namespace canemu::cli {
 
@@ -65,7 +66,7 @@ int run_list(const std::string& socket, const BridgeArgs& a) {
     return fail(r.error().message);
   }
   if (a.json) {
-    std::printf("%s\n", bridges_json(*r).c_str());
+    std::printf("%s\n", one_line_json(bridges_array(*r)).c_str());
   } else {
     print_bridges(*r);
   }

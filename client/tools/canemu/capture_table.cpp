@@ -15,22 +15,6 @@ std::string format_name(uint8_t format) {
   return std::string(ipc::to_string(static_cast<ipc::CaptureFormat>(format)));
 }
 
-// A JSON string's contents: quotes, backslashes and control characters escaped.
-std::string json_escaped(const std::string& s) {
-  std::string out;
-  for (char ch : s) {
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (static_cast<unsigned char>(ch) < 0x20) {
-      out += fmt::format("\\u{:04x}", ch);
-    } else {
-      out += ch;
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 void print_recorders(const ipc::RecorderListReply& r) {
@@ -47,18 +31,22 @@ void print_recorders(const ipc::RecorderListReply& r) {
   }
 }
 
-std::string recorders_json(const ipc::RecorderListReply& r) {
-  std::string out = "[";
+toml::array recorders_array(const ipc::RecorderListReply& r) {
+  const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
+  toml::array out;
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::RecorderEntry& e = r.recorders[i];
-    out += fmt::format(
-        "{}{{\"bus\":\"{}\",\"path\":\"{}\",\"format\":\"{}\",\"errors\":{},\"frames\":{},"
-        "\"bytes\":{},\"rotations\":{},\"lost\":{},\"error\":\"{}\"}}",
-        i ? "," : "", ipc::name_of(e.bus), json_escaped(ipc::name_of(e.path)),
-        format_name(e.format), e.errors ? "true" : "false", e.frames, e.bytes, e.rotations, e.lost,
-        json_escaped(ipc::name_of(e.error)));
+    out.push_back(toml::table{{"bus", ipc::name_of(e.bus)},
+                              {"path", ipc::name_of(e.path)},
+                              {"format", format_name(e.format)},
+                              {"errors", e.errors != 0},
+                              {"frames", i64(e.frames)},
+                              {"bytes", i64(e.bytes)},
+                              {"rotations", i64(e.rotations)},
+                              {"lost", i64(e.lost)},
+                              {"error", ipc::name_of(e.error)}});
   }
-  return out + "]";
+  return out;
 }
 
 void print_bridges(const ipc::BridgeListReply& r) {
@@ -70,27 +58,35 @@ void print_bridges(const ipc::BridgeListReply& r) {
     const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf("%-12s %-10s %-14s %4u %4u %10llu %10llu %7llu %8llu %8llu %8llu %8llu %8llu\n",
                 ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(),
-                state_name(e.state).c_str(), e.tec, e.rec, n(e.to_interface), n(e.from_interface),
-                n(e.error_frames_written), n(e.to_interface_dropped), n(e.kernel_dropped),
-                n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
+                error_state_name(e.state).c_str(), e.tec, e.rec, n(e.to_interface),
+                n(e.from_interface), n(e.error_frames_written), n(e.to_interface_dropped),
+                n(e.kernel_dropped), n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
   }
 }
 
-std::string bridges_json(const ipc::BridgeListReply& r) {
-  std::string out = "[";
+toml::array bridges_array(const ipc::BridgeListReply& r) {
+  const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
+  toml::array out;
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::BridgeEntry& e = r.bridges[i];
-    out += fmt::format(
-        "{}{{\"kind\":\"socketcan\",\"bus\":\"{}\",\"interface\":\"{}\",\"error_frames\":{},"
-        "\"state\":\"{}\",\"tec\":{},\"rec\":{},\"queued\":{},\"to_interface\":{},"
-        "\"from_interface\":{},\"error_frames_written\":{},\"to_interface_dropped\":{},"
-        "\"kernel_dropped\":{},\"queue_dropped\":{},\"rejected\":{},\"tx_failed\":{}}}",
-        i ? "," : "", ipc::name_of(e.bus), json_escaped(ipc::name_of(e.interface)),
-        e.error_frames ? "true" : "false", state_name(e.state), e.tec, e.rec, e.queued,
-        e.to_interface, e.from_interface, e.error_frames_written, e.to_interface_dropped,
-        e.kernel_dropped, e.queue_dropped, e.rejected, e.tx_failed);
+    out.push_back(toml::table{{"kind", "socketcan"},
+                              {"bus", ipc::name_of(e.bus)},
+                              {"interface", ipc::name_of(e.interface)},
+                              {"error_frames", e.error_frames != 0},
+                              {"state", error_state_name(e.state)},
+                              {"tec", i64(e.tec)},
+                              {"rec", i64(e.rec)},
+                              {"queued", i64(e.queued)},
+                              {"to_interface", i64(e.to_interface)},
+                              {"from_interface", i64(e.from_interface)},
+                              {"error_frames_written", i64(e.error_frames_written)},
+                              {"to_interface_dropped", i64(e.to_interface_dropped)},
+                              {"kernel_dropped", i64(e.kernel_dropped)},
+                              {"queue_dropped", i64(e.queue_dropped)},
+                              {"rejected", i64(e.rejected)},
+                              {"tx_failed", i64(e.tx_failed)}});
   }
-  return out + "]";
+  return out;
 }
 
 }  // namespace canemu::cli

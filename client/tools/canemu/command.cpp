@@ -67,7 +67,7 @@ std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const
 static_assert(static_cast<uint8_t>(ipc::WireErrorState::bus_off) ==
               static_cast<uint8_t>(model::ErrorState::bus_off));
 
-std::string state_name(uint8_t state) {
+std::string error_state_name(uint8_t state) {
   return std::string(model::to_string(static_cast<model::ErrorState>(state)));
 }
 

@@ -28,6 +28,7 @@ struct Command {
 // control socket as given on the command line (empty: the default); it is read when the
 // command runs.
 Command add_status(CLI::App& app, const std::string& socket);
+Command add_metrics(CLI::App& app, const std::string& socket);
 Command add_send(CLI::App& app, const std::string& socket);
 Command add_gen(CLI::App& app, const std::string& socket);
 Command add_dump(CLI::App& app, const std::string& socket);
@@ -82,7 +83,7 @@ struct CaptureRun {
 int run_capture(const std::string& socket, const CaptureRun& run);
 
 // A node's error state from the protocol (WireErrorState) by the model's name: "error-active"...
-std::string state_name(uint8_t state);
+std::string error_state_name(uint8_t state);
 
 // Prints "canemu: <message>" to stderr; returns the exit code of a failed command (1).
 int fail(const std::string& message);

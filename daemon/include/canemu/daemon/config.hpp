@@ -39,6 +39,8 @@ struct DeviceConfig {
   std::string name;
   DeviceModel model = DeviceModel::ixxat_usb_to_can;
   std::vector<std::string> controllers;  // bus name per controller
+  std::string mdd_version;               // sorcus-x-can-2i: "N.L"; empty: "3.C"
+  int64_t buffer_load_ns = 0;            // sorcus-x-can-2i: loading a buffer takes this long
   uint32_t line = 0;
 };
 
@@ -74,9 +76,22 @@ struct SimulationConfig {
   uint32_t spin_us = 20;
 };
 
+// The group the packages create (systemd/canemu.sysusers): its members may connect by default.
+inline constexpr const char* kServiceGroup = "canemu";
+
 struct SecurityConfig {
   std::vector<std::string> allowed_users;
-  std::vector<std::string> allowed_groups;
+  // Members (primary or supplementary) of these groups may connect; the group the packages
+  // install (canemu.sysusers) by default.
+  std::vector<std::string> allowed_groups{kServiceGroup};
+  // Members of these groups (besides root and canemud's own user) may clear every client's fault
+  // scenarios and the configuration's; others clear their own user's only.
+  std::vector<std::string> admin_groups;
+  // The control socket's permission bits and group when canemud creates it (not when systemd
+  // passes it: canemud.socket's SocketMode= and SocketGroup= decide then). A group that does not
+  // exist leaves the socket in canemud's own group, with a warning.
+  uint32_t socket_mode = 0660;
+  std::string socket_group = kServiceGroup;
 };
 
 // [[recorder]]: a bus recorded into a file by canemud (docs/socketcan.md).

@@ -58,6 +58,7 @@ struct VciSession {
   // Ephemeral adapters this client created, by name.
   std::map<std::string, Simulation::DeviceLease> devices;
   uint32_t pid = 0;
+  uint32_t uid = 0;
 };
 
 class VciService {

@@ -135,4 +135,18 @@ std::string name_of(const char (&src)[N]) {
   return std::string(src, strnlen(src, N));
 }
 
+// A name a peer chose (a client's name in its Hello), as canemud keeps and shows it: printable
+// ASCII only, every other byte '?', so that no name can break a table, a log line or a
+// terminal.
+template <std::size_t N>
+std::string printable_name_of(const char (&src)[N]) {
+  std::string s = name_of(src);
+  for (char& c : s) {
+    if (c < 0x20 || c > 0x7E) {
+      c = '?';
+    }
+  }
+  return s;
+}
+
 }  // namespace canemu::ipc

@@ -473,7 +473,7 @@ static_assert(sizeof(FaultClearRequest) == 16 + kScenarioNameSize);
 struct FaultClearReply {
   MsgHeader header;
   uint32_t cleared = 0;  // scenarios
-  uint32_t reserved = 0;
+  uint32_t refused = 0;  // scenarios of other users (or the configuration's) left in force
 };
 static_assert(sizeof(FaultClearReply) == 24);
 

@@ -16,6 +16,7 @@
 #include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "capture_config_reader.hpp"
 #include "lin_config_reader.hpp"
 #include "toml_checker.hpp"
 
@@ -292,6 +293,14 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
 
 }  // namespace
 
+namespace detail {
+std::string beside_config(const Config& cfg, const std::string& file) {
+  const std::size_t slash = cfg.source.find_last_of('/');
+  const bool relative = !file.empty() && file[0] != '/';
+  return relative && slash != std::string::npos ? cfg.source.substr(0, slash + 1) + file : file;
+}
+}  // namespace detail
+
 std::string_view to_string(BusKind kind) {
   return name_of(kind, kBusKinds);
 }
@@ -363,19 +372,20 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   }
   Config cfg;
   cfg.source = std::move(source);
-  c.only_keys(root, "", {"simulation", "security", "bus", "device", "lin_node", "scenario"});
+  c.only_keys(
+      root, "",
+      {"simulation", "security", "bus", "device", "lin_node", "scenario", "recorder", "bridge"});
   read_simulation(c, root, cfg);
   read_security(c, root, cfg);
   read_buses(c, root, cfg);
   read_devices(c, root, cfg);
   detail::read_lin_nodes(c, root, cfg);
+  detail::read_recorders(c, root, cfg);
+  detail::read_bridges(c, root, cfg);
   c.for_each_table(root, "scenario", [&](const toml::table& t, const std::string& path) {
     c.only_keys(t, path, {"file"});
     if (auto file = c.string(t, path, "file", true)) {
-      const std::size_t slash = cfg.source.find_last_of('/');
-      const bool relative = !file->empty() && (*file)[0] != '/';
-      cfg.scenario_files.push_back(
-          relative && slash != std::string::npos ? cfg.source.substr(0, slash + 1) + *file : *file);
+      cfg.scenario_files.push_back(detail::beside_config(cfg, *file));
     }
   });
   std::size_t controllers = 0;
@@ -448,6 +458,13 @@ std::string summary(const Config& cfg) {
       s += fmt::format(" {}:{} on {} (LIN)", d.name, d.controllers.size() + i, d.lin[i]);
     }
     s += "\n";
+  }
+  for (const RecorderConfig& r : cfg.recorders) {
+    s += fmt::format("  recorder of {} into {} ({})\n", r.bus, r.path, r.pcap ? "pcap" : "candump");
+  }
+  for (const BridgeConfig& b : cfg.bridges) {
+    s += fmt::format("  bridge {} of {} to {}{}\n", b.kind, b.bus, b.interface,
+                     b.error_frames ? " (error frames too)" : "");
   }
   for (const LinNodeConfig& n : cfg.lin_nodes) {
     s += fmt::format("  lin node {} on {} ({}{})\n", n.name, n.bus,

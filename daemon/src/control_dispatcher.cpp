@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "canemu/daemon/status.hpp"
+#include "capture_config_reader.hpp"
 
 namespace canemu::daemon {
 
@@ -148,6 +149,31 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   send(&r, sizeof r, fds);
 }
 
+void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& send,
+                                   uint32_t request_id) {
+  BridgeConfig b;
+  b.bus = ipc::name_of(m.bus);
+  b.interface = ipc::name_of(m.interface);
+  b.error_frames = m.error_frames != 0;
+  if (auto problem = detail::interface_name_problem(b.interface)) {
+    error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+    return;
+  }
+  if (!sim_.bus_index(b.bus)) {
+    error(send, request_id, ipc::ErrorCode::no_such_bus, fmt::format("no bus named \"{}\"", b.bus));
+    return;
+  }
+  auto added = sim_.add_bridge(b);
+  if (!added) {
+    error(send, request_id, ipc::ErrorCode::bad_argument, added.error());
+    return;
+  }
+  if (channel_opened) {
+    channel_opened(**added);
+  }
+  send_reply(send, ipc::make_message<ipc::BridgeAddReply>(request_id));
+}
+
 void ControlDispatcher::channel_status(Session& c, const ipc::ChannelStatusRequest& m,
                                        const Send& send) {
   auto it = c.channels.find(m.channel);
@@ -276,6 +302,41 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       auto r = std::make_unique<ipc::DeviceListReply>(
           ipc::make_message<ipc::DeviceListReply>(request_id));
       fill_device_list(sim_, *r);
+      send_reply(send, *r);
+      return;
+    }
+    case ipc::MsgType::recorder_list_request: {
+      if (before_status) {
+        before_status();
+      }
+      auto r = std::make_unique<ipc::RecorderListReply>(
+          ipc::make_message<ipc::RecorderListReply>(request_id));
+      fill_recorder_list(sim_, *r);
+      send_reply(send, *r);
+      return;
+    }
+    case ipc::MsgType::bridge_add_request:
+      add_bridge(read_as<ipc::BridgeAddRequest>(data), send, request_id);
+      return;
+    case ipc::MsgType::bridge_remove_request: {
+      const std::string interface = ipc::name_of(read_as<ipc::BridgeRemoveRequest>(data).interface);
+      const bool removed = sim_.remove_bridge(interface, [this](SocketCanBridge& b) {
+        if (channel_closing) {
+          channel_closing(b);
+        }
+      });
+      if (!removed) {
+        error(send, request_id, ipc::ErrorCode::bad_argument,
+              fmt::format("no bridge on interface \"{}\"", interface));
+        return;
+      }
+      send_reply(send, ipc::make_message<ipc::BridgeRemoveReply>(request_id));
+      return;
+    }
+    case ipc::MsgType::bridge_list_request: {
+      auto r = std::make_unique<ipc::BridgeListReply>(
+          ipc::make_message<ipc::BridgeListReply>(request_id));
+      fill_bridge_list(sim_, *r);
       send_reply(send, *r);
       return;
     }

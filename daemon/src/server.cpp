@@ -46,11 +46,17 @@ bool add(int epoll, int fd) {
 
 Server::Server(Simulation& sim, ServerOptions options)
     : sim_(sim), options_(std::move(options)), dispatcher_(sim, options_.time) {
-  dispatcher_.before_status = [this] { advance_to_now(); };
+  dispatcher_.before_status = [this] {
+    advance_to_now();
+    flush_recorders();
+  };
   dispatcher_.client_count = [this] { return live_clients(); };
   dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
   dispatcher_.before_step = [this] { kick_all_channels(); };
-  dispatcher_.after_step = [this] { send_outboxes(); };
+  dispatcher_.after_step = [this] {
+    send_outboxes();
+    flush_recorders();
+  };
   dispatcher_.channel_opened = [this](Doorbell& ch) {
     epoll_event ev{};
     ev.events = EPOLLIN;
@@ -153,6 +159,9 @@ ipc::IpcResult<void> Server::open() {
     return tl::unexpected(sys("epoll_ctl"));
   }
   access_.resolve(sim_.config().security);
+  for (const auto& b : sim_.bridges()) {  // configured bridges: their sockets wake the loop
+    dispatcher_.channel_opened(*b);
+  }
   // Under systemd with WatchdogSec=: a ping every half period, from the loop itself, so a
   // stalled loop gets the daemon restarted.
   uint64_t watchdog_us = 0;
@@ -303,11 +312,18 @@ int Server::run() {
       }
     }
     check_channels();
+    flush_recorders();
     send_outboxes();
     drop_closing();
     send_notifications();
   }
   return 0;
+}
+
+void Server::flush_recorders() {
+  for (const std::string& line : sim_.flush_recorders()) {
+    log::error("{}", line);
+  }
 }
 
 void Server::kick_all_channels() {

@@ -5,15 +5,12 @@
 #include <string>
 #include <vector>
 
-#include <spawn.h>
-
 #include <fmt/format.h>
 
 #include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "cli_process.hpp"
 #include "daemon_process.hpp"
-
-extern char** environ;
 
 namespace canemu {
 namespace {
@@ -21,72 +18,6 @@ namespace {
 using testing::connect;
 using testing::Daemon;
 using testing::readable;
-
-// canemu with `args` on the daemon's socket; stdout (and stderr) through pipes.
-struct Cli {
-  pid_t pid = -1;
-  int out = -1;
-  int err = -1;
-  Cli(const Daemon& d, std::vector<std::string> args) {
-    int o[2];
-    int e[2];
-    EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
-    EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, o[1], 1);
-    posix_spawn_file_actions_adddup2(&actions, e[1], 2);
-    args.insert(args.begin(), {CANEMU_PATH, "--socket", d.socket()});
-    std::vector<char*> argv;
-    for (std::string& a : args) {
-      argv.push_back(a.data());
-    }
-    argv.push_back(nullptr);
-    EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(o[1]);
-    ::close(e[1]);
-    out = o[0];
-    err = e[0];
-  }
-  ~Cli() {
-    if (pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-    ::close(out);
-    ::close(err);
-  }
-  // Reads `fd` until it closes or `timeout_ms` passes without data.
-  static std::string read_all(int fd, int timeout_ms = 10'000) {
-    std::string text;
-    char buf[512];
-    while (readable(fd, timeout_ms)) {
-      const ssize_t n = ::read(fd, buf, sizeof buf);
-      if (n <= 0) {
-        break;
-      }
-      text.append(buf, static_cast<std::size_t>(n));
-    }
-    return text;
-  }
-  int wait() {
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    pid = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-};
-
-// A node on `bus` that acknowledges (the dump only listens, and configured adapters stay off
-// the bus until an application starts them).
-client::Channel partner_on(client::Connection& c, const std::string& bus) {
-  client::ChannelOptions o;
-  o.bus = bus;
-  auto ch = client::Channel::open(c, o);
-  EXPECT_TRUE(ch) << ch.error().message;
-  return std::move(*ch);
-}
 
 TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
   Daemon d;

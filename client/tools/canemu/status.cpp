@@ -1,5 +1,5 @@
-// canemu status: buses with load, nodes with state and counters, devices, clients and faults,
-// as tables or as one JSON object.
+// canemu status: buses with load, nodes with state and counters, devices, clients, faults,
+// recorders and bridges, as tables or as one JSON object.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -10,18 +10,14 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
-#include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "capture_table.hpp"
 #include "command.hpp"
 #include "fault_table.hpp"
 
 namespace canemu::cli {
 
 namespace {
-
-// The wire's error states are the model's, in the model's order.
-static_assert(static_cast<uint8_t>(ipc::WireErrorState::bus_off) ==
-              static_cast<uint8_t>(model::ErrorState::bus_off));
 
 // A CAN node's error state; a LIN controller's "online" or "offline".
 std::string state_name(const ipc::StatusNode& n) {
@@ -33,7 +29,7 @@ std::string state_name(const ipc::StatusNode& n) {
     case ipc::WireLinState::online:
       return "online";
   }
-  return std::string(model::to_string(static_cast<model::ErrorState>(n.state)));
+  return error_state_name(n.state);
 }
 std::string kind_name(uint8_t kind) {
   return std::string(ipc::to_string(static_cast<ipc::WireBusKind>(kind)));
@@ -53,7 +49,8 @@ std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
 // toml++ writes the JSON (names escaped as JSON wants them), one line.
 void print_json(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
                 const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                const ipc::FaultListReply& faults) {
+                const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
+                const ipc::BridgeListReply& bridges) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array buses;
   for (uint16_t i = 0; i < s.bus_count; ++i) {
@@ -115,13 +112,16 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
                   {"nodes", std::move(nodes)},
                   {"devices", std::move(device_list)},
                   {"client_list", std::move(client_list)},
-                  {"faults", faults_array(faults)}};
+                  {"faults", faults_array(faults)},
+                  {"recorders", recorders_array(recorders)},
+                  {"bridges", bridges_array(bridges)}};
   std::fputs((one_line_json(all) + "\n").c_str(), stdout);
 }
 
 void print_tables(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
                   const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                  const ipc::FaultListReply& faults) {
+                  const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
+                  const ipc::BridgeListReply& bridges) {
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
               s.client_count == 1 ? "" : "s");
@@ -163,6 +163,12 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
   if (faults.total > 0) {
     print_faults(faults);
   }
+  if (recorders.count > 0) {
+    print_recorders(recorders);
+  }
+  if (bridges.count > 0) {
+    print_bridges(bridges);
+  }
 }
 
 int run_status(const std::string& socket, bool json) {
@@ -186,11 +192,18 @@ int run_status(const std::string& socket, bool json) {
   if (!faults) {
     return fail(faults.error());
   }
+  auto recorders = c->call<ipc::RecorderListRequest, ipc::RecorderListReply>(
+      ipc::make_message<ipc::RecorderListRequest>());
+  auto bridges = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
+      ipc::make_message<ipc::BridgeListRequest>());
+  if (!recorders || !bridges) {
+    return fail(!recorders ? recorders.error().message : bridges.error().message);
+  }
   const std::string mode(ipc::to_string(static_cast<ipc::WireTimeMode>(reply->time_mode)));
   if (json) {
-    print_json(*c, *reply, mode, *devices, *clients, *faults);
+    print_json(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
   } else {
-    print_tables(*c, *reply, mode, *devices, *clients, *faults);
+    print_tables(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
   }
   return 0;
 }

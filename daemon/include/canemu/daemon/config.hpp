@@ -97,6 +97,26 @@ struct SecurityConfig {
   std::string socket_group = kServiceGroup;
 };
 
+// [[recorder]]: a bus recorded into a file by canemud (docs/socketcan.md).
+struct RecorderConfig {
+  std::string bus;
+  std::string path;         // relative paths are taken from the configuration file's folder
+  bool pcap = false;        // format = "pcap" (default: "candump", or "pcap" for a .pcap path)
+  uint64_t max_size = 0;    // bytes; rotate before a file grows past it (0: never)
+  uint32_t max_files = 10;  // old files kept by rotation
+  bool errors = true;       // error frames recorded too
+  uint32_t line = 0;
+};
+
+// [[bridge]]: a bus joined to a Linux CAN interface (docs/socketcan.md).
+struct BridgeConfig {
+  std::string kind = "socketcan";  // the only kind so far
+  std::string bus;
+  std::string interface;      // vcan0, vxcan1, can0, ...
+  bool error_frames = false;  // the bridge node's errors and states as CAN_ERR_* frames
+  uint32_t line = 0;
+};
+
 struct Config {
   std::string source;  // file name, or "<embedded default>"
   SimulationConfig simulation;
@@ -106,7 +126,9 @@ struct Config {
   std::vector<std::string> scenario_files;
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
-  std::vector<LinNodeConfig> lin_nodes;  // [[lin_node]]: simulated LIN nodes
+  std::vector<LinNodeConfig> lin_nodes;   // [[lin_node]]: simulated LIN nodes
+  std::vector<RecorderConfig> recorders;  // [[recorder]]
+  std::vector<BridgeConfig> bridges;      // [[bridge]]
 
   const BusConfig* bus(std::string_view name) const;
 };

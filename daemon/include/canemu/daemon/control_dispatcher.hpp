@@ -101,6 +101,7 @@ class ControlDispatcher {
   void error(const Send& send, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
   void open_channel(Session& c, const ipc::OpenChannelRequest& m, const Send& send);
   void channel_status(Session& c, const ipc::ChannelStatusRequest& m, const Send& send);
+  void add_bridge(const ipc::BridgeAddRequest& m, const Send& send, uint32_t request_id);
 
   Simulation& sim_;
   TimeSetting time_;

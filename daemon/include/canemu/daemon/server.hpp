@@ -60,6 +60,9 @@ class Server {
   void reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
   void reload();
   void kick_all_channels();
+  // Writes what recorders hold (each pass of the loop, before status, after a time step); logs
+  // recorders that began to lose frames.
+  void flush_recorders();
   void check_channels();
   void send_notifications();
   void send_outboxes();

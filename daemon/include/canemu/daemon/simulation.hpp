@@ -110,6 +110,7 @@ class Simulation {
   // its bus's timing.
   std::optional<std::string> add_device(const DeviceConfig& d);
   std::optional<std::string> add_xcan(const DeviceConfig& d);
+  std::optional<std::string> add_slcan(const DeviceConfig& d);
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).

@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "canemu/ipc/protocol_core.hpp"
+#include "canemu/ipc/slcan_messages.hpp"
 #include "canemu/ipc/vci_messages.hpp"
 #include "canemu/ipc/xcan_messages.hpp"
 
@@ -83,6 +84,12 @@ template <>
 inline constexpr MsgType type_of_v<XcanReply> = MsgType::xcan_reply;
 template <>
 inline constexpr MsgType type_of_v<XcanCallbackMsg> = MsgType::xcan_callback;
+template <>
+inline constexpr MsgType type_of_v<SlcanRequest> = MsgType::slcan_request;
+template <>
+inline constexpr MsgType type_of_v<SlcanReply> = MsgType::slcan_reply;
+template <>
+inline constexpr MsgType type_of_v<SlcanEventMsg> = MsgType::slcan_event;
 template <class T>
 constexpr MsgType type_of() {
   static_assert(type_of_v<T> != MsgType{}, "not a protocol message");

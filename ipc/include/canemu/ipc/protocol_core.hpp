@@ -69,6 +69,9 @@ enum class MsgType : uint16_t {
   xcan_request = 80,
   xcan_reply = 81,
   xcan_callback = 82,  // unsolicited, request_id 0
+  slcan_request = 90,
+  slcan_reply = 91,
+  slcan_event = 92,  // unsolicited, request_id 0
 };
 
 // Why a request failed. Values are stable: clients show them by name.
@@ -297,7 +300,8 @@ enum class WireDeviceModel : uint8_t {
   ixxat_usb_to_can = 0,
   ixxat_usb_to_can_fd = 1,
   ephemeral = 2,
-  sorcus_x_can_2i = 3
+  sorcus_x_can_2i = 3,
+  sorcus_sl_cani = 4
 };
 
 // A device model's name: the `model` key of a configuration's [[device]], and what
@@ -312,6 +316,8 @@ constexpr std::string_view to_string(WireDeviceModel model) {
       return "ephemeral";
     case WireDeviceModel::sorcus_x_can_2i:
       return "sorcus-x-can-2i";
+    case WireDeviceModel::sorcus_sl_cani:
+      return "sorcus-sl-cani";
   }
   return "?";
 }

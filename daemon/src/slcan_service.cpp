@@ -150,13 +150,14 @@ bool SlcanService::call(SlcanDevice& device, SlcanSession& session, const ipc::S
     case ipc::SlcanOp::get_diagnosis:
       r.value = mod.get_diagnosis();
       return true;
-    case ipc::SlcanOp::set_data:
-      if (m.size > sizeof m.data) {
-        error = fmt::format("set_data: size {} is more than 8", m.size);
-        return false;
-      }
-      r.ret = mod.set_data(m.handle, std::span<const uint8_t>(m.data, m.size));
+    case ipc::SlcanOp::set_data: {
+      // More than 8 bytes reaches the driver as such (it refuses them with 2Ah).
+      std::array<uint8_t, 9> d{};
+      std::memcpy(d.data(), m.data, sizeof m.data);
+      r.ret = mod.set_data(m.handle,
+                           std::span<const uint8_t>(d.data(), std::min<std::size_t>(m.size, 9)));
       return true;
+    }
     case ipc::SlcanOp::get_data: {
       std::array<uint8_t, 8> d{};
       uint8_t size = m.size;

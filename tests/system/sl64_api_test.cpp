@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "canemu/firmware_model/bus/can_error.hpp"
@@ -397,6 +399,54 @@ TEST(Sl64Api, Function14GivesAServiceRequestThatEvaluateSrqReads) {
   EXPECT_EQ(sl064_evaluate_srq(&slot, &got), 0);
   EXPECT_EQ(slot, kSlot);
   EXPECT_EQ(got, h);
+}
+
+TEST(Sl64Api, TheExampleTalksBetweenTwoSlots) {
+  Sl64Daemon x(std::string(kConfig) +
+               "\n[[device]]\nname = \"sl1\"\nmodel = \"sorcus-sl-cani\"\ncontrollers = "
+               "[\"can0\"]\nslot = 2\n");
+  canemu_sl064_connect(nullptr);  // the example's slots must be free
+  int out[2];
+  ASSERT_EQ(::pipe(out), 0);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, out[1], 1);
+  posix_spawn_file_actions_addclose(&actions, out[0]);
+  std::vector<std::string> args = {SL64_TALK_PATH, "1", "2", "2"};
+  std::vector<char*> argv;
+  for (std::string& a : args) {
+    argv.push_back(a.data());
+  }
+  argv.push_back(nullptr);
+  std::vector<std::string> env_text = {"CANEMU_SOCKET=" + x.vci.daemon.socket()};
+  std::vector<char*> env = {env_text[0].data(), nullptr};
+  pid_t pid = -1;
+  ASSERT_EQ(::posix_spawn(&pid, SL64_TALK_PATH, &actions, nullptr, argv.data(), env.data()), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(out[1]);
+  int status = -1;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (::waitpid(pid, &status, WNOHANG) == 0 && std::chrono::steady_clock::now() < give_up) {
+    step_ns(1'000'000);
+  }
+  std::string text;
+  char buffer[512];
+  ssize_t n = 0;
+  while ((n = ::read(out[0], buffer, sizeof buffer)) > 0) {
+    text.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(out[0]);
+  ASSERT_TRUE(WIFEXITED(status)) << text;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << text;
+  // Per frame: the sender's routine (after the acknowledgement) and the receiver's, in the
+  // order the emulation made them, then the data read.
+  EXPECT_EQ(text,
+            "service routine 100/4: handle 1\n"
+            "service routine 100/4: handle 1\n"
+            "slot 2 received ID 7: 2 bytes: C0 00\n"
+            "service routine 100/4: handle 1\n"
+            "service routine 100/4: handle 1\n"
+            "slot 2 received ID 7: 2 bytes: C0 01\n");
 }
 
 }  // namespace

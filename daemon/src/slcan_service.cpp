@@ -101,7 +101,10 @@ void SlcanService::handle(SlcanSession& session, const ipc::SlcanRequest& m, con
     send(&r, sizeof r, {});
     return;
   }
-  if (m.slot >= owner_.size() || owner_[m.slot] != &session) {
+  // The EEPROM may also be read and written on a slot nobody holds (canemu eeprom).
+  const bool eeprom = op == ipc::SlcanOp::eeprom_read || op == ipc::SlcanOp::eeprom_write;
+  if (m.slot >= owner_.size() ||
+      (owner_[m.slot] != &session && !(eeprom && owner_[m.slot] == nullptr))) {
     protocol_error(send, id, ipc::ErrorCode::no_such_channel,
                    fmt::format("slot {} is not this client's (sl064_bib_startup gives the "
                                "configured slots no other client holds)",

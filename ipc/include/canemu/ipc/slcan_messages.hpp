@@ -14,9 +14,9 @@ namespace canemu::ipc {
 // One request type carries every sl064_* function for one slot of a configured
 // "sorcus-sl-cani" device (firmware_model adapters/sorcus/slcan_module.hpp). bib_startup gives
 // the client every configured slot no other client holds (`value`: a bit per slot); the other
-// operations need a slot the client holds, else ErrorReply (no_such_channel). The reply's `ret`
-// is the function's return value (0 or 42h) and `diagnosis` what sl064_get_diagnosis would
-// read now. Service routine calls and service requests come as SlcanEventMsg to the client
+// operations need a slot the client holds (the EEPROM ones: or one nobody holds), else
+// ErrorReply (no_such_channel). The reply's `ret` is the function's return value (0 or 42h) and
+// `diagnosis` what sl064_get_diagnosis would read now. Service routine calls and service requests come as SlcanEventMsg to the client
 // holding the slot, in the order the model made them.
 enum class SlcanOp : uint16_t {
   bib_startup = 1,        // reply: `value` = slots held (bit n = slot n)

@@ -229,6 +229,16 @@ TEST(SlcanService, StartupGivesTheFreeSlotsAndOnlyTheirHolderMayUseThem) {
   EXPECT_EQ(x.call(b, ipc::SlcanOp::bib_startup).value, 0b10u);
 }
 
+TEST(SlcanService, TheEepromOfASlotNobodyHoldsIsOpenToAnyClient) {
+  Service x;
+  SlcanSession cli;
+  SlcanSession program;
+  EXPECT_EQ(x.call(cli, ipc::SlcanOp::eeprom_read).eeprom[1], 0x0040);  // nobody holds slot 1
+  EXPECT_EQ(x.call(program, ipc::SlcanOp::bib_startup).value, 0b10u);
+  EXPECT_EQ(x.call(cli, ipc::SlcanOp::eeprom_read).header.type, 0);  // now the program's
+  EXPECT_EQ(x.call(cli, ipc::SlcanOp::config_module).header.type, 0);
+}
+
 TEST(SlcanService, TheEepromIsReadAndWrittenWordByWord) {
   Service x;
   SlcanSession a;

@@ -16,8 +16,8 @@ namespace canemu::ipc {
 // the client every configured slot no other client holds (`value`: a bit per slot); the other
 // operations need a slot the client holds (the EEPROM ones: or one nobody holds), else
 // ErrorReply (no_such_channel). The reply's `ret` is the function's return value (0 or 42h) and
-// `diagnosis` what sl064_get_diagnosis would read now. Service routine calls and service requests come as SlcanEventMsg to the client
-// holding the slot, in the order the model made them.
+// `diagnosis` what sl064_get_diagnosis would read now. Service routine calls and service requests
+// come as SlcanEventMsg to the client holding the slot, in the order the model made them.
 enum class SlcanOp : uint16_t {
   bib_startup = 1,        // reply: `value` = slots held (bit n = slot n)
   config_module = 2,      // task, func: the error service routine

@@ -5,26 +5,13 @@
 
 #include <fmt/format.h>
 
+#include "service_replies.hpp"
+
 namespace canemu::daemon {
 
 namespace {
 
 using model::sorcus::SlcanServiceCall;
-
-template <class T>
-std::vector<uint8_t> bytes_of(const T& m) {
-  std::vector<uint8_t> v(sizeof m);
-  std::memcpy(v.data(), &m, sizeof m);
-  return v;
-}
-
-void protocol_error(const SlcanService::Send& send, uint32_t request_id, ipc::ErrorCode code,
-                    const std::string& text) {
-  auto e = ipc::make_message<ipc::ErrorReply>(request_id);
-  e.code = static_cast<uint32_t>(code);
-  ipc::copy_name(e.message, text);
-  send(&e, sizeof e, {});
-}
 
 }  // namespace
 

@@ -40,7 +40,8 @@ constexpr NamedValue<bool> kTransceivers[] = {{false, "high-speed"}, {true, "low
 constexpr NamedValue<DeviceModel> kDeviceModels[] = {
     {DeviceModel::ixxat_usb_to_can, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can)},
     {DeviceModel::ixxat_usb_to_can_fd, ipc::to_string(ipc::WireDeviceModel::ixxat_usb_to_can_fd)},
-    {DeviceModel::sorcus_x_can_2i, ipc::to_string(ipc::WireDeviceModel::sorcus_x_can_2i)}};
+    {DeviceModel::sorcus_x_can_2i, ipc::to_string(ipc::WireDeviceModel::sorcus_x_can_2i)},
+    {DeviceModel::sorcus_sl_cani, ipc::to_string(ipc::WireDeviceModel::sorcus_sl_cani)}};
 
 // The required key "name" of a [[bus]] or [[device]] table: valid, and unique among `names`.
 std::optional<std::string> read_name(Checker& c, const toml::table& t, const std::string& path,
@@ -206,8 +207,8 @@ void read_lin_controllers(Checker& c, const toml::table& t, const std::string& p
   if (!buses) {
     return;
   }
-  if (dev.model == DeviceModel::sorcus_x_can_2i) {
-    c.error(*lin, path + ".lin", "an X-CAN-2i has no LIN controller");
+  if (dev.model == DeviceModel::sorcus_x_can_2i || dev.model == DeviceModel::sorcus_sl_cani) {
+    c.error(*lin, path + ".lin", "only IXXAT adapters have LIN controllers");
     return;
   }
   for (const std::string& b : *buses) {
@@ -226,11 +227,50 @@ void read_lin_controllers(Checker& c, const toml::table& t, const std::string& p
   dev.lin = *buses;
 }
 
+// An SL-CANi: one 82527 on a classic CAN bus, in a slot of its own, maybe with a state file.
+void check_slcan(Checker& c, const toml::table& t, const std::string& path, const Config& cfg,
+                 std::set<int64_t>& slots, DeviceConfig& dev) {
+  if (auto slot = c.integer(t, path, "slot", true, 0, 5)) {
+    if (!slots.insert(*slot).second) {
+      c.error(*t.get("slot"), path + ".slot",
+              fmt::format("slot {} is another SL-CANi's (one S-Link per slot)", *slot));
+    }
+    dev.slot = static_cast<int>(*slot);
+  }
+  if (auto file = c.string(t, path, "eeprom", false)) {
+    if (file->empty()) {
+      c.error(*t.get("eeprom"), path + ".eeprom", "an empty path; leave the key out instead");
+    }
+    dev.eeprom = *file;
+  }
+  const toml::node* ctl = t.get("controllers");
+  if (ctl == nullptr) {
+    return;
+  }
+  if (dev.controllers.size() != 1) {
+    c.error(*ctl, path + ".controllers",
+            fmt::format("{} controllers; an SL-CANi has 1 interface", dev.controllers.size()));
+    return;
+  }
+  const BusConfig* b = cfg.bus(dev.controllers[0]);
+  if (b != nullptr && b->kind == BusKind::can_fd) {
+    c.error(*ctl, path + ".controllers",
+            fmt::format("\"{}\" is a CAN FD bus; the 82527 is a classic CAN controller", b->name));
+  } else if (b != nullptr && b->low_speed) {
+    c.error(*ctl, path + ".controllers",
+            fmt::format("\"{}\" is a low-speed bus; the SL-CANi's transceiver is high-speed "
+                        "(82C250)",
+                        b->name));
+  }
+}
+
 void read_devices(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
+  std::set<int64_t> slots;
   c.for_each_table(root, "device", [&](const toml::table& t, const std::string& path) {
     c.only_keys(t, path,
-                {"name", "model", "controllers", "lin", "mdd_version", "buffer_load_time"});
+                {"name", "model", "controllers", "lin", "mdd_version", "buffer_load_time", "slot",
+                 "eeprom"});
     DeviceConfig dev;
     dev.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto name = read_name(c, t, path, names, "device")) {
@@ -287,6 +327,15 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
       }
     }
     read_lin_controllers(c, t, path, cfg, dev);
+    if (dev.model == DeviceModel::sorcus_sl_cani) {
+      check_slcan(c, t, path, cfg, slots, dev);
+    } else {
+      for (const char* key : {"slot", "eeprom"}) {
+        if (const toml::node* n = t.get(key)) {
+          c.error(*n, path + "." + key, "only a sorcus-sl-cani device has this key");
+        }
+      }
+    }
     cfg.devices.push_back(dev);
   });
 }

@@ -450,6 +450,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::xcan_request:
       xcan_.handle(c.xcan, read_as<ipc::XcanRequest>(data), send);
       return;
+    case ipc::MsgType::slcan_request:
+      slcan_.handle(c.slcan, read_as<ipc::SlcanRequest>(data), send);
+      return;
     default:
       error(send, request_id, ipc::ErrorCode::unknown_type,
             fmt::format("message type {} is not a request", h.type));
@@ -466,6 +469,7 @@ void ControlDispatcher::end_session(Session& session) {
   session.channels.clear();
   vci_.close_all(session.vci);
   xcan_.close_all(session.xcan);
+  slcan_.close_all(session.slcan);
 }
 
 }  // namespace canemu::daemon

@@ -64,6 +64,15 @@ std::shared_ptr<XcanDevice> DeviceRegistry::find_xcan(std::string_view name) con
   return nullptr;
 }
 
+std::shared_ptr<SlcanDevice> DeviceRegistry::find_slcan_slot(unsigned slot) const {
+  for (const Slcan& s : slcan_) {
+    if (s.device->module().slot() == slot) {
+      return s.device;
+    }
+  }
+  return nullptr;
+}
+
 bool DeviceRegistry::exists(std::string_view name) const {
   for (const Configured& d : configured_) {
     if (d.config.name == name) {
@@ -75,6 +84,11 @@ bool DeviceRegistry::exists(std::string_view name) const {
   }
   for (const LinEphemeral& e : lin_ephemeral_) {
     if (e.name == name) {
+      return true;
+    }
+  }
+  for (const Slcan& s : slcan_) {
+    if (s.config.name == name) {
       return true;
     }
   }
@@ -111,6 +125,12 @@ std::optional<DeviceRegistry::NodeRef> DeviceRegistry::find_node(std::string_vie
       }
     }
   }
+  for (const Slcan& s : slcan_) {
+    if (s.config.name + ":0" == name) {
+      model::I82527& chip = s.device->module().chip();
+      return NodeRef{s.bus, nullptr, chip.node(), &chip, nullptr, 0};
+    }
+  }
   return std::nullopt;
 }
 
@@ -132,6 +152,11 @@ std::optional<std::string> DeviceRegistry::node_name(std::size_t bus, model::Nod
       if (x.buses[i] == bus && x.device->module().chip(i).node() == node) {
         return fmt::format("{}:{}", x.config.name, i);
       }
+    }
+  }
+  for (const Slcan& s : slcan_) {
+    if (s.bus == bus && s.device->module().chip().node() == node) {
+      return s.config.name + ":0";
     }
   }
   return std::nullopt;

@@ -124,9 +124,9 @@ ScenarioRunner::resolve(const Scenario& s) const {
       r.bus = r.node->bus;
       if (f.effect == FaultEffect::babble && r.node->node == nullptr) {
         where(
-            fmt::format("node {} is an X-CAN-2i interface; its module sends only what its "
-                        "objects ask for, so it cannot babble",
-                        node_name));
+            fmt::format("node {} is {}; its driver sends only what its objects ask for, so it "
+                        "cannot babble",
+                        node_name, r.node->xcan ? "an X-CAN-2i interface" : "an SL-CANi S-Link"));
         continue;
       }
       if (f.effect == FaultEffect::line_error && !buses_[r.bus].config.low_speed) {

@@ -349,14 +349,15 @@ void Server::check_channels() {
 // Sent in the order they were made; a client that does not read them is dropped.
 void Server::send_outboxes() {
   for (auto& [fd, c] : clients_) {
-    std::deque<std::vector<uint8_t>>& out = c.session.xcan.outbox;
-    while (!out.empty() && !c.closing) {
-      if (!ipc::send_packet(fd, out.front().data(), out.front().size())) {
-        c.closing = true;
+    for (auto* out : {&c.session.xcan.outbox, &c.session.slcan.outbox}) {
+      while (!out->empty() && !c.closing) {
+        if (!ipc::send_packet(fd, out->front().data(), out->front().size())) {
+          c.closing = true;
+        }
+        out->pop_front();
       }
-      out.pop_front();
+      out->clear();
     }
-    out.clear();
   }
 }
 

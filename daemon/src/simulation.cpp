@@ -1,6 +1,8 @@
 #include "canemu/daemon/simulation.hpp"
 
 #include <algorithm>
+#include <cstdlib>
+#include <cstring>
 #include <tuple>
 
 #include <fmt/format.h>
@@ -188,6 +190,9 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
   if (d.model == DeviceModel::sorcus_x_can_2i) {
     return add_xcan(d);
   }
+  if (d.model == DeviceModel::sorcus_sl_cani) {
+    return add_slcan(d);
+  }
   // Every controller's timing first, so that a device is added whole or not at all.
   std::vector<std::size_t> buses;
   for (const std::string& bus_name : d.controllers) {
@@ -293,6 +298,39 @@ std::optional<std::string> Simulation::add_xcan(const DeviceConfig& d) {
   return std::nullopt;
 }
 
+// The driver programs the 82527 from the EEPROM at sl064_config_module (20 kbit/s from the
+// factory), so the bus's rate is not checked here. The state file: the configured one, else
+// $STATE_DIRECTORY/NAME.eeprom under systemd, else none.
+std::optional<std::string> Simulation::add_slcan(const DeviceConfig& d) {
+  const std::size_t bus = *bus_index(d.controllers.at(0));
+  const BusConfig& bc = config_.buses[bus];
+  if (bc.kind != BusKind::can || bc.low_speed) {
+    return fmt::format("{}:{}: device {}: bus {} is not a high-speed classic CAN bus",
+                       config_.source, d.line, d.name, bc.name);
+  }
+  if (d.slot < 0 || d.slot > 5 || devices_.find_slcan_slot(static_cast<unsigned>(d.slot))) {
+    return fmt::format("{}:{}: device {}: slot {} is not free", config_.source, d.line, d.name,
+                       d.slot);
+  }
+  std::string state = d.eeprom;
+  if (state.empty()) {
+    if (const char* dir = std::getenv("STATE_DIRECTORY"); dir != nullptr && *dir != '\0') {
+      // systemd may pass several directories separated by ':'; the first is ours.
+      const std::string first(dir, std::strcspn(dir, ":"));
+      state = fmt::format("{}/{}.eeprom", first, d.name);
+    }
+  }
+  auto device =
+      std::make_shared<SlcanDevice>(d.name, scheduler_, static_cast<uint8_t>(d.slot), state);
+  if (auto loaded = device->load(); !loaded) {
+    return fmt::format("{}:{}: device {}: EEPROM state: {}", config_.source, d.line, d.name,
+                       loaded.error());
+  }
+  device->module().connect(*buses_[bus]);
+  devices_.add_slcan(DeviceRegistry::Slcan{d, bus, std::move(device)});
+  return std::nullopt;
+}
+
 namespace {
 
 bool same(const BusConfig& a, const BusConfig& b) {
@@ -302,7 +340,8 @@ bool same(const BusConfig& a, const BusConfig& b) {
 
 bool same(const DeviceConfig& a, const DeviceConfig& b) {
   return a.name == b.name && a.model == b.model && a.controllers == b.controllers &&
-         a.lin == b.lin && a.mdd_version == b.mdd_version && a.buffer_load_ns == b.buffer_load_ns;
+         a.lin == b.lin && a.mdd_version == b.mdd_version && a.buffer_load_ns == b.buffer_load_ns &&
+         a.slot == b.slot && a.eeprom == b.eeprom;
 }
 
 bool same(const std::vector<RecorderConfig>& a, const std::vector<RecorderConfig>& b) {

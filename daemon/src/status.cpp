@@ -109,6 +109,11 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
       add_controller(fmt::format("{}:{}", x.config.name, i), x.buses[i], chip, chip.node());
     }
   }
+  // SL-CANi interfaces, the same way.
+  for (const DeviceRegistry::Slcan& s : devices.slcan()) {
+    model::I82527& chip = s.device->module().chip();
+    add_controller(s.config.name + ":0", s.bus, chip, chip.node());
+  }
   r.node_count = static_cast<uint16_t>(n);
 }
 

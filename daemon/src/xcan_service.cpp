@@ -5,27 +5,14 @@
 
 #include <fmt/format.h>
 
+#include "service_replies.hpp"
+
 namespace canemu::daemon {
 
 namespace {
 
 using model::sorcus::CallbackArg;
 using model::sorcus::Reply;
-
-template <class T>
-std::vector<uint8_t> bytes_of(const T& m) {
-  std::vector<uint8_t> v(sizeof m);
-  std::memcpy(v.data(), &m, sizeof m);
-  return v;
-}
-
-void protocol_error(const XcanService::Send& send, uint32_t request_id, ipc::ErrorCode code,
-                    const std::string& text) {
-  auto e = ipc::make_message<ipc::ErrorReply>(request_id);
-  e.code = static_cast<uint32_t>(code);
-  ipc::copy_name(e.message, text);
-  send(&e, sizeof e, {});
-}
 
 void put_data(ipc::XcanReply& r, const std::vector<uint8_t>& data) {
   r.size = static_cast<uint16_t>(std::min(data.size(), ipc::kXcanDataSize));

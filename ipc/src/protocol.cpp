@@ -56,8 +56,8 @@ std::size_t size_of(MsgType type) {
                     FaultListRequest, FaultListReply, FaultClearRequest, FaultClearReply,
                     VciRequest, VciReply, XcanRequest, XcanReply, XcanCallbackMsg,
                     RecorderListRequest, RecorderListReply, BridgeAddRequest, BridgeAddReply,
-                    BridgeRemoveRequest, BridgeRemoveReply, BridgeListRequest, BridgeListReply>(
-      type);
+                    BridgeRemoveRequest, BridgeRemoveReply, BridgeListRequest, BridgeListReply,
+                    SlcanRequest, SlcanReply, SlcanEventMsg>(type);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@ TEST(ProtocolNames, EachWireValueHasTheNameConfigurationsAndStatusUse) {
   EXPECT_EQ(to_string(WireDeviceModel::ixxat_usb_to_can_fd), "ixxat-usb-to-can-fd");
   EXPECT_EQ(to_string(WireDeviceModel::ephemeral), "ephemeral");
   EXPECT_EQ(to_string(WireDeviceModel::sorcus_x_can_2i), "sorcus-x-can-2i");
+  EXPECT_EQ(to_string(WireDeviceModel::sorcus_sl_cani), "sorcus-sl-cani");
   EXPECT_EQ(to_string(WireBusKind::can), "can");
   EXPECT_EQ(to_string(WireBusKind::can_fd), "can-fd");
   EXPECT_EQ(to_string(WireBusKind::lin), "lin");
@@ -23,7 +24,7 @@ TEST(ProtocolNames, EachWireValueHasTheNameConfigurationsAndStatusUse) {
 }
 
 TEST(ProtocolNames, AValueOutsideTheProtocolIsAQuestionMark) {
-  EXPECT_EQ(to_string(static_cast<WireDeviceModel>(4)), "?");
+  EXPECT_EQ(to_string(static_cast<WireDeviceModel>(5)), "?");
   EXPECT_EQ(to_string(static_cast<WireBusKind>(3)), "?");
   EXPECT_EQ(to_string(static_cast<WireTimeMode>(3)), "?");
   EXPECT_EQ(to_string(static_cast<WireFaultState>(4)), "?");

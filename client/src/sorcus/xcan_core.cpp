@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <cstring>
 
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include "canemu/ipc/seqpacket.hpp"
@@ -22,14 +21,18 @@ Library& Library::get() {
   return library;
 }
 
+Library::Library()
+    : link_("xcan", [this](const std::vector<uint8_t>& packet) {
+        ipc::MsgHeader h;
+        std::memcpy(&h, packet.data(), sizeof h);
+        if (h.type == static_cast<uint16_t>(ipc::MsgType::xcan_callback)) {
+          ipc::XcanCallbackMsg m;
+          std::memcpy(&m, packet.data(), sizeof m);
+          deliver(m);
+        }
+      }) {}
+
 Library::~Library() {
-  {
-    std::lock_guard lock(mutex_);
-    disconnect_locked();
-  }
-  if (receiver_.joinable()) {
-    receiver_.join();
-  }
   {
     std::lock_guard lock(queue_mutex_);
     stopping_ = true;
@@ -41,18 +44,33 @@ Library::~Library() {
 }
 
 ULONG Library::reconnect(const std::string& socket) {
-  std::unique_lock lock(mutex_);
-  disconnect_locked();
-  lock.unlock();
-  if (receiver_.joinable()) {
-    receiver_.join();  // it takes the lock on its way out
+  {
+    std::lock_guard lock(mutex_);
+    handles_.clear();
+    socket_ = socket;
   }
-  lock.lock();
-  connection_.reset();
-  broken_ = false;
-  handles_.clear();
-  socket_ = socket;
-  return socket.empty() ? ERR_OK : connect_locked();
+  if (!link_.reconnect(socket)) {
+    return ERR_XCAN_NO_DAEMON;
+  }
+  return socket.empty() ? ERR_OK : connect();
+}
+
+ULONG Library::connect() {
+  if (!link_.connect()) {
+    return ERR_XCAN_NO_DAEMON;
+  }
+  std::lock_guard lock(mutex_);
+  if (const uint64_t g = link_.generation(); g != generation_) {
+    // Channels of the old connection are gone on canemud's side.
+    if (generation_ != 0) {
+      std::erase_if(handles_, [](const auto& e) { return e.second.kind == Kind::channel; });
+    }
+    generation_ = g;
+  }
+  if (!caller_.joinable()) {
+    caller_ = std::thread([this] { callback_loop(); });
+  }
+  return ERR_OK;
 }
 
 MAX_HANDLE Library::add(Handle h) {
@@ -82,105 +100,19 @@ void Library::remove(MAX_HANDLE h) {
   handles_.erase(h);
 }
 
-void Library::disconnect_locked() {
-  if (connection_) {
-    ::shutdown(connection_->fd(), SHUT_RDWR);  // the receive thread sees the end and leaves
-  }
-}
-
-ULONG Library::connect_locked() {
-  if (connection_ && !broken_) {
-    return ERR_OK;
-  }
-  if (connection_) {
-    // The receive thread has left (it set broken_ on its way out).
-    if (receiver_.joinable()) {
-      receiver_.join();
-    }
-    connection_.reset();
-    // Channels of the old connection are gone on canemud's side.
-    std::erase_if(handles_, [](const auto& e) { return e.second.kind == Kind::channel; });
-  }
-  auto c = Connection::open(ipc::socket_path(socket_), "xcan");
-  if (!c) {
-    return ERR_XCAN_NO_DAEMON;
-  }
-  connection_.emplace(std::move(*c));
-  broken_ = false;
-  receiver_ = std::thread([this, fd = connection_->fd()] { receive_loop(fd); });
-  if (!caller_.joinable()) {
-    caller_ = std::thread([this] { callback_loop(); });
-  }
-  return ERR_OK;
-}
-
 ULONG Library::call(ipc::XcanRequest& request, ipc::XcanReply& reply) {
-  Waiter w;
-  std::unique_lock lock(mutex_);
-  if (ULONG e = connect_locked(); e != ERR_OK) {
+  if (ULONG e = connect(); e != ERR_OK) {
     return e;
   }
-  request.header.request_id = ++next_request_;
-  if (request.header.request_id == 0) {
-    request.header.request_id = ++next_request_;  // 0 marks unsolicited messages
-  }
-  waiters_[request.header.request_id] = &w;
-  if (!ipc::send_message(connection_->fd(), request)) {
-    waiters_.erase(request.header.request_id);
-    return ERR_XCAN_NO_DAEMON;
-  }
-  // The receive thread ends every wait: with the reply, or as lost when the connection breaks
-  // (a later connection of another thread cannot leave this one waiting).
-  replied_.wait(lock, [&] { return w.done; });
-  waiters_.erase(request.header.request_id);
-  if (w.lost) {
-    return ERR_XCAN_NO_DAEMON;
-  }
-  if (w.refused) {
-    return ERR_XCAN_NO_MODULE;
-  }
-  reply = w.reply;
-  return ERR_OK;
-}
-
-void Library::receive_loop(int fd) {
-  std::vector<uint8_t> buffer;
-  while (true) {
-    auto n = ipc::receive_packet(fd, buffer, -1);
-    if (!n || *n == 0) {
+  switch (link_.call(request, reply)) {
+    case DaemonLink::Outcome::replied:
+      return ERR_OK;
+    case DaemonLink::Outcome::refused:
+      return ERR_XCAN_NO_MODULE;
+    case DaemonLink::Outcome::no_daemon:
       break;
-    }
-    if (ipc::check_message(buffer.data(), buffer.size()) != ipc::ErrorCode::none) {
-      continue;
-    }
-    ipc::MsgHeader h;
-    std::memcpy(&h, buffer.data(), sizeof h);
-    const auto type = static_cast<ipc::MsgType>(h.type);
-    if (type == ipc::MsgType::xcan_callback) {
-      ipc::XcanCallbackMsg m;
-      std::memcpy(&m, buffer.data(), sizeof m);
-      deliver(m);
-    } else if (type == ipc::MsgType::xcan_reply || type == ipc::MsgType::error_reply) {
-      std::lock_guard lock(mutex_);
-      auto it = waiters_.find(h.request_id);
-      if (it != waiters_.end()) {
-        Waiter& w = *it->second;
-        w.done = true;
-        w.refused = type == ipc::MsgType::error_reply;
-        if (!w.refused) {
-          std::memcpy(&w.reply, buffer.data(), sizeof w.reply);
-        }
-        replied_.notify_all();
-      }
-    }
   }
-  std::lock_guard lock(mutex_);
-  broken_ = true;
-  for (auto& [id, w] : waiters_) {
-    w->done = true;
-    w->lost = true;
-  }
-  replied_.notify_all();
+  return ERR_XCAN_NO_DAEMON;
 }
 
 void Library::deliver(const ipc::XcanCallbackMsg& m) {

@@ -1,7 +1,7 @@
-// The machinery behind libxcan.so: one connection to canemud per process with a receive
-// thread (replies go to the thread that waits for them, so blocking services of several threads
-// can wait at once; callbacks go to the channel's function), the buffered-callback thread, and
-// the handles an application holds (modules, MDDs, channels).
+// The machinery behind libxcan.so: one connection to canemud per process (DaemonLink: its
+// receive thread gives replies to the thread that waits for them, so blocking services of
+// several threads can wait at once, and callbacks to the channel's function), the
+// buffered-callback thread, and the handles an application holds (modules, MDDs, channels).
 #pragma once
 
 #include <condition_variable>
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/client/daemon_link.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "xcan.h"
 
@@ -56,33 +57,21 @@ class Library {
   static std::optional<int64_t> callback_time();
 
  private:
-  Library() = default;
-  struct Waiter {
-    bool done = false;
-    bool refused = false;
-    bool lost = false;  // the connection broke before the reply came
-    ipc::XcanReply reply{};
-  };
+  Library();
   struct Queued {
     MAX_HANDLE channel;
     MAX_CALLBACK callback;
     ipc::XcanCallbackMsg message;
   };
-  ULONG connect_locked();
-  void receive_loop(int fd);
+  // Connected (the callback thread running); channels of an older connection forgotten.
+  ULONG connect();
   void callback_loop();
   void deliver(const ipc::XcanCallbackMsg& m);
   static void invoke(MAX_HANDLE channel, MAX_CALLBACK callback, const ipc::XcanCallbackMsg& m);
-  void disconnect_locked();
 
   std::mutex mutex_;
-  std::condition_variable replied_;
-  std::optional<Connection> connection_;
   std::string socket_;
-  std::thread receiver_;
-  bool broken_ = false;
-  uint32_t next_request_ = 0;
-  std::map<uint32_t, Waiter*> waiters_;
+  uint64_t generation_ = 0;  // the connection the handles belong to
   std::map<MAX_HANDLE, Handle> handles_;
   MAX_HANDLE next_handle_ = 1;
 
@@ -91,6 +80,7 @@ class Library {
   std::deque<Queued> queue_;
   bool stopping_ = false;
   std::thread caller_;
+  DaemonLink link_;  // last: its receive thread ends first
 };
 
 }  // namespace canemu::client::xcan

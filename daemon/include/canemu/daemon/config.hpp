@@ -32,7 +32,7 @@ struct BusConfig {
 
 // Adapter models the daemon can emulate. The X-CAN-2i module has exactly two interfaces; its
 // variant (/H, /F, /M) follows from the transceivers of their buses.
-enum class DeviceModel { ixxat_usb_to_can, ixxat_usb_to_can_fd, sorcus_x_can_2i };
+enum class DeviceModel { ixxat_usb_to_can, ixxat_usb_to_can_fd, sorcus_x_can_2i, sorcus_sl_cani };
 std::string_view to_string(DeviceModel model);
 
 struct DeviceConfig {
@@ -45,6 +45,10 @@ struct DeviceConfig {
   // controllers ("DEVICE:N" with N = controllers.size() + i, and the VCI's bus number N).
   std::vector<std::string> lin;
   uint32_t line = 0;
+  // sorcus-sl-cani: the Multi-COM slot (0..5, channels A..F) and the EEPROM's state file ("":
+  // $STATE_DIRECTORY/NAME.eeprom under systemd, else kept in memory only).
+  int slot = -1;
+  std::string eeprom;
 };
 
 enum class TimeMode { realtime, scaled, stepped };

@@ -16,6 +16,7 @@
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/ring_budget.hpp"
 #include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/slcan_service.hpp"
 #include "canemu/daemon/vci_service.hpp"
 #include "canemu/daemon/xcan_service.hpp"
 
@@ -44,6 +45,7 @@ struct Session {
   std::map<uint32_t, SessionChannel> channels;
   VciSession vci;
   XcanSession xcan;
+  SlcanSession slcan;
 };
 
 class ControlDispatcher {
@@ -51,7 +53,7 @@ class ControlDispatcher {
   using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
 
   ControlDispatcher(Simulation& sim, TimeSetting time)
-      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_), xcan_(sim) {
+      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_), xcan_(sim), slcan_(sim) {
     // VCI channels' doorbells are watched like those of ephemeral channels.
     vci_.port_opened = [this](Doorbell& d) {
       if (channel_opened) {
@@ -108,6 +110,7 @@ class ControlDispatcher {
   std::size_t ring_bytes_in_use_ = 0;
   VciService vci_;
   XcanService xcan_;
+  SlcanService slcan_;
 };
 
 }  // namespace canemu::daemon

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "canemu/daemon/config.hpp"
+#include "canemu/daemon/slcan_device.hpp"
 #include "canemu/daemon/xcan_device.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
@@ -73,6 +74,12 @@ class DeviceRegistry {
     std::vector<std::size_t> buses;
     std::shared_ptr<XcanDevice> device;
   };
+  // A configured SORCUS SL-CANi; its interface is the node "NAME:0" on `bus`.
+  struct Slcan {
+    DeviceConfig config;
+    std::size_t bus;
+    std::shared_ptr<SlcanDevice> device;
+  };
   struct NodeRef {
     std::size_t bus;
     model::HostedNode* node;  // nullptr for an X-CAN interface (the module drives its chip)
@@ -90,6 +97,10 @@ class DeviceRegistry {
   const std::vector<Xcan>& xcan() const { return xcan_; }
   // The X-CAN-2i named `name`, or nullptr.
   std::shared_ptr<XcanDevice> find_xcan(std::string_view name) const;
+  void add_slcan(Slcan device) { slcan_.push_back(std::move(device)); }
+  const std::vector<Slcan>& slcan() const { return slcan_; }
+  // The SL-CANi in `slot`, or nullptr.
+  std::shared_ptr<SlcanDevice> find_slcan_slot(unsigned slot) const;
 
   // An ephemeral device with its one node; a VCI adapter when `line` is set.
   void add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node, uint32_t owner_pid,
@@ -135,6 +146,7 @@ class DeviceRegistry {
   std::vector<Ephemeral> ephemeral_;
   std::vector<LinEphemeral> lin_ephemeral_;
   std::vector<Xcan> xcan_;
+  std::vector<Slcan> slcan_;
   uint32_t generation_ = 0;
   uint64_t next_vci_id_ = 1;
 };

@@ -146,6 +146,7 @@ class Simulation {
                                              std::vector<DeviceRegistry::LinController>& out);
 
   std::optional<std::string> add_recorder(const RecorderConfig& r);
+  std::optional<std::string> add_slcan(const DeviceConfig& d);
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).

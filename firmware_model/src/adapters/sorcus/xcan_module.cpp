@@ -23,13 +23,17 @@ XcanModule::XcanModule(SimScheduler& scheduler, XcanVariant variant, XcanSink& s
   ifaces_[0].low_speed = variant == XcanVariant::f;
   ifaces_[1].low_speed = variant != XcanVariant::h;
   for (unsigned i = 0; i < XCAN_INTERFACES; ++i) {
-    ifaces_[i].chip.on_interrupt = [this, i](SimTime at) {
-      Interface& f = ifaces_[i];
-      if (!f.isr_scheduled) {
-        f.isr_scheduled = true;
+    Interface& f = ifaces_[i];
+    f.events.module = this;
+    f.events.iface = i;
+    f.mgr.emplace(f.chip, f.events, kFifoDepth, kMaxObjects);
+    f.chip.on_interrupt = [this, i](SimTime at) {
+      Interface& g = ifaces_[i];
+      if (!g.isr_scheduled) {
+        g.isr_scheduled = true;
         scheduler_.schedule_at(at, [this, i](SimTime) {
           ifaces_[i].isr_scheduled = false;
-          service(i);
+          ifaces_[i].mgr->service();
         });
       }
     };
@@ -40,8 +44,12 @@ XcanModule::~XcanModule() {
   for (const Waiter& w : waiters_) {
     scheduler_.cancel(w.timeout);
   }
-  for (const auto& [token, id] : loads_) {
-    scheduler_.cancel(id);
+}
+
+void XcanModule::set_buffer_load_time(int64_t ns) {
+  load_ns_ = ns;
+  for (Interface& f : ifaces_) {
+    f.mgr->set_load_time(scheduler_, ns);
   }
 }
 
@@ -135,20 +143,23 @@ tl::expected<ChannelHandle, uint32_t> XcanModule::open_channel(const CPS_XCAN& c
     if (cps.ulCanID != XCAN_AUTO_ID && cps.ulCanID > (ext ? XCAN_MAX_ID_29 : XCAN_MAX_ID_11)) {
       return tl::unexpected(uint32_t{ERR_XCAN_ID_RANGE});
     }
-    const bool remote = (cps.usFlags & XCAN_REMOTE) != 0;
-    const std::vector<int> in15 = buffer15_objects(f);
-    if (!in15.empty() && cps.ulCanID != XCAN_AUTO_ID) {
+    if (!f.mgr->buffer15_objects().empty() && cps.ulCanID != XCAN_AUTO_ID) {
       return tl::unexpected(uint32_t{ERR_XCAN_AUTO_ID_REQUIRED});
     }
-    if (const uint32_t e = check_plan(f, std::nullopt, remote, true); e != ERR_OK) {
+    ManualFilter manual;
+    manual.open = true;
+    manual.remote = (cps.usFlags & XCAN_REMOTE) != 0;
+    manual.extended = ext;
+    if (cps.ulCanID != XCAN_AUTO_ID) {
+      manual.id = cps.ulCanID;
+    }
+    if (const uint32_t e = check_plan(f, nullptr, manual); e != ERR_OK) {
       return tl::unexpected(e);
     }
     const ChannelHandle h = add_channel(Channel{i, Kind::filter, cps, callback});
     f.filter_channel = h;
-    f.filter_remote = remote;
-    f.filter_id = cps.ulCanID;
-    f.manual_mask.reset();
-    program_buffer15(i);
+    f.mgr->manual() = manual;
+    f.mgr->program_buffer15();
     return h;
   }
   if (cps.usDevice != DEVICE_BUS_OUT && cps.usDevice != DEVICE_BUS_IN) {
@@ -165,17 +176,14 @@ tl::expected<ChannelHandle, uint32_t> XcanModule::open_channel(const CPS_XCAN& c
       return tl::unexpected(uint32_t{ERR_XCAN_CHANNEL_BUSY});
     }
     if (f.general_object < 0) {
-      Object g;
-      g.role = Role::general;
-      g.cps = cps;
-      g.excl = true;
-      if (const uint32_t e = check_plan(f, g, f.filter_remote, f.filter_channel != 0);
-          e != ERR_OK) {
+      ManagedObject m;
+      m.send = true;
+      m.general = true;
+      m.excl = true;
+      if (const uint32_t e = check_plan(f, &m, f.mgr->manual()); e != ERR_OK) {
         return tl::unexpected(e);
       }
-      f.objects.push_back(g);
-      f.general_object = static_cast<int>(f.objects.size() - 1);
-      plan(i);
+      f.general_object = add_object(i, m, Object{Role::general, cps, false, 0});
     }
     // The channel's own flags (NO_INT, timeout) count, not those of an earlier general channel.
     f.objects[static_cast<std::size_t>(f.general_object)].no_int = (cps.usFlags & XCAN_NO_INT) != 0;
@@ -221,54 +229,27 @@ uint32_t XcanModule::validate_object_cps(const Interface& f, const CPS_XCAN& cps
   return ERR_OK;
 }
 
-uint32_t XcanModule::check_plan(const Interface& f, std::optional<Object> added, bool filter_remote,
-                                bool filter_open) const {
-  std::size_t exclusive = 0;
-  for (const Object& o : f.objects) {
-    exclusive += o.excl ? 1 : 0;
-  }
-  if (added && added->excl && exclusive + 1 > 13) {
-    // «Diese Eigenschaft darf nur maximal 13 Message-Objekten zugeteilt werden!»
-    return ERR_XCAN_EXCL_LIMIT;
-  }
-  const std::size_t count = f.objects.size() + (added ? 1 : 0);
-  if (count > kMaxObjects) {
-    return ERR_XCAN_NO_MEMORY;
-  }
-  if (count <= 14 && !filter_open) {
-    return ERR_OK;
-  }
-  // Buffer 15 takes one kind of frame in one format: its passive non-exclusive objects must all
-  // be send objects (remote frames) or all receive objects (data frames), and agree with the
-  // filter channel. Decision: the open that would break this fails with
-  // ERR_XCAN_BUFFER15_MIXED (SL-CANi diag 2Ch), the same for the format in mixed mode.
-  std::optional<bool> remote;
-  std::optional<bool> extended;
-  if (filter_open) {
-    remote = filter_remote;
-  }
-  auto take = [&](const Object& o) {
-    const bool passive = o.role == Role::passive_send || o.role == Role::passive_receive;
-    if (!passive || o.excl || count <= 14) {
-      return true;
-    }
-    const bool r = o.role == Role::passive_send;
-    if ((remote && *remote != r) || (extended && *extended != o.extended)) {
-      return false;
-    }
-    remote = r;
-    extended = o.extended;
-    return true;
-  };
-  for (const Object& o : f.objects) {
-    if (!take(o)) {
+uint32_t XcanModule::check_plan(const Interface& f, const ManagedObject* added,
+                                const ManualFilter& manual) const {
+  // Decision: an open that would mix passive send and passive receive objects in buffer 15
+  // (or both formats, in mixed mode) fails with ERR_XCAN_BUFFER15_MIXED (SL-CANi diag 2Ch).
+  switch (f.mgr->check(added, manual)) {
+    case PlanError::none:
+      return ERR_OK;
+    case PlanError::excl_limit:
+      return ERR_XCAN_EXCL_LIMIT;
+    case PlanError::no_memory:
+      return ERR_XCAN_NO_MEMORY;
+    case PlanError::buffer15_mixed:
       return ERR_XCAN_BUFFER15_MIXED;
-    }
   }
-  if (added && !take(*added)) {
-    return ERR_XCAN_BUFFER15_MIXED;
-  }
-  return ERR_OK;
+  return ERR_XCAN_PARAM;
+}
+
+int XcanModule::add_object(unsigned i, const ManagedObject& m, const Object& o) {
+  Interface& f = ifaces_[i];
+  f.objects.push_back(o);
+  return f.mgr->add(m);
 }
 
 tl::expected<ChannelHandle, uint32_t> XcanModule::open_object(const CPS_XCAN& cps, bool callback) {
@@ -279,7 +260,7 @@ tl::expected<ChannelHandle, uint32_t> XcanModule::open_object(const CPS_XCAN& cp
   if (const uint32_t e = validate_object_cps(f, cps, role, extended); e != ERR_OK) {
     return tl::unexpected(e);
   }
-  int index = find_object(f, cps.ulCanID, extended);
+  int index = f.mgr->find(cps.ulCanID, extended);
   if (index >= 0) {
     // «…dürfen sich die CPS-Parameter beim Öffnen eines Kanals zu einem bestehenden
     // Message-Objekt nicht von denen bei seiner Konfiguration unterscheiden.» Decision: the
@@ -291,19 +272,17 @@ tl::expected<ChannelHandle, uint32_t> XcanModule::open_object(const CPS_XCAN& cp
       return tl::unexpected(uint32_t{ERR_XCAN_CPS_MISMATCH});
     }
   } else {
-    Object o;
-    o.id = cps.ulCanID;
-    o.extended = extended;
-    o.role = role;
-    o.cps = cps;
-    o.excl = (cps.usFlags & XCAN_EXCL_BUFFER) != 0;
-    o.no_int = (cps.usFlags & XCAN_NO_INT) != 0;
-    if (const uint32_t e = check_plan(f, o, f.filter_remote, f.filter_channel != 0); e != ERR_OK) {
+    ManagedObject m;
+    m.id = cps.ulCanID;
+    m.extended = extended;
+    m.send = role == Role::active_send || role == Role::passive_send;
+    m.active = role == Role::active_send || role == Role::active_receive;
+    m.passive = !m.active;
+    m.excl = (cps.usFlags & XCAN_EXCL_BUFFER) != 0;
+    if (const uint32_t e = check_plan(f, &m, f.mgr->manual()); e != ERR_OK) {
       return tl::unexpected(e);
     }
-    f.objects.push_back(o);
-    index = static_cast<int>(f.objects.size() - 1);
-    plan(i);
+    index = add_object(i, m, Object{role, cps, (cps.usFlags & XCAN_NO_INT) != 0, 0});
   }
   const ChannelHandle h = add_channel(Channel{i, Kind::object, cps, callback, index});
   bus_on(i);
@@ -324,10 +303,8 @@ uint32_t XcanModule::close_channel(ChannelHandle h) {
     // Decision: closing the filter channel forgets the manual mask; buffer 15 goes back to
     // its automatic filter.
     f.filter_channel = 0;
-    f.manual_mask.reset();
-    f.filter_remote = false;
-    f.filter_id = XCAN_AUTO_ID;
-    program_buffer15(i);
+    f.mgr->manual() = ManualFilter{};
+    f.mgr->program_buffer15();
   } else if (kind == Kind::general) {
     f.general_channel = 0;
   }
@@ -350,13 +327,8 @@ void XcanModule::reset_interface(unsigned i) {
   const bool line = f.line_error;
   f.chip.hardware_reset();
   f.objects.clear();
-  f.buffers = {};
-  f.shared = false;
-  f.fifo.clear();
+  f.mgr->reset();
   f.filter_channel = 0;
-  f.manual_mask.reset();
-  f.filter_id = XCAN_AUTO_ID;
-  f.filter_remote = false;
   f.general_channel = 0;
   f.general_object = -1;
   f.controlled = false;

@@ -35,7 +35,10 @@ Reply XcanModule::write_block(ChannelHandle h, std::span<const uint8_t> data) {
           m.ulCanId > (ext ? XCAN_MAX_ID_29 : XCAN_MAX_ID_11)) {
         return {ERR_XCAN_ID_RANGE};
       }
-      if (const uint32_t e = request(i, Request{f.general_object, false, m}); e != ERR_OK) {
+      DirectMessage d{
+          m.ulCanId, ext, (m.usFlags & XCAN_REMOTE) != 0, static_cast<uint8_t>(m.usDataSize), {}};
+      std::copy_n(m.aucData, 8, d.data.begin());
+      if (const uint32_t e = request(i, SendRequest{f.general_object, false, d}); e != ERR_OK) {
         return {e};
       }
       if (c->cps.usFlags & XCAN_NO_INT) {
@@ -53,15 +56,16 @@ Reply XcanModule::write_block(ChannelHandle h, std::span<const uint8_t> data) {
   if (data.size() > 8) {
     return {ERR_XCAN_DATA_SIZE};
   }
-  o.size = static_cast<uint8_t>(data.size());
-  std::copy(data.begin(), data.end(), o.data.begin());
+  ManagedObject& m = f.mgr->object(c->object);
+  m.size = static_cast<uint8_t>(data.size());
+  std::copy(data.begin(), data.end(), m.data.begin());
   if (o.role == Role::passive_send) {
     // «…stellt dem Sendeobjekt neue Daten zur Verfügung, ohne dass die Daten unmittelbar auf
     // den Bus versendet werden»: an answer from now on carries these data.
-    update_data(i, o);
+    f.mgr->update_data(c->object);
     return {ERR_OK};
   }
-  if (const uint32_t e = request(i, Request{c->object, false, std::nullopt}); e != ERR_OK) {
+  if (const uint32_t e = request(i, SendRequest{c->object, false, std::nullopt}); e != ERR_OK) {
     return {e};
   }
   if (o.no_int && o.cps.usTimeout > 0) {
@@ -96,7 +100,7 @@ Reply XcanModule::read_block(ChannelHandle h) {
   }
   if (o.role == Role::active_receive && o.cps.usTimeout > 0) {
     // A read sends the remote frame and waits for the answer, at most usTimeout µs.
-    if (const uint32_t e = request(i, Request{c->object, true, std::nullopt}); e != ERR_OK) {
+    if (const uint32_t e = request(i, SendRequest{c->object, true, std::nullopt}); e != ERR_OK) {
       return {e};
     }
     return {ERR_OK, wait(h, c->object, true, o.cps.usTimeout)};
@@ -104,7 +108,7 @@ Reply XcanModule::read_block(ChannelHandle h) {
   if (o.role == Role::active_receive) {
     // Decision: usTimeout 0 waits for nothing: the remote frame goes, the read returns the
     // data the object holds now.
-    if (const uint32_t e = request(i, Request{c->object, true, std::nullopt}); e != ERR_OK) {
+    if (const uint32_t e = request(i, SendRequest{c->object, true, std::nullopt}); e != ERR_OK) {
       return {e};
     }
   }
@@ -115,8 +119,9 @@ Reply XcanModule::read_block(ChannelHandle h) {
     }
   }
   c->new_data = false;
+  const ManagedObject& m = f.mgr->object(c->object);
   Reply r;
-  r.data.assign(o.data.begin(), o.data.begin() + o.size);
+  r.data.assign(m.data.begin(), m.data.begin() + m.size);
   return r;
 }
 
@@ -130,18 +135,18 @@ uint32_t XcanModule::write_ulong(ChannelHandle h, ULONG value) {
   }
   const unsigned i = c->iface;
   Interface& f = ifaces_[i];
-  const std::vector<int> in15 = buffer15_objects(f);
+  const std::vector<int> in15 = f.mgr->buffer15_objects();
   if (!in15.empty()) {
     // «…dass in der automatisch erzeugten Akzeptanzmaske niemals ein 0 gesetztes Bit über das
     // Akzeptanzfilter-Device auf 1 gesetzt werden darf»: a 1 where the automatic mask has 0.
-    const bool ext = f.objects[static_cast<std::size_t>(in15.front())].extended;
-    const AcceptanceFilter automatic = buffer15_filter(i);
+    const bool ext = f.mgr->object(in15.front()).extended;
+    const AcceptanceFilter automatic = f.mgr->buffer15_filter();
     if ((value & id_width_mask(ext) & ~automatic.acc) != 0) {
       return ERR_XCAN_MASK_EXCLUDES;
     }
   }
-  f.manual_mask = value;
-  program_buffer15(i);
+  f.mgr->manual().mask = value;
+  f.mgr->program_buffer15();
   return ERR_OK;
 }
 
@@ -154,13 +159,13 @@ tl::expected<ULONG, uint32_t> XcanModule::read_ulong(ChannelHandle h) {
     return tl::unexpected(uint32_t{ERR_XCAN_WRONG_TYPE});
   }
   const Interface& f = ifaces_[c->iface];
-  if (f.manual_mask) {
-    return *f.manual_mask;
+  if (f.mgr->manual().mask) {
+    return *f.mgr->manual().mask;
   }
   // Decision: without a manual mask the read gives the automatic mask of buffer 15's
   // objects, or FFFFFFFFh (the «Initialisierungszustand») when there are none.
-  if (!buffer15_objects(f).empty()) {
-    return buffer15_filter(c->iface).acc;
+  if (!f.mgr->buffer15_objects().empty()) {
+    return f.mgr->buffer15_filter().acc;
   }
   return ULONG{0xFFFFFFFFu};
 }
@@ -201,13 +206,13 @@ uint32_t XcanModule::control(ChannelHandle h, USHORT command) {
   switch (o.role) {
     case Role::active_send:   // «die zuvor versendeten Daten nochmals senden»
     case Role::passive_send:  // «die gerade aktuellen Daten aktiv versenden»
-      return request(i, Request{c->object, false, std::nullopt});
+      return request(i, SendRequest{c->object, false, std::nullopt});
     case Role::active_receive:
       // The answer goes to the callback (XCAN_NO_INT concerns the read only, digest §7.10).
       c->start_pending = true;
-      return request(i, Request{c->object, true, std::nullopt});
+      return request(i, SendRequest{c->object, true, std::nullopt});
     case Role::passive_receive:  // the object becomes active and passive
-      return request(i, Request{c->object, true, std::nullopt});
+      return request(i, SendRequest{c->object, true, std::nullopt});
     case Role::general:
       break;
   }

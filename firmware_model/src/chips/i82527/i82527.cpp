@@ -528,6 +528,21 @@ void I82527::on_error(const BusErrorEvent& e) {
   if (listener_ != nullptr) {
     listener_->bus_error(e);
   }
+  // The frame on the wire is destroyed: the next attempt sends what the objects want now. A
+  // request withdrawn while its frame was on the wire (TxRqst reset by the CPU) is not
+  // repeated (datasheet: the chip chooses the object to send before each attempt).
+  if (e.role == ErrorRole::transmitter && tx_ && bus_ != nullptr) {
+    const uint8_t n = next_tx_object();
+    if (n != tx_object_ || (n != 0 && object(n).frame() != tx_->frame)) {
+      tx_.reset();
+      tx_object_ = 0;
+      if (n != 0) {
+        tx_ = TxFrame{object(n).frame(), false, false};
+        tx_object_ = n;
+      }
+      bus_->tx_changed(node_);
+    }
+  }
 }
 
 void I82527::on_state_change(SimTime at, ErrorState state) {

@@ -14,6 +14,7 @@
 
 #include "canemu/ipc/capture_messages.hpp"
 #include "canemu/ipc/protocol_core.hpp"
+#include "canemu/ipc/slcan_messages.hpp"
 #include "canemu/ipc/vci_messages.hpp"
 #include "canemu/ipc/xcan_messages.hpp"
 
@@ -100,6 +101,12 @@ template <>
 inline constexpr MsgType type_of_v<BridgeListRequest> = MsgType::bridge_list_request;
 template <>
 inline constexpr MsgType type_of_v<BridgeListReply> = MsgType::bridge_list_reply;
+template <>
+inline constexpr MsgType type_of_v<SlcanRequest> = MsgType::slcan_request;
+template <>
+inline constexpr MsgType type_of_v<SlcanReply> = MsgType::slcan_reply;
+template <>
+inline constexpr MsgType type_of_v<SlcanEventMsg> = MsgType::slcan_event;
 template <class T>
 constexpr MsgType type_of() {
   static_assert(type_of_v<T> != MsgType{}, "not a protocol message");

@@ -77,6 +77,9 @@ enum class MsgType : uint16_t {
   bridge_remove_reply = 95,
   bridge_list_request = 96,
   bridge_list_reply = 97,
+  slcan_request = 100,
+  slcan_reply = 101,
+  slcan_event = 102,  // unsolicited, request_id 0
 };
 
 // Why a request failed. Values are stable: clients show them by name.
@@ -307,7 +310,8 @@ enum class WireDeviceModel : uint8_t {
   ixxat_usb_to_can = 0,
   ixxat_usb_to_can_fd = 1,
   ephemeral = 2,
-  sorcus_x_can_2i = 3
+  sorcus_x_can_2i = 3,
+  sorcus_sl_cani = 4
 };
 
 // A device model's name: the `model` key of a configuration's [[device]], and what
@@ -322,6 +326,8 @@ constexpr std::string_view to_string(WireDeviceModel model) {
       return "ephemeral";
     case WireDeviceModel::sorcus_x_can_2i:
       return "sorcus-x-can-2i";
+    case WireDeviceModel::sorcus_sl_cani:
+      return "sorcus-sl-cani";
   }
   return "?";
 }

@@ -8,11 +8,11 @@
 //   by variant (2i/H, 2i/F, 2i/M);
 // - the dynamic object model: the first channel with an ID creates the object, later channels
 //   with that ID attach to it and must bring the same CPS;
-// - the buffer manager: with at most 14 objects each has a buffer of its own; beyond, objects
-//   with XCAN_EXCL_BUFFER (and the general-ID channel) keep buffers 1..13, the rest of 1..14
-//   are the temporary pool, requests wait in the driver FIFO when no temporary buffer is free,
-//   and passive non-exclusive objects share the receive-only buffer 15 behind the automatic
-//   acceptance filter (acceptance.hpp), Data-only or Remote-only;
+// - the buffer manager shared with the SL-CANi (buffer_manager.hpp): with at most 14 objects
+//   each has a buffer of its own; beyond, objects with XCAN_EXCL_BUFFER (and the general-ID
+//   channel) keep buffers 1..13, the rest of 1..14 are the temporary pool, requests wait in the
+//   driver FIFO when no temporary buffer is free, and passive non-exclusive objects share the
+//   receive-only buffer 15 behind the automatic acceptance filter, Data-only or Remote-only;
 // - the acceptance-filter device, the general-ID send channel, active and passive send and
 //   receive objects with every flag of §3.1, the bus-control device (bit timing, CMD_STOP /
 //   CMD_START, INFO_DEVICE), the error callback at WARN ("heavily disturbed") and bus-off.
@@ -36,7 +36,6 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <map>
 #include <optional>
 #include <span>
@@ -45,6 +44,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/firmware_model/adapters/sorcus/acceptance.hpp"
+#include "canemu/firmware_model/adapters/sorcus/buffer_manager.hpp"
 #include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/firmware_model/chips/i82527/i82527.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
@@ -100,14 +100,6 @@ struct Reply {
   std::vector<uint8_t> data;         // read_block: the bytes read
 };
 
-// What a buffer of an interface holds, for tests and status views.
-struct BufferView {
-  enum class Use : uint8_t { unused, own, exclusive, temporary, general, receive_only };
-  Use use = Use::unused;
-  std::optional<uint32_t> id;  // the object programmed into it (temporary: the cached one)
-  bool busy = false;           // a driver request waits for its acknowledgement
-};
-
 class XcanModule {
  public:
   // The FIFO's depth. Decision: the manual gives none (digest §7.3); 64 requests.
@@ -133,7 +125,7 @@ class XcanModule {
   // «Das Eintragen eines Message-Objekts in einen Message-Puffer nimmt eine gewisse Zeit (einige
   // µs) in Anspruch»: the time from loading a buffer (an object not cached there, or a general-ID
   // message) to its transmit request, in ns; 0 unless set.
-  void set_buffer_load_time(int64_t ns) { load_ns_ = ns; }
+  void set_buffer_load_time(int64_t ns);
   int64_t buffer_load_time() const { return load_ns_; }
   bool low_speed(unsigned i) const;
   I82527& chip(unsigned i) { return ifaces_[i].chip; }
@@ -155,11 +147,11 @@ class XcanModule {
   uint32_t clear_error(ChannelHandle channel);
 
   // --- views ---
-  BufferView buffer(unsigned i, uint8_t n) const;  // n = 1..15
+  BufferView buffer(unsigned i, uint8_t n) const { return ifaces_[i].mgr->buffer(n); }
   // The automatic filter of the objects in buffer 15 ({0, 0} without any); a manual mask is
   // not in it.
-  AcceptanceFilter buffer15_filter(unsigned i) const;
-  std::size_t fifo_size(unsigned i) const { return ifaces_[i].fifo.size(); }
+  AcceptanceFilter buffer15_filter(unsigned i) const { return ifaces_[i].mgr->buffer15_filter(); }
+  std::size_t fifo_size(unsigned i) const { return ifaces_[i].mgr->fifo_size(); }
   // Objects on the interface; the general-ID channel's buffer counts as one.
   std::size_t object_count(unsigned i) const { return ifaces_[i].objects.size(); }
   // Frames buffer 15 took that matched no object and went to no filter channel.
@@ -171,30 +163,12 @@ class XcanModule {
   enum class Kind : uint8_t { bus_control, filter, object, general };
   enum class Role : uint8_t { active_send, passive_send, active_receive, passive_receive, general };
 
+  // What X-CAN adds to the buffer manager's object of the same index.
   struct Object {
-    uint32_t id = 0;
-    bool extended = false;
     Role role = Role::active_send;
     CPS_XCAN cps{};  // as configured
-    bool excl = false;
     bool no_int = false;
-    uint8_t size = 0;
-    std::array<uint8_t, 8> data{};
     uint32_t count = 0;  // INFO_XCAN_MSG_COUNT
-    uint8_t buffer = 0;  // its own buffer 1..14, 15 (receive-only), or 0 (temporary pool)
-  };
-  // A send request: an object's data frame or remote frame, or a general-ID message.
-  struct Request {
-    int object = -1;
-    bool remote = false;
-    std::optional<XCAN_MESSAGE> message;  // general-ID channel
-  };
-  struct Buffer {
-    int owner = -1;  // the object programmed into it (cached, for a temporary buffer)
-    bool permanent = false;
-    bool busy = false;
-    Request sending;
-    uint64_t load = 0;  // the pending load's token (0: none): its transmit request is due
   };
   struct Channel {
     Channel(unsigned i, Kind k, const CPS_XCAN& p, bool cb, int o = -1)
@@ -215,20 +189,24 @@ class XcanModule {
     bool read = false;
     EventId timeout = 0;
   };
+  struct Events final : BufferEvents {
+    XcanModule* module = nullptr;
+    unsigned iface = 0;
+    void status_changed() override { module->serve_status(iface); }
+    void sent(const SendRequest& r, bool answered) override;
+    void received(int object, const Frame& frame, bool lost) override;
+    void unconfigured(const Frame& frame) override { module->unconfigured(iface, frame); }
+  };
   struct Interface {
     I82527 chip;
+    Events events;
+    std::optional<BufferManager> mgr;
     CanBus* bus = nullptr;
     bool low_speed = false;
     bool line_error = false;
     XCAN_BITPARAMS params = XCAN_DEFAULT_BITPARAMS;
-    std::vector<Object> objects;
-    std::array<Buffer, 15> buffers{};  // [n - 1]; buffer 15's entry is unused
-    bool shared = false;               // more than 14 objects: the shared plan
-    std::deque<Request> fifo;
+    std::vector<Object> objects;  // parallel to mgr->objects()
     ChannelHandle filter_channel = 0;
-    std::optional<ULONG> manual_mask;
-    ULONG filter_id = XCAN_AUTO_ID;
-    bool filter_remote = false;
     ChannelHandle general_channel = 0;
     int general_object = -1;
     bool controlled = false;  // CMD_STOP or CMD_START came on the bus-control device
@@ -249,44 +227,29 @@ class XcanModule {
   tl::expected<ChannelHandle, uint32_t> open_object(const CPS_XCAN& cps, bool callback);
   uint32_t validate_object_cps(const Interface& f, const CPS_XCAN& cps, Role& role,
                                bool& extended) const;
-  uint32_t check_plan(const Interface& f, std::optional<Object> added, bool filter_remote,
-                      bool filter_open) const;
+  uint32_t check_plan(const Interface& f, const ManagedObject* added,
+                      const ManualFilter& manual) const;
+  int add_object(unsigned i, const ManagedObject& m, const Object& o);
   ChannelHandle add_channel(Channel c);
   void reset_interface(unsigned i);
   uint32_t write_bitparams(unsigned i, std::span<const uint8_t> data);
 
-  // xcan_driver.cpp: the chip, the buffers; xcan_interrupt.cpp: the interrupt
+  // xcan_driver.cpp: the chip and the requests; xcan_interrupt.cpp: the interrupt
   void init_chip(unsigned i);
   void program_timing(unsigned i);
   void bus_on(unsigned i);
-  void plan(unsigned i);
-  void program_object(unsigned i, uint8_t n, int object);
-  void program_buffer15(unsigned i);
-  std::vector<int> buffer15_objects(const Interface& f) const;
-  uint32_t request(unsigned i, Request r);
-  void start_on(unsigned i, uint8_t n, const Request& r);
-  void request_transmission(unsigned i, uint8_t n);
-  void update_data(unsigned i, const Object& o);
-  void service(unsigned i);
+  uint32_t request(unsigned i, const SendRequest& r);
   void serve_status(unsigned i);
-  void serve_buffer(unsigned i, uint8_t n);
-  void serve_buffer15(unsigned i);
-  void tx_done(unsigned i, uint8_t n);
-  void finished(unsigned i, const Request& r);
-  void next_from_fifo(unsigned i, uint8_t n);
+  void finished(unsigned i, const SendRequest& r);
   void received(unsigned i, int object, const Frame& frame);
   void unconfigured(unsigned i, const Frame& frame);
   void error_callback(unsigned i);
-  Frame read_frame(unsigned i, uint8_t n, bool remote);
-  int find_object(const Interface& f, uint32_t id, bool extended) const;
   bool extended_format(const Interface& f, const CPS_XCAN& cps) const;
 
   SimScheduler& scheduler_;
   XcanVariant variant_;
   MddVersion mdd_version_ = kMdd3C;
   int64_t load_ns_ = 0;
-  uint64_t next_load_ = 1;
-  std::map<uint64_t, EventId> loads_;  // pending loads' events by token (cancelled with us)
   XcanSink& sink_;
   std::array<Interface, XCAN_INTERFACES> ifaces_;
   std::map<ChannelHandle, Channel> channels_;

@@ -9,6 +9,7 @@
 #include "canemu/client/connection.hpp"
 #include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "capture_table.hpp"
 #include "command.hpp"
 #include "fault_table.hpp"
 
@@ -193,14 +194,11 @@ int run_metrics(const std::string& socket) {
   if (!faults) {
     return fail(faults.error());
   }
-  auto recorders = c->call<ipc::RecorderListRequest, ipc::RecorderListReply>(
-      ipc::make_message<ipc::RecorderListRequest>());
-  auto bridges = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
-      ipc::make_message<ipc::BridgeListRequest>());
-  if (!recorders || !bridges) {
-    return fail(!recorders ? recorders.error().message : bridges.error().message);
+  auto captures = capture_lists(*c);
+  if (!captures) {
+    return fail(captures.error());
   }
-  std::fputs(expose(*status, *faults, *recorders, *bridges).c_str(), stdout);
+  std::fputs(expose(*status, *faults, captures->recorders, captures->bridges).c_str(), stdout);
   return 0;
 }
 

@@ -134,6 +134,14 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
                    (dir.path / "can0.log").string() + "\",\"rotations\" : 0},"),
             std::string::npos)
       << j;
+  Cli metrics(d, {"metrics"});
+  const std::string m = Cli::read_all(metrics.out);
+  EXPECT_EQ(metrics.wait(), 0);
+  EXPECT_NE(m.find("canemu_recorder_frames_total{bus=\"can0\",path=\"" +
+                   (dir.path / "can0.log").string() + "\"} 2\n"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("# TYPE canemu_bridge_dropped_total counter\n"), std::string::npos) << m;
 }
 
 // canemu bridge against canemud on a host whose kernel may have no CAN at all: every failure

@@ -17,6 +17,17 @@ std::string format_name(uint8_t format) {
 
 }  // namespace
 
+tl::expected<CaptureLists, std::string> capture_lists(client::Connection& c) {
+  auto recorders = c.call<ipc::RecorderListRequest, ipc::RecorderListReply>(
+      ipc::make_message<ipc::RecorderListRequest>());
+  auto bridges = c.call<ipc::BridgeListRequest, ipc::BridgeListReply>(
+      ipc::make_message<ipc::BridgeListRequest>());
+  if (!recorders || !bridges) {
+    return tl::unexpected(!recorders ? recorders.error().message : bridges.error().message);
+  }
+  return CaptureLists{*recorders, *bridges};
+}
+
 void print_recorders(const ipc::RecorderListReply& r) {
   std::printf("%-12s %-7s %10s %12s %7s %8s %s\n", "RECORDER", "FORMAT", "FRAMES", "BYTES",
               "ROTATED", "LOST", "FILE");

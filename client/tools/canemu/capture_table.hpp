@@ -5,10 +5,20 @@
 #include <string>
 
 #include <toml++/toml.h>
+#include <tl/expected.hpp>
+
+#include "canemu/client/connection.hpp"
 
 #include "canemu/ipc/protocol.hpp"
 
 namespace canemu::cli {
+
+// canemud's recorders and bridges, asked for together; the error's text on failure.
+struct CaptureLists {
+  ipc::RecorderListReply recorders;
+  ipc::BridgeListReply bridges;
+};
+tl::expected<CaptureLists, std::string> capture_lists(client::Connection& c);
 
 // Every recorder, one line each under a header line: bus, format, frames, bytes, rotations,
 // frames lost, the file and the last failure.

@@ -9,6 +9,7 @@
 #include "canemu/client/connection.hpp"
 #include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "capture_table.hpp"
 #include "command.hpp"
 #include "fault_table.hpp"
 
@@ -57,7 +58,52 @@ std::string bus_of(const ipc::StatusReply& s, const ipc::StatusNode& n) {
   return n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?");
 }
 
-std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults) {
+// Recorders and SocketCAN bridges: what they wrote and every frame they lost (docs/socketcan.md).
+void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
+                     const ipc::BridgeListReply& bridges) {
+  const auto recorder_label = [&](const ipc::RecorderEntry& r) {
+    return fmt::format("bus=\"{}\",path=\"{}\"", label(ipc::name_of(r.bus)),
+                       label(ipc::name_of(r.path)));
+  };
+  e.family("canemu_recorder_frames_total", "counter", "Frames a recorder wrote to disk.");
+  for (uint16_t i = 0; i < recorders.count; ++i) {
+    e.sample("canemu_recorder_frames_total", recorder_label(recorders.recorders[i]),
+             recorders.recorders[i].frames);
+  }
+  e.family("canemu_recorder_lost_total", "counter", "Frames a recorder's failed writes lost.");
+  for (uint16_t i = 0; i < recorders.count; ++i) {
+    e.sample("canemu_recorder_lost_total", recorder_label(recorders.recorders[i]),
+             recorders.recorders[i].lost);
+  }
+  const auto bridge_label = [&](const ipc::BridgeEntry& b, std::string_view key,
+                                std::string_view value) {
+    return fmt::format("bus=\"{}\",interface=\"{}\",{}=\"{}\"", label(ipc::name_of(b.bus)),
+                       label(ipc::name_of(b.interface)), key, value);
+  };
+  e.family("canemu_bridge_frames_total", "counter", "Frames a SocketCAN bridge passed on.");
+  for (uint16_t i = 0; i < bridges.count; ++i) {
+    const ipc::BridgeEntry& b = bridges.bridges[i];
+    e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "to_interface"),
+             b.to_interface);
+    e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "from_interface"),
+             b.from_interface);
+  }
+  e.family("canemu_bridge_dropped_total", "counter", "Frames a SocketCAN bridge could not pass.");
+  for (uint16_t i = 0; i < bridges.count; ++i) {
+    const ipc::BridgeEntry& b = bridges.bridges[i];
+    for (const auto& [reason, count] :
+         {std::pair<const char*, uint64_t>{"interface", b.to_interface_dropped},
+          {"kernel", b.kernel_dropped},
+          {"queue", b.queue_dropped},
+          {"rejected", b.rejected},
+          {"tx_failed", b.tx_failed}}) {
+      e.sample("canemu_bridge_dropped_total", bridge_label(b, "reason", reason), count);
+    }
+  }
+}
+
+std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
+                   const ipc::RecorderListReply& recorders, const ipc::BridgeListReply& bridges) {
   Exposition e;
   e.family("canemu_sim_time_seconds", "gauge", "Simulated time.");
   e.sample("canemu_sim_time_seconds", "",
@@ -145,6 +191,7 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults)
                          label(ipc::name_of(f.target))),
              f.hits);
   }
+  expose_captures(e, recorders, bridges);
   return e.text();
 }
 
@@ -162,7 +209,11 @@ int run_metrics(const std::string& socket) {
   if (!faults) {
     return fail(faults.error());
   }
-  std::fputs(expose(*status, *faults).c_str(), stdout);
+  auto captures = capture_lists(*c);
+  if (!captures) {
+    return fail(captures.error());
+  }
+  std::fputs(expose(*status, *faults, captures->recorders, captures->bridges).c_str(), stdout);
   return 0;
 }
 

@@ -192,18 +192,17 @@ int run_status(const std::string& socket, bool json) {
   if (!faults) {
     return fail(faults.error());
   }
-  auto recorders = c->call<ipc::RecorderListRequest, ipc::RecorderListReply>(
-      ipc::make_message<ipc::RecorderListRequest>());
-  auto bridges = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
-      ipc::make_message<ipc::BridgeListRequest>());
-  if (!recorders || !bridges) {
-    return fail(!recorders ? recorders.error().message : bridges.error().message);
+  auto captures = capture_lists(*c);
+  if (!captures) {
+    return fail(captures.error());
   }
   const std::string mode(ipc::to_string(static_cast<ipc::WireTimeMode>(reply->time_mode)));
   if (json) {
-    print_json(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
+    print_json(*c, *reply, mode, *devices, *clients, *faults, captures->recorders,
+               captures->bridges);
   } else {
-    print_tables(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
+    print_tables(*c, *reply, mode, *devices, *clients, *faults, captures->recorders,
+                 captures->bridges);
   }
   return 0;
 }

@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 SOURCES = $(shell git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.h' '*.c' '*.inc' 2>/dev/null)
 
-.PHONY: all deps configure build test asan bench fuzz format format-check run clean
+.PHONY: all deps configure build test asan bench fuzz soak format format-check run clean install package
 
 all: build
 
@@ -20,6 +20,16 @@ configure: $(BUILD_DIR)/build.ninja
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+# Installs under PREFIX (default /usr; the configuration goes to /etc/canemu then, else
+# PREFIX/etc/canemu) into DESTDIR if set. docs/security.md, "Installing".
+PREFIX ?= /usr
+install: build
+	DESTDIR=$(DESTDIR) cmake --install $(BUILD_DIR) --prefix $(PREFIX)
+
+# A Debian package in $(BUILD_DIR): canemu_VERSION_ARCH.deb.
+package: build
+	cd $(BUILD_DIR) && cpack -G DEB
 
 test: deps build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
@@ -40,12 +50,20 @@ fuzz: deps
 	@scripts/install-deps.sh scripts/apt-packages-fuzz.txt
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	  -DCANEMU_FUZZ=ON -DCANEMU_WERROR=OFF -DCANEMU_BUILD_TESTS=OFF -DCANEMU_BUILD_BENCH=OFF
-	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_control_messages fuzz_config
-	@mkdir -p $(FUZZ_DIR)/corpus/control $(FUZZ_DIR)/corpus/config
+	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_control_messages fuzz_rings fuzz_config
+	@mkdir -p $(FUZZ_DIR)/corpus/control $(FUZZ_DIR)/corpus/rings $(FUZZ_DIR)/corpus/config
 	$(FUZZ_DIR)/bin/fuzz_control_messages -max_total_time=$(FUZZ_SECONDS) -max_len=20000 \
 	  $(FUZZ_DIR)/corpus/control tests/fuzz/corpus/control
+	$(FUZZ_DIR)/bin/fuzz_rings -max_total_time=$(FUZZ_SECONDS) -max_len=4096 -timeout=10 \
+	  $(FUZZ_DIR)/corpus/rings tests/fuzz/corpus/rings
 	$(FUZZ_DIR)/bin/fuzz_config -max_total_time=$(FUZZ_SECONDS) -max_len=4096 \
 	  $(FUZZ_DIR)/corpus/config tests/fuzz/corpus/config
+
+# Clients that come, go and get killed against canemud in real time for SOAK_SECONDS; checks
+# that nothing leaks or stalls (tests/soak/soak.py; figures as JSON on stdout).
+SOAK_SECONDS ?= 60
+soak: deps build
+	.venv/bin/python tests/soak/soak.py --seconds $(SOAK_SECONDS) --build $(BUILD_DIR)
 
 # Benchmarks write one JSON file each into $(BUILD_DIR)/bench-results/.
 bench: deps build

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what canemu needs, idempotently:
-#   - the Debian packages listed in scripts/apt-packages.txt, or in the lists given as
-#     arguments (through sudo when not root);
+#   - the Debian packages listed in scripts/apt-packages.txt and scripts/apt-packages-guest.txt
+#     (qemu for the guest test), or in the lists given as arguments (through sudo when not root);
 #   - Python virtual environments: .venv (pinned PyPI packages from requirements.txt) and
 #     .venv-debian (Debian's python3-can), each with canemu's python-can interface.
 # A second run finds nothing to do and says so.
@@ -9,7 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 lists=("$@")
-[ ${#lists[@]} -gt 0 ] || lists=(scripts/apt-packages.txt)
+[ ${#lists[@]} -gt 0 ] || lists=(scripts/apt-packages.txt scripts/apt-packages-guest.txt)
 missing=()
 for list in "${lists[@]}"; do
   while read -r pkg; do

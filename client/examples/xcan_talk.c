@@ -46,20 +46,36 @@ static int check(ULONG Error, const char* what) {
   return 1;
 }
 
+/* The number `text` (decimal, or hex with 0x) in *value; else a message naming `what`. */
+static int number(const char* text, const char* what, unsigned long max, ULONG* value) {
+  char* end = NULL;
+  const unsigned long v = strtoul(text, &end, 0);
+  if (*text == '\0' || *text == '-' || *end != '\0' || v > max) {
+    fprintf(stderr, "xcan_talk: %s \"%s\": a number from 0 to %lu\n", what, text, max);
+    return 0;
+  }
+  *value = (ULONG)v;
+  return 1;
+}
+
 int main(int argc, char** argv) {
   MAX_HANDLE hModul, hMDD, hBus, hSend, hReceive;
   CPS_XCAN cps;
   XCAN_BITPARAMS bits = {125, 12, 3, 1, 1, 0, 11}; /* 16 x 125 ns: 500 kbit/s */
-  ULONG Error, ulSize, count = 0;
+  ULONG Error, ulSize, count = 0, ulInterface, ulSendId, ulReceiveId, ulCount = 3;
   USHORT usChannel;
-  int i, n;
+  ULONG i;
 
   if (argc < 5) {
     fprintf(stderr, "usage: xcan_talk DEVICE INTERFACE SEND_ID RECEIVE_ID [COUNT]\n");
     return 2;
   }
-  usChannel = (USHORT)atoi(argv[2]);
-  n = argc > 5 ? atoi(argv[5]) : 3;
+  if (!number(argv[2], "INTERFACE", 1, &ulInterface) ||
+      !number(argv[3], "SEND_ID", 0x1FFFFFFF, &ulSendId) ||
+      !number(argv[4], "RECEIVE_ID", 0x1FFFFFFF, &ulReceiveId) ||
+      (argc > 5 && !number(argv[5], "COUNT", 1000000, &ulCount)))
+    return 2;
+  usChannel = (USHORT)ulInterface;
 
   if (!check(canemu_open_module(argv[1], &hModul), "module"))
     return 1;
@@ -84,7 +100,7 @@ int main(int argc, char** argv) {
   cps.usChannel = usChannel;
   cps.usFlags = XCAN_NO_INT;
   cps.usTimeout = 50000;
-  cps.ulCanID = (ULONG)strtoul(argv[3], NULL, 0);
+  cps.ulCanID = ulSendId;
   if (!check(max_open_channel(hMDD, &cps, NULL, &hSend), "send object"))
     return 1;
 
@@ -92,16 +108,16 @@ int main(int argc, char** argv) {
   memset(&cps, 0, sizeof cps);
   cps.usDevice = DEVICE_BUS_IN;
   cps.usChannel = usChannel;
-  cps.ulCanID = (ULONG)strtoul(argv[4], NULL, 0);
+  cps.ulCanID = ulReceiveId;
   if (!check(max_open_channel(hMDD, &cps, on_receive, &hReceive), "receive object"))
     return 1;
 
-  for (i = 0; i < n; ++i) {
+  for (i = 0; i < ulCount; ++i) {
     UCHAR arcData[8] = {0x11, 0x22, 0x33, (UCHAR)i};
     ulSize = 4;
     Error = max_write_channel_block(hSend, &ulSize, arcData);
     if (Error == ERR_XCAN_TIMEOUT) {
-      printf("frame %d: not acknowledged within 50 ms\n", i);
+      printf("frame %lu: not acknowledged within 50 ms\n", (unsigned long)i);
     } else if (!check(Error, "send")) {
       break;
     }

@@ -2,6 +2,8 @@
 #include <cstdio>
 #include <string>
 
+#include <sys/resource.h>
+
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
@@ -84,6 +86,15 @@ int main(int argc, char** argv) {
     std::fputs(scenarios.c_str(), stdout);
     std::fputs("configuration OK\n", stdout);
     return 0;
+  }
+  // Each client holds descriptors for its rings and doorbells: take all the hard limit allows
+  // (systemd's LimitNOFILE= sets it), not the soft 1024 that a few clients would exhaust.
+  if (rlimit nofile{};
+      ::getrlimit(RLIMIT_NOFILE, &nofile) == 0 && nofile.rlim_cur < nofile.rlim_max) {
+    nofile.rlim_cur = nofile.rlim_max;
+    if (::setrlimit(RLIMIT_NOFILE, &nofile) != 0) {
+      log::warning("cannot raise the descriptor limit to {}", nofile.rlim_max);
+    }
   }
   Server server(**sim, ServerOptions{canemu::ipc::socket_path(socket), config->simulation.time,
                                      config_file, time_override});

@@ -177,9 +177,20 @@ void Channel::transmission_dropped(SimTime at, const Frame& frame) {
 }
 
 void Channel::bus_error(const BusErrorEvent& e) {
-  if (!(flags_ & ipc::kChannelReportErrors)) {
-    return;
+  if (flags_ & ipc::kChannelReportErrors) {
+    ipc::ChannelMessage m = to_error_message(e, node_.controller().confinement().state());
+    deliver(m);
   }
+}
+
+void Channel::state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
+  if (flags_ & ipc::kChannelReportErrors) {
+    ipc::ChannelMessage m = to_state_message(at, state, tec, rec);
+    deliver(m);
+  }
+}
+
+ipc::ChannelMessage to_error_message(const BusErrorEvent& e, ErrorState state) {
   ipc::ChannelMessage m;
   m.timestamp_ns = e.at.ns();
   m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::bus_error);
@@ -189,21 +200,18 @@ void Channel::bus_error(const BusErrorEvent& e) {
   m.error_location = sja1000::ecc_segment(e, e.destuffed_bit, e.extended_frame);
   m.tec = e.tec;
   m.rec = e.rec;
-  m.state = static_cast<uint8_t>(node_.controller().confinement().state());
-  deliver(m);
+  m.state = static_cast<uint8_t>(state);
+  return m;
 }
 
-void Channel::state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
-  if (!(flags_ & ipc::kChannelReportErrors)) {
-    return;
-  }
+ipc::ChannelMessage to_state_message(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
   ipc::ChannelMessage m;
   m.timestamp_ns = at.ns();
   m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::state);
   m.state = static_cast<uint8_t>(state);
   m.tec = tec;
   m.rec = rec;
-  deliver(m);
+  return m;
 }
 
 }  // namespace canemu::daemon

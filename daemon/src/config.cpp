@@ -13,8 +13,10 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "capture_config_reader.hpp"
 #include "lin_config_reader.hpp"
 #include "toml_checker.hpp"
 
@@ -87,12 +89,30 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
   if (t == nullptr) {
     return;
   }
-  c.only_keys(*t, "security", {"allowed_users", "allowed_groups"});
+  c.only_keys(*t, "security",
+              {"allowed_users", "allowed_groups", "admin_groups", "socket_mode", "socket_group"});
+  if (auto v = c.strings(*t, "security", "admin_groups")) {
+    cfg.security.admin_groups = *v;
+  }
   if (auto v = c.strings(*t, "security", "allowed_users")) {
     cfg.security.allowed_users = *v;
   }
   if (auto v = c.strings(*t, "security", "allowed_groups")) {
     cfg.security.allowed_groups = *v;
+  }
+  // Permission bits read as octal, so the error says them in octal too.
+  if (const toml::node* n = t->get("socket_mode")) {
+    const auto* mode = n->as_integer();
+    if (mode == nullptr || mode->get() < 0 || mode->get() > 0777) {
+      c.error(*n, "security.socket_mode",
+              mode == nullptr ? std::string("must be an integer (octal, such as 0o660)")
+                              : fmt::format("0o{:o} is outside 0o000..0o777", mode->get()));
+    } else {
+      cfg.security.socket_mode = static_cast<uint32_t>(mode->get());
+    }
+  }
+  if (auto group = c.string(*t, "security", "socket_group", false)) {
+    cfg.security.socket_group = *group;
   }
 }
 
@@ -209,7 +229,8 @@ void read_lin_controllers(Checker& c, const toml::table& t, const std::string& p
 void read_devices(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
   c.for_each_table(root, "device", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"name", "model", "controllers", "lin"});
+    c.only_keys(t, path,
+                {"name", "model", "controllers", "lin", "mdd_version", "buffer_load_time"});
     DeviceConfig dev;
     dev.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto name = read_name(c, t, path, names, "device")) {
@@ -240,12 +261,45 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
         check_xcan(c, *ctl, path, cfg, dev);
       }
     }
+    if (auto version = c.string(t, path, "mdd_version", false)) {
+      const toml::node& n = *t.get("mdd_version");
+      if (dev.model != DeviceModel::sorcus_x_can_2i) {
+        c.error(n, path + ".mdd_version", "only an X-CAN-2i (sorcus-x-can-2i) has an MDD");
+      } else if (!model::sorcus::MddVersion::parse(*version)) {
+        c.error(n, path + ".mdd_version",
+                fmt::format("\"{}\": a version as the manual writes it, a digit, a dot and a "
+                            "capital letter (\"3.C\")",
+                            *version));
+      } else {
+        dev.mdd_version = *version;
+      }
+    }
+    if (auto load = c.string(t, path, "buffer_load_time", false)) {
+      const toml::node& n = *t.get("buffer_load_time");
+      const std::optional<int64_t> ns = parse_duration(*load);
+      if (dev.model != DeviceModel::sorcus_x_can_2i) {
+        c.error(n, path + ".buffer_load_time", "only an X-CAN-2i (sorcus-x-can-2i) loads buffers");
+      } else if (!ns || *ns > 1'000'000) {
+        c.error(n, path + ".buffer_load_time",
+                fmt::format("\"{}\": a duration from \"0us\" to \"1ms\" (\"5us\")", *load));
+      } else {
+        dev.buffer_load_ns = *ns;
+      }
+    }
     read_lin_controllers(c, t, path, cfg, dev);
     cfg.devices.push_back(dev);
   });
 }
 
 }  // namespace
+
+namespace detail {
+std::string beside_config(const Config& cfg, const std::string& file) {
+  const std::size_t slash = cfg.source.find_last_of('/');
+  const bool relative = !file.empty() && file[0] != '/';
+  return relative && slash != std::string::npos ? cfg.source.substr(0, slash + 1) + file : file;
+}
+}  // namespace detail
 
 std::string_view to_string(BusKind kind) {
   return name_of(kind, kBusKinds);
@@ -318,19 +372,20 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   }
   Config cfg;
   cfg.source = std::move(source);
-  c.only_keys(root, "", {"simulation", "security", "bus", "device", "lin_node", "scenario"});
+  c.only_keys(
+      root, "",
+      {"simulation", "security", "bus", "device", "lin_node", "scenario", "recorder", "bridge"});
   read_simulation(c, root, cfg);
   read_security(c, root, cfg);
   read_buses(c, root, cfg);
   read_devices(c, root, cfg);
   detail::read_lin_nodes(c, root, cfg);
+  detail::read_recorders(c, root, cfg);
+  detail::read_bridges(c, root, cfg);
   c.for_each_table(root, "scenario", [&](const toml::table& t, const std::string& path) {
     c.only_keys(t, path, {"file"});
     if (auto file = c.string(t, path, "file", true)) {
-      const std::size_t slash = cfg.source.find_last_of('/');
-      const bool relative = !file->empty() && (*file)[0] != '/';
-      cfg.scenario_files.push_back(
-          relative && slash != std::string::npos ? cfg.source.substr(0, slash + 1) + *file : *file);
+      cfg.scenario_files.push_back(detail::beside_config(cfg, *file));
     }
   });
   std::size_t controllers = 0;
@@ -403,6 +458,13 @@ std::string summary(const Config& cfg) {
       s += fmt::format(" {}:{} on {} (LIN)", d.name, d.controllers.size() + i, d.lin[i]);
     }
     s += "\n";
+  }
+  for (const RecorderConfig& r : cfg.recorders) {
+    s += fmt::format("  recorder of {} into {} ({})\n", r.bus, r.path, r.pcap ? "pcap" : "candump");
+  }
+  for (const BridgeConfig& b : cfg.bridges) {
+    s += fmt::format("  bridge {} of {} to {}{}\n", b.kind, b.bus, b.interface,
+                     b.error_frames ? " (error frames too)" : "");
   }
   for (const LinNodeConfig& n : cfg.lin_nodes) {
     s += fmt::format("  lin node {} on {} ({}{})\n", n.name, n.bus,

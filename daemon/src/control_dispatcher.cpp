@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "canemu/daemon/status.hpp"
+#include "capture_config_reader.hpp"
 
 namespace canemu::daemon {
 
@@ -148,6 +149,31 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   send(&r, sizeof r, fds);
 }
 
+void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& send,
+                                   uint32_t request_id) {
+  BridgeConfig b;
+  b.bus = ipc::name_of(m.bus);
+  b.interface = ipc::name_of(m.interface);
+  b.error_frames = m.error_frames != 0;
+  if (auto problem = detail::interface_name_problem(b.interface)) {
+    error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+    return;
+  }
+  if (!sim_.bus_index(b.bus)) {
+    error(send, request_id, ipc::ErrorCode::no_such_bus, fmt::format("no bus named \"{}\"", b.bus));
+    return;
+  }
+  auto added = sim_.add_bridge(b);
+  if (!added) {
+    error(send, request_id, ipc::ErrorCode::bad_argument, added.error());
+    return;
+  }
+  if (channel_opened) {
+    channel_opened(**added);
+  }
+  send_reply(send, ipc::make_message<ipc::BridgeAddReply>(request_id));
+}
+
 void ControlDispatcher::channel_status(Session& c, const ipc::ChannelStatusRequest& m,
                                        const Send& send) {
   auto it = c.channels.find(m.channel);
@@ -203,7 +229,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::hello: {
       const auto m = read_as<ipc::Hello>(data);
       c.greeted = true;
-      c.name = ipc::name_of(m.client_name);
+      c.name = ipc::printable_name_of(m.client_name);  // shown in tables, JSON and logs
       auto r = ipc::make_message<ipc::HelloReply>(request_id);
       r.server_pid = static_cast<uint32_t>(::getpid());
       send_reply(send, r);
@@ -279,6 +305,41 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       send_reply(send, *r);
       return;
     }
+    case ipc::MsgType::recorder_list_request: {
+      if (before_status) {
+        before_status();
+      }
+      auto r = std::make_unique<ipc::RecorderListReply>(
+          ipc::make_message<ipc::RecorderListReply>(request_id));
+      fill_recorder_list(sim_, *r);
+      send_reply(send, *r);
+      return;
+    }
+    case ipc::MsgType::bridge_add_request:
+      add_bridge(read_as<ipc::BridgeAddRequest>(data), send, request_id);
+      return;
+    case ipc::MsgType::bridge_remove_request: {
+      const std::string interface = ipc::name_of(read_as<ipc::BridgeRemoveRequest>(data).interface);
+      const bool removed = sim_.remove_bridge(interface, [this](SocketCanBridge& b) {
+        if (channel_closing) {
+          channel_closing(b);
+        }
+      });
+      if (!removed) {
+        error(send, request_id, ipc::ErrorCode::bad_argument,
+              fmt::format("no bridge on interface \"{}\"", interface));
+        return;
+      }
+      send_reply(send, ipc::make_message<ipc::BridgeRemoveReply>(request_id));
+      return;
+    }
+    case ipc::MsgType::bridge_list_request: {
+      auto r = std::make_unique<ipc::BridgeListReply>(
+          ipc::make_message<ipc::BridgeListReply>(request_id));
+      fill_bridge_list(sim_, *r);
+      send_reply(send, *r);
+      return;
+    }
     case ipc::MsgType::client_list_request: {
       auto r = std::make_unique<ipc::ClientListReply>(
           ipc::make_message<ipc::ClientListReply>(request_id));
@@ -302,7 +363,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
         auto scenario = parse_scenario(std::string_view(m->text, m->length), source);
         if (!scenario) {
           problems = scenario.error();
-        } else if (auto applied = sim_.scenarios().apply(*scenario, sim_.scheduler().now());
+        } else if (auto applied = sim_.scenarios().apply(*scenario, sim_.scheduler().now(), c.uid);
                    !applied) {
           problems = applied.error();
         } else {
@@ -346,7 +407,19 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::fault_clear_request: {
       const auto m = read_as<ipc::FaultClearRequest>(data);
       const std::string name = ipc::name_of(m.scenario);
-      const std::size_t cleared = sim_.scenarios().clear(name);
+      // A client clears its own user's scenarios; an admin clears every one.
+      const auto may = [&c](const ScenarioRunner::Owner& owner) {
+        return c.admin || (owner && *owner == c.uid);
+      };
+      std::size_t refused = 0;
+      const std::size_t cleared = sim_.scenarios().clear(name, may, &refused);
+      if (cleared == 0 && refused > 0 && !name.empty()) {
+        error(send, request_id, ipc::ErrorCode::permission_denied,
+              fmt::format("scenario \"{}\" is not yours to clear: only the user who loaded it, "
+                          "root, canemud's own user and members of [security] admin_groups may",
+                          name));
+        return;
+      }
       if (cleared == 0 && !name.empty()) {
         error(send, request_id, ipc::ErrorCode::bad_argument,
               fmt::format("no scenario named \"{}\" to clear", name));
@@ -354,6 +427,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       }
       auto r = ipc::make_message<ipc::FaultClearReply>(request_id);
       r.cleared = static_cast<uint32_t>(cleared);
+      r.refused = static_cast<uint32_t>(refused);
       send_reply(send, r);
       return;
     }

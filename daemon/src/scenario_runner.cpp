@@ -145,8 +145,8 @@ ScenarioRunner::resolve(const Scenario& s) const {
   return plan;
 }
 
-tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenario& s,
-                                                                   SimTime start) {
+tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenario& s, SimTime start,
+                                                                   Owner owner) {
   auto plan = resolve(s);  // all or nothing
   if (!plan) {
     return tl::unexpected(plan.error());
@@ -158,6 +158,17 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
         fmt::format("{}: {} scenarios are in force already, the most canemud holds; clear one "
                     "first (canemu fault clear NAME)",
                     s.source, in_force)});
+  }
+  if (owner) {
+    const auto mine = static_cast<std::size_t>(
+        std::count_if(scenarios_.begin(), scenarios_.end(),
+                      [&](const LoadedScenario& l) { return !l.cleared && l.owner == owner; }));
+    if (mine >= kMaxScenariosPerUser) {
+      return tl::unexpected(std::vector<std::string>{fmt::format(
+          "{}: uid {} has {} scenarios in force, the most one user may; clear one first "
+          "(canemu fault clear NAME)",
+          s.source, *owner, mine)});
+    }
   }
   std::vector<std::size_t> new_rules(buses_.size(), 0);
   for (const Resolved& r : *plan) {
@@ -173,7 +184,7 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
   const uint64_t seed = s.seed.value_or(default_seed_);
   log(fmt::format("scenario \"{}\" ({}) applied: {} fault{}, seed {}", s.name, s.source,
                   s.faults.size(), s.faults.size() == 1 ? "" : "s", seed));
-  LoadedScenario loaded{s.name, {}, false};
+  LoadedScenario loaded{s.name, {}, false, owner};
   for (std::size_t k = 0; k < plan->size(); ++k) {
     const Resolved& r = (*plan)[k];
     const FaultSpec& f = *r.spec;
@@ -433,10 +444,17 @@ std::vector<ScenarioRunner::FaultStatus> ScenarioRunner::status() const {
   return out;
 }
 
-std::size_t ScenarioRunner::clear(std::string_view name) {
+std::size_t ScenarioRunner::clear(std::string_view name, const MayClear& may,
+                                  std::size_t* refused) {
   std::size_t cleared = 0;
   for (LoadedScenario& sc : scenarios_) {
     if (sc.cleared || (!name.empty() && sc.name != name)) {
+      continue;
+    }
+    if (may && !may(sc.owner)) {
+      if (refused != nullptr) {
+        ++*refused;
+      }
       continue;
     }
     sc.cleared = true;

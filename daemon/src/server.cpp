@@ -7,12 +7,14 @@
 #include <csignal>
 #include <cstring>
 
+#include <fcntl.h>
 #include <poll.h>
 #include <sys/epoll.h>
 #include <sys/prctl.h>
 #include <sys/signalfd.h>
 #include <sys/socket.h>
 #include <sys/timerfd.h>
+#include <sys/un.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -44,11 +46,17 @@ bool add(int epoll, int fd) {
 
 Server::Server(Simulation& sim, ServerOptions options)
     : sim_(sim), options_(std::move(options)), dispatcher_(sim, options_.time) {
-  dispatcher_.before_status = [this] { advance_to_now(); };
+  dispatcher_.before_status = [this] {
+    advance_to_now();
+    flush_recorders();
+  };
   dispatcher_.client_count = [this] { return live_clients(); };
   dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
   dispatcher_.before_step = [this] { kick_all_channels(); };
-  dispatcher_.after_step = [this] { send_outboxes(); };
+  dispatcher_.after_step = [this] {
+    send_outboxes();
+    flush_recorders();
+  };
   dispatcher_.channel_opened = [this](Doorbell& ch) {
     epoll_event ev{};
     ev.events = EPOLLIN;
@@ -76,17 +84,56 @@ Server::~Server() {
     c.session.channels.clear();
   }
   sim_.devices().on_change = nullptr;
-  if (listen_.valid()) {
+  if (listen_.valid() && !socket_from_systemd_) {
     ::unlink(options_.socket_path.c_str());
   }
 }
 
-ipc::IpcResult<void> Server::open() {
+// The control socket: the one systemd passes (canemud.socket), or a new one at the configured
+// path with the configured mode and group.
+ipc::IpcResult<void> Server::open_listener() {
+  const int passed = sd_listen_fds(1);
+  if (passed > 1) {
+    return tl::unexpected(ipc::IpcError{
+        EINVAL, fmt::format("systemd passed {} sockets; canemud takes exactly one", passed)});
+  }
+  if (passed == 1) {
+    const int fd = SD_LISTEN_FDS_START;
+    if (sd_is_socket_unix(fd, SOCK_SEQPACKET, 1, nullptr, 0) <= 0) {
+      return tl::unexpected(ipc::IpcError{
+          EINVAL,
+          "systemd passed a socket that is not a listening AF_UNIX SOCK_SEQPACKET one "
+          "(canemud.socket needs ListenSequentialPacket=)"});
+    }
+    sockaddr_un a{};
+    socklen_t len = sizeof a;
+    if (::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0 ||
+        ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK) != 0 ||
+        ::fcntl(fd, F_SETFD, FD_CLOEXEC) != 0) {
+      return tl::unexpected(sys("socket from systemd"));
+    }
+    listen_.reset(fd);
+    socket_from_systemd_ = true;
+    options_.socket_path.assign(a.sun_path, strnlen(a.sun_path, sizeof a.sun_path));
+    return {};
+  }
   auto l = ipc::listen_seqpacket(options_.socket_path);
   if (!l) {
     return tl::unexpected(l.error());
   }
   listen_ = std::move(*l);
+  if (std::string e =
+          AccessPolicy::apply_socket_permissions(options_.socket_path, sim_.config().security);
+      !e.empty()) {
+    return tl::unexpected(ipc::IpcError{EPERM, e});
+  }
+  return {};
+}
+
+ipc::IpcResult<void> Server::open() {
+  if (auto l = open_listener(); !l) {
+    return l;
+  }
   epoll_.reset(::epoll_create1(EPOLL_CLOEXEC));
   if (!epoll_.valid()) {
     return tl::unexpected(sys("epoll_create1"));
@@ -112,6 +159,9 @@ ipc::IpcResult<void> Server::open() {
     return tl::unexpected(sys("epoll_ctl"));
   }
   access_.resolve(sim_.config().security);
+  for (const auto& b : sim_.bridges()) {  // configured bridges: their sockets wake the loop
+    dispatcher_.channel_opened(*b);
+  }
   // Under systemd with WatchdogSec=: a ping every half period, from the loop itself, so a
   // stalled loop gets the daemon restarted.
   uint64_t watchdog_us = 0;
@@ -152,6 +202,14 @@ void Server::reload() {
     }
     const ReloadReport r = sim_.reload(*fresh);
     access_.resolve(sim_.config().security);
+    if (!socket_from_systemd_) {
+      if (std::string e =
+              AccessPolicy::apply_socket_permissions(options_.socket_path, sim_.config().security);
+          !e.empty()) {
+        log::warning("reload: {}", e);
+      }
+    }
+    drop_revoked_clients();
     for (const std::string& line : r.applied) {
       log::info("reload: {}", line);
     }
@@ -254,11 +312,18 @@ int Server::run() {
       }
     }
     check_channels();
+    flush_recorders();
     send_outboxes();
     drop_closing();
     send_notifications();
   }
   return 0;
+}
+
+void Server::flush_recorders() {
+  for (const std::string& line : sim_.flush_recorders()) {
+    log::error("{}", line);
+  }
 }
 
 void Server::kick_all_channels() {
@@ -314,7 +379,7 @@ void Server::send_notifications() {
 void Server::fill_clients(ipc::ClientListReply& r) {
   std::size_t n = 0;
   for (auto& [fd, c] : clients_) {
-    if (c.closing) {
+    if (c.closing || !c.refused.empty()) {
       continue;
     }
     ++r.total;
@@ -355,23 +420,40 @@ void Server::accept_clients() {
       continue;  // unknown peer: refused (closed when c goes out of scope)
     }
     c.session.uid = cred.uid;
+    c.session.gid = cred.gid;
     c.session.pid = static_cast<uint32_t>(cred.pid);
     c.session.vci.pid = c.session.pid;
+    c.session.vci.uid = c.session.uid;
     if (clients_.size() >= kMaxClients) {
       reply_error(c, 0, ipc::ErrorCode::permission_denied,
                   fmt::format("canemud serves at most {} clients", kMaxClients));
       continue;
     }
-    if (!access_.allowed(fd, c.session.uid)) {
-      reply_error(
-          c, 0, ipc::ErrorCode::permission_denied,
-          fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid));
-      continue;  // closed when c goes out of scope
+    c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
+    if (!access_.allowed(fd, c.session.uid, c.session.gid)) {
+      c.refused =
+          fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid);
+      log::info("refused uid {} (pid {}): not allowed by [security]", c.session.uid, c.session.pid);
     }
     if (!add(epoll_.get(), fd)) {
       continue;
     }
     clients_.emplace(fd, std::move(c));
+  }
+}
+
+// After a reload: a client the new [security] no longer allows is told why and dropped.
+void Server::drop_revoked_clients() {
+  for (auto& [fd, c] : clients_) {
+    c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
+    if (!c.closing && c.refused.empty() && !access_.allowed(fd, c.session.uid, c.session.gid)) {
+      log::warning("reload: uid {} (pid {}, \"{}\") is no longer allowed; connection closed",
+                   c.session.uid, c.session.pid, c.session.name);
+      reply_error(c, 0, ipc::ErrorCode::permission_denied,
+                  fmt::format("uid {} is no longer allowed by the [security] configuration",
+                              c.session.uid));
+      c.closing = true;  // dropped after this batch, with everything it opened
+    }
   }
 }
 
@@ -383,7 +465,7 @@ uint16_t Server::live_clients() {
     pollfd p{fd, POLLRDHUP, 0};
     if (::poll(&p, 1, 0) == 1 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR))) {
       c.closing = true;
-    } else {
+    } else if (c.refused.empty()) {
       ++live;
     }
   }
@@ -431,6 +513,13 @@ void Server::serve(int fd) {
   }
   if (!n || *n == 0) {
     it->second.closing = true;  // closed, oversized or broken: dropped after this batch
+    return;
+  }
+  if (!it->second.refused.empty()) {
+    ipc::MsgHeader h{};
+    std::memcpy(&h, buffer_.data(), std::min(sizeof h, buffer_.size()));
+    reply_error(it->second, h.request_id, ipc::ErrorCode::permission_denied, it->second.refused);
+    it->second.closing = true;
     return;
   }
   handle(it->second, buffer_);

@@ -1,6 +1,7 @@
 #include "canemu/daemon/simulation.hpp"
 
 #include <algorithm>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -58,10 +59,107 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
     sim->lin_nodes_.push_back(
         make_lin_node(n, bus, *sim->lin_buses_[bus], sim->config_.buses[bus].bitrate));
   }
+  for (const RecorderConfig& r : sim->config_.recorders) {
+    if (auto error = sim->add_recorder(r)) {
+      errors.push_back(*error);
+    }
+  }
+  for (const BridgeConfig& b : sim->config_.bridges) {
+    if (auto added = sim->add_bridge(b); !added) {
+      errors.push_back(fmt::format("{}:{}: {}", sim->config_.source, b.line, added.error()));
+    }
+  }
   if (!errors.empty()) {
     return tl::unexpected(errors);
   }
   return sim;
+}
+
+std::optional<HostedNodeSettings> Simulation::bus_timing(std::size_t bus) const {
+  const BusConfig& bc = config_.buses[bus];
+  return controller_timing(bc.kind == BusKind::can_fd, bc.bitrate,
+                           bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate, bc.sample_point);
+}
+
+std::optional<std::string> Simulation::add_recorder(const RecorderConfig& r) {
+  const std::size_t bus = *bus_index(r.bus);
+  const BusConfig& bc = config_.buses[bus];
+  const auto timing = bus_timing(bus);
+  if (!timing) {
+    return fmt::format("{}:{}: recorder of {}: no controller runs at {} bit/s", config_.source,
+                       r.line, r.bus, bc.bitrate);
+  }
+  auto recorder = Recorder::start(r, bus, nodes_.spare(bus), *timing);
+  if (!recorder) {
+    return fmt::format("{}:{}: {}", config_.source, r.line, recorder.error());
+  }
+  recorders_.push_back(std::move(*recorder));
+  return std::nullopt;
+}
+
+tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeConfig& b) {
+  const auto bus = bus_index(b.bus);
+  auto port = open_can_raw(b.interface, bus && config_.buses[*bus].kind == BusKind::can_fd);
+  if (!port) {
+    return tl::unexpected("bridge to " + port.error());
+  }
+  return add_bridge(b, std::move(*port));
+}
+
+tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeConfig& b,
+                                                                   ipc::UniqueFd port) {
+  const auto bus = bus_index(b.bus);
+  if (!bus) {
+    return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
+  }
+  const BusConfig& bc = config_.buses[*bus];
+  if (bc.kind == BusKind::lin) {
+    return tl::unexpected(
+        fmt::format("\"{}\" is a LIN bus; SocketCAN bridges join CAN buses", b.bus));
+  }
+  for (const auto& other : bridges_) {
+    if (other->options().interface == b.interface) {
+      return tl::unexpected(fmt::format("{} is bridged to {} already (its frames would loop)",
+                                        b.interface, other->options().bus));
+    }
+  }
+  const auto timing = bus_timing(*bus);
+  if (!timing) {
+    return tl::unexpected(fmt::format("no controller runs bus {} at {} bit/s", b.bus, bc.bitrate));
+  }
+  BridgeOptions o;
+  o.bus = b.bus;
+  o.interface = b.interface;
+  o.error_frames = b.error_frames;
+  o.fd = bc.kind == BusKind::can_fd;
+  bridges_.push_back(
+      SocketCanBridge::start(std::move(o), *bus, nodes_.spare(*bus), *timing, std::move(port)));
+  return bridges_.back().get();
+}
+
+bool Simulation::remove_bridge(const std::string& interface,
+                               const std::function<void(SocketCanBridge&)>& before) {
+  for (auto it = bridges_.begin(); it != bridges_.end(); ++it) {
+    if ((*it)->options().interface == interface) {
+      if (before) {
+        before(**it);
+      }
+      bridges_.erase(it);
+      return true;
+    }
+  }
+  return false;
+}
+
+std::vector<std::string> Simulation::flush_recorders() {
+  std::vector<std::string> news;
+  for (auto& r : recorders_) {
+    if (r->flush()) {
+      news.push_back(fmt::format("recorder of {}: {}; frames are being lost ({} so far)",
+                                 r->config().bus, r->writer().error(), r->writer().lost()));
+    }
+  }
+  return news;
 }
 
 void Simulation::add_bus(const BusConfig& b) {
@@ -183,6 +281,11 @@ std::optional<std::string> Simulation::add_xcan(const DeviceConfig& d) {
                        : low1 ? model::sorcus::XcanVariant::m
                               : model::sorcus::XcanVariant::h;
   x.device = std::make_shared<XcanDevice>(d.name, scheduler_, variant);
+  x.device->module().set_buffer_load_time(d.buffer_load_ns);
+  if (!d.mdd_version.empty()) {
+    x.device->module().set_mdd_version(
+        model::sorcus::MddVersion::parse(d.mdd_version).value_or(model::sorcus::kMdd3C));
+  }
   for (unsigned i = 0; i < 2; ++i) {
     x.device->module().connect(i, *buses_[x.buses[i]]);
   }
@@ -198,7 +301,16 @@ bool same(const BusConfig& a, const BusConfig& b) {
 }
 
 bool same(const DeviceConfig& a, const DeviceConfig& b) {
-  return a.name == b.name && a.model == b.model && a.controllers == b.controllers && a.lin == b.lin;
+  return a.name == b.name && a.model == b.model && a.controllers == b.controllers &&
+         a.lin == b.lin && a.mdd_version == b.mdd_version && a.buffer_load_ns == b.buffer_load_ns;
+}
+
+bool same(const std::vector<RecorderConfig>& a, const std::vector<RecorderConfig>& b) {
+  const auto key = [](const RecorderConfig& r) {
+    return std::tie(r.bus, r.path, r.pcap, r.max_size, r.max_files, r.errors);
+  };
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                    [&](const auto& x, const auto& y) { return key(x) == key(y); });
 }
 
 template <class T>
@@ -245,6 +357,18 @@ ReloadReport Simulation::reload(const Config& fresh) {
       r.refused.push_back(
           fmt::format("device {}: keeps its settings (a restart changes them)", old.name));
     }
+  }
+  const auto bridge_key = [](const BridgeConfig& b) {
+    return std::tie(b.kind, b.bus, b.interface, b.error_frames);
+  };
+  if (!std::equal(fresh.bridges.begin(), fresh.bridges.end(), config_.bridges.begin(),
+                  config_.bridges.end(),
+                  [&](const auto& x, const auto& y) { return bridge_key(x) == bridge_key(y); })) {
+    r.refused.push_back(
+        "bridges: stay as they are (canemu bridge add|remove changes them while running)");
+  }
+  if (!same(fresh.recorders, config_.recorders)) {
+    r.refused.push_back("recorders: stay as they are (a restart changes them)");
   }
   // What can: new buses and devices, the security lists, the wake-up tuning.
   for (const BusConfig& b : fresh.buses) {

@@ -115,8 +115,8 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
 void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
   const DeviceRegistry& devices = sim.devices();
   r.generation = devices.generation();
-  r.total = static_cast<uint16_t>(devices.configured().size() + devices.ephemeral().size() +
-                                  devices.lin_ephemeral().size());
+  r.total = static_cast<uint16_t>(devices.configured().size() + devices.xcan().size() +
+                                  devices.ephemeral().size() + devices.lin_ephemeral().size());
   std::size_t n = 0;
   for (const DeviceRegistry::Configured& d : devices.configured()) {
     if (n == ipc::kMaxDevices) {
@@ -145,6 +145,21 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
       e.epoch_ns = d.controllers[0].line->epoch().ns();
     }
     ipc::copy_name(e.hardware_id, hardware_id(c.name));
+  }
+  // X-CAN-2i modules: no VCI object id (the VCI's device list leaves them out); their
+  // interfaces are the nodes NAME:0 and NAME:1.
+  for (const DeviceRegistry::Xcan& x : devices.xcan()) {
+    if (n == ipc::kMaxDevices) {
+      break;
+    }
+    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::copy_name(e.name, x.config.name);
+    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_x_can_2i);
+    e.controller_count = static_cast<uint8_t>(x.config.controllers.size());
+    for (std::size_t k = 0; k < x.config.controllers.size() && k < ipc::kMaxDeviceControllers;
+         ++k) {
+      ipc::copy_name(e.buses[k], x.config.controllers[k]);
+    }
   }
   // An ephemeral device's entry: one controller on `bus`, of the client `owner_pid`; a VCI
   // adapter when `vci_id` is set.
@@ -183,6 +198,51 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
     }
   }
   r.count = static_cast<uint16_t>(n);
+}
+
+void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& r) {
+  const auto& recorders = sim.recorders();
+  r.count = static_cast<uint16_t>(std::min(recorders.size(), ipc::kMaxRecorders));
+  for (std::size_t i = 0; i < r.count; ++i) {
+    const Recorder& rec = *recorders[i];
+    const ipc::CaptureWriter& w = rec.writer();
+    ipc::RecorderEntry& e = r.recorders[i];
+    ipc::copy_name(e.bus, rec.config().bus);
+    ipc::copy_name(e.path, rec.config().path);
+    e.format = static_cast<uint8_t>(w.options().format);
+    e.errors = rec.config().errors ? 1 : 0;
+    e.rotations = w.rotations();
+    e.frames = w.frames();
+    e.bytes = w.bytes();
+    e.lost = w.lost();
+    ipc::copy_name(e.error, w.error());
+  }
+}
+
+void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
+  const auto& bridges = sim.bridges();
+  r.count = static_cast<uint16_t>(std::min(bridges.size(), ipc::kMaxBridges));
+  for (std::size_t i = 0; i < r.count; ++i) {
+    SocketCanBridge& b = *bridges[i];
+    const BridgeStats& st = b.stats();
+    model::FaultConfinement& fc = b.node().controller().confinement();
+    ipc::BridgeEntry& e = r.bridges[i];
+    ipc::copy_name(e.bus, b.options().bus);
+    ipc::copy_name(e.interface, b.options().interface);
+    e.error_frames = b.options().error_frames ? 1 : 0;
+    e.state = static_cast<uint8_t>(fc.state());
+    e.tec = fc.tec();
+    e.rec = fc.rec();
+    e.queued = static_cast<uint32_t>(b.queued());
+    e.to_interface = st.to_interface;
+    e.from_interface = st.from_interface;
+    e.error_frames_written = st.error_frames;
+    e.to_interface_dropped = st.to_interface_dropped;
+    e.queue_dropped = st.queue_dropped;
+    e.rejected = st.rejected;
+    e.tx_failed = st.tx_failed;
+    e.kernel_dropped = st.kernel_dropped;
+  }
 }
 
 }  // namespace canemu::daemon

@@ -1,5 +1,7 @@
 #include "canemu/daemon/vci_fifos.hpp"
 
+#include <sys/random.h>
+
 #include "vci/vcierr.h"
 
 namespace canemu::daemon {
@@ -9,7 +11,18 @@ std::size_t VciFifos::held_by(Holder holder) const {
   return it == held_.end() ? 0 : it->second.size();
 }
 
-void VciFifos::handle(Holder holder, const ipc::VciRequest& m, ipc::VciReply& r,
+// A random id, neither 0 nor one in use: knowing one FIFO's id tells nothing of another's.
+uint64_t VciFifos::fresh_id() const {
+  uint64_t id = 0;
+  while (id == 0 || fifos_.count(id) != 0) {
+    if (::getrandom(&id, sizeof id, 0) != static_cast<ssize_t>(sizeof id)) {
+      id = 0;
+    }
+  }
+  return id;
+}
+
+void VciFifos::handle(Holder holder, uint32_t uid, const ipc::VciRequest& m, ipc::VciReply& r,
                       std::vector<int>& fds) {
   const auto op = static_cast<ipc::VciOp>(m.op);
   uint64_t id = uint64_t{m.args[0]} | (uint64_t{m.args[1]} << 32);
@@ -30,12 +43,13 @@ void VciFifos::handle(Holder holder, const ipc::VciRequest& m, ipc::VciReply& r,
       r.hresult = VCI_E_OUTOFMEMORY;
       return;
     }
-    id = next_id_++;
+    id = fresh_id();
     const std::size_t bytes =
         std::size_t{ring->memory().capacity()} * ring->memory().element_size();
     fifos_.emplace(
         id,
-        SharedFifo{std::move(*ring), RingBudget(&ring_bytes_in_use_, bytes), {}, nullptr, nullptr});
+        SharedFifo{
+            std::move(*ring), RingBudget(&ring_bytes_in_use_, bytes), {}, nullptr, nullptr, uid});
   }
   auto it = fifos_.find(id);
   if (it == fifos_.end()) {
@@ -43,6 +57,10 @@ void VciFifos::handle(Holder holder, const ipc::VciRequest& m, ipc::VciReply& r,
     return;
   }
   SharedFifo& f = it->second;
+  if (uid != 0 && uid != f.owner_uid) {
+    r.hresult = VCI_E_ACCESSDENIED;  // another user's FIFO
+    return;
+  }
   if (op == ipc::VciOp::fifo_side) {
     side(holder, f, m, r);
     return;

@@ -124,7 +124,7 @@ void VciService::handle(VciSession& session, const ipc::VciRequest& m, const Sen
     open(session, m, r);
   } else if (op == ipc::VciOp::fifo_create || op == ipc::VciOp::fifo_access ||
              op == ipc::VciOp::fifo_side) {
-    fifos_.handle(&session, m, r, fifo_fds);
+    fifos_.handle(&session, session.uid, m, r, fifo_fds);
   } else if (op == ipc::VciOp::device_create) {
     create_device(session, m, r);
   } else if (op == ipc::VciOp::device_remove) {

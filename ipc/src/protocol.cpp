@@ -54,7 +54,10 @@ std::size_t size_of(MsgType type) {
                     DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest,
                     SubscribeReply, Notification, FaultLoadRequest, FaultLoadReply,
                     FaultListRequest, FaultListReply, FaultClearRequest, FaultClearReply,
-                    VciRequest, VciReply, XcanRequest, XcanReply, XcanCallbackMsg>(type);
+                    VciRequest, VciReply, XcanRequest, XcanReply, XcanCallbackMsg,
+                    RecorderListRequest, RecorderListReply, BridgeAddRequest, BridgeAddReply,
+                    BridgeRemoveRequest, BridgeRemoveReply, BridgeListRequest, BridgeListReply>(
+      type);
 }
 
 }  // namespace

@@ -6,7 +6,10 @@
 
 #include <grp.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
+#include <cstdio>
 #include <memory>
 
 #include "canemu/daemon/log.hpp"
@@ -27,15 +30,16 @@ struct Peer {
   }
 };
 
-// A uid nobody on the machine has, and so no group lists it either.
+// A uid nobody on the machine has, and so no group lists it either; a gid no group has.
 constexpr uint32_t kStranger = 0x7FFF0001;
+constexpr uint32_t kStrangerGid = 0x7FFF0002;
 
 TEST(AccessPolicy, RootAndTheDaemonsOwnUserAreAlwaysAllowed) {
   AccessPolicy policy;
   Peer p;
-  EXPECT_TRUE(policy.allowed(p.ours.get(), 0));
-  EXPECT_TRUE(policy.allowed(p.ours.get(), static_cast<uint32_t>(::geteuid())));
-  EXPECT_FALSE(policy.allowed(p.ours.get(), kStranger));
+  EXPECT_TRUE(policy.allowed(p.ours.get(), 0, kStrangerGid));
+  EXPECT_TRUE(policy.allowed(p.ours.get(), static_cast<uint32_t>(::geteuid()), kStrangerGid));
+  EXPECT_FALSE(policy.allowed(p.ours.get(), kStranger, kStrangerGid));
 }
 
 TEST(AccessPolicy, ListedUsersAreResolvedToUidsAndUnknownNamesAreLoggedAndLeftOut) {
@@ -47,28 +51,92 @@ TEST(AccessPolicy, ListedUsersAreResolvedToUidsAndUnknownNamesAreLoggedAndLeftOu
   policy.resolve(security);
   EXPECT_EQ(policy.uids(), std::vector<uint32_t>{0});
   EXPECT_TRUE(policy.gids().empty());
-  EXPECT_EQ(capture.lines(),
-            (std::vector<std::string>{
-                "<4>canemud: [security] user \"no-such-user-canemu\" does not exist",
-                "<4>canemud: [security] group \"no-such-group-canemu\" does not exist"}));
+  EXPECT_EQ(
+      capture.lines(),
+      (std::vector<std::string>{
+          "<4>canemud: [security] user \"no-such-user-canemu\" does not exist",
+          "<4>canemud: [security] allowed_groups: group \"no-such-group-canemu\" does not exist"}));
   security.allowed_users.clear();
   policy.resolve(security);  // a reload replaces the lists
   EXPECT_TRUE(policy.uids().empty());
 }
 
-// A group of the machine other than this process's own (whose gid the kernel does not report
-// among the supplementary groups).
+// A group of the machine other than this process's own and not among its supplementary ones.
 const group* some_other_group() {
+  std::vector<gid_t> mine(static_cast<std::size_t>(::getgroups(0, nullptr)));
+  ::getgroups(static_cast<int>(mine.size()), mine.data());
   ::setgrent();
   const group* found = nullptr;
   while (const group* g = ::getgrent()) {
-    if (g->gr_gid != ::getegid()) {
+    if (g->gr_gid != ::getegid() && std::find(mine.begin(), mine.end(), g->gr_gid) == mine.end()) {
       found = g;
       break;
     }
   }
   ::endgrent();
   return found;
+}
+
+// A peer's primary group (SO_PEERCRED) counts like a supplementary one.
+TEST(AccessPolicy, APeerWhosePrimaryGroupIsListedIsAllowed) {
+  const group* g = some_other_group();
+  ASSERT_NE(g, nullptr);
+  const std::string name = g->gr_name;
+  const uint32_t gid = g->gr_gid;
+  AccessPolicy policy;
+  SecurityConfig security;
+  security.allowed_groups = {name};
+  policy.resolve(security);
+  Peer p;
+  EXPECT_TRUE(policy.allowed(p.ours.get(), kStranger, gid));
+  EXPECT_FALSE(policy.allowed(p.ours.get(), kStranger, kStrangerGid));
+}
+
+// By default the group the packages create may connect; where it does not exist, canemud says so
+// without a warning, while a group the configuration names and the machine lacks is a warning.
+TEST(AccessPolicy, TheServiceGroupIsAllowedByDefaultAndItsAbsenceIsNoWarning) {
+  EXPECT_EQ(SecurityConfig{}.allowed_groups, std::vector<std::string>{"canemu"});
+  log::Capture capture;
+  AccessPolicy policy;
+  policy.resolve(SecurityConfig{});
+  for (const std::string& line : capture.lines()) {
+    EXPECT_EQ(line.rfind("<4>", 0), std::string::npos) << line;
+  }
+  EXPECT_EQ(policy.gids().size(), ::getgrnam("canemu") != nullptr ? 1u : 0u);
+}
+
+// The socket file gets the configured mode and group.
+TEST(AccessPolicy, TheSocketGetsTheConfiguredModeAndGroup) {
+  char dir[] = "/tmp/canemu-perm-XXXXXX";
+  const std::string file = std::string(::mkdtemp(dir)) + "/canemud.sock";
+  FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fclose(f);
+  const group* own = ::getgrgid(::getegid());
+  ASSERT_NE(own, nullptr);
+  SecurityConfig security;
+  security.socket_mode = 0640;
+  security.socket_group = own->gr_name;
+  EXPECT_EQ(AccessPolicy::apply_socket_permissions(file, security), "");
+  struct stat st {};
+  ASSERT_EQ(::stat(file.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0640u);
+  EXPECT_EQ(st.st_gid, ::getegid());
+  log::Capture capture;
+  security.socket_mode = 0600;
+  security.socket_group = "no-such-group-canemu";
+  EXPECT_EQ(AccessPolicy::apply_socket_permissions(file, security), "");
+  ASSERT_EQ(::stat(file.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0600u);
+  ASSERT_EQ(capture.lines().size(), 1u);
+  EXPECT_NE(capture.lines()[0].find("socket_group \"no-such-group-canemu\" does not exist"),
+            std::string::npos)
+      << capture.lines()[0];
+  EXPECT_NE(AccessPolicy::apply_socket_permissions(file + ".missing", security)
+                .find("cannot set mode 0600 on " + file + ".missing: No such file or directory"),
+            std::string::npos);
+  ::unlink(file.c_str());
+  ::rmdir(dir);
 }
 
 // The kernel reports a peer's supplementary groups. Root gives this process one for the time
@@ -97,9 +165,9 @@ TEST(AccessPolicy, APeerInAListedGroupIsAllowedWhateverItsUid) {
   SecurityConfig security;
   security.allowed_groups = {name};
   policy.resolve(security);
-  EXPECT_TRUE(policy.allowed(p->ours.get(), kStranger));
+  EXPECT_TRUE(policy.allowed(p->ours.get(), kStranger, kStrangerGid));
   policy.resolve(SecurityConfig{});
-  EXPECT_FALSE(policy.allowed(p->ours.get(), kStranger));
+  EXPECT_FALSE(policy.allowed(p->ours.get(), kStranger, kStrangerGid));
 }
 
 }  // namespace

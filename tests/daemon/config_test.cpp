@@ -73,6 +73,25 @@ controllers = ["fd0"]
   EXPECT_EQ(c->devices[0].model, DeviceModel::ixxat_usb_to_can_fd);
 }
 
+// The socket's mode in octal, its group; errors say the mode in octal.
+TEST(Config, SecurityDefaultsAndTheSocketsModeAndGroup) {
+  auto plain = parse_config("[[bus]]\nname = \"b\"\n", "t.toml");
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->security.allowed_groups, (std::vector<std::string>{"canemu"}));
+  EXPECT_EQ(plain->security.socket_mode, 0660u);
+  EXPECT_EQ(plain->security.socket_group, "canemu");
+  auto set = parse_config("[security]\nsocket_mode = 0o600\nsocket_group = \"\"\n", "t.toml");
+  ASSERT_TRUE(set);
+  EXPECT_EQ(set->security.socket_mode, 0600u);
+  EXPECT_EQ(set->security.socket_group, "");
+  EXPECT_EQ(errors_of("[security]\nsocket_mode = 0o1777\n"),
+            (std::vector<std::string>{
+                "t.toml:2:15: security.socket_mode: 0o1777 is outside 0o000..0o777"}));
+  EXPECT_EQ(errors_of("[security]\nsocket_mode = \"660\"\n"),
+            (std::vector<std::string>{
+                "t.toml:2:15: security.socket_mode: must be an integer (octal, such as 0o660)"}));
+}
+
 TEST(Config, LowSpeedTransceiversOnSlowClassicBusesOnly) {
   auto cfg = parse_config(
       "[[bus]]\nname = \"body\"\nbitrate = 125000\ntransceiver = \"low-speed\"\n", "t.toml");

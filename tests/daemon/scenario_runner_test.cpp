@@ -463,5 +463,41 @@ TEST(ScenarioBounds, ScenariosInForceAndRulesPerBusAreBounded) {
                                      "most 1024 are in force on a bus"});
 }
 
+// A scenario belongs to the user who loaded it (or to the configuration): a clear that may only
+// touch one user's scenarios leaves the others in force and counts them; a user has at most
+// kMaxScenariosPerUser in force, others still may load.
+TEST(ScenarioOwnership, AUserClearsItsOwnAndHasItsShare) {
+  World w;
+  auto s = parse_scenario(kOneRule, "s.toml");
+  ASSERT_TRUE(s);
+  const SimTime now = w.sim->scheduler().now();
+  ASSERT_TRUE(w.sim->scenarios().apply(*s, now, 1000));
+  ASSERT_TRUE(w.sim->scenarios().apply(*s, now, 1001));
+  ASSERT_TRUE(w.sim->scenarios().apply(*s, now));  // the configuration's
+  const auto only_1000 = [](const ScenarioRunner::Owner& o) { return o && *o == 1000; };
+  std::size_t refused = 0;
+  EXPECT_EQ(w.sim->scenarios().clear("cycle", only_1000, &refused), 1u);
+  EXPECT_EQ(refused, 2u);
+  refused = 0;
+  EXPECT_EQ(w.sim->scenarios().clear("", only_1000, &refused), 0u);
+  EXPECT_EQ(refused, 2u);
+  const auto listed = w.sim->scenarios().status();
+  ASSERT_EQ(listed.size(), 3u);
+  EXPECT_EQ(listed[0].state, ScenarioRunner::FaultStatus::State::cleared);
+  EXPECT_NE(listed[1].state, ScenarioRunner::FaultStatus::State::cleared);
+  EXPECT_NE(listed[2].state, ScenarioRunner::FaultStatus::State::cleared);
+
+  for (std::size_t k = 1; k < ScenarioRunner::kMaxScenariosPerUser; ++k) {
+    ASSERT_TRUE(w.sim->scenarios().apply(*s, now, 1001));
+  }
+  auto over = w.sim->scenarios().apply(*s, now, 1001);
+  ASSERT_FALSE(over);
+  EXPECT_EQ(over.error(),
+            std::vector<std::string>{"s.toml: uid 1001 has 16 scenarios in force, the most one "
+                                     "user may; clear one first (canemu fault clear NAME)"});
+  EXPECT_TRUE(w.sim->scenarios().apply(*s, now, 1000));
+  EXPECT_EQ(w.sim->scenarios().clear(""), 18u);  // no limit given: every scenario
+}
+
 }  // namespace
 }  // namespace canemu::daemon

@@ -1,5 +1,5 @@
-// Stand-alone VCI FIFOs between clients: created by one, reached by id by others, one reader
-// and one writer in all, freed (and its memory given back) when nobody holds it.
+// Stand-alone VCI FIFOs between clients: created by one, reached by id by others of the same
+// user, one reader and one writer in all, freed (and its memory given back) when nobody holds it.
 #include "canemu/daemon/vci_fifos.hpp"
 
 #include <gtest/gtest.h>
@@ -12,8 +12,13 @@ namespace {
 struct Fifos {
   std::size_t ring_bytes = 0;
   VciFifos fifos{ring_bytes};
-  int a = 0;  // two clients, by address
+  int a = 0;  // two clients of one user, by address
   int b = 0;
+  int stranger = 0;  // a client of another user
+  int root = 0;      // a client of root
+  uint32_t uid_of(VciFifos::Holder who) const {
+    return who == &stranger ? 1001 : who == &root ? 0 : 1000;
+  }
 
   ipc::VciReply call(VciFifos::Holder who, ipc::VciOp op, uint32_t a0, uint32_t a1, uint32_t a2 = 0,
                      uint32_t a3 = 0, std::vector<int>* fds = nullptr) {
@@ -25,7 +30,7 @@ struct Fifos {
     m.args[3] = a3;
     ipc::VciReply r{};
     std::vector<int> unused;
-    fifos.handle(who, m, r, fds != nullptr ? *fds : unused);
+    fifos.handle(who, uid_of(who), m, r, fds != nullptr ? *fds : unused);
     return r;
   }
   ipc::VciReply create(VciFifos::Holder who, uint32_t capacity, uint32_t size,
@@ -35,6 +40,9 @@ struct Fifos {
   ipc::VciReply access(VciFifos::Holder who, uint64_t id, std::vector<int>* fds = nullptr) {
     return call(who, ipc::VciOp::fifo_access, static_cast<uint32_t>(id),
                 static_cast<uint32_t>(id >> 32), 0, 0, fds);
+  }
+  static uint64_t id_of(const ipc::VciReply& r) {
+    return uint64_t{r.values[0]} | (uint64_t{r.values[1]} << 32);
   }
   HRESULT side(VciFifos::Holder who, uint64_t id, uint32_t which, bool take) {
     return call(who, ipc::VciOp::fifo_side, static_cast<uint32_t>(id),
@@ -48,13 +56,16 @@ TEST(VciFifos, CreatingGivesTheIdTheRoundedCapacityAndTheThreeDescriptors) {
   std::vector<int> fds;
   const ipc::VciReply r = f.create(&f.a, 32, 20, &fds);
   ASSERT_EQ(r.hresult, VCI_OK);
-  EXPECT_EQ(r.values[0], 1u);  // id, low word
-  EXPECT_EQ(r.values[1], 0u);
+  const uint64_t id = Fifos::id_of(r);
+  EXPECT_NE(id, 0u);
   EXPECT_EQ(r.values[2], 192u);  // one page: (4096 - 256) / 20
   EXPECT_EQ(r.values[3], 20u);
   ASSERT_EQ(fds.size(), ipc::kFifoFdCount);
   EXPECT_EQ(f.ring_bytes, 192u * 20);
-  EXPECT_EQ(f.create(&f.a, 1, 8).values[0], 2u);
+  const uint64_t second = Fifos::id_of(f.create(&f.a, 1, 8));
+  EXPECT_NE(second, id);
+  EXPECT_NE(second, id + 1);  // not sequential
+  EXPECT_EQ(f.access(&f.b, id + 1).hresult, VCI_E_INVALIDARG);
   EXPECT_EQ(f.fifos.count(), 2u);
 }
 
@@ -70,7 +81,7 @@ TEST(VciFifos, BadSizesAndUnknownIdsAreInvalidArguments) {
 
 TEST(VciFifos, EachSideHasOneHolderAtATimeAmongAllClients) {
   Fifos f;
-  const uint64_t id = f.create(&f.a, 8, 8).values[0];
+  const uint64_t id = Fifos::id_of(f.create(&f.a, 8, 8));
   EXPECT_EQ(f.side(&f.b, id, 0, true), VCI_E_INVALIDARG);  // b does not hold the FIFO yet
   ASSERT_EQ(f.access(&f.b, id).hresult, VCI_OK);
   EXPECT_EQ(f.side(&f.a, id, 0, true), VCI_OK);  // a reads
@@ -84,7 +95,7 @@ TEST(VciFifos, EachSideHasOneHolderAtATimeAmongAllClients) {
 
 TEST(VciFifos, AFifoLivesWhileAClientHoldsItAndALeavingClientGivesBackItsSides) {
   Fifos f;
-  const uint64_t id = f.create(&f.a, 8, 8).values[0];
+  const uint64_t id = Fifos::id_of(f.create(&f.a, 8, 8));
   ASSERT_EQ(f.access(&f.b, id).hresult, VCI_OK);
   ASSERT_EQ(f.side(&f.a, id, 1, true), VCI_OK);
   const std::size_t bytes = f.ring_bytes;
@@ -100,13 +111,28 @@ TEST(VciFifos, AFifoLivesWhileAClientHoldsItAndALeavingClientGivesBackItsSides) 
 
 TEST(VciFifos, AClientHoldsAtMost64) {
   Fifos f;
+  uint64_t first = 0;
   for (std::size_t k = 0; k < kMaxVciFifosPerClient; ++k) {
-    ASSERT_EQ(f.create(&f.a, 1, 8).hresult, VCI_OK);
+    const ipc::VciReply r = f.create(&f.a, 1, 8);
+    ASSERT_EQ(r.hresult, VCI_OK);
+    first = k == 0 ? Fifos::id_of(r) : first;
   }
   EXPECT_EQ(f.create(&f.a, 1, 8).hresult, VCI_E_OUTOFMEMORY);
-  const uint64_t other = f.create(&f.b, 1, 8).values[0];
+  const uint64_t other = Fifos::id_of(f.create(&f.b, 1, 8));
   EXPECT_EQ(f.access(&f.a, other).hresult, VCI_E_OUTOFMEMORY);
-  EXPECT_EQ(f.access(&f.a, 1).hresult, VCI_OK);  // one it holds already is no new one
+  EXPECT_EQ(f.access(&f.a, first).hresult, VCI_OK);  // one it holds already is no new one
+}
+
+// A FIFO's id reaches only clients of the creator's user (and root): another user's client is
+// refused whatever it asks, and changes nothing.
+TEST(VciFifos, AnotherUsersClientCannotUseTheFifo) {
+  Fifos f;
+  const uint64_t id = Fifos::id_of(f.create(&f.a, 8, 8));
+  EXPECT_EQ(f.access(&f.stranger, id).hresult, VCI_E_ACCESSDENIED);
+  EXPECT_EQ(f.side(&f.stranger, id, 0, true), VCI_E_ACCESSDENIED);
+  EXPECT_EQ(f.side(&f.a, id, 0, true), VCI_OK);  // the reader side was not taken
+  EXPECT_EQ(f.access(&f.root, id).hresult, VCI_OK);
+  EXPECT_EQ(f.access(&f.b, id).hresult, VCI_OK);
 }
 
 }  // namespace

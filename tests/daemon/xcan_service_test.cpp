@@ -51,10 +51,19 @@ TEST(XcanConfig, TheVariantFollowsTheTransceiversOfTheTwoBuses) {
       "[[device]]\nname = \"x\"\nmodel = \"sorcus-x-can-2i\"\ncontrollers = [\"can0\", "
       "\"can0\"]\n");
   EXPECT_EQ(h->devices().find_xcan("x")->module().variant(), XcanVariant::h);
-  // Not a VCI device: the VCI device list does not show it.
+  // In the device list with its model and buses, without a VCI object id (the VCI's device
+  // enumeration leaves it out).
   auto r = ipc::make_message<ipc::DeviceListReply>();
   fill_device_list(*h, r);
-  EXPECT_EQ(r.total, 0u);
+  EXPECT_EQ(r.total, 1u);
+  ASSERT_EQ(r.count, 1u);
+  EXPECT_EQ(ipc::name_of(r.devices[0].name), "x");
+  EXPECT_EQ(r.devices[0].model, static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_x_can_2i));
+  EXPECT_EQ(r.devices[0].controller_count, 2u);
+  EXPECT_EQ(ipc::name_of(r.devices[0].buses[0]), "can0");
+  EXPECT_EQ(ipc::name_of(r.devices[0].buses[1]), "can0");
+  EXPECT_EQ(r.devices[0].vci_id, 0u);
+  EXPECT_EQ(r.devices[0].ephemeral, 0u);
 }
 
 TEST(XcanConfig, TwoClassicBusesInAnOrderAVariantHas) {
@@ -72,6 +81,41 @@ TEST(XcanConfig, TwoClassicBusesInAnOrderAVariantHas) {
   EXPECT_EQ(errors_of(head + "controllers = [\"hs\", \"fd\"]\n"),
             std::vector<std::string>{"x.toml:21:15: device[0].controllers: \"fd\" is a CAN FD bus; "
                                      "the 82527 is a classic CAN controller"});
+}
+
+// mdd_version gates what the manual marks «ab MDD Version 3.C» (docs/sorcus.md); 3.C unless set.
+TEST(XcanConfig, TheMddVersionIsTheManualsNumberAndOnlyAModuleHasOne) {
+  EXPECT_EQ(world()->devices().find_xcan("xcan0")->module().mdd_version(), model::sorcus::kMdd3C);
+  auto old = world(std::string(kConfig) + "mdd_version = \"3.B\"\n");
+  EXPECT_EQ(old->devices().find_xcan("xcan0")->module().mdd_version(),
+            (model::sorcus::MddVersion{3, 'B'}));
+  const std::string head =
+      "[[device]]\nname = \"x\"\nmodel = \"sorcus-x-can-2i\"\ncontrollers = [\"hs\", \"hs\"]\n";
+  EXPECT_EQ(
+      errors_of(head + "mdd_version = \"3C\"\n"),
+      std::vector<std::string>{"x.toml:22:15: device[0].mdd_version: \"3C\": a version as the "
+                               "manual writes it, a digit, a dot and a capital letter "
+                               "(\"3.C\")"});
+  EXPECT_EQ(errors_of("[[device]]\nname = \"i\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = "
+                      "[\"hs\"]\nmdd_version = \"3.C\"\n"),
+            std::vector<std::string>{"x.toml:22:15: device[0].mdd_version: only an X-CAN-2i "
+                                     "(sorcus-x-can-2i) has an MDD"});
+}
+
+// buffer_load_time: how long loading a buffer takes (docs/sorcus.md, checklist 6); 0 unless set.
+TEST(XcanConfig, TheBufferLoadTimeIsADurationUpToAMillisecond) {
+  EXPECT_EQ(world()->devices().find_xcan("xcan0")->module().buffer_load_time(), 0);
+  auto slow = world(std::string(kConfig) + "buffer_load_time = \"5us\"\n");
+  EXPECT_EQ(slow->devices().find_xcan("xcan0")->module().buffer_load_time(), 5'000);
+  const std::string head =
+      "[[device]]\nname = \"x\"\nmodel = \"sorcus-x-can-2i\"\ncontrollers = [\"hs\", \"hs\"]\n";
+  EXPECT_EQ(errors_of(head + "buffer_load_time = \"2ms\"\n"),
+            std::vector<std::string>{"x.toml:22:20: device[0].buffer_load_time: \"2ms\": a "
+                                     "duration from \"0us\" to \"1ms\" (\"5us\")"});
+  EXPECT_EQ(errors_of("[[device]]\nname = \"i\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = "
+                      "[\"hs\"]\nbuffer_load_time = \"5us\"\n"),
+            std::vector<std::string>{"x.toml:22:20: device[0].buffer_load_time: only an X-CAN-2i "
+                                     "(sorcus-x-can-2i) loads buffers"});
 }
 
 TEST(XcanNodes, StatusShowsBothInterfacesOnTheirBuses) {

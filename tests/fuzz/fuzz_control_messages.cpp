@@ -1,7 +1,8 @@
 // libFuzzer target: canemud's control-message handling. The input is a sequence of packets,
 // each a 16-bit little-endian length and that many bytes, fed to one client session of a daemon
 // built from the embedded default configuration and an X-CAN-2i "xcan0" on its buses, in stepped
-// time. Every reply must be a valid
+// time, built afresh for each input (nothing one input did can hide or cause another's crash).
+// Every reply must be a valid
 // message, with ring descriptors exactly when it opens a channel (or initializes a VCI one),
 // and nothing may crash. The session ends with each input, so the channels and VCI objects it
 // opened close again.
@@ -18,26 +19,28 @@ namespace {
 
 using namespace canemu;
 
-daemon::Simulation& simulation() {
-  static std::unique_ptr<daemon::Simulation> sim = [] {
+const daemon::Config& config() {
+  static const daemon::Config c = [] {
     const std::string text = std::string(daemon::embedded_default_config()) +
                              "\n[[device]]\nname = \"xcan0\"\nmodel = \"sorcus-x-can-2i\"\n"
                              "controllers = [\"can0\", \"can1\"]\n";
-    auto config = daemon::parse_config(text, "fuzz.toml");
-    if (!config) {
+    auto parsed = daemon::parse_config(text, "fuzz.toml");
+    if (!parsed) {
       std::abort();
     }
-    auto built = daemon::Simulation::build(*config);
-    return std::move(*built);
+    return std::move(*parsed);
   }();
-  return *sim;
+  return c;
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  daemon::ControlDispatcher dispatcher(simulation(),
-                                       daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
+  auto sim = daemon::Simulation::build(config());
+  if (!sim) {
+    std::abort();
+  }
+  daemon::ControlDispatcher dispatcher(**sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
   dispatcher.client_count = [] { return uint16_t{1}; };
   daemon::Session session;
   const auto check_reply = [](const void* reply, size_t bytes, std::span<const int> fds) {

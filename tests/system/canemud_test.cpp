@@ -1,8 +1,14 @@
 // canemud as a process: started in stepped time on a private socket, driven by real clients.
 #include <gtest/gtest.h>
 
+#include <csignal>
+#include <string>
+
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "daemon_process.hpp"
 
@@ -271,6 +277,91 @@ TEST(Canemud, NobodyListeningIsAClearError) {
   auto c = client::Connection::open("/tmp/canemu-nobody-listens.sock", "t");
   ASSERT_FALSE(c);
   EXPECT_NE(c.error().message.find("is canemud running?"), std::string::npos);
+}
+
+// Socket activation as systemd does it: the listening socket as descriptor 3, LISTEN_FDS and
+// LISTEN_PID naming canemud. It serves that socket, reports its path, and leaves the file to
+// systemd when it stops; anything but one SOCK_SEQPACKET socket stops the start with the reason.
+struct Activated {
+  pid_t pid = -1;
+  int err = -1;
+  std::string log;
+  // Starts canemud with `fds` as descriptors 3, 4, ...
+  explicit Activated(const std::vector<int>& fds) {
+    int pipe_fds[2];
+    EXPECT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
+    pid = ::fork();
+    if (pid == 0) {
+      for (std::size_t i = 0; i < fds.size(); ++i) {
+        ::dup2(fds[i], static_cast<int>(3 + i));  // dup2 clears FD_CLOEXEC
+      }
+      ::dup2(pipe_fds[1], 2);
+      ::setenv("LISTEN_FDS", std::to_string(fds.size()).c_str(), 1);
+      ::setenv("LISTEN_PID", std::to_string(::getpid()).c_str(), 1);
+      ::execl(CANEMUD_PATH, CANEMUD_PATH, "--time=stepped", static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::close(pipe_fds[1]);
+    err = pipe_fds[0];
+  }
+  bool read_until(const std::string& text) {
+    char buf[512];
+    while (log.find(text) == std::string::npos && readable(err, 10'000)) {
+      const ssize_t n = ::read(err, buf, sizeof buf);
+      if (n <= 0) {
+        break;
+      }
+      log.append(buf, static_cast<std::size_t>(n));
+    }
+    return log.find(text) != std::string::npos;
+  }
+  int stop() {
+    ::kill(pid, SIGTERM);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  ~Activated() { ::close(err); }
+};
+
+TEST(Canemud, TakesTheSocketSystemdPassesAndLeavesItsFileToSystemd) {
+  char dir[] = "/tmp/canemu-activate-XXXXXX";
+  const std::string path = std::string(::mkdtemp(dir)) + "/activated.sock";
+  auto l = ipc::listen_seqpacket(path);
+  ASSERT_TRUE(l) << l.error().message;
+  ::chmod(path.c_str(), 0606);  // systemd's SocketMode=; canemud must not change it
+  Activated d({l->get()});
+  ASSERT_TRUE(d.read_until("listening on " + path)) << d.log;
+  auto c = client::Connection::open(path, "activated");
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(status(*c).bus_count, 3);  // can0, can1, lin0
+  EXPECT_EQ(d.stop(), 0);
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0) << "the file is systemd's";
+  EXPECT_EQ(st.st_mode & 0777, 0606u);
+  ::unlink(path.c_str());
+  ::rmdir(dir);
+}
+
+TEST(Canemud, RefusesToStartOnSocketsItCannotServe) {
+  int dgram[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, dgram), 0);
+  {
+    Activated wrong({dgram[0]});
+    EXPECT_TRUE(wrong.read_until("not a listening AF_UNIX SOCK_SEQPACKET one")) << wrong.log;
+    int status = 0;
+    ::waitpid(wrong.pid, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+  }
+  {
+    Activated two({dgram[0], dgram[1]});
+    EXPECT_TRUE(two.read_until("systemd passed 2 sockets; canemud takes exactly one")) << two.log;
+    int status = 0;
+    ::waitpid(two.pid, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+  }
+  ::close(dgram[0]);
+  ::close(dgram[1]);
 }
 
 }  // namespace

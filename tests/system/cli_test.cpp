@@ -1,18 +1,16 @@
 // The canemu command line against a real canemud: send and dump in stepped time.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
-
-#include <spawn.h>
 
 #include <fmt/format.h>
 
 #include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "cli_process.hpp"
 #include "daemon_process.hpp"
-
-extern char** environ;
 
 namespace canemu {
 namespace {
@@ -20,72 +18,6 @@ namespace {
 using testing::connect;
 using testing::Daemon;
 using testing::readable;
-
-// canemu with `args` on the daemon's socket; stdout (and stderr) through pipes.
-struct Cli {
-  pid_t pid = -1;
-  int out = -1;
-  int err = -1;
-  Cli(const Daemon& d, std::vector<std::string> args) {
-    int o[2];
-    int e[2];
-    EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
-    EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, o[1], 1);
-    posix_spawn_file_actions_adddup2(&actions, e[1], 2);
-    args.insert(args.begin(), {CANEMU_PATH, "--socket", d.socket()});
-    std::vector<char*> argv;
-    for (std::string& a : args) {
-      argv.push_back(a.data());
-    }
-    argv.push_back(nullptr);
-    EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(o[1]);
-    ::close(e[1]);
-    out = o[0];
-    err = e[0];
-  }
-  ~Cli() {
-    if (pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-    ::close(out);
-    ::close(err);
-  }
-  // Reads `fd` until it closes or `timeout_ms` passes without data.
-  static std::string read_all(int fd, int timeout_ms = 10'000) {
-    std::string text;
-    char buf[512];
-    while (readable(fd, timeout_ms)) {
-      const ssize_t n = ::read(fd, buf, sizeof buf);
-      if (n <= 0) {
-        break;
-      }
-      text.append(buf, static_cast<std::size_t>(n));
-    }
-    return text;
-  }
-  int wait() {
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    pid = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-};
-
-// A node on `bus` that acknowledges (the dump only listens, and configured adapters stay off
-// the bus until an application starts them).
-client::Channel partner_on(client::Connection& c, const std::string& bus) {
-  client::ChannelOptions o;
-  o.bus = bus;
-  auto ch = client::Channel::open(c, o);
-  EXPECT_TRUE(ch) << ch.error().message;
-  return std::move(*ch);
-}
 
 TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
   Daemon d;
@@ -223,6 +155,83 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
   EXPECT_EQ(none.wait(), 1);
 }
 
+// A client's name is the peer's choice: canemud keeps printable ASCII only, and the JSON
+// escapes quotes, so a name can neither add a field nor break a line or a table row.
+TEST(Cli, HostileClientNameCannotForgeStatusFields) {
+  Daemon d;
+  auto c = connect(d, "x\",\"uid\":0\n\x1b[2J");
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_EQ(std::count(j.begin(), j.end(), '\n'), 1) << j;
+  EXPECT_EQ(j.find('\x1b'), std::string::npos) << j;
+  EXPECT_NE(j.find("\"name\" : \"x\\\",\\\"uid\\\":0??[2J\""), std::string::npos) << j;
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("x\",\"uid\":0??[2J"), std::string::npos) << t;
+  EXPECT_EQ(t.find('\x1b'), std::string::npos) << t;
+}
+
+// canemu metrics: the Prometheus text format, one family after the other, labels escaped.
+TEST(Cli, MetricsSpeakThePrometheusTextFormat) {
+  Daemon d;
+  Cli step(d, {"time", "step", "10ms"});
+  EXPECT_EQ(step.wait(), 0);
+  Cli metrics(d, {"metrics"});
+  const std::string m = Cli::read_all(metrics.out);
+  EXPECT_EQ(metrics.wait(), 0);
+  for (const char* line :
+       {"# HELP canemu_sim_time_seconds Simulated time.\n"
+        "# TYPE canemu_sim_time_seconds gauge\n"
+        "canemu_sim_time_seconds 0.010000000\n",
+        "# TYPE canemu_bus_frames_total counter\n",
+        "canemu_bus_bitrate_bits_per_second{bus=\"can0\",kind=\"can\"} 500000\n",
+        "canemu_bus_load_ratio{bus=\"can1\"} 0.000\n",
+        "canemu_node_error_state{node=\"ixxat0:0\",bus=\"can0\",state=\"error-active\"} 1\n",
+        "canemu_node_error_state{node=\"ixxat0:0\",bus=\"can0\",state=\"bus-off\"} 0\n",
+        "canemu_node_tec{node=\"ixxat0:1\",bus=\"can1\"} 0\n",
+        "# TYPE canemu_fault_hits_total counter\n"}) {
+    EXPECT_NE(m.find(line), std::string::npos) << line << "\nin:\n" << m;
+  }
+  // Every line is a comment or `name{labels} value`.
+  std::size_t start = 0;
+  while (start < m.size()) {
+    const std::size_t end = m.find('\n', start);
+    ASSERT_NE(end, std::string::npos);
+    const std::string line = m.substr(start, end - start);
+    EXPECT_TRUE(line.rfind("# ", 0) == 0 || line.rfind("canemu_", 0) == 0) << line;
+    start = end + 1;
+  }
+}
+
+// A SORCUS X-CAN-2i module is a DEVICE row like an IXXAT adapter's (model, buses), and its
+// interfaces are nodes NAME:0 and NAME:1 (config/examples/x-can-2i.toml).
+TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
+  Daemon d("stepped", {"--config", CANEMU_SOURCE_DIR "/config/examples/x-can-2i.toml"});
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1\n"
+                   "xcan0          sorcus-x-can-2i      config   can0 can1\n"),
+            std::string::npos)
+      << t;
+  EXPECT_NE(t.find("xcan0:0        can0         error-active      0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("xcan0:1        can1         error-active      0    0"), std::string::npos) << t;
+
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("{\"buses\" : [\"can0\",\"can1\"],\"ephemeral\" : false,\"model\" : "
+                   "\"sorcus-x-can-2i\",\"name\" : \"xcan0\",\"nodes\" : [\"xcan0:0\",\"xcan0:1\"],"
+                   "\"owner_pid\" : 0}"),
+            std::string::npos)
+      << j;
+  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"error-active\""),
+            std::string::npos)
+      << j;
+}
+
 // status (text and JSON), time step and calc, as a user types them.
 TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   Daemon d;
@@ -255,14 +264,15 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   ASSERT_FALSE(j.empty());
   EXPECT_EQ(j.front(), '{');
   EXPECT_EQ(j.substr(j.size() - 2), "}\n");
-  EXPECT_NE(j.find("\"time_mode\":\"stepped\""), std::string::npos) << j;
-  EXPECT_NE(j.find("\"sim_time_ns\":10000000"), std::string::npos) << j;
-  EXPECT_NE(
-      j.find(
-          "{\"name\":\"can1\",\"kind\":\"can\",\"transceiver\":\"high-speed\",\"bitrate\":500000"),
-      std::string::npos)
+  // toml++ writes it: keys sorted, `"key" : value`.
+  EXPECT_NE(j.find("\"time_mode\" : \"stepped\""), std::string::npos) << j;
+  EXPECT_NE(j.find("\"sim_time_ns\" : 10000000"), std::string::npos) << j;
+  EXPECT_NE(j.find("{\"bitrate\" : 500000,\"data_bitrate\" : 0,\"error_frames\" : 0,\"frames\" : "
+                   "0,\"kind\" : \"can\",\"load_percent\" : 0.0,\"name\" : \"can1\","
+                   "\"transceiver\" : \"high-speed\"}"),
+            std::string::npos)
       << j;
-  EXPECT_NE(j.find("{\"name\":\"probe\",\"model\":\"ephemeral\",\"ephemeral\":true"),
+  EXPECT_NE(j.find("\"ephemeral\" : true,\"model\" : \"ephemeral\",\"name\" : \"probe\""),
             std::string::npos)
       << j;
 

@@ -2,8 +2,13 @@
 // FD adapters, bit timing as CANBTP, filters and self reception on v2 channels.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
@@ -313,6 +318,70 @@ TEST(Vci2CApi, AnErrorPassiveSendersFdFrameCarriesEsi) {
   ASSERT_FALSE(got.empty());
   EXPECT_EQ(got[0].dwMsgId, 0x42u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.esi, 1u);  // sent while error-passive
+}
+
+// A client that refills a 65,535-message transmit FIFO with messages the line refuses (an INFO
+// message is no frame), waiting on the FIFO each time it is full (its waiting flag set), does not
+// hold canemud: another client's status requests are answered within 100 ms throughout, and the
+// flood is consumed (many times the FIFO's size goes through).
+TEST(Vci2CApi, AJunkFloodDoesNotDelayAnotherClientsAnswers) {
+  testing::ConfigFile config(kAdapters);
+  testing::Daemon daemon("realtime", {"--config=" + config.path()});
+  ASSERT_EQ(canemuConnect(daemon.socket().c_str()), VCI_OK);
+  {
+    HANDLE gamma = device_named("gamma");
+    HANDLE control = nullptr;
+    ASSERT_EQ(canControlOpen(gamma, 0, &control), VCI_OK);
+    CANBTP classic = btp(500000, 14, 2);
+    ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                   CAN_FILTER_INCL, 2048, 2048, &classic, nullptr),
+              VCI_OK);
+    ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+    HANDLE channel = nullptr;
+    ASSERT_EQ(canChannelOpen(gamma, 0, FALSE, &channel), VCI_OK);
+    constexpr UINT32 kFifo = 65535;
+    ASSERT_EQ(canChannelInitialize(channel, 16, 1, kFifo, 1, 0, CAN_FILTER_PASS), VCI_OK);
+    ASSERT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
+    std::atomic<bool> stop{false};
+    std::atomic<uint64_t> posted{0};
+    std::thread flood([&] {
+      CANMSG2 junk{};
+      junk.uMsgInfo.Bytes.bType = CAN_MSGTYPE_INFO;
+      while (!stop) {
+        if (canChannelSendMessage(channel, 10, &junk) == VCI_OK) {
+          ++posted;
+        }
+      }
+    });
+    auto observer = client::Connection::open(daemon.socket(), "observer");
+    ASSERT_TRUE(observer) << observer.error().message;
+    using Clock = std::chrono::steady_clock;
+    const auto end = Clock::now() + std::chrono::seconds(2);
+    Clock::duration slowest{};
+    int answers = 0;
+    while (Clock::now() < end) {
+      const auto asked = Clock::now();
+      auto r = observer->call<ipc::StatusRequest, ipc::StatusReply>(
+          ipc::make_message<ipc::StatusRequest>());
+      ASSERT_TRUE(r) << r.error().message;
+      slowest = std::max(slowest, Clock::now() - asked);
+      ++answers;
+    }
+    stop = true;
+    flood.join();
+    std::printf(
+        "junk flood: %llu refused messages posted in 2 s; slowest of %d status answers %lld us\n",
+        static_cast<unsigned long long>(posted.load()), answers,
+        static_cast<long long>(
+            std::chrono::duration_cast<std::chrono::microseconds>(slowest).count()));
+    EXPECT_LT(std::chrono::duration_cast<std::chrono::milliseconds>(slowest).count(), 100)
+        << answers << " answers";
+    EXPECT_GT(posted.load(), 4u * kFifo) << "the flood was not consumed";
+    canChannelClose(channel);
+    canControlClose(control);
+    vciDeviceClose(gamma);
+  }
+  canemuConnect(nullptr);
 }
 
 // libvcinpl2 has the LIN functions of libvcinpl (vcinpl_lin.h): a master's header, a slave's

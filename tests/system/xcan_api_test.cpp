@@ -5,9 +5,7 @@
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <cstring>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -15,71 +13,32 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
-#include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 #include "xcan.h"
+#include "xcan_test_support.hpp"
 
 namespace canemu {
 namespace {
 
 using testing::Adapter;
 using testing::bits_of;
+using testing::cps;
 using testing::data;
+using testing::g_mutex;
+using testing::g_seen;
+using testing::k250k;
+using testing::k500k;
 using testing::kBitUs2;
+using testing::kConfig;
+using testing::message_of;
+using testing::record;
+using testing::remote_bits;
+using testing::Seen;
+using testing::status_of;
 using testing::step_ns;
 using testing::VciDaemon;
-
-// The X-CAN-2i "xcan0" (interface 0 on can0, 1 on can1, both 500 kbit/s) and the IXXAT adapters
-// "alpha" and "beta" on can0.
-const char* const kConfig =
-    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[bus]]\nname = \"can1\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
-    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
-    "[[device]]\nname = \"xcan0\"\nmodel = \"sorcus-x-can-2i\"\ncontrollers = [\"can0\", "
-    "\"can1\"]\n";
-
-// 16 time quanta of 125 ns: 500 kbit/s, sampled at 13/16.
-constexpr XCAN_BITPARAMS k500k = {125, 12, 3, 1, 1, 0, 11};
-// The same quanta at 250 ns: 250 kbit/s, against the bus's 500.
-constexpr XCAN_BITPARAMS k250k = {250, 12, 3, 1, 1, 0, 11};
-
-// What a channel's callback got, in order; waited for by the test (the buffered callbacks run
-// on the library's thread).
-struct Seen {
-  MAX_HANDLE channel;
-  std::vector<uint8_t> bytes;
-};
-std::mutex g_mutex;
-std::condition_variable g_cv;
-std::vector<Seen> g_seen;
-
-void record(MAX_HANDLE hChan, ULONG ulSize, const void* pData) {
-  Seen s{hChan, {}};
-  if (ulSize > 0) {
-    const auto* p = static_cast<const uint8_t*>(pData);
-    s.bytes.assign(p, p + ulSize);
-  }
-  std::lock_guard lock(g_mutex);
-  g_seen.push_back(std::move(s));
-  g_cv.notify_all();
-}
-
-// The callbacks seen so far once there are `n` of them (at most 10 s of wall time).
-std::vector<Seen> wait_seen(std::size_t n) {
-  std::unique_lock lock(g_mutex);
-  g_cv.wait_for(lock, std::chrono::seconds(10), [&] { return g_seen.size() >= n; });
-  return g_seen;
-}
-
-// Bits on the wire of a remote frame with an 11-bit identifier and DLC `dlc`.
-int64_t remote_bits(uint32_t id, uint8_t dlc) {
-  model::FrameSpec spec;
-  spec.id = id;
-  spec.remote = true;
-  spec.dlc = dlc;
-  return static_cast<int64_t>(model::encode(*model::Frame::create(spec)).length);
-}
+using testing::wait_seen;
+using testing::XcanDaemon;
 
 // Runs the canemu command line on the daemon's socket to its end; its exit status.
 int run_canemu(const testing::Daemon& d, std::vector<std::string> args) {
@@ -95,54 +54,6 @@ int run_canemu(const testing::Daemon& d, std::vector<std::string> args) {
   ::waitpid(pid, &status, 0);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
-
-ULONG status_of(const Seen& s) {
-  ULONG v = 0;
-  EXPECT_EQ(s.bytes.size(), sizeof v);
-  std::memcpy(&v, s.bytes.data(), std::min(sizeof v, s.bytes.size()));
-  return v;
-}
-
-CPS_XCAN cps(USHORT device, ULONG id, USHORT flags = 0, USHORT timeout = 0) {
-  CPS_XCAN c{};
-  c.usDevice = device;
-  c.usChannel = 0;
-  c.usFlags = flags;
-  c.usTimeout = timeout;
-  c.ulCanID = id;
-  if (device == DEVICE_CTRL) {
-    c.usIndexFirst = c.usIndexLast = XCAN_BUS_CTRL_INDEX;
-  }
-  return c;
-}
-
-// canemud with kConfig, the VCI library and libxcan connected to it, the MDD of xcan0 loaded
-// and interface 0's bus-control channel (callback `bus_callback`) at `bits`.
-struct XcanDaemon {
-  VciDaemon vci{kConfig};
-  MAX_HANDLE mdd = 0;
-  MAX_HANDLE bus = 0;
-  explicit XcanDaemon(const XCAN_BITPARAMS& bits = k500k, USHORT bus_flags = 0) {
-    {
-      std::lock_guard lock(g_mutex);
-      g_seen.clear();
-    }
-    EXPECT_EQ(canemu_xcan_connect(vci.daemon.socket().c_str()), ERR_OK);
-    MAX_HANDLE module = 0;
-    EXPECT_EQ(canemu_open_module("xcan0", &module), ERR_OK);
-    EXPECT_EQ(max_load_mdd(module, 1, 0, 0, 0x803A, nullptr, &mdd), ERR_OK);
-    const CPS_XCAN c = cps(DEVICE_CTRL, 0, bus_flags);
-    EXPECT_EQ(max_open_channel(mdd, &c, record, &bus), ERR_OK);
-    ULONG size = sizeof bits;
-    EXPECT_EQ(max_write_channel_block(bus, &size, &bits), ERR_OK);
-  }
-  ~XcanDaemon() { canemu_xcan_connect(nullptr); }
-  MAX_HANDLE open(const CPS_XCAN& c, MAX_CALLBACK callback = nullptr) const {
-    MAX_HANDLE h = 0;
-    EXPECT_EQ(max_open_channel(mdd, &c, callback, &h), ERR_OK);
-    return h;
-  }
-};
 
 TEST(XcanApi, ModuleAndMddAreCheckedByName) {
   VciDaemon d(kConfig);
@@ -180,6 +91,37 @@ TEST(XcanApi, ModuleAndMddAreCheckedByName) {
   ASSERT_EQ(max_read_channel_block(bus, &size, &back), ERR_OK);
   EXPECT_EQ(size, sizeof back);
   EXPECT_EQ(std::memcmp(&back, &k500k, sizeof back), 0);
+  canemu_xcan_connect(nullptr);
+}
+
+// The VCI's device enumeration shows the IXXAT adapters only: an X-CAN-2i is no VCI device;
+// libxcan's enumeration shows the module's two interfaces.
+TEST(XcanApi, TheVciListsTheAdaptersAndLibxcanTheModulesInterfaces) {
+  VciDaemon d(kConfig);
+  HANDLE e = nullptr;
+  ASSERT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
+  VCIDEVICEINFO info{};
+  std::vector<std::string> found;
+  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
+    found.emplace_back(info.Description);
+  }
+  vciEnumDeviceClose(e);
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_NE(found[0].find("(canemu alpha)"), std::string::npos) << found[0];
+  EXPECT_NE(found[1].find("(canemu beta)"), std::string::npos) << found[1];
+
+  ASSERT_EQ(canemu_xcan_connect(d.daemon.socket().c_str()), ERR_OK);
+  for (USHORT k = 0; k < 2; ++k) {
+    CANEMU_XCAN_INTERFACE iface{};
+    ASSERT_EQ(canemu_xcan_enum_interfaces(k, &iface), ERR_OK);
+    EXPECT_STREQ(iface.szDevice, "xcan0");
+    EXPECT_STREQ(iface.szBus, k == 0 ? "can0" : "can1");
+    EXPECT_EQ(iface.usChannel, k);
+    EXPECT_EQ(iface.usLowSpeed, 0u);
+    EXPECT_EQ(iface.ulBitrate, 500000u);
+  }
+  CANEMU_XCAN_INTERFACE none{};
+  EXPECT_EQ(canemu_xcan_enum_interfaces(2, &none), ERR_XCAN_NO_MODULE);
   canemu_xcan_connect(nullptr);
 }
 
@@ -384,13 +326,6 @@ TEST(XcanApi, BitRateMismatchGivesErrorCallbacksAndBusOffUntilStopAndStart) {
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x100u);
   EXPECT_EQ(got[0].abData[0], 0x55);
-}
-
-XCAN_MESSAGE message_of(const Seen& s) {
-  XCAN_MESSAGE m{};
-  EXPECT_EQ(s.bytes.size(), sizeof m);
-  std::memcpy(&m, s.bytes.data(), std::min(sizeof m, s.bytes.size()));
-  return m;
 }
 
 // The general-ID channel asks alpha by remote frame; the answer, like any frame no object

@@ -232,42 +232,35 @@ ULONG Library::interfaces(std::vector<CANEMU_XCAN_INTERFACE>& out) {
   if (!status) {
     return ERR_XCAN_NO_DAEMON;
   }
-  // The status lists every node as "device:N"; the modules among their devices are those that
-  // canemud says are X-CAN-2i.
-  std::map<std::string, bool> is_xcan;
+  auto devices = c->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
+      ipc::make_message<ipc::DeviceListRequest>());
+  if (!devices) {
+    return ERR_XCAN_NO_DAEMON;
+  }
+  // The device list names the modules (in configuration order) and the bus of each interface;
+  // the status gives those buses' transceiver and bit rate.
   const uint16_t buses = std::min<uint16_t>(status->bus_count, ipc::kMaxStatusBuses);
-  const uint16_t nodes = std::min<uint16_t>(status->node_count, ipc::kMaxStatusNodes);
-  for (uint16_t k = 0; k < nodes; ++k) {
-    const ipc::StatusNode& n = status->nodes[k];
-    const std::string name = ipc::name_of(n.name);
-    const auto colon = name.rfind(':');
-    if (colon == std::string::npos || n.bus >= buses) {
+  const uint16_t count = std::min<uint16_t>(devices->count, ipc::kMaxDevices);
+  for (uint16_t d = 0; d < count; ++d) {
+    const ipc::DeviceEntry& e = devices->devices[d];
+    if (e.model != static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_x_can_2i)) {
       continue;
     }
-    const std::string device = name.substr(0, colon);
-    const std::string number = name.substr(colon + 1);
-    if (number != "0" && number != "1") {
-      continue;
+    for (uint8_t k = 0; k < e.controller_count && k < XCAN_INTERFACES; ++k) {
+      const std::string bus = ipc::name_of(e.buses[k]);
+      const ipc::StatusBus* b = std::find_if(
+          status->buses, status->buses + buses,
+          [&](const ipc::StatusBus& candidate) { return ipc::name_of(candidate.name) == bus; });
+      CANEMU_XCAN_INTERFACE info{};
+      std::snprintf(info.szDevice, sizeof info.szDevice, "%s", ipc::name_of(e.name).c_str());
+      std::snprintf(info.szBus, sizeof info.szBus, "%s", bus.c_str());
+      info.usChannel = k;
+      if (b != status->buses + buses) {
+        info.usLowSpeed = b->low_speed;
+        info.ulBitrate = b->bitrate;
+      }
+      out.push_back(info);
     }
-    auto known = is_xcan.find(device);
-    if (known == is_xcan.end()) {
-      auto m = ipc::make_message<ipc::XcanRequest>();
-      m.op = static_cast<uint16_t>(ipc::XcanOp::module_check);
-      ipc::copy_name(m.device, device);
-      auto r = c->call<ipc::XcanRequest, ipc::XcanReply>(m);
-      known = is_xcan.emplace(device, r.has_value()).first;
-    }
-    if (!known->second) {
-      continue;
-    }
-    const ipc::StatusBus& b = status->buses[n.bus];
-    CANEMU_XCAN_INTERFACE info{};
-    std::snprintf(info.szDevice, sizeof info.szDevice, "%s", device.c_str());
-    std::snprintf(info.szBus, sizeof info.szBus, "%s", ipc::name_of(b.name).c_str());
-    info.usChannel = static_cast<USHORT>(number[0] - '0');
-    info.usLowSpeed = b.low_speed;
-    info.ulBitrate = b.bitrate;
-    out.push_back(info);
   }
   return ERR_OK;
 }

@@ -139,8 +139,10 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
   out.clear();
   for (uint16_t i = 0; i < r->count && i < ipc::kMaxDevices; ++i) {
     const ipc::DeviceEntry& e = r->devices[i];
-    if (e.vci_id == 0) {
-      continue;  // not an adapter the VCI sees (an ephemeral channel's device)
+    const auto model = static_cast<ipc::WireDeviceModel>(e.model);
+    if (e.vci_id == 0 || (model != ipc::WireDeviceModel::ixxat_usb_to_can &&
+                          model != ipc::WireDeviceModel::ixxat_usb_to_can_fd)) {
+      continue;  // not an adapter the VCI sees (an ephemeral channel's device, an X-CAN-2i)
     }
     DeviceDesc d;
     d.name = ipc::name_of(e.name);

@@ -6,9 +6,10 @@
 #include <cstdio>
 #include <thread>
 
+#include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
-#include "frame_text.hpp"
+#include "canemu/ipc/socketcan.hpp"
 
 namespace canemu::cli {
 
@@ -58,9 +59,16 @@ client::Result<ipc::TimeStepReply> step_time(client::Connection& c, int64_t ns) 
 }
 
 std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base) {
-  ipc::ChannelMessage stamped = m;
-  stamped.timestamp_ns = m.timestamp_ns + base.offset_ns;
-  return candump_line(stamped, bus);
+  const auto f = ipc::socketcan::from_message(m);
+  return f ? ipc::socketcan::candump_line(m.timestamp_ns + base.offset_ns, bus, *f) : std::string();
+}
+
+// The wire's error states are the model's, in the model's order.
+static_assert(static_cast<uint8_t>(ipc::WireErrorState::bus_off) ==
+              static_cast<uint8_t>(model::ErrorState::bus_off));
+
+std::string error_state_name(uint8_t state) {
+  return std::string(model::to_string(static_cast<model::ErrorState>(state)));
 }
 
 int fail(const std::string& message) {

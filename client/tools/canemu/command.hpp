@@ -28,9 +28,12 @@ struct Command {
 // control socket as given on the command line (empty: the default); it is read when the
 // command runs.
 Command add_status(CLI::App& app, const std::string& socket);
+Command add_metrics(CLI::App& app, const std::string& socket);
 Command add_send(CLI::App& app, const std::string& socket);
 Command add_gen(CLI::App& app, const std::string& socket);
 Command add_dump(CLI::App& app, const std::string& socket);
+Command add_record(CLI::App& app, const std::string& socket);
+Command add_bridge(CLI::App& app, const std::string& socket);
 Command add_fault(CLI::App& app, const std::string& socket);
 Command add_time(CLI::App& app, const std::string& socket);
 Command add_calc(CLI::App& app);
@@ -60,6 +63,27 @@ client::Result<ipc::TimeStepReply> step_time(client::Connection& c, int64_t ns);
 
 // One line of a candump -L log with the time stamp on `base`.
 std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base);
+
+// What canemu dump and canemu record do: a channel on `bus` whose frames and errors go to
+// `output` ("-": standard output) as a candump log or pcap capture, until interrupted or `count`
+// frames (0: no limit).
+struct CaptureRun {
+  std::string bus;
+  std::string output;
+  std::string format = "candump";
+  uint32_t bitrate = 0;
+  uint64_t count = 0;
+  uint64_t max_bytes = 0;  // rotation (record only)
+  uint32_t max_files = 10;
+  bool no_errors = false;
+  bool listen_only = false;
+  bool sim_time = false;
+  bool record = false;  // says what it wrote when it stops
+};
+int run_capture(const std::string& socket, const CaptureRun& run);
+
+// A node's error state from the protocol (WireErrorState) by the model's name: "error-active"...
+std::string error_state_name(uint8_t state);
 
 // Prints "canemu: <message>" to stderr; returns the exit code of a failed command (1).
 int fail(const std::string& message);

@@ -1,16 +1,19 @@
-// canemu dump: a bus's frames and errors as a candump -L log (a LIN bus: lin_dump.hpp), from a
-// channel of an ephemeral device, until interrupted or --count lines. Like candump on a real
-// interface, its controller is active and acknowledges what it receives; --listen-only makes it a
-// silent observer.
+// canemu dump: a bus's frames and errors as a candump -L log (or a pcap capture; a LIN bus:
+// lin_dump.hpp), from a channel of an ephemeral device, until interrupted or --count frames.
+// Like candump on a real interface, its controller is active and acknowledges what it
+// receives; --listen-only makes it a silent observer. run_capture() also serves canemu record.
 #include <csignal>
 #include <cstdio>
 #include <memory>
 #include <string>
 
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/channel.hpp"
 #include "canemu/client/connection.hpp"
+#include "canemu/ipc/capture_writer.hpp"
+#include "canemu/ipc/socketcan.hpp"
 #include "command.hpp"
 #include "frame_text.hpp"
 #include "lin_dump.hpp"
@@ -25,17 +28,10 @@ void on_stop_signal(int) {
   g_stop = 1;
 }
 
-struct DumpOptions {
-  std::string bus;
-  uint32_t bitrate = 0;
-  uint64_t count = 0;  // 0: until interrupted
-  bool no_errors = false;
-  bool listen_only = false;
-  bool sim_time = false;
-};
+}  // namespace
 
-int run_dump(const std::string& socket, const DumpOptions& o) {
-  auto c = connect(socket, "canemu dump");
+int run_capture(const std::string& socket, const CaptureRun& o) {
+  auto c = connect(socket, o.record ? "canemu record" : "canemu dump");
   if (!c) {
     return fail(c.error().message);
   }
@@ -45,6 +41,9 @@ int run_dump(const std::string& socket, const DumpOptions& o) {
   for (uint16_t i = 0; s && i < s->bus_count; ++i) {
     if (ipc::name_of(s->buses[i].name) == o.bus &&
         s->buses[i].kind == static_cast<uint8_t>(ipc::WireBusKind::lin)) {
+      if (o.record || o.output != "-" || o.format != "candump") {
+        return fail("a LIN bus is dumped as text on standard output only (no pcap, no file yet)");
+      }
       const auto base = time_base(*c, o.sim_time);
       if (!base) {
         return fail(base.error().message);
@@ -66,11 +65,19 @@ int run_dump(const std::string& socket, const DumpOptions& o) {
   if (!base) {
     return fail(base.error().message);
   }
+  const auto format = ipc::parse_capture_format(o.format);
+  if (!format) {
+    return fail("--format must be candump or pcap, not '" + o.format + "'");
+  }
+  auto out = ipc::CaptureWriter::open({o.output, *format, o.bus, o.max_bytes, o.max_files});
+  if (!out) {
+    return fail(out.error().message);
+  }
   std::fprintf(stderr, "canemu: listening on %s as %s (%s, %u bit/s, time stamps in %s)\n",
                o.bus.c_str(), ch->device().c_str(), o.listen_only ? "listen-only" : "acknowledging",
                ch->info().bitrate, base->wall_clock ? "wall-clock seconds" : "simulated seconds");
-  uint64_t printed = 0;
-  while (!g_stop && (o.count == 0 || printed < o.count)) {
+  uint64_t written = 0;
+  while (!g_stop && (o.count == 0 || written < o.count)) {
     auto m = ch->receive(200);
     if (!m) {
       continue;
@@ -79,32 +86,44 @@ int run_dump(const std::string& socket, const DumpOptions& o) {
       std::fprintf(stderr, "canemu: %u message(s) lost: the output did not keep up\n",
                    m->lost_before);
     }
-    const std::string frame = candump_frame(*m);
-    if (frame.empty()) {
+    const auto f = ipc::socketcan::from_message(*m);
+    if (!f) {
       continue;
     }
-    std::printf("%s\n", log_line(*m, o.bus, *base).c_str());
-    std::fflush(stdout);
-    ++printed;
+    out->record(m->timestamp_ns + base->offset_ns, *f);
+    if (!out->flush()) {
+      return fail(out->error() + fmt::format(" ({} frame(s) lost)", out->lost()));
+    }
+    ++written;
+  }
+  if (o.record) {
+    std::fprintf(stderr, "canemu: %llu frame(s) recorded in %s (%s)\n",
+                 static_cast<unsigned long long>(out->frames()), o.output.c_str(),
+                 std::string(ipc::to_string(*format)).c_str());
   }
   return 0;
 }
 
-}  // namespace
-
 Command add_dump(CLI::App& app, const std::string& socket) {
   auto* dump = app.add_subcommand("dump", "print a bus's frames and errors as a candump -L log");
-  auto o = std::make_shared<DumpOptions>();
+  auto o = std::make_shared<CaptureRun>();
+  o->output = "-";
   dump->add_option("BUS", o->bus, "bus name")->required();
   dump->add_option("--bitrate", o->bitrate,
                    "the listener's bit/s (default: the bus's; on a LIN bus each header's)");
-  dump->add_option("-n,--count", o->count, "stop after this many lines");
+  dump->add_option("-n,--count", o->count, "stop after this many frames (LIN: lines)");
   dump->add_flag("--no-errors", o->no_errors, "frames only, no error frames");
   dump->add_flag("-l,--listen-only", o->listen_only,
                  "a silent observer: no acknowledgements, no error flags");
   dump->add_flag("--sim-time", o->sim_time,
                  "time stamps in simulated seconds (default in real time: wall-clock seconds)");
-  return {dump, [&socket, o] { return run_dump(socket, *o); }};
+  dump->add_option("--format", o->format,
+                   "candump (a candump -L log, the default) or pcap (LINKTYPE_CAN_SOCKETCAN)")
+      ->check(CLI::IsMember({"candump", "pcap"}));
+  dump->add_flag_callback(
+      "-L", [o] { o->format = "candump"; }, "a candump -L log (the default)");
+  dump->add_option("-o,--output", o->output, "write to this file (default: standard output, -)");
+  return {dump, [&socket, o] { return run_capture(socket, *o); }};
 }
 
 }  // namespace canemu::cli

@@ -95,7 +95,12 @@ int run_clear(const std::string& socket, const std::string& name) {
   if (!r) {
     return fail(r.error().message);
   }
-  std::printf("%u scenario%s cleared\n", r->cleared, r->cleared == 1 ? "" : "s");
+  std::printf("%u scenario%s cleared", r->cleared, r->cleared == 1 ? "" : "s");
+  if (r->refused > 0) {
+    std::printf("; %u left in force (other users' or the configuration's: an admin clears them)",
+                r->refused);
+  }
+  std::printf("\n");
   return 0;
 }
 

@@ -43,8 +43,7 @@ void print_faults(const ipc::FaultListReply& r) {
   }
 }
 
-// toml++ writes the JSON: names are escaped as JSON wants them.
-std::string faults_json(const ipc::FaultListReply& r) {
+toml::array faults_array(const ipc::FaultListReply& r) {
   toml::array faults;
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::FaultEntry& e = r.faults[i];
@@ -61,11 +60,11 @@ std::string faults_json(const ipc::FaultListReply& r) {
     }
     faults.push_back(std::move(t));
   }
-  std::ostringstream out;
-  out << toml::json_formatter{faults, toml::format_flags::none};
-  std::string text = out.str();
-  std::erase(text, '\n');
-  return text;
+  return faults;
+}
+
+std::string faults_json(const ipc::FaultListReply& r) {
+  return one_line_json(faults_array(r));
 }
 
 }  // namespace canemu::cli

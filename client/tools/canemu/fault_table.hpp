@@ -1,8 +1,10 @@
 // The faults canemud applied, as `canemu fault list` and `canemu status` show them.
 #pragma once
 
+#include <sstream>
 #include <string>
 
+#include <toml++/toml.h>
 #include <tl/expected.hpp>
 
 #include "canemu/client/connection.hpp"
@@ -18,5 +20,17 @@ void print_faults(const ipc::FaultListReply& r);
 
 // The same as a JSON array on one line.
 std::string faults_json(const ipc::FaultListReply& r);
+toml::array faults_array(const ipc::FaultListReply& r);
+
+// A table or array as JSON on one line, written by toml++ (strings escaped as JSON wants them:
+// a name can never end a string or a line early).
+template <typename Node>
+std::string one_line_json(const Node& node) {
+  std::ostringstream out;
+  out << toml::json_formatter{node, toml::format_flags::none};
+  std::string text = out.str();
+  std::erase(text, '\n');  // only the formatter's line breaks: strings have theirs escaped
+  return text;
+}
 
 }  // namespace canemu::cli

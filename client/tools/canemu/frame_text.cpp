@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "canemu/firmware_model/bus/can_error.hpp"
+#include "canemu/ipc/socketcan.hpp"
 
 namespace canemu::cli {
 
@@ -22,32 +22,6 @@ bool all_hex(std::string_view s) {
 
 int hex(char ch) {
   return std::isdigit(static_cast<unsigned char>(ch)) ? ch - '0' : std::tolower(ch) - 'a' + 10;
-}
-
-// linux/can/error.h
-constexpr uint32_t kErrFlag = 0x20000000;
-constexpr uint32_t kErrCrtl = 0x004;
-constexpr uint32_t kErrProt = 0x008;
-constexpr uint32_t kErrAck = 0x020;
-constexpr uint32_t kErrBusOff = 0x040;
-constexpr uint32_t kErrBusError = 0x080;
-constexpr uint32_t kErrCnt = 0x200;
-constexpr uint8_t kCrtlRxWarning = 0x04;
-constexpr uint8_t kCrtlTxWarning = 0x08;
-constexpr uint8_t kCrtlRxPassive = 0x10;
-constexpr uint8_t kCrtlTxPassive = 0x20;
-constexpr uint8_t kCrtlActive = 0x40;
-constexpr uint8_t kProtBit = 0x01;
-constexpr uint8_t kProtForm = 0x02;
-constexpr uint8_t kProtStuff = 0x04;
-constexpr uint8_t kProtTx = 0x80;
-
-std::string error_frame(uint32_t classes, const uint8_t (&data)[8]) {
-  std::string text = fmt::format("{:08X}#", kErrFlag | classes);
-  for (uint8_t b : data) {
-    text += fmt::format("{:02X}", b);
-  }
-  return text;
 }
 
 }  // namespace
@@ -147,71 +121,8 @@ model::Result<model::Frame> to_frame(const ipc::ChannelMessage& m) {
 }
 
 std::string candump_frame(const ipc::ChannelMessage& m) {
-  switch (static_cast<ipc::ChannelMessageKind>(m.kind)) {
-    case ipc::ChannelMessageKind::frame:
-      break;
-    case ipc::ChannelMessageKind::bus_error: {
-      uint8_t data[8] = {};
-      uint32_t classes = kErrProt | kErrBusError | kErrCnt;
-      const auto type = static_cast<model::CanErrorType>(m.error_type);
-      data[2] = type == model::CanErrorType::bit     ? kProtBit
-                : type == model::CanErrorType::form  ? kProtForm
-                : type == model::CanErrorType::stuff ? kProtStuff
-                                                     : 0;
-      if (m.error_role == static_cast<uint8_t>(model::ErrorRole::transmitter)) {
-        data[2] |= kProtTx;
-      }
-      if (type == model::CanErrorType::ack) {
-        classes |= kErrAck;
-      }
-      data[3] = m.error_location;
-      data[6] = static_cast<uint8_t>(std::min<uint16_t>(m.tec, 255));
-      data[7] = static_cast<uint8_t>(std::min<uint16_t>(m.rec, 255));
-      return error_frame(classes, data);
-    }
-    case ipc::ChannelMessageKind::state: {
-      uint8_t data[8] = {};
-      uint32_t classes = kErrCnt;
-      const auto state = static_cast<model::ErrorState>(m.state);
-      const bool tx = m.tec >= m.rec;
-      if (state == model::ErrorState::bus_off) {
-        classes |= kErrBusOff;
-      } else {
-        classes |= kErrCrtl;
-        data[1] = state == model::ErrorState::warning   ? (tx ? kCrtlTxWarning : kCrtlRxWarning)
-                  : state == model::ErrorState::passive ? (tx ? kCrtlTxPassive : kCrtlRxPassive)
-                                                        : kCrtlActive;
-      }
-      data[6] = static_cast<uint8_t>(std::min<uint16_t>(m.tec, 255));
-      data[7] = static_cast<uint8_t>(std::min<uint16_t>(m.rec, 255));
-      return error_frame(classes, data);
-    }
-    default:
-      return {};
-  }
-  const bool extended = (m.flags & ipc::kMsgExtended) != 0;
-  std::string text = extended ? fmt::format("{:08X}", m.id) : fmt::format("{:03X}", m.id);
-  if (m.flags & ipc::kMsgRemote) {
-    return text + fmt::format("#R{}", m.dlc);
-  }
-  const bool fd = (m.flags & ipc::kMsgFd) != 0;
-  if (fd) {
-    const int flags = ((m.flags & ipc::kMsgBrs) ? 1 : 0) | ((m.flags & ipc::kMsgEsi) ? 2 : 0);
-    text += fmt::format("##{:X}", flags);
-  } else {
-    text += '#';
-  }
-  const std::size_t length = model::dlc_to_length(m.dlc, fd);
-  for (std::size_t i = 0; i < length; ++i) {
-    text += fmt::format("{:02X}", m.data[i]);
-  }
-  return text;
-}
-
-std::string candump_line(const ipc::ChannelMessage& m, std::string_view bus) {
-  const int64_t ns = m.timestamp_ns;
-  return fmt::format("({:010}.{:06}) {} {}", ns / 1'000'000'000, (ns % 1'000'000'000) / 1000, bus,
-                     candump_frame(m));
+  const auto f = ipc::socketcan::from_message(m);
+  return f ? ipc::socketcan::candump_text(*f) : std::string();
 }
 
 }  // namespace canemu::cli

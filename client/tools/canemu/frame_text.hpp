@@ -1,6 +1,7 @@
 // Frames as text, the way can-utils writes them: cansend's syntax to read (`123#1122`,
 // `12345678#R4`, `123##1AABB`) and candump's log format to write (`(0.000124) can0 123#1122`),
-// with error and state messages as SocketCAN error frames (linux/can/error.h).
+// with error and state messages as SocketCAN error frames (linux/can/error.h); the writing is
+// ipc/socketcan.hpp's, shared with canemud's recorder and bridge.
 #pragma once
 
 #include <optional>
@@ -17,12 +18,10 @@ namespace canemu::cli {
 // '.'. Nothing, with `error` set, when the text is not a valid frame.
 std::optional<ipc::ChannelMessage> parse_cansend(std::string_view text, std::string& error);
 
-// The frame text of a message: `123#1122`, `123#R4`, `123##1AABB`, or for bus errors and state
-// changes a SocketCAN error frame `20000288#0000040000000800` (CAN_ERR_FLAG and classes, with
-// the counters in data[6] and data[7]). Empty for transmit confirmations.
+// The frame text of a message as ipc/socketcan.hpp writes it: `123#1122`, `123#R4`,
+// `123##1AABB`, or for bus errors and state changes a SocketCAN error frame; empty for transmit
+// confirmations.
 std::string candump_frame(const ipc::ChannelMessage& m);
-// One line of a candump -L log: `(seconds.microseconds) bus frame`.
-std::string candump_line(const ipc::ChannelMessage& m, std::string_view bus);
 
 // The wire model's frame of a message of kind `frame`: its identifier, flags, DLC and data
 // checked as canemud checks a frame a channel sends (Frame::create); an error for anything else.

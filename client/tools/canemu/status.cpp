@@ -1,26 +1,23 @@
-// canemu status: buses with load, nodes with state and counters, devices, clients and faults,
-// as tables or as one JSON object.
+// canemu status: buses with load, nodes with state and counters, devices, clients, faults,
+// recorders and bridges, as tables or as one JSON object.
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
-#include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "capture_table.hpp"
 #include "command.hpp"
 #include "fault_table.hpp"
 
 namespace canemu::cli {
 
 namespace {
-
-// The wire's error states are the model's, in the model's order.
-static_assert(static_cast<uint8_t>(ipc::WireErrorState::bus_off) ==
-              static_cast<uint8_t>(model::ErrorState::bus_off));
 
 // A CAN node's error state; a LIN controller's "online" or "offline".
 std::string state_name(const ipc::StatusNode& n) {
@@ -32,7 +29,7 @@ std::string state_name(const ipc::StatusNode& n) {
     case ipc::WireLinState::online:
       return "online";
   }
-  return std::string(model::to_string(static_cast<model::ErrorState>(n.state)));
+  return error_state_name(n.state);
 }
 std::string kind_name(uint8_t kind) {
   return std::string(ipc::to_string(static_cast<ipc::WireBusKind>(kind)));
@@ -49,58 +46,82 @@ std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
   return buses;
 }
 
+// toml++ writes the JSON (names escaped as JSON wants them), one line.
 void print_json(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
                 const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                const ipc::FaultListReply& faults) {
-  std::string out = fmt::format(
-      "{{\"server_pid\":{},\"time_mode\":\"{}\",\"time_scale\":{},\"sim_time_ns\":{},"
-      "\"clients\":{},\"buses\":[",
-      c.server_pid(), mode, s.time_scale, s.sim_time_ns, s.client_count);
+                const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
+                const ipc::BridgeListReply& bridges) {
+  const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
+  toml::array buses;
   for (uint16_t i = 0; i < s.bus_count; ++i) {
     const ipc::StatusBus& b = s.buses[i];
-    out += fmt::format(
-        "{}{{\"name\":\"{}\",\"kind\":\"{}\",\"transceiver\":\"{}\",\"bitrate\":{},"
-        "\"data_bitrate\":{},\"load_percent\":{:.1f},\"frames\":{},\"error_frames\":{}}}",
-        i ? "," : "", ipc::name_of(b.name), kind_name(b.kind),
-        b.low_speed ? "low-speed" : "high-speed", b.bitrate, b.data_bitrate, b.load_permille / 10.0,
-        b.frames, b.error_frames);
+    buses.push_back(toml::table{{"name", ipc::name_of(b.name)},
+                                {"kind", kind_name(b.kind)},
+                                {"transceiver", b.low_speed ? "low-speed" : "high-speed"},
+                                {"bitrate", i64(b.bitrate)},
+                                {"data_bitrate", i64(b.data_bitrate)},
+                                {"load_percent", b.load_permille / 10.0},
+                                {"frames", i64(b.frames)},
+                                {"error_frames", i64(b.error_frames)}});
   }
-  out += "],\"nodes\":[";
+  toml::array nodes;
   for (uint16_t i = 0; i < s.node_count; ++i) {
     const ipc::StatusNode& n = s.nodes[i];
-    out += fmt::format(
-        "{}{{\"name\":\"{}\",\"bus\":\"{}\",\"state\":\"{}\",\"tec\":{},\"rec\":{},"
-        "\"frames_sent\":{},\"frames_received\":{},\"errors\":{}}}",
-        i ? "," : "", ipc::name_of(n.name),
-        n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : "?", state_name(n), n.tec, n.rec,
-        n.frames_sent, n.frames_received, n.errors);
+    nodes.push_back(toml::table{
+        {"name", ipc::name_of(n.name)},
+        {"bus", n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?")},
+        {"state", state_name(n)},
+        {"tec", i64(n.tec)},
+        {"rec", i64(n.rec)},
+        {"frames_sent", i64(n.frames_sent)},
+        {"frames_received", i64(n.frames_received)},
+        {"errors", i64(n.errors)}});
   }
-  out += "],\"devices\":[";
+  toml::array device_list;
   for (uint16_t i = 0; i < devices.count; ++i) {
     const ipc::DeviceEntry& d = devices.devices[i];
-    std::string buses;
-    for (const std::string& b : device_buses(d)) {
-      buses += fmt::format("{}\"{}\"", buses.empty() ? "" : ",", b);
+    // Controller (interface) N is the node NAME:N on the N-th bus.
+    toml::array device_buses_json;
+    toml::array device_nodes_json;
+    const std::vector<std::string> on = device_buses(d);
+    for (std::size_t k = 0; k < on.size(); ++k) {
+      device_buses_json.push_back(on[k]);
+      device_nodes_json.push_back(fmt::format("{}:{}", ipc::name_of(d.name), k));
     }
-    out += fmt::format(
-        "{}{{\"name\":\"{}\",\"model\":\"{}\",\"ephemeral\":{},"
-        "\"owner_pid\":{},\"buses\":[{}]}}",
-        i ? "," : "", ipc::name_of(d.name), model_name(d.model), d.ephemeral ? "true" : "false",
-        d.owner_pid, buses);
+    device_list.push_back(toml::table{{"name", ipc::name_of(d.name)},
+                                      {"model", model_name(d.model)},
+                                      {"ephemeral", d.ephemeral != 0},
+                                      {"owner_pid", i64(d.owner_pid)},
+                                      {"buses", std::move(device_buses_json)},
+                                      {"nodes", std::move(device_nodes_json)}});
   }
-  out += "],\"client_list\":[";
+  toml::array client_list;
   for (uint16_t i = 0; i < clients.count; ++i) {
     const ipc::ClientEntry& e = clients.clients[i];
-    out += fmt::format("{}{{\"name\":\"{}\",\"pid\":{},\"uid\":{},\"channels\":{}}}", i ? "," : "",
-                       ipc::name_of(e.name), e.pid, e.uid, e.channels);
+    client_list.push_back(toml::table{{"name", ipc::name_of(e.name)},
+                                      {"pid", i64(e.pid)},
+                                      {"uid", i64(e.uid)},
+                                      {"channels", i64(e.channels)}});
   }
-  out += "],\"faults\":" + faults_json(faults) + "}\n";
-  std::fputs(out.c_str(), stdout);
+  toml::table all{{"server_pid", i64(c.server_pid())},
+                  {"time_mode", mode},
+                  {"time_scale", s.time_scale},
+                  {"sim_time_ns", s.sim_time_ns},
+                  {"clients", i64(s.client_count)},
+                  {"buses", std::move(buses)},
+                  {"nodes", std::move(nodes)},
+                  {"devices", std::move(device_list)},
+                  {"client_list", std::move(client_list)},
+                  {"faults", faults_array(faults)},
+                  {"recorders", recorders_array(recorders)},
+                  {"bridges", bridges_array(bridges)}};
+  std::fputs((one_line_json(all) + "\n").c_str(), stdout);
 }
 
 void print_tables(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
                   const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                  const ipc::FaultListReply& faults) {
+                  const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
+                  const ipc::BridgeListReply& bridges) {
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
               s.client_count == 1 ? "" : "s");
@@ -142,6 +163,12 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
   if (faults.total > 0) {
     print_faults(faults);
   }
+  if (recorders.count > 0) {
+    print_recorders(recorders);
+  }
+  if (bridges.count > 0) {
+    print_bridges(bridges);
+  }
 }
 
 int run_status(const std::string& socket, bool json) {
@@ -165,11 +192,18 @@ int run_status(const std::string& socket, bool json) {
   if (!faults) {
     return fail(faults.error());
   }
+  auto recorders = c->call<ipc::RecorderListRequest, ipc::RecorderListReply>(
+      ipc::make_message<ipc::RecorderListRequest>());
+  auto bridges = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
+      ipc::make_message<ipc::BridgeListRequest>());
+  if (!recorders || !bridges) {
+    return fail(!recorders ? recorders.error().message : bridges.error().message);
+  }
   const std::string mode(ipc::to_string(static_cast<ipc::WireTimeMode>(reply->time_mode)));
   if (json) {
-    print_json(*c, *reply, mode, *devices, *clients, *faults);
+    print_json(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
   } else {
-    print_tables(*c, *reply, mode, *devices, *clients, *faults);
+    print_tables(*c, *reply, mode, *devices, *clients, *faults, *recorders, *bridges);
   }
   return 0;
 }

@@ -28,3 +28,18 @@ if [ "$status" != 1 ] || [ "$got" != "$want" ]; then
   printf 'xcan_talk exited %s printing\n  %s\nnot 1 printing\n  %s\n' "$status" "$got" "$want"
   exit 1
 fi
+
+# Arguments that are no numbers, or out of range, are named before anything is tried.
+for args in "x 0x100 0x200:INTERFACE \"x\": a number from 0 to 1" \
+  "2 0x100 0x200:INTERFACE \"2\": a number from 0 to 1" \
+  "0 0x1g 0x200:SEND_ID \"0x1g\": a number from 0 to 536870911"; do
+  status=0
+  # shellcheck disable=SC2086 # the arguments are words
+  got=$(CANEMU_SOCKET="$out/nobody.sock" LD_LIBRARY_PATH=$build/lib \
+    "$out/xcan_talk" xcan0 ${args%%:*} 2>&1) || status=$?
+  want="xcan_talk: ${args#*:}"
+  if [ "$status" != 2 ] || [ "$got" != "$want" ]; then
+    printf 'xcan_talk exited %s printing\n  %s\nnot 2 printing\n  %s\n' "$status" "$got" "$want"
+    exit 1
+  fi
+done

@@ -1,10 +1,13 @@
 // Who may use canemud's control socket ([security] in the configuration): root, the daemon's
-// own user, the listed users, and members of the listed groups. Names are resolved when the
-// configuration is loaded (at start and on reload), never per connection; a peer's groups come
-// from the kernel (SO_PEERGROUPS), so accepting a client reads no user database.
+// own user, the listed users, and members of the listed groups (primary or supplementary). Names
+// are resolved when the configuration is loaded (at start and on reload), never per connection;
+// a peer's groups come from the kernel (SO_PEERCRED, SO_PEERGROUPS), so accepting a client reads
+// no user database. The socket file's own mode and group are the first gate: the kernel refuses
+// whoever may not write to it before canemud sees them.
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "canemu/daemon/config.hpp"
@@ -16,15 +19,27 @@ class AccessPolicy {
   // Replaces the lists with `security`'s; a user or group that does not exist is logged (a
   // warning) and left out.
   void resolve(const SecurityConfig& security);
-  // Whether the peer on the connected AF_UNIX socket `fd`, whose uid is `uid`, may connect.
-  bool allowed(int fd, uint32_t uid) const;
+  // Whether the peer on the connected AF_UNIX socket `fd`, whose uid and primary gid are `uid`
+  // and `gid`, may connect.
+  bool allowed(int fd, uint32_t uid, uint32_t gid) const;
+  // Whether that peer is an administrator: root, canemud's own user, or a member of
+  // `admin_groups` (it may clear every fault scenario).
+  bool admin(int fd, uint32_t uid, uint32_t gid) const;
+  // Gives the socket file at `path` the configured mode and group. Returns what went wrong, or
+  // an empty string; a group that does not exist is a warning in the log, not an error.
+  static std::string apply_socket_permissions(const std::string& path,
+                                              const SecurityConfig& security);
 
   const std::vector<uint32_t>& uids() const { return uids_; }
   const std::vector<uint32_t>& gids() const { return gids_; }
 
  private:
+  // Whether the peer's primary group `gid` or one of its supplementary groups is in `gids`.
+  static bool in_groups(int fd, uint32_t gid, const std::vector<uint32_t>& gids);
+
   std::vector<uint32_t> uids_;
   std::vector<uint32_t> gids_;
+  std::vector<uint32_t> admin_gids_;
 };
 
 }  // namespace canemu::daemon

@@ -103,5 +103,10 @@ class Channel final : private model::ControllerEvents, public Doorbell {
 ipc::ChannelMessage to_message(model::SimTime at, const model::Frame& frame,
                                ipc::ChannelMessageKind kind, bool own = false);
 model::Result<model::TxFrame> to_tx_frame(const ipc::ChannelMessage& m);
+// A node's bus error (with its error state after it) and state change as channel messages: the
+// error's location as the SJA1000's error code capture gives it (CAN_ERR_PROT_LOC_*).
+ipc::ChannelMessage to_error_message(const model::BusErrorEvent& e, model::ErrorState state);
+ipc::ChannelMessage to_state_message(model::SimTime at, model::ErrorState state, uint16_t tec,
+                                     uint16_t rec);
 
 }  // namespace canemu::daemon

@@ -39,6 +39,8 @@ struct DeviceConfig {
   std::string name;
   DeviceModel model = DeviceModel::ixxat_usb_to_can;
   std::vector<std::string> controllers;  // bus name per controller
+  std::string mdd_version;               // sorcus-x-can-2i: "N.L"; empty: "3.C"
+  int64_t buffer_load_ns = 0;            // sorcus-x-can-2i: loading a buffer takes this long
   // IXXAT adapters: the LIN bus of each LIN controller. They are numbered after the CAN
   // controllers ("DEVICE:N" with N = controllers.size() + i, and the VCI's bus number N).
   std::vector<std::string> lin;
@@ -77,9 +79,42 @@ struct SimulationConfig {
   uint32_t spin_us = 20;
 };
 
+// The group the packages create (systemd/canemu.sysusers): its members may connect by default.
+inline constexpr const char* kServiceGroup = "canemu";
+
 struct SecurityConfig {
   std::vector<std::string> allowed_users;
-  std::vector<std::string> allowed_groups;
+  // Members (primary or supplementary) of these groups may connect; the group the packages
+  // install (canemu.sysusers) by default.
+  std::vector<std::string> allowed_groups{kServiceGroup};
+  // Members of these groups (besides root and canemud's own user) may clear every client's fault
+  // scenarios and the configuration's; others clear their own user's only.
+  std::vector<std::string> admin_groups;
+  // The control socket's permission bits and group when canemud creates it (not when systemd
+  // passes it: canemud.socket's SocketMode= and SocketGroup= decide then). A group that does not
+  // exist leaves the socket in canemud's own group, with a warning.
+  uint32_t socket_mode = 0660;
+  std::string socket_group = kServiceGroup;
+};
+
+// [[recorder]]: a bus recorded into a file by canemud (docs/socketcan.md).
+struct RecorderConfig {
+  std::string bus;
+  std::string path;         // relative paths are taken from the configuration file's folder
+  bool pcap = false;        // format = "pcap" (default: "candump", or "pcap" for a .pcap path)
+  uint64_t max_size = 0;    // bytes; rotate before a file grows past it (0: never)
+  uint32_t max_files = 10;  // old files kept by rotation
+  bool errors = true;       // error frames recorded too
+  uint32_t line = 0;
+};
+
+// [[bridge]]: a bus joined to a Linux CAN interface (docs/socketcan.md).
+struct BridgeConfig {
+  std::string kind = "socketcan";  // the only kind so far
+  std::string bus;
+  std::string interface;      // vcan0, vxcan1, can0, ...
+  bool error_frames = false;  // the bridge node's errors and states as CAN_ERR_* frames
+  uint32_t line = 0;
 };
 
 struct Config {
@@ -91,7 +126,9 @@ struct Config {
   std::vector<std::string> scenario_files;
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
-  std::vector<LinNodeConfig> lin_nodes;  // [[lin_node]]: simulated LIN nodes
+  std::vector<LinNodeConfig> lin_nodes;   // [[lin_node]]: simulated LIN nodes
+  std::vector<RecorderConfig> recorders;  // [[recorder]]
+  std::vector<BridgeConfig> bridges;      // [[bridge]]
 
   const BusConfig* bus(std::string_view name) const;
 };

@@ -37,6 +37,8 @@ struct Session {
   std::string name;
   uint32_t pid = 0;  // from SO_PEERCRED
   uint32_t uid = 0;
+  uint32_t gid = 0;     // primary group, from SO_PEERCRED
+  bool admin = false;   // may clear every fault scenario ([security] admin_groups)
   uint32_t events = 0;  // subscribed notifications (ipc::kEvent*)
   uint32_t next_channel = 1;
   std::map<uint32_t, SessionChannel> channels;
@@ -99,6 +101,7 @@ class ControlDispatcher {
   void error(const Send& send, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
   void open_channel(Session& c, const ipc::OpenChannelRequest& m, const Send& send);
   void channel_status(Session& c, const ipc::ChannelStatusRequest& m, const Send& send);
+  void add_bridge(const ipc::BridgeAddRequest& m, const Send& send, uint32_t request_id);
 
   Simulation& sim_;
   TimeSetting time_;

@@ -45,11 +45,16 @@ class ScenarioRunner {
   void add_bus(model::CanBus& bus, const BusConfig& config);
   std::size_t bus_count() const { return buses_.size(); }
 
+  // Who loaded a scenario: the configuration (no uid) or a client running as that uid.
+  using Owner = std::optional<uint32_t>;
+  // Whether a client may clear a scenario of `owner`.
+  using MayClear = std::function<bool(const Owner& owner)>;
+
   // Resolves the scenario's buses and nodes and applies every fault, its times counted from
-  // `start`. Nothing is applied when a name does not resolve; the errors say which, with the
-  // scenario file's line.
-  tl::expected<void, std::vector<std::string>> apply(const Scenario& scenario,
-                                                     model::SimTime start);
+  // `start`, for `owner`. Nothing is applied when a name does not resolve; the errors say which,
+  // with the scenario file's line. A user has at most kMaxScenariosPerUser in force.
+  tl::expected<void, std::vector<std::string>> apply(const Scenario& scenario, model::SimTime start,
+                                                     Owner owner = {});
 
   // Every fault applied so far, with what it did.
   struct FaultStatus {
@@ -66,14 +71,17 @@ class ScenarioRunner {
   };
   std::vector<FaultStatus> status() const;
 
-  // Clears the faults of the scenario named `name` (empty: of every scenario): frame rules stop
-  // matching, scheduled effects do not fire. Effects that fired stay (an unplugged node stays
-  // unplugged). Returns the number of scenarios cleared.
-  std::size_t clear(std::string_view name);
+  // Clears the faults of the scenario named `name` (empty: of every scenario) that `may` allows
+  // (no `may`: all): frame rules stop matching, scheduled effects do not fire. Effects that fired
+  // stay (an unplugged node stays unplugged). Returns the number of scenarios cleared; counts
+  // the ones `may` kept in force in `refused`.
+  std::size_t clear(std::string_view name, const MayClear& may = {},
+                    std::size_t* refused = nullptr);
 
   // Bounds on what clients can pile up (docs/faults.md): scenarios in force at once, frame
   // rules per bus, and cleared scenarios kept for `canemu fault list` (the oldest go first).
   static constexpr std::size_t kMaxScenarios = 64;
+  static constexpr std::size_t kMaxScenariosPerUser = 16;
   static constexpr std::size_t kMaxRulesPerBus = 1024;
   static constexpr std::size_t kKeptCleared = 32;
 
@@ -108,6 +116,7 @@ class ScenarioRunner {
     std::string name;
     std::vector<AppliedFault> faults;
     bool cleared = false;
+    Owner owner;
   };
   // A fault's bus and node, resolved.
   struct Resolved {

@@ -42,6 +42,9 @@ class Server {
     ipc::UniqueFd fd;
     Session session;
     bool closing = false;  // gone or misbehaving: dropped after the current batch of events
+    // Why canemud will not serve it: its first request is answered with this, then it is
+    // dropped (closing at once could discard the answer with the request still unread).
+    std::string refused;
   };
   static constexpr std::size_t kMaxClients = 256;
 
@@ -57,10 +60,15 @@ class Server {
   void reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
   void reload();
   void kick_all_channels();
+  // Writes what recorders hold (each pass of the loop, before status, after a time step); logs
+  // recorders that began to lose frames.
+  void flush_recorders();
   void check_channels();
   void send_notifications();
   void send_outboxes();
   void fill_clients(ipc::ClientListReply& r);
+  ipc::IpcResult<void> open_listener();
+  void drop_revoked_clients();
 
   Simulation& sim_;
   ServerOptions options_;
@@ -75,6 +83,7 @@ class Server {
   int64_t last_wake_ns_ = 0;  // CLOCK_MONOTONIC of the loop's last wake-up
   int64_t deadline_ns_ = 0;   // of the armed timer (0: none)
   bool accepting_ = true;
+  bool socket_from_systemd_ = false;  // socket activation: systemd owns the file
   AccessPolicy access_;
   bool running_ = true;
   std::vector<uint8_t> buffer_;

@@ -8,6 +8,7 @@
 // What the protocol reports of it is filled in status.hpp.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -21,7 +22,9 @@
 #include "canemu/daemon/device_registry.hpp"
 #include "canemu/daemon/lin_nodes.hpp"
 #include "canemu/daemon/node_pool.hpp"
+#include "canemu/daemon/recorder.hpp"
 #include "canemu/daemon/scenario_runner.hpp"
+#include "canemu/daemon/socketcan_bridge.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/lin_bus.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
@@ -66,6 +69,9 @@ class Simulation {
   // The simulated LIN nodes ([[lin_node]]), in configuration order.
   const std::vector<SimulatedLinNode>& lin_nodes() const { return lin_nodes_; }
 
+  // The timing of a node on bus `bus` at the bus's rates (nothing if no controller runs them).
+  std::optional<model::HostedNodeSettings> bus_timing(std::size_t bus) const;
+
   DeviceRegistry& devices() { return devices_; }
   const DeviceRegistry& devices() const { return devices_; }
   ScenarioRunner& scenarios() { return scenarios_; }
@@ -107,6 +113,23 @@ class Simulation {
   // firmware, listed with the configured adapters while the lease lives.
   DeviceLease add_vci_device(std::string name, std::size_t bus, uint32_t owner_pid);
 
+  // ---- recorders ([[recorder]], set at start) ----
+  const std::vector<std::unique_ptr<Recorder>>& recorders() const { return recorders_; }
+  // Writes what the recorders hold; one line for each recorder that began to lose frames.
+  std::vector<std::string> flush_recorders();
+
+  // ---- SocketCAN bridges ([[bridge]] at start, canemu bridge add|remove at run time) ----
+  const std::vector<std::unique_ptr<SocketCanBridge>>& bridges() const { return bridges_; }
+  // A bridge of `b.bus` to `b.interface` over `port` (the interface's socket, or in tests a
+  // stand-in); the error says why not (no such bus, a LIN bus, the interface bridged already,
+  // no controller for the bus's rate). add_bridge() opens the CAN_RAW socket itself.
+  tl::expected<SocketCanBridge*, std::string> add_bridge(const BridgeConfig& b, ipc::UniqueFd port);
+  tl::expected<SocketCanBridge*, std::string> add_bridge(const BridgeConfig& b);
+  // Removes the bridge of `interface` (its node leaves the bus); false if there is none.
+  // `before` sees it first (the server stops watching its socket).
+  bool remove_bridge(const std::string& interface,
+                     const std::function<void(SocketCanBridge&)>& before = {});
+
  private:
   explicit Simulation(Config config)
       : config_(std::move(config)),
@@ -121,6 +144,8 @@ class Simulation {
   // The device's LIN controllers (config `lin`), on LIN buses that exist.
   std::optional<std::string> lin_controllers(const DeviceConfig& d,
                                              std::vector<DeviceRegistry::LinController>& out);
+
+  std::optional<std::string> add_recorder(const RecorderConfig& r);
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).
@@ -132,6 +157,8 @@ class Simulation {
   NodePool nodes_;
   DeviceRegistry devices_;
   ScenarioRunner scenarios_;
+  std::vector<std::unique_ptr<Recorder>> recorders_;       // on nodes_'s nodes
+  std::vector<std::unique_ptr<SocketCanBridge>> bridges_;  // on nodes_'s nodes
 };
 
 }  // namespace canemu::daemon

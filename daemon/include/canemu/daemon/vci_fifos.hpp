@@ -1,6 +1,7 @@
 // Stand-alone VCI FIFOs (VciCreateFifo / VciAccessFifo, ipc::VciOp::fifo_*): rings canemud holds
 // for the processes that share them. A client creates one and gets its id and descriptors;
-// other clients reach it by that id. Each side (reader, writer) is taken by one client at a
+// other clients of the same user (or root) reach it by that id, a random 64-bit number that
+// cannot be guessed from another FIFO's. Each side (reader, writer) is taken by one client at a
 // time, so there is one reader and one writer in all processes together. A FIFO lives while a
 // client holds it; its memory counts against the daemon-wide ring budget.
 #pragma once
@@ -28,9 +29,11 @@ class VciFifos {
 
   // Answers fifo_create (args: capacity, element size), fifo_access (args: the id's low and
   // high words) and fifo_side (args: the id's words, side 0 reader / 1 writer, 1 take / 0 give
-  // back) for `holder` in `r`. Create and access give the id, capacity and element size in r.values
-  // and the descriptors (ipc::kFifoFdCount) in `fds`.
-  void handle(Holder holder, const ipc::VciRequest& m, ipc::VciReply& r, std::vector<int>& fds);
+  // back) for `holder`, whose peer runs as `uid`, in `r`. Create and access give the id, capacity
+  // and element size in r.values and the descriptors (ipc::kFifoFdCount) in `fds`. Access by a
+  // uid other than the creator's (root excepted) is VCI_E_ACCESSDENIED.
+  void handle(Holder holder, uint32_t uid, const ipc::VciRequest& m, ipc::VciReply& r,
+              std::vector<int>& fds);
   // `holder` is gone: it gives back its sides, and a FIFO nobody holds any more is freed.
   void release(Holder holder);
 
@@ -43,14 +46,15 @@ class VciFifos {
     std::set<Holder> holders;
     Holder reader = nullptr;
     Holder writer = nullptr;
+    uint32_t owner_uid = 0;
   };
+  uint64_t fresh_id() const;
   std::size_t held_by(Holder holder) const;
   void side(Holder holder, SharedFifo& f, const ipc::VciRequest& m, ipc::VciReply& r);
 
   std::size_t& ring_bytes_in_use_;
   std::map<uint64_t, SharedFifo> fifos_;
   std::map<Holder, std::set<uint64_t>> held_;  // the FIFOs each holder holds
-  uint64_t next_id_ = 1;
 };
 
 }  // namespace canemu::daemon

@@ -75,6 +75,7 @@ struct VciSession {
   // Ephemeral adapters this client created, by name.
   std::map<std::string, Simulation::DeviceLease> devices;
   uint32_t pid = 0;
+  uint32_t uid = 0;
 };
 
 // The session's CAN channels and LIN monitors (each has rings): at most kMaxVciChannelsPerClient.

@@ -350,6 +350,7 @@ void XcanModule::start_on(unsigned i, uint8_t n, const Request& r) {
   I82527& chip = f.chip;
   const uint8_t base = message(n);
   const Object& o = f.objects[static_cast<std::size_t>(r.object)];
+  bool loaded = true;
   if (r.message) {
     // A general-ID message: identifier, format, DLC and data loaded for this one frame.
     const XCAN_MESSAGE& m = *r.message;
@@ -371,24 +372,44 @@ void XcanModule::start_on(unsigned i, uint8_t n, const Request& r) {
       chip.write(static_cast<uint8_t>(base + DATA0 + k), m.aucData[k]);
     }
     chip.write(base + CTRL0, pair_write(MSGVAL | TXIE, RXIE));
-    chip.write(base + CTRL1, pair_write(TXRQST | NEWDAT, CPUUPD));
+  } else if (b.owner != r.object) {
+    b.owner = r.object;
+    program_object(i, n, r.object);
   } else {
-    const bool send = o.role == Role::active_send || o.role == Role::passive_send;
-    if (b.owner != r.object) {
-      // Loading the object into the buffer (Not modelled: the few µs it takes).
-      b.owner = r.object;
-      program_object(i, n, r.object);
-    } else if (send) {
+    loaded = false;  // cached: only its data change
+    if (o.role == Role::active_send || o.role == Role::passive_send) {
       update_data(i, o);
-    }
-    if (send) {
-      chip.write(base + CTRL1, pair_write(TXRQST | NEWDAT, CPUUPD));
-    } else {
-      chip.write(base + CTRL1, pair_write(TXRQST));  // a receive object sends a remote frame
     }
   }
   b.busy = true;
   b.sending = r;
+  if (!loaded || load_ns_ == 0) {
+    request_transmission(i, n);
+    return;
+  }
+  // The load takes its time; the transmit request follows unless the buffer was taken from
+  // the request meanwhile (a new plan, the interface's reset).
+  const uint64_t token = next_load_++;
+  b.load = token;
+  loads_[token] = scheduler_.schedule_after(SimDuration(load_ns_), [this, i, n, token](SimTime) {
+    loads_.erase(token);
+    Buffer& x = ifaces_[i].buffers[n - 1];
+    if (x.busy && x.load == token) {
+      x.load = 0;
+      request_transmission(i, n);
+    }
+  });
+}
+
+void XcanModule::request_transmission(unsigned i, uint8_t n) {
+  Interface& f = ifaces_[i];
+  const Request& r = f.buffers[n - 1].sending;
+  const Role role = f.objects[static_cast<std::size_t>(r.object)].role;
+  if (r.message || role == Role::active_send || role == Role::passive_send) {
+    f.chip.write(message(n) + CTRL1, pair_write(TXRQST | NEWDAT, CPUUPD));
+  } else {
+    f.chip.write(message(n) + CTRL1, pair_write(TXRQST));  // a receive object's remote frame
+  }
 }
 
 BufferView XcanModule::buffer(unsigned i, uint8_t n) const {

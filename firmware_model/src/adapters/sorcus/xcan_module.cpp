@@ -40,6 +40,9 @@ XcanModule::~XcanModule() {
   for (const Waiter& w : waiters_) {
     scheduler_.cancel(w.timeout);
   }
+  for (const auto& [token, id] : loads_) {
+    scheduler_.cancel(id);
+  }
 }
 
 void XcanModule::connect(unsigned i, CanBus& bus) {
@@ -152,7 +155,8 @@ tl::expected<ChannelHandle, uint32_t> XcanModule::open_channel(const CPS_XCAN& c
     return tl::unexpected(uint32_t{ERR_XCAN_INVALID_CPS});
   }
   if (cps.ulCanID == XCAN_GENERAL_ID) {
-    if (cps.usDevice != DEVICE_BUS_OUT || !(cps.usFlags & _CP_EXCLUSIVE) ||
+    // «dieser Kanaltyp ist ab MDD Version 3.C implementiert»: before, no such channel.
+    if (mdd_version_ < kMdd3C || cps.usDevice != DEVICE_BUS_OUT || !(cps.usFlags & _CP_EXCLUSIVE) ||
         (cps.usFlags & ~(_CP_EXCLUSIVE | _CP_SYNC_CALLBACK | XCAN_NO_INT)) ||
         ((cps.usFlags & XCAN_NO_INT) && cps.usTimeout == 0)) {
       return tl::unexpected(uint32_t{ERR_XCAN_INVALID_CPS});
@@ -186,6 +190,10 @@ tl::expected<ChannelHandle, uint32_t> XcanModule::open_channel(const CPS_XCAN& c
 uint32_t XcanModule::validate_object_cps(const Interface& f, const CPS_XCAN& cps, Role& role,
                                          bool& extended) const {
   if ((cps.usFlags & ~kObjectFlags) != 0) {
+    return ERR_XCAN_INVALID_CPS;
+  }
+  // «Das Flag steht erst ab MDD Version 3.C zur Verfügung.»
+  if ((cps.usFlags & XCAN_NEW_ONLY) && mdd_version_ < kMdd3C) {
     return ERR_XCAN_INVALID_CPS;
   }
   if ((cps.usFlags & XCAN_29BIT_ID) && f.params.MsgFormat != XCAN_MIXED_FORMAT) {

@@ -223,7 +223,12 @@ tl::expected<ULONG, uint32_t> XcanModule::info(ChannelHandle h, USHORT what) {
     return bus_state(c->iface);
   }
   if (what == INFO_XCAN_MSG_COUNT && (c->kind == Kind::object || c->kind == Kind::general)) {
-    return ULONG{ifaces_[c->iface].objects[static_cast<std::size_t>(c->object)].count};
+    const Object& o = ifaces_[c->iface].objects[static_cast<std::size_t>(c->object)];
+    // Send objects count «ab MDD Version 3.C»; receive objects always.
+    const bool send = o.role == Role::active_send || o.role == Role::passive_send;
+    if (!send || mdd_version_ >= kMdd3C) {
+      return ULONG{o.count};
+    }
   }
   return tl::unexpected(uint32_t{ERR_XCAN_WRONG_TYPE});
 }

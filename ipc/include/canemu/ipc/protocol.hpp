@@ -1,8 +1,8 @@
 // The control protocol between canemud and its clients: fixed-layout messages over an AF_UNIX
 // SOCK_SEQPACKET socket, one message per packet, every one starting with MsgHeader. The
-// messages live in protocol_core.hpp (the daemon's own), vci_messages.hpp and
-// xcan_messages.hpp (the personalities); this header gathers them with their message types,
-// the constructor of a message and the check of a received one.
+// messages live in protocol_core.hpp (the daemon's own), capture_messages.hpp (recorders and
+// bridges), vci_messages.hpp and xcan_messages.hpp (the personalities); this header gathers
+// them with their message types, the constructor of a message and the check of a received one.
 #pragma once
 
 #include <cstddef>
@@ -12,6 +12,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "canemu/ipc/capture_messages.hpp"
 #include "canemu/ipc/protocol_core.hpp"
 #include "canemu/ipc/vci_messages.hpp"
 #include "canemu/ipc/xcan_messages.hpp"
@@ -83,6 +84,22 @@ template <>
 inline constexpr MsgType type_of_v<XcanReply> = MsgType::xcan_reply;
 template <>
 inline constexpr MsgType type_of_v<XcanCallbackMsg> = MsgType::xcan_callback;
+template <>
+inline constexpr MsgType type_of_v<RecorderListRequest> = MsgType::recorder_list_request;
+template <>
+inline constexpr MsgType type_of_v<RecorderListReply> = MsgType::recorder_list_reply;
+template <>
+inline constexpr MsgType type_of_v<BridgeAddRequest> = MsgType::bridge_add_request;
+template <>
+inline constexpr MsgType type_of_v<BridgeAddReply> = MsgType::bridge_add_reply;
+template <>
+inline constexpr MsgType type_of_v<BridgeRemoveRequest> = MsgType::bridge_remove_request;
+template <>
+inline constexpr MsgType type_of_v<BridgeRemoveReply> = MsgType::bridge_remove_reply;
+template <>
+inline constexpr MsgType type_of_v<BridgeListRequest> = MsgType::bridge_list_request;
+template <>
+inline constexpr MsgType type_of_v<BridgeListReply> = MsgType::bridge_list_reply;
 template <class T>
 constexpr MsgType type_of() {
   static_assert(type_of_v<T> != MsgType{}, "not a protocol message");
@@ -116,6 +133,20 @@ void copy_name(char (&dst)[N], std::string_view src) {
 template <std::size_t N>
 std::string name_of(const char (&src)[N]) {
   return std::string(src, strnlen(src, N));
+}
+
+// A name a peer chose (a client's name in its Hello), as canemud keeps and shows it: printable
+// ASCII only, every other byte '?', so that no name can break a table, a log line or a
+// terminal.
+template <std::size_t N>
+std::string printable_name_of(const char (&src)[N]) {
+  std::string s = name_of(src);
+  for (char& c : s) {
+    if (c < 0x20 || c > 0x7E) {
+      c = '?';
+    }
+  }
+  return s;
 }
 
 }  // namespace canemu::ipc

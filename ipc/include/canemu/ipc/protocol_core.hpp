@@ -69,6 +69,14 @@ enum class MsgType : uint16_t {
   xcan_request = 80,
   xcan_reply = 81,
   xcan_callback = 82,  // unsolicited, request_id 0
+  recorder_list_request = 90,
+  recorder_list_reply = 91,
+  bridge_add_request = 92,
+  bridge_add_reply = 93,
+  bridge_remove_request = 94,
+  bridge_remove_reply = 95,
+  bridge_list_request = 96,
+  bridge_list_reply = 97,
 };
 
 // Why a request failed. Values are stable: clients show them by name.
@@ -471,7 +479,7 @@ static_assert(sizeof(FaultClearRequest) == 16 + kScenarioNameSize);
 struct FaultClearReply {
   MsgHeader header;
   uint32_t cleared = 0;  // scenarios
-  uint32_t reserved = 0;
+  uint32_t refused = 0;  // scenarios of other users (or the configuration's) left in force
 };
 static_assert(sizeof(FaultClearReply) == 24);
 

@@ -347,6 +347,38 @@ TEST(XcanBuffers, AnExclusiveObjectInBufferFourteenMovesBelowItAtTheFifteenthObj
   EXPECT_EQ(x.sink.callbacks[0].data[0], 0x33);
 }
 
+// Checklist 6: «Das Eintragen eines Message-Objekts in einen Message-Puffer nimmt eine gewisse
+// Zeit (einige µs) in Anspruch. Wenn ein Message-Objekt … bereits in einem Message-Puffer
+// eingetragen ist, entfällt diese Zeit». With a load time of 5 µs set: 15 objects, so buffers
+// 1..14 are temporary and cache 100h..10Dh; 10Eh is cached nowhere.
+TEST(XcanBuffers, LoadingABufferDelaysItsFrameAndACachedObjectGoesAtOnce) {
+  Xcan x;
+  EXPECT_EQ(x.m.buffer_load_time(), 0);  // unless set
+  x.m.set_buffer_load_time(5'000);
+  x.bus_control();
+  const auto sends = open_many(x, DEVICE_BUS_OUT, 0x100, 15);
+  EXPECT_EQ(x.write(sends[14], {0x0E}), uint32_t{ERR_OK});  // loaded into buffer 1
+  EXPECT_TRUE(x.m.buffer(0, 1).busy);
+  x.run_until(1'000'000);
+  EXPECT_EQ(x.write(sends[1], {0x01}), uint32_t{ERR_OK});  // cached in buffer 2
+  x.run_until(2'000'000);
+  EXPECT_EQ(x.write(sends[0], {0x00}), uint32_t{ERR_OK});  // buffer 1 holds 10Eh: loaded again
+  x.run_until(3'000'000);
+  EXPECT_EQ(x.write(sends[0], {0x10}), uint32_t{ERR_OK});  // cached now
+  x.run_until(4'000'000);
+  const std::vector<std::pair<Frame, int64_t>> expected{{data_frame(0x10E, {0x0E}), 5'000},
+                                                        {data_frame(0x101, {0x01}), 1'000'000},
+                                                        {data_frame(0x100, {0x00}), 2'005'000},
+                                                        {data_frame(0x100, {0x10}), 3'000'000}};
+  ASSERT_EQ(x.peer.log.received.size(), expected.size());
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_EQ(x.peer.log.received[k].frame, expected[k].first) << k;
+    EXPECT_EQ(x.peer.log.received[k].at, expected[k].second + frame_ns(expected[k].first)) << k;
+  }
+  EXPECT_EQ(x.m.buffer(0, 1).id, 0x100u);
+  EXPECT_EQ(x.m.buffer(0, 2).id, 0x101u);
+}
+
 TEST(XcanBuffers, AFullFifoRefusesFurtherRequests) {
   Xcan x;
   x.bus_control(1);  // interface 1 is alone: no transmission ever ends, the buffers stay busy

@@ -253,6 +253,42 @@ TEST(XcanObjects, NewOnlyReadWithoutNewDataGivesStickyDataNotReadyUntilClearErro
   EXPECT_EQ(x.read(h), (Bytes{0x08}));
 }
 
+// Checklist 106: what the manual marks «ab MDD Version 3.C» is missing from an MDD 3.B; the
+// rest works as in 3.C.
+TEST(XcanObjects, AnMddBefore3CHasNoSendCountNoNewOnlyAndNoGeneralIdChannel) {
+  EXPECT_EQ(MddVersion::parse("3.B"), (MddVersion{3, 'B'}));
+  EXPECT_EQ(MddVersion::parse("3.c"), std::nullopt);
+  EXPECT_EQ(MddVersion::parse("10.A"), std::nullopt);
+  EXPECT_LT(MddVersion::parse("2.Z"), kMdd3C);
+  EXPECT_GT(MddVersion::parse("4.A"), kMdd3C);
+  Xcan x;
+  x.m.set_mdd_version(MddVersion{3, 'B'});
+  x.bus_control();
+  EXPECT_EQ(x.m.open_channel(Xcan::cps(DEVICE_BUS_IN, 0x400, XCAN_NEW_ONLY), true).error(),
+            uint32_t{ERR_XCAN_INVALID_CPS});
+  EXPECT_EQ(
+      x.m.open_channel(Xcan::cps(DEVICE_BUS_OUT, XCAN_GENERAL_ID, _CP_EXCLUSIVE), true).error(),
+      uint32_t{ERR_XCAN_INVALID_CPS});
+  const ChannelHandle send = x.open(Xcan::cps(DEVICE_BUS_OUT, 0x100));
+  const ChannelHandle passive = x.open(Xcan::cps(DEVICE_BUS_OUT, 0x101, XCAN_REMOTE));
+  const ChannelHandle receive = x.open(Xcan::cps(DEVICE_BUS_IN, 0x200));
+  EXPECT_EQ(x.write(send, {0x01}), uint32_t{ERR_OK});
+  x.peer.send(data_frame(0x200, {0x02}));
+  x.run_until(1'000'000);
+  ASSERT_EQ(x.peer.log.received.size(), 1u);
+  EXPECT_EQ(x.m.info(send, INFO_XCAN_MSG_COUNT).error(), uint32_t{ERR_XCAN_WRONG_TYPE});
+  EXPECT_EQ(x.m.info(passive, INFO_XCAN_MSG_COUNT).error(), uint32_t{ERR_XCAN_WRONG_TYPE});
+  EXPECT_EQ(x.m.info(receive, INFO_XCAN_MSG_COUNT).value(), 1u);  // receive objects count
+  // From 3.C on (the default), all three are there.
+  Xcan y;
+  EXPECT_EQ(y.m.mdd_version(), kMdd3C);
+  y.bus_control();
+  EXPECT_TRUE(y.m.open_channel(Xcan::cps(DEVICE_BUS_IN, 0x400, XCAN_NEW_ONLY), true));
+  EXPECT_TRUE(y.m.open_channel(Xcan::cps(DEVICE_BUS_OUT, XCAN_GENERAL_ID, _CP_EXCLUSIVE), true));
+  const ChannelHandle counted = y.open(Xcan::cps(DEVICE_BUS_OUT, 0x100));
+  EXPECT_EQ(y.m.info(counted, INFO_XCAN_MSG_COUNT).value(), 0u);
+}
+
 TEST(XcanObjects, PassiveReceiveCmdStartSendsARemoteFrameAndTheAnswerCallsBack) {
   Xcan x;
   x.bus_control();

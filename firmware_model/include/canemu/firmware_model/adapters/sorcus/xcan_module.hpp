@@ -23,10 +23,15 @@
 // with XCAN_NO_INT, an active receive read) answer Reply::pending and complete later through
 // XcanSink::completed, so the daemon can block its client without a thread in the model.
 //
+// The MDD's version (MddVersion, 3.C unless set) gates what the manual marks «ab MDD Version
+// 3.C»: INFO_XCAN_MSG_COUNT of send objects, XCAN_NEW_ONLY, the general-ID send channel.
+//
 // Every decision where the manual is silent is marked `Decision:` and listed in docs/sorcus.md.
-// Not modelled: the few µs a buffer load takes (loads are instantaneous), the NI-Task's queue
-// (the sink gets every callback at once, flagged sync or buffered), MDD version gating (the
-// model is an MDD >= 3.C), the 82527 bug that sends a remote frame with ID 0.
+// Loading an object into a buffer takes set_buffer_load_time() (0 unless set): its transmit
+// request reaches the 82527 that much later; an object still cached in its buffer goes at once.
+//
+// Not modelled: the NI-Task's queue (the sink gets every callback at once, flagged sync or
+// buffered), the 82527 bug that sends a remote frame with ID 0.
 #pragma once
 
 #include <array>
@@ -40,6 +45,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/firmware_model/adapters/sorcus/acceptance.hpp"
+#include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/firmware_model/chips/i82527/i82527.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 #include "sorcus/xcan_types.h"
@@ -119,6 +125,16 @@ class XcanModule {
   // Wires interface `i` (0 or 1) to `bus`; before any channel of it is opened.
   void connect(unsigned i, CanBus& bus);
   XcanVariant variant() const { return variant_; }
+  // The MDD's version; before any channel is opened. Before 3.C: no INFO_XCAN_MSG_COUNT on
+  // send objects (ERR_XCAN_WRONG_TYPE), no XCAN_NEW_ONLY and no general-ID channel
+  // (ERR_XCAN_INVALID_CPS).
+  void set_mdd_version(MddVersion v) { mdd_version_ = v; }
+  MddVersion mdd_version() const { return mdd_version_; }
+  // «Das Eintragen eines Message-Objekts in einen Message-Puffer nimmt eine gewisse Zeit (einige
+  // µs) in Anspruch»: the time from loading a buffer (an object not cached there, or a general-ID
+  // message) to its transmit request, in ns; 0 unless set.
+  void set_buffer_load_time(int64_t ns) { load_ns_ = ns; }
+  int64_t buffer_load_time() const { return load_ns_; }
   bool low_speed(unsigned i) const;
   I82527& chip(unsigned i) { return ifaces_[i].chip; }
   // The low-speed transceiver reports a line fault (the daemon's line_error fault): it goes on
@@ -178,6 +194,7 @@ class XcanModule {
     bool permanent = false;
     bool busy = false;
     Request sending;
+    uint64_t load = 0;  // the pending load's token (0: none): its transmit request is due
   };
   struct Channel {
     Channel(unsigned i, Kind k, const CPS_XCAN& p, bool cb, int o = -1)
@@ -248,6 +265,7 @@ class XcanModule {
   std::vector<int> buffer15_objects(const Interface& f) const;
   uint32_t request(unsigned i, Request r);
   void start_on(unsigned i, uint8_t n, const Request& r);
+  void request_transmission(unsigned i, uint8_t n);
   void update_data(unsigned i, const Object& o);
   void service(unsigned i);
   void serve_status(unsigned i);
@@ -265,6 +283,10 @@ class XcanModule {
 
   SimScheduler& scheduler_;
   XcanVariant variant_;
+  MddVersion mdd_version_ = kMdd3C;
+  int64_t load_ns_ = 0;
+  uint64_t next_load_ = 1;
+  std::map<uint64_t, EventId> loads_;  // pending loads' events by token (cancelled with us)
   XcanSink& sink_;
   std::array<Interface, XCAN_INTERFACES> ifaces_;
   std::map<ChannelHandle, Channel> channels_;

@@ -1,0 +1,92 @@
+#include "capture_table.hpp"
+
+#include <cstdio>
+
+#include <fmt/format.h>
+
+#include "canemu/ipc/capture_writer.hpp"
+#include "command.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+std::string format_name(uint8_t format) {
+  return std::string(ipc::to_string(static_cast<ipc::CaptureFormat>(format)));
+}
+
+}  // namespace
+
+void print_recorders(const ipc::RecorderListReply& r) {
+  std::printf("%-12s %-7s %10s %12s %7s %8s %s\n", "RECORDER", "FORMAT", "FRAMES", "BYTES",
+              "ROTATED", "LOST", "FILE");
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::RecorderEntry& e = r.recorders[i];
+    const std::string error = ipc::name_of(e.error);
+    std::printf("%-12s %-7s %10llu %12llu %7u %8llu %s%s\n", ipc::name_of(e.bus).c_str(),
+                format_name(e.format).c_str(), static_cast<unsigned long long>(e.frames),
+                static_cast<unsigned long long>(e.bytes), e.rotations,
+                static_cast<unsigned long long>(e.lost), ipc::name_of(e.path).c_str(),
+                error.empty() ? "" : ("  (" + error + ")").c_str());
+  }
+}
+
+toml::array recorders_array(const ipc::RecorderListReply& r) {
+  const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
+  toml::array out;
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::RecorderEntry& e = r.recorders[i];
+    out.push_back(toml::table{{"bus", ipc::name_of(e.bus)},
+                              {"path", ipc::name_of(e.path)},
+                              {"format", format_name(e.format)},
+                              {"errors", e.errors != 0},
+                              {"frames", i64(e.frames)},
+                              {"bytes", i64(e.bytes)},
+                              {"rotations", i64(e.rotations)},
+                              {"lost", i64(e.lost)},
+                              {"error", ipc::name_of(e.error)}});
+  }
+  return out;
+}
+
+void print_bridges(const ipc::BridgeListReply& r) {
+  std::printf("%-12s %-10s %-14s %4s %4s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
+              "INTERFACE", "STATE", "TEC", "REC", "TO-IF", "FROM-IF", "ERRORS", "IF-DROP", "K-DROP",
+              "Q-DROP", "REJECTED", "FAILED");
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::BridgeEntry& e = r.bridges[i];
+    const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+    std::printf("%-12s %-10s %-14s %4u %4u %10llu %10llu %7llu %8llu %8llu %8llu %8llu %8llu\n",
+                ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(),
+                error_state_name(e.state).c_str(), e.tec, e.rec, n(e.to_interface),
+                n(e.from_interface), n(e.error_frames_written), n(e.to_interface_dropped),
+                n(e.kernel_dropped), n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
+  }
+}
+
+toml::array bridges_array(const ipc::BridgeListReply& r) {
+  const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
+  toml::array out;
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::BridgeEntry& e = r.bridges[i];
+    out.push_back(toml::table{{"kind", "socketcan"},
+                              {"bus", ipc::name_of(e.bus)},
+                              {"interface", ipc::name_of(e.interface)},
+                              {"error_frames", e.error_frames != 0},
+                              {"state", error_state_name(e.state)},
+                              {"tec", i64(e.tec)},
+                              {"rec", i64(e.rec)},
+                              {"queued", i64(e.queued)},
+                              {"to_interface", i64(e.to_interface)},
+                              {"from_interface", i64(e.from_interface)},
+                              {"error_frames_written", i64(e.error_frames_written)},
+                              {"to_interface_dropped", i64(e.to_interface_dropped)},
+                              {"kernel_dropped", i64(e.kernel_dropped)},
+                              {"queue_dropped", i64(e.queue_dropped)},
+                              {"rejected", i64(e.rejected)},
+                              {"tx_failed", i64(e.tx_failed)}});
+  }
+  return out;
+}
+
+}  // namespace canemu::cli

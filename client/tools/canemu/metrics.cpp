@@ -1,0 +1,176 @@
+// canemu metrics: canemud's counters in the Prometheus text exposition format (version 0.0.4),
+// for a node exporter's textfile collector or any scraper that runs a command.
+#include <cstdio>
+#include <string>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/firmware_model/bus/can_error.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "command.hpp"
+#include "fault_table.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+// A label value as the format wants it: backslash, double quote and line feed escaped.
+std::string label(std::string_view value) {
+  std::string out;
+  for (char c : value) {
+    if (c == '\\' || c == '"') {
+      out += '\\';
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+class Exposition {
+ public:
+  // Starts metric family `name` with its help text and type.
+  void family(const char* name, const char* type, const char* help) {
+    text_ += fmt::format("# HELP {} {}\n# TYPE {} {}\n", name, help, name, type);
+  }
+  template <typename V>
+  void sample(const char* name, const std::string& labels, V value) {
+    text_ += labels.empty() ? fmt::format("{} {}\n", name, value)
+                            : fmt::format("{}{{{}}} {}\n", name, labels, value);
+  }
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+};
+
+bool is_lin(const ipc::StatusNode& n) {
+  return static_cast<ipc::WireLinState>(n.lin) != ipc::WireLinState::none;
+}
+
+std::string bus_of(const ipc::StatusReply& s, const ipc::StatusNode& n) {
+  return n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?");
+}
+
+std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults) {
+  Exposition e;
+  e.family("canemu_sim_time_seconds", "gauge", "Simulated time.");
+  e.sample("canemu_sim_time_seconds", "",
+           fmt::format("{:.9f}", static_cast<double>(s.sim_time_ns) / 1e9));
+  e.family("canemu_clients", "gauge", "Connected clients.");
+  e.sample("canemu_clients", "", s.client_count);
+
+  const auto bus_label = [&](uint16_t i) {
+    return fmt::format("bus=\"{}\"", label(ipc::name_of(s.buses[i].name)));
+  };
+  e.family("canemu_bus_bitrate_bits_per_second", "gauge", "Nominal bit rate of the bus.");
+  for (uint16_t i = 0; i < s.bus_count; ++i) {
+    const std::string kind(ipc::to_string(static_cast<ipc::WireBusKind>(s.buses[i].kind)));
+    e.sample("canemu_bus_bitrate_bits_per_second",
+             fmt::format("{},kind=\"{}\"", bus_label(i), label(kind)), s.buses[i].bitrate);
+  }
+  e.family("canemu_bus_load_ratio", "gauge", "Share of the last second the bus was busy.");
+  for (uint16_t i = 0; i < s.bus_count; ++i) {
+    e.sample("canemu_bus_load_ratio", bus_label(i),
+             fmt::format("{:.3f}", s.buses[i].load_permille / 1000.0));
+  }
+  e.family("canemu_bus_frames_total", "counter", "Frames the bus carried.");
+  for (uint16_t i = 0; i < s.bus_count; ++i) {
+    e.sample("canemu_bus_frames_total", bus_label(i), s.buses[i].frames);
+  }
+  e.family("canemu_bus_error_frames_total", "counter", "Error frames on the bus.");
+  for (uint16_t i = 0; i < s.bus_count; ++i) {
+    e.sample("canemu_bus_error_frames_total", bus_label(i), s.buses[i].error_frames);
+  }
+
+  const auto node_label = [&](const ipc::StatusNode& n) {
+    return fmt::format("node=\"{}\",bus=\"{}\"", label(ipc::name_of(n.name)), label(bus_of(s, n)));
+  };
+  e.family("canemu_node_error_state", "gauge",
+           "1 for the node's fault confinement state, 0 for the others.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    const ipc::StatusNode& n = s.nodes[i];
+    if (is_lin(n)) {
+      continue;  // LIN nodes have no fault confinement: canemu_lin_node_online
+    }
+    for (uint8_t st = 0; st <= static_cast<uint8_t>(model::ErrorState::bus_off); ++st) {
+      e.sample("canemu_node_error_state",
+               fmt::format("{},state=\"{}\"", node_label(n),
+                           model::to_string(static_cast<model::ErrorState>(st))),
+               n.state == st ? 1 : 0);
+    }
+  }
+  e.family("canemu_lin_node_online", "gauge", "1 while a LIN node takes part in the bus.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    const ipc::StatusNode& n = s.nodes[i];
+    if (is_lin(n)) {
+      e.sample("canemu_lin_node_online", node_label(n),
+               static_cast<ipc::WireLinState>(n.lin) == ipc::WireLinState::online ? 1 : 0);
+    }
+  }
+  e.family("canemu_node_tec", "gauge", "Transmit error counter.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    e.sample("canemu_node_tec", node_label(s.nodes[i]), s.nodes[i].tec);
+  }
+  e.family("canemu_node_rec", "gauge", "Receive error counter.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    e.sample("canemu_node_rec", node_label(s.nodes[i]), s.nodes[i].rec);
+  }
+  e.family("canemu_node_frames_sent_total", "counter", "Frames the node sent.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    e.sample("canemu_node_frames_sent_total", node_label(s.nodes[i]), s.nodes[i].frames_sent);
+  }
+  e.family("canemu_node_frames_received_total", "counter", "Frames the node received.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    e.sample("canemu_node_frames_received_total", node_label(s.nodes[i]),
+             s.nodes[i].frames_received);
+  }
+  e.family("canemu_node_errors_total", "counter", "Errors the node detected or caused.");
+  for (uint16_t i = 0; i < s.node_count; ++i) {
+    e.sample("canemu_node_errors_total", node_label(s.nodes[i]), s.nodes[i].errors);
+  }
+
+  e.family("canemu_fault_hits_total", "counter",
+           "Frames a fault hit, or times a timed fault fired.");
+  for (uint16_t i = 0; i < faults.count; ++i) {
+    const ipc::FaultEntry& f = faults.faults[i];
+    e.sample("canemu_fault_hits_total",
+             fmt::format("scenario=\"{}\",line=\"{}\",effect=\"{}\",target=\"{}\"",
+                         label(ipc::name_of(f.scenario)), f.line, label(ipc::name_of(f.effect)),
+                         label(ipc::name_of(f.target))),
+             f.hits);
+  }
+  return e.text();
+}
+
+int run_metrics(const std::string& socket) {
+  auto c = connect(socket, "canemu metrics");
+  if (!c) {
+    return fail(c.error().message);
+  }
+  auto status =
+      c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  if (!status) {
+    return fail(status.error().message);
+  }
+  auto faults = fault_list(*c);
+  if (!faults) {
+    return fail(faults.error());
+  }
+  std::fputs(expose(*status, *faults).c_str(), stdout);
+  return 0;
+}
+
+}  // namespace
+
+Command add_metrics(CLI::App& app, const std::string& socket) {
+  auto* metrics = app.add_subcommand("metrics", "canemud's counters in the Prometheus text format");
+  return {metrics, [&socket] { return run_metrics(socket); }};
+}
+
+}  // namespace canemu::cli

@@ -1,0 +1,110 @@
+# `make install` (cmake --install, PREFIX and DESTDIR) and the Debian package (`make package`,
+# CPack): the daemon and the command line, the client libraries with sonames, their headers and
+# pkg-config files, the systemd units, sysusers and tmpfiles files, the default configuration in
+# /etc/canemu, the documentation and the Python package. docs/security.md, "Installing".
+include(GNUInstallDirs)
+
+set(CANEMU_INSTALLED_LIBRARIES vcinpl vcinpl2 vciapi xcan)
+foreach(lib ${CANEMU_INSTALLED_LIBRARIES})
+  set_target_properties(${lib} PROPERTIES VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR})
+endforeach()
+install(TARGETS canemud canemu RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS ${CANEMU_INSTALLED_LIBRARIES} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+
+# The headers as a program includes them: <vci/vcinpl.h>'s directory holds every VCI header,
+# <sorcus/xcan.h>'s both SORCUS ones (the build gathers them the same way).
+install(DIRECTORY ${PROJECT_BINARY_DIR}/include/vci ${PROJECT_BINARY_DIR}/include/sorcus
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+
+# pkg-config files for the installed tree, relocatable (prefix found from the file's own place).
+set(pc_dir ${PROJECT_BINARY_DIR}/install-pkgconfig)
+file(RELATIVE_PATH pc_up /root/${CMAKE_INSTALL_LIBDIR}/pkgconfig /root)
+string(REGEX REPLACE "/$" "" pc_up "${pc_up}")
+string(CONCAT pc_head "prefix=\${pcfiledir}/${pc_up}\n"
+       "includedir=\${prefix}/${CMAKE_INSTALL_INCLUDEDIR}\n"
+       "libdir=\${prefix}/${CMAKE_INSTALL_LIBDIR}\n\n")
+file(WRITE ${pc_dir}/canemu-vci.pc "${pc_head}Name: canemu-vci\n"
+     "Description: IXXAT VCI headers of canemu, the CAN adapter emulator\n"
+     "Version: ${PROJECT_VERSION}\nCflags: -I\${includedir}/vci\nLibs: -L\${libdir}\n")
+file(WRITE ${pc_dir}/canemu-xcan.pc "${pc_head}Name: canemu-xcan\n"
+     "Description: SORCUS X-CAN-2i channel library of canemu, the CAN adapter emulator\n"
+     "Version: ${PROJECT_VERSION}\nCflags: -I\${includedir}/sorcus\nLibs: -L\${libdir} -lxcan\n")
+set(pc_files ${pc_dir}/canemu-vci.pc ${pc_dir}/canemu-xcan.pc)
+foreach(lib vciapi vcinpl vcinpl2)
+  file(WRITE ${pc_dir}/canemu-${lib}.pc "${pc_head}Name: canemu-${lib}\n"
+       "Description: IXXAT VCI library lib${lib} of canemu, the CAN adapter emulator\n"
+       "Version: ${PROJECT_VERSION}\nRequires: canemu-vci = ${PROJECT_VERSION}\n"
+       "Libs: -L\${libdir} -l${lib}\n")
+  list(APPEND pc_files ${pc_dir}/canemu-${lib}.pc)
+endforeach()
+install(FILES ${pc_files} DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+
+# systemd units, sysusers and tmpfiles under the prefix's lib/ (what systemd reads for /usr);
+# the configuration in /etc/canemu for the prefix /usr, else PREFIX/etc/canemu. Decided when
+# installing, so `cmake --install --prefix` and CPack (/usr) both get paths that hold.
+install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemud.socket DESTINATION lib/systemd/system)
+install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemu.sysusers DESTINATION lib/sysusers.d
+        RENAME canemu.conf)
+install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemu.tmpfiles DESTINATION lib/tmpfiles.d
+        RENAME canemu.conf)
+install(CODE "set(CANEMU_SOURCE_DIR \"${PROJECT_SOURCE_DIR}\")
+              set(CANEMU_STAGE \"${PROJECT_BINARY_DIR}/install-systemd\")
+              set(CANEMU_BINDIR \"${CMAKE_INSTALL_BINDIR}\")")
+install(CODE [[
+  if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")
+    set(etc "/etc")
+  else()
+    set(etc "${CMAKE_INSTALL_PREFIX}/etc")
+  endif()
+  file(READ "${CANEMU_SOURCE_DIR}/systemd/canemud.service" unit)
+  string(REPLACE "/usr/bin/canemud" "${CMAKE_INSTALL_PREFIX}/${CANEMU_BINDIR}/canemud" unit
+         "${unit}")
+  string(REPLACE "/etc/canemu/" "${etc}/canemu/" unit "${unit}")
+  file(WRITE "${CANEMU_STAGE}/canemud.service" "${unit}")
+  file(INSTALL "${CANEMU_STAGE}/canemud.service"
+       DESTINATION "${CMAKE_INSTALL_PREFIX}/lib/systemd/system")
+  file(INSTALL "${CANEMU_SOURCE_DIR}/config/default.toml" DESTINATION "${etc}/canemu"
+       RENAME canemud.toml)
+]])
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/examples ${PROJECT_SOURCE_DIR}/config/faults
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu)
+
+install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}
+        FILES_MATCHING PATTERN "*.md")
+
+# The Python package where Debian's python3 finds it, with the entry point that makes
+# can.Bus(interface="canemu") work.
+set(CANEMU_PYTHON_DIR lib/python3/dist-packages)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu DESTINATION ${CANEMU_PYTHON_DIR}
+        FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
+set(dist_info ${PROJECT_BINARY_DIR}/install-python/canemu-${PROJECT_VERSION}.dist-info)
+file(WRITE ${dist_info}/METADATA
+     "Metadata-Version: 2.1\nName: canemu\nVersion: ${PROJECT_VERSION}\n"
+     "Summary: python-can interface and tools of canemu, the CAN/LIN adapter emulator\n"
+     "Requires-Dist: python-can>=4.1\n")
+file(WRITE ${dist_info}/entry_points.txt "[can.interface]\ncanemu = canemu.bus:CanemuBus\n")
+file(WRITE ${dist_info}/INSTALLER "canemu\n")
+file(WRITE ${dist_info}/top_level.txt "canemu\n")
+install(DIRECTORY ${dist_info} DESTINATION ${CANEMU_PYTHON_DIR})
+
+# ---- CPack: a Debian package ----
+set(CPACK_PACKAGE_NAME canemu)
+set(CPACK_PACKAGE_VENDOR "canemu")
+set(CPACK_PACKAGE_CONTACT "canemu maintainers <canemu@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "emulated IXXAT and SORCUS CAN/LIN adapters")
+set(CPACK_PACKAGE_DESCRIPTION
+    "canemud emulates IXXAT (VCI) and SORCUS CAN and LIN interface adapters down to the\n"
+    "controller silicon, in real time; programs written for them link canemu's client\n"
+    "libraries and run without hardware.")
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION misc)
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, python3-can")
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
+    ${PROJECT_SOURCE_DIR}/packaging/debian/conffiles ${PROJECT_SOURCE_DIR}/packaging/debian/postinst
+    ${PROJECT_SOURCE_DIR}/packaging/debian/prerm ${PROJECT_SOURCE_DIR}/packaging/debian/postrm)
+set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
+include(CPack)

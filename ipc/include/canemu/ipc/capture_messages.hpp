@@ -1,0 +1,100 @@
+// The control protocol's messages about canemud's recorders ([[recorder]]: their list with what
+// they wrote and lost, for `canemu status`) and SocketCAN bridges ([[bridge]]: added, removed
+// and listed at run time by `canemu bridge`). Gathered with the others by protocol.hpp.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "canemu/ipc/protocol_core.hpp"
+
+namespace canemu::ipc {
+
+inline constexpr std::size_t kMaxRecorders = 32;
+inline constexpr std::size_t kPathSize = 128;
+
+struct RecorderListRequest {
+  MsgHeader header;
+};
+
+struct RecorderEntry {
+  char bus[kNameSize] = {};
+  char path[kPathSize] = {};  // cut to 127 bytes
+  uint8_t format = 0;         // CaptureFormat
+  uint8_t errors = 0;         // error frames recorded too
+  uint16_t reserved = 0;
+  uint32_t rotations = 0;
+  uint64_t frames = 0;  // written to disk
+  uint64_t bytes = 0;   // in all files, headers included
+  uint64_t lost = 0;    // frames failed writes took with them
+  char error[96] = {};  // the last failure ("write /x.log: No space left on device"), or empty
+};
+static_assert(sizeof(RecorderEntry) == 32 + 128 + 8 + 24 + 96);
+
+struct RecorderListReply {
+  MsgHeader header;
+  uint16_t count = 0;
+  uint16_t reserved[3] = {};
+  RecorderEntry recorders[kMaxRecorders];
+};
+static_assert(sizeof(RecorderListReply) <= kMaxMessageSize);
+
+inline constexpr std::size_t kMaxBridges = 32;
+
+// Joins bus `bus` to the Linux CAN interface `interface` (a SocketCAN bridge).
+struct BridgeAddRequest {
+  MsgHeader header;
+  char bus[kNameSize] = {};
+  char interface[kNameSize] = {};
+  uint8_t error_frames = 0;  // 1: the bridge node's errors and states as CAN_ERR_* frames
+  uint8_t reserved[7] = {};
+};
+static_assert(sizeof(BridgeAddRequest) == 16 + 64 + 8);
+
+struct BridgeAddReply {
+  MsgHeader header;
+};
+
+struct BridgeRemoveRequest {
+  MsgHeader header;
+  char interface[kNameSize] = {};
+};
+
+struct BridgeRemoveReply {
+  MsgHeader header;
+};
+
+struct BridgeListRequest {
+  MsgHeader header;
+};
+
+struct BridgeEntry {
+  char bus[kNameSize] = {};
+  char interface[kNameSize] = {};
+  uint8_t error_frames = 0;
+  uint8_t state = 0;  // WireErrorState of the bridge's node
+  uint16_t tec = 0;
+  uint16_t rec = 0;
+  uint16_t reserved = 0;
+  uint32_t queued = 0;  // frames from the interface waiting for the bus
+  uint32_t reserved2 = 0;
+  uint64_t to_interface = 0;
+  uint64_t from_interface = 0;
+  uint64_t error_frames_written = 0;
+  uint64_t to_interface_dropped = 0;
+  uint64_t queue_dropped = 0;
+  uint64_t rejected = 0;
+  uint64_t tx_failed = 0;
+  uint64_t kernel_dropped = 0;  // dropped by the kernel before the bridge read them
+};
+static_assert(sizeof(BridgeEntry) == 64 + 16 + 64);
+
+struct BridgeListReply {
+  MsgHeader header;
+  uint16_t count = 0;
+  uint16_t reserved[3] = {};
+  BridgeEntry bridges[kMaxBridges];
+};
+static_assert(sizeof(BridgeListReply) <= kMaxMessageSize);
+
+}  // namespace canemu::ipc

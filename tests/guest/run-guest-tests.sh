@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# The SocketCAN bridge in a real Linux kernel: boots Debian's linux-image-amd64 under
+# qemu-system-x86_64 (TCG, or KVM with CANEMU_GUEST_ACCEL=kvm) with an initramfs of busybox, the
+# CAN modules (can, can-raw, can-bcm, can-gw, can-dev, vcan, vxcan), can-utils, and this build's
+# canemud and canemu with the host's libraries they link; runs tests/guest/guest-tests.sh in it
+# (results on the serial console) and powers off. Exit 0 when every guest test passed; 77 (ctest:
+# skipped, never passed) only when qemu is not installed.
+# Usage: run-guest-tests.sh SOURCE_DIR BUILD_DIR
+set -euo pipefail
+src=$(cd "${1:?usage: run-guest-tests.sh SOURCE_DIR BUILD_DIR}" && pwd)
+build=$(cd "${2:?usage: run-guest-tests.sh SOURCE_DIR BUILD_DIR}" && pwd)
+guest=$build/guest
+start=$(date +%s.%N)
+
+if ! command -v qemu-system-x86_64 >/dev/null || ! command -v cpio >/dev/null; then
+  echo "guest: SKIPPED: qemu-system-x86_64 or cpio is not installed (make deps installs them" \
+       "from scripts/apt-packages-guest.txt)"
+  exit 77
+fi
+
+# The Debian packages, downloaded once into the build tree and unpacked (not installed).
+"$src/scripts/fetch-guest-packages.sh" "$guest/debs"
+if [ ! -e "$guest/unpacked/.done" ] || [ -n "$(find "$guest/debs" -newer "$guest/unpacked/.done")" ]; then
+  rm -rf "$guest/unpacked"
+  mkdir -p "$guest/unpacked"
+  for deb in "$guest"/debs/linux-image-[0-9]*.deb "$guest"/debs/busybox-static_*.deb \
+             "$guest"/debs/can-utils_*.deb; do
+    dpkg-deb -x "$deb" "$guest/unpacked"
+  done
+  touch "$guest/unpacked/.done"
+fi
+x=$guest/unpacked
+kernel=$(ls "$x"/boot/vmlinuz-* | head -1)
+modules=$(ls -d "$x"/lib/modules/* | head -1)
+
+# The initramfs, made afresh (the binaries change with every build).
+root=$guest/root
+rm -rf "$root"
+mkdir -p "$root"/{bin,sbin,usr/bin,usr/sbin,proc,sys,dev,tmp,run,lib/modules,etc}
+cp "$x/bin/busybox" "$root/bin/busybox"
+for applet in $("$root/bin/busybox" --list-full); do
+  [ -e "$root/$applet" ] || ln -s /bin/busybox "$root/$applet"
+done
+for m in can can-raw can-bcm can-gw can-dev vcan vxcan; do
+  cp "$(find "$modules" -name "$m.ko")" "$root/lib/modules/"
+done
+for tool in candump cansend cangen cansequence canbusload; do  # libc only
+  cp "$x/usr/bin/$tool" "$root/usr/bin/"
+done
+# canemud, canemu and can-utils with the shared libraries they load (the host's).
+copy_with_libs() {
+  cp "$1" "$root/usr/bin/"
+  for lib in $(ldd "$1" | awk '/=> \// {print $3} /^\t\/lib/ {print $1}'); do
+    mkdir -p "$root$(dirname "$lib")"
+    cp -L "$lib" "$root$lib"
+  done
+}
+copy_with_libs "$build/bin/canemud"
+copy_with_libs "$build/bin/canemu"
+copy_with_libs "$x/usr/bin/candump"
+copy_with_libs "$build/bin/vci_c_talk"
+mkdir -p "$root/lib64"
+cp -L /lib64/ld-linux-x86-64.so.2 "$root/lib64/"
+cp "$src/tests/guest/guest-tests.sh" "$root/guest-tests.sh"
+cat > "$root/init" <<'INIT'
+#!/bin/sh
+mount -t proc proc /proc
+mount -t sysfs sys /sys
+mount -t devtmpfs dev /dev
+mount -t tmpfs tmp /tmp
+echo "GUEST: kernel $(uname -r), tests start at $(cut -d' ' -f1 /proc/uptime) s of uptime"
+sh /guest-tests.sh
+echo "GUEST: done at $(cut -d' ' -f1 /proc/uptime) s of uptime"
+poweroff -f
+INIT
+chmod +x "$root/init" "$root/guest-tests.sh"
+(cd "$root" && find . | cpio -o -H newc --quiet) > "$guest/initramfs.cpio"
+
+# TCG by default: it runs everywhere (nested KVM on a VM can be slower than TCG);
+# CANEMU_GUEST_ACCEL=kvm asks for KVM.
+accel=${CANEMU_GUEST_ACCEL:-tcg}
+echo "guest: booting $(basename "$kernel") under qemu ($accel)"
+console=$guest/console.log
+set +e
+timeout 180 qemu-system-x86_64 -accel "$accel" -cpu max -m 512 -smp 1 -nographic -no-reboot \
+  -kernel "$kernel" -initrd "$guest/initramfs.cpio" \
+  -append "console=ttyS0 loglevel=4 panic=-1 rdinit=/init" </dev/null | tr -d '\r' | tee "$console"
+status=${PIPESTATUS[0]}
+set -e
+end=$(date +%s.%N)
+echo "guest: qemu exited with $status after $(awk "BEGIN {printf \"%.1f\", $end - $start}") s in all"
+result=$(grep -a '^GUEST-RESULT: ' "$console" | tail -1 || true)
+if [ -z "$result" ]; then
+  echo "guest: FAILED: no result on the console (see $console)"
+  exit 1
+fi
+case "$result" in
+  *" 0 failed") exit 0 ;;
+  *) exit 1 ;;
+esac

@@ -1,0 +1,64 @@
+#!/bin/bash
+# `make install` into a scratch DESTDIR, then use what it installed as a user would: the
+# programs run, the configuration in /etc/canemu loads, a C program builds against the installed
+# headers and libraries through pkg-config, the libraries carry sonames, python-can finds the
+# canemu interface, the installed units verify. Then `make package` (CPack) and the package's
+# contents and control data. Usage: check_install.sh SOURCE_DIR BUILD_DIR
+set -euo pipefail
+src=$1
+build=$(cd "$2" && pwd)
+dest=$(mktemp -d)
+trap 'rm -rf "$dest"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+DESTDIR=$dest cmake --install "$build" --prefix /usr >/dev/null
+libdir=$(ls -d "$dest"/usr/lib/x86_64-linux-gnu 2>/dev/null || echo "$dest/usr/lib")
+for f in usr/bin/canemud usr/bin/canemu etc/canemu/canemud.toml \
+         usr/lib/systemd/system/canemud.service usr/lib/systemd/system/canemud.socket \
+         usr/lib/sysusers.d/canemu.conf usr/lib/tmpfiles.d/canemu.conf \
+         usr/include/vci/vcinpl.h usr/include/vci/vcisdk.h usr/include/vci/cantype.h \
+         usr/include/sorcus/xcan.h usr/include/sorcus/xcan_types.h \
+         usr/share/doc/canemu/security.md usr/share/canemu/examples/two-adapters.toml \
+         usr/lib/python3/dist-packages/canemu/bus.py; do
+  [ -e "$dest/$f" ] || fail "$f was not installed"
+done
+for lib in vcinpl vcinpl2 vciapi xcan; do
+  soname=$(readelf -d "$libdir/lib$lib.so" | sed -n 's/.*SONAME.*\[\(.*\)\]/\1/p')
+  [ "$soname" = "lib$lib.so.0" ] || fail "lib$lib.so has soname '$soname', not lib$lib.so.0"
+done
+"$dest/usr/bin/canemud" --check-config "$dest/etc/canemu/canemud.toml" | grep -q "configuration OK" ||
+  fail "the installed configuration does not load"
+"$dest/usr/bin/canemu" calc frame 123#11 | grep -q "bits:" || fail "canemu calc does not run"
+
+# A program of the user's own, built only from what was installed.
+export PKG_CONFIG_PATH=$libdir/pkgconfig
+cc -std=c99 -Wall -Werror -o "$dest/talk" "$src/client/examples/vci_c_talk.c" \
+  $(pkg-config --cflags --libs canemu-vcinpl) || fail "vci_c_talk.c does not build against the install"
+cc -std=c11 -Wall -Werror -o "$dest/xtalk" "$src/client/examples/xcan_talk.c" \
+  $(pkg-config --cflags --libs canemu-xcan) || fail "xcan_talk.c does not build against the install"
+LD_LIBRARY_PATH=$libdir ldd "$dest/talk" | grep -q "libvcinpl.so.0 => $libdir" ||
+  fail "the program does not load the installed libvcinpl.so.0"
+
+PYTHONPATH=$dest/usr/lib/python3/dist-packages python3 - <<'PY' || fail "python-can does not find canemu"
+from importlib.metadata import entry_points
+names = [e.value for e in entry_points().select(group="can.interface") if e.name == "canemu"]
+assert names == ["canemu.bus:CanemuBus"], names
+PY
+
+unit=$dest/usr/lib/systemd/system
+sed -i "s|/usr/bin/canemud|$dest/usr/bin/canemud|g" "$unit/canemud.service"
+out=$(systemd-analyze verify "$unit/canemud.socket" "$unit/canemud.service" 2>&1)
+[ -z "$out" ] || fail "installed units: $out"
+
+# The Debian package.
+(cd "$build" && cpack -G DEB >/dev/null) || fail "cpack"
+deb=$(ls "$build"/canemu_*_amd64.deb)
+contents=$(dpkg-deb -c "$deb")
+for f in ./usr/bin/canemud ./etc/canemu/canemud.toml ./usr/lib/systemd/system/canemud.socket \
+         ./usr/lib/sysusers.d/canemu.conf; do
+  grep -q " $f\$" <<<"$contents" || fail "the package lacks $f"
+done
+dpkg-deb -f "$deb" Depends | grep -q "systemd" || fail "the package does not depend on systemd"
+dpkg-deb -e "$deb" "$dest/control"
+grep -qx /etc/canemu/canemud.toml "$dest/control/conffiles" || fail "canemud.toml is no conffile"
+echo "installed and packaged: $(basename "$deb"), $(wc -l <<<"$contents") entries"

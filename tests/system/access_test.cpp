@@ -1,0 +1,237 @@
+// Who may connect, with clients running as other users: canemud (as root, as CI runs it) serves
+// peers whose uid or groups [security] allows, the socket file's mode and group keep out the rest
+// before canemud sees them, and a reload that revokes a peer drops its connection.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <grp.h>
+#include <libgen.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "daemon_process.hpp"
+
+namespace canemu {
+namespace {
+
+using testing::Daemon;
+
+constexpr uid_t kNobody = 65534;
+constexpr gid_t kNogroup = 65534;
+
+// What a client running as `uid`, primary group `gid` and supplementary `groups` got.
+enum Outcome { kServed = 0, kRefusedByCanemud = 1, kRefusedByTheKernel = 2, kOther = 3 };
+
+// Runs `body` in a child process with those credentials; its exit status is the outcome.
+template <typename Body>
+int as_user(uid_t uid, gid_t gid, const std::vector<gid_t>& groups, Body body) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (::setgroups(groups.size(), groups.data()) != 0 || ::setgid(gid) != 0 ||
+        ::setuid(uid) != 0) {
+      ::_exit(kOther);
+    }
+    ::_exit(body());
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : kOther;
+}
+
+int connect_and_ask(const std::string& socket) {
+  auto c = client::Connection::open(socket, "other user");
+  if (!c) {
+    if (c.error().message.find("not allowed by the [security] configuration") !=
+        std::string::npos) {
+      return kRefusedByCanemud;
+    }
+    return c.error().message.find("Permission denied") != std::string::npos ? kRefusedByTheKernel
+                                                                            : kOther;
+  }
+  auto r = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  return r ? kServed : kOther;
+}
+
+struct Rig {
+  std::string dir;
+  std::string file;
+  gid_t users = 0;
+  Rig() {
+    char d[] = "/tmp/canemu-access-XXXXXX";
+    dir = ::mkdtemp(d);
+    ::chmod(dir.c_str(), 0755);
+    file = dir + "/canemud.toml";
+    const group* g = ::getgrnam("users");
+    users = g != nullptr ? g->gr_gid : 0;
+  }
+  ~Rig() {
+    ::unlink(file.c_str());
+    ::rmdir(dir.c_str());
+  }
+  void write(const std::string& security) const {
+    FILE* f = std::fopen(file.c_str(), "w");
+    std::fputs(("[[bus]]\nname = \"can0\"\n\n[security]\n" + security).c_str(), f);
+    std::fclose(f);
+  }
+};
+
+// The daemon's socket lives in a private folder: let other users reach the socket itself.
+void open_folder(const Daemon& d) {
+  std::string path = d.socket();
+  ::chmod(::dirname(path.data()), 0755);
+}
+
+bool skip_unless_root() {
+  return ::geteuid() != 0;
+}
+
+TEST(Access, PeersAreServedByUidPrimaryGroupOrSupplementaryGroupAndNoOneElse) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  rig.write("allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  const auto ask = [&] { return connect_and_ask(d.socket()); };
+  EXPECT_EQ(as_user(kNobody, kNogroup, {}, ask), kRefusedByCanemud);
+  EXPECT_EQ(as_user(kNobody, kNogroup, {rig.users}, ask), kServed);
+  EXPECT_EQ(as_user(kNobody, rig.users, {}, ask), kServed);
+}
+
+TEST(Access, TheSocketsModeAndGroupKeepOutWhoeverMayNotWriteToIt) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  // canemud itself would let everyone in; the file lets in only group users.
+  rig.write("allowed_users = [\"nobody\"]\nsocket_mode = 0o660\nsocket_group = \"users\"\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  struct stat st {};
+  ASSERT_EQ(::stat(d.socket().c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0660u);
+  EXPECT_EQ(st.st_gid, rig.users);
+  const auto ask = [&] { return connect_and_ask(d.socket()); };
+  EXPECT_EQ(as_user(kNobody, kNogroup, {}, ask), kRefusedByTheKernel);
+  EXPECT_EQ(as_user(kNobody, kNogroup, {rig.users}, ask), kServed);
+}
+
+TEST(Access, AReloadThatRevokesAPeerDropsItsConnection) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  rig.write("allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  int connected[2];
+  int go_on[2];
+  ASSERT_EQ(::pipe(connected), 0);
+  ASSERT_EQ(::pipe(go_on), 0);
+  const std::string socket = d.socket();
+  const pid_t child = ::fork();
+  if (child == 0) {
+    const int outcome = as_user(kNobody, kNogroup, {rig.users}, [&] {
+      auto c = client::Connection::open(socket, "revoked");
+      const char ok = c ? '1' : '0';
+      [[maybe_unused]] ssize_t w = ::write(connected[1], &ok, 1);
+      char byte = 0;
+      [[maybe_unused]] ssize_t r = ::read(go_on[0], &byte, 1);
+      if (!c) {
+        return static_cast<int>(kOther);
+      }
+      auto s =
+          c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+      return s ? static_cast<int>(kServed) : static_cast<int>(kRefusedByCanemud);
+    });
+    ::_exit(outcome);
+  }
+  char ok = 0;
+  ASSERT_EQ(::read(connected[0], &ok, 1), 1);
+  ASSERT_EQ(ok, '1');
+  rig.write("allowed_groups = []\nsocket_mode = 0o666\nsocket_group = \"\"\n");
+  d.signal(SIGHUP);
+  EXPECT_TRUE(d.read_log_until("is no longer allowed; connection closed", 10'000)) << d.log();
+  ASSERT_EQ(::write(go_on[1], "x", 1), 1);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), kRefusedByCanemud);
+  // Root stays served.
+  auto admin = testing::connect(d, "admin");
+  EXPECT_EQ(testing::status(admin).bus_count, 1);
+  for (int fd : {connected[0], connected[1], go_on[0], go_on[1]}) {
+    ::close(fd);
+  }
+}
+
+// Fault scenarios belong to the user who loaded them: another user's client cannot clear one by
+// name (permission_denied with the reason) nor by "all" (it is left and counted); a member of
+// [security] admin_groups and root clear every one.
+TEST(Access, AUserClearsOnlyItsOwnScenariosAndAnAdminClearsAll) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  const group* admins = ::getgrnam("adm");
+  ASSERT_NE(admins, nullptr) << "the machine has no group \"adm\"";
+  const gid_t adm = admins->gr_gid;
+  rig.write(
+      "allowed_groups = [\"users\"]\nadmin_groups = [\"adm\"]\nsocket_mode = 0o666\n"
+      "socket_group = \"\"\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  const std::string socket = d.socket();
+  const std::string text =
+      "[scenario]\nname = \"mine\"\n\n[[fault]]\nat = \"1s\"\nbus = \"can0\"\n"
+      "effect = \"crc_error\"\n";
+  // Returns 0 when loaded, 1 when not.
+  const auto load = [&] {
+    auto c = client::Connection::open(socket, "loader");
+    if (!c) {
+      return 1;
+    }
+    auto m = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+    m->length = static_cast<uint32_t>(text.size());
+    std::memcpy(m->text, text.data(), text.size());
+    auto r = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*m);
+    return r && r->applied == 1 ? 0 : 1;
+  };
+  // Returns 10 + cleared + 20 * refused, 1 when refused with the reason, 2 on other failures.
+  const auto clear = [&](const std::string& name) {
+    return [&socket, name] {
+      auto c = client::Connection::open(socket, "clearer");
+      if (!c) {
+        return 2;
+      }
+      auto m = ipc::make_message<ipc::FaultClearRequest>();
+      ipc::copy_name(m.scenario, name);
+      auto r = c->call<ipc::FaultClearRequest, ipc::FaultClearReply>(m);
+      if (!r) {
+        return r.error().message.find("is not yours to clear") != std::string::npos ? 1 : 2;
+      }
+      return static_cast<int>(10 + r->cleared + 20 * r->refused);
+    };
+  };
+  constexpr uid_t kOther = 65533;
+  ASSERT_EQ(as_user(kNobody, rig.users, {}, load), 0);
+  EXPECT_EQ(as_user(kOther, rig.users, {}, clear("mine")), 1);
+  EXPECT_EQ(as_user(kOther, rig.users, {}, clear("")), 10 + 0 + 20 * 1);
+  EXPECT_EQ(as_user(kNobody, rig.users, {}, clear("mine")), 10 + 1);  // its own
+  ASSERT_EQ(as_user(kNobody, rig.users, {}, load), 0);
+  EXPECT_EQ(as_user(kOther, rig.users, {adm}, clear("")), 10 + 1);  // an admin
+}
+
+}  // namespace
+}  // namespace canemu

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "canemu/firmware_model/bus/lin_frame.hpp"
-#include "canemu/ipc/ring_pair.hpp"
+#include "lin_tap.hpp"
 #include "vci/vcierr.h"
 
 namespace canemu::cli {
@@ -33,30 +33,6 @@ std::string error_name(uint8_t code) {
     default:
       return "other";
   }
-}
-
-// One VCI request on the dump's connection; the daemon's text or the VCI result on failure.
-client::Result<ipc::VciReply> vci(client::Connection& c, ipc::VciOp op, const std::string& device,
-                                  uint32_t handle, std::initializer_list<uint32_t> args = {},
-                                  std::vector<ipc::UniqueFd>* fds = nullptr) {
-  auto m = ipc::make_message<ipc::VciRequest>();
-  m.op = static_cast<uint16_t>(op);
-  m.handle = handle;
-  ipc::copy_name(m.device, device);
-  std::size_t i = 0;
-  for (uint32_t a : args) {
-    m.args[i++] = a;
-  }
-  auto r = c.call<ipc::VciRequest, ipc::VciReply>(m);
-  if (r && fds != nullptr) {
-    *fds = c.take_fds();
-  }
-  if (r && r->hresult != VCI_OK) {
-    return tl::unexpected(ipc::IpcError{
-        EPROTO, fmt::format("canemud refused VCI request {}: 0x{:08X}", static_cast<int>(op),
-                            static_cast<uint32_t>(r->hresult))});
-  }
-  return r;
 }
 
 }  // namespace
@@ -92,79 +68,22 @@ std::string lin_line(const LINMSG& m, int64_t at_ns, const std::string& bus) {
 
 int run_lin_dump(client::Connection& c, const std::string& bus, uint32_t bitrate, uint64_t count,
                  const TimeBase& base, volatile const std::sig_atomic_t& stop) {
-  // An adapter of its own on the bus (gone with the connection), its monitor and controller.
-  auto create = ipc::make_message<ipc::VciRequest>();
-  create.op = static_cast<uint16_t>(ipc::VciOp::device_create);
-  ipc::copy_name(reinterpret_cast<char(&)[ipc::kNameSize]>(create.payload), bus);
-  auto created = c.call<ipc::VciRequest, ipc::VciReply>(create);
-  if (!created || created->hresult != VCI_OK) {
-    return fail(created ? fmt::format("canemud made no adapter on {}", bus)
-                        : created.error().message);
-  }
-  char name_text[ipc::kNameSize] = {};
-  std::memcpy(name_text, created->payload, sizeof name_text - 1);
-  const std::string device = ipc::name_of(name_text);
-  auto monitor = vci(c, ipc::VciOp::lin_monitor_open, device, 0);
-  std::vector<ipc::UniqueFd> fds;
-  auto init = monitor ? vci(c, ipc::VciOp::lin_monitor_init, device, monitor->handle, {4096}, &fds)
-                      : monitor;
-  if (!init) {
-    return fail(init.error().message);
-  }
-  auto rings = ipc::RingPair::map(std::move(fds), sizeof(LINMSG));
-  if (!rings) {
-    return fail(rings.error().message);
-  }
-  ipc::RingReader rx = rings->rx().reader();
-  rx.set_threshold(1);
-  auto control = vci(c, ipc::VciOp::lin_control_open, device, 0);
-  for (auto step :
-       {ipc::VciOp::lin_monitor_activate, ipc::VciOp::lin_init, ipc::VciOp::lin_start}) {
-    if (!control) {
-      break;
-    }
-    const uint32_t handle =
-        step == ipc::VciOp::lin_monitor_activate ? monitor->handle : control->handle;
-    auto r = vci(c, step, device, handle, {LIN_OPMODE_ERRORS, bitrate});
-    if (!r) {
-      control = r;
-    }
-  }
-  if (!control) {
-    return fail(control.error().message);
-  }
-  // Time stamps count microseconds from the adapter's power-on, wrapping at 2^32.
-  int64_t epoch_ns = 0;
-  auto list = c.call<ipc::DeviceListRequest, ipc::DeviceListReply>(
-      ipc::make_message<ipc::DeviceListRequest>());
-  for (uint16_t i = 0; list && i < list->count; ++i) {
-    if (ipc::name_of(list->devices[i].name) == device) {
-      epoch_ns = list->devices[i].epoch_ns;
-    }
+  // A responder with an empty response table and error messages: it listens.
+  auto tap = LinTap::open(c, bus, LIN_OPMODE_ERRORS, bitrate);
+  if (!tap) {
+    return fail(tap.error().message);
   }
   std::fprintf(stderr, "canemu: listening on %s as %s (LIN, %s, time stamps in %s)\n", bus.c_str(),
-               device.c_str(),
+               tap->device().c_str(),
                bitrate == 0 ? "the rate of each header" : fmt::format("{} bit/s", bitrate).c_str(),
                base.wall_clock ? "wall-clock seconds" : "simulated seconds");
   uint64_t printed = 0;
-  uint64_t wraps = 0;
   while (!stop && (count == 0 || printed < count)) {
-    LINMSG m;
-    const ipc::RingStatus status = rx.get(&m);
-    if (status == ipc::RingStatus::empty) {
-      rx.wait(200);
-      continue;
+    auto m = tap->next(200);
+    if (!m) {
+      return fail(m.error().message);
     }
-    if (status != ipc::RingStatus::ok) {
-      return fail("the monitor's ring is corrupted");
-    }
-    if (m.uMsgInfo.Bytes.bType == LIN_MSGTYPE_TMOVR) {
-      wraps += m.uMsgInfo.Bytes.bDlen;
-      continue;
-    }
-    const int64_t at =
-        epoch_ns + static_cast<int64_t>(((wraps << 32) | m.dwTime) * 1000) + base.offset_ns;
-    const std::string line = lin_line(m, at, bus);
+    const std::string line = *m ? lin_line((*m)->msg, (*m)->at_ns + base.offset_ns, bus) : "";
     if (line.empty()) {
       continue;
     }

@@ -13,6 +13,7 @@
 #include "canemu/client/connection.hpp"
 #include "command.hpp"
 #include "frame_text.hpp"
+#include "lin_send.hpp"
 
 namespace canemu::cli {
 
@@ -25,18 +26,31 @@ struct SendOptions {
   std::string step;
   int timeout_ms = 2000;
   bool sim_time = false;
+  bool classic = false;  // LIN: the classic checksum
 };
 
-int run_send(const std::string& socket, const SendOptions& o) {
-  std::vector<ipc::ChannelMessage> messages;
+// On a LIN bus: its own frame syntax, one frame after another (lin_send.hpp).
+int send_lin(client::Connection& c, const SendOptions& o, std::optional<int64_t> step_ns,
+             const TimeBase& base) {
+  std::vector<LINMSG> frames;
   for (const std::string& text : o.frames) {
     std::string error;
-    auto m = parse_cansend(text, error);
+    auto m = parse_lin_send(text, o.classic, error);
     if (!m) {
       return fail(fmt::format("'{}': {}", text, error));
     }
-    messages.push_back(*m);
+    frames.push_back(*m);
   }
+  LinSendOptions lo;
+  lo.bus = o.bus;
+  lo.bitrate = o.bitrate;
+  lo.classic = o.classic;
+  lo.step_ns = step_ns;
+  lo.timeout_ms = o.timeout_ms;
+  return run_lin_send(c, frames, lo, base);
+}
+
+int run_send(const std::string& socket, const SendOptions& o) {
   std::optional<int64_t> step_ns;
   if (!o.step.empty()) {
     step_ns = parse_positive_duration(o.step);
@@ -61,6 +75,18 @@ int run_send(const std::string& socket, const SendOptions& o) {
   if (!stepped && step_ns) {
     return fail("--step needs stepped time; canemud runs " +
                 std::string(ipc::to_string(base->mode)));
+  }
+  if (auto kind = bus_kind(*c, o.bus); kind && kind->first == ipc::WireBusKind::lin) {
+    return send_lin(*c, o, step_ns, *base);
+  }
+  std::vector<ipc::ChannelMessage> messages;
+  for (const std::string& text : o.frames) {
+    std::string error;
+    auto m = parse_cansend(text, error);
+    if (!m) {
+      return fail(fmt::format("'{}': {}", text, error));
+    }
+    messages.push_back(*m);
   }
   client::ChannelOptions co;
   co.bus = o.bus;
@@ -117,8 +143,11 @@ Command add_send(CLI::App& app, const std::string& socket) {
   auto* send = app.add_subcommand("send", "send frames on a bus, e.g. 'send can0 123#1122'");
   auto o = std::make_shared<SendOptions>();
   send->add_option("BUS", o->bus, "bus name")->required();
-  send->add_option("FRAME", o->frames, "cansend syntax: 123#1122, 12345678#R4, 123##1AABB")
+  send->add_option("FRAME", o->frames,
+                   "cansend syntax: 123#1122, 12345678#R4, 123##1AABB; on a LIN bus 10#0102 "
+                   "(published), 10# (the header alone), sleep")
       ->required();
+  send->add_flag("--classic", o->classic, "LIN: the classic checksum (default enhanced)");
   send->add_option("--bitrate", o->bitrate, "the sender's bit/s (default: the bus's)");
   send->add_option("--step", o->step, "stepped time: step this long after queueing");
   send->add_option("--timeout", o->timeout_ms, "ms to wait for the frames (default 2000)")

@@ -1,6 +1,8 @@
 // canemu dump's lines for LIN monitor messages: frames with their protected identifier and
-// checksum (computed here by hand), errors, wake-ups, and what a dump leaves out.
+// checksum (computed here by hand), errors, wake-ups, and what a dump leaves out; canemu send's
+// LIN frame syntax.
 #include "lin_dump.hpp"
+#include "lin_send.hpp"
 
 #include <gtest/gtest.h>
 
@@ -46,6 +48,29 @@ TEST(LinDump, ErrorsAndWakeUpsAreNamedAndTheRestLeftOut) {
             "(0000000000.000250) lin0 wake-up");
   EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_INFO, 0xFF, {LIN_INFO_START}), 0, "lin0"), "");
   EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_TMOVR, 0xFF, {}), 0, "lin0"), "");
+}
+
+TEST(LinSend, FramesHeadersAndSleepInTheirOwnSyntax) {
+  std::string error;
+  auto m = parse_lin_send("3a#0102", false, error);
+  ASSERT_TRUE(m) << error;
+  EXPECT_EQ(m->uMsgInfo.Bytes.bType, LIN_MSGTYPE_DATA);
+  EXPECT_EQ(m->uMsgInfo.Bytes.bPid, 0x3A);
+  EXPECT_EQ(m->uMsgInfo.Bytes.bDlen, 2);
+  EXPECT_EQ(m->uMsgInfo.Bits.ecs, 1U);
+  EXPECT_EQ(m->uMsgInfo.Bits.ido, 0U);
+  EXPECT_EQ(m->abData[1], 0x02);
+  m = parse_lin_send("10#", true, error);
+  ASSERT_TRUE(m) << error;
+  EXPECT_EQ(m->uMsgInfo.Bits.ido, 1U);
+  EXPECT_EQ(m->uMsgInfo.Bits.ecs, 0U);
+  m = parse_lin_send("sleep", false, error);
+  ASSERT_TRUE(m);
+  EXPECT_EQ(m->uMsgInfo.Bytes.bType, LIN_MSGTYPE_SLEEP);
+  for (const char* bad :
+       {"40#01", "1#01", "123#01", "10#1", "10#010203040506070809", "10#0G", "wakeup"}) {
+    EXPECT_FALSE(parse_lin_send(bad, false, error)) << bad;
+  }
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 # /etc/canemu, the documentation and the Python package. docs/security.md, "Installing".
 include(GNUInstallDirs)
 
-set(CANEMU_INSTALLED_LIBRARIES vcinpl vcinpl2 vciapi xcan)
+set(CANEMU_INSTALLED_LIBRARIES vcinpl vcinpl2 vciapi xcan sl64)
 foreach(lib ${CANEMU_INSTALLED_LIBRARIES})
   set_target_properties(${lib} PROPERTIES VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR})
 endforeach()
@@ -29,7 +29,10 @@ file(WRITE ${pc_dir}/canemu-vci.pc "${pc_head}Name: canemu-vci\n"
 file(WRITE ${pc_dir}/canemu-xcan.pc "${pc_head}Name: canemu-xcan\n"
      "Description: SORCUS X-CAN-2i channel library of canemu, the CAN adapter emulator\n"
      "Version: ${PROJECT_VERSION}\nCflags: -I\${includedir}/sorcus\nLibs: -L\${libdir} -lxcan\n")
-set(pc_files ${pc_dir}/canemu-vci.pc ${pc_dir}/canemu-xcan.pc)
+file(WRITE ${pc_dir}/canemu-sl64.pc "${pc_head}Name: canemu-sl64\n"
+     "Description: SORCUS SL-CANi library (SL64_LIB) of canemu, the CAN adapter emulator\n"
+     "Version: ${PROJECT_VERSION}\nCflags: -I\${includedir}/sorcus\nLibs: -L\${libdir} -lsl64\n")
+set(pc_files ${pc_dir}/canemu-vci.pc ${pc_dir}/canemu-xcan.pc ${pc_dir}/canemu-sl64.pc)
 foreach(lib vciapi vcinpl vcinpl2)
   file(WRITE ${pc_dir}/canemu-${lib}.pc "${pc_head}Name: canemu-${lib}\n"
        "Description: IXXAT VCI library lib${lib} of canemu, the CAN adapter emulator\n"

@@ -13,6 +13,7 @@
  * configuration tools do it). Built with
  *   cc sl64_talk.c $(pkg-config --cflags --libs canemu-sl64)
  */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime, also with -std=c11 */
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -18,11 +18,12 @@ for f in usr/bin/canemud usr/bin/canemu etc/canemu/canemud.toml \
          usr/lib/sysusers.d/canemu.conf usr/lib/tmpfiles.d/canemu.conf \
          usr/include/vci/vcinpl.h usr/include/vci/vcisdk.h usr/include/vci/cantype.h \
          usr/include/sorcus/xcan.h usr/include/sorcus/xcan_types.h \
+         usr/include/sorcus/sl64lib.h usr/include/sorcus/sl64_types.h \
          usr/share/doc/canemu/security.md usr/share/canemu/examples/two-adapters.toml \
          usr/lib/python3/dist-packages/canemu/bus.py; do
   [ -e "$dest/$f" ] || fail "$f was not installed"
 done
-for lib in vcinpl vcinpl2 vciapi xcan; do
+for lib in vcinpl vcinpl2 vciapi xcan sl64; do
   soname=$(readelf -d "$libdir/lib$lib.so" | sed -n 's/.*SONAME.*\[\(.*\)\]/\1/p')
   [ "$soname" = "lib$lib.so.0" ] || fail "lib$lib.so has soname '$soname', not lib$lib.so.0"
 done
@@ -36,6 +37,8 @@ cc -std=c99 -Wall -Werror -o "$dest/talk" "$src/client/examples/vci_c_talk.c" \
   $(pkg-config --cflags --libs canemu-vcinpl) || fail "vci_c_talk.c does not build against the install"
 cc -std=c11 -Wall -Werror -o "$dest/xtalk" "$src/client/examples/xcan_talk.c" \
   $(pkg-config --cflags --libs canemu-xcan) || fail "xcan_talk.c does not build against the install"
+cc -std=c11 -Wall -Werror -o "$dest/stalk" "$src/client/examples/sl64_talk.c" \
+  $(pkg-config --cflags --libs canemu-sl64) || fail "sl64_talk.c does not build against the install"
 LD_LIBRARY_PATH=$libdir ldd "$dest/talk" | grep -q "libvcinpl.so.0 => $libdir" ||
   fail "the program does not load the installed libvcinpl.so.0"
 

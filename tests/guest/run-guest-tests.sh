@@ -48,11 +48,15 @@ for tool in candump cansend cangen cansequence canbusload; do  # libc only
   cp "$x/usr/bin/$tool" "$root/usr/bin/"
 done
 # canemud, canemu and can-utils with the shared libraries they load (the host's).
+# Each library also goes where the guest's loader searches by default: a build tree under /tmp
+# (a CI clone) is hidden by the guest's own /tmp, so its RUNPATH finds nothing there.
 copy_with_libs() {
   cp "$1" "$root/usr/bin/"
+  mkdir -p "$root/lib/x86_64-linux-gnu"
   for lib in $(ldd "$1" | awk '/=> \// {print $3} /^\t\/lib/ {print $1}'); do
     mkdir -p "$root$(dirname "$lib")"
     cp -L "$lib" "$root$lib"
+    cp -L "$lib" "$root/lib/x86_64-linux-gnu/"
   done
 }
 copy_with_libs "$build/bin/canemud"

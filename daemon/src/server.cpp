@@ -425,16 +425,23 @@ void Server::accept_clients() {
     c.session.pid = static_cast<uint32_t>(cred.pid);
     c.session.vci.pid = c.session.pid;
     c.session.vci.uid = c.session.uid;
-    if (clients_.size() >= kMaxClients) {
+    const auto waiting = static_cast<std::size_t>(std::count_if(
+        clients_.begin(), clients_.end(), [](const auto& e) { return !e.second.refused.empty(); }));
+    if (clients_.size() - waiting >= kMaxClients) {
       reply_error(c, 0, ipc::ErrorCode::permission_denied,
                   fmt::format("canemud serves at most {} clients", kMaxClients));
       continue;
     }
     c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
     if (!access_.allowed(fd, c.session.uid, c.session.gid)) {
-      c.refused =
+      const std::string why =
           fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid);
       log::info("refused uid {} (pid {}): not allowed by [security]", c.session.uid, c.session.pid);
+      if (waiting >= kMaxRefusedWaiting) {
+        reply_error(c, 0, ipc::ErrorCode::permission_denied, why);
+        continue;  // closed when c goes out of scope
+      }
+      c.refused = why;
     }
     if (!add(epoll_.get(), fd)) {
       continue;

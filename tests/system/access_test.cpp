@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "canemu/ipc/seqpacket.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -231,6 +233,68 @@ TEST(Access, AUserClearsOnlyItsOwnScenariosAndAnAdminClearsAll) {
   EXPECT_EQ(as_user(kNobody, rig.users, {}, clear("mine")), 10 + 1);  // its own
   ASSERT_EQ(as_user(kNobody, rig.users, {}, load), 0);
   EXPECT_EQ(as_user(kOther, rig.users, {adm}, clear("")), 10 + 1);  // an admin
+}
+
+// Refused peers that connect and never ask anything take no slot of an allowed peer and hold no
+// more than 16 descriptors: canemud keeps at most 16 of them waiting for their answer, and
+// closes the rest at once.
+TEST(Access, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  rig.write("allowed_groups = []\nsocket_mode = 0o666\nsocket_group = \"\"\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  const std::string socket = d.socket();
+  const auto descriptors = [&d] {
+    std::size_t n = 0;
+    for ([[maybe_unused]] const auto& e :
+         std::filesystem::directory_iterator("/proc/" + std::to_string(d.pid()) + "/fd")) {
+      ++n;
+    }
+    return n;
+  };
+  const std::size_t before = descriptors();
+  int held[2];
+  int ready[2];
+  ASSERT_EQ(::pipe(held), 0);
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::close(held[1]);
+    ::close(ready[0]);
+    const int rc = as_user(kNobody, kNogroup, {}, [&] {
+      std::vector<ipc::UniqueFd> silent;
+      for (int k = 0; k < 300; ++k) {  // more than the daemon's 256 client slots
+        auto fd = ipc::connect_seqpacket(socket);
+        if (fd) {
+          silent.push_back(std::move(*fd));
+        }
+      }
+      [[maybe_unused]] ssize_t w = ::write(ready[1], "r", 1);
+      char byte = 0;
+      [[maybe_unused]] ssize_t r = ::read(held[0], &byte, 1);  // held until the parent is done
+      return static_cast<int>(silent.size() >= 300 ? kServed : kOther);
+    });
+    ::_exit(rc);
+  }
+  ::close(held[0]);
+  ::close(ready[1]);
+  // Every silent peer has connected (and queues before root's connection).
+  char byte = 0;
+  ASSERT_EQ(::read(ready[0], &byte, 1), 1);
+  ::close(ready[0]);
+  auto admin = client::Connection::open(socket, "admin");
+  ASSERT_TRUE(admin) << admin.error().message;
+  EXPECT_EQ(testing::status(*admin).client_count, 1);
+  // The 16 waiting refused peers and root's connection.
+  EXPECT_LE(descriptors(), before + 16 + 1);
+  ASSERT_EQ(::write(held[1], "x", 1), 1);
+  ::close(held[1]);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == kServed);
 }
 
 }  // namespace

@@ -47,6 +47,10 @@ class Server {
     std::string refused;
   };
   static constexpr std::size_t kMaxClients = 256;
+  // Refused peers kept until their first request (to answer it with the reason): at most this
+  // many at once, so that refused peers never take the slots of allowed ones; beyond it a refused
+  // peer is told at once and closed.
+  static constexpr std::size_t kMaxRefusedWaiting = 16;
 
   model::SimTime wall_to_sim() const;
   void advance_to_now();

@@ -14,33 +14,25 @@
 #include <string>
 
 #include "canemu/daemon/control_dispatcher.hpp"
+#include "fuzz_world.hpp"
 
 namespace {
 
 using namespace canemu;
 
 const daemon::Config& config() {
-  static const daemon::Config c = [] {
-    const std::string text = std::string(daemon::embedded_default_config()) +
-                             "\n[[device]]\nname = \"xcan0\"\nmodel = \"sorcus-x-can-2i\"\n"
-                             "controllers = [\"can0\", \"can1\"]\n";
-    auto parsed = daemon::parse_config(text, "fuzz.toml");
-    if (!parsed) {
-      std::abort();
-    }
-    return std::move(*parsed);
-  }();
+  static const daemon::Config c =
+      fuzzing::parse_or_abort(std::string(daemon::embedded_default_config()) +
+                              "\n[[device]]\nname = \"xcan0\"\nmodel = \"sorcus-x-can-2i\"\n"
+                              "controllers = [\"can0\", \"can1\"]\n");
   return c;
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  auto sim = daemon::Simulation::build(config());
-  if (!sim) {
-    std::abort();
-  }
-  daemon::ControlDispatcher dispatcher(**sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
+  auto sim = fuzzing::fresh_simulation(config());
+  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
   dispatcher.client_count = [] { return uint16_t{1}; };
   daemon::Session session;
   const auto check_reply = [](const void* reply, size_t bytes, std::span<const int> fds) {

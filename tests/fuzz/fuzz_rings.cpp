@@ -18,19 +18,14 @@
 #include <unistd.h>
 
 #include "canemu/daemon/control_dispatcher.hpp"
+#include "fuzz_world.hpp"
 
 namespace {
 
 using namespace canemu;
 
 const daemon::Config& config() {
-  static const daemon::Config c = [] {
-    auto parsed = daemon::parse_config(daemon::embedded_default_config(), "fuzz.toml");
-    if (!parsed) {
-      std::abort();
-    }
-    return std::move(*parsed);
-  }();
+  static const daemon::Config c = fuzzing::parse_or_abort(daemon::embedded_default_config());
   return c;
 }
 
@@ -68,11 +63,8 @@ void check(const void* reply, std::size_t bytes) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  auto sim = daemon::Simulation::build(config());
-  if (!sim) {
-    std::abort();
-  }
-  daemon::ControlDispatcher dispatcher(**sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
+  auto sim = fuzzing::fresh_simulation(config());
+  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
   dispatcher.client_count = [] { return uint16_t{1}; };
   daemon::Doorbell* bell = nullptr;
   dispatcher.channel_opened = [&bell](daemon::Doorbell& d) { bell = &d; };

@@ -159,26 +159,30 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
                static_cast<ipc::WireLinState>(n.lin) == ipc::WireLinState::online ? 1 : 0);
     }
   }
-  e.family("canemu_node_tec", "gauge", "Transmit error counter.");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    e.sample("canemu_node_tec", node_label(s.nodes[i]), s.nodes[i].tec);
-  }
-  e.family("canemu_node_rec", "gauge", "Receive error counter.");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    e.sample("canemu_node_rec", node_label(s.nodes[i]), s.nodes[i].rec);
-  }
-  e.family("canemu_node_frames_sent_total", "counter", "Frames the node sent.");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    e.sample("canemu_node_frames_sent_total", node_label(s.nodes[i]), s.nodes[i].frames_sent);
-  }
-  e.family("canemu_node_frames_received_total", "counter", "Frames the node received.");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    e.sample("canemu_node_frames_received_total", node_label(s.nodes[i]),
-             s.nodes[i].frames_received);
-  }
-  e.family("canemu_node_errors_total", "counter", "Errors the node detected or caused.");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    e.sample("canemu_node_errors_total", node_label(s.nodes[i]), s.nodes[i].errors);
+  // The per-node counters: one family each.
+  struct NodeCounter {
+    const char* name;
+    const char* type;
+    const char* help;
+    uint64_t (*value)(const ipc::StatusNode&);
+  };
+  static constexpr NodeCounter kNodeCounters[] = {
+      {"canemu_node_tec", "gauge", "Transmit error counter.",
+       [](const ipc::StatusNode& n) -> uint64_t { return n.tec; }},
+      {"canemu_node_rec", "gauge", "Receive error counter.",
+       [](const ipc::StatusNode& n) -> uint64_t { return n.rec; }},
+      {"canemu_node_frames_sent_total", "counter", "Frames the node sent.",
+       [](const ipc::StatusNode& n) -> uint64_t { return n.frames_sent; }},
+      {"canemu_node_frames_received_total", "counter", "Frames the node received.",
+       [](const ipc::StatusNode& n) -> uint64_t { return n.frames_received; }},
+      {"canemu_node_errors_total", "counter", "Errors the node detected or caused.",
+       [](const ipc::StatusNode& n) -> uint64_t { return n.errors; }},
+  };
+  for (const NodeCounter& counter : kNodeCounters) {
+    e.family(counter.name, counter.type, counter.help);
+    for (uint16_t i = 0; i < s.node_count; ++i) {
+      e.sample(counter.name, node_label(s.nodes[i]), counter.value(s.nodes[i]));
+    }
   }
 
   e.family("canemu_fault_hits_total", "counter",

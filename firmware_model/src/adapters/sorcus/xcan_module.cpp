@@ -47,7 +47,6 @@ XcanModule::~XcanModule() {
 }
 
 void XcanModule::set_buffer_load_time(int64_t ns) {
-  load_ns_ = ns;
   for (Interface& f : ifaces_) {
     f.mgr->set_load_time(scheduler_, ns);
   }

@@ -126,6 +126,7 @@ class BufferManager {
     scheduler_ = &scheduler;
     load_ns_ = ns;
   }
+  int64_t load_time() const { return load_ns_; }
 
   // As the driver starts the chip: configuration access, the clock divider, global masks
   // "every bit must match", every object invalid, interrupts enabled, still off the bus (INI).

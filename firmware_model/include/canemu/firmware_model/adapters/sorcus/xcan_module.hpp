@@ -126,7 +126,7 @@ class XcanModule {
   // µs) in Anspruch»: the time from loading a buffer (an object not cached there, or a general-ID
   // message) to its transmit request, in ns; 0 unless set.
   void set_buffer_load_time(int64_t ns);
-  int64_t buffer_load_time() const { return load_ns_; }
+  int64_t buffer_load_time() const { return ifaces_[0].mgr->load_time(); }
   bool low_speed(unsigned i) const;
   I82527& chip(unsigned i) { return ifaces_[i].chip; }
   // The low-speed transceiver reports a line fault (the daemon's line_error fault): it goes on
@@ -249,7 +249,6 @@ class XcanModule {
   SimScheduler& scheduler_;
   XcanVariant variant_;
   MddVersion mdd_version_ = kMdd3C;
-  int64_t load_ns_ = 0;
   XcanSink& sink_;
   std::array<Interface, XCAN_INTERFACES> ifaces_;
   std::map<ChannelHandle, Channel> channels_;

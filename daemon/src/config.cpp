@@ -91,7 +91,8 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
     return;
   }
   c.only_keys(*t, "security",
-              {"allowed_users", "allowed_groups", "admin_groups", "socket_mode", "socket_group"});
+              {"allowed_users", "allowed_groups", "admin_groups", "socket_mode", "socket_group",
+               "max_clients_per_user", "ring_mib_per_user"});
   if (auto v = c.strings(*t, "security", "admin_groups")) {
     cfg.security.admin_groups = *v;
   }
@@ -114,6 +115,12 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
   }
   if (auto group = c.string(*t, "security", "socket_group", false)) {
     cfg.security.socket_group = *group;
+  }
+  if (auto n = c.integer(*t, "security", "max_clients_per_user", false, 1, 256)) {
+    cfg.security.max_clients_per_user = static_cast<uint32_t>(*n);
+  }
+  if (auto n = c.integer(*t, "security", "ring_mib_per_user", false, 1, 256)) {
+    cfg.security.ring_mib_per_user = static_cast<uint32_t>(*n);
   }
 }
 

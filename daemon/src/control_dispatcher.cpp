@@ -108,12 +108,12 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   options.flags = m.flags;
   options.rx_capacity = m.rx_capacity != 0 ? m.rx_capacity : 1024;
   options.tx_capacity = m.tx_capacity != 0 ? m.tx_capacity : 256;
-  // Ring memory is limited daemon-wide, so that clients together cannot exhaust the machine.
+  // Ring memory is limited daemon-wide and per user, so that clients together cannot exhaust
+  // the machine and one user cannot take every other user's share.
   const std::size_t ring_bytes =
       (std::size_t{options.rx_capacity} + options.tx_capacity) * sizeof(ipc::ChannelMessage);
-  if (ring_bytes_in_use_ + ring_bytes > kMaxRingBytes) {
-    error(send, rid, ipc::ErrorCode::no_resources,
-          fmt::format("ring memory for all channels is limited to {} MiB", kMaxRingBytes >> 20));
+  if (const std::string why = rings_.refusal(c.uid, ring_bytes); !why.empty()) {
+    error(send, rid, ipc::ErrorCode::no_resources, why);
     return;
   }
   uint32_t id = c.next_channel++;
@@ -129,7 +129,7 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   SessionChannel& sc = c.channels[id];
   sc.lease = sim_.add_ephemeral(device, *bus, node, c.pid);
   sc.channel = std::move(*channel);
-  sc.budget = RingBudget(&ring_bytes_in_use_, ring_bytes);
+  sc.budget = rings_.take(c.uid, ring_bytes);
   if (channel_opened) {
     channel_opened(*sc.channel);
   }

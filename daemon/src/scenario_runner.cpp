@@ -171,8 +171,24 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
     }
   }
   std::vector<std::size_t> new_rules(buses_.size(), 0);
+  std::size_t adding = 0;
   for (const Resolved& r : *plan) {
     new_rules[r.bus] += is_frame_rule(r.spec->effect) ? 1 : 0;
+    adding += is_frame_rule(r.spec->effect) ? 1 : 0;
+  }
+  if (owner) {
+    std::size_t held = 0;  // frame rules of the user's scenarios still matching frames
+    for (const LoadedScenario& l : scenarios_) {
+      if (!l.cleared && l.owner == owner) {
+        held += static_cast<std::size_t>(std::count_if(
+            l.faults.begin(), l.faults.end(), [](const AppliedFault& f) { return f.rule; }));
+      }
+    }
+    if (held + adding > kMaxRulesPerUser) {
+      return tl::unexpected(std::vector<std::string>{
+          fmt::format("{}: uid {} would have {} frame fault rules in force; one user may have {}",
+                      s.source, *owner, held + adding, kMaxRulesPerUser)});
+    }
   }
   for (std::size_t b = 0; b < buses_.size(); ++b) {
     if (buses_[b].faults->size() + new_rules[b] > kMaxRulesPerBus) {

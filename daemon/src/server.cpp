@@ -159,6 +159,7 @@ ipc::IpcResult<void> Server::open() {
     return tl::unexpected(sys("epoll_ctl"));
   }
   access_.resolve(sim_.config().security);
+  dispatcher_.set_ring_quota(std::size_t{sim_.config().security.ring_mib_per_user} << 20);
   for (const auto& b : sim_.bridges()) {  // configured bridges: their sockets wake the loop
     dispatcher_.channel_opened(*b);
   }
@@ -202,6 +203,7 @@ void Server::reload() {
     }
     const ReloadReport r = sim_.reload(*fresh);
     access_.resolve(sim_.config().security);
+    dispatcher_.set_ring_quota(std::size_t{sim_.config().security.ring_mib_per_user} << 20);
     if (!socket_from_systemd_) {
       if (std::string e =
               AccessPolicy::apply_socket_permissions(options_.socket_path, sim_.config().security);
@@ -434,20 +436,35 @@ void Server::accept_clients() {
     }
     c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
     if (!access_.allowed(fd, c.session.uid, c.session.gid)) {
-      const std::string why =
+      c.refused =
           fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid);
       log::info("refused uid {} (pid {}): not allowed by [security]", c.session.uid, c.session.pid);
-      if (waiting >= kMaxRefusedWaiting) {
-        reply_error(c, 0, ipc::ErrorCode::permission_denied, why);
-        continue;  // closed when c goes out of scope
-      }
-      c.refused = why;
+    } else if (const std::size_t held = connections_of(c.session.uid);
+               c.session.uid != 0 && held >= sim_.config().security.max_clients_per_user) {
+      c.refused = fmt::format(
+          "uid {} has {} connections to canemud; [security] max_clients_per_user allows {}",
+          c.session.uid, held, sim_.config().security.max_clients_per_user);
+      c.refused_code = ipc::ErrorCode::no_resources;
+      log::warning("refused uid {} (pid {}): {} connections, the most one user may have",
+                   c.session.uid, c.session.pid, held);
+    }
+    if (!c.refused.empty() && waiting >= kMaxRefusedWaiting) {
+      reply_error(c, 0, c.refused_code, c.refused);
+      continue;  // closed when c goes out of scope
     }
     if (!add(epoll_.get(), fd)) {
       continue;
     }
     clients_.emplace(fd, std::move(c));
   }
+}
+
+// Connections of `uid` being served (refused and closing ones not counted).
+std::size_t Server::connections_of(uint32_t uid) const {
+  return static_cast<std::size_t>(
+      std::count_if(clients_.begin(), clients_.end(), [&](const auto& e) {
+        return e.second.session.uid == uid && e.second.refused.empty() && !e.second.closing;
+      }));
 }
 
 // After a reload: a client the new [security] no longer allows is told why and dropped.
@@ -526,7 +543,7 @@ void Server::serve(int fd) {
   if (!it->second.refused.empty()) {
     ipc::MsgHeader h{};
     std::memcpy(&h, buffer_.data(), std::min(sizeof h, buffer_.size()));
-    reply_error(it->second, h.request_id, ipc::ErrorCode::permission_denied, it->second.refused);
+    reply_error(it->second, h.request_id, it->second.refused_code, it->second.refused);
     it->second.closing = true;
     return;
   }

@@ -1,4 +1,5 @@
 #include "canemu/daemon/vci_fifos.hpp"
+#include "canemu/daemon/log.hpp"
 
 #include <sys/random.h>
 
@@ -33,9 +34,20 @@ void VciFifos::handle(Holder holder, uint32_t uid, const ipc::VciRequest& m, ipc
       r.hresult = VCI_E_INVALIDARG;
       return;
     }
-    if (held_by(holder) >= kMaxVciFifosPerClient ||
-        ring_bytes_in_use_ + std::size_t{capacity} * size > kMaxRingBytes) {
+    if (held_by(holder) >= kMaxVciFifosPerClient) {
       r.hresult = VCI_E_OUTOFMEMORY;
+      return;
+    }
+    // The request is checked before anything is made, the ring as made (rounded to pages) after.
+    const auto refused = [&](std::size_t bytes) {
+      const std::string why = rings_.refusal(uid, bytes);
+      if (!why.empty()) {
+        log::warning("VCI FIFO of uid {} not created: {}", uid, why);
+        r.hresult = VCI_E_OUTOFMEMORY;
+      }
+      return !why.empty();
+    };
+    if (refused(std::size_t{capacity} * size)) {
       return;
     }
     auto ring = ipc::SharedRing::create(capacity, size, "canemu-vci-fifo");
@@ -43,13 +55,14 @@ void VciFifos::handle(Holder holder, uint32_t uid, const ipc::VciRequest& m, ipc
       r.hresult = VCI_E_OUTOFMEMORY;
       return;
     }
-    id = fresh_id();
     const std::size_t bytes =
         std::size_t{ring->memory().capacity()} * ring->memory().element_size();
+    if (refused(bytes)) {
+      return;
+    }
+    id = fresh_id();
     fifos_.emplace(
-        id,
-        SharedFifo{
-            std::move(*ring), RingBudget(&ring_bytes_in_use_, bytes), {}, nullptr, nullptr, uid});
+        id, SharedFifo{std::move(*ring), rings_.take(uid, bytes), {}, nullptr, nullptr, uid});
   }
   auto it = fifos_.find(id);
   if (it == fifos_.end()) {

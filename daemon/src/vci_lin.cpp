@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/log.hpp"
 #include "canemu/daemon/vci_service.hpp"
 
 namespace canemu::daemon {
@@ -174,7 +175,9 @@ void VciService::lin_monitor_init(VciHandle& h, const ipc::VciRequest& m, ipc::V
     r.hresult = VCI_E_INVALID_STATE;
     return;
   }
-  if (ring_bytes_in_use_ + (std::size_t{rx} + 1) * sizeof(LINMSG) > kMaxRingBytes) {
+  if (const std::string why = rings_.refusal(h.uid, (std::size_t{rx} + 1) * sizeof(LINMSG));
+      !why.empty()) {
+    log::warning("LIN monitor of uid {} not initialized: {}", h.uid, why);
     r.hresult = VCI_E_OUTOFMEMORY;
     return;
   }
@@ -188,7 +191,7 @@ void VciService::lin_monitor_init(VciHandle& h, const ipc::VciRequest& m, ipc::V
     return;
   }
   VciLinPort& fresh = **port;
-  RingBudget budget(&ring_bytes_in_use_, fresh.bytes());
+  RingBudget budget = rings_.take(h.uid, fresh.bytes());
   h.replace_lin_port(std::move(*port), std::move(budget));
   r.values[0] = fresh.capacity();
   r.values[1] = 0;

@@ -1,4 +1,5 @@
 #include "canemu/daemon/vci_service.hpp"
+#include "canemu/daemon/log.hpp"
 
 #include <cstring>
 
@@ -257,6 +258,7 @@ void VciService::add_handle(VciSession& session, std::unique_ptr<VciHandle> h, i
   while (id == 0 || session.handles.count(id) != 0) {
     id = session.next_handle++;
   }
+  h->uid = session.uid;
   session.handles[id] = std::move(h);
   r.handle = id;
 }
@@ -275,7 +277,9 @@ void VciService::init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciRe
     return;
   }
   const std::size_t element = h.v2() ? sizeof(CANMSG2) : sizeof(CANMSG);
-  if (ring_bytes_in_use_ + (std::size_t{rx} + tx) * element > kMaxRingBytes) {
+  if (const std::string why = rings_.refusal(h.uid, (std::size_t{rx} + tx) * element);
+      !why.empty()) {
+    log::warning("VCI channel of uid {} not initialized: {}", h.uid, why);
     r.hresult = VCI_E_OUTOFMEMORY;
     return;
   }
@@ -297,7 +301,7 @@ void VciService::init_channel(VciHandle& h, const ipc::VciRequest& m, ipc::VciRe
     return;
   }
   VciPort& fresh = **port;
-  RingBudget budget(&ring_bytes_in_use_, fresh.bytes());
+  RingBudget budget = rings_.take(h.uid, fresh.bytes());
   std::unique_ptr<VciPort> old = h.replace_port(std::move(*port), std::move(budget));
   if (old && port_closing) {
     port_closing(*old);

@@ -92,6 +92,24 @@ TEST(Config, SecurityDefaultsAndTheSocketsModeAndGroup) {
                 "t.toml:2:15: security.socket_mode: must be an integer (octal, such as 0o660)"}));
 }
 
+TEST(Config, QuotasPerUser) {
+  auto plain = parse_config("[[bus]]\nname = \"b\"\n", "t.toml");
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->security.max_clients_per_user, 32u);
+  EXPECT_EQ(plain->security.ring_mib_per_user, 64u);
+  auto set =
+      parse_config("[security]\nmax_clients_per_user = 4\nring_mib_per_user = 8\n", "t.toml");
+  ASSERT_TRUE(set);
+  EXPECT_EQ(set->security.max_clients_per_user, 4u);
+  EXPECT_EQ(set->security.ring_mib_per_user, 8u);
+  const auto errors = errors_of("[security]\nmax_clients_per_user = 0\nring_mib_per_user = 257\n");
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_NE(errors[0].find("t.toml:2:24: security.max_clients_per_user"), std::string::npos)
+      << errors[0];
+  EXPECT_NE(errors[1].find("t.toml:3:21: security.ring_mib_per_user"), std::string::npos)
+      << errors[1];
+}
+
 TEST(Config, LowSpeedTransceiversOnSlowClassicBusesOnly) {
   auto cfg = parse_config(
       "[[bus]]\nname = \"body\"\nbitrate = 125000\ntransceiver = \"low-speed\"\n", "t.toml");

@@ -381,6 +381,34 @@ effect = "bus_off"
   EXPECT_EQ(w.fc().state(), model::ErrorState::active);
 }
 
+// A user has at most kMaxRulesPerUser frame rules in force, over all its scenarios and buses;
+// the configuration and other users are not counted against it.
+TEST(ScenarioOwnership, AUserHasAtMost256FrameRules) {
+  World w;
+  const auto rules = [](const char* name, std::size_t n) {
+    std::string text = std::string("[scenario]\nname = \"") + name + "\"\n";
+    for (std::size_t k = 0; k < n; ++k) {
+      text += "\n[[fault]]\nat = \"0s\"\nbus = \"can1\"\neffect = \"crc_error\"\n";
+    }
+    return parse_scenario(text, std::string(name) + ".toml");
+  };
+  const SimTime now = w.sim->scheduler().now();
+  auto two_hundred = rules("a", 200);
+  auto fifty_six = rules("b", 56);
+  auto one = rules("c", 1);
+  ASSERT_TRUE(two_hundred && fifty_six && one);
+  ASSERT_TRUE(w.sim->scenarios().apply(*two_hundred, now, 1000));
+  ASSERT_TRUE(w.sim->scenarios().apply(*fifty_six, now, 1000));  // 256: the share
+  auto over = w.sim->scenarios().apply(*one, now, 1000);
+  ASSERT_FALSE(over);
+  EXPECT_EQ(over.error(), std::vector<std::string>{"c.toml: uid 1000 would have 257 frame fault "
+                                                   "rules in force; one user may have 256"});
+  EXPECT_TRUE(w.sim->scenarios().apply(*one, now, 1001));
+  EXPECT_TRUE(w.sim->scenarios().apply(*two_hundred, now));  // the configuration's
+  EXPECT_EQ(w.sim->scenarios().clear("b", [](const auto& o) { return o && *o == 1000; }), 1u);
+  EXPECT_TRUE(w.sim->scenarios().apply(*one, now, 1000));  // cleared rules are given back
+}
+
 }  // namespace
 }  // namespace canemu::daemon
 

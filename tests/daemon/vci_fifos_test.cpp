@@ -10,8 +10,8 @@ namespace canemu::daemon {
 namespace {
 
 struct Fifos {
-  std::size_t ring_bytes = 0;
-  VciFifos fifos{ring_bytes};
+  RingLedger rings;
+  VciFifos fifos{rings};
   int a = 0;  // two clients of one user, by address
   int b = 0;
   int stranger = 0;  // a client of another user
@@ -61,12 +61,33 @@ TEST(VciFifos, CreatingGivesTheIdTheRoundedCapacityAndTheThreeDescriptors) {
   EXPECT_EQ(r.values[2], 192u);  // one page: (4096 - 256) / 20
   EXPECT_EQ(r.values[3], 20u);
   ASSERT_EQ(fds.size(), ipc::kFifoFdCount);
-  EXPECT_EQ(f.ring_bytes, 192u * 20);
+  EXPECT_EQ(f.rings.in_use(), 192u * 20);
   const uint64_t second = Fifos::id_of(f.create(&f.a, 1, 8));
   EXPECT_NE(second, id);
   EXPECT_NE(second, id + 1);  // not sequential
   EXPECT_EQ(f.access(&f.b, id + 1).hresult, VCI_E_INVALIDARG);
   EXPECT_EQ(f.fifos.count(), 2u);
+}
+
+TEST(VciFifos, OneUserHoldsAtMostItsRingQuotaAndOtherUsersKeepTheirs) {
+  Fifos f;
+  f.rings.set_user_quota(std::size_t{1} << 20);
+  // 4096 elements of 200 bytes: 800 KiB, counted as held by uid 1000.
+  ASSERT_EQ(f.create(&f.a, 4096, 200).hresult, VCI_OK);
+  EXPECT_EQ(f.rings.in_use(1000), f.rings.in_use());
+  EXPECT_GE(f.rings.in_use(1000), 4096u * 200);
+  // Another client of the same user shares the quota: 800 KiB more do not fit.
+  EXPECT_EQ(f.create(&f.b, 4096, 200).hresult, VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(f.fifos.count(), 1u);                                 // nothing changed
+  EXPECT_NE(f.create(&f.b, 64, 200).hresult, VCI_E_OUTOFMEMORY);  // what is left still fits
+  // Another user has a quota of its own; root has none (only the daemon-wide limit).
+  EXPECT_EQ(f.create(&f.stranger, 4096, 200).hresult, VCI_OK);
+  EXPECT_EQ(f.create(&f.root, 0xFFFF, 200).hresult, VCI_OK);
+  EXPECT_EQ(f.create(&f.root, 0xFFFF, 0xFFFF).hresult, VCI_E_OUTOFMEMORY);  // 4 GiB > 256 MiB
+  f.fifos.release(&f.a);
+  f.fifos.release(&f.b);
+  EXPECT_EQ(f.rings.in_use(1000), 0u);
+  EXPECT_EQ(f.create(&f.a, 4096, 200).hresult, VCI_OK);  // given back
 }
 
 TEST(VciFifos, BadSizesAndUnknownIdsAreInvalidArguments) {
@@ -98,14 +119,14 @@ TEST(VciFifos, AFifoLivesWhileAClientHoldsItAndALeavingClientGivesBackItsSides) 
   const uint64_t id = Fifos::id_of(f.create(&f.a, 8, 8));
   ASSERT_EQ(f.access(&f.b, id).hresult, VCI_OK);
   ASSERT_EQ(f.side(&f.a, id, 1, true), VCI_OK);
-  const std::size_t bytes = f.ring_bytes;
+  const std::size_t bytes = f.rings.in_use();
   f.fifos.release(&f.a);
   EXPECT_EQ(f.fifos.count(), 1u);  // b still holds it
-  EXPECT_EQ(f.ring_bytes, bytes);
+  EXPECT_EQ(f.rings.in_use(), bytes);
   EXPECT_EQ(f.side(&f.b, id, 1, true), VCI_OK);  // a's writer side was given back
   f.fifos.release(&f.b);
   EXPECT_EQ(f.fifos.count(), 0u);
-  EXPECT_EQ(f.ring_bytes, 0u);
+  EXPECT_EQ(f.rings.in_use(), 0u);
   EXPECT_EQ(f.access(&f.a, id).hresult, VCI_E_INVALIDARG);  // gone for good
 }
 

@@ -18,6 +18,10 @@ and files written by one command are seen by the next. Background processes stil
 the end of the page are stopped. The page fails at the first command whose output differs, with
 both texts.
 
+Socket paths of the form /tmp/canemu-NAME.sock in commands and in expected output are moved
+into the scratch directory, so that two checkouts running their tests at once do not share a
+daemon's socket.
+
 Usage: run_examples.py PAGE.md [--repo DIR] [--build DIR] [--timeout S] [--show]
 (--build: what `build` stands for, default the repository's build/)
 """
@@ -36,6 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 MARK = "@@canemu-example@@"
+PRIVATE_SOCKET = re.compile(r"/tmp/(canemu[\w.-]*\.sock)\b")
 
 
 @dataclass
@@ -130,6 +135,9 @@ def run_page(page_path: Path, repo: Path, timeout: float, show: bool = False,
         return 0
     with tempfile.TemporaryDirectory(prefix="canemu-examples-") as scratch:
         work = Path(scratch)
+        for c in commands:
+            c.text = PRIVATE_SOCKET.sub(rf"{scratch}/\1", c.text)
+            c.expected = [PRIVATE_SOCKET.sub(rf"{scratch}/\1", e) for e in c.expected]
         logs = work / ".logs"
         logs.mkdir()
         for name in ("config", "client", "docs", ".venv"):

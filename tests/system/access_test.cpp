@@ -16,6 +16,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "canemu/client/channel.hpp"
+#include "canemu/ipc/channel_message.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 #include "daemon_process.hpp"
 
@@ -295,6 +297,79 @@ TEST(Access, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
   int status = 0;
   ::waitpid(child, &status, 0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == kServed);
+}
+
+// Quotas per user ([security] max_clients_per_user, ring_mib_per_user): a user past its share
+// is told which quota and by how much, other users and root keep theirs, and what a user gives
+// back is free again.
+TEST(Access, OneUserHoldsAtMostItsConnectionsAndRingMemory) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  rig.write(
+      "allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n"
+      "max_clients_per_user = 3\nring_mib_per_user = 1\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  const std::string socket = d.socket();
+  // About 700 KiB of rings: one fits in 1 MiB, two do not.
+  client::ChannelOptions big;
+  big.bus = "can0";
+  big.rx_capacity = static_cast<uint32_t>((700u << 10) / sizeof(ipc::ChannelMessage));
+  big.tx_capacity = 16;
+  const auto user = [&] {
+    std::vector<client::Connection> held;
+    for (int k = 0; k < 3; ++k) {
+      auto c = client::Connection::open(socket, "quota");
+      if (!c) {
+        return 10 + k;
+      }
+      held.push_back(std::move(*c));
+    }
+    auto fourth = client::Connection::open(socket, "quota");
+    if (fourth || fourth.error().message.find(
+                      "has 3 connections to canemud; [security] max_clients_per_user allows 3") ==
+                      std::string::npos) {
+      return 20;
+    }
+    {
+      auto first = client::Channel::open(held[0], big);
+      if (!first) {
+        return 30;
+      }
+      // The quota is the user's, not the connection's.
+      auto second = client::Channel::open(held[1], big);
+      if (second || second.error().message.find("[security] ring_mib_per_user allows 1 MiB") ==
+                        std::string::npos) {
+        return 40;
+      }
+    }
+    // Ring memory given back can be taken again (asked on the connection that closed it, so
+    // that canemud has seen the close first), and so can a connection.
+    if (!client::Channel::open(held[0], big)) {
+      return 50;
+    }
+    held.pop_back();
+    // Answered after canemud has seen the closed connection's hang-up (sent before it).
+    (void)testing::status(held[0]);
+    if (!client::Connection::open(socket, "quota")) {
+      return 60;
+    }
+    return 0;
+  };
+  EXPECT_EQ(as_user(kNobody, rig.users, {}, user), 0);
+  // Root has no quota: four connections, two big channels.
+  std::vector<client::Connection> mine;
+  for (int k = 0; k < 4; ++k) {
+    auto c = client::Connection::open(socket, "root");
+    ASSERT_TRUE(c) << c.error().message;
+    mine.push_back(std::move(*c));
+  }
+  auto a = client::Channel::open(mine[0], big);
+  auto b = client::Channel::open(mine[1], big);
+  EXPECT_TRUE(a && b);
 }
 
 }  // namespace

@@ -99,6 +99,10 @@ struct SecurityConfig {
   // exist leaves the socket in canemud's own group, with a warning.
   uint32_t socket_mode = 0660;
   std::string socket_group = kServiceGroup;
+  // Quotas of one user (root has none; docs/security.md): connections at once, and ring memory
+  // of all its channels and FIFOs together.
+  uint32_t max_clients_per_user = 32;
+  uint32_t ring_mib_per_user = 64;
 };
 
 // [[recorder]]: a bus recorded into a file by canemud (docs/socketcan.md).

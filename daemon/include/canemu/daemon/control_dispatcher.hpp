@@ -53,7 +53,7 @@ class ControlDispatcher {
   using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
 
   ControlDispatcher(Simulation& sim, TimeSetting time)
-      : sim_(sim), time_(time), vci_(sim, ring_bytes_in_use_), xcan_(sim), slcan_(sim) {
+      : sim_(sim), time_(time), vci_(sim, rings_), xcan_(sim), slcan_(sim) {
     // VCI channels' doorbells are watched like those of ephemeral channels.
     vci_.port_opened = [this](Doorbell& d) {
       if (channel_opened) {
@@ -82,6 +82,10 @@ class ControlDispatcher {
   std::function<void(Doorbell&)> channel_opened;
   std::function<void(Doorbell&)> channel_closing;
 
+  // The ring memory one user's channels and FIFOs may hold together (root: no quota).
+  void set_ring_quota(std::size_t bytes) { rings_.set_user_quota(bytes); }
+  const RingLedger& rings() const { return rings_; }
+
   // Handles one packet of `size` bytes; `send` gets each reply.
   void handle(Session& session, const uint8_t* data, std::size_t size, const Send& send);
   // The client went away: everything it opened is closed (before its session is destroyed).
@@ -107,7 +111,7 @@ class ControlDispatcher {
 
   Simulation& sim_;
   TimeSetting time_;
-  std::size_t ring_bytes_in_use_ = 0;
+  RingLedger rings_;
   VciService vci_;
   XcanService xcan_;
   SlcanService slcan_;

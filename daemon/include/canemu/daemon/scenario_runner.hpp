@@ -78,11 +78,13 @@ class ScenarioRunner {
   std::size_t clear(std::string_view name, const MayClear& may = {},
                     std::size_t* refused = nullptr);
 
-  // Bounds on what clients can pile up (docs/faults.md): scenarios in force at once, frame
-  // rules per bus, and cleared scenarios kept for `canemu fault list` (the oldest go first).
+  // Bounds on what clients can pile up (docs/faults.md): scenarios in force at once (in all and
+  // per user), frame rules per bus and per user, and cleared scenarios kept for `canemu fault
+  // list` (the oldest go first).
   static constexpr std::size_t kMaxScenarios = 64;
   static constexpr std::size_t kMaxScenariosPerUser = 16;
   static constexpr std::size_t kMaxRulesPerBus = 1024;
+  static constexpr std::size_t kMaxRulesPerUser = 256;
   static constexpr std::size_t kKeptCleared = 32;
 
   // The ephemeral device `device` with node `node` on bus `bus` is going: the faults that act

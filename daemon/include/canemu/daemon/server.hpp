@@ -45,6 +45,7 @@ class Server {
     // Why canemud will not serve it: its first request is answered with this, then it is
     // dropped (closing at once could discard the answer with the request still unread).
     std::string refused;
+    ipc::ErrorCode refused_code = ipc::ErrorCode::permission_denied;
   };
   static constexpr std::size_t kMaxClients = 256;
   // Refused peers kept until their first request (to answer it with the reason): at most this
@@ -73,6 +74,7 @@ class Server {
   void fill_clients(ipc::ClientListReply& r);
   ipc::IpcResult<void> open_listener();
   void drop_revoked_clients();
+  std::size_t connections_of(uint32_t uid) const;
 
   Simulation& sim_;
   ServerOptions options_;

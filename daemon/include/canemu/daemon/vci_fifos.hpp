@@ -25,7 +25,7 @@ class VciFifos {
   // Who holds FIFOs: a client's session, by address (never dereferenced).
   using Holder = const void*;
 
-  explicit VciFifos(std::size_t& ring_bytes_in_use) : ring_bytes_in_use_(ring_bytes_in_use) {}
+  explicit VciFifos(RingLedger& rings) : rings_(rings) {}
 
   // Answers fifo_create (args: capacity, element size), fifo_access (args: the id's low and
   // high words) and fifo_side (args: the id's words, side 0 reader / 1 writer, 1 take / 0 give
@@ -52,7 +52,7 @@ class VciFifos {
   std::size_t held_by(Holder holder) const;
   void side(Holder holder, SharedFifo& f, const ipc::VciRequest& m, ipc::VciReply& r);
 
-  std::size_t& ring_bytes_in_use_;
+  RingLedger& rings_;
   std::map<uint64_t, SharedFifo> fifos_;
   std::map<Holder, std::set<uint64_t>> held_;  // the FIFOs each holder holds
 };

@@ -36,6 +36,7 @@ class VciHandle {
   ~VciHandle();
   VciHandle(const VciHandle&) = delete;
   VciHandle& operator=(const VciHandle&) = delete;
+  uint32_t uid = 0;  // the owner's: its ring memory counts against that user's quota
 
   Kind kind() const { return kind_; }
   bool is_lin() const { return kind_ == Kind::lin_control || kind_ == Kind::lin_monitor; }
@@ -90,8 +91,7 @@ inline std::size_t receivers(const VciSession& session) {
 class VciService {
  public:
   using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
-  VciService(Simulation& sim, std::size_t& ring_bytes_in_use)
-      : sim_(sim), ring_bytes_in_use_(ring_bytes_in_use), fifos_(ring_bytes_in_use) {}
+  VciService(Simulation& sim, RingLedger& rings) : sim_(sim), rings_(rings), fifos_(rings) {}
 
   // A port's doorbell starts or stops being watched.
   std::function<void(Doorbell&)> port_opened;
@@ -123,7 +123,7 @@ class VciService {
   static void add_handle(VciSession& session, std::unique_ptr<VciHandle> h, ipc::VciReply& r);
 
   Simulation& sim_;
-  std::size_t& ring_bytes_in_use_;
+  RingLedger& rings_;
   VciFifos fifos_;  // stand-alone FIFOs, held by sessions
 };
 

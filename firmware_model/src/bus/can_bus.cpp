@@ -17,6 +17,16 @@ SimDuration with_ppm(SimDuration d, int32_t ppm) {
   return SimDuration((d.ns() * 1'000'000 + den / 2) / den);
 }
 
+// The cause of a counter change; its time, counters and state are filled in when reported.
+CounterSample because(CounterCause cause, ErrorRole role = ErrorRole::transmitter,
+                      CanErrorType error = CanErrorType::bit) {
+  CounterSample s;
+  s.cause = cause;
+  s.role = role;
+  s.error = error;
+  return s;
+}
+
 }  // namespace
 
 uint64_t& ErrorCounts::operator[](CanErrorType t) {
@@ -161,7 +171,7 @@ void CanBus::restart(NodeId node) {
 void CanBus::counters_changed(NodeId node) {
   Node& n = nodes_[node];
   n.reported_tec = static_cast<uint16_t>(~n.fc->tec());  // force a fresh report
-  report_state(node, scheduler_.now());
+  report_state(node, scheduler_.now(), because(CounterCause::written));
   if (!n.fc->bus_off() && n.last_state != ErrorState::bus_off && !busy_) {
     schedule_attempt(std::max(scheduler_.now(), free_at_));
   }
@@ -571,7 +581,13 @@ void CanBus::apply(SimTime now, const ErrorPhase::Action& a, const std::optional
       }
       break;
   }
-  report_state(a.node, now);
+  CounterSample why;
+  if (a.kind == Kind::error) {
+    why = because(CounterCause::error, a.role, a.type);
+  } else if (a.kind == Kind::severe) {
+    why = because(CounterCause::severe, a.role);
+  }
+  report_state(a.node, now, why);
 }
 
 void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
@@ -678,21 +694,32 @@ void CanBus::recovered(NodeId id, SimTime at) {
   n.reported_tec = 0;
   n.reported_rec = 0;
   n.stats.state_changes.push_back(StateChange{at, ErrorState::active});
+  CounterSample back = because(CounterCause::recovered);
+  back.at = at;
+  n.stats.timeline.add(back);
   n.controller->on_state_change(at, ErrorState::active);
   if (!busy_) {
     schedule_attempt(std::max(at, free_at_));
   }
 }
 
-void CanBus::report_state(NodeId id, SimTime at) {
+void CanBus::report_state(NodeId id, SimTime at, CounterSample why) {
   Node& n = nodes_[id];
   FaultConfinement& fc = *n.fc;
-  if (fc.tec() == n.reported_tec && fc.rec() == n.reported_rec && !fc.bus_off()) {
+  const bool counted = fc.tec() != n.reported_tec || fc.rec() != n.reported_rec;
+  if (!counted && !fc.bus_off()) {
     return;  // nothing counted since the last report
   }
   n.reported_tec = fc.tec();
   n.reported_rec = fc.rec();
   const ErrorState s = fc.state();
+  if (counted || s != n.last_state) {
+    why.at = at;
+    why.tec = static_cast<uint16_t>(fc.tec());
+    why.rec = static_cast<uint16_t>(fc.rec());
+    why.state = s;
+    n.stats.timeline.add(why);
+  }
   if (s == n.last_state) {
     return;
   }
@@ -722,6 +749,23 @@ bool withdraw_tx(CanBus* bus, NodeId node, std::optional<TxFrame>& tx) {
     bus->tx_changed(node);
   }
   return true;
+}
+
+void CounterTimeline::add(const CounterSample& s) {
+  const std::size_t n = samples_.size();
+  // A run of count-downs by good frames in one state: its first and its latest sample.
+  if (s.cause == CounterCause::success && n >= 2 &&
+      samples_[n - 1].cause == CounterCause::success &&
+      samples_[n - 2].cause == CounterCause::success && samples_[n - 1].state == s.state &&
+      samples_[n - 2].state == s.state) {
+    samples_.back() = s;
+    return;
+  }
+  if (n == kSamples) {
+    samples_.pop_front();
+    ++forgotten_;
+  }
+  samples_.push_back(s);
 }
 
 }  // namespace canemu::model

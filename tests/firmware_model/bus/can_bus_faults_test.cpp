@@ -436,6 +436,77 @@ TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {
   EXPECT_TRUE(b.sent.size() == 1u);
 }
 
+// The timeline of a node's counters: each counted error with its kind and role at its instant,
+// the state it gave, the end of bus-off recovery; of count-downs by good frames the first and
+// the last of each run.
+TEST(CanBusFaults, TheCounterTimelineHoldsEveryErrorTheRecoveryAndTheEndsOfCountDowns) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  f.plan.add(rule(CanErrorType::bit, 32));
+  a.send(k123);
+  f.run_until(100'000'000);
+  ASSERT_EQ(a.errors.size(), 32u);
+  const auto& ta = f.bus.stats(a.id()).timeline.samples();
+  ASSERT_EQ(ta.size(), 33u);
+  for (std::size_t k = 0; k < 32; ++k) {
+    EXPECT_EQ(ta[k].at, a.errors[k].at);
+    EXPECT_EQ(ta[k].tec, 8 * (k + 1));
+    EXPECT_EQ(ta[k].rec, 0);
+    EXPECT_EQ(ta[k].cause, CounterCause::error);
+    EXPECT_EQ(ta[k].error, CanErrorType::bit);
+    EXPECT_EQ(ta[k].role, ErrorRole::transmitter);
+    const ErrorState want = k < 11   ? ErrorState::active
+                            : k < 15 ? ErrorState::warning
+                            : k < 31 ? ErrorState::passive
+                                     : ErrorState::bus_off;
+    EXPECT_EQ(ta[k].state, want) << k;
+  }
+  EXPECT_EQ(ta[32].at, a.states[3].at);
+  EXPECT_EQ(ta[32].cause, CounterCause::recovered);
+  EXPECT_EQ(ta[32].tec, 0);
+  EXPECT_EQ(ta[32].state, ErrorState::active);
+  EXPECT_EQ(f.bus.stats(a.id()).timeline.forgotten(), 0u);
+  // The receiver: one more per error it detected (a stuff error in the transmitter's flag),
+  // one less for the frame it finally received.
+  const auto& tb = f.bus.stats(b.id()).timeline.samples();
+  ASSERT_EQ(tb.size(), 33u);
+  for (std::size_t k = 0; k < 32; ++k) {
+    EXPECT_EQ(tb[k].rec, b.errors[k].rec);
+    EXPECT_EQ(tb[k].cause, CounterCause::error);
+    EXPECT_EQ(tb[k].error, CanErrorType::stuff);
+    EXPECT_EQ(tb[k].role, ErrorRole::receiver);
+  }
+  EXPECT_EQ(tb[32].cause, CounterCause::success);
+  EXPECT_EQ(tb[32].rec, tb[31].rec - 1);
+  EXPECT_EQ(tb[32].at.ns(), b.received[0].at.ns());
+}
+
+TEST(CounterTimeline, ARunOfCountDownsKeepsItsFirstAndLastAndTheOldestAreForgotten) {
+  CounterTimeline t;
+  const auto sample = [](int64_t ns, uint16_t tec, CounterCause cause) {
+    CounterSample s;
+    s.at = SimTime::from_ns(ns);
+    s.tec = tec;
+    s.cause = cause;
+    return s;
+  };
+  t.add(sample(10, 8, CounterCause::error));
+  for (uint16_t k = 1; k <= 8; ++k) {
+    t.add(sample(10 + k, static_cast<uint16_t>(8 - k), CounterCause::success));
+  }
+  ASSERT_EQ(t.samples().size(), 3u);
+  EXPECT_EQ(t.samples()[1].at.ns(), 11);
+  EXPECT_EQ(t.samples()[1].tec, 7);
+  EXPECT_EQ(t.samples()[2].at.ns(), 18);
+  EXPECT_EQ(t.samples()[2].tec, 0);
+  for (std::size_t k = 0; k < CounterTimeline::kSamples; ++k) {
+    t.add(sample(100 + static_cast<int64_t>(k), 8, CounterCause::written));
+  }
+  EXPECT_EQ(t.samples().size(), CounterTimeline::kSamples);
+  EXPECT_EQ(t.forgotten(), 3u);
+  EXPECT_EQ(t.samples().front().at.ns(), 100);
+}
+
 }  // namespace
 }  // namespace canemu::model
 

@@ -3,8 +3,11 @@
 // error frame.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <utility>
+#include <vector>
 
 #include "canemu/firmware_model/sim/sim_time.hpp"
 
@@ -18,8 +21,24 @@ class BusLoad {
   // Busy time within the second before `now`, in percent of that second.
   double percent(SimTime now) const;
 
+  // The load over time: simulated time in bins of kBin (bin k covers [k * kBin, (k + 1) * kBin)),
+  // the busy time of each. history(now) gives the bins that ended by `now`, oldest first, idle
+  // ones included, the newest kHistoryBins of them (five minutes).
+  static constexpr SimDuration kBin = milliseconds(100);
+  static constexpr std::size_t kHistoryBins = 3000;
+  struct Bin {
+    SimTime start;
+    SimDuration busy;
+  };
+  std::vector<Bin> history(SimTime now) const;
+
  private:
+  void add_to_bins(SimTime start, SimTime end);
+
   std::deque<std::pair<SimTime, SimTime>> busy_;
+  // Busy nanoseconds of bins first_bin_, first_bin_ + 1, ...; later bins are idle so far.
+  std::deque<int64_t> bins_;
+  int64_t first_bin_ = 0;
 };
 
 }  // namespace canemu::model

@@ -14,7 +14,9 @@
 // first detection on) and BusLoad.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <optional>
 #include <span>
@@ -62,6 +64,52 @@ struct StateChange {
   ErrorState state;
 };
 
+// Why a node's error counters changed: a frame that went well (each counts one down), an error
+// it detected (which, in what role), a dominant-bit sequence after its error flag, the end of
+// bus-off recovery, or a direct write (SJA1000 TXERR/RXERR, a fault scenario).
+enum class CounterCause : uint8_t { success, error, severe, recovered, written };
+
+constexpr std::string_view to_string(CounterCause c) {
+  switch (c) {
+    case CounterCause::success:
+      return "success";
+    case CounterCause::error:
+      return "error";
+    case CounterCause::severe:
+      return "severe";
+    case CounterCause::recovered:
+      return "recovered";
+    case CounterCause::written:
+      return "written";
+  }
+  return "?";
+}
+
+struct CounterSample {
+  SimTime at;
+  uint16_t tec = 0;
+  uint16_t rec = 0;
+  ErrorState state = ErrorState::active;
+  CounterCause cause = CounterCause::success;
+  CanErrorType error = CanErrorType::bit;   // cause error: what was detected
+  ErrorRole role = ErrorRole::transmitter;  // cause error or severe
+};
+
+// A node's error counters and state over time (`canemu timeline`): every change caused by an
+// error, a recovery or a write, and of each run of changes by successful frames in one state its
+// first and its last; the newest kSamples, with the number of older ones forgotten.
+class CounterTimeline {
+ public:
+  static constexpr std::size_t kSamples = 1024;
+  void add(const CounterSample& s);
+  const std::deque<CounterSample>& samples() const { return samples_; }
+  uint64_t forgotten() const { return forgotten_; }
+
+ private:
+  std::deque<CounterSample> samples_;
+  uint64_t forgotten_ = 0;
+};
+
 struct NodeStats {
   uint64_t frames_sent = 0;
   uint64_t frames_received = 0;
@@ -70,6 +118,7 @@ struct NodeStats {
   ErrorCounts errors_as_transmitter;
   ErrorCounts errors_as_receiver;
   std::vector<StateChange> state_changes;
+  CounterTimeline timeline;
 };
 
 // One line of what happened on the wire, for traces and tests.
@@ -128,6 +177,7 @@ class CanBus final : private EventHandler {
   void reset_stats(NodeId node) { nodes_[node].stats = NodeStats{}; }
   // Busy time (start of frame to end of intermission) over the second before `now`, percent.
   double bus_load_percent(SimTime now) const { return bus_load_.percent(now); }
+  std::vector<BusLoad::Bin> bus_load_history(SimTime now) const { return bus_load_.history(now); }
   uint64_t frames_on_bus() const { return frames_on_bus_; }
   uint64_t error_frames_on_bus() const { return error_frames_on_bus_; }
   // Called for every frame and error frame, in order.
@@ -258,7 +308,8 @@ class CanBus final : private EventHandler {
   void account_recessive(SimTime dominant_start);
   void arm_recovery(NodeId id);
   void recovery_check(NodeId id, SimTime now);
-  void report_state(NodeId id, SimTime at);
+  // `why`: the cause of a counter change (its time and counters are filled in here).
+  void report_state(NodeId id, SimTime at, CounterSample why = {});
   void recovered(NodeId id, SimTime at);
   // Whole bits of `node`'s own bit time in `span`, rounded to the nearest bit.
   uint64_t bits_in(NodeId node, SimDuration span);

@@ -1,4 +1,5 @@
 #include "canemu/daemon/control_dispatcher.hpp"
+#include "canemu/daemon/timeline.hpp"
 
 #include <cstring>
 #include <memory>
@@ -298,6 +299,20 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::channel_status_request:
       channel_status(c, read_as<ipc::ChannelStatusRequest>(data), send);
       return;
+    case ipc::MsgType::timeline_request: {
+      if (before_status) {
+        before_status();  // simulated time brought to now
+      }
+      auto answer = answer_timeline(sim_, read_as<ipc::TimelineRequest>(data), request_id);
+      if (auto* e = std::get_if<TimelineError>(&answer)) {
+        error(send, request_id, e->code, e->text);
+      } else if (auto* t = std::get_if<std::unique_ptr<ipc::TimelineReply>>(&answer)) {
+        send_reply(send, **t);
+      } else {
+        send_reply(send, *std::get<std::unique_ptr<ipc::LoadHistoryReply>>(answer));
+      }
+      return;
+    }
     case ipc::MsgType::device_list_request: {
       auto r = std::make_unique<ipc::DeviceListReply>(
           ipc::make_message<ipc::DeviceListReply>(request_id));

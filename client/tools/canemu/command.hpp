@@ -29,6 +29,8 @@ struct Command {
 // command runs.
 Command add_status(CLI::App& app, const std::string& socket);
 Command add_metrics(CLI::App& app, const std::string& socket);
+Command add_timeline(CLI::App& app, const std::string& socket);
+Command add_plot(CLI::App& app, const std::string& socket);
 Command add_send(CLI::App& app, const std::string& socket);
 Command add_gen(CLI::App& app, const std::string& socket);
 Command add_dump(CLI::App& app, const std::string& socket);

@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 3600.0));
   const std::vector<Command> commands = {add_status(app, socket),
                                          add_metrics(app, socket),
+                                         add_timeline(app, socket),
+                                         add_plot(app, socket),
                                          add_send(app, socket),
                                          add_gen(app, socket),
                                          add_dump(app, socket),

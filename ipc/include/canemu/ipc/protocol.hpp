@@ -15,6 +15,7 @@
 #include "canemu/ipc/capture_messages.hpp"
 #include "canemu/ipc/protocol_core.hpp"
 #include "canemu/ipc/slcan_messages.hpp"
+#include "canemu/ipc/timeline_messages.hpp"
 #include "canemu/ipc/vci_messages.hpp"
 #include "canemu/ipc/xcan_messages.hpp"
 
@@ -23,6 +24,12 @@ namespace canemu::ipc {
 // The message type of each struct (and, in protocol.cpp, the size of each type).
 template <class T>
 inline constexpr MsgType type_of_v = MsgType{};
+template <>
+inline constexpr MsgType type_of_v<TimelineRequest> = MsgType::timeline_request;
+template <>
+inline constexpr MsgType type_of_v<TimelineReply> = MsgType::timeline_reply;
+template <>
+inline constexpr MsgType type_of_v<LoadHistoryReply> = MsgType::load_history_reply;
 template <>
 inline constexpr MsgType type_of_v<Hello> = MsgType::hello;
 template <>

@@ -80,6 +80,9 @@ enum class MsgType : uint16_t {
   slcan_request = 100,
   slcan_reply = 101,
   slcan_event = 102,  // unsolicited, request_id 0
+  timeline_request = 160,
+  timeline_reply = 161,
+  load_history_reply = 162,
 };
 
 // Why a request failed. Values are stable: clients show them by name.

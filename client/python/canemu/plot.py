@@ -1,0 +1,109 @@
+"""canemu.plot: a picture of what happened on a bus over simulated time, drawn with matplotlib.
+
+`canemu plot BUS [NODE...] -o FILE` fetches the timeline from canemud (the JSON object that
+`canemu timeline BUS --json` prints) and pipes it into `python -m canemu.plot --output FILE`.
+The picture has two panels over the same time axis: the bus load in percent per 100 ms bin,
+and TEC and REC of each node with the error-warning (96), error-passive (128) and bus-off (256)
+limits. The file's extension chooses the format (.png, .svg, .pdf).
+
+`series()` gives the lines as numbers, so that what is drawn can be checked without looking.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+FORMATS = {".png", ".svg", ".pdf"}
+LIMITS = {"warning": 96, "passive": 128, "bus-off": 256}
+
+
+def series(timeline: dict) -> dict:
+    """The lines of the picture, times in seconds: `load` (x, percent) with a point at the start
+    and end of every bin, and per node `tec` and `rec` as steps (x, value) from simulated time 0
+    (counters 0) to the timeline's end."""
+    end = timeline["now_ns"] / 1e9
+    load = timeline["load"]
+    bin_s = load["bin_ns"] / 1e9
+    xs: list[float] = []
+    ys: list[float] = []
+    for k, busy in enumerate(load["busy_ns"]):
+        start = load["start_ns"] / 1e9 + k * bin_s
+        percent = 100.0 * busy / load["bin_ns"]
+        xs += [start, start + bin_s]
+        ys += [percent, percent]
+    nodes = {}
+    for node in timeline["nodes"]:
+        steps = {"tec": ([0.0], [0]), "rec": ([0.0], [0])}
+        for s in node["samples"]:
+            for key in ("tec", "rec"):
+                x, y = steps[key]
+                x.append(s["at_ns"] / 1e9)
+                y.append(s[key])
+        for x, y in steps.values():
+            x.append(end)
+            y.append(y[-1])
+        nodes[node["name"]] = {key: (x, y) for key, (x, y) in steps.items()}
+    return {"load": (xs, ys), "nodes": nodes, "end": end}
+
+
+def draw(timeline: dict, output: str, title: str | None = None) -> None:
+    """Writes the picture of `timeline` to `output`."""
+    suffix = Path(output).suffix.lower()
+    if suffix not in FORMATS:
+        raise ValueError(f"{output}: the picture's name must end in {', '.join(sorted(FORMATS))}")
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, no display
+    import matplotlib.pyplot as plt
+
+    lines = series(timeline)
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(10, 6))
+    fig.suptitle(title or f"bus {timeline['bus']}")
+    x, y = lines["load"]
+    top.plot(x, y, color="tab:blue", linewidth=1)
+    top.set_ylabel("bus load (%)")
+    top.set_ylim(0, 100)
+    top.grid(True, alpha=0.3)
+    for name, counters in lines["nodes"].items():
+        (line,) = bottom.step(*counters["tec"], where="post", label=f"{name} TEC")
+        bottom.step(*counters["rec"], where="post", label=f"{name} REC", linestyle="--",
+                    color=line.get_color())
+    for label, value in LIMITS.items():
+        bottom.axhline(value, color="grey", linewidth=0.6, linestyle=":")
+        bottom.annotate(label, (0, value), xycoords=("axes fraction", "data"), fontsize=7,
+                        color="grey", va="bottom")
+    bottom.set_ylabel("error counters")
+    bottom.set_xlabel("simulated time (s)")
+    bottom.set_xlim(0, max(lines["end"], 1e-9))
+    bottom.grid(True, alpha=0.3)
+    if lines["nodes"]:
+        bottom.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(output)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m canemu.plot", description=__doc__.split("\n")[0])
+    parser.add_argument("--output", "-o", required=True, help="FILE.png, FILE.svg or FILE.pdf")
+    parser.add_argument("--title", default=None)
+    parser.add_argument("--input", default="-", help="the timeline JSON (default: standard input)")
+    args = parser.parse_args(argv)
+    text = sys.stdin.read() if args.input == "-" else Path(args.input).read_text()
+    try:
+        timeline = json.loads(text)
+        draw(timeline, args.output, args.title)
+    except (ValueError, KeyError, OSError) as e:
+        print(f"canemu.plot: {e}", file=sys.stderr)
+        return 2
+    except ImportError as e:
+        print(f"canemu.plot: matplotlib is needed to draw ({e})", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

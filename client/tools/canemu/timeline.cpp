@@ -1,0 +1,332 @@
+// canemu timeline: what happened on a bus over time, from canemud's records: the load in bins of
+// 100 ms of simulated time and, per node, every change of its error counters and state with its
+// cause. canemu plot: the same drawn by matplotlib (the canemu Python package's canemu.plot).
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+#include <CLI/CLI.hpp>
+
+#include "canemu/client/connection.hpp"
+#include "canemu/firmware_model/bus/can_error.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "command.hpp"
+#include "fault_table.hpp"
+
+namespace canemu::cli {
+
+namespace {
+
+struct NodeTimeline {
+  std::string name;
+  uint64_t forgotten = 0;
+  std::vector<ipc::WireCounterSample> samples;
+};
+
+struct Timeline {
+  std::string bus;
+  int64_t now_ns = 0;
+  int64_t start_ns = 0;  // of the first load bin
+  uint32_t bin_ns = 0;
+  std::vector<uint32_t> busy_ns;
+  std::vector<NodeTimeline> nodes;
+};
+
+// Every page of the load history of `bus` and of each node's timeline.
+tl::expected<Timeline, std::string> fetch(client::Connection& c, const std::string& bus,
+                                          std::vector<std::string> nodes) {
+  Timeline t;
+  t.bus = bus;
+  for (uint32_t first = 0;;) {
+    auto m = ipc::make_message<ipc::TimelineRequest>();
+    ipc::copy_name(m.bus, bus);
+    m.first = first;
+    auto r = c.call<ipc::TimelineRequest, ipc::LoadHistoryReply>(m);
+    if (!r) {
+      return tl::unexpected(r.error().message);
+    }
+    if (first == 0) {
+      t.start_ns = r->start_ns;
+      t.now_ns = r->now_ns;
+      t.bin_ns = r->bin_ns;
+    }
+    t.busy_ns.insert(t.busy_ns.end(), r->busy_ns, r->busy_ns + r->count);
+    first += r->count;
+    if (r->count == 0 || first >= r->total) {
+      break;
+    }
+  }
+  if (nodes.empty()) {  // every CAN node of the bus that canemu status lists
+    auto s = c.call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+    if (!s) {
+      return tl::unexpected(s.error().message);
+    }
+    for (uint16_t i = 0; i < s->node_count; ++i) {
+      const ipc::StatusNode& n = s->nodes[i];
+      if (n.bus < s->bus_count && ipc::name_of(s->buses[n.bus].name) == bus &&
+          static_cast<ipc::WireLinState>(n.lin) == ipc::WireLinState::none) {
+        nodes.push_back(ipc::name_of(n.name));
+      }
+    }
+  }
+  for (const std::string& name : nodes) {
+    NodeTimeline n;
+    n.name = name;
+    for (uint32_t first = 0;;) {
+      auto m = ipc::make_message<ipc::TimelineRequest>();
+      ipc::copy_name(m.bus, bus);
+      ipc::copy_name(m.node, name);
+      m.first = first;
+      auto r = c.call<ipc::TimelineRequest, ipc::TimelineReply>(m);
+      if (!r) {
+        return tl::unexpected(r.error().message);
+      }
+      n.forgotten = r->forgotten;
+      n.samples.insert(n.samples.end(), r->samples, r->samples + r->count);
+      first += r->count;
+      if (r->count == 0 || first >= r->total) {
+        break;
+      }
+    }
+    t.nodes.push_back(std::move(n));
+  }
+  return t;
+}
+
+const char* cause_name(uint8_t cause) {
+  switch (static_cast<ipc::WireCounterCause>(cause)) {
+    case ipc::WireCounterCause::success:
+      return "success";
+    case ipc::WireCounterCause::error:
+      return "error";
+    case ipc::WireCounterCause::severe:
+      return "severe";
+    case ipc::WireCounterCause::recovered:
+      return "recovered";
+    case ipc::WireCounterCause::written:
+      return "written";
+  }
+  return "?";
+}
+
+std::string error_name(uint8_t error) {
+  return std::string(model::to_string(static_cast<model::CanErrorType>(error)));
+}
+
+const char* role_name(uint8_t role) {
+  return role == 0 ? "transmitter" : "receiver";
+}
+
+// "bit error as transmitter", "good frame", ...
+std::string cause_text(const ipc::WireCounterSample& s) {
+  switch (static_cast<ipc::WireCounterCause>(s.cause)) {
+    case ipc::WireCounterCause::success:
+      return "good frame";
+    case ipc::WireCounterCause::error:
+      return fmt::format("{} error as {}", error_name(s.error), role_name(s.role));
+    case ipc::WireCounterCause::severe:
+      return fmt::format("dominant bits after the error flag, as {}", role_name(s.role));
+    case ipc::WireCounterCause::recovered:
+      return "bus-off recovery ended";
+    case ipc::WireCounterCause::written:
+      return "counters written";
+  }
+  return "?";
+}
+
+double seconds(int64_t ns) {
+  return static_cast<double>(ns) / 1e9;
+}
+
+void print_text(const Timeline& t) {
+  std::printf("bus %s: load per %.1f s of simulated time, up to %.9f s\n", t.bus.c_str(),
+              seconds(t.bin_ns), seconds(t.now_ns));
+  // Runs of bins with the same load, one line each.
+  for (std::size_t k = 0; k < t.busy_ns.size();) {
+    std::size_t end = k + 1;
+    while (end < t.busy_ns.size() && t.busy_ns[end] == t.busy_ns[k]) {
+      ++end;
+    }
+    const int64_t from = t.start_ns + static_cast<int64_t>(k) * t.bin_ns;
+    const int64_t to = t.start_ns + static_cast<int64_t>(end) * t.bin_ns;
+    std::printf("  %14.3f .. %14.3f s  %6.2f %%\n", seconds(from), seconds(to),
+                100.0 * t.busy_ns[k] / t.bin_ns);
+    k = end;
+  }
+  for (const NodeTimeline& n : t.nodes) {
+    std::printf(
+        "node %s: %zu change%s of its error counters%s\n", n.name.c_str(), n.samples.size(),
+        n.samples.size() == 1 ? "" : "s",
+        n.forgotten > 0 ? fmt::format(" ({} older ones forgotten)", n.forgotten).c_str() : "");
+    if (n.samples.empty()) {
+      continue;
+    }
+    std::printf("  %-20s %5s %5s  %-8s %s\n", "time (s)", "TEC", "REC", "state", "cause");
+    for (const ipc::WireCounterSample& s : n.samples) {
+      std::printf("  %-20.9f %5u %5u  %-8s %s\n", seconds(s.at_ns), s.tec, s.rec,
+                  error_state_name(s.state).c_str(), cause_text(s).c_str());
+    }
+  }
+}
+
+toml::table to_json(const Timeline& t) {
+  toml::array busy;
+  for (uint32_t b : t.busy_ns) {
+    busy.push_back(static_cast<int64_t>(b));
+  }
+  toml::array nodes;
+  for (const NodeTimeline& n : t.nodes) {
+    toml::array samples;
+    for (const ipc::WireCounterSample& s : n.samples) {
+      toml::table row{{"at_ns", s.at_ns},
+                      {"tec", static_cast<int64_t>(s.tec)},
+                      {"rec", static_cast<int64_t>(s.rec)},
+                      {"state", error_state_name(s.state)},
+                      {"cause", cause_name(s.cause)}};
+      if (static_cast<ipc::WireCounterCause>(s.cause) == ipc::WireCounterCause::error) {
+        row.insert("error", error_name(s.error));
+      }
+      if (static_cast<ipc::WireCounterCause>(s.cause) == ipc::WireCounterCause::error ||
+          static_cast<ipc::WireCounterCause>(s.cause) == ipc::WireCounterCause::severe) {
+        row.insert("role", role_name(s.role));
+      }
+      samples.push_back(std::move(row));
+    }
+    nodes.push_back(toml::table{{"name", n.name},
+                                {"forgotten", static_cast<int64_t>(n.forgotten)},
+                                {"samples", std::move(samples)}});
+  }
+  return toml::table{{"bus", t.bus},
+                     {"now_ns", t.now_ns},
+                     {"load", toml::table{{"start_ns", t.start_ns},
+                                          {"bin_ns", static_cast<int64_t>(t.bin_ns)},
+                                          {"busy_ns", std::move(busy)}}},
+                     {"nodes", std::move(nodes)}};
+}
+
+struct Options {
+  std::string bus;
+  std::vector<std::string> nodes;
+  bool json = false;
+  std::string output;
+  std::string title;
+};
+
+int run_timeline(const std::string& socket, const Options& o) {
+  auto c = connect(socket, "canemu timeline");
+  if (!c) {
+    std::fprintf(stderr, "canemu: %s\n", c.error().message.c_str());
+    return 1;
+  }
+  auto t = fetch(*c, o.bus, o.nodes);
+  if (!t) {
+    std::fprintf(stderr, "canemu: %s\n", t.error().c_str());
+    return 1;
+  }
+  if (o.json) {
+    std::fputs((one_line_json(to_json(*t)) + "\n").c_str(), stdout);
+  } else {
+    print_text(*t);
+  }
+  return 0;
+}
+
+// The timeline as JSON into `python3 -m canemu.plot` (CANEMU_PYTHON names another interpreter).
+int run_plot(const std::string& socket, const Options& o) {
+  auto c = connect(socket, "canemu plot");
+  if (!c) {
+    std::fprintf(stderr, "canemu: %s\n", c.error().message.c_str());
+    return 1;
+  }
+  auto t = fetch(*c, o.bus, o.nodes);
+  if (!t) {
+    std::fprintf(stderr, "canemu: %s\n", t.error().c_str());
+    return 1;
+  }
+  const char* env = std::getenv("CANEMU_PYTHON");
+  const std::string python = env != nullptr && *env != '\0' ? env : "python3";
+  std::vector<std::string> args{python, "-m", "canemu.plot", "--output", o.output};
+  if (!o.title.empty()) {
+    args.insert(args.end(), {"--title", o.title});
+  }
+  std::vector<char*> argv;
+  for (std::string& a : args) {
+    argv.push_back(a.data());
+  }
+  argv.push_back(nullptr);
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) {
+    std::perror("canemu: plot: pipe");
+    return 1;
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[0], STDIN_FILENO);
+  pid_t pid = 0;
+  const int spawned = ::posix_spawnp(&pid, python.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(fds[0]);
+  if (spawned != 0) {
+    ::close(fds[1]);
+    std::fprintf(stderr, "canemu: plot: cannot run %s: %s\n", python.c_str(),
+                 std::strerror(spawned));
+    return 1;
+  }
+  ::signal(SIGPIPE, SIG_IGN);  // a plotter that ends early is reported by its exit status
+  const std::string json = one_line_json(to_json(*t)) + "\n";
+  for (std::size_t done = 0; done < json.size();) {
+    const ssize_t n = ::write(fds[1], json.data() + done, json.size() - done);
+    if (n <= 0) {
+      break;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  ::close(fds[1]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::fprintf(stderr,
+                 "canemu: plot: %s -m canemu.plot failed (it needs the canemu Python package and "
+                 "matplotlib; CANEMU_PYTHON names the interpreter)\n",
+                 python.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command add_timeline(CLI::App& app, const std::string& socket) {
+  auto* cmd = app.add_subcommand("timeline",
+                                 "a bus's load and its nodes' error counters over simulated time");
+  auto o = std::make_shared<Options>();
+  cmd->add_option("bus", o->bus, "the CAN bus")->required();
+  cmd->add_option("nodes", o->nodes, "nodes (DEVICE:N); default: every node on the bus");
+  cmd->add_flag("--json", o->json, "one JSON object instead of tables");
+  return {cmd, [&socket, o] { return run_timeline(socket, *o); }};
+}
+
+Command add_plot(CLI::App& app, const std::string& socket) {
+  auto* cmd = app.add_subcommand(
+      "plot", "draw a bus's load and its nodes' TEC and REC over time (PNG, SVG or PDF)");
+  auto o = std::make_shared<Options>();
+  cmd->add_option("bus", o->bus, "the CAN bus")->required();
+  cmd->add_option("nodes", o->nodes, "nodes (DEVICE:N); default: every node on the bus");
+  cmd->add_option("-o,--output", o->output, "the picture: FILE.png, FILE.svg or FILE.pdf")
+      ->required();
+  cmd->add_option("--title", o->title, "the picture's title (default: the bus)");
+  return {cmd, [&socket, o] { return run_plot(socket, *o); }};
+}
+
+}  // namespace canemu::cli

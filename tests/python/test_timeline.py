@@ -1,0 +1,143 @@
+"""`canemu timeline` and `canemu plot` against a running canemud in stepped time: the load of
+a bus in 100 ms bins with the exact busy time of its frames, each node's counter changes at
+the instants its error frames carry, and the picture drawn from them."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import can
+
+import canemu
+from canemu.plot import series
+
+from conftest import CANEMU_CLI, bus_errors, drain, load
+
+US = 1_000
+MS = 1_000_000
+BIT = 2 * US  # at 500 kbit/s
+
+
+def cli(daemon, *args, check=True, env=None) -> subprocess.CompletedProcess:
+    done = subprocess.run(
+        [str(CANEMU_CLI), "--socket", daemon.socket, *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
+    if check:
+        assert done.returncode == 0, done.stderr
+    return done
+
+
+def timeline(daemon, *args) -> dict:
+    return json.loads(cli(daemon, "timeline", *args, "--json").stdout)
+
+
+def msg(arbitration_id=0x123, data=(1, 2)):
+    return can.Message(arbitration_id=arbitration_id, data=list(data), is_extended_id=False)
+
+
+def test_the_load_history_has_the_exact_busy_time_of_each_bin(daemon, nodes):
+    a, _ = nodes
+    a.send(msg(0x100))  # 64 bits + 3 of intermission: 134 us (canemu calc frame 100#0102)
+    canemu.step(150 * MS)
+    a.send(msg(0x100))
+    a.send(msg(0x100))
+    canemu.step(100 * MS)  # now 250 ms: two bins have ended
+    t = timeline(daemon, "can0")
+    assert t["bus"] == "can0" and t["now_ns"] == 250 * MS
+    assert t["load"] == {"start_ns": 0, "bin_ns": 100 * MS, "busy_ns": [134 * US, 2 * 134 * US]}
+    text = cli(daemon, "timeline", "can0").stdout.splitlines()
+    assert text[0] == "bus can0: load per 0.1 s of simulated time, up to 0.250000000 s"
+    assert text[1].split() == ["0.000", "..", "0.100", "s", "0.13", "%"]
+    assert text[2].split() == ["0.100", "..", "0.200", "s", "0.27", "%"]
+
+
+def test_each_counted_error_is_in_the_senders_timeline_at_its_instant(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[scenario]
+name = "three acks missing"
+
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x123, mask = 0x7FF }
+effect = "ack_error"
+count = 3
+""")
+    a.send(msg(0x123))
+    canemu.step(5 * MS)
+    errors_a = bus_errors(drain(a))
+    received_b = [m for m in drain(b) if not m.is_error_frame]
+    assert len(errors_a) == 3 and len(received_b) == 1
+    t = timeline(daemon, "can0", a.node_name)
+    [node] = t["nodes"]
+    assert node["name"] == a.node_name and node["forgotten"] == 0
+    samples = node["samples"]
+    # +8 per ACK error at the instant its error frame says, then -1 for the frame that went.
+    assert [(s["tec"], s["rec"], s["state"], s["cause"]) for s in samples] == [
+        (8, 0, "error-active", "error"),
+        (16, 0, "error-active", "error"),
+        (24, 0, "error-active", "error"),
+        (23, 0, "error-active", "success"),
+    ]
+    assert [s["at_ns"] for s in samples[:3]] == [round(e.timestamp * 1e9) for e in errors_a]
+    assert all(s["error"] == "ack" and s["role"] == "transmitter" for s in samples[:3])
+    assert samples[3]["at_ns"] == round(received_b[0].timestamp * 1e9)
+    # Every node of the bus when none is named; the text form says the same.
+    everyone = timeline(daemon, "can0")
+    assert a.node_name in [n["name"] for n in everyone["nodes"]]
+    assert b.node_name in [n["name"] for n in everyone["nodes"]]
+    text = cli(daemon, "timeline", "can0", a.node_name).stdout
+    assert f"node {a.node_name}: 4 changes of its error counters" in text
+    assert "ack error as transmitter" in text and "good frame" in text
+
+
+def test_bad_names_are_refused_with_the_reason(daemon):
+    assert "no bus named \"nope\"" in cli(daemon, "timeline", "nope", check=False).stderr
+    done = cli(daemon, "timeline", "can0", "ghost:0", check=False)
+    assert done.returncode == 1 and 'no CAN node named "ghost:0"' in done.stderr
+    done = cli(daemon, "timeline", "can1", "ixxat0:0", check=False)
+    assert 'node "ixxat0:0" is not on bus "can1"' in done.stderr
+
+
+def test_plot_draws_the_timeline(daemon, nodes, tmp_path):
+    a, _ = nodes
+    load(daemon, """
+[scenario]
+name = "acks missing"
+
+[[fault]]
+at = "0s"
+bus = "can0"
+effect = "ack_error"
+count = 20
+""")
+    a.send(msg(0x123))
+    canemu.step(120 * MS)
+    t = timeline(daemon, "can0", a.node_name)
+    lines = series(t)
+    x, tec = lines["nodes"][a.node_name]["tec"]
+    # From 0 at time 0, one step per change, held to the end (error-passive from TEC 128 on:
+    # an ACK error of a passive sender does not count, so TEC stays at 128 until it goes).
+    assert x[0] == 0.0 and tec[0] == 0 and x[-1] == 0.12
+    assert max(tec) == 128 and tec[-1] == 127
+    lx, ly = lines["load"]
+    assert lx[:2] == [0.0, 0.1] and ly[0] == ly[1] > 0
+    env = dict(os.environ, CANEMU_PYTHON=sys.executable)
+    for name in ("timeline.png", "timeline.svg"):
+        out = tmp_path / name
+        cli(daemon, "plot", "can0", a.node_name, "-o", str(out), "--title", "acks missing", env=env)
+        data = out.read_bytes()
+        if name.endswith(".png"):
+            assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+        else:
+            assert b"<svg" in data and b"acks missing" in data
+    bad = cli(daemon, "plot", "can0", "-o", str(tmp_path / "x.bmp"), check=False, env=env)
+    assert bad.returncode == 1 and "must end in .pdf, .png, .svg" in bad.stderr

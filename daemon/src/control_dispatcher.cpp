@@ -247,6 +247,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
                                                                            : 2);
       r->time_scale = time_.scale;
       r->client_count = client_count ? client_count() : 0;
+      r->ring_bytes = rings_.in_use();
       send_reply(send, *r);
       return;
     }

@@ -10,7 +10,13 @@ times a second. At the end every worker is gone, and:
 - canemud holds the descriptors it held before the first client (every ring, eventfd and socket
   of the dead and finished clients closed);
 - its resident memory grew by less than 16 MiB after the warm-up;
-- it lists no client but this one, and `canemu fault clear all` clears what killed workers left.
+- it lists no client but this one, and `canemu fault clear all` clears what killed workers left;
+- no ring memory is held any more (`ring_bytes` 0);
+- nothing was lost silently: a listen-only `canemu dump` on each bus, running from before the
+  first worker to after the last, printed every frame its node received or reported it lost
+  (frames the node received = lines printed + messages reported lost), and that is at least
+  every frame the bus carried (a listen-only node also takes the frames whose sender, error
+  passive, was left without an acknowledgement: its passive error flag leaves them valid).
 
 Prints the figures as one JSON object; exits 1 with the reasons when a check fails.
 Usage: soak.py [--seconds N] [--workers N] [--build DIR]
@@ -82,6 +88,35 @@ while True:
 """
 
 
+class Observer:
+    """`canemu dump BUS --listen-only --no-errors` into a file: every frame the bus carries, or
+    a report of how many it could not print."""
+
+    def __init__(self, cli: str, socket: str, bus: str, folder: Path) -> None:
+        self.out = folder / f"observed-{bus}.log"
+        self.err = folder / f"observed-{bus}.err"
+        with open(self.err, "w") as err:
+            self.proc = subprocess.Popen([cli, "--socket", socket, "dump", bus, "--listen-only",
+                                          "--no-errors", "--sim-time", "-o", str(self.out)],
+                                         stdout=subprocess.DEVNULL, stderr=err)
+        deadline = time.monotonic() + 10
+        while "listening on" not in self.err.read_text():
+            if time.monotonic() > deadline or self.proc.poll() is not None:
+                raise RuntimeError(f"canemu dump {bus} did not start: {self.err.read_text()}")
+            time.sleep(0.01)
+        # "canemu: listening on can0 as eph1 (...)": its node is eph1:0
+        self.node = self.err.read_text().split(" as ")[1].split()[0] + ":0"
+
+    def stop(self) -> tuple[int, int]:
+        """Ends the dump; the lines it printed and the messages it reported lost."""
+        self.proc.send_signal(signal.SIGINT)
+        self.proc.wait(timeout=10)
+        printed = len(self.out.read_text().splitlines())
+        lost = sum(int(line.split()[1]) for line in self.err.read_text().splitlines()
+                   if line.endswith("lost: the output did not keep up"))
+        return printed, lost
+
+
 def descriptors(pid: int) -> int:
     return len(os.listdir(f"/proc/{pid}/fd"))
 
@@ -117,6 +152,7 @@ def main() -> int:
         fds_before = descriptors(pid)
         env = dict(os.environ, CANEMU_SOCKET=daemon.socket,
                    PYTHONPATH=str(REPO / "client" / "python"))
+        dumps = {bus: Observer(cli, daemon.socket, bus, Path(daemon.dir)) for bus in ("can0", "can1")}
 
         def start(k: int) -> subprocess.Popen:
             return subprocess.Popen([sys.executable, "-c", WORKER, cli, str(rnd.randrange(1 << 30)),
@@ -153,12 +189,21 @@ def main() -> int:
         for w in workers:
             w.send_signal(signal.SIGKILL)
             w.wait()
-        # canemud notices the dead clients; wait until only this one is listed.
+        # canemud notices the dead clients; wait until only this one and the observers are
+        # listed and the buses are quiet (the frames of the last workers have gone out).
         deadline = time.monotonic() + 10
         left = status(cli, daemon.socket)
-        while time.monotonic() < deadline and left["clients"] > 2:
+        while time.monotonic() < deadline:
             time.sleep(0.05)
-            left = status(cli, daemon.socket)
+            now_status = status(cli, daemon.socket)
+            quiet = [b["frames"] for b in now_status["buses"]] == [b["frames"] for b in left["buses"]]
+            left = now_status
+            if left["clients"] <= 2 + len(dumps) and quiet:
+                break
+        received = {bus: next(n["frames_received"] for n in left["nodes"] if n["name"] == d.node)
+                    for bus, d in dumps.items()}
+        seen = {bus: d.stop() for bus, d in dumps.items()}
+        left = status(cli, daemon.socket)
         # This process and the status command are the clients left.
         fds_after = descriptors(pid)
         rss_after = rss_kib(pid)
@@ -178,6 +223,9 @@ def main() -> int:
             "rss_end_kib": rss_after,
             "frames_can0": left["buses"][0]["frames"],
             "frames_can1": left["buses"][1]["frames"],
+            "observed": {bus: {"received": received[bus], "printed": printed, "lost": lost}
+                         for bus, (printed, lost) in seen.items()},
+            "ring_bytes_end": left["ring_bytes"],
         }
         print(json.dumps(figures))
         if slowest >= 0.1:
@@ -188,6 +236,16 @@ def main() -> int:
             failures.append(f"canemud grew by {rss_after - warm_rss} KiB after the warm-up")
         if left["clients"] > 2:
             failures.append(f"{left['clients']} clients still listed")
+        if left["ring_bytes"] != 0:
+            failures.append(f"{left['ring_bytes']} bytes of ring memory still held")
+        for k, bus in enumerate(("can0", "can1")):
+            printed, lost = seen[bus]
+            if printed + lost != received[bus]:
+                failures.append(f"{bus}: the observer's node received {received[bus]} frames; it "
+                                f"printed {printed} and reported {lost} lost")
+            if received[bus] < left["buses"][k]["frames"]:
+                failures.append(f"{bus} carried {left['buses'][k]['frames']} frames; the observer "
+                                f"received only {received[bus]}")
         if cleared.returncode != 0 or in_force:
             failures.append(f"fault clear all: {cleared.stdout}{cleared.stderr}; in force: {in_force}")
     for f in failures:

@@ -110,6 +110,8 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
            fmt::format("{:.9f}", static_cast<double>(s.sim_time_ns) / 1e9));
   e.family("canemu_clients", "gauge", "Connected clients.");
   e.sample("canemu_clients", "", s.client_count);
+  e.family("canemu_ring_bytes", "gauge", "Shared ring memory the clients' channels hold.");
+  e.sample("canemu_ring_bytes", "", s.ring_bytes);
 
   const auto bus_label = [&](uint16_t i) {
     return fmt::format("bus=\"{}\"", label(ipc::name_of(s.buses[i].name)));

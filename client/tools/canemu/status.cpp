@@ -108,6 +108,7 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
                   {"time_scale", s.time_scale},
                   {"sim_time_ns", s.sim_time_ns},
                   {"clients", i64(s.client_count)},
+                  {"ring_bytes", i64(s.ring_bytes)},
                   {"buses", std::move(buses)},
                   {"nodes", std::move(nodes)},
                   {"devices", std::move(device_list)},

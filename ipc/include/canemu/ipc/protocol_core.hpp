@@ -207,8 +207,9 @@ struct StatusReply {
   uint16_t client_count = 0;
   StatusBus buses[kMaxStatusBuses];
   StatusNode nodes[kMaxStatusNodes];
+  uint64_t ring_bytes = 0;  // shared ring memory all clients' channels and FIFOs hold
 };
-static_assert(sizeof(StatusReply) == 16 + 24 + 64 * kMaxStatusBuses + 64 * kMaxStatusNodes);
+static_assert(sizeof(StatusReply) == 16 + 24 + 64 * kMaxStatusBuses + 64 * kMaxStatusNodes + 8);
 static_assert(sizeof(StatusReply) <= kMaxMessageSize);
 
 struct TimeStepRequest {

@@ -262,64 +262,71 @@ void Server::arm_timer() {
 }
 
 int Server::run() {
-  constexpr int kMaxEvents = 32;
-  epoll_event events[kMaxEvents];
   while (running_) {
-    arm_timer();
-    const int n = ::epoll_wait(epoll_.get(), events, kMaxEvents, -1);
-    if (n < 0) {
-      if (errno == EINTR) {
-        continue;
-      }
-      log::error("epoll_wait: {}", std::strerror(errno));
+    if (!run_once(-1)) {
       return 1;
     }
-    for (int i = 0; i < n; ++i) {
-      if (events[i].data.fd == timer_.get() && deadline_ns_ != 0) {
-        // The last few microseconds to the deadline (simulation.spin_us), never longer.
-        const int64_t until = std::min(
-            deadline_ns_, monotonic_ns() + int64_t{sim_.config().simulation.spin_us} * 1000);
-        while (monotonic_ns() < until) {
-        }
-      }
-    }
-    last_wake_ns_ = monotonic_ns();
-    advance_to_now();  // events are handled at the simulated instant they are seen
-    for (int i = 0; i < n; ++i) {
-      const int fd = events[i].data.fd;
-      if (fd == timer_.get()) {
-        uint64_t expirations = 0;
-        [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
-      } else if (fd == listen_.get()) {
-        accept_clients();
-      } else if (watchdog_.valid() && fd == watchdog_.get()) {
-        uint64_t expirations = 0;
-        [[maybe_unused]] const ssize_t r = ::read(fd, &expirations, sizeof expirations);
-        sd_notify(0, "WATCHDOG=1");
-      } else if (fd == signals_.get()) {
-        signalfd_siginfo si{};
-        while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
-          if (si.ssi_signo == SIGHUP) {
-            reload();
-          } else {
-            log::info("signal {}, stopping", si.ssi_signo);
-            sd_notify(0, "STOPPING=1");
-            running_ = false;
-          }
-        }
-      } else if (auto bell = doorbells_.find(fd); bell != doorbells_.end()) {
-        bell->second->kick();
-      } else {
-        serve(fd);
-      }
-    }
-    check_channels();
-    flush_recorders();
-    send_outboxes();
-    drop_closing();
-    send_notifications();
   }
   return 0;
+}
+
+bool Server::run_once(int timeout_ms) {
+  constexpr int kMaxEvents = 32;
+  epoll_event events[kMaxEvents];
+  arm_timer();
+  const int n = ::epoll_wait(epoll_.get(), events, kMaxEvents, timeout_ms);
+  if (n < 0) {
+    if (errno == EINTR) {
+      return true;
+    }
+    log::error("epoll_wait: {}", std::strerror(errno));
+    return false;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (events[i].data.fd == timer_.get() && deadline_ns_ != 0) {
+      // The last few microseconds to the deadline (simulation.spin_us), never longer.
+      const int64_t until =
+          std::min(deadline_ns_, monotonic_ns() + int64_t{sim_.config().simulation.spin_us} * 1000);
+      while (monotonic_ns() < until) {
+      }
+    }
+  }
+  last_wake_ns_ = monotonic_ns();
+  advance_to_now();  // events are handled at the simulated instant they are seen
+  for (int i = 0; i < n; ++i) {
+    const int fd = events[i].data.fd;
+    if (fd == timer_.get()) {
+      uint64_t expirations = 0;
+      [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
+    } else if (fd == listen_.get()) {
+      accept_clients();
+    } else if (watchdog_.valid() && fd == watchdog_.get()) {
+      uint64_t expirations = 0;
+      [[maybe_unused]] const ssize_t r = ::read(fd, &expirations, sizeof expirations);
+      sd_notify(0, "WATCHDOG=1");
+    } else if (fd == signals_.get()) {
+      signalfd_siginfo si{};
+      while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
+        if (si.ssi_signo == SIGHUP) {
+          reload();
+        } else {
+          log::info("signal {}, stopping", si.ssi_signo);
+          sd_notify(0, "STOPPING=1");
+          running_ = false;
+        }
+      }
+    } else if (auto bell = doorbells_.find(fd); bell != doorbells_.end()) {
+      bell->second->kick();
+    } else {
+      serve(fd);
+    }
+  }
+  check_channels();
+  flush_recorders();
+  send_outboxes();
+  drop_closing();
+  send_notifications();
+  return true;
 }
 
 void Server::flush_recorders() {

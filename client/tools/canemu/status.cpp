@@ -103,18 +103,12 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
                                       {"uid", i64(e.uid)},
                                       {"channels", i64(e.channels)}});
   }
-  toml::table all{{"server_pid", i64(c.server_pid())},
-                  {"time_mode", mode},
-                  {"time_scale", s.time_scale},
-                  {"sim_time_ns", s.sim_time_ns},
-                  {"clients", i64(s.client_count)},
-                  {"ring_bytes", i64(s.ring_bytes)},
-                  {"buses", std::move(buses)},
-                  {"nodes", std::move(nodes)},
-                  {"devices", std::move(device_list)},
-                  {"client_list", std::move(client_list)},
-                  {"faults", faults_array(faults)},
-                  {"recorders", recorders_array(recorders)},
+  toml::table all{{"server_pid", i64(c.server_pid())}, {"time_mode", mode},
+                  {"time_scale", s.time_scale},        {"sim_time_ns", s.sim_time_ns},
+                  {"clients", i64(s.client_count)},    {"ring_bytes", i64(s.ring_bytes)},
+                  {"buses", std::move(buses)},         {"nodes", std::move(nodes)},
+                  {"devices", std::move(device_list)}, {"client_list", std::move(client_list)},
+                  {"faults", faults_array(faults)},    {"recorders", recorders_array(recorders)},
                   {"bridges", bridges_array(bridges)}};
   std::fputs((one_line_json(all) + "\n").c_str(), stdout);
 }

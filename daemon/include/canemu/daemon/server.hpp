@@ -34,6 +34,10 @@ class Server {
   ipc::IpcResult<void> open();
   // Runs until SIGTERM or SIGINT (or stop()). Returns the exit code.
   int run();
+  // One turn of the loop: waits up to `timeout_ms` (-1: until something happens) and serves
+  // what came. False on a failure of epoll itself (logged). For run() and the fuzz target.
+  bool run_once(int timeout_ms);
+  bool running() const { return running_; }
   void stop() { running_ = false; }
   const std::string& socket_path() const { return options_.socket_path; }
 

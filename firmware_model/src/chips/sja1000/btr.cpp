@@ -45,8 +45,14 @@ std::optional<Btr> btr_for(uint32_t bitrate, uint32_t sample_point_permille,
     for (uint8_t t2 = 1; t2 < 8; ++t2) {
       for (uint8_t t1 = 0; t1 < 16; ++t1) {
         const Btr btr{brp, static_cast<uint8_t>((t2 << 4) | t1)};
+        // The rate first, from the plain fields (cheap); the rules only for the values that
+        // give it (their error texts cost a formatting each).
+        if (!(timing_from_btr(btr.btr0, btr.btr1, oscillator_hz).bit_rate() ==
+              BitRate{bitrate, 1})) {
+          continue;
+        }
         auto t = decode_btr(btr.btr0, btr.btr1, oscillator_hz);
-        if (!t || !(t->bit_rate() == BitRate{bitrate, 1})) {
+        if (!t) {
           continue;
         }
         const uint32_t point = t->sample_point_permille();

@@ -1,0 +1,214 @@
+// libFuzzer target: canemud's server layer (accepting, peer credentials, packets of any size and
+// content, descriptors passed by clients, peers that half-close or vanish) and configuration
+// reloads (SIGHUP with any file content). The input is a script of operations on up to eight
+// clients of a daemon in stepped time, built afresh for each input. Every packet a client gets
+// must be a valid message; when the input's script ends the clients close, the server is
+// destroyed, and the process must hold exactly the descriptors it held before: nothing a client
+// passed or opened may leak.
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "canemu/daemon/log.hpp"
+#include "canemu/daemon/server.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "fuzz_world.hpp"
+
+namespace {
+
+using namespace canemu;
+
+constexpr const char* kConfig = R"([simulation]
+time = "stepped"
+
+[[bus]]
+name = "can0"
+bitrate = 500000
+
+[[device]]
+name = "ixxat0"
+model = "ixxat-usb-to-can"
+controllers = ["can0"]
+)";
+
+const daemon::Config& config() {
+  static const daemon::Config c = fuzzing::parse_or_abort(kConfig);
+  return c;
+}
+
+const std::string& folder() {
+  static const std::string dir = [] {
+    char name[] = "/tmp/canemu-fuzz-server-XXXXXX";
+    if (::mkdtemp(name) == nullptr) {
+      std::abort();
+    }
+    daemon::log::set_max_level(daemon::log::Level::error);  // quieter: the input is hostile
+    return std::string(name);
+  }();
+  return dir;
+}
+
+std::size_t open_descriptors() {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator("/proc/self/fd")) {
+    ++n;
+  }
+  return n;
+}
+
+class Script {
+ public:
+  Script(const uint8_t* data, std::size_t size) : data_(data), size_(size) {}
+  bool done() const { return at_ >= size_; }
+  uint8_t byte() { return at_ < size_ ? data_[at_++] : 0; }
+  std::vector<uint8_t> bytes(std::size_t n) {
+    n = std::min(n, size_ - at_);
+    std::vector<uint8_t> out(data_ + at_, data_ + at_ + n);
+    at_ += n;
+    return out;
+  }
+
+ private:
+  const uint8_t* data_;
+  std::size_t size_;
+  std::size_t at_ = 0;
+};
+
+// Reads everything waiting for `fd` without blocking: each packet must be a valid message; the
+// descriptors that come with replies are closed.
+void drain(int fd) {
+  std::vector<uint8_t> buffer;
+  std::vector<ipc::UniqueFd> fds;
+  while (true) {
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, 0) <= 0) {
+      return;
+    }
+    auto n = ipc::receive_packet(fd, buffer, 0, &fds);
+    if (!n || *n == 0) {
+      return;  // closed by canemud (refused, or it misbehaved)
+    }
+    if (ipc::check_message(buffer.data(), buffer.size()) != ipc::ErrorCode::none) {
+      std::abort();  // canemud sends well-formed messages only
+    }
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string socket = folder() + "/canemud.sock";
+  const std::string file = folder() + "/canemud.toml";
+  { std::ofstream(file) << kConfig; }
+  const std::size_t before = open_descriptors();
+  {
+    auto sim = fuzzing::fresh_simulation(config());
+    daemon::Server server(*sim, {socket, {daemon::TimeMode::stepped, 1.0}, file, std::nullopt});
+    if (!server.open()) {
+      std::abort();
+    }
+    std::vector<ipc::UniqueFd> clients;
+    Script s(data, size);
+    while (!s.done()) {
+      const uint8_t op = s.byte();
+      ipc::UniqueFd* c = clients.empty() ? nullptr : &clients[s.byte() % clients.size()];
+      switch (op % 8) {
+        case 0:
+          if (clients.size() < 8) {
+            if (auto fd = ipc::connect_seqpacket(socket)) {
+              clients.push_back(std::move(*fd));
+            }
+          }
+          break;
+        case 1:    // a packet of any size and content
+        case 2: {  // the same after a proper hello
+          if (c == nullptr) {
+            break;
+          }
+          if (op % 8 == 2) {
+            auto hello = ipc::make_message<ipc::Hello>();
+            ipc::copy_name(hello.client_name, "fuzz");
+            (void)ipc::send_message(c->get(), hello);
+          }
+          const std::size_t n = static_cast<std::size_t>(s.byte()) * 64 + s.byte();
+          const auto packet = s.bytes(n);
+          (void)::send(c->get(), packet.data(), packet.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+          break;
+        }
+        case 3: {  // a packet with descriptors attached
+          if (c == nullptr) {
+            break;
+          }
+          int pipe_fds[2];
+          if (::pipe2(pipe_fds, O_CLOEXEC) != 0) {
+            break;
+          }
+          auto m = ipc::make_message<ipc::StatusRequest>();
+          const int passed[2] = {pipe_fds[0], pipe_fds[1]};
+          (void)ipc::send_packet(c->get(), &m, sizeof m, passed);
+          ::close(pipe_fds[0]);
+          ::close(pipe_fds[1]);
+          break;
+        }
+        case 4:
+          if (c != nullptr) {
+            drain(c->get());
+            clients.erase(clients.begin() + (c - clients.data()));
+          }
+          break;
+        case 5:
+          if (c != nullptr) {
+            ::shutdown(c->get(), SHUT_WR);
+          }
+          break;
+        case 6: {  // a reload with whatever the file says
+          const auto text = s.bytes(s.byte() * 4);
+          std::ofstream(file, std::ios::trunc)
+              .write(reinterpret_cast<const char*>(text.data()),
+                     static_cast<std::streamsize>(text.size()));
+          std::raise(SIGHUP);  // blocked: the server's signalfd takes it
+          if (!server.run_once(0)) {
+            std::abort();
+          }
+          break;
+        }
+        default:
+          if (!server.run_once(0)) {
+            std::abort();
+          }
+          if (c != nullptr) {
+            drain(c->get());
+          }
+          break;
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (!server.run_once(0)) {
+        std::abort();
+      }
+      for (auto& c : clients) {
+        drain(c.get());
+      }
+    }
+    clients.clear();
+    if (!server.run_once(0) || !server.running()) {
+      std::abort();  // no client may stop the daemon
+    }
+  }
+  if (open_descriptors() != before) {
+    std::abort();  // a descriptor leaked
+  }
+  return 0;
+}

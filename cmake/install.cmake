@@ -4,6 +4,11 @@
 # /etc/canemu, the documentation and the Python package. docs/security.md, "Installing".
 include(GNUInstallDirs)
 
+# The package's maintainer: a distributor sets their own (-DCANEMU_PACKAGE_CONTACT=...).
+set(CANEMU_PACKAGE_CONTACT "canemu maintainers <canemu@localhost>"
+    CACHE STRING "Maintainer of the Debian package (name <address>)")
+
+
 set(CANEMU_INSTALLED_LIBRARIES vcinpl vcinpl2 vciapi xcan sl64)
 foreach(lib ${CANEMU_INSTALLED_LIBRARIES})
   set_target_properties(${lib} PROPERTIES VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR})
@@ -72,7 +77,16 @@ install(CODE [[
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/examples ${PROJECT_SOURCE_DIR}/config/faults
         DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu)
 
-install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/packaging/debian/copyright
+        DESTINATION ${CMAKE_INSTALL_DOCDIR})
+# A native package's changelog, compressed as Debian wants it (gzip -9n: no name, no time).
+string(TIMESTAMP changelog_date "%a, %d %b %Y %H:%M:%S +0000" UTC)
+file(WRITE ${PROJECT_BINARY_DIR}/install-doc/changelog
+     "canemu (${PROJECT_VERSION}) unstable; urgency=medium\n\n"
+     "  * Built from the canemu source tree; docs/ describes this version.\n\n"
+     " -- ${CANEMU_PACKAGE_CONTACT}  ${changelog_date}\n")
+execute_process(COMMAND gzip -9nf ${PROJECT_BINARY_DIR}/install-doc/changelog)
+install(FILES ${PROJECT_BINARY_DIR}/install-doc/changelog.gz DESTINATION ${CMAKE_INSTALL_DOCDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}
         FILES_MATCHING PATTERN "*.md")
 
@@ -94,21 +108,26 @@ install(DIRECTORY ${dist_info} DESTINATION ${CANEMU_PYTHON_DIR})
 # ---- CPack: a Debian package ----
 set(CPACK_PACKAGE_NAME canemu)
 set(CPACK_PACKAGE_VENDOR "canemu")
-set(CPACK_PACKAGE_CONTACT "canemu maintainers <canemu@localhost>")
+set(CPACK_PACKAGE_CONTACT "${CANEMU_PACKAGE_CONTACT}")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "emulated IXXAT and SORCUS CAN/LIN adapters")
 set(CPACK_PACKAGE_DESCRIPTION
-    "canemud emulates IXXAT (VCI) and SORCUS CAN and LIN interface adapters down to the\n"
-    "controller silicon, in real time; programs written for them link canemu's client\n"
-    "libraries and run without hardware.")
+    "canemud emulates IXXAT (VCI) and SORCUS CAN and LIN interface adapters\n"
+    "down to the controller silicon, in real time; programs written for them\n"
+    "link canemu's client libraries and run without hardware.")
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION misc)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, python3-can")
+# shlibs and the ldconfig trigger for the five libraries; binaries and libraries stripped.
+set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
+set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS_POLICY ">=")
+set(CPACK_STRIP_FILES ON)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, python3, python3-can")
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")  # canemu plot
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/packaging/debian/conffiles ${PROJECT_SOURCE_DIR}/packaging/debian/postinst
-    ${PROJECT_SOURCE_DIR}/packaging/debian/prerm ${PROJECT_SOURCE_DIR}/packaging/debian/postrm)
+    ${PROJECT_SOURCE_DIR}/packaging/debian/prerm ${PROJECT_SOURCE_DIR}/packaging/debian/postrm
+    ${PROJECT_SOURCE_DIR}/packaging/debian/triggers)
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 include(CPack)

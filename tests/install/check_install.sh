@@ -64,4 +64,11 @@ done
 dpkg-deb -f "$deb" Depends | grep -q "systemd" || fail "the package does not depend on systemd"
 dpkg-deb -e "$deb" "$dest/control"
 grep -qx /etc/canemu/canemud.toml "$dest/control/conffiles" || fail "canemud.toml is no conffile"
+grep -q "activate-noawait ldconfig" "$dest/control/triggers" || fail "no ldconfig trigger"
+grep -q "^libvcinpl 0 canemu" "$dest/control/shlibs" || fail "no shlibs for libvcinpl.so.0"
+# lintian: no error. Accepted and documented (docs/security.md, "Installing"): the default
+# maintainer address (a distributor sets CANEMU_PACKAGE_CONTACT); warnings are not failures.
+command -v lintian >/dev/null || fail "lintian is missing (scripts/apt-packages.txt)"
+lintian --fail-on error --suppress-tags bogus-mail-host,bogus-mail-host-in-debian-changelog "$deb" >"$dest/lintian.txt" 2>&1 ||
+  fail "lintian: $(grep '^E:' "$dest/lintian.txt")"
 echo "installed and packaged: $(basename "$deb"), $(wc -l <<<"$contents") entries"

@@ -63,6 +63,7 @@ void BM_ClientDaemonClientLatencyRealtime(benchmark::State& state) {
   }
   client::ChannelOptions o;
   o.bus = "fast";
+  o.spin_us = static_cast<uint32_t>(state.range(0));  // both channels' spin before blocking
   auto a = client::Channel::open(*ca, o);
   auto b = client::Channel::open(*cb, o);
   if (!a || !b) {
@@ -122,7 +123,14 @@ void BM_ClientDaemonClientLatencyRealtime(benchmark::State& state) {
   ::unlink(config.c_str());
   ::rmdir(dir);
 }
-BENCHMARK(BM_ClientDaemonClientLatencyRealtime)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ClientDaemonClientLatencyRealtime)
+    ->ArgName("spin_us")
+    ->Arg(0)
+    ->Arg(50)
+    ->Arg(200)
+    ->Arg(1000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // A client killed with an open channel: the time from SIGKILL until a subscriber hears that
 // its device is gone (target: within 100 ms).

@@ -1,5 +1,7 @@
 #include "canemu/client/channel.hpp"
 
+#include <sched.h>
+
 #include <fmt/format.h>
 
 #include "canemu/ipc/clock.hpp"
@@ -19,8 +21,11 @@ bool spin(int64_t spin_ns, Attempt attempt) {
     if (attempt()) {
       return true;
     }
-    if (k % 64 == 0 && ipc::monotonic_ns() >= until) {
-      return false;
+    if (k % 64 == 0) {
+      if (ipc::monotonic_ns() >= until) {
+        return false;
+      }
+      ::sched_yield();
     }
   }
 }

@@ -248,6 +248,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       r->time_scale = time_.scale;
       r->client_count = client_count ? client_count() : 0;
       r->ring_bytes = rings_.in_use();
+      if (fill_pace) {
+        fill_pace(*r);
+      }
       send_reply(send, *r);
       return;
     }

@@ -51,6 +51,12 @@ Server::Server(Simulation& sim, ServerOptions options)
     flush_recorders();
   };
   dispatcher_.client_count = [this] { return live_clients(); };
+  dispatcher_.fill_pace = [this](ipc::StatusReply& r) {
+    if (options_.time.mode != TimeMode::stepped) {
+      r.lag_ns = lag_ns_;
+      r.achieved_scale = achieved_scale();
+    }
+  };
   dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
   dispatcher_.before_step = [this] { kick_all_channels(); };
   dispatcher_.after_step = [this] {
@@ -232,9 +238,48 @@ model::SimTime Server::wall_to_sim() const {
 }
 
 void Server::advance_to_now() {
-  if (options_.time.mode != TimeMode::stepped) {
-    sim_.scheduler().run_until(wall_to_sim());
+  if (options_.time.mode == TimeMode::stepped) {
+    return;
   }
+  const model::SimTime target = wall_to_sim();
+  model::SimScheduler& s = sim_.scheduler();
+  const int64_t until = monotonic_ns() + kMaxPassWorkNs;
+  while (true) {
+    s.run_until(target, kEventsPerCheck);
+    if (s.now() >= target || monotonic_ns() >= until) {
+      break;  // caught up, or the rest waits for the next pass (the timer is due at once)
+    }
+  }
+  note_pace(monotonic_ns(), target);
+}
+
+void Server::note_pace(int64_t mono_ns, model::SimTime target) {
+  const model::SimTime now = sim_.scheduler().now();
+  lag_ns_ = std::max<int64_t>(0, (target - now).ns());
+  if (pace_.empty() || mono_ns - pace_.back().first >= 100'000'000) {
+    pace_.emplace_back(mono_ns, now.ns());
+    while (pace_.size() > 2 && mono_ns - pace_[1].first >= 1'000'000'000) {
+      pace_.pop_front();  // keep a window of at least one second
+    }
+  }
+  const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
+  const double lag_wall_ns = static_cast<double>(lag_ns_) / scale;
+  if (lag_wall_ns >= 100e6 && mono_ns - lag_logged_ns_ >= 10'000'000'000) {
+    lag_logged_ns_ = mono_ns;
+    log::warning(
+        "simulated time lags {:.3f} s behind: the simulation cannot keep up with time {} "
+        "(achieved {:.1f} x real time over the last second)",
+        static_cast<double>(lag_ns_) / 1e9, to_string(options_.time), achieved_scale());
+  }
+}
+
+double Server::achieved_scale() const {
+  const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
+  if (pace_.size() < 2 || pace_.back().first - pace_.front().first < 500'000'000) {
+    return lag_ns_ == 0 ? scale : 0.0;  // too early to tell
+  }
+  return static_cast<double>(pace_.back().second - pace_.front().second) /
+         static_cast<double>(pace_.back().first - pace_.front().first);
 }
 
 void Server::arm_timer() {

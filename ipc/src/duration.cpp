@@ -25,6 +25,9 @@ std::optional<int64_t> parse_duration(std::string_view text) {
     return std::nullopt;
   }
   const std::string_view unit = text.substr(i);
+  if (unit.empty() && value == 0) {
+    return 0;  // zero needs no unit
+  }
   const double scale = unit == "ns"   ? 1
                        : unit == "us" ? 1e3
                        : unit == "ms" ? 1e6

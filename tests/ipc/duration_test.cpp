@@ -11,6 +11,9 @@ TEST(ParseDuration, ReadsEachUnitInNanoseconds) {
   EXPECT_EQ(parse_duration("10ms"), 10'000'000);
   EXPECT_EQ(parse_duration("2s"), 2'000'000'000);
   EXPECT_EQ(parse_duration("0s"), 0);
+  EXPECT_EQ(parse_duration("0"), 0);  // zero needs no unit; any other number does
+  EXPECT_EQ(parse_duration("0.0"), 0);
+  EXPECT_EQ(parse_duration("5"), std::nullopt);
 }
 
 TEST(ParseDuration, ReadsAFractionRoundedToTheNearestNanosecond) {

@@ -10,6 +10,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "canemu/client/channel.hpp"
+#include "canemu/ipc/clock.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -362,6 +364,58 @@ TEST(Canemud, RefusesToStartOnSocketsItCannotServe) {
   }
   ::close(dgram[0]);
   ::close(dgram[1]);
+}
+
+// A simulation that cannot keep the requested scale does not make canemud deaf: a babbling node
+// keeps a 1 Mbit/s bus at full load while time runs 20,000 times faster than real time (far more
+// than the engine can do on this machine); status requests are still answered within 100 ms
+// (a loop pass runs the simulation for 2 ms at most), and the status says how far simulated time
+// lags and what scale was achieved.
+TEST(Canemud, AScaleThatCannotBeKeptLagsVisiblyAndRequestsAreStillAnswered) {
+  char dir[] = "/tmp/canemu-lag-XXXXXX";
+  const std::string folder = ::mkdtemp(dir);
+  const std::string config = folder + "/lag.toml";
+  {
+    FILE* f = std::fopen(config.c_str(), "w");
+    std::fputs("[[bus]]\nname = \"fast\"\nbitrate = 1000000\n", f);
+    std::fclose(f);
+  }
+  Daemon d("scaled:20000", {"--config=" + config});
+  auto c = connect(d);
+  client::ChannelOptions o;
+  o.bus = "fast";
+  o.device = "talker";
+  auto talker = client::Channel::open(c, o);
+  o.device = "listener";
+  auto listener = client::Channel::open(c, o);
+  ASSERT_TRUE(talker && listener);
+  const std::string text =
+      "[scenario]\nname = \"babble\"\n\n[[fault]]\nat = \"0s\"\nnode = \"talker:0\"\n"
+      "effect = \"babble\"\nid = 0x10\nduration = \"100000s\"\n";
+  auto load = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+  load->length = static_cast<uint32_t>(text.size());
+  std::copy(text.begin(), text.end(), load->text);
+  auto loaded = c.call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
+  ASSERT_TRUE(loaded && loaded->applied == 1) << (loaded ? loaded->errors : "no reply");
+  int64_t slowest = 0;
+  ipc::StatusReply last{};
+  const int64_t end = ipc::monotonic_ns() + 2'000'000'000;
+  while (ipc::monotonic_ns() < end) {
+    const int64_t t0 = ipc::monotonic_ns();
+    last = status(c);
+    slowest = std::max(slowest, ipc::monotonic_ns() - t0);
+  }
+  EXPECT_LT(slowest, 100'000'000) << "slowest status answer " << slowest / 1000 << " us";
+  std::printf("slowest status answer under overload: %.1f ms; lag %.3f s, achieved x%.0f\n",
+              static_cast<double>(slowest) / 1e6, static_cast<double>(last.lag_ns) / 1e9,
+              last.achieved_scale);
+  EXPECT_GT(last.lag_ns, 0);
+  EXPECT_GT(last.achieved_scale, 1.0);
+  EXPECT_LT(last.achieved_scale, 20000.0);
+  EXPECT_GT(last.buses[0].frames, 1000u);  // the bus did carry the babble
+  EXPECT_TRUE(d.read_log_until("simulated time lags", 5000)) << d.log();
+  ::unlink(config.c_str());
+  ::rmdir(dir);
 }
 
 }  // namespace

@@ -110,6 +110,13 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
            fmt::format("{:.9f}", static_cast<double>(s.sim_time_ns) / 1e9));
   e.family("canemu_clients", "gauge", "Connected clients.");
   e.sample("canemu_clients", "", s.client_count);
+  e.family("canemu_sim_lag_seconds", "gauge",
+           "How far simulated time is behind real or scaled time (0 while canemud keeps up).");
+  e.sample("canemu_sim_lag_seconds", "",
+           fmt::format("{:.9f}", static_cast<double>(s.lag_ns) / 1e9));
+  e.family("canemu_sim_achieved_scale", "gauge",
+           "Simulated seconds per real second over the last second (real and scaled time).");
+  e.sample("canemu_sim_achieved_scale", "", fmt::format("{:.3f}", s.achieved_scale));
   e.family("canemu_ring_bytes", "gauge", "Shared ring memory the clients' channels hold.");
   e.sample("canemu_ring_bytes", "", s.ring_bytes);
 

@@ -103,12 +103,20 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
                                       {"uid", i64(e.uid)},
                                       {"channels", i64(e.channels)}});
   }
-  toml::table all{{"server_pid", i64(c.server_pid())}, {"time_mode", mode},
-                  {"time_scale", s.time_scale},        {"sim_time_ns", s.sim_time_ns},
-                  {"clients", i64(s.client_count)},    {"ring_bytes", i64(s.ring_bytes)},
-                  {"buses", std::move(buses)},         {"nodes", std::move(nodes)},
-                  {"devices", std::move(device_list)}, {"client_list", std::move(client_list)},
-                  {"faults", faults_array(faults)},    {"recorders", recorders_array(recorders)},
+  toml::table all{{"server_pid", i64(c.server_pid())},
+                  {"time_mode", mode},
+                  {"time_scale", s.time_scale},
+                  {"sim_time_ns", s.sim_time_ns},
+                  {"clients", i64(s.client_count)},
+                  {"ring_bytes", i64(s.ring_bytes)},
+                  {"lag_ns", s.lag_ns},
+                  {"achieved_scale", s.achieved_scale},
+                  {"buses", std::move(buses)},
+                  {"nodes", std::move(nodes)},
+                  {"devices", std::move(device_list)},
+                  {"client_list", std::move(client_list)},
+                  {"faults", faults_array(faults)},
+                  {"recorders", recorders_array(recorders)},
                   {"bridges", bridges_array(bridges)}};
   std::fputs((one_line_json(all) + "\n").c_str(), stdout);
 }
@@ -120,6 +128,10 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
               s.client_count == 1 ? "" : "s");
+  if (s.lag_ns >= 1'000'000) {  // a millisecond or more: the simulation does not keep up
+    std::printf("simulated time lags %.3f s behind (achieved %.1f x real time)\n",
+                static_cast<double>(s.lag_ns) / 1e9, s.achieved_scale);
+  }
   std::printf("%-12s %-7s %9s %9s %7s %10s %8s\n", "BUS", "KIND", "BITRATE", "DATA", "LOAD",
               "FRAMES", "ERRORS");
   for (uint16_t i = 0; i < s.bus_count; ++i) {

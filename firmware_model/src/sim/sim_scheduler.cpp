@@ -33,10 +33,15 @@ bool SimScheduler::cancel(EventId id) {
   return queue_.cancel(id);
 }
 
-std::size_t SimScheduler::run_until(SimTime limit) {
+std::size_t SimScheduler::run_until(SimTime limit, std::size_t max_events) {
   limit = std::max(limit, now_);  // time never goes backwards
   std::size_t ran = 0;
-  while (auto entry = queue_.pop_due(limit)) {
+  while (ran < max_events) {
+    auto entry = queue_.pop_due(limit);
+    if (!entry) {
+      now_ = limit;
+      return ran;
+    }
     now_ = std::max(now_, entry->time);
     const Target t = entry->payload;
     if (t.handler != nullptr) {
@@ -49,7 +54,9 @@ std::size_t SimScheduler::run_until(SimTime limit) {
     }
     ++ran;
   }
-  now_ = limit;
+  if (!queue_.next_time() || *queue_.next_time() > limit) {
+    now_ = limit;  // exactly `max_events` were due
+  }
   return ran;
 }
 

@@ -91,6 +91,30 @@ TEST(SimScheduler, RunsDueEventsInOrderAndStopsAtTheLimit) {
   EXPECT_EQ(trace, (std::vector<std::pair<int, int64_t>>{{1, 100}, {2, 100}, {3, 300}}));
 }
 
+// A bounded turn stops after `max_events`; time stays at the last event run while more are due,
+// and reaches the limit once none is.
+TEST(SimScheduler, ABoundedRunStopsAfterItsEventsAndTimeWaitsForTheRest) {
+  SimScheduler s;
+  std::vector<int64_t> ran;
+  for (int64_t at : {10, 20, 30, 40, 40}) {
+    s.schedule_at(SimTime::from_ns(at), [&](SimTime t) { ran.push_back(t.ns()); });
+  }
+  EXPECT_EQ(s.run_until(SimTime::from_ns(100), 2), 2u);
+  EXPECT_EQ(s.now().ns(), 20);
+  EXPECT_EQ(s.run_until(SimTime::from_ns(100), 2), 2u);
+  EXPECT_EQ(s.now().ns(), 40);  // the second event at 40 is still due
+  EXPECT_EQ(s.run_until(SimTime::from_ns(100), 2), 1u);
+  EXPECT_EQ(s.now().ns(), 100);
+  EXPECT_EQ(ran, (std::vector<int64_t>{10, 20, 30, 40, 40}));
+  // Exactly as many due as allowed: the limit is reached.
+  s.schedule_at(SimTime::from_ns(150), [&](SimTime t) { ran.push_back(t.ns()); });
+  s.schedule_at(SimTime::from_ns(900), [&](SimTime t) { ran.push_back(t.ns()); });
+  EXPECT_EQ(s.run_until(SimTime::from_ns(200), 1), 1u);
+  EXPECT_EQ(s.now().ns(), 200);
+  EXPECT_EQ(s.run_until(SimTime::from_ns(300), 0), 0u);
+  EXPECT_EQ(s.now().ns(), 300);  // nothing due: even a turn of no events reaches the limit
+}
+
 TEST(SimScheduler, EventsScheduledWhileRunningRunInTheSameCallWhenDue) {
   SimScheduler s;
   std::vector<int64_t> times;

@@ -5,10 +5,12 @@
 //   stepped   simulated time moves only on a client's time-step request.
 #pragma once
 
+#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "canemu/daemon/access_policy.hpp"
 #include "canemu/daemon/config.hpp"
@@ -79,6 +81,9 @@ class Server {
   ipc::IpcResult<void> open_listener();
   void drop_revoked_clients();
   std::size_t connections_of(uint32_t uid) const;
+  // Keeps the samples for the achieved scale, logs a lag now and then.
+  void note_pace(int64_t mono_ns, model::SimTime target);
+  double achieved_scale() const;
 
   Simulation& sim_;
   ServerOptions options_;
@@ -99,6 +104,16 @@ class Server {
   std::vector<uint8_t> buffer_;
   std::map<int, Doorbell*> doorbells_;  // doorbell fd -> its channel
   std::vector<ipc::Notification> pending_notifications_;
+
+  // Real and scaled time: one pass of the loop runs the simulation for at most kMaxPassWorkNs
+  // of wall time (checked every kEventsPerCheck events), so requests, doorbells and signals are
+  // served at least that often whatever the load. When the scale cannot be kept, simulated time
+  // lags behind the configured mapping instead (docs/daemon.md, "Time").
+  static constexpr int64_t kMaxPassWorkNs = 2'000'000;
+  static constexpr std::size_t kEventsPerCheck = 256;
+  int64_t lag_ns_ = 0;                            // simulated ns behind
+  std::deque<std::pair<int64_t, int64_t>> pace_;  // (CLOCK_MONOTONIC, simulated) ns
+  int64_t lag_logged_ns_ = 0;                     // CLOCK_MONOTONIC of the last lag warning
 };
 
 }  // namespace canemu::daemon

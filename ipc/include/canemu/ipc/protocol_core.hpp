@@ -208,8 +208,13 @@ struct StatusReply {
   StatusBus buses[kMaxStatusBuses];
   StatusNode nodes[kMaxStatusNodes];
   uint64_t ring_bytes = 0;  // shared ring memory all clients' channels and FIFOs hold
+  // Real and scaled time: how far simulated time is behind the configured mapping (0 while
+  // canemud keeps up), and the scale achieved over the last second.
+  int64_t lag_ns = 0;
+  double achieved_scale = 0.0;
 };
-static_assert(sizeof(StatusReply) == 16 + 24 + 64 * kMaxStatusBuses + 64 * kMaxStatusNodes + 8);
+static_assert(sizeof(StatusReply) ==
+              16 + 24 + 64 * kMaxStatusBuses + 64 * kMaxStatusNodes + 8 + 16);
 static_assert(sizeof(StatusReply) <= kMaxMessageSize);
 
 struct TimeStepRequest {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <vector>
@@ -74,7 +75,10 @@ class SimScheduler {
 
   // Runs every event due at or before `limit`, then sets now() to `limit` (never backwards).
   // Returns the number of events run.
-  std::size_t run_until(SimTime limit);
+  std::size_t run_until(SimTime limit) { return run_until(limit, SIZE_MAX); }
+  // The same, but at most `max_events`: when that many ran and more are due, now() stays at the
+  // last one's instant (the rest run at the next call). So a caller can bound its work per turn.
+  std::size_t run_until(SimTime limit, std::size_t max_events);
 
  private:
   // Heap entries stay small: a handler and a tag, or an index into the slots of std::function

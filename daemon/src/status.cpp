@@ -24,12 +24,11 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
     s.bitrate = c.bitrate;
     s.data_bitrate = c.data_bitrate;
     if (const lin::LinBus* lin = sim.lin_bus(i)) {
-      // A LIN bus: frames whole, frames with an error, and its load since the start.
+      // A LIN bus: frames whole, frames with an error, and its load over the last second.
       const lin::LinBusStats& st = lin->stats();
       s.frames = st.frames;
       s.error_frames = st.errors;
-      s.load_permille =
-          now.ns() > 0 ? static_cast<uint32_t>((st.busy_ns * 1000 + now.ns() / 2) / now.ns()) : 0;
+      s.load_permille = static_cast<uint32_t>(lin->load_percent(now) * 10 + 0.5);
       continue;
     }
     s.load_permille = static_cast<uint32_t>(b.bus_load_percent(now) * 10 + 0.5);

@@ -33,12 +33,8 @@ TimelineAnswer answer_timeline(const Simulation& sim, const ipc::TimelineRequest
       return TimelineError{ipc::ErrorCode::no_such_bus,
                            fmt::format("no bus named \"{}\"", bus_name)};
     }
-    if (sim.lin_bus(*bus) != nullptr) {
-      return TimelineError{
-          ipc::ErrorCode::bad_argument,
-          fmt::format("\"{}\" is a LIN bus; load histories are kept for CAN buses", bus_name)};
-    }
-    const auto bins = sim.bus(*bus).bus_load_history(now);
+    const model::lin::LinBus* lin = sim.lin_bus(*bus);
+    const auto bins = lin != nullptr ? lin->load_history(now) : sim.bus(*bus).bus_load_history(now);
     auto r = std::make_unique<ipc::LoadHistoryReply>(
         ipc::make_message<ipc::LoadHistoryReply>(request_id));
     ipc::copy_name(r->bus, bus_name);

@@ -27,9 +27,11 @@ for lib in vcinpl vcinpl2 vciapi xcan sl64; do
   soname=$(readelf -d "$libdir/lib$lib.so" | sed -n 's/.*SONAME.*\[\(.*\)\]/\1/p')
   [ "$soname" = "lib$lib.so.0" ] || fail "lib$lib.so has soname '$soname', not lib$lib.so.0"
 done
-"$dest/usr/bin/canemud" --check-config "$dest/etc/canemu/canemud.toml" | grep -q "configuration OK" ||
+# (grep reads what each command printed whole: with pipefail, `cmd | grep -q` fails whenever grep
+# stops reading before cmd has written everything)
+grep -q "configuration OK" <<<"$("$dest/usr/bin/canemud" --check-config "$dest/etc/canemu/canemud.toml")" ||
   fail "the installed configuration does not load"
-"$dest/usr/bin/canemu" calc frame 123#11 | grep -q "bits:" || fail "canemu calc does not run"
+grep -q "bits:" <<<"$("$dest/usr/bin/canemu" calc frame 123#11)" || fail "canemu calc does not run"
 
 # A program of the user's own, built only from what was installed.
 export PKG_CONFIG_PATH=$libdir/pkgconfig
@@ -39,7 +41,7 @@ cc -std=c11 -Wall -Werror -o "$dest/xtalk" "$src/client/examples/xcan_talk.c" \
   $(pkg-config --cflags --libs canemu-xcan) || fail "xcan_talk.c does not build against the install"
 cc -std=c11 -Wall -Werror -o "$dest/stalk" "$src/client/examples/sl64_talk.c" \
   $(pkg-config --cflags --libs canemu-sl64) || fail "sl64_talk.c does not build against the install"
-LD_LIBRARY_PATH=$libdir ldd "$dest/talk" | grep -q "libvcinpl.so.0 => $libdir" ||
+grep -q "libvcinpl.so.0 => $libdir" <<<"$(LD_LIBRARY_PATH=$libdir ldd "$dest/talk")" ||
   fail "the program does not load the installed libvcinpl.so.0"
 
 PYTHONPATH=$dest/usr/lib/python3/dist-packages python3 - <<'PY' || fail "python-can does not find canemu"
@@ -61,7 +63,7 @@ for f in ./usr/bin/canemud ./etc/canemu/canemud.toml ./usr/lib/systemd/system/ca
          ./usr/lib/sysusers.d/canemu.conf; do
   grep -q " $f\$" <<<"$contents" || fail "the package lacks $f"
 done
-dpkg-deb -f "$deb" Depends | grep -q "systemd" || fail "the package does not depend on systemd"
+grep -q "systemd" <<<"$(dpkg-deb -f "$deb" Depends)" || fail "the package does not depend on systemd"
 dpkg-deb -e "$deb" "$dest/control"
 grep -qx /etc/canemu/canemud.toml "$dest/control/conffiles" || fail "canemud.toml is no conffile"
 grep -q "activate-noawait ldconfig" "$dest/control/triggers" || fail "no ldconfig trigger"

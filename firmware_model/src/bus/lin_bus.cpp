@@ -381,6 +381,7 @@ void LinBus::finish(SimTime now) {
   busy_ = false;
   bit_error_events_.clear();  // they ran: none is later than the response's end
   stats_.busy_ns += static_cast<uint64_t>((now - started_).ns());
+  load_.record(started_, now);
   if (current_.from < nodes_.size()) {
     nodes_[current_.from].pending = false;
   }

@@ -91,6 +91,13 @@ TEST_F(LinBusTest, AHeaderIsAnsweredFromAResponseTable) {
   EXPECT_FALSE(bus.busy());
   EXPECT_EQ(bus.stats().frames, 1u);
   EXPECT_EQ(bus.stats().busy_ns, 3'333'333u);
+  // The load over the last second, and in 100 ms bins, as on a CAN bus.
+  EXPECT_DOUBLE_EQ(bus.load_percent(SimTime::from_ns(1'000'000'000)), 0.3333333);
+  EXPECT_DOUBLE_EQ(bus.load_percent(SimTime::from_ns(1'003'333'333)), 0.0);
+  const auto bins = bus.load_history(SimTime::from_ns(200'000'000));
+  ASSERT_EQ(bins.size(), 2u);
+  EXPECT_EQ(bins[0].busy.ns(), 3'333'333);
+  EXPECT_EQ(bins[1].busy.ns(), 0);
 }
 
 TEST_F(LinBusTest, ListenersTellTheChecksumKindFromTheChecksum) {

@@ -29,6 +29,7 @@
 #include <optional>
 #include <vector>
 
+#include "canemu/firmware_model/bus/bus_load.hpp"
 #include "canemu/firmware_model/bus/lin_frame.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 
@@ -112,7 +113,7 @@ struct LinBusStats {
   uint64_t headers = 0;  // headers sent
   uint64_t errors = 0;   // frames with an error (no response, checksum, parity, ...)
   uint64_t wakeups = 0;
-  uint64_t busy_ns = 0;  // time the wire carried something
+  uint64_t busy_ns = 0;  // time the wire carried frames, since the start
 };
 
 class LinBus final : private EventHandler {
@@ -142,6 +143,9 @@ class LinBus final : private EventHandler {
 
   const Layout& layout() const { return layout_; }
   const LinBusStats& stats() const { return stats_; }
+  // The load as on a CAN bus (bus/bus_load.hpp): over the last second, and in 100 ms bins.
+  double load_percent(SimTime now) const { return load_.percent(now); }
+  std::vector<BusLoad::Bin> load_history(SimTime now) const { return load_.history(now); }
   bool busy() const { return busy_; }
   SimScheduler& scheduler() { return scheduler_; }
 
@@ -188,6 +192,7 @@ class LinBus final : private EventHandler {
   std::deque<Request> queue_;
   LinFaultSource* faults_ = nullptr;
   LinBusStats stats_;
+  BusLoad load_;
 
   // The frame on the wire.
   bool busy_ = false;

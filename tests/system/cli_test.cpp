@@ -41,15 +41,15 @@ TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
 }
 
 // On the default configuration's LIN bus: send publishes, sends a header nobody answers and the
-// go-to-sleep command, one after another (each at the next whole millisecond after the last
-// one's outcome); dump shows the same.
+// go-to-sleep command and a wake-up pulse (250 us), one after another (each at the next whole
+// millisecond after the last one's outcome); dump shows the same.
 TEST(CliLin, SendAndDumpOnALinBus) {
   Daemon d;
   auto watcher = connect(d, "watcher");
   ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
-  Cli dump(d, {"dump", "lin0", "-n", "3"});
+  Cli dump(d, {"dump", "lin0", "-n", "4"});
   ASSERT_TRUE(watcher.next_notification(10'000));  // the dump's adapter is there
-  Cli send(d, {"send", "lin0", "33#AABB", "20#", "sleep", "--step", "30ms"});
+  Cli send(d, {"send", "lin0", "33#AABB", "20#", "sleep", "wakeup", "--step", "30ms"});
   const std::string sent = Cli::read_all(send.out);
   EXPECT_EQ(send.wait(), 1) << Cli::read_all(send.err);  // a frame ended in an error
   // 34 + 30 bits from 0; the header from 4 ms, no response 160 bits after it; the
@@ -57,15 +57,16 @@ TEST(CliLin, SendAndDumpOnALinBus) {
   const std::string expected =
       "(0000000000.003333) lin0 33#AABB pid 73 enhanced checksum 26\n"
       "(0000000000.012333) lin0 error no-response\n"
-      "(0000000000.019458) lin0 3C#00FFFFFFFFFFFFFF pid 3C classic checksum 00 go-to-sleep\n";
+      "(0000000000.019458) lin0 3C#00FFFFFFFFFFFFFF pid 3C classic checksum 00 go-to-sleep\n"
+      "(0000000000.020250) lin0 wake-up\n";
   EXPECT_EQ(sent, expected);
   EXPECT_EQ(Cli::read_all(dump.out), expected);
   EXPECT_EQ(dump.wait(), 0);
   Cli bad(d, {"send", "lin0", "40#01", "--step", "1ms"});
   EXPECT_EQ(bad.wait(), 1);
   EXPECT_EQ(Cli::read_all(bad.err),
-            "canemu: '40#01': a LIN frame is ID#DATA, ID# (the header alone) or sleep, with ID "
-            "00..3F in hex\n");
+            "canemu: '40#01': a LIN frame is ID#DATA, ID# (the header alone), sleep or wakeup, "
+            "with ID 00..3F in hex\n");
 }
 
 // On a CAN FD bus the ephemeral nodes are CAN FD controllers: FD frames with the rate switch go

@@ -32,10 +32,15 @@ std::optional<LINMSG> parse_lin_send(const std::string& text, bool classic, std:
     m.uMsgInfo.Bytes.bType = LIN_MSGTYPE_SLEEP;
     return m;
   }
+  if (text == "wakeup") {
+    m.uMsgInfo.Bytes.bType = LIN_MSGTYPE_WAKEUP;
+    return m;
+  }
   const std::size_t hash = text.find('#');
   uint8_t id = 0;
   if (hash != 2 || !hex_byte(text, 0, id) || id > 0x3F) {
-    error = "a LIN frame is ID#DATA, ID# (the header alone) or sleep, with ID 00..3F in hex";
+    error =
+        "a LIN frame is ID#DATA, ID# (the header alone), sleep or wakeup, with ID 00..3F in hex";
     return std::nullopt;
   }
   const std::string data = text.substr(hash + 1);
@@ -76,6 +81,17 @@ int run_lin_send(client::Connection& c, const std::vector<LINMSG>& frames, const
   if (!tap) {
     return fail(tap.error().message);
   }
+  // A node does not hear its own wake-up pulse: a listener of its own sees where one ends.
+  std::optional<LinTap> listener;
+  for (const LINMSG& frame : frames) {
+    if (frame.uMsgInfo.Bytes.bType == LIN_MSGTYPE_WAKEUP && !listener) {
+      auto l = LinTap::open(c, o.bus, LIN_OPMODE_ERRORS, 0);
+      if (!l) {
+        return fail(l.error().message);
+      }
+      listener.emplace(std::move(*l));
+    }
+  }
   int64_t stepped = 0;
   int errors = 0;
   for (const LINMSG& frame : frames) {
@@ -88,17 +104,22 @@ int run_lin_send(client::Connection& c, const std::vector<LINMSG>& frames, const
       return fail(r.error().message);
     }
     // Its outcome: the frame with its identifier as the sender's monitor saw it (the
-    // go-to-sleep command: 3Ch), or an error. Other frames are other commanders' business.
+    // go-to-sleep command: 3Ch; a wake-up pulse: its end), or an error. Other frames are other
+    // commanders' business.
     const uint8_t id =
         frame.uMsgInfo.Bytes.bType == LIN_MSGTYPE_SLEEP ? 0x3C : frame.uMsgInfo.Bytes.bPid;
+    const bool wakeup = frame.uMsgInfo.Bytes.bType == LIN_MSGTYPE_WAKEUP;
+    LinTap& watch = wakeup ? *listener : *tap;
     while (true) {
-      auto m = tap->next(o.step_ns ? 0 : o.timeout_ms);
+      auto m = watch.next(o.step_ns ? 0 : o.timeout_ms);
       if (!m) {
         return fail(m.error().message);
       }
       const uint8_t type = *m ? (*m)->msg.uMsgInfo.Bytes.bType : 0;
-      const bool mine = type == LIN_MSGTYPE_DATA && (*m)->msg.uMsgInfo.Bytes.bPid == id;
-      if (*m && (mine || type == LIN_MSGTYPE_ERROR)) {
+      const bool mine = wakeup ? type == LIN_MSGTYPE_WAKEUP
+                               : type == LIN_MSGTYPE_DATA && (*m)->msg.uMsgInfo.Bytes.bPid == id;
+      // The listener sees the errors of earlier frames too: a wake-up ends with its end only.
+      if (*m && (mine || (!wakeup && type == LIN_MSGTYPE_ERROR))) {
         std::printf("%s\n", lin_line((*m)->msg, (*m)->at_ns + base.offset_ns, o.bus).c_str());
         errors += type == LIN_MSGTYPE_ERROR ? 1 : 0;
         break;

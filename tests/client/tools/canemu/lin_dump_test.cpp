@@ -50,7 +50,7 @@ TEST(LinDump, ErrorsAndWakeUpsAreNamedAndTheRestLeftOut) {
   EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_TMOVR, 0xFF, {}), 0, "lin0"), "");
 }
 
-TEST(LinSend, FramesHeadersAndSleepInTheirOwnSyntax) {
+TEST(LinSend, FramesHeadersSleepAndWakeupInTheirOwnSyntax) {
   std::string error;
   auto m = parse_lin_send("3a#0102", false, error);
   ASSERT_TRUE(m) << error;
@@ -67,8 +67,11 @@ TEST(LinSend, FramesHeadersAndSleepInTheirOwnSyntax) {
   m = parse_lin_send("sleep", false, error);
   ASSERT_TRUE(m);
   EXPECT_EQ(m->uMsgInfo.Bytes.bType, LIN_MSGTYPE_SLEEP);
+  m = parse_lin_send("wakeup", false, error);
+  ASSERT_TRUE(m);
+  EXPECT_EQ(m->uMsgInfo.Bytes.bType, LIN_MSGTYPE_WAKEUP);
   for (const char* bad :
-       {"40#01", "1#01", "123#01", "10#1", "10#010203040506070809", "10#0G", "wakeup"}) {
+       {"40#01", "1#01", "123#01", "10#1", "10#010203040506070809", "10#0G", "wake", "Sleep"}) {
     EXPECT_FALSE(parse_lin_send(bad, false, error)) << bad;
   }
 }

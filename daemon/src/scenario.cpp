@@ -27,13 +27,17 @@ constexpr NamedValue<FaultEffect> kEffects[] = {
     {FaultEffect::oscillator, "oscillator"},
     {FaultEffect::babble, "babble"},
     {FaultEffect::line_error, "line_error"},
+    {FaultEffect::lin_bit_error, "lin_bit_error"},
+    {FaultEffect::lin_checksum_error, "lin_checksum_error"},
+    {FaultEffect::lin_parity_error, "lin_parity_error"},
+    {FaultEffect::lin_sync_error, "lin_sync_error"},
+    {FaultEffect::lin_no_response, "lin_no_response"},
+    {FaultEffect::lin_short_break, "lin_short_break"},
+    {FaultEffect::lin_responder_off, "lin_responder_off"},
+    {FaultEffect::lin_wakeup, "lin_wakeup"},
 };
+constexpr NamedValue<bool> kLinWhere[] = {{true, "header"}, {false, "response"}};
 constexpr NamedValue<bool> kWires[] = {{false, "one"}, {true, "both"}};
-
-// Named by the language, not emulated yet: a scenario using them is refused with a reason.
-constexpr std::string_view kLaterEffects[] = {"lin_no_response",  "lin_checksum_error",
-                                              "lin_parity_error", "lin_sync_error",
-                                              "lin_bit_error",    "lin_wakeup"};
 
 bool is_frame_effect(FaultEffect e) {
   return e <= FaultEffect::ack_error;
@@ -43,7 +47,8 @@ bool is_bus_effect(FaultEffect e) {
 }
 // Node effects name a node; all others a bus.
 bool is_node_effect(FaultEffect e) {
-  return e >= FaultEffect::node_off;
+  return (e >= FaultEffect::node_off && e <= FaultEffect::line_error) ||
+         e == FaultEffect::lin_responder_off || e == FaultEffect::lin_wakeup;
 }
 
 // A duration key ("2s", "150ms", "20us", "10ns").
@@ -100,6 +105,39 @@ void read_match(Checker& c, const toml::table& t, const std::string& path, Fault
   }
 }
 
+// count = N or "all" (the default: every matching frame in the window).
+void read_count(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
+  if (const toml::node* n = t.get("count")) {
+    if (n->is_string() && n->as_string()->get() == "all") {
+      f.count.reset();
+    } else if (auto count = c.integer(t, path, "count", false, 1, INT64_MAX)) {
+      f.count = static_cast<uint64_t>(*count);
+    }
+  }
+}
+
+// A LIN frame's match: its identifier (0..3Fh) and the commander that sends its header.
+void read_lin_match(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
+  const toml::node* n = t.get("match");
+  if (n == nullptr) {
+    return;
+  }
+  const toml::table* m = n->as_table();
+  const std::string mpath = path + ".match";
+  if (m == nullptr) {
+    c.error(*n, mpath, "must be a table, e.g. { id = 0x10, from = \"ixxat0:2\" }");
+    return;
+  }
+  c.only_keys(*m, mpath, {"id", "from"});
+  if (auto id = c.integer(*m, mpath, "id", false, 0, 0x3F)) {
+    f.match.id = static_cast<uint32_t>(*id);
+    f.match.mask = 0x3F;
+  }
+  if (auto from = c.string(*m, mpath, "from", false)) {
+    f.match.from = *from;
+  }
+}
+
 // babble's frame: id (11 bits, or 29 with ext = true), data (up to 8 bytes).
 void read_babble_frame(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
   f.ext = boolean(c, t, path, "ext").value_or(false);
@@ -133,14 +171,6 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
   if (!effect_text) {
     return;
   }
-  for (std::string_view later : kLaterEffects) {
-    if (*effect_text == later) {
-      c.error(*t.get("effect"), path + ".effect",
-              fmt::format("\"{}\" is not emulated yet{}", later,
-                          later.substr(0, 4) == "lin_" ? " (it comes with LIN)" : ""));
-      return;
-    }
-  }
   auto effect = c.choice(t, path, "effect", true, kEffects, "fault effect");
   if (!effect) {
     return;
@@ -154,6 +184,15 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     allow({"until", "bus", "match", "count", "probability"});
     if (f.effect != FaultEffect::ack_error) {
       allow({"bit"});
+    }
+  } else if (f.effect == FaultEffect::lin_responder_off) {
+    allow({"node", "until", "match", "count"});
+  } else if (f.effect == FaultEffect::lin_wakeup) {
+    allow({"node", "pulse"});
+  } else if (is_lin_frame_effect(f.effect)) {
+    allow({"until", "bus", "match", "count"});
+    if (f.effect == FaultEffect::lin_bit_error) {
+      allow({"where"});
     }
   } else if (is_bus_effect(f.effect)) {
     allow({"bus", "duration"});
@@ -195,15 +234,27 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
   } else if (auto node = c.string(t, path, "node", true)) {
     f.node = *node;
   }
-  if (is_frame_effect(f.effect)) {
-    read_match(c, t, path, f);
-    if (const toml::node* n = t.get("count")) {
-      if (n->is_string() && n->as_string()->get() == "all") {
-        f.count.reset();
-      } else if (auto count = c.integer(t, path, "count", false, 1, INT64_MAX)) {
-        f.count = static_cast<uint64_t>(*count);
+  if (is_lin_frame_effect(f.effect)) {
+    read_lin_match(c, t, path, f);
+    read_count(c, t, path, f);
+    if (f.effect == FaultEffect::lin_bit_error) {
+      f.lin_header = c.choice(t, path, "where", false, kLinWhere, "place").value_or(false);
+    }
+  }
+  if (f.effect == FaultEffect::lin_wakeup) {
+    if (t.get("pulse") != nullptr) {
+      if (auto pulse = duration(c, t, path, "pulse", false)) {
+        f.pulse_ns = *pulse;
+        if (*pulse < 250'000 || *pulse > 5'000'000) {
+          c.error(*t.get("pulse"), path + ".pulse",
+                  "a LIN wake-up pulse lasts 250 us to 5 ms (LIN 2.x)");
+        }
       }
     }
+  }
+  if (is_frame_effect(f.effect)) {
+    read_match(c, t, path, f);
+    read_count(c, t, path, f);
     if (auto bit = c.integer(t, path, "bit", false, 0, 735)) {
       f.bit = static_cast<uint16_t>(*bit);
     }
@@ -258,6 +309,10 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
 }
 
 }  // namespace
+
+bool is_lin_frame_effect(FaultEffect e) {
+  return e >= FaultEffect::lin_bit_error && e <= FaultEffect::lin_responder_off;
+}
 
 std::string_view to_string(FaultEffect effect) {
   return detail::name_of(effect, kEffects);

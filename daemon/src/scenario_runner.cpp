@@ -17,8 +17,11 @@ std::string fault_label(std::string_view scenario, const FaultSpec& f) {
   return fmt::format("scenario \"{}\" line {}: {}", scenario, f.line, to_string(f.effect));
 }
 
-// The effects that become a rule in their bus's FaultPlan.
+// The effects that become a rule in their bus's FaultPlan (or a LIN bus's LinFaultPlan).
 bool is_frame_rule(FaultEffect e) {
+  if (is_lin_frame_effect(e)) {
+    return true;
+  }
   switch (e) {
     case FaultEffect::bit_error:
     case FaultEffect::stuff_error:
@@ -34,14 +37,45 @@ bool is_frame_rule(FaultEffect e) {
 
 }  // namespace
 
-void ScenarioRunner::add_bus(CanBus& bus, const BusConfig& config) {
-  buses_.push_back(Bus{&bus, config, std::make_unique<FaultPlan>()});
+void ScenarioRunner::add_bus(CanBus& bus, const BusConfig& config, lin::LinBus* lin) {
+  buses_.push_back(Bus{&bus, config, std::make_unique<FaultPlan>(), lin, nullptr});
   bus.set_injector(buses_.back().faults.get());
   const std::size_t index = buses_.size() - 1;
   buses_.back().faults->on_hit = [this, index](std::size_t rule, const FrameContext& ctx,
                                                const FrameFault&) {
     frame_fault_hit(index, rule, ctx);
   };
+  if (lin != nullptr) {
+    buses_.back().lin_faults = std::make_unique<lin::LinFaultPlan>();
+    lin->set_fault_source(buses_.back().lin_faults.get());
+    buses_.back().lin_faults->on_hit = [this, index](std::size_t rule, SimTime at, uint8_t id) {
+      lin_fault_hit(index, rule, at, id);
+    };
+  }
+}
+
+void ScenarioRunner::lin_fault_hit(std::size_t bus, std::size_t rule, SimTime at, uint8_t id) {
+  const lin::LinFaultRule& r = buses_[bus].lin_faults->rule(rule);
+  const bool first = r.hits == 1;
+  const bool done = r.count && r.hits == *r.count;
+  if (!first && !done) {
+    return;  // single hits are in the trace and the counts
+  }
+  std::string label;
+  for (const LoadedScenario& sc : scenarios_) {
+    for (const AppliedFault& a : sc.faults) {
+      if (a.bus == bus && a.lin_rule == rule) {
+        label = fault_label(sc.name, a.spec);
+      }
+    }
+  }
+  if (first) {
+    log(fmt::format("{}: first hit, frame {:02X} at {:.9f} s", label, id,
+                    static_cast<double>(at.ns()) / 1e9));
+  }
+  if (done) {
+    log(fmt::format("{}: done, {} hit{}", label, r.hits, r.hits == 1 ? "" : "s"));
+  }
 }
 
 std::optional<std::size_t> ScenarioRunner::bus_index(std::string_view name) const {
@@ -94,21 +128,47 @@ ScenarioRunner::resolve(const Scenario& s) const {
   std::vector<Resolved> plan;
   std::vector<std::string> errors;
   for (const FaultSpec& f : s.faults) {
-    Resolved r{&f, 0, std::nullopt};
+    Resolved r{&f, 0, std::nullopt, std::nullopt};
     const auto where = [&](std::string_view what) {
       errors.push_back(fmt::format("{}:{}: {}: {}", s.source, f.line, to_string(f.effect), what));
     };
+    const bool lin_effect = is_lin_frame_effect(f.effect) || f.effect == FaultEffect::lin_wakeup;
     if (!f.bus.empty()) {
       if (auto b = bus_index(f.bus)) {
         r.bus = *b;
-        if (buses_[*b].config.kind == BusKind::lin) {
+        if (buses_[*b].config.kind == BusKind::lin && !lin_effect) {
           where(fmt::format("bus {} is a LIN bus; CAN faults need a CAN bus", f.bus));
+          continue;
+        }
+        if (buses_[*b].config.kind != BusKind::lin && lin_effect) {
+          where(fmt::format("bus {} is a CAN bus; LIN faults need a LIN bus", f.bus));
           continue;
         }
       } else {
         where(fmt::format("no bus named \"{}\"", f.bus));
         continue;
       }
+    }
+    if (lin_effect) {
+      // LIN nodes: a LIN controller ("DEVICE:N") or a simulated node, by name.
+      const std::string& lin_name = !f.node.empty() ? f.node : f.match.from;
+      if (!lin_name.empty()) {
+        r.lin_node = find_lin_node ? find_lin_node(lin_name) : std::nullopt;
+        if (!r.lin_node) {
+          where(
+              fmt::format("no LIN node named \"{}\" (a LIN controller DEVICE:N or a "
+                          "[[lin_node]])",
+                          lin_name));
+          continue;
+        }
+        if (!f.bus.empty() && r.lin_node->bus != r.bus) {
+          where(fmt::format("node {} is not on bus {}", lin_name, f.bus));
+          continue;
+        }
+        r.bus = r.lin_node->bus;
+      }
+      plan.push_back(r);
+      continue;
     }
     const std::string& node_name = !f.node.empty() ? f.node : f.match.from;
     if (!node_name.empty()) {
@@ -180,8 +240,9 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
     std::size_t held = 0;  // frame rules of the user's scenarios still matching frames
     for (const LoadedScenario& l : scenarios_) {
       if (!l.cleared && l.owner == owner) {
-        held += static_cast<std::size_t>(std::count_if(
-            l.faults.begin(), l.faults.end(), [](const AppliedFault& f) { return f.rule; }));
+        held += static_cast<std::size_t>(
+            std::count_if(l.faults.begin(), l.faults.end(),
+                          [](const AppliedFault& f) { return f.rule || f.lin_rule; }));
       }
     }
     if (held + adding > kMaxRulesPerUser) {
@@ -191,10 +252,12 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
     }
   }
   for (std::size_t b = 0; b < buses_.size(); ++b) {
-    if (buses_[b].faults->size() + new_rules[b] > kMaxRulesPerBus) {
+    const std::size_t on_bus =
+        buses_[b].faults->size() + (buses_[b].lin_faults ? buses_[b].lin_faults->size() : 0);
+    if (on_bus + new_rules[b] > kMaxRulesPerBus) {
       return tl::unexpected(std::vector<std::string>{fmt::format(
           "{}: bus {} would have {} frame fault rules; at most {} are in force on a bus", s.source,
-          buses_[b].config.name, buses_[b].faults->size() + new_rules[b], kMaxRulesPerBus)});
+          buses_[b].config.name, on_bus + new_rules[b], kMaxRulesPerBus)});
     }
   }
   const uint64_t seed = s.seed.value_or(default_seed_);
@@ -210,7 +273,10 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
                          start,
                          std::nullopt,
                          std::make_shared<FaultSwitch>(),
-                         r.node ? r.node->node : nullptr};
+                         r.node ? r.node->node : nullptr,
+                         0,
+                         0,
+                         std::nullopt};
     arm(s.name, r, k, seed, applied);
     loaded.faults.push_back(std::move(applied));
   }
@@ -276,6 +342,48 @@ void ScenarioRunner::add_frame_rule(const Resolved& r, std::size_t k, uint64_t s
       }
     });
   }
+}
+
+void ScenarioRunner::add_lin_rule(const Resolved& r, AppliedFault& applied) {
+  const FaultSpec& f = *r.spec;
+  lin::LinFaultRule rule;
+  switch (f.effect) {
+    case FaultEffect::lin_bit_error:
+      rule.effect =
+          f.lin_header ? lin::LinEffect::header_bit_error : lin::LinEffect::response_bit_error;
+      break;
+    case FaultEffect::lin_checksum_error:
+      rule.effect = lin::LinEffect::checksum_error;
+      break;
+    case FaultEffect::lin_parity_error:
+      rule.effect = lin::LinEffect::parity_error;
+      break;
+    case FaultEffect::lin_sync_error:
+      rule.effect = lin::LinEffect::sync_error;
+      break;
+    case FaultEffect::lin_short_break:
+      rule.effect = lin::LinEffect::short_break;
+      break;
+    case FaultEffect::lin_responder_off:
+      rule.effect = lin::LinEffect::responder_off;
+      rule.responder = r.lin_node->node;
+      break;
+    default:
+      rule.effect = lin::LinEffect::no_response;
+      break;
+  }
+  if (f.effect != FaultEffect::lin_responder_off && r.lin_node) {
+    rule.commander = r.lin_node->node;  // match.from: the header's sender
+  }
+  if (f.match.mask != 0) {
+    rule.id = static_cast<uint8_t>(f.match.id);
+  }
+  rule.count = f.count;
+  rule.from = applied.start + SimDuration(f.at_ns);
+  if (f.until_ns) {
+    rule.until = applied.start + SimDuration(*f.until_ns);
+  }
+  applied.lin_rule = buses_[r.bus].lin_faults->add(rule);
 }
 
 void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t k, uint64_t seed,
@@ -399,6 +507,29 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
       }
       break;
     }
+    case FaultEffect::lin_bit_error:
+    case FaultEffect::lin_checksum_error:
+    case FaultEffect::lin_parity_error:
+    case FaultEffect::lin_sync_error:
+    case FaultEffect::lin_no_response:
+    case FaultEffect::lin_short_break:
+    case FaultEffect::lin_responder_off:
+      add_lin_rule(r, applied);
+      break;
+    case FaultEffect::lin_wakeup: {
+      lin::LinBus* bus = buses_[r.bus].lin;
+      const lin::LinNodeId node = r.lin_node->node;
+      const SimDuration pulse(f.pulse_ns);
+      when(at, state, [this, bus, node, pulse, what, state] {
+        if (bus->send_wakeup(node, pulse)) {
+          log(what);
+        } else {
+          --state->fired;  // it did nothing
+          log(what + ": the node has a frame of its own pending; no wake-up pulse");
+        }
+      });
+      break;
+    }
     case FaultEffect::oscillator: {
       const NodeId node = r.node->id;
       const int32_t ppm = f.ppm;
@@ -439,11 +570,17 @@ std::vector<ScenarioRunner::FaultStatus> ScenarioRunner::status() const {
         st.until_ns = st.at_ns + f.duration_ns;
       }
       bool over = st.until_ns && now.ns() >= *st.until_ns;
-      if (a.rule) {
-        const FaultPlan& plan = *buses_[a.bus].faults;
-        const bool live = plan.contains(*a.rule);
-        st.seen = live ? plan.rule(*a.rule).seen : a.final_seen;
-        st.hits = live ? plan.rule(*a.rule).hits : a.final_hits;
+      if (a.rule || is_lin_frame_effect(f.effect)) {
+        if (a.rule) {
+          const FaultPlan& plan = *buses_[a.bus].faults;
+          const bool live = plan.contains(*a.rule);
+          st.seen = live ? plan.rule(*a.rule).seen : a.final_seen;
+          st.hits = live ? plan.rule(*a.rule).hits : a.final_hits;
+        } else {
+          const lin::LinFaultPlan& plan = *buses_[a.bus].lin_faults;
+          st.seen = a.lin_rule ? plan.rule(*a.lin_rule).seen : a.final_seen;
+          st.hits = a.lin_rule ? plan.rule(*a.lin_rule).hits : a.final_hits;
+        }
         over = over || (a.spec.count && st.hits >= *a.spec.count);
         st.state = now.ns() < st.at_ns ? State::pending : over ? State::done : State::active;
       } else if (now.ns() < st.at_ns) {
@@ -503,6 +640,22 @@ void ScenarioRunner::retire(AppliedFault& a) {
     a.final_seen = plan.rule(*a.rule).seen;
     a.final_hits = plan.rule(*a.rule).hits;
     plan.remove(*a.rule);
+  }
+  if (a.lin_rule) {
+    lin::LinFaultPlan& lin_plan = *buses_[a.bus].lin_faults;
+    a.final_seen = lin_plan.rule(*a.lin_rule).seen;
+    a.final_hits = lin_plan.rule(*a.lin_rule).hits;
+    lin_plan.disable(*a.lin_rule);
+    a.lin_rule.reset();
+    // Rules are kept by index while any is in force; when none is, the plan starts afresh (so
+    // cleared scenarios cost no scanning).
+    bool any = false;
+    for (std::size_t i = 0; i < lin_plan.size(); ++i) {
+      any = any || lin_plan.rule(i).enabled;
+    }
+    if (!any) {
+      lin_plan.clear();
+    }
   }
 }
 

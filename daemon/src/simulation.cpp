@@ -174,7 +174,28 @@ void Simulation::add_bus(const BusConfig& b) {
   }
   lin_buses_.push_back(std::move(lin_bus));
   nodes_.add_bus(*buses_.back(), b.kind == BusKind::can_fd);
-  scenarios_.add_bus(*buses_.back(), b);
+  scenarios_.add_bus(*buses_.back(), b, lin_buses_.back().get());
+}
+
+std::optional<ScenarioRunner::LinNodeRef> Simulation::find_lin_node(std::string_view name) const {
+  for (const DeviceRegistry::Configured& d : devices_.configured()) {
+    for (const DeviceRegistry::LinController& c : d.lin) {
+      if (c.name == name) {
+        return ScenarioRunner::LinNodeRef{c.bus, c.line->controller().node()};
+      }
+    }
+  }
+  for (const DeviceRegistry::LinEphemeral& e : devices_.lin_ephemeral()) {
+    if (e.name == name || e.name + ":0" == name) {
+      return ScenarioRunner::LinNodeRef{e.bus, e.line->controller().node()};
+    }
+  }
+  for (const SimulatedLinNode& n : lin_nodes_) {
+    if (n.name == name) {
+      return ScenarioRunner::LinNodeRef{n.bus, n.ecu->node()};
+    }
+  }
+  return std::nullopt;
 }
 
 std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {

@@ -67,6 +67,7 @@ effect = "teleport"
 at = "1s"
 node = "x:0"
 effect = "lin_wakeup"
+pulse = "10ms"
 
 [[fault]]
 at = "1s"
@@ -80,22 +81,24 @@ node = "ixxat0:0"
 effect = "error_counters"
 tec = 300
 )");
-  EXPECT_EQ(e, (std::vector<std::string>{
-                   "s.toml:2:6: fault[0].at: \"soon\" is not a duration (examples: 2s, 150ms, "
-                   "20us, 10ns)",
-                   "s.toml:8:1: fault[1].until: not a key of ack_suppress (known: at, effect, bus, "
-                   "duration)",
-                   "s.toml:6:1: fault[1].duration: missing (a string is required)",
-                   "s.toml:14:10: fault[2].effect: \"teleport\" is not a fault effect (bit_error, "
-                   "stuff_error, form_error, crc_error, ack_error, ack_suppress, stuck_dominant, "
-                   "random_errors, node_off, node_on, bus_off, error_counters, oscillator, "
-                   "babble, line_error)",
-                   "s.toml:19:10: fault[3].effect: \"lin_wakeup\" is not emulated yet (it comes "
-                   "with LIN)",
-                   "s.toml:25:15: fault[4].probability: must be above 0 and at most 1",
-                   "s.toml:31:7: fault[5].tec: 300 is outside 0..255",
-                   "s.toml:27:1: fault[5].rec: missing (an integer is required)",
-               }));
+  EXPECT_EQ(e,
+            (std::vector<std::string>{
+                "s.toml:2:6: fault[0].at: \"soon\" is not a duration (examples: 2s, 150ms, "
+                "20us, 10ns)",
+                "s.toml:8:1: fault[1].until: not a key of ack_suppress (known: at, effect, bus, "
+                "duration)",
+                "s.toml:6:1: fault[1].duration: missing (a string is required)",
+                "s.toml:14:10: fault[2].effect: \"teleport\" is not a fault effect (bit_error, "
+                "stuff_error, form_error, crc_error, ack_error, ack_suppress, stuck_dominant, "
+                "random_errors, node_off, node_on, bus_off, error_counters, oscillator, "
+                "babble, line_error, lin_bit_error, lin_checksum_error, lin_parity_error, "
+                "lin_sync_error, lin_no_response, lin_short_break, lin_responder_off, "
+                "lin_wakeup)",
+                "s.toml:20:9: fault[3].pulse: a LIN wake-up pulse lasts 250 us to 5 ms (LIN 2.x)",
+                "s.toml:26:15: fault[4].probability: must be above 0 and at most 1",
+                "s.toml:32:7: fault[5].tec: 300 is outside 0..255",
+                "s.toml:28:1: fault[5].rec: missing (an integer is required)",
+            }));
   EXPECT_EQ(
       errors_of("[scenario]\nname = \"empty\"\n"),
       (std::vector<std::string>{"s.toml: no [[fault]] tables: a scenario needs at least one"}));

@@ -206,11 +206,11 @@ def unacknowledged_attempts(start: int, end: int, bits: int, receiver: bool) -> 
     return sofs
 
 
-def test_the_examples_are_the_seven_documented():
+def test_the_examples_are_the_eight_documented():
     assert sorted(p.name for p in EXAMPLES.glob("*.toml")) == [
         "babbling-node.toml", "corrupt-id.toml", "drifting-oscillator.toml",
-        "nobody-acknowledges.toml", "noisy-bus.toml", "sender-bus-off.toml",
-        "unplug-node.toml"]
+        "lin-checksum.toml", "nobody-acknowledges.toml", "noisy-bus.toml",
+        "sender-bus-off.toml", "unplug-node.toml"]
     doc = (REPO / "docs" / "faults.md").read_text()
     for p in EXAMPLES.glob("*.toml"):
         assert f"| `{p.name}` |" in doc
@@ -643,3 +643,16 @@ def test_noisy_bus(daemon):
         second_daemon.stop()
     assert int(second["list"][0]["hits"]) == hits
     assert second == first
+
+
+def test_lin_checksum(daemon):
+    """lin-checksum.toml: the next three responses to 20h on lin0 carry a wrong checksum (the
+    sender of `canemu send` is its own responder, so it reports them too); the fourth is whole."""
+    load_example(daemon, "lin-checksum.toml")
+    done = cli(daemon, "send", "lin0", "20#1122", "20#1122", "20#1122", "20#1122", "--step", "50ms")
+    assert done.returncode == 1  # outcomes with errors
+    outcomes = [line.split(" ", 2)[2] for line in done.stdout.splitlines()]
+    assert outcomes == ["error checksum"] * 3 + ["20#1122 pid 20 enhanced checksum AC"]
+    [row] = fault_list(daemon)
+    assert (row["effect"], row["target"], row["seen"], row["hits"], row["state"]) == (
+        "lin_checksum_error", "lin0", "4", "3", "done")

@@ -389,7 +389,7 @@ ppm = 9800
     assert frames(drain(b)) == [] and bus_errors(drain(a)) != []
 
 
-def test_lin_effects_are_refused_whole_with_the_reason(daemon, nodes):
+def test_lin_effects_on_a_can_bus_are_refused_whole_with_the_reason(daemon, nodes):
     a, _ = nodes
     done = fault_load(daemon, f"""
 [[fault]]
@@ -397,6 +397,7 @@ at = "0s"
 node = "{a.node_name}"
 effect = "error_counters"
 tec = 50
+rec = 0
 
 [[fault]]
 at = "0s"
@@ -404,7 +405,7 @@ bus = "can0"
 effect = "lin_no_response"
 """)
     assert done.returncode != 0
-    assert "lin_no_response" in done.stderr and "LIN" in done.stderr
+    assert "lin_no_response: bus can0 is a CAN bus; LIN faults need a LIN bus" in done.stderr
     assert a.error_counters() == (0, 0)  # nothing of it applied
 
 

@@ -232,6 +232,35 @@ TEST(VciCppLin, CollidingChecksumsAreAChecksumErrorMessage) {  // 146
             (Texts{event_text(stamp(frame_end(t0, 1)), LIN_MSGTYPE_ERROR, LIN_ERROR_CHKSUM, 0)}));
 }
 
+// A parity error a scenario puts on one header of 20h: every listener reports it at the end of
+// the header and the responder stays silent (the commander reads back what it sent and sees
+// nothing); the next header, past the fault's count, is answered.
+TEST(VciCppLin, AParityErrorFromAScenarioIsAnErrorMessageOfTheListeners) {  // 146
+  VciDaemon d(kLinAdapters);
+  LinAdapter master("alpha", LIN_OPMODE_MASTER | LIN_OPMODE_ERRORS);
+  LinAdapter beta("beta", LIN_OPMODE_SLAVE | LIN_OPMODE_ERRORS);
+  LinAdapter gamma("gamma", LIN_OPMODE_SLAVE | LIN_OPMODE_ERRORS);
+  ASSERT_EQ(beta.write(false, lin_data(0x20, {0x55})), VCI_OK);
+  testing::load_faults(d.daemon,
+                       "[[fault]]\nat = \"0s\"\nbus = \"lin0\"\neffect = \"lin_parity_error\"\n"
+                       "match = { id = 0x20 }\ncount = 1\n");
+  master.drain();
+  beta.drain();
+  gamma.drain();
+  const int64_t t0 = step_to(1'000'000);
+  ASSERT_EQ(master.write(true, lin_data(0x20, {}, true, true)), VCI_OK);
+  const int64_t t1 = step_to(10'000'000);
+  ASSERT_EQ(master.write(true, lin_data(0x20, {}, true, true)), VCI_OK);
+  step_to(10'000'000);
+  const Texts parity{event_text(stamp(after_bits(t0, 34)), LIN_MSGTYPE_ERROR, LIN_ERROR_PARITY, 0)};
+  const std::string answered = frame_text(stamp(frame_end(t1, 1)), 0x20, {0x55}, true, false);
+  EXPECT_EQ(gamma.texts(), (Texts{parity[0], answered}));
+  // The responder's own response is marked as its own; the commander's is not.
+  EXPECT_EQ(beta.texts(),
+            (Texts{parity[0], frame_text(stamp(frame_end(t1, 1)), 0x20, {0x55}, true, true)}));
+  EXPECT_EQ(master.texts(), (Texts{answered}));
+}
+
 TEST(VciCppLin, AFullMonitorMarksItsLastMessage) {  // 148
   VciDaemon d(kLinAdapters);
   LinAdapter master("alpha", LIN_OPMODE_MASTER);

@@ -81,6 +81,7 @@ inline void load_faults(const Daemon& d, const std::string& text) {
   std::memcpy(m.text, text.data(), text.size());
   auto r = c.call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(m);
   ASSERT_TRUE(r) << r.error().message;
+  ASSERT_GT(r->applied, 0u) << r->errors;  // a refused scenario is the test's mistake
 }
 
 }  // namespace canemu::testing

@@ -56,13 +56,17 @@ void add_inject_options(CLI::App& inject, InjectOptions& o) {
   inject.add_option("--ppm", o.ppm, "oscillator");
   inject.add_option("--data", o.data, "babble: data bytes in hex (1122AABB)");
   inject.add_option("--wire", o.wire, "line_error: one (default) or both");
+  inject.add_option("--where", o.where, "lin_bit_error: header or response (default)");
+  inject.add_option("--pulse", o.pulse, "lin_wakeup: 250us (default) to 5ms");
   inject.footer(
       "Examples:\n"
       "  canemu fault inject --effect bit_error --bus can0 --id 0x1A0 --count 3\n"
       "  canemu fault inject --effect random_errors --bus can0 --bit-error-rate 1e-4 --until 2s\n"
       "  canemu fault inject --effect node_off --node ixxat0:1 --at 1s --until 1.5s\n"
       "  canemu fault inject --effect babble --node ixxat0:0 --id 0 --data DEADBEEF "
-      "--duration 500ms");
+      "--duration 500ms\n"
+      "  canemu fault inject --effect lin_checksum_error --bus lin0 --id 0x20 --count 1\n"
+      "  canemu fault inject --effect lin_wakeup --node ixxat0:2 --at 10ms");
 }
 
 // Made with toml++ so that every value is quoted and escaped as TOML wants it.
@@ -78,6 +82,8 @@ tl::expected<std::string, std::string> inject_scenario(const InjectOptions& o) {
   put("node", o.node);
   put("duration", o.duration);
   put("wire", o.wire);
+  put("where", o.where);
+  put("pulse", o.pulse);
   put("bit", o.bit);
   put("tec", o.tec);
   put("rec", o.rec);

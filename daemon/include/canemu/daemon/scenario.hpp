@@ -32,7 +32,19 @@ enum class FaultEffect {
   oscillator,
   babble,
   line_error,
+  // on a LIN bus's frames (docs/faults.md, "LIN")
+  lin_bit_error,
+  lin_checksum_error,
+  lin_parity_error,
+  lin_sync_error,
+  lin_no_response,
+  lin_short_break,
+  // on a LIN node
+  lin_responder_off,
+  lin_wakeup,
 };
+// The effects on a LIN bus's frames (rules of its LinFaultPlan), lin_responder_off included.
+bool is_lin_frame_effect(FaultEffect effect);
 std::string_view to_string(FaultEffect effect);
 
 // Which frames a frame effect hits; every part optional.
@@ -63,7 +75,9 @@ struct FaultSpec {
   uint32_t id = 0;            // babble: the frame it floods
   bool ext = false;
   std::vector<uint8_t> data;
-  bool both_wires = false;  // line_error: both wires broken (else one: single-wire mode)
+  bool both_wires = false;     // line_error: both wires broken (else one: single-wire mode)
+  bool lin_header = false;     // lin_bit_error: in the header (else in the response)
+  int64_t pulse_ns = 250'000;  // lin_wakeup: the dominant pulse
 };
 
 struct Scenario {

@@ -26,6 +26,7 @@
 #include "canemu/daemon/scenario.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/fault_plan.hpp"
+#include "canemu/firmware_model/bus/lin_fault_plan.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 
 namespace canemu::daemon {
@@ -41,8 +42,15 @@ class ScenarioRunner {
   ScenarioRunner& operator=(const ScenarioRunner&) = delete;
 
   // Bus number `bus_count()` from now on, configured as `config`: the runner becomes its fault
-  // injector. The bus must outlive the runner.
-  void add_bus(model::CanBus& bus, const BusConfig& config);
+  // injector (and, for a LIN bus, the fault source of its engine `lin`). The buses must outlive
+  // the runner.
+  void add_bus(model::CanBus& bus, const BusConfig& config, model::lin::LinBus* lin = nullptr);
+  // How LIN node names ("DEVICE:N", a simulated node's name) resolve: their bus and node.
+  struct LinNodeRef {
+    std::size_t bus;
+    model::lin::LinNodeId node;
+  };
+  std::function<std::optional<LinNodeRef>(std::string_view name)> find_lin_node;
   std::size_t bus_count() const { return buses_.size(); }
 
   // Who loaded a scenario: the configuration (no uid) or a client running as that uid.
@@ -97,6 +105,8 @@ class ScenarioRunner {
     model::CanBus* bus;
     BusConfig config;
     std::unique_ptr<model::FaultPlan> faults;  // frame faults of the scenarios
+    model::lin::LinBus* lin = nullptr;         // a LIN bus's engine, and its frame faults
+    std::unique_ptr<model::lin::LinFaultPlan> lin_faults;
   };
   // Shared by a fault's scheduled actions: whether it was cleared, how often it fired.
   struct FaultSwitch {
@@ -113,6 +123,7 @@ class ScenarioRunner {
     const model::HostedNode* node = nullptr;  // the node it acts on or matches (`from`)
     uint64_t final_seen = 0;                  // the rule's counts when it left the plan
     uint64_t final_hits = 0;
+    std::optional<std::size_t> lin_rule;  // in the LIN bus's LinFaultPlan (while it is there)
   };
   struct LoadedScenario {
     std::string name;
@@ -125,7 +136,10 @@ class ScenarioRunner {
     const FaultSpec* spec;
     std::size_t bus = 0;
     std::optional<DeviceRegistry::NodeRef> node;  // node effects; frame effects with match.from
+    std::optional<LinNodeRef> lin_node;           // LIN node effects; LIN frames' match.from
   };
+  void add_lin_rule(const Resolved& r, AppliedFault& applied);
+  void lin_fault_hit(std::size_t bus, std::size_t rule, model::SimTime at, uint8_t id);
 
   std::optional<std::size_t> bus_index(std::string_view name) const;
   // A fault's frame rule leaves its bus's plan (its counts kept in the fault).

@@ -134,7 +134,11 @@ class Simulation {
   explicit Simulation(Config config)
       : config_(std::move(config)),
         nodes_(scheduler_),
-        scenarios_(scheduler_, devices_, config_.simulation.seed) {}
+        scenarios_(scheduler_, devices_, config_.simulation.seed) {
+    scenarios_.find_lin_node = [this](std::string_view name) { return find_lin_node(name); };
+  }
+  // A LIN controller ("DEVICE:N", configured or ephemeral) or a simulated LIN node, by name.
+  std::optional<ScenarioRunner::LinNodeRef> find_lin_node(std::string_view name) const;
 
   void add_bus(const BusConfig& b);
   // Builds a device whose buses exist; an error (and nothing added) if a controller cannot run

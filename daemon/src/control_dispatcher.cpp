@@ -303,6 +303,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     case ipc::MsgType::channel_status_request:
       channel_status(c, read_as<ipc::ChannelStatusRequest>(data), send);
       return;
+    case ipc::MsgType::lin_node_request:
+      send_reply(send, *answer_lin_nodes(sim_, read_as<ipc::LinNodeRequest>(data), request_id));
+      return;
     case ipc::MsgType::timeline_request: {
       if (before_status) {
         before_status();  // simulated time brought to now

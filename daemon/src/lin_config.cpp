@@ -1,4 +1,5 @@
 // Reading [[lin_node]] tables (lin_config.hpp), checked with every problem reported.
+#include "canemu/daemon/lin_nodes.hpp"
 #include "lin_config_reader.hpp"
 
 #include <set>
@@ -257,3 +258,31 @@ void read_lin_nodes(Checker& c, const toml::table& root, Config& cfg) {
 }
 
 }  // namespace canemu::daemon::detail
+
+namespace canemu::daemon {
+
+tl::expected<std::vector<LinNodeConfig>, std::vector<std::string>> parse_lin_nodes(
+    std::string_view text, const std::string& source, const std::vector<BusConfig>& buses) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    return tl::unexpected(std::vector<std::string>{fmt::format(
+        "{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column, e.description())});
+  }
+  detail::Checker c(source);
+  c.only_keys(root, "", {"lin_node"});
+  Config cfg;
+  cfg.buses = buses;
+  detail::read_lin_nodes(c, root, cfg);
+  if (!c.errors().empty()) {
+    return tl::unexpected(c.errors());
+  }
+  if (cfg.lin_nodes.empty()) {
+    return tl::unexpected(
+        std::vector<std::string>{fmt::format("{}: no [[lin_node]] tables", source)});
+  }
+  return cfg.lin_nodes;
+}
+
+}  // namespace canemu::daemon

@@ -517,3 +517,98 @@ Simulation::DeviceLease::~DeviceLease() {
 }
 
 }  // namespace canemu::daemon
+
+namespace canemu::daemon {
+
+namespace {
+
+std::vector<SimulatedLinNode>::iterator find_named(std::vector<SimulatedLinNode>& nodes,
+                                                   const std::string& name) {
+  return std::find_if(nodes.begin(), nodes.end(),
+                      [&](const SimulatedLinNode& n) { return n.name == name; });
+}
+
+}  // namespace
+
+tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::load_lin_nodes(
+    std::string_view text, const std::string& source) {
+  auto configs = parse_lin_nodes(text, source, config_.buses);
+  if (!configs) {
+    return tl::unexpected(configs.error());
+  }
+  std::vector<std::string> errors;
+  for (const LinNodeConfig& n : *configs) {
+    if (n.schedule.empty()) {
+      continue;
+    }
+    // A bus has one commander: another node (not one this load replaces) running a schedule
+    // there is a conflict.
+    for (const SimulatedLinNode& other : lin_nodes_) {
+      const bool replaced =
+          std::any_of(configs->begin(), configs->end(),
+                      [&](const LinNodeConfig& c) { return c.name == other.name; });
+      if (!replaced && config_.buses[other.bus].name == n.bus &&
+          !other.ecu->running_schedule().empty()) {
+        errors.push_back(fmt::format(
+            "{}:{}: lin_node {}: {} is the commander of {} already (running {}); stop its "
+            "schedule first",
+            source, n.line, n.name, other.name, n.bus, other.ecu->running_schedule()));
+      }
+    }
+  }
+  if (!errors.empty()) {
+    return tl::unexpected(errors);
+  }
+  std::vector<std::string> names;
+  for (const LinNodeConfig& n : *configs) {
+    if (auto old = find_named(lin_nodes_, n.name); old != lin_nodes_.end()) {
+      lin_nodes_.erase(old);  // replaced: it leaves the bus first
+    }
+    const std::size_t bus = *bus_index(n.bus);
+    lin_nodes_.push_back(make_lin_node(n, bus, *lin_buses_[bus], config_.buses[bus].bitrate));
+    names.push_back(n.name);
+  }
+  return names;
+}
+
+std::optional<std::string> Simulation::power_lin_node(const std::string& name, bool on) {
+  auto it = find_named(lin_nodes_, name);
+  if (it == lin_nodes_.end()) {
+    return fmt::format("no simulated LIN node named \"{}\"", name);
+  }
+  it->ecu->set_powered(on);
+  return std::nullopt;
+}
+
+std::optional<std::string> Simulation::run_lin_schedule(const std::string& name,
+                                                        const std::string& table) {
+  auto it = find_named(lin_nodes_, name);
+  if (it == lin_nodes_.end()) {
+    return fmt::format("no simulated LIN node named \"{}\"", name);
+  }
+  if (table.empty()) {
+    it->ecu->stop_schedule();
+    return std::nullopt;
+  }
+  for (const SimulatedLinNode& other : lin_nodes_) {
+    if (&other != &*it && other.bus == it->bus && !other.ecu->running_schedule().empty()) {
+      return fmt::format("{} is the commander of {} already (running {}); stop its schedule first",
+                         other.name, config_.buses[it->bus].name, other.ecu->running_schedule());
+    }
+  }
+  if (!it->ecu->run_schedule(table)) {
+    return fmt::format("node {} has no schedule table named \"{}\"", name, table);
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> Simulation::remove_lin_node(const std::string& name) {
+  auto it = find_named(lin_nodes_, name);
+  if (it == lin_nodes_.end()) {
+    return fmt::format("no simulated LIN node named \"{}\"", name);
+  }
+  lin_nodes_.erase(it);
+  return std::nullopt;
+}
+
+}  // namespace canemu::daemon

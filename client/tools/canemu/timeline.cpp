@@ -1,18 +1,11 @@
 // canemu timeline: what happened on a bus over time, from canemud's records: the load in bins of
 // 100 ms of simulated time and, per node, every change of its error counters and state with its
 // cause. canemu plot: the same drawn by matplotlib (the canemu Python package's canemu.plot).
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -23,6 +16,7 @@
 #include "canemu/ipc/protocol.hpp"
 #include "command.hpp"
 #include "fault_table.hpp"
+#include "python_tool.hpp"
 
 namespace canemu::cli {
 
@@ -254,52 +248,18 @@ int run_plot(const std::string& socket, const Options& o) {
     std::fprintf(stderr, "canemu: %s\n", t.error().c_str());
     return 1;
   }
-  const char* env = std::getenv("CANEMU_PYTHON");
-  const std::string python = env != nullptr && *env != '\0' ? env : "python3";
-  std::vector<std::string> args{python, "-m", "canemu.plot", "--output", o.output};
+  std::vector<std::string> args{"--output", o.output};
   if (!o.title.empty()) {
     args.insert(args.end(), {"--title", o.title});
   }
-  std::vector<char*> argv;
-  for (std::string& a : args) {
-    argv.push_back(a.data());
-  }
-  argv.push_back(nullptr);
-  int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0) {
-    std::perror("canemu: plot: pipe");
-    return 1;
-  }
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fds[0], STDIN_FILENO);
-  pid_t pid = 0;
-  const int spawned = ::posix_spawnp(&pid, python.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(fds[0]);
-  if (spawned != 0) {
-    ::close(fds[1]);
-    std::fprintf(stderr, "canemu: plot: cannot run %s: %s\n", python.c_str(),
-                 std::strerror(spawned));
-    return 1;
-  }
-  ::signal(SIGPIPE, SIG_IGN);  // a plotter that ends early is reported by its exit status
-  const std::string json = one_line_json(to_json(*t)) + "\n";
-  for (std::size_t done = 0; done < json.size();) {
-    const ssize_t n = ::write(fds[1], json.data() + done, json.size() - done);
-    if (n <= 0) {
-      break;
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  ::close(fds[1]);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+  const PythonRun run =
+      run_python_module("canemu.plot", args, one_line_json(to_json(*t)) + "\n", false);
+  if (run.status != 0) {
     std::fprintf(stderr,
-                 "canemu: plot: %s -m canemu.plot failed (it needs the canemu Python package and "
+                 "canemu: plot: %s -m canemu.plot %s (it needs the canemu Python package and "
                  "matplotlib; CANEMU_PYTHON names the interpreter)\n",
-                 python.c_str());
+                 run.interpreter.c_str(),
+                 run.error.empty() ? "failed" : ("cannot run: " + run.error).c_str());
     return 1;
   }
   return 0;

@@ -32,6 +32,10 @@ struct SessionChannel {
 
 inline constexpr std::size_t kMaxChannelsPerClient = 16;
 
+// `canemu lin`: the answer to a LinNodeRequest (lin_node_service.cpp).
+std::unique_ptr<ipc::LinNodeReply> answer_lin_nodes(Simulation& sim, const ipc::LinNodeRequest& m,
+                                                    uint32_t request_id);
+
 // What the daemon knows of one client.
 struct Session {
   bool greeted = false;

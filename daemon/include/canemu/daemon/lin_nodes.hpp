@@ -6,7 +6,12 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <vector>
 
+#include <tl/expected.hpp>
+
+#include "canemu/daemon/config.hpp"
 #include "canemu/daemon/lin_config.hpp"
 #include "canemu/firmware_model/chips/lin/lin_ecu.hpp"
 
@@ -22,5 +27,10 @@ struct SimulatedLinNode {
 // as it starts: tables loaded, powered as configured, its schedule (if any) running from now.
 SimulatedLinNode make_lin_node(const LinNodeConfig& config, std::size_t bus_index,
                                model::lin::LinBus& bus, uint32_t bus_bitrate);
+
+// [[lin_node]] tables loaded at run time (`canemu lin load`): checked as the configuration's are,
+// against `buses`; every problem with its line.
+tl::expected<std::vector<LinNodeConfig>, std::vector<std::string>> parse_lin_nodes(
+    std::string_view text, const std::string& source, const std::vector<BusConfig>& buses);
 
 }  // namespace canemu::daemon

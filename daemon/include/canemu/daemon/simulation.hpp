@@ -68,6 +68,16 @@ class Simulation {
 
   // The simulated LIN nodes ([[lin_node]]), in configuration order.
   const std::vector<SimulatedLinNode>& lin_nodes() const { return lin_nodes_; }
+  // ---- simulated LIN nodes at run time (`canemu lin`, docs/lin.md) ----
+  // Loads [[lin_node]] tables: a node of a name that runs already is replaced; a bus keeps at
+  // most one commander running a schedule. All or nothing; the names loaded, or every problem.
+  tl::expected<std::vector<std::string>, std::vector<std::string>> load_lin_nodes(
+      std::string_view text, const std::string& source);
+  // Switches node `name` on or off, runs its schedule table `table` ("": stops its schedule), or
+  // removes it; the reason when it cannot.
+  std::optional<std::string> power_lin_node(const std::string& name, bool on);
+  std::optional<std::string> run_lin_schedule(const std::string& name, const std::string& table);
+  std::optional<std::string> remove_lin_node(const std::string& name);
 
   // The timing of a node on bus `bus` at the bus's rates (nothing if no controller runs them).
   std::optional<model::HostedNodeSettings> bus_timing(std::size_t bus) const;

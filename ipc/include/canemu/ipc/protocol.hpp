@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "canemu/ipc/capture_messages.hpp"
+#include "canemu/ipc/lin_node_messages.hpp"
 #include "canemu/ipc/protocol_core.hpp"
 #include "canemu/ipc/slcan_messages.hpp"
 #include "canemu/ipc/timeline_messages.hpp"
@@ -24,6 +25,10 @@ namespace canemu::ipc {
 // The message type of each struct (and, in protocol.cpp, the size of each type).
 template <class T>
 inline constexpr MsgType type_of_v = MsgType{};
+template <>
+inline constexpr MsgType type_of_v<LinNodeRequest> = MsgType::lin_node_request;
+template <>
+inline constexpr MsgType type_of_v<LinNodeReply> = MsgType::lin_node_reply;
 template <>
 inline constexpr MsgType type_of_v<TimelineRequest> = MsgType::timeline_request;
 template <>

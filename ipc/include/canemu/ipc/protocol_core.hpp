@@ -80,6 +80,8 @@ enum class MsgType : uint16_t {
   slcan_request = 100,
   slcan_reply = 101,
   slcan_event = 102,  // unsolicited, request_id 0
+  lin_node_request = 110,
+  lin_node_reply = 111,
   timeline_request = 160,
   timeline_reply = 161,
   load_history_reply = 162,

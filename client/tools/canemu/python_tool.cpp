@@ -1,0 +1,78 @@
+#include "python_tool.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+
+namespace canemu::cli {
+
+PythonRun run_python_module(const std::string& module, const std::vector<std::string>& args,
+                            const std::string& input, bool capture_output) {
+  PythonRun run;
+  const char* env = std::getenv("CANEMU_PYTHON");
+  run.interpreter = env != nullptr && *env != '\0' ? env : "python3";
+  std::vector<std::string> words{run.interpreter, "-m", module};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) {
+    argv.push_back(w.data());
+  }
+  argv.push_back(nullptr);
+  int in[2];
+  int out[2] = {-1, -1};
+  if (::pipe2(in, O_CLOEXEC) != 0 || (capture_output && ::pipe2(out, O_CLOEXEC) != 0)) {
+    run.error = std::strerror(errno);
+    return run;
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
+  if (capture_output) {
+    posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
+  }
+  pid_t pid = 0;
+  const int spawned =
+      ::posix_spawnp(&pid, run.interpreter.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(in[0]);
+  if (capture_output) {
+    ::close(out[1]);
+  }
+  if (spawned != 0) {
+    ::close(in[1]);
+    if (capture_output) {
+      ::close(out[0]);
+    }
+    run.error = std::strerror(spawned);
+    return run;
+  }
+  ::signal(SIGPIPE, SIG_IGN);  // a module that ends early is reported by its exit status
+  for (std::size_t done = 0; done < input.size();) {
+    const ssize_t n = ::write(in[1], input.data() + done, input.size() - done);
+    if (n <= 0) {
+      break;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  ::close(in[1]);
+  if (capture_output) {
+    char buf[4096];
+    ssize_t n;
+    while ((n = ::read(out[0], buf, sizeof buf)) > 0) {
+      run.output.append(buf, static_cast<std::size_t>(n));
+    }
+    ::close(out[0]);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+}  // namespace canemu::cli

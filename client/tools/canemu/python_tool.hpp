@@ -1,0 +1,22 @@
+// The canemu commands that are Python underneath (plot: matplotlib; lin load: ldfparser) run
+// `python3 -m MODULE` of the canemu package; CANEMU_PYTHON names another interpreter.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace canemu::cli {
+
+struct PythonRun {
+  int status = -1;     // the exit status; -1 when it could not run or was killed
+  std::string output;  // its standard output, when asked for
+  std::string error;   // why it could not run
+  std::string interpreter;
+};
+
+// `input` goes to the module's standard input (written whole before its output is read: one of
+// the two should be small); its standard error stays the caller's.
+PythonRun run_python_module(const std::string& module, const std::vector<std::string>& args,
+                            const std::string& input, bool capture_output);
+
+}  // namespace canemu::cli

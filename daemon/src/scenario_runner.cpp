@@ -54,27 +54,32 @@ void ScenarioRunner::add_bus(CanBus& bus, const BusConfig& config, lin::LinBus* 
   }
 }
 
-void ScenarioRunner::lin_fault_hit(std::size_t bus, std::size_t rule, SimTime at, uint8_t id) {
+void ScenarioRunner::lin_fault_hit(std::size_t bus, std::size_t rule, SimTime, uint8_t id) {
   const lin::LinFaultRule& r = buses_[bus].lin_faults->rule(rule);
-  const bool first = r.hits == 1;
-  const bool done = r.count && r.hits == *r.count;
+  log_progress(bus, rule, true, r.hits, r.count, [id] { return fmt::format("frame {:02X}", id); });
+}
+
+void ScenarioRunner::log_progress(std::size_t bus, std::size_t rule, bool lin, uint64_t hits,
+                                  const std::optional<uint64_t>& count,
+                                  const std::function<std::string()>& what_was_hit) const {
+  const bool first = hits == 1;
+  const bool done = count && hits == *count;
   if (!first && !done) {
     return;  // single hits are in the trace and the counts
   }
   std::string label;
   for (const LoadedScenario& sc : scenarios_) {
     for (const AppliedFault& a : sc.faults) {
-      if (a.bus == bus && a.lin_rule == rule) {
+      if (a.bus == bus && (lin ? a.lin_rule : a.rule) == rule) {
         label = fault_label(sc.name, a.spec);
       }
     }
   }
   if (first) {
-    log(fmt::format("{}: first hit, frame {:02X} at {:.9f} s", label, id,
-                    static_cast<double>(at.ns()) / 1e9));
+    log(fmt::format("{}: first hit, {}", label, what_was_hit()));
   }
   if (done) {
-    log(fmt::format("{}: done, {} hit{}", label, r.hits, r.hits == 1 ? "" : "s"));
+    log(fmt::format("{}: done, {} hit{}", label, hits, hits == 1 ? "" : "s"));
   }
 }
 
@@ -100,27 +105,10 @@ void ScenarioRunner::log(const std::string& text) const {
 
 void ScenarioRunner::frame_fault_hit(std::size_t bus, std::size_t rule, const FrameContext& ctx) {
   const FaultRule& r = buses_[bus].faults->rule(rule);
-  const bool first = r.hits == 1;
-  const bool done = r.count && r.hits == *r.count;
-  if (!first && !done) {
-    return;  // single hits are in the trace and the counts
-  }
-  std::string label;
-  for (const LoadedScenario& sc : scenarios_) {
-    for (const AppliedFault& a : sc.faults) {
-      if (a.bus == bus && a.rule == rule) {
-        label = fault_label(sc.name, a.spec);
-      }
-    }
-  }
-  if (first) {
-    log(fmt::format("{}: first hit, {} {:X} from {}", label,
-                    ctx.frame.extended() ? "frame (29-bit)" : "frame", ctx.frame.id(),
-                    node_name(bus, ctx.transmitter)));
-  }
-  if (done) {
-    log(fmt::format("{}: done, {} hit{}", label, r.hits, r.hits == 1 ? "" : "s"));
-  }
+  log_progress(bus, rule, false, r.hits, r.count, [&] {
+    return fmt::format("{} {:X} from {}", ctx.frame.extended() ? "frame (29-bit)" : "frame",
+                       ctx.frame.id(), node_name(bus, ctx.transmitter));
+  });
 }
 
 tl::expected<std::vector<ScenarioRunner::Resolved>, std::vector<std::string>>

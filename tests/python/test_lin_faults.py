@@ -81,7 +81,7 @@ def test_each_effect_hits_one_frame_and_the_next_goes_through(daemon, effect, ex
     assert second.endswith("lin0 20#1122 pid 20 enhanced checksum AC"), second
     [f] = faults(daemon)
     assert (f["effect"], f["seen"], f["hits"], f["state"]) == (effect, 2, 1, "done")
-    daemon.wait_log(f"{effect}: first hit, frame 20 at ")
+    daemon.wait_log(f"{effect}: first hit, frame 20")
 
 
 # A broken header: the commander reads back what it sent and sees nothing wrong (so `send` finds

@@ -217,16 +217,20 @@ struct Options {
   std::string title;
 };
 
-int run_timeline(const std::string& socket, const Options& o) {
-  auto c = connect(socket, "canemu timeline");
+// The timeline from canemud at `socket`, asked as client `name`; the error's text on failure.
+tl::expected<Timeline, std::string> ask(const std::string& socket, const char* name,
+                                        const Options& o) {
+  auto c = connect(socket, name);
   if (!c) {
-    std::fprintf(stderr, "canemu: %s\n", c.error().message.c_str());
-    return 1;
+    return tl::unexpected(c.error().message);
   }
-  auto t = fetch(*c, o.bus, o.nodes);
+  return fetch(*c, o.bus, o.nodes);
+}
+
+int run_timeline(const std::string& socket, const Options& o) {
+  auto t = ask(socket, "canemu timeline", o);
   if (!t) {
-    std::fprintf(stderr, "canemu: %s\n", t.error().c_str());
-    return 1;
+    return fail(t.error());
   }
   if (o.json) {
     std::fputs((one_line_json(to_json(*t)) + "\n").c_str(), stdout);
@@ -238,15 +242,9 @@ int run_timeline(const std::string& socket, const Options& o) {
 
 // The timeline as JSON into `python3 -m canemu.plot` (CANEMU_PYTHON names another interpreter).
 int run_plot(const std::string& socket, const Options& o) {
-  auto c = connect(socket, "canemu plot");
-  if (!c) {
-    std::fprintf(stderr, "canemu: %s\n", c.error().message.c_str());
-    return 1;
-  }
-  auto t = fetch(*c, o.bus, o.nodes);
+  auto t = ask(socket, "canemu plot", o);
   if (!t) {
-    std::fprintf(stderr, "canemu: %s\n", t.error().c_str());
-    return 1;
+    return fail(t.error());
   }
   std::vector<std::string> args{"--output", o.output};
   if (!o.title.empty()) {

@@ -140,6 +140,11 @@ class ScenarioRunner {
   };
   void add_lin_rule(const Resolved& r, AppliedFault& applied);
   void lin_fault_hit(std::size_t bus, std::size_t rule, model::SimTime at, uint8_t id);
+  // Logs a rule's first hit (with `what_was_hit`) and the hit that reaches its count (a frame
+  // rule of bus `bus`'s FaultPlan, or with `lin` of its LinFaultPlan).
+  void log_progress(std::size_t bus, std::size_t rule, bool lin, uint64_t hits,
+                    const std::optional<uint64_t>& count,
+                    const std::function<std::string()>& what_was_hit) const;
 
   std::optional<std::size_t> bus_index(std::string_view name) const;
   // A fault's frame rule leaves its bus's plan (its counts kept in the fault).

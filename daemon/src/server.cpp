@@ -5,7 +5,9 @@
 #include <cerrno>
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
+#include <string_view>
 
 #include <fcntl.h>
 #include <poll.h>
@@ -153,6 +155,14 @@ ipc::IpcResult<void> Server::open() {
   sigaddset(&mask, SIGINT);
   sigaddset(&mask, SIGTERM);
   sigaddset(&mask, SIGHUP);
+  // Test hook for the watchdog test (tests/guest/systemd-tests.sh): with
+  // CANEMU_TEST_HOOKS=stall-on-sigusr2 in the environment, SIGUSR2 stalls the loop for good.
+  if (const char* hooks = std::getenv("CANEMU_TEST_HOOKS");
+      hooks != nullptr && std::string_view(hooks) == "stall-on-sigusr2") {
+    sigaddset(&mask, SIGUSR2);
+    stall_hook_ = true;
+    log::warning("test hook: SIGUSR2 stalls the event loop (CANEMU_TEST_HOOKS)");
+  }
   if (::sigprocmask(SIG_BLOCK, &mask, nullptr) != 0) {
     return tl::unexpected(sys("sigprocmask"));
   }
@@ -354,6 +364,11 @@ bool Server::run_once(int timeout_ms) {
       while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
         if (si.ssi_signo == SIGHUP) {
           reload();
+        } else if (si.ssi_signo == SIGUSR2 && stall_hook_) {
+          log::warning("test hook: the event loop stalls now");
+          for (;;) {
+            ::pause();  // until the watchdog's SIGABRT (or SIGKILL) ends the process
+          }
         } else {
           log::info("signal {}, stopping", si.ssi_signo);
           sd_notify(0, "STOPPING=1");

@@ -2,56 +2,7 @@
 # The SocketCAN scenarios, run inside the guest by its /init (tests/guest/run-guest-tests.sh):
 # can-utils on vcan interfaces bridged to canemud's emulated buses. Each test prints
 # GUEST-PASS or GUEST-FAIL with what it expected and got; the last line is the count.
-pass=0
-fail=0
-
-result() {  # NAME EXPECTED GOT
-  if [ "$2" = "$3" ]; then
-    echo "GUEST-PASS $1"
-    pass=$((pass + 1))
-  else
-    echo "GUEST-FAIL $1"
-    echo "  expected: $2"
-    echo "  got:      $3"
-    fail=$((fail + 1))
-  fi
-}
-
-uptime_cs() {  # the guest's uptime in hundredths of a second
-  tr -d . </proc/uptime | cut -d' ' -f1
-}
-
-wait_for() {  # COMMAND...: until it succeeds, for at most 20 s
-  deadline=$(($(uptime_cs) + 2000))
-  while ! "$@" 2>/dev/null; do
-    [ "$(uptime_cs)" -gt "$deadline" ] && return 1
-    usleep 10000
-  done
-}
-
-wait_pid() {  # PID [SECONDS]: until the process ends; killed after SECONDS (default 10)
-  i=0
-  while kill -0 "$1" 2>/dev/null; do
-    i=$((i + 1))
-    if [ $i -gt $((${2:-10} * 100)) ]; then
-      kill "$1"
-      echo "  (process $1 killed after ${2:-10} s)"
-      return 1
-    fi
-    usleep 10000
-  done
-}
-
-# Sockets of can-utils listening on an interface, from the kernel's receive lists.
-receivers() {
-  grep -c " $1 " /proc/net/can/rcvlist_all
-}
-more_receivers() {  # INTERFACE COUNT
-  [ "$(receivers "$1")" -gt "$2" ]
-}
-listening() {  # FILE: canemu dump/record said it listens
-  grep -q listening "$1"
-}
+. /guest-lib.sh
 
 for m in can can-raw can-bcm can-gw can-dev vcan vxcan; do
   insmod "/lib/modules/$m.ko" || echo "GUEST-FAIL insmod $m"
@@ -240,4 +191,4 @@ result a_socketcan_program_and_an_adapter_at_the_wrong_rate "can1 200002 vcan2 1
 canemu bridge remove vcan2 >/dev/null
 
 canemu status
-echo "GUEST-RESULT: $pass passed, $fail failed"
+guest_summary

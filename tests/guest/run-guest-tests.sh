@@ -18,20 +18,9 @@ if ! command -v qemu-system-x86_64 >/dev/null || ! command -v cpio >/dev/null; t
   exit 77
 fi
 
-# The Debian packages, downloaded once into the build tree and unpacked (not installed).
-"$src/scripts/fetch-guest-packages.sh" "$guest/debs"
-if [ ! -e "$guest/unpacked/.done" ] || [ -n "$(find "$guest/debs" -newer "$guest/unpacked/.done")" ]; then
-  rm -rf "$guest/unpacked"
-  mkdir -p "$guest/unpacked"
-  for deb in "$guest"/debs/linux-image-[0-9]*.deb "$guest"/debs/busybox-static_*.deb \
-             "$guest"/debs/can-utils_*.deb; do
-    dpkg-deb -x "$deb" "$guest/unpacked"
-  done
-  touch "$guest/unpacked/.done"
-fi
+# The kernel, busybox and can-utils (Debian packages, downloaded once into the build tree).
+source "$src/tests/guest/guest-kernel.sh"
 x=$guest/unpacked
-kernel=$(ls "$x"/boot/vmlinuz-* | head -1)
-modules=$(ls -d "$x"/lib/modules/* | head -1)
 
 # The initramfs, made afresh (the binaries change with every build).
 root=$guest/root
@@ -65,7 +54,7 @@ copy_with_libs "$x/usr/bin/candump"
 copy_with_libs "$build/bin/vci_c_talk"
 mkdir -p "$root/lib64"
 cp -L /lib64/ld-linux-x86-64.so.2 "$root/lib64/"
-cp "$src/tests/guest/guest-tests.sh" "$root/guest-tests.sh"
+cp "$src/tests/guest/guest-tests.sh" "$src/tests/guest/guest-lib.sh" "$root/"
 cat > "$root/init" <<'INIT'
 #!/bin/sh
 mount -t proc proc /proc
@@ -93,12 +82,4 @@ status=${PIPESTATUS[0]}
 set -e
 end=$(date +%s.%N)
 echo "guest: qemu exited with $status after $(awk "BEGIN {printf \"%.1f\", $end - $start}") s in all"
-result=$(grep -a '^GUEST-RESULT: ' "$console" | tail -1 || true)
-if [ -z "$result" ]; then
-  echo "guest: FAILED: no result on the console (see $console)"
-  exit 1
-fi
-case "$result" in
-  *" 0 failed") exit 0 ;;
-  *) exit 1 ;;
-esac
+guest_result "$console"

@@ -101,6 +101,7 @@ class Server {
   bool socket_from_systemd_ = false;  // socket activation: systemd owns the file
   AccessPolicy access_;
   bool running_ = true;
+  bool stall_hook_ = false;  // CANEMU_TEST_HOOKS=stall-on-sigusr2
   std::vector<uint8_t> buffer_;
   std::map<int, Doorbell*> doorbells_;  // doorbell fd -> its channel
   std::vector<ipc::Notification> pending_notifications_;

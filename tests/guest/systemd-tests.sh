@@ -1,0 +1,178 @@
+#!/bin/sh
+# Run inside the systemd guest by canemu-guest-tests.service (tests/guest/run-systemd-tests.sh),
+# as root, from the unpacked second disk: this build's Debian package installed with dpkg and
+# run by systemd as on a test rig, then the SocketCAN scenarios that need Debian's userland
+# (python-can, tshark, ip netns, canbusload) against the service. GUEST-PASS / GUEST-FAIL lines
+# (guest-lib.sh) and a count the host reads.
+. ./guest-lib.sh
+echo "GUEST: systemd $(systemctl --version | head -1 | cut -d' ' -f2), tests start at $(cut -d' ' -f1 /proc/uptime) s of uptime"
+
+show() {  # UNIT PROPERTY: the property's value
+  systemctl show -p "$2" --value "$1"
+}
+journal_has() {  # TEXT: canemud's journal holds TEXT
+  journalctl -q -o cat -u canemud.service | grep -q "$1"
+}
+
+# 1. The package installs; its socket listens with the documented owner and mode and the
+# postinst starts the service, which reaches "active (running)" only after READY=1 (Type=notify).
+dpkg -i ./canemu.deb >/tmp/dpkg.log 2>&1
+rc=$?
+[ $rc -eq 0 ] || cat /tmp/dpkg.log
+wait_for [ "$(show canemud.service SubState)" = running ]
+result the_package_installs_and_the_service_is_ready "0 active running root:canemu 660 socket" \
+  "$rc $(show canemud.service ActiveState) $(show canemud.service SubState) $(stat -c '%U:%G %a %F' /run/canemu/canemud.sock)"
+
+# 2. Socket activation: with the service stopped, a client's connection starts it again.
+systemctl stop canemud.service
+before=$(show canemud.service ActiveState)
+canemu --wait 30 status >/tmp/t2 2>&1
+rc=$?
+result socket_activation_starts_the_service "inactive 0 active can0" \
+  "$before $rc $(show canemud.service ActiveState) $(grep -o '^can0' /tmp/t2 | head -1)"
+
+# 3. Access by group: a member of group canemu connects, another user is refused by the
+# socket's mode (0660 root:canemu).
+useradd --no-create-home --groups canemu alice
+useradd --no-create-home bob
+setpriv --reuid=alice --regid=alice --init-groups canemu status >/tmp/t3a 2>&1
+alice=$?
+setpriv --reuid=bob --regid=bob --init-groups canemu status >/tmp/t3b 2>&1
+bob=$?
+result a_member_of_canemu_connects_and_another_user_is_refused \
+  "0 can0 1 Permission denied" \
+  "$alice $(grep -o '^can0' /tmp/t3a | head -1) $bob $(grep -o 'Permission denied' /tmp/t3b | head -1)"
+
+# 4. systemctl reload with a broken configuration keeps the running one (same process, same buses).
+pid=$(show canemud.service MainPID)
+cp /etc/canemu/canemud.toml /tmp/canemud.toml.good
+printf '[[bus]]\nname = \n' >>/etc/canemu/canemud.toml
+systemctl reload canemud.service
+WAIT_SECONDS=10 wait_for journal_has "configuration rejected"
+rejected=$?
+canemu status >/tmp/t4 2>&1
+result a_reload_with_a_bad_file_keeps_the_configuration "0 $pid active 0 can0" \
+  "$rejected $(show canemud.service MainPID) $(show canemud.service ActiveState) $(show canemud.service NRestarts) $(grep -o '^can0' /tmp/t4 | head -1)"
+cp /tmp/canemud.toml.good /etc/canemu/canemud.toml
+
+# 5. The watchdog: a loop stalled by the test hook (CANEMU_TEST_HOOKS, a drop-in with a 2 s
+# watchdog) gets canemud killed and restarted by systemd.
+mkdir -p /run/systemd/system/canemud.service.d
+printf '[Service]\nEnvironment=CANEMU_TEST_HOOKS=stall-on-sigusr2\nWatchdogSec=2s\n' \
+  >/run/systemd/system/canemud.service.d/stall.conf
+systemctl daemon-reload
+systemctl restart canemud.service
+old=$(show canemud.service MainPID)
+systemctl kill --kill-whom=main --signal=SIGUSR2 canemud.service
+restarted() {
+  [ "$(show canemud.service NRestarts)" -ge 1 ] && [ "$(show canemud.service SubState)" = running ] &&
+    [ "$(show canemud.service MainPID)" != "$old" ]
+}
+WAIT_SECONDS=30 wait_for restarted
+journal_has "Watchdog timeout" && watchdog=watchdog || watchdog=none
+result the_watchdog_restarts_a_stalled_loop "1 running watchdog" \
+  "$(show canemud.service NRestarts) $(show canemud.service SubState) $watchdog"
+rm -r /run/systemd/system/canemud.service.d
+systemctl daemon-reload
+
+# 6. systemctl stop is clean: exit status 0, the socket stays with canemud.socket.
+systemctl restart canemud.service
+systemctl stop canemud.service
+result systemctl_stop_is_clean "inactive success 0 active socket" \
+  "$(show canemud.service ActiveState) $(show canemud.service Result) $(show canemud.service ExecMainStatus) $(show canemud.socket ActiveState) $(stat -c %F /run/canemu/canemud.sock)"
+
+# The SocketCAN scenarios run against the service, confined as the unit says: a bridge from can0
+# to vcan0 in its configuration.
+modprobe vcan
+modprobe vxcan
+modprobe can-raw
+ip link add dev vcan0 type vcan && ip link set vcan0 up
+cat >>/etc/canemu/canemud.toml <<'TOML'
+
+[[bridge]]
+kind = "socketcan"
+bus = "can0"
+interface = "vcan0"
+TOML
+systemctl start canemud.service
+canemu --wait 30 status >/dev/null || journalctl -u canemud.service | tail -20
+
+# 7. A python-can program on the emulated bus (interface "canemu") and one on vcan0 (python-can's
+# socketcan) see each other's frames; candump on vcan0 shows the first one's.
+n=$(receivers vcan0)
+candump -L -n 1 vcan0 >/tmp/t7 &
+pid=$!
+wait_for more_receivers vcan0 "$n"
+python3 - >/tmp/t7b 2>&1 <<'PY'
+import can
+emulated = can.Bus(interface="canemu", channel="can0")
+kernel = can.Bus(interface="socketcan", channel="vcan0")
+emulated.send(can.Message(arbitration_id=0x123, data=[1, 2], is_extended_id=False))
+m = kernel.recv(10)
+print("socketcan got", m and f"{m.arbitration_id:X}#{m.data.hex().upper()}")
+kernel.send(can.Message(arbitration_id=0x1ABCDE, data=[3, 4, 5], is_extended_id=True))
+m = emulated.recv(10)
+print("canemu got", m and f"{m.arbitration_id:X}#{m.data.hex().upper()} ext={m.is_extended_id}")
+emulated.shutdown()
+kernel.shutdown()
+PY
+wait_pid $pid
+result python_can_programs_on_both_sides_of_a_bridge "vcan0 123#0102
+socketcan got 123#0102
+canemu got 1ABCDE#030405 ext=True" "$(cut -d' ' -f2- /tmp/t7)
+$(cat /tmp/t7b)"
+
+# 8. tshark captures the emulated bus live on vcan0 and decodes it as Wireshark does.
+tshark -i vcan0 -c 2 -a duration:60 -T fields -e can.id -e can.len -e data.data >/tmp/t8 2>/tmp/t8.err &
+pid=$!
+WAIT_SECONDS=60 wait_for grep -q "Capturing on" /tmp/t8.err
+canemu send can0 123#1122 7FF# >/dev/null
+wait_pid $pid 60
+result tshark_decodes_the_emulated_bus_on_vcan0 "291 2 1122|2047 0 |" "$(tr '\t\n' ' |' </tmp/t8)"
+
+# 9. vxcan into a network namespace: a program in the namespace (as in a container) and the
+# emulated bus see each other's frames through a bridge added at run time.
+ip netns add ecu
+ip link add vxcan0 type vxcan peer name vxcan1 netns ecu
+ip link set vxcan0 up
+ip netns exec ecu ip link set vxcan1 up
+canemu bridge add can0 vxcan0 >/tmp/t9
+ip netns exec ecu candump -L -n 1 vxcan1 >/tmp/t9b &
+pid=$!
+WAIT_SECONDS=20 wait_for ip netns exec ecu grep -q " vxcan1 " /proc/net/can/rcvlist_all
+canemu send can0 321#AB >/dev/null
+wait_pid $pid
+canemu dump can0 -n 1 >/tmp/t9c 2>/tmp/t9c.err &
+pid=$!
+wait_for listening /tmp/t9c.err
+ip netns exec ecu cansend vxcan1 654#CD
+wait_pid $pid
+result vxcan_into_a_network_namespace "can0 bridged to vxcan0
+vxcan1 321#AB
+can0 654#CD" "$(cat /tmp/t9)
+$(cut -d' ' -f2- /tmp/t9b)
+$(cut -d' ' -f2- /tmp/t9c)"
+canemu bridge remove vxcan0 >/dev/null
+
+# 10. canbusload on vcan0 and canemu status agree on the load of can0 to 3 points: an emulated
+# node sends a frame of 8 bytes, waits 1 ms, and again (17 % of 500 kbit/s here; at least 10 %
+# is required, so that the agreement means something); canbusload counts the exact stuffed bits
+# of what the bridge writes in each second of wall time, canemu the bus's busy time over the
+# last simulated second.
+canemu gen can0 -g 1ms -n 6000 -I 100 -L 8 -D i >/dev/null 2>&1 &
+gen=$!
+canbusload -e vcan0@500000 >/tmp/t10 2>&1 &
+cbl=$!
+sleep 4
+emulated=$(canemu status --json | python3 -c 'import json, sys
+print(round([b for b in json.load(sys.stdin)["buses"] if b["name"] == "can0"][0]["load_percent"]))')
+sleep 1
+kill $cbl $gen
+kernel=$(grep -o 'vcan0@500000.*%' /tmp/t10 | tail -3 | head -1 | awk '{print $NF}' | tr -d %)
+agree=$(awk -v a="$emulated" -v b="$kernel" 'BEGIN {d = a - b; if (d < 0) d = -d;
+  print (d <= 3 && a >= 10) ? "within 3 points" : "apart: canemu " a " %, canbusload " b " %"}')
+result canbusload_agrees_with_canemu_status "within 3 points" "$agree"
+echo "  (canemu status $emulated %, canbusload $kernel %)"
+
+systemctl stop canemud.service
+guest_summary

@@ -41,27 +41,35 @@ std::optional<Btr> btr_for(uint32_t bitrate, uint32_t sample_point_permille,
                            uint32_t oscillator_hz) {
   std::optional<Btr> best;
   uint32_t best_error = UINT32_MAX;
+  if (bitrate == 0 || oscillator_hz == 0) {
+    return best;
+  }
+  // A bit lasts 2 (BRP + 1) (TSEG1 + TSEG2 + 3) oscillator periods: only a prescaler that
+  // divides the oscillator into a whole number of quanta per bit can give the rate, and then
+  // each TSEG2 leaves one TSEG1. Same candidates, in the same order, as trying all 7,168 values.
   for (uint8_t brp = 0; brp < 64; ++brp) {
+    const uint64_t per_quantum = uint64_t{bitrate} * 2u * (brp + 1u);
+    if (oscillator_hz % per_quantum != 0) {
+      continue;
+    }
+    const uint64_t quanta = oscillator_hz / per_quantum;
     for (uint8_t t2 = 1; t2 < 8; ++t2) {
-      for (uint8_t t1 = 0; t1 < 16; ++t1) {
-        const Btr btr{brp, static_cast<uint8_t>((t2 << 4) | t1)};
-        // The rate first, from the plain fields (cheap); the rules only for the values that
-        // give it (their error texts cost a formatting each).
-        if (!(timing_from_btr(btr.btr0, btr.btr1, oscillator_hz).bit_rate() ==
-              BitRate{bitrate, 1})) {
-          continue;
-        }
-        auto t = decode_btr(btr.btr0, btr.btr1, oscillator_hz);
-        if (!t) {
-          continue;
-        }
-        const uint32_t point = t->sample_point_permille();
-        const uint32_t error = point > sample_point_permille ? point - sample_point_permille
-                                                             : sample_point_permille - point;
-        if (error < best_error) {
-          best_error = error;
-          best = btr;
-        }
+      if (quanta < t2 + 3u || quanta - t2 - 3u > 15u) {
+        continue;
+      }
+      const auto t1 = static_cast<uint8_t>(quanta - t2 - 3u);
+      const Btr btr{brp, static_cast<uint8_t>((t2 << 4) | t1)};
+      // The rules only for the values that give the rate (their error texts cost a formatting).
+      auto t = decode_btr(btr.btr0, btr.btr1, oscillator_hz);
+      if (!t) {
+        continue;
+      }
+      const uint32_t point = t->sample_point_permille();
+      const uint32_t error = point > sample_point_permille ? point - sample_point_permille
+                                                           : sample_point_permille - point;
+      if (error < best_error) {
+        best_error = error;
+        best = btr;
       }
     }
   }

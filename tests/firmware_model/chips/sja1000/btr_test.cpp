@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <string>
 
 #include "timing_expect.hpp"
@@ -98,6 +99,51 @@ TEST(Sja1000BtrFor, PrefersTheSamplePointClosestToTheOneAskedFor) {
 TEST(Sja1000BtrFor, FindsNothingForARateTheOscillatorCannotMake) {
   EXPECT_FALSE(sja1000::btr_for(7, 875));
   EXPECT_FALSE(sja1000::btr_for(2'000'000, 875));  // 8 quanta at least: 1 Mbit/s is the top
+  EXPECT_FALSE(sja1000::btr_for(0, 875));
+  EXPECT_FALSE(sja1000::btr_for(500'000, 875, 0));
+}
+
+// The search as the register map defines it: all 7,168 (BRP, TSEG1, TSEG2) values in order,
+// the first with the smallest sample-point error among those that decode to the rate.
+std::optional<sja1000::Btr> every_register_value(uint32_t bitrate, uint32_t point, uint32_t osc) {
+  std::optional<sja1000::Btr> best;
+  uint32_t best_error = UINT32_MAX;
+  for (uint8_t brp = 0; brp < 64; ++brp) {
+    for (uint8_t t2 = 1; t2 < 8; ++t2) {
+      for (uint8_t t1 = 0; t1 < 16; ++t1) {
+        const uint8_t btr1 = static_cast<uint8_t>((t2 << 4) | t1);
+        if (!(sja1000::timing_from_btr(brp, btr1, osc).bit_rate() == BitRate{bitrate, 1})) {
+          continue;
+        }
+        const auto t = sja1000::decode_btr(brp, btr1, osc);
+        if (!t) {
+          continue;
+        }
+        const uint32_t p = t->sample_point_permille();
+        const uint32_t error = p > point ? p - point : point - p;
+        if (error < best_error) {
+          best_error = error;
+          best = sja1000::Btr{brp, btr1};
+        }
+      }
+    }
+  }
+  return best;
+}
+
+TEST(Sja1000BtrFor, ChoosesWhatTryingEveryRegisterValueChooses) {
+  int found = 0;
+  for (const uint32_t osc : {16'000'000u, 24'000'000u, 8'000'000u}) {
+    for (uint32_t rate = 5'000; rate <= 1'000'000; rate += 5'000) {
+      for (const uint32_t point : {500u, 750u, 800u, 875u, 900u}) {
+        const auto expected = every_register_value(rate, point, osc);
+        ASSERT_EQ(sja1000::btr_for(rate, point, osc), expected)
+            << rate << " bit/s at " << point << " per mille, " << osc << " Hz";
+        found += expected ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GE(found, 250);  // not vacuous: many of these rates exist on these oscillators
 }
 
 }  // namespace

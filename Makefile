@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 SOURCES = $(shell git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.h' '*.c' '*.inc' 2>/dev/null)
 
-.PHONY: all deps configure build test asan bench fuzz soak format format-check run clean install package
+.PHONY: all deps configure build test asan bench fuzz fuzz-long soak format format-check run clean install package
 
 all: build
 
@@ -43,24 +43,18 @@ asan: deps
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS)
 
-# libFuzzer targets (clang), each run for FUZZ_SECONDS from its seed corpus (fuzz_server's own
-# log lines are hidden: -close_fd_mask=2).
-FUZZ_DIR ?= build-fuzz
+# libFuzzer targets (clang; scripts/fuzz.sh): `make fuzz` runs each for FUZZ_SECONDS with the
+# sanitizers; `make fuzz-long` runs each for FUZZ_RUNS executions built for speed, then replays
+# what they found through the sanitizers. Figures in build-fuzz*/fuzz-figures.json.
 FUZZ_SECONDS ?= 60
+FUZZ_RUNS ?= 10000000
 fuzz: deps
 	@scripts/install-deps.sh scripts/apt-packages-fuzz.txt
-	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	  -DCANEMU_FUZZ=ON -DCANEMU_WERROR=OFF -DCANEMU_BUILD_TESTS=OFF -DCANEMU_BUILD_BENCH=OFF
-	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_control_messages fuzz_rings fuzz_config fuzz_server
-	@mkdir -p $(FUZZ_DIR)/corpus/control $(FUZZ_DIR)/corpus/rings $(FUZZ_DIR)/corpus/config $(FUZZ_DIR)/corpus/server
-	$(FUZZ_DIR)/bin/fuzz_control_messages -max_total_time=$(FUZZ_SECONDS) -max_len=20000 \
-	  $(FUZZ_DIR)/corpus/control tests/fuzz/corpus/control
-	$(FUZZ_DIR)/bin/fuzz_rings -max_total_time=$(FUZZ_SECONDS) -max_len=4096 -timeout=10 \
-	  $(FUZZ_DIR)/corpus/rings tests/fuzz/corpus/rings
-	$(FUZZ_DIR)/bin/fuzz_config -max_total_time=$(FUZZ_SECONDS) -max_len=4096 \
-	  $(FUZZ_DIR)/corpus/config tests/fuzz/corpus/config
-	$(FUZZ_DIR)/bin/fuzz_server -max_total_time=$(FUZZ_SECONDS) -max_len=4096 -timeout=10 \
-	  -close_fd_mask=2 $(FUZZ_DIR)/corpus/server tests/fuzz/corpus/server
+	scripts/fuzz.sh time $(FUZZ_SECONDS)
+
+fuzz-long: deps
+	@scripts/install-deps.sh scripts/apt-packages-fuzz.txt
+	scripts/fuzz.sh runs $(FUZZ_RUNS)  # FUZZ_TARGETS="..." for some of them
 
 # Clients that come, go and get killed against canemud in real time for SOAK_SECONDS; checks
 # that nothing leaks or stalls (tests/soak/soak.py; figures as JSON on stdout).
@@ -97,4 +91,4 @@ run: deps build
 	exec $(BUILD_DIR)/bin/canemud --socket "$$sock"
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(FUZZ_DIR)
+	rm -rf $(BUILD_DIR) $(ASAN_DIR) build-fuzz build-fuzz-fast

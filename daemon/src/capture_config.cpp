@@ -1,5 +1,5 @@
-// [[recorder]] tables (a bus recorded by canemud into a candump log or a pcap file) and
-// [[bridge]] tables (a bus joined to a Linux CAN interface).
+// [[recorder]] tables (a bus recorded by canemud into a candump log or a pcap file; a LIN bus
+// into pcap only) and [[bridge]] tables (a bus joined to a Linux CAN interface).
 #include <set>
 
 #include <fmt/format.h>
@@ -69,14 +69,14 @@ void read_recorders(Checker& c, const toml::table& root, Config& cfg) {
     c.only_keys(t, path, {"bus", "path", "format", "max_size", "max_files", "errors"});
     RecorderConfig r;
     r.line = static_cast<uint32_t>(t.source().begin.line);
+    bool lin = false;
     if (auto bus = c.string(t, path, "bus", true)) {
       r.bus = *bus;
       const BusConfig* b = cfg.bus(*bus);
       if (b == nullptr) {
         c.error(*t.get("bus"), path + ".bus", fmt::format("no bus is named \"{}\"", *bus));
-      } else if (b->kind == BusKind::lin) {
-        c.error(*t.get("bus"), path + ".bus",
-                fmt::format("\"{}\" is a LIN bus; recorders record CAN and CAN FD buses", *bus));
+      } else {
+        lin = b->kind == BusKind::lin;
       }
     }
     if (auto file = c.string(t, path, "path", true)) {
@@ -93,6 +93,15 @@ void read_recorders(Checker& c, const toml::table& root, Config& cfg) {
     }
     if (auto pcap = c.choice(t, path, "format", false, kFormats, "recording format")) {
       r.pcap = *pcap;
+      if (lin && !*pcap) {
+        // A candump log has no LIN; LINKTYPE_LIN in pcap has.
+        c.error(*t.get("format"), path + ".format",
+                fmt::format("\"{}\" is a LIN bus; a candump log holds CAN frames only, "
+                            "format = \"pcap\" records it (LINKTYPE_LIN)",
+                            r.bus));
+      }
+    } else if (lin) {
+      r.pcap = true;  // a LIN bus's only format
     }
     if (auto size = read_size(c, t, path, "max_size")) {
       r.max_size = *size;

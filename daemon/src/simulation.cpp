@@ -86,6 +86,14 @@ std::optional<HostedNodeSettings> Simulation::bus_timing(std::size_t bus) const 
 std::optional<std::string> Simulation::add_recorder(const RecorderConfig& r) {
   const std::size_t bus = *bus_index(r.bus);
   const BusConfig& bc = config_.buses[bus];
+  if (lin_buses_[bus] != nullptr) {
+    auto recorder = Recorder::start_lin(r, bus, *lin_buses_[bus]);
+    if (!recorder) {
+      return fmt::format("{}:{}: {}", config_.source, r.line, recorder.error());
+    }
+    recorders_.push_back(std::move(*recorder));
+    return std::nullopt;
+  }
   const auto timing = bus_timing(bus);
   if (!timing) {
     return fmt::format("{}:{}: recorder of {}: no controller runs at {} bit/s", config_.source,

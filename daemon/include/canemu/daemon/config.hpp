@@ -109,7 +109,7 @@ struct SecurityConfig {
 struct RecorderConfig {
   std::string bus;
   std::string path;         // relative paths are taken from the configuration file's folder
-  bool pcap = false;        // format = "pcap" (default: "candump", or "pcap" for a .pcap path)
+  bool pcap = false;  // format = "pcap" (default: "candump", "pcap" for a .pcap path or a LIN bus)
   uint64_t max_size = 0;    // bytes; rotate before a file grows past it (0: never)
   uint32_t max_files = 10;  // old files kept by rotation
   bool errors = true;       // error frames recorded too

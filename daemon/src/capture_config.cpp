@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/ipc/capture_messages.hpp"
 #include "capture_config_reader.hpp"
 
 namespace canemu::daemon::detail {
@@ -135,7 +136,7 @@ std::optional<std::string> interface_name_problem(std::string_view name) {
 void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> interfaces;
   c.for_each_table(root, "bridge", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"kind", "bus", "interface", "error_frames"});
+    c.only_keys(t, path, {"kind", "bus", "interface", "error_frames", "restart_ms"});
     BridgeConfig b;
     b.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto kind = c.string(t, path, "kind", true)) {
@@ -169,6 +170,9 @@ void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
       } else {
         b.error_frames = n->as_boolean()->get();
       }
+    }
+    if (auto ms = c.integer(t, path, "restart_ms", false, 0, ipc::kMaxBridgeRestartMs)) {
+      b.restart_ms = static_cast<uint32_t>(*ms);
     }
     cfg.bridges.push_back(b);
   });

@@ -141,6 +141,7 @@ tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeC
   o.bus = b.bus;
   o.interface = b.interface;
   o.error_frames = b.error_frames;
+  o.restart_ms = b.restart_ms;
   o.fd = bc.kind == BusKind::can_fd;
   bridges_.push_back(
       SocketCanBridge::start(std::move(o), *bus, nodes_.spare(*bus), *timing, std::move(port)));
@@ -427,7 +428,7 @@ ReloadReport Simulation::reload(const Config& fresh) {
     }
   }
   const auto bridge_key = [](const BridgeConfig& b) {
-    return std::tie(b.kind, b.bus, b.interface, b.error_frames);
+    return std::tie(b.kind, b.bus, b.interface, b.error_frames, b.restart_ms);
   };
   if (!std::equal(fresh.bridges.begin(), fresh.bridges.end(), config_.bridges.begin(),
                   config_.bridges.end(),

@@ -328,6 +328,30 @@ TEST(CliBridge, AddListAndRemoveSayWhatIsWrong) {
   Cli remove(d, {"bridge", "remove", "vcan0"});
   EXPECT_EQ(remove.wait(), 1);
   EXPECT_NE(Cli::read_all(remove.err).find("no bridge on interface \"vcan0\""), std::string::npos);
+  Cli restart(d, {"bridge", "restart", "vcan0"});
+  EXPECT_EQ(restart.wait(), 1);
+  EXPECT_EQ(Cli::read_all(restart.err),
+            "canemu: canemud: bad_argument: no bridge on interface \"vcan0\"\n");
+  for (const std::string ms : {"-5", "60001"}) {
+    Cli bad(d, {"bridge", "add", "can0", "vcan0", "--restart-ms", ms});
+    EXPECT_EQ(bad.wait(), 1);
+    EXPECT_EQ(Cli::read_all(bad.err), "canemu: --restart-ms " + ms +
+                                          " is outside 0..60000 (ms after bus-off; 0: stay "
+                                          "bus-off)\n");
+  }
+  Cli huge(d, {"bridge", "add", "can0", "vcan0", "--restart-ms", "99999999999999999999"});
+  EXPECT_NE(huge.wait(), 0);
+  EXPECT_NE(Cli::read_all(huge.err).find("--restart-ms"), std::string::npos);
+  // canemud checks it too, for clients other than canemu.
+  auto c = connect(d, "raw");
+  auto req = ipc::make_message<ipc::BridgeAddRequest>();
+  ipc::copy_name(req.bus, "can0");
+  ipc::copy_name(req.interface, "vcan0");
+  req.restart_ms = 70'000;
+  auto r = c.call<ipc::BridgeAddRequest, ipc::BridgeAddReply>(req);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("restart_ms 70000 is outside 0..60000"), std::string::npos)
+      << r.error().message;
 }
 
 }  // namespace

@@ -1,9 +1,10 @@
-// [[recorder]] tables (a bus recorded by canemud into a candump log or a pcap file) and
-// [[bridge]] tables (a bus joined to a Linux CAN interface).
+// [[recorder]] tables (a bus recorded by canemud into a candump log or a pcap file; a LIN bus
+// into pcap only) and [[bridge]] tables (a bus joined to a Linux CAN interface).
 #include <set>
 
 #include <fmt/format.h>
 
+#include "canemu/ipc/capture_messages.hpp"
 #include "capture_config_reader.hpp"
 
 namespace canemu::daemon::detail {
@@ -69,14 +70,14 @@ void read_recorders(Checker& c, const toml::table& root, Config& cfg) {
     c.only_keys(t, path, {"bus", "path", "format", "max_size", "max_files", "errors"});
     RecorderConfig r;
     r.line = static_cast<uint32_t>(t.source().begin.line);
+    bool lin = false;
     if (auto bus = c.string(t, path, "bus", true)) {
       r.bus = *bus;
       const BusConfig* b = cfg.bus(*bus);
       if (b == nullptr) {
         c.error(*t.get("bus"), path + ".bus", fmt::format("no bus is named \"{}\"", *bus));
-      } else if (b->kind == BusKind::lin) {
-        c.error(*t.get("bus"), path + ".bus",
-                fmt::format("\"{}\" is a LIN bus; recorders record CAN and CAN FD buses", *bus));
+      } else {
+        lin = b->kind == BusKind::lin;
       }
     }
     if (auto file = c.string(t, path, "path", true)) {
@@ -93,6 +94,15 @@ void read_recorders(Checker& c, const toml::table& root, Config& cfg) {
     }
     if (auto pcap = c.choice(t, path, "format", false, kFormats, "recording format")) {
       r.pcap = *pcap;
+      if (lin && !*pcap) {
+        // A candump log has no LIN; LINKTYPE_LIN in pcap has.
+        c.error(*t.get("format"), path + ".format",
+                fmt::format("\"{}\" is a LIN bus; a candump log holds CAN frames only, "
+                            "format = \"pcap\" records it (LINKTYPE_LIN)",
+                            r.bus));
+      }
+    } else if (lin) {
+      r.pcap = true;  // a LIN bus's only format
     }
     if (auto size = read_size(c, t, path, "max_size")) {
       r.max_size = *size;
@@ -126,7 +136,7 @@ std::optional<std::string> interface_name_problem(std::string_view name) {
 void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> interfaces;
   c.for_each_table(root, "bridge", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"kind", "bus", "interface", "error_frames"});
+    c.only_keys(t, path, {"kind", "bus", "interface", "error_frames", "restart_ms"});
     BridgeConfig b;
     b.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto kind = c.string(t, path, "kind", true)) {
@@ -160,6 +170,9 @@ void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
       } else {
         b.error_frames = n->as_boolean()->get();
       }
+    }
+    if (auto ms = c.integer(t, path, "restart_ms", false, 0, ipc::kMaxBridgeRestartMs)) {
+      b.restart_ms = static_cast<uint32_t>(*ms);
     }
     cfg.bridges.push_back(b);
   });

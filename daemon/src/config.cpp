@@ -519,8 +519,10 @@ std::string summary(const Config& cfg) {
     s += fmt::format("  recorder of {} into {} ({})\n", r.bus, r.path, r.pcap ? "pcap" : "candump");
   }
   for (const BridgeConfig& b : cfg.bridges) {
-    s += fmt::format("  bridge {} of {} to {}{}\n", b.kind, b.bus, b.interface,
-                     b.error_frames ? " (error frames too)" : "");
+    s += fmt::format(
+        "  bridge {} of {} to {}{}{}\n", b.kind, b.bus, b.interface,
+        b.error_frames ? " (error frames too)" : "",
+        b.restart_ms != 0 ? fmt::format(", restart {} ms after bus-off", b.restart_ms) : "");
   }
   for (const LinNodeConfig& n : cfg.lin_nodes) {
     s += fmt::format("  lin node {} on {} ({}{})\n", n.name, n.bus,

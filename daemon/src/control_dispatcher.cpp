@@ -156,6 +156,12 @@ void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& s
   b.bus = ipc::name_of(m.bus);
   b.interface = ipc::name_of(m.interface);
   b.error_frames = m.error_frames != 0;
+  b.restart_ms = m.restart_ms;
+  if (m.restart_ms > ipc::kMaxBridgeRestartMs) {
+    error(send, request_id, ipc::ErrorCode::bad_argument,
+          fmt::format("restart_ms {} is outside 0..{}", m.restart_ms, ipc::kMaxBridgeRestartMs));
+    return;
+  }
   if (auto problem = detail::interface_name_problem(b.interface)) {
     error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
     return;
@@ -353,6 +359,27 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
         return;
       }
       send_reply(send, ipc::make_message<ipc::BridgeRemoveReply>(request_id));
+      return;
+    }
+    case ipc::MsgType::bridge_restart_request: {
+      const std::string interface =
+          ipc::name_of(read_as<ipc::BridgeRestartRequest>(data).interface);
+      SocketCanBridge* bridge = nullptr;
+      for (const auto& b : sim_.bridges()) {
+        if (b->options().interface == interface) {
+          bridge = b.get();
+        }
+      }
+      if (bridge == nullptr) {
+        error(send, request_id, ipc::ErrorCode::bad_argument,
+              fmt::format("no bridge on interface \"{}\"", interface));
+        return;
+      }
+      if (auto problem = bridge->restart()) {
+        error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+        return;
+      }
+      send_reply(send, ipc::make_message<ipc::BridgeRestartReply>(request_id));
       return;
     }
     case ipc::MsgType::bridge_list_request: {

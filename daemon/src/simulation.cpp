@@ -86,6 +86,14 @@ std::optional<HostedNodeSettings> Simulation::bus_timing(std::size_t bus) const 
 std::optional<std::string> Simulation::add_recorder(const RecorderConfig& r) {
   const std::size_t bus = *bus_index(r.bus);
   const BusConfig& bc = config_.buses[bus];
+  if (lin_buses_[bus] != nullptr) {
+    auto recorder = Recorder::start_lin(r, bus, *lin_buses_[bus]);
+    if (!recorder) {
+      return fmt::format("{}:{}: {}", config_.source, r.line, recorder.error());
+    }
+    recorders_.push_back(std::move(*recorder));
+    return std::nullopt;
+  }
   const auto timing = bus_timing(bus);
   if (!timing) {
     return fmt::format("{}:{}: recorder of {}: no controller runs at {} bit/s", config_.source,
@@ -133,6 +141,7 @@ tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeC
   o.bus = b.bus;
   o.interface = b.interface;
   o.error_frames = b.error_frames;
+  o.restart_ms = b.restart_ms;
   o.fd = bc.kind == BusKind::can_fd;
   bridges_.push_back(
       SocketCanBridge::start(std::move(o), *bus, nodes_.spare(*bus), *timing, std::move(port)));
@@ -419,7 +428,7 @@ ReloadReport Simulation::reload(const Config& fresh) {
     }
   }
   const auto bridge_key = [](const BridgeConfig& b) {
-    return std::tie(b.kind, b.bus, b.interface, b.error_frames);
+    return std::tie(b.kind, b.bus, b.interface, b.error_frames, b.restart_ms);
   };
   if (!std::equal(fresh.bridges.begin(), fresh.bridges.end(), config_.bridges.begin(),
                   config_.bridges.end(),

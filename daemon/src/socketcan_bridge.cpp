@@ -30,7 +30,38 @@ std::unique_ptr<SocketCanBridge> SocketCanBridge::start(BridgeOptions options, s
 }
 
 SocketCanBridge::~SocketCanBridge() {
+  if (restart_event_) {
+    node_.scheduler().cancel(*restart_event_);
+  }
   node_.stop();
+}
+
+std::optional<std::string> SocketCanBridge::restart() {
+  const FaultConfinement& fc = node_.controller().confinement();
+  if (!fc.bus_off()) {
+    return "bridge on " + options_.interface + " is " + std::string(to_string(fc.state())) +
+           ", not bus-off: nothing to restart";
+  }
+  if (fc.recovering()) {
+    return "bridge on " + options_.interface +
+           " restarts already (waits for 128 x 11 recessive bits, " +
+           std::to_string(fc.recovery_sequences_left()) + " left)";
+  }
+  if (restart_event_) {
+    node_.scheduler().cancel(*restart_event_);
+    restart_event_.reset();
+  }
+  node_.restart();
+  ++stats_.restarts;
+  if (options_.error_frames) {
+    write_frame(ipc::socketcan::restarted_frame(), stats_.error_frames);
+  }
+  return std::nullopt;
+}
+
+void SocketCanBridge::restart_after_bus_off() {
+  restart_event_.reset();
+  restart();  // nothing to do if it was restarted by hand in the meantime
 }
 
 void SocketCanBridge::kick() {
@@ -91,11 +122,13 @@ std::optional<TxFrame> SocketCanBridge::next_tx() {
 }
 
 void SocketCanBridge::write_out(const ipc::ChannelMessage& m, uint64_t& counter) {
-  const auto f = ipc::socketcan::from_message(m);
-  if (!f) {
-    return;
+  if (const auto f = ipc::socketcan::from_message(m)) {
+    write_frame(*f, counter);
   }
-  const std::vector<uint8_t> bytes = ipc::socketcan::to_struct(*f);
+}
+
+void SocketCanBridge::write_frame(const ipc::socketcan::Frame& f, uint64_t& counter) {
+  const std::vector<uint8_t> bytes = ipc::socketcan::to_struct(f);
   const ssize_t n = ::send(port_.get(), bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
   if (n == static_cast<ssize_t>(bytes.size())) {
     ++counter;
@@ -128,6 +161,11 @@ void SocketCanBridge::bus_error(const BusErrorEvent& event) {
 void SocketCanBridge::state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
   if (options_.error_frames) {
     write_out(to_state_message(at, state, tec, rec), stats_.error_frames);
+  }
+  if (state == ErrorState::bus_off && options_.restart_ms != 0 && !restart_event_) {
+    restart_event_ =
+        node_.scheduler().schedule_at(at + SimDuration(int64_t{options_.restart_ms} * 1'000'000),
+                                      [this](SimTime) { restart_after_bus_off(); });
   }
 }
 

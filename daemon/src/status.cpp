@@ -238,6 +238,8 @@ void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
     e.tec = fc.tec();
     e.rec = fc.rec();
     e.queued = static_cast<uint32_t>(b.queued());
+    e.restart_ms = b.options().restart_ms;
+    e.restarts = st.restarts;
     e.to_interface = st.to_interface;
     e.from_interface = st.from_interface;
     e.error_frames_written = st.error_frames;

@@ -19,6 +19,11 @@ std::string system_error(const std::string& what, const std::string& path, int e
 
 }  // namespace
 
+std::string candump_has_no_lin(std::string_view bus) {
+  return "a candump log holds CAN frames only; LIN bus " + std::string(bus) +
+         " is recorded as pcap (LINKTYPE_LIN)";
+}
+
 std::string_view to_string(CaptureFormat f) {
   return f == CaptureFormat::pcap ? "pcap" : "candump";
 }
@@ -36,6 +41,9 @@ std::optional<CaptureFormat> parse_capture_format(std::string_view text) {
 IpcResult<CaptureWriter> CaptureWriter::open(CaptureOptions options) {
   if (options.path.empty()) {
     return tl::unexpected(IpcError{0, "a recording needs a file name"});
+  }
+  if (options.lin && options.format == CaptureFormat::candump) {
+    return tl::unexpected(IpcError{0, candump_has_no_lin(options.bus)});
   }
   CaptureWriter w(std::move(options));
   auto started = w.start_file();
@@ -64,13 +72,20 @@ IpcResult<void> CaptureWriter::start_file() {
   file_bytes_ = 0;
   file_records_ = 0;
   if (options_.format == CaptureFormat::pcap) {
-    const auto header = socketcan::pcap_file_header();
+    const auto header = file_header();
     pending_.insert(pending_.begin(), header.begin(), header.end());
   }
   return {};
 }
 
+std::vector<uint8_t> CaptureWriter::file_header() const {
+  return options_.lin ? lin_pcap::pcap_file_header() : socketcan::pcap_file_header();
+}
+
 void CaptureWriter::record(int64_t ns, const socketcan::Frame& f) {
+  if (options_.lin) {
+    return;
+  }
   std::vector<uint8_t> one;
   if (options_.format == CaptureFormat::pcap) {
     socketcan::append_pcap_record(one, ns, f);
@@ -78,6 +93,19 @@ void CaptureWriter::record(int64_t ns, const socketcan::Frame& f) {
     const std::string line = socketcan::candump_line(ns, options_.bus, f) + "\n";
     one.assign(line.begin(), line.end());
   }
+  append(one);
+}
+
+void CaptureWriter::record(int64_t ns, const lin_pcap::Message& m) {
+  if (!options_.lin) {
+    return;
+  }
+  std::vector<uint8_t> one;
+  lin_pcap::append_pcap_record(one, ns, m);
+  append(one);
+}
+
+void CaptureWriter::append(const std::vector<uint8_t>& one) {
   if (options_.max_bytes != 0 && options_.path != "-" && file_records_ != 0 &&
       file_bytes_ + pending_.size() + one.size() > options_.max_bytes) {
     flush();
@@ -127,7 +155,7 @@ bool CaptureWriter::write_pending() {
       }
       pending_.clear();
       if (file_bytes_ == 0 && options_.format == CaptureFormat::pcap) {
-        pending_ = socketcan::pcap_file_header();
+        pending_ = file_header();
       }
       return false;
     }

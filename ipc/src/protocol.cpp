@@ -48,17 +48,17 @@ std::size_t size_among(MsgType type) {
 }
 
 std::size_t size_of(MsgType type) {
-  return size_among<Hello, HelloReply, ErrorReply, StatusRequest, StatusReply, TimeStepRequest,
-                    TimeStepReply, OpenChannelRequest, OpenChannelReply, CloseChannelRequest,
-                    CloseChannelReply, ChannelStatusRequest, ChannelStatusReply, DeviceListRequest,
-                    DeviceListReply, ClientListRequest, ClientListReply, SubscribeRequest,
-                    SubscribeReply, Notification, FaultLoadRequest, FaultLoadReply,
-                    FaultListRequest, FaultListReply, FaultClearRequest, FaultClearReply,
-                    VciRequest, VciReply, XcanRequest, XcanReply, XcanCallbackMsg,
-                    RecorderListRequest, RecorderListReply, BridgeAddRequest, BridgeAddReply,
-                    BridgeRemoveRequest, BridgeRemoveReply, BridgeListRequest, BridgeListReply,
-                    SlcanRequest, SlcanReply, SlcanEventMsg, TimelineRequest, TimelineReply,
-                    LinNodeRequest, LinNodeReply, LoadHistoryReply>(type);
+  return size_among<
+      Hello, HelloReply, ErrorReply, StatusRequest, StatusReply, TimeStepRequest, TimeStepReply,
+      OpenChannelRequest, OpenChannelReply, CloseChannelRequest, CloseChannelReply,
+      ChannelStatusRequest, ChannelStatusReply, DeviceListRequest, DeviceListReply,
+      ClientListRequest, ClientListReply, SubscribeRequest, SubscribeReply, Notification,
+      FaultLoadRequest, FaultLoadReply, FaultListRequest, FaultListReply, FaultClearRequest,
+      FaultClearReply, VciRequest, VciReply, XcanRequest, XcanReply, XcanCallbackMsg,
+      RecorderListRequest, RecorderListReply, BridgeAddRequest, BridgeAddReply, BridgeRemoveRequest,
+      BridgeRemoveReply, BridgeRestartRequest, BridgeRestartReply, BridgeListRequest,
+      BridgeListReply, SlcanRequest, SlcanReply, SlcanEventMsg, TimelineRequest, TimelineReply,
+      LinNodeRequest, LinNodeReply, LoadHistoryReply>(type);
 }
 
 }  // namespace

@@ -45,6 +45,13 @@ constexpr char kHex[] = "0123456789ABCDEF";
 
 }  // namespace
 
+Frame restarted_frame() {
+  Frame f;
+  f.can_id = kErrFlag | kErrRestarted;
+  f.len = 8;
+  return f;
+}
+
 std::optional<Frame> from_message(const ChannelMessage& m) {
   switch (static_cast<ChannelMessageKind>(m.kind)) {
     case ChannelMessageKind::frame:

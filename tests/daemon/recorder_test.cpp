@@ -2,9 +2,12 @@
 // simulated instants, and never lose frames silently.
 #include "canemu/daemon/recorder.hpp"
 
+#include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <map>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "../support/temp_dir.hpp"
@@ -149,6 +152,198 @@ TEST(Recorder, AFullDiskIsReportedOnceWithWhatWasLost) {
   fill_recorder_list(*sim, list);
   EXPECT_EQ(list.recorders[0].lost, 3u);
   EXPECT_EQ(ipc::name_of(list.recorders[0].error), "write /dev/full: No space left on device");
+}
+
+// ---- LIN: lin0 of the embedded default (19200 bit/s, bus 2) into pcap with LINKTYPE_LIN
+
+std::string hex(const std::string& bytes) {
+  std::string s;
+  for (unsigned char b : bytes) {
+    char two[3];
+    std::snprintf(two, sizeof two, "%02X", b);
+    s += two;
+  }
+  return s;
+}
+
+// LIN 2.x's protected identifier and checksum, computed here independently of the model.
+int bit(int value, int n) {
+  return (value >> n) & 1;
+}
+int pid(int id) {
+  const int p0 = bit(id, 0) ^ bit(id, 1) ^ bit(id, 2) ^ bit(id, 4);
+  const int p1 = 1 - (bit(id, 1) ^ bit(id, 3) ^ bit(id, 4) ^ bit(id, 5));
+  return id | (p0 << 6) | (p1 << 7);
+}
+int inverted_sum(std::initializer_list<int> bytes) {
+  int sum = 0;
+  for (int b : bytes) {
+    sum += b;
+    if (sum > 0xFF) {
+      sum -= 0xFF;
+    }
+  }
+  return 0xFF - sum;
+}
+
+// Bit k of a frame starting at `from_ns` at 19200 bit/s, rounded down to the ns.
+int64_t at_bits(int64_t from_ns, int64_t bits) {
+  return from_ns + bits * 1'000'000'000 / 19200;
+}
+
+// A pcap record header (little-endian seconds, nanoseconds, 2 x length) as hex.
+std::string record_header(int64_t ns, int size) {
+  const auto le = [](uint32_t v) {
+    return fmt::format("{:02X}{:02X}{:02X}{:02X}", v & 0xFF, (v >> 8) & 0xFF, (v >> 16) & 0xFF,
+                       v >> 24);
+  };
+  return le(static_cast<uint32_t>(ns / 1'000'000'000)) +
+         le(static_cast<uint32_t>(ns % 1'000'000'000)) + le(static_cast<uint32_t>(size)) +
+         le(static_cast<uint32_t>(size));
+}
+
+struct LinPeer : model::lin::LinNode {
+  model::lin::LinBus& bus;
+  std::map<uint8_t, model::lin::Response> table;
+  model::lin::LinNodeId id;
+  explicit LinPeer(model::lin::LinBus& b) : bus(b), id(b.attach(*this)) {}
+  ~LinPeer() override { bus.detach(id); }
+  std::optional<model::lin::Response> respond(uint8_t frame_id) override {
+    const auto it = table.find(frame_id);
+    return it == table.end() ? std::nullopt : std::optional(it->second);
+  }
+  void on_lin_event(const model::lin::Event&) override {}
+  uint32_t lin_bitrate() const override { return 19200; }
+};
+
+model::lin::Response lin_response(std::vector<uint8_t> data, model::lin::Checksum kind) {
+  model::lin::Response r;
+  std::copy(data.begin(), data.end(), r.data.begin());
+  r.size = static_cast<uint8_t>(data.size());
+  r.checksum = kind;
+  return r;
+}
+
+// A frame, a header nobody answers, two responders whose checksums collide, the go-to-sleep
+// command, a wake-up pulse and 4 s of silence.
+void lin_traffic(Simulation& sim) {
+  using model::lin::Checksum;
+  model::lin::LinBus& bus = *sim.lin_bus(2);
+  LinPeer commander(bus);
+  LinPeer a(bus);
+  LinPeer b(bus);
+  a.table[0x10] = lin_response({0x01, 0x00}, Checksum::enhanced);
+  a.table[0x11] = lin_response({0x01}, Checksum::enhanced);
+  b.table[0x11] = lin_response({0x01}, Checksum::classic);
+  auto& s = sim.scheduler();
+  const auto run_to = [&](int64_t ns) { s.run_until(model::SimTime::from_ns(ns)); };
+  bus.send_header(commander.id, 0x10);
+  run_to(10'000'000);
+  bus.send_header(commander.id, 0x20);
+  run_to(20'000'000);
+  bus.send_header(commander.id, 0x11);
+  run_to(30'000'000);
+  bus.send_sleep(commander.id);
+  run_to(40'000'000);
+  bus.send_wakeup(commander.id, model::microseconds(250));
+  run_to(5'000'000'000);
+}
+
+TEST(Recorder, RecordsALinBusAsLinktypeLinAtTheExactInstants) {
+  TempDir dir;
+  auto sim =
+      world("[[recorder]]\nbus = \"lin0\"\npath = \"" + (dir.path / "lin0.pcap").string() + "\"\n");
+  lin_traffic(*sim);
+  EXPECT_TRUE(sim->flush_recorders().empty());
+  const std::string file = hex(read_file(dir.path / "lin0.pcap"));
+  const std::string header =
+      "4D3CB2A1020004000000000000000000"
+      "10000000D4000000";
+  // The frame: 34 header bits and 3 characters; length 2, enhanced.
+  const std::string frame10 =
+      record_header(at_bits(0, 64), 12) + fmt::format("0100000022{:02X}{:02X}0001000000", pid(0x10),
+                                                      inverted_sum({pid(0x10), 0x01, 0x00}));
+  // Nobody answers 20h: the error 160 bits after the break (34 + 14 x 9).
+  const std::string none20 = record_header(at_bits(10'000'000, 160), 12) +
+                             fmt::format("0100000000{:02X}000100000000", pid(0x20));
+  // 11h answered with the same data and both checksum kinds: the wire carries the AND of the
+  // two checksum characters, which matches neither.
+  const int wired = inverted_sum({pid(0x11), 0x01}) & inverted_sum({0x01});
+  const std::string bad11 = record_header(at_bits(20'000'000, 54), 12) +
+                            fmt::format("0100000010{:02X}{:02X}0801000000", pid(0x11), wired);
+  // The go-to-sleep command (8 bytes, classic) and its event at the same instant.
+  const int64_t sleep_at = at_bits(30'000'000, 124);
+  const std::string sleep =
+      record_header(sleep_at, 16) +
+      fmt::format("0100000081{:02X}{:02X}0000FFFFFFFFFFFFFF", pid(0x3C),
+                  inverted_sum({0x00, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF})) +
+      record_header(sleep_at, 12) + "010000004C000000B0B00001";
+  const std::string wakeup = record_header(40'250'000, 12) + "010000004C000000B0B00004";
+  const std::string idle = record_header(4'040'250'000, 12) + "010000004C000000B0B00002";
+  EXPECT_EQ(file, header + frame10 + none20 + bad11 + sleep + wakeup + idle);
+  ipc::RecorderListReply list{};
+  fill_recorder_list(*sim, list);
+  ASSERT_EQ(list.count, 1);
+  EXPECT_EQ(ipc::name_of(list.recorders[0].bus), "lin0");
+  EXPECT_EQ(list.recorders[0].format, static_cast<uint8_t>(ipc::CaptureFormat::pcap));
+  EXPECT_EQ(list.recorders[0].frames, 7u);
+}
+
+TEST(Recorder, ALinRecorderWithoutErrorsKeepsFramesAndEvents) {
+  TempDir dir;
+  // No format and no .pcap: a LIN bus's recording is pcap all the same.
+  auto sim = world("[[recorder]]\nbus = \"lin0\"\npath = \"" + (dir.path / "lin0.rec").string() +
+                   "\"\nerrors = false\n");
+  lin_traffic(*sim);
+  sim->flush_recorders();
+  const std::string bytes = read_file(dir.path / "lin0.rec");
+  // The frame, the go-to-sleep command and the three events.
+  EXPECT_EQ(bytes.size(), 24u + 28 + 32 + 3 * 28);
+  EXPECT_EQ(static_cast<uint8_t>(bytes[20]), 212);
+}
+
+TEST(Recorder, TheLinRecordOfEachKindOfError) {
+  namespace lp = ipc::lin_pcap;
+  model::lin::Event e;
+  e.kind = model::lin::Event::Kind::error;
+  const auto errors_of = [&](model::lin::ErrorKind kind, uint8_t id) {
+    e.error = kind;
+    e.id = id;
+    return lin_pcap_message(e);
+  };
+  using model::lin::ErrorKind;
+  EXPECT_EQ(errors_of(ErrorKind::no_response, 0x20).errors, lp::kErrorNoSlaveResponse);
+  EXPECT_EQ(errors_of(ErrorKind::checksum, 0x20).errors, lp::kErrorChecksum);
+  EXPECT_EQ(errors_of(ErrorKind::parity, 0xFF).errors, lp::kErrorParity);
+  EXPECT_EQ(errors_of(ErrorKind::parity, 0xFF).pid, 0);  // not received
+  EXPECT_EQ(errors_of(ErrorKind::sync, 0xFF).errors, lp::kErrorFraming);
+  EXPECT_EQ(errors_of(ErrorKind::other, 0xFF).errors, lp::kErrorFraming);
+  EXPECT_EQ(errors_of(ErrorKind::bit, 0x10).errors, lp::kErrorFraming);
+  EXPECT_EQ(errors_of(ErrorKind::bit, 0x10).pid, pid(0x10));
+  EXPECT_EQ(errors_of(ErrorKind::no_response, 0x3F).errors,
+            lp::kErrorNoSlaveResponse | lp::kErrorInvalidId);
+  EXPECT_EQ(errors_of(ErrorKind::inactive, 0xFF), lp::event(lp::kEventInactivity));
+  for (const auto kind : {ErrorKind::no_response, ErrorKind::parity, ErrorKind::sync}) {
+    EXPECT_EQ(errors_of(kind, 0x20).checksum_type, lp::ChecksumType::unknown);
+    EXPECT_EQ(errors_of(kind, 0x20).length, 0);
+  }
+}
+
+TEST(RecorderConfig, ALinBusIsRecordedAsPcapOnly) {
+  const std::string base = std::string(embedded_default_config());
+  auto cfg = parse_config(base + "[[recorder]]\nbus = \"lin0\"\npath = \"lin0.log\"\n",
+                          "/etc/canemu/canemu.toml");
+  ASSERT_TRUE(cfg) << cfg.error().front();
+  EXPECT_TRUE(cfg->recorders.at(0).pcap);
+  auto bad = parse_config(
+      "[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n"
+      "[[recorder]]\nbus = \"lin0\"\npath = \"lin0.log\"\nformat = \"candump\"\n",
+      "t.toml");
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.error(), (std::vector<std::string>{
+                             "t.toml:8:10: recorder[0].format: \"lin0\" is a LIN bus; a candump "
+                             "log holds CAN frames only, format = \"pcap\" records it "
+                             "(LINKTYPE_LIN)"}));
 }
 
 TEST(RecorderConfig, ReadsEveryKeyAndNamesEveryMistake) {

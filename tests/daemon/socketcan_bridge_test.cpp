@@ -8,13 +8,16 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <deque>
 
 #include <gtest/gtest.h>
 
 #include "canemu/daemon/channel.hpp"
+#include "canemu/daemon/scenario.hpp"
 #include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/status.hpp"
 #include "canemu/ipc/socketcan.hpp"
 
 namespace canemu::daemon {
@@ -243,6 +246,171 @@ TEST(SocketCanBridge, ErrorFramesOnlyWhenAskedFor) {
   EXPECT_EQ((*b)->stats().error_frames, errors.size());
 }
 
+// ---- restarts after bus-off
+
+// The node's TEC set above 255 at `at_ns`, as the `bus_off` fault effect does it.
+void bus_off_at(Simulation& sim, model::HostedNode& node, int64_t at_ns) {
+  sim.scheduler().schedule_at(model::SimTime::from_ns(at_ns), [&node](model::SimTime) {
+    model::FaultConfinement& fc = node.controller().confinement();
+    fc.set_counters(model::kBusOffLimit, fc.rec());
+    node.bus().counters_changed(node.node());
+  });
+}
+
+void run_to(Simulation& sim, int64_t ns) {
+  sim.scheduler().run_until(model::SimTime::from_ns(ns));
+}
+
+// 128 sequences of 11 recessive bits at 500 kbit/s (2 us a bit), on an idle bus.
+constexpr int64_t kRecoveryNs = 128 * 11 * 2'000;
+
+TEST(SocketCanBridge, RestartsRestartMsAfterBusOffThenWaitsForTheRecessiveBits) {
+  auto sim = world(kClassic);
+  Interface vcan;
+  auto b = sim->add_bridge({"socketcan", "can0", "vcan0", true, 5}, std::move(vcan.bridge));
+  ASSERT_TRUE(b) << b.error();
+  SocketCanBridge& bridge = **b;
+  Node ecu(*sim, 0);
+  const model::FaultConfinement& fc = bridge.node().controller().confinement();
+  bus_off_at(*sim, bridge.node(), 1'000'000);
+  run_to(*sim, 2'000'000);
+  ASSERT_TRUE(fc.bus_off());
+  vcan.write_text("123#1122");  // waits for the node
+  bridge.kick();
+  run_to(*sim, 1'000'000 + 5'000'000 - 1);
+  EXPECT_EQ(bridge.stats().restarts, 0u);
+  EXPECT_FALSE(fc.recovering());
+  run_to(*sim, 6'000'000);  // exactly restart_ms after the bus-off instant
+  EXPECT_EQ(bridge.stats().restarts, 1u);
+  EXPECT_TRUE(fc.recovering());
+  run_to(*sim, 6'000'000 + kRecoveryNs - 1);
+  EXPECT_TRUE(fc.bus_off());
+  run_to(*sim, 6'000'000 + kRecoveryNs);
+  EXPECT_FALSE(fc.bus_off());
+  EXPECT_EQ(fc.tec(), 0);
+  // Then the queued frame goes: 62 bits from the recovery's end.
+  run_to(*sim, 10'000'000);
+  EXPECT_EQ(ecu.received, (std::vector<std::string>{"123#1122"}));
+  EXPECT_EQ(ecu.at_ns, (std::vector<int64_t>{6'000'000 + kRecoveryNs + 124'000}));
+  // Bus-off, the kernel's restart frame, error-active again.
+  EXPECT_EQ(vcan.read_all(),
+            (std::vector<std::string>{"20000240#000000000000FF00", "20000100#0000000000000000",
+                                      "20000204#0040000000000000"}));
+  EXPECT_EQ(bridge.stats().error_frames, 3u);
+  EXPECT_EQ(bridge.stats().from_interface, 1u);
+}
+
+TEST(SocketCanBridge, TheCanFdControllerRestartsTheSameWay) {
+  auto sim = world(kFd);  // 500 kbit/s arbitration: the same recovery time
+  Interface vcan;
+  auto b = sim->add_bridge({"socketcan", "fd0", "vcan0", false, 2}, std::move(vcan.bridge));
+  ASSERT_TRUE(b);
+  const model::FaultConfinement& fc = (*b)->node().controller().confinement();
+  bus_off_at(*sim, (*b)->node(), 500'000);
+  run_to(*sim, 2'500'000 - 1);
+  EXPECT_EQ((*b)->stats().restarts, 0u);
+  run_to(*sim, 2'500'000);
+  EXPECT_EQ((*b)->stats().restarts, 1u);
+  run_to(*sim, 2'500'000 + kRecoveryNs - 1);
+  EXPECT_TRUE(fc.bus_off());
+  run_to(*sim, 2'500'000 + kRecoveryNs);
+  EXPECT_FALSE(fc.bus_off());
+}
+
+TEST(SocketCanBridge, WithoutRestartMsTheNodeStaysBusOffUntilRestartedByHand) {
+  auto sim = world(kClassic);
+  Interface vcan;
+  auto b = sim->add_bridge({"socketcan", "can0", "vcan0", false, 0}, std::move(vcan.bridge));
+  ASSERT_TRUE(b);
+  SocketCanBridge& bridge = **b;
+  const model::FaultConfinement& fc = bridge.node().controller().confinement();
+  EXPECT_EQ(bridge.restart(), "bridge on vcan0 is error-active, not bus-off: nothing to restart");
+  bus_off_at(*sim, bridge.node(), 1'000'000);
+  run_to(*sim, 1'000'000'000);  // a second: still bus-off
+  EXPECT_TRUE(fc.bus_off());
+  EXPECT_FALSE(fc.recovering());
+  EXPECT_EQ(bridge.restart(), std::nullopt);
+  EXPECT_EQ(bridge.stats().restarts, 1u);
+  EXPECT_EQ(bridge.restart(),
+            "bridge on vcan0 restarts already (waits for 128 x 11 recessive bits, 128 left)");
+  EXPECT_EQ(bridge.stats().restarts, 1u);
+  run_to(*sim, 1'000'000'000 + kRecoveryNs);
+  EXPECT_FALSE(fc.bus_off());
+  EXPECT_TRUE(vcan.read_all().empty());  // no error frames asked for
+  ipc::BridgeListReply list{};
+  fill_bridge_list(*sim, list);
+  ASSERT_EQ(list.count, 1);
+  EXPECT_EQ(list.bridges[0].restarts, 1u);
+  EXPECT_EQ(list.bridges[0].restart_ms, 0u);
+}
+
+TEST(SocketCanBridge, ARestartByHandBeforeTheTimerCountsOnce) {
+  auto sim = world(kClassic);
+  Interface vcan;
+  auto b = sim->add_bridge({"socketcan", "can0", "vcan0", false, 100}, std::move(vcan.bridge));
+  ASSERT_TRUE(b);
+  SocketCanBridge& bridge = **b;
+  bus_off_at(*sim, bridge.node(), 1'000'000);
+  run_to(*sim, 2'000'000);
+  EXPECT_EQ(bridge.restart(), std::nullopt);
+  run_to(*sim, 200'000'000);  // past the timer's 101 ms
+  EXPECT_EQ(bridge.stats().restarts, 1u);
+  EXPECT_FALSE(bridge.node().controller().confinement().bus_off());
+  // Removing a bridge whose timer is due cancels it.
+  bus_off_at(*sim, bridge.node(), 300'000'000);
+  run_to(*sim, 301'000'000);
+  EXPECT_TRUE(sim->remove_bridge("vcan0"));
+  run_to(*sim, 500'000'000);
+}
+
+// A real way there: a fault rule gives every transmission of 123h a bit error, 32 of them take
+// the bridge's node from TEC 0 to 256 (8 each), and restart_ms later the node restarts,
+// recovers and sends the frame its transmit buffer kept (the SJA1000 keeps a request through
+// bus-off) and what waited in the bridge's queue.
+TEST(SocketCanBridge, BitErrorsDriveTheNodeBusOffAndItRestartsAfterRestartMs) {
+  auto sim = world(kClassic);
+  auto scenario = parse_scenario(
+      "[[fault]]\nat = \"0s\"\nbus = \"can0\"\nmatch = { id = 0x123 }\neffect = "
+      "\"bit_error\"\ncount = 32\n",
+      "s.toml");
+  ASSERT_TRUE(scenario) << scenario.error().front();
+  ASSERT_TRUE(sim->scenarios().apply(*scenario, model::SimTime{}));
+  Interface vcan;
+  auto b = sim->add_bridge({"socketcan", "can0", "vcan0", true, 20}, std::move(vcan.bridge));
+  ASSERT_TRUE(b);
+  SocketCanBridge& bridge = **b;
+  Node ecu(*sim, 0);
+  vcan.write_text("123#01");
+  vcan.write_text("124#02");
+  bridge.kick();
+  const model::FaultConfinement& fc = bridge.node().controller().confinement();
+  // In steps of 1 us: the step that sees bus-off, and the one that sees the restart, which
+  // must be exactly 20 ms (20000 steps) later.
+  int64_t step = 0;
+  while (!fc.bus_off() && step < 100'000) {
+    run_to(*sim, ++step * 1'000);
+  }
+  ASSERT_TRUE(fc.bus_off());
+  const int64_t bus_off_step = step;
+  EXPECT_TRUE(ecu.received.empty());
+  while (bridge.stats().restarts == 0 && step < bus_off_step + 100'000) {
+    run_to(*sim, ++step * 1'000);
+  }
+  EXPECT_EQ(step, bus_off_step + 20'000);
+  run_to(*sim, step * 1'000 + kRecoveryNs + 1'000'000);
+  EXPECT_FALSE(fc.bus_off());
+  EXPECT_EQ(ecu.received, (std::vector<std::string>{"123#01", "124#02"}));
+  EXPECT_EQ(bridge.stats().from_interface, 2u);
+  EXPECT_EQ(bridge.stats().tx_failed, 0u);
+  const std::vector<std::string> errors = vcan.read_all();
+  ASSERT_GE(errors.size(), 3u);
+  EXPECT_EQ(std::vector<std::string>(errors.end() - 3, errors.end()),
+            (std::vector<std::string>{"20000240#000000000000FF00", "20000100#0000000000000000",
+                                      "20000204#0040000000000000"}));
+  EXPECT_EQ(std::count(errors.begin(), errors.end(), "20000100#0000000000000000"), 1);
+  EXPECT_EQ(bridge.stats().restarts, 1u);
+}
+
 TEST(SocketCanBridge, TwoBridgesOnOneInterfaceAreRefused) {
   auto sim = world(kClassic);
   Interface a;
@@ -276,6 +444,26 @@ TEST(BridgeConfig, ReadsTheTableAndNamesEveryMistake) {
   ASSERT_EQ(cfg->bridges.size(), 1u);
   EXPECT_EQ(cfg->bridges[0].interface, "vcan0");
   EXPECT_TRUE(cfg->bridges[0].error_frames);
+  EXPECT_EQ(cfg->bridges[0].restart_ms, 0u);
+  auto restarting = parse_config(std::string(kClassic) +
+                                     "[[bridge]]\nkind = \"socketcan\"\nbus = \"can0\"\n"
+                                     "interface = \"vcan0\"\nrestart_ms = 100\n",
+                                 "t.toml");
+  ASSERT_TRUE(restarting) << restarting.error().front();
+  EXPECT_EQ(restarting->bridges[0].restart_ms, 100u);
+  auto wrong = parse_config(std::string(kClassic) +
+                                "[[bridge]]\nkind = \"socketcan\"\nbus = \"can0\"\n"
+                                "interface = \"vcan0\"\nrestart_ms = -1\n"
+                                "[[bridge]]\nkind = \"socketcan\"\nbus = \"can0\"\n"
+                                "interface = \"vcan1\"\nrestart_ms = 60001\n"
+                                "[[bridge]]\nkind = \"socketcan\"\nbus = \"can0\"\n"
+                                "interface = \"vcan2\"\nrestart_ms = \"100ms\"\n",
+                            "t.toml");
+  ASSERT_FALSE(wrong);
+  EXPECT_EQ(wrong.error(), (std::vector<std::string>{
+                               "t.toml:7:14: bridge[0].restart_ms: -1 is outside 0..60000",
+                               "t.toml:12:14: bridge[1].restart_ms: 60001 is outside 0..60000",
+                               "t.toml:17:14: bridge[2].restart_ms: must be an integer"}));
   auto bad = parse_config(std::string(kClassic) +
                               "[[bridge]]\nkind = \"lcm\"\nbus = \"can9\"\ninterface = \"vcan0\"\n"
                               "[[bridge]]\nkind = \"socketcan\"\nbus = \"can0\"\n"
@@ -287,7 +475,7 @@ TEST(BridgeConfig, ReadsTheTableAndNamesEveryMistake) {
                 "t.toml:4:8: bridge[0].kind: \"lcm\" is not a bridge kind (socketcan)",
                 "t.toml:5:7: bridge[0].bus: no bus is named \"can9\"",
                 "t.toml:11:1: bridge[1].loop: unknown key (known here: kind, bus, interface, "
-                "error_frames)",
+                "error_frames, restart_ms)",
                 "t.toml:10:13: bridge[1].interface: another bridge uses \"vcan0\" already (its "
                 "frames would loop)"}));
 }

@@ -130,6 +130,76 @@ TEST(CaptureWriter, EveryRotatedPcapFileHasItsHeader) {
   EXPECT_EQ(parse_pcap(read_file(path)), (std::vector<PcapRecord>{{0, 2, 0x202, 16, 1}}));
 }
 
+lin_pcap::Message lin_frame(uint8_t pid, uint8_t length) {
+  lin_pcap::Message m;
+  m.pid = pid;
+  m.length = length;
+  m.checksum_type = lin_pcap::ChecksumType::classic;
+  return m;
+}
+
+TEST(CaptureWriter, WritesLinRecordsUnderLinktypeLin) {
+  TempDir dir;
+  const auto path = dir.path / "lin0.pcap";
+  {
+    auto w = CaptureWriter::open({path.string(), CaptureFormat::pcap, "lin0", 0, 10, true});
+    ASSERT_TRUE(w) << w.error().message;
+    w->record(5, lin_frame(0x50, 2));
+    w->record(6, frame(0x123, 2));  // not a LIN message: ignored
+    w->record(1'000'000'000, lin_pcap::event(lin_pcap::kEventWakeUp));
+    EXPECT_TRUE(w->flush());
+    EXPECT_EQ(w->frames(), 2u);
+  }
+  const std::string s = read_file(path);
+  ASSERT_EQ(s.size(), 24u + 2 * (16 + 12));
+  EXPECT_EQ(le32(s, 16), 16u);   // snap length
+  EXPECT_EQ(le32(s, 20), 212u);  // LINKTYPE_LIN
+  EXPECT_EQ(le32(s, 24 + 4), 5u);
+  EXPECT_EQ(le32(s, 24 + 8), 12u);
+  EXPECT_EQ(static_cast<uint8_t>(s[24 + 16 + 5]), 0x50);
+  EXPECT_EQ(le32(s, 24 + 28), 1u);
+  EXPECT_EQ(static_cast<uint8_t>(s[24 + 28 + 16 + 4]), 0x4C);  // an event
+
+  // A CAN recording ignores LIN messages.
+  const auto can = dir.path / "can0.pcap";
+  {
+    auto w = CaptureWriter::open({can.string(), CaptureFormat::pcap, "can0"});
+    ASSERT_TRUE(w);
+    w->record(5, lin_frame(0x50, 2));
+  }
+  EXPECT_EQ(read_file(can).size(), 24u);
+}
+
+TEST(CaptureWriter, RotatedLinFilesHaveTheLinHeader) {
+  TempDir dir;
+  const auto path = dir.path / "lin0.pcap";
+  // Records of 28 and 32 bytes: two fit into 24 + 60.
+  auto w = CaptureWriter::open({path.string(), CaptureFormat::pcap, "lin0", 24 + 60, 3, true});
+  ASSERT_TRUE(w);
+  w->record(1, lin_frame(0x50, 2));
+  w->record(2, lin_frame(0x50, 8));
+  w->record(3, lin_frame(0x50, 1));
+  EXPECT_TRUE(w->flush());
+  EXPECT_EQ(w->rotations(), 1u);
+  const std::string old = read_file(dir.path / "lin0.pcap.1");
+  const std::string now = read_file(path);
+  ASSERT_EQ(old.size(), 24u + 28 + 32);
+  ASSERT_EQ(now.size(), 24u + 28);
+  EXPECT_EQ(le32(old, 20), 212u);
+  EXPECT_EQ(le32(now, 20), 212u);
+  EXPECT_EQ(le32(now, 24 + 4), 3u);
+}
+
+TEST(CaptureWriter, ALinBusHasNoCandumpLog) {
+  TempDir dir;
+  auto w = CaptureWriter::open(
+      {(dir.path / "lin0.log").string(), CaptureFormat::candump, "lin0", 0, 10, true});
+  ASSERT_FALSE(w);
+  EXPECT_EQ(w.error().message,
+            "a candump log holds CAN frames only; LIN bus lin0 is recorded as pcap (LINKTYPE_LIN)");
+  EXPECT_FALSE(fs::exists(dir.path / "lin0.log"));
+}
+
 TEST(CaptureWriter, AFullDiskCountsTheLostFramesAndSaysWhy) {
   auto w = CaptureWriter::open({"/dev/full", CaptureFormat::candump, "can0"});
   ASSERT_TRUE(w) << w.error().message;

@@ -15,7 +15,7 @@ static_assert(kCanMtu == CAN_MTU && kCanFdMtu == CANFD_MTU);
 static_assert(kFdBrs == CANFD_BRS && kFdEsi == CANFD_ESI && kFdFdf == CANFD_FDF);
 static_assert(kErrCrtl == CAN_ERR_CRTL && kErrProt == CAN_ERR_PROT && kErrAck == CAN_ERR_ACK &&
               kErrBusOff == CAN_ERR_BUSOFF && kErrBusError == CAN_ERR_BUSERROR &&
-              kErrCnt == CAN_ERR_CNT);
+              kErrRestarted == CAN_ERR_RESTARTED && kErrCnt == CAN_ERR_CNT);
 static_assert(kCrtlRxWarning == CAN_ERR_CRTL_RX_WARNING &&
               kCrtlTxWarning == CAN_ERR_CRTL_TX_WARNING &&
               kCrtlRxPassive == CAN_ERR_CRTL_RX_PASSIVE &&
@@ -123,6 +123,14 @@ TEST(SocketCan, StateChangesAreControllerOrBusOffErrorFrames) {
   s.tec = 0;
   EXPECT_EQ(text(s), "20000204#0040000000000000");
   EXPECT_EQ(from_message(s)->len, CAN_ERR_DLC);
+}
+
+TEST(SocketCan, ARestartIsTheKernelsRestartedErrorFrame) {
+  // can_restart(): CAN_ERR_FLAG | CAN_ERR_RESTARTED, CAN_ERR_DLC bytes of 0.
+  const Frame f = restarted_frame();
+  EXPECT_EQ(f.can_id, CAN_ERR_FLAG | CAN_ERR_RESTARTED);
+  EXPECT_EQ(f.len, CAN_ERR_DLC);
+  EXPECT_EQ(candump_text(f), "20000100#0000000000000000");
 }
 
 TEST(SocketCan, StructBytesAreTheKernelsCanFrameAndCanFdFrame) {

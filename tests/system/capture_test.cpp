@@ -6,6 +6,7 @@
 #include <fstream>
 #include <string>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "../support/temp_dir.hpp"
@@ -144,6 +145,169 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
   EXPECT_NE(m.find("# TYPE canemu_bridge_dropped_total counter\n"), std::string::npos) << m;
 }
 
+// ---- LIN: pcap with LINKTYPE_LIN (212), at 19200 bit/s
+
+// LIN 2.x's protected identifier and checksum, computed here independently of the model.
+int bit(int value, int n) {
+  return (value >> n) & 1;
+}
+int pid(int id) {
+  const int p0 = bit(id, 0) ^ bit(id, 1) ^ bit(id, 2) ^ bit(id, 4);
+  const int p1 = 1 - (bit(id, 1) ^ bit(id, 3) ^ bit(id, 4) ^ bit(id, 5));
+  return id | (p0 << 6) | (p1 << 7);
+}
+int inverted_sum(std::initializer_list<int> bytes) {
+  int sum = 0;
+  for (int b : bytes) {
+    sum += b;
+    if (sum > 0xFF) {
+      sum -= 0xFF;
+    }
+  }
+  return 0xFF - sum;
+}
+
+// Bit k of a frame at 19200 bit/s from its break, rounded down to the ns.
+int64_t bits_ns(int64_t bits) {
+  return bits * 1'000'000'000 / 19200;
+}
+
+// A pcap record header: seconds, nanoseconds and twice the length, little-endian, as hex.
+std::string record_header(int64_t ns, int size) {
+  const auto le = [](uint32_t v) {
+    char text[9];
+    std::snprintf(text, sizeof text, "%02X%02X%02X%02X", v & 0xFF, (v >> 8) & 0xFF,
+                  (v >> 16) & 0xFF, v >> 24);
+    return std::string(text);
+  };
+  return le(static_cast<uint32_t>(ns / 1'000'000'000)) +
+         le(static_cast<uint32_t>(ns % 1'000'000'000)) + le(static_cast<uint32_t>(size)) +
+         le(static_cast<uint32_t>(size));
+}
+
+std::string hex2(int v) {
+  char two[3];
+  std::snprintf(two, sizeof two, "%02X", v);
+  return two;
+}
+
+constexpr const char* kLinFileHeader =
+    "4D3CB2A1020004000000000000000000"
+    "10000000D4000000";
+
+// What tshark makes of a capture: `fields` (-e ...) of every record, one line each.
+std::string tshark_fields(const fs::path& file, const std::string& fields) {
+  const std::string command =
+      "tshark -r " + file.string() + " -T fields -E separator=/s " + fields + " 2>/dev/null";
+  FILE* tshark = ::popen(command.c_str(), "r");
+  EXPECT_NE(tshark, nullptr);
+  if (tshark == nullptr) {
+    return "";
+  }
+  std::string out;
+  char line[256];
+  while (std::fgets(line, sizeof line, tshark) != nullptr) {
+    out += line;
+  }
+  EXPECT_EQ(::pclose(tshark), 0) << "tshark missing? make deps installs it";
+  return out;
+}
+
+// canemud's [[recorder]] on a LIN bus whose commander is a simulated node: a frame the commander
+// answers itself, one a simulated responder answers and a header nobody answers, every record at
+// its exact simulated instant.
+TEST(DaemonRecorder, RecordsALinBusAsLinktypeLin) {
+  TempDir dir;
+  const fs::path config = dir.path / "canemu.toml";
+  std::ofstream(config)
+      << "[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n"
+         "[[lin_node]]\nname = \"bcm\"\nbus = \"lin0\"\nschedule = \"normal\"\n"
+         "[[lin_node.schedules]]\nname = \"normal\"\n"
+         "slots = [{ frame = 0x10, delay = \"10ms\" }, "
+         "{ frame = 0x20, delay = \"10ms\" }, { frame = 0x21, delay = \"10ms\" }]\n"
+         "[[lin_node.response]]\nid = 0x10\ndata = [0x01, 0x00]\n"
+         "[[lin_node]]\nname = \"door\"\nbus = \"lin0\"\n"
+         "[[lin_node.response]]\nid = 0x20\ndata = [0x00, 0x01, 0x64]\n"
+         "[[recorder]]\nbus = \"lin0\"\npath = \"lin0.pcap\"\n";
+  Daemon d("stepped", {"--config", config.string()});
+  Cli step(d, {"time", "step", "30ms"});
+  EXPECT_EQ(step.wait(), 0) << Cli::read_all(step.err);
+  // 10h: 34 header bits and 3 characters. 20h from 10 ms: 4 characters. 21h from 20 ms: the
+  // no-response error after the longest response (34 + 14 x 9 bits). Written when the step
+  // ended.
+  const std::string expected = std::string(kLinFileHeader) + record_header(bits_ns(64), 12) +
+                               "01000000" + "22" + hex2(pid(0x10)) +
+                               hex2(inverted_sum({pid(0x10), 0x01, 0x00})) + "00" + "01000000" +
+                               record_header(10'000'000 + bits_ns(74), 12) + "01000000" + "32" +
+                               hex2(pid(0x20)) + hex2(inverted_sum({pid(0x20), 0x00, 0x01, 0x64})) +
+                               "00" + "00016400" + record_header(20'000'000 + bits_ns(160), 12) +
+                               "01000000" + "00" + hex2(pid(0x21)) + "00" + "01" + "00000000";
+  EXPECT_EQ(hex(read_file(dir.path / "lin0.pcap")), expected);
+  EXPECT_EQ(record_header(bits_ns(64), 12).substr(8, 8), "D5DC3200");  // 3333333 ns
+
+  // Wireshark's LIN dissector reads it back.
+  EXPECT_EQ(tshark_fields(dir.path / "lin0.pcap",
+                          "-e frame.time_epoch -e lin.frame_id -e lin.checksum_type -e "
+                          "lin.checksum -e lin.errors -e data.data"),
+            "0.003333333 0x10 2 0xae 0x00 0100\n"
+            "0.013854166 0x20 2 " +
+                fmt::format("{:#04x}", inverted_sum({pid(0x20), 0x00, 0x01, 0x64})) +
+                " 0x00 000164\n"
+                "0.028333333 0x21 0 0x00 0x01 \n");
+
+  Cli status(d, {"status"});
+  const std::string text = Cli::read_all(status.out);
+  EXPECT_EQ(status.wait(), 0);
+  EXPECT_NE(text.find("lin0         pcap             3          108       0        0 " +
+                      (dir.path / "lin0.pcap").string() + "\n"),
+            std::string::npos)
+      << text;
+}
+
+// canemu record on a LIN bus writes pcap (a LIN bus has no candump log), with the instants of
+// its monitor (microseconds); candump into a file is refused naming the bus.
+TEST(CliCapture, RecordOnALinBusWritesLinktypeLin) {
+  TempDir dir;
+  Daemon d;
+  auto watcher = connect(d, "watcher");
+  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
+  const fs::path file = dir.path / "lin0.rec";
+  Cli record(d, {"record", "lin0", "-o", file.string(), "-n", "4"});
+  ASSERT_TRUE(watcher.next_notification(10'000));  // the recorder's adapter is there
+  Cli send(d, {"send", "lin0", "33#AABB", "20#", "sleep", "wakeup", "--step", "30ms"});
+  EXPECT_EQ(send.wait(), 1) << Cli::read_all(send.err);  // 20# ends in an error
+  EXPECT_EQ(record.wait(), 0);
+  const std::string err = Cli::read_all(record.err);
+  EXPECT_NE(err.find("(LIN, the rate of each header, time stamps in simulated seconds)\n"
+                     "canemu: 5 record(s) recorded in " +
+                     file.string() + " (pcap, LINKTYPE_LIN)\n"),
+            std::string::npos)
+      << err;
+  // The instants of Cli.SendAndDumpOnALinBus, in whole microseconds; the VCI's error message
+  // tells no identifier (PID 0).
+  const std::string expected =
+      std::string(kLinFileHeader) + record_header(3'333'000, 12) + "01000000" + "22" +
+      hex2(pid(0x33)) + hex2(inverted_sum({pid(0x33), 0xAA, 0xBB})) + "00" + "AABB0000" +
+      record_header(12'333'000, 12) + "01000000" + "00" + "00" + "00" + "01" + "00000000" +
+      record_header(19'458'000, 16) + "01000000" + "81" + hex2(pid(0x3C)) +
+      hex2(inverted_sum({0x00, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF})) + "00" +
+      "00FFFFFFFFFFFFFF" + record_header(19'458'000, 12) + "010000004C000000B0B00001" +
+      record_header(20'250'000, 12) + "010000004C000000B0B00004";
+  EXPECT_EQ(hex(read_file(file)), expected);
+  EXPECT_EQ(tshark_fields(file, "-e lin.message_type -e lin.frame_id -e lin.event_id"),
+            "0 0x33 \n0 0x00 \n0 0x3c \n3  0xb0b00001\n3  0xb0b00004\n");
+
+  for (const std::string tool : {"record", "dump"}) {
+    const fs::path log = dir.path / "lin0.log";
+    Cli bad(d, {tool, "lin0", "--format", "candump", "-o", log.string()});
+    EXPECT_EQ(bad.wait(), 1);
+    EXPECT_EQ(Cli::read_all(bad.err),
+              "canemu: a candump log holds CAN frames only; LIN bus lin0 is recorded as pcap "
+              "(LINKTYPE_LIN)\n");
+    EXPECT_FALSE(fs::exists(log));
+  }
+}
+
 // canemu bridge against canemud on a host whose kernel may have no CAN at all: every failure
 // says which interface and why; the bridge itself is tested in tests/daemon and tests/guest.
 TEST(CliBridge, AddListAndRemoveSayWhatIsWrong) {
@@ -164,6 +328,30 @@ TEST(CliBridge, AddListAndRemoveSayWhatIsWrong) {
   Cli remove(d, {"bridge", "remove", "vcan0"});
   EXPECT_EQ(remove.wait(), 1);
   EXPECT_NE(Cli::read_all(remove.err).find("no bridge on interface \"vcan0\""), std::string::npos);
+  Cli restart(d, {"bridge", "restart", "vcan0"});
+  EXPECT_EQ(restart.wait(), 1);
+  EXPECT_EQ(Cli::read_all(restart.err),
+            "canemu: canemud: bad_argument: no bridge on interface \"vcan0\"\n");
+  for (const std::string ms : {"-5", "60001"}) {
+    Cli bad(d, {"bridge", "add", "can0", "vcan0", "--restart-ms", ms});
+    EXPECT_EQ(bad.wait(), 1);
+    EXPECT_EQ(Cli::read_all(bad.err), "canemu: --restart-ms " + ms +
+                                          " is outside 0..60000 (ms after bus-off; 0: stay "
+                                          "bus-off)\n");
+  }
+  Cli huge(d, {"bridge", "add", "can0", "vcan0", "--restart-ms", "99999999999999999999"});
+  EXPECT_NE(huge.wait(), 0);
+  EXPECT_NE(Cli::read_all(huge.err).find("--restart-ms"), std::string::npos);
+  // canemud checks it too, for clients other than canemu.
+  auto c = connect(d, "raw");
+  auto req = ipc::make_message<ipc::BridgeAddRequest>();
+  ipc::copy_name(req.bus, "can0");
+  ipc::copy_name(req.interface, "vcan0");
+  req.restart_ms = 70'000;
+  auto r = c.call<ipc::BridgeAddRequest, ipc::BridgeAddReply>(req);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("restart_ms 70000 is outside 0..60000"), std::string::npos)
+      << r.error().message;
 }
 
 }  // namespace

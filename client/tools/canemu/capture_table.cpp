@@ -61,17 +61,19 @@ toml::array recorders_array(const ipc::RecorderListReply& r) {
 }
 
 void print_bridges(const ipc::BridgeListReply& r) {
-  std::printf("%-12s %-10s %-14s %4s %4s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
-              "INTERFACE", "STATE", "TEC", "REC", "TO-IF", "FROM-IF", "ERRORS", "IF-DROP", "K-DROP",
-              "Q-DROP", "REJECTED", "FAILED");
+  std::printf("%-12s %-10s %-14s %4s %4s %8s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
+              "INTERFACE", "STATE", "TEC", "REC", "RESTARTS", "TO-IF", "FROM-IF", "ERRORS",
+              "IF-DROP", "K-DROP", "Q-DROP", "REJECTED", "FAILED");
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::BridgeEntry& e = r.bridges[i];
     const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
-    std::printf("%-12s %-10s %-14s %4u %4u %10llu %10llu %7llu %8llu %8llu %8llu %8llu %8llu\n",
-                ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(),
-                error_state_name(e.state).c_str(), e.tec, e.rec, n(e.to_interface),
-                n(e.from_interface), n(e.error_frames_written), n(e.to_interface_dropped),
-                n(e.kernel_dropped), n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
+    std::printf(
+        "%-12s %-10s %-14s %4u %4u %8llu %10llu %10llu %7llu %8llu %8llu %8llu %8llu "
+        "%8llu\n",
+        ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(),
+        error_state_name(e.state).c_str(), e.tec, e.rec, n(e.restarts), n(e.to_interface),
+        n(e.from_interface), n(e.error_frames_written), n(e.to_interface_dropped),
+        n(e.kernel_dropped), n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
   }
 }
 
@@ -84,6 +86,8 @@ toml::array bridges_array(const ipc::BridgeListReply& r) {
                               {"bus", ipc::name_of(e.bus)},
                               {"interface", ipc::name_of(e.interface)},
                               {"error_frames", e.error_frames != 0},
+                              {"restart_ms", i64(e.restart_ms)},
+                              {"restarts", i64(e.restarts)},
                               {"state", error_state_name(e.state)},
                               {"tec", i64(e.tec)},
                               {"rec", i64(e.rec)},

@@ -74,7 +74,7 @@ std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const
 struct CaptureRun {
   std::string bus;
   std::string output;
-  std::string format = "candump";
+  std::string format;  // "candump", "pcap"; empty: by the file name and the bus (dump.cpp)
   uint32_t bitrate = 0;
   uint64_t count = 0;
   uint64_t max_bytes = 0;  // rotation (record only)

@@ -1,5 +1,6 @@
 // canemu dump: a bus's frames and errors as a candump -L log (or a pcap capture; a LIN bus:
-// lin_dump.hpp), from a channel of an ephemeral device, until interrupted or --count frames.
+// lin_dump.hpp, text lines or LINKTYPE_LIN pcap), from a channel of an ephemeral device, until
+// interrupted or --count frames.
 // Like candump on a real interface, its controller is active and acknowledges what it
 // receives; --listen-only makes it a silent observer. run_capture() also serves canemu record.
 #include <csignal>
@@ -41,14 +42,17 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
   for (uint16_t i = 0; s && i < s->bus_count; ++i) {
     if (ipc::name_of(s->buses[i].name) == o.bus &&
         s->buses[i].kind == static_cast<uint8_t>(ipc::WireBusKind::lin)) {
-      if (o.record || o.output != "-" || o.format != "candump") {
-        return fail("a LIN bus is dumped as text on standard output only (no pcap, no file yet)");
+      // A LIN bus: text lines on the terminal, pcap (LINKTYPE_LIN) in files.
+      const bool to_file = o.record || o.output != "-" || o.format == "pcap";
+      if (to_file && o.format == "candump") {
+        return fail(ipc::candump_has_no_lin(o.bus));
       }
       const auto base = time_base(*c, o.sim_time);
       if (!base) {
         return fail(base.error().message);
       }
-      return run_lin_dump(*c, o.bus, o.bitrate, o.count, *base, g_stop);
+      return to_file ? run_lin_record(*c, o, *base, g_stop)
+                     : run_lin_dump(*c, o.bus, o.bitrate, o.count, *base, g_stop);
     }
   }
   client::ChannelOptions co;
@@ -65,7 +69,11 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
   if (!base) {
     return fail(base.error().message);
   }
-  const auto format = ipc::parse_capture_format(o.format);
+  // Without --format: pcap for a .pcap file (as [[recorder]] does), else candump.
+  const bool pcap_path = o.output.size() > 5 && o.output.ends_with(".pcap");
+  const auto format = o.format.empty()
+                          ? (pcap_path ? ipc::CaptureFormat::pcap : ipc::CaptureFormat::candump)
+                          : ipc::parse_capture_format(o.format);
   if (!format) {
     return fail("--format must be candump or pcap, not '" + o.format + "'");
   }
@@ -118,7 +126,8 @@ Command add_dump(CLI::App& app, const std::string& socket) {
   dump->add_flag("--sim-time", o->sim_time,
                  "time stamps in simulated seconds (default in real time: wall-clock seconds)");
   dump->add_option("--format", o->format,
-                   "candump (a candump -L log, the default) or pcap (LINKTYPE_CAN_SOCKETCAN)")
+                   "candump (a candump -L log, the default) or pcap (LINKTYPE_CAN_SOCKETCAN; "
+                   "a LIN bus: LINKTYPE_LIN); default pcap for a .pcap file and a LIN bus's files")
       ->check(CLI::IsMember({"candump", "pcap"}));
   dump->add_flag_callback(
       "-L", [o] { o->format = "candump"; }, "a candump -L log (the default)");

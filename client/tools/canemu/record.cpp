@@ -1,8 +1,9 @@
-// canemu record: a bus's frames and errors into a file, in candump log or pcap format, with
-// size-based rotation, until interrupted or --count frames. Unlike dump it is a silent observer
-// by default (listen-only: it neither acknowledges nor signals errors, so recording changes
-// nothing on the bus); --acknowledge makes it an active node. canemud's own recorders
-// ([[recorder]] in the configuration) write the same formats without a client.
+// canemu record: a bus's frames and errors into a file, in candump log or pcap format (a LIN
+// bus: pcap with LINKTYPE_LIN, lin_dump.hpp), with size-based rotation, until interrupted or
+// --count frames. Unlike dump it is a silent observer by default (listen-only: it neither
+// acknowledges nor signals errors, so recording changes nothing on the bus); --acknowledge makes
+// it an active node (on a LIN bus the recorder only listens either way). canemud's own
+// recorders ([[recorder]] in the configuration) write the same formats without a client.
 #include <memory>
 #include <string>
 
@@ -20,7 +21,10 @@ Command add_record(CLI::App& app, const std::string& socket) {
   o->record = true;
   record->add_option("BUS", o->bus, "bus name")->required();
   record->add_option("-o,--output", o->output, "the file (- for standard output)")->required();
-  record->add_option("--format", o->format, "candump (the default) or pcap")
+  record
+      ->add_option("--format", o->format,
+                   "candump or pcap (default: pcap for a .pcap file and on a LIN bus, which "
+                   "has no candump log; else candump)")
       ->check(CLI::IsMember({"candump", "pcap"}));
   record->add_option("-n,--count", o->count, "stop after this many frames");
   record->add_option("--max-size", o->max_bytes,

@@ -351,11 +351,14 @@ void LinBus::response_end(SimTime now) {
       }
     }
   }
+  e.checksum_byte = wire_.back();
   if (!kind || responder_ == kNoNode) {
     ++stats_.errors;
     e.kind = Event::Kind::error;
     e.error = ErrorKind::checksum;
     e.responder = kNoNode;
+    e.response.size = static_cast<uint8_t>(wire_.size() - 1);
+    std::copy(wire_.begin(), wire_.end() - 1, e.response.data.begin());
     deliver(e, listeners);
     finish(now);
     return;

@@ -84,6 +84,7 @@ TEST_F(LinBusTest, AHeaderIsAnsweredFromAResponseTable) {
     EXPECT_EQ(e.response.data[0], 0x11);
     EXPECT_EQ(e.response.data[1], 0x22);
     EXPECT_EQ(e.response.checksum, Checksum::enhanced);
+    EXPECT_EQ(e.checksum_byte, 0x7C);  // ~(50h + 11h + 22h), PID 50h
     EXPECT_EQ(e.sender, commander.id);
     EXPECT_EQ(e.responder, responder.id);
     EXPECT_EQ(e.bitrate, k19200);
@@ -167,6 +168,9 @@ TEST_F(LinBusTest, CollidingRespondersSeeBitErrorsAndListenersAChecksumError) {
   }
   ASSERT_EQ(listener.seen.size(), 1u);
   EXPECT_EQ(listener.seen[0].error, ErrorKind::checksum);
+  // What the wire carried: the AND of the first characters, then nothing.
+  EXPECT_EQ(listener.seen[0].response.size, 0);
+  EXPECT_EQ(listener.seen[0].checksum_byte, 0x00);
   EXPECT_EQ(commander.seen.at(0).error, ErrorKind::checksum);
 }
 
@@ -253,6 +257,12 @@ TEST_F(LinBusTest, FaultsOnTheResponse) {
   run_to(at_bits(160) + at_bits(64));
   EXPECT_EQ(listener.seen.at(1).error, ErrorKind::checksum);
   EXPECT_EQ(listener.seen[1].at.ns(), at_bits(160) + at_bits(64));
+  // The characters as received: the data, and the checksum ~(97h + 01h + 02h) = 65h with its
+  // lowest bit flipped.
+  EXPECT_EQ(listener.seen[1].response.size, 2);
+  EXPECT_EQ(listener.seen[1].response.data[0], 0x01);
+  EXPECT_EQ(listener.seen[1].response.data[1], 0x02);
+  EXPECT_EQ(listener.seen[1].checksum_byte, 0x64);
   EXPECT_EQ(responder.seen.at(1).error, ErrorKind::checksum);  // it reads back what it sent
 
   faults.next = {};

@@ -108,8 +108,8 @@ struct SecurityConfig {
 // [[recorder]]: a bus recorded into a file by canemud (docs/socketcan.md).
 struct RecorderConfig {
   std::string bus;
-  std::string path;         // relative paths are taken from the configuration file's folder
-  bool pcap = false;        // format = "pcap" (default: "candump", or "pcap" for a .pcap path)
+  std::string path;   // relative paths are taken from the configuration file's folder
+  bool pcap = false;  // format = "pcap" (default: "candump", "pcap" for a .pcap path or a LIN bus)
   uint64_t max_size = 0;    // bytes; rotate before a file grows past it (0: never)
   uint32_t max_files = 10;  // old files kept by rotation
   bool errors = true;       // error frames recorded too
@@ -122,6 +122,7 @@ struct BridgeConfig {
   std::string bus;
   std::string interface;      // vcan0, vxcan1, can0, ...
   bool error_frames = false;  // the bridge node's errors and states as CAN_ERR_* frames
+  uint32_t restart_ms = 0;    // restart the node this long after bus-off; 0: it stays bus-off
   uint32_t line = 0;
 };
 

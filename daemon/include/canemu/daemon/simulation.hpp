@@ -172,7 +172,7 @@ class Simulation {
   NodePool nodes_;
   DeviceRegistry devices_;
   ScenarioRunner scenarios_;
-  std::vector<std::unique_ptr<Recorder>> recorders_;       // on nodes_'s nodes
+  std::vector<std::unique_ptr<Recorder>> recorders_;       // on nodes_'s nodes, lin_buses_
   std::vector<std::unique_ptr<SocketCanBridge>> bridges_;  // on nodes_'s nodes
 };
 

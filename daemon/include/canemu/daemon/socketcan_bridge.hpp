@@ -11,6 +11,13 @@
 // No loops: the node never receives its own frames, and the socket (CAN_RAW, own messages not
 // received) never reads back what it wrote; two bridges on one interface are refused.
 //
+// After bus-off the node stays off the bus (the kernel's default) unless `restart_ms` is set:
+// then the bridge restarts it that long after the bus-off instant, as `ip link set canX type can
+// restart-ms N` has a kernel driver do; restart() does it when asked (`ip link set canX type can
+// restart`). Either way the node then waits for 128 sequences of 11 recessive bits (ISO
+// 11898-1) before it is error-active and sends again; every restart is counted, and with
+// `error_frames` it is written to the interface as the kernel's CAN_ERR_RESTARTED frame.
+//
 // Nothing is lost silently: the kernel's senders never see a refusal, so every frame from the
 // interface that the bus cannot take (queue full, a frame the bus cannot carry, given up after
 // bus-off) and every frame the interface refused (socket buffer full, interface down) is counted
@@ -23,6 +30,7 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <tl/expected.hpp>
@@ -30,6 +38,7 @@
 #include "canemu/daemon/doorbell.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/channel_message.hpp"
+#include "canemu/ipc/socketcan.hpp"
 #include "canemu/ipc/unique_fd.hpp"
 
 namespace canemu::daemon {
@@ -45,6 +54,7 @@ struct BridgeStats {
   uint64_t tx_failed = 0;       // queued but given up by the node (bus-off)
   uint64_t kernel_dropped = 0;  // dropped by the kernel before the bridge read them (its
                                 // socket's receive buffer was full: SO_RXQ_OVFL)
+  uint64_t restarts = 0;        // restarts after bus-off, automatic and asked for
 };
 
 struct BridgeOptions {
@@ -53,6 +63,7 @@ struct BridgeOptions {
   bool error_frames = false;
   bool fd = false;               // the bus is a CAN FD bus: CAN FD frames both ways
   uint32_t queue_frames = 1024;  // frames from the interface waiting for the bus
+  uint32_t restart_ms = 0;       // restart after bus-off after this long; 0: stay bus-off
 };
 
 class SocketCanBridge final : private model::ControllerEvents, public Doorbell {
@@ -82,6 +93,10 @@ class SocketCanBridge final : private model::ControllerEvents, public Doorbell {
   void kick() override;
   bool broken() const override { return false; }
 
+  // Restarts the node from bus-off now; what is wrong otherwise (it is not bus-off, or it
+  // restarts already and waits for the recessive bits).
+  std::optional<std::string> restart();
+
  private:
   SocketCanBridge(BridgeOptions options, std::size_t bus, model::HostedNode& node,
                   ipc::UniqueFd port)
@@ -90,6 +105,7 @@ class SocketCanBridge final : private model::ControllerEvents, public Doorbell {
   std::optional<model::TxFrame> next_tx();
   void accept(const uint8_t* bytes, std::size_t size);
   void write_out(const ipc::ChannelMessage& m, uint64_t& counter);
+  void write_frame(const ipc::socketcan::Frame& f, uint64_t& counter);
 
   void frame_received(model::SimTime at, const model::Frame& frame, bool own) override;
   void frame_transmitted(model::SimTime at, const model::Frame& frame) override;
@@ -98,6 +114,8 @@ class SocketCanBridge final : private model::ControllerEvents, public Doorbell {
   void state_changed(model::SimTime at, model::ErrorState state, uint16_t tec,
                      uint16_t rec) override;
 
+  void restart_after_bus_off();
+
   static constexpr int kMaxReadsPerKick = 256;
   BridgeOptions options_;
   std::size_t bus_;
@@ -105,6 +123,7 @@ class SocketCanBridge final : private model::ControllerEvents, public Doorbell {
   ipc::UniqueFd port_;
   std::deque<model::TxFrame> queue_;
   BridgeStats stats_;
+  std::optional<model::EventId> restart_event_;  // the automatic restart, while due
 };
 
 // A CAN_RAW socket bound to `interface`, non-blocking and close-on-exec, with CAN FD frames

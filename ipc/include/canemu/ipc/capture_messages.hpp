@@ -1,6 +1,7 @@
 // The control protocol's messages about canemud's recorders ([[recorder]]: their list with what
-// they wrote and lost, for `canemu status`) and SocketCAN bridges ([[bridge]]: added, removed
-// and listed at run time by `canemu bridge`). Gathered with the others by protocol.hpp.
+// they wrote and lost, for `canemu status`) and SocketCAN bridges ([[bridge]]: added, removed,
+// restarted after bus-off and listed at run time by `canemu bridge`). Gathered with the others
+// by protocol.hpp.
 #pragma once
 
 #include <cstddef>
@@ -40,6 +41,7 @@ struct RecorderListReply {
 static_assert(sizeof(RecorderListReply) <= kMaxMessageSize);
 
 inline constexpr std::size_t kMaxBridges = 32;
+inline constexpr uint32_t kMaxBridgeRestartMs = 60'000;  // as a channel's restart_ms
 
 // Joins bus `bus` to the Linux CAN interface `interface` (a SocketCAN bridge).
 struct BridgeAddRequest {
@@ -47,7 +49,8 @@ struct BridgeAddRequest {
   char bus[kNameSize] = {};
   char interface[kNameSize] = {};
   uint8_t error_frames = 0;  // 1: the bridge node's errors and states as CAN_ERR_* frames
-  uint8_t reserved[7] = {};
+  uint8_t reserved[3] = {};
+  uint32_t restart_ms = 0;  // restart the node this long after bus-off; 0: it stays bus-off
 };
 static_assert(sizeof(BridgeAddRequest) == 16 + 64 + 8);
 
@@ -64,6 +67,17 @@ struct BridgeRemoveReply {
   MsgHeader header;
 };
 
+// Restarts the bus-off node of the bridge on `interface` (as `ip link set canX type can
+// restart` does); refused when the node is not bus-off or restarts already.
+struct BridgeRestartRequest {
+  MsgHeader header;
+  char interface[kNameSize] = {};
+};
+
+struct BridgeRestartReply {
+  MsgHeader header;
+};
+
 struct BridgeListRequest {
   MsgHeader header;
 };
@@ -76,8 +90,8 @@ struct BridgeEntry {
   uint16_t tec = 0;
   uint16_t rec = 0;
   uint16_t reserved = 0;
-  uint32_t queued = 0;  // frames from the interface waiting for the bus
-  uint32_t reserved2 = 0;
+  uint32_t queued = 0;      // frames from the interface waiting for the bus
+  uint32_t restart_ms = 0;  // the automatic restart after bus-off; 0: none
   uint64_t to_interface = 0;
   uint64_t from_interface = 0;
   uint64_t error_frames_written = 0;
@@ -86,8 +100,9 @@ struct BridgeEntry {
   uint64_t rejected = 0;
   uint64_t tx_failed = 0;
   uint64_t kernel_dropped = 0;  // dropped by the kernel before the bridge read them
+  uint64_t restarts = 0;        // restarts after bus-off (automatic and asked for)
 };
-static_assert(sizeof(BridgeEntry) == 64 + 16 + 64);
+static_assert(sizeof(BridgeEntry) == 64 + 16 + 72);
 
 struct BridgeListReply {
   MsgHeader header;

@@ -1,5 +1,6 @@
-// A bus recording on disk, in candump log or pcap format (socketcan.hpp), with size-based
-// rotation: canemud's [[recorder]] and `canemu record` / `canemu dump -o` write through it.
+// A bus recording on disk, in candump log or pcap format (socketcan.hpp; a LIN bus: pcap with
+// LINKTYPE_LIN, lin_pcap.hpp), with size-based rotation: canemud's [[recorder]] and
+// `canemu record` / `canemu dump -o` write through it.
 //
 // Records are gathered in memory and written with write(2) by flush() (and by record() when
 // 64 KiB are pending). Nothing is lost silently: a failed write (a full disk, a removed
@@ -18,6 +19,7 @@
 #include <string_view>
 #include <vector>
 
+#include "canemu/ipc/lin_pcap.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 #include "canemu/ipc/socketcan.hpp"
 #include "canemu/ipc/unique_fd.hpp"
@@ -30,30 +32,38 @@ std::string_view to_string(CaptureFormat f);
 // "candump" or "pcap"; nothing otherwise.
 std::optional<CaptureFormat> parse_capture_format(std::string_view text);
 
+// Why a LIN bus cannot go into a candump log, naming the bus: what canemud's configuration,
+// canemu record and canemu dump say when asked to.
+std::string candump_has_no_lin(std::string_view bus);
+
 struct CaptureOptions {
   std::string path;  // "-": standard output (no rotation)
   CaptureFormat format = CaptureFormat::candump;
   std::string bus;          // the interface name of candump lines
   uint64_t max_bytes = 0;   // rotate before a file grows past this; 0: never
   uint32_t max_files = 10;  // old files kept by rotation (PATH.1 .. PATH.max_files)
+  bool lin = false;         // a LIN bus: pcap with LINKTYPE_LIN (candump logs have no LIN)
 };
 
 class CaptureWriter {
  public:
   // Opens (creates or truncates) the file and writes the pcap header; the error names the path.
+  // A LIN recording in candump format is refused (the error names the bus).
   static IpcResult<CaptureWriter> open(CaptureOptions options);
 
   CaptureWriter(CaptureWriter&&) noexcept = default;
   CaptureWriter& operator=(CaptureWriter&&) noexcept = default;
   ~CaptureWriter();
 
-  // Queues one frame stamped `ns` (nanoseconds); writes when enough is pending.
+  // Queues one frame stamped `ns` (nanoseconds); writes when enough is pending. A CAN frame goes
+  // into a CAN recording only, a LIN message into a LIN recording only (others are ignored).
   void record(int64_t ns, const socketcan::Frame& f);
+  void record(int64_t ns, const lin_pcap::Message& m);
   // Writes what is pending; false when the write failed (see error() and lost()).
   bool flush();
 
   const CaptureOptions& options() const { return options_; }
-  uint64_t frames() const { return frames_; }  // written to disk
+  uint64_t frames() const { return frames_; }  // written to disk (LIN: records)
   uint64_t bytes() const { return bytes_; }    // in all files, headers included
   uint64_t lost() const { return lost_; }      // frames a failed write took with it
   uint32_t rotations() const { return rotations_; }
@@ -62,6 +72,8 @@ class CaptureWriter {
  private:
   explicit CaptureWriter(CaptureOptions options) : options_(std::move(options)) {}
   IpcResult<void> start_file();
+  std::vector<uint8_t> file_header() const;
+  void append(const std::vector<uint8_t>& one);
   bool rotate();
   bool write_pending();
 

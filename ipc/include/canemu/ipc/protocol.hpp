@@ -110,6 +110,10 @@ inline constexpr MsgType type_of_v<BridgeRemoveRequest> = MsgType::bridge_remove
 template <>
 inline constexpr MsgType type_of_v<BridgeRemoveReply> = MsgType::bridge_remove_reply;
 template <>
+inline constexpr MsgType type_of_v<BridgeRestartRequest> = MsgType::bridge_restart_request;
+template <>
+inline constexpr MsgType type_of_v<BridgeRestartReply> = MsgType::bridge_restart_reply;
+template <>
 inline constexpr MsgType type_of_v<BridgeListRequest> = MsgType::bridge_list_request;
 template <>
 inline constexpr MsgType type_of_v<BridgeListReply> = MsgType::bridge_list_reply;

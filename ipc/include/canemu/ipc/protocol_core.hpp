@@ -77,6 +77,8 @@ enum class MsgType : uint16_t {
   bridge_remove_reply = 95,
   bridge_list_request = 96,
   bridge_list_reply = 97,
+  bridge_restart_request = 98,
+  bridge_restart_reply = 99,
   slcan_request = 100,
   slcan_reply = 101,
   slcan_event = 102,  // unsolicited, request_id 0

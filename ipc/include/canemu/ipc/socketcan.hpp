@@ -39,6 +39,7 @@ inline constexpr uint32_t kErrProt = 0x008;
 inline constexpr uint32_t kErrAck = 0x020;
 inline constexpr uint32_t kErrBusOff = 0x040;
 inline constexpr uint32_t kErrBusError = 0x080;
+inline constexpr uint32_t kErrRestarted = 0x100;
 inline constexpr uint32_t kErrCnt = 0x200;
 inline constexpr uint8_t kCrtlRxWarning = 0x04;
 inline constexpr uint8_t kCrtlTxWarning = 0x08;
@@ -80,6 +81,10 @@ struct Frame {
 // carry TEC and REC in data[6] and data[7] (at most 255) and have len 8. Nothing for transmit
 // confirmations and drops, which a SocketCAN interface does not show.
 std::optional<Frame> from_message(const ChannelMessage& m);
+
+// What a kernel CAN driver sends when it restarts a controller after bus-off (can_restart()):
+// CAN_ERR_RESTARTED, len 8, data all 0.
+Frame restarted_frame();
 
 // The channel message of a frame read from a CAN_RAW socket (kind frame): identifier, flags and
 // DLC from can_id, len, flags and len8_dlc. Error frames and lengths that are no CAN (FD) length

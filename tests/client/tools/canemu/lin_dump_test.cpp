@@ -50,6 +50,66 @@ TEST(LinDump, ErrorsAndWakeUpsAreNamedAndTheRestLeftOut) {
   EXPECT_EQ(lin_line(msg(LIN_MSGTYPE_TMOVR, 0xFF, {}), 0, "lin0"), "");
 }
 
+TEST(LinRecord, MonitorMessagesBecomeLinktypeLinRecords) {
+  namespace lp = ipc::lin_pcap;
+  // 10h with 01 00, enhanced: PID 50h, ~(50h + 01h + 00h) = AEh.
+  auto r = lin_pcap_messages(msg(LIN_MSGTYPE_DATA, 0x10, {0x01, 0x00}));
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].pid, 0x50);
+  EXPECT_EQ(r[0].checksum, 0xAE);
+  EXPECT_EQ(r[0].checksum_type, lp::ChecksumType::enhanced);
+  EXPECT_EQ(r[0].length, 2);
+  EXPECT_EQ(r[0].data[0], 0x01);
+  EXPECT_EQ(r[0].errors, 0);
+  // 21h with 42h, classic: PID 61h, ~42h = BDh.
+  r = lin_pcap_messages(msg(LIN_MSGTYPE_DATA, 0x21, {0x42}, false));
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].pid, 0x61);
+  EXPECT_EQ(r[0].checksum, 0xBD);
+  EXPECT_EQ(r[0].checksum_type, lp::ChecksumType::classic);
+  // The go-to-sleep command is its frame and the go-to-sleep event.
+  r = lin_pcap_messages(
+      msg(LIN_MSGTYPE_DATA, 0x3C, {0, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}, false));
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[0].pid, 0x3C);
+  EXPECT_EQ(r[0].checksum, 0x00);
+  EXPECT_EQ(r[1], lp::event(lp::kEventGoToSleep));
+  // 3Fh: P0 = 1 ^ 1 ^ 1 ^ 1 = 0, P1 = !(1 ^ 1 ^ 1 ^ 1) = 1 -> BFh; reserved: invalid ID.
+  r = lin_pcap_messages(msg(LIN_MSGTYPE_DATA, 0x3F, {0x00}));
+  EXPECT_EQ(r.at(0).pid, 0xBF);
+  EXPECT_EQ(r.at(0).errors, lp::kErrorInvalidId);
+  // A message that filled the monitor's FIFO.
+  LINMSG full = msg(LIN_MSGTYPE_DATA, 0x10, {0x01});
+  full.uMsgInfo.Bits.ovr = 1;
+  EXPECT_EQ(lin_pcap_messages(full).at(0).errors, lp::kErrorOverflow);
+}
+
+TEST(LinRecord, ErrorsAreBitsAndTheRestEvents) {
+  namespace lp = ipc::lin_pcap;
+  LINMSG e = msg(LIN_MSGTYPE_ERROR, 0xFF, {});
+  const auto errors = [&](uint8_t code) {
+    e.abData[0] = code;
+    const auto r = lin_pcap_messages(e);
+    EXPECT_EQ(r.size(), 1u);
+    EXPECT_EQ(r.at(0).pid, 0);
+    EXPECT_EQ(r.at(0).length, 0);
+    EXPECT_EQ(r.at(0).checksum_type, lp::ChecksumType::unknown);
+    return r.at(0).errors;
+  };
+  EXPECT_EQ(errors(LIN_ERROR_SLNORE), lp::kErrorNoSlaveResponse);
+  EXPECT_EQ(errors(LIN_ERROR_CHKSUM), lp::kErrorChecksum);
+  EXPECT_EQ(errors(LIN_ERROR_PARITY), lp::kErrorParity);
+  EXPECT_EQ(errors(LIN_ERROR_SYNC), lp::kErrorFraming);
+  EXPECT_EQ(errors(LIN_ERROR_BIT), lp::kErrorFraming);
+  EXPECT_EQ(errors(LIN_ERROR_OTHER), lp::kErrorFraming);
+  e.abData[0] = LIN_ERROR_NOBUS;
+  EXPECT_EQ(lin_pcap_messages(e), std::vector<lp::Message>{lp::event(lp::kEventInactivity)});
+  EXPECT_EQ(lin_pcap_messages(msg(LIN_MSGTYPE_WAKEUP, 0xFF, {})),
+            std::vector<lp::Message>{lp::event(lp::kEventWakeUp)});
+  EXPECT_TRUE(lin_pcap_messages(msg(LIN_MSGTYPE_INFO, 0xFF, {LIN_INFO_START})).empty());
+  EXPECT_TRUE(lin_pcap_messages(msg(LIN_MSGTYPE_TMOVR, 0xFF, {})).empty());
+}
+
 TEST(LinSend, FramesHeadersSleepAndWakeupInTheirOwnSyntax) {
   std::string error;
   auto m = parse_lin_send("3a#0102", false, error);

@@ -67,7 +67,9 @@ struct Event {
   Kind kind = Kind::frame;
   SimTime at;
   uint8_t id = kNoId;
-  Response response;              // frame: its data, size and checksum kind
+  Response response;              // frame: its data, size and checksum kind; checksum error: the
+                                  // data characters received (size 0..8)
+  uint8_t checksum_byte = 0;      // frame and checksum error: the last character received
   LinNodeId sender = kNoNode;     // who sent the header (or the wake-up pulse)
   LinNodeId responder = kNoNode;  // who sent the response (frame)
   ErrorKind error = ErrorKind::other;

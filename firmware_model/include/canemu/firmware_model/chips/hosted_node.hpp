@@ -85,6 +85,7 @@ class HostedNode : private ControllerEvents {
   bool babble(const Frame& frame, SimTime until);
   bool babbling() const { return babble_.has_value(); }
   SimTime now() const { return bus_.now(); }
+  SimScheduler& scheduler() { return scheduler_; }
   // This node's frame is on the wire (start of frame to the end of its frame or error frame).
   bool frame_on_wire() const { return bus_.in_flight(node()); }
   CanBus& bus() { return bus_; }

@@ -1,0 +1,80 @@
+#include "canemu/ipc/lin_pcap.hpp"
+
+#include <algorithm>
+
+namespace canemu::ipc::lin_pcap {
+
+namespace {
+
+constexpr uint32_t kPcapMagicNanoseconds = 0xA1B23C4D;
+
+void put_le32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) {
+    out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  }
+}
+
+void put_le16(std::vector<uint8_t>& out, uint16_t v) {
+  out.push_back(static_cast<uint8_t>(v));
+  out.push_back(static_cast<uint8_t>(v >> 8));
+}
+
+}  // namespace
+
+Message event(uint32_t type) {
+  Message m;
+  m.type = MessageType::event;
+  m.event = type;
+  return m;
+}
+
+std::vector<uint8_t> encode(const Message& m) {
+  std::vector<uint8_t> out;
+  out.reserve(kMaxRecordSize);
+  out.push_back(kFormatRevision);
+  out.insert(out.end(), 3, 0);
+  const bool is_event = m.type == MessageType::event;
+  const uint8_t length = is_event ? 4 : std::min(m.length, kMaxData);
+  const auto type = static_cast<uint8_t>(m.type);
+  const auto checksum_type = is_event ? 0 : static_cast<uint8_t>(m.checksum_type);
+  out.push_back(
+      static_cast<uint8_t>((length << 4) | ((type & 0x03) << 2) | (checksum_type & 0x03)));
+  out.push_back(is_event ? 0 : m.pid);
+  out.push_back(is_event ? 0 : m.checksum);
+  out.push_back(is_event ? 0 : m.errors);
+  if (is_event) {
+    for (int i = 3; i >= 0; --i) {
+      out.push_back(static_cast<uint8_t>(m.event >> (8 * i)));
+    }
+  } else {
+    out.insert(out.end(), m.data, m.data + length);
+  }
+  out.resize(length <= 4 ? 12 : 16, 0);
+  return out;
+}
+
+std::vector<uint8_t> pcap_file_header() {
+  std::vector<uint8_t> out;
+  out.reserve(24);
+  put_le32(out, kPcapMagicNanoseconds);
+  put_le16(out, 2);  // version 2.4
+  put_le16(out, 4);
+  put_le32(out, 0);  // thiszone
+  put_le32(out, 0);  // sigfigs
+  put_le32(out, kMaxRecordSize);
+  put_le32(out, kLinktypeLin);
+  return out;
+}
+
+void append_pcap_record(std::vector<uint8_t>& out, int64_t ns, const Message& m) {
+  ns = std::max<int64_t>(ns, 0);
+  const std::vector<uint8_t> record = encode(m);
+  const auto size = static_cast<uint32_t>(record.size());
+  put_le32(out, static_cast<uint32_t>(ns / 1'000'000'000));
+  put_le32(out, static_cast<uint32_t>(ns % 1'000'000'000));
+  put_le32(out, size);
+  put_le32(out, size);
+  out.insert(out.end(), record.begin(), record.end());
+}
+
+}  // namespace canemu::ipc::lin_pcap

@@ -190,5 +190,27 @@ result a_socketcan_program_and_an_adapter_at_the_wrong_rate "can1 200002 vcan2 1
   "$(cut -d' ' -f2- /tmp/t9 | cut -c1-11) $(head -1 /tmp/t9b | cut -d' ' -f2-) $(tail -1 /tmp/t9b | cut -d' ' -f2- | cut -c1-12)"
 canemu bridge remove vcan2 >/dev/null
 
+# 10. Bus-off and restart: a fault rule gives the bridge's frame 321 32 bit errors, which take
+# its node bus-off (TEC 256); 100 ms later (restart_ms) it restarts, as `ip link set ... type can
+# restart-ms 100` makes a kernel driver do, writes CAN_ERR_RESTARTED, recovers, and sends the
+# frame its transmit buffer kept to the emulated node that listens.
+canemu bridge add can1 vcan3 --error-frames --restart-ms 100 >/dev/null
+canemu fault inject --effect bit_error --bus can1 --id 0x321 --count 32 >/dev/null
+canemu dump can1 -n 1 --no-errors >/tmp/t10 2>/tmp/t10.err &
+pid=$!
+wait_for listening /tmp/t10.err
+n=$(receivers vcan3)
+candump -L vcan3,#1FFFFFFF >/tmp/t10b &
+cd=$!
+wait_for more_receivers vcan3 "$n"
+cansend vcan3 321#AB
+wait_pid $pid 20
+kill $cd
+restarts=$(canemu bridge list --json | tr '}' '\n' | grep '"vcan3"' | sed 's/.*"restarts" *: *\([0-9]*\).*/\1/')
+result a_bridge_restarts_after_bus_off "can1 321#AB
+bus-off 1, restarted 1, restarts 1" "$(cut -d' ' -f2- /tmp/t10)
+bus-off $(grep -c ' 20000240#' /tmp/t10b), restarted $(grep -c ' 20000100#' /tmp/t10b), restarts $restarts"
+canemu bridge remove vcan3 >/dev/null
+
 canemu status
 guest_summary

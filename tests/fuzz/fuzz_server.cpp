@@ -30,8 +30,14 @@ namespace {
 
 using namespace canemu;
 
+// No group names: resolving them through NSS (files, systemd's userdb) cost most of each input's
+// time, and the clients are root anyway. Reloads may still name groups.
 constexpr const char* kConfig = R"([simulation]
 time = "stepped"
+
+[security]
+allowed_groups = []
+socket_group = ""
 
 [[bus]]
 name = "can0"

@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 SOURCES = $(shell git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.h' '*.c' '*.inc' 2>/dev/null)
 
-.PHONY: all deps configure build test asan bench fuzz fuzz-long soak format format-check run clean install package
+.PHONY: all deps configure build test asan bench bench-compare fuzz fuzz-long soak format format-check run clean install package
 
 all: build
 
@@ -73,6 +73,11 @@ bench: deps build
 	  --benchmark_out_format=json $(BENCH_ARGS)
 	.venv/bin/python bench/python/python_can_bench.py --out $(BUILD_DIR)/bench-results/python.json
 	@echo "bench: results in $(BUILD_DIR)/bench-results/"
+
+# The figures of two result sets side by side with their ratio (bench/compare.py):
+#   make bench-compare A=build-main/bench-results B=build/bench-results
+bench-compare:
+	@python3 bench/compare.py $(A) $(B)
 
 format:
 	clang-format -i $(SOURCES)

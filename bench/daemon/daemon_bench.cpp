@@ -5,13 +5,19 @@
 //   same run;
 // - how long after a client is killed its resources are freed (target: 100 ms);
 // - peak resident memory of canemud on the default configuration with 64 clients connected,
-//   each with an open channel (target <= 64 MB).
+//   each with an open channel (target <= 64 MB);
+// - what 16 idle buses with two adapters and a connected client cost canemud in real time:
+//   processor time and wake-ups per second (target: nothing).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <sys/socket.h>
 #include <sys/wait.h>
@@ -223,5 +229,66 @@ void BM_DaemonPeakRss64Clients(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DaemonPeakRss64Clients)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// utime + stime in clock ticks, and voluntary + involuntary context switches, of a process.
+std::pair<uint64_t, uint64_t> cpu_ticks_and_switches(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  // Fields after the command's closing parenthesis: state is field 3, utime 14, stime 15.
+  std::istringstream fields(text.substr(text.rfind(')') + 2));
+  std::vector<std::string> f((std::istream_iterator<std::string>(fields)),
+                             std::istream_iterator<std::string>());
+  const uint64_t ticks = f.size() > 12 ? std::stoull(f[11]) + std::stoull(f[12]) : 0;
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  uint64_t switches = 0;
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.find("ctxt_switches:") != std::string::npos) {
+      switches += std::stoull(line.substr(line.find(':') + 1));
+    }
+  }
+  return {ticks, switches};
+}
+
+void BM_IdleBusesCostNothing(benchmark::State& state) {
+  char dir[] = "/tmp/canemu-bench-XXXXXX";
+  const std::string path = std::string(::mkdtemp(dir)) + "/idle.toml";
+  {
+    std::ofstream f(path);
+    f << "[simulation]\ntime = \"realtime\"\n";
+    for (int i = 0; i < 16; ++i) {
+      f << "[[bus]]\nname = \"can" << i << "\"\nbitrate = 500000\n";
+    }
+    f << "[[device]]\nname = \"a\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\", "
+         "\"can1\"]\n[[device]]\nname = \"b\"\nmodel = \"ixxat-usb-to-can\"\n"
+         "controllers = [\"can2\"]\n";
+  }
+  testing::CanemudProcess daemon(CANEMUD_PATH, {"--config=" + path});
+  auto c = client::Connection::open(daemon.socket(), "bench-idle");
+  if (!daemon.ready() || !c) {
+    state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
+    return;
+  }
+  client::ChannelOptions o;
+  o.bus = "can0";
+  auto ch = client::Channel::open(*c, o);
+  if (!ch) {
+    state.SkipWithError("the channel did not open");
+    return;
+  }
+  constexpr int64_t kWindowNs = 2'000'000'000;
+  for (auto _ : state) {
+    const auto [ticks0, switches0] = cpu_ticks_and_switches(daemon.pid());
+    sleep_ns(kWindowNs);
+    const auto [ticks1, switches1] = cpu_ticks_and_switches(daemon.pid());
+    const double seconds = static_cast<double>(kWindowNs) / 1e9;
+    state.counters["cpu_percent_of_a_core"] = 100.0 * static_cast<double>(ticks1 - ticks0) /
+                                              static_cast<double>(::sysconf(_SC_CLK_TCK)) / seconds;
+    state.counters["wakeups_per_second"] = static_cast<double>(switches1 - switches0) / seconds;
+  }
+  std::remove(path.c_str());
+  ::rmdir(dir);
+}
+BENCHMARK(BM_IdleBusesCostNothing)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -5,6 +5,7 @@ canemu.step(), so every figure here is exact."""
 from __future__ import annotations
 
 import re
+import select
 import subprocess
 import threading
 import time
@@ -138,6 +139,37 @@ def test_gap_between_received_frames_is_the_exact_frame_duration(daemon, bus_nam
     finally:
         a.shutdown()
         b.shutdown()
+
+
+def test_messages_taken_in_a_batch_come_one_per_recv_in_order(pair):
+    """The interface takes up to 64 waiting messages from the ring in one call: 100 frames
+    waiting come in order, each once, with increasing simulated time stamps."""
+    a, b = pair
+    drain(b)
+    for i in range(100):
+        a.send(can.Message(arbitration_id=i, data=[i], is_extended_id=False))
+    canemu.step(50 * MS)  # 100 frames of 1 byte at 500 kbit/s take about 13 ms
+    got = data_frames(drain(b))
+    assert [(m.arbitration_id, bytes(m.data)) for m in got] == [(i, bytes([i])) for i in range(100)]
+    assert all(x.timestamp < y.timestamp for x, y in zip(got, got[1:]))
+
+
+def test_after_fileno_the_descriptor_is_readable_while_any_message_waits(pair):
+    """Once a program asked for the descriptor, recv takes one message at a time from the ring,
+    so the descriptor stays readable until the last one is read."""
+    a, b = pair
+    fd = b.fileno()
+    drain(b)
+    for i in range(3):
+        a.send(can.Message(arbitration_id=0x20 + i, is_extended_id=False))
+    canemu.step(5 * MS)
+    readable = []
+    for _ in range(3):
+        readable.append(select.select([fd], [], [], 0)[0] == [fd])
+        assert b.recv(0).arbitration_id == 0x20 + len(readable) - 1
+    assert readable == [True, True, True]
+    assert b.recv(0) is None
+    assert select.select([fd], [], [], 0)[0] == []
 
 
 def test_stepped_time_stamps_are_simulated_seconds(pair):

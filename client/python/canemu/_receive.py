@@ -15,13 +15,12 @@ from ._daemon import _sim_time
 from ._state import _StateMixin
 from ._vci import VciError
 
-
-def _payload_length(flags: int, flags2: int) -> int:
-    """Data bytes of a CAN message from its CANMSGINFO flags (a remote frame has none)."""
-    dlc = flags & _vci.FLAGS_DLC
-    if flags2 & _vci.FLAGS2_EDL:
-        return _vci.DLC_TO_LEN[dlc]
-    return 0 if flags & _vci.FLAGS_RTR else min(dlc, 8)
+_RX_BATCH = 64  # messages taken from the receive ring in one call (CanemuBus)
+_MSG_SIZE = ctypes.sizeof(_vci.CANMSG2)
+# For the data-frame path of _convert (a global is found faster than a module's attribute).
+_DATA, _DLC, _EDL, _RTR, _SRR = (_vci.CAN_MSGTYPE_DATA, _vci.FLAGS_DLC, _vci.FLAGS2_EDL,
+                                 _vci.FLAGS_RTR, _vci.FLAGS_SRR)
+_EXT, _FDR, _ESI, _DLC_TO_LEN = _vci.FLAGS_EXT, _vci.FLAGS2_FDR, _vci.FLAGS2_ESI, _vci.DLC_TO_LEN
 
 
 class _ReceiveMixin(_StateMixin):
@@ -30,6 +29,9 @@ class _ReceiveMixin(_StateMixin):
     def fileno(self) -> int:
         """A descriptor that is readable whenever messages wait (for select, Notifier,
         asyncio)."""
+        # From now on one message at a time: a message taken from the ring into the batch would
+        # no longer make the descriptor readable.
+        self._rx_batch_max = 1
         if self._poll_fd is None:
             fd = ctypes.c_int(-1)
             with _vci_errors():
@@ -44,9 +46,23 @@ class _ReceiveMixin(_StateMixin):
             while True:
                 if self._pending:
                     return self._pending.popleft(), True
+                if self._rx_next < self._rx_count:
+                    offset = self._rx_next * _MSG_SIZE
+                    self._rx_next += 1
+                    msg, filtered = self._convert(self._rx_batch_view, offset)
+                    if msg is not None:
+                        return msg, filtered
+                    continue
                 if self._closed:
                     return None, True
-                hr = lib.canChannelPeekMessage(self._channel, self._rx_ref)
+                hr = lib.canChannelPeekMsgMult(
+                    self._channel, self._rx_batch, self._rx_batch_max, self._rx_taken_ref
+                )
+                if self._rx_taken.value > 0:
+                    self._rx_count, self._rx_next = self._rx_taken.value, 0
+                    continue
+                if hr in (_vci.VCI_OK, _vci.VCI_E_TIMEOUT):
+                    hr = _vci.VCI_E_RXQUEUE_EMPTY
                 if hr == _vci.VCI_E_RXQUEUE_EMPTY:
                     if self._reported in (_vci.CANEMU_STATE_WARNING, _vci.CANEMU_STATE_PASSIVE):
                         # Nothing marks a counter crossing 128 by itself (a fault setting the
@@ -66,7 +82,7 @@ class _ReceiveMixin(_StateMixin):
                         continue
                 if hr != _vci.VCI_OK:
                     raise _can_error(VciError("canChannelReadMessage", hr, _vci.error_text(hr)))
-                msg, filtered = self._convert()
+                msg, filtered = self._convert(self._rx_view, 0)
                 if msg is not None:
                     return msg, filtered  # what it caused (self._pending) comes next
 
@@ -87,28 +103,35 @@ class _ReceiveMixin(_StateMixin):
             now_ns, _ = _sim_time()
         return now_ns - (now_ns - self._epoch_ns) % 1000
 
-    def _convert(self) -> Tuple[Optional[Message], bool]:
-        """The message in self._rx_msg as a python-can Message (None for those python-can has no
-        use for). Error frames that the message also causes go to self._pending, after it."""
-        ticks, _, ident, kind, flags2, flags, _ = _HEADER.unpack_from(self._rx_view)
-        if kind == _vci.CAN_MSGTYPE_DATA:
-            sim_ns = self._sim_ns(ticks)
-            dlc = flags & _vci.FLAGS_DLC
-            fd = bool(flags2 & _vci.FLAGS2_EDL)
-            remote = bool(flags & _vci.FLAGS_RTR) and not fd
-            length = _payload_length(flags, flags2)
-            data = bytes(self._rx_view[16 : 16 + length])
-            own = bool(flags & _vci.FLAGS_SRR)
+    def _convert(self, view: memoryview, at: int) -> Tuple[Optional[Message], bool]:
+        """The CANMSG2 at byte `at` of `view` as a python-can Message (None for those python-can
+        has no use for). Error frames that the message also causes go to self._pending, after
+        it."""
+        ticks, _, ident, kind, flags2, flags, _ = _HEADER.unpack_from(view, at)
+        body = at + 16
+        if kind == _DATA:
+            # The hot path: _sim_ns and _payload_length inline, constants from module globals.
+            if ticks < self._last_ticks:
+                self._wraps += 1
+            self._last_ticks = ticks
+            sim_ns = self._epoch_ns + ((self._wraps << 32) | ticks) * 1000
+            dlc = flags & _DLC
+            if flags2 & _EDL:
+                fd, remote, length = True, False, _DLC_TO_LEN[dlc]
+            else:
+                fd, remote = False, bool(flags & _RTR)
+                length = 0 if remote else (dlc if dlc < 8 else 8)
+            own = bool(flags & _SRR)
             msg = Message(
-                timestamp=sim_ns / 1e9 + self._time_offset,  # _stamp, inline: the hot path
+                timestamp=sim_ns / 1e9 + self._time_offset,  # _stamp, inline
                 arbitration_id=ident,
-                is_extended_id=bool(flags & _vci.FLAGS_EXT),
+                is_extended_id=bool(flags & _EXT),
                 is_remote_frame=remote,
                 is_fd=fd,
-                bitrate_switch=bool(flags2 & _vci.FLAGS2_FDR),
-                error_state_indicator=bool(flags2 & _vci.FLAGS2_ESI),
+                bitrate_switch=bool(flags2 & _FDR),
+                error_state_indicator=bool(flags2 & _ESI),
                 dlc=length if fd else dlc,
-                data=data,
+                data=bytes(view[body : body + length]),
                 channel=self._channel_name,
                 is_rx=not own,
                 check=False,
@@ -122,10 +145,10 @@ class _ReceiveMixin(_StateMixin):
             return msg, self._hw_filtered
         if kind == _vci.CAN_MSGTYPE_ERROR:
             sim_ns = self._sim_ns(ticks)
-            msg = self._bus_error(sim_ns)
+            msg = self._bus_error(sim_ns, view[body])
             # The counters as the error was detected (canemu's firmware writes REC and TEC
             # beyond the message's dlc, docs/vci.md): the crossing at its instant.
-            counters = (self._rx_view[16 + 4], self._rx_view[16 + 3])
+            counters = (view[body + 4], view[body + 3])
             if self._reported == _vci.CANEMU_STATE_WARNING:
                 self._check_passive(sim_ns, counters)
             else:
@@ -133,7 +156,7 @@ class _ReceiveMixin(_StateMixin):
             return msg, True
         if kind == _vci.CAN_MSGTYPE_STATUS:
             sim_ns = self._sim_ns(ticks)
-            msg = self._status_change(sim_ns, self._rx_view[16])
+            msg = self._status_change(sim_ns, view[body])
             if self._reported == _vci.CANEMU_STATE_WARNING:
                 self._check_passive(sim_ns, self._counters)  # those of the last ERROR message
             elif self._reported == _vci.CANEMU_STATE_PASSIVE:

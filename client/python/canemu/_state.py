@@ -78,8 +78,9 @@ class _StateMixin:
             channel=self._channel_name,
         )
 
-    def _bus_error(self, sim_ns: int) -> Optional[Message]:
-        cls, prot, location = _BUS_ERRORS.get(self._rx_view[16], (CAN_ERR_PROT, 0, 0))
+    def _bus_error(self, sim_ns: int, code: int) -> Optional[Message]:
+        """An ERROR message with CAN_ERROR_* `code` as a SocketCAN error frame."""
+        cls, prot, location = _BUS_ERRORS.get(code, (CAN_ERR_PROT, 0, 0))
         data = bytearray(8)
         data[2] = prot
         data[3] = location

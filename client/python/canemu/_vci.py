@@ -309,6 +309,12 @@ _SIGNATURES = {
     "canChannelAddFilterIds": (HANDLE, ctypes.c_int, ctypes.c_uint32, ctypes.c_uint32),
     "canChannelRemFilterIds": (HANDLE, ctypes.c_int, ctypes.c_uint32, ctypes.c_uint32),
     "canChannelPeekMessage": (HANDLE, ctypes.POINTER(CANMSG2)),
+    "canChannelPeekMsgMult": (
+        HANDLE,
+        ctypes.POINTER(CANMSG2),
+        ctypes.c_uint32,
+        ctypes.POINTER(ctypes.c_uint32),
+    ),
     "canChannelReadMessage": (HANDLE, ctypes.c_uint32, ctypes.POINTER(CANMSG2)),
     "canChannelPostMessage": (HANDLE, ctypes.POINTER(CANMSG2)),
     "canChannelSendMessage": (HANDLE, ctypes.c_uint32, ctypes.POINTER(CANMSG2)),

@@ -27,7 +27,7 @@ from ._cyclic import CanemuCyclicTask, _CyclicMixin
 from ._daemon import _buses, _devices, _wall_offset, buses, connect, devices, sim_time, step
 from ._daemon import current_socket as _current_socket
 from ._filters import _FilterMixin
-from ._receive import _ReceiveMixin
+from ._receive import _RX_BATCH, _ReceiveMixin
 from ._send import _SendMixin
 from ._state import (  # noqa: F401 (SocketCAN's error frame constants, importable from here)
     CAN_ERR_ACK,
@@ -163,6 +163,16 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._rx_msg = _vci.CANMSG2()
         self._rx_view = memoryview(self._rx_msg).cast("B")
         self._rx_ref = ctypes.byref(self._rx_msg)  # made once: a call per frame is the hot path
+        # Messages are taken from the receive ring up to _RX_BATCH at a time (one call for
+        # them all) and converted one per recv; fileno() turns that off (batch of 1), so that a
+        # descriptor that is not readable always means that nothing waits (_receive.py).
+        self._rx_batch = (_vci.CANMSG2 * _RX_BATCH)()
+        self._rx_batch_view = memoryview(self._rx_batch).cast("B")
+        self._rx_batch_max = _RX_BATCH
+        self._rx_taken = ctypes.c_uint32()
+        self._rx_taken_ref = ctypes.byref(self._rx_taken)
+        self._rx_count = 0  # messages in the batch
+        self._rx_next = 0  # the next one to convert
         self._tx_msg = _vci.CANMSG2()
         self._tx_view = memoryview(self._tx_msg).cast("B")
         self._tx_ref = ctypes.byref(self._tx_msg)

@@ -2,24 +2,12 @@
 
 #include <algorithm>
 
+#include "canemu/ipc/pcap.hpp"
+
 namespace canemu::ipc::lin_pcap {
 
-namespace {
-
-constexpr uint32_t kPcapMagicNanoseconds = 0xA1B23C4D;
-
-void put_le32(std::vector<uint8_t>& out, uint32_t v) {
-  for (int i = 0; i < 4; ++i) {
-    out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-  }
-}
-
-void put_le16(std::vector<uint8_t>& out, uint16_t v) {
-  out.push_back(static_cast<uint8_t>(v));
-  out.push_back(static_cast<uint8_t>(v >> 8));
-}
-
-}  // namespace
+using pcap::put_le16;
+using pcap::put_le32;
 
 Message event(uint32_t type) {
   Message m;
@@ -54,26 +42,12 @@ std::vector<uint8_t> encode(const Message& m) {
 }
 
 std::vector<uint8_t> pcap_file_header() {
-  std::vector<uint8_t> out;
-  out.reserve(24);
-  put_le32(out, kPcapMagicNanoseconds);
-  put_le16(out, 2);  // version 2.4
-  put_le16(out, 4);
-  put_le32(out, 0);  // thiszone
-  put_le32(out, 0);  // sigfigs
-  put_le32(out, kMaxRecordSize);
-  put_le32(out, kLinktypeLin);
-  return out;
+  return pcap::file_header(kMaxRecordSize, kLinktypeLin);
 }
 
 void append_pcap_record(std::vector<uint8_t>& out, int64_t ns, const Message& m) {
-  ns = std::max<int64_t>(ns, 0);
   const std::vector<uint8_t> record = encode(m);
-  const auto size = static_cast<uint32_t>(record.size());
-  put_le32(out, static_cast<uint32_t>(ns / 1'000'000'000));
-  put_le32(out, static_cast<uint32_t>(ns % 1'000'000'000));
-  put_le32(out, size);
-  put_le32(out, size);
+  pcap::append_record_header(out, ns, static_cast<uint32_t>(record.size()));
   out.insert(out.end(), record.begin(), record.end());
 }
 

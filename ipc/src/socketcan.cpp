@@ -30,17 +30,6 @@ Frame error_frame(uint32_t classes, const ChannelMessage& m) {
   return f;
 }
 
-void put_le32(std::vector<uint8_t>& out, uint32_t v) {
-  for (int i = 0; i < 4; ++i) {
-    out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-  }
-}
-
-void put_le16(std::vector<uint8_t>& out, uint16_t v) {
-  out.push_back(static_cast<uint8_t>(v));
-  out.push_back(static_cast<uint8_t>(v >> 8));
-}
-
 constexpr char kHex[] = "0123456789ABCDEF";
 
 }  // namespace
@@ -217,25 +206,11 @@ std::string candump_line(int64_t ns, std::string_view bus, const Frame& f) {
 }
 
 std::vector<uint8_t> pcap_file_header() {
-  std::vector<uint8_t> out;
-  out.reserve(kPcapFileHeaderSize);
-  put_le32(out, kPcapMagicNanoseconds);
-  put_le16(out, 2);  // version 2.4
-  put_le16(out, 4);
-  put_le32(out, 0);  // thiszone
-  put_le32(out, 0);  // sigfigs
-  put_le32(out, kCanFdMtu);
-  put_le32(out, kLinktypeCanSocketcan);
-  return out;
+  return pcap::file_header(kCanFdMtu, kLinktypeCanSocketcan);
 }
 
 void append_pcap_record(std::vector<uint8_t>& out, int64_t ns, const Frame& f) {
-  ns = std::max<int64_t>(ns, 0);
-  const auto size = static_cast<uint32_t>(f.mtu());
-  put_le32(out, static_cast<uint32_t>(ns / 1'000'000'000));
-  put_le32(out, static_cast<uint32_t>(ns % 1'000'000'000));
-  put_le32(out, size);
-  put_le32(out, size);
+  pcap::append_record_header(out, ns, static_cast<uint32_t>(f.mtu()));
   for (int i = 3; i >= 0; --i) {
     out.push_back(static_cast<uint8_t>(f.can_id >> (8 * i)));
   }

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "canemu/ipc/channel_message.hpp"
+#include "canemu/ipc/pcap.hpp"
 
 namespace canemu::ipc::socketcan {
 
@@ -53,9 +54,9 @@ inline constexpr uint8_t kProtTx = 0x80;
 
 // pcap: https://www.tcpdump.org/linktypes/LINKTYPE_CAN_SOCKETCAN.html
 inline constexpr uint32_t kLinktypeCanSocketcan = 227;
-inline constexpr uint32_t kPcapMagicNanoseconds = 0xA1B23C4D;
-inline constexpr std::size_t kPcapFileHeaderSize = 24;
-inline constexpr std::size_t kPcapRecordHeaderSize = 16;
+inline constexpr uint32_t kPcapMagicNanoseconds = pcap::kMagicNanoseconds;
+inline constexpr std::size_t kPcapFileHeaderSize = pcap::kFileHeaderSize;
+inline constexpr std::size_t kPcapRecordHeaderSize = pcap::kRecordHeaderSize;
 
 // A frame as the kernel's structs hold it: can_id with its EFF/RTR/ERR flags, the payload length
 // (0..8 classic, 0..64 FD; for RTR the requested length), canfd_frame.flags (FD: BRS, ESI, FDF)

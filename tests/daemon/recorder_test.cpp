@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "../support/lin_reference.hpp"
 #include "../support/temp_dir.hpp"
 
 #include "canemu/daemon/simulation.hpp"
@@ -156,35 +157,9 @@ TEST(Recorder, AFullDiskIsReportedOnceWithWhatWasLost) {
 
 // ---- LIN: lin0 of the embedded default (19200 bit/s, bus 2) into pcap with LINKTYPE_LIN
 
-std::string hex(const std::string& bytes) {
-  std::string s;
-  for (unsigned char b : bytes) {
-    char two[3];
-    std::snprintf(two, sizeof two, "%02X", b);
-    s += two;
-  }
-  return s;
-}
-
-// LIN 2.x's protected identifier and checksum, computed here independently of the model.
-int bit(int value, int n) {
-  return (value >> n) & 1;
-}
-int pid(int id) {
-  const int p0 = bit(id, 0) ^ bit(id, 1) ^ bit(id, 2) ^ bit(id, 4);
-  const int p1 = 1 - (bit(id, 1) ^ bit(id, 3) ^ bit(id, 4) ^ bit(id, 5));
-  return id | (p0 << 6) | (p1 << 7);
-}
-int inverted_sum(std::initializer_list<int> bytes) {
-  int sum = 0;
-  for (int b : bytes) {
-    sum += b;
-    if (sum > 0xFF) {
-      sum -= 0xFF;
-    }
-  }
-  return 0xFF - sum;
-}
+using test_support::lin::hex;
+using test_support::lin::inverted_sum;
+using test_support::lin::pid;
 
 // Bit k of a frame starting at `from_ns` at 19200 bit/s, rounded down to the ns.
 int64_t at_bits(int64_t from_ns, int64_t bits) {

@@ -7,42 +7,14 @@
 
 #include <gtest/gtest.h>
 
+#include "../support/lin_reference.hpp"
+
 namespace canemu::ipc::lin_pcap {
 namespace {
 
-std::string hex(const std::vector<uint8_t>& bytes) {
-  std::string s;
-  for (uint8_t b : bytes) {
-    char two[3];
-    std::snprintf(two, sizeof two, "%02X", b);
-    s += two;
-  }
-  return s;
-}
-
-// The protected identifier and checksums as LIN 2.x defines them, computed here bit by bit and
-// independently of the model's lin_frame.cpp.
-int bit(int value, int n) {
-  return (value >> n) & 1;
-}
-
-uint8_t pid(int id) {
-  const int p0 = bit(id, 0) ^ bit(id, 1) ^ bit(id, 2) ^ bit(id, 4);
-  const int p1 = 1 - (bit(id, 1) ^ bit(id, 3) ^ bit(id, 4) ^ bit(id, 5));
-  return static_cast<uint8_t>(id | (p0 << 6) | (p1 << 7));
-}
-
-// The inverted sum with each carry added back.
-uint8_t inverted_sum(std::initializer_list<int> bytes) {
-  int sum = 0;
-  for (int b : bytes) {
-    sum += b;
-    if (sum > 0xFF) {
-      sum -= 0xFF;
-    }
-  }
-  return static_cast<uint8_t>(0xFF - sum);
-}
+using test_support::lin::hex;
+using test_support::lin::inverted_sum;
+using test_support::lin::pid;
 
 Message frame(int id, std::initializer_list<int> data, ChecksumType kind, uint8_t checksum) {
   Message m;

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "../support/lin_reference.hpp"
 #include "../support/temp_dir.hpp"
 
 #include "cli_process.hpp"
@@ -147,25 +148,9 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
 
 // ---- LIN: pcap with LINKTYPE_LIN (212), at 19200 bit/s
 
-// LIN 2.x's protected identifier and checksum, computed here independently of the model.
-int bit(int value, int n) {
-  return (value >> n) & 1;
-}
-int pid(int id) {
-  const int p0 = bit(id, 0) ^ bit(id, 1) ^ bit(id, 2) ^ bit(id, 4);
-  const int p1 = 1 - (bit(id, 1) ^ bit(id, 3) ^ bit(id, 4) ^ bit(id, 5));
-  return id | (p0 << 6) | (p1 << 7);
-}
-int inverted_sum(std::initializer_list<int> bytes) {
-  int sum = 0;
-  for (int b : bytes) {
-    sum += b;
-    if (sum > 0xFF) {
-      sum -= 0xFF;
-    }
-  }
-  return 0xFF - sum;
-}
+// LIN 2.x's protected identifier and checksum, computed independently of the model.
+using test_support::lin::inverted_sum;
+using test_support::lin::pid;
 
 // Bit k of a frame at 19200 bit/s from its break, rounded down to the ns.
 int64_t bits_ns(int64_t bits) {

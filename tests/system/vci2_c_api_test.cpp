@@ -182,6 +182,52 @@ TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
   vciDeviceClose(gamma);
 }
 
+TEST(Vci2CApi, AChannelAndACyclicListHandOutTheirLinesControlUnit) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  HANDLE beta = device_named("beta");
+  HANDLE channel = channel_on(beta, 0, CAN_FILTER_PASS);
+  HANDLE control = nullptr;
+  EXPECT_EQ(canChannelGetControl(channel, nullptr), VCI_E_INVALIDARG);
+  EXPECT_EQ(canChannelGetControl(beta, &control), VCI_E_INVHANDLE);  // a device, not a channel
+  EXPECT_EQ(control, nullptr);
+  ASSERT_EQ(canChannelGetControl(channel, &control), VCI_OK);
+  ASSERT_NE(control, nullptr);
+  // It is beta's control unit: held, so nobody else opens it; it starts beta's line.
+  HANDLE other = nullptr;
+  EXPECT_EQ(canControlOpen(beta, 0, &other), VCI_E_ACCESSDENIED);
+  HANDLE list = nullptr;
+  ASSERT_EQ(canSchedulerOpen(beta, 0, &list), VCI_OK);
+  EXPECT_EQ(canSchedulerGetControl(list, &other), VCI_E_ACCESSDENIED);
+  CANBTP n = kNominal;
+  CANBTP f = kData;
+  ASSERT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048, 2048,
+                                 &n, &f),
+            VCI_OK);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus & CAN_STATUS_ININIT, 0u);
+  EXPECT_EQ(s.sBtpFdr.dwBPS, 2000000u);
+  alpha.post(msg(0x321, {1, 2, 3}, true, true));
+  step_ns(2'000'000);
+  const auto got = drain(channel);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x321u);
+  // Closed like any control unit; then the cyclic list gets it (the line keeps running).
+  ASSERT_EQ(canControlClose(control), VCI_OK);
+  EXPECT_EQ(canSchedulerGetControl(channel, &other), VCI_E_INVHANDLE);  // a channel, not a list
+  EXPECT_EQ(canSchedulerGetControl(list, nullptr), VCI_E_INVALIDARG);
+  ASSERT_EQ(canSchedulerGetControl(list, &other), VCI_OK);
+  ASSERT_EQ(canControlGetStatus(other, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus & CAN_STATUS_ININIT, 0u);
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 500000u);
+  EXPECT_EQ(canControlClose(other), VCI_OK);
+  EXPECT_EQ(canSchedulerClose(list), VCI_OK);
+  EXPECT_EQ(canChannelClose(channel), VCI_OK);
+  vciDeviceClose(beta);
+}
+
 TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
   VciDaemon d(kAdapters);
   FdAdapter alpha("alpha", false);

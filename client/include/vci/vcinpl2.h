@@ -173,6 +173,12 @@ HRESULT VCIAPI canChannelGetCaps(HANDLE hCanChn, PCANCAPABILITIES2 pCanCaps);
  * VCI_E_INVHANDLE. */
 HRESULT VCIAPI canChannelGetStatus(HANDLE hCanChn, PCANCHANSTATUS2 pStatus);
 
+/* Opens the control unit of the channel's line, as canControlOpen on the channel's device
+ * and line would, and stores its handle in *phCanCtl (close it with canControlClose);
+ * VCI_OK, VCI_E_INVHANDLE, VCI_E_INVALIDARG for a null pointer, VCI_E_ACCESSDENIED while
+ * another handle holds the control unit. */
+HRESULT VCIAPI canChannelGetControl(HANDLE hCanChn, PHANDLE phCanCtl);
+
 /* Creates the FIFOs (sizes in messages), the event thresholds and the channel's own
  * filter (list size dwFilterSize, mode bFilterMode = CAN_FILTER_*, optionally
  * | CAN_FILTER_SRRA); VCI_OK, VCI_E_INVALIDARG, VCI_E_INVALID_STATE when active. */
@@ -263,6 +269,10 @@ HRESULT VCIAPI canSchedulerGetCaps(HANDLE hCanShd, PCANCAPABILITIES2 pCanCaps);
 /* Fills *pStatus with the line status, the task state and each entry's state; VCI_OK,
  * VCI_E_INVHANDLE. */
 HRESULT VCIAPI canSchedulerGetStatus(HANDLE hCanShd, PCANSCHEDULERSTATUS2 pStatus);
+
+/* Opens the control unit of the scheduler's line (as canChannelGetControl does for a
+ * channel); VCI_OK, VCI_E_INVHANDLE, VCI_E_INVALIDARG, VCI_E_ACCESSDENIED. */
+HRESULT VCIAPI canSchedulerGetControl(HANDLE hCanShd, PHANDLE phCanCtl);
 
 /* Runs (fEnable TRUE) or halts the whole scheduler; VCI_OK, VCI_E_INVHANDLE. */
 HRESULT VCIAPI canSchedulerActivate(HANDLE hCanShd, BOOL fEnable);

@@ -91,6 +91,10 @@ HRESULT VCIAPI canChannelInitialize(HANDLE hCanChn, UINT16 wRxFifoSize, UINT16 w
                                      dwFilterSize, bFilterMode);
 }
 
+HRESULT VCIAPI canChannelGetControl(HANDLE hCanChn, PHANDLE phCanCtl) {
+  return control_of_line(hCanChn, Kind::channel, kV2, phCanCtl);
+}
+
 HRESULT VCIAPI canChannelGetFilterMode(HANDLE hCanChn, BOOL fExtend, PUINT8 pbMode) {
   if (pbMode == nullptr) {
     return VCI_E_INVALIDARG;
@@ -128,6 +132,10 @@ HRESULT VCIAPI canSchedulerGetStatus(HANDLE hCanShd, PCANSCHEDULERSTATUS2 pStatu
     return hr;
   }
   return scheduler_status(hCanShd, &pStatus->bTaskStat, pStatus->abMsgStat);
+}
+
+HRESULT VCIAPI canSchedulerGetControl(HANDLE hCanShd, PHANDLE phCanCtl) {
+  return control_of_line(hCanShd, Kind::scheduler, kV2, phCanCtl);
 }
 
 HRESULT VCIAPI canSchedulerAddMessage(HANDLE hCanShd, PCANCYCLICTXMSG2 pMessage, PUINT32 pdwIndex) {

@@ -182,6 +182,41 @@ TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
   vciDeviceClose(gamma);
 }
 
+TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
+  UINT32 major = 0;
+  UINT32 minor = 99;
+  UINT32 revision = 99;
+  UINT32 build = 0;
+  ASSERT_EQ(vciGetVersion(&major, &minor, &revision, &build), VCI_OK);
+  EXPECT_EQ(major, 4u);
+  EXPECT_EQ(minor, 0u);
+  EXPECT_EQ(revision, 0u);
+  unsigned v[3] = {};
+  ASSERT_EQ(std::sscanf(CANEMU_PROJECT_VERSION, "%u.%u.%u", &v[0], &v[1], &v[2]), 3);
+  EXPECT_EQ(build, v[0] * 10000 + v[1] * 100 + v[2]);
+  EXPECT_EQ(vciGetVersion(&major, &minor, nullptr, &build), VCI_E_INVALIDARG);
+  // What vcinpl_general.h declares is in this library too.
+  VCIID id{};
+  ASSERT_EQ(vciCreateLuid(&id), VCI_OK);
+  wchar_t text[17];
+  ASSERT_EQ(vciLuidToCharW(id, text, 17), VCI_OK);
+  VCIID back{};
+  ASSERT_EQ(vciCharToLuidW(text, &back), VCI_OK);
+  EXPECT_EQ(back.AsInt64, id.AsInt64);
+  HANDLE e = nullptr;
+  ASSERT_EQ(vciEventCreate(FALSE, TRUE, &e), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 0), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 10), VCI_E_TIMEOUT);
+  EXPECT_EQ(vciEventDelete(e), VCI_OK);
+  VciDaemon d(kAdapters);
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpenDlg(nullptr, &dev), VCI_OK);  // the first device: alpha
+  VCIDEVICEINFO info{};
+  ASSERT_EQ(vciDeviceGetInfo(dev, &info), VCI_OK);
+  EXPECT_NE(std::string(info.Description).find("(canemu alpha)"), std::string::npos);
+  EXPECT_EQ(vciDeviceClose(dev), VCI_OK);
+}
+
 TEST(Vci2CApi, AChannelAndACyclicListHandOutTheirLinesControlUnit) {
   VciDaemon d(kAdapters);
   FdAdapter alpha("alpha");

@@ -3,13 +3,11 @@
 // core's remote objects and rings, live in com.hpp (the IUnknown part), device_objects
 // (device manager, enumerator, device, BAL), can_objects (socket, control unit, channel,
 // cyclic list) and fifo_objects (readers, writers, stand-alone FIFOs).
-#include <atomic>
 #include <cinttypes>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 
-#include <unistd.h>
+#include <sys/utsname.h>
 
 #include "com.hpp"
 #include "device_objects.hpp"
@@ -54,37 +52,6 @@ const IID IID_ILinMonitor = guid(19);
 const CLSID CLSID_VCIBAL = guid(0x80);
 }
 
-namespace {
-
-int hex(char c) {
-  if (c >= '0' && c <= '9') {
-    return c - '0';
-  }
-  if (c >= 'a' && c <= 'f') {
-    return c - 'a' + 10;
-  }
-  if (c >= 'A' && c <= 'F') {
-    return c - 'A' + 10;
-  }
-  return -1;
-}
-
-// Reads `digits` hex digits at `p` into `out`; false on anything else.
-bool read_hex(const char*& p, int digits, uint64_t& out) {
-  out = 0;
-  for (int i = 0; i < digits; ++i) {
-    const int v = hex(p[i]);
-    if (v < 0) {
-      return false;
-    }
-    out = (out << 4) | static_cast<uint64_t>(v);
-  }
-  p += digits;
-  return true;
-}
-
-}  // namespace
-
 // ---------------------------------------------------------------- functions
 
 extern "C" {
@@ -105,7 +72,17 @@ HRESULT VCIAPI VciGetVersion(PVCIVERSIONINFO p) {
   if (p == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  *p = VCIVERSIONINFO{4, 0, 0, 0, 0, 0, 0, 0};
+  *p = VCIVERSIONINFO{};
+  p->VciMajorVersion = kVciMajorVersion;
+  p->VciMinorVersion = kVciMinorVersion;
+  p->VciReleaseNumber = kVciRevisionNumber;
+  p->VciBuildNumber = vci_build_number();
+  // The kernel's version ("6.1.0-18-amd64": 6, 1, 0); the platform id stays 0 (not Windows).
+  utsname u{};
+  if (::uname(&u) == 0) {
+    std::sscanf(u.release, "%" SCNu32 ".%" SCNu32 ".%" SCNu32, &p->OsMajorVersion,
+                &p->OsMinorVersion, &p->OsBuildNumber);
+  }
   return VCI_OK;
 }
 
@@ -113,75 +90,39 @@ HRESULT VCIAPI VciCreateLuid(PVCIID p) {
   if (p == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  static std::atomic<int64_t> next{1};
-  // Unique in this process: its pid above, a counter below.
-  p->AsInt64 = (static_cast<int64_t>(::getpid()) << 32) | next++;
+  p->AsInt64 = new_luid();
   return VCI_OK;
 }
 
 HRESULT VCIAPI VciLuidToChar(REFVCIID rVciid, PCHAR psz, LONG cbSize) {
-  if (psz == nullptr || cbSize <= 0) {
-    return VCI_E_INVALIDARG;
-  }
-  if (cbSize < 17) {
-    return VCI_E_BUFFER_OVERFLOW;
-  }
-  std::snprintf(psz, static_cast<std::size_t>(cbSize), "%016" PRIX64,
-                static_cast<uint64_t>(rVciid.AsInt64));
-  return VCI_OK;
+  return copy_text(luid_text(rVciid), psz, cbSize);
 }
 
 HRESULT VCIAPI VciCharToLuid(PCHAR psz, PVCIID p) {
   if (psz == nullptr || p == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  const char* s = psz;
-  uint64_t v = 0;
-  if (std::strlen(psz) != 16 || !read_hex(s, 16, v)) {
+  const auto id = parse_luid(psz);
+  if (!id) {
     return VCI_E_FAIL;
   }
-  p->AsInt64 = static_cast<INT64>(v);
+  *p = *id;
   return VCI_OK;
 }
 
 HRESULT VCIAPI VciGuidToChar(REFGUID g, PCHAR psz, LONG cbSize) {
-  if (psz == nullptr || cbSize <= 0) {
-    return VCI_E_INVALIDARG;
-  }
-  if (cbSize < 39) {
-    return VCI_E_BUFFER_OVERFLOW;
-  }
-  std::snprintf(psz, static_cast<std::size_t>(cbSize),
-                "{%08X-%04X-%04X-%02X%02X-%02X%02X%02X%02X%02X%02X}", g.Data1, g.Data2, g.Data3,
-                g.Data4[0], g.Data4[1], g.Data4[2], g.Data4[3], g.Data4[4], g.Data4[5], g.Data4[6],
-                g.Data4[7]);
-  return VCI_OK;
+  return copy_text(guid_text(g), psz, cbSize);
 }
 
 HRESULT VCIAPI VciCharToGuid(PCHAR psz, PGUID p) {
   if (psz == nullptr || p == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  const char* s = psz;
-  uint64_t a = 0;
-  uint64_t b = 0;
-  uint64_t c = 0;
-  uint64_t d = 0;
-  uint64_t e = 0;
-  const bool ok = std::strlen(psz) == 38 && *s++ == '{' && read_hex(s, 8, a) && *s++ == '-' &&
-                  read_hex(s, 4, b) && *s++ == '-' && read_hex(s, 4, c) && *s++ == '-' &&
-                  read_hex(s, 4, d) && *s++ == '-' && read_hex(s, 12, e) && *s == '}';
-  if (!ok) {
+  const auto g = parse_guid(psz);
+  if (!g) {
     return VCI_E_FAIL;
   }
-  p->Data1 = static_cast<UINT32>(a);
-  p->Data2 = static_cast<UINT16>(b);
-  p->Data3 = static_cast<UINT16>(c);
-  p->Data4[0] = static_cast<UINT8>(d >> 8);
-  p->Data4[1] = static_cast<UINT8>(d);
-  for (int i = 0; i < 6; ++i) {
-    p->Data4[2 + i] = static_cast<UINT8>(e >> (40 - 8 * i));
-  }
+  *p = *g;
   return VCI_OK;
 }
 

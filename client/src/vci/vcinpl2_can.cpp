@@ -19,6 +19,21 @@ using Kind = Object::Kind;
 
 extern "C" {
 
+// ---- version ----
+
+HRESULT VCIAPI vciGetVersion(PUINT32 pdwMajorVersion, PUINT32 pdwMinorVersion, PUINT32 pdwRevNumber,
+                             PUINT32 pdwBuildNumber) {
+  if (pdwMajorVersion == nullptr || pdwMinorVersion == nullptr || pdwRevNumber == nullptr ||
+      pdwBuildNumber == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *pdwMajorVersion = kVciMajorVersion;
+  *pdwMinorVersion = kVciMinorVersion;
+  *pdwRevNumber = kVciRevisionNumber;
+  *pdwBuildNumber = vci_build_number();
+  return VCI_OK;
+}
+
 // ---- control unit ----
 
 HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExMode,

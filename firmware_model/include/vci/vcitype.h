@@ -13,6 +13,7 @@
 #ifndef CANEMU_VCI_VCITYPE_H
 #define CANEMU_VCI_VCITYPE_H
 
+#include <stddef.h> /* wchar_t in C */
 #include <stdint.h>
 
 /* ------------------------------------------------------------------------------------------
@@ -56,6 +57,9 @@ typedef INT32 BOOL32;
 
 typedef char CHAR;
 typedef char TCHAR; /* no UNICODE build: TCHAR is always char */
+/* The W (wide) functions take wchar_t text: 32-bit on Linux, what L"..." literals and the
+ * wcs* functions use (on Windows WCHAR is 16-bit UTF-16). */
+typedef wchar_t WCHAR;
 typedef INT32 LONG; /* 32-bit, as on Windows (LLP64), not the 64-bit Linux long */
 typedef UINT32 ULONG;
 typedef float FLOAT;
@@ -76,12 +80,14 @@ typedef BOOL* PBOOL;
 typedef BOOL8* PBOOL8;
 typedef BOOL32* PBOOL32;
 typedef CHAR* PCHAR;
+typedef WCHAR* PWCHAR;
 typedef TCHAR* PTCHAR;
 typedef LONG* PLONG;
 typedef ULONG* PULONG;
 typedef FLOAT* PFLOAT;
 typedef HRESULT* PHRESULT;
 typedef HANDLE* PHANDLE;
+typedef void* HWND; /* a window; the VCI functions that take one ignore it on Linux */
 
 #ifndef TRUE
 #define TRUE 1

@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <cwchar>
+#include <iterator>
+#include <set>
 #include <string>
 #include <thread>
 
@@ -166,6 +168,24 @@ TEST(VciCApiGeneral, TheWideErrorTextIsTheNarrowOneTruncatedAlike) {
   small[0] = L'x';
   vciFormatErrorW(VCI_E_TIMEOUT, small, 0);
   EXPECT_EQ(small[0], L'x');
+}
+
+TEST(VciCApiGeneral, EveryCodeOfVcierrHasItsOwnText) {
+  const HRESULT later[] = {
+      VCI_E_INVALID_LICENSE,        VCI_E_NO_SUCH_LICENSE,      VCI_E_LICENSE_EXPIRED,
+      VCI_E_LICENSE_QUOTA_EXCEEDED, VCI_E_INVALID_TIMING,       VCI_E_IN_USE,
+      VCI_E_NO_SUCH_DEVICE,         VCI_E_DEVICE_NOT_CONNECTED, VCI_E_DEVICE_NOT_READY,
+      VCI_E_TYPE_MISMATCH,          VCI_E_NOT_SUPPORTED,        VCI_E_DUPLICATE_OBJECTID,
+      VCI_E_OBJECTID_NOT_FOUND,     VCI_E_WRONG_LEVEL,          VCI_E_WRONG_DRV_VERSION,
+      VCI_E_LUIDS_EXHAUSTED};
+  std::set<std::string> texts;
+  for (const HRESULT hr : later) {
+    char text[VCI_MAX_ERRSTRLEN];
+    vciFormatError(hr, text, sizeof text);
+    EXPECT_EQ(std::string(text).find("unknown error"), std::string::npos) << text;
+    texts.insert(text);
+  }
+  EXPECT_EQ(texts.size(), std::size(later));
 }
 
 TEST(VciCApiGeneral, DisplayErrorWritesOneLineToStandardError) {

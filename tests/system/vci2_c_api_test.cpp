@@ -182,6 +182,87 @@ TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
   vciDeviceClose(gamma);
 }
 
+TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
+  UINT32 major = 0;
+  UINT32 minor = 99;
+  UINT32 revision = 99;
+  UINT32 build = 0;
+  ASSERT_EQ(vciGetVersion(&major, &minor, &revision, &build), VCI_OK);
+  EXPECT_EQ(major, 4u);
+  EXPECT_EQ(minor, 0u);
+  EXPECT_EQ(revision, 0u);
+  unsigned v[3] = {};
+  ASSERT_EQ(std::sscanf(CANEMU_PROJECT_VERSION, "%u.%u.%u", &v[0], &v[1], &v[2]), 3);
+  EXPECT_EQ(build, v[0] * 10000 + v[1] * 100 + v[2]);
+  EXPECT_EQ(vciGetVersion(&major, &minor, nullptr, &build), VCI_E_INVALIDARG);
+  // What vcinpl_general.h declares is in this library too.
+  VCIID id{};
+  ASSERT_EQ(vciCreateLuid(&id), VCI_OK);
+  wchar_t text[17];
+  ASSERT_EQ(vciLuidToCharW(id, text, 17), VCI_OK);
+  VCIID back{};
+  ASSERT_EQ(vciCharToLuidW(text, &back), VCI_OK);
+  EXPECT_EQ(back.AsInt64, id.AsInt64);
+  HANDLE e = nullptr;
+  ASSERT_EQ(vciEventCreate(FALSE, TRUE, &e), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 0), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 10), VCI_E_TIMEOUT);
+  EXPECT_EQ(vciEventDelete(e), VCI_OK);
+  VciDaemon d(kAdapters);
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpenDlg(nullptr, &dev), VCI_OK);  // the first device: alpha
+  VCIDEVICEINFO info{};
+  ASSERT_EQ(vciDeviceGetInfo(dev, &info), VCI_OK);
+  EXPECT_NE(std::string(info.Description).find("(canemu alpha)"), std::string::npos);
+  EXPECT_EQ(vciDeviceClose(dev), VCI_OK);
+}
+
+TEST(Vci2CApi, AChannelAndACyclicListHandOutTheirLinesControlUnit) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  HANDLE beta = device_named("beta");
+  HANDLE channel = channel_on(beta, 0, CAN_FILTER_PASS);
+  HANDLE control = nullptr;
+  EXPECT_EQ(canChannelGetControl(channel, nullptr), VCI_E_INVALIDARG);
+  EXPECT_EQ(canChannelGetControl(beta, &control), VCI_E_INVHANDLE);  // a device, not a channel
+  EXPECT_EQ(control, nullptr);
+  ASSERT_EQ(canChannelGetControl(channel, &control), VCI_OK);
+  ASSERT_NE(control, nullptr);
+  // It is beta's control unit: held, so nobody else opens it; it starts beta's line.
+  HANDLE other = nullptr;
+  EXPECT_EQ(canControlOpen(beta, 0, &other), VCI_E_ACCESSDENIED);
+  HANDLE list = nullptr;
+  ASSERT_EQ(canSchedulerOpen(beta, 0, &list), VCI_OK);
+  EXPECT_EQ(canSchedulerGetControl(list, &other), VCI_E_ACCESSDENIED);
+  CANBTP n = kNominal;
+  CANBTP f = kData;
+  ASSERT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048, 2048,
+                                 &n, &f),
+            VCI_OK);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus & CAN_STATUS_ININIT, 0u);
+  EXPECT_EQ(s.sBtpFdr.dwBPS, 2000000u);
+  alpha.post(msg(0x321, {1, 2, 3}, true, true));
+  step_ns(2'000'000);
+  const auto got = drain(channel);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x321u);
+  // Closed like any control unit; then the cyclic list gets it (the line keeps running).
+  ASSERT_EQ(canControlClose(control), VCI_OK);
+  EXPECT_EQ(canSchedulerGetControl(channel, &other), VCI_E_INVHANDLE);  // a channel, not a list
+  EXPECT_EQ(canSchedulerGetControl(list, nullptr), VCI_E_INVALIDARG);
+  ASSERT_EQ(canSchedulerGetControl(list, &other), VCI_OK);
+  ASSERT_EQ(canControlGetStatus(other, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus & CAN_STATUS_ININIT, 0u);
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 500000u);
+  EXPECT_EQ(canControlClose(other), VCI_OK);
+  EXPECT_EQ(canSchedulerClose(list), VCI_OK);
+  EXPECT_EQ(canChannelClose(channel), VCI_OK);
+  vciDeviceClose(beta);
+}
+
 TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
   VciDaemon d(kAdapters);
   FdAdapter alpha("alpha", false);

@@ -5,6 +5,8 @@
 
 #include <cstdio>
 #include <cstring>
+#include <iterator>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -113,6 +115,39 @@ TEST(VciCppApi, ObjectsAreExclusiveWhereTheGuideSaysAndReferenceCounted) {
   BALFEATURES features{};
   ASSERT_EQ(alpha.bal->GetFeatures(&features), VCI_OK);
   EXPECT_EQ(features.BusSocketCount, 1);
+}
+
+TEST(VciCppApi, InterfaceIdentifiersHaveTheVendorsValues) {
+  auto text = [](const GUID& g) {
+    char t[40];
+    EXPECT_EQ(VciGuidToChar(g, t, sizeof t), VCI_OK);
+    return std::string(t);
+  };
+  EXPECT_EQ(text(IID_IUnknown), "{00000000-0000-0000-C000-000000000046}");
+  EXPECT_EQ(text(CLSID_VCIBAL), "{3CB880F4-2791-40BD-B852-09349D1A7B37}");
+  EXPECT_EQ(text(IID_IVciDeviceManager), "{7724B0A9-E6DB-46B0-A5D0-468CC4191732}");
+  EXPECT_EQ(text(IID_IBalObject), "{A2B958AA-9188-4CDB-8307-25D9F1F843E9}");
+  EXPECT_EQ(text(IID_ICanControl2), "{EFD3A8E2-09E3-4115-869F-93E579167431}");
+  EXPECT_EQ(text(IID_ICanChannel), "{66FF396B-22EA-42AA-BC7E-4919F89FB45C}");
+  EXPECT_EQ(text(IID_IFifoReader), "{19286603-A9CD-433A-A495-72E5C9D97A97}");
+  EXPECT_EQ(text(IID_ILinMonitor), "{29068E57-6B69-4010-911C-7A9128521BE0}");
+  // Field by field, as a program that compares with its own copy of the SDK's value does.
+  const GUID channel2 = {
+      0xF2528F90, 0x3A10, 0x46D0, {0x8F, 0x82, 0x08, 0x71, 0xC1, 0xE7, 0xDB, 0xB9}};
+  EXPECT_EQ(std::memcmp(&channel2, &IID_ICanChannel2, sizeof channel2), 0);
+  // All distinct.
+  const GUID* all[] = {&IID_IVciDeviceManager, &IID_IVciEnumDevice, &IID_IVciDevice,
+                       &IID_IBalObject,        &IID_ICanSocket,     &IID_ICanSocket2,
+                       &IID_ICanControl,       &IID_ICanControl2,   &IID_ICanChannel,
+                       &IID_ICanChannel2,      &IID_ICanScheduler,  &IID_ICanScheduler2,
+                       &IID_IFifoReader,       &IID_IFifoWriter,    &IID_IVciFifo,
+                       &IID_IVciFifo2,         &IID_ILinSocket,     &IID_ILinControl,
+                       &IID_ILinMonitor,       &CLSID_VCIBAL,       &IID_IUnknown};
+  std::set<std::string> texts;
+  for (const GUID* g : all) {
+    texts.insert(text(*g));
+  }
+  EXPECT_EQ(texts.size(), std::size(all));
 }
 
 TEST(VciCppApi, IdentifiersRoundTripThroughText) {

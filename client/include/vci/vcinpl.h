@@ -26,15 +26,12 @@
 
 #include "cantype.h"
 #include "vcierr.h"
-#include "vcinpl_lin.h" /* the LIN functions */
+#include "vcinpl_general.h" /* error texts, identifiers, events */
+#include "vcinpl_lin.h"     /* the LIN functions */
 #include "vcitype.h"
 
 #ifndef VCIAPI
 #define VCIAPI
-#endif
-
-#ifndef VCI_MAX_ERRSTRLEN
-#define VCI_MAX_ERRSTRLEN 256 /* buffer size that always holds a vciFormatError text */
 #endif
 
 /*
@@ -62,12 +59,16 @@ extern "C" {
  * cannot be reached. */
 HRESULT VCIAPI vciInitialize(void);
 
-/* Writes the text for hrError into pszText (at most dwLength bytes, always
- * NUL-terminated when dwLength > 0); returns nothing. */
-void VCIAPI vciFormatError(HRESULT hrError, PCHAR pszText, UINT32 dwLength);
+/* The VCI version these libraries implement: 4.0; VCI_OK, VCI_E_INVALIDARG when a pointer
+ * is NULL. */
+HRESULT VCIAPI vciGetVersion(PUINT32 pdwMajorVersion, PUINT32 pdwMinorVersion);
 
-/* Same as vciFormatError (the ANSI name the VCI 4 headers map vciFormatError to). */
-void VCIAPI vciFormatErrorA(HRESULT hrError, PCHAR pszText, UINT32 dwLength);
+/* The same with the revision (0) and the build number, canemu's own version
+ * (major * 10000 + minor * 100 + patch). */
+HRESULT VCIAPI vciGetVersionEx(PUINT32 pdwMajorVersion, PUINT32 pdwMinorVersion,
+                               PUINT32 pdwRevNumber, PUINT32 pdwBuildNumber);
+
+/* Error texts, identifiers and events: vcinpl_general.h. */
 
 /* ---- device enumeration -------------------------------------------------------------- */
 
@@ -96,11 +97,23 @@ HRESULT VCIAPI vciFindDeviceByHwid(REFGUID rHwid, PVCIID pVciid);
  * VCI_OK, or an error when there is no such instance. */
 HRESULT VCIAPI vciFindDeviceByClass(REFGUID rClass, UINT32 dwInst, PVCIID pVciid);
 
+/* There is no device selection dialog on Linux: the "choice" is the device named by the
+ * environment variable CANEMU_VCI_DEVICE (its name in canemud's configuration, or its VCIID
+ * as vciLuidToChar writes it) when that is set, otherwise the first device of the
+ * enumeration. Its VCI id goes to *pVciid; VCI_OK, VCI_E_INVALIDARG for NULL,
+ * VCI_E_NO_MORE_ITEMS when there is no device or none of that name (vciFormatError says
+ * which), VCI_E_DISCONNECTED without canemud. hwndParent is ignored. */
+HRESULT VCIAPI vciSelectDeviceDlg(HWND hwndParent, PVCIID pVciid);
+
 /* ---- device -------------------------------------------------------------------------- */
 
 /* Opens the device with VCI id rVciid and stores its handle in *phDevice; VCI_OK,
  * VCI_E_INVALIDARG / VCI_E_NO_MORE_ITEMS for an unknown id. */
 HRESULT VCIAPI vciDeviceOpen(REFVCIID rVciid, PHANDLE phDevice);
+
+/* vciSelectDeviceDlg's choice, opened as vciDeviceOpen opens it; VCI_OK and the codes of
+ * both. */
+HRESULT VCIAPI vciDeviceOpenDlg(HWND hwndParent, PHANDLE phDevice);
 
 /* Closes a device handle (objects opened on it stay usable until closed); VCI_OK,
  * VCI_E_INVHANDLE. */

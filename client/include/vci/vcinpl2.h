@@ -23,15 +23,12 @@
 
 #include "cantype.h"
 #include "vcierr.h"
-#include "vcinpl_lin.h" /* the LIN functions */
+#include "vcinpl_general.h" /* error texts, identifiers, events */
+#include "vcinpl_lin.h"     /* the LIN functions */
 #include "vcitype.h"
 
 #ifndef VCIAPI
 #define VCIAPI
-#endif
-
-#ifndef VCI_MAX_ERRSTRLEN
-#define VCI_MAX_ERRSTRLEN 256 /* buffer size that always holds a vciFormatError text */
 #endif
 
 #ifdef __cplusplus
@@ -44,14 +41,13 @@ extern "C" {
  * cannot be reached. */
 HRESULT VCIAPI vciInitialize(void);
 
-/* Writes the text for hrError into pszText (at most dwLength bytes, always
- * NUL-terminated when dwLength > 0); returns nothing. The vendor's vcinpl2 header only
- * has vciFormatErrorA (vciFormatError is a macro there); exporting the plain name too lets
- * clients that look it up by name (python-can tries it first) find it. */
-void VCIAPI vciFormatError(HRESULT hrError, PCHAR pszText, UINT32 dwLength);
+/* The VCI version these libraries implement, 4.0, and canemu's own as the build number
+ * (major * 10000 + minor * 100 + patch); the revision is 0. VCI_OK, VCI_E_INVALIDARG when a
+ * pointer is NULL. */
+HRESULT VCIAPI vciGetVersion(PUINT32 pdwMajorVersion, PUINT32 pdwMinorVersion, PUINT32 pdwRevNumber,
+                             PUINT32 pdwBuildNumber);
 
-/* Same as vciFormatError; the name vcinpl2.dll exports. */
-void VCIAPI vciFormatErrorA(HRESULT hrError, PCHAR pszText, UINT32 dwLength);
+/* Error texts, identifiers and events: vcinpl_general.h. */
 
 /* ---- device enumeration -------------------------------------------------------------- */
 
@@ -80,11 +76,23 @@ HRESULT VCIAPI vciFindDeviceByHwid(REFGUID rHwid, PVCIID pVciid);
  * VCI_OK, or an error when there is no such instance. */
 HRESULT VCIAPI vciFindDeviceByClass(REFGUID rClass, UINT32 dwInst, PVCIID pVciid);
 
+/* There is no device selection dialog on Linux: the "choice" is the device named by the
+ * environment variable CANEMU_VCI_DEVICE (its name in canemud's configuration, or its VCIID
+ * as vciLuidToChar writes it) when that is set, otherwise the first device of the
+ * enumeration. Its VCI id goes to *pVciid; VCI_OK, VCI_E_INVALIDARG for NULL,
+ * VCI_E_NO_MORE_ITEMS when there is no device or none of that name (vciFormatError says
+ * which), VCI_E_DISCONNECTED without canemud. hwndParent is ignored. */
+HRESULT VCIAPI vciSelectDeviceDlg(HWND hwndParent, PVCIID pVciid);
+
 /* ---- device -------------------------------------------------------------------------- */
 
 /* Opens the device with VCI id rVciid and stores its handle in *phDevice; VCI_OK, an
  * error for an unknown id. */
 HRESULT VCIAPI vciDeviceOpen(REFVCIID rVciid, PHANDLE phDevice);
+
+/* vciSelectDeviceDlg's choice, opened as vciDeviceOpen opens it; VCI_OK and the codes of
+ * both. */
+HRESULT VCIAPI vciDeviceOpenDlg(HWND hwndParent, PHANDLE phDevice);
 
 /* Closes a device handle (objects opened on it stay usable until closed); VCI_OK,
  * VCI_E_INVHANDLE. */
@@ -172,6 +180,12 @@ HRESULT VCIAPI canChannelGetCaps(HANDLE hCanChn, PCANCAPABILITIES2 pCanCaps);
 /* Fills *pStatus with line status, activation, overrun flag and FIFO loads; VCI_OK,
  * VCI_E_INVHANDLE. */
 HRESULT VCIAPI canChannelGetStatus(HANDLE hCanChn, PCANCHANSTATUS2 pStatus);
+
+/* Opens the control unit of the channel's line, as canControlOpen on the channel's device
+ * and line would, and stores its handle in *phCanCtl (close it with canControlClose);
+ * VCI_OK, VCI_E_INVHANDLE, VCI_E_INVALIDARG for a null pointer, VCI_E_ACCESSDENIED while
+ * another handle holds the control unit. */
+HRESULT VCIAPI canChannelGetControl(HANDLE hCanChn, PHANDLE phCanCtl);
 
 /* Creates the FIFOs (sizes in messages), the event thresholds and the channel's own
  * filter (list size dwFilterSize, mode bFilterMode = CAN_FILTER_*, optionally
@@ -263,6 +277,10 @@ HRESULT VCIAPI canSchedulerGetCaps(HANDLE hCanShd, PCANCAPABILITIES2 pCanCaps);
 /* Fills *pStatus with the line status, the task state and each entry's state; VCI_OK,
  * VCI_E_INVHANDLE. */
 HRESULT VCIAPI canSchedulerGetStatus(HANDLE hCanShd, PCANSCHEDULERSTATUS2 pStatus);
+
+/* Opens the control unit of the scheduler's line (as canChannelGetControl does for a
+ * channel); VCI_OK, VCI_E_INVHANDLE, VCI_E_INVALIDARG, VCI_E_ACCESSDENIED. */
+HRESULT VCIAPI canSchedulerGetControl(HANDLE hCanShd, PHANDLE phCanCtl);
 
 /* Runs (fEnable TRUE) or halts the whole scheduler; VCI_OK, VCI_E_INVHANDLE. */
 HRESULT VCIAPI canSchedulerActivate(HANDLE hCanShd, BOOL fEnable);

@@ -32,6 +32,7 @@ typedef UINT32 ULONG;
 #endif
 
 extern "C" {
+/* The interface and class identifiers, with the values of IXXAT's VCI 4 SDK (docs/vci.md). */
 extern VCIAPI_DATA const IID IID_IUnknown;
 extern VCIAPI_DATA const IID IID_IVciDeviceManager;
 extern VCIAPI_DATA const IID IID_IVciEnumDevice;

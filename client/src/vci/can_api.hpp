@@ -17,6 +17,29 @@ inline ChannelObj* channel_of(HANDLE h) {
   return static_cast<ChannelObj*>(lookup(h, Object::Kind::channel));
 }
 
+// Opens a control unit (control), channel or cyclic list on bus `can_no` of `device`.
+inline HRESULT open_on_line(const DeviceDesc& device, UINT32 can_no, Object::Kind kind, bool v2,
+                            bool exclusive, PHANDLE out) {
+  ipc::VciOp op = ipc::VciOp::control_open;
+  if (kind == Object::Kind::channel) {
+    op = ipc::VciOp::channel_open;
+  } else if (kind == Object::Kind::scheduler) {
+    op = ipc::VciOp::scheduler_open;
+  }
+  const uint16_t flags =
+      static_cast<uint16_t>((v2 ? ipc::kVciV2 : 0) | (exclusive ? ipc::kVciExclusive : 0));
+  uint32_t handle = 0;
+  if (HRESULT hr = Library::get().open_remote(op, flags, device, can_no, handle); hr != VCI_OK) {
+    return hr;
+  }
+  if (kind == Object::Kind::channel) {
+    *out = register_object(std::make_unique<ChannelObj>(handle, device, can_no, v2));
+  } else {
+    *out = register_object(std::make_unique<Remote>(kind, handle, device, can_no));
+  }
+  return VCI_OK;
+}
+
 // Opens a control unit (control), channel or cyclic list on bus `can_no` of device `hDevice`.
 inline HRESULT open_on_device(HANDLE hDevice, UINT32 can_no, Object::Kind kind, bool v2,
                               bool exclusive, PHANDLE out) {
@@ -31,24 +54,21 @@ inline HRESULT open_on_device(HANDLE hDevice, UINT32 can_no, Object::Kind kind, 
   if (can_no >= dev->desc.controller_fd.size()) {
     return VCI_E_INVALIDARG;
   }
-  ipc::VciOp op = ipc::VciOp::control_open;
-  if (kind == Object::Kind::channel) {
-    op = ipc::VciOp::channel_open;
-  } else if (kind == Object::Kind::scheduler) {
-    op = ipc::VciOp::scheduler_open;
+  return open_on_line(dev->desc, can_no, kind, v2, exclusive, out);
+}
+
+// canChannelGetControl, canSchedulerGetControl: the control unit of the line a channel or
+// cyclic list (`kind`) is on, opened as canControlOpen opens it.
+inline HRESULT control_of_line(HANDLE h, Object::Kind kind, bool v2, PHANDLE out) {
+  Remote* r = static_cast<Remote*>(lookup(h, kind));
+  if (r == nullptr) {
+    return VCI_E_INVHANDLE;
   }
-  const uint16_t flags =
-      static_cast<uint16_t>((v2 ? ipc::kVciV2 : 0) | (exclusive ? ipc::kVciExclusive : 0));
-  uint32_t handle = 0;
-  if (HRESULT hr = Library::get().open_remote(op, flags, dev->desc, can_no, handle); hr != VCI_OK) {
-    return hr;
+  if (out == nullptr) {
+    return VCI_E_INVALIDARG;
   }
-  if (kind == Object::Kind::channel) {
-    *out = register_object(std::make_unique<ChannelObj>(handle, dev->desc, can_no, v2));
-  } else {
-    *out = register_object(std::make_unique<Remote>(kind, handle, dev->desc, can_no));
-  }
-  return VCI_OK;
+  *out = nullptr;
+  return open_on_line(r->device, r->controller, Object::Kind::control, v2, false, out);
 }
 
 inline HRESULT close_handle(HANDLE h, Object::Kind kind) {

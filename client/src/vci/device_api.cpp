@@ -1,7 +1,9 @@
-// The device half of the VCI C API, the same in libvcinpl and libvcinpl2: initialization, error
-// texts, identifiers, device enumeration and opening.
-#include <cstdio>
+// The device half of the VCI C API, the same in libvcinpl and libvcinpl2: initialization,
+// device enumeration, selection (no dialog on Linux) and opening.
+#include <cstdlib>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "vci_core.hpp"
 #include "vcinpl.h"
@@ -25,6 +27,34 @@ const GUID* ptr(REFGUID r) {
   return &r;
 }
 
+// vciSelectDeviceDlg's choice without a dialog: the device $CANEMU_VCI_DEVICE names (by name or
+// VCIID text), otherwise the first one listed.
+HRESULT choose_device(DeviceDesc& out) {
+  std::vector<DeviceDesc> devices;
+  if (HRESULT hr = Library::get().list_devices(devices); hr != VCI_OK) {
+    return hr;
+  }
+  const char* wanted = std::getenv("CANEMU_VCI_DEVICE");
+  if (wanted == nullptr || *wanted == '\0') {
+    if (devices.empty()) {
+      set_detail("vciSelectDeviceDlg: canemud has no device to choose");
+      return VCI_E_NO_MORE_ITEMS;
+    }
+    out = devices.front();
+    return VCI_OK;
+  }
+  const auto id = parse_luid(wanted);
+  for (const DeviceDesc& d : devices) {
+    if (d.name == wanted || (id && static_cast<uint64_t>(id->AsInt64) == d.vci_id)) {
+      out = d;
+      return VCI_OK;
+    }
+  }
+  set_detail(std::string("vciSelectDeviceDlg: canemud has no device \"") + wanted +
+             "\" (named by CANEMU_VCI_DEVICE)");
+  return VCI_E_NO_MORE_ITEMS;
+}
+
 }  // namespace
 
 extern "C" {
@@ -33,18 +63,6 @@ HRESULT VCIAPI vciInitialize(void) {
   // Nothing to set up until the first call that needs canemud: a program that only formats
   // errors or converts identifiers runs without it.
   return VCI_OK;
-}
-
-void VCIAPI vciFormatError(HRESULT hrError, PCHAR pszText, UINT32 dwLength) {
-  if (pszText == nullptr || dwLength == 0) {
-    return;
-  }
-  const std::string text = format_error(hrError);
-  std::snprintf(pszText, dwLength, "%s", text.c_str());
-}
-
-void VCIAPI vciFormatErrorA(HRESULT hrError, PCHAR pszText, UINT32 dwLength) {
-  vciFormatError(hrError, pszText, dwLength);
 }
 
 HRESULT VCIAPI vciEnumDeviceOpen(PHANDLE phEnum) {
@@ -124,6 +142,31 @@ HRESULT VCIAPI vciFindDeviceByClass(REFGUID rClass, UINT32 dwInst, PVCIID pVciid
     *pVciid = d->info().VciObjectId;
   }
   return hr;
+}
+
+HRESULT VCIAPI vciSelectDeviceDlg(HWND, PVCIID pVciid) {
+  if (pVciid == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  DeviceDesc d;
+  if (HRESULT hr = choose_device(d); hr != VCI_OK) {
+    return hr;
+  }
+  *pVciid = d.info().VciObjectId;
+  return VCI_OK;
+}
+
+HRESULT VCIAPI vciDeviceOpenDlg(HWND, PHANDLE phDevice) {
+  if (phDevice == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *phDevice = nullptr;
+  auto dev = std::make_unique<Device>();
+  if (HRESULT hr = choose_device(dev->desc); hr != VCI_OK) {
+    return hr;
+  }
+  *phDevice = register_object(std::move(dev));
+  return VCI_OK;
 }
 
 HRESULT VCIAPI vciDeviceOpen(REFVCIID rVciid, PHANDLE phDevice) {

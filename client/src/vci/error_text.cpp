@@ -103,6 +103,54 @@ std::string format_error(HRESULT hr) {
     case static_cast<uint32_t>(VCI_E_WRONG_FLASHFWVERSION):
       text = "wrong flash firmware version";
       break;
+    case static_cast<uint32_t>(VCI_E_INVALID_LICENSE):
+      text = "invalid license";
+      break;
+    case static_cast<uint32_t>(VCI_E_NO_SUCH_LICENSE):
+      text = "no license available";
+      break;
+    case static_cast<uint32_t>(VCI_E_LICENSE_EXPIRED):
+      text = "license expired";
+      break;
+    case static_cast<uint32_t>(VCI_E_LICENSE_QUOTA_EXCEEDED):
+      text = "license quota exceeded";
+      break;
+    case static_cast<uint32_t>(VCI_E_INVALID_TIMING):
+      text = "invalid bit timing";
+      break;
+    case static_cast<uint32_t>(VCI_E_IN_USE):
+      text = "resource in use";
+      break;
+    case static_cast<uint32_t>(VCI_E_NO_SUCH_DEVICE):
+      text = "no such device";
+      break;
+    case static_cast<uint32_t>(VCI_E_DEVICE_NOT_CONNECTED):
+      text = "device not connected";
+      break;
+    case static_cast<uint32_t>(VCI_E_DEVICE_NOT_READY):
+      text = "device not ready";
+      break;
+    case static_cast<uint32_t>(VCI_E_TYPE_MISMATCH):
+      text = "wrong type of object";
+      break;
+    case static_cast<uint32_t>(VCI_E_NOT_SUPPORTED):
+      text = "request not supported";
+      break;
+    case static_cast<uint32_t>(VCI_E_DUPLICATE_OBJECTID):
+      text = "object id already in use";
+      break;
+    case static_cast<uint32_t>(VCI_E_OBJECTID_NOT_FOUND):
+      text = "object id not found";
+      break;
+    case static_cast<uint32_t>(VCI_E_WRONG_LEVEL):
+      text = "called at the wrong execution level";
+      break;
+    case static_cast<uint32_t>(VCI_E_WRONG_DRV_VERSION):
+      text = "incompatible driver version";
+      break;
+    case static_cast<uint32_t>(VCI_E_LUIDS_EXHAUSTED):
+      text = "no more LUIDs";
+      break;
     default:
       text = fmt::format("unknown error {:#010x}", code);
       break;

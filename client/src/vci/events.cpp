@@ -1,6 +1,5 @@
 #include "events.hpp"
 
-#include <algorithm>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -10,25 +9,11 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
-#include "canemu/ipc/clock.hpp"
 #include "canemu_events.h"
 
 namespace canemu::client::vci {
 
-EventObj::~EventObj() {
-  ::close(fd);
-}
-
-void EventObj::set() const {
-  const uint64_t one = 1;
-  [[maybe_unused]] const ssize_t n = ::write(fd, &one, sizeof one);
-}
-
 namespace {
-
-EventObj* event_of(HANDLE h) {
-  return static_cast<EventObj*>(lookup(h, Object::Kind::event));
-}
 
 void drain(int fd) {
   uint64_t count = 0;
@@ -128,11 +113,7 @@ using namespace canemu::client::vci;
 extern "C" {
 
 HANDLE VCIAPI CreateEvent(PVOID, BOOL bManualReset, BOOL bInitialState, const char*) {
-  const int fd = ::eventfd(bInitialState ? 1 : 0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (fd < 0) {
-    return nullptr;
-  }
-  return register_object(std::make_unique<EventObj>(fd, bManualReset != 0));
+  return create_event(bManualReset != 0, bInitialState != 0);
 }
 
 BOOL VCIAPI SetEvent(HANDLE hEvent) {
@@ -149,7 +130,7 @@ BOOL VCIAPI ResetEvent(HANDLE hEvent) {
   if (e == nullptr) {
     return FALSE;
   }
-  drain(e->fd);
+  e->reset();
   return TRUE;
 }
 
@@ -166,49 +147,8 @@ UINT32 VCIAPI WaitForMultipleObjects(UINT32 nCount, const HANDLE* pHandles, BOOL
     }
     events.push_back(e);
   }
-  const int64_t deadline =
-      dwMilliseconds == INFINITE ? -1 : canemu::ipc::monotonic_ns() / 1'000'000 + dwMilliseconds;
-  auto left = [deadline] {
-    return deadline < 0 ? -1
-                        : static_cast<int>(std::max<int64_t>(
-                              0, deadline - canemu::ipc::monotonic_ns() / 1'000'000));
-  };
-  // An auto-reset event is taken by the wait that sees it; false if another waiter was faster.
-  auto take = [](const EventObj* e) {
-    uint64_t count = 0;
-    return e->manual || ::read(e->fd, &count, sizeof count) == static_cast<ssize_t>(sizeof count);
-  };
-  if (bWaitAll) {
-    for (const EventObj* e : events) {
-      pollfd p{e->fd, POLLIN, 0};
-      while (::poll(&p, 1, left()) <= 0) {
-        if (left() == 0) {
-          return WAIT_TIMEOUT;
-        }
-      }
-    }
-    for (const EventObj* e : events) {
-      take(e);
-    }
-    return WAIT_OBJECT_0;
-  }
-  std::vector<pollfd> fds(nCount);
-  while (true) {
-    for (UINT32 i = 0; i < nCount; ++i) {
-      fds[i] = pollfd{events[i]->fd, POLLIN, 0};
-    }
-    const int wait = left();
-    if (::poll(fds.data(), nCount, wait) > 0) {
-      for (UINT32 i = 0; i < nCount; ++i) {
-        if ((fds[i].revents & POLLIN) != 0 && take(events[i])) {
-          return WAIT_OBJECT_0 + i;
-        }
-      }
-    }
-    if (wait == 0) {
-      return WAIT_TIMEOUT;
-    }
-  }
+  const int i = wait_events(events, bWaitAll != 0, dwMilliseconds);
+  return i < 0 ? WAIT_TIMEOUT : WAIT_OBJECT_0 + static_cast<UINT32>(i);
 }
 
 UINT32 VCIAPI WaitForSingleObject(HANDLE hEvent, UINT32 dwMilliseconds) {

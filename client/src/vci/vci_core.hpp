@@ -13,6 +13,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "canemu/client/connection.hpp"
@@ -29,6 +30,39 @@ namespace canemu::client::vci {
 // (e.g. where canemud was looked for).
 std::string format_error(HRESULT hr);
 void set_detail(std::string detail);
+
+// The VCI version all three libraries report (vciGetVersion, vciGetVersionEx, VciGetVersion):
+// the VCI 4 interfaces they implement, and canemu's own version as the build number
+// (major * 10000 + minor * 100 + patch). docs/vci.md.
+inline constexpr uint32_t kVciMajorVersion = 4;
+inline constexpr uint32_t kVciMinorVersion = 0;
+inline constexpr uint32_t kVciRevisionNumber = 0;
+uint32_t vci_build_number();
+
+// A new locally unique identifier (vciCreateLuid, VciCreateLuid): the process id in the high
+// half, a counter of the process in the low half; never 0, never a device's VCIID.
+int64_t new_luid();
+
+// Identifiers as text: a LUID as 16 upper-case hex digits (its 64-bit value), a GUID in the
+// registry form {XXXXXXXX-XXXX-XXXX-XXXX-XXXXXXXXXXXX} (38 characters). The parsers take
+// either case and nothing else around the digits.
+inline constexpr std::size_t kLuidTextLength = 16;
+inline constexpr std::size_t kGuidTextLength = 38;
+std::string luid_text(const VCIID& id);
+std::string guid_text(const GUID& guid);
+std::optional<VCIID> parse_luid(std::string_view text);
+std::optional<GUID> parse_guid(std::string_view text);
+
+// UTF-8 to wide text (a wchar_t per code point; bytes that are not UTF-8 become U+FFFD), and
+// wide text that is pure ASCII back to bytes (nullopt for anything else).
+std::wstring widen(std::string_view utf8);
+std::string narrow(std::wstring_view wide);
+std::optional<std::string> narrow_ascii(std::wstring_view wide);
+
+// Copies `text` and its NUL into `out`, which holds `size` characters; VCI_E_INVALIDARG for a
+// null buffer or a size <= 0, VCI_E_BUFFER_OVERFLOW (nothing written) when it does not fit.
+HRESULT copy_text(const std::string& text, char* out, LONG size);
+HRESULT copy_text(const std::string& text, wchar_t* out, LONG size);
 
 // A device as canemud lists it.
 struct DeviceDesc {

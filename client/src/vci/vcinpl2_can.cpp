@@ -19,6 +19,21 @@ using Kind = Object::Kind;
 
 extern "C" {
 
+// ---- version ----
+
+HRESULT VCIAPI vciGetVersion(PUINT32 pdwMajorVersion, PUINT32 pdwMinorVersion, PUINT32 pdwRevNumber,
+                             PUINT32 pdwBuildNumber) {
+  if (pdwMajorVersion == nullptr || pdwMinorVersion == nullptr || pdwRevNumber == nullptr ||
+      pdwBuildNumber == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *pdwMajorVersion = kVciMajorVersion;
+  *pdwMinorVersion = kVciMinorVersion;
+  *pdwRevNumber = kVciRevisionNumber;
+  *pdwBuildNumber = vci_build_number();
+  return VCI_OK;
+}
+
 // ---- control unit ----
 
 HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExMode,
@@ -91,6 +106,10 @@ HRESULT VCIAPI canChannelInitialize(HANDLE hCanChn, UINT16 wRxFifoSize, UINT16 w
                                      dwFilterSize, bFilterMode);
 }
 
+HRESULT VCIAPI canChannelGetControl(HANDLE hCanChn, PHANDLE phCanCtl) {
+  return control_of_line(hCanChn, Kind::channel, kV2, phCanCtl);
+}
+
 HRESULT VCIAPI canChannelGetFilterMode(HANDLE hCanChn, BOOL fExtend, PUINT8 pbMode) {
   if (pbMode == nullptr) {
     return VCI_E_INVALIDARG;
@@ -128,6 +147,10 @@ HRESULT VCIAPI canSchedulerGetStatus(HANDLE hCanShd, PCANSCHEDULERSTATUS2 pStatu
     return hr;
   }
   return scheduler_status(hCanShd, &pStatus->bTaskStat, pStatus->abMsgStat);
+}
+
+HRESULT VCIAPI canSchedulerGetControl(HANDLE hCanShd, PHANDLE phCanCtl) {
+  return control_of_line(hCanShd, Kind::scheduler, kV2, phCanCtl);
 }
 
 HRESULT VCIAPI canSchedulerAddMessage(HANDLE hCanShd, PCANCYCLICTXMSG2 pMessage, PUINT32 pdwIndex) {

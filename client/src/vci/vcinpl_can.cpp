@@ -18,6 +18,27 @@ using Kind = Object::Kind;
 
 extern "C" {
 
+// ---- version ----
+
+HRESULT VCIAPI vciGetVersionEx(PUINT32 pdwMajorVersion, PUINT32 pdwMinorVersion,
+                               PUINT32 pdwRevNumber, PUINT32 pdwBuildNumber) {
+  if (pdwMajorVersion == nullptr || pdwMinorVersion == nullptr || pdwRevNumber == nullptr ||
+      pdwBuildNumber == nullptr) {
+    return VCI_E_INVALIDARG;
+  }
+  *pdwMajorVersion = kVciMajorVersion;
+  *pdwMinorVersion = kVciMinorVersion;
+  *pdwRevNumber = kVciRevisionNumber;
+  *pdwBuildNumber = vci_build_number();
+  return VCI_OK;
+}
+
+HRESULT VCIAPI vciGetVersion(PUINT32 pdwMajorVersion, PUINT32 pdwMinorVersion) {
+  UINT32 revision = 0;
+  UINT32 build = 0;
+  return vciGetVersionEx(pdwMajorVersion, pdwMinorVersion, &revision, &build);
+}
+
 // ---- control unit ----
 
 HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT16 wTimeout, UINT32 dwCount,

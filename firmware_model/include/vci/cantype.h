@@ -107,12 +107,31 @@
 #define CAN_BT0_1000KB 0x00
 #define CAN_BT1_1000KB 0x14
 
+/* The same pairs as "BTR0, BTR1", for an argument list or an initializer:
+ *   canControlInitialize(hCtl, mode, CAN_BT01_500KB);  UINT8 btr[2] = {CAN_BT01_500KB}; */
+#define CAN_BT01_5KB 0x3F, 0x7F
+#define CAN_BT01_10KB 0x31, 0x1C
+#define CAN_BT01_20KB 0x18, 0x1C
+#define CAN_BT01_50KB 0x09, 0x1C
+#define CAN_BT01_100KB 0x04, 0x1C
+#define CAN_BT01_125KB 0x03, 0x1C
+#define CAN_BT01_250KB 0x01, 0x1C
+#define CAN_BT01_500KB 0x00, 0x1C
+#define CAN_BT01_800KB 0x00, 0x16
+#define CAN_BT01_1000KB 0x00, 0x14
+
 /* CANBTP.dwMode */
 #define CAN_BTMODE_RAW 0x00000001 /* raw controller values: dwBPS is the prescaler */
 #define CAN_BTMODE_TSM 0x00000002 /* triple sampling */
 
 /* CANBTP initializers {dwMode, dwBPS, wTS1, wTS2, wSJW, wTDO}:
- *   CANBTP nominal = CAN_BTP_500KB; */
+ *   CANBTP nominal = CAN_BTP_500KB;
+ * In the bit/s form wTS1 counts the synchronization quantum too: a bit is wTS1 + wTS2 quanta,
+ * sampled after wTS1. CAN_BTP_EMPTY is all zero (no timing, e.g. no fast data phase). The
+ * same values as CANBTP objects: CAN_BITRATE_NONE, CAN_BITRATE_5KB, ... (after the
+ * structures). */
+#define CAN_BTP_EMPTY \
+  { 0, 0, 0, 0, 0, 0 }
 #define CAN_BTP_5KB \
   { 0, 5000, 17, 8, 1, 0 }
 #define CAN_BTP_10KB \
@@ -134,9 +153,9 @@
 #define CAN_BTP_1000KB \
   { 0, 1000000, 6, 2, 1, 0 }
 
-/* Number of data bytes per DLC 0..15:  UINT8 len[16] = CAN_EDLC_XLT; */
-#define CAN_EDLC_XLT \
-  { 0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64 }
+/* Entries of CANBTRTABLE and CANBTPTABLE (the vendor's spelling). */
+#define CAN_BTR_TABEL_SIZE 64
+#define CAN_BTP_TABEL_SIZE 64
 
 /* ------------------------------------------------------------------------------------------
  * Message filter
@@ -217,6 +236,11 @@
 #define CAN_MSGFLAGS_RTR 0x40 /* remote transmission request */
 #define CAN_MSGFLAGS_EXT 0x80 /* 29-bit ID */
 
+/* CANMSGINFO.Bytes.bFlags from its fields (each 0 or 1, dlc 0..15). */
+#define CAN_MAKE_MSGFLAGS(dlc, ovr, srr, rtr, ext)                                             \
+  ((UINT8)((((UINT32)(ext)&1u) << 7) | (((UINT32)(rtr)&1u) << 6) | (((UINT32)(srr)&1u) << 5) | \
+           (((UINT32)(ovr)&1u) << 4) | ((UINT32)(dlc)&0x0Fu)))
+
 /* Flags of CANMSGINFO.Bytes.bFlags2 */
 #define CAN_MSGFLAGS2_SSM 0x01 /* single-shot */
 #define CAN_MSGFLAGS2_HPM 0x02 /* high priority */
@@ -224,6 +248,11 @@
 #define CAN_MSGFLAGS2_FDR 0x08 /* fast data rate (bit-rate switch) */
 #define CAN_MSGFLAGS2_ESI 0x10 /* error state indicator (receive only) */
 #define CAN_MSGFLAGS2_RES 0xE0 /* reserved, 0 */
+
+/* CANMSGINFO.Bytes.bFlags2 from its fields (each 0 or 1). */
+#define CAN_MAKE_MSGFLAGS2(ssm, hpm, edl, fdr, esi)                                            \
+  ((UINT8)((((UINT32)(esi)&1u) << 4) | (((UINT32)(fdr)&1u) << 3) | (((UINT32)(edl)&1u) << 2) | \
+           (((UINT32)(hpm)&1u) << 1) | ((UINT32)(ssm)&1u)))
 
 /* Acceptance result (CANMSGINFO.Bytes.bAccept) */
 #define CAN_ACCEPT_REJECT 0x00   /* rejected */
@@ -242,8 +271,9 @@
 #define CAN_MSGID_STATUS 0xFFFFFFFFu /* status message */
 #define CAN_MSGID_WAKEUP 0xFFFFFFFFu /* wake-up message */
 
-#define CAN_MSGID_MASK11 0x000007FF /* valid bits of an 11-bit ID */
-#define CAN_MSGID_MASK29 0x1FFFFFFF /* valid bits of a 29-bit ID */
+#define CAN_MSGID_MASK11 0x000007FF   /* valid bits of an 11-bit ID */
+#define CAN_MSGID_MASK29 0x1FFFFFFF   /* valid bits of a 29-bit ID */
+#define CAN_MSGID_INVALID 0xE0000000u /* bits no valid ID has */
 
 /* abData[0] of an info message */
 #define CAN_INFO_START 1 /* controller started */
@@ -386,6 +416,15 @@ typedef struct _CANCHANSTATUS2 {
   UINT8 bTxFifoLoad;          /* transmit FIFO load in percent */
 } CANCHANSTATUS2, *PCANCHANSTATUS2;
 
+/* Run-time information of a controller (16 bytes) */
+typedef struct _CANRTINFO {
+  UINT32 dwNumChannels; /* channels open on the controller */
+  UINT32 dwActChannels; /* of which activated */
+  UINT32 dwLockStatus;  /* CAN_RTI_LOCKSTAT_* */
+  UINT16 wRxFifoLoad;   /* device receive FIFO load in percent */
+  UINT16 wTxFifoLoad;   /* device transmit FIFO load in percent */
+} CANRTINFO, *PCANRTINFO;
+
 /* Cyclic transmit list status, v1 (17 bytes) */
 typedef struct _CANSCHEDULERSTATUS {
   UINT8 bTaskStat;                   /* CAN_CTXTSK_STAT_* */
@@ -468,6 +507,85 @@ typedef struct _CANCYCLICTXMSG2 {
 
 #pragma pack(pop)
 
+/* CANRTINFO.dwLockStatus */
+#define CAN_RTI_LOCKSTAT_CTL 0x00000001u /* the control unit is held */
+#define CAN_RTI_LOCKSTAT_SHD 0x00000002u /* the cyclic transmit list is held */
+#define CAN_RTI_LOCKSTAT_CHN 0x80000000u /* an exclusive channel is open */
+
+/* ------------------------------------------------------------------------------------------
+ * Tables and bit-rate objects
+ *
+ * CAN_EDLC_XLT[dlc]: data bytes of a CAN FD DLC (0..15); CAN_ELEN_XLT[len]: the smallest DLC
+ * that holds len bytes (0..64). CAN_BITRATE_*: the CAN_BTP_* timings as CANBTP objects.
+ * In C++ each translation unit gets its own const (C++11: constexpr) copy. In C they are objects
+ * with external linkage: a program may define them in one of its files (#define INIT_CAN_EDLC_XLT
+ * and/or INIT_CAN_BITRATES before including this header, as with the vendor's header); otherwise
+ * the definitions exported by libvcinpl.so, libvcinpl2.so and libvciapi.so serve.
+ * ------------------------------------------------------------------------------------------ */
+
+#define CAN_SDLC_MAX 8  /* largest classic DLC */
+#define CAN_SLEN_MAX 8  /* longest classic data field */
+#define CAN_EDLC_MAX 15 /* largest CAN FD DLC */
+#define CAN_ELEN_MAX 64 /* longest CAN FD data field */
+
+#define CANEMU_CAN_EDLC_XLT_VALUES \
+  { 0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64 }
+#define CANEMU_CAN_ELEN_XLT_VALUES                                                                 \
+  {                                                                                                \
+    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 9, 10, 10, 10, 10, 11, 11, 11, 11, 12, 12, 12, 12, 13, 13, \
+        13, 13, 13, 13, 13, 13, 14, 14, 14, 14, 14, 14, 14, 14, 14, 14, 14, 14, 14, 14, 14, 14,    \
+        15, 15, 15, 15, 15, 15, 15, 15, 15, 15, 15, 15, 15, 15, 15, 15                             \
+  }
+
+/* C++11 and later: constexpr, usable in constant expressions. */
+#if defined(__cplusplus) && __cplusplus >= 201103L
+#define CANEMU_CAN_CONST constexpr
+#else
+#define CANEMU_CAN_CONST const
+#endif
+
+#if defined(__cplusplus) || defined(INIT_CAN_EDLC_XLT)
+CANEMU_CAN_CONST UINT8 CAN_EDLC_XLT[CAN_EDLC_MAX + 1] = CANEMU_CAN_EDLC_XLT_VALUES;
+CANEMU_CAN_CONST UINT8 CAN_ELEN_XLT[CAN_ELEN_MAX + 1] = CANEMU_CAN_ELEN_XLT_VALUES;
+#else
+extern const UINT8 CAN_EDLC_XLT[CAN_EDLC_MAX + 1];
+extern const UINT8 CAN_ELEN_XLT[CAN_ELEN_MAX + 1];
+#endif
+
+#if defined(__cplusplus) || defined(INIT_CAN_BITRATES)
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_NONE = CAN_BTP_EMPTY;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_5KB = CAN_BTP_5KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_10KB = CAN_BTP_10KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_20KB = CAN_BTP_20KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_50KB = CAN_BTP_50KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_100KB = CAN_BTP_100KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_125KB = CAN_BTP_125KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_250KB = CAN_BTP_250KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_500KB = CAN_BTP_500KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_800KB = CAN_BTP_800KB;
+CANEMU_CAN_CONST CANBTP CAN_BITRATE_1000KB = CAN_BTP_1000KB;
+#else
+extern const CANBTP CAN_BITRATE_NONE;
+extern const CANBTP CAN_BITRATE_5KB;
+extern const CANBTP CAN_BITRATE_10KB;
+extern const CANBTP CAN_BITRATE_20KB;
+extern const CANBTP CAN_BITRATE_50KB;
+extern const CANBTP CAN_BITRATE_100KB;
+extern const CANBTP CAN_BITRATE_125KB;
+extern const CANBTP CAN_BITRATE_250KB;
+extern const CANBTP CAN_BITRATE_500KB;
+extern const CANBTP CAN_BITRATE_800KB;
+extern const CANBTP CAN_BITRATE_1000KB;
+#endif
+
+/* DLC <-> length. Out-of-range arguments (negative ones too) give the largest value. */
+#define CAN_SDLC_TO_LEN(dlc) ((UINT32)(dlc) <= CAN_SDLC_MAX ? (UINT8)(dlc) : (UINT8)CAN_SLEN_MAX)
+#define CAN_EDLC_TO_LEN(dlc) \
+  ((UINT32)(dlc) <= CAN_EDLC_MAX ? CAN_EDLC_XLT[(UINT32)(dlc)] : (UINT8)CAN_ELEN_MAX)
+#define CAN_LEN_TO_SDLC(len) ((UINT32)(len) <= CAN_SLEN_MAX ? (UINT8)(len) : (UINT8)CAN_SDLC_MAX)
+#define CAN_LEN_TO_EDLC(len) \
+  ((UINT32)(len) <= CAN_ELEN_MAX ? CAN_ELEN_XLT[(UINT32)(len)] : (UINT8)CAN_EDLC_MAX)
+
 /* ------------------------------------------------------------------------------------------
  * Layout checks
  * ------------------------------------------------------------------------------------------ */
@@ -483,6 +601,7 @@ VCI_ASSERT_SIZE(CANLINESTATUS, 8);
 VCI_ASSERT_SIZE(CANLINESTATUS2, 40);
 VCI_ASSERT_SIZE(CANCHANSTATUS, 18);
 VCI_ASSERT_SIZE(CANCHANSTATUS2, 44);
+VCI_ASSERT_SIZE(CANRTINFO, 16);
 VCI_ASSERT_SIZE(CANSCHEDULERSTATUS, 17);
 VCI_ASSERT_SIZE(CANSCHEDULERSTATUS2, 57);
 VCI_ASSERT_SIZE(CANMSGINFO, 4);

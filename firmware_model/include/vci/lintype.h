@@ -18,7 +18,8 @@
  * ------------------------------------------------------------------------------------------ */
 
 /* Controller type (VCI_LIN_CTRL(type) in VCIDEVICECAPS.BusCtrlTypes) */
-#define LIN_CTRL_UNKNOWN 0 /* unknown (the only one the emulation reports) */
+#define LIN_CTRL_UNKNOWN 0  /* unknown (the only one the emulation reports) */
+#define LIN_CTRL_MAXVAL 255 /* largest possible value */
 
 /* Controller features (LINCAPABILITIES.dwFeatures) */
 #define LIN_FEATURE_MASTER 0x0001   /* master mode */

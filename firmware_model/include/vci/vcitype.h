@@ -13,6 +13,7 @@
 #ifndef CANEMU_VCI_VCITYPE_H
 #define CANEMU_VCI_VCITYPE_H
 
+#include <stddef.h> /* wchar_t in C */
 #include <stdint.h>
 
 /* ------------------------------------------------------------------------------------------
@@ -56,6 +57,9 @@ typedef INT32 BOOL32;
 
 typedef char CHAR;
 typedef char TCHAR; /* no UNICODE build: TCHAR is always char */
+/* The W (wide) functions take wchar_t text: 32-bit on Linux, what L"..." literals and the
+ * wcs* functions use (on Windows WCHAR is 16-bit UTF-16). */
+typedef wchar_t WCHAR;
 typedef INT32 LONG; /* 32-bit, as on Windows (LLP64), not the 64-bit Linux long */
 typedef UINT32 ULONG;
 typedef float FLOAT;
@@ -76,12 +80,14 @@ typedef BOOL* PBOOL;
 typedef BOOL8* PBOOL8;
 typedef BOOL32* PBOOL32;
 typedef CHAR* PCHAR;
+typedef WCHAR* PWCHAR;
 typedef TCHAR* PTCHAR;
 typedef LONG* PLONG;
 typedef ULONG* PULONG;
 typedef FLOAT* PFLOAT;
 typedef HRESULT* PHRESULT;
 typedef HANDLE* PHANDLE;
+typedef void* HWND; /* a window; the VCI functions that take one ignore it on Linux */
 
 #ifndef TRUE
 #define TRUE 1
@@ -153,6 +159,7 @@ typedef const VCIID* REFVCIID;
 #define VCI_BUS_CAN 1 /* CAN */
 #define VCI_BUS_LIN 2 /* LIN */
 #define VCI_BUS_FLX 3 /* FlexRay */
+#define VCI_BUS_KLN 4 /* K-Line */
 
 /* Builds a type word from a bus type and a controller type. */
 #define VCI_BUS_CTRL(bus, ctrl) ((UINT16)((((UINT16)(bus)&0xFFu) << 8) | ((UINT16)(ctrl)&0xFFu)))
@@ -166,6 +173,31 @@ typedef const VCIID* REFVCIID;
 #define VCI_LIN_CTRL(ctrl) VCI_BUS_CTRL(VCI_BUS_LIN, ctrl)
 #define VCI_FLX_CTRL(ctrl) VCI_BUS_CTRL(VCI_BUS_FLX, ctrl)
 
+/* Type words of the controllers (the CAN_CTRL_* values come from cantype.h, LIN_CTRL_* from
+ * lintype.h). */
+#define VCI_CAN_UNKNOWN VCI_CAN_CTRL(CAN_CTRL_UNKNOWN)
+#define VCI_CAN_82527 VCI_CAN_CTRL(CAN_CTRL_82527)
+#define VCI_CAN_82C200 VCI_CAN_CTRL(CAN_CTRL_82C200)
+#define VCI_CAN_81C90 VCI_CAN_CTRL(CAN_CTRL_81C90)
+#define VCI_CAN_82C90 VCI_CAN_81C90 /* older (misspelt) name */
+#define VCI_CAN_81C92 VCI_CAN_CTRL(CAN_CTRL_81C92)
+#define VCI_CAN_82C92 VCI_CAN_81C92 /* older (misspelt) name */
+#define VCI_CAN_SJA1000 VCI_CAN_CTRL(CAN_CTRL_SJA1000)
+#define VCI_CAN_82C900 VCI_CAN_CTRL(CAN_CTRL_82C900)
+#define VCI_CAN_TOUCAN VCI_CAN_CTRL(CAN_CTRL_TOUCAN)
+#define VCI_CAN_MSCAN VCI_CAN_CTRL(CAN_CTRL_MSCAN)
+#define VCI_CAN_FLEXCAN VCI_CAN_CTRL(CAN_CTRL_FLEXCAN)
+#define VCI_CAN_IFICAN VCI_CAN_CTRL(CAN_CTRL_IFICAN)
+#define VCI_CAN_IFI VCI_CAN_IFICAN /* older name */
+#define VCI_CAN_BCCAN VCI_CAN_CTRL(CAN_CTRL_BCCAN)
+#define VCI_CAN_CCAN VCI_CAN_BCCAN /* older name */
+#define VCI_CAN_BXCAN VCI_CAN_CTRL(CAN_CTRL_BXCAN)
+#define VCI_CAN_IFICFD VCI_CAN_CTRL(CAN_CTRL_IFICFD)
+#define VCI_CAN_BMCAN VCI_CAN_CTRL(CAN_CTRL_BMCAN)
+#define VCI_LIN_UNKNOWN VCI_LIN_CTRL(LIN_CTRL_UNKNOWN)
+#define VCI_FLX_UNKNOWN VCI_FLX_CTRL(0)
+#define VCI_KLN_UNKNOWN VCI_BUS_CTRL(VCI_BUS_KLN, 0)
+
 /* ------------------------------------------------------------------------------------------
  * Version, device and BAL information
  * ------------------------------------------------------------------------------------------ */
@@ -176,7 +208,10 @@ typedef const VCIID* REFVCIID;
 typedef struct _VCIVERSIONINFO {
   UINT32 VciMajorVersion;
   UINT32 VciMinorVersion;
-  UINT32 VciReleaseNumber;
+  union {
+    UINT32 VciRevNumber;     /* the SDK's name */
+    UINT32 VciReleaseNumber; /* the C++ guide's name, same field */
+  };
   UINT32 VciBuildNumber;
   UINT32 OsMajorVersion;
   UINT32 OsMinorVersion;

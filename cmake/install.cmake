@@ -102,7 +102,7 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu_lcm DESTINATION ${C
 if(CANEMU_LCM)
   install(DIRECTORY ${PROJECT_BINARY_DIR}/include/canemu_lcm DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endif()
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/lcm/canemu_lcm DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/lcm
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/lcmtypes/canemu_lcm DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/lcm
         FILES_MATCHING PATTERN "*.lcm")
 set(dist_info ${PROJECT_BINARY_DIR}/install-python/canemu-${PROJECT_VERSION}.dist-info)
 file(WRITE ${dist_info}/METADATA

@@ -216,7 +216,11 @@ tl::expected<std::unique_ptr<BridgeTransport>, std::string> open_lcm(const std::
                                                                      const std::string& prefix) {
   lcm_t* lcm = lcm_create(url.c_str());
   if (lcm == nullptr) {
-    return tl::unexpected("LCM cannot open \"" + url + "\"");
+    return tl::unexpected("LCM cannot open \"" + url + "\"" +
+                          (url.starts_with("udpm://")
+                               ? " (UDP multicast needs a multicast route, even on one host: "
+                                 "docs/bridges.md)"
+                               : ""));
   }
   auto t = std::make_unique<LcmTransport>(bus, lcm, prefix);
   if (!t->subscribe()) {

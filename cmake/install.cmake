@@ -95,6 +95,15 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR
 set(CANEMU_PYTHON_DIR lib/python3/dist-packages)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu DESTINATION ${CANEMU_PYTHON_DIR}
         FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
+# The LCM bridge's message types (docs/bridges.md): Python beside canemu, the C++ headers lcm-gen
+# made (<canemu_lcm/frame_t.hpp>) and the .lcm files for other languages' lcm-gen.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu_lcm DESTINATION ${CANEMU_PYTHON_DIR}
+        FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
+if(CANEMU_LCM)
+  install(DIRECTORY ${PROJECT_BINARY_DIR}/include/canemu_lcm DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+endif()
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/lcmtypes/canemu_lcm DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/lcm
+        FILES_MATCHING PATTERN "*.lcm")
 set(dist_info ${PROJECT_BINARY_DIR}/install-python/canemu-${PROJECT_VERSION}.dist-info)
 file(WRITE ${dist_info}/METADATA
      "Metadata-Version: 2.1\nName: canemu\nVersion: ${PROJECT_VERSION}\n"

@@ -1,9 +1,11 @@
 // [[recorder]] tables (a bus recorded by canemud into a candump log or a pcap file; a LIN bus
 // into pcap only) and [[bridge]] tables (a bus joined to a Linux CAN interface).
 #include <set>
+#include <utility>
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/lcm_bridge.hpp"
 #include "canemu/ipc/capture_messages.hpp"
 #include "capture_config_reader.hpp"
 
@@ -135,14 +137,23 @@ std::optional<std::string> interface_name_problem(std::string_view name) {
 
 void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> interfaces;
+  std::set<std::string> lcm_buses;
+  std::set<std::pair<std::string, std::string>> lcm_channels;
   c.for_each_table(root, "bridge", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path, {"kind", "bus", "interface", "error_frames", "restart_ms"});
     BridgeConfig b;
     b.line = static_cast<uint32_t>(t.source().begin.line);
+    const toml::node* kind_node = t.get("kind");
+    const bool lcm = kind_node != nullptr && kind_node->value<std::string>() == "lcm";
+    if (lcm) {
+      c.only_keys(t, path, {"kind", "bus", "url", "channel_prefix", "restart_ms"});
+    } else {
+      c.only_keys(t, path, {"kind", "bus", "interface", "error_frames", "restart_ms"});
+    }
     if (auto kind = c.string(t, path, "kind", true)) {
-      if (*kind != "socketcan") {
+      b.kind = *kind;
+      if (*kind != "socketcan" && *kind != "lcm") {
         c.error(*t.get("kind"), path + ".kind",
-                fmt::format("\"{}\" is not a bridge kind (socketcan)", *kind));
+                fmt::format("\"{}\" is not a bridge kind (socketcan, lcm)", *kind));
       }
     }
     if (auto bus = c.string(t, path, "bus", true)) {
@@ -152,23 +163,51 @@ void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
         c.error(*t.get("bus"), path + ".bus", fmt::format("no bus is named \"{}\"", *bus));
       } else if (bc->kind == BusKind::lin) {
         c.error(*t.get("bus"), path + ".bus",
-                fmt::format("\"{}\" is a LIN bus; SocketCAN bridges join CAN buses", *bus));
+                fmt::format("\"{}\" is a LIN bus; {} bridges join CAN buses", *bus,
+                            lcm ? "LCM" : "SocketCAN"));
+      } else if (lcm && !lcm_buses.insert(*bus).second) {
+        c.error(*t.get("bus"), path + ".bus",
+                fmt::format("another LCM bridge joins \"{}\" already", *bus));
       }
     }
-    if (auto name = c.string(t, path, "interface", true)) {
-      b.interface = *name;
-      if (auto problem = interface_name_problem(*name)) {
-        c.error(*t.get("interface"), path + ".interface", *problem);
-      } else if (!interfaces.insert(*name).second) {
-        c.error(*t.get("interface"), path + ".interface",
-                fmt::format("another bridge uses \"{}\" already (its frames would loop)", *name));
+    if (lcm) {
+      b.url = std::string(kDefaultLcmUrl);
+      if (auto url = c.string(t, path, "url", false)) {
+        b.url = *url;
+        if (auto problem = lcm_url_problem(*url)) {
+          c.error(*t.get("url"), path + ".url", *problem);
+        }
+      }
+      b.channel_prefix = default_lcm_prefix(b.bus);
+      if (auto prefix = c.string(t, path, "channel_prefix", false)) {
+        b.channel_prefix = *prefix;
+        if (auto problem = lcm_prefix_problem(*prefix)) {
+          c.error(*t.get("channel_prefix"), path + ".channel_prefix", *problem);
+        }
+      }
+      if (!b.bus.empty() && !lcm_channels.insert({b.url, b.channel_prefix}).second) {
+        c.error(t, path,
+                fmt::format("another LCM bridge uses the channels {}* on {} already (their frames "
+                            "would loop)",
+                            b.channel_prefix, b.url));
       }
     }
-    if (const toml::node* n = t.get("error_frames")) {
-      if (!n->is_boolean()) {
-        c.error(*n, path + ".error_frames", "must be true or false");
-      } else {
-        b.error_frames = n->as_boolean()->get();
+    if (!lcm) {
+      if (auto name = c.string(t, path, "interface", true)) {
+        b.interface = *name;
+        if (auto problem = interface_name_problem(*name)) {
+          c.error(*t.get("interface"), path + ".interface", *problem);
+        } else if (!interfaces.insert(*name).second) {
+          c.error(*t.get("interface"), path + ".interface",
+                  fmt::format("another bridge uses \"{}\" already (its frames would loop)", *name));
+        }
+      }
+      if (const toml::node* n = t.get("error_frames")) {
+        if (!n->is_boolean()) {
+          c.error(*n, path + ".error_frames", "must be true or false");
+        } else {
+          b.error_frames = n->as_boolean()->get();
+        }
       }
     }
     if (auto ms = c.integer(t, path, "restart_ms", false, 0, ipc::kMaxBridgeRestartMs)) {

@@ -519,6 +519,12 @@ std::string summary(const Config& cfg) {
     s += fmt::format("  recorder of {} into {} ({})\n", r.bus, r.path, r.pcap ? "pcap" : "candump");
   }
   for (const BridgeConfig& b : cfg.bridges) {
+    if (b.kind == "lcm") {
+      s += fmt::format(
+          "  bridge lcm of {} to {}*, {}{}\n", b.bus, b.channel_prefix, b.url,
+          b.restart_ms != 0 ? fmt::format(", restart {} ms after bus-off", b.restart_ms) : "");
+      continue;
+    }
     s += fmt::format(
         "  bridge {} of {} to {}{}{}\n", b.kind, b.bus, b.interface,
         b.error_frames ? " (error frames too)" : "",

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/lcm_bridge.hpp"
 #include "canemu/daemon/status.hpp"
 #include "capture_config_reader.hpp"
 
@@ -154,16 +155,38 @@ void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& s
                                    uint32_t request_id) {
   BridgeConfig b;
   b.bus = ipc::name_of(m.bus);
-  b.interface = ipc::name_of(m.interface);
-  b.error_frames = m.error_frames != 0;
   b.restart_ms = m.restart_ms;
   if (m.restart_ms > ipc::kMaxBridgeRestartMs) {
     error(send, request_id, ipc::ErrorCode::bad_argument,
           fmt::format("restart_ms {} is outside 0..{}", m.restart_ms, ipc::kMaxBridgeRestartMs));
     return;
   }
-  if (auto problem = detail::interface_name_problem(b.interface)) {
-    error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+  if (m.kind == ipc::kBridgeLcm) {
+    b.kind = "lcm";
+    b.url = ipc::name_of(m.url);
+    b.channel_prefix = ipc::name_of(m.channel_prefix);
+    if (b.url.empty()) {
+      b.url = std::string(kDefaultLcmUrl);
+    } else if (auto problem = lcm_url_problem(b.url)) {
+      error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+      return;
+    }
+    if (b.channel_prefix.empty()) {
+      b.channel_prefix = default_lcm_prefix(b.bus);
+    } else if (auto problem = lcm_prefix_problem(b.channel_prefix)) {
+      error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+      return;
+    }
+  } else if (m.kind == ipc::kBridgeSocketCan) {
+    b.interface = ipc::name_of(m.interface);
+    b.error_frames = m.error_frames != 0;
+    if (auto problem = detail::interface_name_problem(b.interface)) {
+      error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+      return;
+    }
+  } else {
+    error(send, request_id, ipc::ErrorCode::bad_argument,
+          fmt::format("bridge kind {} is neither SocketCAN (0) nor LCM (1)", m.kind));
     return;
   }
   if (!sim_.bus_index(b.bus)) {
@@ -347,32 +370,34 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       add_bridge(read_as<ipc::BridgeAddRequest>(data), send, request_id);
       return;
     case ipc::MsgType::bridge_remove_request: {
-      const std::string interface = ipc::name_of(read_as<ipc::BridgeRemoveRequest>(data).interface);
-      const bool removed = sim_.remove_bridge(interface, [this](SocketCanBridge& b) {
+      const auto& m = read_as<ipc::BridgeRemoveRequest>(data);
+      const bool lcm = m.kind == ipc::kBridgeLcm;
+      const std::string name = lcm ? ipc::name_of(m.bus) : ipc::name_of(m.interface);
+      const auto closing = [this](Bridge& b) {
         if (channel_closing) {
           channel_closing(b);
         }
-      });
+      };
+      const bool removed =
+          lcm ? sim_.remove_lcm_bridge(name, closing) : sim_.remove_bridge(name, closing);
       if (!removed) {
         error(send, request_id, ipc::ErrorCode::bad_argument,
-              fmt::format("no bridge on interface \"{}\"", interface));
+              lcm ? fmt::format("no LCM bridge on bus \"{}\"", name)
+                  : fmt::format("no bridge on interface \"{}\"", name));
         return;
       }
       send_reply(send, ipc::make_message<ipc::BridgeRemoveReply>(request_id));
       return;
     }
     case ipc::MsgType::bridge_restart_request: {
-      const std::string interface =
-          ipc::name_of(read_as<ipc::BridgeRestartRequest>(data).interface);
-      SocketCanBridge* bridge = nullptr;
-      for (const auto& b : sim_.bridges()) {
-        if (b->options().interface == interface) {
-          bridge = b.get();
-        }
-      }
+      const auto& m = read_as<ipc::BridgeRestartRequest>(data);
+      const bool lcm = m.kind == ipc::kBridgeLcm;
+      const std::string name = lcm ? ipc::name_of(m.bus) : ipc::name_of(m.interface);
+      Bridge* bridge = sim_.find_bridge(lcm ? BridgeKind::lcm : BridgeKind::socketcan, name);
       if (bridge == nullptr) {
         error(send, request_id, ipc::ErrorCode::bad_argument,
-              fmt::format("no bridge on interface \"{}\"", interface));
+              lcm ? fmt::format("no LCM bridge on bus \"{}\"", name)
+                  : fmt::format("no bridge on interface \"{}\"", name));
         return;
       }
       if (auto problem = bridge->restart()) {

@@ -399,6 +399,10 @@ void Server::kick_all_channels() {
   for (auto& [fd, c] : clients_) {
     ControlDispatcher::for_each_ring(c.session, [](Doorbell& d) { d.kick(); });
   }
+  // What arrived on the bridges is sent in the step too, whichever the loop saw first.
+  for (const auto& b : sim_.bridges()) {
+    b->kick();
+  }
 }
 
 // A client whose ring positions make no sense is dropped; the others go on.

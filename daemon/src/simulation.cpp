@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/lcm_bridge.hpp"
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
@@ -107,8 +108,35 @@ std::optional<std::string> Simulation::add_recorder(const RecorderConfig& r) {
   return std::nullopt;
 }
 
-tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeConfig& b) {
+tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b) {
   const auto bus = bus_index(b.bus);
+  if (b.kind == "lcm") {
+    if (!bus) {
+      return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
+    }
+    if (find_bridge(BridgeKind::lcm, b.bus) != nullptr) {
+      return tl::unexpected(fmt::format("{} has an LCM bridge already", b.bus));
+    }
+    const std::string url = b.url.empty() ? std::string(kDefaultLcmUrl) : b.url;
+    const std::string prefix =
+        b.channel_prefix.empty() ? default_lcm_prefix(b.bus) : b.channel_prefix;
+    for (const auto& other : bridges_) {
+      if (other->kind() == BridgeKind::lcm && other->options().url == url &&
+          other->options().channel_prefix == prefix) {
+        return tl::unexpected(fmt::format(
+            "the LCM bridge of {} uses the channels {}* on {} already (their frames would loop)",
+            other->options().bus, prefix, url));
+      }
+    }
+    auto transport = open_lcm(b.bus, url, prefix);
+    if (!transport) {
+      return tl::unexpected(transport.error());
+    }
+    BridgeConfig resolved = b;
+    resolved.url = url;
+    resolved.channel_prefix = prefix;
+    return add_bridge(resolved, std::move(*transport));
+  }
   auto port = open_can_raw(b.interface, bus && config_.buses[*bus].kind == BusKind::can_fd);
   if (!port) {
     return tl::unexpected("bridge to " + port.error());
@@ -116,42 +144,72 @@ tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeC
   return add_bridge(b, std::move(*port));
 }
 
-tl::expected<SocketCanBridge*, std::string> Simulation::add_bridge(const BridgeConfig& b,
-                                                                   ipc::UniqueFd port) {
+tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b,
+                                                          ipc::UniqueFd port) {
+  for (const auto& other : bridges_) {
+    if (other->kind() == BridgeKind::socketcan && other->options().interface == b.interface) {
+      return tl::unexpected(fmt::format("{} is bridged to {} already (its frames would loop)",
+                                        b.interface, other->options().bus));
+    }
+  }
+  return add_bridge(b, std::make_unique<SocketCanTransport>(b.interface, std::move(port)));
+}
+
+tl::expected<Bridge*, std::string> Simulation::add_bridge(
+    const BridgeConfig& b, std::unique_ptr<BridgeTransport> transport) {
   const auto bus = bus_index(b.bus);
   if (!bus) {
     return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
   }
+  const bool lcm = b.kind == "lcm";
   const BusConfig& bc = config_.buses[*bus];
   if (bc.kind == BusKind::lin) {
-    return tl::unexpected(
-        fmt::format("\"{}\" is a LIN bus; SocketCAN bridges join CAN buses", b.bus));
-  }
-  for (const auto& other : bridges_) {
-    if (other->options().interface == b.interface) {
-      return tl::unexpected(fmt::format("{} is bridged to {} already (its frames would loop)",
-                                        b.interface, other->options().bus));
-    }
+    return tl::unexpected(fmt::format("\"{}\" is a LIN bus; {} bridges join CAN buses", b.bus,
+                                      lcm ? "LCM" : "SocketCAN"));
   }
   const auto timing = bus_timing(*bus);
   if (!timing) {
     return tl::unexpected(fmt::format("no controller runs bus {} at {} bit/s", b.bus, bc.bitrate));
   }
   BridgeOptions o;
+  o.kind = lcm ? BridgeKind::lcm : BridgeKind::socketcan;
   o.bus = b.bus;
   o.interface = b.interface;
-  o.error_frames = b.error_frames;
+  o.error_frames = lcm || b.error_frames;  // LCM: always on ERRORS and STATES
   o.restart_ms = b.restart_ms;
   o.fd = bc.kind == BusKind::can_fd;
+  o.url = b.url;
+  o.channel_prefix = b.channel_prefix;
   bridges_.push_back(
-      SocketCanBridge::start(std::move(o), *bus, nodes_.spare(*bus), *timing, std::move(port)));
+      Bridge::start(std::move(o), *bus, nodes_.spare(*bus), *timing, std::move(transport)));
   return bridges_.back().get();
 }
 
+Bridge* Simulation::find_bridge(BridgeKind kind, const std::string& name) const {
+  for (const auto& b : bridges_) {
+    if (b->kind() == kind &&
+        (kind == BridgeKind::lcm ? b->options().bus : b->options().interface) == name) {
+      return b.get();
+    }
+  }
+  return nullptr;
+}
+
 bool Simulation::remove_bridge(const std::string& interface,
-                               const std::function<void(SocketCanBridge&)>& before) {
+                               const std::function<void(Bridge&)>& before) {
+  Bridge* found = find_bridge(BridgeKind::socketcan, interface);
+  return found != nullptr && remove(found, before);
+}
+
+bool Simulation::remove_lcm_bridge(const std::string& bus,
+                                   const std::function<void(Bridge&)>& before) {
+  Bridge* found = find_bridge(BridgeKind::lcm, bus);
+  return found != nullptr && remove(found, before);
+}
+
+bool Simulation::remove(Bridge* bridge, const std::function<void(Bridge&)>& before) {
   for (auto it = bridges_.begin(); it != bridges_.end(); ++it) {
-    if ((*it)->options().interface == interface) {
+    if (it->get() == bridge) {
       if (before) {
         before(**it);
       }
@@ -428,7 +486,8 @@ ReloadReport Simulation::reload(const Config& fresh) {
     }
   }
   const auto bridge_key = [](const BridgeConfig& b) {
-    return std::tie(b.kind, b.bus, b.interface, b.error_frames, b.restart_ms);
+    return std::tie(b.kind, b.bus, b.interface, b.error_frames, b.restart_ms, b.url,
+                    b.channel_prefix);
   };
   if (!std::equal(fresh.bridges.begin(), fresh.bridges.end(), config_.bridges.begin(),
                   config_.bridges.end(),

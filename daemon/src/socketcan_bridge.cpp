@@ -16,55 +16,7 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
-std::unique_ptr<SocketCanBridge> SocketCanBridge::start(BridgeOptions options, std::size_t bus,
-                                                        HostedNode& node,
-                                                        const HostedNodeSettings& settings,
-                                                        ipc::UniqueFd port) {
-  std::unique_ptr<SocketCanBridge> b(
-      new SocketCanBridge(std::move(options), bus, node, std::move(port)));
-  SocketCanBridge* self = b.get();
-  HostedNodeSettings s = settings;
-  s.listen_only = false;
-  node.start(s, self, [self] { return self->next_tx(); });
-  return b;
-}
-
-SocketCanBridge::~SocketCanBridge() {
-  if (restart_event_) {
-    node_.scheduler().cancel(*restart_event_);
-  }
-  node_.stop();
-}
-
-std::optional<std::string> SocketCanBridge::restart() {
-  const FaultConfinement& fc = node_.controller().confinement();
-  if (!fc.bus_off()) {
-    return "bridge on " + options_.interface + " is " + std::string(to_string(fc.state())) +
-           ", not bus-off: nothing to restart";
-  }
-  if (fc.recovering()) {
-    return "bridge on " + options_.interface +
-           " restarts already (waits for 128 x 11 recessive bits, " +
-           std::to_string(fc.recovery_sequences_left()) + " left)";
-  }
-  if (restart_event_) {
-    node_.scheduler().cancel(*restart_event_);
-    restart_event_.reset();
-  }
-  node_.restart();
-  ++stats_.restarts;
-  if (options_.error_frames) {
-    write_frame(ipc::socketcan::restarted_frame(), stats_.error_frames);
-  }
-  return std::nullopt;
-}
-
-void SocketCanBridge::restart_after_bus_off() {
-  restart_event_.reset();
-  restart();  // nothing to do if it was restarted by hand in the meantime
-}
-
-void SocketCanBridge::kick() {
+void SocketCanTransport::receive(Bridge& bridge) {
   uint8_t buffer[ipc::socketcan::kCanFdMtu + 1];
   alignas(cmsghdr) char control[CMSG_SPACE(sizeof(uint32_t))];
   for (int i = 0; i < kMaxReadsPerKick; ++i) {
@@ -86,87 +38,45 @@ void SocketCanBridge::kick() {
       if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
         uint32_t dropped = 0;
         std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
-        stats_.kernel_dropped = dropped;
+        bridge.counters().kernel_dropped = dropped;
       }
     }
-    accept(buffer, static_cast<std::size_t>(n));
+    // Anything but a frame (a short read, an error frame, a bad length or identifier) is
+    // counted and skipped by the bridge.
+    const auto f = ipc::socketcan::from_struct(buffer, static_cast<std::size_t>(n));
+    std::string error;
+    const auto m = f ? ipc::socketcan::to_message(*f, error) : std::nullopt;
+    bridge.offer(m ? &*m : nullptr);
   }
-  node_.kick();
 }
 
-void SocketCanBridge::accept(const uint8_t* bytes, std::size_t size) {
-  // Anything but a frame of this bus (a short read, an error frame, a bad length or
-  // identifier, CAN FD on a classic bus) is counted and skipped.
-  const auto f = ipc::socketcan::from_struct(bytes, size);
-  std::string error;
-  const auto m = f ? ipc::socketcan::to_message(*f, error) : std::nullopt;
-  const auto frame = m ? to_tx_frame(*m) : Result<TxFrame>(tl::unexpected(ModelError{}));
-  if (!frame || (frame->frame.fd() && !options_.fd)) {
-    ++stats_.rejected;
-    return;
-  }
-  if (queue_.size() >= options_.queue_frames) {
-    ++stats_.queue_dropped;
-    return;
-  }
-  queue_.push_back(*frame);
-}
-
-std::optional<TxFrame> SocketCanBridge::next_tx() {
-  if (queue_.empty()) {
-    return std::nullopt;
-  }
-  TxFrame f = queue_.front();
-  queue_.pop_front();
-  return f;
-}
-
-void SocketCanBridge::write_out(const ipc::ChannelMessage& m, uint64_t& counter) {
+Delivery SocketCanTransport::write_out(const ipc::ChannelMessage& m) {
   if (const auto f = ipc::socketcan::from_message(m)) {
-    write_frame(*f, counter);
+    return write_frame(*f);
   }
+  return Delivery::none;
 }
 
-void SocketCanBridge::write_frame(const ipc::socketcan::Frame& f, uint64_t& counter) {
+Delivery SocketCanTransport::write_frame(const ipc::socketcan::Frame& f) {
   const std::vector<uint8_t> bytes = ipc::socketcan::to_struct(f);
   const ssize_t n = ::send(port_.get(), bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
-  if (n == static_cast<ssize_t>(bytes.size())) {
-    ++counter;
-  } else {
-    ++stats_.to_interface_dropped;
-  }
+  return n == static_cast<ssize_t>(bytes.size()) ? Delivery::sent : Delivery::refused;
 }
 
-void SocketCanBridge::frame_received(SimTime at, const Frame& frame, bool own) {
-  if (!own) {
-    write_out(to_message(at, frame, ipc::ChannelMessageKind::frame), stats_.to_interface);
-  }
+Delivery SocketCanTransport::frame(SimTime at, const Frame& frame, bool) {
+  return write_out(to_message(at, frame, ipc::ChannelMessageKind::frame));
 }
 
-void SocketCanBridge::frame_transmitted(SimTime, const Frame&) {
-  ++stats_.from_interface;
+Delivery SocketCanTransport::error(const BusErrorEvent& event, ErrorState state) {
+  return write_out(to_error_message(event, state));
 }
 
-void SocketCanBridge::transmission_dropped(SimTime, const Frame&) {
-  ++stats_.tx_failed;
+Delivery SocketCanTransport::state(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
+  return write_out(to_state_message(at, state, tec, rec));
 }
 
-void SocketCanBridge::bus_error(const BusErrorEvent& event) {
-  if (options_.error_frames) {
-    write_out(to_error_message(event, node_.controller().confinement().state()),
-              stats_.error_frames);
-  }
-}
-
-void SocketCanBridge::state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
-  if (options_.error_frames) {
-    write_out(to_state_message(at, state, tec, rec), stats_.error_frames);
-  }
-  if (state == ErrorState::bus_off && options_.restart_ms != 0 && !restart_event_) {
-    restart_event_ =
-        node_.scheduler().schedule_at(at + SimDuration(int64_t{options_.restart_ms} * 1'000'000),
-                                      [this](SimTime) { restart_after_bus_off(); });
-  }
+Delivery SocketCanTransport::restarted(SimTime, uint16_t, uint16_t) {
+  return write_frame(ipc::socketcan::restarted_frame());
 }
 
 tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interface, bool fd) {

@@ -227,7 +227,7 @@ void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
   const auto& bridges = sim.bridges();
   r.count = static_cast<uint16_t>(std::min(bridges.size(), ipc::kMaxBridges));
   for (std::size_t i = 0; i < r.count; ++i) {
-    SocketCanBridge& b = *bridges[i];
+    Bridge& b = *bridges[i];
     const BridgeStats& st = b.stats();
     model::FaultConfinement& fc = b.node().controller().confinement();
     ipc::BridgeEntry& e = r.bridges[i];
@@ -248,6 +248,10 @@ void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
     e.rejected = st.rejected;
     e.tx_failed = st.tx_failed;
     e.kernel_dropped = st.kernel_dropped;
+    e.kind = b.kind() == BridgeKind::lcm ? ipc::kBridgeLcm : ipc::kBridgeSocketCan;
+    e.received = st.received;
+    ipc::copy_name(e.url, b.options().url);
+    ipc::copy_name(e.channel_prefix, b.options().channel_prefix);
   }
 }
 

@@ -465,14 +465,14 @@ TEST(BridgeConfig, ReadsTheTableAndNamesEveryMistake) {
                                "t.toml:12:14: bridge[1].restart_ms: 60001 is outside 0..60000",
                                "t.toml:17:14: bridge[2].restart_ms: must be an integer"}));
   auto bad = parse_config(std::string(kClassic) +
-                              "[[bridge]]\nkind = \"lcm\"\nbus = \"can9\"\ninterface = \"vcan0\"\n"
+                              "[[bridge]]\nkind = \"zmq\"\nbus = \"can9\"\ninterface = \"vcan0\"\n"
                               "[[bridge]]\nkind = \"socketcan\"\nbus = \"can0\"\n"
                               "interface = \"vcan0\"\nloop = 1\n",
                           "t.toml");
   ASSERT_FALSE(bad);
   EXPECT_EQ(bad.error(),
             (std::vector<std::string>{
-                "t.toml:4:8: bridge[0].kind: \"lcm\" is not a bridge kind (socketcan)",
+                "t.toml:4:8: bridge[0].kind: \"zmq\" is not a bridge kind (socketcan, lcm)",
                 "t.toml:5:7: bridge[0].bus: no bus is named \"can9\"",
                 "t.toml:11:1: bridge[1].loop: unknown key (known here: kind, bus, interface, "
                 "error_frames, restart_ms)",

@@ -339,5 +339,60 @@ TEST(CliBridge, AddListAndRemoveSayWhatIsWrong) {
       << r.error().message;
 }
 
+// canemu bridge with --lcm, on LCM's in-process memq:// provider (no network needed; the bridge
+// between processes is tested in tests/python/test_lcm_bridge.py).
+TEST(CliBridge, AnLcmBridgeIsAddedListedRestartedAndRemovedByItsBus) {
+#ifndef CANEMU_HAVE_LCM
+  GTEST_SKIP() << "canemu was built without LCM";
+#endif
+  Daemon d;
+  Cli add(d, {"bridge", "add", "can0", "--lcm", "memq://", "--restart-ms", "10"});
+  EXPECT_EQ(Cli::read_all(add.out),
+            "can0 bridged to LCM channels CANEMU_CAN0_* on memq:// (restart 10 ms after "
+            "bus-off)\n");
+  EXPECT_EQ(add.wait(), 0) << Cli::read_all(add.err);
+  Cli again(d, {"bridge", "add", "can0", "--lcm", "memq://"});
+  EXPECT_EQ(again.wait(), 1);
+  EXPECT_EQ(Cli::read_all(again.err),
+            "canemu: canemud: bad_argument: can0 has an LCM bridge already\n");
+  Cli list(d, {"bridge", "list", "--json"});
+  const std::string json = Cli::read_all(list.out);
+  EXPECT_EQ(list.wait(), 0);
+  EXPECT_NE(json.find("\"kind\" : \"lcm\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"tx\" : \"CANEMU_CAN0_TX\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"url\" : \"memq://\""), std::string::npos) << json;
+  Cli table(d, {"bridge", "list"});
+  const std::string text = Cli::read_all(table.out);
+  EXPECT_EQ(table.wait(), 0);
+  EXPECT_EQ(text.substr(0, 10), "LCM-BRIDGE") << text;
+  Cli restart(d, {"bridge", "restart", "can0", "--lcm"});
+  EXPECT_EQ(restart.wait(), 1);
+  EXPECT_EQ(Cli::read_all(restart.err),
+            "canemu: canemud: bad_argument: LCM bridge of can0 is error-active, not bus-off: "
+            "nothing to restart\n");
+  Cli remove(d, {"bridge", "remove", "can0", "--lcm"});
+  EXPECT_EQ(Cli::read_all(remove.out), "LCM bridge of can0 removed\n");
+  EXPECT_EQ(remove.wait(), 0);
+  Cli gone(d, {"bridge", "remove", "can0", "--lcm"});
+  EXPECT_EQ(gone.wait(), 1);
+  EXPECT_EQ(Cli::read_all(gone.err),
+            "canemu: canemud: bad_argument: no LCM bridge on bus \"can0\"\n");
+  Cli none(d, {"bridge", "add", "can0"});
+  EXPECT_EQ(none.wait(), 1);
+  EXPECT_EQ(Cli::read_all(none.err),
+            "canemu: which interface? canemu bridge add BUS INTERFACE, or BUS --lcm [URL]\n");
+  Cli both(d, {"bridge", "add", "can0", "vcan0", "--lcm"});
+  EXPECT_EQ(both.wait(), 1);
+  EXPECT_NE(Cli::read_all(both.err).find("an LCM bridge has no INTERFACE"), std::string::npos);
+  Cli badprefix(d, {"bridge", "add", "can0", "--lcm", "--prefix", "A B"});
+  EXPECT_EQ(badprefix.wait(), 1);
+  EXPECT_EQ(Cli::read_all(badprefix.err),
+            "canemu: canemud: bad_argument: \"A B\" is not a channel prefix (letters, digits, "
+            "'_', '-', '.', '/')\n");
+  Cli badurl(d, {"bridge", "add", "can0", "--lcm", "nowhere"});
+  EXPECT_EQ(badurl.wait(), 1);
+  EXPECT_NE(Cli::read_all(badurl.err).find("\"nowhere\" is not an LCM URL"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace canemu

@@ -1,5 +1,5 @@
-// canemu bridge add|list|restart|remove: SocketCAN bridges while canemud runs
-// (docs/socketcan.md).
+// canemu bridge add|list|restart|remove: SocketCAN and LCM bridges while canemud runs
+// (docs/socketcan.md, docs/bridges.md).
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -23,12 +23,35 @@ struct BridgeArgs {
   bool error_frames = false;
   int64_t restart_ms = 0;
   bool json = false;
+  CLI::Option* lcm = nullptr;  // --lcm [URL]: an LCM bridge (of BUS, for remove and restart)
+  std::string url;
+  std::string prefix;
 };
+
+bool is_lcm(const BridgeArgs& a) {
+  return a.lcm != nullptr && a.lcm->count() > 0;
+}
 
 int run_add(const std::string& socket, const BridgeArgs& a) {
   if (a.restart_ms < 0 || a.restart_ms > ipc::kMaxBridgeRestartMs) {
     return fail(fmt::format("--restart-ms {} is outside 0..{} (ms after bus-off; 0: stay bus-off)",
                             a.restart_ms, ipc::kMaxBridgeRestartMs));
+  }
+  const bool lcm = is_lcm(a);
+  if (lcm && (!a.interface.empty() || a.error_frames)) {
+    return fail(
+        "an LCM bridge has no INTERFACE and no --error-frames (it always publishes the "
+        "node's errors and states)");
+  }
+  if (!lcm && a.interface.empty()) {
+    return fail("which interface? canemu bridge add BUS INTERFACE, or BUS --lcm [URL]");
+  }
+  if (!lcm && !a.prefix.empty()) {
+    return fail("--prefix is for LCM bridges (--lcm)");
+  }
+  if (a.url.size() >= ipc::kLcmUrlSize || a.prefix.size() >= ipc::kLcmPrefixSize) {
+    return fail(fmt::format("the URL takes up to {} characters, the prefix up to {}",
+                            ipc::kLcmUrlSize - 1, ipc::kLcmPrefixSize - 1));
   }
   auto c = connect(socket, "canemu bridge");
   if (!c) {
@@ -37,11 +60,33 @@ int run_add(const std::string& socket, const BridgeArgs& a) {
   auto req = ipc::make_message<ipc::BridgeAddRequest>();
   ipc::copy_name(req.bus, a.bus);
   ipc::copy_name(req.interface, a.interface);
+  req.kind = lcm ? ipc::kBridgeLcm : ipc::kBridgeSocketCan;
+  ipc::copy_name(req.url, a.url);
+  ipc::copy_name(req.channel_prefix, a.prefix);
   req.error_frames = a.error_frames ? 1 : 0;
   req.restart_ms = static_cast<uint32_t>(a.restart_ms);
   auto r = c->call<ipc::BridgeAddRequest, ipc::BridgeAddReply>(req);
   if (!r) {
     return fail(r.error().message);
+  }
+  if (lcm) {
+    // What the daemon chose: the defaults for what was not given.
+    auto list = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
+        ipc::make_message<ipc::BridgeListRequest>());
+    std::string where = a.prefix + "* on " + a.url;
+    if (list) {
+      for (uint16_t i = 0; i < list->count; ++i) {
+        const ipc::BridgeEntry& e = list->bridges[i];
+        if (e.kind == ipc::kBridgeLcm && ipc::name_of(e.bus) == a.bus) {
+          where = ipc::name_of(e.channel_prefix) + "* on " + ipc::name_of(e.url);
+        }
+      }
+    }
+    std::printf("%s bridged to LCM channels %s%s\n", a.bus.c_str(), where.c_str(),
+                a.restart_ms != 0
+                    ? fmt::format(" (restart {} ms after bus-off)", a.restart_ms).c_str()
+                    : "");
+    return 0;
   }
   std::string how;
   if (a.error_frames) {
@@ -61,13 +106,18 @@ int run_restart(const std::string& socket, const BridgeArgs& a) {
     return fail(c.error().message);
   }
   auto req = ipc::make_message<ipc::BridgeRestartRequest>();
-  ipc::copy_name(req.interface, a.interface);
+  if (is_lcm(a)) {
+    req.kind = ipc::kBridgeLcm;
+    ipc::copy_name(req.bus, a.interface);
+  } else {
+    ipc::copy_name(req.interface, a.interface);
+  }
   auto r = c->call<ipc::BridgeRestartRequest, ipc::BridgeRestartReply>(req);
   if (!r) {
     return fail(r.error().message);
   }
-  std::printf("bridge on %s restarted (error-active after 128 x 11 recessive bits)\n",
-              a.interface.c_str());
+  std::printf("%s %s restarted (error-active after 128 x 11 recessive bits)\n",
+              is_lcm(a) ? "LCM bridge of" : "bridge on", a.interface.c_str());
   return 0;
 }
 
@@ -77,12 +127,17 @@ int run_remove(const std::string& socket, const BridgeArgs& a) {
     return fail(c.error().message);
   }
   auto req = ipc::make_message<ipc::BridgeRemoveRequest>();
-  ipc::copy_name(req.interface, a.interface);
+  if (is_lcm(a)) {
+    req.kind = ipc::kBridgeLcm;
+    ipc::copy_name(req.bus, a.interface);
+  } else {
+    ipc::copy_name(req.interface, a.interface);
+  }
   auto r = c->call<ipc::BridgeRemoveRequest, ipc::BridgeRemoveReply>(req);
   if (!r) {
     return fail(r.error().message);
   }
-  std::printf("bridge on %s removed\n", a.interface.c_str());
+  std::printf("%s %s removed\n", is_lcm(a) ? "LCM bridge of" : "bridge on", a.interface.c_str());
   return 0;
 }
 
@@ -107,25 +162,40 @@ int run_list(const std::string& socket, const BridgeArgs& a) {
 }  // namespace
 
 Command add_bridge(CLI::App& app, const std::string& socket) {
-  auto* bridge = app.add_subcommand("bridge", "SocketCAN bridges: add, list, restart, remove");
+  auto* bridge =
+      app.add_subcommand("bridge", "SocketCAN and LCM bridges: add, list, restart, remove");
   bridge->require_subcommand(1);
   auto a = std::make_shared<BridgeArgs>();
-  auto* add = bridge->add_subcommand("add", "join BUS to the Linux CAN interface INTERFACE");
+  auto* add = bridge->add_subcommand(
+      "add", "join BUS to the Linux CAN interface INTERFACE, or with --lcm to LCM channels");
   add->add_option("BUS", a->bus, "bus name")->required();
-  add->add_option("INTERFACE", a->interface, "vcan0, vxcan1, can0, ...")->required();
+  add->add_option("INTERFACE", a->interface, "vcan0, vxcan1, can0, ... (not with --lcm)");
+  auto* add_lcm = add->add_option("--lcm", a->url,
+                                  "an LCM bridge instead, on the LCM URL given (default "
+                                  "udpm://239.255.76.67:7667?ttl=0, which stays on this host)");
+  add_lcm->expected(0, 1);
+  add->add_option("--prefix", a->prefix,
+                  "LCM: the channels' prefix (default CANEMU_<BUS>_: CANEMU_CAN0_FRAMES, ...)");
   add->add_flag("-e,--error-frames", a->error_frames,
                 "the bridge node's errors and states as CAN_ERR_* frames on the interface");
   add->add_option("--restart-ms", a->restart_ms,
                   "restart the bridge's node this many ms after bus-off (0..60000; 0, the "
                   "default: it stays bus-off, as restart-ms 0 of a kernel CAN interface)");
-  auto* restart =
-      bridge->add_subcommand("restart", "restart the bus-off node of the bridge on INTERFACE");
-  restart->add_option("INTERFACE", a->interface, "the bridged interface")->required();
+  auto* restart = bridge->add_subcommand(
+      "restart", "restart the bus-off node of the bridge on INTERFACE (--lcm: of BUS)");
+  restart->add_option("INTERFACE", a->interface, "the bridged interface, or with --lcm the bus")
+      ->required();
+  auto* restart_lcm =
+      restart->add_flag("--lcm")->description("the LCM bridge of the bus INTERFACE names");
   auto* list = bridge->add_subcommand("list", "bridges with their node's state and counts");
   list->add_flag("--json", a->json, "a JSON array instead of a table");
-  auto* remove = bridge->add_subcommand("remove", "take the bridge off INTERFACE");
-  remove->add_option("INTERFACE", a->interface, "the bridged interface")->required();
-  return {bridge, [&socket, a, add, remove, restart] {
+  auto* remove = bridge->add_subcommand("remove", "take the bridge off INTERFACE (--lcm: off BUS)");
+  remove->add_option("INTERFACE", a->interface, "the bridged interface, or with --lcm the bus")
+      ->required();
+  auto* remove_lcm =
+      remove->add_flag("--lcm")->description("the LCM bridge of the bus INTERFACE names");
+  return {bridge, [&socket, a, add, remove, restart, add_lcm, restart_lcm, remove_lcm] {
+            a->lcm = *add ? add_lcm : *remove ? remove_lcm : restart_lcm;
             return *add       ? run_add(socket, *a)
                    : *remove  ? run_remove(socket, *a)
                    : *restart ? run_restart(socket, *a)

@@ -61,12 +61,22 @@ toml::array recorders_array(const ipc::RecorderListReply& r) {
 }
 
 void print_bridges(const ipc::BridgeListReply& r) {
-  std::printf("%-12s %-10s %-14s %4s %4s %8s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
-              "INTERFACE", "STATE", "TEC", "REC", "RESTARTS", "TO-IF", "FROM-IF", "ERRORS",
-              "IF-DROP", "K-DROP", "Q-DROP", "REJECTED", "FAILED");
+  const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+  bool socketcan = false;
+  bool lcm = false;
+  for (uint16_t i = 0; i < r.count; ++i) {
+    (r.bridges[i].kind == ipc::kBridgeLcm ? lcm : socketcan) = true;
+  }
+  if (socketcan || !lcm) {
+    std::printf("%-12s %-10s %-14s %4s %4s %8s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
+                "INTERFACE", "STATE", "TEC", "REC", "RESTARTS", "TO-IF", "FROM-IF", "ERRORS",
+                "IF-DROP", "K-DROP", "Q-DROP", "REJECTED", "FAILED");
+  }
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::BridgeEntry& e = r.bridges[i];
-    const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+    if (e.kind == ipc::kBridgeLcm) {
+      continue;
+    }
     std::printf(
         "%-12s %-10s %-14s %4u %4u %8llu %10llu %10llu %7llu %8llu %8llu %8llu %8llu "
         "%8llu\n",
@@ -75,6 +85,27 @@ void print_bridges(const ipc::BridgeListReply& r) {
         n(e.from_interface), n(e.error_frames_written), n(e.to_interface_dropped),
         n(e.kernel_dropped), n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
   }
+  if (!lcm) {
+    return;
+  }
+  // LCM bridges: PUBLISHED frames on FRAMES, EVENTS on ERRORS and STATES, PUB-FAIL what LCM
+  // refused; RECEIVED on TX, SENT of them on the bus, Q-DROP, REJECTED, FAILED as above.
+  std::printf("%-12s %-20s %-14s %4s %4s %8s %10s %8s %8s %10s %10s %8s %8s %8s  %s\n",
+              "LCM-BRIDGE", "CHANNELS", "STATE", "TEC", "REC", "RESTARTS", "PUBLISHED", "EVENTS",
+              "PUB-FAIL", "RECEIVED", "SENT", "Q-DROP", "REJECTED", "FAILED", "URL");
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::BridgeEntry& e = r.bridges[i];
+    if (e.kind != ipc::kBridgeLcm) {
+      continue;
+    }
+    std::printf(
+        "%-12s %-20s %-14s %4u %4u %8llu %10llu %8llu %8llu %10llu %10llu %8llu %8llu %8llu  "
+        "%s\n",
+        ipc::name_of(e.bus).c_str(), (ipc::name_of(e.channel_prefix) + "*").c_str(),
+        error_state_name(e.state).c_str(), e.tec, e.rec, n(e.restarts), n(e.to_interface),
+        n(e.error_frames_written), n(e.to_interface_dropped), n(e.received), n(e.from_interface),
+        n(e.queue_dropped), n(e.rejected), n(e.tx_failed), ipc::name_of(e.url).c_str());
+  }
 }
 
 toml::array bridges_array(const ipc::BridgeListReply& r) {
@@ -82,6 +113,34 @@ toml::array bridges_array(const ipc::BridgeListReply& r) {
   toml::array out;
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::BridgeEntry& e = r.bridges[i];
+    if (e.kind == ipc::kBridgeLcm) {
+      const std::string prefix = ipc::name_of(e.channel_prefix);
+      out.push_back(toml::table{
+          {"kind", "lcm"},
+          {"bus", ipc::name_of(e.bus)},
+          {"url", ipc::name_of(e.url)},
+          {"channel_prefix", prefix},
+          {"channels", toml::table{{"frames", prefix + "FRAMES"},
+                                   {"errors", prefix + "ERRORS"},
+                                   {"states", prefix + "STATES"},
+                                   {"tx", prefix + "TX"}}},
+          {"restart_ms", i64(e.restart_ms)},
+          {"restarts", i64(e.restarts)},
+          {"state", error_state_name(e.state)},
+          {"tec", i64(e.tec)},
+          {"rec", i64(e.rec)},
+          {"queued", i64(e.queued)},
+          {"published", i64(e.to_interface)},
+          {"published_events", i64(e.error_frames_written)},
+          {"publish_failed", i64(e.to_interface_dropped)},
+          {"received", i64(e.received)},
+          {"sent", i64(e.from_interface)},
+          {"queue_dropped", i64(e.queue_dropped)},
+          {"rejected", i64(e.rejected)},
+          {"tx_failed", i64(e.tx_failed)},
+          {"dropped", i64(e.to_interface_dropped + e.queue_dropped + e.rejected + e.tx_failed)}});
+      continue;
+    }
     out.push_back(toml::table{{"kind", "socketcan"},
                               {"bus", ipc::name_of(e.bus)},
                               {"interface", ipc::name_of(e.interface)},

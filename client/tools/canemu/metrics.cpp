@@ -58,7 +58,8 @@ std::string bus_of(const ipc::StatusReply& s, const ipc::StatusNode& n) {
   return n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?");
 }
 
-// Recorders and SocketCAN bridges: what they wrote and every frame they lost (docs/socketcan.md).
+// Recorders and bridges: what they wrote and every frame they lost (docs/socketcan.md,
+// docs/bridges.md). An LCM bridge's "interface" is lcm:PREFIX.
 void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
                      const ipc::BridgeListReply& bridges) {
   const auto recorder_label = [&](const ipc::RecorderEntry& r) {
@@ -77,10 +78,13 @@ void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
   }
   const auto bridge_label = [&](const ipc::BridgeEntry& b, std::string_view key,
                                 std::string_view value) {
+    const std::string interface = b.kind == ipc::kBridgeLcm
+                                      ? "lcm:" + ipc::name_of(b.channel_prefix)
+                                      : ipc::name_of(b.interface);
     return fmt::format("bus=\"{}\",interface=\"{}\",{}=\"{}\"", label(ipc::name_of(b.bus)),
-                       label(ipc::name_of(b.interface)), key, value);
+                       label(interface), key, value);
   };
-  e.family("canemu_bridge_frames_total", "counter", "Frames a SocketCAN bridge passed on.");
+  e.family("canemu_bridge_frames_total", "counter", "Frames a bridge passed on.");
   for (uint16_t i = 0; i < bridges.count; ++i) {
     const ipc::BridgeEntry& b = bridges.bridges[i];
     e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "to_interface"),
@@ -88,7 +92,7 @@ void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
     e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "from_interface"),
              b.from_interface);
   }
-  e.family("canemu_bridge_dropped_total", "counter", "Frames a SocketCAN bridge could not pass.");
+  e.family("canemu_bridge_dropped_total", "counter", "Frames a bridge could not pass.");
   for (uint16_t i = 0; i < bridges.count; ++i) {
     const ipc::BridgeEntry& b = bridges.bridges[i];
     for (const auto& [reason, count] :

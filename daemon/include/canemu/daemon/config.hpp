@@ -116,14 +116,17 @@ struct RecorderConfig {
   uint32_t line = 0;
 };
 
-// [[bridge]]: a bus joined to a Linux CAN interface (docs/socketcan.md).
+// [[bridge]]: a bus joined to a Linux CAN interface (kind "socketcan", docs/socketcan.md) or to
+// LCM channels (kind "lcm", docs/bridges.md).
 struct BridgeConfig {
-  std::string kind = "socketcan";  // the only kind so far
+  std::string kind = "socketcan";  // "socketcan" or "lcm"
   std::string bus;
-  std::string interface;      // vcan0, vxcan1, can0, ...
-  bool error_frames = false;  // the bridge node's errors and states as CAN_ERR_* frames
+  std::string interface;      // socketcan: vcan0, vxcan1, can0, ...
+  bool error_frames = false;  // socketcan: the bridge node's errors and states as CAN_ERR_* frames
   uint32_t restart_ms = 0;    // restart the node this long after bus-off; 0: it stays bus-off
   uint32_t line = 0;
+  std::string url{};             // lcm: the provider URL (default kDefaultLcmUrl)
+  std::string channel_prefix{};  // lcm: the channels' prefix (default CANEMU_<BUS>_)
 };
 
 struct Config {

@@ -18,6 +18,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/bridge.hpp"
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/device_registry.hpp"
 #include "canemu/daemon/lin_nodes.hpp"
@@ -128,19 +129,27 @@ class Simulation {
   // Writes what the recorders hold; one line for each recorder that began to lose frames.
   std::vector<std::string> flush_recorders();
 
-  // ---- SocketCAN bridges ([[bridge]] at start, canemu bridge add|remove at run time) ----
-  const std::vector<std::unique_ptr<SocketCanBridge>>& bridges() const { return bridges_; }
-  // A bridge of `b.bus` to `b.interface` over `port` (the interface's socket, or in tests a
-  // stand-in); the error says why not (no such bus, a LIN bus, the interface bridged already,
-  // no controller for the bus's rate). add_bridge() opens the CAN_RAW socket itself.
-  tl::expected<SocketCanBridge*, std::string> add_bridge(const BridgeConfig& b, ipc::UniqueFd port);
-  tl::expected<SocketCanBridge*, std::string> add_bridge(const BridgeConfig& b);
-  // Removes the bridge of `interface` (its node leaves the bus); false if there is none.
-  // `before` sees it first (the server stops watching its socket).
-  bool remove_bridge(const std::string& interface,
-                     const std::function<void(SocketCanBridge&)>& before = {});
+  // ---- bridges ([[bridge]] at start, canemu bridge add|remove at run time): SocketCAN and LCM
+  const std::vector<std::unique_ptr<Bridge>>& bridges() const { return bridges_; }
+  // A SocketCAN bridge of `b.bus` to `b.interface` over `port` (the interface's socket, or in
+  // tests a stand-in); the error says why not (no such bus, a LIN bus, the interface bridged
+  // already, no controller for the bus's rate). add_bridge() opens the CAN_RAW socket itself,
+  // or for kind "lcm" the LCM instance.
+  tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b, ipc::UniqueFd port);
+  tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b);
+  // A bridge of `b.bus` over `transport` (b.kind says which kind it is).
+  tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b,
+                                                std::unique_ptr<BridgeTransport> transport);
+  // Removes the SocketCAN bridge of `interface` (its node leaves the bus); false if there is
+  // none. `before` sees it first (the server stops watching its socket).
+  bool remove_bridge(const std::string& interface, const std::function<void(Bridge&)>& before = {});
+  // Removes the LCM bridge of bus `bus`, as remove_bridge().
+  bool remove_lcm_bridge(const std::string& bus, const std::function<void(Bridge&)>& before = {});
+  // The SocketCAN bridge of `interface`, or the LCM bridge of bus `bus`; nullptr if none.
+  Bridge* find_bridge(BridgeKind kind, const std::string& name) const;
 
  private:
+  bool remove(Bridge* bridge, const std::function<void(Bridge&)>& before);
   explicit Simulation(Config config)
       : config_(std::move(config)),
         nodes_(scheduler_),
@@ -172,8 +181,8 @@ class Simulation {
   NodePool nodes_;
   DeviceRegistry devices_;
   ScenarioRunner scenarios_;
-  std::vector<std::unique_ptr<Recorder>> recorders_;       // on nodes_'s nodes, lin_buses_
-  std::vector<std::unique_ptr<SocketCanBridge>> bridges_;  // on nodes_'s nodes
+  std::vector<std::unique_ptr<Recorder>> recorders_;  // on nodes_'s nodes, lin_buses_
+  std::vector<std::unique_ptr<Bridge>> bridges_;      // on nodes_'s nodes
 };
 
 }  // namespace canemu::daemon

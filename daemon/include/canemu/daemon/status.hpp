@@ -14,7 +14,7 @@ void fill_status(const Simulation& sim, ipc::StatusReply& reply);
 void fill_device_list(const Simulation& sim, ipc::DeviceListReply& reply);
 // The recorders ([[recorder]]) with what they wrote and lost.
 void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& reply);
-// The SocketCAN bridges with their node's state and their counts.
+// The bridges (SocketCAN and LCM) with their node's state and their counts.
 void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& reply);
 
 }  // namespace canemu::daemon

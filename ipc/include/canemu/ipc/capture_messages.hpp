@@ -1,7 +1,7 @@
 // The control protocol's messages about canemud's recorders ([[recorder]]: their list with what
-// they wrote and lost, for `canemu status`) and SocketCAN bridges ([[bridge]]: added, removed,
-// restarted after bus-off and listed at run time by `canemu bridge`). Gathered with the others
-// by protocol.hpp.
+// they wrote and lost, for `canemu status`) and bridges, SocketCAN and LCM ([[bridge]]: added,
+// removed, restarted after bus-off and listed at run time by `canemu bridge`). Gathered with the
+// others by protocol.hpp.
 #pragma once
 
 #include <cstddef>
@@ -42,25 +42,39 @@ static_assert(sizeof(RecorderListReply) <= kMaxMessageSize);
 
 inline constexpr std::size_t kMaxBridges = 32;
 inline constexpr uint32_t kMaxBridgeRestartMs = 60'000;  // as a channel's restart_ms
+inline constexpr std::size_t kLcmUrlSize = 128;
+inline constexpr std::size_t kLcmPrefixSize = 64;
 
-// Joins bus `bus` to the Linux CAN interface `interface` (a SocketCAN bridge).
+// BridgeAddRequest.kind and the others
+inline constexpr uint8_t kBridgeSocketCan = 0;
+inline constexpr uint8_t kBridgeLcm = 1;
+
+// Joins bus `bus` to the Linux CAN interface `interface` (a SocketCAN bridge), or to the LCM
+// channels `channel_prefix`* on `url` (an LCM bridge; empty: the defaults).
 struct BridgeAddRequest {
   MsgHeader header;
   char bus[kNameSize] = {};
   char interface[kNameSize] = {};
   uint8_t error_frames = 0;  // 1: the bridge node's errors and states as CAN_ERR_* frames
-  uint8_t reserved[3] = {};
+  uint8_t kind = kBridgeSocketCan;
+  uint8_t reserved[2] = {};
   uint32_t restart_ms = 0;  // restart the node this long after bus-off; 0: it stays bus-off
+  char url[kLcmUrlSize] = {};
+  char channel_prefix[kLcmPrefixSize] = {};
 };
-static_assert(sizeof(BridgeAddRequest) == 16 + 64 + 8);
+static_assert(sizeof(BridgeAddRequest) == 16 + 64 + 8 + 128 + 64);
 
 struct BridgeAddReply {
   MsgHeader header;
 };
 
+// The SocketCAN bridge on `interface`, or the LCM bridge of bus `bus`.
 struct BridgeRemoveRequest {
   MsgHeader header;
   char interface[kNameSize] = {};
+  uint8_t kind = kBridgeSocketCan;
+  uint8_t reserved[7] = {};
+  char bus[kNameSize] = {};
 };
 
 struct BridgeRemoveReply {
@@ -72,6 +86,9 @@ struct BridgeRemoveReply {
 struct BridgeRestartRequest {
   MsgHeader header;
   char interface[kNameSize] = {};
+  uint8_t kind = kBridgeSocketCan;  // kBridgeLcm: the LCM bridge of `bus`
+  uint8_t reserved[7] = {};
+  char bus[kNameSize] = {};
 };
 
 struct BridgeRestartReply {
@@ -89,7 +106,8 @@ struct BridgeEntry {
   uint8_t state = 0;  // WireErrorState of the bridge's node
   uint16_t tec = 0;
   uint16_t rec = 0;
-  uint16_t reserved = 0;
+  uint8_t kind = kBridgeSocketCan;
+  uint8_t reserved = 0;
   uint32_t queued = 0;      // frames from the interface waiting for the bus
   uint32_t restart_ms = 0;  // the automatic restart after bus-off; 0: none
   uint64_t to_interface = 0;
@@ -101,8 +119,12 @@ struct BridgeEntry {
   uint64_t tx_failed = 0;
   uint64_t kernel_dropped = 0;  // dropped by the kernel before the bridge read them
   uint64_t restarts = 0;        // restarts after bus-off (automatic and asked for)
+  // LCM: what arrived on TX (frames or not); the URL and the channels' prefix
+  uint64_t received = 0;
+  char url[kLcmUrlSize] = {};
+  char channel_prefix[kLcmPrefixSize] = {};
 };
-static_assert(sizeof(BridgeEntry) == 64 + 16 + 72);
+static_assert(sizeof(BridgeEntry) == 64 + 16 + 80 + 128 + 64);
 
 struct BridgeListReply {
   MsgHeader header;

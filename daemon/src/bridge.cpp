@@ -1,0 +1,124 @@
+#include "canemu/daemon/bridge.hpp"
+
+#include "canemu/daemon/channel.hpp"
+
+namespace canemu::daemon {
+
+using namespace canemu::model;
+
+std::unique_ptr<Bridge> Bridge::start(BridgeOptions options, std::size_t bus, HostedNode& node,
+                                      const HostedNodeSettings& settings,
+                                      std::unique_ptr<BridgeTransport> transport) {
+  std::unique_ptr<Bridge> b(new Bridge(std::move(options), bus, node, std::move(transport)));
+  Bridge* self = b.get();
+  HostedNodeSettings s = settings;
+  s.listen_only = false;
+  node.start(s, self, [self] { return self->next_tx(); });
+  return b;
+}
+
+Bridge::~Bridge() {
+  if (restart_event_) {
+    node_.scheduler().cancel(*restart_event_);
+  }
+  node_.stop();
+}
+
+std::optional<std::string> Bridge::restart() {
+  const FaultConfinement& fc = node_.controller().confinement();
+  if (!fc.bus_off()) {
+    return transport_->name() + " is " + std::string(to_string(fc.state())) +
+           ", not bus-off: nothing to restart";
+  }
+  if (fc.recovering()) {
+    return transport_->name() + " restarts already (waits for 128 x 11 recessive bits, " +
+           std::to_string(fc.recovery_sequences_left()) + " left)";
+  }
+  if (restart_event_) {
+    node_.scheduler().cancel(*restart_event_);
+    restart_event_.reset();
+  }
+  node_.restart();
+  ++stats_.restarts;
+  if (options_.error_frames) {
+    count(transport_->restarted(node_.now(), fc.tec(), fc.rec()), stats_.error_frames);
+  }
+  return std::nullopt;
+}
+
+void Bridge::restart_after_bus_off() {
+  restart_event_.reset();
+  restart();  // nothing to do if it was restarted by hand in the meantime
+}
+
+void Bridge::kick() {
+  transport_->receive(*this);
+  node_.kick();
+}
+
+void Bridge::offer(const ipc::ChannelMessage* m) {
+  ++stats_.received;
+  const auto frame = m ? to_tx_frame(*m) : Result<TxFrame>(tl::unexpected(ModelError{}));
+  if (!frame || (frame->frame.fd() && !options_.fd)) {
+    ++stats_.rejected;
+    return;
+  }
+  if (queue_.size() >= options_.queue_frames) {
+    ++stats_.queue_dropped;
+    return;
+  }
+  queue_.push_back(*frame);
+}
+
+std::optional<TxFrame> Bridge::next_tx() {
+  if (queue_.empty()) {
+    return std::nullopt;
+  }
+  TxFrame f = queue_.front();
+  queue_.pop_front();
+  return f;
+}
+
+void Bridge::count(Delivery d, uint64_t& counter) {
+  if (d == Delivery::sent) {
+    ++counter;
+  } else if (d == Delivery::refused) {
+    ++stats_.to_interface_dropped;
+  }
+}
+
+void Bridge::frame_received(SimTime at, const Frame& frame, bool own) {
+  if (!own) {
+    count(transport_->frame(at, frame, false), stats_.to_interface);
+  }
+}
+
+void Bridge::frame_transmitted(SimTime at, const Frame& frame) {
+  ++stats_.from_interface;
+  if (transport_->carries_own_frames()) {
+    count(transport_->frame(at, frame, true), stats_.to_interface);
+  }
+}
+
+void Bridge::transmission_dropped(SimTime, const Frame&) {
+  ++stats_.tx_failed;
+}
+
+void Bridge::bus_error(const BusErrorEvent& event) {
+  if (options_.error_frames) {
+    count(transport_->error(event, node_.controller().confinement().state()), stats_.error_frames);
+  }
+}
+
+void Bridge::state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) {
+  if (options_.error_frames) {
+    count(transport_->state(at, state, tec, rec), stats_.error_frames);
+  }
+  if (state == ErrorState::bus_off && options_.restart_ms != 0 && !restart_event_) {
+    restart_event_ =
+        node_.scheduler().schedule_at(at + SimDuration(int64_t{options_.restart_ms} * 1'000'000),
+                                      [this](SimTime) { restart_after_bus_off(); });
+  }
+}
+
+}  // namespace canemu::daemon

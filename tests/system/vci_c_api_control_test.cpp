@@ -3,6 +3,7 @@
 // acceptance filter, bit-rate detection and the time stamp counter's overflow.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -10,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_process.hpp"
 #include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 
@@ -184,6 +186,61 @@ TEST(VciCApi, ThirtyTwoBitErrorsDriveTheSenderBusOffAndARestartRecovers) {
   CANLINESTATUS s{};
   ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
   EXPECT_EQ(s.dwStatus & (CAN_STATUS_BUSOFF | CAN_STATUS_ERRLIM), 0u);
+}
+
+// A long receive fault: the bus held dominant for 100 ms. Every 8 dominant bits after the error
+// flag add 8 to the receivers' REC (ISO 11898-1 rule 6), but the SJA1000's RXERR is 8 bits wide:
+// REC stops at 255 and stays there, in the controller state, the line status (ERRLIM, not
+// BUSOFF), canemu status and the next ERROR message. The next frame received takes it to 127.
+TEST(VciCApi, ALongReceiveFaultLeavesRecAt255) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  testing::load_faults(d.daemon,
+                       "[[fault]]\nat = \"1ms\"\nbus = \"can0\"\neffect = \"stuck_dominant\"\n"
+                       "duration = \"100ms\"\n\n"
+                       "[[fault]]\nat = \"700ms\"\nbus = \"can0\"\n"
+                       "match = { from = \"alpha:0\" }\neffect = \"stuff_error\"\ncount = 1\n");
+  step_ns(600'000'000);
+  for (const Adapter* a : {&alpha, &beta}) {
+    UINT8 state = 0;
+    UINT16 tec = 1;
+    UINT16 rec = 0;
+    ASSERT_EQ(canemuGetControllerState(a->control, &state, &tec, &rec, nullptr), VCI_OK);
+    EXPECT_EQ(state, CANEMU_STATE_PASSIVE);
+    EXPECT_EQ(tec, 0);
+    EXPECT_EQ(rec, 255);
+    CANLINESTATUS s{};
+    ASSERT_EQ(canControlGetStatus(a->control, &s), VCI_OK);
+    EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ERRLIM));
+  }
+  Cli status(d.daemon, {"status"});
+  const std::string text = Cli::read_all(status.out);
+  EXPECT_EQ(status.wait(), 0);
+  EXPECT_NE(text.find("beta:0         can0         error-passive     0  255"), std::string::npos)
+      << text;
+  beta.drain();
+  // A receive error while at 255: the ERROR message says 255 (REC as the error was counted).
+  step_ns(100'000'000);  // to 700 ms: the fault waits for alpha's frame
+  alpha.post(data(0x10, {1}));
+  step_ns(10'000'000);
+  std::vector<CANMSG> errors;
+  std::vector<CANMSG> frames;
+  for (const CANMSG& m : beta.drain()) {
+    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
+      errors.push_back(m);
+    } else if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+      frames.push_back(m);
+    }
+  }
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].abData[0], CAN_ERROR_STUFF);
+  EXPECT_EQ(errors[0].abData[1], CAN_STATUS_ERRLIM);
+  EXPECT_EQ(errors[0].abData[3], 255);
+  ASSERT_EQ(frames.size(), 1u);  // the repetition
+  UINT16 rec = 0;
+  ASSERT_EQ(canemuGetControllerState(beta.control, nullptr, nullptr, &rec, nullptr), VCI_OK);
+  EXPECT_EQ(rec, 127);
 }
 
 TEST(VciCApi, TheControlUnitsFilterPassesOnlyWhatItAccepts) {

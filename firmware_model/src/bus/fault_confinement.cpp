@@ -33,8 +33,8 @@ void FaultConfinement::add_rec(uint16_t n) {
   if (bus_off_) {
     return;
   }
-  // The receive counter has no upper state; it saturates so it cannot wrap.
-  rec_ = static_cast<uint16_t>(std::min<uint32_t>(uint32_t{rec_} + n, 0xFFFF));
+  // The receive counter has no upper state; it stops at the width of the controller's counter.
+  rec_ = static_cast<uint16_t>(std::min<uint32_t>(uint32_t{rec_} + n, rec_limit_));
 }
 
 bool FaultConfinement::recessive_sequences(uint32_t n) {
@@ -51,7 +51,7 @@ bool FaultConfinement::recessive_sequences(uint32_t n) {
 
 void FaultConfinement::set_counters(uint16_t tec, uint16_t rec) {
   tec_ = tec;
-  rec_ = rec;
+  rec_ = std::min(rec, rec_limit_);
   bus_off_ = tec_ >= kBusOffLimit;
   recovering_ = false;
   sequences_seen_ = 0;

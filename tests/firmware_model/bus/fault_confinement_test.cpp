@@ -36,6 +36,27 @@ TEST(FaultConfinement, Rule6DominantSequencesCountForTheRole) {
   EXPECT_EQ(fc.rec(), 8);
 }
 
+TEST(FaultConfinement, TheReceiveCounterStopsAtTheControllersWidth) {
+  FaultConfinement fc(255);
+  fc.set_counters(0, 250);
+  fc.receiver_severe_error();
+  EXPECT_EQ(fc.rec(), 255);
+  fc.receiver_detected_error();
+  fc.dominant_sequence(ErrorRole::receiver);
+  EXPECT_EQ(fc.rec(), 255);
+  fc.set_counters(0, 300);  // a direct write is no wider than the counter
+  EXPECT_EQ(fc.rec(), 255);
+  fc.reset();  // the width survives a reset
+  fc.set_counters(0, 254);
+  fc.receiver_severe_error();
+  EXPECT_EQ(fc.rec(), 255);
+  // Without a width of its own, the counter only stops at 65535.
+  FaultConfinement wide;
+  wide.set_counters(0, 65530);
+  wide.receiver_severe_error();
+  EXPECT_EQ(wide.rec(), 65535);
+}
+
 TEST(FaultConfinement, Rule7SuccessfulTransmissionSubtractsOneDownToZero) {
   FaultConfinement fc;
   fc.set_counters(2, 0);

@@ -6,6 +6,7 @@
 // bitrate_detector_test, line_init_test.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -567,6 +568,37 @@ TEST(VciCanLine, ReceiveErrorsGiveErrorMessagesWithTheirType) {
   EXPECT_EQ(errors[1].abData[3], 1 + 9);
   EXPECT_EQ(errors[2].abData[3], 1 + 18);
   EXPECT_EQ(p.data_ids(), std::vector<uint32_t>{0x123});  // the fourth attempt
+}
+
+// A long receive fault (the bus held dominant for 100 ms): every 8 dominant bits after the error
+// flag add 8 to REC (rule 6), but the SJA1000's counter is 8 bits wide and stops at 255. ERRLIM
+// is set, BUSOFF is not (only the TEC leads to bus-off).
+TEST(VciCanLine, ALongReceiveFaultLeavesRecAt255) {
+  Rig r;
+  Port p;
+  r.online(p);
+  r.b.bus.hold_dominant(SimTime::from_ns(kMs), SimDuration(100 * kMs));
+  r.b.run_until(200 * kMs);
+  const ixxat::ControllerState s = r.line.controller_state();
+  EXPECT_EQ(s.rec, 255);
+  EXPECT_EQ(s.tec, 0);
+  EXPECT_EQ(s.state, ErrorState::passive);
+  EXPECT_EQ(r.peer.node.controller().confinement().rec(), 255);
+  const auto errors = p.of_type(CAN_MSGTYPE_ERROR);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].abData[0], CAN_ERROR_STUFF);  // six dominant bits from 1 ms on
+  EXPECT_EQ(errors[0].abData[3], 1);
+  EXPECT_EQ(errors[0].dwTime, 1012u);
+  const auto status = p.of_type(CAN_MSGTYPE_STATUS);
+  ASSERT_EQ(status.size(), 1u);
+  EXPECT_EQ(status[0].abData[0], CAN_STATUS_ERRLIM);
+  EXPECT_EQ(status[0].dwTime, 1200u);  // REC past 96 within the dominant hold
+  EXPECT_EQ(r.line.line_status().dwStatus, static_cast<uint32_t>(CAN_STATUS_ERRLIM));
+  // The next frame received takes it back to 127 (rule 8).
+  r.peer.send(k123);
+  r.b.run_until(210 * kMs);
+  EXPECT_EQ(p.data_ids(), std::vector<uint32_t>{0x123});
+  EXPECT_EQ(r.line.controller_state().rec, 127);
 }
 
 TEST(VciCanLine, TheTimeStampCounterOverflowsAfter2To32TicksWithATimeovrMessage) {

@@ -155,5 +155,17 @@ TEST(CanFdController, AbortDropsQueuedFramesAndRejectsFdWhenDisabled) {
   EXPECT_EQ(a.tx_queued(), 0u);
 }
 
+// The controller's receive error count is an 8-bit field: it stops at 255.
+TEST(CanFdController, ReceiveErrorCounterStopsAt255) {
+  CanFdController c(fd_config());
+  for (int i = 0; i < 2000; ++i) {
+    c.confinement().receiver_severe_error();
+  }
+  EXPECT_EQ(c.confinement().rec(), 255);
+  EXPECT_EQ(c.state(), ErrorState::passive);
+  c.confinement().receive_succeeded();
+  EXPECT_EQ(c.confinement().rec(), 127);
+}
+
 }  // namespace
 }  // namespace canemu::model

@@ -350,6 +350,22 @@ TEST(Sja1000FrameFormat, PacksAndUnpacksBothFormats) {
   EXPECT_EQ(unpack_frame(bytes.data()), rtr);
 }
 
+// RXERR is an 8-bit register and the counter behind it is no wider: a receiver that keeps seeing
+// errors stays at 255 (ISO 11898-1 sets no upper bound; rule 8 takes any value above 127 back
+// to 127).
+TEST(Sja1000, ReceiveErrorCounterStopsAt255) {
+  Sja1000 c;
+  for (int i = 0; i < 2000; ++i) {
+    c.confinement().receiver_severe_error();
+  }
+  EXPECT_EQ(c.confinement().rec(), 255);
+  EXPECT_EQ(c.read(RXERR), 255);
+  c.confinement().receiver_detected_error();
+  EXPECT_EQ(c.confinement().rec(), 255);
+  c.confinement().receive_succeeded();
+  EXPECT_EQ(c.confinement().rec(), 127);
+}
+
 }  // namespace
 }  // namespace canemu::model
 

@@ -20,8 +20,15 @@ inline constexpr uint32_t kRecoverySequenceBits = 11;
 
 class FaultConfinement {
  public:
+  // `rec_limit`: where the receive error counter stops. ISO 11898-1 sets no upper bound (rule 8
+  // takes anything above 127 back to 127), so a counter is as wide as the controller makes it:
+  // 8 bits (255) on the SJA1000 (RXERR) and the CAN FD controller; the default only keeps the
+  // 16-bit value from wrapping.
+  explicit FaultConfinement(uint16_t rec_limit = 0xFFFF) : rec_limit_(rec_limit) {}
+
   uint16_t tec() const { return tec_; }
   uint16_t rec() const { return rec_; }
+  uint16_t rec_limit() const { return rec_limit_; }
   bool bus_off() const { return bus_off_; }
   bool error_passive() const {
     return !bus_off_ && (tec_ >= kErrorPassiveLimit || rec_ >= kErrorPassiveLimit);
@@ -77,7 +84,7 @@ class FaultConfinement {
   bool recessive_sequences(uint32_t n);
 
   // Direct writes: SJA1000 RXERR/TXERR in reset mode, fault injection. A TEC above 255 means
-  // bus-off.
+  // bus-off; a REC above the limit is the limit.
   void set_counters(uint16_t tec, uint16_t rec);
   void reset();
 
@@ -87,6 +94,7 @@ class FaultConfinement {
 
   uint16_t tec_ = 0;
   uint16_t rec_ = 0;
+  uint16_t rec_limit_;
   uint8_t warning_limit_ = kDefaultWarningLimit;
   bool bus_off_ = false;
   bool recovering_ = false;

@@ -91,7 +91,7 @@ class CanFdController final : public CanController {
   CanBus* bus_ = nullptr;
   NodeId node_ = 0;
   bool running_ = false;
-  FaultConfinement fc_;
+  FaultConfinement fc_{255};  // an 8-bit receive error count
   ControllerEvents* listener_ = nullptr;
   std::deque<TxFrame> tx_;
   std::deque<ReceivedFrame> rx_;

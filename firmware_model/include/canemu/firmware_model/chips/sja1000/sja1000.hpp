@@ -165,7 +165,7 @@ class Sja1000 final : public CanController {
   NodeId node_ = 0;
   uint32_t oscillator_hz_;
   ControllerEvents* listener_ = nullptr;
-  FaultConfinement fc_;
+  FaultConfinement fc_{255};  // RXERR is 8 bits wide
 
   uint8_t mod_ = sja1000::MOD_RM;
   uint8_t ir_ = 0;

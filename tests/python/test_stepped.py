@@ -403,6 +403,19 @@ def test_cyclic_list_sends_with_exact_period_and_count(pair):
     task.stop()
 
 
+def test_a_period_the_cyclic_list_has_no_room_for_goes_to_software(pair):
+    a, b = pair
+    # Two entries of 2 ms take every 1 ms tick of the list: a third is refused there
+    # (VCI_E_OUTOFMEMORY) and python-can's software scheduler sends it.
+    tasks = [a.send_periodic(can.Message(arbitration_id=0x50 + k, is_extended_id=False), 0.002)
+             for k in range(3)]
+    try:
+        assert [isinstance(t, canemu.CanemuCyclicTask) for t in tasks] == [True, True, False]
+    finally:
+        for t in tasks:
+            t.stop()
+
+
 def test_send_waits_while_the_transmit_fifo_is_full(pair):
     a, b = pair
     sent = 0

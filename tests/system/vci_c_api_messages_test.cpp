@@ -229,6 +229,64 @@ TEST(VciCApi, TheCyclicListSendsOnItsTicksAndIncrementsTheIdentifier) {
 
 // In real time a blocked reader wakes when the frame comes, and a writer's doorbell wakes the
 // daemon: no steps anywhere.
+// One frame per tick: an entry whose share 1/wCycleTime would take the list's total above 1 is
+// refused (VCI_E_OUTOFMEMORY, index 0xFFFFFFFF), whether the entries are started or not.
+// Cycles 2, 3 and 6 fill every tick: each sends on its own rhythm, one frame per tick.
+TEST(VciCApi, TheCyclicListAdmitsEntriesUpToOneFramePerTick) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  HANDLE list = nullptr;
+  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  CANCYCLICTXMSG m{};
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  const UINT16 cycles[] = {2, 3, 6};
+  for (UINT32 k = 0; k < 3; ++k) {
+    m.wCycleTime = cycles[k];
+    m.dwMsgId = 0x100 + k;
+    UINT32 index = 99;
+    ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+    EXPECT_EQ(index, k);
+  }
+  m.wCycleTime = 65535;
+  m.dwMsgId = 0x1FF;
+  UINT32 refused = 0;
+  EXPECT_EQ(canSchedulerAddMessage(list, &m, &refused), VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(refused, 0xFFFFFFFFu);
+  CANSCHEDULERSTATUS s{};
+  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  EXPECT_EQ(s.abMsgStat[3], CAN_CTXMSG_STAT_EMPTY);
+  // Removing the cycle-6 entry frees its share: one of cycle 7 fits, leaving 1/42: a further
+  // one of cycle 41 does not.
+  ASSERT_EQ(canSchedulerRemMessage(list, 2), VCI_OK);
+  m.wCycleTime = 7;
+  UINT32 index = 0;
+  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+  EXPECT_EQ(index, 2u);
+  m.wCycleTime = 41;
+  EXPECT_EQ(canSchedulerAddMessage(list, &m, &refused), VCI_E_OUTOFMEMORY);
+  ASSERT_EQ(canSchedulerRemMessage(list, 2), VCI_OK);
+  m.wCycleTime = 6;
+  m.dwMsgId = 0x102;
+  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+  for (UINT32 k = 0; k < 3; ++k) {
+    ASSERT_EQ(canSchedulerStartMessage(list, k, 0), VCI_OK);
+  }
+  beta.drain();
+  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);  // at t = 0
+  step_ns(12'500'000);
+  std::vector<uint32_t> ids;
+  for (const CANMSG& f : beta.frames()) {
+    ids.push_back(f.dwMsgId);
+  }
+  // a (cycle 2), b (3), c (6). Ticks 2 a, 3 b, 4 a, 6 a (all three due: the oldest entry),
+  // 7 b, 8 c (due since 6, before a's 8), 9 a, 10 b (due 9), 11 a (due 10), 12 a.
+  EXPECT_EQ(ids, (std::vector<uint32_t>{0x100, 0x101, 0x100, 0x100, 0x101, 0x102, 0x100, 0x101,
+                                        0x100, 0x100}));
+  canSchedulerClose(list);
+}
+
 TEST(VciCApi, InRealTimeAReaderBlocksUntilTheFrameComes) {
   testing::ConfigFile config(testing::kTwoAdapters);
   testing::Daemon daemon("realtime", {"--config=" + config.path()});

@@ -53,9 +53,11 @@ class _CyclicMixin:
             if scheduler is not None:
                 task = CanemuCyclicTask(self, scheduler, messages[0], period, duration,
                                         ticks, repeat)
-                if autostart:
-                    task.start()
-                return task
+                if not autostart or task._start(refused_ok=True):
+                    return task
+                # The list has no room for the period (16 entries, or the entries' shares of
+                # its 1 ms ticks would add up to more than one frame per tick).
+                log.info("%s: cyclic list full; software scheduling", self.channel_info)
         return super()._send_periodic_internal(msgs, period, duration, *args, **kwargs)
 
     def _open_scheduler(self):
@@ -109,16 +111,25 @@ class CanemuCyclicTask(LimitedDurationCyclicSendTaskABC, ModifiableCyclicTaskABC
         return entry
 
     def start(self) -> None:
+        self._start()
+
+    def _start(self, refused_ok: bool = False) -> bool:
+        """Adds and starts the entry. False when the list refuses it for want of room
+        (VCI_E_OUTOFMEMORY) and `refused_ok`; otherwise a refusal raises."""
         with self._lock:
             if self._index is not None:
-                return
+                return True
             index = ctypes.c_uint32()
             entry = self._entry()
             with _vci_errors():
-                _call("canSchedulerAddMessage", self._scheduler, ctypes.byref(entry),
-                      ctypes.byref(index))
+                hr = _vci.lib().canSchedulerAddMessage(self._scheduler, ctypes.byref(entry),
+                                                       ctypes.byref(index))
+                if hr == _vci.VCI_E_OUTOFMEMORY and refused_ok:
+                    return False
+                _vci.check("canSchedulerAddMessage", hr)
                 _call("canSchedulerStartMessage", self._scheduler, index.value, self._repeat)
             self._index = index.value
+            return True
 
     def stop(self) -> None:
         with self._lock:

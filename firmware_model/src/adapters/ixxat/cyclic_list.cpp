@@ -1,7 +1,10 @@
 #include "canemu/firmware_model/adapters/ixxat/cyclic_list.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <span>
+#include <vector>
 
 #include "canemu/firmware_model/bus/frame.hpp"
 
@@ -30,6 +33,63 @@ void increment(CANCYCLICTXMSG2& m) {
     default:
       break;
   }
+}
+
+// An unsigned integer wide enough for products of up to 17 cycle times (16 bits each) and
+// sums of 17 of them: 32-bit limbs, least significant first.
+class Wide {
+ public:
+  explicit Wide(uint32_t v = 0) { limbs_[0] = v; }
+  Wide& operator*=(uint32_t f) {
+    uint64_t carry = 0;
+    for (uint32_t& l : limbs_) {
+      const uint64_t v = uint64_t{l} * f + carry;
+      l = static_cast<uint32_t>(v);
+      carry = v >> 32;
+    }
+    return *this;
+  }
+  Wide& operator+=(const Wide& o) {
+    uint64_t carry = 0;
+    for (std::size_t i = 0; i < limbs_.size(); ++i) {
+      const uint64_t v = uint64_t{limbs_[i]} + o.limbs_[i] + carry;
+      limbs_[i] = static_cast<uint32_t>(v);
+      carry = v >> 32;
+    }
+    return *this;
+  }
+  friend bool operator<=(const Wide& a, const Wide& b) {
+    for (std::size_t i = a.limbs_.size(); i-- > 0;) {
+      if (a.limbs_[i] != b.limbs_[i]) {
+        return a.limbs_[i] < b.limbs_[i];
+      }
+    }
+    return true;
+  }
+
+ private:
+  std::array<uint32_t, 12> limbs_{};
+};
+
+// Whether the list can give every entry its ticks: one frame per tick, so the entries' shares
+// 1/cycle must add up to at most 1. Exact: the sum of 1/c_i <= 1 exactly when the sum over i of
+// the product of the other cycles is at most the product of all of them.
+bool fits(std::span<const uint16_t> cycles) {
+  Wide all(1);
+  for (uint16_t c : cycles) {
+    all *= c;
+  }
+  Wide sum;
+  for (std::size_t i = 0; i < cycles.size(); ++i) {
+    Wide others(1);
+    for (std::size_t j = 0; j < cycles.size(); ++j) {
+      if (j != i) {
+        others *= cycles[j];
+      }
+    }
+    sum += others;
+  }
+  return sum <= all;
 }
 
 }  // namespace
@@ -109,6 +169,18 @@ tl::expected<uint32_t, HRESULT> CyclicList::add(const CANCYCLICTXMSG2& msg) {
       break;
     default:
       return tl::unexpected(VCI_E_INVALIDARG);
+  }
+  // The admission rule (VCI guide 5.2.5): every entry in the list, started or not, holds its
+  // share of the ticks; one that would take the total above one frame per tick is refused as
+  // a full list is.
+  std::vector<uint16_t> cycles{msg.wCycleTime};
+  for (const Entry& e : entries_) {
+    if (e.status != CAN_CTXMSG_STAT_EMPTY) {
+      cycles.push_back(e.msg.wCycleTime);
+    }
+  }
+  if (!fits(cycles)) {
+    return tl::unexpected(VCI_E_OUTOFMEMORY);
   }
   for (uint32_t i = 0; i < entries_.size(); ++i) {
     if (entries_[i].status == CAN_CTXMSG_STAT_EMPTY) {

@@ -76,7 +76,7 @@ TEST(VciCanLine, TheTaskIsStoppedAfterOpeningAndResumeStartsEveryStartedEntryTog
   EXPECT_EQ(r.line.scheduler_status().bTaskStat, CAN_CTXTSK_STAT_STOPPED);
   const uint32_t a = *r.line.scheduler_add(cyclic(0x100, 4));
   const uint32_t b = *r.line.scheduler_add(cyclic(0x200, 4));
-  const uint32_t idle = *r.line.scheduler_add(cyclic(0x300, 1));
+  const uint32_t idle = *r.line.scheduler_add(cyclic(0x300, 2));
   EXPECT_EQ(r.line.scheduler_status().abMsgStat[a], CAN_CTXMSG_STAT_DONE);  // added, not started
   ASSERT_EQ(r.line.scheduler_start(a, 0), VCI_OK);
   ASSERT_EQ(r.line.scheduler_start(b, 0), VCI_OK);
@@ -124,7 +124,7 @@ TEST(VciCanLine, StartMessageWithACountSendsExactlyThatManyFrames) {
 
 TEST(VciCanLine, IncrementsApplyAfterEachFrameAndWrap) {
   ListRig r;
-  ASSERT_EQ(r.line.scheduler_start(*r.line.scheduler_add(cyclic(0x7FE, 1, CAN_CTXMSG_INC_ID)), 3),
+  ASSERT_EQ(r.line.scheduler_start(*r.line.scheduler_add(cyclic(0x7FE, 4, CAN_CTXMSG_INC_ID)), 3),
             VCI_OK);
   ASSERT_EQ(r.line.scheduler_start(
                 *r.line.scheduler_add(cyclic(0x1FFFFFFF, 4, CAN_CTXMSG_INC_ID, 0, {1}, true)), 2),
@@ -194,16 +194,39 @@ TEST(VciCanLine, AddMessageChecksCycleTypeIncrementAndRoom) {
   EXPECT_EQ(r.line.scheduler_add(cyclic(0x100, 5, CAN_CTXMSG_INC_16, 1)).error(),
             VCI_E_INVALIDARG);  // index 0 only
   for (uint32_t k = 0; k < CAN_MAX_CTX_MSGS; ++k) {
-    EXPECT_EQ(r.line.scheduler_add(cyclic(0x100 + k, 5, CAN_CTXMSG_INC_16, 0)).value(), k);
+    EXPECT_EQ(r.line.scheduler_add(cyclic(0x100 + k, 16, CAN_CTXMSG_INC_16, 0)).value(), k);
   }
-  EXPECT_EQ(r.line.scheduler_add(cyclic(0x120, 5)).error(), VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x120, 16)).error(), VCI_E_OUTOFMEMORY);
   ASSERT_EQ(r.line.scheduler_remove(7), VCI_OK);
   EXPECT_EQ(r.line.scheduler_status().abMsgStat[7], CAN_CTXMSG_STAT_EMPTY);
   EXPECT_EQ(r.line.scheduler_remove(7), VCI_E_INVALID_INDEX);
   EXPECT_EQ(r.line.scheduler_start(7, 0), VCI_E_INVALID_INDEX);
   EXPECT_EQ(r.line.scheduler_stop(7), VCI_E_INVALID_INDEX);
   EXPECT_EQ(r.line.scheduler_start(16, 0), VCI_E_INVALID_INDEX);
-  EXPECT_EQ(r.line.scheduler_add(cyclic(0x120, 5)).value(), 7u);  // the free index again
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x120, 16)).value(), 7u);  // the free index again
+}
+
+// One frame per tick: the entries' shares 1/wCycleTime add up to at most 1 (VCI guide 5.2.5).
+// Every entry in the list counts, started or not; one that would take the total above 1 is
+// refused as a full list is, VCI_E_OUTOFMEMORY.
+TEST(VciCanLine, AddMessageRefusesAnEntryThatTakesTheTicksAboveOneFramePerTick) {
+  ListRig r;
+  const uint32_t a = *r.line.scheduler_add(cyclic(0x100, 2));
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x101, 3)).value(), 1u);
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x102, 6)).value(), 2u);  // 1/2 + 1/3 + 1/6 = 1
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x103, 65535)).error(), VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x103, 1)).error(), VCI_E_OUTOFMEMORY);
+  EXPECT_EQ(r.line.scheduler_status().abMsgStat[3], CAN_CTXMSG_STAT_EMPTY);
+  ASSERT_EQ(r.line.scheduler_start(a, 0), VCI_OK);
+  ASSERT_EQ(r.line.scheduler_stop(a), VCI_OK);  // a stopped entry keeps its share
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x103, 65535)).error(), VCI_E_OUTOFMEMORY);
+  ASSERT_EQ(r.line.scheduler_remove(2), VCI_OK);  // 1/6 free again
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x103, 7)).value(), 2u);
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x104, 42)).value(), 3u);  // 1/2 + 1/3 + 1/7 + 1/42 = 1
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x105, 65535)).error(), VCI_E_OUTOFMEMORY);
+  ASSERT_EQ(r.line.scheduler_reset(), VCI_OK);
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x100, 1)).value(), 0u);  // one entry takes every tick
+  EXPECT_EQ(r.line.scheduler_add(cyclic(0x101, 65535)).error(), VCI_E_OUTOFMEMORY);
 }
 
 TEST(VciCanLine, SuspendStopsTheListResumeRestartsItAndResetEmptiesIt) {
@@ -373,6 +396,26 @@ TEST(CyclicList, IdentifierIncrementsWrapAndApplyAfterEachFrame) {
     ids.push_back(l.list.take()->dwMsgId);
   }
   EXPECT_EQ(ids, (std::vector<uint32_t>{0x7FF, 0x000, 0x001}));
+}
+
+// The admission sum is exact: nine entries of cycle 9 fill the ticks exactly (a sum in doubles
+// comes out above 1), and so do 2, 3, 7, 43 and 1806; with 1807 instead of 1806 the sum falls
+// 1/3263442 short of 1, less than any further entry's share.
+TEST(CyclicList, TheAdmissionSumIsExact) {
+  ListAlone l;
+  for (uint32_t k = 0; k < 9; ++k) {
+    EXPECT_EQ(l.list.add(cyclic(0x100 + k, 9)).value(), k);
+  }
+  EXPECT_EQ(l.list.add(cyclic(0x110, 65535)).error(), VCI_E_OUTOFMEMORY);
+  l.list.reset();
+  for (const uint16_t c : std::initializer_list<uint16_t>{2, 3, 7, 43}) {
+    ASSERT_TRUE(l.list.add(cyclic(0x100, c)).has_value()) << c;
+  }
+  EXPECT_EQ(l.list.add(cyclic(0x100, 1806)).value(), 4u);
+  EXPECT_EQ(l.list.add(cyclic(0x100, 65535)).error(), VCI_E_OUTOFMEMORY);
+  ASSERT_EQ(l.list.remove(4), VCI_OK);
+  EXPECT_EQ(l.list.add(cyclic(0x100, 1807)).value(), 4u);
+  EXPECT_EQ(l.list.add(cyclic(0x100, 65535)).error(), VCI_E_OUTOFMEMORY);
 }
 
 TEST(CyclicList, ClearDropsTheWaitingFrameAndEveryEntry) {

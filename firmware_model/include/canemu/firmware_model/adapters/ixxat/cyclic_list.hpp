@@ -51,7 +51,8 @@ class CyclicList final : private EventHandler {
   void reset();
   // The first empty entry gets `msg` (added, not started). VCI_E_INVALIDARG for a cycle of 0
   // or above cms_max_ticks, a message that is not data, an identifier out of range, an unknown
-  // increment mode or one whose byte(s) lie outside the data; VCI_E_OUTOFMEMORY when full.
+  // increment mode or one whose byte(s) lie outside the data; VCI_E_OUTOFMEMORY when full or
+  // when the entries' shares of the ticks, 1/wCycleTime each, would add up to more than 1.
   tl::expected<uint32_t, HRESULT> add(const CANCYCLICTXMSG2& msg);
   // VCI_E_INVALID_INDEX for an index out of range or an empty entry.
   HRESULT remove(uint32_t index);

@@ -8,8 +8,10 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstddef>
 #include <cstdint>
@@ -18,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,6 +82,20 @@ std::size_t open_descriptors() {
   return n;
 }
 
+// Connects as a client would, but without waiting: while the server does not run (this one
+// thread plays both sides), connections the input made and closed stay in the listening
+// socket's backlog, and once it is full a blocking connect would wait for ever. Then: none.
+std::optional<ipc::UniqueFd> connect_now(const std::string& path) {
+  ipc::UniqueFd fd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::memcpy(a.sun_path, path.c_str(), std::min(path.size(), sizeof a.sun_path - 1));
+  if (!fd.valid() || ::connect(fd.get(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
+    return std::nullopt;
+  }
+  return fd;
+}
+
 class Script {
  public:
   Script(const uint8_t* data, std::size_t size) : data_(data), size_(size) {}
@@ -138,7 +155,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       switch (op % 8) {
         case 0:
           if (clients.size() < 8) {
-            if (auto fd = ipc::connect_seqpacket(socket)) {
+            if (auto fd = connect_now(socket)) {
               clients.push_back(std::move(*fd));
             }
           }

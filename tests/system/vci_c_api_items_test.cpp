@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "vci_c_lin_support.hpp"
 #include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 
@@ -309,6 +310,37 @@ TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
   }
   EXPECT_EQ(times_of(got), want);
   canSchedulerClose(list);
+}
+
+// The LIN monitor's reads that no other test of libvcinpl calls: a master's header answered by
+// a slave, read as one message, several at once, and waited for.
+TEST(VciCFunctions, LinMonitorReadsOneOrSeveralMessagesAndSignalsItsEvent) {
+  using namespace testing;
+  VciDaemon d(kLinAdapters);
+  LinAdapter master("alpha", LIN_OPMODE_MASTER);
+  LinAdapter slave("beta");
+  ASSERT_EQ(slave.write(false, lin_data(0x2A, {0xDE, 0xAD}, true)), VCI_OK);
+  const int64_t t0 = step_to(1'000'000);
+  ASSERT_EQ(master.write(true, lin_data(0x2A, {}, true, true)), VCI_OK);
+  step_to(10'000'000);
+  EXPECT_EQ(linMonitorWaitRxEvent(master.monitor, 0), VCI_OK);  // the writes signalled it
+  EXPECT_EQ(linMonitorWaitRxEvent(master.monitor, 0), VCI_E_TIMEOUT);
+  LINMSG one{};
+  ASSERT_EQ(linMonitorReadMessage(master.monitor, 100, &one), VCI_OK);
+  EXPECT_EQ(text_of(one), event_text(0, LIN_MSGTYPE_INFO, LIN_INFO_START));
+  ASSERT_EQ(linMonitorReadMessage(master.monitor, 100, &one), VCI_OK);
+  EXPECT_EQ(text_of(one), frame_text(stamp(frame_end(t0, 2)), 0x2A, {0xDE, 0xAD}, true, false));
+  EXPECT_EQ(linMonitorReadMessage(master.monitor, 0, &one), VCI_E_TIMEOUT);
+  LINMSG got[4] = {};
+  UINT32 done = 0;
+  ASSERT_EQ(linMonitorPeekMsgMult(slave.monitor, got, 1, &done), VCI_OK);
+  ASSERT_EQ(done, 1u);
+  EXPECT_EQ(text_of(got[0]), event_text(0, LIN_MSGTYPE_INFO, LIN_INFO_START));
+  ASSERT_EQ(linMonitorReadMsgMult(slave.monitor, 100, got, 4, &done), VCI_OK);
+  ASSERT_EQ(done, 1u);
+  EXPECT_EQ(text_of(got[0]), frame_text(stamp(frame_end(t0, 2)), 0x2A, {0xDE, 0xAD}, true, true));
+  EXPECT_EQ(linMonitorPeekMsgMult(slave.monitor, got, 4, &done), VCI_E_RXQUEUE_EMPTY);
+  EXPECT_EQ(done, 0u);
 }
 
 // ---------------------------------------------------------------- checklist items

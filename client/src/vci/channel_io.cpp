@@ -179,7 +179,8 @@ HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, 
     const HRESULT hr = timeout_ms == 0 ? channel_post(c, in + done * size)
                                        : channel_send(c, timeout_ms, in + done * size);
     if (hr != VCI_OK) {
-      return hr;
+      // Some queued: success with their count (vcinpl.h); none: the FIFO's refusal.
+      return done > 0 ? VCI_OK : hr;
     }
   }
   return VCI_OK;

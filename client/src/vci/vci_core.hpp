@@ -237,7 +237,8 @@ HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg);
 HRESULT channel_read_many(ChannelObj& c, uint32_t timeout_ms, void* msgs, uint32_t count,
                           uint32_t& done);
 // Up to `count` messages from `msgs`, waiting up to `timeout_ms` for room; `done` gets how
-// many were queued. VCI_E_TIMEOUT (VCI_E_TXQUEUE_FULL with no waiting) when not all fit.
+// many were queued. VCI_OK when at least one was queued (vcinpl.h); VCI_E_TIMEOUT
+// (VCI_E_TXQUEUE_FULL with no waiting) when none was.
 HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, uint32_t count,
                           uint32_t& done);
 HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms);

@@ -1,0 +1,705 @@
+// Checklist items of the VCI digest (§7) through the VCI "2" C API (libvcinpl2: CANMSG2,
+// CANBTP) against a running canemud in stepped time, with exact time stamps; and the
+// functions of vcinpl2.h that no other test of libvcinpl2 calls.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <cstring>
+#include <cwchar>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "vci_lin_test_support.hpp"
+#include "vci_test_support.hpp"
+#include "vcinpl2.h"
+
+namespace canemu {
+namespace {
+
+using testing::VciDaemon;
+
+// Two CAN FD adapters and a third for listening on an FD bus, a classic one on a classic bus.
+const char* const kAdapters =
+    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
+    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
+    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
+    "[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
+
+constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
+constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
+CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) {
+  return CANBTP{0, bps, ts1, ts2, 1, 0};
+}
+const CANBTP kNominal = btp(500000, 14, 2);  // 16 quanta of 80 MHz / 10
+const CANBTP kData = btp(2000000, 8, 2);     // 10 quanta
+
+struct SimClock {
+  uint64_t now = 0;
+  void to(uint64_t t_ns) {
+    ASSERT_GT(t_ns, now);
+    UINT64 after = 0;
+    ASSERT_EQ(canemuStepTime(t_ns - now, &after), VCI_OK);
+    now = after;
+    ASSERT_EQ(now, t_ns);
+  }
+};
+
+VCIID id_named(const std::string& name) {
+  HANDLE e = nullptr;
+  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
+  VCIDEVICEINFO info{};
+  VCIID id{};
+  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
+    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
+      id = info.VciObjectId;
+    }
+  }
+  vciEnumDeviceClose(e);
+  return id;
+}
+
+std::vector<CANMSG2> drain(HANDLE channel, bool data_only = true) {
+  std::vector<CANMSG2> got;
+  CANMSG2 m;
+  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
+    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+      got.push_back(m);
+    }
+  }
+  return got;
+}
+
+// An FD adapter's device, control unit and a PASS channel (activated unless told otherwise);
+// the line initialized with `ex_mode` at 500 kbit/s / 2 Mbit/s and started if asked.
+struct FdAdapter {
+  HANDLE device = nullptr;
+  HANDLE control = nullptr;
+  HANDLE channel = nullptr;
+  explicit FdAdapter(const std::string& name, bool start = true, UINT8 ex_mode = kFd,
+                     bool activate = true) {
+    EXPECT_EQ(vciDeviceOpen(id_named(name), &device), VCI_OK);
+    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
+    EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
+    EXPECT_EQ(canChannelInitialize(channel, 256, 1, 64, 1, 0, CAN_FILTER_PASS), VCI_OK);
+    if (activate) {
+      EXPECT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
+    }
+    init(ex_mode);
+    if (start) {
+      EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
+    }
+  }
+  ~FdAdapter() {
+    canChannelClose(channel);
+    canControlClose(control);
+    vciDeviceClose(device);
+  }
+  HRESULT init(UINT8 ex_mode) const {
+    CANBTP n = kNominal;
+    CANBTP f = kData;
+    const HRESULT hr = canControlInitialize(control, kMode, ex_mode, CAN_FILTER_INCL,
+                                            CAN_FILTER_INCL, 2048, 2048, &n, &f);
+    EXPECT_EQ(hr, VCI_OK);
+    return hr;
+  }
+  void post(const CANMSG2& m) const {
+    CANMSG2 copy = m;
+    ASSERT_EQ(canChannelPostMessage(channel, &copy), VCI_OK);
+  }
+};
+
+CANMSG2 msg(uint32_t id, std::vector<uint8_t> bytes, bool fd = false, bool brs = false) {
+  CANMSG2 m{};
+  m.dwMsgId = id;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
+  m.uMsgInfo.Bits.edl = fd ? 1 : 0;
+  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
+  if (!bytes.empty()) {
+    std::memcpy(m.abData, bytes.data(), bytes.size());
+  }
+  return m;
+}
+
+// The end of a frame started at `start_us`, in ticks of 1 us, at 500 kbit/s / 2 Mbit/s.
+UINT32 end_of(uint32_t start_us, const model::Frame& f) {
+  const auto nominal = model::ixxat::decode_btp(
+      {0, 500000, 14, 2, 1, 0}, model::ixxat::kFdNominalRange, model::ixxat::Phase::nominal);
+  const auto data = model::ixxat::decode_btp({0, 2000000, 8, 2, 1, 0}, model::ixxat::kFdDataRange,
+                                             model::ixxat::Phase::data);
+  return static_cast<UINT32>(
+      (start_us * int64_t{1000} + model::frame_duration(model::encode(f), *nominal, *data).ns()) /
+      1000);
+}
+UINT32 fd_end(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes, bool brs = false) {
+  return end_of(start_us, *model::Frame::fd_frame(id, bytes, false, brs));
+}
+UINT32 classic_end(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes) {
+  return end_of(start_us, *model::Frame::classic(id, bytes, false));
+}
+
+std::vector<uint32_t> ids_of(const std::vector<CANMSG2>& msgs) {
+  std::vector<uint32_t> ids;
+  for (const CANMSG2& m : msgs) {
+    ids.push_back(m.dwMsgId);
+  }
+  return ids;
+}
+
+// ---------------------------------------------------------------- functions
+
+// What vcinpl_general.h declares behaves in libvcinpl2 as in libvcinpl.
+TEST(Vci2CFunctions, TheGeneralFunctionsAreThoseOfLibvcinpl) {
+  EXPECT_EQ(vciInitialize(), VCI_OK);
+  char narrow[VCI_MAX_ERRSTRLEN];
+  wchar_t wide[VCI_MAX_ERRSTRLEN];
+  vciFormatErrorA(VCI_E_TIMEOUT, narrow, VCI_MAX_ERRSTRLEN);
+  vciFormatErrorW(VCI_E_TIMEOUT, wide, VCI_MAX_ERRSTRLEN);
+  ASSERT_GT(std::strlen(narrow), 3u);
+  ASSERT_EQ(std::wcslen(wide), std::strlen(narrow));
+  for (std::size_t i = 0; narrow[i] != '\0'; ++i) {
+    EXPECT_EQ(wide[i], static_cast<wchar_t>(narrow[i])) << i;
+  }
+  char caption[] = "two";
+  ::testing::internal::CaptureStderr();
+  vciDisplayErrorA(nullptr, caption, VCI_E_TIMEOUT);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), std::string("two: ") + narrow + "\n");
+  wchar_t wide_caption[] = L"two";
+  ::testing::internal::CaptureStderr();
+  vciDisplayErrorW(nullptr, wide_caption, VCI_E_TIMEOUT);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), std::string("two: ") + narrow + "\n");
+
+  VCIID id{};
+  id.AsInt64 = 0x0123456789ABCDEF;
+  char text[17];
+  EXPECT_EQ(vciLuidToCharA(id, text, 16), VCI_E_BUFFER_OVERFLOW);
+  ASSERT_EQ(vciLuidToCharA(id, text, 17), VCI_OK);
+  EXPECT_STREQ(text, "0123456789ABCDEF");
+  VCIID back{};
+  ASSERT_EQ(vciCharToLuidA(text, &back), VCI_OK);
+  EXPECT_EQ(back.AsInt64, id.AsInt64);
+  char bad[] = "0123456789ABCDEG";
+  EXPECT_EQ(vciCharToLuidA(bad, &back), VCI_E_FAIL);
+
+  const GUID g = {0x12345678, 0x9ABC, 0xDEF0, {0x01, 0x23, 0x45, 0x67, 0x89, 0xAB, 0xCD, 0xEF}};
+  char gtext[39];
+  ASSERT_EQ(vciGuidToCharA(g, gtext, 39), VCI_OK);
+  EXPECT_STREQ(gtext, "{12345678-9ABC-DEF0-0123-456789ABCDEF}");
+  wchar_t gwide[39];
+  EXPECT_EQ(vciGuidToCharW(g, gwide, 38), VCI_E_BUFFER_OVERFLOW);
+  ASSERT_EQ(vciGuidToCharW(g, gwide, 39), VCI_OK);
+  EXPECT_STREQ(gwide, L"{12345678-9ABC-DEF0-0123-456789ABCDEF}");
+  GUID gback{};
+  ASSERT_EQ(vciCharToGuidA(gtext, &gback), VCI_OK);
+  EXPECT_EQ(std::memcmp(&gback, &g, sizeof g), 0);
+  gback = GUID{};
+  ASSERT_EQ(vciCharToGuidW(gwide, &gback), VCI_OK);
+  EXPECT_EQ(std::memcmp(&gback, &g, sizeof g), 0);
+  EXPECT_EQ(vciCharToGuidA(nullptr, &gback), VCI_E_INVALIDARG);
+
+  HANDLE e = nullptr;
+  ASSERT_EQ(vciEventCreate(FALSE, FALSE, &e), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 0), VCI_E_TIMEOUT);
+  ASSERT_EQ(vciEventSignal(e), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 0), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 0), VCI_E_TIMEOUT);  // auto reset
+  ASSERT_EQ(vciEventSignal(e), VCI_OK);
+  ASSERT_EQ(vciEventReset(e), VCI_OK);
+  EXPECT_EQ(vciEventWaitFor(e, 0), VCI_E_TIMEOUT);
+  EXPECT_EQ(vciEventDelete(e), VCI_OK);
+  EXPECT_EQ(vciEventSignal(e), VCI_E_INVHANDLE);
+}
+
+TEST(Vci2CFunctions, DevicesAreEnumeratedFoundAndDescribed) {
+  VciDaemon d(kAdapters);
+  EXPECT_EQ(vciInitialize(), VCI_OK);
+  HANDLE e = nullptr;
+  ASSERT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
+  VCIDEVICEINFO first{};
+  VCIDEVICEINFO info{};
+  ASSERT_EQ(vciEnumDeviceNext(e, &first), VCI_OK);
+  int count = 1;
+  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
+    ++count;
+  }
+  EXPECT_EQ(count, 4);
+  ASSERT_EQ(vciEnumDeviceReset(e), VCI_OK);
+  ASSERT_EQ(vciEnumDeviceNext(e, &info), VCI_OK);
+  EXPECT_EQ(std::memcmp(&info, &first, sizeof info), 0);
+  EXPECT_EQ(vciEnumDeviceWaitEvent(e, 0), VCI_E_TIMEOUT);  // nothing changed
+  EXPECT_EQ(vciEnumDeviceClose(e), VCI_OK);
+  EXPECT_EQ(vciEnumDeviceReset(e), VCI_E_INVHANDLE);
+  EXPECT_STREQ(first.Description, "USB-to-CAN FD (canemu alpha)");
+  VCIID id{};
+  ASSERT_EQ(vciFindDeviceByHwid(first.UniqueHardwareId.AsGuid, &id), VCI_OK);
+  EXPECT_EQ(id.AsInt64, first.VciObjectId.AsInt64);
+  // The FD adapters are one class: alpha, beta, delta (gamma is another).
+  ASSERT_EQ(vciFindDeviceByClass(first.DeviceClass, 0, &id), VCI_OK);
+  EXPECT_EQ(id.AsInt64, id_named("alpha").AsInt64);
+  ASSERT_EQ(vciFindDeviceByClass(first.DeviceClass, 2, &id), VCI_OK);
+  EXPECT_EQ(id.AsInt64, id_named("delta").AsInt64);
+  EXPECT_EQ(vciFindDeviceByClass(first.DeviceClass, 3, &id), VCI_E_NO_MORE_ITEMS);
+  ::unsetenv("CANEMU_VCI_DEVICE");
+  ASSERT_EQ(vciSelectDeviceDlg(nullptr, &id), VCI_OK);
+  EXPECT_EQ(id.AsInt64, first.VciObjectId.AsInt64);
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpen(id_named("alpha"), &dev), VCI_OK);
+  VCIDEVICECAPS caps{};
+  ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
+  EXPECT_EQ(caps.BusCtrlCount, 1);
+  EXPECT_EQ(caps.BusCtrlTypes[0], VCI_CAN_CTRL(CAN_CTRL_IFICFD));
+  EXPECT_EQ(vciDeviceClose(dev), VCI_OK);
+  ASSERT_EQ(vciDeviceOpen(id_named("gamma"), &dev), VCI_OK);
+  ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
+  EXPECT_EQ(caps.BusCtrlTypes[0], VCI_CAN_CTRL(CAN_CTRL_SJA1000));
+  EXPECT_EQ(vciDeviceGetCaps(dev, nullptr), VCI_E_INVALIDARG);
+  EXPECT_EQ(vciDeviceClose(dev), VCI_OK);
+}
+
+// A v2 channel's calls with CANMSG2: capabilities and status, the multi-message calls, the
+// blocking reads and sends, the FIFO events.
+TEST(Vci2CFunctions, TheChannelCallsMoveCanmsg2) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", false);
+  FdAdapter beta("beta");
+  CANCAPABILITIES2 caps{};
+  CANCAPABILITIES2 of_control{};
+  ASSERT_EQ(canChannelGetCaps(alpha.channel, &caps), VCI_OK);
+  ASSERT_EQ(canControlGetCaps(alpha.control, &of_control), VCI_OK);
+  EXPECT_EQ(std::memcmp(&caps, &of_control, sizeof caps), 0);
+  EXPECT_EQ(caps.wCtrlType, CAN_CTRL_IFICFD);
+  EXPECT_EQ(canChannelGetCaps(alpha.control, &caps), VCI_E_INVHANDLE);
+  CANCHANSTATUS2 s{};
+  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  EXPECT_TRUE(s.fActivated);
+  EXPECT_FALSE(s.fRxOverrun);
+  EXPECT_EQ(s.bRxFifoLoad, 0);
+  EXPECT_EQ(s.sLineStatus.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  EXPECT_EQ(s.sLineStatus.sBtpFdr.dwBPS, 2'000'000u);
+  EXPECT_EQ(canChannelWaitTxEvent(alpha.channel, 0), VCI_E_TIMEOUT);  // nothing read yet
+  std::vector<CANMSG2> out{msg(0x101, {1}, true, true), msg(0x102, {2}), msg(0x103, {3})};
+  UINT32 done = 0;
+  ASSERT_EQ(canChannelPostMsgMult(alpha.channel, out.data(), 2, &done), VCI_OK);
+  EXPECT_EQ(done, 2u);
+  ASSERT_EQ(canChannelSendMsgMult(alpha.channel, 100, &out[2], 1, &done), VCI_OK);
+  EXPECT_EQ(done, 1u);
+  beta.post(msg(0x0FF, std::vector<uint8_t>(12, 0xA5), true, true));
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  SimClock clock;
+  clock.to(2'000'000);
+  EXPECT_EQ(canChannelWaitTxEvent(alpha.channel, 0), VCI_OK);  // canemud took them
+  EXPECT_EQ(canChannelWaitRxEvent(alpha.channel, 0), VCI_OK);
+  EXPECT_EQ(canChannelWaitRxEvent(alpha.channel, 0), VCI_E_TIMEOUT);
+  // alpha: INFO START and beta's frame (it won the arbitration against 0x101 at t = 0).
+  CANMSG2 m{};
+  ASSERT_EQ(canChannelReadMessage(alpha.channel, 100, &m), VCI_OK);
+  EXPECT_EQ(m.uMsgInfo.Bytes.bType, CAN_MSGTYPE_INFO);
+  CANMSG2 in[4] = {};
+  ASSERT_EQ(canChannelReadMsgMult(alpha.channel, 100, in, 4, &done), VCI_OK);
+  ASSERT_EQ(done, 1u);
+  EXPECT_EQ(in[0].dwMsgId, 0x0FFu);
+  EXPECT_EQ(in[0].uMsgInfo.Bits.dlc, 9u);
+  EXPECT_EQ(in[0].abData[11], 0xA5);
+  const UINT32 first_end =
+      end_of(0, *model::Frame::fd_frame(0x0FF, std::vector<uint8_t>(12, 0xA5), false, true));
+  EXPECT_EQ(in[0].dwTime, first_end);
+  EXPECT_EQ(canChannelReadMessage(alpha.channel, 0, &m), VCI_E_TIMEOUT);  // nothing within 0 ms
+  // beta: INFO START, then alpha's three after its own.
+  ASSERT_EQ(canChannelPeekMsgMult(beta.channel, in, 4, &done), VCI_OK);
+  ASSERT_EQ(done, 4u);
+  EXPECT_EQ(in[0].uMsgInfo.Bytes.bType, CAN_MSGTYPE_INFO);
+  EXPECT_EQ(ids_of(std::vector<CANMSG2>(in + 1, in + 4)),
+            (std::vector<uint32_t>{0x101, 0x102, 0x103}));
+  const UINT32 second_end = fd_end(first_end + 6, 0x101, {1}, true);
+  EXPECT_EQ(in[1].dwTime, second_end);
+  EXPECT_EQ(in[1].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(in[2].dwTime, classic_end(second_end + 6, 0x102, {2}));
+  EXPECT_EQ(canChannelPeekMsgMult(beta.channel, in, 4, &done), VCI_E_RXQUEUE_EMPTY);
+  EXPECT_EQ(done, 0u);
+  // A blocking read gives up after its time, counted in simulated time.
+  std::atomic<bool> ended{false};
+  std::atomic<HRESULT> hr{VCI_E_UNEXPECTED};
+  std::thread reader([&] {
+    CANMSG2 x;
+    hr = canChannelReadMessage(beta.channel, 5, &x);
+    ended = true;
+  });
+  testing::step_until(ended);
+  reader.join();
+  EXPECT_EQ(hr.load(), VCI_E_TIMEOUT);
+}
+
+// Channel filter lists: RemFilterIds takes back what AddFilterIds added.
+TEST(Vci2CFunctions, RemFilterIdsTakesIdsOffAChannelsList) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", false);
+  FdAdapter beta("beta");
+  HANDLE ch = nullptr;
+  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &ch), VCI_OK);
+  ASSERT_EQ(canChannelInitialize(ch, 64, 1, 0, 0, 16, CAN_FILTER_INCL), VCI_OK);
+  ASSERT_EQ(canChannelSetAccFilter(ch, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE), VCI_OK);
+  ASSERT_EQ(canChannelAddFilterIds(ch, FALSE, 0x120 << 1, 0xFF9), VCI_OK);  // 0x120..0x123
+  ASSERT_EQ(canChannelRemFilterIds(ch, FALSE, 0x122 << 1, 0xFFF), VCI_OK);
+  ASSERT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
+  EXPECT_EQ(canChannelRemFilterIds(ch, FALSE, 0x121 << 1, 0xFFF), VCI_E_INVALID_STATE);
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  for (uint32_t id = 0x11F; id <= 0x124; ++id) {
+    beta.post(msg(id, {}));
+  }
+  SimClock clock;
+  clock.to(2'000'000);
+  EXPECT_EQ(ids_of(drain(ch)), (std::vector<uint32_t>{0x120, 0x121, 0x123}));
+  EXPECT_EQ(drain(alpha.channel).size(), 6u);
+  canChannelClose(ch);
+}
+
+// Traffic of 500 kbit/s / 2 Mbit/s on the FD bus; delta tries a table and finds the second
+// entry. The call blocks while simulated time runs, so another thread steps it.
+TEST(Vci2CFunctions, DetectBitrateFindsTheEntryOfTheTraffic) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  HANDLE list = nullptr;
+  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  CANCYCLICTXMSG2 m{};
+  m.wCycleTime = 1;
+  m.dwMsgId = 0x2A0;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = 1;
+  UINT32 index = 0;
+  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+  ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
+  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpen(id_named("delta"), &dev), VCI_OK);
+  HANDLE control = nullptr;
+  ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
+  CANBTP sdr[] = {btp(250000, 30, 2), kNominal};
+  CANBTP fdr[] = {btp(1000000, 18, 2), kData};
+  UINT32 found = 99;
+  EXPECT_EQ(canControlDetectBitrate(control, kMode, kFd, 100, 0, sdr, fdr, &found),
+            VCI_E_INVALIDARG);
+  std::atomic<bool> done{false};
+  std::atomic<HRESULT> hr{VCI_E_UNEXPECTED};
+  std::thread detector([&] {
+    hr = canControlDetectBitrate(control, kMode, kFd, 100, 2, sdr, fdr, &found);
+    done = true;
+  });
+  testing::step_until(done);
+  detector.join();
+  EXPECT_EQ(hr.load(), VCI_OK);
+  EXPECT_EQ(found, 1u);
+  canSchedulerClose(list);
+  canControlClose(control);
+  vciDeviceClose(dev);
+}
+
+// ---------------------------------------------------------------- checklist items
+
+TEST(Vci2CItems, Item56_NewChannelIsInactiveUntilActivate) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", true, kFd, false);
+  FdAdapter beta("beta");
+  SimClock clock;
+  beta.post(msg(0x123, {1, 2, 3}, true, true));
+  clock.to(1'000'000);
+  CANCHANSTATUS2 s{};
+  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  EXPECT_FALSE(s.fActivated);
+  EXPECT_EQ(s.sLineStatus.dwStatus, 0u);
+  EXPECT_TRUE(drain(alpha.channel, false).empty());
+  ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
+  beta.post(msg(0x124, {4}, true, true));
+  clock.to(2'000'000);
+  const auto got = drain(alpha.channel, false);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x124u);
+  EXPECT_EQ(got[0].dwTime, fd_end(1000, 0x124, {4}, true));
+}
+
+// Without EXTDATA an edl frame is dropped; without FASTDATA an fdr frame is; what the modes
+// allow goes out.
+TEST(Vci2CItems, Item74_FdFramesAreDroppedWithoutTheirExtendedModes) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", true, CAN_EXMODE_EXTDATA);
+  FdAdapter beta("beta", true, CAN_EXMODE_EXTDATA);
+  alpha.post(msg(0x101, {1, 2, 3}, true, true));  // fdr: no FASTDATA
+  CANMSG2 fdr_alone = msg(0x102, {1});
+  fdr_alone.uMsgInfo.Bits.fdr = 1;
+  alpha.post(fdr_alone);
+  alpha.post(msg(0x103, std::vector<uint8_t>(12, 7), true));  // edl without fdr: allowed
+  alpha.post(msg(0x104, {4}));
+  SimClock clock;
+  clock.to(2'000'000);
+  auto got = drain(beta.channel);
+  ASSERT_EQ(ids_of(got), (std::vector<uint32_t>{0x103, 0x104}));
+  // An FD frame without the rate switch: all of it at the nominal rate.
+  const UINT32 first = end_of(0, *model::Frame::fd_frame(0x103, std::vector<uint8_t>(12, 7)));
+  EXPECT_EQ(got[0].dwTime, first);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 0u);
+  EXPECT_EQ(got[1].dwTime, classic_end(first + 6, 0x104, {4}));
+  // Classic lines on both: edl frames are dropped too.
+  for (const FdAdapter* a : {&alpha, &beta}) {
+    ASSERT_EQ(canControlReset(a->control), VCI_OK);
+    a->init(CAN_EXMODE_DISABLED);
+    ASSERT_EQ(canControlStart(a->control, TRUE), VCI_OK);
+  }
+  alpha.post(msg(0x201, std::vector<uint8_t>(12, 7), true));
+  alpha.post(msg(0x202, {2}));
+  clock.to(4'000'000);
+  got = drain(beta.channel);
+  ASSERT_EQ(ids_of(got), (std::vector<uint32_t>{0x202}));
+  EXPECT_EQ(got[0].dwTime, classic_end(2000, 0x202, {2}));
+}
+
+TEST(Vci2CItems, Item75_RtrIsIgnoredWhenEdlOrFdrIsSet) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  CANMSG2 edl = msg(0x101, {1, 2, 3}, true);
+  edl.uMsgInfo.Bits.rtr = 1;
+  CANMSG2 fdr = msg(0x102, {4, 5}, true, true);
+  fdr.uMsgInfo.Bits.edl = 0;  // fdr alone asks for an FD frame with the rate switch
+  fdr.uMsgInfo.Bits.rtr = 1;
+  alpha.post(edl);
+  alpha.post(fdr);
+  SimClock clock;
+  clock.to(2'000'000);
+  const auto got = drain(beta.channel);
+  ASSERT_EQ(got.size(), 2u);
+  const UINT32 first = fd_end(0, 0x101, {1, 2, 3});
+  EXPECT_EQ(got[0].dwMsgId, 0x101u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.rtr, 0u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.dlc, 3u);
+  EXPECT_EQ(got[0].abData[2], 3);
+  EXPECT_EQ(got[0].dwTime, first);
+  EXPECT_EQ(got[1].dwMsgId, 0x102u);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.rtr, 0u);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.edl, 1u);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(got[1].abData[1], 5);
+  EXPECT_EQ(got[1].dwTime, fd_end(first + 6, 0x102, {4, 5}, true));
+}
+
+// One tick is 1 / (dwTscClkFreq / dwTscDivisor) s.
+TEST(Vci2CItems, Item77_TimeStampsCountDwTscClkFreqOverDwTscDivisorTicksPerSecond) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  CANCAPABILITIES2 caps{};
+  ASSERT_EQ(canChannelGetCaps(alpha.channel, &caps), VCI_OK);
+  const uint64_t per_second = caps.dwTscClkFreq / caps.dwTscDivisor;
+  EXPECT_EQ(per_second, 1'000'000u);
+  SimClock clock;
+  beta.post(msg(0x123, {1}));
+  clock.to(1'000'000'000);
+  beta.post(msg(0x123, {1}));
+  clock.to(2'000'000'000);
+  const auto got = drain(alpha.channel);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].dwTime, classic_end(0, 0x123, {1}));
+  EXPECT_EQ(got[1].dwTime - got[0].dwTime, per_second);
+}
+
+// The control unit's list passes 0x123 only; a PASS channel sees no more than that.
+TEST(Vci2CItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", false);
+  FdAdapter beta("beta");
+  ASSERT_EQ(canControlSetAccFilter(alpha.control, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
+            VCI_OK);
+  ASSERT_EQ(canControlAddFilterIds(alpha.control, FALSE, 0x120 << 1, 0xFF9), VCI_OK);
+  ASSERT_EQ(canControlRemFilterIds(alpha.control, FALSE, 0x121 << 1, 0xFFF), VCI_OK);
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  EXPECT_EQ(canControlAddFilterIds(alpha.control, FALSE, 0x124 << 1, 0xFFF), VCI_E_INVALID_STATE);
+  for (uint32_t id = 0x11F; id <= 0x124; ++id) {
+    beta.post(msg(id, {}));
+  }
+  SimClock clock;
+  clock.to(2'000'000);
+  const auto got = drain(alpha.channel);
+  EXPECT_EQ(ids_of(got), (std::vector<uint32_t>{0x120, 0x122, 0x123}));
+  for (const CANMSG2& m : got) {
+    EXPECT_EQ(m.uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
+  }
+}
+
+// Raw CANBTP values are checked against the capability ranges of each phase.
+TEST(Vci2CItems, Item117_RawTimingOutsideTheCapabilityRangesIsRejected) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha", false);
+  CANCAPABILITIES2 caps{};
+  ASSERT_EQ(canControlGetCaps(alpha.control, &caps), VCI_OK);
+  EXPECT_EQ(caps.sSdrRangeMin.dwBPS, 1u);
+  EXPECT_EQ(caps.sSdrRangeMax.dwBPS, 1024u);
+  EXPECT_EQ(caps.sSdrRangeMax.wTS1, 256);
+  EXPECT_EQ(caps.sSdrRangeMin.wTS2, 2);
+  EXPECT_EQ(caps.sFdrRangeMax.wTS1, 32);
+  auto init = [&](CANBTP n, CANBTP f) {
+    return canControlInitialize(alpha.control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
+                                2048, &n, &f);
+  };
+  // 500 kbit/s as raw values: prescaler 10, 1 + 13 + 2 quanta; 2 Mbit/s: 4, 1 + 7 + 2.
+  const CANBTP nominal{CAN_BTMODE_RAW, 10, 13, 2, 1, 0};
+  const CANBTP data{CAN_BTMODE_RAW, 4, 7, 2, 1, 0};
+  EXPECT_EQ(init(nominal, data), VCI_OK);
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 10u);
+  EXPECT_EQ(s.sBtpFdr.wTS1, 7);
+  CANBTP n = nominal;
+  n.dwBPS = caps.sSdrRangeMax.dwBPS + 1;
+  EXPECT_EQ(init(n, data), VCI_E_INVALIDARG);
+  n = nominal;
+  n.wTS1 = caps.sSdrRangeMax.wTS1 + 1;
+  EXPECT_EQ(init(n, data), VCI_E_INVALIDARG);
+  n = nominal;
+  n.wTS2 = caps.sSdrRangeMin.wTS2 - 1;
+  EXPECT_EQ(init(n, data), VCI_E_INVALIDARG);
+  CANBTP f = data;
+  f.wTS1 = caps.sFdrRangeMax.wTS1 + 1;
+  EXPECT_EQ(init(nominal, f), VCI_E_INVALIDARG);
+  f = data;
+  f.dwBPS = caps.sFdrRangeMax.dwBPS + 1;
+  EXPECT_EQ(init(nominal, f), VCI_E_INVALIDARG);
+  // At the edges of the ranges it is taken.
+  n = nominal;
+  n.wTS1 = caps.sSdrRangeMax.wTS1;
+  n.wTS2 = caps.sSdrRangeMax.wTS2;
+  EXPECT_EQ(init(n, data), VCI_OK);
+}
+
+// The v2 cyclic list: its status carries the line's, FD frames go out, Suspend stops it,
+// Resume continues, StopMessage keeps an entry, Reset empties the list.
+TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  HANDLE list = nullptr;
+  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  CANCAPABILITIES2 caps{};
+  ASSERT_EQ(canSchedulerGetCaps(list, &caps), VCI_OK);
+  ASSERT_EQ(caps.dwCmsClkFreq / caps.dwCmsDivisor, 1000u);  // ticks of 1 ms
+  CANCYCLICTXMSG2 m{};
+  m.wCycleTime = 2;
+  m.dwMsgId = 0x100;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.edl = 1;
+  m.uMsgInfo.Bits.fdr = 1;
+  m.uMsgInfo.Bits.dlc = 9;  // 12 bytes
+  std::memset(m.abData, 0x5A, 12);
+  UINT32 index = 99;
+  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+  EXPECT_EQ(index, 0u);
+  m.dwMsgId = 0x200;
+  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
+  EXPECT_EQ(index, 1u);
+  ASSERT_EQ(canSchedulerRemMessage(list, 1), VCI_OK);
+  EXPECT_EQ(canSchedulerStartMessage(list, 1, 0), VCI_E_INVALID_INDEX);
+  ASSERT_EQ(canSchedulerStartMessage(list, 0, 0), VCI_OK);
+  CANSCHEDULERSTATUS2 s{};
+  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
+  EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_BUSY);
+  EXPECT_EQ(s.abMsgStat[1], CAN_CTXMSG_STAT_EMPTY);
+  EXPECT_EQ(s.sLineStatus.dwStatus, 0u);
+  EXPECT_EQ(s.sLineStatus.sBtpFdr.dwBPS, 2'000'000u);
+  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+  SimClock clock;
+  clock.to(5'000'000);
+  ASSERT_EQ(canSchedulerActivate(list, FALSE), VCI_OK);
+  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
+  EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_BUSY);
+  clock.to(11'000'000);
+  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+  clock.to(15'500'000);
+  ASSERT_EQ(canSchedulerStopMessage(list, 0), VCI_OK);
+  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_RUNNING);
+  EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_DONE);
+  clock.to(20'000'000);
+  ASSERT_EQ(canSchedulerReset(list), VCI_OK);
+  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
+  for (UINT8 stat : s.abMsgStat) {
+    EXPECT_EQ(stat, CAN_CTXMSG_STAT_EMPTY);
+  }
+  EXPECT_EQ(canSchedulerStartMessage(list, 0, 0), VCI_E_INVALID_INDEX);
+  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+  clock.to(30'000'000);
+  const auto got = drain(beta.channel);
+  std::vector<UINT32> times;
+  for (const CANMSG2& f : got) {
+    times.push_back(f.dwTime);
+    EXPECT_EQ(f.uMsgInfo.Bits.fdr, 1u);
+    EXPECT_EQ(f.abData[11], 0x5A);
+  }
+  const auto frame = model::Frame::fd_frame(0x100, std::vector<uint8_t>(12, 0x5A), false, true);
+  std::vector<UINT32> want;
+  for (uint32_t ms : {2, 4, 13, 15}) {
+    want.push_back(end_of(ms * 1000, *frame));
+  }
+  EXPECT_EQ(times, want);
+  canSchedulerClose(list);
+}
+
+// ---------------------------------------------------------------- LIN
+
+// The LIN calls of libvcinpl2 not used elsewhere: capabilities, status, reset, single reads.
+TEST(Vci2CLin, CapabilitiesStatusResetAndSingleReads) {
+  using namespace testing;
+  VciDaemon d(kLinAdapters);
+  HANDLE dev = nullptr;
+  ASSERT_EQ(vciDeviceOpen(id_named("alpha"), &dev), VCI_OK);
+  HANDLE control = nullptr;
+  HANDLE monitor = nullptr;
+  ASSERT_EQ(linControlOpen(dev, kLinNo, &control), VCI_OK);
+  ASSERT_EQ(linMonitorOpen(dev, kLinNo, FALSE, &monitor), VCI_OK);
+  ASSERT_EQ(linMonitorInitialize(monitor, 16, 1), VCI_OK);
+  ASSERT_EQ(linMonitorActivate(monitor, TRUE), VCI_OK);
+  LINCAPABILITIES caps{};
+  ASSERT_EQ(linControlGetCaps(control, &caps), VCI_OK);
+  EXPECT_EQ(caps.dwFeatures, 0x3Fu);
+  EXPECT_EQ(caps.dwClockFreq, 1'000'000u);
+  EXPECT_EQ(caps.dwTscDivisor, 1u);
+  LINCAPABILITIES of_monitor{};
+  ASSERT_EQ(linMonitorGetCaps(monitor, &of_monitor), VCI_OK);
+  EXPECT_EQ(std::memcmp(&caps, &of_monitor, sizeof caps), 0);
+  ASSERT_EQ(linControlInitialize(control, LIN_OPMODE_MASTER, kRate), VCI_OK);
+  LINLINESTATUS s{};
+  ASSERT_EQ(linControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.bOpMode, LIN_OPMODE_MASTER);
+  EXPECT_EQ(s.wBitrate, kRate);
+  EXPECT_EQ(s.dwStatus, LIN_STATUS_ININIT);
+  SimClock clock;
+  clock.to(1'000'000);
+  ASSERT_EQ(linControlStart(control, TRUE), VCI_OK);
+  LINMONITORSTATUS ms{};
+  ASSERT_EQ(linMonitorGetStatus(monitor, &ms), VCI_OK);
+  EXPECT_TRUE(ms.fActivated);
+  EXPECT_EQ(ms.sLineStatus.dwStatus, 0u);
+  ASSERT_EQ(linControlReset(control), VCI_OK);
+  ASSERT_EQ(linControlGetStatus(control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, LIN_STATUS_ININIT);
+  LINMSG m{};
+  ASSERT_EQ(linMonitorPeekMessage(monitor, &m), VCI_OK);
+  EXPECT_EQ(text_of(m), event_text(1000, LIN_MSGTYPE_INFO, LIN_INFO_START));
+  ASSERT_EQ(linMonitorReadMessage(monitor, 100, &m), VCI_OK);
+  EXPECT_EQ(text_of(m), event_text(0, LIN_MSGTYPE_INFO, LIN_INFO_RESET));
+  EXPECT_EQ(linMonitorPeekMessage(monitor, &m), VCI_E_RXQUEUE_EMPTY);
+  EXPECT_EQ(linMonitorClose(monitor), VCI_OK);
+  EXPECT_EQ(linControlClose(control), VCI_OK);
+  vciDeviceClose(dev);
+}
+
+}  // namespace
+}  // namespace canemu

@@ -140,3 +140,9 @@ set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/packaging/debian/triggers)
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 include(CPack)
+# The DDS bridge's types (docs/bridges.md): the IDL files for any DDS implementation's IDL
+# compiler, and the Python types beside canemu.
+install(FILES ${PROJECT_SOURCE_DIR}/ddstypes/canemu_dds.idl ${PROJECT_SOURCE_DIR}/ddstypes/ros2_can_msgs.idl
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/idl)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu_dds DESTINATION ${CANEMU_PYTHON_DIR}
+        FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/dds_bridge.hpp"
 #include "canemu/daemon/lcm_bridge.hpp"
 #include "canemu/ipc/capture_messages.hpp"
 #include "capture_config_reader.hpp"
@@ -139,21 +140,27 @@ void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> interfaces;
   std::set<std::string> lcm_buses;
   std::set<std::pair<std::string, std::string>> lcm_channels;
+  std::set<std::string> dds_buses;
+  std::set<std::string> dds_topics;  // domain/partition/prefix
   c.for_each_table(root, "bridge", [&](const toml::table& t, const std::string& path) {
     BridgeConfig b;
     b.line = static_cast<uint32_t>(t.source().begin.line);
     const toml::node* kind_node = t.get("kind");
     const bool lcm = kind_node != nullptr && kind_node->value<std::string>() == "lcm";
+    const bool dds = kind_node != nullptr && kind_node->value<std::string>() == "dds";
     if (lcm) {
       c.only_keys(t, path, {"kind", "bus", "url", "channel_prefix", "restart_ms"});
+    } else if (dds) {
+      c.only_keys(t, path,
+                  {"kind", "bus", "domain", "partition", "topic_prefix", "ros2", "restart_ms"});
     } else {
       c.only_keys(t, path, {"kind", "bus", "interface", "error_frames", "restart_ms"});
     }
     if (auto kind = c.string(t, path, "kind", true)) {
       b.kind = *kind;
-      if (*kind != "socketcan" && *kind != "lcm") {
+      if (*kind != "socketcan" && *kind != "lcm" && *kind != "dds") {
         c.error(*t.get("kind"), path + ".kind",
-                fmt::format("\"{}\" is not a bridge kind (socketcan, lcm)", *kind));
+                fmt::format("\"{}\" is not a bridge kind (socketcan, lcm, dds)", *kind));
       }
     }
     if (auto bus = c.string(t, path, "bus", true)) {
@@ -164,10 +171,15 @@ void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
       } else if (bc->kind == BusKind::lin) {
         c.error(*t.get("bus"), path + ".bus",
                 fmt::format("\"{}\" is a LIN bus; {} bridges join CAN buses", *bus,
-                            lcm ? "LCM" : "SocketCAN"));
+                            lcm   ? "LCM"
+                            : dds ? "DDS"
+                                  : "SocketCAN"));
       } else if (lcm && !lcm_buses.insert(*bus).second) {
         c.error(*t.get("bus"), path + ".bus",
                 fmt::format("another LCM bridge joins \"{}\" already", *bus));
+      } else if (dds && !dds_buses.insert(*bus).second) {
+        c.error(*t.get("bus"), path + ".bus",
+                fmt::format("another DDS bridge joins \"{}\" already", *bus));
       }
     }
     if (lcm) {
@@ -192,7 +204,40 @@ void read_bridges(Checker& c, const toml::table& root, Config& cfg) {
                             b.channel_prefix, b.url));
       }
     }
-    if (!lcm) {
+    if (dds) {
+      if (auto domain = c.integer(t, path, "domain", false, 0, kMaxDdsDomain)) {
+        b.domain = static_cast<uint32_t>(*domain);
+      }
+      b.partition = std::string(kDefaultDdsPartition);
+      if (auto partition = c.string(t, path, "partition", false)) {
+        b.partition = *partition;
+        if (auto problem = dds_partition_problem(*partition)) {
+          c.error(*t.get("partition"), path + ".partition", *problem);
+        }
+      }
+      b.channel_prefix = default_dds_prefix(b.bus);
+      if (auto prefix = c.string(t, path, "topic_prefix", false)) {
+        b.channel_prefix = *prefix;
+        if (auto problem = dds_prefix_problem(*prefix)) {
+          c.error(*t.get("topic_prefix"), path + ".topic_prefix", *problem);
+        }
+      }
+      if (const toml::node* n = t.get("ros2")) {
+        if (!n->is_boolean()) {
+          c.error(*n, path + ".ros2", "must be true or false");
+        } else {
+          b.ros2 = n->as_boolean()->get();
+        }
+      }
+      const std::string topics = fmt::format("{}/{}/{}", b.domain, b.partition, b.channel_prefix);
+      if (!b.bus.empty() && !dds_topics.insert(topics).second) {
+        c.error(t, path,
+                fmt::format("another DDS bridge uses the topics {}* in domain {}, partition {} "
+                            "already (their frames would loop)",
+                            b.channel_prefix, b.domain, b.partition));
+      }
+    }
+    if (!lcm && !dds) {
       if (auto name = c.string(t, path, "interface", true)) {
         b.interface = *name;
         if (auto problem = interface_name_problem(*name)) {

@@ -525,6 +525,13 @@ std::string summary(const Config& cfg) {
           b.restart_ms != 0 ? fmt::format(", restart {} ms after bus-off", b.restart_ms) : "");
       continue;
     }
+    if (b.kind == "dds") {
+      s += fmt::format(
+          "  bridge dds of {} to {}* in domain {}, partition {}{}{}\n", b.bus, b.channel_prefix,
+          b.domain, b.partition, b.ros2 ? ", ROS 2 topics too" : "",
+          b.restart_ms != 0 ? fmt::format(", restart {} ms after bus-off", b.restart_ms) : "");
+      continue;
+    }
     s += fmt::format(
         "  bridge {} of {} to {}{}{}\n", b.kind, b.bus, b.interface,
         b.error_frames ? " (error frames too)" : "",

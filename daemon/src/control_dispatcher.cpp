@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/dds_bridge.hpp"
 #include "canemu/daemon/lcm_bridge.hpp"
 #include "canemu/daemon/status.hpp"
 #include "capture_config_reader.hpp"
@@ -23,6 +24,25 @@ void ControlDispatcher::error(const Send& send, uint32_t request_id, ipc::ErrorC
 }
 
 namespace {
+
+// A request's bridge kind (an unknown one: SocketCAN, whose names it will not find).
+BridgeKind bridge_kind(uint8_t kind) {
+  return kind == ipc::kBridgeLcm   ? BridgeKind::lcm
+         : kind == ipc::kBridgeDds ? BridgeKind::dds
+                                   : BridgeKind::socketcan;
+}
+
+std::string no_bridge(BridgeKind kind, const std::string& name) {
+  switch (kind) {
+    case BridgeKind::lcm:
+      return fmt::format("no LCM bridge on bus \"{}\"", name);
+    case BridgeKind::dds:
+      return fmt::format("no DDS bridge on bus \"{}\"", name);
+    case BridgeKind::socketcan:
+      break;
+  }
+  return fmt::format("no bridge on interface \"{}\"", name);
+}
 
 template <class T>
 T read_as(const uint8_t* data) {
@@ -177,6 +197,28 @@ void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& s
       error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
       return;
     }
+  } else if (m.kind == ipc::kBridgeDds) {
+    b.kind = "dds";
+    const std::string locator = ipc::name_of(m.url);
+    const auto o =
+        locator.empty() ? std::optional<DdsOptions>(DdsOptions{}) : parse_dds_locator(locator);
+    if (!o) {
+      error(send, request_id, ipc::ErrorCode::bad_argument,
+            fmt::format("\"{}\" is not DOMAIN/PARTITION (a domain id 0..{}, a partition of up "
+                        "to {} printable characters, +ros2 for ROS 2's topics too)",
+                        locator, kMaxDdsDomain, kMaxDdsPartition));
+      return;
+    }
+    b.domain = o->domain;
+    b.partition = o->partition;
+    b.ros2 = o->ros2;
+    b.channel_prefix = ipc::name_of(m.channel_prefix);
+    if (b.channel_prefix.empty()) {
+      b.channel_prefix = default_dds_prefix(b.bus);
+    } else if (auto problem = dds_prefix_problem(b.channel_prefix)) {
+      error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+      return;
+    }
   } else if (m.kind == ipc::kBridgeSocketCan) {
     b.interface = ipc::name_of(m.interface);
     b.error_frames = m.error_frames != 0;
@@ -186,7 +228,7 @@ void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& s
     }
   } else {
     error(send, request_id, ipc::ErrorCode::bad_argument,
-          fmt::format("bridge kind {} is neither SocketCAN (0) nor LCM (1)", m.kind));
+          fmt::format("bridge kind {} is none of SocketCAN (0), LCM (1), DDS (2)", m.kind));
     return;
   }
   if (!sim_.bus_index(b.bus)) {
@@ -371,19 +413,18 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       return;
     case ipc::MsgType::bridge_remove_request: {
       const auto& m = read_as<ipc::BridgeRemoveRequest>(data);
-      const bool lcm = m.kind == ipc::kBridgeLcm;
-      const std::string name = lcm ? ipc::name_of(m.bus) : ipc::name_of(m.interface);
+      const auto kind = bridge_kind(m.kind);
+      const bool by_bus = kind != BridgeKind::socketcan;
+      const std::string name = by_bus ? ipc::name_of(m.bus) : ipc::name_of(m.interface);
       const auto closing = [this](Bridge& b) {
         if (channel_closing) {
           channel_closing(b);
         }
       };
       const bool removed =
-          lcm ? sim_.remove_lcm_bridge(name, closing) : sim_.remove_bridge(name, closing);
+          by_bus ? sim_.remove_bus_bridge(kind, name, closing) : sim_.remove_bridge(name, closing);
       if (!removed) {
-        error(send, request_id, ipc::ErrorCode::bad_argument,
-              lcm ? fmt::format("no LCM bridge on bus \"{}\"", name)
-                  : fmt::format("no bridge on interface \"{}\"", name));
+        error(send, request_id, ipc::ErrorCode::bad_argument, no_bridge(kind, name));
         return;
       }
       send_reply(send, ipc::make_message<ipc::BridgeRemoveReply>(request_id));
@@ -391,13 +432,12 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
     }
     case ipc::MsgType::bridge_restart_request: {
       const auto& m = read_as<ipc::BridgeRestartRequest>(data);
-      const bool lcm = m.kind == ipc::kBridgeLcm;
-      const std::string name = lcm ? ipc::name_of(m.bus) : ipc::name_of(m.interface);
-      Bridge* bridge = sim_.find_bridge(lcm ? BridgeKind::lcm : BridgeKind::socketcan, name);
+      const auto kind = bridge_kind(m.kind);
+      const std::string name =
+          kind != BridgeKind::socketcan ? ipc::name_of(m.bus) : ipc::name_of(m.interface);
+      Bridge* bridge = sim_.find_bridge(kind, name);
       if (bridge == nullptr) {
-        error(send, request_id, ipc::ErrorCode::bad_argument,
-              lcm ? fmt::format("no LCM bridge on bus \"{}\"", name)
-                  : fmt::format("no bridge on interface \"{}\"", name));
+        error(send, request_id, ipc::ErrorCode::bad_argument, no_bridge(kind, name));
         return;
       }
       if (auto problem = bridge->restart()) {

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/daemon/dds_bridge.hpp"
 #include "canemu/daemon/lcm_bridge.hpp"
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
@@ -137,6 +138,39 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
     resolved.channel_prefix = prefix;
     return add_bridge(resolved, std::move(*transport));
   }
+  if (b.kind == "dds") {
+    if (!bus) {
+      return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
+    }
+    if (find_bridge(BridgeKind::dds, b.bus) != nullptr) {
+      return tl::unexpected(fmt::format("{} has a DDS bridge already", b.bus));
+    }
+    DdsOptions o;
+    o.domain = b.domain;
+    o.partition = b.partition.empty() ? std::string(kDefaultDdsPartition) : b.partition;
+    o.topic_prefix = b.channel_prefix.empty() ? default_dds_prefix(b.bus) : b.channel_prefix;
+    o.ros2 = b.ros2;
+    const std::string locator = dds_locator(o);
+    for (const auto& other : bridges_) {
+      if (other->kind() == BridgeKind::dds && other->options().channel_prefix == o.topic_prefix) {
+        const auto theirs = parse_dds_locator(other->options().url);
+        if (theirs && theirs->domain == o.domain && theirs->partition == o.partition) {
+          return tl::unexpected(fmt::format(
+              "the DDS bridge of {} uses the topics {}* in domain {}, partition {} already "
+              "(their frames would loop)",
+              other->options().bus, o.topic_prefix, o.domain, o.partition));
+        }
+      }
+    }
+    auto transport = open_dds(b.bus, o);
+    if (!transport) {
+      return tl::unexpected(transport.error());
+    }
+    BridgeConfig resolved = b;
+    resolved.url = locator;
+    resolved.channel_prefix = o.topic_prefix;
+    return add_bridge(resolved, std::move(*transport));
+  }
   auto port = open_can_raw(b.interface, bus && config_.buses[*bus].kind == BusKind::can_fd);
   if (!port) {
     return tl::unexpected("bridge to " + port.error());
@@ -162,20 +196,23 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(
     return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
   }
   const bool lcm = b.kind == "lcm";
+  const bool dds = b.kind == "dds";
   const BusConfig& bc = config_.buses[*bus];
   if (bc.kind == BusKind::lin) {
     return tl::unexpected(fmt::format("\"{}\" is a LIN bus; {} bridges join CAN buses", b.bus,
-                                      lcm ? "LCM" : "SocketCAN"));
+                                      lcm   ? "LCM"
+                                      : dds ? "DDS"
+                                            : "SocketCAN"));
   }
   const auto timing = bus_timing(*bus);
   if (!timing) {
     return tl::unexpected(fmt::format("no controller runs bus {} at {} bit/s", b.bus, bc.bitrate));
   }
   BridgeOptions o;
-  o.kind = lcm ? BridgeKind::lcm : BridgeKind::socketcan;
+  o.kind = lcm ? BridgeKind::lcm : dds ? BridgeKind::dds : BridgeKind::socketcan;
   o.bus = b.bus;
   o.interface = b.interface;
-  o.error_frames = lcm || b.error_frames;  // LCM: always on ERRORS and STATES
+  o.error_frames = lcm || dds || b.error_frames;  // LCM, DDS: always (errors and states)
   o.restart_ms = b.restart_ms;
   o.fd = bc.kind == BusKind::can_fd;
   o.url = b.url;
@@ -188,7 +225,7 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(
 Bridge* Simulation::find_bridge(BridgeKind kind, const std::string& name) const {
   for (const auto& b : bridges_) {
     if (b->kind() == kind &&
-        (kind == BridgeKind::lcm ? b->options().bus : b->options().interface) == name) {
+        (kind == BridgeKind::socketcan ? b->options().interface : b->options().bus) == name) {
       return b.get();
     }
   }
@@ -201,9 +238,9 @@ bool Simulation::remove_bridge(const std::string& interface,
   return found != nullptr && remove(found, before);
 }
 
-bool Simulation::remove_lcm_bridge(const std::string& bus,
+bool Simulation::remove_bus_bridge(BridgeKind kind, const std::string& bus,
                                    const std::function<void(Bridge&)>& before) {
-  Bridge* found = find_bridge(BridgeKind::lcm, bus);
+  Bridge* found = find_bridge(kind, bus);
   return found != nullptr && remove(found, before);
 }
 

@@ -248,7 +248,9 @@ void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
     e.rejected = st.rejected;
     e.tx_failed = st.tx_failed;
     e.kernel_dropped = st.kernel_dropped;
-    e.kind = b.kind() == BridgeKind::lcm ? ipc::kBridgeLcm : ipc::kBridgeSocketCan;
+    e.kind = b.kind() == BridgeKind::lcm   ? ipc::kBridgeLcm
+             : b.kind() == BridgeKind::dds ? ipc::kBridgeDds
+                                           : ipc::kBridgeSocketCan;
     e.received = st.received;
     ipc::copy_name(e.url, b.options().url);
     ipc::copy_name(e.channel_prefix, b.options().channel_prefix);

@@ -319,8 +319,8 @@ TEST(LcmBridge, OneLcmBridgeABusAndNoTwoOnTheSameChannels) {
   ASSERT_TRUE(sim->add_bridge(lcm_bridge("can1")));
   EXPECT_EQ(sim->bridges().size(), 2u);
   EXPECT_FALSE(sim->remove_bridge("can0"));  // a SocketCAN bridge's interface: none
-  EXPECT_TRUE(sim->remove_lcm_bridge("can0"));
-  EXPECT_FALSE(sim->remove_lcm_bridge("can0"));
+  EXPECT_TRUE(sim->remove_bus_bridge(BridgeKind::lcm, "can0"));
+  EXPECT_FALSE(sim->remove_bus_bridge(BridgeKind::lcm, "can0"));
   EXPECT_EQ(sim->bridges().size(), 1u);
 }
 

@@ -1,5 +1,7 @@
 #include "capture_table.hpp"
 
+#include <algorithm>
+#include <charconv>
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -60,42 +62,28 @@ toml::array recorders_array(const ipc::RecorderListReply& r) {
   return out;
 }
 
-void print_bridges(const ipc::BridgeListReply& r) {
+namespace {
+
+// LCM and DDS bridges (by bus): PUBLISHED frames on FRAMES, EVENTS on ERRORS and STATES,
+// PUB-FAIL what LCM or DDS refused; RECEIVED on TX, SENT of them on the bus, Q-DROP, REJECTED,
+// FAILED as for SocketCAN; WHERE: LCM's URL, DDS's domain/partition.
+void print_bus_bridges(const ipc::BridgeListReply& r, uint8_t kind) {
   const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
-  bool socketcan = false;
-  bool lcm = false;
+  bool any = false;
   for (uint16_t i = 0; i < r.count; ++i) {
-    (r.bridges[i].kind == ipc::kBridgeLcm ? lcm : socketcan) = true;
+    any = any || r.bridges[i].kind == kind;
   }
-  if (socketcan || !lcm) {
-    std::printf("%-12s %-10s %-14s %4s %4s %8s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
-                "INTERFACE", "STATE", "TEC", "REC", "RESTARTS", "TO-IF", "FROM-IF", "ERRORS",
-                "IF-DROP", "K-DROP", "Q-DROP", "REJECTED", "FAILED");
-  }
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::BridgeEntry& e = r.bridges[i];
-    if (e.kind == ipc::kBridgeLcm) {
-      continue;
-    }
-    std::printf(
-        "%-12s %-10s %-14s %4u %4u %8llu %10llu %10llu %7llu %8llu %8llu %8llu %8llu "
-        "%8llu\n",
-        ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(),
-        error_state_name(e.state).c_str(), e.tec, e.rec, n(e.restarts), n(e.to_interface),
-        n(e.from_interface), n(e.error_frames_written), n(e.to_interface_dropped),
-        n(e.kernel_dropped), n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
-  }
-  if (!lcm) {
+  if (!any) {
     return;
   }
-  // LCM bridges: PUBLISHED frames on FRAMES, EVENTS on ERRORS and STATES, PUB-FAIL what LCM
-  // refused; RECEIVED on TX, SENT of them on the bus, Q-DROP, REJECTED, FAILED as above.
+  const bool lcm = kind == ipc::kBridgeLcm;
   std::printf("%-12s %-20s %-14s %4s %4s %8s %10s %8s %8s %10s %10s %8s %8s %8s  %s\n",
-              "LCM-BRIDGE", "CHANNELS", "STATE", "TEC", "REC", "RESTARTS", "PUBLISHED", "EVENTS",
-              "PUB-FAIL", "RECEIVED", "SENT", "Q-DROP", "REJECTED", "FAILED", "URL");
+              lcm ? "LCM-BRIDGE" : "DDS-BRIDGE", lcm ? "CHANNELS" : "TOPICS", "STATE", "TEC", "REC",
+              "RESTARTS", "PUBLISHED", "EVENTS", "PUB-FAIL", "RECEIVED", "SENT", "Q-DROP",
+              "REJECTED", "FAILED", lcm ? "URL" : "DOMAIN/PARTITION");
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::BridgeEntry& e = r.bridges[i];
-    if (e.kind != ipc::kBridgeLcm) {
+    if (e.kind != kind) {
       continue;
     }
     std::printf(
@@ -108,22 +96,80 @@ void print_bridges(const ipc::BridgeListReply& r) {
   }
 }
 
+}  // namespace
+
+void print_bridges(const ipc::BridgeListReply& r) {
+  const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+  bool socketcan = false;
+  bool by_bus = false;
+  for (uint16_t i = 0; i < r.count; ++i) {
+    (r.bridges[i].kind == ipc::kBridgeSocketCan ? socketcan : by_bus) = true;
+  }
+  if (socketcan || !by_bus) {
+    std::printf("%-12s %-10s %-14s %4s %4s %8s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
+                "INTERFACE", "STATE", "TEC", "REC", "RESTARTS", "TO-IF", "FROM-IF", "ERRORS",
+                "IF-DROP", "K-DROP", "Q-DROP", "REJECTED", "FAILED");
+  }
+  for (uint16_t i = 0; i < r.count; ++i) {
+    const ipc::BridgeEntry& e = r.bridges[i];
+    if (e.kind != ipc::kBridgeSocketCan) {
+      continue;
+    }
+    std::printf(
+        "%-12s %-10s %-14s %4u %4u %8llu %10llu %10llu %7llu %8llu %8llu %8llu %8llu "
+        "%8llu\n",
+        ipc::name_of(e.bus).c_str(), ipc::name_of(e.interface).c_str(),
+        error_state_name(e.state).c_str(), e.tec, e.rec, n(e.restarts), n(e.to_interface),
+        n(e.from_interface), n(e.error_frames_written), n(e.to_interface_dropped),
+        n(e.kernel_dropped), n(e.queue_dropped), n(e.rejected), n(e.tx_failed));
+  }
+  print_bus_bridges(r, ipc::kBridgeLcm);
+  print_bus_bridges(r, ipc::kBridgeDds);
+}
+
 toml::array bridges_array(const ipc::BridgeListReply& r) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array out;
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::BridgeEntry& e = r.bridges[i];
-    if (e.kind == ipc::kBridgeLcm) {
+    if (e.kind == ipc::kBridgeLcm || e.kind == ipc::kBridgeDds) {
+      const bool lcm = e.kind == ipc::kBridgeLcm;
       const std::string prefix = ipc::name_of(e.channel_prefix);
-      out.push_back(toml::table{
-          {"kind", "lcm"},
+      toml::table where;
+      if (lcm) {
+        where.insert("url", ipc::name_of(e.url));
+        where.insert("channel_prefix", prefix);
+        where.insert("channels", toml::table{{"frames", prefix + "FRAMES"},
+                                             {"errors", prefix + "ERRORS"},
+                                             {"states", prefix + "STATES"},
+                                             {"tx", prefix + "TX"}});
+      } else {
+        const std::string locator = ipc::name_of(e.url);
+        const auto slash = locator.find('/');
+        const bool ros2 = locator.ends_with("+ros2");
+        const std::string partition =
+            slash == std::string::npos
+                ? std::string()
+                : locator.substr(slash + 1, locator.size() - slash - 1 - (ros2 ? 5 : 0));
+        int64_t domain = -1;  // as the daemon wrote it: DOMAIN/PARTITION[+ros2]
+        std::from_chars(locator.data(), locator.data() + std::min(slash, locator.size()), domain);
+        where.insert("domain", domain);
+        where.insert("partition", partition);
+        where.insert("topic_prefix", prefix);
+        toml::table topics{{"frames", prefix + "frames"},
+                           {"errors", prefix + "errors"},
+                           {"states", prefix + "states"},
+                           {"tx", prefix + "tx"}};
+        if (ros2) {
+          topics.insert("ros2_from_can_bus", "rt/" + ipc::name_of(e.bus) + "/from_can_bus");
+          topics.insert("ros2_to_can_bus", "rt/" + ipc::name_of(e.bus) + "/to_can_bus");
+        }
+        where.insert("ros2", ros2);
+        where.insert("topics", std::move(topics));
+      }
+      toml::table entry{
+          {"kind", lcm ? "lcm" : "dds"},
           {"bus", ipc::name_of(e.bus)},
-          {"url", ipc::name_of(e.url)},
-          {"channel_prefix", prefix},
-          {"channels", toml::table{{"frames", prefix + "FRAMES"},
-                                   {"errors", prefix + "ERRORS"},
-                                   {"states", prefix + "STATES"},
-                                   {"tx", prefix + "TX"}}},
           {"restart_ms", i64(e.restart_ms)},
           {"restarts", i64(e.restarts)},
           {"state", error_state_name(e.state)},
@@ -138,7 +184,11 @@ toml::array bridges_array(const ipc::BridgeListReply& r) {
           {"queue_dropped", i64(e.queue_dropped)},
           {"rejected", i64(e.rejected)},
           {"tx_failed", i64(e.tx_failed)},
-          {"dropped", i64(e.to_interface_dropped + e.queue_dropped + e.rejected + e.tx_failed)}});
+          {"dropped", i64(e.to_interface_dropped + e.queue_dropped + e.rejected + e.tx_failed)}};
+      for (auto&& [key, value] : where) {
+        entry.insert(key, value);
+      }
+      out.push_back(std::move(entry));
       continue;
     }
     out.push_back(toml::table{{"kind", "socketcan"},

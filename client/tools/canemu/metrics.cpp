@@ -59,7 +59,7 @@ std::string bus_of(const ipc::StatusReply& s, const ipc::StatusNode& n) {
 }
 
 // Recorders and bridges: what they wrote and every frame they lost (docs/socketcan.md,
-// docs/bridges.md). An LCM bridge's "interface" is lcm:PREFIX.
+// docs/bridges.md). An LCM bridge's "interface" is lcm:PREFIX, a DDS bridge's dds:PREFIX.
 void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
                      const ipc::BridgeListReply& bridges) {
   const auto recorder_label = [&](const ipc::RecorderEntry& r) {
@@ -78,9 +78,10 @@ void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
   }
   const auto bridge_label = [&](const ipc::BridgeEntry& b, std::string_view key,
                                 std::string_view value) {
-    const std::string interface = b.kind == ipc::kBridgeLcm
-                                      ? "lcm:" + ipc::name_of(b.channel_prefix)
-                                      : ipc::name_of(b.interface);
+    const std::string interface =
+        b.kind == ipc::kBridgeLcm   ? "lcm:" + ipc::name_of(b.channel_prefix)
+        : b.kind == ipc::kBridgeDds ? "dds:" + ipc::name_of(b.channel_prefix)
+                                    : ipc::name_of(b.interface);
     return fmt::format("bus=\"{}\",interface=\"{}\",{}=\"{}\"", label(ipc::name_of(b.bus)),
                        label(interface), key, value);
   };

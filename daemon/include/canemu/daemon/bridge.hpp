@@ -31,7 +31,7 @@
 
 namespace canemu::daemon {
 
-enum class BridgeKind : uint8_t { socketcan = 0, lcm = 1 };
+enum class BridgeKind : uint8_t { socketcan = 0, lcm = 1, dds = 2 };
 
 // The counters' names are the SocketCAN bridge's; "interface" is whatever the transport
 // reaches (for LCM: its channels).
@@ -58,8 +58,8 @@ struct BridgeOptions {
   uint32_t queue_frames = 1024;  // frames from outside waiting for the bus
   uint32_t restart_ms = 0;       // restart after bus-off after this long; 0: stay bus-off
   BridgeKind kind = BridgeKind::socketcan;
-  std::string url;             // LCM: the provider URL
-  std::string channel_prefix;  // LCM: the channels' common prefix
+  std::string url;             // LCM: the provider URL; DDS: domain/partition (dds_locator)
+  std::string channel_prefix;  // LCM: the channels' common prefix; DDS: the topics' common prefix
 };
 
 class Bridge;

@@ -117,16 +117,20 @@ struct RecorderConfig {
 };
 
 // [[bridge]]: a bus joined to a Linux CAN interface (kind "socketcan", docs/socketcan.md) or to
-// LCM channels (kind "lcm", docs/bridges.md).
+// LCM channels (kind "lcm") or DDS topics (kind "dds", docs/bridges.md).
 struct BridgeConfig {
-  std::string kind = "socketcan";  // "socketcan" or "lcm"
+  std::string kind = "socketcan";  // "socketcan", "lcm" or "dds"
   std::string bus;
   std::string interface;      // socketcan: vcan0, vxcan1, can0, ...
   bool error_frames = false;  // socketcan: the bridge node's errors and states as CAN_ERR_* frames
   uint32_t restart_ms = 0;    // restart the node this long after bus-off; 0: it stays bus-off
   uint32_t line = 0;
   std::string url{};             // lcm: the provider URL (default kDefaultLcmUrl)
-  std::string channel_prefix{};  // lcm: the channels' prefix (default CANEMU_<BUS>_)
+  std::string channel_prefix{};  // lcm: the channels' prefix (default CANEMU_<BUS>_); dds: the
+                                 // topics' prefix (topic_prefix, default canemu/<bus>/)
+  uint32_t domain = 0;           // dds: the DDS domain id
+  std::string partition{};       // dds: the partition of canemu's topics (default "canemu")
+  bool ros2 = false;             // dds: ROS 2's can_msgs/msg/Frame topics too
 };
 
 struct Config {

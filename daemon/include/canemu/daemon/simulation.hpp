@@ -129,12 +129,13 @@ class Simulation {
   // Writes what the recorders hold; one line for each recorder that began to lose frames.
   std::vector<std::string> flush_recorders();
 
-  // ---- bridges ([[bridge]] at start, canemu bridge add|remove at run time): SocketCAN and LCM
+  // ---- bridges ([[bridge]] at start, canemu bridge add|remove at run time): SocketCAN, LCM and
+  // DDS
   const std::vector<std::unique_ptr<Bridge>>& bridges() const { return bridges_; }
   // A SocketCAN bridge of `b.bus` to `b.interface` over `port` (the interface's socket, or in
   // tests a stand-in); the error says why not (no such bus, a LIN bus, the interface bridged
   // already, no controller for the bus's rate). add_bridge() opens the CAN_RAW socket itself,
-  // or for kind "lcm" the LCM instance.
+  // or for kind "lcm" the LCM instance, for "dds" the DDS participant and topics.
   tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b, ipc::UniqueFd port);
   tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b);
   // A bridge of `b.bus` over `transport` (b.kind says which kind it is).
@@ -143,9 +144,10 @@ class Simulation {
   // Removes the SocketCAN bridge of `interface` (its node leaves the bus); false if there is
   // none. `before` sees it first (the server stops watching its socket).
   bool remove_bridge(const std::string& interface, const std::function<void(Bridge&)>& before = {});
-  // Removes the LCM bridge of bus `bus`, as remove_bridge().
-  bool remove_lcm_bridge(const std::string& bus, const std::function<void(Bridge&)>& before = {});
-  // The SocketCAN bridge of `interface`, or the LCM bridge of bus `bus`; nullptr if none.
+  // Removes the LCM or DDS bridge (`kind`) of bus `bus`, as remove_bridge().
+  bool remove_bus_bridge(BridgeKind kind, const std::string& bus,
+                         const std::function<void(Bridge&)>& before = {});
+  // The SocketCAN bridge of `interface`, or the LCM or DDS bridge of bus `bus`; nullptr if none.
   Bridge* find_bridge(BridgeKind kind, const std::string& name) const;
 
  private:

@@ -48,9 +48,12 @@ inline constexpr std::size_t kLcmPrefixSize = 64;
 // BridgeAddRequest.kind and the others
 inline constexpr uint8_t kBridgeSocketCan = 0;
 inline constexpr uint8_t kBridgeLcm = 1;
+inline constexpr uint8_t kBridgeDds = 2;
 
 // Joins bus `bus` to the Linux CAN interface `interface` (a SocketCAN bridge), or to the LCM
-// channels `channel_prefix`* on `url` (an LCM bridge; empty: the defaults).
+// channels `channel_prefix`* on `url` (an LCM bridge; empty: the defaults), or to the DDS topics
+// `channel_prefix`* at `url` = "DOMAIN/PARTITION", "+ros2" appended for ROS 2's topics too (a DDS
+// bridge; empty: the defaults).
 struct BridgeAddRequest {
   MsgHeader header;
   char bus[kNameSize] = {};

@@ -21,7 +21,7 @@ import pytest
 import canemu
 from canemu import ixxat_shim
 from canemu.testing import Daemon
-from conftest import CANEMUD, drain, fault_load, frames
+from conftest import CANEMUD, REPO, drain, fault_load, frames
 
 US = 1_000
 MS = 1_000_000
@@ -155,19 +155,42 @@ def test_receive_standard_and_extended(ixxat, other):
     # The ixxat node's time stamps (libvcinpl's 1 µs ticks) are as far apart as the
     # sender's ends of transmission: the second frame's length on the wire plus intermission.
     assert us(second.timestamp - first.timestamp) == us(echoes[1].timestamp - echoes[0].timestamp)
+    # The ticks count from the adapter's epoch, simulated time 0 here: python-can 4.1 gives
+    # them as seconds, the instants the sender's echoes carry. python-can 4.6 adds an offset
+    # it computes at the start (meant as the wall-clock instant of the start; its arithmetic
+    # gives about 1.5 times that), which only shifts them.
+    offset = getattr(ixxat.bus, "_timeoffset", 0.0)
+    assert us(first.timestamp - offset) == us(echoes[0].timestamp)
+    assert us(second.timestamp - offset) == us(echoes[1].timestamp)
     assert ixxat.recv(0) is None
 
 
 def send_periodic(bus, msg, period, duration=None):
-    """bus.send_periodic, the ixxat backend's cyclic list. python-can 4.1's IXXATBus never
-    runs BusABC.__init__ (python-can issue #1285, fixed in 4.2.2), so its send_periodic fails
-    before reaching the backend; there the test checks that and goes to the backend's bus
-    object, whose send_periodic is the same cyclic-list code."""
+    """bus.send_periodic: the backend's cyclic list. On python-can 4.1 the backend's own bus
+    object's (see test_send_periodic_of_python_can_4_1)."""
     if VERSION >= (4, 2):
         return bus.send_periodic(msg, period, duration)
-    with pytest.raises(AttributeError, match="_periodic_tasks"):
-        bus.send_periodic(msg, period, duration)
     return bus.bus.send_periodic(msg, period, duration)
+
+
+def test_send_periodic_of_python_can_4_1(ixxat, other):
+    """python-can 4.1's IXXATBus never runs BusABC.__init__ (python-can issue #1285, fixed
+    in 4.2.2): its send_periodic starts the backend's cyclic entry, then fails on the missing
+    task list, so the entry runs without a task to stop it (shutdown() ends it). Its backend
+    bus object (`bus.bus`) has the list and works; later versions keep the task."""
+    msg = can.Message(arbitration_id=0x0C0, data=[0xC0], is_extended_id=False)
+    if VERSION >= (4, 2):
+        task = ixxat.send_periodic(msg, 0.010)
+        assert ixxat._periodic_tasks == [task]
+        task.stop()
+        assert ixxat._periodic_tasks == []
+        canemu.step(30 * MS)
+        assert drain(other) == []
+        return
+    with pytest.raises(AttributeError, match="_periodic_tasks"):
+        ixxat.send_periodic(msg, 0.010)
+    canemu.step(30 * MS)
+    assert [us(m.timestamp) for m in drain(other)] == [10_110, 20_110]
 
 
 def test_send_periodic_uses_the_cyclic_list(ixxat, other):
@@ -247,11 +270,60 @@ def test_bus_off(daemon, ixxat, other):
     canemu.step(50 * MS)  # python-can never restarts the controller: it stays bus-off
     assert controller_state(ixxat)[0] == canemu.ControllerState.BUS_OFF
     assert frames(drain(other)) == []  # the other node saw the 32 bit errors, no frame
-    if "raise BusState.ERROR" in inspect.getsource(vcinpl.IXXATBus.state.fget):
-        # python-can 4.1 raises the enum member instead of returning it.
-        with pytest.raises(TypeError, match="exceptions must derive from BaseException"):
-            ixxat.state
-    else:
-        assert ixxat.state == can.BusState.ERROR
+    assert ixxat.state == can.BusState.ERROR
     with pytest.raises(vcinpl.VCIError, match="Error warning limit exceeded"):
         ixxat.recv(0)
+
+
+def low_speed_default_config() -> str:
+    """The default configuration with can1 made a fault-tolerant low-speed bus at 125 kbit/s
+    (the only change): the line_error fault needs a low-speed transceiver."""
+    text = (REPO / "config" / "default.toml").read_text()
+    can1 = 'name = "can1"\nkind = "can"\nbitrate = 500000\n'
+    assert can1 in text
+    text = text.replace(can1, 'name = "can1"\nkind = "can"\nbitrate = 125000\n'
+                        'transceiver = "low-speed"\n')
+    return text.replace('time = "realtime"', 'time = "stepped"')
+
+
+@pytest.fixture
+def low_speed_daemon():
+    d = Daemon(low_speed_default_config(), canemud=str(CANEMUD))
+    ixxat_shim.install()
+    yield d
+    d.stop()
+
+
+def test_bus_coupling_error(low_speed_daemon):
+    """A wire fault at ixxat0:1's low-speed transceiver: CAN_STATUS_BUSCERR in the line
+    status while it lasts. python-can 4.6 reports ERROR; python-can 4.1 raises the enum member
+    instead of returning it (`raise BusState.ERROR`: a TypeError), the one path where its
+    state differs."""
+    d = low_speed_daemon
+    vcinpl = backend()
+    bus = can.Bus(interface="ixxat", channel=1, bitrate=125000)
+    try:
+        assert bus.state == can.BusState.ACTIVE
+        done = fault_load(
+            d,
+            """
+[[fault]]
+at = "1ms"
+until = "10ms"
+node = "ixxat0:1"
+effect = "line_error"
+""",
+        )
+        assert done.returncode == 0, done.stderr
+        canemu.step(2 * MS)
+        if "raise BusState.ERROR" in inspect.getsource(vcinpl.IXXATBus.state.fget):
+            with pytest.raises(TypeError, match="exceptions must derive from BaseException"):
+                bus.state
+        else:
+            assert bus.state == can.BusState.ERROR
+        with pytest.raises(vcinpl.VCIError, match="Bus coupling error"):
+            bus.recv(0)
+        canemu.step(10 * MS)  # the wire is back at 10 ms
+        assert bus.state == can.BusState.ACTIVE
+    finally:
+        bus.shutdown()

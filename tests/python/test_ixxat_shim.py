@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import ctypes
 import inspect
+import json
+import os
 import re
+import subprocess
 import sys
 
 import can
@@ -21,7 +24,7 @@ import pytest
 import canemu
 from canemu import ixxat_shim
 from canemu.testing import Daemon
-from conftest import CANEMUD, REPO, drain, fault_load, frames
+from conftest import CANEMU_CLI, CANEMUD, REPO, drain, fault_load, frames
 
 US = 1_000
 MS = 1_000_000
@@ -107,6 +110,30 @@ def test_install_loads_libvcinpl_into_the_unmodified_backend(daemon):
         ]
     else:
         assert configs == []  # python-can 4.1's ixxat backend has no detection
+
+
+def clients(daemon) -> list:
+    """This process's connections to `daemon`, as `canemu status` lists them."""
+    status = json.loads(
+        subprocess.run(
+            [str(CANEMU_CLI), "--socket", daemon.socket, "status", "--json"],
+            capture_output=True, text=True, timeout=30, check=True,
+        ).stdout
+    )
+    return [(c["name"], c["channels"]) for c in status["client_list"] if c["pid"] == os.getpid()]
+
+
+def test_libvcinpl_goes_to_canemus_daemon_with_the_first_ixxat_bus(daemon):
+    """libvcinpl.so has a connection of its own (libvcinpl2.so's is canemu's interface's):
+    it is made when the backend opens its first bus on the canemud of canemu.connect(), not
+    before, so that a process without ixxat buses has none."""
+    before = clients(daemon)
+    assert len(before) == 1 and before[0][1] == 0
+    bus = can.Bus(interface="ixxat", channel=0, bitrate=500000)
+    try:
+        assert clients(daemon) == before + [(before[0][0], 1)]  # the bus's channel
+    finally:
+        bus.shutdown()
 
 
 def test_send_standard_and_extended(ixxat, other):

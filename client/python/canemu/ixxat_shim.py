@@ -57,6 +57,7 @@ _lock = threading.Lock()
 _paths: dict = {}  # Windows name -> the path of canemu's library loaded for it
 _own: dict = {}  # Windows name -> this module's own CDLL of that library (canemuConnect)
 _socket: Optional[str] = None  # the socket libvcinpl.so was pointed at (None: its own search)
+_wanted: Optional[str] = None  # the socket it is to talk to from its next enumeration on
 
 
 def _find(filename: str) -> str:
@@ -100,7 +101,19 @@ def _library_class(base):
             if restype in (ctypes.c_long, ctypes.c_ulong):
                 restype = ctypes.c_uint32  # HRESULT, read unsigned like python-can's constants
             argtypes = tuple(_narrow(t) for t in argtypes)
-            return super().map_symbol(func_name, restype, argtypes, errcheck)
+            func = super().map_symbol(func_name, restype, argtypes, errcheck)
+            if func_name != "vciEnumDeviceOpen" or self._name != _paths.get("vcinpl.dll"):
+                return func
+
+            # Every bus (and hardware-id listing) of the backend starts by enumerating: the
+            # moment libvcinpl.so goes over to the canemud canemu.connect() chose last.
+            def enum_open(*args):
+                _follow()
+                return func(*args)
+
+            enum_open._name = func_name
+            setattr(self, func_name, enum_open)
+            return enum_open
 
     return CanemuVciLibrary
 
@@ -112,19 +125,25 @@ def installed() -> bool:
 
 
 def use_socket(socket: Optional[str]) -> None:
-    """Points libvcinpl.so at the canemud at `socket` (None: $CANEMU_SOCKET or the default
-    path), unless it talks to that one already: a reconnection drops the handles it holds.
-    canemu.connect() calls it once the shim is installed; libvcinpl2.so is canemu's own library
-    and follows canemu.connect() by itself."""
+    """Makes libvcinpl.so talk to the canemud at `socket` (None: $CANEMU_SOCKET or the default
+    path) from the backend's next bus on: canemu.connect() calls it once the shim is installed
+    (libvcinpl2.so is canemu's own library and follows canemu.connect() by itself). The switch
+    waits for that bus, so that a process that opens no ixxat bus keeps no connection of
+    libvcinpl.so; it drops the ixxat handles still open on the previous canemud."""
+    global _wanted
+    with _lock:
+        _wanted = socket
+
+
+def _follow() -> None:
     global _socket
     with _lock:
-        lib = _own.get("vcinpl.dll")
-        if lib is None or socket == _socket:
+        if _wanted == _socket:
             return
-        hr = lib.canemuConnect(socket.encode() if socket else None)
+        hr = _own["vcinpl.dll"].canemuConnect(_wanted.encode() if _wanted else None)
         if hr != _vci.VCI_OK:
-            raise OSError(f"libvcinpl.so: canemud does not answer at {socket} (0x{hr:08X})")
-        _socket = socket
+            raise OSError(f"libvcinpl.so: canemud does not answer at {_wanted} (0x{hr:08X})")
+        _socket = _wanted
 
 
 def library_path(dll: str = "vcinpl.dll") -> Optional[str]:

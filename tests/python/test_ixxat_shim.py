@@ -26,7 +26,6 @@ from canemu import ixxat_shim
 from canemu.testing import Daemon
 from conftest import CANEMU_CLI, CANEMUD, REPO, drain, fault_load, frames
 
-US = 1_000
 MS = 1_000_000
 VERSION = tuple(int(x) for x in can.__version__.split(".")[:2])
 
@@ -93,10 +92,11 @@ def test_install_loads_libvcinpl_into_the_unmodified_backend(daemon):
     assert vcinpl._canlib.canControlStart.restype is ctypes.c_uint32
     assert vcinpl._canlib.canControlStart.argtypes[1] is ctypes.c_int32
     assert vcinpl2._canlib.canControlStart.restype is ctypes.c_uint32
+    assert vcinpl2._canlib.canControlStart.argtypes[1] is ctypes.c_int32
     ixxat_shim.install()  # again: nothing changes
     assert backend()._canlib is vcinpl._canlib
     # An error comes back as python-can's exception with libvcinpl's text for the code.
-    with pytest.raises(vcinpl.VCIError, match=r"function vciDeviceClose failed \(.+\)"):
+    with pytest.raises(vcinpl.VCIError, match=r"^function vciDeviceClose failed \(invalid handle\)$"):
         vcinpl._canlib.vciDeviceClose(vcinpl.HANDLE(0x1234))
     hwids = vcinpl.get_ixxat_hwids()
     assert len(hwids) == 1 and re.fullmatch(r"HW\d{6}", hwids[0])
@@ -195,18 +195,19 @@ def test_receive_standard_and_extended(ixxat, other):
 def send_periodic(bus, msg, period, duration=None):
     """bus.send_periodic: the backend's cyclic list. On python-can 4.1 the backend's own bus
     object's (see test_send_periodic_of_python_can_4_1)."""
-    if VERSION >= (4, 2):
+    if hasattr(bus, "_periodic_tasks"):
         return bus.send_periodic(msg, period, duration)
     return bus.bus.send_periodic(msg, period, duration)
 
 
 def test_send_periodic_of_python_can_4_1(ixxat, other):
     """python-can 4.1's IXXATBus never runs BusABC.__init__ (python-can issue #1285, fixed
-    in 4.2.2): its send_periodic starts the backend's cyclic entry, then fails on the missing
+    later; 4.6 has the fix): its send_periodic starts the backend's cyclic entry, then fails on the missing
     task list, so the entry runs without a task to stop it (shutdown() ends it). Its backend
     bus object (`bus.bus`) has the list and works; later versions keep the task."""
     msg = can.Message(arbitration_id=0x0C0, data=[0xC0], is_extended_id=False)
-    if VERSION >= (4, 2):
+    assert hasattr(ixxat, "_periodic_tasks") == (VERSION >= (4, 6))
+    if VERSION >= (4, 6):
         task = ixxat.send_periodic(msg, 0.010)
         assert ixxat._periodic_tasks == [task]
         task.stop()

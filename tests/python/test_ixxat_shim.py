@@ -96,7 +96,8 @@ def test_install_loads_libvcinpl_into_the_unmodified_backend(daemon):
     ixxat_shim.install()  # again: nothing changes
     assert backend()._canlib is vcinpl._canlib
     # An error comes back as python-can's exception with libvcinpl's text for the code.
-    with pytest.raises(vcinpl.VCIError, match=r"^function vciDeviceClose failed \(invalid handle\)$"):
+    text = r"^function vciDeviceClose failed \(invalid handle\)$"
+    with pytest.raises(vcinpl.VCIError, match=text):
         vcinpl._canlib.vciDeviceClose(vcinpl.HANDLE(0x1234))
     hwids = vcinpl.get_ixxat_hwids()
     assert len(hwids) == 1 and re.fullmatch(r"HW\d{6}", hwids[0])
@@ -202,9 +203,9 @@ def send_periodic(bus, msg, period, duration=None):
 
 def test_send_periodic_of_python_can_4_1(ixxat, other):
     """python-can 4.1's IXXATBus never runs BusABC.__init__ (python-can issue #1285, fixed
-    later; 4.6 has the fix): its send_periodic starts the backend's cyclic entry, then fails on the missing
-    task list, so the entry runs without a task to stop it (shutdown() ends it). Its backend
-    bus object (`bus.bus`) has the list and works; later versions keep the task."""
+    later; 4.6 has the fix): its send_periodic starts the backend's cyclic entry, then fails
+    on the missing task list, so the entry runs without a task to stop it (shutdown() ends
+    it). Its backend bus object (`bus.bus`) has the list and works; 4.6 keeps the task."""
     msg = can.Message(arbitration_id=0x0C0, data=[0xC0], is_extended_id=False)
     assert hasattr(ixxat, "_periodic_tasks") == (VERSION >= (4, 6))
     if VERSION >= (4, 6):

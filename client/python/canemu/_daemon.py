@@ -4,6 +4,7 @@ its buses and adapters."""
 from __future__ import annotations
 
 import ctypes
+import sys
 import threading
 import time
 from typing import Any, Dict, Iterator, List, Optional, Tuple
@@ -40,6 +41,9 @@ def connect(socket: Optional[str]) -> None:
     with _vci_errors(initializing=True):
         _call("canemuConnect", socket.encode() if socket else None)
     _socket = socket  # libxcan follows when an X-CAN-2i is next asked for (_xcan.use_socket)
+    shim = sys.modules.get("canemu.ixxat_shim")
+    if shim is not None:  # python-can's ixxat interface on libvcinpl.so follows at once
+        shim.use_socket(socket)
 
 
 def current_socket() -> Optional[str]:

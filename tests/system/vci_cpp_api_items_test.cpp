@@ -9,6 +9,9 @@
 #include <string>
 #include <vector>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "vci_cpp_test_support.hpp"
@@ -1685,6 +1688,104 @@ TEST(VciCppItems, Item131_ARemovedEntryIsEmptyAndItsIndexRefused) {
   EXPECT_EQ(list->StartMessage(1, 0), VCI_E_INVALID_INDEX);
   EXPECT_EQ(list->StopMessage(1), VCI_E_INVALID_INDEX);
   EXPECT_EQ(list->RemMessage(1), VCI_E_INVALID_INDEX);
+}
+
+// 90: a v2 channel with SRRA gets the other channels' srr frames through its own filter, srr
+// cleared.
+TEST(VciCppItems, Item90_SrraEchoesPassTheChannelsFilter) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  Ref<ICanSocket2> socket2;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
+  Ref<ICanChannel2> srra;
+  ASSERT_EQ(socket2->CreateChannel(FALSE, srra.out()), VCI_OK);
+  ASSERT_EQ(srra->Initialize(64, 0, 16, CAN_FILTER_INCL | CAN_FILTER_SRRA), VCI_OK);
+  ASSERT_EQ(srra->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE), VCI_OK);
+  ASSERT_EQ(srra->AddFilterIds(CAN_FILTER_STD, 0x321 << 1, 0xFFF), VCI_OK);
+  Ref<IFifoReader> reader;
+  ASSERT_EQ(srra->GetReader(reader.out()), VCI_OK);
+  ASSERT_EQ(srra->Activate(), VCI_OK);
+  for (UINT32 id : {0x321u, 0x322u}) {
+    CANMSG m = one_byte(id, 1);
+    m.uMsgInfo.Bits.srr = 1;
+    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  }
+  step_ns(2'000'000);
+  const auto got = drain2(reader.p);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x321u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.srr, 0u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
+  EXPECT_EQ(got[0].dwTime, end_of(0x321, {1}));
+  EXPECT_EQ(ids_of(drain(alpha.reader.p, true)), (std::vector<UINT32>{0x321, 0x322}));  // v1
+}
+
+// 100: a 29-bit identifier with the full mask 0x3FFFFFFF selects one (identifier, RTR) pair:
+// not the remote frame of that identifier, not its neighbour.
+TEST(VciCppItems, Item100_AFullMaskSelectsOneIdentifierAndRtrPair) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
+  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_EXT, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
+            VCI_OK);
+  ASSERT_EQ(alpha.control->AddFilterIds(CAN_FILTER_EXT, 0x1234567 << 1, 0x3FFFFFFF), VCI_OK);
+  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
+  drain(alpha.reader.p, false);
+  CANMSG data = one_byte(0x1234567, 1);
+  data.uMsgInfo.Bits.ext = 1;
+  CANMSG remote = data;
+  remote.uMsgInfo.Bits.rtr = 1;
+  CANMSG next = data;
+  next.dwMsgId = 0x1234568;
+  for (CANMSG* m : {&remote, &next, &data}) {
+    ASSERT_EQ(beta.writer->PutDataEntry(m), VCI_OK);
+  }
+  step_ns(2'000'000);
+  const auto got = drain(alpha.reader.p, true);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x1234567u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.rtr, 0u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
+}
+
+// 121: while one program holds a controller's cyclic list, another program's open is refused.
+TEST(VciCppItems, Item121_AnotherProgramCannotOpenAHeldScheduler) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Ref<ICanScheduler> list;
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    if (canemuConnect(d.daemon.socket().c_str()) != VCI_OK) {
+      ::_exit(10);
+    }
+    IVciDeviceManager* manager = nullptr;
+    IVciDevice* device = nullptr;
+    IBalObject* bal = nullptr;
+    VCIID id{};
+    id.AsInt64 = 1;
+    if (VciGetDeviceManager(&manager) != VCI_OK || manager->OpenDevice(id, &device) != VCI_OK ||
+        device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, reinterpret_cast<PVOID*>(&bal)) !=
+            VCI_OK) {
+      ::_exit(11);
+    }
+    PVOID other = &other;
+    if (bal->OpenSocket(0, IID_ICanScheduler, &other) != VCI_E_ACCESSDENIED || other != nullptr) {
+      ::_exit(12);
+    }
+    other = &other;
+    if (bal->OpenSocket(0, IID_ICanScheduler2, &other) != VCI_E_ACCESSDENIED) {
+      ::_exit(13);
+    }
+    ::_exit(0);
+  }
+  int status = -1;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
 }  // namespace

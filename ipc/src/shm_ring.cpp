@@ -198,12 +198,18 @@ bool RingEvent::wait(int timeout_ms) const {
   if (flag->exchange(0, std::memory_order_acq_rel) != 0) {
     return true;
   }
+  sleepers->fetch_add(1, std::memory_order_seq_cst);
+  // Leaving: the waiting flag stays set while other threads of this process sleep on it.
+  const auto leave = [this](bool signalled) {
+    const bool others = sleepers->fetch_sub(1, std::memory_order_seq_cst) > 1;
+    waiting->store(others ? 1 : 0, std::memory_order_seq_cst);
+    return signalled;
+  };
   const int64_t start_ms = monotonic_ns() / 1'000'000;
   while (true) {
     waiting->store(1, std::memory_order_seq_cst);
     if (flag->exchange(0, std::memory_order_seq_cst) != 0) {
-      waiting->store(0, std::memory_order_seq_cst);
-      return true;
+      return leave(true);
     }
     int left = -1;
     if (timeout_ms >= 0) {
@@ -214,13 +220,13 @@ bool RingEvent::wait(int timeout_ms) const {
     const int r = ::poll(&p, 1, left);
     uint64_t count;
     [[maybe_unused]] const ssize_t n = ::read(eventfd, &count, sizeof count);
-    waiting->store(0, std::memory_order_seq_cst);
     if (flag->exchange(0, std::memory_order_acq_rel) != 0) {
-      return true;
+      return leave(true);
     }
-    // A wake-up left over from a signal already consumed: wait on, unless time is up.
+    // A wake-up left over from a signal already consumed (here, or by another thread of this
+    // process): wait on, unless time is up.
     if ((r == 0 && left >= 0) || (r < 0 && errno != EINTR) || left == 0) {
-      return false;
+      return leave(false);
     }
   }
 }

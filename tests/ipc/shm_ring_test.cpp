@@ -5,6 +5,7 @@
 #include <atomic>
 
 #include <cstring>
+#include <thread>
 
 #include <csignal>
 
@@ -205,6 +206,27 @@ TEST(ShmRing, ReaderEventFiresOnWritesThatReachTheThresholdOnly) {
   EXPECT_FALSE(p.reader.wait(0));
   p.reader.set_threshold(100000);
   EXPECT_EQ(p.reader.threshold(), p.memory.capacity());  // clamped
+}
+
+// Two threads of one program wait on the same event (a reader thread blocked in WaitRxEvent,
+// another polling it with timeout 0): the poll ending must not take the sleeper's wake-up away.
+TEST(ShmRing, AWaitWithTimeoutZeroLeavesAnotherThreadsWaitArmed) {
+  auto p = make(32);
+  std::atomic<int> sleeper_result{-1};
+  std::thread sleeper([&] { sleeper_result = p.reader.wait(10'000) ? 1 : 0; });
+  // Until the sleeper armed the event (its waiting flag is in the ring's header), at most 10 s.
+  std::atomic<uint32_t>& waiting = p.memory.header()->reader_waiting;
+  for (int i = 0; i < 10'000'000 && waiting.load() == 0; ++i) {
+    std::this_thread::yield();
+  }
+  ASSERT_EQ(waiting.load(), 1u);
+  EXPECT_FALSE(p.reader.wait(0));  // nothing yet
+  EXPECT_EQ(waiting.load(), 1u);   // still armed for the sleeper
+  const Element e = element(1);
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+  sleeper.join();
+  EXPECT_EQ(sleeper_result.load(), 1);  // woken by the put, not by its 10 s timeout
+  EXPECT_EQ(waiting.load(), 0u);
 }
 
 TEST(ShmRing, WriterEventFiresWhenReadsFreeEnoughSpace) {

@@ -19,6 +19,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -94,6 +95,10 @@ struct RingEvent {
   std::atomic<uint32_t>* flag = nullptr;
   std::atomic<uint32_t>* waiting = nullptr;
   int eventfd = -1;
+  // Threads of this process inside wait() on this event (shared by copies of it): while one
+  // sleeps, the shared waiting flag stays set, so another thread's wait() ending (a poll with
+  // timeout 0, or the signal it took) never leaves a sleeper without its wake-up.
+  std::shared_ptr<std::atomic<uint32_t>> sleepers = std::make_shared<std::atomic<uint32_t>>(0);
 
   // Sets the flag and, if the other side armed (waiting), writes the eventfd once and
   // disarms it.

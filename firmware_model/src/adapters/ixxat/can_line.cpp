@@ -40,10 +40,11 @@ CANMSG2 data_message(const Frame& frame, uint32_t time) {
   return m;
 }
 
-uint8_t error_code(CanErrorType t) {
-  switch (t) {
+uint8_t error_code(const BusErrorEvent& e) {
+  switch (e.type) {
     case CanErrorType::bit:
-      return CAN_ERROR_BIT;
+      // A bit error at the data bit rate of an FD frame (docs/vci.md): the fast data bit error.
+      return e.data_phase ? CAN_ERROR_FDB : CAN_ERROR_BIT;
     case CanErrorType::stuff:
       return CAN_ERROR_STUFF;
     case CanErrorType::form:
@@ -560,7 +561,7 @@ void CanLine::bus_error(const BusErrorEvent& event) {
     status |= CAN_STATUS_BUSOFF;
   }
   CANMSG2 m = event_message(CAN_MSGTYPE_ERROR, ticks(event.at), CAN_MSGID_ERROR, 2);
-  m.abData[0] = error_code(event.type);
+  m.abData[0] = error_code(event);
   m.abData[1] = static_cast<UINT8>(status & 0xFF);
   // Beyond the dlc, a canemu addition the manuals are silent on: the counters after the error
   // (REC, TEC; 255 stands for more), from which a program can tell the error-passive limit.

@@ -9,6 +9,7 @@
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
 #include "vci_test_support.hpp"
 #include "vcinpl2.h"
 
@@ -159,6 +160,85 @@ TEST(VciBehaviour, ABitErrorInTheFastDataPhaseIsAFastDataBitError) {
   ASSERT_EQ(second.size(), 1u);
   EXPECT_EQ(second[0].abData[0], CAN_ERROR_BIT);
   EXPECT_EQ(second[0].dwTime, 2000u + (enc2.brs_index + 1u) * 2u);
+}
+
+// ---------------------------------------------------------------- CAN_OPMODE_AUTOBAUD
+
+// epsilon starts with CAN_OPMODE_AUTOBAUD (timing fields garbage) on a bus where gamma sends ten
+// frames back to back at 250 kbit/s and delta acknowledges them. epsilon tries 1000, 800 and
+// 500 kbit/s on the first three (an error each, nothing disturbed), decodes the fourth with
+// 250 kbit/s and locks in at its end: it receives the fourth to the tenth with their exact time
+// stamps, then sends at 250 kbit/s itself.
+TEST(VciBehaviour, AnAutobaudLineFindsTheRateOfTheTrafficAndReceivesFromThen) {
+  VciDaemon d(kAdapters);
+  constexpr CANBTP kGarbage{0, 300000, 1, 0, 0, 0};
+  Line epsilon("epsilon", kMode | CAN_OPMODE_AUTOBAUD, CAN_EXMODE_DISABLED, kGarbage, CANBTP{});
+  CANCAPABILITIES2 caps{};
+  ASSERT_EQ(canControlGetCaps(epsilon.control, &caps), VCI_OK);
+  EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_AUTOBAUD, static_cast<UINT32>(CAN_FEATURE_AUTOBAUD));
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.bOpMode, kMode | CAN_OPMODE_AUTOBAUD);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));  // listening
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 0u);                                 // no rate yet
+  Line delta("delta", kMode, CAN_EXMODE_DISABLED, k250k, CANBTP{});
+  Line gamma("gamma", kMode, CAN_EXMODE_DISABLED, k250k, CANBTP{});
+  const std::vector<uint8_t> two{0x11, 0x22};
+  for (int k = 0; k < 10; ++k) {
+    gamma.post(msg(0x123, two));
+  }
+  // Frame k starts at k x (L + 3) bits of 4 us (L from SOF to the end of EOF, 3 of
+  // intermission) and is delivered at the end of its EOF.
+  const int64_t bits =
+      model::frame_duration(model::encode(*model::Frame::classic(0x123, two, false)),
+                            model::sja1000::timing_from_btr(CAN_BT0_250KB, CAN_BT1_250KB))
+          .ns() /
+      4000;
+  auto received_us = [&](int64_t k) { return static_cast<UINT32>((k * (bits + 3) + bits) * 4); };
+  step_ns(uint64_t{received_us(3)} * 1000 - 1000);
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  step_ns(1000);
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, 0u);  // locked in
+  EXPECT_EQ(s.bOpMode, kMode | CAN_OPMODE_AUTOBAUD);
+  EXPECT_EQ(s.sBtpSdr.dwMode, static_cast<UINT32>(CAN_BTMODE_RAW));  // 250 kbit/s, raw
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 2u);  // 2 periods of the 8 MHz clock a quantum
+  EXPECT_EQ(s.sBtpSdr.wTS1, 13u);
+  EXPECT_EQ(s.sBtpSdr.wTS2, 2u);
+  step_ns(10'000'000);
+  const auto got = epsilon.drain(CAN_MSGTYPE_DATA);
+  ASSERT_EQ(got.size(), 7u);
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].dwMsgId, 0x123u);
+    EXPECT_EQ(got[k].dwTime, received_us(3 + static_cast<int64_t>(k))) << k;
+  }
+  EXPECT_EQ(delta.drain(CAN_MSGTYPE_ERROR).size(), 0u);  // nobody saw an error flag
+  EXPECT_EQ(gamma.drain(CAN_MSGTYPE_ERROR).size(), 0u);
+  EXPECT_EQ(epsilon.drain(CAN_MSGTYPE_ERROR).size(), 0u);
+  // It sends at 250 kbit/s now: delta receives it.
+  epsilon.post(msg(0x321, {5}));
+  step_ns(1'000'000);
+  const auto heard = delta.drain(CAN_MSGTYPE_DATA);
+  ASSERT_FALSE(heard.empty());
+  EXPECT_EQ(heard.back().dwMsgId, 0x321u);
+}
+
+// On a silent bus it stays listening: ININIT, no timing, and a posted frame stays unsent.
+TEST(VciBehaviour, AnAutobaudLineOnASilentBusKeepsListening) {
+  VciDaemon d(kAdapters);
+  Line epsilon("epsilon", kMode | CAN_OPMODE_AUTOBAUD, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  Line delta("delta", kMode, CAN_EXMODE_DISABLED, k250k, CANBTP{});
+  epsilon.post(msg(0x321, {5}));
+  step_ns(500'000'000);
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 0u);
+  EXPECT_TRUE(delta.drain(CAN_MSGTYPE_DATA).empty());
+  CANCHANSTATUS2 cs{};
+  ASSERT_EQ(canChannelGetStatus(epsilon.channel, &cs), VCI_OK);
+  EXPECT_EQ(cs.sLineStatus.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
 }
 
 }  // namespace

@@ -27,8 +27,9 @@ TEST(VciCanLine, CapabilitiesReportTheEmulatedClocksAndFeatures) {
   EXPECT_EQ(c.wCtrlType, CAN_CTRL_SJA1000);
   EXPECT_EQ(c.wBusCoupling, CAN_BUSC_HIGHSPEED);
   // STDANDEXT RMTFRAME ERRFRAME BUSLOAD IDFILTER LISTONLY SCHEDULER DELAYEDTX SINGLESHOT
-  // HIGHPRIOR: 0x2 + 0x4 + 0x8 + 0x10 + 0x20 + 0x40 + 0x80 + 0x200 + 0x400 + 0x800.
-  EXPECT_EQ(c.dwFeatures, 0xEFEu);
+  // HIGHPRIOR AUTOBAUD: 0x2 + 0x4 + 0x8 + 0x10 + 0x20 + 0x40 + 0x80 + 0x200 + 0x400 + 0x800 +
+  // 0x1000.
+  EXPECT_EQ(c.dwFeatures, 0x1EFEu);
   EXPECT_EQ(c.dwClockFreq, 1'000'000u);
   EXPECT_EQ(c.dwTscDivisor, 1u);
   EXPECT_EQ(c.dwCmsDivisor, 1000u);
@@ -36,7 +37,7 @@ TEST(VciCanLine, CapabilitiesReportTheEmulatedClocksAndFeatures) {
   EXPECT_EQ(c.dwDtxDivisor, 1u);
   EXPECT_EQ(c.dwDtxMaxTicks, 0xFFFFu);
   const CANCAPABILITIES2 c2 = r.line.capabilities2();
-  EXPECT_EQ(c2.dwFeatures, 0xEFEu);
+  EXPECT_EQ(c2.dwFeatures, 0x1EFEu);
   EXPECT_EQ(c2.dwCanClkFreq, 8'000'000u);
   EXPECT_EQ(c2.sSdrRangeMax.dwBPS, 64u);
   EXPECT_EQ(c2.sSdrRangeMax.wTS1, 16u);

@@ -321,16 +321,10 @@ HRESULT CanLine::stop_line() {
     return VCI_OK;
   }
   detector_.cancel();  // still looking for its rate: it looks again from the next start
-  const bool loaded_not_started = loaded_ && !node_.frame_on_wire();
+  // A frame in the controller that has not started is taken back (kept for the next start);
+  // the controller's reset mode aborts its request, also one it held through bus-off.
   release_loaded(true);
   node_.go_offline();
-  if (loaded_not_started && staged_ && !loaded_ && node_.controller().pending_tx() != nullptr) {
-    // The controller kept its request through reset mode (the SJA1000 in bus-off holds it and
-    // sends it after recovery): the frame is still in the controller, it must not be loaded a
-    // second time.
-    loaded_ = staged_;
-    staged_.reset();
-  }
   state_ = LineState::offline;
   send_info(CAN_INFO_STOP, 0);
   update_status(scheduler_.now());

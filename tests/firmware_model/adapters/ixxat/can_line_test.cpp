@@ -489,9 +489,14 @@ TEST(VciCanLine, ThirtyTwoBitErrorsTakeTheLineBusOffUntilItIsStartedAgain) {
   // Still bus-off much later: the firmware does not restart by itself.
   r.b.run_until(200 * kMs);
   EXPECT_EQ(r.line.controller_state().state, ErrorState::bus_off);
-  // Stop and start: recovery takes 128 x 11 recessive bits on the idle bus, then the frame goes.
+  // Stop: reset mode aborts the controller's request; the firmware keeps the frame for the
+  // next start, so nothing is pending in the controller while the line is offline.
   p.rx.clear();
   ASSERT_EQ(r.line.stop_line(), VCI_OK);
+  EXPECT_EQ(r.node.controller().pending_tx(), nullptr);
+  EXPECT_EQ(r.line.line_status().dwStatus,
+            static_cast<uint32_t>(CAN_STATUS_ININIT | CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF));
+  // Start: recovery takes 128 x 11 recessive bits on the idle bus, then the frame goes, once.
   ASSERT_EQ(r.line.start_line(), VCI_OK);
   const int64_t recovered = 200 * kMs + 128 * 11 * kBit;
   r.b.run_until(recovered - 1);

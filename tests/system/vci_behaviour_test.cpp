@@ -241,5 +241,35 @@ TEST(VciBehaviour, AnAutobaudLineOnASilentBusKeepsListening) {
   EXPECT_EQ(cs.sLineStatus.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
 }
 
+// ---------------------------------------------------------------- listen-only
+
+// A listen-only line never sends: what a program posts is taken from the transmit FIFO and
+// dropped, so the line status never shows TXPEND and the FIFO does not fill. It still receives.
+TEST(VciBehaviour, AListenOnlyLineDropsWhatItIsGivenAndNeverShowsTxpend) {
+  VciDaemon d(kAdapters);
+  Line gamma("gamma", kMode | CAN_OPMODE_LISTONLY, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  Line delta("delta", kMode, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  Line epsilon("epsilon", kMode, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  for (uint32_t id : {0x100u, 0x101u, 0x102u}) {
+    gamma.post(msg(id, {1}));
+  }
+  step_ns(5'000'000);
+  CANCHANSTATUS2 cs{};
+  ASSERT_EQ(canChannelGetStatus(gamma.channel, &cs), VCI_OK);
+  EXPECT_EQ(cs.sLineStatus.dwStatus, 0u);  // online, nothing pending
+  EXPECT_EQ(cs.bTxFifoLoad, 0u);
+  EXPECT_EQ(gamma.line_status(), 0u);
+  EXPECT_TRUE(delta.drain(CAN_MSGTYPE_DATA).empty());
+  EXPECT_TRUE(epsilon.drain(CAN_MSGTYPE_DATA).empty());
+  // It receives delta's frame (acknowledged by epsilon): 62 bits of 2 us after it was posted.
+  delta.post(msg(0x123, {0x11, 0x22}));
+  step_ns(1'000'000);
+  const auto got = gamma.drain(CAN_MSGTYPE_DATA);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x123u);
+  EXPECT_EQ(got[0].dwTime, 5000u + 62 * 2);
+  EXPECT_EQ(gamma.line_status(), 0u);
+}
+
 }  // namespace
 }  // namespace canemu

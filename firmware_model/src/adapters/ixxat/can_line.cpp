@@ -449,6 +449,9 @@ std::optional<TxFrame> CanLine::to_frame(const CANMSG2& msg) const {
   if (b.type != CAN_MSGTYPE_DATA) {
     return std::nullopt;
   }
+  if ((init_.op_mode & CAN_OPMODE_LISTONLY) != 0) {
+    return std::nullopt;  // a listen-only line never sends: rejected (docs/vci.md)
+  }
   const bool ext = b.ext != 0;
   if ((init_.op_mode & (ext ? CAN_OPMODE_EXTENDED : CAN_OPMODE_STANDARD)) == 0) {
     return std::nullopt;

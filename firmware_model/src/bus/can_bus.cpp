@@ -546,6 +546,7 @@ void CanBus::apply(SimTime now, const ErrorPhase::Action& a, const std::optional
       ev.field = a.field;
       ev.destuffed_bit = a.destuffed_bit;
       ev.extended_frame = a.extended;
+      ev.data_phase = a.data_phase;
       ev.tec = fc.tec();
       ev.rec = fc.rec();
       n.controller->on_error(ev);

@@ -182,6 +182,7 @@ void ErrorPhase::detect(std::size_t k, uint32_t i, CanErrorType type, bool count
       .destuffed_bit =
           inside ? seen->destuffed_index(static_cast<uint16_t>(i)) : static_cast<uint16_t>(i),
       .extended = seen != nullptr && seen->field_begin(Field::srr) < seen->length,
+      .data_phase = inside && seen->brs && i > seen->brs_index && i < seen->crc_delimiter_index,
   });
 }
 

@@ -23,6 +23,10 @@ void BitrateDetector::start(std::vector<HostedNodeSettings> entries, SimDuration
   try_entry(0);
 }
 
+void BitrateDetector::start_endless(std::vector<HostedNodeSettings> entries) {
+  start(std::move(entries), SimDuration{});
+}
+
 void BitrateDetector::cancel() {
   if (running_) {
     finish(VCI_E_ABORT, 0);
@@ -39,9 +43,13 @@ void BitrateDetector::bus_error() {
 }
 
 void BitrateDetector::try_entry(std::size_t i) {
+  const bool endless = running_->per_entry.ns() == 0;
   if (i >= running_->entries.size()) {
-    finish(VCI_E_TIMEOUT, 0);
-    return;
+    if (!endless) {
+      finish(VCI_E_TIMEOUT, 0);
+      return;
+    }
+    i = 0;
   }
   running_->current = i;
   running_->moving_on = false;
@@ -49,8 +57,11 @@ void BitrateDetector::try_entry(std::size_t i) {
   node_.go_online();
   if (event_ != 0) {
     scheduler_.cancel(event_);
+    event_ = 0;
   }
-  event_ = scheduler_.schedule_at(scheduler_.now() + running_->per_entry, *this, 0);
+  if (!endless) {
+    event_ = scheduler_.schedule_at(scheduler_.now() + running_->per_entry, *this, 0);
+  }
 }
 
 void BitrateDetector::next_entry() {

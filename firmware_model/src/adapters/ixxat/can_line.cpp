@@ -40,10 +40,11 @@ CANMSG2 data_message(const Frame& frame, uint32_t time) {
   return m;
 }
 
-uint8_t error_code(CanErrorType t) {
-  switch (t) {
+uint8_t error_code(const BusErrorEvent& e) {
+  switch (e.type) {
     case CanErrorType::bit:
-      return CAN_ERROR_BIT;
+      // A bit error at the data bit rate of an FD frame (docs/vci.md): the fast data bit error.
+      return e.data_phase ? CAN_ERROR_FDB : CAN_ERROR_BIT;
     case CanErrorType::stuff:
       return CAN_ERROR_STUFF;
     case CanErrorType::form:
@@ -102,8 +103,8 @@ uint32_t CanLine::status_flags() const {
   if (error_state_ == ErrorState::bus_off) {
     s |= CAN_STATUS_BUSOFF;
   }
-  if (state_ != LineState::online) {
-    s |= CAN_STATUS_ININIT;
+  if (state_ != LineState::online || autobaud_detecting_) {
+    s |= CAN_STATUS_ININIT;  // not online, or still looking for its rate (CAN_OPMODE_AUTOBAUD)
   }
   if (bus_coupling_error_) {
     s |= CAN_STATUS_BUSCERR;
@@ -120,8 +121,10 @@ CANLINESTATUS CanLine::line_status() const {
   CANLINESTATUS s{};
   if (state_ != LineState::not_initialized || configured_) {
     s.bOpMode = init_.op_mode;
-    s.bBtReg0 = settings_.btr0;
-    s.bBtReg1 = settings_.btr1;
+    if (!autobaud_pending_) {
+      s.bBtReg0 = settings_.btr0;
+      s.bBtReg1 = settings_.btr1;
+    }
   }
   s.bBusLoad = bus_load();
   s.dwStatus = status_flags();
@@ -133,7 +136,9 @@ CANLINESTATUS2 CanLine::line_status2() const {
   if (state_ != LineState::not_initialized || configured_) {
     s.bOpMode = init_.op_mode;
     s.bExMode = init_.ex_mode;
-    if (init_.v2) {
+    if (autobaud_pending_) {
+      // No rate yet: the timing fields stay zero.
+    } else if (init_.v2) {
       s.sBtpSdr = init_.sdr;
       s.sBtpFdr = init_.fdr;
     } else if (!fd_controller()) {
@@ -185,6 +190,8 @@ void CanLine::release_if_unused() {
   state_ = LineState::not_initialized;
   configured_ = false;
   init_ = LineInit{};
+  autobaud_pending_ = false;
+  autobaud_table_.clear();
   controller_overrun_ = false;
   error_state_ = ErrorState::active;
   reported_status_ = bus_coupling_error_ ? CAN_STATUS_BUSCERR : 0;  // the transceiver's own
@@ -227,16 +234,27 @@ void CanLine::count_dropped(const Loaded& l) {
 }
 
 HRESULT CanLine::init_line(const LineInit& init) {
-  if (detector_.running()) {
-    return VCI_E_BUSY;
+  if (detector_.running() && !autobaud_detecting_) {
+    return VCI_E_BUSY;  // DetectBaud runs
   }
   const auto settings = line_settings(init, fd_controller(), low_speed_);
   if (!settings) {
     return settings.error();
   }
+  detector_.cancel();  // an online line still looking for its rate stops looking
   release_loaded(false);
   init_ = init;
   settings_ = *settings;
+  autobaud_pending_ = (init.op_mode & CAN_OPMODE_AUTOBAUD) != 0;
+  autobaud_table_.clear();
+  if (autobaud_pending_) {
+    // The timing fields are ignored (and shown as zero until the rate is found).
+    init_.btr0 = 0;
+    init_.btr1 = 0;
+    init_.sdr = CANBTP{};
+    init_.fdr = CANBTP{};
+    autobaud_table_ = autobaud_candidates(init, fd_controller());
+  }
   configured_ = true;
   node_.configure(settings_, this, [this] { return next_tx(); });
   state_ = LineState::offline;
@@ -263,14 +281,14 @@ HRESULT CanLine::reset_line() {
 }
 
 HRESULT CanLine::start_line() {
+  if (state_ == LineState::online) {
+    return VCI_OK;
+  }
   if (detector_.running()) {
     return VCI_E_BUSY;
   }
   if (state_ == LineState::not_initialized) {
     return VCI_E_INVALID_STATE;
-  }
-  if (state_ == LineState::online) {
-    return VCI_OK;
   }
   state_ = LineState::online;
   // The first frame after the start is not delayed (docs/vci.md, delayed transmission): no
@@ -280,25 +298,33 @@ HRESULT CanLine::start_line() {
     staged_not_before_ = scheduler_.now();
   }
   send_info(CAN_INFO_START, ticks(scheduler_.now()));
-  node_.go_online();
+  if (autobaud_pending_) {
+    start_autobaud();
+  } else {
+    node_.go_online();
+  }
   update_status(scheduler_.now());
   return VCI_OK;
+}
+
+void CanLine::start_autobaud() {
+  std::vector<HostedNodeSettings> settings;
+  for (const LineInit& c : autobaud_table_) {
+    settings.push_back(*line_settings(c, fd_controller(), low_speed_));
+  }
+  autobaud_detecting_ = true;
+  detector_.start_endless(std::move(settings));
 }
 
 HRESULT CanLine::stop_line() {
   if (state_ != LineState::online) {
     return VCI_OK;
   }
-  const bool loaded_not_started = loaded_ && !node_.frame_on_wire();
+  detector_.cancel();  // still looking for its rate: it looks again from the next start
+  // A frame in the controller that has not started is taken back (kept for the next start);
+  // the controller's reset mode aborts its request, also one it held through bus-off.
   release_loaded(true);
   node_.go_offline();
-  if (loaded_not_started && staged_ && !loaded_ && node_.controller().pending_tx() != nullptr) {
-    // The controller kept its request through reset mode (the SJA1000 in bus-off holds it and
-    // sends it after recovery): the frame is still in the controller, it must not be loaded a
-    // second time.
-    loaded_ = staged_;
-    staged_.reset();
-  }
   state_ = LineState::offline;
   send_info(CAN_INFO_STOP, 0);
   update_status(scheduler_.now());
@@ -423,6 +449,9 @@ std::optional<TxFrame> CanLine::to_frame(const CANMSG2& msg) const {
   if (b.type != CAN_MSGTYPE_DATA) {
     return std::nullopt;
   }
+  if ((init_.op_mode & CAN_OPMODE_LISTONLY) != 0) {
+    return std::nullopt;  // a listen-only line never sends: rejected (docs/vci.md)
+  }
   const bool ext = b.ext != 0;
   if ((init_.op_mode & (ext ? CAN_OPMODE_EXTENDED : CAN_OPMODE_STANDARD)) == 0) {
     return std::nullopt;
@@ -501,7 +530,11 @@ std::optional<TxFrame> CanLine::next_tx() {
 void CanLine::frame_received(SimTime at, const Frame& frame, bool own) {
   if (detector_.running()) {
     detector_.frame_received();
-    return;
+    if (!autobaud_detecting_) {
+      return;
+    }
+    // CAN_OPMODE_AUTOBAUD: the frame that shows the rate was received whole with it, and is
+    // delivered like every frame after it.
   }
   if (own || state_ != LineState::online) {
     return;
@@ -560,7 +593,7 @@ void CanLine::bus_error(const BusErrorEvent& event) {
     status |= CAN_STATUS_BUSOFF;
   }
   CANMSG2 m = event_message(CAN_MSGTYPE_ERROR, ticks(event.at), CAN_MSGID_ERROR, 2);
-  m.abData[0] = error_code(event.type);
+  m.abData[0] = error_code(event);
   m.abData[1] = static_cast<UINT8>(status & 0xFF);
   // Beyond the dlc, a canemu addition the manuals are silent on: the counters after the error
   // (REC, TEC; 255 stands for more), from which a program can tell the error-passive limit.
@@ -610,8 +643,27 @@ HRESULT CanLine::start_detection(const std::vector<LineInit>& entries, SimDurati
 }
 
 void CanLine::detection_ended() {
+  if (autobaud_detecting_) {
+    autobaud_detecting_ = false;
+    const Detection r = detector_.result();
+    if (r.hr != VCI_OK) {
+      return;  // cancelled: stop, reset or InitLine, which leave the line as they do
+    }
+    // Lock-in: the line takes the rate found and runs from this instant in its own modes.
+    const LineInit& found = autobaud_table_[r.index];
+    settings_ = *line_settings(found, fd_controller(), low_speed_);
+    init_.btr0 = found.btr0;
+    init_.btr1 = found.btr1;
+    init_.sdr = found.sdr;
+    autobaud_pending_ = false;
+    node_.configure(settings_, this, [this] { return next_tx(); });
+    node_.go_online();
+    update_status(scheduler_.now());
+    return;
+  }
   state_ = LineState::not_initialized;
   configured_ = false;
+  autobaud_pending_ = false;
   error_state_ = ErrorState::active;
 }
 

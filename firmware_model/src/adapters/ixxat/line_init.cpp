@@ -6,8 +6,28 @@ namespace canemu::model::ixxat {
 
 namespace {
 
-constexpr uint8_t kKnownOpModes =
-    CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME | CAN_OPMODE_LISTONLY;
+constexpr uint8_t kKnownOpModes = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME |
+                                  CAN_OPMODE_LISTONLY | CAN_OPMODE_AUTOBAUD;
+
+// The rates CAN_OPMODE_AUTOBAUD tries, fastest first (CiA 301's): the SJA1000's bus timing
+// registers, and the CAN FD controller's nominal timing in bit/s form (80 MHz: 16 quanta with the
+// sample point at 87.5 %, 800 kbit/s 20 quanta at 85 %).
+struct AutobaudRate {
+  uint8_t btr0;
+  uint8_t btr1;
+  CANBTP fd;
+};
+constexpr AutobaudRate kAutobaudRates[] = {
+    {CAN_BT0_1000KB, CAN_BT1_1000KB, {0, 1'000'000, 14, 2, 1, 0}},
+    {CAN_BT0_800KB, CAN_BT1_800KB, {0, 800'000, 17, 3, 1, 0}},
+    {CAN_BT0_500KB, CAN_BT1_500KB, {0, 500'000, 14, 2, 1, 0}},
+    {CAN_BT0_250KB, CAN_BT1_250KB, {0, 250'000, 14, 2, 1, 0}},
+    {CAN_BT0_125KB, CAN_BT1_125KB, {0, 125'000, 14, 2, 1, 0}},
+    {CAN_BT0_100KB, CAN_BT1_100KB, {0, 100'000, 14, 2, 1, 0}},
+    {CAN_BT0_50KB, CAN_BT1_50KB, {0, 50'000, 14, 2, 1, 0}},
+    {CAN_BT0_20KB, CAN_BT1_20KB, {0, 20'000, 14, 2, 1, 0}},
+    {CAN_BT0_10KB, CAN_BT1_10KB, {0, 10'000, 14, 2, 1, 0}},
+};
 
 Btp to_btp(const CANBTP& b) {
   return Btp{b.dwMode, b.dwBPS, b.wTS1, b.wTS2, b.wSJW, b.wTDO};
@@ -17,7 +37,7 @@ uint32_t features(bool fd) {
   uint32_t f = CAN_FEATURE_STDANDEXT | CAN_FEATURE_RMTFRAME | CAN_FEATURE_ERRFRAME |
                CAN_FEATURE_BUSLOAD | CAN_FEATURE_IDFILTER | CAN_FEATURE_LISTONLY |
                CAN_FEATURE_SCHEDULER | CAN_FEATURE_DELAYEDTX | CAN_FEATURE_SINGLESHOT |
-               CAN_FEATURE_HIGHPRIOR;
+               CAN_FEATURE_HIGHPRIOR | CAN_FEATURE_AUTOBAUD;
   if (fd) {
     f |= CAN_FEATURE_EXTDATA | CAN_FEATURE_FASTDATA | CAN_FEATURE_ISOFRAME;
   }
@@ -37,14 +57,47 @@ CANBTP to_canbtp(const Btp& b) {
 
 }  // namespace
 
+std::vector<LineInit> autobaud_candidates(const LineInit& init, bool fd_controller) {
+  std::vector<LineInit> out;
+  for (const AutobaudRate& r : kAutobaudRates) {
+    LineInit c = init;
+    c.op_mode = static_cast<uint8_t>(init.op_mode & ~CAN_OPMODE_AUTOBAUD);
+    c.btr0 = 0;
+    c.btr1 = 0;
+    c.sdr = CANBTP{};
+    c.fdr = CANBTP{};
+    if (!init.v2) {
+      c.btr0 = r.btr0;
+      c.btr1 = r.btr1;
+    } else if (fd_controller) {
+      c.sdr = r.fd;
+    } else {
+      c.sdr = btp_of_btr(r.btr0, r.btr1);
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
 tl::expected<HostedNodeSettings, HRESULT> line_settings(const LineInit& init, bool fd_controller,
                                                         bool low_speed) {
   const auto invalid = tl::unexpected(VCI_E_INVALIDARG);
   HostedNodeSettings s;
   const uint8_t known_op = kKnownOpModes | (low_speed ? CAN_OPMODE_LOWSPEED : 0);
   if ((init.op_mode & ~known_op) != 0) {
-    // Hardware bit-rate detection is not emulated; low speed needs a low-speed bus.
-    return invalid;
+    return invalid;  // low speed needs a low-speed bus
+  }
+  if ((init.op_mode & CAN_OPMODE_AUTOBAUD) != 0) {
+    // The timing fields are ignored: the controller starts with the first rate it will try.
+    // The data-phase rate cannot be told from the traffic's arbitration phase: no FASTDATA.
+    if (init.v2 && (init.ex_mode & CAN_EXMODE_FASTDATA) != 0) {
+      return invalid;
+    }
+    if (init.v2 && (!valid_filter_mode(init.sf_mode) || !valid_filter_mode(init.ef_mode))) {
+      return invalid;
+    }
+    return line_settings(autobaud_candidates(init, fd_controller).front(), fd_controller,
+                         low_speed);
   }
   const bool fd = fd_controller;
   s.listen_only = (init.op_mode & CAN_OPMODE_LISTONLY) != 0;

@@ -157,8 +157,11 @@ void Sja1000::write(uint8_t address, uint8_t value) {
         mod_ = static_cast<uint8_t>((value & (MOD_LOM | MOD_STM | MOD_AFM | MOD_SM)) | MOD_RM);
         if (!(value & MOD_RM)) {
           leave_reset();
-        } else if (bus_ != nullptr) {
-          bus_->controller_changed(node_);
+        } else {
+          // The host's reset request. The chip may be in reset mode by itself (bus-off sets RM
+          // and keeps the request for after recovery); the host's request aborts it all the
+          // same: reset mode as entered from operating mode.
+          enter_reset();
         }
       } else if (value & MOD_RM) {
         enter_reset();
@@ -433,7 +436,8 @@ void Sja1000::on_state_change(SimTime at, ErrorState state) {
   if (state == ErrorState::bus_off) {
     // Bus-off puts the chip in reset mode; the host restarts it by clearing RM.
     mod_ |= MOD_RM;
-    // A request stays in the transmit buffer and goes out after recovery.
+    // A request stays in the transmit buffer and goes out after recovery, unless the host
+    // requests reset mode meanwhile (write()).
     if (bus_ != nullptr) {
       bus_->controller_changed(node_);
     }

@@ -7,6 +7,7 @@
 
 #include "adapters/ixxat/line_rig.hpp"
 #include "canemu/firmware_model/adapters/ixxat/bitrate_detector.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
 
 namespace canemu::model {
 namespace {
@@ -91,6 +92,134 @@ TEST(VciCanLine, DetectionIsRefusedOnlineAndEndedByResetLine) {
   EXPECT_EQ(r.line.detection().hr, VCI_E_ABORT);
   r.b.run_until(50 * kMs);
   EXPECT_EQ(r.line.detection().hr, VCI_E_ABORT);  // no timer of the cancelled run fires
+}
+
+// ---------------------------------------------------------------- CAN_OPMODE_AUTOBAUD
+
+constexpr int64_t k250kBit = 4'000;  // ns
+
+ixxat::LineInit autobaud_init(uint8_t op_mode = kOpAll) {
+  ixxat::LineInit init = v1_init(op_mode | CAN_OPMODE_AUTOBAUD);
+  init.btr0 = 0xFF;  // ignored
+  init.btr1 = 0xFF;
+  return init;
+}
+
+// Back-to-back frames at 250 kbit/s from t = 0. The line tries 1000, 800 and 500 kbit/s on the
+// first three (each sees an error in its frame and gives way at once) and decodes the fourth
+// with 250 kbit/s: it locks in at the instant the fourth frame is received (the end of its
+// EOF: the engine delivers a frame at its end), delivers that frame and every later one with exact
+// time stamps, and from then on is an ordinary line at 250 kbit/s: it acknowledges and sends.
+TEST(VciCanLine, AutobaudLocksInOnTheFirstFrameThatDecodesAndRunsAtThatRate) {
+  Rig r;
+  Port p;
+  ASSERT_EQ(r.line.open_control(), VCI_OK);
+  ASSERT_EQ(r.line.init_line(autobaud_init()), VCI_OK);
+  CANLINESTATUS s = r.line.line_status();
+  EXPECT_EQ(s.bOpMode, kOpAll | CAN_OPMODE_AUTOBAUD);
+  EXPECT_EQ(s.bBtReg0, 0u);  // no rate yet
+  EXPECT_EQ(s.bBtReg1, 0u);
+  r.channel(p);
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  EXPECT_EQ(r.line.state(), ixxat::LineState::online);
+  EXPECT_FALSE(r.line.autobaud_rate_known());
+  EXPECT_EQ(r.line.status_flags(), static_cast<uint32_t>(CAN_STATUS_ININIT));
+  EXPECT_TRUE(r.node.controller().listen_only());
+  Traffic250k traffic(r.b, 10);
+  // Frame k (from 0) starts at k x (L + 3) bits and is received at the end of its EOF: L bits
+  // from SOF to the end of EOF, 3 of intermission.
+  const int64_t bits =
+      frame_duration(encode(k123), sja1000::timing_from_btr(0x01, 0x1C)).ns() / k250kBit;
+  auto received_at = [&](int64_t k) { return (k * (bits + 3) + bits) * k250kBit; };
+  r.b.run_until(received_at(3) - 1);
+  EXPECT_FALSE(r.line.autobaud_rate_known());
+  EXPECT_TRUE(p.data().empty());
+  r.b.run_until(received_at(3));
+  EXPECT_TRUE(r.line.autobaud_rate_known());
+  EXPECT_EQ(r.line.status_flags(), 0u);
+  s = r.line.line_status();
+  EXPECT_EQ(s.bOpMode, kOpAll | CAN_OPMODE_AUTOBAUD);
+  EXPECT_EQ(s.bBtReg0, CAN_BT0_250KB);
+  EXPECT_EQ(s.bBtReg1, CAN_BT1_250KB);
+  EXPECT_FALSE(r.node.controller().listen_only());
+  r.b.run_until(10 * kMs);
+  const auto got = p.data();
+  ASSERT_EQ(got.size(), 7u);  // the fourth frame to the tenth
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].dwMsgId, 0x123u);
+    EXPECT_EQ(got[k].dwTime, static_cast<uint32_t>(received_at(3 + k) / kUs)) << k;
+    EXPECT_EQ(int64_t{got[k].dwTime} * kUs, traffic.acker.log.received[3 + k].at) << k;
+  }
+  // No ERROR messages for the three frames it could not decode, and nobody saw an error flag.
+  EXPECT_TRUE(p.of_type(CAN_MSGTYPE_ERROR).empty());
+  EXPECT_EQ(r.b.bus.stats(traffic.sender.node.node()).errors_as_transmitter.total(), 0u);
+  // Now it sends at 250 kbit/s.
+  r.send(p, msg(0x321, {5}));
+  r.b.run_until(20 * kMs);
+  ASSERT_EQ(traffic.acker.log.received.size(), 11u);
+  EXPECT_EQ(traffic.acker.log.received.back().frame.id(), 0x321u);
+  EXPECT_EQ(r.b.bus.stats(r.node.node()).frames_sent, 1u);
+}
+
+// On a silent bus an AUTOBAUD line listens with its current rate for as long as the bus stays
+// silent: CAN_STATUS_ININIT, no timing in its status, frames posted wait in the FIFO. Traffic
+// that starts later is detected then; the posted frame goes out after the lock-in.
+TEST(VciCanLine, AutobaudOnASilentBusKeepsListeningUntilTrafficComes) {
+  Rig r;
+  Port p;
+  ASSERT_EQ(r.line.open_control(), VCI_OK);
+  ASSERT_EQ(r.line.init_line(autobaud_init()), VCI_OK);
+  r.channel(p);
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  r.send(p, msg(0x321, {5}));
+  r.b.run_until(1'000 * kMs);
+  EXPECT_FALSE(r.line.autobaud_rate_known());
+  EXPECT_EQ(r.line.status_flags(), static_cast<uint32_t>(CAN_STATUS_ININIT));
+  EXPECT_EQ(r.line.line_status().bBtReg0, 0u);
+  EXPECT_EQ(r.b.bus.stats(r.node.node()).frames_sent, 0u);
+  EXPECT_EQ(p.tx.size(), 1u);  // still in the FIFO
+  Traffic250k traffic(r.b, 4);
+  const int64_t bits =
+      frame_duration(encode(k123), sja1000::timing_from_btr(0x01, 0x1C)).ns() / k250kBit;
+  const int64_t lock_in = 1'000 * kMs + (3 * (bits + 3) + bits) * k250kBit;
+  r.b.run_until(lock_in);
+  EXPECT_TRUE(r.line.autobaud_rate_known());
+  ASSERT_EQ(p.data().size(), 1u);
+  EXPECT_EQ(p.data()[0].dwTime, static_cast<uint32_t>(lock_in / kUs));
+  r.b.run_until(1'100 * kMs);
+  ASSERT_EQ(traffic.acker.log.received.size(), 5u);
+  EXPECT_EQ(traffic.acker.log.received.back().frame.id(), 0x321u);
+  EXPECT_TRUE(p.tx.empty());
+}
+
+// Stopping an AUTOBAUD line before it found its rate stops the listening; the next start listens
+// again from the first rate. ResetLine leaves it not initialized; InitLine while it listens
+// (online) is allowed and replaces the mode.
+TEST(VciCanLine, AutobaudListeningEndsWithStopResetAndInit) {
+  Rig r;
+  Port p;
+  ASSERT_EQ(r.line.open_control(), VCI_OK);
+  ASSERT_EQ(r.line.init_line(autobaud_init()), VCI_OK);
+  r.channel(p);
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  r.b.run_until(1 * kMs);
+  ASSERT_EQ(r.line.stop_line(), VCI_OK);
+  EXPECT_EQ(r.line.state(), ixxat::LineState::offline);
+  EXPECT_FALSE(r.node.running());
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  EXPECT_TRUE(r.node.running());
+  EXPECT_TRUE(r.node.controller().listen_only());
+  EXPECT_EQ(r.line.status_flags(), static_cast<uint32_t>(CAN_STATUS_ININIT));
+  ASSERT_EQ(r.line.reset_line(), VCI_OK);
+  EXPECT_EQ(r.line.state(), ixxat::LineState::not_initialized);
+  EXPECT_EQ(r.line.start_line(), VCI_E_INVALID_STATE);
+  ASSERT_EQ(r.line.init_line(autobaud_init()), VCI_OK);
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  ASSERT_EQ(r.line.init_line(v1_init()), VCI_OK);  // a fixed rate instead
+  EXPECT_TRUE(r.line.autobaud_rate_known());
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  EXPECT_EQ(r.line.status_flags(), 0u);
+  EXPECT_FALSE(r.node.controller().listen_only());
 }
 
 // ---------------------------------------------------------------- the detector on its own

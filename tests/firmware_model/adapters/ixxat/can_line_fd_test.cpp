@@ -85,7 +85,7 @@ TEST(VciCanLine, AnFdLineInitializedThroughV2ReportsItsTimingAndCapabilities) {
   EXPECT_EQ(s.dwStatus, static_cast<uint32_t>(CAN_STATUS_ININIT));
   const CANCAPABILITIES2 c = r.line.capabilities2();
   EXPECT_EQ(c.wCtrlType, CAN_CTRL_IFICFD);
-  EXPECT_EQ(c.dwFeatures, 0xEEFEu);  // the classic set + EXTDATA, FASTDATA, ISOFRAME
+  EXPECT_EQ(c.dwFeatures, 0xFEFEu);  // the classic set + EXTDATA, FASTDATA, ISOFRAME
   EXPECT_EQ(c.dwCanClkFreq, 80'000'000u);
   EXPECT_EQ(c.sFdrRangeMax.dwBPS, 32u);
   EXPECT_EQ(r.nominal.bits_duration(1).ns(), kBit);
@@ -204,35 +204,84 @@ TEST(VciCanLine, AnFdLineLeavesBusOffAfterARestartAndSendsItsFrameOnce) {
   EXPECT_EQ(r.line.line_status2().dwStatus, 0u);
 }
 
-TEST(VciCanLine, ABitErrorInTheFastDataPhaseIsReportedAsABitError) {
+// One bit error injected at frame bit `bit` of a 12-byte FD frame the line sends (with or
+// without bit-rate switch): the ERROR messages the line's channel gets, and the peer's log.
+struct InjectedBitError {
+  std::vector<CANMSG2> errors;
+  std::vector<Frame> received;
+  int64_t expected_at = 0;  // end of bit `bit` of the retransmitted frame, ns from 0
+};
+InjectedBitError inject_bit_error(uint16_t bit, bool brs) {
   FdRig r;
   Port p;
-  ASSERT_EQ(r.line.open_control(), VCI_OK);
-  ASSERT_EQ(r.line.init_line(r.init()), VCI_OK);
+  EXPECT_EQ(r.line.open_control(), VCI_OK);
+  EXPECT_EQ(r.line.init_line(r.init()), VCI_OK);
   r.channel(p, true);
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  EXPECT_EQ(r.line.start_line(), VCI_OK);
   FaultRule rule;
   rule.match.transmitter = r.node.node();
   rule.fault.error = CanErrorType::bit;
-  rule.fault.bit = 40;  // in the data field of a 12-byte frame
+  rule.fault.bit = bit;
   rule.count = 1;
   r.b.plan.add(rule);
   CANMSG2 m = msg(0x200, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
   m.uMsgInfo.Bits.dlc = 9;
-  m.uMsgInfo.Bits.fdr = 1;
+  m.uMsgInfo.Bits.edl = 1;
+  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
   r.send(p, m);
   r.b.run_until(2 * kMs);
-  const auto errors = p.of_type(CAN_MSGTYPE_ERROR);
-  ASSERT_EQ(errors.size(), 1u);
-  EXPECT_EQ(errors[0].abData[0], CAN_ERROR_BIT);
-  EXPECT_EQ(errors[0].abData[1], CAN_STATUS_TXPEND);
-  ASSERT_EQ(r.peer.log.received.size(), 1u);  // the retransmission
-  // Detected at the end of bit 40: the 40 bits before it with the rate switch, then the bus
-  // engine switches back to the nominal rate at the erroneous bit (docs/bus-engine.md).
-  const int64_t at =
-      frame_prefix_duration(encode(r.peer.log.received[0].frame), r.nominal, r.data, 40).ns() +
-      kBit;
-  EXPECT_EQ(errors[0].dwTime, static_cast<uint32_t>(at / kUs));
+  InjectedBitError out;
+  out.errors = p.of_type(CAN_MSGTYPE_ERROR);
+  for (const auto& rx : r.peer.log.received) {
+    out.received.push_back(rx.frame);
+  }
+  if (!out.received.empty()) {
+    // Detected at the end of the bit: the bits before it at their rates, then the bus engine
+    // switches back to the nominal rate at the erroneous bit (docs/bus-engine.md).
+    out.expected_at =
+        frame_prefix_duration(encode(out.received[0]), r.nominal, r.data, bit).ns() + kBit;
+  }
+  return out;
+}
+
+TEST(VciCanLine, ABitErrorInTheFastDataPhaseIsReportedAsAFastDataBitError) {
+  const InjectedBitError e = inject_bit_error(40, true);  // in the data field
+  ASSERT_EQ(e.errors.size(), 1u);
+  EXPECT_EQ(e.errors[0].abData[0], CAN_ERROR_FDB);
+  EXPECT_EQ(e.errors[0].abData[1], CAN_STATUS_TXPEND);
+  EXPECT_EQ(e.errors[0].abData[4], 8u);  // TEC after the error
+  ASSERT_EQ(e.received.size(), 1u);      // the retransmission
+  EXPECT_TRUE(e.received[0].brs());
+  EXPECT_EQ(e.errors[0].dwTime, static_cast<uint32_t>(e.expected_at / kUs));
+}
+
+TEST(VciCanLine, TheFastDataPhaseRunsFromAfterBrsToBeforeTheCrcDelimiter) {
+  const EncodedFrame enc = encode(*Frame::fd_frame(
+      0x200, std::vector<uint8_t>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}, false, true));
+  // The first bit after BRS (ESI) and the last CRC bit are at the data rate: FDB.
+  for (const uint16_t bit : {static_cast<uint16_t>(enc.brs_index + 1),
+                             static_cast<uint16_t>(enc.crc_delimiter_index - 1)}) {
+    const InjectedBitError e = inject_bit_error(bit, true);
+    ASSERT_EQ(e.errors.size(), 1u) << bit;
+    EXPECT_EQ(e.errors[0].abData[0], CAN_ERROR_FDB) << bit;
+    EXPECT_EQ(e.errors[0].dwTime, static_cast<uint32_t>(e.expected_at / kUs)) << bit;
+  }
+  // The identifier (arbitration phase) and BRS itself (the rate switches at its sample point):
+  // a plain bit error.
+  for (const uint16_t bit : {uint16_t{5}, enc.brs_index}) {
+    const InjectedBitError e = inject_bit_error(bit, true);
+    ASSERT_EQ(e.errors.size(), 1u) << bit;
+    EXPECT_EQ(e.errors[0].abData[0], CAN_ERROR_BIT) << bit;
+  }
+}
+
+TEST(VciCanLine, ABitErrorInTheDataFieldOfAnFdFrameWithoutBitRateSwitchIsABitError) {
+  const InjectedBitError e = inject_bit_error(40, false);
+  ASSERT_EQ(e.errors.size(), 1u);
+  EXPECT_EQ(e.errors[0].abData[0], CAN_ERROR_BIT);
+  ASSERT_EQ(e.received.size(), 1u);
+  EXPECT_FALSE(e.received[0].brs());
+  EXPECT_EQ(e.errors[0].dwTime, static_cast<uint32_t>(e.expected_at / kUs));
 }
 
 TEST(VciCanLine, InitLineRefusesModesAndTimingsTheControllerDoesNotHave) {
@@ -242,8 +291,6 @@ TEST(VciCanLine, InitLineRefusesModesAndTimingsTheControllerDoesNotHave) {
   fd_modes.ex_mode = CAN_EXMODE_EXTDATA;
   EXPECT_EQ(classic_line.line.init_line(fd_modes), VCI_E_INVALIDARG);
   EXPECT_EQ(classic_line.line.init_line(v1_init(CAN_OPMODE_STANDARD | CAN_OPMODE_LOWSPEED)),
-            VCI_E_INVALIDARG);
-  EXPECT_EQ(classic_line.line.init_line(v1_init(CAN_OPMODE_STANDARD | CAN_OPMODE_AUTOBAUD)),
             VCI_E_INVALIDARG);
   ixxat::LineInit bad_rate = v2_init();
   bad_rate.sdr = CANBTP{0, 300'000, 14, 2, 1, 0};  // 8 MHz / (300 kbit/s x 16) is no prescaler

@@ -27,8 +27,9 @@ TEST(VciCanLine, CapabilitiesReportTheEmulatedClocksAndFeatures) {
   EXPECT_EQ(c.wCtrlType, CAN_CTRL_SJA1000);
   EXPECT_EQ(c.wBusCoupling, CAN_BUSC_HIGHSPEED);
   // STDANDEXT RMTFRAME ERRFRAME BUSLOAD IDFILTER LISTONLY SCHEDULER DELAYEDTX SINGLESHOT
-  // HIGHPRIOR: 0x2 + 0x4 + 0x8 + 0x10 + 0x20 + 0x40 + 0x80 + 0x200 + 0x400 + 0x800.
-  EXPECT_EQ(c.dwFeatures, 0xEFEu);
+  // HIGHPRIOR AUTOBAUD: 0x2 + 0x4 + 0x8 + 0x10 + 0x20 + 0x40 + 0x80 + 0x200 + 0x400 + 0x800 +
+  // 0x1000.
+  EXPECT_EQ(c.dwFeatures, 0x1EFEu);
   EXPECT_EQ(c.dwClockFreq, 1'000'000u);
   EXPECT_EQ(c.dwTscDivisor, 1u);
   EXPECT_EQ(c.dwCmsDivisor, 1000u);
@@ -36,7 +37,7 @@ TEST(VciCanLine, CapabilitiesReportTheEmulatedClocksAndFeatures) {
   EXPECT_EQ(c.dwDtxDivisor, 1u);
   EXPECT_EQ(c.dwDtxMaxTicks, 0xFFFFu);
   const CANCAPABILITIES2 c2 = r.line.capabilities2();
-  EXPECT_EQ(c2.dwFeatures, 0xEFEu);
+  EXPECT_EQ(c2.dwFeatures, 0x1EFEu);
   EXPECT_EQ(c2.dwCanClkFreq, 8'000'000u);
   EXPECT_EQ(c2.sSdrRangeMax.dwBPS, 64u);
   EXPECT_EQ(c2.sSdrRangeMax.wTS1, 16u);
@@ -488,9 +489,14 @@ TEST(VciCanLine, ThirtyTwoBitErrorsTakeTheLineBusOffUntilItIsStartedAgain) {
   // Still bus-off much later: the firmware does not restart by itself.
   r.b.run_until(200 * kMs);
   EXPECT_EQ(r.line.controller_state().state, ErrorState::bus_off);
-  // Stop and start: recovery takes 128 x 11 recessive bits on the idle bus, then the frame goes.
+  // Stop: reset mode aborts the controller's request; the firmware keeps the frame for the
+  // next start, so nothing is pending in the controller while the line is offline.
   p.rx.clear();
   ASSERT_EQ(r.line.stop_line(), VCI_OK);
+  EXPECT_EQ(r.node.controller().pending_tx(), nullptr);
+  EXPECT_EQ(r.line.line_status().dwStatus,
+            static_cast<uint32_t>(CAN_STATUS_ININIT | CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF));
+  // Start: recovery takes 128 x 11 recessive bits on the idle bus, then the frame goes, once.
   ASSERT_EQ(r.line.start_line(), VCI_OK);
   const int64_t recovered = 200 * kMs + 128 * 11 * kBit;
   r.b.run_until(recovered - 1);

@@ -197,5 +197,47 @@ TEST(VciCanLine, TheDistributorServesTheChannelsRoundRobin) {
   EXPECT_EQ(r.counters(cb).sent, 2u);
 }
 
+// A listen-only line never sends: the firmware takes the messages from the transmit FIFO and
+// drops them as rejected, without handing them to the controller (no TXPEND, ever), and the
+// cyclic list's entries the same way. It still receives.
+TEST(VciCanLine, AListenOnlyLineRejectsWhatItIsGivenToSendAndNeverShowsTxpend) {
+  Rig r;
+  Port p;
+  r.init(kOpAll | CAN_OPMODE_LISTONLY);
+  const ChannelId ch = r.channel(p);
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  r.peer.start();
+  EXPECT_TRUE(r.node.controller().listen_only());
+  for (uint32_t id : {0x100u, 0x101u, 0x102u}) {
+    r.send(p, msg(id));
+  }
+  EXPECT_TRUE(p.tx.empty());
+  EXPECT_EQ(r.line.line_status().dwStatus, 0u);
+  EXPECT_EQ(r.counters(ch).rejected, 3u);
+  EXPECT_EQ(r.counters(ch).sent, 0u);
+  EXPECT_EQ(r.node.controller().pending_tx(), nullptr);
+  ASSERT_EQ(r.line.open_scheduler(), VCI_OK);
+  CANCYCLICTXMSG2 c{};
+  c.wCycleTime = 1;
+  c.dwMsgId = 0x200;
+  c.uMsgInfo.Bits.type = CAN_MSGTYPE_DATA;
+  c.uMsgInfo.Bits.dlc = 1;
+  const auto index = r.line.scheduler_add(c);
+  ASSERT_TRUE(index.has_value());
+  ASSERT_EQ(r.line.scheduler_start(*index, 0), VCI_OK);
+  ASSERT_EQ(r.line.scheduler_resume(), VCI_OK);
+  Peer acker(r.b);  // acknowledges the peer's frame
+  acker.start();
+  r.peer.send(k123);
+  r.b.run_until(10 * kMs);
+  EXPECT_TRUE(r.peer.log.received.empty());  // nothing of the line's on the bus
+  EXPECT_EQ(r.b.bus.stats(r.node.node()).frames_sent, 0u);
+  EXPECT_EQ(r.line.line_status().dwStatus, 0u);
+  // The peer's frame is received.
+  ASSERT_EQ(p.data().size(), 1u);
+  EXPECT_EQ(p.data()[0].dwMsgId, 0x123u);
+  EXPECT_EQ(p.data()[0].dwTime, static_cast<uint32_t>(62 * kBit / kUs));
+}
+
 }  // namespace
 }  // namespace canemu::model

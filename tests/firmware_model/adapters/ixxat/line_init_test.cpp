@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
+
 namespace canemu::model {
 namespace {
 
@@ -79,15 +81,45 @@ TEST(LineInit, AV2InitOnTheFdControllerTakesBothTimingsAndTheFdModes) {
   EXPECT_TRUE(slow->fd);
 }
 
+// CAN_OPMODE_AUTOBAUD: the timing fields are ignored (garbage is accepted), and the rates it tries
+// run on both controllers through both interfaces, at exactly their bit times.
+TEST(LineInit, AutobaudIgnoresTheTimingAndTriesTheCiaRatesFastestFirst) {
+  const int64_t bit_ns[] = {1'000, 1'250, 2'000, 4'000, 8'000, 10'000, 20'000, 50'000, 100'000};
+  for (const bool fd : {false, true}) {
+    for (const bool use_v2 : {false, true}) {
+      LineInit init = use_v2 ? v2(CANBTP{0, 300'000, 1, 0, 0, 0}) : v1(0xFF, 0xFF);
+      init.op_mode = CAN_OPMODE_STANDARD | CAN_OPMODE_ERRFRAME | CAN_OPMODE_AUTOBAUD;
+      const auto s = ixxat::line_settings(init, fd, false);
+      ASSERT_TRUE(s.has_value()) << fd << use_v2;
+      EXPECT_FALSE(s->listen_only);
+      const auto table = ixxat::autobaud_candidates(init, fd);
+      ASSERT_EQ(table.size(), 9u);
+      for (std::size_t k = 0; k < table.size(); ++k) {
+        EXPECT_EQ(table[k].op_mode, CAN_OPMODE_STANDARD | CAN_OPMODE_ERRFRAME);
+        const auto e = ixxat::line_settings(table[k], fd, false);
+        ASSERT_TRUE(e.has_value()) << fd << use_v2 << k;
+        const BitTiming t = fd ? e->nominal : sja1000::timing_from_btr(e->btr0, e->btr1);
+        EXPECT_EQ(t.bits_duration(1).ns(), bit_ns[k]) << fd << use_v2 << k;
+      }
+      // The controller starts with the first of them.
+      EXPECT_EQ(s->btr0, ixxat::line_settings(table[0], fd, false)->btr0);
+    }
+  }
+  EXPECT_EQ(ixxat::autobaud_candidates(v1(0, 0), false)[3].btr0, CAN_BT0_250KB);
+  EXPECT_EQ(ixxat::autobaud_candidates(v1(0, 0), false)[3].btr1, CAN_BT1_250KB);
+  EXPECT_EQ(ixxat::autobaud_candidates(v2(CANBTP{}), true)[3].sdr.dwBPS, 250'000u);
+}
+
 TEST(LineInit, ModesTheLineDoesNotHaveAreInvalidArguments) {
   const CANBTP b500 = CAN_BTP_500KB;
   // Low speed only on a low-speed bus.
   const LineInit low = v1(0x00, 0x1C, CAN_OPMODE_STANDARD | CAN_OPMODE_LOWSPEED);
   EXPECT_EQ(ixxat::line_settings(low, false, false).error(), VCI_E_INVALIDARG);
   EXPECT_TRUE(ixxat::line_settings(low, false, true).has_value());
-  // Hardware bit-rate detection is not emulated.
-  EXPECT_EQ(ixxat::line_settings(v1(0x00, 0x1C, CAN_OPMODE_AUTOBAUD), false, false).error(),
-            VCI_E_INVALIDARG);
+  // Bit-rate detection with a fast data phase: its rate cannot be told from the traffic.
+  LineInit autobaud_fast = v2(b500, CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA);
+  autobaud_fast.op_mode = CAN_OPMODE_STANDARD | CAN_OPMODE_AUTOBAUD;
+  EXPECT_EQ(ixxat::line_settings(autobaud_fast, true, false).error(), VCI_E_INVALIDARG);
   // FD modes on a classic controller.
   EXPECT_EQ(ixxat::line_settings(v2(b500, CAN_EXMODE_EXTDATA), false, false).error(),
             VCI_E_INVALIDARG);

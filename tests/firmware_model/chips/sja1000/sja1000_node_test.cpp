@@ -228,6 +228,42 @@ TEST(Sja1000Node, AReusedNodeDoesNotSendTheLastUsersFrame) {
   EXPECT_EQ(r.log.received[0].frame, k123);
 }
 
+// Bus-off sets reset mode and keeps the request for after recovery; the host's own reset
+// request (go_offline(): MOD.RM written while the chip is already in reset mode) aborts it: the
+// buffer is released (SR.TBS) and, back on the bus after recovery, the chip sends nothing.
+TEST(Sja1000Node, GoingOffTheBusInBusOffAbortsTheHeldRequest) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  one_error_from_bus_off(b, a);
+  a.send(kZero);
+  b.run_until(200 * kBit);
+  ASSERT_TRUE(a.node.chip().confinement().bus_off());
+  ASSERT_EQ(a.node.chip().read(sja1000::MOD) & sja1000::MOD_RM, sja1000::MOD_RM);
+  EXPECT_EQ(a.node.chip().read(sja1000::SR) & sja1000::SR_TBS, 0);  // held
+  EXPECT_NE(a.node.controller().pending_tx(), nullptr);
+  a.node.go_offline();
+  EXPECT_EQ(a.node.chip().read(sja1000::SR) & sja1000::SR_TBS, sja1000::SR_TBS);  // released
+  EXPECT_EQ(a.node.controller().pending_tx(), nullptr);
+  EXPECT_FALSE(a.node.transmitting());
+  // Back on the bus: recovery (128 x 11 bits from 300 bits), then nothing of the old request.
+  b.run_until(300 * kBit);
+  a.node.go_online();
+  const int64_t recovered = (300 + 128 * 11) * kBit;
+  b.run_until(recovered);
+  EXPECT_EQ(a.log.states.back(), std::make_pair(recovered, ErrorState::active));
+  b.run_until(recovered + 1'000 * kBit);
+  EXPECT_TRUE(r.log.received.empty());
+  EXPECT_TRUE(a.log.sent.empty());
+  // Its next frame goes at once.
+  a.send(k123);
+  b.run_until(recovered + 1'100 * kBit);
+  ASSERT_EQ(r.log.received.size(), 1u);
+  EXPECT_EQ(r.log.received[0].frame, k123);
+  EXPECT_EQ(r.log.received[0].at, recovered + 1'000 * kBit + 62 * kBit);
+}
+
 TEST(Sja1000Node, AStoppedNodeTakesNoPartOnTheBus) {
   Bus b;
   Station a(b), r(b);

@@ -40,7 +40,10 @@ struct BusErrorEvent {
   Field field = Field::sof;
   bool extended_frame = false;
   bool in_frame = true;  // false when the bus was idle (e.g. held dominant)
-  uint16_t tec = 0;      // counters after the error was counted
+  // CAN FD with bit-rate switch: detected in the fast data phase (after the sample point of BRS,
+  // before that of the CRC delimiter), at the data bit rate.
+  bool data_phase = false;
+  uint16_t tec = 0;  // counters after the error was counted
   uint16_t rec = 0;
 };
 

@@ -67,6 +67,7 @@ class ErrorPhase {
     Field field = Field::sof;
     uint16_t destuffed_bit = 0;
     bool extended = false;
+    bool data_phase = false;  // BusErrorEvent::data_phase
   };
 
   struct Outcome {

@@ -38,6 +38,10 @@ class BitrateDetector final : private EventHandler {
   // The caller checks that there is an entry, that `per_entry` is positive and that no
   // detection runs.
   void start(std::vector<HostedNodeSettings> entries, SimDuration per_entry);
+  // CAN_OPMODE_AUTOBAUD: as start(), but an entry listens as long as the bus is silent (only a
+  // bus error moves it on), and after the last entry the first comes again: it ends only with
+  // a frame decoded, or cancel().
+  void start_endless(std::vector<HostedNodeSettings> entries);
   bool running() const { return running_.has_value(); }
   // Ends a running detection with VCI_E_ABORT.
   void cancel();
@@ -51,7 +55,7 @@ class BitrateDetector final : private EventHandler {
  private:
   struct Running {
     std::vector<HostedNodeSettings> entries;
-    SimDuration per_entry;
+    SimDuration per_entry;  // zero: endless (no time limit, wraps around)
     std::size_t current = 0;
     bool moving_on = false;  // the next entry (or the end) is scheduled
     bool found = false;      // the current entry received a frame

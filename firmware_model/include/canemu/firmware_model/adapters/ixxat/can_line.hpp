@@ -105,6 +105,12 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   uint32_t status_flags() const;
   ControllerState controller_state();
 
+  // --- CAN_OPMODE_AUTOBAUD ---
+  // A line initialized with it listens from StartLine (listen-only, CAN_STATUS_ININIT, the
+  // timing fields of its status zero) with each rate of autobaud_candidates() in turn, until a
+  // frame decodes; from then on it runs with that rate, in its own modes. See docs/vci.md.
+  bool autobaud_rate_known() const { return !autobaud_pending_; }
+
   // --- bit-rate detection (DetectBaud) ---
   // Listens (listen-only) with each entry's timing in turn until a frame decodes: an entry that
   // sees bus errors gives way at once, one that sees nothing for `per_entry` too. Only while
@@ -178,8 +184,12 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   std::optional<TxFrame> load(Loaded l);
   std::optional<TxFrame> to_frame(const CANMSG2& msg) const;
 
-  // A detection ended: the line is not initialized.
+  // A detection ended: the line is not initialized (DetectBaud), or runs with the rate found
+  // (CAN_OPMODE_AUTOBAUD).
   void detection_ended();
+  // CAN_OPMODE_AUTOBAUD: the line was started and its rate is not known yet.
+  void start_autobaud();
+  bool autobaud_listening() const { return autobaud_detecting_; }
   void schedule_time_overrun();
 
   // --- CyclicList::Line ---
@@ -221,6 +231,11 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   EventId delay_event_ = 0;
 
   BitrateDetector detector_;
+  // CAN_OPMODE_AUTOBAUD (docs/vci.md): the rate is still to be found (from InitLine until the
+  // detector decodes a frame), and the detector runs for it (only while online).
+  bool autobaud_pending_ = false;
+  bool autobaud_detecting_ = false;
+  std::vector<LineInit> autobaud_table_;
 
   EventId overrun_event_ = 0;
   uint64_t time_overruns_ = 0;

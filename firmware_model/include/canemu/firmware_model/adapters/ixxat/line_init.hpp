@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <tl/expected.hpp>
 
@@ -37,11 +38,16 @@ inline constexpr BtpRange kSja1000BtpRange{
 
 // The controller settings `init` asks for, on the CAN FD controller (`fd_controller`) or an
 // SJA1000, wired to a low-speed bus or not. VCI_E_INVALIDARG for a mode the line does not have
-// (low speed on a high-speed bus, hardware bit-rate detection, FD modes on a classic
-// controller, non-ISO frames), an invalid filter mode or a timing the controller cannot run.
-// v2 timings on an SJA1000 also give its BTR0/BTR1.
+// (low speed on a high-speed bus, FD modes on a classic controller, non-ISO frames, bit-rate
+// detection with a fast data phase), an invalid filter mode or a timing the controller cannot
+// run. v2 timings on an SJA1000 also give its BTR0/BTR1. With CAN_OPMODE_AUTOBAUD the timing
+// fields are ignored: the settings are those of the first of autobaud_candidates().
 tl::expected<HostedNodeSettings, HRESULT> line_settings(const LineInit& init, bool fd_controller,
                                                         bool low_speed);
+
+// What CAN_OPMODE_AUTOBAUD tries, in order: `init` without AUTOBAUD, with the timing of
+// 1000, 800, 500, 250, 125, 100, 50, 20 and 10 kbit/s (BTR0/BTR1 for a v1 init, CANBTP for v2).
+std::vector<LineInit> autobaud_candidates(const LineInit& init, bool fd_controller);
 
 // The raw CANBTP of SJA1000 bus timing registers (what CANLINESTATUS2 shows for a v1 init).
 CANBTP btp_of_btr(uint8_t btr0, uint8_t btr1);

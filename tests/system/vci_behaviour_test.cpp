@@ -1,0 +1,275 @@
+// Behaviours of the VCI emulation seen through the VCI "2" C API (libvcinpl2) against a real
+// canemud in stepped time: the fast data bit error, bit-rate detection at initialization
+// (CAN_OPMODE_AUTOBAUD), and what a listen-only line does with the frames it is given.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "canemu/firmware_model/adapters/ixxat/btp.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
+#include "vci_test_support.hpp"
+#include "vcinpl2.h"
+
+namespace canemu {
+namespace {
+
+using testing::step_ns;
+using testing::VciDaemon;
+
+// Two CAN FD adapters on an FD bus; three classic ones on a classic bus.
+const char* const kAdapters =
+    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
+    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
+    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
+    "[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
+    "[[device]]\nname = \"epsilon\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
+
+constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
+constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
+constexpr CANBTP kNominal{0, 500000, 14, 2, 1, 0};  // 16 quanta, sample point 87.5 %
+constexpr CANBTP kData{0, 2000000, 8, 2, 1, 0};     // 10 quanta, 80 %
+constexpr CANBTP k250k{0, 250000, 14, 2, 1, 0};     // on the SJA1000: 32 quanta of 125 ns
+constexpr CANBTP k500k{0, 500000, 14, 2, 1, 0};
+
+HANDLE device_named(const std::string& name) {
+  HANDLE e = nullptr;
+  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
+  VCIDEVICEINFO info{};
+  HANDLE dev = nullptr;
+  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
+    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
+      EXPECT_EQ(vciDeviceOpen(info.VciObjectId, &dev), VCI_OK);
+    }
+  }
+  vciEnumDeviceClose(e);
+  return dev;
+}
+
+// A controller opened as a program opens it: device, control unit, one PASS channel, the line
+// initialized with `mode` (FD modes and timings on an FD adapter) and started.
+struct Line {
+  HANDLE device = nullptr;
+  HANDLE control = nullptr;
+  HANDLE channel = nullptr;
+  Line(const std::string& name, UINT8 mode, UINT8 ex_mode, CANBTP sdr, CANBTP fdr,
+       bool start = true) {
+    device = device_named(name);
+    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
+    EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
+    EXPECT_EQ(canChannelInitialize(channel, 256, 1, 64, 1, 0, CAN_FILTER_PASS), VCI_OK);
+    EXPECT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
+    EXPECT_EQ(canControlInitialize(control, mode, ex_mode, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
+                                   2048, &sdr, ex_mode != CAN_EXMODE_DISABLED ? &fdr : nullptr),
+              VCI_OK);
+    if (start) {
+      EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
+    }
+  }
+  ~Line() {
+    canChannelClose(channel);
+    canControlClose(control);
+    vciDeviceClose(device);
+  }
+  void post(const CANMSG2& m) const {
+    CANMSG2 copy = m;
+    ASSERT_EQ(canChannelPostMessage(channel, &copy), VCI_OK);
+  }
+  std::vector<CANMSG2> drain(UINT8 type) const {
+    std::vector<CANMSG2> got;
+    CANMSG2 m;
+    while (canChannelPeekMessage(channel, &m) == VCI_OK) {
+      if (m.uMsgInfo.Bytes.bType == type) {
+        got.push_back(m);
+      }
+    }
+    return got;
+  }
+  UINT32 line_status() const {
+    CANLINESTATUS2 s{};
+    EXPECT_EQ(canControlGetStatus(control, &s), VCI_OK);
+    return s.dwStatus;
+  }
+};
+
+CANMSG2 msg(uint32_t id, const std::vector<uint8_t>& bytes, bool fd = false, bool brs = false) {
+  CANMSG2 m{};
+  m.dwMsgId = id;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
+  m.uMsgInfo.Bits.edl = fd ? 1 : 0;
+  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
+  if (!bytes.empty()) {
+    std::memcpy(m.abData, bytes.data(), bytes.size());
+  }
+  return m;
+}
+
+model::BitTiming fd_timing(const CANBTP& b, const model::ixxat::BtpRange& range,
+                           model::ixxat::Phase phase) {
+  return *model::ixxat::decode_btp({b.dwMode, b.dwBPS, b.wTS1, b.wTS2, b.wSJW, b.wTDO}, range,
+                                   phase);
+}
+
+// ---------------------------------------------------------------- fast data bit error
+
+// A bit error in the data field of an FD frame with bit-rate switch is CAN_ERROR_FDB; the same
+// fault in its identifier is CAN_ERROR_BIT. The ERROR message is stamped with the end of the
+// erroneous bit: the bits before it at their rates, that bit at the nominal rate (the engine
+// switches back to it at the error).
+TEST(VciBehaviour, ABitErrorInTheFastDataPhaseIsAFastDataBitError) {
+  VciDaemon d(kAdapters);
+  Line alpha("alpha", kMode, kFd, kNominal, kData);
+  Line beta("beta", kMode, kFd, kNominal, kData);
+  testing::load_faults(d.daemon,
+                       "[[fault]]\nat = \"0s\"\nbus = \"fd0\"\nmatch = { from = \"alpha:0\" }\n"
+                       "effect = \"bit_error\"\nbit = 40\ncount = 1\n");
+  const std::vector<uint8_t> twelve{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+  alpha.post(msg(0x123, twelve, true, true));
+  step_ns(2'000'000);
+  const auto errors = alpha.drain(CAN_MSGTYPE_ERROR);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].dwMsgId, CAN_MSGID_ERROR);
+  EXPECT_EQ(errors[0].abData[0], CAN_ERROR_FDB);
+  EXPECT_EQ(errors[0].abData[1], CAN_STATUS_TXPEND);
+  const auto nominal =
+      fd_timing(kNominal, model::ixxat::kFdNominalRange, model::ixxat::Phase::nominal);
+  const auto data = fd_timing(kData, model::ixxat::kFdDataRange, model::ixxat::Phase::data);
+  const auto enc = model::encode(*model::Frame::fd_frame(0x123, twelve, false, true));
+  const int64_t at = model::frame_prefix_duration(enc, nominal, data, 40).ns() + 2000;
+  EXPECT_EQ(errors[0].dwTime, static_cast<UINT32>(at / 1000));
+  const auto got = beta.drain(CAN_MSGTYPE_DATA);  // the repetition
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+
+  // BRS itself (the rate switches at its sample point): a plain bit error, at the end of BRS
+  // at the nominal rate of 2 us a bit.
+  const auto enc2 = model::encode(*model::Frame::fd_frame(0x124, twelve, false, true));
+  testing::load_faults(d.daemon,
+                       "[scenario]\nname = \"brs\"\n[[fault]]\nat = \"0s\"\n"
+                       "bus = \"fd0\"\nmatch = { from = \"alpha:0\" }\n"
+                       "effect = \"bit_error\"\ncount = 1\nbit = " +
+                           std::to_string(enc2.brs_index) + "\n");
+  alpha.post(msg(0x124, twelve, true, true));
+  step_ns(2'000'000);
+  const auto second = alpha.drain(CAN_MSGTYPE_ERROR);
+  ASSERT_EQ(second.size(), 1u);
+  EXPECT_EQ(second[0].abData[0], CAN_ERROR_BIT);
+  EXPECT_EQ(second[0].dwTime, 2000u + (enc2.brs_index + 1u) * 2u);
+}
+
+// ---------------------------------------------------------------- CAN_OPMODE_AUTOBAUD
+
+// epsilon starts with CAN_OPMODE_AUTOBAUD (timing fields garbage) on a bus where gamma sends ten
+// frames back to back at 250 kbit/s and delta acknowledges them. epsilon tries 1000, 800 and
+// 500 kbit/s on the first three (an error each, nothing disturbed), decodes the fourth with
+// 250 kbit/s and locks in at its end: it receives the fourth to the tenth with their exact time
+// stamps, then sends at 250 kbit/s itself.
+TEST(VciBehaviour, AnAutobaudLineFindsTheRateOfTheTrafficAndReceivesFromThen) {
+  VciDaemon d(kAdapters);
+  constexpr CANBTP kGarbage{0, 300000, 1, 0, 0, 0};
+  Line epsilon("epsilon", kMode | CAN_OPMODE_AUTOBAUD, CAN_EXMODE_DISABLED, kGarbage, CANBTP{});
+  CANCAPABILITIES2 caps{};
+  ASSERT_EQ(canControlGetCaps(epsilon.control, &caps), VCI_OK);
+  EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_AUTOBAUD, static_cast<UINT32>(CAN_FEATURE_AUTOBAUD));
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.bOpMode, kMode | CAN_OPMODE_AUTOBAUD);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));  // listening
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 0u);                                 // no rate yet
+  Line delta("delta", kMode, CAN_EXMODE_DISABLED, k250k, CANBTP{});
+  Line gamma("gamma", kMode, CAN_EXMODE_DISABLED, k250k, CANBTP{});
+  const std::vector<uint8_t> two{0x11, 0x22};
+  for (int k = 0; k < 10; ++k) {
+    gamma.post(msg(0x123, two));
+  }
+  // Frame k starts at k x (L + 3) bits of 4 us (L from SOF to the end of EOF, 3 of
+  // intermission) and is delivered at the end of its EOF.
+  const int64_t bits =
+      model::frame_duration(model::encode(*model::Frame::classic(0x123, two, false)),
+                            model::sja1000::timing_from_btr(CAN_BT0_250KB, CAN_BT1_250KB))
+          .ns() /
+      4000;
+  auto received_us = [&](int64_t k) { return static_cast<UINT32>((k * (bits + 3) + bits) * 4); };
+  step_ns(uint64_t{received_us(3)} * 1000 - 1000);
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  step_ns(1000);
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, 0u);  // locked in
+  EXPECT_EQ(s.bOpMode, kMode | CAN_OPMODE_AUTOBAUD);
+  EXPECT_EQ(s.sBtpSdr.dwMode, static_cast<UINT32>(CAN_BTMODE_RAW));  // 250 kbit/s, raw
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 2u);  // 2 periods of the 8 MHz clock a quantum
+  EXPECT_EQ(s.sBtpSdr.wTS1, 13u);
+  EXPECT_EQ(s.sBtpSdr.wTS2, 2u);
+  step_ns(10'000'000);
+  const auto got = epsilon.drain(CAN_MSGTYPE_DATA);
+  ASSERT_EQ(got.size(), 7u);
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].dwMsgId, 0x123u);
+    EXPECT_EQ(got[k].dwTime, received_us(3 + static_cast<int64_t>(k))) << k;
+  }
+  EXPECT_EQ(delta.drain(CAN_MSGTYPE_ERROR).size(), 0u);  // nobody saw an error flag
+  EXPECT_EQ(gamma.drain(CAN_MSGTYPE_ERROR).size(), 0u);
+  EXPECT_EQ(epsilon.drain(CAN_MSGTYPE_ERROR).size(), 0u);
+  // It sends at 250 kbit/s now: delta receives it.
+  epsilon.post(msg(0x321, {5}));
+  step_ns(1'000'000);
+  const auto heard = delta.drain(CAN_MSGTYPE_DATA);
+  ASSERT_FALSE(heard.empty());
+  EXPECT_EQ(heard.back().dwMsgId, 0x321u);
+}
+
+// On a silent bus it stays listening: ININIT, no timing, and a posted frame stays unsent.
+TEST(VciBehaviour, AnAutobaudLineOnASilentBusKeepsListening) {
+  VciDaemon d(kAdapters);
+  Line epsilon("epsilon", kMode | CAN_OPMODE_AUTOBAUD, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  Line delta("delta", kMode, CAN_EXMODE_DISABLED, k250k, CANBTP{});
+  epsilon.post(msg(0x321, {5}));
+  step_ns(500'000'000);
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(epsilon.control, &s), VCI_OK);
+  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  EXPECT_EQ(s.sBtpSdr.dwBPS, 0u);
+  EXPECT_TRUE(delta.drain(CAN_MSGTYPE_DATA).empty());
+  CANCHANSTATUS2 cs{};
+  ASSERT_EQ(canChannelGetStatus(epsilon.channel, &cs), VCI_OK);
+  EXPECT_EQ(cs.sLineStatus.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+}
+
+// ---------------------------------------------------------------- listen-only
+
+// A listen-only line never sends: what a program posts is taken from the transmit FIFO and
+// dropped, so the line status never shows TXPEND and the FIFO does not fill. It still receives.
+TEST(VciBehaviour, AListenOnlyLineDropsWhatItIsGivenAndNeverShowsTxpend) {
+  VciDaemon d(kAdapters);
+  Line gamma("gamma", kMode | CAN_OPMODE_LISTONLY, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  Line delta("delta", kMode, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  Line epsilon("epsilon", kMode, CAN_EXMODE_DISABLED, k500k, CANBTP{});
+  for (uint32_t id : {0x100u, 0x101u, 0x102u}) {
+    gamma.post(msg(id, {1}));
+  }
+  step_ns(5'000'000);
+  CANCHANSTATUS2 cs{};
+  ASSERT_EQ(canChannelGetStatus(gamma.channel, &cs), VCI_OK);
+  EXPECT_EQ(cs.sLineStatus.dwStatus, 0u);  // online, nothing pending
+  EXPECT_EQ(cs.bTxFifoLoad, 0u);
+  EXPECT_EQ(gamma.line_status(), 0u);
+  EXPECT_TRUE(delta.drain(CAN_MSGTYPE_DATA).empty());
+  EXPECT_TRUE(epsilon.drain(CAN_MSGTYPE_DATA).empty());
+  // It receives delta's frame (acknowledged by epsilon): 62 bits of 2 us after it was posted.
+  delta.post(msg(0x123, {0x11, 0x22}));
+  step_ns(1'000'000);
+  const auto got = gamma.drain(CAN_MSGTYPE_DATA);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x123u);
+  EXPECT_EQ(got[0].dwTime, 5000u + 62 * 2);
+  EXPECT_EQ(gamma.line_status(), 0u);
+}
+
+}  // namespace
+}  // namespace canemu

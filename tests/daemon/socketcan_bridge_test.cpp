@@ -472,7 +472,7 @@ TEST(BridgeConfig, ReadsTheTableAndNamesEveryMistake) {
   ASSERT_FALSE(bad);
   EXPECT_EQ(bad.error(),
             (std::vector<std::string>{
-                "t.toml:4:8: bridge[0].kind: \"zmq\" is not a bridge kind (socketcan, lcm)",
+                "t.toml:4:8: bridge[0].kind: \"zmq\" is not a bridge kind (socketcan, lcm, dds)",
                 "t.toml:5:7: bridge[0].bus: no bus is named \"can9\"",
                 "t.toml:11:1: bridge[1].loop: unknown key (known here: kind, bus, interface, "
                 "error_frames, restart_ms)",

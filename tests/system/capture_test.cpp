@@ -380,7 +380,8 @@ TEST(CliBridge, AnLcmBridgeIsAddedListedRestartedAndRemovedByItsBus) {
   Cli none(d, {"bridge", "add", "can0"});
   EXPECT_EQ(none.wait(), 1);
   EXPECT_EQ(Cli::read_all(none.err),
-            "canemu: which interface? canemu bridge add BUS INTERFACE, or BUS --lcm [URL]\n");
+            "canemu: which interface? canemu bridge add BUS INTERFACE, or BUS --lcm [URL], or BUS "
+            "--dds [DOMAIN/PARTITION]\n");
   Cli both(d, {"bridge", "add", "can0", "vcan0", "--lcm"});
   EXPECT_EQ(both.wait(), 1);
   EXPECT_NE(Cli::read_all(both.err).find("an LCM bridge has no INTERFACE"), std::string::npos);
@@ -392,6 +393,13 @@ TEST(CliBridge, AnLcmBridgeIsAddedListedRestartedAndRemovedByItsBus) {
   Cli badurl(d, {"bridge", "add", "can0", "--lcm", "nowhere"});
   EXPECT_EQ(badurl.wait(), 1);
   EXPECT_NE(Cli::read_all(badurl.err).find("\"nowhere\" is not an LCM URL"), std::string::npos);
+  Cli two(d, {"bridge", "add", "can0", "--lcm", "--dds"});
+  EXPECT_EQ(two.wait(), 1);
+  EXPECT_EQ(Cli::read_all(two.err), "canemu: --lcm or --dds, not both\n");
+  Cli prefix(d, {"bridge", "add", "can0", "vcan0", "--prefix", "X_"});
+  EXPECT_EQ(prefix.wait(), 1);
+  EXPECT_EQ(Cli::read_all(prefix.err),
+            "canemu: --prefix is for LCM and DDS bridges (--lcm, --dds)\n");
 }
 
 }  // namespace

@@ -1606,9 +1606,11 @@ TEST(VciCppItems, Item115_DifferentRatesDoNotConnect) {
   EXPECT_GT(errors, 16u);
 }
 
-// 120: the adapters have no automatic bit-rate detection: the feature is not announced and
-// InitLine refuses CAN_OPMODE_AUTOBAUD.
-TEST(VciCppItems, Item120_AutobaudIsNotAFeatureAndInitLineRefusesIt) {
+// 120: AUTOBAUD is a feature of the emulated adapters; InitLine with it ignores the BTR fields
+// (here those of about 4 kbit/s) and, started, the line listens for the rate (CAN_STATUS_ININIT) until
+// traffic shows it (VciBehaviour.AnAutobaudLineFindsTheRateOfTheTrafficAndReceivesFromThen: the
+// rate adopted and the frames from then on, with exact time stamps).
+TEST(VciCppItems, Item120_AutobaudIsAFeatureAndIgnoresTheBtrFields) {
   VciDaemon d;
   Ref<IBalObject> bal;
   ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
@@ -1616,14 +1618,16 @@ TEST(VciCppItems, Item120_AutobaudIsNotAFeatureAndInitLineRefusesIt) {
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
   CANCAPABILITIES caps{};
   ASSERT_EQ(socket->GetCapabilities(&caps), VCI_OK);
-  EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_AUTOBAUD, 0u);
+  EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_AUTOBAUD, static_cast<UINT32>(CAN_FEATURE_AUTOBAUD));
   Ref<ICanControl> control;
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
-  CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_AUTOBAUD, 0, CAN_BT0_500KB, CAN_BT1_500KB};
-  EXPECT_EQ(control->InitLine(&init), VCI_E_INVALIDARG);
+  CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_AUTOBAUD, 0, 0xFF, 0xFF};
+  ASSERT_EQ(control->InitLine(&init), VCI_OK);
+  ASSERT_EQ(control->StartLine(), VCI_OK);
   CANLINESTATUS s{};
   ASSERT_EQ(control->GetLineStatus(&s), VCI_OK);
-  EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
+  EXPECT_EQ(s.dwStatus & CAN_STATUS_ININIT, static_cast<UINT32>(CAN_STATUS_ININIT));
+  EXPECT_EQ(s.bOpMode & CAN_OPMODE_AUTOBAUD, CAN_OPMODE_AUTOBAUD);
 }
 
 // 123: a cycle of 0 is refused; the longest cycle (dwCmsMaxTicks, 65535: the most a 16-bit

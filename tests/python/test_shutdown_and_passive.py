@@ -128,10 +128,10 @@ def test_a_passive_bus_neither_acknowledges_nor_sends_and_active_restores_it(nod
     canemu.step(10_000_000)
     got_b = frames(drain(b))
     got_a = frames(drain(a))
-    # b acknowledges a's frame now and sends the frame its FIFO held; the one its controller
-    # held went with the line's re-initialization, as canControlInitialize drops it.
+    # b acknowledges a's frame now and sends the two frames its transmit FIFO kept while it
+    # listened (0x7 and 0x8 win the arbitration against a's 0x55).
     assert [m.arbitration_id for m in got_b] == [0x55]
-    assert [m.arbitration_id for m in got_a] == [0x8]
+    assert [m.arbitration_id for m in got_a] == [0x7, 0x8]
 
 
 def test_state_error_cannot_be_set(nodes):

@@ -243,9 +243,10 @@ TEST(VciBehaviour, AnAutobaudLineOnASilentBusKeepsListening) {
 
 // ---------------------------------------------------------------- listen-only
 
-// A listen-only line never sends: what a program posts is taken from the transmit FIFO and
-// dropped, so the line status never shows TXPEND and the FIFO does not fill. It still receives.
-TEST(VciBehaviour, AListenOnlyLineDropsWhatItIsGivenAndNeverShowsTxpend) {
+// A listen-only line never sends: what a program posts waits in the transmit FIFO (the
+// firmware hands nothing to the controller), so the line status never shows TXPEND. It still
+// receives. Initialized to send again, the line sends what waited.
+TEST(VciBehaviour, AListenOnlyLineKeepsWhatItIsGivenInTheFifoAndNeverShowsTxpend) {
   VciDaemon d(kAdapters);
   Line gamma("gamma", kMode | CAN_OPMODE_LISTONLY, CAN_EXMODE_DISABLED, k500k, CANBTP{});
   Line delta("delta", kMode, CAN_EXMODE_DISABLED, k500k, CANBTP{});
@@ -257,7 +258,8 @@ TEST(VciBehaviour, AListenOnlyLineDropsWhatItIsGivenAndNeverShowsTxpend) {
   CANCHANSTATUS2 cs{};
   ASSERT_EQ(canChannelGetStatus(gamma.channel, &cs), VCI_OK);
   EXPECT_EQ(cs.sLineStatus.dwStatus, 0u);  // online, nothing pending
-  EXPECT_EQ(cs.bTxFifoLoad, 0u);
+  // 3 messages waiting: 3 % of the FIFO (64 asked for, a whole page of CANMSG2 given).
+  EXPECT_EQ(cs.bTxFifoLoad, 3u);
   EXPECT_EQ(gamma.line_status(), 0u);
   EXPECT_TRUE(delta.drain(CAN_MSGTYPE_DATA).empty());
   EXPECT_TRUE(epsilon.drain(CAN_MSGTYPE_DATA).empty());
@@ -269,6 +271,21 @@ TEST(VciBehaviour, AListenOnlyLineDropsWhatItIsGivenAndNeverShowsTxpend) {
   EXPECT_EQ(got[0].dwMsgId, 0x123u);
   EXPECT_EQ(got[0].dwTime, 5000u + 62 * 2);
   EXPECT_EQ(gamma.line_status(), 0u);
+  // Initialized to send: the three go out in order.
+  ASSERT_EQ(canControlReset(gamma.control), VCI_OK);
+  CANBTP sdr = k500k;
+  ASSERT_EQ(canControlInitialize(gamma.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &sdr, nullptr),
+            VCI_OK);
+  ASSERT_EQ(canControlStart(gamma.control, TRUE), VCI_OK);
+  step_ns(2'000'000);
+  std::vector<uint32_t> ids;
+  for (const CANMSG2& m : delta.drain(CAN_MSGTYPE_DATA)) {
+    ids.push_back(m.dwMsgId);
+  }
+  EXPECT_EQ(ids, (std::vector<uint32_t>{0x100, 0x101, 0x102}));
+  ASSERT_EQ(canChannelGetStatus(gamma.channel, &cs), VCI_OK);
+  EXPECT_EQ(cs.bTxFifoLoad, 0u);
 }
 
 }  // namespace

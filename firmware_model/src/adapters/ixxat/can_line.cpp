@@ -449,9 +449,6 @@ std::optional<TxFrame> CanLine::to_frame(const CANMSG2& msg) const {
   if (b.type != CAN_MSGTYPE_DATA) {
     return std::nullopt;
   }
-  if ((init_.op_mode & CAN_OPMODE_LISTONLY) != 0) {
-    return std::nullopt;  // a listen-only line never sends: rejected (docs/vci.md)
-  }
   const bool ext = b.ext != 0;
   if ((init_.op_mode & (ext ? CAN_OPMODE_EXTENDED : CAN_OPMODE_STANDARD)) == 0) {
     return std::nullopt;
@@ -493,6 +490,15 @@ std::optional<TxFrame> CanLine::load(Loaded l) {
 
 std::optional<TxFrame> CanLine::next_tx() {
   if (state_ != LineState::online) {
+    return std::nullopt;
+  }
+  if ((init_.op_mode & CAN_OPMODE_LISTONLY) != 0) {
+    // A listen-only line never sends (docs/vci.md): nothing reaches the controller (no TXPEND);
+    // the transmit FIFOs keep their messages for when the line is initialized to send again,
+    // and entries of the cyclic list that fall due are skipped, counted as rejected.
+    while (cyclic_.take()) {
+      ++cyclic_rejected_;
+    }
     return std::nullopt;
   }
   const SimTime now = scheduler_.now();

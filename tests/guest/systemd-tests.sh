@@ -125,10 +125,15 @@ $(cat /tmp/t7b)"
 # 8. tshark captures the emulated bus live on vcan0 and decodes it as Wireshark does.
 tshark -i vcan0 -c 2 -a duration:60 -T fields -e can.id -e can.len -e data.data >/tmp/t8 2>/tmp/t8.err &
 pid=$!
-WAIT_SECONDS=60 wait_for grep -q "Capturing on" /tmp/t8.err
+# "Capturing on" comes before dumpcap's packet socket runs: wait for that socket on vcan0
+# (/proc/net/packet: Iface and R columns), or frames sent at once can be missed.
+vcan0=$(cat /sys/class/net/vcan0/ifindex)
+WAIT_SECONDS=60 wait_for awk -v i="$vcan0" 'NR > 1 && $5 == i && $6 == 1 {f = 1} END {exit !f}' \
+  /proc/net/packet
 canemu send can0 123#1122 7FF# >/dev/null
 wait_pid $pid 60
 result tshark_decodes_the_emulated_bus_on_vcan0 "291 2 1122|2047 0 |" "$(tr '\t\n' ' |' </tmp/t8)"
+[ -s /tmp/t8 ] || sed 's/^/  tshark: /' /tmp/t8.err
 
 # 9. vxcan into a network namespace: a program in the namespace (as in a container) and the
 # emulated bus see each other's frames through a bridge added at run time.

@@ -187,6 +187,14 @@ class DdsTransport final : public BridgeTransport {
     dds_qos_t* ours = dds_create_qos();
     dds_copy_qos(ours, qos);
     dds_qset_partition1(ours, options_.partition.c_str());
+    // Readers keep all, up to what a bridge queues: a writer that outruns canemud is held back
+    // by reliable flow control (its write waits up to its max_blocking_time, then fails where
+    // the writer sees it) instead of losing samples unseen.
+    dds_qos_t* inbound = dds_create_qos();
+    dds_copy_qos(inbound, qos);
+    dds_qset_history(inbound, DDS_HISTORY_KEEP_ALL, 0);
+    dds_qset_resource_limits(inbound, static_cast<int32_t>(kDdsReaderSamples), DDS_LENGTH_UNLIMITED,
+                             DDS_LENGTH_UNLIMITED);
     dds_listener_t* listener = dds_create_listener(this);
     dds_lset_data_available(listener, &DdsTransport::on_data);
 
@@ -196,17 +204,18 @@ class DdsTransport final : public BridgeTransport {
     frames_ = writer(publisher, &canemu_dds_Frame_desc, p + "frames", qos);
     errors_ = writer(publisher, &canemu_dds_BusError_desc, p + "errors", qos);
     states_ = writer(publisher, &canemu_dds_NodeState_desc, p + "states", qos);
-    tx_ = reader(subscriber, &canemu_dds_Frame_desc, p + "tx", qos, listener);
+    tx_ = reader(subscriber, &canemu_dds_Frame_desc, p + "tx", inbound, listener);
     bool ok =
         publisher > 0 && subscriber > 0 && frames_ > 0 && errors_ > 0 && states_ > 0 && tx_ > 0;
     if (ok && options_.ros2) {
       const std::string base = "rt/" + bus_ + "/";
       ros_from_ = writer(participant_, &can_msgs_msg_dds__Frame__desc, base + "from_can_bus", qos);
-      ros_to_ =
-          reader(participant_, &can_msgs_msg_dds__Frame__desc, base + "to_can_bus", qos, listener);
+      ros_to_ = reader(participant_, &can_msgs_msg_dds__Frame__desc, base + "to_can_bus", inbound,
+                       listener);
       ok = ros_from_ > 0 && ros_to_ > 0;
     }
     dds_delete_listener(listener);
+    dds_delete_qos(inbound);
     dds_delete_qos(ours);
     dds_delete_qos(qos);
     if (!ok) {

@@ -360,6 +360,9 @@ TEST(DdsBridge, CanFdFramesOnACanFdBus) {
   EXPECT_EQ(on_ros[0].id, 0x10u);
   EXPECT_EQ(on_ros[0].dlc, 2);
   EXPECT_EQ(bridge.stats().to_interface, 2u);
+  for (auto r : on_ros) {
+    dds_sample_free(&r, &can_msgs_msg_dds__Frame__desc, DDS_FREE_CONTENTS);  // frame_id
+  }
 }
 
 TEST(DdsBridge, Ros2FramesBothWaysOnTheTopicsOfRos2Socketcan) {

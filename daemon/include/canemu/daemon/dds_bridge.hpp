@@ -13,10 +13,11 @@
 //   rt/<bus>/from_can_bus  every classic frame of the bus (CAN FD frames have no form there)
 //   rt/<bus>/to_can_bus    frames for the bridge's node to send
 //
-// QoS of every reader and writer: reliable, volatile, keep-last `depth` (64). Writing never
-// waits (keep-last history: a reader that falls behind loses the oldest samples, as DDS
-// defines). Cyclone delivers on threads of its own; a listener rings an eventfd that wakes
-// canemud's loop, which then takes what arrived (a bounded amount per turn).
+// QoS: reliable and volatile; the writers keep the last 64 samples (writing never waits: a
+// reader that falls behind loses the oldest, as DDS defines), the readers keep all up to 1024
+// (a writer that outruns canemud is held back by DDS's flow control, never dropped unseen). Cyclone
+// delivers on threads of its own; a listener rings an eventfd that wakes canemud's loop, which then
+// takes what arrived (a bounded amount per turn).
 #pragma once
 
 #include <cstdint>
@@ -35,7 +36,8 @@ inline constexpr uint32_t kMaxDdsDomain = 232;  // the highest id RTPS's port ma
 inline constexpr std::string_view kDefaultDdsPartition = "canemu";
 inline constexpr std::size_t kMaxDdsPartition = 63;
 inline constexpr std::size_t kMaxDdsPrefix = 63;
-inline constexpr uint32_t kDdsDepth = 64;
+inline constexpr uint32_t kDdsDepth = 64;            // keep-last depth of the bridge's writers
+inline constexpr uint32_t kDdsReaderSamples = 1024;  // what the bridge's readers hold at most
 
 struct DdsOptions {
   uint32_t domain = 0;

@@ -107,7 +107,8 @@ TEST(LineInit, AutobaudIgnoresTheTimingAndTriesTheCiaRatesFastestFirst) {
   }
   EXPECT_EQ(ixxat::autobaud_candidates(v1(0, 0), false)[3].btr0, CAN_BT0_250KB);
   EXPECT_EQ(ixxat::autobaud_candidates(v1(0, 0), false)[3].btr1, CAN_BT1_250KB);
-  EXPECT_EQ(ixxat::autobaud_candidates(v2(CANBTP{}), true)[3].sdr.dwBPS, 250'000u);
+  const UINT32 bps = ixxat::autobaud_candidates(v2(CANBTP{}), true)[3].sdr.dwBPS;  // packed
+  EXPECT_EQ(bps, 250'000u);
 }
 
 TEST(LineInit, ModesTheLineDoesNotHaveAreInvalidArguments) {

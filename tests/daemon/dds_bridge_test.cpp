@@ -17,6 +17,7 @@
 #include <dds/dds.h>
 #include <gtest/gtest.h>
 
+#include "bridge_test_support.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/status.hpp"
 #include "canemu_dds.h"
@@ -24,6 +25,9 @@
 
 namespace canemu::daemon {
 namespace {
+
+using namespace bridge_test;
+using Node = BusNode;
 
 // A domain of this process's own, Cyclone on the loopback interface only.
 uint32_t test_domain() {
@@ -37,18 +41,6 @@ uint32_t test_domain() {
   }();
   return domain;
 }
-
-std::unique_ptr<Simulation> world(const std::string& text) {
-  auto cfg = parse_config(text, "test.toml");
-  EXPECT_TRUE(cfg) << (cfg ? "" : cfg.error().front());
-  auto sim = Simulation::build(*cfg);
-  EXPECT_TRUE(sim) << (sim ? "" : sim.error().front());
-  return std::move(*sim);
-}
-
-constexpr const char* kClassic = "[[bus]]\nname = \"can0\"\n";
-constexpr const char* kFd =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n";
 
 BridgeConfig dds_bridge(const std::string& bus, bool ros2 = false, uint32_t restart_ms = 0) {
   BridgeConfig b;
@@ -149,42 +141,6 @@ canemu_dds_Frame frame(uint32_t id, std::vector<uint8_t> data, bool extended = f
   f.len = static_cast<uint8_t>(data.size());
   std::copy(data.begin(), data.end(), f.data);
   return f;
-}
-
-// An acknowledging node that sends what it is given.
-struct Node : model::ControllerEvents {
-  std::deque<model::Frame> queue;
-  std::vector<int64_t> at_ns;
-  std::vector<model::Frame> received;
-  model::HostedNode* node = nullptr;
-  Node(Simulation& sim, std::size_t bus) {
-    node = &sim.spare_node(bus);
-    node->start(*sim.bus_timing(bus), this, [this]() -> std::optional<model::TxFrame> {
-      if (queue.empty()) {
-        return std::nullopt;
-      }
-      model::TxFrame f{queue.front()};
-      queue.pop_front();
-      return f;
-    });
-  }
-  void frame_received(model::SimTime at, const model::Frame& f, bool) override {
-    at_ns.push_back(at.ns());
-    received.push_back(f);
-  }
-  void send(uint32_t id, std::vector<uint8_t> data, bool fd = false) {
-    model::FrameSpec spec;
-    spec.id = id;
-    spec.dlc = static_cast<uint8_t>(data.size());
-    spec.data = data;
-    spec.fd = fd;
-    queue.push_back(*model::Frame::create(spec));
-    node->kick();
-  }
-};
-
-void run_to(Simulation& sim, int64_t ns) {
-  sim.scheduler().run_until(model::SimTime::from_ns(ns));
 }
 
 TEST(DdsBridge, NamesLocatorsAndTheirChecks) {

@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "bridge_test_support.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/status.hpp"
 #include "canemu_lcm/error_t.hpp"
@@ -22,17 +23,8 @@
 namespace canemu::daemon {
 namespace {
 
-std::unique_ptr<Simulation> world(const std::string& text) {
-  auto cfg = parse_config(text, "test.toml");
-  EXPECT_TRUE(cfg) << (cfg ? "" : cfg.error().front());
-  auto sim = Simulation::build(*cfg);
-  EXPECT_TRUE(sim) << (sim ? "" : sim.error().front());
-  return std::move(*sim);
-}
-
-constexpr const char* kClassic = "[[bus]]\nname = \"can0\"\n";
-constexpr const char* kFd =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n";
+using namespace bridge_test;
+using Node = BusNode;
 
 BridgeConfig lcm_bridge(const std::string& bus, uint32_t restart_ms = 0) {
   BridgeConfig b;
@@ -73,39 +65,6 @@ void publish(lcm_t* lcm, const std::string& channel, const canemu_lcm::frame_t& 
             static_cast<int>(bytes.size()));
   ASSERT_EQ(lcm_publish(lcm, channel.c_str(), bytes.data(), static_cast<unsigned>(bytes.size())),
             0);
-}
-
-// An acknowledging node that sends what it is given.
-struct Node : model::ControllerEvents {
-  std::deque<model::Frame> queue;
-  std::vector<int64_t> at_ns;
-  model::HostedNode* node = nullptr;
-  Node(Simulation& sim, std::size_t bus) {
-    node = &sim.spare_node(bus);
-    node->start(*sim.bus_timing(bus), this, [this]() -> std::optional<model::TxFrame> {
-      if (queue.empty()) {
-        return std::nullopt;
-      }
-      model::TxFrame f{queue.front()};
-      queue.pop_front();
-      return f;
-    });
-  }
-  void frame_received(model::SimTime at, const model::Frame&, bool) override {
-    at_ns.push_back(at.ns());
-  }
-  void send(uint32_t id, std::vector<uint8_t> data) {
-    model::FrameSpec spec;
-    spec.id = id;
-    spec.dlc = static_cast<uint8_t>(data.size());
-    spec.data = data;
-    queue.push_back(*model::Frame::create(spec));
-    node->kick();
-  }
-};
-
-void run_to(Simulation& sim, int64_t ns) {
-  sim.scheduler().run_until(model::SimTime::from_ns(ns));
 }
 
 TEST(LcmBridge, ChannelNamesAndTheirChecks) {

@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "bridge_test_support.hpp"
 #include "canemu/daemon/channel.hpp"
 #include "canemu/daemon/scenario.hpp"
 #include "canemu/daemon/simulation.hpp"
@@ -23,17 +24,7 @@
 namespace canemu::daemon {
 namespace {
 
-std::unique_ptr<Simulation> world(const std::string& text) {
-  auto cfg = parse_config(text, "test.toml");
-  EXPECT_TRUE(cfg) << (cfg ? "" : cfg.error().front());
-  auto sim = Simulation::build(*cfg);
-  EXPECT_TRUE(sim) << (sim ? "" : sim.error().front());
-  return std::move(*sim);
-}
-
-constexpr const char* kClassic = "[[bus]]\nname = \"can0\"\n";
-constexpr const char* kFd =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n";
+using namespace bridge_test;
 
 // The kernel side: what programs write on the interface and what they read from it.
 struct Interface {
@@ -89,33 +80,20 @@ struct Interface {
   }
 };
 
-// A channel-like node on the bus: acknowledges, records what it receives, sends a queue.
-struct Node : model::ControllerEvents {
+// A channel-like node on the bus (bridge_test_support.hpp) that receives and sends in
+// candump's text.
+struct Node : BusNode {
   std::vector<std::string> received;
-  std::vector<int64_t> at_ns;
-  std::deque<model::Frame> queue;
-  model::HostedNode* node = nullptr;
-  Node(Simulation& sim, std::size_t bus) {
-    node = &sim.spare_node(bus);
-    node->start(*sim.bus_timing(bus), this, [this]() -> std::optional<model::TxFrame> {
-      if (queue.empty()) {
-        return std::nullopt;
-      }
-      model::TxFrame f{queue.front()};
-      queue.pop_front();
-      return f;
-    });
-  }
-  void frame_received(model::SimTime at, const model::Frame& f, bool) override {
+  Node(Simulation& sim, std::size_t bus) : BusNode(sim, bus) {}
+  void frame_received(model::SimTime at, const model::Frame& f, bool own) override {
+    BusNode::frame_received(at, f, own);
     const auto s = ipc::socketcan::from_message(to_message(at, f, ipc::ChannelMessageKind::frame));
     received.push_back(ipc::socketcan::candump_text(*s));
-    at_ns.push_back(at.ns());
   }
   void send(const std::string& cansend) {
     std::string error;
     const auto m = ipc::socketcan::to_message(Interface::parse(cansend), error);
-    queue.push_back(to_tx_frame(*m)->frame);
-    node->kick();
+    BusNode::send(to_tx_frame(*m)->frame);
   }
 };
 

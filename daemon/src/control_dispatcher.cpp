@@ -311,8 +311,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       if (before_status) {
         before_status();
       }
+      const auto m = read_as<ipc::StatusRequest>(data);
       auto r = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>(request_id));
-      fill_status(sim_, *r);
+      fill_status(sim_, *r, m.first_bus, m.first_node);
       r->time_mode = static_cast<uint8_t>(time_.mode == TimeMode::realtime ? 0
                                           : time_.mode == TimeMode::scaled ? 1
                                                                            : 2);
@@ -392,9 +393,10 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       return;
     }
     case ipc::MsgType::device_list_request: {
+      const auto m = read_as<ipc::DeviceListRequest>(data);
       auto r = std::make_unique<ipc::DeviceListReply>(
           ipc::make_message<ipc::DeviceListReply>(request_id));
-      fill_device_list(sim_, *r);
+      fill_device_list(sim_, *r, m.first);
       send_reply(send, *r);
       return;
     }
@@ -455,8 +457,10 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       return;
     }
     case ipc::MsgType::client_list_request: {
+      const auto m = read_as<ipc::ClientListRequest>(data);
       auto r = std::make_unique<ipc::ClientListReply>(
           ipc::make_message<ipc::ClientListReply>(request_id));
+      r->first = m.first;
       if (fill_clients) {
         fill_clients(*r);
       }

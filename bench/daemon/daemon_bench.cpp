@@ -22,6 +22,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -315,19 +316,20 @@ BENCHMARK(BM_IdleBusesCostNothing)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
-// N buses at 1 Mbit/s in real time, each with a babbling node (an ephemeral channel's node that
-// a babble fault makes send 000#0102030405060708 back to back, for 3600 s) and a second
-// channel's node that acknowledges and receives every frame; this process drains the receiving
-// rings every 5 ms. Measured over 3 s after a second of warming up: canemud's processor time,
-// simulated seconds per real second, the largest lag a status reply showed, the frames the
-// buses carried against what back-to-back frames at 1 Mbit/s would be, and the frames received.
+// N buses at 1 Mbit/s in real time (the event loop waking at most every batch_us), each with a
+// babbling node (an ephemeral channel's node that a babble fault makes send 000#0102030405060708
+// back to back, for 3600 s) and a second channel's node that acknowledges and receives every
+// frame; this process drains the receiving rings every 5 ms. Measured over 3 s after a second of
+// warming up: canemud's processor time and wake-ups, simulated seconds per real second, the
+// largest lag a status reply showed, the frames the buses carried against what back-to-back
+// frames at 1 Mbit/s would be, and the frames received.
 void BM_BusyBusesRealtime(benchmark::State& state) {
   const auto buses = static_cast<int>(state.range(0));
   char dir[] = "/tmp/canemu-bench-XXXXXX";
   const std::string path = std::string(::mkdtemp(dir)) + "/busy.toml";
   {
     std::ofstream f(path);
-    f << "[simulation]\ntime = \"realtime\"\n";
+    f << "[simulation]\ntime = \"realtime\"\nbatch_us = " << state.range(1) << "\n";
     for (int i = 0; i < buses; ++i) {
       f << "[[bus]]\nname = \"can" << i << "\"\nbitrate = 1000000\n";
     }
@@ -396,6 +398,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
     uint64_t frames = 0;
     uint64_t load_permille = 0;
     uint64_t ticks = 0;
+    uint64_t switches = 0;
   };
   int64_t max_lag_ns = 0;
   const auto sample = [&]() -> std::optional<Sample> {
@@ -410,7 +413,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
       out.frames += b.frames;
       out.load_permille += b.load_permille;
     }
-    out.ticks = cpu_ticks_and_switches(daemon.pid()).first;
+    std::tie(out.ticks, out.switches) = cpu_ticks_and_switches(daemon.pid());
     max_lag_ns = std::max(max_lag_ns, s->lag_ns);
     return out;
   };
@@ -448,6 +451,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
                                               static_cast<double>(::sysconf(_SC_CLK_TCK)) / wall;
     state.counters["sim_seconds_per_second"] =
         static_cast<double>(b->sim_ns - a->sim_ns) / 1e9 / wall;
+    state.counters["wakeups_per_second"] = static_cast<double>(b->switches - a->switches) / wall;
     state.counters["max_lag_ms"] = static_cast<double>(max_lag_ns) / 1e6;
     state.counters["frames_per_second"] = static_cast<double>(b->frames - a->frames) / wall;
     state.counters["received_per_second"] = static_cast<double>(received - received0) / wall;
@@ -463,9 +467,10 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
   ::rmdir(dir);
 }
 BENCHMARK(BM_BusyBusesRealtime)
-    ->ArgName("buses")
-    ->Arg(16)
-    ->Arg(64)
+    ->ArgNames({"buses", "batch_us"})
+    ->Args({16, 50})  // batch_us 50: the default
+    ->Args({64, 50})
+    ->Args({64, 1000})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

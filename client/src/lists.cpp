@@ -96,23 +96,45 @@ Result<DeviceList> fetch_device_list(Connection& c) {
   return tl::unexpected(kept_changing("the device list"));
 }
 
-Result<std::vector<ipc::ClientEntry>> fetch_client_list(Connection& c) {
-  // Clients have no generation: one that comes or goes between pages may be missed or listed
-  // twice, which a list of who is connected right now can live with.
-  std::vector<ipc::ClientEntry> clients;
+namespace {
+
+// Page after page of a list without a generation, `Reply::*entries` holding up to `page`.
+template <class Request, class Reply, class Entry, std::size_t N>
+Result<std::vector<Entry>> every_page(Connection& c, Entry (Reply::*entries)[N]) {
+  std::vector<Entry> all;
   while (true) {
-    auto m = ipc::make_message<ipc::ClientListRequest>();
-    m.first = static_cast<uint16_t>(clients.size());
-    auto r = c.call<ipc::ClientListRequest, ipc::ClientListReply>(m);
+    auto m = ipc::make_message<Request>();
+    m.first = static_cast<uint16_t>(all.size());
+    auto r = c.template call<Request, Reply>(m);
     if (!r) {
       return tl::unexpected(r.error());
     }
-    const uint16_t count = std::min<uint16_t>(r->count, ipc::kClientPage);
-    clients.insert(clients.end(), r->clients, r->clients + count);
-    if (count == 0 || clients.size() >= r->total) {
-      return clients;
+    const std::size_t count = std::min<std::size_t>(r->count, N);
+    const Entry* got = (*r).*entries;
+    all.insert(all.end(), got, got + count);
+    if (count == 0 || all.size() >= r->total) {
+      return all;
     }
   }
+}
+
+}  // namespace
+
+Result<std::vector<ipc::ClientEntry>> fetch_client_list(Connection& c) {
+  // Clients have no generation: one that comes or goes between pages may be missed or listed
+  // twice, which a list of who is connected right now can live with.
+  return every_page<ipc::ClientListRequest, ipc::ClientListReply>(c,
+                                                                  &ipc::ClientListReply::clients);
+}
+
+Result<std::vector<ipc::RecorderEntry>> fetch_recorder_list(Connection& c) {
+  return every_page<ipc::RecorderListRequest, ipc::RecorderListReply>(
+      c, &ipc::RecorderListReply::recorders);
+}
+
+Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c) {
+  return every_page<ipc::BridgeListRequest, ipc::BridgeListReply>(c,
+                                                                  &ipc::BridgeListReply::bridges);
 }
 
 }  // namespace canemu::client

@@ -404,9 +404,10 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       if (before_status) {
         before_status();
       }
+      const auto m = read_as<ipc::RecorderListRequest>(data);
       auto r = std::make_unique<ipc::RecorderListReply>(
           ipc::make_message<ipc::RecorderListReply>(request_id));
-      fill_recorder_list(sim_, *r);
+      fill_recorder_list(sim_, *r, m.first);
       send_reply(send, *r);
       return;
     }
@@ -450,9 +451,10 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       return;
     }
     case ipc::MsgType::bridge_list_request: {
+      const auto m = read_as<ipc::BridgeListRequest>(data);
       auto r = std::make_unique<ipc::BridgeListReply>(
           ipc::make_message<ipc::BridgeListReply>(request_id));
-      fill_bridge_list(sim_, *r);
+      fill_bridge_list(sim_, *r, m.first);
       send_reply(send, *r);
       return;
     }

@@ -227,11 +227,14 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r, std::size_
   r.total = static_cast<uint16_t>(index);
 }
 
-void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& r) {
+void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& r, std::size_t first) {
   const auto& recorders = sim.recorders();
-  r.count = static_cast<uint16_t>(std::min(recorders.size(), ipc::kMaxRecorders));
+  r.total = static_cast<uint16_t>(recorders.size());
+  r.first = static_cast<uint16_t>(first);
+  const std::size_t from = std::min(first, recorders.size());
+  r.count = static_cast<uint16_t>(std::min(recorders.size() - from, ipc::kRecorderPage));
   for (std::size_t i = 0; i < r.count; ++i) {
-    const Recorder& rec = *recorders[i];
+    const Recorder& rec = *recorders[from + i];
     const ipc::CaptureWriter& w = rec.writer();
     ipc::RecorderEntry& e = r.recorders[i];
     ipc::copy_name(e.bus, rec.config().bus);
@@ -246,11 +249,14 @@ void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& r) {
   }
 }
 
-void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
+void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r, std::size_t first) {
   const auto& bridges = sim.bridges();
-  r.count = static_cast<uint16_t>(std::min(bridges.size(), ipc::kMaxBridges));
+  r.total = static_cast<uint16_t>(bridges.size());
+  r.first = static_cast<uint16_t>(first);
+  const std::size_t from = std::min(first, bridges.size());
+  r.count = static_cast<uint16_t>(std::min(bridges.size() - from, ipc::kBridgePage));
   for (std::size_t i = 0; i < r.count; ++i) {
-    Bridge& b = *bridges[i];
+    Bridge& b = *bridges[from + i];
     const BridgeStats& st = b.stats();
     model::FaultConfinement& fc = b.node().controller().confinement();
     ipc::BridgeEntry& e = r.bridges[i];

@@ -3,6 +3,7 @@
 // though the status comes in several pages; one more bus is refused naming the limit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <set>
 #include <string>
@@ -64,11 +65,17 @@ std::string json_bus(std::size_t i, uint64_t frames) {
       frames, i);
 }
 
-// 64 buses and 256 controllers (64 adapters of four), two ephemeral nodes on the last bus that
-// exchange three frames: two pages of buses, two of nodes, two of devices.
+// 64 buses and 256 controllers (64 adapters of four), a recorder on every bus, two ephemeral
+// nodes on the last bus that exchange three frames: two pages of buses, nodes, devices and
+// recorders.
 TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
   testing::TempDir dir;
-  Daemon d("stepped", {"--config=" + write_config(dir, many_buses_config(64, 256))});
+  std::string config = many_buses_config(64, 256);
+  for (int b = 0; b < 64; ++b) {  // a recorder on every bus: two pages of recorders
+    config += fmt::format("[[recorder]]\nbus = \"bus{}\"\npath = \"{}\"\n", b,
+                          (dir.path / fmt::format("bus{}.log", b)).string());
+  }
+  Daemon d("stepped", {"--config=" + write_config(dir, config)});
   auto c = connect(d);
   auto tx = open(c, "bus63", "tx63");
   auto rx = open(c, "bus63", "rx63");
@@ -101,6 +108,17 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
             std::string::npos)
       << j;
   EXPECT_NE(j.find("\"name\" : \"rx63\",\"nodes\" : [\"rx63:0\"]"), std::string::npos) << j;
+  // The recorders: bus63's, on the second page, wrote the three frames.
+  const std::size_t recorder = j.find("{\"bus\" : \"bus63\",\"bytes\"");
+  ASSERT_NE(recorder, std::string::npos) << j;
+  const std::string entry = j.substr(recorder, j.find('}', recorder) - recorder);
+  EXPECT_NE(entry.find("\"frames\" : 3,"), std::string::npos) << entry;
+  EXPECT_NE(entry.find("bus63.log"), std::string::npos) << entry;
+  const std::string log = testing::read_file(dir.path / "bus63.log");
+  EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 3) << log;
+  for (const char* line : {" bus63 001#00\n", " bus63 002#00\n", " bus63 003#00\n"}) {
+    EXPECT_NE(log.find(line), std::string::npos) << log;
+  }
 
   // The tables: a row for every bus and node.
   Cli text(d, {"status"});

@@ -57,21 +57,19 @@ bool is_lin(const ipc::StatusNode& n) {
 
 // Recorders and bridges: what they wrote and every frame they lost (docs/socketcan.md,
 // docs/bridges.md). An LCM bridge's "interface" is lcm:PREFIX, a DDS bridge's dds:PREFIX.
-void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
-                     const ipc::BridgeListReply& bridges) {
+void expose_captures(Exposition& e, const std::vector<ipc::RecorderEntry>& recorders,
+                     const std::vector<ipc::BridgeEntry>& bridges) {
   const auto recorder_label = [&](const ipc::RecorderEntry& r) {
     return fmt::format("bus=\"{}\",path=\"{}\"", label(ipc::name_of(r.bus)),
                        label(ipc::name_of(r.path)));
   };
   e.family("canemu_recorder_frames_total", "counter", "Frames a recorder wrote to disk.");
-  for (uint16_t i = 0; i < recorders.count; ++i) {
-    e.sample("canemu_recorder_frames_total", recorder_label(recorders.recorders[i]),
-             recorders.recorders[i].frames);
+  for (const ipc::RecorderEntry& r : recorders) {
+    e.sample("canemu_recorder_frames_total", recorder_label(r), r.frames);
   }
   e.family("canemu_recorder_lost_total", "counter", "Frames a recorder's failed writes lost.");
-  for (uint16_t i = 0; i < recorders.count; ++i) {
-    e.sample("canemu_recorder_lost_total", recorder_label(recorders.recorders[i]),
-             recorders.recorders[i].lost);
+  for (const ipc::RecorderEntry& r : recorders) {
+    e.sample("canemu_recorder_lost_total", recorder_label(r), r.lost);
   }
   const auto bridge_label = [&](const ipc::BridgeEntry& b, std::string_view key,
                                 std::string_view value) {
@@ -83,16 +81,14 @@ void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
                        label(interface), key, value);
   };
   e.family("canemu_bridge_frames_total", "counter", "Frames a bridge passed on.");
-  for (uint16_t i = 0; i < bridges.count; ++i) {
-    const ipc::BridgeEntry& b = bridges.bridges[i];
+  for (const ipc::BridgeEntry& b : bridges) {
     e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "to_interface"),
              b.to_interface);
     e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "from_interface"),
              b.from_interface);
   }
   e.family("canemu_bridge_dropped_total", "counter", "Frames a bridge could not pass.");
-  for (uint16_t i = 0; i < bridges.count; ++i) {
-    const ipc::BridgeEntry& b = bridges.bridges[i];
+  for (const ipc::BridgeEntry& b : bridges) {
     for (const auto& [reason, count] :
          {std::pair<const char*, uint64_t>{"interface", b.to_interface_dropped},
           {"kernel", b.kernel_dropped},
@@ -105,7 +101,8 @@ void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
 }
 
 std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
-                   const ipc::RecorderListReply& recorders, const ipc::BridgeListReply& bridges) {
+                   const std::vector<ipc::RecorderEntry>& recorders,
+                   const std::vector<ipc::BridgeEntry>& bridges) {
   Exposition e;
   e.family("canemu_sim_time_seconds", "gauge", "Simulated time.");
   e.sample("canemu_sim_time_seconds", "",

@@ -50,8 +50,8 @@ std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
 // toml++ writes the JSON (names escaped as JSON wants them), one line.
 void print_json(const client::Connection& c, const client::Status& s, const std::string& mode,
                 const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
-                const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
-                const ipc::BridgeListReply& bridges) {
+                const ipc::FaultListReply& faults, const std::vector<ipc::RecorderEntry>& recorders,
+                const std::vector<ipc::BridgeEntry>& bridges) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array buses;
   for (const ipc::StatusBus& b : s.buses) {
@@ -119,8 +119,9 @@ void print_json(const client::Connection& c, const client::Status& s, const std:
 
 void print_tables(const client::Connection& c, const client::Status& s, const std::string& mode,
                   const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
-                  const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
-                  const ipc::BridgeListReply& bridges) {
+                  const ipc::FaultListReply& faults,
+                  const std::vector<ipc::RecorderEntry>& recorders,
+                  const std::vector<ipc::BridgeEntry>& bridges) {
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
               s.client_count == 1 ? "" : "s");
@@ -162,10 +163,10 @@ void print_tables(const client::Connection& c, const client::Status& s, const st
   if (faults.total > 0) {
     print_faults(faults);
   }
-  if (recorders.count > 0) {
+  if (!recorders.empty()) {
     print_recorders(recorders);
   }
-  if (bridges.count > 0) {
+  if (!bridges.empty()) {
     print_bridges(bridges);
   }
 }

@@ -1,6 +1,6 @@
-// The daemon's status, device list and client list whole: each comes in pages (StatusRequest,
-// DeviceListRequest, ClientListRequest name the first entry they want); these ask for page
-// after page until they have every entry. A node or device that comes or goes meanwhile
+// The daemon's status and its lists of devices, clients, recorders and bridges whole: each
+// comes in pages (the requests name the first entry they want); these ask for page after page
+// until they have every entry. A node or device that comes or goes meanwhile
 // (the generation changes) makes them start over, so the pages always fit together.
 #pragma once
 
@@ -38,5 +38,9 @@ struct DeviceList {
 Result<Status> fetch_status(Connection& c);
 Result<DeviceList> fetch_device_list(Connection& c);
 Result<std::vector<ipc::ClientEntry>> fetch_client_list(Connection& c);
+// Recorders and bridges have no generation either: one added or removed between pages may be
+// missed or listed twice.
+Result<std::vector<ipc::RecorderEntry>> fetch_recorder_list(Connection& c);
+Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c);
 
 }  // namespace canemu::client

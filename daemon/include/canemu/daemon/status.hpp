@@ -17,8 +17,9 @@ void fill_status(const Simulation& sim, ipc::StatusReply& reply, std::size_t fir
                  std::size_t first_node = 0);
 void fill_device_list(const Simulation& sim, ipc::DeviceListReply& reply, std::size_t first = 0);
 // The recorders ([[recorder]]) with what they wrote and lost.
-void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& reply);
+void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& reply,
+                        std::size_t first = 0);
 // The bridges (SocketCAN and LCM) with their node's state and their counts.
-void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& reply);
+void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& reply, std::size_t first = 0);
 
 }  // namespace canemu::daemon

@@ -143,6 +143,8 @@ TEST(StatusPages, SixtyFourBusesAndTwoHundredFiftySixNodesInTwoPagesEach) {
 
 TEST(DevicePages, AdaptersBeyondAPageComeOnTheNextWithTheSameGeneration) {
   auto sim = many_buses_world(64, 256);  // 64 adapters: exactly a page
+  auto before = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>());
+  fill_status(*sim, *before, 0, 0);
   auto lease = sim->add_ephemeral("eph1", 5, sim->spare_node(5), 4712);
   auto first = std::make_unique<ipc::DeviceListReply>(ipc::make_message<ipc::DeviceListReply>());
   fill_device_list(*sim, *first);
@@ -164,6 +166,8 @@ TEST(DevicePages, AdaptersBeyondAPageComeOnTheNextWithTheSameGeneration) {
   auto status = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>());
   fill_status(*sim, *status, 0, 256);
   EXPECT_EQ(status->generation, first->generation);
+  EXPECT_NE(status->generation, before->generation);  // pages from before do not fit
+  EXPECT_EQ(before->node_total, 256u);
   EXPECT_EQ(status->node_total, 257u);
   ASSERT_EQ(status->node_count, 1u);
   EXPECT_EQ(ipc::name_of(status->nodes[0].name), "eph1:0");

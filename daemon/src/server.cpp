@@ -452,6 +452,7 @@ void Server::send_notifications() {
 
 void Server::fill_clients(ipc::ClientListReply& r) {
   // The page from r.first on; total counts them all.
+  r.total = 0;
   std::size_t n = 0;
   for (auto& [fd, c] : clients_) {
     if (c.closing || !c.refused.empty()) {

@@ -18,6 +18,8 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
   r.first_bus = static_cast<uint16_t>(first_bus);
   r.first_node = static_cast<uint16_t>(first_node);
   r.generation = sim.devices().generation();
+  r.bus_count = 0;  // the reply may be filled again
+  r.node_count = 0;
   const std::size_t last_bus = std::min(sim.bus_count(), first_bus + ipc::kStatusPageBuses);
   for (std::size_t i = first_bus; i < last_bus; ++i) {
     const BusConfig& c = sim.bus_config(i);
@@ -133,6 +135,7 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r, std::size_
   const DeviceRegistry& devices = sim.devices();
   r.generation = devices.generation();
   r.first = static_cast<uint16_t>(first);
+  r.count = 0;  // the reply may be filled again
   // Every device counts towards total; the page holds those from `first` on.
   std::size_t index = 0;
   auto next_slot = [&]() -> ipc::DeviceEntry* {

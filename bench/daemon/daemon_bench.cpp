@@ -6,16 +6,23 @@
 // - how long after a client is killed its resources are freed (target: 100 ms);
 // - peak resident memory of canemud on the default configuration with 64 clients connected,
 //   each with an open channel (target <= 64 MB);
-// - what 16 idle buses with two adapters and a connected client cost canemud in real time:
-//   processor time and wake-ups per second (target: nothing).
+// - what 16 and 64 idle buses with adapters and a connected client cost canemud in real time:
+//   processor time and wake-ups per second (target: nothing);
+// - 16 and 64 buses at 1 Mbit/s kept at full load by babbling nodes in real time: canemud's
+//   share of a core and whether simulated time keeps up (target: 64 buses keep up with at most
+//   50 % of a core).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -26,6 +33,7 @@
 #include "../../tests/support/canemud_process.hpp"
 #include "../support/latency.hpp"
 #include "canemu/client/channel.hpp"
+#include "canemu/client/lists.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 
 namespace {
@@ -250,18 +258,30 @@ std::pair<uint64_t, uint64_t> cpu_ticks_and_switches(pid_t pid) {
   return {ticks, switches};
 }
 
+// N idle buses; two adapters on the first three, and with 64 buses 64 more adapters with four
+// controllers each (256 controllers on the 64 buses).
 void BM_IdleBusesCostNothing(benchmark::State& state) {
+  const auto buses = static_cast<int>(state.range(0));
   char dir[] = "/tmp/canemu-bench-XXXXXX";
   const std::string path = std::string(::mkdtemp(dir)) + "/idle.toml";
   {
     std::ofstream f(path);
     f << "[simulation]\ntime = \"realtime\"\n";
-    for (int i = 0; i < 16; ++i) {
+    for (int i = 0; i < buses; ++i) {
       f << "[[bus]]\nname = \"can" << i << "\"\nbitrate = 500000\n";
     }
     f << "[[device]]\nname = \"a\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\", "
          "\"can1\"]\n[[device]]\nname = \"b\"\nmodel = \"ixxat-usb-to-can\"\n"
          "controllers = [\"can2\"]\n";
+    if (buses == 64) {
+      for (int d = 0; d < 63; ++d) {  // 253 more controllers: 256 in all
+        f << "[[device]]\nname = \"d" << d << "\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [";
+        for (int k = 0; k < (d == 62 ? 1 : 4); ++k) {
+          f << (k == 0 ? "" : ", ") << "\"can" << (4 * d + k) % 64 << "\"";
+        }
+        f << "]\n";
+      }
+    }
   }
   testing::CanemudProcess daemon(CANEMUD_PATH, {"--config=" + path});
   auto c = client::Connection::open(daemon.socket(), "bench-idle");
@@ -289,6 +309,169 @@ void BM_IdleBusesCostNothing(benchmark::State& state) {
   std::remove(path.c_str());
   ::rmdir(dir);
 }
-BENCHMARK(BM_IdleBusesCostNothing)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IdleBusesCostNothing)
+    ->ArgName("buses")
+    ->Arg(16)
+    ->Arg(64)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// N buses at 1 Mbit/s in real time (the event loop waking at most every batch_us), each with a
+// babbling node (an ephemeral channel's node that a babble fault makes send 000#0102030405060708
+// back to back, for 3600 s) and a second channel's node that acknowledges and receives every
+// frame; this process drains the receiving rings every 5 ms. Measured over 3 s after a second of
+// warming up: canemud's processor time and wake-ups, simulated seconds per real second, the
+// largest lag a status reply showed, the frames the buses carried against what back-to-back
+// frames at 1 Mbit/s would be, and the frames received.
+void BM_BusyBusesRealtime(benchmark::State& state) {
+  const auto buses = static_cast<int>(state.range(0));
+  char dir[] = "/tmp/canemu-bench-XXXXXX";
+  const std::string path = std::string(::mkdtemp(dir)) + "/busy.toml";
+  {
+    std::ofstream f(path);
+    f << "[simulation]\ntime = \"realtime\"\nbatch_us = " << state.range(1) << "\n";
+    for (int i = 0; i < buses; ++i) {
+      f << "[[bus]]\nname = \"can" << i << "\"\nbitrate = 1000000\n";
+    }
+  }
+  testing::CanemudProcess daemon(CANEMUD_PATH, {"--config=" + path});
+  auto c = client::Connection::open(daemon.socket(), "bench-busy");
+  if (!daemon.ready() || !c) {
+    state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
+    return;
+  }
+  // A connection per bus (a client may open 16 channels), none of which moves once it has
+  // channels.
+  std::vector<client::Connection> owners;
+  owners.reserve(static_cast<std::size_t>(buses));
+  std::vector<client::Channel> babblers;
+  std::vector<client::Channel> receivers;
+  std::string scenario = "[scenario]\nname = \"babble\"\n";
+  for (int i = 0; i < buses; ++i) {
+    auto owner = client::Connection::open(daemon.socket(), "bench-bus" + std::to_string(i));
+    if (!owner) {
+      state.SkipWithError(owner.error().message.c_str());
+      return;
+    }
+    owners.push_back(std::move(*owner));
+    client::ChannelOptions o;
+    o.bus = "can" + std::to_string(i);
+    o.device = "tx" + std::to_string(i);
+    o.rx_capacity = 16;
+    o.tx_capacity = 16;
+    auto tx = client::Channel::open(owners.back(), o);
+    o.device = "rx" + std::to_string(i);
+    o.rx_capacity = 2048;
+    auto rx = client::Channel::open(owners.back(), o);
+    if (!tx || !rx) {
+      state.SkipWithError((!tx ? tx.error() : rx.error()).message.c_str());
+      return;
+    }
+    babblers.push_back(std::move(*tx));
+    receivers.push_back(std::move(*rx));
+    scenario += "[[fault]]\nat = \"0s\"\nnode = \"tx" + std::to_string(i) +
+                ":0\"\neffect = \"babble\"\nid = 0\ndata = [1, 2, 3, 4, 5, 6, 7, 8]\n"
+                "duration = \"3600s\"\n";
+  }
+  auto load = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+  ipc::copy_name(load->source, "bench");
+  load->length = static_cast<uint32_t>(scenario.size());
+  std::memcpy(load->text, scenario.data(), std::min(scenario.size(), sizeof load->text));
+  auto loaded = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
+  if (!loaded || loaded->applied != 1) {
+    state.SkipWithError(loaded ? loaded->errors : loaded.error().message.c_str());
+    return;
+  }
+  uint64_t received = 0;
+  const auto drain = [&] {
+    ipc::ChannelMessage m;
+    for (client::Channel& r : receivers) {
+      while (r.rx().get(&m) == ipc::RingStatus::ok) {
+        ++received;
+      }
+    }
+  };
+  // Sim time, bus frames summed, the largest lag seen and the load of the buses (permille).
+  struct Sample {
+    int64_t wall_ns = 0;
+    int64_t sim_ns = 0;
+    uint64_t frames = 0;
+    uint64_t load_permille = 0;
+    uint64_t ticks = 0;
+    uint64_t switches = 0;
+  };
+  int64_t max_lag_ns = 0;
+  const auto sample = [&]() -> std::optional<Sample> {
+    auto s = client::fetch_status(*c);
+    if (!s) {
+      return std::nullopt;
+    }
+    Sample out;
+    out.wall_ns = now_ns();
+    out.sim_ns = s->sim_time_ns;
+    for (const ipc::StatusBus& b : s->buses) {
+      out.frames += b.frames;
+      out.load_permille += b.load_permille;
+    }
+    std::tie(out.ticks, out.switches) = cpu_ticks_and_switches(daemon.pid());
+    max_lag_ns = std::max(max_lag_ns, s->lag_ns);
+    return out;
+  };
+  const auto run_for = [&](int64_t ns) {
+    const int64_t end = now_ns() + ns;
+    int64_t next_status = now_ns();
+    while (now_ns() < end) {
+      drain();
+      if (now_ns() >= next_status) {  // the lag, five times a second
+        auto r =
+            c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+        if (r) {
+          max_lag_ns = std::max(max_lag_ns, r->lag_ns);
+        }
+        next_status += 200'000'000;
+      }
+      sleep_ns(5'000'000);
+    }
+  };
+  constexpr int64_t kWarmUpNs = 1'000'000'000;
+  constexpr int64_t kWindowNs = 3'000'000'000;
+  for (auto _ : state) {
+    run_for(kWarmUpNs);
+    max_lag_ns = 0;
+    const uint64_t received0 = received;
+    const auto a = sample();
+    run_for(kWindowNs);
+    const auto b = sample();
+    if (!a || !b) {
+      state.SkipWithError("no status");
+      return;
+    }
+    const double wall = static_cast<double>(b->wall_ns - a->wall_ns) / 1e9;
+    state.counters["cpu_percent_of_a_core"] = 100.0 * static_cast<double>(b->ticks - a->ticks) /
+                                              static_cast<double>(::sysconf(_SC_CLK_TCK)) / wall;
+    state.counters["sim_seconds_per_second"] =
+        static_cast<double>(b->sim_ns - a->sim_ns) / 1e9 / wall;
+    state.counters["wakeups_per_second"] = static_cast<double>(b->switches - a->switches) / wall;
+    state.counters["max_lag_ms"] = static_cast<double>(max_lag_ns) / 1e6;
+    state.counters["frames_per_second"] = static_cast<double>(b->frames - a->frames) / wall;
+    state.counters["received_per_second"] = static_cast<double>(received - received0) / wall;
+    state.counters["mean_bus_load_percent"] =
+        static_cast<double>(b->load_permille) / 10.0 / static_cast<double>(buses);
+  }
+  // What the buses would carry at full load: back-to-back frames and 3 bits of intermission.
+  const uint8_t data[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+  const auto frame = model::Frame::classic(0, std::span<const uint8_t>(data, 8));
+  const double bits = static_cast<double>(model::encode(*frame).length + 3);
+  state.counters["full_load_frames_per_second"] = static_cast<double>(buses) * 1e6 / bits;
+  std::remove(path.c_str());
+  ::rmdir(dir);
+}
+BENCHMARK(BM_BusyBusesRealtime)
+    ->ArgNames({"buses", "batch_us"})
+    ->Args({16, 50})  // batch_us 50: the default
+    ->Args({64, 50})
+    ->Args({64, 1000})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace

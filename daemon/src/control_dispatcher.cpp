@@ -311,8 +311,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       if (before_status) {
         before_status();
       }
+      const auto m = read_as<ipc::StatusRequest>(data);
       auto r = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>(request_id));
-      fill_status(sim_, *r);
+      fill_status(sim_, *r, m.first_bus, m.first_node);
       r->time_mode = static_cast<uint8_t>(time_.mode == TimeMode::realtime ? 0
                                           : time_.mode == TimeMode::scaled ? 1
                                                                            : 2);
@@ -392,9 +393,10 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       return;
     }
     case ipc::MsgType::device_list_request: {
+      const auto m = read_as<ipc::DeviceListRequest>(data);
       auto r = std::make_unique<ipc::DeviceListReply>(
           ipc::make_message<ipc::DeviceListReply>(request_id));
-      fill_device_list(sim_, *r);
+      fill_device_list(sim_, *r, m.first);
       send_reply(send, *r);
       return;
     }
@@ -402,9 +404,10 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       if (before_status) {
         before_status();
       }
+      const auto m = read_as<ipc::RecorderListRequest>(data);
       auto r = std::make_unique<ipc::RecorderListReply>(
           ipc::make_message<ipc::RecorderListReply>(request_id));
-      fill_recorder_list(sim_, *r);
+      fill_recorder_list(sim_, *r, m.first);
       send_reply(send, *r);
       return;
     }
@@ -448,15 +451,18 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       return;
     }
     case ipc::MsgType::bridge_list_request: {
+      const auto m = read_as<ipc::BridgeListRequest>(data);
       auto r = std::make_unique<ipc::BridgeListReply>(
           ipc::make_message<ipc::BridgeListReply>(request_id));
-      fill_bridge_list(sim_, *r);
+      fill_bridge_list(sim_, *r, m.first);
       send_reply(send, *r);
       return;
     }
     case ipc::MsgType::client_list_request: {
+      const auto m = read_as<ipc::ClientListRequest>(data);
       auto r = std::make_unique<ipc::ClientListReply>(
           ipc::make_message<ipc::ClientListReply>(request_id));
+      r->first = m.first;
       if (fill_clients) {
         fill_clients(*r);
       }

@@ -451,13 +451,14 @@ void Server::send_notifications() {
 }
 
 void Server::fill_clients(ipc::ClientListReply& r) {
+  // The page from r.first on; total counts them all.
+  r.total = 0;
   std::size_t n = 0;
   for (auto& [fd, c] : clients_) {
     if (c.closing || !c.refused.empty()) {
       continue;
     }
-    ++r.total;
-    if (n < ipc::kMaxClients) {
+    if (r.total++ >= r.first && n < ipc::kClientPage) {
       ipc::ClientEntry& e = r.clients[n++];
       ipc::copy_name(e.name, c.session.name);
       e.pid = c.session.pid;

@@ -10,14 +10,21 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
-void fill_status(const Simulation& sim, ipc::StatusReply& r) {
+void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_bus,
+                 std::size_t first_node) {
   const SimTime now = sim.scheduler().now();
   r.sim_time_ns = now.ns();
-  r.bus_count = static_cast<uint16_t>(std::min(sim.bus_count(), ipc::kMaxStatusBuses));
-  for (std::size_t i = 0; i < r.bus_count; ++i) {
+  r.bus_total = static_cast<uint16_t>(sim.bus_count());
+  r.first_bus = static_cast<uint16_t>(first_bus);
+  r.first_node = static_cast<uint16_t>(first_node);
+  r.generation = sim.devices().generation();
+  r.bus_count = 0;  // the reply may be filled again
+  r.node_count = 0;
+  const std::size_t last_bus = std::min(sim.bus_count(), first_bus + ipc::kStatusPageBuses);
+  for (std::size_t i = first_bus; i < last_bus; ++i) {
     const BusConfig& c = sim.bus_config(i);
     const CanBus& b = sim.bus(i);
-    ipc::StatusBus& s = r.buses[i];
+    ipc::StatusBus& s = r.buses[r.bus_count++];
     ipc::copy_name(s.name, c.name);
     s.kind = static_cast<uint8_t>(c.kind);
     s.low_speed = c.low_speed ? 1 : 0;
@@ -35,40 +42,48 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
     s.frames = b.frames_on_bus();
     s.error_frames = b.error_frames_on_bus();
   }
-  std::size_t n = 0;
+  // Every node counts towards node_total; the page holds those from first_node on.
+  std::size_t index = 0;
+  auto next_slot = [&]() -> ipc::StatusNode* {
+    const std::size_t i = index++;
+    if (i < first_node || r.node_count == ipc::kStatusPageNodes) {
+      return nullptr;
+    }
+    return &r.nodes[r.node_count++];
+  };
   auto add_controller = [&](const std::string& name, std::size_t bus, CanController& controller,
                             NodeId id) {
-    if (n == ipc::kMaxStatusNodes) {
+    ipc::StatusNode* s = next_slot();
+    if (s == nullptr) {
       return;
     }
-    ipc::StatusNode& s = r.nodes[n++];
-    ipc::copy_name(s.name, name);
-    s.bus = static_cast<uint16_t>(bus);
+    ipc::copy_name(s->name, name);
+    s->bus = static_cast<uint16_t>(bus);
     FaultConfinement& fc = controller.confinement();
-    s.state = static_cast<uint8_t>(fc.state());
-    s.tec = fc.tec();
-    s.rec = fc.rec();
+    s->state = static_cast<uint8_t>(fc.state());
+    s->tec = fc.tec();
+    s->rec = fc.rec();
     const NodeStats& st = sim.bus(bus).stats(id);
-    s.frames_sent = st.frames_sent;
-    s.frames_received = st.frames_received;
-    s.errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
+    s->frames_sent = st.frames_sent;
+    s->frames_received = st.frames_received;
+    s->errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
   };
   auto add_node = [&](const std::string& name, std::size_t bus, HostedNode& node) {
     add_controller(name, bus, node.controller(), node.node());
   };
   // A LIN controller: online or offline, and what it did (no error counters).
   auto add_lin = [&](const std::string& name, std::size_t bus, const ixxat::LinLine& line) {
-    if (n == ipc::kMaxStatusNodes) {
+    ipc::StatusNode* s = next_slot();
+    if (s == nullptr) {
       return;
     }
-    ipc::StatusNode& s = r.nodes[n++];
-    ipc::copy_name(s.name, name);
-    s.bus = static_cast<uint16_t>(bus);
-    s.lin = static_cast<uint8_t>(line.online() ? ipc::WireLinState::online
-                                               : ipc::WireLinState::offline);
-    s.frames_sent = line.stats().frames_sent;
-    s.frames_received = line.stats().frames_received;
-    s.errors = line.stats().errors;
+    ipc::copy_name(s->name, name);
+    s->bus = static_cast<uint16_t>(bus);
+    s->lin = static_cast<uint8_t>(line.online() ? ipc::WireLinState::online
+                                                : ipc::WireLinState::offline);
+    s->frames_sent = line.stats().frames_sent;
+    s->frames_received = line.stats().frames_received;
+    s->errors = line.stats().errors;
   };
   const DeviceRegistry& devices = sim.devices();
   for (const DeviceRegistry::Configured& d : devices.configured()) {
@@ -87,18 +102,18 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
   }
   // Simulated LIN nodes: powered (online) or switched off; sent: headers and responses.
   for (const SimulatedLinNode& l : sim.lin_nodes()) {
-    if (n == ipc::kMaxStatusNodes) {
-      break;
+    ipc::StatusNode* s = next_slot();
+    if (s == nullptr) {
+      continue;
     }
-    ipc::StatusNode& s = r.nodes[n++];
-    ipc::copy_name(s.name, l.name);
-    s.bus = static_cast<uint16_t>(l.bus);
-    s.lin = static_cast<uint8_t>(l.ecu->powered() ? ipc::WireLinState::online
-                                                  : ipc::WireLinState::offline);
+    ipc::copy_name(s->name, l.name);
+    s->bus = static_cast<uint16_t>(l.bus);
+    s->lin = static_cast<uint8_t>(l.ecu->powered() ? ipc::WireLinState::online
+                                                   : ipc::WireLinState::offline);
     const lin::EcuCounters& c = l.ecu->counters();
-    s.frames_sent = c.headers + c.responses;
-    s.frames_received = c.frames;
-    s.errors = c.errors;
+    s->frames_sent = c.headers + c.responses;
+    s->frames_received = c.frames;
+    s->errors = c.errors;
   }
   // X-CAN-2i interfaces: the 82527's counters are the model's (the chip shows them to nobody
   // else).
@@ -113,21 +128,30 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r) {
     model::I82527& chip = s.device->module().chip();
     add_controller(s.config.name + ":0", s.bus, chip, chip.node());
   }
-  r.node_count = static_cast<uint16_t>(n);
+  r.node_total = static_cast<uint16_t>(index);
 }
 
-void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
+void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r, std::size_t first) {
   const DeviceRegistry& devices = sim.devices();
   r.generation = devices.generation();
-  r.total = static_cast<uint16_t>(devices.configured().size() + devices.xcan().size() +
-                                  devices.ephemeral().size() + devices.lin_ephemeral().size());
-  std::size_t n = 0;
+  r.first = static_cast<uint16_t>(first);
+  r.count = 0;  // the reply may be filled again
+  // Every device counts towards total; the page holds those from `first` on.
+  std::size_t index = 0;
+  auto next_slot = [&]() -> ipc::DeviceEntry* {
+    const std::size_t i = index++;
+    if (i < first || r.count == ipc::kDevicePage) {
+      return nullptr;
+    }
+    return &r.devices[r.count++];
+  };
   for (const DeviceRegistry::Configured& d : devices.configured()) {
-    if (n == ipc::kMaxDevices) {
-      break;
+    ipc::DeviceEntry* slot = next_slot();
+    if (slot == nullptr) {
+      continue;
     }
     const DeviceConfig& c = d.config;
-    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::DeviceEntry& e = *slot;
     ipc::copy_name(e.name, c.name);
     e.model = static_cast<uint8_t>(c.model == DeviceModel::ixxat_usb_to_can
                                        ? ipc::WireDeviceModel::ixxat_usb_to_can
@@ -153,10 +177,11 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
   // X-CAN-2i modules: no VCI object id (the VCI's device list leaves them out); their
   // interfaces are the nodes NAME:0 and NAME:1.
   for (const DeviceRegistry::Xcan& x : devices.xcan()) {
-    if (n == ipc::kMaxDevices) {
-      break;
+    ipc::DeviceEntry* slot = next_slot();
+    if (slot == nullptr) {
+      continue;
     }
-    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::DeviceEntry& e = *slot;
     ipc::copy_name(e.name, x.config.name);
     e.model = static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_x_can_2i);
     e.controller_count = static_cast<uint8_t>(x.config.controllers.size());
@@ -169,10 +194,11 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
   // adapter when `vci_id` is set.
   auto add_ephemeral = [&](const std::string& name, std::size_t bus, uint32_t owner_pid,
                            uint64_t vci_id, SimTime epoch) -> ipc::DeviceEntry* {
-    if (n == ipc::kMaxDevices) {
+    ipc::DeviceEntry* slot = next_slot();
+    if (slot == nullptr) {
       return nullptr;
     }
-    ipc::DeviceEntry& e = r.devices[n++];
+    ipc::DeviceEntry& e = *slot;
     ipc::copy_name(e.name, name);
     e.model = static_cast<uint8_t>(vci_id != 0 ? ipc::WireDeviceModel::ixxat_usb_to_can
                                                : ipc::WireDeviceModel::ephemeral);
@@ -201,14 +227,17 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r) {
       e->controller_fd[0] = static_cast<uint8_t>(ipc::WireControllerKind::lin);
     }
   }
-  r.count = static_cast<uint16_t>(n);
+  r.total = static_cast<uint16_t>(index);
 }
 
-void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& r) {
+void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& r, std::size_t first) {
   const auto& recorders = sim.recorders();
-  r.count = static_cast<uint16_t>(std::min(recorders.size(), ipc::kMaxRecorders));
+  r.total = static_cast<uint16_t>(recorders.size());
+  r.first = static_cast<uint16_t>(first);
+  const std::size_t from = std::min(first, recorders.size());
+  r.count = static_cast<uint16_t>(std::min(recorders.size() - from, ipc::kRecorderPage));
   for (std::size_t i = 0; i < r.count; ++i) {
-    const Recorder& rec = *recorders[i];
+    const Recorder& rec = *recorders[from + i];
     const ipc::CaptureWriter& w = rec.writer();
     ipc::RecorderEntry& e = r.recorders[i];
     ipc::copy_name(e.bus, rec.config().bus);
@@ -223,11 +252,14 @@ void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& r) {
   }
 }
 
-void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r) {
+void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r, std::size_t first) {
   const auto& bridges = sim.bridges();
-  r.count = static_cast<uint16_t>(std::min(bridges.size(), ipc::kMaxBridges));
+  r.total = static_cast<uint16_t>(bridges.size());
+  r.first = static_cast<uint16_t>(first);
+  const std::size_t from = std::min(first, bridges.size());
+  r.count = static_cast<uint16_t>(std::min(bridges.size() - from, ipc::kBridgePage));
   for (std::size_t i = 0; i < r.count; ++i) {
-    Bridge& b = *bridges[i];
+    Bridge& b = *bridges[from + i];
     const BridgeStats& st = b.stats();
     model::FaultConfinement& fc = b.node().controller().confinement();
     ipc::BridgeEntry& e = r.bridges[i];

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "../support/many_buses.hpp"
+
 namespace canemu::daemon {
 namespace {
 
@@ -160,6 +162,20 @@ controllers = ["can9"]
   EXPECT_EQ(e[2], "t.toml:7:8: bus[1].name: a bus named \"can0\" exists already");
   EXPECT_EQ(e[3], "t.toml:8:8: bus[1].kind: \"flexray\" is not a bus kind (can, can-fd, lin)");
   EXPECT_EQ(e[4], "t.toml:12:15: device[0].controllers: no bus is named \"can9\"");
+}
+
+TEST(Config, TakesSixtyFourBusesAndTwoHundredFiftySixControllersAndNoMore) {
+  auto most = parse_config(testing::many_buses_config(64, 256), "t.toml");
+  ASSERT_TRUE(most) << most.error().front();
+  EXPECT_EQ(most->buses.size(), 64u);
+  EXPECT_EQ(most->devices.size(), 64u);
+  EXPECT_EQ(most->devices[63].controllers.back(), "bus63");
+  const auto buses = errors_of(testing::many_buses_config(65, 4));
+  ASSERT_EQ(buses.size(), 1u);
+  EXPECT_EQ(buses[0], "t.toml:1:1: bus: 65 buses; at most 64");
+  const auto controllers = errors_of(testing::many_buses_config(64, 257));
+  ASSERT_EQ(controllers.size(), 1u);
+  EXPECT_EQ(controllers[0], "t.toml:1:1: device: 257 controllers in all; at most 256");
 }
 
 TEST(Config, RejectsControllersOnLinBusesAndDataRatesOnClassicBuses) {

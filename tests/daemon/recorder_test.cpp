@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "../support/lin_reference.hpp"
+#include "../support/many_buses.hpp"
 #include "../support/temp_dir.hpp"
 
 #include "canemu/daemon/simulation.hpp"
@@ -355,6 +356,39 @@ TEST(RecorderConfig, ReadsEveryKeyAndNamesEveryMistake) {
       "t.toml:14:12: recorder[1].max_size: 5 bytes is outside 1024..1099511627776 (or 0: no "
       "rotation)"};
   EXPECT_EQ(bad.error(), expected);
+}
+
+// A recorder on each of 33 buses: a page of 32, then the 33rd; a page beyond the end is empty.
+TEST(RecorderList, ComesInPages) {
+  TempDir dir;
+  std::string text = testing::many_buses_config(40, 0);
+  for (int b = 0; b < 33; ++b) {
+    text += fmt::format("[[recorder]]\nbus = \"bus{}\"\npath = \"{}\"\n", b,
+                        (dir.path / fmt::format("bus{}.log", b)).string());
+  }
+  auto cfg = parse_config(text, "/etc/canemu/test.toml");
+  ASSERT_TRUE(cfg) << cfg.error().front();
+  auto sim = Simulation::build(*cfg);
+  ASSERT_TRUE(sim) << sim.error().front();
+  auto first = std::make_unique<ipc::RecorderListReply>();
+  fill_recorder_list(**sim, *first);
+  EXPECT_EQ(first->total, 33u);
+  EXPECT_EQ(first->first, 0u);
+  ASSERT_EQ(first->count, ipc::kRecorderPage);
+  for (std::size_t i = 0; i < ipc::kRecorderPage; ++i) {
+    EXPECT_EQ(ipc::name_of(first->recorders[i].bus), fmt::format("bus{}", i));
+  }
+  auto second = std::make_unique<ipc::RecorderListReply>();
+  fill_recorder_list(**sim, *second, ipc::kRecorderPage);
+  EXPECT_EQ(second->total, 33u);
+  EXPECT_EQ(second->first, ipc::kRecorderPage);
+  ASSERT_EQ(second->count, 1u);
+  EXPECT_EQ(ipc::name_of(second->recorders[0].bus), "bus32");
+  EXPECT_EQ(ipc::name_of(second->recorders[0].path), (dir.path / "bus32.log").string());
+  auto beyond = std::make_unique<ipc::RecorderListReply>();
+  fill_recorder_list(**sim, *beyond, 40);
+  EXPECT_EQ(beyond->count, 0u);
+  EXPECT_EQ(beyond->total, 33u);
 }
 
 }  // namespace

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
+#include "../support/many_buses.hpp"
 #include "canemu/daemon/simulation.hpp"
 
 namespace canemu::daemon {
@@ -80,6 +83,95 @@ TEST(Status, ListsTheBusesThenEveryDevicesNodes) {
   EXPECT_EQ(r.nodes[3].bus, 1u);
   EXPECT_EQ(r.nodes[3].state, static_cast<uint8_t>(model::ErrorState::active));
   EXPECT_EQ(r.nodes[3].tec, 0u);
+}
+
+std::unique_ptr<Simulation> many_buses_world(std::size_t buses, std::size_t controllers) {
+  auto config = parse_config(testing::many_buses_config(buses, controllers), "many.toml");
+  EXPECT_TRUE(config) << (config ? "" : config.error().front());
+  return std::move(*Simulation::build(*config));
+}
+
+// The page from (first_bus, first_node) on: its buses and nodes must be exactly those of a
+// world with `buses` buses and `controllers` controllers (many_buses_config) from there on.
+void expect_page(const Simulation& sim, std::size_t buses, std::size_t controllers,
+                 std::size_t first_bus, std::size_t first_node, std::size_t bus_count,
+                 std::size_t node_count) {
+  auto r = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>());
+  fill_status(sim, *r, first_bus, first_node);
+  EXPECT_EQ(r->bus_total, buses);
+  EXPECT_EQ(r->node_total, controllers);
+  EXPECT_EQ(r->first_bus, first_bus);
+  EXPECT_EQ(r->first_node, first_node);
+  ASSERT_EQ(r->bus_count, bus_count);
+  ASSERT_EQ(r->node_count, node_count);
+  for (std::size_t i = 0; i < bus_count; ++i) {
+    EXPECT_EQ(ipc::name_of(r->buses[i].name), fmt::format("bus{}", first_bus + i));
+    EXPECT_EQ(r->buses[i].bitrate, 1'000'000u);
+  }
+  for (std::size_t i = 0; i < node_count; ++i) {
+    const std::size_t k = first_node + i;
+    EXPECT_EQ(ipc::name_of(r->nodes[i].name), testing::many_buses_node(k));
+    EXPECT_EQ(r->nodes[i].bus, k % buses);  // among all buses, not the page's
+  }
+}
+
+TEST(StatusPages, ExactlyAPageFitsTheFirstReplyAndTheNextOneIsEmpty) {
+  const std::size_t buses = ipc::kStatusPageBuses;
+  const std::size_t nodes = ipc::kStatusPageNodes;
+  auto sim = many_buses_world(buses, nodes);
+  expect_page(*sim, buses, nodes, 0, 0, buses, nodes);
+  expect_page(*sim, buses, nodes, buses, nodes, 0, 0);
+}
+
+TEST(StatusPages, OneMoreBusAndNodeComeOnTheSecondPage) {
+  const std::size_t buses = ipc::kStatusPageBuses + 1;
+  const std::size_t nodes = ipc::kStatusPageNodes + 1;
+  auto sim = many_buses_world(buses, nodes);
+  expect_page(*sim, buses, nodes, 0, 0, buses - 1, nodes - 1);
+  expect_page(*sim, buses, nodes, buses - 1, nodes - 1, 1, 1);
+  // Buses and nodes page on their own: the rest of the nodes with no bus.
+  expect_page(*sim, buses, nodes, buses, 5, 0, nodes - 5);
+}
+
+TEST(StatusPages, SixtyFourBusesAndTwoHundredFiftySixNodesInTwoPagesEach) {
+  auto sim = many_buses_world(64, 256);
+  expect_page(*sim, 64, 256, 0, 0, 32, 192);
+  expect_page(*sim, 64, 256, 32, 192, 32, 64);
+  expect_page(*sim, 64, 256, 64, 256, 0, 0);
+  expect_page(*sim, 64, 256, 1000, 1000, 0, 0);
+}
+
+TEST(DevicePages, AdaptersBeyondAPageComeOnTheNextWithTheSameGeneration) {
+  auto sim = many_buses_world(64, 256);  // 64 adapters: exactly a page
+  auto before = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>());
+  fill_status(*sim, *before, 0, 0);
+  auto lease = sim->add_ephemeral("eph1", 5, sim->spare_node(5), 4712);
+  auto first = std::make_unique<ipc::DeviceListReply>(ipc::make_message<ipc::DeviceListReply>());
+  fill_device_list(*sim, *first);
+  EXPECT_EQ(first->total, 65u);
+  EXPECT_EQ(first->first, 0u);
+  ASSERT_EQ(first->count, ipc::kDevicePage);
+  for (std::size_t i = 0; i < ipc::kDevicePage; ++i) {
+    EXPECT_EQ(ipc::name_of(first->devices[i].name), fmt::format("dev{}", i));
+  }
+  auto second = std::make_unique<ipc::DeviceListReply>(ipc::make_message<ipc::DeviceListReply>());
+  fill_device_list(*sim, *second, ipc::kDevicePage);
+  EXPECT_EQ(second->total, 65u);
+  EXPECT_EQ(second->first, ipc::kDevicePage);
+  ASSERT_EQ(second->count, 1u);
+  EXPECT_EQ(ipc::name_of(second->devices[0].name), "eph1");
+  EXPECT_EQ(ipc::name_of(second->devices[0].buses[0]), "bus5");
+  EXPECT_EQ(second->generation, first->generation);
+  // The ephemeral node is the 257th node, on the second page of the status.
+  auto status = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>());
+  fill_status(*sim, *status, 0, 256);
+  EXPECT_EQ(status->generation, first->generation);
+  EXPECT_NE(status->generation, before->generation);  // pages from before do not fit
+  EXPECT_EQ(before->node_total, 256u);
+  EXPECT_EQ(status->node_total, 257u);
+  ASSERT_EQ(status->node_count, 1u);
+  EXPECT_EQ(ipc::name_of(status->nodes[0].name), "eph1:0");
+  EXPECT_EQ(status->nodes[0].bus, 5u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <unistd.h>
 
+#include "canemu/client/lists.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 
 namespace canemu::client::xcan {
@@ -159,35 +160,30 @@ ULONG Library::interfaces(std::vector<CANEMU_XCAN_INTERFACE>& out) {
   if (!c) {
     return ERR_XCAN_NO_DAEMON;
   }
-  auto status =
-      c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  auto status = client::fetch_status(*c);
   if (!status) {
     return ERR_XCAN_NO_DAEMON;
   }
-  auto devices = c->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
-      ipc::make_message<ipc::DeviceListRequest>());
+  auto devices = client::fetch_device_list(*c);
   if (!devices) {
     return ERR_XCAN_NO_DAEMON;
   }
   // The device list names the modules (in configuration order) and the bus of each interface;
   // the status gives those buses' transceiver and bit rate.
-  const uint16_t buses = std::min<uint16_t>(status->bus_count, ipc::kMaxStatusBuses);
-  const uint16_t count = std::min<uint16_t>(devices->count, ipc::kMaxDevices);
-  for (uint16_t d = 0; d < count; ++d) {
-    const ipc::DeviceEntry& e = devices->devices[d];
+  for (const ipc::DeviceEntry& e : devices->devices) {
     if (e.model != static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_x_can_2i)) {
       continue;
     }
     for (uint8_t k = 0; k < e.controller_count && k < XCAN_INTERFACES; ++k) {
       const std::string bus = ipc::name_of(e.buses[k]);
-      const ipc::StatusBus* b = std::find_if(
-          status->buses, status->buses + buses,
+      const auto b = std::find_if(
+          status->buses.begin(), status->buses.end(),
           [&](const ipc::StatusBus& candidate) { return ipc::name_of(candidate.name) == bus; });
       CANEMU_XCAN_INTERFACE info{};
       std::snprintf(info.szDevice, sizeof info.szDevice, "%s", ipc::name_of(e.name).c_str());
       std::snprintf(info.szBus, sizeof info.szBus, "%s", bus.c_str());
       info.usChannel = k;
-      if (b != status->buses + buses) {
+      if (b != status->buses.end()) {
         info.usLowSpeed = b->low_speed;
         info.ulBitrate = b->bitrate;
       }

@@ -128,14 +128,14 @@ HRESULT VCIAPI canemuEnumBuses(UINT32 dwIndex, PCANEMU_BUSINFO pInfo) {
   if (pInfo == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  auto status = std::make_unique<canemu::ipc::StatusReply>();
-  if (HRESULT hr = Library::get().status(*status); hr != VCI_OK) {
+  canemu::client::Status status;
+  if (HRESULT hr = Library::get().status(status); hr != VCI_OK) {
     return hr;
   }
-  if (dwIndex >= status->bus_count || dwIndex >= canemu::ipc::kMaxStatusBuses) {
+  if (dwIndex >= status.buses.size()) {
     return VCI_E_NO_MORE_ITEMS;
   }
-  const canemu::ipc::StatusBus& b = status->buses[dwIndex];
+  const canemu::ipc::StatusBus& b = status.buses[dwIndex];
   CANEMU_BUSINFO info{};
   std::snprintf(info.szName, sizeof info.szName, "%s", canemu::ipc::name_of(b.name).c_str());
   info.bKind = b.kind;
@@ -180,15 +180,15 @@ HRESULT VCIAPI canemuFindDevice(const char* pszName, PCANEMU_DEVICEINFO pInfo) {
 }
 
 HRESULT VCIAPI canemuGetTime(UINT64* pqwNow, PUINT8 pbTimeMode) {
-  auto status = std::make_unique<canemu::ipc::StatusReply>();
-  if (HRESULT hr = Library::get().status(*status); hr != VCI_OK) {
+  canemu::client::Status status;
+  if (HRESULT hr = Library::get().status(status); hr != VCI_OK) {
     return hr;
   }
   if (pqwNow != nullptr) {
-    *pqwNow = static_cast<UINT64>(status->sim_time_ns);
+    *pqwNow = static_cast<UINT64>(status.sim_time_ns);
   }
   if (pbTimeMode != nullptr) {
-    *pbTimeMode = status->time_mode;
+    *pbTimeMode = status.time_mode;
   }
   return VCI_OK;
 }

@@ -131,14 +131,12 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
   if (HRESULT hr = connect_locked(); hr != VCI_OK) {
     return hr;
   }
-  auto r = connection_->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
-      ipc::make_message<ipc::DeviceListRequest>());
+  auto r = client::fetch_device_list(*connection_);
   if (!r) {
     return failed(r.error());
   }
   out.clear();
-  for (uint16_t i = 0; i < r->count && i < ipc::kMaxDevices; ++i) {
-    const ipc::DeviceEntry& e = r->devices[i];
+  for (const ipc::DeviceEntry& e : r->devices) {
     const auto model = static_cast<ipc::WireDeviceModel>(e.model);
     if (e.vci_id == 0 || (model != ipc::WireDeviceModel::ixxat_usb_to_can &&
                           model != ipc::WireDeviceModel::ixxat_usb_to_can_fd)) {
@@ -165,17 +163,16 @@ HRESULT Library::list_devices(std::vector<DeviceDesc>& out, uint32_t* generation
   return VCI_OK;
 }
 
-HRESULT Library::status(ipc::StatusReply& out) {
+HRESULT Library::status(client::Status& out) {
   std::lock_guard lock(mutex_);
   if (HRESULT hr = connect_locked(); hr != VCI_OK) {
     return hr;
   }
-  auto r = connection_->call<ipc::StatusRequest, ipc::StatusReply>(
-      ipc::make_message<ipc::StatusRequest>());
+  auto r = client::fetch_status(*connection_);
   if (!r) {
     return failed(r.error());
   }
-  out = *r;
+  out = std::move(*r);
   return VCI_OK;
 }
 

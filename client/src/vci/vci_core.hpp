@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/client/lists.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/ring_pair.hpp"
 #include "vci/cantype.h"
@@ -187,8 +188,8 @@ class Library {
   HRESULT call(ipc::VciRequest& request, ipc::VciReply& reply,
                std::vector<ipc::UniqueFd>* fds = nullptr);
   HRESULT list_devices(std::vector<DeviceDesc>& out, uint32_t* generation = nullptr);
-  // canemud's status: buses, simulated time and time mode.
-  HRESULT status(ipc::StatusReply& out);
+  // canemud's status, every page of it: buses, nodes, simulated time and time mode.
+  HRESULT status(client::Status& out);
   // Waits until the device list changes (VCI_OK) or `timeout_ms` passes (VCI_E_TIMEOUT).
   HRESULT wait_device_change(uint32_t generation, int timeout_ms);
   // Opens a control unit, channel or cyclic list on controller `controller` of `device`.

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/client/lists.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "capture_table.hpp"
 #include "command.hpp"
@@ -104,13 +105,11 @@ int run_add(const std::string& socket, const BridgeArgs& a) {
   }
   if (by_bus) {
     // What the daemon chose: the defaults for what was not given.
-    auto list = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
-        ipc::make_message<ipc::BridgeListRequest>());
+    auto list = client::fetch_bridge_list(*c);
     std::string prefix = a.prefix;
     std::string where = url;
     if (list) {
-      for (uint16_t i = 0; i < list->count; ++i) {
-        const ipc::BridgeEntry& e = list->bridges[i];
+      for (const ipc::BridgeEntry& e : *list) {
         if (e.kind == kind && ipc::name_of(e.bus) == a.bus) {
           prefix = ipc::name_of(e.channel_prefix);
           where = ipc::name_of(e.url);
@@ -185,8 +184,7 @@ int run_list(const std::string& socket, const BridgeArgs& a) {
   if (!c) {
     return fail(c.error().message);
   }
-  auto r = c->call<ipc::BridgeListRequest, ipc::BridgeListReply>(
-      ipc::make_message<ipc::BridgeListRequest>());
+  auto r = client::fetch_bridge_list(*c);
   if (!r) {
     return fail(r.error().message);
   }

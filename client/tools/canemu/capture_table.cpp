@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/client/lists.hpp"
 #include "canemu/ipc/capture_writer.hpp"
 #include "command.hpp"
 
@@ -20,21 +21,18 @@ std::string format_name(uint8_t format) {
 }  // namespace
 
 tl::expected<CaptureLists, std::string> capture_lists(client::Connection& c) {
-  auto recorders = c.call<ipc::RecorderListRequest, ipc::RecorderListReply>(
-      ipc::make_message<ipc::RecorderListRequest>());
-  auto bridges = c.call<ipc::BridgeListRequest, ipc::BridgeListReply>(
-      ipc::make_message<ipc::BridgeListRequest>());
+  auto recorders = client::fetch_recorder_list(c);
+  auto bridges = client::fetch_bridge_list(c);
   if (!recorders || !bridges) {
     return tl::unexpected(!recorders ? recorders.error().message : bridges.error().message);
   }
-  return CaptureLists{*recorders, *bridges};
+  return CaptureLists{std::move(*recorders), std::move(*bridges)};
 }
 
-void print_recorders(const ipc::RecorderListReply& r) {
+void print_recorders(const std::vector<ipc::RecorderEntry>& r) {
   std::printf("%-12s %-7s %10s %12s %7s %8s %s\n", "RECORDER", "FORMAT", "FRAMES", "BYTES",
               "ROTATED", "LOST", "FILE");
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::RecorderEntry& e = r.recorders[i];
+  for (const ipc::RecorderEntry& e : r) {
     const std::string error = ipc::name_of(e.error);
     std::printf("%-12s %-7s %10llu %12llu %7u %8llu %s%s\n", ipc::name_of(e.bus).c_str(),
                 format_name(e.format).c_str(), static_cast<unsigned long long>(e.frames),
@@ -44,11 +42,10 @@ void print_recorders(const ipc::RecorderListReply& r) {
   }
 }
 
-toml::array recorders_array(const ipc::RecorderListReply& r) {
+toml::array recorders_array(const std::vector<ipc::RecorderEntry>& r) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array out;
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::RecorderEntry& e = r.recorders[i];
+  for (const ipc::RecorderEntry& e : r) {
     out.push_back(toml::table{{"bus", ipc::name_of(e.bus)},
                               {"path", ipc::name_of(e.path)},
                               {"format", format_name(e.format)},
@@ -67,11 +64,11 @@ namespace {
 // LCM and DDS bridges (by bus): PUBLISHED frames on FRAMES, EVENTS on ERRORS and STATES,
 // PUB-FAIL what LCM or DDS refused; RECEIVED on TX, SENT of them on the bus, Q-DROP, REJECTED,
 // FAILED as for SocketCAN; WHERE: LCM's URL, DDS's domain/partition.
-void print_bus_bridges(const ipc::BridgeListReply& r, uint8_t kind) {
+void print_bus_bridges(const std::vector<ipc::BridgeEntry>& r, uint8_t kind) {
   const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
   bool any = false;
-  for (uint16_t i = 0; i < r.count; ++i) {
-    any = any || r.bridges[i].kind == kind;
+  for (const ipc::BridgeEntry& e : r) {
+    any = any || e.kind == kind;
   }
   if (!any) {
     return;
@@ -81,8 +78,7 @@ void print_bus_bridges(const ipc::BridgeListReply& r, uint8_t kind) {
               lcm ? "LCM-BRIDGE" : "DDS-BRIDGE", lcm ? "CHANNELS" : "TOPICS", "STATE", "TEC", "REC",
               "RESTARTS", "PUBLISHED", "EVENTS", "PUB-FAIL", "RECEIVED", "SENT", "Q-DROP",
               "REJECTED", "FAILED", lcm ? "URL" : "DOMAIN/PARTITION");
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::BridgeEntry& e = r.bridges[i];
+  for (const ipc::BridgeEntry& e : r) {
     if (e.kind != kind) {
       continue;
     }
@@ -98,20 +94,19 @@ void print_bus_bridges(const ipc::BridgeListReply& r, uint8_t kind) {
 
 }  // namespace
 
-void print_bridges(const ipc::BridgeListReply& r) {
+void print_bridges(const std::vector<ipc::BridgeEntry>& r) {
   const auto n = [](uint64_t v) { return static_cast<unsigned long long>(v); };
   bool socketcan = false;
   bool by_bus = false;
-  for (uint16_t i = 0; i < r.count; ++i) {
-    (r.bridges[i].kind == ipc::kBridgeSocketCan ? socketcan : by_bus) = true;
+  for (const ipc::BridgeEntry& e : r) {
+    (e.kind == ipc::kBridgeSocketCan ? socketcan : by_bus) = true;
   }
   if (socketcan || !by_bus) {
     std::printf("%-12s %-10s %-14s %4s %4s %8s %10s %10s %7s %8s %8s %8s %8s %8s\n", "BRIDGE",
                 "INTERFACE", "STATE", "TEC", "REC", "RESTARTS", "TO-IF", "FROM-IF", "ERRORS",
                 "IF-DROP", "K-DROP", "Q-DROP", "REJECTED", "FAILED");
   }
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::BridgeEntry& e = r.bridges[i];
+  for (const ipc::BridgeEntry& e : r) {
     if (e.kind != ipc::kBridgeSocketCan) {
       continue;
     }
@@ -127,11 +122,10 @@ void print_bridges(const ipc::BridgeListReply& r) {
   print_bus_bridges(r, ipc::kBridgeDds);
 }
 
-toml::array bridges_array(const ipc::BridgeListReply& r) {
+toml::array bridges_array(const std::vector<ipc::BridgeEntry>& r) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array out;
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::BridgeEntry& e = r.bridges[i];
+  for (const ipc::BridgeEntry& e : r) {
     if (e.kind == ipc::kBridgeLcm || e.kind == ipc::kBridgeDds) {
       const bool lcm = e.kind == ipc::kBridgeLcm;
       const std::string prefix = ipc::name_of(e.channel_prefix);

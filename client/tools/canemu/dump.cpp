@@ -13,6 +13,7 @@
 
 #include "canemu/client/channel.hpp"
 #include "canemu/client/connection.hpp"
+#include "canemu/client/lists.hpp"
 #include "canemu/ipc/capture_writer.hpp"
 #include "canemu/ipc/socketcan.hpp"
 #include "command.hpp"
@@ -38,8 +39,8 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
   }
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
-  auto s = c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
-  for (uint16_t i = 0; s && i < s->bus_count; ++i) {
+  auto s = client::fetch_status(*c);
+  for (std::size_t i = 0; s && i < s->buses.size(); ++i) {
     if (ipc::name_of(s->buses[i].name) == o.bus &&
         s->buses[i].kind == static_cast<uint8_t>(ipc::WireBusKind::lin)) {
       // A LIN bus: text lines on the terminal, pcap (LINKTYPE_LIN) in files.

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/client/lists.hpp"
 #include "lin_dump.hpp"
 #include "lin_tap.hpp"
 
@@ -64,8 +65,8 @@ std::optional<LINMSG> parse_lin_send(const std::string& text, bool classic, std:
 
 std::optional<std::pair<ipc::WireBusKind, uint32_t>> bus_kind(client::Connection& c,
                                                               const std::string& bus) {
-  auto s = c.call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
-  for (uint16_t i = 0; s && i < s->bus_count; ++i) {
+  auto s = client::fetch_status(c);
+  for (std::size_t i = 0; s && i < s->buses.size(); ++i) {
     if (ipc::name_of(s->buses[i].name) == bus) {
       return std::make_pair(static_cast<ipc::WireBusKind>(s->buses[i].kind), s->buses[i].bitrate);
     }

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "canemu/client/lists.hpp"
 #include "vci/vcierr.h"
 
 namespace canemu::cli {
@@ -78,9 +79,8 @@ client::Result<LinTap> LinTap::open(client::Connection& c, const std::string& bu
   }
   // Time stamps count microseconds from the adapter's power-on.
   int64_t epoch_ns = 0;
-  auto list = c.call<ipc::DeviceListRequest, ipc::DeviceListReply>(
-      ipc::make_message<ipc::DeviceListRequest>());
-  for (uint16_t i = 0; list && i < list->count; ++i) {
+  auto list = client::fetch_device_list(c);
+  for (std::size_t i = 0; list && i < list->devices.size(); ++i) {
     if (ipc::name_of(list->devices[i].name) == device) {
       epoch_ns = list->devices[i].epoch_ns;
     }

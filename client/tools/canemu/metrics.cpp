@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/client/lists.hpp"
 #include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "capture_table.hpp"
@@ -54,27 +55,21 @@ bool is_lin(const ipc::StatusNode& n) {
   return static_cast<ipc::WireLinState>(n.lin) != ipc::WireLinState::none;
 }
 
-std::string bus_of(const ipc::StatusReply& s, const ipc::StatusNode& n) {
-  return n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?");
-}
-
 // Recorders and bridges: what they wrote and every frame they lost (docs/socketcan.md,
 // docs/bridges.md). An LCM bridge's "interface" is lcm:PREFIX, a DDS bridge's dds:PREFIX.
-void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
-                     const ipc::BridgeListReply& bridges) {
+void expose_captures(Exposition& e, const std::vector<ipc::RecorderEntry>& recorders,
+                     const std::vector<ipc::BridgeEntry>& bridges) {
   const auto recorder_label = [&](const ipc::RecorderEntry& r) {
     return fmt::format("bus=\"{}\",path=\"{}\"", label(ipc::name_of(r.bus)),
                        label(ipc::name_of(r.path)));
   };
   e.family("canemu_recorder_frames_total", "counter", "Frames a recorder wrote to disk.");
-  for (uint16_t i = 0; i < recorders.count; ++i) {
-    e.sample("canemu_recorder_frames_total", recorder_label(recorders.recorders[i]),
-             recorders.recorders[i].frames);
+  for (const ipc::RecorderEntry& r : recorders) {
+    e.sample("canemu_recorder_frames_total", recorder_label(r), r.frames);
   }
   e.family("canemu_recorder_lost_total", "counter", "Frames a recorder's failed writes lost.");
-  for (uint16_t i = 0; i < recorders.count; ++i) {
-    e.sample("canemu_recorder_lost_total", recorder_label(recorders.recorders[i]),
-             recorders.recorders[i].lost);
+  for (const ipc::RecorderEntry& r : recorders) {
+    e.sample("canemu_recorder_lost_total", recorder_label(r), r.lost);
   }
   const auto bridge_label = [&](const ipc::BridgeEntry& b, std::string_view key,
                                 std::string_view value) {
@@ -86,16 +81,14 @@ void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
                        label(interface), key, value);
   };
   e.family("canemu_bridge_frames_total", "counter", "Frames a bridge passed on.");
-  for (uint16_t i = 0; i < bridges.count; ++i) {
-    const ipc::BridgeEntry& b = bridges.bridges[i];
+  for (const ipc::BridgeEntry& b : bridges) {
     e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "to_interface"),
              b.to_interface);
     e.sample("canemu_bridge_frames_total", bridge_label(b, "direction", "from_interface"),
              b.from_interface);
   }
   e.family("canemu_bridge_dropped_total", "counter", "Frames a bridge could not pass.");
-  for (uint16_t i = 0; i < bridges.count; ++i) {
-    const ipc::BridgeEntry& b = bridges.bridges[i];
+  for (const ipc::BridgeEntry& b : bridges) {
     for (const auto& [reason, count] :
          {std::pair<const char*, uint64_t>{"interface", b.to_interface_dropped},
           {"kernel", b.kernel_dropped},
@@ -107,8 +100,9 @@ void expose_captures(Exposition& e, const ipc::RecorderListReply& recorders,
   }
 }
 
-std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
-                   const ipc::RecorderListReply& recorders, const ipc::BridgeListReply& bridges) {
+std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
+                   const std::vector<ipc::RecorderEntry>& recorders,
+                   const std::vector<ipc::BridgeEntry>& bridges) {
   Exposition e;
   e.family("canemu_sim_time_seconds", "gauge", "Simulated time.");
   e.sample("canemu_sim_time_seconds", "",
@@ -125,36 +119,35 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
   e.family("canemu_ring_bytes", "gauge", "Shared ring memory the clients' channels hold.");
   e.sample("canemu_ring_bytes", "", s.ring_bytes);
 
-  const auto bus_label = [&](uint16_t i) {
+  const auto bus_label = [&](std::size_t i) {
     return fmt::format("bus=\"{}\"", label(ipc::name_of(s.buses[i].name)));
   };
   e.family("canemu_bus_bitrate_bits_per_second", "gauge", "Nominal bit rate of the bus.");
-  for (uint16_t i = 0; i < s.bus_count; ++i) {
+  for (std::size_t i = 0; i < s.buses.size(); ++i) {
     const std::string kind(ipc::to_string(static_cast<ipc::WireBusKind>(s.buses[i].kind)));
     e.sample("canemu_bus_bitrate_bits_per_second",
              fmt::format("{},kind=\"{}\"", bus_label(i), label(kind)), s.buses[i].bitrate);
   }
   e.family("canemu_bus_load_ratio", "gauge", "Share of the last second the bus was busy.");
-  for (uint16_t i = 0; i < s.bus_count; ++i) {
+  for (std::size_t i = 0; i < s.buses.size(); ++i) {
     e.sample("canemu_bus_load_ratio", bus_label(i),
              fmt::format("{:.3f}", s.buses[i].load_permille / 1000.0));
   }
   e.family("canemu_bus_frames_total", "counter", "Frames the bus carried.");
-  for (uint16_t i = 0; i < s.bus_count; ++i) {
+  for (std::size_t i = 0; i < s.buses.size(); ++i) {
     e.sample("canemu_bus_frames_total", bus_label(i), s.buses[i].frames);
   }
   e.family("canemu_bus_error_frames_total", "counter", "Error frames on the bus.");
-  for (uint16_t i = 0; i < s.bus_count; ++i) {
+  for (std::size_t i = 0; i < s.buses.size(); ++i) {
     e.sample("canemu_bus_error_frames_total", bus_label(i), s.buses[i].error_frames);
   }
 
   const auto node_label = [&](const ipc::StatusNode& n) {
-    return fmt::format("node=\"{}\",bus=\"{}\"", label(ipc::name_of(n.name)), label(bus_of(s, n)));
+    return fmt::format("node=\"{}\",bus=\"{}\"", label(ipc::name_of(n.name)), label(s.bus_name(n)));
   };
   e.family("canemu_node_error_state", "gauge",
            "1 for the node's fault confinement state, 0 for the others.");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    const ipc::StatusNode& n = s.nodes[i];
+  for (const ipc::StatusNode& n : s.nodes) {
     if (is_lin(n)) {
       continue;  // LIN nodes have no fault confinement: canemu_lin_node_online
     }
@@ -166,8 +159,7 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
     }
   }
   e.family("canemu_lin_node_online", "gauge", "1 while a LIN node takes part in the bus.");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    const ipc::StatusNode& n = s.nodes[i];
+  for (const ipc::StatusNode& n : s.nodes) {
     if (is_lin(n)) {
       e.sample("canemu_lin_node_online", node_label(n),
                static_cast<ipc::WireLinState>(n.lin) == ipc::WireLinState::online ? 1 : 0);
@@ -194,8 +186,8 @@ std::string expose(const ipc::StatusReply& s, const ipc::FaultListReply& faults,
   };
   for (const NodeCounter& counter : kNodeCounters) {
     e.family(counter.name, counter.type, counter.help);
-    for (uint16_t i = 0; i < s.node_count; ++i) {
-      e.sample(counter.name, node_label(s.nodes[i]), counter.value(s.nodes[i]));
+    for (const ipc::StatusNode& n : s.nodes) {
+      e.sample(counter.name, node_label(n), counter.value(n));
     }
   }
 
@@ -218,8 +210,7 @@ int run_metrics(const std::string& socket) {
   if (!c) {
     return fail(c.error().message);
   }
-  auto status =
-      c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  auto status = client::fetch_status(*c);
   if (!status) {
     return fail(status.error().message);
   }

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/client/lists.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "capture_table.hpp"
 #include "command.hpp"
@@ -47,14 +48,13 @@ std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
 }
 
 // toml++ writes the JSON (names escaped as JSON wants them), one line.
-void print_json(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
-                const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
-                const ipc::BridgeListReply& bridges) {
+void print_json(const client::Connection& c, const client::Status& s, const std::string& mode,
+                const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
+                const ipc::FaultListReply& faults, const std::vector<ipc::RecorderEntry>& recorders,
+                const std::vector<ipc::BridgeEntry>& bridges) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array buses;
-  for (uint16_t i = 0; i < s.bus_count; ++i) {
-    const ipc::StatusBus& b = s.buses[i];
+  for (const ipc::StatusBus& b : s.buses) {
     buses.push_back(toml::table{{"name", ipc::name_of(b.name)},
                                 {"kind", kind_name(b.kind)},
                                 {"transceiver", b.low_speed ? "low-speed" : "high-speed"},
@@ -65,21 +65,18 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
                                 {"error_frames", i64(b.error_frames)}});
   }
   toml::array nodes;
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    const ipc::StatusNode& n = s.nodes[i];
-    nodes.push_back(toml::table{
-        {"name", ipc::name_of(n.name)},
-        {"bus", n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name) : std::string("?")},
-        {"state", state_name(n)},
-        {"tec", i64(n.tec)},
-        {"rec", i64(n.rec)},
-        {"frames_sent", i64(n.frames_sent)},
-        {"frames_received", i64(n.frames_received)},
-        {"errors", i64(n.errors)}});
+  for (const ipc::StatusNode& n : s.nodes) {
+    nodes.push_back(toml::table{{"name", ipc::name_of(n.name)},
+                                {"bus", s.bus_name(n)},
+                                {"state", state_name(n)},
+                                {"tec", i64(n.tec)},
+                                {"rec", i64(n.rec)},
+                                {"frames_sent", i64(n.frames_sent)},
+                                {"frames_received", i64(n.frames_received)},
+                                {"errors", i64(n.errors)}});
   }
   toml::array device_list;
-  for (uint16_t i = 0; i < devices.count; ++i) {
-    const ipc::DeviceEntry& d = devices.devices[i];
+  for (const ipc::DeviceEntry& d : devices.devices) {
     // Controller (interface) N is the node NAME:N on the N-th bus.
     toml::array device_buses_json;
     toml::array device_nodes_json;
@@ -96,8 +93,7 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
                                       {"nodes", std::move(device_nodes_json)}});
   }
   toml::array client_list;
-  for (uint16_t i = 0; i < clients.count; ++i) {
-    const ipc::ClientEntry& e = clients.clients[i];
+  for (const ipc::ClientEntry& e : clients) {
     client_list.push_back(toml::table{{"name", ipc::name_of(e.name)},
                                       {"pid", i64(e.pid)},
                                       {"uid", i64(e.uid)},
@@ -121,10 +117,11 @@ void print_json(const client::Connection& c, const ipc::StatusReply& s, const st
   std::fputs((one_line_json(all) + "\n").c_str(), stdout);
 }
 
-void print_tables(const client::Connection& c, const ipc::StatusReply& s, const std::string& mode,
-                  const ipc::DeviceListReply& devices, const ipc::ClientListReply& clients,
-                  const ipc::FaultListReply& faults, const ipc::RecorderListReply& recorders,
-                  const ipc::BridgeListReply& bridges) {
+void print_tables(const client::Connection& c, const client::Status& s, const std::string& mode,
+                  const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
+                  const ipc::FaultListReply& faults,
+                  const std::vector<ipc::RecorderEntry>& recorders,
+                  const std::vector<ipc::BridgeEntry>& bridges) {
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
               s.client_count == 1 ? "" : "s");
@@ -134,8 +131,7 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
   }
   std::printf("%-12s %-7s %9s %9s %7s %10s %8s\n", "BUS", "KIND", "BITRATE", "DATA", "LOAD",
               "FRAMES", "ERRORS");
-  for (uint16_t i = 0; i < s.bus_count; ++i) {
-    const ipc::StatusBus& b = s.buses[i];
+  for (const ipc::StatusBus& b : s.buses) {
     const std::string kind = kind_name(b.kind) + (b.low_speed ? "-ls" : "");
     std::printf("%-12s %-7s %9u %9u %6.1f%% %10llu %8llu\n", ipc::name_of(b.name).c_str(),
                 kind.c_str(), b.bitrate, b.data_bitrate, b.load_permille / 10.0,
@@ -144,17 +140,15 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
   }
   std::printf("%-14s %-12s %-14s %4s %4s %10s %10s %8s\n", "NODE", "BUS", "STATE", "TEC", "REC",
               "SENT", "RECEIVED", "ERRORS");
-  for (uint16_t i = 0; i < s.node_count; ++i) {
-    const ipc::StatusNode& n = s.nodes[i];
+  for (const ipc::StatusNode& n : s.nodes) {
     std::printf("%-14s %-12s %-14s %4u %4u %10llu %10llu %8llu\n", ipc::name_of(n.name).c_str(),
-                n.bus < s.bus_count ? ipc::name_of(s.buses[n.bus].name).c_str() : "?",
-                state_name(n).c_str(), n.tec, n.rec, static_cast<unsigned long long>(n.frames_sent),
+                s.bus_name(n).c_str(), state_name(n).c_str(), n.tec, n.rec,
+                static_cast<unsigned long long>(n.frames_sent),
                 static_cast<unsigned long long>(n.frames_received),
                 static_cast<unsigned long long>(n.errors));
   }
   std::printf("%-14s %-20s %-8s %s\n", "DEVICE", "MODEL", "OWNER", "BUSES");
-  for (uint16_t i = 0; i < devices.count; ++i) {
-    const ipc::DeviceEntry& d = devices.devices[i];
+  for (const ipc::DeviceEntry& d : devices.devices) {
     std::string buses;
     for (const std::string& b : device_buses(d)) {
       buses += (buses.empty() ? "" : " ") + b;
@@ -163,17 +157,16 @@ void print_tables(const client::Connection& c, const ipc::StatusReply& s, const 
                 d.ephemeral ? std::to_string(d.owner_pid).c_str() : "config", buses.c_str());
   }
   std::printf("%-20s %8s %8s %8s\n", "CLIENT", "PID", "UID", "CHANNELS");
-  for (uint16_t i = 0; i < clients.count; ++i) {
-    const ipc::ClientEntry& e = clients.clients[i];
+  for (const ipc::ClientEntry& e : clients) {
     std::printf("%-20s %8u %8u %8u\n", ipc::name_of(e.name).c_str(), e.pid, e.uid, e.channels);
   }
   if (faults.total > 0) {
     print_faults(faults);
   }
-  if (recorders.count > 0) {
+  if (!recorders.empty()) {
     print_recorders(recorders);
   }
-  if (bridges.count > 0) {
+  if (!bridges.empty()) {
     print_bridges(bridges);
   }
 }
@@ -183,15 +176,12 @@ int run_status(const std::string& socket, bool json) {
   if (!c) {
     return fail(c.error().message);
   }
-  auto reply =
-      c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+  auto reply = client::fetch_status(*c);
   if (!reply) {
     return fail(reply.error().message);
   }
-  auto devices = c->call<ipc::DeviceListRequest, ipc::DeviceListReply>(
-      ipc::make_message<ipc::DeviceListRequest>());
-  auto clients = c->call<ipc::ClientListRequest, ipc::ClientListReply>(
-      ipc::make_message<ipc::ClientListRequest>());
+  auto devices = client::fetch_device_list(*c);
+  auto clients = client::fetch_client_list(*c);
   if (!devices || !clients) {
     return fail(!devices ? devices.error().message : clients.error().message);
   }

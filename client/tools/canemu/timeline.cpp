@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/client/lists.hpp"
 #include "canemu/firmware_model/bus/can_error.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "command.hpp"
@@ -62,13 +63,12 @@ tl::expected<Timeline, std::string> fetch(client::Connection& c, const std::stri
     }
   }
   if (nodes.empty()) {  // every CAN node of the bus that canemu status lists
-    auto s = c.call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+    auto s = client::fetch_status(c);
     if (!s) {
       return tl::unexpected(s.error().message);
     }
-    for (uint16_t i = 0; i < s->node_count; ++i) {
-      const ipc::StatusNode& n = s->nodes[i];
-      if (n.bus < s->bus_count && ipc::name_of(s->buses[n.bus].name) == bus &&
+    for (const ipc::StatusNode& n : s->nodes) {
+      if (n.bus < s->buses.size() && ipc::name_of(s->buses[n.bus].name) == bus &&
           static_cast<ipc::WireLinState>(n.lin) == ipc::WireLinState::none) {
         nodes.push_back(ipc::name_of(n.name));
       }

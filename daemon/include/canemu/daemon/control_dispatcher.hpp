@@ -77,6 +77,7 @@ class ControlDispatcher {
   std::function<uint16_t()> client_count;
   // Fills what only the server knows of time: the lag and the achieved scale.
   std::function<void(ipc::StatusReply&)> fill_pace;
+  // Fills the page of clients from the reply's `first` on, and their total.
   std::function<void(ipc::ClientListReply&)> fill_clients;
   // Called before a time step runs: the server lets every idle node take what its client put.
   std::function<void()> before_step;

@@ -1,8 +1,11 @@
 // What the control protocol reports of the world: `canemu status` (buses with their load and
 // counts, every device's nodes with their error state and counts) and the device list (the VCI
-// device manager's view: configured adapters, then ephemeral devices). Entries beyond the
-// replies' fixed arrays are left out; the device list's total counts them all.
+// device manager's view: configured adapters, then ephemeral devices). Both come in pages: a
+// reply holds the entries from the first one asked for on, as many as it has room for, and
+// says how many there are in all.
 #pragma once
+
+#include <cstddef>
 
 #include "canemu/ipc/protocol.hpp"
 
@@ -10,11 +13,13 @@ namespace canemu::daemon {
 
 class Simulation;
 
-void fill_status(const Simulation& sim, ipc::StatusReply& reply);
-void fill_device_list(const Simulation& sim, ipc::DeviceListReply& reply);
+void fill_status(const Simulation& sim, ipc::StatusReply& reply, std::size_t first_bus = 0,
+                 std::size_t first_node = 0);
+void fill_device_list(const Simulation& sim, ipc::DeviceListReply& reply, std::size_t first = 0);
 // The recorders ([[recorder]]) with what they wrote and lost.
-void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& reply);
+void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& reply,
+                        std::size_t first = 0);
 // The bridges (SocketCAN and LCM) with their node's state and their counts.
-void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& reply);
+void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& reply, std::size_t first = 0);
 
 }  // namespace canemu::daemon

@@ -11,12 +11,17 @@
 
 namespace canemu::ipc {
 
-inline constexpr std::size_t kMaxRecorders = 32;
+inline constexpr std::size_t kRecorderPage = 32;  // the list comes in pages of this many
 inline constexpr std::size_t kPathSize = 128;
 
+// One page of the recorder list: recorders from `first` on.
 struct RecorderListRequest {
   MsgHeader header;
+  uint16_t first = 0;
+  uint16_t reserved = 0;
+  uint32_t reserved2 = 0;
 };
+static_assert(sizeof(RecorderListRequest) == 24);
 
 struct RecorderEntry {
   char bus[kNameSize] = {};
@@ -34,13 +39,15 @@ static_assert(sizeof(RecorderEntry) == 32 + 128 + 8 + 24 + 96);
 
 struct RecorderListReply {
   MsgHeader header;
-  uint16_t count = 0;
-  uint16_t reserved[3] = {};
-  RecorderEntry recorders[kMaxRecorders];
+  uint16_t count = 0;  // in this page
+  uint16_t total = 0;  // recorders that exist
+  uint16_t first = 0;  // index of recorders[0] among all (the request's)
+  uint16_t reserved = 0;
+  RecorderEntry recorders[kRecorderPage];
 };
 static_assert(sizeof(RecorderListReply) <= kMaxMessageSize);
 
-inline constexpr std::size_t kMaxBridges = 32;
+inline constexpr std::size_t kBridgePage = 32;           // the list comes in pages of this many
 inline constexpr uint32_t kMaxBridgeRestartMs = 60'000;  // as a channel's restart_ms
 inline constexpr std::size_t kLcmUrlSize = 128;
 inline constexpr std::size_t kLcmPrefixSize = 64;
@@ -98,9 +105,14 @@ struct BridgeRestartReply {
   MsgHeader header;
 };
 
+// One page of the bridge list: bridges from `first` on.
 struct BridgeListRequest {
   MsgHeader header;
+  uint16_t first = 0;
+  uint16_t reserved = 0;
+  uint32_t reserved2 = 0;
 };
+static_assert(sizeof(BridgeListRequest) == 24);
 
 struct BridgeEntry {
   char bus[kNameSize] = {};
@@ -131,9 +143,11 @@ static_assert(sizeof(BridgeEntry) == 64 + 16 + 80 + 128 + 64);
 
 struct BridgeListReply {
   MsgHeader header;
-  uint16_t count = 0;
-  uint16_t reserved[3] = {};
-  BridgeEntry bridges[kMaxBridges];
+  uint16_t count = 0;  // in this page
+  uint16_t total = 0;  // bridges that exist
+  uint16_t first = 0;  // index of bridges[0] among all (the request's)
+  uint16_t reserved = 0;
+  BridgeEntry bridges[kBridgePage];
 };
 static_assert(sizeof(BridgeListReply) <= kMaxMessageSize);
 

@@ -21,16 +21,18 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 2;
+inline constexpr uint16_t kProtocolVersion = 3;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 // A fault scenario's name: up to 63 bytes and the terminating zero.
 inline constexpr std::size_t kScenarioNameSize = 64;
-inline constexpr std::size_t kMaxStatusBuses = 16;
-inline constexpr std::size_t kMaxStatusNodes = 128;
-inline constexpr std::size_t kMaxDevices = 64;
+// Lists longer than one message come in pages: a request names the first entry it wants, the
+// reply how many there are in all (StatusRequest, DeviceListRequest, ClientListRequest).
+inline constexpr std::size_t kStatusPageBuses = 32;
+inline constexpr std::size_t kStatusPageNodes = 192;
+inline constexpr std::size_t kDevicePage = 64;
 inline constexpr std::size_t kMaxDeviceControllers = 4;
-inline constexpr std::size_t kMaxClients = 64;
+inline constexpr std::size_t kClientPage = 64;
 // Descriptors that come with an OpenChannelReply, in this order.
 inline constexpr std::size_t kChannelFdCount = 5;
 // Descriptors that come with a VCI FIFO (VciOp::fifo_create / fifo_access), in this order: the
@@ -140,9 +142,16 @@ struct ErrorReply {
 };
 static_assert(sizeof(ErrorReply) == 116);
 
+// One page of the status: buses from first_bus on, nodes from first_node on (0, 0: the first
+// page, which is all of it while there are at most kStatusPageBuses buses and kStatusPageNodes
+// nodes).
 struct StatusRequest {
   MsgHeader header;
+  uint16_t first_bus = 0;
+  uint16_t first_node = 0;
+  uint32_t reserved = 0;
 };
+static_assert(sizeof(StatusRequest) == 24);
 
 enum class WireTimeMode : uint8_t { realtime = 0, scaled = 1, stepped = 2 };
 enum class WireBusKind : uint8_t { can = 0, can_fd = 1, lin = 2 };
@@ -189,7 +198,7 @@ static_assert(sizeof(StatusBus) == 64);
 
 struct StatusNode {
   char name[kNameSize] = {};  // "device:N"
-  uint16_t bus = 0;           // index into the reply's buses
+  uint16_t bus = 0;           // index among all buses (not the page's)
   uint8_t state = 0;          // WireErrorState (CAN nodes)
   uint8_t lin = 0;            // WireLinState: 0 for a CAN node
   uint16_t tec = 0;
@@ -206,11 +215,19 @@ struct StatusReply {
   double time_scale = 1.0;
   uint8_t time_mode = 0;  // WireTimeMode
   uint8_t reserved = 0;
-  uint16_t bus_count = 0;
-  uint16_t node_count = 0;
+  uint16_t bus_count = 0;   // in this page
+  uint16_t node_count = 0;  // in this page
   uint16_t client_count = 0;
-  StatusBus buses[kMaxStatusBuses];
-  StatusNode nodes[kMaxStatusNodes];
+  uint16_t first_bus = 0;  // index of buses[0] among all buses (the request's)
+  uint16_t first_node = 0;
+  uint16_t bus_total = 0;  // buses and nodes that exist
+  uint16_t node_total = 0;
+  // Changes whenever a node comes or goes (DeviceListReply.generation): pages of different
+  // generations do not fit together.
+  uint32_t generation = 0;
+  uint32_t reserved2 = 0;
+  StatusBus buses[kStatusPageBuses];
+  StatusNode nodes[kStatusPageNodes];
   uint64_t ring_bytes = 0;  // shared ring memory all clients' channels and FIFOs hold
   // Real and scaled time: how far simulated time is behind the configured mapping (0 while
   // canemud keeps up), and the scale achieved over the last second.
@@ -218,7 +235,7 @@ struct StatusReply {
   double achieved_scale = 0.0;
 };
 static_assert(sizeof(StatusReply) ==
-              16 + 24 + 64 * kMaxStatusBuses + 64 * kMaxStatusNodes + 8 + 16);
+              16 + 40 + 64 * kStatusPageBuses + 64 * kStatusPageNodes + 8 + 16);
 static_assert(sizeof(StatusReply) <= kMaxMessageSize);
 
 struct TimeStepRequest {
@@ -365,16 +382,24 @@ struct DeviceEntry {
 };
 static_assert(sizeof(DeviceEntry) == 40 + 32 * kMaxDeviceControllers + 40);
 
+// One page of the device list: devices from `first` on.
 struct DeviceListRequest {
   MsgHeader header;
+  uint16_t first = 0;
+  uint16_t reserved = 0;
+  uint32_t reserved2 = 0;
 };
+static_assert(sizeof(DeviceListRequest) == 24);
 
 struct DeviceListReply {
   MsgHeader header;
   uint32_t generation = 0;  // changes whenever a device comes or goes
-  uint16_t count = 0;
-  uint16_t total = 0;  // devices that exist (count is capped at kMaxDevices)
-  DeviceEntry devices[kMaxDevices];
+  uint16_t count = 0;       // in this page, at most kDevicePage
+  uint16_t total = 0;       // devices that exist
+  uint16_t first = 0;       // index of devices[0] among all (the request's)
+  uint16_t reserved = 0;
+  uint32_t reserved2 = 0;
+  DeviceEntry devices[kDevicePage];
 };
 static_assert(sizeof(DeviceListReply) <= kMaxMessageSize);
 
@@ -387,16 +412,22 @@ struct ClientEntry {
 };
 static_assert(sizeof(ClientEntry) == 48);
 
+// One page of the client list: clients from `first` on.
 struct ClientListRequest {
   MsgHeader header;
+  uint16_t first = 0;
+  uint16_t reserved = 0;
+  uint32_t reserved2 = 0;
 };
+static_assert(sizeof(ClientListRequest) == 24);
 
 struct ClientListReply {
   MsgHeader header;
-  uint16_t count = 0;
-  uint16_t total = 0;
-  uint32_t reserved = 0;
-  ClientEntry clients[kMaxClients];
+  uint16_t count = 0;  // in this page, at most kClientPage
+  uint16_t total = 0;  // clients connected
+  uint16_t first = 0;  // index of clients[0] among all (the request's)
+  uint16_t reserved = 0;
+  ClientEntry clients[kClientPage];
 };
 static_assert(sizeof(ClientListReply) <= kMaxMessageSize);
 

@@ -13,13 +13,22 @@
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "vci2_c_test_support.hpp"
 #include "vci_lin_test_support.hpp"
-#include "vci_test_support.hpp"
-#include "vcinpl2.h"
 
 namespace canemu {
 namespace {
 
+using testing::btp;
+using testing::device_named;
+using testing::drain;
+using testing::end_of;
+using testing::FdAdapter;
+using testing::kData;
+using testing::kFd;
+using testing::kMode;
+using testing::kNominal;
+using testing::msg;
 using testing::step_ns;
 using testing::VciDaemon;
 
@@ -31,39 +40,6 @@ const char* const kAdapters =
     "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
     "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
 
-constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
-constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
-CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) {
-  return CANBTP{0, bps, ts1, ts2, 1, 0};
-}
-const CANBTP kNominal = btp(500000, 14, 2);  // 16 quanta, sample point 87.5 %
-const CANBTP kData = btp(2000000, 8, 2);     // 10 quanta, 80 %
-
-HANDLE device_named(const std::string& name) {
-  HANDLE e = nullptr;
-  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
-  VCIDEVICEINFO info{};
-  HANDLE dev = nullptr;
-  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
-    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-      EXPECT_EQ(vciDeviceOpen(info.VciObjectId, &dev), VCI_OK);
-    }
-  }
-  vciEnumDeviceClose(e);
-  return dev;
-}
-
-std::vector<CANMSG2> drain(HANDLE channel, bool data_only = true) {
-  std::vector<CANMSG2> got;
-  CANMSG2 m;
-  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
-  return got;
-}
-
 HANDLE channel_on(HANDLE dev, UINT32 filter_size, UINT8 filter_mode, bool activate = true) {
   HANDLE ch = nullptr;
   EXPECT_EQ(canChannelOpen(dev, 0, FALSE, &ch), VCI_OK);
@@ -72,57 +48,6 @@ HANDLE channel_on(HANDLE dev, UINT32 filter_size, UINT8 filter_mode, bool activa
     EXPECT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
   }
   return ch;
-}
-
-// An FD adapter's controller initialized at 500 kbit/s / 2 Mbit/s, with one PASS channel.
-struct FdAdapter {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
-  explicit FdAdapter(const std::string& name, bool start = true) {
-    device = device_named(name);
-    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
-    channel = channel_on(device, 0, CAN_FILTER_PASS);
-    CANBTP n = kNominal;
-    CANBTP f = kData;
-    EXPECT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
-                                   2048, &n, &f),
-              VCI_OK);
-    if (start) {
-      EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
-    }
-  }
-  ~FdAdapter() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
-  }
-  void post(const CANMSG2& m) const {
-    CANMSG2 copy = m;
-    ASSERT_EQ(canChannelPostMessage(channel, &copy), VCI_OK);
-  }
-};
-
-CANMSG2 msg(uint32_t id, std::vector<uint8_t> bytes, bool fd = false, bool brs = false) {
-  CANMSG2 m{};
-  m.dwMsgId = id;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
-  m.uMsgInfo.Bits.edl = fd ? 1 : 0;
-  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
-  if (!bytes.empty()) {
-    std::memcpy(m.abData, bytes.data(), bytes.size());
-  }
-  return m;
-}
-
-// End of a frame sent at t = 0, in device ticks (us).
-UINT32 ticks_of(const model::Frame& f) {
-  const auto nominal = model::ixxat::decode_btp(
-      {0, 500000, 14, 2, 1, 0}, model::ixxat::kFdNominalRange, model::ixxat::Phase::nominal);
-  const auto data = model::ixxat::decode_btp({0, 2000000, 8, 2, 1, 0}, model::ixxat::kFdDataRange,
-                                             model::ixxat::Phase::data);
-  return static_cast<UINT32>(model::frame_duration(model::encode(f), *nominal, *data).ns() / 1000);
 }
 
 TEST(Vci2CApi, FdFramesWithTheRateSwitchArriveAtTheirExactEnd) {
@@ -140,7 +65,7 @@ TEST(Vci2CApi, FdFramesWithTheRateSwitchArriveAtTheirExactEnd) {
   EXPECT_EQ(got[0].uMsgInfo.Bits.esi, 0u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.dlc, 9u);  // 12 bytes
   EXPECT_EQ(std::memcmp(got[0].abData, twelve.data(), twelve.size()), 0);
-  EXPECT_EQ(got[0].dwTime, ticks_of(*model::Frame::fd_frame(0x123, twelve, false, true)));
+  EXPECT_EQ(got[0].dwTime, end_of(0, *model::Frame::fd_frame(0x123, twelve, false, true)));
 }
 
 TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {

@@ -24,6 +24,7 @@ using testing::data;
 using testing::id_of;
 using testing::kBitUs2;
 using testing::kMode;
+using testing::SimClock;
 using testing::VciDaemon;
 
 // Three adapters on can0: a third one acknowledges while the one under test does not.
@@ -32,18 +33,6 @@ const char* const kThreeAdapters =
     "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
     "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
     "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
-
-// Simulated time from canemud's start (each test starts its own canemud at 0).
-struct SimClock {
-  uint64_t now = 0;
-  void to(uint64_t t_ns) {
-    ASSERT_GT(t_ns, now);
-    UINT64 after = 0;
-    ASSERT_EQ(canemuStepTime(t_ns - now, &after), VCI_OK);
-    now = after;
-    ASSERT_EQ(now, t_ns);
-  }
-};
 
 // The end of a classic frame started at `start_us`, in ticks of 1 us at 500 kbit/s.
 UINT32 end_of(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes, bool ext = false) {

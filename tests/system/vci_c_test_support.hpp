@@ -11,25 +11,13 @@
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "vci_test_support.hpp"
 #include "vcinpl.h"
+// after vcinpl.h
+#include "vci_c_common_support.hpp"
 
 namespace canemu::testing {
 
 inline constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
 inline constexpr int64_t kBitUs2 = 2;  // one bit at 500 kbit/s is 2 us
-
-inline VCIID id_of(const std::string& name) {
-  HANDLE e = nullptr;
-  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
-  VCIDEVICEINFO info{};
-  VCIID id{};
-  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
-    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-      id = info.VciObjectId;
-    }
-  }
-  vciEnumDeviceClose(e);
-  return id;
-}
 
 // One adapter's controller opened as a VCI program opens it: device, control unit, one
 // channel (receive FIFO `rx`, transmit FIFO 64), initialized at 500 kbit/s, started.

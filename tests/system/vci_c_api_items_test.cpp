@@ -24,6 +24,7 @@ using testing::data;
 using testing::id_of;
 using testing::kBitUs2;
 using testing::kMode;
+using testing::Parts;
 using testing::SimClock;
 using testing::VciDaemon;
 
@@ -54,32 +55,6 @@ std::vector<UINT32> times_of(const std::vector<CANMSG>& msgs) {
   }
   return t;
 }
-
-// A device, its control unit and a channel initialized but not yet activated.
-struct Parts {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
-  explicit Parts(const std::string& name) {
-    EXPECT_EQ(vciDeviceOpen(id_of(name), &device), VCI_OK);
-    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
-    EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
-    EXPECT_EQ(canChannelInitialize(channel, 64, 1, 16, 1), VCI_OK);
-  }
-  ~Parts() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
-  }
-  std::vector<CANMSG> drain() const {
-    std::vector<CANMSG> got;
-    CANMSG m;
-    while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-      got.push_back(m);
-    }
-    return got;
-  }
-};
 
 // ---------------------------------------------------------------- functions
 
@@ -686,13 +661,7 @@ TEST(VciCItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
   clock.to(1'000'000);
   const UINT32 second_end = end_of(end_of(0, 0x122, {}) + 6, 0x123, {});
   for (HANDLE ch : {alpha.channel, second}) {
-    std::vector<CANMSG> got;
-    CANMSG m;
-    while (canChannelPeekMessage(ch, &m) == VCI_OK) {
-      if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-        got.push_back(m);
-      }
-    }
+    const auto got = testing::drain(ch, true);
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].dwMsgId, 0x123u);
     EXPECT_EQ(got[0].dwTime, second_end);

@@ -33,14 +33,10 @@ using testing::msg;
 using testing::SimClock;
 using testing::VciDaemon;
 
-// Two CAN FD adapters and a third for listening on an FD bus, a classic one on a classic bus.
-const char* const kAdapters =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
-    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
-    "[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
+// kFdAdapters and a third FD adapter, for listening.
+const std::string kAdapters =
+    testing::kFdAdapters +
+    "\n[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
 
 UINT32 fd_end(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes, bool brs = false) {
   return end_of(start_us, *model::Frame::fd_frame(id, bytes, false, brs));

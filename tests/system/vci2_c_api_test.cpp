@@ -26,19 +26,12 @@ using testing::end_of;
 using testing::FdAdapter;
 using testing::kData;
 using testing::kFd;
+using testing::kFdAdapters;
 using testing::kMode;
 using testing::kNominal;
 using testing::msg;
 using testing::step_ns;
 using testing::VciDaemon;
-
-// Two CAN FD adapters on an FD bus, and a classic one on a classic bus.
-const char* const kAdapters =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
-    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
 
 HANDLE channel_on(HANDLE dev, UINT32 filter_size, UINT8 filter_mode, bool activate = true) {
   HANDLE ch = nullptr;
@@ -51,7 +44,7 @@ HANDLE channel_on(HANDLE dev, UINT32 filter_size, UINT8 filter_mode, bool activa
 }
 
 TEST(Vci2CApi, FdFramesWithTheRateSwitchArriveAtTheirExactEnd) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   FdAdapter beta("beta");
   std::vector<uint8_t> twelve{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
@@ -69,7 +62,7 @@ TEST(Vci2CApi, FdFramesWithTheRateSwitchArriveAtTheirExactEnd) {
 }
 
 TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha", false);
   CANCAPABILITIES2 caps{};
   ASSERT_EQ(canControlGetCaps(alpha.control, &caps), VCI_OK);
@@ -133,7 +126,7 @@ TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
   EXPECT_EQ(vciEventWaitFor(e, 0), VCI_OK);
   EXPECT_EQ(vciEventWaitFor(e, 10), VCI_E_TIMEOUT);
   EXPECT_EQ(vciEventDelete(e), VCI_OK);
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   HANDLE dev = nullptr;
   ASSERT_EQ(vciDeviceOpenDlg(nullptr, &dev), VCI_OK);  // the first device: alpha
   VCIDEVICEINFO info{};
@@ -143,7 +136,7 @@ TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
 }
 
 TEST(Vci2CApi, AChannelAndACyclicListHandOutTheirLinesControlUnit) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   HANDLE beta = device_named("beta");
   HANDLE channel = channel_on(beta, 0, CAN_FILTER_PASS);
@@ -189,7 +182,7 @@ TEST(Vci2CApi, AChannelAndACyclicListHandOutTheirLinesControlUnit) {
 }
 
 TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha", false);
   FdAdapter beta("beta");
   HANDLE only = channel_on(alpha.device, 16, CAN_FILTER_INCL, false);
@@ -239,7 +232,7 @@ TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
 }
 
 TEST(Vci2CApi, OwnEchoesPassAnyFilterAndOthersNeedSrra) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   FdAdapter beta("beta");
   HANDLE sender = channel_on(alpha.device, 0, CAN_FILTER_LOCK);
@@ -265,7 +258,7 @@ TEST(Vci2CApi, OwnEchoesPassAnyFilterAndOthersNeedSrra) {
 }
 
 TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter beta("beta");
   HANDLE dev = device_named("alpha");
   HANDLE control = nullptr;
@@ -311,7 +304,7 @@ TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData
 }
 
 TEST(Vci2CApi, AnErrorPassiveSendersFdFrameCarriesEsi) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   alpha.post(msg(0x42, {1, 2, 3}, true, true));
   step_ns(10'000'000);  // alone: ACK errors up to TEC 128, error-passive
@@ -331,7 +324,7 @@ TEST(Vci2CApi, AnErrorPassiveSendersFdFrameCarriesEsi) {
 // hold canemud: another client's status requests are answered within 100 ms throughout, and the
 // flood is consumed (many times the FIFO's size goes through).
 TEST(Vci2CApi, AJunkFloodDoesNotDelayAnotherClientsAnswers) {
-  testing::ConfigFile config(kAdapters);
+  testing::ConfigFile config(kFdAdapters);
   testing::Daemon daemon("realtime", {"--config=" + config.path()});
   ASSERT_EQ(canemuConnect(daemon.socket().c_str()), VCI_OK);
   {

@@ -18,6 +18,15 @@
 
 namespace canemu::testing {
 
+// Two CAN FD adapters, alpha and beta, on the FD bus fd0 (500 kbit/s, 2 Mbit/s in the data
+// phase), and a classic one, gamma, on the classic bus can0 (500 kbit/s).
+inline const std::string kFdAdapters =
+    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
+    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
+    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
+    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
+
 inline constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
 inline constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
 inline constexpr CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) {

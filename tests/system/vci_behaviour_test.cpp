@@ -25,14 +25,10 @@ using testing::msg;
 using testing::step_ns;
 using testing::VciDaemon;
 
-// Two CAN FD adapters on an FD bus; three classic ones on a classic bus.
-const char* const kAdapters =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
-    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
-    "[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
+// kFdAdapters and two more classic adapters on can0.
+const std::string kAdapters =
+    testing::kFdAdapters +
+    "\n[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
     "[[device]]\nname = \"epsilon\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
 
 constexpr CANBTP k250k{0, 250000, 14, 2, 1, 0};  // on the SJA1000: 32 quanta of 125 ns

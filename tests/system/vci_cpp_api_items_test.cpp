@@ -24,10 +24,14 @@ namespace {
 using testing::Adapter;
 using testing::drain;
 using testing::end_of;
+using testing::kData;
+using testing::kMode;
+using testing::kNominal;
 using testing::one_byte;
 using testing::open_bal;
 using testing::Ref;
 using testing::step_ns;
+using testing::V2Adapter;
 using testing::vci_id_named;
 using testing::VciDaemon;
 
@@ -41,10 +45,6 @@ const char* const kFdAdapters =
     "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
     "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
     "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
-
-constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
-const CANBTP kNominal{0, 500000, 14, 2, 1, 0};  // 16 quanta
-const CANBTP kData{0, 2000000, 8, 2, 1, 0};     // 10 quanta
 
 // Simulated time now, in ns.
 uint64_t now_ns() {
@@ -81,17 +81,6 @@ CANMSG2 msg2(uint32_t id, std::vector<uint8_t> bytes) {
   return m;
 }
 
-std::vector<CANMSG2> drain2(IFifoReader* reader, bool data_only = true) {
-  std::vector<CANMSG2> got;
-  CANMSG2 m;
-  while (reader->GetDataEntry(&m) == VCI_OK) {
-    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
-  return got;
-}
-
 std::vector<UINT32> ids_of(const std::vector<CANMSG>& msgs) {
   std::vector<UINT32> ids;
   for (const CANMSG& m : msgs) {
@@ -99,43 +88,6 @@ std::vector<UINT32> ids_of(const std::vector<CANMSG>& msgs) {
   }
   return ids;
 }
-
-// An adapter's controller through the v2 interfaces: a PASS channel with its reader and writer,
-// the control unit initialized with `ex_mode` (500 kbit/s, and 2 Mbit/s with FASTDATA) and
-// started.
-struct V2Adapter {
-  Ref<IBalObject> bal;
-  Ref<ICanSocket2> socket;
-  Ref<ICanChannel2> channel;
-  Ref<IFifoReader> reader;
-  Ref<IFifoWriter> writer;
-  Ref<ICanControl2> control;
-  V2Adapter(const std::string& name, UINT8 ex_mode) {
-    open_bal(vci_id_named(name), bal);
-    EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
-    EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
-    EXPECT_EQ(channel->Initialize(256, 64, 0, CAN_FILTER_PASS), VCI_OK);
-    EXPECT_EQ(channel->GetReader(reader.out()), VCI_OK);
-    EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
-    EXPECT_EQ(channel->Activate(), VCI_OK);
-    EXPECT_EQ(channel->GetControl(control.out()), VCI_OK);
-    init(ex_mode);
-    EXPECT_EQ(control->StartLine(), VCI_OK);
-  }
-  void init(UINT8 ex_mode) {
-    CANINITLINE2 init{};
-    init.bOpMode = kMode;
-    init.bExMode = ex_mode;
-    init.bSFMode = CAN_FILTER_PASS;
-    init.bEFMode = CAN_FILTER_PASS;
-    init.sBtpSdr = kNominal;
-    if ((ex_mode & CAN_EXMODE_FASTDATA) != 0) {
-      init.sBtpFdr = kData;
-    }
-    EXPECT_EQ(control->InitLine(&init), VCI_OK);
-  }
-  void post(CANMSG2 m) const { ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK); }
-};
 
 // ---------------------------------------------------------------- channels and control unit
 
@@ -491,7 +443,7 @@ TEST(VciCppItems, Item74_FdFramesNeedTheirExtendedModes) {
   alpha.post(fast);
   alpha.post(slow);
   step_ns(2'000'000);
-  auto got = drain2(beta.reader.p);
+  auto got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x202u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
@@ -508,7 +460,7 @@ TEST(VciCppItems, Item74_FdFramesNeedTheirExtendedModes) {
   alpha.post(fd);
   alpha.post(msg2(0x204, {4}));
   step_ns(2'000'000);
-  got = drain2(beta.reader.p);
+  got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x204u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 0u);
@@ -534,7 +486,7 @@ TEST(VciCppItems, Item75_RtrIsIgnoredOnFdFrames) {
   alpha.post(b);
   alpha.post(c);
   step_ns(2'000'000);
-  const auto got = drain2(beta.reader.p);
+  const auto got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 3u);
   EXPECT_EQ(got[0].dwMsgId, 0x301u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
@@ -602,7 +554,7 @@ TEST(VciCppItems, Item77_TimeStampsCountAtTheCapabilitiesRate) {
   }
   step_ns(1'000'000);
   const auto v1 = drain(alpha.reader.p, true);
-  const auto v2 = drain2(reader2.p);
+  const auto v2 = drain<CANMSG2>(reader2.p, true);
   ASSERT_EQ(v1.size(), 3u);
   ASSERT_EQ(v2.size(), 3u);
   for (std::size_t k = 0; k < 3; ++k) {
@@ -696,7 +648,7 @@ TEST(VciCppItems, Item105_ControlUnitFilterBlocksEvenPassChannels) {
   EXPECT_EQ(a[0].dwMsgId, 0x101u);
   EXPECT_EQ(a[0].dwTime, end);
   EXPECT_EQ(a[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_1);
-  const auto b = drain2(pass_reader.p);
+  const auto b = drain<CANMSG2>(pass_reader.p, true);
   ASSERT_EQ(b.size(), 1u);
   EXPECT_EQ(b[0].dwMsgId, 0x101u);
   EXPECT_EQ(b[0].dwTime, end);
@@ -1343,7 +1295,7 @@ TEST(VciCppItems, Item73_TheFdDlcTable) {
     alpha.post(m);
   }
   step_ns(5'000'000);
-  const auto got = drain2(beta.reader.p);
+  const auto got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 7u);
   int64_t end = -6'000;
   for (std::size_t k = 0; k < 7; ++k) {
@@ -1404,7 +1356,7 @@ TEST(VciCppItems, Item91_WithoutSrrNoV2ChannelSeesTheFrame) {
   echoed.uMsgInfo.Bits.srr = 1;
   ASSERT_EQ(alpha.writer->PutDataEntry(&echoed), VCI_OK);
   step_ns(2'000'000);
-  const auto got = drain2(reader.p);
+  const auto got = drain<CANMSG2>(reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x323u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.srr, 0u);
@@ -1485,7 +1437,7 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);  // alone: ACK errors, then ERRLIM
   step_ns(10'000'000);
   const auto v1 = drain(alpha.reader.p, false);
-  const auto got = drain2(reader.p, false);
+  const auto got = drain<CANMSG2>(reader.p, false);
   ASSERT_EQ(got.size() + 1, v1.size());  // all of it but the START, which came before
   std::size_t errors = 0;
   std::size_t statuses = 0;
@@ -1503,7 +1455,7 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
   step_ns(10'000'000);
   EXPECT_EQ(drain(alpha.reader.p, true).size(), 1u);
-  EXPECT_TRUE(drain2(reader.p).empty());
+  EXPECT_TRUE(drain<CANMSG2>(reader.p, true).empty());
 }
 
 // 104: INFO, ERROR and STATUS messages carry afc = CAN_ACCEPT_ALWAYS; data frames the filter
@@ -1607,9 +1559,9 @@ TEST(VciCppItems, Item115_DifferentRatesDoNotConnect) {
 }
 
 // 120: AUTOBAUD is a feature of the emulated adapters; InitLine with it ignores the BTR fields
-// (here those of about 4 kbit/s) and, started, the line listens for the rate (CAN_STATUS_ININIT) until
-// traffic shows it (VciBehaviour.AnAutobaudLineFindsTheRateOfTheTrafficAndReceivesFromThen: the
-// rate adopted and the frames from then on, with exact time stamps).
+// (here those of about 4 kbit/s) and, started, the line listens for the rate (CAN_STATUS_ININIT)
+// until traffic shows it (VciBehaviour.AnAutobaudLineFindsTheRateOfTheTrafficAndReceivesFromThen:
+// the rate adopted and the frames from then on, with exact time stamps).
 TEST(VciCppItems, Item120_AutobaudIsAFeatureAndIgnoresTheBtrFields) {
   VciDaemon d;
   Ref<IBalObject> bal;
@@ -1716,7 +1668,7 @@ TEST(VciCppItems, Item90_SrraEchoesPassTheChannelsFilter) {
     ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
   }
   step_ns(2'000'000);
-  const auto got = drain2(reader.p);
+  const auto got = drain<CANMSG2>(reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x321u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.srr, 0u);

@@ -46,6 +46,11 @@ const char* const kFdAdapters =
     "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
     "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
 
+// Puts `m` into `writer` (the caller asserts the result).
+HRESULT put(const Ref<IFifoWriter>& writer, CANMSG m) {
+  return writer->PutDataEntry(&m);
+}
+
 // Simulated time now, in ns.
 uint64_t now_ns() {
   UINT64 now = 0;
@@ -106,8 +111,7 @@ TEST(VciCppItems, Item56_NewChannelIsInactiveUntilActivate) {
   ASSERT_EQ(fresh->GetStatus(&s), VCI_OK);
   EXPECT_FALSE(s.fActivated);
   EXPECT_EQ(s.sLineStatus.dwStatus, 0u);  // the line is online
-  CANMSG m = one_byte(0x101, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x101, 1)), VCI_OK);
   step_ns(1'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   const auto at_alpha = drain(alpha.reader.p, true);  // the older channel had it
@@ -116,8 +120,7 @@ TEST(VciCppItems, Item56_NewChannelIsInactiveUntilActivate) {
   ASSERT_EQ(fresh->Activate(), VCI_OK);
   ASSERT_EQ(fresh->GetStatus(&s), VCI_OK);
   EXPECT_TRUE(s.fActivated);
-  m = one_byte(0x102, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);  // at 1 ms
+  ASSERT_EQ(put(beta.writer, one_byte(0x102, 2)), VCI_OK);  // at 1 ms
   step_ns(1'000'000);
   const auto got = drain(reader.p, false);
   ASSERT_EQ(got.size(), 1u);
@@ -146,19 +149,16 @@ TEST(VciCppItems, Item57_ActiveChannelIsDeafWhileTheLineIsOfflineAndDeactivatedI
   ASSERT_EQ(channel->Activate(), VCI_OK);
   Ref<ICanControl> control;
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
-  CANMSG m = one_byte(0x101, 1);  // the line is not initialized
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x101, 1)), VCI_OK);  // the line is not initialized
   step_ns(1'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
   ASSERT_EQ(control->InitLine(&init), VCI_OK);  // initialized, offline
-  m = one_byte(0x102, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x102, 2)), VCI_OK);
   step_ns(1'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   ASSERT_EQ(control->StartLine(), VCI_OK);  // at 2 ms
-  m = one_byte(0x103, 3);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x103, 3)), VCI_OK);
   step_ns(1'000'000);
   auto got = drain(reader.p, false);
   ASSERT_EQ(got.size(), 2u);
@@ -169,10 +169,8 @@ TEST(VciCppItems, Item57_ActiveChannelIsDeafWhileTheLineIsOfflineAndDeactivatedI
   EXPECT_EQ(ids_of(drain(gamma.reader.p, true)), (std::vector<UINT32>{0x101, 0x102, 0x103}));
   // Deactivated at 3 ms: beta's frame does not come in, its own frame does not go out.
   ASSERT_EQ(channel->Deactivate(), VCI_OK);
-  m = one_byte(0x104, 4);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
-  m = one_byte(0x201, 5);
-  ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x104, 4)), VCI_OK);
+  ASSERT_EQ(put(writer, one_byte(0x201, 5)), VCI_OK);
   step_ns(2'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   got = drain(gamma.reader.p, true);
@@ -196,13 +194,11 @@ TEST(VciCppItems, Item66_StopAndResetLineKeepTheChannelFifos) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(1'000'000);
   ASSERT_EQ(alpha.control->StopLine(), VCI_OK);  // at 1 ms
   for (UINT32 id : {0x201u, 0x202u}) {
-    m = one_byte(id, static_cast<UINT8>(id));
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(id, static_cast<UINT8>(id))), VCI_OK);
   }
   step_ns(1'000'000);
   ASSERT_EQ(alpha.control->ResetLine(), VCI_OK);  // at 2 ms
@@ -244,8 +240,7 @@ TEST(VciCppItems, Item67_InitLineWhileOnlineLeavesTheLineOffline) {
   ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
   EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
   EXPECT_EQ(s.bOpMode, CAN_OPMODE_STANDARD);
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(1'000'000);
   auto got = drain(alpha.reader.p, false);
   ASSERT_EQ(got.size(), 1u);  // the first START only
@@ -253,8 +248,7 @@ TEST(VciCppItems, Item67_InitLineWhileOnlineLeavesTheLineOffline) {
   EXPECT_EQ(got[0].dwTime, 0u);
   EXPECT_EQ(drain(gamma.reader.p, true).size(), 1u);  // the frame was on the bus
   ASSERT_EQ(alpha.control->StartLine(), VCI_OK);      // at 2 ms
-  m = one_byte(0x124, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x124, 2)), VCI_OK);
   step_ns(1'000'000);
   got = drain(alpha.reader.p, false);
   ASSERT_EQ(got.size(), 2u);
@@ -277,15 +271,13 @@ TEST(VciCppItems, Item68_ReleasingTheControlUnitLeavesTheLineRunning) {
   ASSERT_EQ(alpha.socket->GetLineStatus(&s), VCI_OK);
   EXPECT_EQ(s.dwStatus, 0u);  // online, no ININIT
   EXPECT_EQ(s.bOpMode, kMode);
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);  // at 1 ms
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);  // at 1 ms
   step_ns(1'000'000);
   auto got = drain(alpha.reader.p, false);
   ASSERT_EQ(got.size(), 2u);  // the START and the frame: no STOP or RESET
   EXPECT_EQ(got[1].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].dwTime, 1000u + end_of(0x123, {1}));
-  m = one_byte(0x124, 2);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);  // at 2 ms
+  ASSERT_EQ(put(alpha.writer, one_byte(0x124, 2)), VCI_OK);  // at 2 ms
   step_ns(1'000'000);
   got = drain(beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
@@ -363,12 +355,10 @@ TEST(VciCppItems, Item71_TwoChannelsTransmitInTurn) {
   ASSERT_EQ(second->GetWriter(writer.out()), VCI_OK);
   ASSERT_EQ(second->Activate(), VCI_OK);
   for (UINT32 id : {0x101u, 0x102u, 0x103u, 0x104u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(id, 1)), VCI_OK);
   }
   for (UINT32 id : {0x201u, 0x202u}) {
-    CANMSG m = one_byte(id, 2);
-    ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(writer, one_byte(id, 2)), VCI_OK);
   }
   step_ns(5'000'000);
   const auto got = drain(beta.reader.p, true);
@@ -392,8 +382,7 @@ TEST(VciCppItems, Item72_NonDataTransmitMessagesAreDropped) {
     junk.uMsgInfo.Bytes.bType = type;
     ASSERT_EQ(alpha.writer->PutDataEntry(&junk), VCI_OK);
   }
-  CANMSG m = one_byte(0x123, 0x5A);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(alpha.writer, one_byte(0x123, 0x5A)), VCI_OK);
   step_ns(2'000'000);
   const auto got = drain(beta.reader.p, false);
   ASSERT_EQ(got.size(), 2u);  // beta's START and the data frame
@@ -549,8 +538,7 @@ TEST(VciCppItems, Item77_TimeStampsCountAtTheCapabilitiesRate) {
       step_ns(when - t);
       t = when;
     }
-    CANMSG m = one_byte(0x123, 1);
-    ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   }
   step_ns(1'000'000);
   const auto v1 = drain(alpha.reader.p, true);
@@ -638,8 +626,7 @@ TEST(VciCppItems, Item105_ControlUnitFilterBlocksEvenPassChannels) {
   ASSERT_EQ(control->SetAccFilter(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);  // 0x100..0x103
   ASSERT_EQ(control->StartLine(), VCI_OK);
   for (UINT32 id : {0x200u, 0x101u, 0x104u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(beta.writer, one_byte(id, 1)), VCI_OK);
   }
   step_ns(2'000'000);
   const UINT32 end = end_of(0x200, {1}) + 6u + end_of(0x101, {1});
@@ -733,8 +720,7 @@ TEST(VciCppItems, Item114_BtrPairsOfTheTableGiveTheirRates) {
     EXPECT_EQ(s.bBtReg1, r.btr1);
     drain(alpha.reader.p, false);
     const uint64_t start = now_ns();
-    CANMSG m = one_byte(0x555, 0xAA);
-    ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(beta.writer, one_byte(0x555, 0xAA)), VCI_OK);
     step_ns(50'000'000);
     const auto got = drain(alpha.reader.p, false);
     ASSERT_EQ(got.size(), 1u) << r.bit_ns;
@@ -1323,8 +1309,7 @@ TEST(VciCppItems, Item85_FifoLoadsAreTheFillInPercent) {
   ASSERT_EQ(alpha.reader->GetCapacity(&rx_capacity), VCI_OK);
   const UINT16 posted = tx_capacity / 2;
   for (UINT16 k = 0; k < posted; ++k) {
-    CANMSG m = one_byte(0x100, 1);
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(0x100, 1)), VCI_OK);
   }
   step_ns(1'000'000);
   CANCHANSTATUS s{};
@@ -1433,8 +1418,7 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   Ref<IFifoReader> reader;
   ASSERT_EQ(lock->GetReader(reader.out()), VCI_OK);
   ASSERT_EQ(lock->Activate(), VCI_OK);
-  CANMSG m = one_byte(0x10, 1);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);  // alone: ACK errors, then ERRLIM
+  ASSERT_EQ(put(alpha.writer, one_byte(0x10, 1)), VCI_OK);  // alone: ACK errors, then ERRLIM
   step_ns(10'000'000);
   const auto v1 = drain(alpha.reader.p, false);
   const auto got = drain<CANMSG2>(reader.p, false);
@@ -1451,8 +1435,7 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   EXPECT_GT(errors, 16u);
   EXPECT_EQ(statuses, 1u);
   Adapter beta("beta");  // now alpha's frame goes, and beta's data too: neither passes LOCK
-  m = one_byte(0x20, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x20, 2)), VCI_OK);
   step_ns(10'000'000);
   EXPECT_EQ(drain(alpha.reader.p, true).size(), 1u);
   EXPECT_TRUE(drain<CANMSG2>(reader.p, true).empty());
@@ -1463,8 +1446,7 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
 TEST(VciCppItems, Item104_NonDataMessagesCarryAfcAlways) {
   VciDaemon d;
   Adapter alpha("alpha");
-  CANMSG m = one_byte(0x10, 1);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(alpha.writer, one_byte(0x10, 1)), VCI_OK);
   step_ns(10'000'000);
   Adapter beta("beta");
   step_ns(1'000'000);
@@ -1520,15 +1502,13 @@ TEST(VciCppItems, Item113_HighPriorityNeverOvertakesItsOwnFifo) {
   ASSERT_EQ(second->Activate(), VCI_OK);
   ASSERT_EQ(alpha.control->StopLine(), VCI_OK);  // everything waits in the FIFOs
   for (UINT32 id : {0x301u, 0x302u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(id, 1)), VCI_OK);
   }
   CANMSG urgent = one_byte(0x303, 1);
   urgent.uMsgInfo.Bits.hpm = 1;
   ASSERT_EQ(alpha.writer->PutDataEntry(&urgent), VCI_OK);
   for (UINT32 id : {0x401u, 0x402u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(writer, one_byte(id, 1)), VCI_OK);
   }
   ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
   step_ns(5'000'000);
@@ -1547,8 +1527,7 @@ TEST(VciCppItems, Item115_DifferentRatesDoNotConnect) {
   ASSERT_EQ(beta.control->InitLine(&init), VCI_OK);
   ASSERT_EQ(beta.control->StartLine(), VCI_OK);
   drain(beta.reader.p, false);
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(20'000'000);
   EXPECT_TRUE(drain(alpha.reader.p, true).empty());
   std::size_t errors = 0;

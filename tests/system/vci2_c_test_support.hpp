@@ -151,12 +151,4 @@ inline UINT32 end_of(uint32_t start_us, const model::Frame& f) {
       1000);
 }
 
-inline std::vector<uint32_t> ids_of(const std::vector<CANMSG2>& msgs) {
-  std::vector<uint32_t> ids;
-  for (const CANMSG2& m : msgs) {
-    ids.push_back(m.dwMsgId);
-  }
-  return ids;
-}
-
 }  // namespace canemu::testing

@@ -22,6 +22,7 @@ using testing::Adapter;
 using testing::bits_of;
 using testing::data;
 using testing::id_of;
+using testing::ids_of;
 using testing::kBitUs2;
 using testing::kMode;
 using testing::Parts;
@@ -38,14 +39,6 @@ const char* const kThreeAdapters =
 // The end of a classic frame started at `start_us`, in ticks of 1 us at 500 kbit/s.
 UINT32 end_of(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes, bool ext = false) {
   return static_cast<UINT32>(start_us + bits_of(id, std::move(bytes), ext) * kBitUs2);
-}
-
-std::vector<uint32_t> ids_of(const std::vector<CANMSG>& msgs) {
-  std::vector<uint32_t> ids;
-  for (const CANMSG& m : msgs) {
-    ids.push_back(m.dwMsgId);
-  }
-  return ids;
 }
 
 std::vector<UINT32> times_of(const std::vector<CANMSG>& msgs) {

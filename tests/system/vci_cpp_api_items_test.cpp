@@ -24,6 +24,7 @@ namespace {
 using testing::Adapter;
 using testing::drain;
 using testing::end_of;
+using testing::ids_of;
 using testing::kData;
 using testing::kMode;
 using testing::kNominal;
@@ -84,14 +85,6 @@ CANMSG2 msg2(uint32_t id, std::vector<uint8_t> bytes) {
     std::memcpy(m.abData, bytes.data(), bytes.size());
   }
   return m;
-}
-
-std::vector<UINT32> ids_of(const std::vector<CANMSG>& msgs) {
-  std::vector<UINT32> ids;
-  for (const CANMSG& m : msgs) {
-    ids.push_back(m.dwMsgId);
-  }
-  return ids;
 }
 
 // ---------------------------------------------------------------- channels and control unit

@@ -85,6 +85,16 @@ struct SimClock {
   }
 };
 
+// The identifiers of `msgs` (CANMSG or CANMSG2), in order.
+template <class Msg>
+inline std::vector<uint32_t> ids_of(const std::vector<Msg>& msgs) {
+  std::vector<uint32_t> ids;
+  for (const Msg& m : msgs) {
+    ids.push_back(m.dwMsgId);
+  }
+  return ids;
+}
+
 // Loads a fault scenario from `text` into the daemon.
 inline void load_faults(const Daemon& d, const std::string& text) {
   auto c = connect(d, "faults");

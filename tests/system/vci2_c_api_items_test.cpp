@@ -13,143 +13,36 @@
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "vci2_c_test_support.hpp"
 #include "vci_lin_test_support.hpp"
-#include "vci_test_support.hpp"
-#include "vcinpl2.h"
 
 namespace canemu {
 namespace {
 
+using testing::btp;
+using testing::drain;
+using testing::end_of;
+using testing::FdAdapter;
+using testing::id_of;
+using testing::ids_of;
+using testing::kData;
+using testing::kFd;
+using testing::kMode;
+using testing::kNominal;
+using testing::msg;
+using testing::SimClock;
 using testing::VciDaemon;
 
-// Two CAN FD adapters and a third for listening on an FD bus, a classic one on a classic bus.
-const char* const kAdapters =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
-    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
-    "[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
+// kFdAdapters and a third FD adapter, for listening.
+const std::string kAdapters =
+    testing::kFdAdapters +
+    "\n[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
 
-constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
-constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
-CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) {
-  return CANBTP{0, bps, ts1, ts2, 1, 0};
-}
-const CANBTP kNominal = btp(500000, 14, 2);  // 16 quanta of 80 MHz / 10
-const CANBTP kData = btp(2000000, 8, 2);     // 10 quanta
-
-struct SimClock {
-  uint64_t now = 0;
-  void to(uint64_t t_ns) {
-    ASSERT_GT(t_ns, now);
-    UINT64 after = 0;
-    ASSERT_EQ(canemuStepTime(t_ns - now, &after), VCI_OK);
-    now = after;
-    ASSERT_EQ(now, t_ns);
-  }
-};
-
-VCIID id_named(const std::string& name) {
-  HANDLE e = nullptr;
-  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
-  VCIDEVICEINFO info{};
-  VCIID id{};
-  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
-    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-      id = info.VciObjectId;
-    }
-  }
-  vciEnumDeviceClose(e);
-  return id;
-}
-
-std::vector<CANMSG2> drain(HANDLE channel, bool data_only = true) {
-  std::vector<CANMSG2> got;
-  CANMSG2 m;
-  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
-  return got;
-}
-
-// An FD adapter's device, control unit and a PASS channel (activated unless told otherwise);
-// the line initialized with `ex_mode` at 500 kbit/s / 2 Mbit/s and started if asked.
-struct FdAdapter {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
-  explicit FdAdapter(const std::string& name, bool start = true, UINT8 ex_mode = kFd,
-                     bool activate = true) {
-    EXPECT_EQ(vciDeviceOpen(id_named(name), &device), VCI_OK);
-    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
-    EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
-    EXPECT_EQ(canChannelInitialize(channel, 256, 1, 64, 1, 0, CAN_FILTER_PASS), VCI_OK);
-    if (activate) {
-      EXPECT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
-    }
-    init(ex_mode);
-    if (start) {
-      EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
-    }
-  }
-  ~FdAdapter() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
-  }
-  HRESULT init(UINT8 ex_mode) const {
-    CANBTP n = kNominal;
-    CANBTP f = kData;
-    const HRESULT hr = canControlInitialize(control, kMode, ex_mode, CAN_FILTER_INCL,
-                                            CAN_FILTER_INCL, 2048, 2048, &n, &f);
-    EXPECT_EQ(hr, VCI_OK);
-    return hr;
-  }
-  void post(const CANMSG2& m) const {
-    CANMSG2 copy = m;
-    ASSERT_EQ(canChannelPostMessage(channel, &copy), VCI_OK);
-  }
-};
-
-CANMSG2 msg(uint32_t id, std::vector<uint8_t> bytes, bool fd = false, bool brs = false) {
-  CANMSG2 m{};
-  m.dwMsgId = id;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
-  m.uMsgInfo.Bits.edl = fd ? 1 : 0;
-  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
-  if (!bytes.empty()) {
-    std::memcpy(m.abData, bytes.data(), bytes.size());
-  }
-  return m;
-}
-
-// The end of a frame started at `start_us`, in ticks of 1 us, at 500 kbit/s / 2 Mbit/s.
-UINT32 end_of(uint32_t start_us, const model::Frame& f) {
-  const auto nominal = model::ixxat::decode_btp(
-      {0, 500000, 14, 2, 1, 0}, model::ixxat::kFdNominalRange, model::ixxat::Phase::nominal);
-  const auto data = model::ixxat::decode_btp({0, 2000000, 8, 2, 1, 0}, model::ixxat::kFdDataRange,
-                                             model::ixxat::Phase::data);
-  return static_cast<UINT32>(
-      (start_us * int64_t{1000} + model::frame_duration(model::encode(f), *nominal, *data).ns()) /
-      1000);
-}
 UINT32 fd_end(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes, bool brs = false) {
   return end_of(start_us, *model::Frame::fd_frame(id, bytes, false, brs));
 }
 UINT32 classic_end(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes) {
   return end_of(start_us, *model::Frame::classic(id, bytes, false));
-}
-
-std::vector<uint32_t> ids_of(const std::vector<CANMSG2>& msgs) {
-  std::vector<uint32_t> ids;
-  for (const CANMSG2& m : msgs) {
-    ids.push_back(m.dwMsgId);
-  }
-  return ids;
 }
 
 // ---------------------------------------------------------------- functions
@@ -241,21 +134,21 @@ TEST(Vci2CFunctions, DevicesAreEnumeratedFoundAndDescribed) {
   EXPECT_EQ(id.AsInt64, first.VciObjectId.AsInt64);
   // The FD adapters are one class: alpha, beta, delta (gamma is another).
   ASSERT_EQ(vciFindDeviceByClass(first.DeviceClass, 0, &id), VCI_OK);
-  EXPECT_EQ(id.AsInt64, id_named("alpha").AsInt64);
+  EXPECT_EQ(id.AsInt64, id_of("alpha").AsInt64);
   ASSERT_EQ(vciFindDeviceByClass(first.DeviceClass, 2, &id), VCI_OK);
-  EXPECT_EQ(id.AsInt64, id_named("delta").AsInt64);
+  EXPECT_EQ(id.AsInt64, id_of("delta").AsInt64);
   EXPECT_EQ(vciFindDeviceByClass(first.DeviceClass, 3, &id), VCI_E_NO_MORE_ITEMS);
   ::unsetenv("CANEMU_VCI_DEVICE");
   ASSERT_EQ(vciSelectDeviceDlg(nullptr, &id), VCI_OK);
   EXPECT_EQ(id.AsInt64, first.VciObjectId.AsInt64);
   HANDLE dev = nullptr;
-  ASSERT_EQ(vciDeviceOpen(id_named("alpha"), &dev), VCI_OK);
+  ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
   VCIDEVICECAPS caps{};
   ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
   EXPECT_EQ(caps.BusCtrlCount, 1);
   EXPECT_EQ(caps.BusCtrlTypes[0], VCI_CAN_CTRL(CAN_CTRL_IFICFD));
   EXPECT_EQ(vciDeviceClose(dev), VCI_OK);
-  ASSERT_EQ(vciDeviceOpen(id_named("gamma"), &dev), VCI_OK);
+  ASSERT_EQ(vciDeviceOpen(id_of("gamma"), &dev), VCI_OK);
   ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
   EXPECT_EQ(caps.BusCtrlTypes[0], VCI_CAN_CTRL(CAN_CTRL_SJA1000));
   EXPECT_EQ(vciDeviceGetCaps(dev, nullptr), VCI_E_INVALIDARG);
@@ -377,7 +270,7 @@ TEST(Vci2CFunctions, DetectBitrateFindsTheEntryOfTheTraffic) {
   ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
   ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
   HANDLE dev = nullptr;
-  ASSERT_EQ(vciDeviceOpen(id_named("delta"), &dev), VCI_OK);
+  ASSERT_EQ(vciDeviceOpen(id_of("delta"), &dev), VCI_OK);
   HANDLE control = nullptr;
   ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
   CANBTP sdr[] = {btp(250000, 30, 2), kNominal};
@@ -659,7 +552,7 @@ TEST(Vci2CLin, CapabilitiesStatusResetAndSingleReads) {
   using namespace testing;
   VciDaemon d(kLinAdapters);
   HANDLE dev = nullptr;
-  ASSERT_EQ(vciDeviceOpen(id_named("alpha"), &dev), VCI_OK);
+  ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
   HANDLE control = nullptr;
   HANDLE monitor = nullptr;
   ASSERT_EQ(linControlOpen(dev, kLinNo, &control), VCI_OK);

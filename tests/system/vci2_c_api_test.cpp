@@ -13,56 +13,25 @@
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "vci2_c_test_support.hpp"
 #include "vci_lin_test_support.hpp"
-#include "vci_test_support.hpp"
-#include "vcinpl2.h"
 
 namespace canemu {
 namespace {
 
+using testing::btp;
+using testing::device_named;
+using testing::drain;
+using testing::end_of;
+using testing::FdAdapter;
+using testing::kData;
+using testing::kFd;
+using testing::kFdAdapters;
+using testing::kMode;
+using testing::kNominal;
+using testing::msg;
 using testing::step_ns;
 using testing::VciDaemon;
-
-// Two CAN FD adapters on an FD bus, and a classic one on a classic bus.
-const char* const kAdapters =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
-    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
-
-constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
-constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
-CANBTP btp(UINT32 bps, UINT16 ts1, UINT16 ts2) {
-  return CANBTP{0, bps, ts1, ts2, 1, 0};
-}
-const CANBTP kNominal = btp(500000, 14, 2);  // 16 quanta, sample point 87.5 %
-const CANBTP kData = btp(2000000, 8, 2);     // 10 quanta, 80 %
-
-HANDLE device_named(const std::string& name) {
-  HANDLE e = nullptr;
-  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
-  VCIDEVICEINFO info{};
-  HANDLE dev = nullptr;
-  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
-    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-      EXPECT_EQ(vciDeviceOpen(info.VciObjectId, &dev), VCI_OK);
-    }
-  }
-  vciEnumDeviceClose(e);
-  return dev;
-}
-
-std::vector<CANMSG2> drain(HANDLE channel, bool data_only = true) {
-  std::vector<CANMSG2> got;
-  CANMSG2 m;
-  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
-  return got;
-}
 
 HANDLE channel_on(HANDLE dev, UINT32 filter_size, UINT8 filter_mode, bool activate = true) {
   HANDLE ch = nullptr;
@@ -74,59 +43,8 @@ HANDLE channel_on(HANDLE dev, UINT32 filter_size, UINT8 filter_mode, bool activa
   return ch;
 }
 
-// An FD adapter's controller initialized at 500 kbit/s / 2 Mbit/s, with one PASS channel.
-struct FdAdapter {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
-  explicit FdAdapter(const std::string& name, bool start = true) {
-    device = device_named(name);
-    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
-    channel = channel_on(device, 0, CAN_FILTER_PASS);
-    CANBTP n = kNominal;
-    CANBTP f = kData;
-    EXPECT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
-                                   2048, &n, &f),
-              VCI_OK);
-    if (start) {
-      EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
-    }
-  }
-  ~FdAdapter() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
-  }
-  void post(const CANMSG2& m) const {
-    CANMSG2 copy = m;
-    ASSERT_EQ(canChannelPostMessage(channel, &copy), VCI_OK);
-  }
-};
-
-CANMSG2 msg(uint32_t id, std::vector<uint8_t> bytes, bool fd = false, bool brs = false) {
-  CANMSG2 m{};
-  m.dwMsgId = id;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
-  m.uMsgInfo.Bits.edl = fd ? 1 : 0;
-  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
-  if (!bytes.empty()) {
-    std::memcpy(m.abData, bytes.data(), bytes.size());
-  }
-  return m;
-}
-
-// End of a frame sent at t = 0, in device ticks (us).
-UINT32 ticks_of(const model::Frame& f) {
-  const auto nominal = model::ixxat::decode_btp(
-      {0, 500000, 14, 2, 1, 0}, model::ixxat::kFdNominalRange, model::ixxat::Phase::nominal);
-  const auto data = model::ixxat::decode_btp({0, 2000000, 8, 2, 1, 0}, model::ixxat::kFdDataRange,
-                                             model::ixxat::Phase::data);
-  return static_cast<UINT32>(model::frame_duration(model::encode(f), *nominal, *data).ns() / 1000);
-}
-
 TEST(Vci2CApi, FdFramesWithTheRateSwitchArriveAtTheirExactEnd) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   FdAdapter beta("beta");
   std::vector<uint8_t> twelve{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
@@ -140,11 +58,11 @@ TEST(Vci2CApi, FdFramesWithTheRateSwitchArriveAtTheirExactEnd) {
   EXPECT_EQ(got[0].uMsgInfo.Bits.esi, 0u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.dlc, 9u);  // 12 bytes
   EXPECT_EQ(std::memcmp(got[0].abData, twelve.data(), twelve.size()), 0);
-  EXPECT_EQ(got[0].dwTime, ticks_of(*model::Frame::fd_frame(0x123, twelve, false, true)));
+  EXPECT_EQ(got[0].dwTime, end_of(0, *model::Frame::fd_frame(0x123, twelve, false, true)));
 }
 
 TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha", false);
   CANCAPABILITIES2 caps{};
   ASSERT_EQ(canControlGetCaps(alpha.control, &caps), VCI_OK);
@@ -208,7 +126,7 @@ TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
   EXPECT_EQ(vciEventWaitFor(e, 0), VCI_OK);
   EXPECT_EQ(vciEventWaitFor(e, 10), VCI_E_TIMEOUT);
   EXPECT_EQ(vciEventDelete(e), VCI_OK);
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   HANDLE dev = nullptr;
   ASSERT_EQ(vciDeviceOpenDlg(nullptr, &dev), VCI_OK);  // the first device: alpha
   VCIDEVICEINFO info{};
@@ -218,7 +136,7 @@ TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
 }
 
 TEST(Vci2CApi, AChannelAndACyclicListHandOutTheirLinesControlUnit) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   HANDLE beta = device_named("beta");
   HANDLE channel = channel_on(beta, 0, CAN_FILTER_PASS);
@@ -264,7 +182,7 @@ TEST(Vci2CApi, AChannelAndACyclicListHandOutTheirLinesControlUnit) {
 }
 
 TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha", false);
   FdAdapter beta("beta");
   HANDLE only = channel_on(alpha.device, 16, CAN_FILTER_INCL, false);
@@ -314,7 +232,7 @@ TEST(Vci2CApi, EachV2ChannelFiltersOnItsOwn) {
 }
 
 TEST(Vci2CApi, OwnEchoesPassAnyFilterAndOthersNeedSrra) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   FdAdapter beta("beta");
   HANDLE sender = channel_on(alpha.device, 0, CAN_FILTER_LOCK);
@@ -340,7 +258,7 @@ TEST(Vci2CApi, OwnEchoesPassAnyFilterAndOthersNeedSrra) {
 }
 
 TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter beta("beta");
   HANDLE dev = device_named("alpha");
   HANDLE control = nullptr;
@@ -386,7 +304,7 @@ TEST(Vci2CApi, TheControlUnitsFilterModeComesFromInitLineAndLockKeepsOnlyNonData
 }
 
 TEST(Vci2CApi, AnErrorPassiveSendersFdFrameCarriesEsi) {
-  VciDaemon d(kAdapters);
+  VciDaemon d(kFdAdapters);
   FdAdapter alpha("alpha");
   alpha.post(msg(0x42, {1, 2, 3}, true, true));
   step_ns(10'000'000);  // alone: ACK errors up to TEC 128, error-passive
@@ -406,7 +324,7 @@ TEST(Vci2CApi, AnErrorPassiveSendersFdFrameCarriesEsi) {
 // hold canemud: another client's status requests are answered within 100 ms throughout, and the
 // flood is consumed (many times the FIFO's size goes through).
 TEST(Vci2CApi, AJunkFloodDoesNotDelayAnotherClientsAnswers) {
-  testing::ConfigFile config(kAdapters);
+  testing::ConfigFile config(kFdAdapters);
   testing::Daemon daemon("realtime", {"--config=" + config.path()});
   ASSERT_EQ(canemuConnect(daemon.socket().c_str()), VCI_OK);
   {

@@ -10,110 +10,29 @@
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
-#include "vci_test_support.hpp"
-#include "vcinpl2.h"
+#include "vci2_c_test_support.hpp"
 
 namespace canemu {
 namespace {
 
+using testing::fd_timing;
+using testing::kData;
+using testing::kFd;
+using testing::kMode;
+using testing::kNominal;
+using testing::Line;
+using testing::msg;
 using testing::step_ns;
 using testing::VciDaemon;
 
-// Two CAN FD adapters on an FD bus; three classic ones on a classic bus.
-const char* const kAdapters =
-    "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
-    "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n"
-    "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
-    "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
-    "[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
+// kFdAdapters and two more classic adapters on can0.
+const std::string kAdapters =
+    testing::kFdAdapters +
+    "\n[[device]]\nname = \"delta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
     "[[device]]\nname = \"epsilon\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
 
-constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
-constexpr UINT8 kFd = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
-constexpr CANBTP kNominal{0, 500000, 14, 2, 1, 0};  // 16 quanta, sample point 87.5 %
-constexpr CANBTP kData{0, 2000000, 8, 2, 1, 0};     // 10 quanta, 80 %
-constexpr CANBTP k250k{0, 250000, 14, 2, 1, 0};     // on the SJA1000: 32 quanta of 125 ns
+constexpr CANBTP k250k{0, 250000, 14, 2, 1, 0};  // on the SJA1000: 32 quanta of 125 ns
 constexpr CANBTP k500k{0, 500000, 14, 2, 1, 0};
-
-HANDLE device_named(const std::string& name) {
-  HANDLE e = nullptr;
-  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
-  VCIDEVICEINFO info{};
-  HANDLE dev = nullptr;
-  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
-    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-      EXPECT_EQ(vciDeviceOpen(info.VciObjectId, &dev), VCI_OK);
-    }
-  }
-  vciEnumDeviceClose(e);
-  return dev;
-}
-
-// A controller opened as a program opens it: device, control unit, one PASS channel, the line
-// initialized with `mode` (FD modes and timings on an FD adapter) and started.
-struct Line {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
-  Line(const std::string& name, UINT8 mode, UINT8 ex_mode, CANBTP sdr, CANBTP fdr,
-       bool start = true) {
-    device = device_named(name);
-    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
-    EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
-    EXPECT_EQ(canChannelInitialize(channel, 256, 1, 64, 1, 0, CAN_FILTER_PASS), VCI_OK);
-    EXPECT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
-    EXPECT_EQ(canControlInitialize(control, mode, ex_mode, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
-                                   2048, &sdr, ex_mode != CAN_EXMODE_DISABLED ? &fdr : nullptr),
-              VCI_OK);
-    if (start) {
-      EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
-    }
-  }
-  ~Line() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
-  }
-  void post(const CANMSG2& m) const {
-    CANMSG2 copy = m;
-    ASSERT_EQ(canChannelPostMessage(channel, &copy), VCI_OK);
-  }
-  std::vector<CANMSG2> drain(UINT8 type) const {
-    std::vector<CANMSG2> got;
-    CANMSG2 m;
-    while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-      if (m.uMsgInfo.Bytes.bType == type) {
-        got.push_back(m);
-      }
-    }
-    return got;
-  }
-  UINT32 line_status() const {
-    CANLINESTATUS2 s{};
-    EXPECT_EQ(canControlGetStatus(control, &s), VCI_OK);
-    return s.dwStatus;
-  }
-};
-
-CANMSG2 msg(uint32_t id, const std::vector<uint8_t>& bytes, bool fd = false, bool brs = false) {
-  CANMSG2 m{};
-  m.dwMsgId = id;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = *model::length_to_dlc(bytes.size(), fd) & 0x0FU;
-  m.uMsgInfo.Bits.edl = fd ? 1 : 0;
-  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
-  if (!bytes.empty()) {
-    std::memcpy(m.abData, bytes.data(), bytes.size());
-  }
-  return m;
-}
-
-model::BitTiming fd_timing(const CANBTP& b, const model::ixxat::BtpRange& range,
-                           model::ixxat::Phase phase) {
-  return *model::ixxat::decode_btp({b.dwMode, b.dwBPS, b.wTS1, b.wTS2, b.wSJW, b.wTDO}, range,
-                                   phase);
-}
 
 // ---------------------------------------------------------------- fast data bit error
 

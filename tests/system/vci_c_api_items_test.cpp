@@ -22,8 +22,11 @@ using testing::Adapter;
 using testing::bits_of;
 using testing::data;
 using testing::id_of;
+using testing::ids_of;
 using testing::kBitUs2;
 using testing::kMode;
+using testing::Parts;
+using testing::SimClock;
 using testing::VciDaemon;
 
 // Three adapters on can0: a third one acknowledges while the one under test does not.
@@ -33,29 +36,9 @@ const char* const kThreeAdapters =
     "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n"
     "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
 
-// Simulated time from canemud's start (each test starts its own canemud at 0).
-struct SimClock {
-  uint64_t now = 0;
-  void to(uint64_t t_ns) {
-    ASSERT_GT(t_ns, now);
-    UINT64 after = 0;
-    ASSERT_EQ(canemuStepTime(t_ns - now, &after), VCI_OK);
-    now = after;
-    ASSERT_EQ(now, t_ns);
-  }
-};
-
 // The end of a classic frame started at `start_us`, in ticks of 1 us at 500 kbit/s.
 UINT32 end_of(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes, bool ext = false) {
   return static_cast<UINT32>(start_us + bits_of(id, std::move(bytes), ext) * kBitUs2);
-}
-
-std::vector<uint32_t> ids_of(const std::vector<CANMSG>& msgs) {
-  std::vector<uint32_t> ids;
-  for (const CANMSG& m : msgs) {
-    ids.push_back(m.dwMsgId);
-  }
-  return ids;
 }
 
 std::vector<UINT32> times_of(const std::vector<CANMSG>& msgs) {
@@ -65,32 +48,6 @@ std::vector<UINT32> times_of(const std::vector<CANMSG>& msgs) {
   }
   return t;
 }
-
-// A device, its control unit and a channel initialized but not yet activated.
-struct Parts {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
-  explicit Parts(const std::string& name) {
-    EXPECT_EQ(vciDeviceOpen(id_of(name), &device), VCI_OK);
-    EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
-    EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
-    EXPECT_EQ(canChannelInitialize(channel, 64, 1, 16, 1), VCI_OK);
-  }
-  ~Parts() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
-  }
-  std::vector<CANMSG> drain() const {
-    std::vector<CANMSG> got;
-    CANMSG m;
-    while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-      got.push_back(m);
-    }
-    return got;
-  }
-};
 
 // ---------------------------------------------------------------- functions
 
@@ -697,13 +654,7 @@ TEST(VciCItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
   clock.to(1'000'000);
   const UINT32 second_end = end_of(end_of(0, 0x122, {}) + 6, 0x123, {});
   for (HANDLE ch : {alpha.channel, second}) {
-    std::vector<CANMSG> got;
-    CANMSG m;
-    while (canChannelPeekMessage(ch, &m) == VCI_OK) {
-      if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-        got.push_back(m);
-      }
-    }
+    const auto got = testing::drain(ch, true);
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].dwMsgId, 0x123u);
     EXPECT_EQ(got[0].dwTime, second_end);

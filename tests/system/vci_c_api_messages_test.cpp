@@ -71,13 +71,7 @@ TEST(VciCApi, SelfReceptionReachesEveryChannelOfTheController) {
   EXPECT_EQ(first[0].dwMsgId, 0x321u);
   EXPECT_EQ(first[0].uMsgInfo.Bits.srr, 1u);
   EXPECT_EQ(first[0].dwTime, static_cast<UINT32>(bits_of(0x321, {7}) * kBitUs2));
-  std::vector<CANMSG> at_second;
-  CANMSG m;
-  while (canChannelPeekMessage(second, &m) == VCI_OK) {
-    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      at_second.push_back(m);
-    }
-  }
+  const auto at_second = testing::drain(second, true);
   ASSERT_EQ(at_second.size(), 1u);
   EXPECT_EQ(at_second[0].dwMsgId, 0x321u);
   EXPECT_EQ(at_second[0].uMsgInfo.Bits.srr, 1u);

@@ -11,67 +11,62 @@
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "vci_test_support.hpp"
 #include "vcinpl.h"
+// after vcinpl.h
+#include "vci_c_common_support.hpp"
 
 namespace canemu::testing {
 
 inline constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
 inline constexpr int64_t kBitUs2 = 2;  // one bit at 500 kbit/s is 2 us
 
-inline VCIID id_of(const std::string& name) {
-  HANDLE e = nullptr;
-  EXPECT_EQ(vciEnumDeviceOpen(&e), VCI_OK);
-  VCIDEVICEINFO info{};
-  VCIID id{};
-  while (vciEnumDeviceNext(e, &info) == VCI_OK) {
-    if (std::string(info.Description).find("(canemu " + name + ")") != std::string::npos) {
-      id = info.VciObjectId;
+// What `channel` holds, taken out (`data_only`: only the data frames).
+inline std::vector<CANMSG> drain(HANDLE channel, bool data_only) {
+  std::vector<CANMSG> got;
+  CANMSG m;
+  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
+    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
+      got.push_back(m);
     }
   }
-  vciEnumDeviceClose(e);
-  return id;
+  return got;
 }
 
-// One adapter's controller opened as a VCI program opens it: device, control unit, one
-// channel (receive FIFO `rx`, transmit FIFO 64), initialized at 500 kbit/s, started.
-struct Adapter {
+// An adapter's device, its control unit and a channel (receive FIFO `rx`, transmit FIFO `tx`)
+// initialized but not yet activated.
+struct Parts {
   HANDLE device = nullptr;
   HANDLE control = nullptr;
   HANDLE channel = nullptr;
-  explicit Adapter(const std::string& name, bool start = true, UINT8 mode = kMode, UINT16 rx = 1024,
-                   UINT8 btr0 = CAN_BT0_500KB, UINT8 btr1 = CAN_BT1_500KB) {
-    const VCIID id = id_of(name);
-    EXPECT_EQ(vciDeviceOpen(id, &device), VCI_OK);
+  explicit Parts(const std::string& name, UINT16 rx = 64, UINT16 tx = 16) {
+    EXPECT_EQ(vciDeviceOpen(id_of(name), &device), VCI_OK);
     EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
     EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
-    EXPECT_EQ(canChannelInitialize(channel, rx, 1, 64, 1), VCI_OK);
+    EXPECT_EQ(canChannelInitialize(channel, rx, 1, tx, 1), VCI_OK);
+  }
+  Parts(const Parts&) = delete;
+  Parts& operator=(const Parts&) = delete;
+  ~Parts() {
+    canChannelClose(channel);
+    canControlClose(control);
+    vciDeviceClose(device);
+  }
+  // All that arrived.
+  std::vector<CANMSG> drain() const { return testing::drain(channel, false); }
+  // The data frames among what arrived.
+  std::vector<CANMSG> frames() const { return testing::drain(channel, true); }
+};
+
+// One adapter's controller opened as a VCI program opens it: device, control unit, one
+// channel (receive FIFO `rx`, transmit FIFO 64), initialized at 500 kbit/s, started.
+struct Adapter : Parts {
+  explicit Adapter(const std::string& name, bool start = true, UINT8 mode = kMode, UINT16 rx = 1024,
+                   UINT8 btr0 = CAN_BT0_500KB, UINT8 btr1 = CAN_BT1_500KB)
+      : Parts(name, rx, 64) {
     EXPECT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
     EXPECT_EQ(canControlInitialize(control, mode, btr0, btr1), VCI_OK);
     if (start) {
       EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
     }
-  }
-  ~Adapter() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
-  }
-  std::vector<CANMSG> drain() const {
-    std::vector<CANMSG> got;
-    CANMSG m;
-    while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-      got.push_back(m);
-    }
-    return got;
-  }
-  // The data frames among what arrived.
-  std::vector<CANMSG> frames() const {
-    std::vector<CANMSG> got;
-    for (const CANMSG& m : drain()) {
-      if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-        got.push_back(m);
-      }
-    }
-    return got;
   }
   void post(const CANMSG& m) const {
     CANMSG copy = m;

@@ -23,41 +23,9 @@ TEST(VciCppApi, TheFdChannelSendsAnFdFrameThroughItsWriter) {
       "[[bus]]\nname = \"fd0\"\nkind = \"can-fd\"\nbitrate = 500000\ndata_bitrate = 2000000\n\n"
       "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
       "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n");
-  struct Fd {
-    Ref<IVciDevice> device;
-    Ref<IBalObject> bal;
-    Ref<ICanSocket2> socket;
-    Ref<ICanChannel2> channel;
-    Ref<ICanControl2> control;
-    Ref<IFifoReader> reader;
-    Ref<IFifoWriter> writer;
-    explicit Fd(INT64 id) {
-      Ref<IVciDeviceManager> manager;
-      EXPECT_EQ(VciGetDeviceManager(manager.out()), VCI_OK);
-      VCIID v{};
-      v.AsInt64 = id;
-      EXPECT_EQ(manager->OpenDevice(v, device.out()), VCI_OK);
-      EXPECT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
-      EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
-      EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
-      EXPECT_EQ(channel->Initialize(256, 64, 0, CAN_FILTER_PASS), VCI_OK);
-      EXPECT_EQ(channel->GetReader(reader.out()), VCI_OK);
-      EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
-      EXPECT_EQ(channel->Activate(), VCI_OK);
-      EXPECT_EQ(channel->GetControl(control.out()), VCI_OK);
-      CANINITLINE2 init{};
-      init.bOpMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED;
-      init.bExMode = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
-      init.bSFMode = CAN_FILTER_PASS;
-      init.bEFMode = CAN_FILTER_PASS;
-      init.sBtpSdr = CANBTP{0, 500000, 14, 2, 1, 0};
-      init.sBtpFdr = CANBTP{0, 2000000, 8, 2, 1, 0};
-      EXPECT_EQ(control->InitLine(&init), VCI_OK);
-      EXPECT_EQ(control->StartLine(), VCI_OK);
-    }
-  };
-  Fd alpha(1);
-  Fd beta(2);
+  const UINT8 ex_mode = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
+  testing::V2Adapter alpha("alpha", ex_mode, CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED);
+  testing::V2Adapter beta("beta", ex_mode, CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED);
   // The guide's own example: fdr without edl, written in place with AcquireWrite.
   PCANMSG2 p = nullptr;
   ASSERT_EQ(alpha.writer->AcquireWrite(reinterpret_cast<PVOID*>(&p), nullptr), VCI_OK);
@@ -70,13 +38,7 @@ TEST(VciCppApi, TheFdChannelSendsAnFdFrameThroughItsWriter) {
   p->abData[0] = 0x77;
   ASSERT_EQ(alpha.writer->ReleaseWrite(1), VCI_OK);
   step_ns(1'000'000);
-  std::vector<CANMSG2> got;
-  CANMSG2 m;
-  while (beta.reader->GetDataEntry(&m) == VCI_OK) {
-    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
+  const auto got = testing::drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x1234u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);

@@ -24,10 +24,15 @@ namespace {
 using testing::Adapter;
 using testing::drain;
 using testing::end_of;
+using testing::ids_of;
+using testing::kData;
+using testing::kMode;
+using testing::kNominal;
 using testing::one_byte;
 using testing::open_bal;
 using testing::Ref;
 using testing::step_ns;
+using testing::V2Adapter;
 using testing::vci_id_named;
 using testing::VciDaemon;
 
@@ -42,9 +47,10 @@ const char* const kFdAdapters =
     "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n\n"
     "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can-fd\"\ncontrollers = [\"fd0\"]\n";
 
-constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
-const CANBTP kNominal{0, 500000, 14, 2, 1, 0};  // 16 quanta
-const CANBTP kData{0, 2000000, 8, 2, 1, 0};     // 10 quanta
+// Puts `m` into `writer` (the caller asserts the result).
+HRESULT put(const Ref<IFifoWriter>& writer, CANMSG m) {
+  return writer->PutDataEntry(&m);
+}
 
 // Simulated time now, in ns.
 uint64_t now_ns() {
@@ -81,62 +87,6 @@ CANMSG2 msg2(uint32_t id, std::vector<uint8_t> bytes) {
   return m;
 }
 
-std::vector<CANMSG2> drain2(IFifoReader* reader, bool data_only = true) {
-  std::vector<CANMSG2> got;
-  CANMSG2 m;
-  while (reader->GetDataEntry(&m) == VCI_OK) {
-    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
-  return got;
-}
-
-std::vector<UINT32> ids_of(const std::vector<CANMSG>& msgs) {
-  std::vector<UINT32> ids;
-  for (const CANMSG& m : msgs) {
-    ids.push_back(m.dwMsgId);
-  }
-  return ids;
-}
-
-// An adapter's controller through the v2 interfaces: a PASS channel with its reader and writer,
-// the control unit initialized with `ex_mode` (500 kbit/s, and 2 Mbit/s with FASTDATA) and
-// started.
-struct V2Adapter {
-  Ref<IBalObject> bal;
-  Ref<ICanSocket2> socket;
-  Ref<ICanChannel2> channel;
-  Ref<IFifoReader> reader;
-  Ref<IFifoWriter> writer;
-  Ref<ICanControl2> control;
-  V2Adapter(const std::string& name, UINT8 ex_mode) {
-    open_bal(vci_id_named(name), bal);
-    EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
-    EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
-    EXPECT_EQ(channel->Initialize(256, 64, 0, CAN_FILTER_PASS), VCI_OK);
-    EXPECT_EQ(channel->GetReader(reader.out()), VCI_OK);
-    EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
-    EXPECT_EQ(channel->Activate(), VCI_OK);
-    EXPECT_EQ(channel->GetControl(control.out()), VCI_OK);
-    init(ex_mode);
-    EXPECT_EQ(control->StartLine(), VCI_OK);
-  }
-  void init(UINT8 ex_mode) {
-    CANINITLINE2 init{};
-    init.bOpMode = kMode;
-    init.bExMode = ex_mode;
-    init.bSFMode = CAN_FILTER_PASS;
-    init.bEFMode = CAN_FILTER_PASS;
-    init.sBtpSdr = kNominal;
-    if ((ex_mode & CAN_EXMODE_FASTDATA) != 0) {
-      init.sBtpFdr = kData;
-    }
-    EXPECT_EQ(control->InitLine(&init), VCI_OK);
-  }
-  void post(CANMSG2 m) const { ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK); }
-};
-
 // ---------------------------------------------------------------- channels and control unit
 
 // 56: a channel made while the line is online receives nothing until it is activated, and
@@ -154,8 +104,7 @@ TEST(VciCppItems, Item56_NewChannelIsInactiveUntilActivate) {
   ASSERT_EQ(fresh->GetStatus(&s), VCI_OK);
   EXPECT_FALSE(s.fActivated);
   EXPECT_EQ(s.sLineStatus.dwStatus, 0u);  // the line is online
-  CANMSG m = one_byte(0x101, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x101, 1)), VCI_OK);
   step_ns(1'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   const auto at_alpha = drain(alpha.reader.p, true);  // the older channel had it
@@ -164,8 +113,7 @@ TEST(VciCppItems, Item56_NewChannelIsInactiveUntilActivate) {
   ASSERT_EQ(fresh->Activate(), VCI_OK);
   ASSERT_EQ(fresh->GetStatus(&s), VCI_OK);
   EXPECT_TRUE(s.fActivated);
-  m = one_byte(0x102, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);  // at 1 ms
+  ASSERT_EQ(put(beta.writer, one_byte(0x102, 2)), VCI_OK);  // at 1 ms
   step_ns(1'000'000);
   const auto got = drain(reader.p, false);
   ASSERT_EQ(got.size(), 1u);
@@ -194,19 +142,16 @@ TEST(VciCppItems, Item57_ActiveChannelIsDeafWhileTheLineIsOfflineAndDeactivatedI
   ASSERT_EQ(channel->Activate(), VCI_OK);
   Ref<ICanControl> control;
   ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
-  CANMSG m = one_byte(0x101, 1);  // the line is not initialized
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x101, 1)), VCI_OK);  // the line is not initialized
   step_ns(1'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
   ASSERT_EQ(control->InitLine(&init), VCI_OK);  // initialized, offline
-  m = one_byte(0x102, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x102, 2)), VCI_OK);
   step_ns(1'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   ASSERT_EQ(control->StartLine(), VCI_OK);  // at 2 ms
-  m = one_byte(0x103, 3);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x103, 3)), VCI_OK);
   step_ns(1'000'000);
   auto got = drain(reader.p, false);
   ASSERT_EQ(got.size(), 2u);
@@ -217,10 +162,8 @@ TEST(VciCppItems, Item57_ActiveChannelIsDeafWhileTheLineIsOfflineAndDeactivatedI
   EXPECT_EQ(ids_of(drain(gamma.reader.p, true)), (std::vector<UINT32>{0x101, 0x102, 0x103}));
   // Deactivated at 3 ms: beta's frame does not come in, its own frame does not go out.
   ASSERT_EQ(channel->Deactivate(), VCI_OK);
-  m = one_byte(0x104, 4);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
-  m = one_byte(0x201, 5);
-  ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x104, 4)), VCI_OK);
+  ASSERT_EQ(put(writer, one_byte(0x201, 5)), VCI_OK);
   step_ns(2'000'000);
   EXPECT_TRUE(drain(reader.p, false).empty());
   got = drain(gamma.reader.p, true);
@@ -244,13 +187,11 @@ TEST(VciCppItems, Item66_StopAndResetLineKeepTheChannelFifos) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(1'000'000);
   ASSERT_EQ(alpha.control->StopLine(), VCI_OK);  // at 1 ms
   for (UINT32 id : {0x201u, 0x202u}) {
-    m = one_byte(id, static_cast<UINT8>(id));
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(id, static_cast<UINT8>(id))), VCI_OK);
   }
   step_ns(1'000'000);
   ASSERT_EQ(alpha.control->ResetLine(), VCI_OK);  // at 2 ms
@@ -292,8 +233,7 @@ TEST(VciCppItems, Item67_InitLineWhileOnlineLeavesTheLineOffline) {
   ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
   EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
   EXPECT_EQ(s.bOpMode, CAN_OPMODE_STANDARD);
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(1'000'000);
   auto got = drain(alpha.reader.p, false);
   ASSERT_EQ(got.size(), 1u);  // the first START only
@@ -301,8 +241,7 @@ TEST(VciCppItems, Item67_InitLineWhileOnlineLeavesTheLineOffline) {
   EXPECT_EQ(got[0].dwTime, 0u);
   EXPECT_EQ(drain(gamma.reader.p, true).size(), 1u);  // the frame was on the bus
   ASSERT_EQ(alpha.control->StartLine(), VCI_OK);      // at 2 ms
-  m = one_byte(0x124, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x124, 2)), VCI_OK);
   step_ns(1'000'000);
   got = drain(alpha.reader.p, false);
   ASSERT_EQ(got.size(), 2u);
@@ -325,15 +264,13 @@ TEST(VciCppItems, Item68_ReleasingTheControlUnitLeavesTheLineRunning) {
   ASSERT_EQ(alpha.socket->GetLineStatus(&s), VCI_OK);
   EXPECT_EQ(s.dwStatus, 0u);  // online, no ININIT
   EXPECT_EQ(s.bOpMode, kMode);
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);  // at 1 ms
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);  // at 1 ms
   step_ns(1'000'000);
   auto got = drain(alpha.reader.p, false);
   ASSERT_EQ(got.size(), 2u);  // the START and the frame: no STOP or RESET
   EXPECT_EQ(got[1].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].dwTime, 1000u + end_of(0x123, {1}));
-  m = one_byte(0x124, 2);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);  // at 2 ms
+  ASSERT_EQ(put(alpha.writer, one_byte(0x124, 2)), VCI_OK);  // at 2 ms
   step_ns(1'000'000);
   got = drain(beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
@@ -411,12 +348,10 @@ TEST(VciCppItems, Item71_TwoChannelsTransmitInTurn) {
   ASSERT_EQ(second->GetWriter(writer.out()), VCI_OK);
   ASSERT_EQ(second->Activate(), VCI_OK);
   for (UINT32 id : {0x101u, 0x102u, 0x103u, 0x104u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(id, 1)), VCI_OK);
   }
   for (UINT32 id : {0x201u, 0x202u}) {
-    CANMSG m = one_byte(id, 2);
-    ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(writer, one_byte(id, 2)), VCI_OK);
   }
   step_ns(5'000'000);
   const auto got = drain(beta.reader.p, true);
@@ -440,8 +375,7 @@ TEST(VciCppItems, Item72_NonDataTransmitMessagesAreDropped) {
     junk.uMsgInfo.Bytes.bType = type;
     ASSERT_EQ(alpha.writer->PutDataEntry(&junk), VCI_OK);
   }
-  CANMSG m = one_byte(0x123, 0x5A);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(alpha.writer, one_byte(0x123, 0x5A)), VCI_OK);
   step_ns(2'000'000);
   const auto got = drain(beta.reader.p, false);
   ASSERT_EQ(got.size(), 2u);  // beta's START and the data frame
@@ -491,7 +425,7 @@ TEST(VciCppItems, Item74_FdFramesNeedTheirExtendedModes) {
   alpha.post(fast);
   alpha.post(slow);
   step_ns(2'000'000);
-  auto got = drain2(beta.reader.p);
+  auto got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x202u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
@@ -508,7 +442,7 @@ TEST(VciCppItems, Item74_FdFramesNeedTheirExtendedModes) {
   alpha.post(fd);
   alpha.post(msg2(0x204, {4}));
   step_ns(2'000'000);
-  got = drain2(beta.reader.p);
+  got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x204u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 0u);
@@ -534,7 +468,7 @@ TEST(VciCppItems, Item75_RtrIsIgnoredOnFdFrames) {
   alpha.post(b);
   alpha.post(c);
   step_ns(2'000'000);
-  const auto got = drain2(beta.reader.p);
+  const auto got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 3u);
   EXPECT_EQ(got[0].dwMsgId, 0x301u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
@@ -597,12 +531,11 @@ TEST(VciCppItems, Item77_TimeStampsCountAtTheCapabilitiesRate) {
       step_ns(when - t);
       t = when;
     }
-    CANMSG m = one_byte(0x123, 1);
-    ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   }
   step_ns(1'000'000);
   const auto v1 = drain(alpha.reader.p, true);
-  const auto v2 = drain2(reader2.p);
+  const auto v2 = drain<CANMSG2>(reader2.p, true);
   ASSERT_EQ(v1.size(), 3u);
   ASSERT_EQ(v2.size(), 3u);
   for (std::size_t k = 0; k < 3; ++k) {
@@ -686,8 +619,7 @@ TEST(VciCppItems, Item105_ControlUnitFilterBlocksEvenPassChannels) {
   ASSERT_EQ(control->SetAccFilter(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);  // 0x100..0x103
   ASSERT_EQ(control->StartLine(), VCI_OK);
   for (UINT32 id : {0x200u, 0x101u, 0x104u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(beta.writer, one_byte(id, 1)), VCI_OK);
   }
   step_ns(2'000'000);
   const UINT32 end = end_of(0x200, {1}) + 6u + end_of(0x101, {1});
@@ -696,7 +628,7 @@ TEST(VciCppItems, Item105_ControlUnitFilterBlocksEvenPassChannels) {
   EXPECT_EQ(a[0].dwMsgId, 0x101u);
   EXPECT_EQ(a[0].dwTime, end);
   EXPECT_EQ(a[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_1);
-  const auto b = drain2(pass_reader.p);
+  const auto b = drain<CANMSG2>(pass_reader.p, true);
   ASSERT_EQ(b.size(), 1u);
   EXPECT_EQ(b[0].dwMsgId, 0x101u);
   EXPECT_EQ(b[0].dwTime, end);
@@ -781,8 +713,7 @@ TEST(VciCppItems, Item114_BtrPairsOfTheTableGiveTheirRates) {
     EXPECT_EQ(s.bBtReg1, r.btr1);
     drain(alpha.reader.p, false);
     const uint64_t start = now_ns();
-    CANMSG m = one_byte(0x555, 0xAA);
-    ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(beta.writer, one_byte(0x555, 0xAA)), VCI_OK);
     step_ns(50'000'000);
     const auto got = drain(alpha.reader.p, false);
     ASSERT_EQ(got.size(), 1u) << r.bit_ns;
@@ -1343,7 +1274,7 @@ TEST(VciCppItems, Item73_TheFdDlcTable) {
     alpha.post(m);
   }
   step_ns(5'000'000);
-  const auto got = drain2(beta.reader.p);
+  const auto got = drain<CANMSG2>(beta.reader.p, true);
   ASSERT_EQ(got.size(), 7u);
   int64_t end = -6'000;
   for (std::size_t k = 0; k < 7; ++k) {
@@ -1371,8 +1302,7 @@ TEST(VciCppItems, Item85_FifoLoadsAreTheFillInPercent) {
   ASSERT_EQ(alpha.reader->GetCapacity(&rx_capacity), VCI_OK);
   const UINT16 posted = tx_capacity / 2;
   for (UINT16 k = 0; k < posted; ++k) {
-    CANMSG m = one_byte(0x100, 1);
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(0x100, 1)), VCI_OK);
   }
   step_ns(1'000'000);
   CANCHANSTATUS s{};
@@ -1404,7 +1334,7 @@ TEST(VciCppItems, Item91_WithoutSrrNoV2ChannelSeesTheFrame) {
   echoed.uMsgInfo.Bits.srr = 1;
   ASSERT_EQ(alpha.writer->PutDataEntry(&echoed), VCI_OK);
   step_ns(2'000'000);
-  const auto got = drain2(reader.p);
+  const auto got = drain<CANMSG2>(reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x323u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.srr, 0u);
@@ -1481,11 +1411,10 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   Ref<IFifoReader> reader;
   ASSERT_EQ(lock->GetReader(reader.out()), VCI_OK);
   ASSERT_EQ(lock->Activate(), VCI_OK);
-  CANMSG m = one_byte(0x10, 1);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);  // alone: ACK errors, then ERRLIM
+  ASSERT_EQ(put(alpha.writer, one_byte(0x10, 1)), VCI_OK);  // alone: ACK errors, then ERRLIM
   step_ns(10'000'000);
   const auto v1 = drain(alpha.reader.p, false);
-  const auto got = drain2(reader.p, false);
+  const auto got = drain<CANMSG2>(reader.p, false);
   ASSERT_EQ(got.size() + 1, v1.size());  // all of it but the START, which came before
   std::size_t errors = 0;
   std::size_t statuses = 0;
@@ -1499,11 +1428,10 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   EXPECT_GT(errors, 16u);
   EXPECT_EQ(statuses, 1u);
   Adapter beta("beta");  // now alpha's frame goes, and beta's data too: neither passes LOCK
-  m = one_byte(0x20, 2);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x20, 2)), VCI_OK);
   step_ns(10'000'000);
   EXPECT_EQ(drain(alpha.reader.p, true).size(), 1u);
-  EXPECT_TRUE(drain2(reader.p).empty());
+  EXPECT_TRUE(drain<CANMSG2>(reader.p, true).empty());
 }
 
 // 104: INFO, ERROR and STATUS messages carry afc = CAN_ACCEPT_ALWAYS; data frames the filter
@@ -1511,8 +1439,7 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
 TEST(VciCppItems, Item104_NonDataMessagesCarryAfcAlways) {
   VciDaemon d;
   Adapter alpha("alpha");
-  CANMSG m = one_byte(0x10, 1);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(alpha.writer, one_byte(0x10, 1)), VCI_OK);
   step_ns(10'000'000);
   Adapter beta("beta");
   step_ns(1'000'000);
@@ -1568,15 +1495,13 @@ TEST(VciCppItems, Item113_HighPriorityNeverOvertakesItsOwnFifo) {
   ASSERT_EQ(second->Activate(), VCI_OK);
   ASSERT_EQ(alpha.control->StopLine(), VCI_OK);  // everything waits in the FIFOs
   for (UINT32 id : {0x301u, 0x302u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(alpha.writer, one_byte(id, 1)), VCI_OK);
   }
   CANMSG urgent = one_byte(0x303, 1);
   urgent.uMsgInfo.Bits.hpm = 1;
   ASSERT_EQ(alpha.writer->PutDataEntry(&urgent), VCI_OK);
   for (UINT32 id : {0x401u, 0x402u}) {
-    CANMSG m = one_byte(id, 1);
-    ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(put(writer, one_byte(id, 1)), VCI_OK);
   }
   ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
   step_ns(5'000'000);
@@ -1595,8 +1520,7 @@ TEST(VciCppItems, Item115_DifferentRatesDoNotConnect) {
   ASSERT_EQ(beta.control->InitLine(&init), VCI_OK);
   ASSERT_EQ(beta.control->StartLine(), VCI_OK);
   drain(beta.reader.p, false);
-  CANMSG m = one_byte(0x123, 1);
-  ASSERT_EQ(beta.writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(20'000'000);
   EXPECT_TRUE(drain(alpha.reader.p, true).empty());
   std::size_t errors = 0;
@@ -1607,9 +1531,9 @@ TEST(VciCppItems, Item115_DifferentRatesDoNotConnect) {
 }
 
 // 120: AUTOBAUD is a feature of the emulated adapters; InitLine with it ignores the BTR fields
-// (here those of about 4 kbit/s) and, started, the line listens for the rate (CAN_STATUS_ININIT) until
-// traffic shows it (VciBehaviour.AnAutobaudLineFindsTheRateOfTheTrafficAndReceivesFromThen: the
-// rate adopted and the frames from then on, with exact time stamps).
+// (here those of about 4 kbit/s) and, started, the line listens for the rate (CAN_STATUS_ININIT)
+// until traffic shows it (VciBehaviour.AnAutobaudLineFindsTheRateOfTheTrafficAndReceivesFromThen:
+// the rate adopted and the frames from then on, with exact time stamps).
 TEST(VciCppItems, Item120_AutobaudIsAFeatureAndIgnoresTheBtrFields) {
   VciDaemon d;
   Ref<IBalObject> bal;
@@ -1716,7 +1640,7 @@ TEST(VciCppItems, Item90_SrraEchoesPassTheChannelsFilter) {
     ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
   }
   step_ns(2'000'000);
-  const auto got = drain2(reader.p);
+  const auto got = drain<CANMSG2>(reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x321u);
   EXPECT_EQ(got[0].uMsgInfo.Bits.srr, 0u);

@@ -95,10 +95,12 @@ inline CANMSG one_byte(UINT32 id, UINT8 b) {
   return m;
 }
 
-// What `reader` holds, taken out (`data_only`: only the data frames).
-inline std::vector<CANMSG> drain(IFifoReader* reader, bool data_only) {
-  std::vector<CANMSG> got;
-  CANMSG m;
+// What `reader` holds, taken out as `Msg` (CANMSG or CANMSG2; `data_only`: only the data
+// frames).
+template <class Msg = CANMSG>
+inline std::vector<Msg> drain(IFifoReader* reader, bool data_only) {
+  std::vector<Msg> got;
+  Msg m;
   while (reader->GetDataEntry(&m) == VCI_OK) {
     if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
       got.push_back(m);
@@ -106,6 +108,48 @@ inline std::vector<CANMSG> drain(IFifoReader* reader, bool data_only) {
   }
   return got;
 }
+
+inline constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
+inline constexpr CANBTP kNominal{0, 500000, 14, 2, 1, 0};  // 16 quanta
+inline constexpr CANBTP kData{0, 2000000, 8, 2, 1, 0};     // 10 quanta
+
+// An adapter's controller through the v2 interfaces: a PASS channel with its reader and writer,
+// the control unit initialized with `op_mode` and `ex_mode` (500 kbit/s, and 2 Mbit/s with
+// FASTDATA) and started.
+struct V2Adapter {
+  Ref<IBalObject> bal;
+  Ref<ICanSocket2> socket;
+  Ref<ICanChannel2> channel;
+  Ref<IFifoReader> reader;
+  Ref<IFifoWriter> writer;
+  Ref<ICanControl2> control;
+  UINT8 op_mode;
+  V2Adapter(const std::string& name, UINT8 ex_mode, UINT8 mode = kMode) : op_mode(mode) {
+    open_bal(vci_id_named(name), bal);
+    EXPECT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
+    EXPECT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
+    EXPECT_EQ(channel->Initialize(256, 64, 0, CAN_FILTER_PASS), VCI_OK);
+    EXPECT_EQ(channel->GetReader(reader.out()), VCI_OK);
+    EXPECT_EQ(channel->GetWriter(writer.out()), VCI_OK);
+    EXPECT_EQ(channel->Activate(), VCI_OK);
+    EXPECT_EQ(channel->GetControl(control.out()), VCI_OK);
+    init(ex_mode);
+    EXPECT_EQ(control->StartLine(), VCI_OK);
+  }
+  void init(UINT8 ex_mode) {
+    CANINITLINE2 init{};
+    init.bOpMode = op_mode;
+    init.bExMode = ex_mode;
+    init.bSFMode = CAN_FILTER_PASS;
+    init.bEFMode = CAN_FILTER_PASS;
+    init.sBtpSdr = kNominal;
+    if ((ex_mode & CAN_EXMODE_FASTDATA) != 0) {
+      init.sBtpFdr = kData;
+    }
+    EXPECT_EQ(control->InitLine(&init), VCI_OK);
+  }
+  void post(CANMSG2 m) const { ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK); }
+};
 
 // The end of a classic frame sent at t = 0, in device ticks (us) at 500 kbit/s.
 inline UINT32 end_of(uint32_t id, std::vector<uint8_t> data, bool ext = false) {

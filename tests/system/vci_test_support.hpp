@@ -72,6 +72,29 @@ inline void step_until(const std::atomic<bool>& done) {
   ASSERT_TRUE(done) << "the waiting call did not return";
 }
 
+// Simulated time from canemud's start (each test starts its own canemud at 0), stepped to
+// exact instants.
+struct SimClock {
+  uint64_t now = 0;
+  void to(uint64_t t_ns) {
+    ASSERT_GT(t_ns, now);
+    UINT64 after = 0;
+    ASSERT_EQ(canemuStepTime(t_ns - now, &after), VCI_OK);
+    now = after;
+    ASSERT_EQ(now, t_ns);
+  }
+};
+
+// The identifiers of `msgs` (CANMSG or CANMSG2), in order.
+template <class Msg>
+inline std::vector<uint32_t> ids_of(const std::vector<Msg>& msgs) {
+  std::vector<uint32_t> ids;
+  for (const Msg& m : msgs) {
+    ids.push_back(m.dwMsgId);
+  }
+  return ids;
+}
+
 // Loads a fault scenario from `text` into the daemon.
 inline void load_faults(const Daemon& d, const std::string& text) {
   auto c = connect(d, "faults");

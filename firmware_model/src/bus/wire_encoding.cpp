@@ -627,7 +627,7 @@ uint16_t EncodedFrame::stuffed_index(uint16_t destuffed) const {
   }
 }
 
-uint16_t EncodedFrame::destuffed_index(uint16_t i) const {
+uint16_t EncodedFrame::destuffed_index_far(uint16_t i) const {
   uint32_t n = 0;
   for (uint32_t w = 0; w < i / 64u; ++w) {
     n += count_ones(stuff[w]);

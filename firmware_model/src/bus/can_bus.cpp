@@ -425,7 +425,7 @@ void CanBus::complete_success(SimTime eof_end) {
       n.controller->on_frame(eof_end, c.sent[k]->frame, true);
     }
     n.controller->on_tx_done(eof_end);
-    report_state(id, eof_end);
+    report_if_changed(id, eof_end);
   }
   scheduler_.schedule_at(c.ifs_end, *this, kBusFree);
 }

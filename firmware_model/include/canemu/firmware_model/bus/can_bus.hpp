@@ -310,6 +310,14 @@ class CanBus final : private EventHandler {
   void recovery_check(NodeId id, SimTime now);
   // `why`: the cause of a counter change (its time and counters are filled in here).
   void report_state(NodeId id, SimTime at, CounterSample why = {});
+  // report_state() without a cause, skipped inline when it would do nothing (counters as last
+  // reported, not bus-off): after most frames.
+  void report_if_changed(NodeId id, SimTime at) {
+    const Node& n = nodes_[id];
+    if (n.fc->tec() != n.reported_tec || n.fc->rec() != n.reported_rec || n.fc->bus_off()) {
+      report_state(id, at);
+    }
+  }
   void recovered(NodeId id, SimTime at);
   // Whole bits of `node`'s own bit time in `span`, rounded to the nearest bit.
   uint64_t bits_in(NodeId node, SimDuration span);

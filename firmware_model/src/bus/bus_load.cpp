@@ -28,6 +28,14 @@ double BusLoad::percent(SimTime now) const {
 
 void BusLoad::add_to_bins(SimTime start, SimTime end) {
   const int64_t bin = kBin.ns();
+  // Most activities fall inside the newest bin.
+  if (!bins_.empty()) {
+    const int64_t last = first_bin_ + static_cast<int64_t>(bins_.size()) - 1;
+    if (start.ns() / bin == last && end.ns() <= (last + 1) * bin && end > start) {
+      bins_.back() += (end - start).ns();
+      return;
+    }
+  }
   for (int64_t k = start.ns() / bin; k * bin < end.ns(); ++k) {
     if (bins_.empty()) {
       first_bin_ = k;

@@ -56,8 +56,9 @@ NodeId CanBus::attach(CanController& controller) {
   n.fc = &controller.confinement();
   n.last_state = n.fc->state();
   nodes_.push_back(std::move(n));
+  node_count_ = nodes_.size();
   decodes_cache_.clear();
-  const NodeId id = static_cast<NodeId>(nodes_.size() - 1);
+  const NodeId id = static_cast<NodeId>(node_count_ - 1);
   if (!busy_) {
     schedule_attempt(scheduler_.now());
   }
@@ -99,7 +100,7 @@ void CanBus::load_props(Node& n) {
 }
 
 bool CanBus::decodes_slow(NodeId tx, NodeId rx, bool brs) {
-  const std::size_t n = nodes_.size();
+  const std::size_t n = node_count_;
   if (decodes_cache_.size() != 2 * n * n) {
     decodes_cache_.assign(2 * n * n, -1);
   }
@@ -256,7 +257,7 @@ void CanBus::attempt(SimTime now) {
   std::vector<Arbitration::Contender>& contenders = contenders_;
   contenders.clear();
   std::optional<SimTime> next_ready;
-  for (NodeId id = 0; id < nodes_.size(); ++id) {
+  for (NodeId id = 0; id < node_count_; ++id) {
     Node& n = refresh(id);
     if (!can_transmit(n)) {
       continue;
@@ -314,17 +315,17 @@ void CanBus::run_frame(SimTime sof) {
   }
   const FrameRoles roles(e, fault, sof < ack_suppressed_until_);
   std::vector<BusParticipant>& parts = parts_;
-  parts.resize(nodes_.size());
-  std::size_t count = 0;
-  for (NodeId id = 0; id < nodes_.size(); ++id) {
+  parts.clear();
+  const bool alone = active.size() == 1;
+  for (NodeId id = 0; id < node_count_; ++id) {
     Node& n = refresh(id);
     if (!on_bus(n)) {
       continue;
     }
     const NodeFacts facts{id, n.listen_only, n.fc->error_passive(), n.self_test};
-    BusParticipant& p = parts[count++];
-    if (std::find(active.begin(), active.end(), id) != active.end()) {
-      p = roles.sender(facts, encoded_tx(id), arbitration_.collision_of(id));
+    BusParticipant& p = parts.emplace_back();
+    if (alone ? id == tx : std::find(active.begin(), active.end(), id) != active.end()) {
+      p = roles.sender(facts, encoded_tx(id), alone ? std::nullopt : arbitration_.collision_of(id));
     } else if (tx_frame.frame.fd() && !n.fd_capable) {
       p = roles.receiver(facts, FrameRoles::Decoding::not_fd);
     } else {
@@ -333,7 +334,6 @@ void CanBus::run_frame(SimTime sof) {
                                     : FrameRoles::Decoding::timing);
     }
   }
-  parts.resize(count);
 
   std::optional<uint16_t> first_bit = roles.first_detection(parts);
   // A dominant hold that overlaps the frame disturbs it.
@@ -425,7 +425,7 @@ void CanBus::complete_success(SimTime eof_end) {
       n.controller->on_frame(eof_end, c.sent[k]->frame, true);
     }
     n.controller->on_tx_done(eof_end);
-    report_state(id, eof_end);
+    report_if_changed(id, eof_end);
   }
   scheduler_.schedule_at(c.ifs_end, *this, kBusFree);
 }
@@ -437,7 +437,7 @@ void CanBus::run_hold(SimTime now) {
   std::vector<BusParticipant> parts;
   BitTiming nominal;
   bool have_timing = false;
-  for (NodeId id = 0; id < nodes_.size(); ++id) {
+  for (NodeId id = 0; id < node_count_; ++id) {
     Node& n = refresh(id);
     if (!on_bus(n)) {
       continue;
@@ -597,7 +597,7 @@ void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
   free_at_ = idle_at;
   last_dominant_end_ = last_dominant_end;
   if (maybe_recovering_) {
-    for (NodeId id = 0; id < nodes_.size(); ++id) {
+    for (NodeId id = 0; id < node_count_; ++id) {
       if (nodes_[id].fc->recovering()) {
         arm_recovery(id);
       }
@@ -617,7 +617,7 @@ void CanBus::account_recessive(SimTime dominant_start) {
     return;
   }
   bool any = false;
-  for (NodeId id = 0; id < nodes_.size(); ++id) {
+  for (NodeId id = 0; id < node_count_; ++id) {
     Node& n = nodes_[id];
     FaultConfinement& fc = *n.fc;
     if (!fc.recovering()) {

@@ -111,7 +111,7 @@ struct BitString {
 };
 
 // Up to 128 bits in one register pair: the destuffed bits of a classic frame (at most
-// 39 + 64 + 15 = 118), so that windows and bits are shifts instead of memory reads.
+// 39 + 64 + 15 = 118), which the CRC and the stuffing then read a word at a time.
 struct ShortBits {
   uint128 bits = 0;  // first bit at bit 127
   uint32_t size = 0;
@@ -120,10 +120,8 @@ struct ShortBits {
     bits |= (uint128{value} << (128 - count)) >> size;
     size += count;
   }
-  bool bit(uint32_t i) const { return static_cast<uint64_t>(bits >> (127 - i)) & 1u; }
-  uint64_t window(uint32_t i) const { return static_cast<uint64_t>((bits << i) >> 64); }
-  uint32_t byte_at(uint32_t i) const { return static_cast<uint32_t>((bits << i) >> 120); }
-  void seal() {}
+  uint64_t hi() const { return static_cast<uint64_t>(bits >> 64); }
+  uint64_t lo() const { return static_cast<uint64_t>(bits); }
 };
 
 // Table-driven CRC over a bit string (MSB first), 16 bits per step. The register after 16
@@ -154,6 +152,30 @@ struct Crc {
   }
   static constexpr std::array<uint32_t, 256> kHigh = make_table(8);
   static constexpr std::array<uint32_t, 256> kLow = make_table(0);
+
+  // Feeds the low `k` (1..16) bits of `v`, most significant first, in one table step: k bits
+  // into the register are k zeros and then those bits (leading zeros leave a cleared register
+  // cleared), plus what stays of the register.
+  static uint32_t feed(uint32_t crc, uint32_t v, uint32_t k) {
+    const uint32_t top = k <= Width ? crc >> (Width - k) : crc << (k - Width);
+    const uint32_t idx = (top ^ v) & 0xFFFF;
+    const uint32_t rest = k < Width ? (crc << k) & kMask : 0u;
+    return rest ^ kHigh[idx >> 8] ^ kLow[idx & 0xFF];
+  }
+
+  // Over the first `bits` (at most 128) of the two words `hi`, `lo`, first bit at the top of `hi`.
+  static uint32_t over_words(uint64_t hi, uint64_t lo, uint32_t bits, uint32_t crc) {
+    uint64_t x = hi;
+    for (uint32_t i = 0; i < bits; i += 16) {
+      if (i == 64) {
+        x = lo;
+      }
+      const uint32_t k = bits - i < 16 ? bits - i : 16;
+      crc = feed(crc, static_cast<uint32_t>(x >> (64 - k)), k);
+      x <<= 16;
+    }
+    return crc;
+  }
 
   template <class Bits>
   static uint32_t over(const Bits& s, uint32_t bits, uint32_t crc) {
@@ -212,7 +234,8 @@ void build_header_and_data(const Frame& frame, Bits& d) {
 
 // Dynamic bit stuffing of `d` into the frame bits `s`, marking stuff bits in `m`: after five
 // equal bits a complementary bit, which starts the next run. `last_may_stuff` is false for
-// CAN FD, where no dynamic stuff bit follows the last bit before the CRC field.
+// CAN FD, where no dynamic stuff bit follows the last bit before the CRC field. (Classic frames
+// are stuffed a byte at a time by table: encode_classic.)
 //
 // Runs are found a 64-bit window at a time (bit j equals bit j + 1 for four j in a row), and the
 // bits between two stuff bits are copied as one block, so the cost grows with the number of
@@ -343,21 +366,145 @@ void apply(const Probes& p, EncodedFrame& out) {
   }
 }
 
+// Dynamic stuffing of classic frames, a byte at a time. The state between bytes is the level
+// of the last bit sent and how many bits of that level end the output (1..4; 0 before SOF):
+// state = 5 * level + run. A step takes up to 8 bits and gives what goes on the wire for them,
+// stuff bits included (at most two), with their marks, and the state after them.
+struct StuffStep {
+  uint16_t bits = 0;   // the output, last bit in bit 0
+  uint16_t marks = 0;  // 1 = stuff bit
+  uint8_t count = 0;   // output bits
+  uint8_t state = 0;
+};
+
+constexpr StuffStep stuff_run(uint32_t state, uint32_t value, uint32_t nbits) {
+  uint32_t level = state / 5;
+  uint32_t run = state % 5;
+  StuffStep r;
+  auto put = [&](uint32_t bit, uint32_t mark) {
+    r.bits = static_cast<uint16_t>((r.bits << 1) | bit);
+    r.marks = static_cast<uint16_t>((r.marks << 1) | mark);
+    ++r.count;
+  };
+  for (uint32_t i = nbits; i-- > 0;) {
+    const uint32_t b = (value >> i) & 1u;
+    if (run != 0 && b == level) {
+      ++run;
+    } else {
+      level = b;
+      run = 1;
+    }
+    put(b, 0);
+    if (run == 5) {  // the complement follows and starts the next run
+      level ^= 1u;
+      put(level, 1);
+      run = 1;
+    }
+  }
+  r.state = static_cast<uint8_t>(5 * level + run);
+  return r;
+}
+
+// kStuffTable[256 * state + byte]: a StuffStep packed as bits | marks << 10 | count << 20 |
+// state << 24, one load per byte.
+constexpr std::array<uint32_t, 10 * 256> make_stuff_table() {
+  std::array<uint32_t, 10 * 256> t{};
+  for (uint32_t state = 0; state < 10; ++state) {
+    for (uint32_t v = 0; v < 256; ++v) {
+      const StuffStep r = stuff_run(state, v, 8);
+      t[state * 256 + v] = uint32_t{r.bits} | uint32_t{r.marks} << 10 | uint32_t{r.count} << 20 |
+                           uint32_t{r.state} << 24;
+    }
+  }
+  return t;
+}
+
+constexpr std::array<uint32_t, 10 * 256> kStuffTable = make_stuff_table();
+
+// The wire bits and the stuff marks of a frame, gathered in registers and stored a word at a
+// time into an EncodedFrame.
+struct WireWriter {
+  EncodedFrame& out;
+  std::size_t w = 0;
+  uint64_t acc_bits = 0;
+  uint64_t acc_marks = 0;
+  uint32_t used = 0;  // bits in the accumulators, from the top
+
+  // Appends `count` (1..63) bits and their marks; neither value has bits above `count`.
+  void put(uint64_t v, uint64_t mark, uint32_t count) {
+    const uint32_t space = 64 - used;
+    if (count < space) {
+      acc_bits |= v << (space - count);
+      acc_marks |= mark << (space - count);
+      used += count;
+      return;
+    }
+    const uint32_t rest = count - space;
+    out.level[w] = acc_bits | (v >> rest);
+    out.stuff[w] = acc_marks | (mark >> rest);
+    ++w;
+    acc_bits = rest != 0 ? v << (64 - rest) : 0;
+    acc_marks = rest != 0 ? mark << (64 - rest) : 0;
+    used = rest;
+  }
+  // Stuffs the top `bytes` bytes of `x`, from state `state`; returns the state after them.
+  uint32_t stuff_bytes(uint64_t x, uint32_t bytes, uint32_t state) {
+    for (uint32_t k = 0; k < bytes; ++k) {
+      const uint32_t e = kStuffTable[state * 256 + static_cast<uint32_t>(x >> 56)];
+      x <<= 8;
+      put(e & 0x3FF, (e >> 10) & 0x3FF, (e >> 20) & 0xF);
+      state = e >> 24;
+    }
+    return state;
+  }
+  uint32_t size() const { return static_cast<uint32_t>(w * 64 + used); }
+  void close() {
+    if (used != 0) {
+      out.level[w] = acc_bits;
+      out.stuff[w] = acc_marks;
+    }
+  }
+};
+
 void encode_classic(const Frame& frame, EncodedFrame& out) {
   ShortBits d;
   build_header_and_data(frame, d);
   // CRC-15 over the destuffed bits; the CRC sequence is then stuffed like the rest.
-  const uint32_t crc = Crc15::over(d, d.size, 0);
+  const uint32_t crc = Crc15::over_words(d.hi(), d.lo(), d.size, 0);
   d.append(crc, 15);
-  BitString s;
-  BitString m;
-  Probes probes = probes_for(out);
-  stuff(d, true, s, m, probes);
-  apply(probes, out);
-  out.dynamic_stuff_bits = static_cast<uint16_t>(s.size - d.size);
+
+  WireWriter wr{out};
+  const uint32_t whole = d.size / 8;  // 4 to 14 bytes, and 2 or 6 bits
+  uint32_t state = wr.stuff_bytes(d.hi(), std::min(whole, 8u), 0);
+  if (whole > 8) {
+    state = wr.stuff_bytes(d.lo(), whole - 8, state);
+  }
+  if (const uint32_t tail = d.size % 8; tail != 0) {
+    const uint32_t last = static_cast<uint32_t>((d.bits << (8 * whole)) >> 120);
+    const StuffStep st = stuff_run(state, last >> (8 - tail), tail);
+    wr.put(st.bits, st.marks, st.count);
+  }
+  const uint32_t stuffed = wr.size();
+  // CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits.
+  out.crc_delimiter_index = static_cast<uint16_t>(stuffed);
+  wr.put(0x3FF, 0, 3 + kEofBits);
+  wr.close();
+  out.length = static_cast<uint16_t>(wr.size());
+  out.dynamic_stuff_bits = static_cast<uint16_t>(stuffed - d.size);
   out.crc = crc;
   out.crc_bits = 15;
-  finish(s, m, out);
+  // The first bit after the arbitration field (destuffed 13 or 33) moves on by every stuff bit
+  // before it; they all lie in the first word.
+  uint32_t pos = out.extended ? 33 : 13;
+  for (uint64_t m = out.stuff[0]; m != 0;) {
+    const uint32_t q = static_cast<uint32_t>(__builtin_clzll(m));
+    if (q > pos) {
+      break;
+    }
+    ++pos;
+    m &= ~(uint64_t{1} << (63 - q));
+  }
+  out.arbitration_end = static_cast<uint16_t>(pos);
 }
 
 void encode_fd(const Frame& frame, EncodedFrame& out) {
@@ -480,7 +627,7 @@ uint16_t EncodedFrame::stuffed_index(uint16_t destuffed) const {
   }
 }
 
-uint16_t EncodedFrame::destuffed_index(uint16_t i) const {
+uint16_t EncodedFrame::destuffed_index_far(uint16_t i) const {
   uint32_t n = 0;
   for (uint32_t w = 0; w < i / 64u; ++w) {
     n += count_ones(stuff[w]);

@@ -17,10 +17,6 @@ EventId SimScheduler::schedule_at(SimTime at, Action action) {
   return queue_.push(std::max(at, now_), Target{nullptr, slot});
 }
 
-EventId SimScheduler::schedule_at(SimTime at, EventHandler& handler, uint64_t tag) {
-  return queue_.push(std::max(at, now_), Target{&handler, tag});
-}
-
 bool SimScheduler::cancel(EventId id) {
   const Target* t = queue_.find(id);
   if (t == nullptr) {

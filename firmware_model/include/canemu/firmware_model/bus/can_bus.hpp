@@ -146,7 +146,7 @@ class CanBus final : private EventHandler {
   bool in_flight(NodeId node) const;
 
   NodeId attach(CanController& controller);
-  std::size_t node_count() const { return nodes_.size(); }
+  std::size_t node_count() const { return node_count_; }
 
   // The controller has a new or changed pending_tx() (or wants to try again).
   void tx_changed(NodeId node);
@@ -273,8 +273,8 @@ class CanBus final : private EventHandler {
   }
   bool can_transmit(Node& n) { return on_bus(n) && !n.listen_only && pending(n) != nullptr; }
   bool decodes(NodeId tx, NodeId rx, bool brs) {
-    const std::size_t n = nodes_.size();
-    if (decodes_cache_.size() == 2 * n * n) {
+    const std::size_t n = node_count_;
+    if (!decodes_cache_.empty()) {
       const int8_t c = decodes_cache_[(brs ? n * n : 0) + tx * n + rx];
       if (c >= 0) {
         return c == 1;
@@ -310,6 +310,14 @@ class CanBus final : private EventHandler {
   void recovery_check(NodeId id, SimTime now);
   // `why`: the cause of a counter change (its time and counters are filled in here).
   void report_state(NodeId id, SimTime at, CounterSample why = {});
+  // report_state() without a cause, skipped inline when it would do nothing (counters as last
+  // reported, not bus-off): after most frames.
+  void report_if_changed(NodeId id, SimTime at) {
+    const Node& n = nodes_[id];
+    if (n.fc->tec() != n.reported_tec || n.fc->rec() != n.reported_rec || n.fc->bus_off()) {
+      report_state(id, at);
+    }
+  }
   void recovered(NodeId id, SimTime at);
   // Whole bits of `node`'s own bit time in `span`, rounded to the nearest bit.
   uint64_t bits_in(NodeId node, SimDuration span);
@@ -317,6 +325,8 @@ class CanBus final : private EventHandler {
   SimScheduler& scheduler_;
   std::string name_;
   std::vector<Node> nodes_;
+  // nodes_.size(), kept apart: a Node is large and of odd size, so size() would divide.
+  std::size_t node_count_ = 0;
   FaultInjector* injector_ = nullptr;
   SimTime ack_suppressed_until_;
 

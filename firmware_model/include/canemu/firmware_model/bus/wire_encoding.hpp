@@ -91,8 +91,19 @@ struct EncodedFrame {
   uint8_t fields(std::array<FieldSpan, 19>& out) const;
   // Frame index of the `destuffed`-th bit of the dynamically stuffed part.
   uint16_t stuffed_index(uint16_t destuffed) const;
-  // The other way: bits before frame index `i` that are not stuff bits.
-  uint16_t destuffed_index(uint16_t i) const;
+  // The other way: bits before frame index `i` that are not stuff bits. Inline for the first
+  // word (arbitration losses, every frame): a handful of stuff bits to count there.
+  uint16_t destuffed_index(uint16_t i) const {
+    if (i >= 64) {
+      return destuffed_index_far(i);
+    }
+    uint16_t n = i;
+    for (uint64_t m = i == 0 ? 0 : stuff[0] >> (64 - i); m != 0; m &= m - 1) {
+      --n;
+    }
+    return n;
+  }
+  uint16_t destuffed_index_far(uint16_t i) const;
   // Bit index where `field` begins, or `length` if the frame has no such field.
   uint16_t field_begin(Field field) const;
   // The bits as '0' (dominant) and '1' (recessive), SOF first.

@@ -33,7 +33,7 @@ class EventQueue {
   EventId push(SimTime time, Payload payload) {
     const EventId id = next_id_++;
     heap_.push_back(Entry{time, id, std::move(payload), false});
-    std::push_heap(heap_.begin(), heap_.end(), later);
+    sift_up(heap_.size() - 1);
     ++live_;
     return id;
   }
@@ -80,15 +80,16 @@ class EventQueue {
     if (heap_.empty() || heap_.front().time > limit) {
       return std::nullopt;
     }
-    std::pop_heap(heap_.begin(), heap_.end(), later);
-    Entry e = std::move(heap_.back());
-    heap_.pop_back();
+    std::optional<Entry> e(std::move(heap_.front()));
+    remove_top();
     --live_;
     return e;
   }
 
  private:
-  // Heap comparator: "a comes out after b".
+  // A binary heap by hand: the few pending events of an island cost a compare or two per push
+  // and pop, without the generic algorithms' set-up. (time, id) is a total order, so the order
+  // events come out in does not depend on how the heap is arranged.
   static bool later(const Entry& a, const Entry& b) {
     if (a.time != b.time) {
       return a.time > b.time;
@@ -96,10 +97,42 @@ class EventQueue {
     return a.id > b.id;
   }
 
+  void sift_up(std::size_t i) {
+    while (i > 0) {
+      const std::size_t parent = (i - 1) / 2;
+      if (!later(heap_[parent], heap_[i])) {
+        return;
+      }
+      std::swap(heap_[parent], heap_[i]);
+      i = parent;
+    }
+  }
+
+  // Replaces the top by the last entry and restores the heap.
+  void remove_top() {
+    const std::size_t n = heap_.size() - 1;
+    if (n > 0) {
+      heap_.front() = std::move(heap_.back());
+    }
+    heap_.pop_back();
+    std::size_t i = 0;
+    while (true) {
+      const std::size_t l = 2 * i + 1;
+      if (l >= n) {
+        return;
+      }
+      const std::size_t c = l + 1 < n && later(heap_[l], heap_[l + 1]) ? l + 1 : l;
+      if (!later(heap_[i], heap_[c])) {
+        return;
+      }
+      std::swap(heap_[i], heap_[c]);
+      i = c;
+    }
+  }
+
   void drop_cancelled() {
     while (!heap_.empty() && heap_.front().cancelled) {
-      std::pop_heap(heap_.begin(), heap_.end(), later);
-      heap_.pop_back();
+      remove_top();
     }
   }
 

@@ -6,6 +6,7 @@
 // schedule further events, including at the current instant (they run in the same call).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -64,7 +65,9 @@ class SimScheduler {
   // Schedules `action` at `at`; an instant in the past runs at the next run_until(), at now().
   EventId schedule_at(SimTime at, Action action);
   // Schedules handler.on_event(now, tag) at `at`. The handler must outlive the event.
-  EventId schedule_at(SimTime at, EventHandler& handler, uint64_t tag);
+  EventId schedule_at(SimTime at, EventHandler& handler, uint64_t tag) {
+    return queue_.push(std::max(at, now_), Target{&handler, tag});
+  }
   EventId schedule_after(SimDuration delay, Action action) {
     return schedule_at(now_ + delay, std::move(action));
   }

@@ -27,6 +27,14 @@ def tool_env(daemon) -> dict:
     return {**os.environ, "CANEMU_SOCKET": daemon.socket, "PYTHONUNBUFFERED": "1"}
 
 
+def _ctrl_c_as_at_a_terminal() -> None:
+    """In the tool's process before it starts: SIGINT's default action. A test run started in the
+    background by a non-interactive shell (`make test &`) has SIGINT ignored, which its children
+    inherit, and Python then never raises KeyboardInterrupt: Ctrl-C (interrupt()) would do
+    nothing."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 class Tool:
     """`python -m MODULE ARGS` with its standard output and error read into `output` (through
     a pseudo-terminal of `rows` x `cols` when `pty_size` is given, as curses needs one).
@@ -47,7 +55,8 @@ class Tool:
         command = [sys.executable, "-m", module, *args]
         if pty_size is None:
             self.proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                         stderr=subprocess.STDOUT, env=tool_env(daemon), cwd=cwd)
+                                         stderr=subprocess.STDOUT, env=tool_env(daemon), cwd=cwd,
+                                         preexec_fn=_ctrl_c_as_at_a_terminal)
             self._read_fd = self.proc.stdout.fileno()
             self._write_fd = None
         else:
@@ -56,7 +65,8 @@ class Tool:
             fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", rows, cols, 0, 0))
             env = {**tool_env(daemon), "TERM": "xterm", "LINES": str(rows), "COLUMNS": str(cols)}
             self.proc = subprocess.Popen(command, stdin=slave, stdout=slave, stderr=slave,
-                                         env=env, cwd=cwd, start_new_session=True)
+                                         env=env, cwd=cwd, start_new_session=True,
+                                         preexec_fn=_ctrl_c_as_at_a_terminal)
             os.close(slave)
             self._read_fd = master
             self._write_fd = master

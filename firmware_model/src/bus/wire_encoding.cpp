@@ -246,54 +246,63 @@ struct Probes {
   std::array<uint16_t, 2> stuffed{};
 };
 
+// Wire bits and their stuff marks, gathered in registers and stored a word at a time.
+struct WireWriter {
+  EncodedFrame::Bits& bits;
+  EncodedFrame::Bits& marks;
+  std::size_t w = 0;
+  uint64_t acc_bits = 0;
+  uint64_t acc_marks = 0;
+  uint32_t used = 0;  // bits in the accumulators, from the top
+
+  // Appends `count` (1..64) bits and as many stuff marks; neither value has bits above count.
+  void put(uint64_t v, uint64_t mark, uint32_t count) {
+    const uint32_t space = 64 - used;
+    if (count < space) {
+      acc_bits |= v << (space - count);
+      acc_marks |= mark << (space - count);
+      used += count;
+      return;
+    }
+    const uint32_t rest = count - space;
+    bits[w] = acc_bits | (v >> rest);
+    marks[w] = acc_marks | (mark >> rest);
+    ++w;
+    acc_bits = rest != 0 ? v << (64 - rest) : 0;
+    acc_marks = rest != 0 ? mark << (64 - rest) : 0;
+    used = rest;
+  }
+  // Appends `count` bits of `from` from bit `begin` on, unmarked.
+  template <class Bits>
+  void copy(const Bits& from, uint32_t begin, uint32_t count) {
+    while (count > 0) {
+      const uint32_t c = count < 64 ? count : 64;
+      put(from.window(begin) >> (64 - c), 0, c);
+      begin += c;
+      count -= c;
+    }
+  }
+  // Stuffs the top `bytes` bytes of `x` by table (kStuffTable, below), from state `state`;
+  // returns the state after them.
+  uint32_t stuff_bytes(uint64_t x, uint32_t bytes, uint32_t state);
+  uint32_t size() const { return static_cast<uint32_t>(w * 64 + used); }
+  // Stores what the accumulators hold.
+  void close() {
+    if (used != 0) {
+      bits[w] = acc_bits;
+      marks[w] = acc_marks;
+    }
+  }
+  void close(BitString& a, BitString& b) {
+    close();
+    a.size = b.size = size();
+  }
+};
+
 template <class Bits>
 void stuff(Bits& d, bool last_may_stuff, BitString& s, BitString& m, Probes& probes) {
-  // Both outputs start empty and grow in step; their bits are gathered in registers and stored
-  // a word at a time.
-  struct Writer {
-    EncodedFrame::Bits& bits;
-    EncodedFrame::Bits& marks;
-    std::size_t w = 0;
-    uint64_t acc_bits = 0;
-    uint64_t acc_marks = 0;
-    uint32_t n = 0;  // bits in the accumulators, from the top
-
-    // Appends `count` (1..64) bits and as many stuff marks; neither value has bits above count.
-    void put(uint64_t v, uint64_t mark, uint32_t count) {
-      const uint32_t space = 64 - n;
-      if (count < space) {
-        acc_bits |= v << (space - count);
-        acc_marks |= mark << (space - count);
-        n += count;
-        return;
-      }
-      const uint32_t rest = count - space;
-      bits[w] = acc_bits | (v >> rest);
-      marks[w] = acc_marks | (mark >> rest);
-      ++w;
-      acc_bits = rest != 0 ? v << (64 - rest) : 0;
-      acc_marks = rest != 0 ? mark << (64 - rest) : 0;
-      n = rest;
-    }
-    void copy(const Bits& from, uint32_t begin, uint32_t count) {
-      while (count > 0) {
-        const uint32_t c = count < 64 ? count : 64;
-        put(from.window(begin) >> (64 - c), 0, c);
-        begin += c;
-        count -= c;
-      }
-    }
-    void close(BitString& a, BitString& b) {
-      if (n != 0) {
-        bits[w] = acc_bits;
-        marks[w] = acc_marks;
-      }
-      a.size = b.size = static_cast<uint32_t>(w * 64 + n);
-    }
-  };
-
   d.seal();
-  Writer out{s.words, m.words};
+  WireWriter out{s.words, m.words};  // both outputs grow in step
   const uint32_t n = d.size;
   const uint32_t last_allowed = last_may_stuff ? n - 1 : n - 2;  // highest bit a stuff may follow
   uint32_t pos = 0;                                              // next destuffed bit to copy
@@ -421,50 +430,15 @@ constexpr std::array<uint32_t, 10 * 256> make_stuff_table() {
 
 constexpr std::array<uint32_t, 10 * 256> kStuffTable = make_stuff_table();
 
-// The wire bits and the stuff marks of a frame, gathered in registers and stored a word at a
-// time into an EncodedFrame.
-struct WireWriter {
-  EncodedFrame& out;
-  std::size_t w = 0;
-  uint64_t acc_bits = 0;
-  uint64_t acc_marks = 0;
-  uint32_t used = 0;  // bits in the accumulators, from the top
-
-  // Appends `count` (1..63) bits and their marks; neither value has bits above `count`.
-  void put(uint64_t v, uint64_t mark, uint32_t count) {
-    const uint32_t space = 64 - used;
-    if (count < space) {
-      acc_bits |= v << (space - count);
-      acc_marks |= mark << (space - count);
-      used += count;
-      return;
-    }
-    const uint32_t rest = count - space;
-    out.level[w] = acc_bits | (v >> rest);
-    out.stuff[w] = acc_marks | (mark >> rest);
-    ++w;
-    acc_bits = rest != 0 ? v << (64 - rest) : 0;
-    acc_marks = rest != 0 ? mark << (64 - rest) : 0;
-    used = rest;
+uint32_t WireWriter::stuff_bytes(uint64_t x, uint32_t bytes, uint32_t state) {
+  for (uint32_t k = 0; k < bytes; ++k) {
+    const uint32_t e = kStuffTable[state * 256 + static_cast<uint32_t>(x >> 56)];
+    x <<= 8;
+    put(e & 0x3FF, (e >> 10) & 0x3FF, (e >> 20) & 0xF);
+    state = e >> 24;
   }
-  // Stuffs the top `bytes` bytes of `x`, from state `state`; returns the state after them.
-  uint32_t stuff_bytes(uint64_t x, uint32_t bytes, uint32_t state) {
-    for (uint32_t k = 0; k < bytes; ++k) {
-      const uint32_t e = kStuffTable[state * 256 + static_cast<uint32_t>(x >> 56)];
-      x <<= 8;
-      put(e & 0x3FF, (e >> 10) & 0x3FF, (e >> 20) & 0xF);
-      state = e >> 24;
-    }
-    return state;
-  }
-  uint32_t size() const { return static_cast<uint32_t>(w * 64 + used); }
-  void close() {
-    if (used != 0) {
-      out.level[w] = acc_bits;
-      out.stuff[w] = acc_marks;
-    }
-  }
-};
+  return state;
+}
 
 void encode_classic(const Frame& frame, EncodedFrame& out) {
   ShortBits d;
@@ -473,7 +447,7 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
   const uint32_t crc = Crc15::over_words(d.hi(), d.lo(), d.size, 0);
   d.append(crc, 15);
 
-  WireWriter wr{out};
+  WireWriter wr{out.level, out.stuff};
   const uint32_t whole = d.size / 8;  // 4 to 14 bytes, and 2 or 6 bits
   uint32_t state = wr.stuff_bytes(d.hi(), std::min(whole, 8u), 0);
   if (whole > 8) {

@@ -1,10 +1,35 @@
 #include "canemu/daemon/bridge.hpp"
 
+#include <cstring>
+
 #include "canemu/daemon/channel.hpp"
+#include "canemu/firmware_model/bus/frame.hpp"
 
 namespace canemu::daemon {
 
 using namespace canemu::model;
+
+std::optional<ipc::ChannelMessage> frame_message(const FrameFields& f) {
+  if (f.id < 0 || f.id > UINT32_MAX || f.dlc < 0 || f.dlc > 15) {
+    return std::nullopt;
+  }
+  const auto dlc = static_cast<uint8_t>(f.dlc);
+  const std::size_t bytes = f.remote ? 0 : dlc_to_length(dlc, f.fd);
+  if (f.len < 0 || static_cast<std::size_t>(f.len) != bytes) {
+    return std::nullopt;
+  }
+  ipc::ChannelMessage m;
+  m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
+  m.id = static_cast<uint32_t>(f.id);
+  m.dlc = dlc;
+  m.flags = static_cast<uint8_t>((f.extended ? ipc::kMsgExtended : 0) |
+                                 (f.remote ? ipc::kMsgRemote : 0) | (f.fd ? ipc::kMsgFd : 0) |
+                                 (f.brs ? ipc::kMsgBrs : 0) | (f.esi ? ipc::kMsgEsi : 0));
+  if (bytes != 0) {
+    std::memcpy(m.data, f.data, bytes);
+  }
+  return m;
+}
 
 std::unique_ptr<Bridge> Bridge::start(BridgeOptions options, std::size_t bus, HostedNode& node,
                                       const HostedNodeSettings& settings,

@@ -117,22 +117,7 @@ canemu_dds_Frame to_dds(SimTime at, const Frame& frame, bool own) {
 }
 
 std::optional<ipc::ChannelMessage> to_message(const canemu_dds_Frame& f) {
-  if (f.dlc > 15) {
-    return std::nullopt;
-  }
-  const std::size_t bytes = f.remote ? 0 : dlc_to_length(f.dlc, f.fd);
-  if (f.len != bytes) {
-    return std::nullopt;
-  }
-  ipc::ChannelMessage m;
-  m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
-  m.id = f.id;
-  m.dlc = f.dlc;
-  m.flags = static_cast<uint8_t>((f.extended ? ipc::kMsgExtended : 0) |
-                                 (f.remote ? ipc::kMsgRemote : 0) | (f.fd ? ipc::kMsgFd : 0) |
-                                 (f.brs ? ipc::kMsgBrs : 0) | (f.esi ? ipc::kMsgEsi : 0));
-  std::memcpy(m.data, f.data, bytes);
-  return m;
+  return frame_message({f.id, f.extended, f.remote, f.fd, f.brs, f.esi, f.dlc, f.len, f.data});
 }
 
 // ROS 2's can_msgs/msg/Frame (classic frames only: 8 data bytes) and back. An error frame or a

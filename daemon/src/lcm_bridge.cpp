@@ -178,23 +178,11 @@ class LcmTransport final : public BridgeTransport {
     }
     canemu_lcm_frame_t_decode_cleanup(
         &f);  // frees nothing: the type has no arrays of variable size
-    if (static_cast<uint32_t>(used) != size || f.id < 0 || f.dlc < 0 || f.dlc > 15) {
+    if (static_cast<uint32_t>(used) != size) {
       return std::nullopt;
     }
-    const auto dlc = static_cast<uint8_t>(f.dlc);
-    const std::size_t bytes = f.remote ? 0 : dlc_to_length(dlc, f.fd != 0);
-    if (f.len < 0 || static_cast<std::size_t>(f.len) != bytes) {
-      return std::nullopt;
-    }
-    ipc::ChannelMessage m;
-    m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
-    m.id = static_cast<uint32_t>(f.id);
-    m.dlc = dlc;
-    m.flags = static_cast<uint8_t>((f.extended ? ipc::kMsgExtended : 0) |
-                                   (f.remote ? ipc::kMsgRemote : 0) | (f.fd ? ipc::kMsgFd : 0) |
-                                   (f.brs ? ipc::kMsgBrs : 0) | (f.esi ? ipc::kMsgEsi : 0));
-    std::memcpy(m.data, f.data, bytes);
-    return m;
+    return frame_message({f.id, f.extended != 0, f.remote != 0, f.fd != 0, f.brs != 0, f.esi != 0,
+                          f.dlc, f.len, reinterpret_cast<const uint8_t*>(f.data)});
   }
 
   static constexpr int kMaxHandlesPerKick = 256;

@@ -64,6 +64,18 @@ struct BridgeOptions {
 
 class Bridge;
 
+// A frame as a message transport (LCM, DDS) carries it: its fields one by one.
+struct FrameFields {
+  int64_t id = 0;
+  bool extended = false, remote = false, fd = false, brs = false, esi = false;
+  int dlc = 0;
+  int len = 0;  // data bytes the message says it has
+  const uint8_t* data = nullptr;
+};
+// Those fields as a frame for a bridge to send; nothing if they disagree (an identifier or DLC out
+// of range, a length other than the DLC's). Bridge::offer() checks the rest.
+std::optional<ipc::ChannelMessage> frame_message(const FrameFields& f);
+
 // What a transport did with something the bridge gave it.
 enum class Delivery : uint8_t {
   sent,     // counted as written

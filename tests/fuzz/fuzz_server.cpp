@@ -6,7 +6,9 @@
 // destroyed, and the process must hold exactly the descriptors it held before: nothing a client
 // passed or opened may leak.
 #include <fcntl.h>
+#include <grp.h>
 #include <poll.h>
+#include <pwd.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -15,6 +17,7 @@
 #include <csignal>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -28,6 +31,40 @@
 #include "canemu/daemon/server.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "fuzz_world.hpp"
+
+// User and group names are answered from a fixed table instead of the C library's NSS: a
+// reloaded file may name any group, and each NSS look-up (files, then systemd's userdb folders)
+// took more time than the rest of an input. What is fuzzed is canemud's handling of the answer.
+// These definitions take the place of the C library's for this program.
+extern "C" group* getgrnam(const char* name) {
+  static char members_none[] = "";
+  static char* members[] = {members_none, nullptr};
+  static group g{};
+  static char stored[64];
+  if (std::strcmp(name, "canemu") != 0 && std::strcmp(name, "wheel") != 0) {
+    return nullptr;
+  }
+  std::snprintf(stored, sizeof stored, "%s", name);
+  g.gr_name = stored;
+  g.gr_passwd = members_none;
+  g.gr_gid = name[0] == 'c' ? 990 : 10;
+  g.gr_mem = members + 1;
+  return &g;
+}
+extern "C" passwd* getpwnam(const char* name) {
+  static passwd p{};
+  static char stored[64];
+  static char empty[] = "";
+  if (std::strcmp(name, "canemu") != 0) {
+    return nullptr;
+  }
+  std::snprintf(stored, sizeof stored, "%s", name);
+  p.pw_name = stored;
+  p.pw_passwd = p.pw_gecos = p.pw_dir = p.pw_shell = empty;
+  p.pw_uid = 990;
+  p.pw_gid = 990;
+  return &p;
+}
 
 namespace {
 
@@ -139,7 +176,11 @@ void drain(int fd) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string socket = folder() + "/canemud.sock";
   const std::string file = folder() + "/canemud.toml";
-  { std::ofstream(file) << kConfig; }
+  static bool file_changed = true;  // a reload wrote it; the first input writes it
+  if (file_changed) {
+    std::ofstream(file, std::ios::trunc) << kConfig;
+    file_changed = false;
+  }
   const std::size_t before = open_descriptors();
   {
     auto sim = fuzzing::fresh_simulation(config());
@@ -203,6 +244,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           break;
         case 6: {  // a reload with whatever the file says
           const auto text = s.bytes(s.byte() * 4);
+          file_changed = true;
           std::ofstream(file, std::ios::trunc)
               .write(reinterpret_cast<const char*>(text.data()),
                      static_cast<std::streamsize>(text.size()));

@@ -13,6 +13,8 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "canemu/daemon/dds_bridge.hpp"
+#include "canemu/daemon/distributed.hpp"
 #include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
@@ -126,11 +128,53 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
   }
 }
 
+void read_distributed(Checker& c, const toml::table& root, Config& cfg) {
+  const toml::table* t = c.section(root, "distributed");
+  if (t == nullptr) {
+    return;
+  }
+  DistributedConfig& d = cfg.distributed;
+  d.enabled = true;
+  c.only_keys(*t, "distributed", {"name", "domain", "partition", "heartbeat_ms", "timeout_ms"});
+  if (auto name = c.string(*t, "distributed", "name", false)) {
+    if (!valid_name(*name)) {
+      c.error(*t->get("name"), "distributed.name", kNameRule);
+    } else {
+      d.name = *name;
+    }
+  }
+  if (d.name.empty()) {
+    d.name = default_daemon_name();
+  }
+  if (auto domain = c.integer(*t, "distributed", "domain", false, 0, kMaxDdsDomain)) {
+    d.domain = static_cast<uint32_t>(*domain);
+  }
+  if (auto partition = c.string(*t, "distributed", "partition", false)) {
+    if (auto problem = dds_partition_problem(*partition)) {
+      c.error(*t->get("partition"), "distributed.partition", *problem);
+    } else {
+      d.partition = *partition;
+    }
+  }
+  if (auto ms = c.integer(*t, "distributed", "heartbeat_ms", false, 10, 10'000)) {
+    d.heartbeat_ms = static_cast<uint32_t>(*ms);
+  }
+  if (auto ms = c.integer(*t, "distributed", "timeout_ms", false, 30, 600'000)) {
+    d.timeout_ms = static_cast<uint32_t>(*ms);
+  }
+  if (d.timeout_ms < 3 * d.heartbeat_ms) {
+    c.error(*t, "distributed.timeout_ms",
+            fmt::format("{} ms is less than three heartbeats ({} ms each)", d.timeout_ms,
+                        d.heartbeat_ms));
+  }
+}
+
 void read_buses(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
   c.for_each_table(root, "bus", [&](const toml::table& t, const std::string& path) {
-    c.only_keys(t, path,
-                {"name", "kind", "bitrate", "sample_point", "data_bitrate", "transceiver"});
+    c.only_keys(
+        t, path,
+        {"name", "kind", "bitrate", "sample_point", "data_bitrate", "transceiver", "owner"});
     BusConfig bus;
     bus.line = static_cast<uint32_t>(t.source().begin.line);
     if (auto name = read_name(c, t, path, names, "bus")) {
@@ -170,6 +214,20 @@ void read_buses(Checker& c, const toml::table& root, Config& cfg) {
       } else if (*low && bus.bitrate > 125'000) {
         c.error(*t.get("transceiver"), path + ".transceiver",
                 fmt::format("a low-speed bus runs at up to 125000 bit/s, not {}", bus.bitrate));
+      }
+    }
+    if (auto owner = c.string(t, path, "owner", false)) {
+      if (!cfg.distributed.enabled) {
+        c.error(*t.get("owner"), path + ".owner",
+                "a bus of another daemon needs [distributed] (the installation's DDS domain)");
+      } else if (!valid_name(*owner)) {
+        c.error(*t.get("owner"), path + ".owner", kNameRule);
+      } else if (*owner != cfg.distributed.name && bus.kind == BusKind::lin) {
+        c.error(*t.get("owner"), path + ".owner",
+                "LIN buses are simulated where they are declared; only CAN and CAN FD buses "
+                "may have another daemon as owner");
+      } else {
+        bus.owner = *owner;
       }
     }
     cfg.buses.push_back(bus);
@@ -303,6 +361,12 @@ void read_devices(Checker& c, const toml::table& root, Config& cfg) {
         } else if (bus->kind == BusKind::lin) {
           c.error(*ctl, path + ".controllers",
                   fmt::format("\"{}\" is a LIN bus; a CAN controller cannot sit on it", b));
+        } else if (cfg.remote(*bus) && dev.model != DeviceModel::ixxat_usb_to_can &&
+                   dev.model != DeviceModel::ixxat_usb_to_can_fd) {
+          c.error(*ctl, path + ".controllers",
+                  fmt::format("\"{}\" is simulated by daemon \"{}\"; SORCUS adapters need a "
+                              "bus of this daemon (their 82527 drives the bus itself)",
+                              b, bus->owner));
         }
       }
       dev.controllers = *buses;
@@ -430,11 +494,12 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   }
   Config cfg;
   cfg.source = std::move(source);
-  c.only_keys(
-      root, "",
-      {"simulation", "security", "bus", "device", "lin_node", "scenario", "recorder", "bridge"});
+  c.only_keys(root, "",
+              {"simulation", "security", "distributed", "bus", "device", "lin_node", "scenario",
+               "recorder", "bridge"});
   read_simulation(c, root, cfg);
   read_security(c, root, cfg);
+  read_distributed(c, root, cfg);
   read_buses(c, root, cfg);
   read_devices(c, root, cfg);
   detail::read_lin_nodes(c, root, cfg);

@@ -5,8 +5,8 @@
 
 namespace canemu::daemon {
 
-void NodePool::add_bus(model::CanBus& bus, bool fd) {
-  buses_.push_back(BusNodes{&bus, fd, {}});
+void NodePool::add_bus(model::CanBus& bus, bool fd, Maker make) {
+  buses_.push_back(BusNodes{&bus, fd, std::move(make), {}});
 }
 
 model::HostedNode& NodePool::spare(std::size_t bus) {
@@ -16,7 +16,9 @@ model::HostedNode& NodePool::spare(std::size_t bus) {
       return *node;
     }
   }
-  if (b.fd) {
+  if (b.make) {
+    b.nodes.push_back(b.make(*b.bus));
+  } else if (b.fd) {
     b.nodes.push_back(std::make_unique<model::CanFdNode>(scheduler_, *b.bus));
   } else {
     b.nodes.push_back(std::make_unique<model::Sja1000Node>(scheduler_, *b.bus));

@@ -179,6 +179,10 @@ ipc::IpcResult<void> Server::open() {
   for (const auto& b : sim_.bridges()) {  // configured bridges: their sockets wake the loop
     dispatcher_.channel_opened(*b);
   }
+  if (Distributed* d = sim_.distributed()) {  // other daemons' messages, the heartbeat
+    dispatcher_.channel_opened(*d);
+    dispatcher_.channel_opened(d->heartbeat());
+  }
   // Under systemd with WatchdogSec=: a ping every half period, from the loop itself, so a
   // stalled loop gets the daemon restarted.
   uint64_t watchdog_us = 0;

@@ -49,6 +49,14 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
     const Config& config) {
   std::unique_ptr<Simulation> sim(new Simulation(config));
   std::vector<std::string> errors;
+  if (sim->config_.distributed.enabled) {
+    auto link = Distributed::open(*sim, sim->config_);
+    if (!link) {
+      return tl::unexpected(std::vector<std::string>{
+          fmt::format("{}: [distributed]: {}", sim->config_.source, link.error())});
+    }
+    sim->distributed_ = std::move(*link);
+  }
   for (const BusConfig& b : sim->config_.buses) {
     sim->add_bus(b);
   }
@@ -277,7 +285,13 @@ void Simulation::add_bus(const BusConfig& b) {
     lin_bus = std::make_unique<lin::LinBus>(scheduler_, layout);
   }
   lin_buses_.push_back(std::move(lin_bus));
-  nodes_.add_bus(*buses_.back(), b.kind == BusKind::can_fd);
+  NodePool::Maker make;
+  if (config_.remote(b)) {
+    make = [this, bus = buses_.size() - 1, fd = b.kind == BusKind::can_fd](CanBus& placeholder) {
+      return distributed_->make_node(bus, placeholder, fd);
+    };
+  }
+  nodes_.add_bus(*buses_.back(), b.kind == BusKind::can_fd, std::move(make));
   scenarios_.add_bus(*buses_.back(), b, lin_buses_.back().get());
 }
 
@@ -350,7 +364,10 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     // The controller stays in reset (off the bus) until an application initializes and starts
     // it through the VCI, as on a real adapter.
     CanBus& bus = *buses_[c.bus];
-    if (d.model == DeviceModel::ixxat_usb_to_can) {
+    if (config_.remote(config_.buses[c.bus])) {
+      c.node = distributed_->make_node(c.bus, bus, d.model == DeviceModel::ixxat_usb_to_can_fd);
+      distributed_->name_node(*c.node, c.name);
+    } else if (d.model == DeviceModel::ixxat_usb_to_can) {
       c.node = std::make_unique<Sja1000Node>(scheduler_, bus);
     } else {
       c.node = std::make_unique<CanFdNode>(scheduler_, bus);
@@ -583,6 +600,9 @@ ReloadReport Simulation::reload(const Config& fresh) {
 
 Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t bus,
                                                   HostedNode& node, uint32_t owner_pid) {
+  if (config_.remote(config_.buses[bus])) {
+    distributed_->name_node(node, name);
+  }
   devices_.add_ephemeral(name, bus, node, owner_pid);
   return DeviceLease(this, std::move(name));
 }
@@ -600,6 +620,9 @@ Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t
     return DeviceLease(this, std::move(name));
   }
   HostedNode& node = nodes_.spare(bus);
+  if (config_.remote(config_.buses[bus])) {
+    distributed_->name_node(node, name);
+  }
   auto line = std::make_shared<ixxat::CanLine>(scheduler_, node, ixxat::Clocks{}, power_on);
   line->set_low_speed(config_.buses[bus].low_speed);
   devices_.add_ephemeral(name, bus, node, owner_pid, std::move(line));

@@ -10,7 +10,7 @@ void HostedNode::configure(const HostedNodeSettings& settings, ControllerEvents*
   sink_ = nullptr;  // the counter reset below reports a state nobody asked about
   ++generation_;
   running_ = false;
-  tx_loaded_ = false;
+  tx_loaded_ = 0;
   babble_.reset();
   babble_loaded_ = false;
   program(settings);
@@ -30,7 +30,7 @@ void HostedNode::go_online() {
 
 void HostedNode::go_offline() {
   running_ = false;
-  tx_loaded_ = false;
+  tx_loaded_ = 0;
   babble_loaded_ = false;
   ++generation_;
   go_off_bus();
@@ -79,33 +79,31 @@ void HostedNode::end_babble() {
   abort_tx();  // gone: the SJA1000 reports the drop at once, the FD controller does not
   if (babble_loaded_) {
     babble_loaded_ = false;
-    tx_loaded_ = false;
+    tx_loaded_ = 0;
   }
   load_next();
 }
 
 void HostedNode::load_next() {
-  if (!running_ || tx_loaded_ || !buffer_free()) {
-    return;
-  }
   if (babble_ && now() >= babble_until_) {
     babble_.reset();  // ended while the node was off the bus
   }
   if (babble_) {
-    tx_loaded_ = true;
-    babble_loaded_ = true;
-    load(TxFrame{*babble_, false, false});
+    if (running_ && tx_loaded_ == 0 && buffer_free()) {
+      tx_loaded_ = 1;
+      babble_loaded_ = true;
+      load(TxFrame{*babble_, false, false});
+    }
     return;
   }
-  if (!source_) {
-    return;
+  while (running_ && tx_loaded_ < tx_window() && buffer_free() && source_) {
+    std::optional<TxFrame> next = source_();
+    if (!next) {
+      return;
+    }
+    ++tx_loaded_;
+    load(*next);
   }
-  std::optional<TxFrame> next = source_();
-  if (!next) {
-    return;
-  }
-  tx_loaded_ = true;
-  load(*next);
 }
 
 void HostedNode::frame_received(SimTime at, const Frame& frame, bool own) {
@@ -116,7 +114,7 @@ void HostedNode::frame_received(SimTime at, const Frame& frame, bool own) {
 }
 
 void HostedNode::frame_transmitted(SimTime at, const Frame& frame) {
-  tx_loaded_ = false;
+  tx_loaded_ -= tx_loaded_ > 0 ? 1 : 0;
   if (std::exchange(babble_loaded_, false)) {
     load_next();
     return;
@@ -128,7 +126,7 @@ void HostedNode::frame_transmitted(SimTime at, const Frame& frame) {
 }
 
 void HostedNode::transmission_dropped(SimTime at, const Frame& frame) {
-  tx_loaded_ = false;
+  tx_loaded_ -= tx_loaded_ > 0 ? 1 : 0;
   if (std::exchange(babble_loaded_, false)) {
     load_next();
     return;
@@ -149,7 +147,8 @@ void HostedNode::state_changed(SimTime at, ErrorState state, uint16_t tec, uint1
   if (sink_ != nullptr) {
     sink_->state_changed(at, state, tec, rec);
   }
-  if (state == ErrorState::bus_off && running_ && settings_.restart_delay.ns() > 0) {
+  if (state == ErrorState::bus_off && running_ && settings_.restart_delay.ns() > 0 &&
+      !restarts_itself()) {
     const uint64_t generation = generation_;
     scheduler_.schedule_at(at + settings_.restart_delay, [this, generation](SimTime) {
       if (generation == generation_) {

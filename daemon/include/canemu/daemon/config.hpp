@@ -27,7 +27,10 @@ struct BusConfig {
   uint32_t sample_point = 875;  // per mille
   uint32_t data_bitrate = 0;    // can-fd: data-phase bit/s (0: no bit-rate switch)
   bool low_speed = false;       // can: ISO 11898-3 fault-tolerant transceivers (<= 125 kbit/s)
-  uint32_t line = 0;            // where it was declared
+  // The daemon that simulates this bus ([distributed], docs/distributed.md); empty, or this
+  // daemon's own name: this one.
+  std::string owner;
+  uint32_t line = 0;  // where it was declared
 };
 
 // Adapter models the daemon can emulate. The X-CAN-2i module has exactly two interfaces; its
@@ -133,10 +136,21 @@ struct BridgeConfig {
   bool ros2 = false;             // dds: ROS 2's can_msgs/msg/Frame topics too
 };
 
+// [distributed]: this daemon in an installation of several (docs/distributed.md).
+struct DistributedConfig {
+  bool enabled = false;  // the table is there
+  std::string name;      // this daemon's name (default: default_daemon_name())
+  uint32_t domain = 0;   // the DDS domain id
+  std::string partition = "canemu";
+  uint32_t heartbeat_ms = 200;  // how often it tells the others it is there
+  uint32_t timeout_ms = 2000;   // another daemon not heard from this long is gone
+};
+
 struct Config {
   std::string source;  // file name, or "<embedded default>"
   SimulationConfig simulation;
   SecurityConfig security;
+  DistributedConfig distributed;
   // [[scenario]] file = "...": fault scenarios applied at start, paths relative to the
   // configuration file's folder.
   std::vector<std::string> scenario_files;
@@ -147,6 +161,10 @@ struct Config {
   std::vector<BridgeConfig> bridges;      // [[bridge]]
 
   const BusConfig* bus(std::string_view name) const;
+  // Bus `b` is simulated by another daemon.
+  bool remote(const BusConfig& b) const {
+    return distributed.enabled && !b.owner.empty() && b.owner != distributed.name;
+  }
 };
 
 using ConfigErrors = std::vector<std::string>;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -17,9 +18,11 @@ class NodePool {
  public:
   explicit NodePool(model::SimScheduler& scheduler) : scheduler_(scheduler) {}
 
+  // Makes a node for a bus whose controllers run elsewhere (another daemon's bus).
+  using Maker = std::function<std::unique_ptr<model::HostedNode>(model::CanBus&)>;
   // Bus number `bus_count()` from now on: its nodes are CAN FD controllers when `fd`, else
-  // SJA1000s. The bus must outlive the pool.
-  void add_bus(model::CanBus& bus, bool fd);
+  // SJA1000s; or, when `make` is given, what it makes. The bus must outlive the pool.
+  void add_bus(model::CanBus& bus, bool fd, Maker make = {});
   std::size_t bus_count() const { return buses_.size(); }
 
   // A stopped node on bus `bus`, ready to start: one an earlier device left that is reusable()
@@ -32,6 +35,7 @@ class NodePool {
   struct BusNodes {
     model::CanBus* bus;
     bool fd;
+    Maker make;
     std::vector<std::unique_ptr<model::HostedNode>> nodes;
   };
   model::SimScheduler& scheduler_;

@@ -21,6 +21,7 @@
 #include "canemu/daemon/bridge.hpp"
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/device_registry.hpp"
+#include "canemu/daemon/distributed.hpp"
 #include "canemu/daemon/lin_nodes.hpp"
 #include "canemu/daemon/node_pool.hpp"
 #include "canemu/daemon/recorder.hpp"
@@ -150,6 +151,10 @@ class Simulation {
   // The SocketCAN bridge of `interface`, or the LCM or DDS bridge of bus `bus`; nullptr if none.
   Bridge* find_bridge(BridgeKind kind, const std::string& name) const;
 
+  // ---- buses across hosts ([distributed], docs/distributed.md); nullptr without it ----
+  Distributed* distributed() { return distributed_.get(); }
+  const Distributed* distributed() const { return distributed_.get(); }
+
  private:
   bool remove(Bridge* bridge, const std::function<void(Bridge&)>& before);
   explicit Simulation(Config config)
@@ -185,6 +190,8 @@ class Simulation {
   ScenarioRunner scenarios_;
   std::vector<std::unique_ptr<Recorder>> recorders_;  // on nodes_'s nodes, lin_buses_
   std::vector<std::unique_ptr<Bridge>> bridges_;      // on nodes_'s nodes
+  // Other daemons' nodes on nodes_'s nodes; gone first (nodes_'s remote nodes outlive it).
+  std::unique_ptr<Distributed> distributed_;
 };
 
 }  // namespace canemu::daemon

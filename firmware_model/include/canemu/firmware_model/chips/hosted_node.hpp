@@ -73,7 +73,7 @@ class HostedNode : private ControllerEvents {
   // Leaves bus-off: recovery starts counting.
   void restart();
   // A frame is in the transmit buffer.
-  bool transmitting() const { return tx_loaded_; }
+  bool transmitting() const { return tx_loaded_ > 0; }
 
   // Fault injection, a babbling idiot: from now until `until` the node sends `frame` back to
   // back, each copy as soon as arbitration lets it (errors and retransmissions as for any
@@ -112,6 +112,13 @@ class HostedNode : private ControllerEvents {
   // repeated.
   virtual void abort_tx() = 0;
   virtual void release_received() = 0;
+  // How many frames the driver hands over before the first is done: 1 for a chip's transmit
+  // buffer; more for a node whose controller is elsewhere (a bus of another daemon), so that
+  // the link's delay does not come between frames. buffer_free() is asked before each.
+  virtual uint32_t tx_window() const { return 1; }
+  // The controller leaves bus-off by itself after settings.restart_delay (the controller of a
+  // node of another daemon's bus is restarted there): no restart is scheduled here.
+  virtual bool restarts_itself() const { return false; }
 
  private:
   void frame_received(SimTime at, const Frame& frame, bool own) override;
@@ -132,7 +139,7 @@ class HostedNode : private ControllerEvents {
   TxSource source_;
   bool running_ = false;
   bool claimed_ = false;
-  bool tx_loaded_ = false;
+  uint32_t tx_loaded_ = 0;       // frames handed to load() and not yet done or dropped
   std::optional<Frame> babble_;  // while babbling
   SimTime babble_until_;
   bool babble_loaded_ = false;  // the loaded frame is a babbled copy

@@ -1,0 +1,114 @@
+// Buses that span several hosts (docs/distributed.md): canemud joins the installation's DDS
+// domain and partition ([distributed]), announces itself and the buses it simulates, and
+//   - as the owner of a bus, runs the nodes other daemons ask for on it: real nodes of its
+//     simulation (a controller of the bus's kind, arbitration, ACK, error counters, faults by
+//     the name "DAEMON/DEVICE"), fed with the frames those daemons send and reporting every
+//     event of the controller back to them;
+//   - as a user of a remote bus ([[bus]] owner = "..."), gives its local clients nodes on it
+//     (model::HostedNode, so ephemeral channels, python-can and VCI adapters work unchanged),
+//     whose controller runs on the owner.
+// Everything rides on Cyclone DDS (ddstypes/canemu_net.idl); nothing here is a network protocol
+// of its own. One object per daemon, a Doorbell of the server's loop: Cyclone's listeners ring
+// its eventfd, and the loop's kick() applies what came; a timerfd paces the heartbeats.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <tl/expected.hpp>
+
+#include "canemu/daemon/config.hpp"
+#include "canemu/daemon/doorbell.hpp"
+#include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/chips/hosted_node.hpp"
+
+namespace canemu::daemon {
+
+class Simulation;
+
+// What `canemu status` shows of another daemon of the installation.
+struct PeerStatus {
+  std::string name;
+  std::string version;
+  uint16_t protocol = 0;
+  std::string state;   // "up", "gone" (not heard from within timeout_ms, or it left), "refused"
+  std::string reason;  // refused: why (protocol, time mode)
+  std::string time;    // its time mode ("realtime", "scaled:2", "stepped")
+  int64_t last_heard_ms = 0;       // milliseconds since its last heartbeat
+  std::vector<std::string> buses;  // the buses it simulates
+  uint32_t hosted_nodes = 0;       // its nodes on this daemon's buses
+};
+
+// A bus of this daemon that another daemon simulates.
+struct RemoteBusStatus {
+  std::string bus;
+  std::string owner;
+  std::string state;   // "attached", "waiting" (for the owner), "refused"
+  std::string reason;  // waiting or refused: why
+  uint32_t nodes = 0;  // this daemon's nodes on it
+};
+
+struct DistributedCounters {
+  uint64_t requests_sent = 0;      // to owners
+  uint64_t requests_received = 0;  // from daemons using this daemon's buses
+  uint64_t events_sent = 0;
+  uint64_t events_received = 0;
+  uint64_t dropped = 0;  // messages DDS did not take (a full reader), or came for no node
+  uint64_t late = 0;     // events applied after their simulated instant had passed here
+};
+
+class Distributed : public Doorbell {
+ public:
+  // Joins the domain; the error says why not (no Cyclone DDS in this build, no domain).
+  static tl::expected<std::unique_ptr<Distributed>, std::string> open(Simulation& sim,
+                                                                      const Config& config);
+  ~Distributed();
+  Distributed(const Distributed&) = delete;
+  Distributed& operator=(const Distributed&) = delete;
+
+  const std::string& name() const;
+
+  // A node on remote bus `bus` (its CanBus here carries no traffic: every node's controller
+  // runs on the owner), of a CAN FD controller when `fd`, else a classic one.
+  std::unique_ptr<model::HostedNode> make_node(std::size_t bus, model::CanBus& placeholder,
+                                               bool fd);
+  // The device a node of a remote bus serves got its name: the owner lists the node as
+  // "DAEMON/NAME" (faults name it so).
+  void name_node(model::HostedNode& node, const std::string& device);
+
+  // ---- the server's loop ----
+  // Rung when something arrived; kick() applies it.
+  int doorbell_fd() const override;
+  void kick() override;
+  bool broken() const override { return false; }
+  // Rung when a heartbeat is due: announces this daemon, says hello to owners not yet
+  // answering, and lets daemons not heard from within timeout_ms go.
+  Doorbell& heartbeat();
+
+  // ---- stepped time (docs/distributed.md, "Time") ----
+  // True when steps of this daemon are the owner's: it uses a remote bus in stepped time.
+  bool follows_owner() const;
+  // This daemon owns buses that other daemons use in stepped time: its steps wait at the
+  // barrier.
+  bool leads_steps() const;
+
+  // ---- status ----
+  std::vector<PeerStatus> peers() const;
+  std::vector<RemoteBusStatus> remote_buses() const;
+  const DistributedCounters& counters() const;
+
+  struct Impl;
+
+ private:
+  explicit Distributed(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// The name a daemon goes by when [distributed] gives none: the host name, lower case, with
+// every character a name may not have made '-', at most 28 characters.
+std::string default_daemon_name();
+
+}  // namespace canemu::daemon

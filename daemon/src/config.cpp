@@ -501,6 +501,24 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   read_security(c, root, cfg);
   read_distributed(c, root, cfg);
   read_buses(c, root, cfg);
+  if (cfg.simulation.time.mode == TimeMode::stepped) {
+    // One time authority: stepped time follows the owner of the remote buses.
+    const BusConfig* first = nullptr;
+    for (const BusConfig& b : cfg.buses) {
+      if (!cfg.remote(b)) {
+        continue;
+      }
+      if (first == nullptr) {
+        first = &b;
+      } else if (b.owner != first->owner) {
+        c.error(root.source(), "bus",
+                fmt::format("in stepped time the remote buses must have one owner (its steps are "
+                            "this daemon's): \"{}\" is daemon {}'s, \"{}\" daemon {}'s",
+                            first->name, first->owner, b.name, b.owner));
+        break;
+      }
+    }
+  }
   read_devices(c, root, cfg);
   detail::read_lin_nodes(c, root, cfg);
   detail::read_recorders(c, root, cfg);

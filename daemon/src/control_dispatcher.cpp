@@ -339,6 +339,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
               fmt::format("step of {} ns is outside 1 ns .. 60 s", m.step_ns));
         return;
       }
+      if (defer_step && defer_step(m.step_ns, request_id)) {
+        return;
+      }
       if (before_step) {
         before_step();
       }

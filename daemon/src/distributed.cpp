@@ -52,7 +52,7 @@ using namespace canemu::model;
 
 namespace {
 
-constexpr uint32_t kTxWindow = 16;       // frames a remote node has on their way to the owner
+constexpr uint32_t kTxWindow = 64;       // frames a remote node has on their way to the owner
 constexpr std::size_t kOwnerQueue = 64;  // frames the owner keeps for one remote node
 constexpr int32_t kWriterDepth = 4096;   // samples a writer keeps for readers catching up
 constexpr int32_t kReaderSamples = 8192;
@@ -201,6 +201,7 @@ struct Distributed::Impl {
     int64_t offset_ns = 0;  // its simulated time minus ours (the largest estimate so far)
     // As user of our buses:
     uint64_t next_request = 0;  // the seq expected next
+    bool follower = false;      // stepped time: its steps are ours (it said hello, stepped)
   };
   std::map<std::string, Peer> peers;
   uint64_t next_event_from(const std::string&);
@@ -311,6 +312,33 @@ struct Distributed::Impl {
   };
   std::map<std::pair<std::string, uint32_t>, std::unique_ptr<Hosted>> hosted;
 
+  // ---- stepped time ----
+  Distributed* self = nullptr;  // its hooks
+  std::string stepped_owner;    // follower: the owner whose steps this daemon's are
+  // Leader: the steps asked for, the one at the barrier, who has still to say ready.
+  struct Step {
+    int64_t ns = 0;
+    std::string asker;
+    uint64_t token = 0;
+  };
+  std::deque<Step> steps;
+  bool barrier = false;
+  uint64_t step_no = 0;
+  std::set<std::string> waiting;
+  int64_t barrier_deadline_ms = 0;
+  bool stepped() const { return time.mode == TimeMode::stepped; }
+  bool leads() const {
+    if (!stepped() || !stepped_owner.empty()) {
+      return false;
+    }
+    return std::any_of(peers.begin(), peers.end(),
+                       [](const auto& p) { return p.second.follower && !p.second.gone; });
+  }
+  void enqueue_step(Step s);
+  void start_next_step();
+  void run_step();
+  void deliver(RemoteNode& n, const canemu_net_Event& e, const Peer& owner);
+
   // The heartbeat timer as a doorbell of the loop.
   struct Heartbeat final : Doorbell {
     Impl* impl = nullptr;
@@ -322,6 +350,14 @@ struct Distributed::Impl {
   Impl(Simulation& s, const Config& config)
       : sim(s), cfg(config.distributed), time(config.simulation.time) {
     heartbeat.impl = this;
+    if (stepped()) {
+      for (const BusConfig& b : config.buses) {
+        if (config.remote(b)) {
+          stepped_owner = b.owner;  // the configuration reader allows one owner in stepped time
+          break;
+        }
+      }
+    }
     std::random_device rd;
     boot = (uint64_t{rd()} << 32) ^ rd() ^ static_cast<uint64_t>(monotonic_ms());
   }
@@ -740,6 +776,18 @@ void Distributed::Impl::tick() {
   [[maybe_unused]] const auto n = ::read(timer, &expirations, sizeof expirations);
   announce(false);
   const int64_t now = monotonic_ms();
+  if (barrier && now > barrier_deadline_ms) {
+    for (const std::string& name : std::vector<std::string>(waiting.begin(), waiting.end())) {
+      auto it = peers.find(name);
+      if (it != peers.end()) {
+        peer_gone(it->second, fmt::format("it did not get ready for step {} within {} ms", step_no,
+                                          cfg.timeout_ms));
+      }
+    }
+    if (barrier) {
+      run_step();
+    }
+  }
   for (auto& [name, p] : peers) {
     if (!p.gone && now - p.heard_ms > static_cast<int64_t>(cfg.timeout_ms)) {
       peer_gone(p, fmt::format("not heard from for {} ms", now - p.heard_ms));
@@ -859,12 +907,16 @@ std::string Distributed::Impl::bus_problem(const BusConfig& b) const {
 void Distributed::Impl::peer_gone(Peer& p, const std::string& why) {
   p.gone = true;
   p.welcomed = false;
+  p.follower = false;
   log::warning("daemon {} is gone: {}", p.name, why);
   drop_hosted_of(p.name, why);
   for (RemoteNode* n : nodes) {
     if (n->owner() == p.name) {
       n->owner_lost();
     }
+  }
+  if (barrier && waiting.erase(p.name) > 0 && waiting.empty()) {
+    run_step();
   }
 }
 
@@ -975,6 +1027,10 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
   }
   p.next_request = r.seq + 1;
   if (r.kind == canemu_net_REQ_HELLO) {
+    if (stepped() && stepped_owner.empty() && !p.follower) {
+      p.follower = true;
+      log::info("daemon {} uses this daemon's buses in stepped time: steps wait for it", from);
+    }
     canemu_net_Event e{};
     e.kind = canemu_net_EV_WELCOME;
     e.at_ns = sim.scheduler().now().ns();
@@ -983,6 +1039,21 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
   }
   if (r.kind == canemu_net_REQ_OPEN) {
     open_hosted(r);
+    return;
+  }
+  if (r.kind == canemu_net_REQ_STEP) {
+    if (stepped() && stepped_owner.empty() && r.step_ns > 0 &&
+        r.step_ns <= int64_t{60} * 1'000'000'000) {
+      enqueue_step(Step{r.step_ns, from, r.step});
+    } else {
+      ++counters.dropped;
+    }
+    return;
+  }
+  if (r.kind == canemu_net_REQ_READY) {
+    if (barrier && r.step == step_no && waiting.erase(from) > 0 && waiting.empty()) {
+      run_step();
+    }
     return;
   }
   Hosted* h = find_hosted(from, r.node);
@@ -1042,30 +1113,147 @@ SimTime Distributed::Impl::local_time(const Peer& owner, int64_t owner_ns) {
 }
 
 void Distributed::Impl::on_event(const canemu_net_Event& e) {
-  if (get(e.to) != cfg.name) {
+  const std::string to = get(e.to);
+  if (to != cfg.name && !to.empty()) {
     return;
   }
-  ++counters.events_received;
   const std::string from = get(e.from);
   auto pit = peers.find(from);
+  if (to.empty() && from != stepped_owner) {
+    return;  // another owner's steps
+  }
+  ++counters.events_received;
   if (pit == peers.end() || pit->second.boot != e.from_boot || pit->second.gone) {
     ++counters.dropped;
     return;
   }
   Peer& p = pit->second;
-  if (e.kind == canemu_net_EV_WELCOME) {
-    if (!p.welcomed && p.refused.empty()) {
-      owner_up(p);
+  SimScheduler& s = sim.scheduler();
+  switch (e.kind) {
+    case canemu_net_EV_WELCOME:
+      if (!p.welcomed && p.refused.empty()) {
+        owner_up(p);
+      }
+      return;
+    case canemu_net_EV_STEP_BEGIN: {
+      // This daemon's world runs to the owner's instant (it joins at the owner's time), its
+      // transmitters look at their rings, and what they send reaches the owner before "ready".
+      s.run_until(SimTime::from_ns(std::max(e.at_ns, s.now().ns())));
+      if (self->before_step) {
+        self->before_step();
+      }
+      canemu_net_Request r{};
+      r.kind = canemu_net_REQ_READY;
+      r.step = e.step;
+      send_request(from, r);
+      return;
     }
-    return;
+    case canemu_net_EV_STEP_DONE: {
+      const std::size_t events = s.run_until(SimTime::from_ns(std::max(e.at_ns, s.now().ns())));
+      if (self->after_step) {
+        self->after_step();
+      }
+      if (get(e.asker) == cfg.name && self->step_done) {
+        self->step_done(e.token, events, s.now().ns());
+      }
+      return;
+    }
+    default:
+      break;
   }
   for (RemoteNode* n : nodes) {
     if (n->owner() == from && n->number() == e.node) {
-      n->deliver(e, local_time(p, e.at_ns));
+      deliver(*n, e, p);
       return;
     }
   }
   ++counters.dropped;
+}
+
+void Distributed::Impl::deliver(RemoteNode& n, const canemu_net_Event& e, const Peer& owner) {
+  if (!stepped()) {
+    n.deliver(e, local_time(owner, e.at_ns));
+    return;
+  }
+  // Stepped: this daemon's time is the owner's; an event of the step runs here at its instant
+  // when the step's end is reached (EV_STEP_DONE), so everything on this daemon sees it in order.
+  SimScheduler& s = sim.scheduler();
+  const SimTime at = SimTime::from_ns(e.at_ns);
+  if (at <= s.now()) {
+    counters.late += at < s.now() ? 1 : 0;
+    n.deliver(e, s.now());
+    return;
+  }
+  s.schedule_at(at, [this, e, number = n.number()](SimTime now) {
+    for (RemoteNode* m : nodes) {
+      if (m->number() == number) {
+        m->deliver(e, now);
+        return;
+      }
+    }
+  });
+}
+
+void Distributed::Impl::enqueue_step(Step st) {
+  steps.push_back(std::move(st));
+  if (!barrier) {
+    start_next_step();
+  }
+}
+
+void Distributed::Impl::start_next_step() {
+  if (steps.empty() || barrier) {
+    return;
+  }
+  ++step_no;
+  waiting.clear();
+  for (const auto& [name, p] : peers) {
+    if (p.follower && !p.gone) {
+      waiting.insert(name);
+    }
+  }
+  if (waiting.empty()) {
+    run_step();
+    return;
+  }
+  barrier = true;
+  barrier_deadline_ms = monotonic_ms() + cfg.timeout_ms;
+  canemu_net_Event e{};
+  e.kind = canemu_net_EV_STEP_BEGIN;
+  e.at_ns = sim.scheduler().now().ns();
+  e.step = step_no;
+  e.step_ns = steps.front().ns;
+  send_event("", e);
+}
+
+void Distributed::Impl::run_step() {
+  barrier = false;
+  waiting.clear();
+  if (steps.empty()) {
+    return;
+  }
+  const Step st = steps.front();
+  steps.pop_front();
+  if (self->before_step) {
+    self->before_step();
+  }
+  SimScheduler& s = sim.scheduler();
+  const std::size_t events = s.run_until(s.now() + SimDuration(st.ns));
+  if (self->after_step) {
+    self->after_step();
+  }
+  canemu_net_Event e{};
+  e.kind = canemu_net_EV_STEP_DONE;
+  e.at_ns = s.now().ns();
+  e.step = step_no;
+  e.step_ns = st.ns;
+  e.token = st.token;
+  put(e.asker, st.asker);
+  send_event("", e);  // every follower runs to the step's end; the asker answers its client
+  if (st.asker == cfg.name && self->step_done) {
+    self->step_done(st.token, events, s.now().ns());
+  }
+  start_next_step();
 }
 
 void Distributed::Impl::receive() {
@@ -1118,7 +1306,10 @@ tl::expected<std::unique_ptr<Distributed>, std::string> Distributed::open(Simula
   if (auto problem = impl->open()) {
     return tl::unexpected(*problem);
   }
-  return std::unique_ptr<Distributed>(new Distributed(std::move(impl)));
+  Impl* raw = impl.get();
+  std::unique_ptr<Distributed> d(new Distributed(std::move(impl)));
+  raw->self = d.get();
+  return d;
 }
 
 const std::string& Distributed::name() const {
@@ -1152,11 +1343,31 @@ Doorbell& Distributed::heartbeat() {
 }
 
 bool Distributed::follows_owner() const {
-  return false;
+  return impl_->stepped() && !impl_->stepped_owner.empty();
 }
 
 bool Distributed::leads_steps() const {
-  return false;
+  return impl_->leads();
+}
+
+std::optional<std::string> Distributed::step(int64_t step_ns, uint64_t token) {
+  Impl& d = *impl_;
+  if (follows_owner()) {
+    if (!d.attached(d.stepped_owner)) {
+      return fmt::format("steps are daemon {}'s, which is not attached ({})", d.stepped_owner,
+                         remote_buses().empty() ? "" : remote_buses().front().reason);
+    }
+    canemu_net_Request r{};
+    r.kind = canemu_net_REQ_STEP;
+    r.step_ns = step_ns;
+    r.step = token;
+    if (!d.send_request(d.stepped_owner, r)) {
+      return fmt::format("DDS did not take the step request for daemon {}", d.stepped_owner);
+    }
+    return std::nullopt;
+  }
+  d.enqueue_step(Impl::Step{step_ns, d.cfg.name, token});
+  return std::nullopt;
 }
 
 std::vector<PeerStatus> Distributed::peers() const {
@@ -1253,6 +1464,9 @@ bool Distributed::follows_owner() const {
 }
 bool Distributed::leads_steps() const {
   return false;
+}
+std::optional<std::string> Distributed::step(int64_t, uint64_t) {
+  return std::string("no DDS in this build");
 }
 std::vector<PeerStatus> Distributed::peers() const {
   return {};

@@ -182,6 +182,26 @@ ipc::IpcResult<void> Server::open() {
   if (Distributed* d = sim_.distributed()) {  // other daemons' messages, the heartbeat
     dispatcher_.channel_opened(*d);
     dispatcher_.channel_opened(d->heartbeat());
+    d->before_step = [this] { kick_all_channels(); };
+    d->after_step = [this] {
+      send_outboxes();
+      flush_recorders();
+    };
+    d->step_done = [this](uint64_t token, uint64_t events_run, int64_t sim_ns) {
+      step_done(token, events_run, sim_ns);
+    };
+    dispatcher_.defer_step = [this, d](int64_t step_ns, uint32_t request_id) {
+      if (!d->follows_owner() && !d->leads_steps()) {
+        return false;  // no other daemon takes part: the step runs at once
+      }
+      const uint64_t token = ++step_tokens_;
+      pending_steps_[token] = PendingStep{current_->fd.get(), current_->serial, request_id};
+      if (auto problem = d->step(step_ns, token)) {
+        pending_steps_.erase(token);
+        reply_error(*current_, request_id, ipc::ErrorCode::not_stepped, *problem);
+      }
+      return true;
+    };
   }
   // Under systemd with WatchdogSec=: a ping every half period, from the loop itself, so a
   // stalled loop gets the daemon restarted.
@@ -531,6 +551,7 @@ void Server::accept_clients() {
     if (!add(epoll_.get(), fd)) {
       continue;
     }
+    c.serial = ++client_serials_;
     clients_.emplace(fd, std::move(c));
   }
 }
@@ -634,7 +655,27 @@ void Server::reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code,
   (void)ipc::send_message(c.fd.get(), e);
 }
 
+void Server::step_done(uint64_t token, uint64_t events_run, int64_t sim_ns) {
+  auto it = pending_steps_.find(token);
+  if (it == pending_steps_.end()) {
+    return;
+  }
+  const PendingStep p = it->second;
+  pending_steps_.erase(it);
+  auto c = clients_.find(p.fd);
+  if (c == clients_.end() || c->second.serial != p.serial || c->second.closing) {
+    return;  // the client left before its step ended
+  }
+  auto r = ipc::make_message<ipc::TimeStepReply>(p.request_id);
+  r.events_run = events_run;
+  r.sim_time_ns = sim_ns;
+  if (!ipc::send_message(p.fd, r)) {
+    c->second.closing = true;
+  }
+}
+
 void Server::handle(Client& c, const std::vector<uint8_t>& packet) {
+  current_ = &c;
   dispatcher_.handle(c.session, packet.data(), packet.size(),
                      [&c](const void* data, std::size_t size, std::span<const int> fds) {
                        // A client that does not read its replies is dropped, not waited for.

@@ -84,6 +84,9 @@ class ControlDispatcher {
   // Called after a time step ran, before its reply: the server sends what the step made for
   // its clients (X-CAN callbacks and the ends of blocking services).
   std::function<void()> after_step;
+  // Stepped time with buses across hosts: takes the step request over (true), answering it
+  // later (the step runs when every daemon in it is ready).
+  std::function<bool(int64_t step_ns, uint32_t request_id)> defer_step;
   // A channel (ephemeral or VCI) was opened or is about to close (the server watches its
   // doorbell).
   std::function<void(Doorbell&)> channel_opened;

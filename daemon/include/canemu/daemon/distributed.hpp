@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -89,11 +90,19 @@ class Distributed : public Doorbell {
   Doorbell& heartbeat();
 
   // ---- stepped time (docs/distributed.md, "Time") ----
-  // True when steps of this daemon are the owner's: it uses a remote bus in stepped time.
+  // This daemon uses a remote bus in stepped time: its steps are the owner's.
   bool follows_owner() const;
   // This daemon owns buses that other daemons use in stepped time: its steps wait at the
-  // barrier.
+  // barrier until each of them has sent everything its clients queued.
   bool leads_steps() const;
+  // A client asks for a step of `step_ns` (follows_owner() or leads_steps()); step_done(token)
+  // answers it once the step has run here. The error says why not.
+  std::optional<std::string> step(int64_t step_ns, uint64_t token);
+  // The server's parts of a step: before it (idle transmitters look at their rings), after it
+  // (outboxes, recorders), and the answer to step(token).
+  std::function<void()> before_step;
+  std::function<void()> after_step;
+  std::function<void(uint64_t token, uint64_t events_run, int64_t sim_ns)> step_done;
 
   // ---- status ----
   std::vector<PeerStatus> peers() const;

@@ -52,7 +52,19 @@ class Server {
     // dropped (closing at once could discard the answer with the request still unread).
     std::string refused;
     ipc::ErrorCode refused_code = ipc::ErrorCode::permission_denied;
+    uint64_t serial = 0;  // tells a later client on the same descriptor apart
   };
+  // A step request answered when the step has run across hosts (Distributed::step).
+  struct PendingStep {
+    int fd = -1;
+    uint64_t serial = 0;
+    uint32_t request_id = 0;
+  };
+  std::map<uint64_t, PendingStep> pending_steps_;
+  uint64_t step_tokens_ = 0;
+  uint64_t client_serials_ = 0;
+  Client* current_ = nullptr;  // the client whose request is being handled
+  void step_done(uint64_t token, uint64_t events_run, int64_t sim_ns);
   static constexpr std::size_t kMaxClients = 256;
   // Refused peers kept until their first request (to answer it with the reason): at most this
   // many at once, so that refused peers never take the slots of allowed ones; beyond it a refused

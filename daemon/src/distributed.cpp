@@ -532,10 +532,7 @@ class RemoteNode final : public HostedNode {
   }
   void go_on_bus(const HostedNodeSettings&) override {
     online_ = true;
-    request(canemu_net_REQ_ONLINE);
-    if (!usable()) {
-      owner_lost();  // not (yet) there: the node waits off the bus
-    }
+    request(canemu_net_REQ_ONLINE);  // without the owner (yet): frames wait for replay()
   }
   void go_off_bus() override {
     online_ = false;

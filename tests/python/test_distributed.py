@@ -1,0 +1,251 @@
+"""A bus across daemons (docs/distributed.md) on one machine: daemon "a" simulates can0, daemon
+"b" declares can0 with owner "a"; both talk over the loopback interface by unicast in a DDS
+domain of this run's own (CYCLONEDDS_URI), so no root is needed. python-can programs on both
+daemons exchange frames; arbitration, time stamps and error counters are the owner's, exact in
+stepped time. tests/python/test_netns_distributed.py runs daemons in network namespaces."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import time
+
+import can
+import pytest
+
+from conftest import BUILD, CANEMU_CLI
+
+from canemu.testing import Daemon  # noqa: E402
+
+TIMEOUT = 20.0
+DOMAIN = 1 + (os.getpid() + 97) % 200
+URI = ("<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/>"
+       "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
+       "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
+       "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
+       "</Domain></CycloneDDS>")
+
+
+def config(name: str, time_mode: str, owner: str | None = None) -> str:
+    owner_line = f'owner = "{owner}"' if owner else ""
+    return f"""
+[simulation]
+time = "{time_mode}"
+
+[distributed]
+name = "{name}"
+domain = {DOMAIN}
+partition = "canemu-test-{os.getpid()}"
+heartbeat_ms = 50
+timeout_ms = 1000
+
+[[bus]]
+name = "can0"
+bitrate = 500000
+{owner_line}
+"""
+
+
+def frame_ns(frame: str) -> tuple[int, int]:
+    """The frame's duration from SOF to the end of EOF, and with its intermission."""
+    text = subprocess.run([str(CANEMU_CLI), "calc", "frame", frame, "--bitrate", "500000"],
+                          capture_output=True, text=True, check=True).stdout
+    return (int(re.search(r": (\d+) ns \(", text).group(1)),
+            int(re.search(r"(\d+) ns with intermission", text).group(1)))
+
+
+def wait_until(done, what: str) -> None:
+    deadline = time.monotonic() + TIMEOUT
+    while not done():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what}: not within {TIMEOUT} s")
+        time.sleep(0.01)  # polling a condition with a deadline, not waiting for time to pass
+
+
+def cli(daemon: Daemon, *args: str) -> str:
+    done = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, *args],
+                          capture_output=True, text=True, timeout=TIMEOUT)
+    if done.returncode != 0:
+        raise AssertionError(f"canemu {' '.join(args)}: {done.stderr}")
+    return done.stdout
+
+
+def nodes(daemon: Daemon) -> dict:
+    return {n["name"]: n for n in json.loads(cli(daemon, "status", "--json"))["nodes"]}
+
+
+def step(daemon: Daemon, ns: int) -> int:
+    """A step asked of `daemon` (by `canemu time step`: this process keeps its connection to
+    the daemon its python-can bus is on); the simulated time after it."""
+    text = cli(daemon, "time", "step", f"{ns}ns")
+    whole, frac = re.search(r"simulated time (\d+)\.(\d{9}) s", text).groups()
+    return int(whole) * 1_000_000_000 + int(frac)
+
+
+def frames(bus) -> list:
+    out = []
+    while (m := bus.recv(0)) is not None:
+        if not m.is_error_frame:
+            out.append((m.arbitration_id, bytes(m.data).hex(), round(m.timestamp * 1e9)))
+    return out
+
+
+def errors(bus) -> list:
+    out = []
+    while (m := bus.recv(0)) is not None:
+        if m.is_error_frame:
+            out.append((m.arbitration_id, bytes(m.data).hex()))
+    return out
+
+
+def attached_step(follower: Daemon) -> int:
+    """Steps `follower` by 1 us as soon as its bus's owner answers (until then its steps are
+    refused); returns the time after it."""
+    got: list = []
+
+    def try_step() -> bool:
+        try:
+            got.append(step(follower, 1000))
+            return True
+        except AssertionError:
+            return False
+
+    wait_until(try_step, "the follower's steps reach the owner")
+    return got[0]
+
+
+class Peer:
+    """tests/python/distributed_peer.py on `daemon`: a python-can program in a process of its
+    own (a process talks to one canemud)."""
+
+    def __init__(self, daemon: Daemon) -> None:
+        import sys
+        from pathlib import Path
+        self.proc = subprocess.Popen(
+            [sys.executable, str(Path(__file__).with_name("distributed_peer.py")), daemon.socket],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        assert self.proc.stdout.readline().strip() == "ready"
+
+    def ask(self, line: str) -> str:
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
+        return self.proc.stdout.readline().strip()
+
+    def send(self, ident: int, data: str) -> None:
+        assert self.ask(f"send {ident:x} {data}") == "sent"
+
+    def frames(self) -> list:
+        return [tuple(f) for f in json.loads(self.ask("recv"))]
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.ask("quit")
+        self.proc.wait(timeout=TIMEOUT)
+
+
+@pytest.fixture()
+def env():
+    os.environ["CYCLONEDDS_URI"] = URI  # the daemons inherit it
+    yield
+    del os.environ["CYCLONEDDS_URI"]
+
+
+def test_stepped_arbitration_and_time_stamps_across_daemons(env):
+    with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a, \
+            Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud")) as b:
+        t0 = attached_step(b)
+        assert step(a, 1000) == t0 + 1000  # one clock, the owner's: a step of a is one of b
+        t0 += 1000  # (VCI time stamps tick in microseconds)
+        ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
+        ecu_a = Peer(a)
+        try:
+            # 1. Both queue a frame before the step, asked for on b: the owner's arbitration
+            # sends a's 0x100 first, then b's 0x300, exact to the nanosecond on both daemons.
+            ecu_b.send(can.Message(arbitration_id=0x300, is_extended_id=False, data=[3]))
+            ecu_a.send(0x100, "01")
+            assert step(b, 1_000_000) == t0 + 1_000_000
+            first, first_gap = frame_ns("100#01")
+            second, _ = frame_ns("300#03")
+            assert ecu_a.frames() == [(0x300, "03", t0 + first_gap + second)]
+            assert frames(ecu_b) == [(0x100, "01", t0 + first)]
+            # 2. A step asked for on the owner waits for b's frame queued before it.
+            t1 = t0 + 1_000_000
+            ecu_b.send(can.Message(arbitration_id=0x050, is_extended_id=False, data=[5, 5]))
+            assert step(a, 1_000_000) == t1 + 1_000_000
+            third, _ = frame_ns("050#0505")
+            assert ecu_a.frames() == [(0x050, "0505", t1 + third)]
+            assert frames(ecu_b) == []
+            # 3. The owner lists b's node as "b/DEVICE" with its statistics.
+            remote = {k: v for k, v in nodes(a).items() if k.startswith("b/")}
+            assert len(remote) == 1
+            (name, entry), = remote.items()
+            assert (entry["frames_sent"], entry["frames_received"]) == (2, 1)
+            # 4. A fault on the owner naming b's node: its counters as the owner set them, seen
+            # by the program on b (an error frame with the state and counters) and in b's status.
+            device = name.split("/", 1)[1].removesuffix(":0")
+            cli(a, "fault", "inject", "--effect", "error_counters", "--node", name.removesuffix(":0"),
+                "--tec", "200", "--rec", "0")
+            step(b, 1_000_000)
+            errs = errors(ecu_b)
+            assert errs, "b's program saw no state change"
+            data = bytes.fromhex(errs[-1][1])
+            assert data[1] & 0x20 and (data[6], data[7]) == (200, 0)  # TX passive, TEC 200
+            local = nodes(b)
+            mine = [v for k, v in local.items() if k.startswith(device)]
+            assert [(n["tec"], n["rec"], n["state"]) for n in mine] == [(200, 0, "error-passive")]
+        finally:
+            ecu_a.close()
+            ecu_b.shutdown()
+
+
+def test_a_follower_that_dies_leaves_the_bus_and_steps_go_on(env):
+    with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a:
+        b = Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud"))
+        try:
+            attached_step(b)
+            ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
+            ecu_b.send(can.Message(arbitration_id=0x123, is_extended_id=False, data=[1]))
+            step(b, 1_000_000)
+            assert any(k.startswith("b/") for k in nodes(a))
+            b.proc.kill()  # mid-stream, without a word to the owner
+            b.proc.wait()
+        finally:
+            b.stop()
+        # The owner's next step waits at the barrier for b at most timeout_ms (1 s), then lets
+        # it go: its node leaves can0, and the step ends.
+        started = time.monotonic()
+        step(a, 1_000_000)
+        assert time.monotonic() - started < TIMEOUT
+        assert not any(k.startswith("b/") for k in nodes(a))
+        a.wait_log("daemon b is gone")
+
+
+def test_realtime_frames_both_ways_and_the_owner_stopping(env):
+    a = Daemon(config("a", "realtime"), canemud=str(BUILD / "bin" / "canemud"))
+    b = Daemon(config("b", "realtime", owner="a"), canemud=str(BUILD / "bin" / "canemud"))
+    try:
+        wait_until(lambda: "daemon a answers" in b.log, "b attaches to a's can0")
+        ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
+        ecu_a = Peer(a)
+        ecu_b.send(can.Message(arbitration_id=0x222, is_extended_id=False, data=[2]))
+        got = []
+        wait_until(lambda: got.extend(ecu_a.frames()) or got, "b's frame reaches a")
+        assert [(i, d) for i, d, _ in got] == [(0x222, "02")]
+        ecu_a.send(0x111, "01")
+        back = []
+        wait_until(lambda: back.extend(frames(ecu_b)) or back, "a's frame reaches b")
+        assert [(i, d) for i, d, _ in back] == [(0x111, "01")]
+        ecu_a.close()
+        # The owner stops (it says so as it goes): b's node is off the bus, and its program
+        # hears bus-off.
+        a.stop()
+        errs = []
+        wait_until(lambda: errs.extend(errors(ecu_b)) or any(e & 0x40 for e, _ in errs),
+                   "bus-off on b")
+        b.wait_log("daemon a is gone")
+        ecu_b.shutdown()
+    finally:
+        b.stop()
+        a.stop()

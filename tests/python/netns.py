@@ -119,14 +119,18 @@ def _inside(namespace: str) -> Iterator[None]:
         os.close(own)
 
 
-def _kill_inside(namespace: str) -> None:
-    """SIGKILL to every process still in the namespace (all of them started by a Hosts)."""
-    pids = _ip("netns", "pids", namespace, check=False).stdout.split()
-    for pid in pids:
-        try:
-            os.kill(int(pid), signal.SIGKILL)
-        except (ProcessLookupError, ValueError):
-            pass
+def _kill_inside(namespace: str, timeout: float = 5.0) -> None:
+    """SIGKILL to every process in the namespace (all of them started by a Hosts), again until
+    none is left in it (a process that ended is no longer in it, even before it is reaped)."""
+    deadline = time.monotonic() + timeout
+    while pids := _ip("netns", "pids", namespace, check=False).stdout.split():
+        for pid in pids:
+            try:
+                os.kill(int(pid), signal.SIGKILL)
+            except (ProcessLookupError, ValueError):
+                pass
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"processes {pids} in {namespace} do not end on SIGKILL")
 
 
 def _remove_stale() -> None:

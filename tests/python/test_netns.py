@@ -50,8 +50,9 @@ def test_hosts_linked_configured_and_removed():
             '<CycloneDDS><Domain Id="any"><General><Interfaces><NetworkInterface name="eth0"/>'
             "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
             "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20"
-            '</MaxAutoParticipantIndex><Peers><Peer address="10.77.0.1"/><Peer address="10.77.0.2"/>'
-            '<Peer address="10.77.0.3"/></Peers></Discovery></Domain></CycloneDDS>')
+            '</MaxAutoParticipantIndex><Peers><Peer address="10.77.0.1"/>'
+            '<Peer address="10.77.0.2"/><Peer address="10.77.0.3"/></Peers></Discovery>'
+            "</Domain></CycloneDDS>")
         assert h.cyclone_uri("c", multicast=True) == (
             '<CycloneDDS><Domain Id="any"><General><Interfaces><NetworkInterface name="eth0"/>'
             "</Interfaces><AllowMulticast>true</AllowMulticast></General></Domain></CycloneDDS>")

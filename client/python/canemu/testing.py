@@ -19,7 +19,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
-from typing import Dict, Optional, Sequence
+from typing import Dict, Mapping, Optional, Sequence
 
 from .bus import connect
 
@@ -46,6 +46,10 @@ class Daemon:
     :param canemud: the program; default find_canemud().
     :param timeout: seconds to wait for it to listen.
     :param args: more command-line arguments (for example ``["--time", "stepped"]``).
+    :param wrap: a command that runs canemud, put before it (for example
+        ``["ip", "netns", "exec", "host-a"]``: canemud in that network namespace); it must end
+        in canemud's own process (exec), as SIGTERM goes to the process started.
+    :param env: more environment variables for canemud (on top of this process's own).
 
     The process talks to this daemon from now on (canemu.connect).
     """
@@ -57,20 +61,24 @@ class Daemon:
         canemud: Optional[str] = None,
         timeout: float = 10.0,
         args: Sequence[str] = (),
+        wrap: Sequence[str] = (),
+        env: Optional[Mapping[str, str]] = None,
     ) -> None:
         self.dir = tempfile.mkdtemp(prefix="canemu-")
         self.socket = os.path.join(self.dir, "canemud.sock")
         self.config = os.path.join(self.dir, "canemu.toml") if config is not None else None
         for name, text in (files or {}).items():
             Path(self.dir, name).write_text(text)
-        command = [canemud or find_canemud(), "--socket", self.socket, *args]
+        command = [*wrap, canemud or find_canemud(), "--socket", self.socket, *args]
         if self.config is not None:
             Path(self.config).write_text(config)
             command += ["--config", self.config]
         self._log = bytearray()
         self._log_changed = threading.Condition()
         self._eof = False
-        self.proc = subprocess.Popen(command, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL)
+        environment = {**os.environ, **env} if env else None
+        self.proc = subprocess.Popen(command, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                                     env=environment)
         self._reader = threading.Thread(target=self._read_log, name="canemud-log", daemon=True)
         self._reader.start()
         try:

@@ -107,18 +107,24 @@ toml::table distributed_json(const client::PeerList& d) {
                      {"remote_buses", std::move(remote)}};
 }
 
+// One table row, without the blanks a last empty column leaves.
+void print_row(std::string row) {
+  row.erase(row.find_last_not_of(' ') + 1);
+  std::puts(row.c_str());
+}
+
 // With [distributed]: a line of this daemon's place and counters, a DAEMON table of the other
 // daemons, and a REMOTE BUS table of its buses they simulate (when it has any).
 void print_distributed(const client::PeerList& d) {
   const ipc::WireDistributedCounters& c = d.counters;
-  const auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
-  std::printf(
-      "daemon %s, DDS domain %u, partition %s: requests sent %llu, received %llu; events sent "
-      "%llu, received %llu; dropped %llu, late %llu\n",
-      d.name.c_str(), d.domain, d.partition.c_str(), u(c.requests_sent), u(c.requests_received),
-      u(c.events_sent), u(c.events_received), u(c.dropped), u(c.late));
-  std::printf("%-14s %-8s %-12s %-12s %10s %6s %-24s %s\n", "DAEMON", "STATE", "VERSION", "TIME",
-              "HEARD", "HOSTED", "BUSES", "REASON");
+  std::puts(fmt::format("daemon {}, DDS domain {}, partition {}: requests sent {}, received {}; "
+                        "events sent {}, received {}; dropped {}, late {}",
+                        d.name, d.domain, d.partition, c.requests_sent, c.requests_received,
+                        c.events_sent, c.events_received, c.dropped, c.late)
+                .c_str());
+  const char* peer_row = "{:<14} {:<8} {:<12} {:<12} {:>10} {:>6} {:<24} {}";
+  print_row(fmt::format(fmt::runtime(peer_row), "DAEMON", "STATE", "VERSION", "TIME", "HEARD",
+                        "HOSTED", "BUSES", "REASON"));
   for (const ipc::PeerEntry& p : d.peers) {
     std::string buses;
     for (const std::string& b : peer_buses(p)) {
@@ -127,21 +133,21 @@ void print_distributed(const client::PeerList& d) {
     if (const std::size_t more = more_buses(p); more > 0) {
       buses += fmt::format(",+{}", more);
     }
-    const std::string heard = fmt::format("{:.1f} s", static_cast<double>(p.last_heard_ms) / 1e3);
-    std::printf("%-14s %-8s %-12s %-12s %10s %6u %-24s %s\n",
-                ipc::printable_name_of(p.name).c_str(), ipc::printable_name_of(p.state).c_str(),
-                ipc::printable_name_of(p.version).c_str(), ipc::printable_name_of(p.time).c_str(),
-                heard.c_str(), p.hosted_nodes, buses.empty() ? "-" : buses.c_str(),
-                ipc::printable_name_of(p.reason).c_str());
+    print_row(fmt::format(
+        fmt::runtime(peer_row), ipc::printable_name_of(p.name), ipc::printable_name_of(p.state),
+        ipc::printable_name_of(p.version), ipc::printable_name_of(p.time),
+        fmt::format("{:.1f} s", static_cast<double>(p.last_heard_ms) / 1e3), p.hosted_nodes,
+        buses.empty() ? "-" : buses, ipc::printable_name_of(p.reason)));
   }
   if (d.remote_buses.empty()) {
     return;
   }
-  std::printf("%-12s %-14s %-8s %6s %s\n", "REMOTE BUS", "OWNER", "STATE", "NODES", "REASON");
+  const char* bus_row = "{:<12} {:<14} {:<8} {:>6} {}";
+  print_row(fmt::format(fmt::runtime(bus_row), "REMOTE BUS", "OWNER", "STATE", "NODES", "REASON"));
   for (const ipc::RemoteBusEntry& b : d.remote_buses) {
-    std::printf("%-12s %-14s %-8s %6u %s\n", ipc::printable_name_of(b.bus).c_str(),
-                ipc::printable_name_of(b.owner).c_str(), ipc::printable_name_of(b.state).c_str(),
-                b.nodes, ipc::printable_name_of(b.reason).c_str());
+    print_row(fmt::format(fmt::runtime(bus_row), ipc::printable_name_of(b.bus),
+                          ipc::printable_name_of(b.owner), ipc::printable_name_of(b.state), b.nodes,
+                          ipc::printable_name_of(b.reason)));
   }
 }
 

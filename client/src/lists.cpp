@@ -137,4 +137,38 @@ Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c) {
                                                                   &ipc::BridgeListReply::bridges);
 }
 
+Result<PeerList> fetch_peer_list(Connection& c) {
+  PeerList list;
+  std::size_t peer_total = 0;
+  std::size_t bus_total = 0;
+  for (bool first_page = true;; first_page = false) {
+    auto m = ipc::make_message<ipc::PeerListRequest>();
+    m.first_peer = static_cast<uint16_t>(std::min(list.peers.size(), peer_total));
+    m.first_bus = static_cast<uint16_t>(std::min(list.remote_buses.size(), bus_total));
+    auto r = c.call<ipc::PeerListRequest, ipc::PeerListReply>(m);
+    if (!r) {
+      return tl::unexpected(r.error());
+    }
+    if (first_page) {
+      list.enabled = r->enabled != 0;
+      list.name = ipc::printable_name_of(r->name);
+      list.domain = r->domain;
+      list.partition = ipc::printable_name_of(r->partition);
+      list.heartbeat_ms = r->heartbeat_ms;
+      list.timeout_ms = r->timeout_ms;
+      list.counters = r->counters;
+    }
+    peer_total = r->peer_total;
+    bus_total = r->bus_total;
+    const uint16_t peers = std::min<uint16_t>(r->peer_count, ipc::kPeerPage);
+    const uint16_t buses = std::min<uint16_t>(r->bus_count, ipc::kRemoteBusPage);
+    list.peers.insert(list.peers.end(), r->peers, r->peers + peers);
+    list.remote_buses.insert(list.remote_buses.end(), r->buses, r->buses + buses);
+    const bool done = list.peers.size() >= peer_total && list.remote_buses.size() >= bus_total;
+    if (done || (peers == 0 && buses == 0)) {  // nothing more: never ask forever
+      return list;
+    }
+  }
+}
+
 }  // namespace canemu::client

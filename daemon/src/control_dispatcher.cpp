@@ -461,6 +461,14 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       send_reply(send, *r);
       return;
     }
+    case ipc::MsgType::peer_list_request: {
+      const auto m = read_as<ipc::PeerListRequest>(data);
+      auto r =
+          std::make_unique<ipc::PeerListReply>(ipc::make_message<ipc::PeerListReply>(request_id));
+      fill_peer_list(sim_, *r, m.first_peer, m.first_bus);
+      send_reply(send, *r);
+      return;
+    }
     case ipc::MsgType::client_list_request: {
       const auto m = read_as<ipc::ClientListRequest>(data);
       auto r = std::make_unique<ipc::ClientListReply>(

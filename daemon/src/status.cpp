@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 #include <algorithm>
+#include <cstdint>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "canemu/daemon/simulation.hpp"
 
@@ -286,6 +289,82 @@ void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r, std::size_
     e.received = st.received;
     ipc::copy_name(e.url, b.options().url);
     ipc::copy_name(e.channel_prefix, b.options().channel_prefix);
+  }
+}
+
+namespace {
+
+// Copies text another daemon sent: every byte outside printable ASCII becomes '?', so that no
+// peer can break a table, a log line or a terminal.
+template <std::size_t N>
+void copy_printable(char (&dst)[N], std::string_view src) {
+  ipc::copy_name(dst, src);
+  for (char& c : dst) {
+    if (c != '\0' && (c < 0x20 || c > 0x7E)) {
+      c = '?';
+    }
+  }
+}
+
+}  // namespace
+
+void fill_peer_list(const Simulation& sim, ipc::PeerListReply& r, std::size_t first_peer,
+                    std::size_t first_bus) {
+  r.first_peer = static_cast<uint16_t>(first_peer);
+  r.first_bus = static_cast<uint16_t>(first_bus);
+  const Distributed* d = sim.distributed();
+  if (d == nullptr) {
+    return;
+  }
+  const DistributedConfig& cfg = sim.config().distributed;
+  r.enabled = 1;
+  ipc::copy_name(r.name, d->name());
+  r.domain = cfg.domain;
+  ipc::copy_name(r.partition, cfg.partition);
+  r.heartbeat_ms = cfg.heartbeat_ms;
+  r.timeout_ms = cfg.timeout_ms;
+  const DistributedCounters& c = d->counters();
+  r.counters.requests_sent = c.requests_sent;
+  r.counters.requests_received = c.requests_received;
+  r.counters.events_sent = c.events_sent;
+  r.counters.events_received = c.events_received;
+  r.counters.dropped = c.dropped;
+  r.counters.late = c.late;
+
+  const std::vector<PeerStatus> peers = d->peers();
+  r.peer_total = static_cast<uint16_t>(std::min<std::size_t>(peers.size(), UINT16_MAX));
+  const std::size_t peer_from = std::min<std::size_t>(first_peer, r.peer_total);
+  r.peer_count = static_cast<uint16_t>(std::min(r.peer_total - peer_from, ipc::kPeerPage));
+  for (std::size_t i = 0; i < r.peer_count; ++i) {
+    const PeerStatus& p = peers[peer_from + i];
+    ipc::PeerEntry& e = r.peers[i];
+    copy_printable(e.name, p.name);
+    copy_printable(e.version, p.version);
+    copy_printable(e.time, p.time);
+    copy_printable(e.state, p.state);
+    copy_printable(e.reason, p.reason);
+    e.protocol = p.protocol;
+    e.bus_total = static_cast<uint32_t>(p.buses.size());
+    e.bus_count = static_cast<uint8_t>(std::min(p.buses.size(), ipc::kPeerBuses));
+    for (std::size_t b = 0; b < e.bus_count; ++b) {
+      copy_printable(e.buses[b], p.buses[b]);
+    }
+    e.last_heard_ms = p.last_heard_ms;
+    e.hosted_nodes = p.hosted_nodes;
+  }
+
+  const std::vector<RemoteBusStatus> buses = d->remote_buses();
+  r.bus_total = static_cast<uint16_t>(std::min<std::size_t>(buses.size(), UINT16_MAX));
+  const std::size_t bus_from = std::min<std::size_t>(first_bus, r.bus_total);
+  r.bus_count = static_cast<uint16_t>(std::min(r.bus_total - bus_from, ipc::kRemoteBusPage));
+  for (std::size_t i = 0; i < r.bus_count; ++i) {
+    const RemoteBusStatus& b = buses[bus_from + i];
+    ipc::RemoteBusEntry& e = r.buses[i];
+    ipc::copy_name(e.bus, b.bus);
+    ipc::copy_name(e.owner, b.owner);
+    ipc::copy_name(e.state, b.state);
+    copy_printable(e.reason, b.reason);
+    e.nodes = b.nodes;
   }
 }
 

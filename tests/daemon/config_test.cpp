@@ -134,7 +134,7 @@ TEST(Config, UnknownKeysAreErrorsWithFileLineColumnAndKey) {
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0],
             "t.toml:3:1: bus[0].speed: unknown key (known here: name, kind, bitrate, "
-            "sample_point, data_bitrate, transceiver)");
+            "sample_point, data_bitrate, transceiver, owner)");
   const auto top = errors_of("[buses]\n");
   ASSERT_EQ(top.size(), 1u);
   EXPECT_NE(top[0].find("t.toml:1:2: buses: unknown key"), std::string::npos) << top[0];

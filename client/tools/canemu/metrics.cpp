@@ -100,9 +100,47 @@ void expose_captures(Exposition& e, const std::vector<ipc::RecorderEntry>& recor
   }
 }
 
+// [distributed]: messages to and from other daemons, what was lost or late, whether each other
+// daemon is up and each remote bus attached. Nothing without [distributed].
+void expose_distributed(Exposition& e, const client::PeerList& d) {
+  if (!d.enabled) {
+    return;
+  }
+  const ipc::WireDistributedCounters& c = d.counters;
+  e.family("canemu_distributed_requests_total", "counter",
+           "Requests sent to owners of this daemon's remote buses, and received from daemons "
+           "with nodes on its buses.");
+  e.sample("canemu_distributed_requests_total", "direction=\"sent\"", c.requests_sent);
+  e.sample("canemu_distributed_requests_total", "direction=\"received\"", c.requests_received);
+  e.family("canemu_distributed_events_total", "counter",
+           "Controller events sent to and received from other daemons.");
+  e.sample("canemu_distributed_events_total", "direction=\"sent\"", c.events_sent);
+  e.sample("canemu_distributed_events_total", "direction=\"received\"", c.events_received);
+  e.family("canemu_distributed_dropped_total", "counter",
+           "Messages between daemons lost on the way, not taken by DDS, or for no node.");
+  e.sample("canemu_distributed_dropped_total", "", c.dropped);
+  e.family("canemu_distributed_late_total", "counter",
+           "Events applied after their simulated instant had passed here.");
+  e.sample("canemu_distributed_late_total", "", c.late);
+  e.family("canemu_peer_up", "gauge",
+           "1 while another daemon is heard and accepted, 0 when it is gone or refused.");
+  for (const ipc::PeerEntry& p : d.peers) {
+    e.sample("canemu_peer_up", fmt::format("daemon=\"{}\"", label(ipc::printable_name_of(p.name))),
+             ipc::name_of(p.state) == "up" ? 1 : 0);
+  }
+  e.family("canemu_remote_bus_attached", "gauge",
+           "1 while this daemon's bus simulated by another daemon is attached to it.");
+  for (const ipc::RemoteBusEntry& b : d.remote_buses) {
+    e.sample("canemu_remote_bus_attached",
+             fmt::format("bus=\"{}\",owner=\"{}\"", label(ipc::printable_name_of(b.bus)),
+                         label(ipc::printable_name_of(b.owner))),
+             ipc::name_of(b.state) == "attached" ? 1 : 0);
+  }
+}
+
 std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
                    const std::vector<ipc::RecorderEntry>& recorders,
-                   const std::vector<ipc::BridgeEntry>& bridges) {
+                   const std::vector<ipc::BridgeEntry>& bridges, const client::PeerList& peers) {
   Exposition e;
   e.family("canemu_sim_time_seconds", "gauge", "Simulated time.");
   e.sample("canemu_sim_time_seconds", "",
@@ -202,6 +240,7 @@ std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
              f.hits);
   }
   expose_captures(e, recorders, bridges);
+  expose_distributed(e, peers);
   return e.text();
 }
 
@@ -222,7 +261,12 @@ int run_metrics(const std::string& socket) {
   if (!captures) {
     return fail(captures.error());
   }
-  std::fputs(expose(*status, *faults, captures->recorders, captures->bridges).c_str(), stdout);
+  auto peers = client::fetch_peer_list(*c);
+  if (!peers) {
+    return fail(peers.error().message);
+  }
+  std::fputs(expose(*status, *faults, captures->recorders, captures->bridges, *peers).c_str(),
+             stdout);
   return 0;
 }
 

@@ -1,5 +1,7 @@
 // canemu status: buses with load, nodes with state and counters, devices, clients, faults,
-// recorders and bridges, as tables or as one JSON object.
+// recorders, bridges and, with [distributed], the other daemons and the buses they simulate for
+// this one, as tables or as one JSON object.
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -47,11 +49,114 @@ std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
   return buses;
 }
 
-// toml++ writes the JSON (names escaped as JSON wants them), one line.
+// The bus names a peer listed, and how many more it simulates.
+std::vector<std::string> peer_buses(const ipc::PeerEntry& p) {
+  std::vector<std::string> buses;
+  for (uint8_t k = 0; k < p.bus_count && k < ipc::kPeerBuses; ++k) {
+    buses.push_back(ipc::printable_name_of(p.buses[k]));
+  }
+  return buses;
+}
+std::size_t more_buses(const ipc::PeerEntry& p) {
+  const std::size_t listed = std::min<std::size_t>(p.bus_count, ipc::kPeerBuses);
+  return p.bus_total > listed ? p.bus_total - listed : 0;
+}
+
+// "distributed" of the JSON: this daemon's place in the installation, its counters, the other
+// daemons and its buses they simulate.
+toml::table distributed_json(const client::PeerList& d) {
+  const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
+  toml::array peers;
+  for (const ipc::PeerEntry& p : d.peers) {
+    toml::array buses;
+    for (const std::string& b : peer_buses(p)) {
+      buses.push_back(b);
+    }
+    peers.push_back(toml::table{{"name", ipc::printable_name_of(p.name)},
+                                {"version", ipc::printable_name_of(p.version)},
+                                {"protocol", i64(p.protocol)},
+                                {"state", ipc::printable_name_of(p.state)},
+                                {"reason", ipc::printable_name_of(p.reason)},
+                                {"time", ipc::printable_name_of(p.time)},
+                                {"last_heard_ms", p.last_heard_ms},
+                                {"buses", std::move(buses)},
+                                {"bus_total", i64(p.bus_total)},
+                                {"hosted_nodes", i64(p.hosted_nodes)}});
+  }
+  toml::array remote;
+  for (const ipc::RemoteBusEntry& b : d.remote_buses) {
+    remote.push_back(toml::table{{"bus", ipc::printable_name_of(b.bus)},
+                                 {"owner", ipc::printable_name_of(b.owner)},
+                                 {"state", ipc::printable_name_of(b.state)},
+                                 {"reason", ipc::printable_name_of(b.reason)},
+                                 {"nodes", i64(b.nodes)}});
+  }
+  const ipc::WireDistributedCounters& c = d.counters;
+  return toml::table{{"name", d.name},
+                     {"domain", i64(d.domain)},
+                     {"partition", d.partition},
+                     {"heartbeat_ms", i64(d.heartbeat_ms)},
+                     {"timeout_ms", i64(d.timeout_ms)},
+                     {"counters", toml::table{{"requests_sent", i64(c.requests_sent)},
+                                              {"requests_received", i64(c.requests_received)},
+                                              {"events_sent", i64(c.events_sent)},
+                                              {"events_received", i64(c.events_received)},
+                                              {"dropped", i64(c.dropped)},
+                                              {"late", i64(c.late)}}},
+                     {"peers", std::move(peers)},
+                     {"remote_buses", std::move(remote)}};
+}
+
+// One table row, without the blanks a last empty column leaves.
+void print_row(std::string row) {
+  row.erase(row.find_last_not_of(' ') + 1);
+  std::puts(row.c_str());
+}
+
+// With [distributed]: a line of this daemon's place and counters, a DAEMON table of the other
+// daemons, and a REMOTE BUS table of its buses they simulate (when it has any).
+void print_distributed(const client::PeerList& d) {
+  const ipc::WireDistributedCounters& c = d.counters;
+  std::puts(fmt::format("daemon {}, DDS domain {}, partition {}: requests sent {}, received {}; "
+                        "events sent {}, received {}; dropped {}, late {}",
+                        d.name, d.domain, d.partition, c.requests_sent, c.requests_received,
+                        c.events_sent, c.events_received, c.dropped, c.late)
+                .c_str());
+  const char* peer_row = "{:<14} {:<8} {:<12} {:<12} {:>10} {:>6} {:<24} {}";
+  print_row(fmt::format(fmt::runtime(peer_row), "DAEMON", "STATE", "VERSION", "TIME", "HEARD",
+                        "HOSTED", "BUSES", "REASON"));
+  for (const ipc::PeerEntry& p : d.peers) {
+    std::string buses;
+    for (const std::string& b : peer_buses(p)) {
+      buses += (buses.empty() ? "" : ",") + b;
+    }
+    if (const std::size_t more = more_buses(p); more > 0) {
+      buses += fmt::format(",+{}", more);
+    }
+    print_row(fmt::format(
+        fmt::runtime(peer_row), ipc::printable_name_of(p.name), ipc::printable_name_of(p.state),
+        ipc::printable_name_of(p.version), ipc::printable_name_of(p.time),
+        fmt::format("{:.1f} s", static_cast<double>(p.last_heard_ms) / 1e3), p.hosted_nodes,
+        buses.empty() ? "-" : buses, ipc::printable_name_of(p.reason)));
+  }
+  if (d.remote_buses.empty()) {
+    return;
+  }
+  const char* bus_row = "{:<12} {:<14} {:<8} {:>6} {}";
+  print_row(fmt::format(fmt::runtime(bus_row), "REMOTE BUS", "OWNER", "STATE", "NODES", "REASON"));
+  for (const ipc::RemoteBusEntry& b : d.remote_buses) {
+    print_row(fmt::format(fmt::runtime(bus_row), ipc::printable_name_of(b.bus),
+                          ipc::printable_name_of(b.owner), ipc::printable_name_of(b.state), b.nodes,
+                          ipc::printable_name_of(b.reason)));
+  }
+}
+
+// toml++ writes the JSON (names escaped as JSON wants them), one line. "distributed" is there
+// only when the daemon has [distributed] (TOML, and so toml++, has no null).
 void print_json(const client::Connection& c, const client::Status& s, const std::string& mode,
                 const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
                 const ipc::FaultListReply& faults, const std::vector<ipc::RecorderEntry>& recorders,
-                const std::vector<ipc::BridgeEntry>& bridges) {
+                const std::vector<ipc::BridgeEntry>& bridges, const client::PeerList& peers) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array buses;
   for (const ipc::StatusBus& b : s.buses) {
@@ -114,6 +219,9 @@ void print_json(const client::Connection& c, const client::Status& s, const std:
                   {"faults", faults_array(faults)},
                   {"recorders", recorders_array(recorders)},
                   {"bridges", bridges_array(bridges)}};
+  if (peers.enabled) {
+    all.insert("distributed", distributed_json(peers));
+  }
   std::fputs((one_line_json(all) + "\n").c_str(), stdout);
 }
 
@@ -121,7 +229,7 @@ void print_tables(const client::Connection& c, const client::Status& s, const st
                   const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
                   const ipc::FaultListReply& faults,
                   const std::vector<ipc::RecorderEntry>& recorders,
-                  const std::vector<ipc::BridgeEntry>& bridges) {
+                  const std::vector<ipc::BridgeEntry>& bridges, const client::PeerList& peers) {
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
               s.client_count == 1 ? "" : "s");
@@ -169,6 +277,9 @@ void print_tables(const client::Connection& c, const client::Status& s, const st
   if (!bridges.empty()) {
     print_bridges(bridges);
   }
+  if (peers.enabled) {
+    print_distributed(peers);
+  }
 }
 
 int run_status(const std::string& socket, bool json) {
@@ -193,13 +304,17 @@ int run_status(const std::string& socket, bool json) {
   if (!captures) {
     return fail(captures.error());
   }
+  auto peers = client::fetch_peer_list(*c);
+  if (!peers) {
+    return fail(peers.error().message);
+  }
   const std::string mode(ipc::to_string(static_cast<ipc::WireTimeMode>(reply->time_mode)));
   if (json) {
     print_json(*c, *reply, mode, *devices, *clients, *faults, captures->recorders,
-               captures->bridges);
+               captures->bridges, *peers);
   } else {
     print_tables(*c, *reply, mode, *devices, *clients, *faults, captures->recorders,
-                 captures->bridges);
+                 captures->bridges, *peers);
   }
   return 0;
 }

@@ -1,4 +1,5 @@
-// The daemon's status and its lists of devices, clients, recorders and bridges whole: each
+// The daemon's status and its lists of devices, clients, recorders, bridges and other daemons
+// ([distributed]) whole: each
 // comes in pages (the requests name the first entry they want); these ask for page after page
 // until they have every entry. A node or device that comes or goes meanwhile
 // (the generation changes) makes them start over, so the pages always fit together.
@@ -42,5 +43,23 @@ Result<std::vector<ipc::ClientEntry>> fetch_client_list(Connection& c);
 // missed or listed twice.
 Result<std::vector<ipc::RecorderEntry>> fetch_recorder_list(Connection& c);
 Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c);
+
+// [distributed]: this daemon's name, domain, partition and counters (the first page's), every
+// other daemon it heard and every bus of it that another daemon simulates. Without
+// [distributed], `enabled` false and the lists empty. No generation either: a daemon heard for
+// the first time between pages may make another be missed or listed twice (peers come sorted
+// by name; none is ever forgotten, a daemon that left is only marked gone).
+struct PeerList {
+  bool enabled = false;
+  std::string name;
+  uint32_t domain = 0;
+  std::string partition;
+  uint32_t heartbeat_ms = 0;
+  uint32_t timeout_ms = 0;
+  ipc::WireDistributedCounters counters;
+  std::vector<ipc::PeerEntry> peers;
+  std::vector<ipc::RemoteBusEntry> remote_buses;
+};
+Result<PeerList> fetch_peer_list(Connection& c);
 
 }  // namespace canemu::client

@@ -21,5 +21,10 @@ void fill_recorder_list(const Simulation& sim, ipc::RecorderListReply& reply,
                         std::size_t first = 0);
 // The bridges (SocketCAN and LCM) with their node's state and their counts.
 void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& reply, std::size_t first = 0);
+// [distributed]: this daemon's name, domain, partition and counters, a page of the other
+// daemons it heard (from first_peer on) and of its buses another daemon simulates (from
+// first_bus on). Without [distributed], `enabled` 0 and nothing else.
+void fill_peer_list(const Simulation& sim, ipc::PeerListReply& reply, std::size_t first_peer = 0,
+                    std::size_t first_bus = 0);
 
 }  // namespace canemu::daemon

@@ -1,8 +1,9 @@
 // The control protocol between canemud and its clients: fixed-layout messages over an AF_UNIX
 // SOCK_SEQPACKET socket, one message per packet, every one starting with MsgHeader. The
 // messages live in protocol_core.hpp (the daemon's own), capture_messages.hpp (recorders and
-// bridges), vci_messages.hpp and xcan_messages.hpp (the personalities); this header gathers
-// them with their message types, the constructor of a message and the check of a received one.
+// bridges), distributed_messages.hpp (other daemons), vci_messages.hpp and xcan_messages.hpp
+// (the personalities); this header gathers them with their message types, the constructor of a
+// message and the check of a received one.
 #pragma once
 
 #include <cstddef>
@@ -13,6 +14,7 @@
 #include <type_traits>
 
 #include "canemu/ipc/capture_messages.hpp"
+#include "canemu/ipc/distributed_messages.hpp"
 #include "canemu/ipc/lin_node_messages.hpp"
 #include "canemu/ipc/protocol_core.hpp"
 #include "canemu/ipc/slcan_messages.hpp"
@@ -117,6 +119,10 @@ template <>
 inline constexpr MsgType type_of_v<BridgeListRequest> = MsgType::bridge_list_request;
 template <>
 inline constexpr MsgType type_of_v<BridgeListReply> = MsgType::bridge_list_reply;
+template <>
+inline constexpr MsgType type_of_v<PeerListRequest> = MsgType::peer_list_request;
+template <>
+inline constexpr MsgType type_of_v<PeerListReply> = MsgType::peer_list_reply;
 template <>
 inline constexpr MsgType type_of_v<SlcanRequest> = MsgType::slcan_request;
 template <>

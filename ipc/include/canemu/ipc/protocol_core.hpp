@@ -86,6 +86,8 @@ enum class MsgType : uint16_t {
   slcan_event = 102,  // unsolicited, request_id 0
   lin_node_request = 110,
   lin_node_reply = 111,
+  peer_list_request = 120,
+  peer_list_reply = 121,
   timeline_request = 160,
   timeline_reply = 161,
   load_history_reply = 162,

@@ -139,6 +139,9 @@ class Peer:
     def frames(self) -> list:
         return [tuple(f) for f in json.loads(self.ask("recv"))]
 
+    def errors(self) -> list:
+        return [tuple(f) for f in json.loads(self.ask("errors"))]
+
     def close(self) -> None:
         if self.proc.poll() is None:
             self.ask("quit")
@@ -222,30 +225,50 @@ def test_a_follower_that_dies_leaves_the_bus_and_steps_go_on(env):
         a.wait_log("daemon b is gone")
 
 
-def test_realtime_frames_both_ways_and_the_owner_stopping(env):
-    a = Daemon(config("a", "realtime"), canemud=str(BUILD / "bin" / "canemud"))
-    b = Daemon(config("b", "realtime", owner="a"), canemud=str(BUILD / "bin" / "canemud"))
+def test_realtime_owner_late_stopping_and_back(env):
+    # Programs in processes of their own: starting a Daemon connects this process to it, and a
+    # process talks to one canemud at a time.
+    canemud = str(BUILD / "bin" / "canemud")
+    b = Daemon(config("b", "realtime", owner="a"), canemud=canemud)
+    ecu_b = Peer(b)
+    a = None
     try:
-        wait_until(lambda: "daemon a answers" in b.log, "b attaches to a's can0")
-        ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
+        # The owner is not there yet: b's frame waits in its transmit queue, nothing is lost.
+        ecu_b.send(0x222, "02")
+        a = Daemon(config("a", "realtime"), canemud=canemud)
         ecu_a = Peer(a)
-        ecu_b.send(can.Message(arbitration_id=0x222, is_extended_id=False, data=[2]))
-        got = []
-        wait_until(lambda: got.extend(ecu_a.frames()) or got, "b's frame reaches a")
-        assert [(i, d) for i, d, _ in got] == [(0x222, "02")]
+        # It goes out once a is there (unacknowledged until a's program's controller joins,
+        # which may be before that program reads: so it is counted on the owner's nodes).
+
+        def sent_by_b() -> list:
+            return [n["frames_sent"] for k, n in nodes(a).items() if k.startswith("b/")]
+
+        wait_until(lambda: sent_by_b() == [1], "b's waiting frame goes out on a's can0")
         ecu_a.send(0x111, "01")
         back = []
-        wait_until(lambda: back.extend(frames(ecu_b)) or back, "a's frame reaches b")
+        wait_until(lambda: back.extend(ecu_b.frames()) or back, "a's frame reaches b")
         assert [(i, d) for i, d, _ in back] == [(0x111, "01")]
         ecu_a.close()
         # The owner stops (it says so as it goes): b's node is off the bus, and its program
-        # hears bus-off.
+        # hears bus-off (CAN_ERR_BUSOFF).
         a.stop()
         errs = []
-        wait_until(lambda: errs.extend(errors(ecu_b)) or any(e & 0x40 for e, _ in errs),
+        wait_until(lambda: errs.extend(ecu_b.errors()) or any(e & 0x40 for e, _ in errs),
                    "bus-off on b")
         b.wait_log("daemon a is gone")
-        ecu_b.shutdown()
+        # The owner back (another boot): b's node is opened there again, back to error-active,
+        # and frames flow.
+        a = Daemon(config("a", "realtime"), canemud=canemud)
+        ecu_a = Peer(a)
+        wait_until(lambda: errs.extend(ecu_b.errors()) or any(
+            bytes.fromhex(d)[1] & 0x40 for _, d in errs[-1:]), "error-active again on b")
+        ecu_b.send(0x333, "03")
+        got = []
+        wait_until(lambda: got.extend(ecu_a.frames()) or got, "b's frame reaches the new a")
+        assert [(i, d) for i, d, _ in got] == [(0x333, "03")]
+        ecu_a.close()
+        ecu_b.close()
     finally:
         b.stop()
-        a.stop()
+        if a is not None:
+            a.stop()

@@ -76,6 +76,15 @@ std::string get(const char (&src)[N]) {
   return std::string(src, strnlen(src, N));
 }
 
+// Text from another daemon, shown in logs and status: what is not printable ASCII becomes '?'.
+std::string printable(std::string s) {
+  for (char& ch : s) {
+    const auto u = static_cast<unsigned char>(ch);
+    ch = u >= 0x20 && u < 0x7F ? ch : '?';
+  }
+  return s;
+}
+
 uint8_t wire_time_mode(TimeMode m) {
   switch (m) {
     case TimeMode::realtime:
@@ -190,8 +199,10 @@ struct Distributed::Impl {
     std::string version;
     uint8_t time_mode = 0;
     double scale = 1.0;
-    int64_t heard_ms = 0;  // monotonic
+    int64_t heard_ms = 0;    // monotonic
+    bool announced = false;  // its Daemon sample came (protocol, time mode known)
     bool gone = false;
+    std::string gone_reason;
     std::string refused;  // why this daemon will not use its buses
     std::vector<std::string> buses;
     std::vector<std::pair<std::string, canemu_net_OwnedBus>> owned;
@@ -498,7 +509,7 @@ class RemoteNode final : public HostedNode {
         b.role = e.role == 0 ? ErrorRole::transmitter : ErrorRole::receiver;
         b.bit = e.bit;
         b.destuffed_bit = e.destuffed_bit;
-        b.field = static_cast<Field>(e.field);
+        b.field = static_cast<Field>(std::min<uint8_t>(e.field, static_cast<uint8_t>(Field::eof)));
         b.extended_frame = e.extended_frame;
         b.in_frame = e.in_frame;
         b.data_phase = e.data_phase;
@@ -513,7 +524,8 @@ class RemoteNode final : public HostedNode {
         return;
       case canemu_net_EV_REFUSED:
       case canemu_net_EV_GONE:
-        log::warning("node {} of bus {} (owner {}): {}", device_, bus_name_, owner_, get(e.text));
+        log::warning("node {} of bus {} (owner {}): {}", device_, bus_name_, owner_,
+                     printable(get(e.text)));
         owner_lost();
         return;
       default:
@@ -802,7 +814,7 @@ void Distributed::Impl::tick() {
 std::string Distributed::Impl::time_problem(const Peer& p) const {
   const uint8_t ours = wire_time_mode(time.mode);
   if (p.time_mode != ours || (ours == canemu_net_TIME_SCALED && p.scale != time.scale)) {
-    return fmt::format("it runs {} time, this daemon {}", time_text(p.time_mode, p.scale),
+    return fmt::format("its time is {}, this daemon's {}", time_text(p.time_mode, p.scale),
                        to_string(time));
   }
   return {};
@@ -810,6 +822,10 @@ std::string Distributed::Impl::time_problem(const Peer& p) const {
 
 void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
   const std::string name = get(d.name);
+  if (!valid_name(name)) {
+    ++counters.dropped;  // not a daemon of ours (names follow the configuration's rule)
+    return;
+  }
   if (name == cfg.name) {
     if (d.boot != boot) {
       log::warning("another daemon in DDS domain {} partition \"{}\" calls itself \"{}\"",
@@ -835,16 +851,17 @@ void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
     }
     return;
   }
+  p.announced = true;
   p.protocol = d.protocol;
-  p.version = get(d.version);
+  p.version = printable(get(d.version));
   p.time_mode = d.time_mode;
   p.scale = d.scale;
   p.heard_ms = monotonic_ms();
   p.gone = false;
   p.buses.clear();
   p.owned.clear();
-  for (uint32_t i = 0; i < d.buses._length; ++i) {
-    p.buses.push_back(get(d.buses._buffer[i].name));
+  for (uint32_t i = 0; i < d.buses._length && i < 64; ++i) {
+    p.buses.push_back(printable(get(d.buses._buffer[i].name)));
     p.owned.emplace_back(p.buses.back(), d.buses._buffer[i]);
   }
   if (p.protocol != canemu_net_PROTOCOL) {
@@ -903,6 +920,7 @@ std::string Distributed::Impl::bus_problem(const BusConfig& b) const {
 
 void Distributed::Impl::peer_gone(Peer& p, const std::string& why) {
   p.gone = true;
+  p.gone_reason = why;
   p.welcomed = false;
   p.follower = false;
   log::warning("daemon {} is gone: {}", p.name, why);
@@ -964,6 +982,27 @@ void Distributed::Impl::open_hosted(const canemu_net_Request& r) {
     refuse(fmt::format("\"{}\" is a LIN bus", bus_name));
     return;
   }
+  // The controller's programming as the other daemon computed it; checked, so that no value
+  // that came over the network can upset the model (a prescaler of 0, a bit of 1 quantum).
+  auto timing_ok = [](uint64_t clock, uint32_t prescaler, uint32_t tseg1, uint32_t tseg2,
+                      uint32_t sjw) {
+    return clock >= 1'000'000 && clock <= 1'000'000'000 && prescaler >= 1 && prescaler <= 1024 &&
+           tseg1 >= 1 && tseg1 <= 256 && tseg2 >= 1 && tseg2 <= 128 && sjw >= 1 && sjw <= tseg2;
+  };
+  if (!timing_ok(r.clock_hz, r.n_prescaler, r.n_tseg1, r.n_tseg2, r.n_sjw) ||
+      (r.fd && !timing_ok(r.clock_hz, r.d_prescaler, r.d_tseg1, r.d_tseg2, r.d_sjw)) ||
+      r.restart_ns < 0) {
+    refuse(
+        fmt::format("the node's bit timing (clock {} Hz, prescaler {}, tseg1 {}, tseg2 {}, "
+                    "sjw {}) is no controller's",
+                    r.clock_hz, r.n_prescaler, r.n_tseg1, r.n_tseg2, r.n_sjw));
+    return;
+  }
+  const std::string device = get(r.device);
+  if (!valid_name(device)) {
+    refuse(fmt::format("\"{}\" is not a device name", printable(device)));
+    return;
+  }
   Hosted* h = find_hosted(daemon, r.node);
   if (h == nullptr) {
     auto made = std::make_unique<Hosted>();
@@ -1009,15 +1048,20 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
   }
   ++counters.requests_received;
   const std::string from = get(r.from);
-  Peer& p = peers[from];
-  if (p.name.empty() || p.boot != r.from_boot) {
-    if (!p.name.empty() && !p.gone) {
-      peer_gone(p, "restarted");
-    }
-    p = Peer{};
-    p.name = from;
-    p.boot = r.from_boot;
-    p.heard_ms = monotonic_ms();
+  if (!valid_name(from)) {
+    ++counters.dropped;
+    return;
+  }
+  auto pit = peers.find(from);
+  if (pit == peers.end() || pit->second.boot != r.from_boot) {
+    return;  // its announcement has not come yet: only its hello, which it repeats until answered
+  }
+  Peer& p = pit->second;
+  if (!p.announced || !p.refused.empty() || p.gone) {
+    // Not heard announcing itself yet (its time mode and protocol unchecked), refused, or let
+    // go: nothing it asks is done. A daemon says hello again each heartbeat until answered.
+    ++counters.dropped;
+    return;
   }
   if (p.next_request != 0 && r.seq > p.next_request) {
     counters.dropped += r.seq - p.next_request;  // lost on the way (a reader that fell behind)
@@ -1073,6 +1117,10 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
       h->node->restart();
       break;
     case canemu_net_REQ_NAME: {
+      if (!valid_name(get(r.device))) {
+        ++counters.dropped;
+        break;
+      }
       const std::string name = from + "/" + get(r.device);
       if (!sim.devices().exists(name)) {
         h->lease = {};
@@ -1376,7 +1424,7 @@ std::vector<PeerStatus> Distributed::peers() const {
     s.version = p.version;
     s.protocol = p.protocol;
     s.state = p.gone ? "gone" : !p.refused.empty() ? "refused" : "up";
-    s.reason = p.refused;
+    s.reason = p.gone ? p.gone_reason : p.refused;
     s.time = time_text(p.time_mode, p.scale);
     s.last_heard_ms = now - p.heard_ms;
     s.buses = p.buses;

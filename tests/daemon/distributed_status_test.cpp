@@ -246,12 +246,12 @@ TEST(DistributedStatus, ADaemonInAnotherTimeModeIsRefusedWithTheReason) {
   EXPECT_EQ(ipc::name_of(ra->peers[0].name), "b");
   EXPECT_EQ(ipc::name_of(ra->peers[0].state), "refused");
   EXPECT_EQ(ipc::name_of(ra->peers[0].time), "stepped");
-  EXPECT_EQ(ipc::name_of(ra->peers[0].reason), "it runs stepped time, this daemon realtime");
+  EXPECT_EQ(ipc::name_of(ra->peers[0].reason), "its time is stepped, this daemon's realtime");
   auto rb = std::make_unique<ipc::PeerListReply>(ipc::make_message<ipc::PeerListReply>());
   fill_peer_list(*b, *rb, 0, 0);
   ASSERT_EQ(rb->bus_count, 1u);
   EXPECT_EQ(ipc::name_of(rb->buses[0].state), "refused");
-  EXPECT_EQ(ipc::name_of(rb->buses[0].reason), "it runs realtime time, this daemon stepped");
+  EXPECT_EQ(ipc::name_of(rb->buses[0].reason), "its time is realtime, this daemon's stepped");
   EXPECT_EQ(rb->counters.requests_sent, 0u);  // nothing goes to a refused daemon
 }
 

@@ -578,6 +578,10 @@ tl::expected<Config, ConfigErrors> load_default_config() {
 std::string summary(const Config& cfg) {
   std::string s = fmt::format("config {}: time {}, seed {}\n", cfg.source,
                               to_string(cfg.simulation.time), cfg.simulation.seed);
+  if (cfg.distributed.enabled) {
+    s += fmt::format("  daemon {} in DDS domain {}, partition \"{}\"\n", cfg.distributed.name,
+                     cfg.distributed.domain, cfg.distributed.partition);
+  }
   for (const BusConfig& b : cfg.buses) {
     s += fmt::format("  bus {} ({}, {} bit/s", b.name, to_string(b.kind), b.bitrate);
     if (b.data_bitrate != 0) {
@@ -587,8 +591,9 @@ std::string summary(const Config& cfg) {
       s += ")\n";  // a LIN node samples each bit once, in its middle
       continue;
     }
-    s += fmt::format(", sample point {:.1f} %{})\n", b.sample_point / 10.0,
-                     b.low_speed ? ", low-speed transceivers" : "");
+    s += fmt::format(", sample point {:.1f} %{}{})\n", b.sample_point / 10.0,
+                     b.low_speed ? ", low-speed transceivers" : "",
+                     cfg.remote(b) ? fmt::format(", simulated by daemon {}", b.owner) : "");
   }
   for (const DeviceConfig& d : cfg.devices) {
     s += fmt::format("  device {} ({}):", d.name, to_string(d.model));

@@ -435,6 +435,7 @@ class RemoteNode final : public HostedNode {
   const std::string& owner() const { return owner_; }
   const std::string& bus_name() const { return bus_name_; }
   uint32_t number() const { return number_; }
+  bool in_use() const { return programmed_; }
   void unlink() { link_ = nullptr; }
 
   void set_device(const std::string& device) {
@@ -563,6 +564,14 @@ class RemoteNode final : public HostedNode {
   }
   void abort_tx() override {}
   void release_received() override {}
+  void released() override {
+    if (programmed_) {
+      request(canemu_net_REQ_CLOSE);  // the owner gives its node back
+    }
+    programmed_ = false;
+    online_ = false;
+    reported_off_ = false;
+  }
   uint32_t tx_window() const override { return kTxWindow; }
   bool restarts_itself() const override { return true; }
 
@@ -864,10 +873,20 @@ void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
     p.buses.push_back(printable(get(d.buses._buffer[i].name)));
     p.owned.emplace_back(p.buses.back(), d.buses._buffer[i]);
   }
+  bool uses_ours = false;
+  for (uint32_t i = 0; i < d.uses._length && i < 64; ++i) {
+    uses_ours = uses_ours || get(d.uses._buffer[i]).starts_with(cfg.name + "/");
+  }
   if (p.protocol != canemu_net_PROTOCOL) {
     p.refused = fmt::format("protocol {}, this daemon speaks {}", p.protocol, canemu_net_PROTOCOL);
   } else {
     p.refused = time_problem(p);
+  }
+  if (p.refused.empty() && uses_ours && stepped() && !stepped_owner.empty()) {
+    p.refused = fmt::format(
+        "it uses this daemon's buses in stepped time, and this daemon follows daemon {}'s steps "
+        "(an owner follows nobody)",
+        stepped_owner);
   }
   // Simulated time there minus here: its time when it wrote this, against ours now, is the
   // offset less the link's delay, so the largest such value is the best estimate.
@@ -1465,7 +1484,7 @@ std::vector<RemoteBusStatus> Distributed::remote_buses() const {
       s.state = "attached";
     }
     for (RemoteNode* n : impl_->nodes) {
-      s.nodes += n->bus_name() == b.name ? 1 : 0;
+      s.nodes += n->bus_name() == b.name && n->in_use() ? 1 : 0;
     }
     out.push_back(std::move(s));
   }

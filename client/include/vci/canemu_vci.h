@@ -60,7 +60,8 @@ typedef struct _CANEMU_DEVICEINFO {
 } CANEMU_DEVICEINFO, *PCANEMU_DEVICEINFO;
 
 /* Talks to the canemud listening at pszSocket from now on (NULL: $CANEMU_SOCKET or the
- * default path again). Objects opened on the previous daemon stay open there until closed.
+ * default path again). The connection to the previous daemon ends: objects opened there are
+ * closed by that daemon, and their handles fail from now on (close them first).
  * VCI_OK, or VCI_E_DISCONNECTED when nobody listens there. */
 HRESULT VCIAPI canemuConnect(const char* pszSocket);
 

@@ -34,7 +34,9 @@ def _wall_offset() -> float:
 
 def connect(socket: Optional[str]) -> None:
     """Talks to the canemud at `socket` from now on (None: $CANEMU_SOCKET or the default path).
-    The choice is for the whole process; buses opened before stay with their daemon."""
+    The choice is for the whole process, and it ends the process's connection to the daemon it
+    talked to before: buses opened there stop working (their adapters are closed with it), so
+    close them first. A program talks to one canemud; run one per daemon."""
     global _offset, _socket
     with _offset_lock:
         _offset = None

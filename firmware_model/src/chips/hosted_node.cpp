@@ -40,6 +40,7 @@ void HostedNode::stop() {
   go_offline();
   sink_ = nullptr;
   source_ = nullptr;
+  released();
 }
 
 void HostedNode::restart() {

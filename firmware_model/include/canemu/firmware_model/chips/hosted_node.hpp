@@ -116,6 +116,8 @@ class HostedNode : private ControllerEvents {
   // buffer; more for a node whose controller is elsewhere (a bus of another daemon), so that
   // the link's delay does not come between frames. buffer_free() is asked before each.
   virtual uint32_t tx_window() const { return 1; }
+  // stop() ended the node's use: nobody drives it until it is configured again.
+  virtual void released() {}
   // The controller leaves bus-off by itself after settings.restart_delay (the controller of a
   // node of another daemon's bus is restarted there): no restart is scheduled here.
   virtual bool restarts_itself() const { return false; }

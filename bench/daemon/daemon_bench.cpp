@@ -156,8 +156,8 @@ BENCHMARK(BM_ClientDaemonClientLatencyRealtime)
 // A bus spanning two daemons over Cyclone DDS, in real time: canemud "a" owns bus "fast"
 // (1 Mbit/s), canemud "b" declares it with owner "a"; both in a DDS domain and partition of
 // this run's own, by unicast over the loopback interface (CYCLONEDDS_URI). Two ephemeral
-// channels on each daemon; frames go round-robin along four paths, each beyond the frame's own
-// duration on the bus:
+// channels on each daemon (spinning spin_us before they block); frames go round-robin along four
+// paths, each beyond the frame's own duration on the bus:
 //   a_to_a: a client of a to another of a (no hop: the baseline, in the same run);
 //   b_to_a: a client of b to one of a (one hop: b's request to the owner);
 //   a_to_b: a client of a to one of b (one hop: the owner's event to b);
@@ -267,7 +267,8 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
     return;
   }
   client::ChannelOptions o;
-  o.bus = "fast";  // spin_us: the default
+  o.bus = "fast";
+  o.spin_us = static_cast<uint32_t>(state.range(0));  // every channel's spin before blocking
   auto a1 = client::Channel::open(*ca1, o);
   auto a2 = client::Channel::open(*ca2, o);
   auto b1 = client::Channel::open(*cb1, o);
@@ -358,7 +359,12 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
   state.counters["attach_ms"] = static_cast<double>(attach_ns) / 1e6;
   cleanup();
 }
-BENCHMARK(BM_DdsHopLatencyRealtime)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DdsHopLatencyRealtime)
+    ->ArgName("spin_us")
+    ->Arg(0)
+    ->Arg(200)  // the default
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // A client killed with an open channel: the time from SIGKILL until a subscriber hears that
 // its device is gone (target: within 100 ms).

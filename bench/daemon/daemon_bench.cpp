@@ -3,6 +3,9 @@
 //   channel's ring until it comes out of another's, minus the frame's own duration on the wire
 //   (targets p50 <= 30 us, p99 <= 200 us), beside a Unix-socket round trip measured in the
 //   same run;
+// - the same across two daemons sharing a bus over Cyclone DDS: a client of the follower to
+//   one of the owner and back, and between two clients of the follower, beside two clients of
+//   the owner in the same run;
 // - how long after a client is killed its resources are freed (target: 100 ms);
 // - peak resident memory of canemud on the default configuration with 64 clients connected,
 //   each with an open channel (target <= 64 MB);
@@ -14,14 +17,18 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <iterator>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -143,6 +150,219 @@ BENCHMARK(BM_ClientDaemonClientLatencyRealtime)
     ->Arg(50)
     ->Arg(200)
     ->Arg(1000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// A bus spanning two daemons over Cyclone DDS, in real time: canemud "a" owns bus "fast"
+// (1 Mbit/s), canemud "b" declares it with owner "a"; both in a DDS domain and partition of
+// this run's own, by unicast over the loopback interface (CYCLONEDDS_URI). Two ephemeral
+// channels on each daemon (spinning spin_us before they block); frames go round-robin along four
+// paths, each beyond the frame's own duration on the bus:
+//   a_to_a: a client of a to another of a (no hop: the baseline, in the same run);
+//   b_to_a: a client of b to one of a (one hop: b's request to the owner);
+//   a_to_b: a client of a to one of b (one hop: the owner's event to b);
+//   b_to_b: a client of b to another of b (two hops: request and event).
+// kDdsSamples per path, fewer in a smoke run (--benchmark_min_time below 0.5 s, as in CI).
+
+// Whether --benchmark_min_time was given below Google Benchmark's default of 0.5 s (a smoke
+// run, as CI's); Google Benchmark keeps the flag to itself.
+bool smoke_run() {
+  std::ifstream f("/proc/self/cmdline");
+  std::string arg;
+  while (std::getline(f, arg, '\0')) {
+    constexpr std::string_view kFlag = "--benchmark_min_time=";
+    if (arg.rfind(kFlag, 0) == 0) {
+      try {
+        return std::stod(arg.substr(kFlag.size())) < 0.5;
+      } catch (const std::exception&) {
+        return false;
+      }
+    }
+  }
+  return false;
+}
+
+std::string distributed_config(const std::string& dir, const std::string& name, int domain,
+                               const char* owner_line) {
+  const std::string path = dir + "/" + name + ".toml";
+  std::ofstream f(path);
+  f << "[simulation]\ntime = \"realtime\"\n\n[distributed]\nname = \"" << name
+    << "\"\ndomain = " << domain << "\npartition = \"canemu-bench-" << ::getpid()
+    << "\"\nheartbeat_ms = 100\ntimeout_ms = 2000\n\n[[bus]]\nname = \"fast\"\nkind = \"can\"\n"
+       "bitrate = 1000000\n"
+    << owner_line;
+  return path;
+}
+
+// Sets an environment variable while it lives (the daemons started meanwhile inherit it).
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::string& value) : name_(name) {
+    if (const char* old = ::getenv(name)) {
+      old_ = old;
+    }
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnv() {
+    if (old_) {
+      ::setenv(name_, old_->c_str(), 1);
+    } else {
+      ::unsetenv(name_);
+    }
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
+constexpr std::size_t kDdsSamples = 2000;  // per path
+constexpr std::size_t kDdsSmokeSamples = 50;
+constexpr int64_t kDdsGapNs = 1'000'000;
+
+void BM_DdsHopLatencyRealtime(benchmark::State& state) {
+  char dir[] = "/tmp/canemu-bench-XXXXXX";
+  const std::string base = ::mkdtemp(dir);
+  const int domain = 1 + static_cast<int>(::getpid() % 200);
+  const ScopedEnv uri(
+      "CYCLONEDDS_URI",
+      "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/>"
+      "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
+      "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
+      "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
+      "</Domain></CycloneDDS>");
+  const std::string config_a = distributed_config(base, "a", domain, "");
+  const std::string config_b = distributed_config(base, "b", domain, "owner = \"a\"\n");
+  const auto cleanup = [&] {
+    std::remove(config_a.c_str());
+    std::remove(config_b.c_str());
+    ::rmdir(base.c_str());
+  };
+  testing::CanemudProcess da(CANEMUD_PATH, {"--config=" + config_a});
+  testing::CanemudProcess db(CANEMUD_PATH, {"--config=" + config_b});
+  if (!da.ready() || !db.ready()) {
+    state.SkipWithError(("canemud did not start: " + da.log() + db.log()).c_str());
+    cleanup();
+    return;
+  }
+  // b attaches once a answers its hello (discovery over lo takes some 100 ms).
+  const int64_t attach_start = now_ns();
+  while (!db.read_log_until("daemon a answers", 100) && now_ns() - attach_start < 20'000'000'000) {
+  }
+  const int64_t attach_ns = now_ns() - attach_start;
+  if (db.log().find("daemon a answers") == std::string::npos) {
+    state.SkipWithError(("b did not attach within 20 s: " + db.log()).c_str());
+    cleanup();
+    return;
+  }
+  auto ca1 = client::Connection::open(da.socket(), "bench-a1");
+  auto ca2 = client::Connection::open(da.socket(), "bench-a2");
+  auto cb1 = client::Connection::open(db.socket(), "bench-b1");
+  auto cb2 = client::Connection::open(db.socket(), "bench-b2");
+  if (!ca1 || !ca2 || !cb1 || !cb2) {
+    state.SkipWithError("connections did not open");
+    cleanup();
+    return;
+  }
+  client::ChannelOptions o;
+  o.bus = "fast";
+  o.spin_us = static_cast<uint32_t>(state.range(0));  // every channel's spin before blocking
+  auto a1 = client::Channel::open(*ca1, o);
+  auto a2 = client::Channel::open(*ca2, o);
+  auto b1 = client::Channel::open(*cb1, o);
+  auto b2 = client::Channel::open(*cb2, o);
+  if (!a1 || !a2 || !b1 || !b2) {
+    state.SkipWithError("channels did not open");
+    cleanup();
+    return;
+  }
+  std::array<client::Channel*, 4> all{&*a1, &*a2, &*b1, &*b2};
+  struct Path {
+    const char* name;
+    client::Channel* from;
+    client::Channel* to;
+    std::vector<int64_t> beyond;
+  };
+  std::array<Path, 4> paths{{{"a_to_a", &*a1, &*a2, {}},
+                             {"b_to_a", &*b1, &*a2, {}},
+                             {"a_to_b", &*a1, &*b2, {}},
+                             {"b_to_b", &*b1, &*b2, {}}}};
+  const std::size_t samples = smoke_run() ? kDdsSmokeSamples : kDdsSamples;
+  uint32_t seq = 0;
+  // One frame along `p`, tagged with its sequence number in its first four bytes; the receiver
+  // passes over anything else (a late copy of an earlier frame). The time beyond the frame, or
+  // nothing when it did not come within a second.
+  const auto one = [&](Path& p) -> std::optional<int64_t> {
+    ipc::ChannelMessage drained;
+    for (client::Channel* c : all) {
+      while (c->rx().get(&drained) == ipc::RingStatus::ok) {
+      }
+    }
+    ipc::ChannelMessage m;
+    m.id = 0x123;
+    m.dlc = 8;
+    ++seq;
+    std::memcpy(m.data, &seq, sizeof seq);
+    std::memset(m.data + 4, 0x55, 4);
+    const auto frame = model::Frame::classic(0x123, std::span<const uint8_t>(m.data, 8));
+    const int64_t wire_ns = int64_t{model::encode(*frame).length} * 1000;  // 1 us a bit
+    const int64_t t0 = now_ns();
+    if (!p.from->send(m)) {
+      return std::nullopt;
+    }
+    while (now_ns() - t0 < 1'000'000'000) {
+      auto got = p.to->receive(1000);
+      if (!got) {
+        return std::nullopt;
+      }
+      uint32_t tag = 0;
+      std::memcpy(&tag, got->data, sizeof tag);
+      if (got->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::frame) && tag == seq) {
+        return now_ns() - t0 - wire_ns;
+      }
+    }
+    return std::nullopt;
+  };
+  for (auto _ : state) {
+    // Warming up: b's nodes on the owner, DDS's first samples on each path.
+    for (int k = 0; k < 20; ++k) {
+      for (Path& p : paths) {
+        sleep_ns(kDdsGapNs);
+        if (!one(p)) {
+          state.SkipWithError((std::string("no frame on ") + p.name + " (warm-up)").c_str());
+          cleanup();
+          return;
+        }
+      }
+    }
+    for (std::size_t i = 0; i < samples; ++i) {
+      for (Path& p : paths) {  // round-robin, so a busy spell hits every path alike
+        sleep_ns(kDdsGapNs);
+        const auto beyond = one(p);
+        if (!beyond) {
+          state.SkipWithError((std::string("no frame on ") + p.name).c_str());
+          cleanup();
+          return;
+        }
+        p.beyond.push_back(*beyond);
+      }
+    }
+  }
+  for (const Path& p : paths) {
+    report(state, p.name, p.beyond);
+    state.counters[std::string(p.name) + "_max_us"] =
+        static_cast<double>(*std::max_element(p.beyond.begin(), p.beyond.end())) / 1000.0;
+  }
+  state.counters["samples_per_path"] = static_cast<double>(samples);
+  state.counters["attach_ms"] = static_cast<double>(attach_ns) / 1e6;
+  cleanup();
+}
+BENCHMARK(BM_DdsHopLatencyRealtime)
+    ->ArgName("spin_us")
+    ->Arg(0)
+    ->Arg(200)  // the default
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

@@ -674,6 +674,8 @@ std::optional<std::string> Distributed::Impl::open() {
   dds_copy_qos(rq, qos);
   dds_qset_history(rq, DDS_HISTORY_KEEP_ALL, 0);
   dds_qset_resource_limits(rq, kReaderSamples, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+  // What this daemon writes is not for its own readers (it would only wake the loop).
+  dds_qset_ignorelocal(rq, DDS_IGNORELOCAL_PARTICIPANT);
   dds_listener_t* listener = dds_create_listener(this);
   dds_lset_data_available(listener, &Impl::on_data);
   const dds_entity_t pub = dds_create_publisher(participant, qos, nullptr);

@@ -25,8 +25,11 @@ import pytest
 from conftest import CANEMU_CLI, CANEMUD
 from netns import Hosts, netns_available
 
+from canemu.bus import CAN_ERR_BUSOFF, CAN_ERR_RESTARTED
+
 US = 1_000
 MS = 1_000_000
+BIT = 2_000  # at 500 kbit/s
 TIMEOUT = 20.0
 DOMAIN = 1 + (os.getpid() + 103) % 200
 PEER = Path(__file__).with_name("distributed_peer.py")
@@ -353,3 +356,60 @@ def test_realtime_across_hosts_and_a_partition(multicast_hosts):
     back: list = []
     wait_until(lambda: back.extend(pa.frames()) or back, "c's frame reaches a")
     assert [(i, d) for i, d, _ in back] == [(0x201, "01")]
+    # The partition heals: b answers again, its node is opened on a's bus as it was, and b's
+    # program talks to c again.
+    mark_a, mark_b = len(a.log), len(b.log)
+    hosts.connect("b")
+    b.wait_log("daemon a answers", start=mark_b, timeout=TIMEOUT)
+    wait_until(lambda: f"b/{pb.name}" in remote_nodes(a), "b's node back on a's bus")
+    pb.send(0x301, "01")
+    again: list = []
+    wait_until(lambda: again.extend(pc.frames()) or again, "b's frame reaches c after healing")
+    assert [(i, d) for i, d, _ in again] == [(0x301, "01")]
+
+
+def test_a_partition_in_stepped_time(hosts):
+    a, b, c, t0 = stepped(hosts)
+    pa, pb = Peer(hosts, "a", a), Peer(hosts, "b", b)
+    # b's link leaves the hub. The owner's next step waits at the barrier for b at most
+    # timeout_ms, then lets it go; a's frame of that step finds nobody to acknowledge it.
+    hosts.disconnect("b")
+    mark_b = len(b.log)
+    pa.send(0x100, "01")
+    assert step(a, MS) == t0 + MS
+    a.wait_log("daemon b is gone")
+    assert remote_nodes(a) == {}
+    # Each attempt ends in an ACK error (+8): 8 of them in the step, as an attempt lasts 64 bit
+    # times (128 us; the frame up to its ACK slot, error flag, delimiter and intermission).
+    mine = nodes(a)[pa.name]
+    assert (mine["tec"], mine["state"], mine["frames_sent"]) == (64, "error-active", 0)
+    # b, cut off, lost its owner: its steps are refused, and its program heard bus-off at b's
+    # last instant.
+    b.wait_log("daemon a is gone", start=mark_b)
+    with pytest.raises(AssertionError, match="steps are daemon a's, which is not attached"):
+        step(b, MS)
+    assert pb.frames() == []
+    assert [(e[0] & CAN_ERR_BUSOFF, e[2]) for e in pb.errors()] == [(CAN_ERR_BUSOFF, t0)]
+    # The partition heals: b follows a's clock again, its node is back on a's bus (fresh
+    # statistics), and its program hears it restarted (error-active) at that instant.
+    hosts.connect("b")
+    t1 = t0 + MS
+    assert attached_step(b) == t1 + US
+    assert remote_nodes(a) == {f"b/{pb.name}": (0, 0)}
+    restarted = pb.errors()
+    assert [(e[0] & CAN_ERR_RESTARTED, e[2]) for e in restarted] == [(CAN_ERR_RESTARTED, t1)]
+    # a's frame, repeated every 128 us since t0, is acknowledged by b at its first repetition
+    # that starts after b's node came back (the ninth, at t0 + 1024 us); b's 0x300, queued now,
+    # follows it after the intermission.
+    pb.send(0x300, "03")
+    assert step(b, MS) == t1 + US + MS
+    d1, g1 = frame_ns("100#01")
+    d3, _ = frame_ns("300#03")
+    attempt = d1 - 8 * BIT + (6 + 8 + 3) * BIT  # up to the ACK slot; flag, delimiter, pause
+    assert attempt == 128 * US
+    f1 = (0x100, "01", t0 + 8 * attempt + d1)
+    assert pb.frames() == [f1]
+    assert pa.frames() == [(0x300, "03", f1[2] + (g1 - d1) + d3)]
+    assert remote_nodes(a) == {f"b/{pb.name}": (1, 1)}
+    mine = nodes(a)[pa.name]
+    assert (mine["tec"], mine["state"], mine["frames_sent"]) == (63, "error-active", 1)

@@ -2,10 +2,12 @@
 its own link and address (netns.Hosts), a canemud in each with Cyclone DDS on that link (unicast
 peers; the realtime test by SPDP multicast on the link). Daemon a simulates can0; b and c declare
 can0 with owner "a". python-can programs (distributed_peer.py, a process of their own inside each
-host, talking to that host's canemud) exchange frames over a's bus: arbitration across hosts and
-every time stamp exact in stepped time, a fault scenario on the owner hitting b's node, c's daemon
-killed mid-stream, frames both ways in realtime and a network partition. Needs root
-(netns.netns_available); reported as skipped with the reason otherwise."""
+host, talking to that host's canemud) exchange frames over a's bus. In stepped time, every time
+stamp exact: arbitration across hosts, the follower's status, a fault scenario loaded on the
+owner taking b's node bus-off (and python-can's recovery), c's daemon killed with SIGKILL in the
+middle of a stream (the owner's barrier lets it go after timeout_ms; a and b go on), b cut off
+from the hub and back. In realtime: 100 frames each way between b and c, then a partition that
+heals. Needs root (netns.netns_available); reported as skipped with the reason otherwise."""
 
 from __future__ import annotations
 
@@ -227,6 +229,20 @@ def test_arbitration_across_hosts(hosts):
     assert (pa.errors(), pb.errors(), pc.errors()) == ([], [], [])
     print(f"\nhosts made in {hosts.setup_seconds:.2f} s; the test "
           f"{time.monotonic() - started:.2f} s")
+
+
+def test_a_followers_status_counts_the_frames_of_its_nodes(hosts):
+    """`canemu status` on b shows its node on a's bus with the frames it sent and received, as
+    the owner counts them (and as a node of a local bus would be shown)."""
+    a, b, c, t0 = stepped(hosts)
+    pa, pb = Peer(hosts, "a", a), Peer(hosts, "b", b)
+    pb.send(0x300, "03")
+    pa.send(0x100, "01")
+    assert step(b, MS) == t0 + MS
+    assert (len(pa.frames()), len(pb.frames())) == (1, 1)
+    assert remote_nodes(a) == {f"b/{pb.name}": (1, 1)}
+    mine = nodes(b)[pb.name]
+    assert (mine["frames_sent"], mine["frames_received"]) == (1, 1)
 
 
 def test_a_fault_scenario_on_the_owner_hits_a_remote_node(hosts):

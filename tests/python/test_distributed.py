@@ -140,7 +140,8 @@ class Peer:
         return [tuple(f) for f in json.loads(self.ask("recv"))]
 
     def errors(self) -> list:
-        return [tuple(f) for f in json.loads(self.ask("errors"))]
+        """Error frames received so far, as (can_id, hexdata)."""
+        return [(f[0], f[1]) for f in json.loads(self.ask("errors"))]
 
     def close(self) -> None:
         if self.proc.poll() is None:

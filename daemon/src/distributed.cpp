@@ -436,6 +436,9 @@ class RemoteNode final : public HostedNode {
   const std::string& bus_name() const { return bus_name_; }
   uint32_t number() const { return number_; }
   bool in_use() const { return programmed_; }
+  std::size_t bus() const { return bus_; }
+  // What the owner reported of this node: frames, errors, arbitration lost.
+  const NodeStats& stats() const { return stats_; }
   void unlink() { link_ = nullptr; }
 
   void set_device(const std::string& device) {
@@ -489,8 +492,10 @@ class RemoteNode final : public HostedNode {
           return;
         }
         if (e.kind == canemu_net_EV_RX) {
+          stats_.frames_received += e.own ? 0 : 1;
           ev->frame_received(at, *f, e.own);
         } else if (e.kind == canemu_net_EV_TX_DONE) {
+          ++stats_.frames_sent;
           ev->frame_transmitted(at, *f);
         } else if (e.kind == canemu_net_EV_DROPPED) {
           ev->transmission_dropped(at, *f);
@@ -500,6 +505,7 @@ class RemoteNode final : public HostedNode {
         return;
       }
       case canemu_net_EV_ARB_LOST:
+        ++stats_.arbitration_lost;
         ev->arbitration_lost(at, e.bit);
         return;
       case canemu_net_EV_ERROR: {
@@ -516,6 +522,8 @@ class RemoteNode final : public HostedNode {
         b.data_phase = e.data_phase;
         b.tec = e.tec;
         b.rec = e.rec;
+        ++(b.role == ErrorRole::transmitter ? stats_.errors_as_transmitter
+                                            : stats_.errors_as_receiver)[b.type];
         ev->bus_error(b);
         return;
       }
@@ -536,6 +544,7 @@ class RemoteNode final : public HostedNode {
 
  private:
   void program(const HostedNodeSettings& settings) override {
+    stats_ = NodeStats{};  // a node configured afresh starts counting afresh, as a local one
     settings_ = settings;
     programmed_ = true;
     online_ = false;
@@ -628,6 +637,7 @@ class RemoteNode final : public HostedNode {
   bool online_ = false;
   bool reported_off_ = false;  // owner_lost() told the driver the node is off the bus
   uint64_t opened_ = 0;
+  NodeStats stats_;
 };
 
 Distributed::Impl::~Impl() {
@@ -1497,6 +1507,15 @@ const DistributedCounters& Distributed::counters() const {
   return impl_->counters;
 }
 
+const NodeStats* Distributed::remote_stats(std::size_t bus, NodeId node) const {
+  for (const RemoteNode* n : impl_->nodes) {
+    if (n->bus() == bus && n->node() == node) {
+      return &n->stats();
+    }
+  }
+  return nullptr;
+}
+
 #else  // no Cyclone DDS
 
 struct Distributed::Impl {};
@@ -1543,6 +1562,9 @@ std::vector<RemoteBusStatus> Distributed::remote_buses() const {
 const DistributedCounters& Distributed::counters() const {
   static const DistributedCounters none;
   return none;
+}
+const model::NodeStats* Distributed::remote_stats(std::size_t, model::NodeId) const {
+  return nullptr;
 }
 
 #endif

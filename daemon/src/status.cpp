@@ -66,7 +66,9 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
     s->state = static_cast<uint8_t>(fc.state());
     s->tec = fc.tec();
     s->rec = fc.rec();
-    const NodeStats& st = sim.bus(bus).stats(id);
+    const Distributed* d = sim.distributed();
+    const NodeStats* remote = d != nullptr ? d->remote_stats(bus, id) : nullptr;
+    const NodeStats& st = remote != nullptr ? *remote : sim.bus(bus).stats(id);
     s->frames_sent = st.frames_sent;
     s->frames_received = st.frames_received;
     s->errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();

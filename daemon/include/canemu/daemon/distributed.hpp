@@ -108,6 +108,9 @@ class Distributed : public Doorbell {
   std::vector<PeerStatus> peers() const;
   std::vector<RemoteBusStatus> remote_buses() const;
   const DistributedCounters& counters() const;
+  // The statistics of node `node` of remote bus `bus` as its owner reported them (the bus here
+  // carries nothing); nullptr for any other node.
+  const model::NodeStats* remote_stats(std::size_t bus, model::NodeId node) const;
 
   struct Impl;
 

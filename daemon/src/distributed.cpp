@@ -964,6 +964,9 @@ void Distributed::Impl::peer_gone(Peer& p, const std::string& why) {
   if (barrier && waiting.erase(p.name) > 0 && waiting.empty()) {
     run_step();
   }
+  if (p.name == stepped_owner && self != nullptr && self->steps_failed) {
+    self->steps_failed(fmt::format("daemon {}, whose steps these are, is gone ({})", p.name, why));
+  }
 }
 
 void Distributed::Impl::owner_up(Peer& p) {

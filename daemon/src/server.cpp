@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
+#include <utility>
 
 #include <fcntl.h>
 #include <poll.h>
@@ -189,6 +190,14 @@ ipc::IpcResult<void> Server::open() {
     };
     d->step_done = [this](uint64_t token, uint64_t events_run, int64_t sim_ns) {
       step_done(token, events_run, sim_ns);
+    };
+    d->steps_failed = [this](const std::string& why) {
+      for (const auto& [token, p] : std::exchange(pending_steps_, {})) {
+        auto c = clients_.find(p.fd);
+        if (c != clients_.end() && c->second.serial == p.serial && !c->second.closing) {
+          reply_error(c->second, p.request_id, ipc::ErrorCode::not_stepped, why);
+        }
+      }
     };
     dispatcher_.defer_step = [this, d](int64_t step_ns, uint32_t request_id) {
       if (!d->follows_owner() && !d->leads_steps()) {

@@ -273,3 +273,23 @@ def test_realtime_owner_late_stopping_and_back(env):
         b.stop()
         if a is not None:
             a.stop()
+
+
+def test_a_step_asked_of_a_follower_whose_owner_dies_is_answered(env):
+    canemud = str(BUILD / "bin" / "canemud")
+    with Daemon(config("b", "stepped", owner="a"), canemud=canemud) as b:
+        a = Daemon(config("a", "stepped"), canemud=canemud)
+        try:
+            attached_step(b)
+            a.proc.kill()  # without a word
+            a.proc.wait()
+        finally:
+            a.stop()
+        # b asks the owner, which never answers; once a is let go (timeout_ms) the step is
+        # answered with the reason instead of waiting for ever.
+        started = time.monotonic()
+        done = subprocess.run([str(CANEMU_CLI), "--socket", b.socket, "time", "step", "1ms"],
+                              capture_output=True, text=True, timeout=TIMEOUT)
+        assert done.returncode != 0
+        assert "daemon a, whose steps these are, is gone (not heard from for" in done.stderr
+        assert time.monotonic() - started < TIMEOUT

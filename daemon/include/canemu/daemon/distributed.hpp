@@ -103,6 +103,8 @@ class Distributed : public Doorbell {
   std::function<void()> before_step;
   std::function<void()> after_step;
   std::function<void(uint64_t token, uint64_t events_run, int64_t sim_ns)> step_done;
+  // The owner whose steps these are is gone: the steps asked of it will not be answered.
+  std::function<void(const std::string& why)> steps_failed;
 
   // ---- status ----
   std::vector<PeerStatus> peers() const;

@@ -13,12 +13,15 @@
 #include <string>
 #include <vector>
 
+#include <dds/dds.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "canemu/daemon/distributed.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/status.hpp"
+#include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "canemu_net.h"
 
 namespace canemu::daemon {
 namespace {
@@ -59,10 +62,11 @@ std::unique_ptr<Simulation> daemon_named(const std::string& name, const std::str
 constexpr const char* kBusA = "[[bus]]\nname = \"can0\"\nbitrate = 500000\n";
 constexpr const char* kBusB = "[[bus]]\nname = \"can0\"\nbitrate = 500000\nowner = \"a\"\n";
 
-// Runs the daemons' loops (what came over DDS, the heartbeats) until done() or 10 s passed.
+// Runs the daemons' loops (what came over DDS, the heartbeats) until done() or `limit` passed.
 template <class Done>
-bool pump(const std::vector<Simulation*>& sims, Done done) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+bool pump(const std::vector<Simulation*>& sims, Done done,
+          std::chrono::milliseconds limit = std::chrono::seconds(10)) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
   std::vector<Doorbell*> bells;
   for (Simulation* s : sims) {
     bells.push_back(s->distributed());
@@ -253,6 +257,268 @@ TEST(DistributedStatus, ADaemonInAnotherTimeModeIsRefusedWithTheReason) {
   EXPECT_EQ(ipc::name_of(rb->buses[0].state), "refused");
   EXPECT_EQ(ipc::name_of(rb->buses[0].reason), "its time is realtime, this daemon's stepped");
   EXPECT_EQ(rb->counters.requests_sent, 0u);  // nothing goes to a refused daemon
+}
+
+// ---- a daemon of the test's own making: raw samples on canemu/net/* ----
+
+template <std::size_t N>
+void put_text(char (&dst)[N], const std::string& s) {
+  std::snprintf(dst, N, "%s", s.c_str());
+}
+
+// A participant of the test in the daemons' domain and partition that writes Daemon and Request
+// samples as a daemon named `name` would (or as one breaking the rules), and reads the events.
+struct RawDaemon {
+  std::string name;
+  uint64_t boot = 0x5eed;
+  uint64_t seq = 0;
+  dds_entity_t participant;
+  dds_entity_t w_daemons = 0, w_requests = 0, r_events = 0;
+
+  explicit RawDaemon(std::string n)
+      : name(std::move(n)), participant(dds_create_participant(test_domain(), nullptr, nullptr)) {
+    dds_qos_t* qos = dds_create_qos();
+    dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+    dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+    dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+    dds_qset_partition1(qos, ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    const dds_entity_t pub = dds_create_publisher(participant, qos, nullptr);
+    const dds_entity_t sub = dds_create_subscriber(participant, qos, nullptr);
+    auto topic = [&](const dds_topic_descriptor_t* d, const char* t) {
+      return dds_create_topic(participant, d, t, nullptr, nullptr);
+    };
+    w_daemons =
+        dds_create_writer(pub, topic(&canemu_net_Daemon_desc, "canemu/net/daemons"), qos, nullptr);
+    w_requests = dds_create_writer(pub, topic(&canemu_net_Request_desc, "canemu/net/requests"), qos,
+                                   nullptr);
+    r_events =
+        dds_create_reader(sub, topic(&canemu_net_Event_desc, "canemu/net/events"), qos, nullptr);
+    dds_delete_qos(qos);
+  }
+  ~RawDaemon() { dds_delete(participant); }
+  RawDaemon(const RawDaemon&) = delete;
+  RawDaemon& operator=(const RawDaemon&) = delete;
+
+  bool ok() const { return participant > 0 && w_daemons > 0 && w_requests > 0 && r_events > 0; }
+  // The daemon's readers and writer are matched (volatile topics: what is written before is lost).
+  bool matched() const {
+    dds_publication_matched_status_t d{}, r{};
+    dds_subscription_matched_status_t e{};
+    dds_get_publication_matched_status(w_daemons, &d);
+    dds_get_publication_matched_status(w_requests, &r);
+    dds_get_subscription_matched_status(r_events, &e);
+    return d.current_count >= 1 && r.current_count >= 1 && e.current_count >= 1;
+  }
+  // Announces itself speaking `protocol`, in real time, using daemon a's can0.
+  void announce(uint16_t protocol) {
+    canemu_net_Daemon d{};
+    put_text(d.name, name);
+    d.boot = boot;
+    d.protocol = protocol;
+    put_text(d.version, "raw-test");
+    d.time_mode = canemu_net_TIME_REALTIME;
+    d.scale = 1.0;
+    char uses[1][32] = {"a/can0"};
+    d.uses._buffer = reinterpret_cast<decltype(d.uses._buffer)>(uses);
+    d.uses._length = 1;
+    d.uses._maximum = 1;
+    d.uses._release = false;
+    ASSERT_EQ(dds_write(w_daemons, &d), DDS_RETCODE_OK);
+  }
+  // Sends `r` to daemon a as the next request (seq 1, 2, ...); returns its seq.
+  uint64_t request(canemu_net_Request r) {
+    put_text(r.from, name);
+    r.from_boot = boot;
+    put_text(r.to, "a");
+    r.seq = ++seq;
+    EXPECT_EQ(dds_write(w_requests, &r), DDS_RETCODE_OK);
+    return r.seq;
+  }
+  // The events that came so far, addressed to this daemon.
+  std::vector<canemu_net_Event> take(std::vector<canemu_net_Event>& into) {
+    for (;;) {
+      void* samples[16] = {};
+      dds_sample_info_t infos[16];
+      const dds_return_t n = dds_take(r_events, samples, infos, 16, 16);
+      if (n <= 0) {
+        return into;
+      }
+      for (dds_return_t i = 0; i < n; ++i) {
+        const auto* e = static_cast<const canemu_net_Event*>(samples[i]);
+        if (infos[i].valid_data && std::string(e->to) == name) {
+          into.push_back(*e);
+        }
+      }
+      dds_return_loan(r_events, samples, n);
+    }
+  }
+};
+
+canemu_net_Request request_of(uint8_t kind, uint32_t node = 0) {
+  canemu_net_Request r{};
+  r.kind = kind;
+  r.node = node;
+  put_text(r.bus, "can0");
+  put_text(r.device, "ecu");
+  return r;
+}
+
+// A REQ_OPEN for node `node` on can0 programmed as an SJA1000 at 500 kbit/s.
+canemu_net_Request open_request(uint32_t node) {
+  const model::HostedNodeSettings t = *controller_timing(false, 500000, 0, 875);
+  canemu_net_Request r = request_of(canemu_net_REQ_OPEN, node);
+  r.btr0 = t.btr0;
+  r.btr1 = t.btr1;
+  r.clock_hz = t.nominal.clock_hz;
+  r.n_prescaler = t.nominal.prescaler;
+  r.n_tseg1 = t.nominal.tseg1;
+  r.n_tseg2 = t.nominal.tseg2;
+  r.n_sjw = t.nominal.sjw;
+  return r;
+}
+
+TEST(DistributedStatus, APeerOfAnotherProtocolIsRefusedAndItsHelloNotAnswered) {
+  ASSERT_EQ(canemu_net_PROTOCOL, 1);  // the reason below names protocols 2 and 1
+  auto a = daemon_named("a", kBusA);
+  ASSERT_TRUE(a);
+  RawDaemon r("r");
+  ASSERT_TRUE(r.ok());
+  ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
+  r.announce(canemu_net_PROTOCOL + 1);
+  std::vector<PeerStatus> keep;
+  ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep) != nullptr; }));
+  const PeerStatus& p = *peer(*a, "r", keep);
+  EXPECT_EQ(p.state, "refused");
+  EXPECT_EQ(p.reason, "protocol 2, this daemon speaks 1");
+  EXPECT_EQ(p.protocol, 2u);
+  EXPECT_EQ(p.version, "raw-test");
+  EXPECT_EQ(p.time, "realtime");
+  EXPECT_EQ(p.hosted_nodes, 0u);
+
+  // Its hello reaches a (counted received) and is not done (counted dropped): no welcome.
+  const DistributedCounters before = a->distributed()->counters();
+  r.request(request_of(canemu_net_REQ_HELLO));
+  ASSERT_TRUE(pump({a.get()}, [&] {
+    return a->distributed()->counters().requests_received == before.requests_received + 1;
+  }));
+  const DistributedCounters& after = a->distributed()->counters();
+  EXPECT_EQ(after.dropped, before.dropped + 1);
+  EXPECT_EQ(after.events_sent, before.events_sent);
+  // a answers a request as it handles it (above), and delivery within the process takes well
+  // under a millisecond: 300 ms without a welcome arriving shows that none was written.
+  std::vector<canemu_net_Event> events;
+  EXPECT_FALSE(pump(
+      {a.get()}, [&] { return !r.take(events).empty(); }, std::chrono::milliseconds(300)));
+  EXPECT_TRUE(events.empty()) << "event kind " << int(events.front().kind);
+  EXPECT_EQ(peer(*a, "r", keep)->state, "refused");
+  EXPECT_EQ(peer(*a, "r", keep)->hosted_nodes, 0u);
+}
+
+TEST(DistributedStatus, ADaemonNamedAgainstTheRuleIsNotListedAndCountsAsDropped) {
+  auto a = daemon_named("a", kBusA);
+  ASSERT_TRUE(a);
+  RawDaemon r("Bad Name!");
+  ASSERT_TRUE(r.ok());
+  ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
+  const uint64_t dropped = a->distributed()->counters().dropped;
+  r.announce(canemu_net_PROTOCOL);
+  ASSERT_TRUE(pump({a.get()}, [&] { return a->distributed()->counters().dropped == dropped + 1; }));
+  EXPECT_TRUE(a->distributed()->peers().empty());
+  EXPECT_EQ(a->distributed()->counters().requests_received, 0u);
+}
+
+TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
+  auto a = daemon_named("a", kBusA);
+  ASSERT_TRUE(a);
+  // A node of a's own on can0, to acknowledge frames.
+  model::HostedNode& acker = a->spare_node(0);
+  acker.start(*controller_timing(false, 500000, 0, 875), nullptr,
+              [] { return std::optional<model::TxFrame>(); });
+  RawDaemon r("r");
+  ASSERT_TRUE(r.ok());
+  ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
+  r.announce(canemu_net_PROTOCOL);
+  std::vector<PeerStatus> keep;
+  ASSERT_TRUE(pump({a.get()}, [&] {
+    const PeerStatus* p = peer(*a, "r", keep);
+    return p != nullptr && p->state == "up";
+  }));
+  std::vector<canemu_net_Event> events;
+  auto next_event = [&](canemu_net_Event& out) {
+    if (!pump({a.get()}, [&] { return !r.take(events).empty(); })) {
+      return false;
+    }
+    out = events.front();
+    events.erase(events.begin());
+    return true;
+  };
+  canemu_net_Event e{};
+  const uint64_t hello = r.request(request_of(canemu_net_REQ_HELLO));
+  ASSERT_TRUE(next_event(e));
+  EXPECT_EQ(e.kind, canemu_net_EV_WELCOME);
+  EXPECT_EQ(hello, 1u);
+
+  // 1. A REQ_OPEN with a prescaler of 0: refused, the reason naming the timing.
+  canemu_net_Request bad = open_request(1);
+  bad.n_prescaler = 0;
+  const uint64_t bad_seq = r.request(bad);
+  ASSERT_TRUE(next_event(e));
+  EXPECT_EQ(e.kind, canemu_net_EV_REFUSED);
+  EXPECT_EQ(e.node, 1u);
+  EXPECT_EQ(e.opened, bad_seq);
+  EXPECT_EQ(std::string(e.from), "a");
+  EXPECT_EQ(std::string(e.text),
+            fmt::format("the node's bit timing (clock {} Hz, prescaler 0, tseg1 {}, tseg2 {}, "
+                        "sjw {}) is no controller's",
+                        bad.clock_hz, bad.n_tseg1, bad.n_tseg2, bad.n_sjw));
+  EXPECT_EQ(bad.clock_hz, 16'000'000u);  // the SJA1000's clock: the text above names it
+  EXPECT_EQ(peer(*a, "r", keep)->hosted_nodes, 0u);
+
+  // 2. The node opened properly, then a classic frame of DLC 15 carrying 64 bytes: dropped.
+  r.request(open_request(1));
+  ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep)->hosted_nodes == 1; }));
+  const DistributedCounters before = a->distributed()->counters();
+  canemu_net_Request tx = request_of(canemu_net_REQ_TX, 1);
+  tx.id = 0x123;
+  tx.dlc = 15;
+  tx.len = 64;
+  r.request(tx);
+  ASSERT_TRUE(pump({a.get()}, [&] {
+    return a->distributed()->counters().requests_received == before.requests_received + 1;
+  }));
+  EXPECT_EQ(a->distributed()->counters().dropped, before.dropped + 1);
+  EXPECT_EQ(a->distributed()->counters().events_sent, before.events_sent);  // no EV_DROPPED
+
+  // 3. The owner goes on: online and a valid frame, which goes out on can0 when a's time runs.
+  r.request(request_of(canemu_net_REQ_ONLINE, 1));
+  tx.dlc = 1;
+  tx.len = 1;
+  tx.data[0] = 0x42;
+  r.request(tx);
+  ASSERT_TRUE(pump({a.get()}, [&] {
+    return a->distributed()->counters().requests_received == before.requests_received + 3;
+  }));
+  EXPECT_EQ(a->distributed()->counters().dropped, before.dropped + 1);
+  const model::SimTime start = a->scheduler().now();
+  a->scheduler().run_until(start + model::SimDuration(1'000'000));
+  EXPECT_EQ(a->bus(0).frames_on_bus(), 1u);
+  EXPECT_EQ(a->bus(0).error_frames_on_bus(), 0u);
+  ASSERT_TRUE(next_event(e));
+  EXPECT_EQ(e.kind, canemu_net_EV_TX_DONE);
+  EXPECT_EQ(e.node, 1u);
+  EXPECT_EQ(e.id, 0x123u);
+  EXPECT_EQ(e.dlc, 1u);
+  EXPECT_EQ(e.len, 1u);
+  EXPECT_EQ(e.data[0], 0x42);
+  // It starts as a's time runs on (can0 idle) and ends after its bits at 500 kbit/s.
+  const auto frame = model::Frame::create(
+      model::FrameSpec{.id = 0x123, .dlc = 1, .data = std::span<const uint8_t>(tx.data, 1)});
+  ASSERT_TRUE(frame);
+  const model::SimDuration bits = model::frame_duration(
+      model::encode(*frame), controller_timing(false, 500000, 0, 875)->nominal);
+  EXPECT_EQ(bits.ns(), 106'000);  // 53 bits (canemu calc frame 123#42)
+  EXPECT_EQ(e.at_ns, (start + bits).ns());
+  acker.stop();
 }
 
 }  // namespace

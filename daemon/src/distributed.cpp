@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "canemu/daemon/simulation.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
 
 #ifdef CANEMU_HAVE_DDS
 #include <sys/eventfd.h>
@@ -591,6 +592,13 @@ class RemoteNode final : public HostedNode {
     r.listen_only = settings_.listen_only;
     r.btr0 = settings_.btr0;
     r.btr1 = settings_.btr1;
+    if (!r.fd && settings_.nominal.clock_hz == 0) {
+      // An SJA1000 programmed by its registers alone (a VCI line's BTR0/BTR1): the timing they
+      // give, which the owner checks.
+      if (auto t = sja1000::decode_btr(settings_.btr0, settings_.btr1)) {
+        settings_.nominal = *t;
+      }
+    }
     r.clock_hz = settings_.nominal.clock_hz;
     r.n_prescaler = settings_.nominal.prescaler;
     r.n_tseg1 = settings_.nominal.tseg1;

@@ -366,7 +366,8 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     CanBus& bus = *buses_[c.bus];
     if (config_.remote(config_.buses[c.bus])) {
       c.node = distributed_->make_node(c.bus, bus, d.model == DeviceModel::ixxat_usb_to_can_fd);
-      distributed_->name_node(*c.node, c.name);
+      // The owner lists it as "DAEMON/DEVICE:0" (controller 0) or "DAEMON/DEVICE-N:0".
+      distributed_->name_node(*c.node, i == 0 ? d.name : fmt::format("{}-{}", d.name, i));
     } else if (d.model == DeviceModel::ixxat_usb_to_can) {
       c.node = std::make_unique<Sja1000Node>(scheduler_, bus);
     } else {

@@ -16,6 +16,7 @@
 #include <dds/dds.h>
 
 #include "canemu_dds.h"
+#include "dds_frame_fields.hpp"
 #include "ros2_can_msgs.h"
 #endif
 
@@ -103,15 +104,7 @@ namespace {
 canemu_dds_Frame to_dds(SimTime at, const Frame& frame, bool own) {
   canemu_dds_Frame m{};
   m.timestamp_ns = at.ns();
-  m.id = frame.id();
-  m.extended = frame.extended();
-  m.remote = frame.remote();
-  m.fd = frame.fd();
-  m.brs = frame.brs();
-  m.esi = frame.esi();
-  m.dlc = frame.dlc();
-  m.len = static_cast<uint8_t>(frame.length());
-  std::memcpy(m.data, frame.data().data(), frame.length());
+  put_frame_fields(m, frame);
   m.from_tx = own;
   return m;
 }

@@ -26,6 +26,7 @@
 #include "canemu/daemon/dds_bridge.hpp"
 #include "canemu/daemon/log.hpp"
 #include "canemu_net.h"
+#include "dds_frame_fields.hpp"
 #endif
 
 #ifndef CANEMU_VERSION
@@ -120,37 +121,6 @@ uint8_t wire_bus_kind(BusKind k) {
       return canemu_net_BUS_LIN;
   }
   return canemu_net_BUS_CAN;
-}
-
-template <typename M>
-void put_frame(M& m, const Frame& f) {
-  m.id = f.id();
-  m.extended = f.extended();
-  m.remote = f.remote();
-  m.fd = f.fd();
-  m.brs = f.brs();
-  m.esi = f.esi();
-  m.dlc = f.dlc();
-  m.len = static_cast<uint8_t>(f.length());
-  std::memcpy(m.data, f.data().data(), f.length());
-}
-
-template <typename M>
-std::optional<Frame> get_frame(const M& m) {
-  FrameSpec spec;
-  spec.id = m.id;
-  spec.extended = m.extended;
-  spec.remote = m.remote;
-  spec.fd = m.fd;
-  spec.brs = m.brs;
-  spec.esi = m.esi;
-  spec.dlc = m.dlc;
-  spec.data = std::span<const uint8_t>(m.data, m.remote ? 0 : std::min<std::size_t>(m.len, 64));
-  auto f = Frame::create(spec);
-  if (!f) {
-    return std::nullopt;
-  }
-  return *f;
 }
 
 // A controller that never takes part in the traffic of the bus it sits on: it gives a node of a
@@ -255,7 +225,7 @@ struct Distributed::Impl {
       e.at_ns = at.ns();
       e.own = own;
       if (f != nullptr) {
-        put_frame(e, *f);
+        put_frame_fields(e, *f);
       }
       send(e);
     }
@@ -487,7 +457,7 @@ class RemoteNode final : public HostedNode {
       case canemu_net_EV_TX_DONE:
       case canemu_net_EV_DROPPED:
       case canemu_net_EV_OVERRUN: {
-        auto f = get_frame(e);
+        auto f = frame_of_fields(e);
         if (!f) {
           ++link_->counters.dropped;
           return;
@@ -569,7 +539,7 @@ class RemoteNode final : public HostedNode {
     r.kind = canemu_net_REQ_TX;
     r.single_shot = tx.single_shot;
     r.self_reception = tx.self_reception;
-    put_frame(r, tx.frame);
+    put_frame_fields(r, tx.frame);
     send(r);
   }
   void abort_tx() override {}
@@ -1171,7 +1141,7 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
       break;
     }
     case canemu_net_REQ_TX: {
-      auto f = get_frame(r);
+      auto f = frame_of_fields(r);
       if (!f) {
         ++counters.dropped;
         break;

@@ -3,7 +3,10 @@
 // it receives with its simulated instant.
 #pragma once
 
+#include <unistd.h>
+
 #include <cstdint>
+#include <cstdlib>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -16,6 +19,20 @@
 #include "canemu/daemon/simulation.hpp"
 
 namespace canemu::daemon::bridge_test {
+
+// A DDS domain of this test process's own (from its pid), Cyclone on the loopback interface
+// only (CYCLONEDDS_URI set for the process the first time).
+inline uint32_t test_domain() {
+  static const uint32_t domain = [] {
+    ::setenv("CYCLONEDDS_URI",
+             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+             "name=\"lo\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
+             "</Domain></CycloneDDS>",
+             1);
+    return static_cast<uint32_t>(1 + ::getpid() % 200);
+  }();
+  return domain;
+}
 
 inline std::unique_ptr<Simulation> world(const std::string& text) {
   auto cfg = parse_config(text, "test.toml");

@@ -29,19 +29,6 @@ namespace {
 using namespace bridge_test;
 using Node = BusNode;
 
-// A domain of this process's own, Cyclone on the loopback interface only.
-uint32_t test_domain() {
-  static const uint32_t domain = [] {
-    ::setenv("CYCLONEDDS_URI",
-             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
-             "name=\"lo\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
-             "</Domain></CycloneDDS>",
-             1);
-    return static_cast<uint32_t>(1 + ::getpid() % 200);
-  }();
-  return domain;
-}
-
 BridgeConfig dds_bridge(const std::string& bus, bool ros2 = false, uint32_t restart_ms = 0) {
   BridgeConfig b;
   b.kind = "dds";

@@ -17,6 +17,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "bridge_test_support.hpp"
 #include "canemu/daemon/distributed.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/status.hpp"
@@ -26,18 +27,7 @@
 namespace canemu::daemon {
 namespace {
 
-// A domain of this process's own, Cyclone on the loopback interface only.
-uint32_t test_domain() {
-  static const uint32_t domain = [] {
-    ::setenv("CYCLONEDDS_URI",
-             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
-             "name=\"lo\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
-             "</Domain></CycloneDDS>",
-             1);
-    return static_cast<uint32_t>(1 + ::getpid() % 200);
-  }();
-  return domain;
-}
+using bridge_test::test_domain;
 
 // A daemon's configuration: [distributed] with `name` in the test's partition (one per test, so
 // no test hears another's daemons), and `rest` (buses, devices, the time mode).

@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import subprocess
-import time
 
 import can
 import pytest
 
 from conftest import BUILD, CANEMU_CLI
+from distributed_support import LOOPBACK_URI, TIMEOUT, frame_ns, wait_until
 
 cyclonedds = pytest.importorskip(
     "cyclonedds", reason="PyPI's cyclonedds is not in this Python environment (requirements.txt, "
@@ -26,13 +25,8 @@ import canemu  # noqa: E402
 from canemu.testing import Daemon  # noqa: E402
 
 MS = 1_000_000
-TIMEOUT = 20.0
 DOMAIN = 1 + os.getpid() % 200
-URI = ("<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/>"
-       "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-       "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
-       "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
-       "</Domain></CycloneDDS>")
+URI = LOOPBACK_URI
 
 CONFIG = f"""
 [simulation]
@@ -54,22 +48,6 @@ bus = "can0"
 domain = {DOMAIN}
 ros2 = true
 """
-
-
-def frame_ns(frame: str, bitrate: int = 500000) -> tuple[int, int]:
-    """The frame's duration from SOF to the end of EOF and with its intermission."""
-    text = subprocess.run([str(CANEMU_CLI), "calc", "frame", frame, "--bitrate", str(bitrate)],
-                          capture_output=True, text=True, check=True).stdout
-    bare = int(re.search(r": (\d+) ns \(", text).group(1))
-    return bare, int(re.search(r"(\d+) ns with intermission", text).group(1))
-
-
-def wait_until(done, what: str) -> None:
-    deadline = time.monotonic() + TIMEOUT
-    while not done():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {TIMEOUT} s")
-        time.sleep(0.005)  # polling a condition with a deadline, not waiting for time to pass
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import subprocess
 import time
 
@@ -16,72 +15,19 @@ import can
 import pytest
 
 from conftest import BUILD, CANEMU_CLI
+from distributed_support import (LOOPBACK_URI, TIMEOUT, attached_step, cli, frame_ns, nodes, step,
+                                 wait_until)
+from distributed_support import config as support_config
 
 from canemu.testing import Daemon  # noqa: E402
 
-TIMEOUT = 20.0
 DOMAIN = 1 + (os.getpid() + 97) % 200
-URI = ("<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/>"
-       "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-       "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
-       "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
-       "</Domain></CycloneDDS>")
+URI = LOOPBACK_URI
 
 
 def config(name: str, time_mode: str, owner: str | None = None) -> str:
-    owner_line = f'owner = "{owner}"' if owner else ""
-    return f"""
-[simulation]
-time = "{time_mode}"
-
-[distributed]
-name = "{name}"
-domain = {DOMAIN}
-partition = "canemu-test-{os.getpid()}"
-heartbeat_ms = 50
-timeout_ms = 1000
-
-[[bus]]
-name = "can0"
-bitrate = 500000
-{owner_line}
-"""
-
-
-def frame_ns(frame: str) -> tuple[int, int]:
-    """The frame's duration from SOF to the end of EOF, and with its intermission."""
-    text = subprocess.run([str(CANEMU_CLI), "calc", "frame", frame, "--bitrate", "500000"],
-                          capture_output=True, text=True, check=True).stdout
-    return (int(re.search(r": (\d+) ns \(", text).group(1)),
-            int(re.search(r"(\d+) ns with intermission", text).group(1)))
-
-
-def wait_until(done, what: str) -> None:
-    deadline = time.monotonic() + TIMEOUT
-    while not done():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {TIMEOUT} s")
-        time.sleep(0.01)  # polling a condition with a deadline, not waiting for time to pass
-
-
-def cli(daemon: Daemon, *args: str) -> str:
-    done = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, *args],
-                          capture_output=True, text=True, timeout=TIMEOUT)
-    if done.returncode != 0:
-        raise AssertionError(f"canemu {' '.join(args)}: {done.stderr}")
-    return done.stdout
-
-
-def nodes(daemon: Daemon) -> dict:
-    return {n["name"]: n for n in json.loads(cli(daemon, "status", "--json"))["nodes"]}
-
-
-def step(daemon: Daemon, ns: int) -> int:
-    """A step asked of `daemon` (by `canemu time step`: this process keeps its connection to
-    the daemon its python-can bus is on); the simulated time after it."""
-    text = cli(daemon, "time", "step", f"{ns}ns")
-    whole, frac = re.search(r"simulated time (\d+)\.(\d{9}) s", text).groups()
-    return int(whole) * 1_000_000_000 + int(frac)
+    return support_config(name, time_mode, owner, domain=DOMAIN,
+                          partition=f"canemu-test-{os.getpid()}")
 
 
 def frames(bus) -> list:
@@ -98,22 +44,6 @@ def errors(bus) -> list:
         if m.is_error_frame:
             out.append((m.arbitration_id, bytes(m.data).hex()))
     return out
-
-
-def attached_step(follower: Daemon) -> int:
-    """Steps `follower` by 1 us as soon as its bus's owner answers (until then its steps are
-    refused); returns the time after it."""
-    got: list = []
-
-    def try_step() -> bool:
-        try:
-            got.append(step(follower, 1000))
-            return True
-        except AssertionError:
-            return False
-
-    wait_until(try_step, "the follower's steps reach the owner")
-    return got[0]
 
 
 class Peer:

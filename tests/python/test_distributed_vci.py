@@ -11,8 +11,8 @@ import os
 import subprocess
 
 from conftest import BUILD
-from test_distributed import (TIMEOUT, Peer, attached_step, cli, config, env, frame_ns, nodes,
-                              step, wait_until)
+from distributed_support import TIMEOUT, attached_step, cli, frame_ns, nodes, step, wait_until
+from test_distributed import Peer, config, env
 
 from canemu.testing import Daemon  # noqa: E402
 

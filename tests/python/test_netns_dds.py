@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import os
 import queue
-import re
 import subprocess
 import sys
 import threading
@@ -21,6 +20,7 @@ import can
 import pytest
 
 from conftest import CANEMU_CLI, CANEMUD
+from distributed_support import TIMEOUT, frame_ns, wait_until
 
 pytest.importorskip(
     "cyclonedds", reason="PyPI's cyclonedds is not in this Python environment (requirements.txt, "
@@ -30,7 +30,6 @@ import canemu  # noqa: E402
 from netns import Hosts, netns_available  # noqa: E402
 
 MS = 1_000_000
-TIMEOUT = 20.0
 ALONE = 1.0  # seconds host c's peer looks for the bridge (discovery on a link takes ~50 ms)
 DOMAIN = 1 + (os.getpid() + 101) % 200
 PEER = Path(__file__).with_name("netns_dds_peer.py")
@@ -49,14 +48,6 @@ kind = "dds"
 bus = "can0"
 domain = {DOMAIN}
 """
-
-
-def frame_ns(frame: str, bitrate: int = 500000) -> tuple[int, int]:
-    """The frame's duration from SOF to the end of EOF and with its intermission."""
-    text = subprocess.run([str(CANEMU_CLI), "calc", "frame", frame, "--bitrate", str(bitrate)],
-                          capture_output=True, text=True, check=True).stdout
-    bare = int(re.search(r": (\d+) ns \(", text).group(1))
-    return bare, int(re.search(r"(\d+) ns with intermission", text).group(1))
 
 
 class Peer:
@@ -89,14 +80,6 @@ class Peer:
             raise AssertionError(f"peer in {self.host}: no event within {timeout} s or it ended "
                                  f"(status {self.proc.poll()}); stderr:\n{''.join(self.err)}")
         return json.loads(line)
-
-
-def wait_until(done, what: str) -> None:
-    deadline = time.monotonic() + TIMEOUT
-    while not done():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {TIMEOUT} s")
-        time.sleep(0.005)  # polling a condition with a deadline, not waiting for time to pass
 
 
 def bridges(daemon) -> list:

@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import os
 import queue
-import re
 import subprocess
 import sys
 import tempfile
@@ -24,7 +23,9 @@ from pathlib import Path
 
 import pytest
 
-from conftest import CANEMU_CLI, CANEMUD
+from conftest import CANEMUD
+from distributed_support import attached_step, cli, frame_ns, nodes, step, wait_until
+from distributed_support import config as support_config
 from netns import Hosts, netns_available
 
 from canemu.bus import CAN_ERR_BUSOFF, CAN_ERR_CNT, CAN_ERR_CRTL, CAN_ERR_RESTARTED
@@ -40,56 +41,9 @@ GONE_MS = 1000  # [distributed] timeout_ms
 
 
 def config(name: str, time_mode: str, owner: str | None = None) -> str:
-    owner_line = f'owner = "{owner}"' if owner else ""
-    return f"""
-[simulation]
-time = "{time_mode}"
-
-[distributed]
-name = "{name}"
-domain = {DOMAIN}
-partition = "canemu-netns-{os.getpid()}"
-heartbeat_ms = {HEARTBEAT_MS}
-timeout_ms = {GONE_MS}
-
-[[bus]]
-name = "can0"
-bitrate = 500000
-{owner_line}
-"""
-
-
-_durations: dict = {}
-
-
-def frame_ns(frame: str) -> tuple[int, int]:
-    """The frame's duration from SOF to the end of EOF, and with its intermission (500 kbit/s)."""
-    if frame not in _durations:
-        text = subprocess.run([str(CANEMU_CLI), "calc", "frame", frame, "--bitrate", "500000"],
-                              capture_output=True, text=True, check=True).stdout
-        _durations[frame] = (int(re.search(r": (\d+) ns \(", text).group(1)),
-                             int(re.search(r"(\d+) ns with intermission", text).group(1)))
-    return _durations[frame]
-
-
-def wait_until(done, what: str, timeout: float = TIMEOUT) -> None:
-    deadline = time.monotonic() + timeout
-    while not done():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {timeout} s")
-        time.sleep(0.01)  # polling a condition with a deadline, not waiting for time to pass
-
-
-def cli(daemon, *args: str) -> str:
-    done = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, *args],
-                          capture_output=True, text=True, timeout=TIMEOUT)
-    if done.returncode != 0:
-        raise AssertionError(f"canemu {' '.join(args)}: {done.stderr}")
-    return done.stdout
-
-
-def nodes(daemon) -> dict:
-    return {n["name"]: n for n in json.loads(cli(daemon, "status", "--json"))["nodes"]}
+    return support_config(name, time_mode, owner, domain=DOMAIN,
+                          partition=f"canemu-netns-{os.getpid()}", heartbeat_ms=HEARTBEAT_MS,
+                          timeout_ms=GONE_MS)
 
 
 def remote_nodes(daemon) -> dict:
@@ -100,30 +54,6 @@ def remote_nodes(daemon) -> dict:
 
 def state(node: dict) -> tuple:
     return node["state"], node["tec"], node["rec"]
-
-
-def step(daemon, ns: int) -> int:
-    """A step asked of `daemon` by `canemu time step` (a process of its own); the simulated time
-    after it."""
-    text = cli(daemon, "time", "step", f"{ns}ns")
-    whole, frac = re.search(r"simulated time (\d+)\.(\d{9}) s", text).groups()
-    return int(whole) * 1_000_000_000 + int(frac)
-
-
-def attached_step(follower) -> int:
-    """Steps `follower` by 1 us as soon as its bus's owner answers (until then its steps are
-    refused); the time after it."""
-    got: list = []
-
-    def try_step() -> bool:
-        try:
-            got.append(step(follower, US))
-            return True
-        except AssertionError:
-            return False
-
-    wait_until(try_step, "the follower's steps reach the owner")
-    return got[0]
 
 
 class Peer:

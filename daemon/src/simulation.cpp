@@ -478,7 +478,13 @@ namespace {
 
 bool same(const BusConfig& a, const BusConfig& b) {
   return a.name == b.name && a.kind == b.kind && a.bitrate == b.bitrate &&
-         a.sample_point == b.sample_point && a.data_bitrate == b.data_bitrate;
+         a.sample_point == b.sample_point && a.data_bitrate == b.data_bitrate && a.owner == b.owner;
+}
+
+bool same(const DistributedConfig& a, const DistributedConfig& b) {
+  return a.enabled == b.enabled && a.name == b.name && a.domain == b.domain &&
+         a.partition == b.partition && a.heartbeat_ms == b.heartbeat_ms &&
+         a.timeout_ms == b.timeout_ms;
 }
 
 bool same(const DeviceConfig& a, const DeviceConfig& b) {
@@ -519,6 +525,9 @@ ReloadReport Simulation::reload(const Config& fresh) {
     r.refused.push_back(
         fmt::format("simulation.seed: stays {} (a restart changes it)", config_.simulation.seed));
   }
+  if (!same(fresh.distributed, config_.distributed)) {
+    r.refused.push_back("distributed: stays as it was (a restart changes it)");
+  }
   for (const BusConfig& old : config_.buses) {
     const BusConfig* now = find_named(fresh.buses, old.name);
     if (now == nullptr) {
@@ -556,6 +565,19 @@ ReloadReport Simulation::reload(const Config& fresh) {
   // What can: new buses and devices, the security lists, the wake-up tuning.
   for (const BusConfig& b : fresh.buses) {
     if (find_named(config_.buses, b.name) == nullptr) {
+      if (!b.owner.empty() && b.owner != config_.distributed.name && !config_.distributed.enabled) {
+        r.refused.push_back(fmt::format(
+            "bus {}: not added (daemon {} simulates it, and [distributed] needs a restart)", b.name,
+            b.owner));
+        continue;
+      }
+      if (config_.remote(b) && config_.simulation.time.mode == TimeMode::stepped) {
+        r.refused.push_back(fmt::format(
+            "bus {}: not added (in stepped time the remote buses, whose owner's steps are this "
+            "daemon's, are set at start)",
+            b.name));
+        continue;
+      }
       config_.buses.push_back(b);
       add_bus(b);
       r.applied.push_back(

@@ -512,4 +512,20 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
 }
 
 }  // namespace
+TEST(DistributedStatus, InSteppedTimeARemoteBusIsNotAddedByAReload) {
+  auto b = daemon_named("b", std::string("[simulation]\ntime = \"stepped\"\n") + kBusB);
+  ASSERT_TRUE(b);
+  Config fresh = b->config();
+  BusConfig far;
+  far.name = "can1";
+  far.owner = "a";
+  fresh.buses.push_back(far);
+  const ReloadReport r = b->reload(fresh);
+  EXPECT_TRUE(r.applied.empty());
+  EXPECT_EQ(r.refused, (std::vector<std::string>{
+                           "bus can1: not added (in stepped time the remote buses, whose owner's "
+                           "steps are this daemon's, are set at start)"}));
+  EXPECT_EQ(b->bus_count(), 1u);
+}
+
 }  // namespace canemu::daemon

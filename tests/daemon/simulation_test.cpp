@@ -97,4 +97,27 @@ TEST(SimulationDevices, AVciDeviceOnACanBusRunsAnSja1000WithItsFirmware) {
 }
 
 }  // namespace
+TEST(SimulationReload, BusesOfOtherDaemonsNeedDistributedFromTheStart) {
+  auto sim = std::move(*Simulation::build(default_config()));
+  Config fresh = default_config();
+  fresh.distributed.enabled = true;
+  fresh.distributed.name = "here";
+  BusConfig remote;
+  remote.name = "far";
+  remote.owner = "rig-a";
+  fresh.buses.push_back(remote);
+  fresh.buses[0].owner = "rig-a";
+  const ReloadReport r = sim->reload(fresh);
+  EXPECT_TRUE(r.applied.empty());
+  EXPECT_EQ(r.refused,
+            (std::vector<std::string>{
+                "distributed: stays as it was (a restart changes it)",
+                "bus can0: keeps its settings (can at 500000 bit/s; a restart changes them)",
+                "bus far: not added (daemon rig-a simulates it, and [distributed] needs a "
+                "restart)"}));
+  EXPECT_EQ(sim->bus_count(), 3u);
+  EXPECT_TRUE(sim->config().buses[0].owner.empty());
+  EXPECT_EQ(sim->distributed(), nullptr);
+}
+
 }  // namespace canemu::daemon

@@ -487,7 +487,6 @@ class RemoteNode final : public HostedNode {
         ev->state_changed(at, static_cast<ErrorState>(std::min<uint8_t>(e.state, 3)), e.tec, e.rec);
         return;
       case canemu_net_EV_REFUSED:
-      case canemu_net_EV_GONE:
         log::warning("node {} of bus {} (owner {}): {}", device_, bus_name_, owner_,
                      printable(get(e.text)));
         owner_lost();

@@ -542,7 +542,8 @@ BENCHMARK(BM_IdleBusesCostNothing)
 // frame; this process drains the receiving rings every 5 ms. Measured over 3 s after a second of
 // warming up: canemud's processor time and wake-ups, simulated seconds per real second, the
 // largest lag a status reply showed, the frames the buses carried against what back-to-back
-// frames at 1 Mbit/s would be, and the frames received.
+// frames at 1 Mbit/s would be, the frames received, and canemud's own pacing figures over the
+// last second (events, wake-ups and the timer against their instants; docs/daemon.md).
 void BM_BusyBusesRealtime(benchmark::State& state) {
   const auto buses = static_cast<int>(state.range(0));
   char dir[] = "/tmp/canemu-bench-XXXXXX";
@@ -619,6 +620,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
     uint64_t load_permille = 0;
     uint64_t ticks = 0;
     uint64_t switches = 0;
+    ipc::WirePacing pacing;  // canemud's own figures (docs/daemon.md, "Pacing")
   };
   int64_t max_lag_ns = 0;
   const auto sample = [&]() -> std::optional<Sample> {
@@ -635,6 +637,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
     }
     std::tie(out.ticks, out.switches) = cpu_ticks_and_switches(daemon.pid());
     max_lag_ns = std::max(max_lag_ns, s->lag_ns);
+    out.pacing = s->pacing;
     return out;
   };
   const auto run_for = [&](int64_t ns) {
@@ -677,6 +680,17 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
     state.counters["received_per_second"] = static_cast<double>(received - received0) / wall;
     state.counters["mean_bus_load_percent"] =
         static_cast<double>(b->load_permille) / 10.0 / static_cast<double>(buses);
+    // canemud's pacing over the last complete second of the window.
+    const ipc::WirePacing& p = b->pacing;
+    const auto us = [](int64_t ns) { return static_cast<double>(ns) / 1e3; };
+    state.counters["event_late_p50_us"] = us(p.events_last.p50_ns);
+    state.counters["event_late_p99_us"] = us(p.events_last.p99_ns);
+    state.counters["event_late_max_us"] = us(p.events_last.max_ns);
+    state.counters["wakeup_late_p50_us"] = us(p.wakeups_last.p50_ns);
+    state.counters["wakeup_late_p99_us"] = us(p.wakeups_last.p99_ns);
+    state.counters["wakeup_late_max_us"] = us(p.wakeups_last.max_ns);
+    state.counters["timer_late_p99_us"] = us(p.timer_last.p99_ns);
+    state.counters["spin_us"] = us(p.spin_ns);
   }
   // What the buses would carry at full load: back-to-back frames and 3 bits of intermission.
   const uint8_t data[8] = {1, 2, 3, 4, 5, 6, 7, 8};
@@ -688,6 +702,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
 }
 BENCHMARK(BM_BusyBusesRealtime)
     ->ArgNames({"buses", "batch_us"})
+    ->Args({16, 0})   // a wake-up per event: the pacing without batching
     ->Args({16, 50})  // batch_us 50: the default
     ->Args({64, 50})
     ->Args({64, 1000})

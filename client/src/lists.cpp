@@ -42,6 +42,7 @@ Result<Status> fetch_status(Connection& c) {
         s.ring_bytes = r->ring_bytes;
         s.lag_ns = r->lag_ns;
         s.achieved_scale = r->achieved_scale;
+        s.pacing = r->pacing;
         s.generation = r->generation;
         bus_total = r->bus_total;
         node_total = r->node_total;

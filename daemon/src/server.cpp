@@ -58,6 +58,7 @@ Server::Server(Simulation& sim, ServerOptions options)
     if (options_.time.mode != TimeMode::stepped) {
       r.lag_ns = lag_ns_;
       r.achieved_scale = achieved_scale();
+      pacing_.fill(r.pacing);
     }
   };
   dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
@@ -286,17 +287,31 @@ void Server::advance_to_now() {
   }
   const model::SimTime target = wall_to_sim();
   model::SimScheduler& s = sim_.scheduler();
-  const int64_t until = monotonic_ns() + kMaxPassWorkNs;
-  while (true) {
-    s.run_until(target, kEventsPerCheck);
-    if (s.now() >= target || monotonic_ns() >= until) {
-      break;  // caught up, or the rest waits for the next pass (the timer is due at once)
+  const double per_sim_ns =
+      options_.time.mode == TimeMode::scaled ? 1.0 / options_.time.scale : 1.0;
+  int64_t wall = monotonic_ns();
+  const int64_t until = wall + kMaxPassWorkNs;
+  for (std::size_t ran = 0;; ++ran) {
+    const std::optional<model::SimTime> next = s.next_event_time();
+    if (!next || *next > target) {
+      s.run_until(target);  // nothing more is due: now() becomes the target
+      break;
     }
+    if (ran % kEventsPerClock == kEventsPerClock - 1) {
+      wall = monotonic_ns();
+      if (wall >= until) {
+        break;  // the rest waits for the next pass (the timer is due at once)
+      }
+    }
+    const double instant = static_cast<double>(next->ns()) * per_sim_ns;
+    pacing_.event_late(wall - start_mono_ns_ - static_cast<int64_t>(std::min(instant, 9.0e18)));
+    s.run_until(*next, 1);
   }
   note_pace(monotonic_ns(), target);
 }
 
 void Server::note_pace(int64_t mono_ns, model::SimTime target) {
+  pacing_.tick(mono_ns);
   const model::SimTime now = sim_.scheduler().now();
   lag_ns_ = std::max<int64_t>(0, (target - now).ns());
   if (pace_.empty() || mono_ns - pace_.back().first >= 100'000'000) {
@@ -338,8 +353,14 @@ void Server::arm_timer() {
       const int64_t due = start_mono_ns_ + static_cast<int64_t>(std::min(offset, 9.0e18));
       const SimulationConfig& sc = sim_.config().simulation;
       deadline_ns_ = std::max(due, last_wake_ns_ + int64_t{sc.batch_us} * 1000);
-      // Woken a little early, the loop spins to the deadline.
-      const int64_t wall = std::max<int64_t>(1, deadline_ns_ - int64_t{sc.spin_us} * 1000);
+      // Woken a little early (as early as the timer has lately been late, at most spin_us),
+      // the loop spins to the deadline.
+      if (pacing_.max_spin_ns() != int64_t{sc.spin_us} * 1000) {
+        pacing_.set_max_spin(int64_t{sc.spin_us} * 1000);  // at start and after a reload
+      }
+      const int64_t wall = std::max<int64_t>(1, deadline_ns_ - pacing_.spin_ns());
+      armed_ns_ = wall;
+      armed_ahead_ = wall > monotonic_ns();
       its.it_value.tv_sec = wall / 1'000'000'000;
       its.it_value.tv_nsec = wall % 1'000'000'000;
     }
@@ -370,16 +391,24 @@ bool Server::run_once(int timeout_ms) {
     log::error("epoll_wait: {}", std::strerror(errno));
     return false;
   }
+  bool timer_woke = false;
   for (int i = 0; i < n; ++i) {
     if (events[i].data.fd == timer_.get() && deadline_ns_ != 0) {
-      // The last few microseconds to the deadline (simulation.spin_us), never longer.
-      const int64_t until =
-          std::min(deadline_ns_, monotonic_ns() + int64_t{sim_.config().simulation.spin_us} * 1000);
+      timer_woke = true;
+      const int64_t fired = monotonic_ns();
+      if (armed_ahead_) {  // a timer armed for the past says nothing about the timer
+        pacing_.timer_late(fired - armed_ns_);
+      }
+      // The last few microseconds to the deadline, never longer than the spin.
+      const int64_t until = std::min(deadline_ns_, fired + pacing_.spin_ns());
       while (monotonic_ns() < until) {
       }
     }
   }
   last_wake_ns_ = monotonic_ns();
+  if (timer_woke) {
+    pacing_.wakeup_late(last_wake_ns_ - deadline_ns_);
+  }
   advance_to_now();  // events are handled at the simulated instant they are seen
   for (int i = 0; i < n; ++i) {
     const int fd = events[i].data.fd;

@@ -2,7 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -12,6 +15,7 @@
 
 #include "canemu/client/channel.hpp"
 #include "canemu/ipc/clock.hpp"
+#include "cli_process.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -366,6 +370,117 @@ TEST(Canemud, RefusesToStartOnSocketsItCannotServe) {
   ::close(dgram[1]);
 }
 
+// Opens two channels on bus "fast" and makes the first ("talker") babble: the bus at full load.
+std::pair<std::optional<client::Channel>, std::optional<client::Channel>> babbling_bus(
+    client::Connection& c) {
+  client::ChannelOptions o;
+  o.bus = "fast";
+  o.device = "talker";
+  auto talker = client::Channel::open(c, o);
+  o.device = "listener";
+  auto listener = client::Channel::open(c, o);
+  EXPECT_TRUE(talker && listener);
+  const std::string text =
+      "[scenario]\nname = \"babble\"\n\n[[fault]]\nat = \"0s\"\nnode = \"talker:0\"\n"
+      "effect = \"babble\"\nid = 0x10\nduration = \"100000s\"\n";
+  auto load = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+  load->length = static_cast<uint32_t>(text.size());
+  std::copy(text.begin(), text.end(), load->text);
+  auto loaded = c.call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
+  EXPECT_TRUE(loaded && loaded->applied == 1) << (loaded ? loaded->errors : "no reply");
+  std::pair<std::optional<client::Channel>, std::optional<client::Channel>> bus;
+  if (talker && listener) {
+    bus.first.emplace(std::move(*talker));
+    bus.second.emplace(std::move(*listener));
+  }
+  return bus;
+}
+
+std::string write_fast_bus(const std::string& folder, const std::string& extra = "") {
+  const std::string config = folder + "/fast.toml";
+  FILE* f = std::fopen(config.c_str(), "w");
+  std::fputs(("[[bus]]\nname = \"fast\"\nbitrate = 1000000\n" + extra).c_str(), f);
+  std::fclose(f);
+  return config;
+}
+
+void expect_ordered(const ipc::WirePacingFigures& f, const char* what) {
+  EXPECT_LE(f.p50_ns, f.p99_ns) << what;
+  EXPECT_LE(f.p99_ns, f.max_ns) << what;
+  EXPECT_GE(f.p50_ns, 0) << what;
+}
+
+// canemud measures its own pacing in real time: every event, each timer wake-up and the timer's
+// firing, since start and over the last second; the spin follows the timer, at most spin_us.
+// (Figures, not a wall-clock bound: which values they take depends on the machine.)
+TEST(Canemud, MeasuresItsOwnPacingInRealTime) {
+  char dir[] = "/tmp/canemu-pace-XXXXXX";
+  const std::string folder = ::mkdtemp(dir);
+  const std::string config = write_fast_bus(folder, "\n[simulation]\nspin_us = 30\n");
+  Daemon d("realtime", {"--config=" + config});
+  auto c = connect(d);
+  auto bus = babbling_bus(c);
+  ASSERT_TRUE(bus.first && bus.second);
+  // Wait (at most 10 s) for a complete second with traffic.
+  ipc::StatusReply s{};
+  for (const int64_t end = ipc::monotonic_ns() + 10'000'000'000;
+       ipc::monotonic_ns() < end && s.pacing.events_last.count < 1000;) {
+    s = status(c);
+  }
+  const ipc::WirePacing& p = s.pacing;
+  // A babbling 1 Mbit/s bus: about 8,700 frames a second, several events each.
+  EXPECT_GE(p.events_last.count, 1000u);
+  EXPECT_GE(p.events.count, p.events_last.count);
+  EXPECT_GT(p.wakeups.count, 0u);
+  EXPECT_GT(p.timer.count, 0u);
+  for (const auto* f :
+       {&p.events, &p.events_last, &p.wakeups, &p.wakeups_last, &p.timer, &p.timer_last}) {
+    expect_ordered(*f, "pacing figures");
+  }
+  EXPECT_EQ(p.max_spin_ns, 30'000);
+  EXPECT_GE(p.spin_ns, 0);
+  EXPECT_LE(p.spin_ns, 30'000);
+  Cli text(d, {"status"});
+  const std::string out = Cli::read_all(text.out);
+  EXPECT_NE(out.find("pacing, last second: events late p50 "), std::string::npos) << out;
+  EXPECT_NE(out.find("(at most 30.0 us)"), std::string::npos) << out;
+  Cli metrics(d, {"metrics"});
+  const std::string m = Cli::read_all(metrics.out);
+  EXPECT_NE(m.find("canemu_pacing_lateness_seconds{what=\"events\",window=\"last_second\","
+                   "quantile=\"0.99\"} "),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("canemu_pacing_spin_seconds "), std::string::npos) << m;
+  ::unlink(config.c_str());
+  ::rmdir(dir);
+}
+
+// In stepped time nothing is late: the figures stay empty and the status prints no pacing.
+TEST(Canemud, SteppedTimeHasNoPacing) {
+  char dir[] = "/tmp/canemu-pace-XXXXXX";
+  const std::string folder = ::mkdtemp(dir);
+  const std::string config = write_fast_bus(folder);
+  Daemon d("stepped", {"--config=" + config});
+  auto c = connect(d);
+  auto bus = babbling_bus(c);
+  ASSERT_TRUE(bus.first && bus.second);
+  auto step = ipc::make_message<ipc::TimeStepRequest>();
+  step.step_ns = 10'000'000;
+  auto stepped = c.call<ipc::TimeStepRequest, ipc::TimeStepReply>(step);
+  ASSERT_TRUE(stepped);
+  EXPECT_GT(stepped->events_run, 100u);
+  const ipc::StatusReply s = status(c);
+  EXPECT_GT(s.buses[0].frames, 50u);
+  EXPECT_EQ(s.pacing.events.count, 0u);
+  EXPECT_EQ(s.pacing.wakeups.count, 0u);
+  EXPECT_EQ(s.pacing.spin_ns, 0);
+  Cli text(d, {"status"});
+  const std::string out = Cli::read_all(text.out);
+  EXPECT_EQ(out.find("pacing"), std::string::npos) << out;
+  ::unlink(config.c_str());
+  ::rmdir(dir);
+}
+
 // A simulation that cannot keep the requested scale does not make canemud deaf: a babbling node
 // keeps a 1 Mbit/s bus at full load while time runs 20,000 times faster than real time (far more
 // than the engine can do on this machine); status requests are still answered within 100 ms
@@ -374,29 +489,11 @@ TEST(Canemud, RefusesToStartOnSocketsItCannotServe) {
 TEST(Canemud, AScaleThatCannotBeKeptLagsVisiblyAndRequestsAreStillAnswered) {
   char dir[] = "/tmp/canemu-lag-XXXXXX";
   const std::string folder = ::mkdtemp(dir);
-  const std::string config = folder + "/lag.toml";
-  {
-    FILE* f = std::fopen(config.c_str(), "w");
-    std::fputs("[[bus]]\nname = \"fast\"\nbitrate = 1000000\n", f);
-    std::fclose(f);
-  }
+  const std::string config = write_fast_bus(folder);
   Daemon d("scaled:20000", {"--config=" + config});
   auto c = connect(d);
-  client::ChannelOptions o;
-  o.bus = "fast";
-  o.device = "talker";
-  auto talker = client::Channel::open(c, o);
-  o.device = "listener";
-  auto listener = client::Channel::open(c, o);
-  ASSERT_TRUE(talker && listener);
-  const std::string text =
-      "[scenario]\nname = \"babble\"\n\n[[fault]]\nat = \"0s\"\nnode = \"talker:0\"\n"
-      "effect = \"babble\"\nid = 0x10\nduration = \"100000s\"\n";
-  auto load = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
-  load->length = static_cast<uint32_t>(text.size());
-  std::copy(text.begin(), text.end(), load->text);
-  auto loaded = c.call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
-  ASSERT_TRUE(loaded && loaded->applied == 1) << (loaded ? loaded->errors : "no reply");
+  auto bus = babbling_bus(c);
+  ASSERT_TRUE(bus.first && bus.second);
   int64_t slowest = 0;
   ipc::StatusReply last{};
   const int64_t end = ipc::monotonic_ns() + 2'000'000'000;
@@ -414,6 +511,8 @@ TEST(Canemud, AScaleThatCannotBeKeptLagsVisiblyAndRequestsAreStillAnswered) {
   EXPECT_LT(last.achieved_scale, 20000.0);
   EXPECT_GT(last.buses[0].frames, 1000u);  // the bus did carry the babble
   EXPECT_TRUE(d.read_log_until("simulated time lags", 5000)) << d.log();
+  // The pacing says the same: events ran far behind their instants.
+  EXPECT_GT(last.pacing.events.max_ns, 1'000'000);
   ::unlink(config.c_str());
   ::rmdir(dir);
 }

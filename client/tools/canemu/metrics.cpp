@@ -2,6 +2,7 @@
 // for a node exporter's textfile collector or any scraper that runs a command.
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
@@ -154,6 +155,34 @@ std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
   e.family("canemu_sim_achieved_scale", "gauge",
            "Simulated seconds per real second over the last second (real and scaled time).");
   e.sample("canemu_sim_achieved_scale", "", fmt::format("{:.3f}", s.achieved_scale));
+  e.family("canemu_pacing_lateness_seconds", "gauge",
+           "Real and scaled time: how late canemud ran simulated events, woke for its timer "
+           "deadlines and saw its timer fire (what: events, wakeups, timer), since start or over "
+           "the last second (window), as quantiles 0.5, 0.99 and 1 (the max); 0 in stepped time.");
+  const auto lateness = [&](const char* what, const char* window, const ipc::WirePacingFigures& f) {
+    const std::pair<const char*, int64_t> quantiles[] = {
+        {"0.5", f.p50_ns}, {"0.99", f.p99_ns}, {"1", f.max_ns}};
+    for (const auto& [q, ns] : quantiles) {
+      e.sample("canemu_pacing_lateness_seconds",
+               fmt::format("what=\"{}\",window=\"{}\",quantile=\"{}\"", what, window, q),
+               fmt::format("{:.9f}", static_cast<double>(ns) / 1e9));
+    }
+  };
+  lateness("events", "start", s.pacing.events);
+  lateness("events", "last_second", s.pacing.events_last);
+  lateness("wakeups", "start", s.pacing.wakeups);
+  lateness("wakeups", "last_second", s.pacing.wakeups_last);
+  lateness("timer", "start", s.pacing.timer);
+  lateness("timer", "last_second", s.pacing.timer_last);
+  e.family("canemu_pacing_measured_total", "counter",
+           "Events, timer wake-ups and timer firings whose lateness was measured since start.");
+  e.sample("canemu_pacing_measured_total", "what=\"events\"", s.pacing.events.count);
+  e.sample("canemu_pacing_measured_total", "what=\"wakeups\"", s.pacing.wakeups.count);
+  e.sample("canemu_pacing_measured_total", "what=\"timer\"", s.pacing.timer.count);
+  e.family("canemu_pacing_spin_seconds", "gauge",
+           "How early the loop's timer is armed before a deadline (at most simulation.spin_us).");
+  e.sample("canemu_pacing_spin_seconds", "",
+           fmt::format("{:.9f}", static_cast<double>(s.pacing.spin_ns) / 1e9));
   e.family("canemu_ring_bytes", "gauge", "Shared ring memory the clients' channels hold.");
   e.sample("canemu_ring_bytes", "", s.ring_bytes);
 

@@ -41,6 +41,47 @@ std::string model_name(uint8_t model) {
   return std::string(ipc::to_string(static_cast<ipc::WireDeviceModel>(model)));
 }
 
+// A lateness: microseconds below a millisecond, then milliseconds.
+std::string duration_text(int64_t ns) {
+  if (ns < 1'000'000) {
+    return fmt::format("{:.1f} us", static_cast<double>(ns) / 1e3);
+  }
+  return fmt::format("{:.2f} ms", static_cast<double>(ns) / 1e6);
+}
+
+// Real and scaled time: how late events, wake-ups and the timer were (docs/daemon.md, "Pacing").
+void print_pacing(const ipc::WirePacing& p) {
+  std::printf(
+      "pacing, last second: events late p50 %s, p99 %s, max %s (%llu); wake-ups late "
+      "p99 %s, max %s; timer late p99 %s, spin %s (at most %s)\n",
+      duration_text(p.events_last.p50_ns).c_str(), duration_text(p.events_last.p99_ns).c_str(),
+      duration_text(p.events_last.max_ns).c_str(),
+      static_cast<unsigned long long>(p.events_last.count),
+      duration_text(p.wakeups_last.p99_ns).c_str(), duration_text(p.wakeups_last.max_ns).c_str(),
+      duration_text(p.timer_last.p99_ns).c_str(), duration_text(p.spin_ns).c_str(),
+      duration_text(p.max_spin_ns).c_str());
+  std::printf(
+      "pacing since start: events late p50 %s, p99 %s, max %s (%llu); wake-ups late "
+      "p99 %s, max %s\n",
+      duration_text(p.events.p50_ns).c_str(), duration_text(p.events.p99_ns).c_str(),
+      duration_text(p.events.max_ns).c_str(), static_cast<unsigned long long>(p.events.count),
+      duration_text(p.wakeups.p99_ns).c_str(), duration_text(p.wakeups.max_ns).c_str());
+}
+
+toml::table pacing_json(const ipc::WirePacing& p) {
+  const auto figures = [](const ipc::WirePacingFigures& f) {
+    return toml::table{{"count", static_cast<int64_t>(f.count)},
+                       {"p50_ns", f.p50_ns},
+                       {"p99_ns", f.p99_ns},
+                       {"max_ns", f.max_ns}};
+  };
+  return toml::table{
+      {"events", figures(p.events)},   {"events_last_second", figures(p.events_last)},
+      {"wakeups", figures(p.wakeups)}, {"wakeups_last_second", figures(p.wakeups_last)},
+      {"timer", figures(p.timer)},     {"timer_last_second", figures(p.timer_last)},
+      {"spin_ns", p.spin_ns},          {"max_spin_ns", p.max_spin_ns}};
+}
+
 std::vector<std::string> device_buses(const ipc::DeviceEntry& d) {
   std::vector<std::string> buses;
   for (uint8_t k = 0; k < d.controller_count && k < ipc::kMaxDeviceControllers; ++k) {
@@ -212,6 +253,7 @@ void print_json(const client::Connection& c, const client::Status& s, const std:
                   {"ring_bytes", i64(s.ring_bytes)},
                   {"lag_ns", s.lag_ns},
                   {"achieved_scale", s.achieved_scale},
+                  {"pacing", pacing_json(s.pacing)},
                   {"buses", std::move(buses)},
                   {"nodes", std::move(nodes)},
                   {"devices", std::move(device_list)},
@@ -236,6 +278,9 @@ void print_tables(const client::Connection& c, const client::Status& s, const st
   if (s.lag_ns >= 1'000'000) {  // a millisecond or more: the simulation does not keep up
     std::printf("simulated time lags %.3f s behind (achieved %.1f x real time)\n",
                 static_cast<double>(s.lag_ns) / 1e9, s.achieved_scale);
+  }
+  if (static_cast<ipc::WireTimeMode>(s.time_mode) != ipc::WireTimeMode::stepped) {
+    print_pacing(s.pacing);
   }
   std::printf("%-12s %-7s %9s %9s %7s %10s %8s\n", "BUS", "KIND", "BITRATE", "DATA", "LOAD",
               "FRAMES", "ERRORS");

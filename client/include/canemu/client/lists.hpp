@@ -23,6 +23,7 @@ struct Status {
   uint64_t ring_bytes = 0;
   int64_t lag_ns = 0;
   double achieved_scale = 0.0;
+  ipc::WirePacing pacing;  // real and scaled time: how late canemud ran things
   uint32_t generation = 0;
   std::vector<ipc::StatusBus> buses;
   std::vector<ipc::StatusNode> nodes;  // a node's `bus` indexes `buses`

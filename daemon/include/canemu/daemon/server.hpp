@@ -15,6 +15,7 @@
 #include "canemu/daemon/access_policy.hpp"
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/control_dispatcher.hpp"
+#include "canemu/daemon/pacing.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 
@@ -119,12 +120,17 @@ class Server {
   std::vector<ipc::Notification> pending_notifications_;
 
   // Real and scaled time: one pass of the loop runs the simulation for at most kMaxPassWorkNs
-  // of wall time (checked every kEventsPerCheck events), so requests, doorbells and signals are
+  // of wall time (checked every kEventsPerClock events), so requests, doorbells and signals are
   // served at least that often whatever the load. When the scale cannot be kept, simulated time
   // lags behind the configured mapping instead (docs/daemon.md, "Time").
   static constexpr int64_t kMaxPassWorkNs = 2'000'000;
-  static constexpr std::size_t kEventsPerCheck = 256;
-  int64_t lag_ns_ = 0;                            // simulated ns behind
+  // The clock is read every kEventsPerClock events: an event's lateness is measured against
+  // the last reading (at most the time that many events take, a few microseconds, early).
+  static constexpr std::size_t kEventsPerClock = 8;
+  Pacing pacing_;
+  int64_t armed_ns_ = 0;      // CLOCK_MONOTONIC the timer is armed for (the deadline less the spin)
+  bool armed_ahead_ = false;  // ... and that instant was still ahead when armed
+  int64_t lag_ns_ = 0;        // simulated ns behind
   std::deque<std::pair<int64_t, int64_t>> pace_;  // (CLOCK_MONOTONIC, simulated) ns
   int64_t lag_logged_ns_ = 0;                     // CLOCK_MONOTONIC of the last lag warning
 };

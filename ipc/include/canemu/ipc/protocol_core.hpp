@@ -21,7 +21,7 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 3;
+inline constexpr uint16_t kProtocolVersion = 4;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 // A fault scenario's name: up to 63 bytes and the terminating zero.
@@ -211,6 +211,29 @@ struct StatusNode {
 };
 static_assert(sizeof(StatusNode) == 64);
 
+// How late things ran, in ns (real and scaled time; all zero in stepped time).
+struct WirePacingFigures {
+  uint64_t count = 0;
+  int64_t p50_ns = 0;
+  int64_t p99_ns = 0;
+  int64_t max_ns = 0;
+};
+static_assert(sizeof(WirePacingFigures) == 32);
+
+// canemud's own measure of its pacing (docs/daemon.md, "Pacing"): since start and over the
+// last complete second.
+struct WirePacing {
+  WirePacingFigures events;  // every simulated event against its instant
+  WirePacingFigures events_last;
+  WirePacingFigures wakeups;  // the loop's timer wake-ups, after the spin, against the deadline
+  WirePacingFigures wakeups_last;
+  WirePacingFigures timer;  // the timerfd's firing against the instant it was armed for
+  WirePacingFigures timer_last;
+  int64_t spin_ns = 0;      // how early the timer is armed now
+  int64_t max_spin_ns = 0;  // simulation.spin_us
+};
+static_assert(sizeof(WirePacing) == 6 * 32 + 16);
+
 struct StatusReply {
   MsgHeader header;
   int64_t sim_time_ns = 0;
@@ -235,9 +258,10 @@ struct StatusReply {
   // canemud keeps up), and the scale achieved over the last second.
   int64_t lag_ns = 0;
   double achieved_scale = 0.0;
+  WirePacing pacing;
 };
 static_assert(sizeof(StatusReply) ==
-              16 + 40 + 64 * kStatusPageBuses + 64 * kStatusPageNodes + 8 + 16);
+              16 + 40 + 64 * kStatusPageBuses + 64 * kStatusPageNodes + 8 + 16 + 208);
 static_assert(sizeof(StatusReply) <= kMaxMessageSize);
 
 struct TimeStepRequest {

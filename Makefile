@@ -71,6 +71,8 @@ bench: deps build
 	  --benchmark_out_format=json $(BENCH_ARGS)
 	$(BUILD_DIR)/bin/daemon_bench --benchmark_out=$(BUILD_DIR)/bench-results/daemon.json \
 	  --benchmark_out_format=json $(BENCH_ARGS)
+	$(BUILD_DIR)/bin/vci_bench --benchmark_out=$(BUILD_DIR)/bench-results/vci.json \
+	  --benchmark_out_format=json $(BENCH_ARGS)
 	.venv/bin/python bench/python/python_can_bench.py --out $(BUILD_DIR)/bench-results/python.json
 	@echo "bench: results in $(BUILD_DIR)/bench-results/"
 

@@ -536,6 +536,64 @@ BENCHMARK(BM_IdleBusesCostNothing)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
+// Buses can0..canN-1 kept at full load: on each an ephemeral channel's node that a babble fault
+// makes send 000#0102030405060708 back to back for an hour, and a second channel's node that
+// acknowledges and receives every frame (a connection per bus: a client may open 16 channels).
+struct BabblingBuses {
+  std::vector<client::Connection> owners;  // none moves once it has channels
+  std::vector<client::Channel> babblers;
+  std::vector<client::Channel> receivers;
+  // An empty text, or what failed.
+  std::string open(const testing::CanemudProcess& daemon, client::Connection& c, int buses) {
+    owners.reserve(static_cast<std::size_t>(buses));
+    std::string scenario = "[scenario]\nname = \"babble\"\n";
+    for (int i = 0; i < buses; ++i) {
+      auto owner = client::Connection::open(daemon.socket(), "bench-bus" + std::to_string(i));
+      if (!owner) {
+        return owner.error().message;
+      }
+      owners.push_back(std::move(*owner));
+      client::ChannelOptions o;
+      o.bus = "can" + std::to_string(i);
+      o.device = "tx" + std::to_string(i);
+      o.rx_capacity = 16;
+      o.tx_capacity = 16;
+      auto tx = client::Channel::open(owners.back(), o);
+      o.device = "rx" + std::to_string(i);
+      o.rx_capacity = 2048;
+      auto rx = client::Channel::open(owners.back(), o);
+      if (!tx || !rx) {
+        return (!tx ? tx.error() : rx.error()).message;
+      }
+      babblers.push_back(std::move(*tx));
+      receivers.push_back(std::move(*rx));
+      scenario += "[[fault]]\nat = \"0s\"\nnode = \"tx" + std::to_string(i) +
+                  ":0\"\neffect = \"babble\"\nid = 0\ndata = [1, 2, 3, 4, 5, 6, 7, 8]\n"
+                  "duration = \"3600s\"\n";
+    }
+    auto load = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
+    ipc::copy_name(load->source, "bench");
+    load->length = static_cast<uint32_t>(scenario.size());
+    std::memcpy(load->text, scenario.data(), std::min(scenario.size(), sizeof load->text));
+    auto loaded = c.call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
+    if (!loaded) {
+      return loaded.error().message;
+    }
+    return loaded->applied == 1 ? std::string() : std::string(loaded->errors);
+  }
+  // Takes what the receivers hold; returns how many.
+  uint64_t drain() {
+    uint64_t n = 0;
+    ipc::ChannelMessage m;
+    for (client::Channel& r : receivers) {
+      while (r.rx().get(&m) == ipc::RingStatus::ok) {
+        ++n;
+      }
+    }
+    return n;
+  }
+};
+
 // N buses at 1 Mbit/s in real time (the event loop waking at most every batch_us), each with a
 // babbling node (an ephemeral channel's node that a babble fault makes send 000#0102030405060708
 // back to back, for 3600 s) and a second channel's node that acknowledges and receives every
@@ -561,57 +619,13 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
     state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
     return;
   }
-  // A connection per bus (a client may open 16 channels), none of which moves once it has
-  // channels.
-  std::vector<client::Connection> owners;
-  owners.reserve(static_cast<std::size_t>(buses));
-  std::vector<client::Channel> babblers;
-  std::vector<client::Channel> receivers;
-  std::string scenario = "[scenario]\nname = \"babble\"\n";
-  for (int i = 0; i < buses; ++i) {
-    auto owner = client::Connection::open(daemon.socket(), "bench-bus" + std::to_string(i));
-    if (!owner) {
-      state.SkipWithError(owner.error().message.c_str());
-      return;
-    }
-    owners.push_back(std::move(*owner));
-    client::ChannelOptions o;
-    o.bus = "can" + std::to_string(i);
-    o.device = "tx" + std::to_string(i);
-    o.rx_capacity = 16;
-    o.tx_capacity = 16;
-    auto tx = client::Channel::open(owners.back(), o);
-    o.device = "rx" + std::to_string(i);
-    o.rx_capacity = 2048;
-    auto rx = client::Channel::open(owners.back(), o);
-    if (!tx || !rx) {
-      state.SkipWithError((!tx ? tx.error() : rx.error()).message.c_str());
-      return;
-    }
-    babblers.push_back(std::move(*tx));
-    receivers.push_back(std::move(*rx));
-    scenario += "[[fault]]\nat = \"0s\"\nnode = \"tx" + std::to_string(i) +
-                ":0\"\neffect = \"babble\"\nid = 0\ndata = [1, 2, 3, 4, 5, 6, 7, 8]\n"
-                "duration = \"3600s\"\n";
-  }
-  auto load = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
-  ipc::copy_name(load->source, "bench");
-  load->length = static_cast<uint32_t>(scenario.size());
-  std::memcpy(load->text, scenario.data(), std::min(scenario.size(), sizeof load->text));
-  auto loaded = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
-  if (!loaded || loaded->applied != 1) {
-    state.SkipWithError(loaded ? loaded->errors : loaded.error().message.c_str());
+  BabblingBuses bus;
+  if (std::string e = bus.open(daemon, *c, buses); !e.empty()) {
+    state.SkipWithError(e.c_str());
     return;
   }
   uint64_t received = 0;
-  const auto drain = [&] {
-    ipc::ChannelMessage m;
-    for (client::Channel& r : receivers) {
-      while (r.rx().get(&m) == ipc::RingStatus::ok) {
-        ++received;
-      }
-    }
-  };
+  const auto drain = [&] { received += bus.drain(); };
   // Sim time, bus frames summed, the largest lag seen and the load of the buses (permille).
   struct Sample {
     int64_t wall_ns = 0;
@@ -706,6 +720,78 @@ BENCHMARK(BM_BusyBusesRealtime)
     ->Args({16, 50})  // batch_us 50: the default
     ->Args({64, 50})
     ->Args({64, 1000})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// Scaled time at full load: one 1 Mbit/s bus kept busy by a babbling node and a receiving node
+// (two clients' nodes), at scaled:F. For 3 s after a second of warming up this process drains
+// the receiving ring and asks for the status every 10 ms: the scale achieved (simulated seconds
+// per real second), the lag at the end, canemud's share of a core, the frames the receiving
+// client took, and how long each status answer took (target: within 10 ms at any load).
+void BM_ScaledTimeFullLoad(benchmark::State& state) {
+  const int64_t scale = state.range(0);
+  char dir[] = "/tmp/canemu-bench-XXXXXX";
+  const std::string path = std::string(::mkdtemp(dir)) + "/scaled.toml";
+  {
+    std::ofstream f(path);
+    f << "[simulation]\ntime = \"scaled:" << scale << "\"\n[[bus]]\nname = \"can0\"\n"
+      << "bitrate = 1000000\n";
+  }
+  testing::CanemudProcess daemon(CANEMUD_PATH, {"--config=" + path});
+  auto c = client::Connection::open(daemon.socket(), "bench-scaled");
+  if (!daemon.ready() || !c) {
+    state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
+    return;
+  }
+  BabblingBuses bus;
+  if (std::string e = bus.open(daemon, *c, 1); !e.empty()) {
+    state.SkipWithError(e.c_str());
+    return;
+  }
+  std::vector<int64_t> answers;
+  uint64_t received = 0;
+  ipc::StatusReply last{};
+  const auto run_for = [&](int64_t ns) {
+    for (const int64_t end = now_ns() + ns; now_ns() < end;) {
+      received += bus.drain();
+      const int64_t t0 = now_ns();
+      auto r =
+          c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+      answers.push_back(now_ns() - t0);
+      if (r) {
+        last = *r;
+      }
+      sleep_ns(10'000'000);
+    }
+  };
+  for (auto _ : state) {
+    run_for(1'000'000'000);
+    answers.clear();
+    received = 0;
+    const auto [ticks0, switches0] = cpu_ticks_and_switches(daemon.pid());
+    const int64_t sim0 = last.sim_time_ns;
+    const int64_t wall0 = now_ns();
+    run_for(3'000'000'000);
+    const double wall = static_cast<double>(now_ns() - wall0) / 1e9;
+    const auto [ticks1, switches1] = cpu_ticks_and_switches(daemon.pid());
+    state.counters["achieved_scale"] = static_cast<double>(last.sim_time_ns - sim0) / 1e9 / wall;
+    state.counters["achieved_scale_status"] = last.achieved_scale;
+    state.counters["lag_s"] = static_cast<double>(last.lag_ns) / 1e9;
+    state.counters["cpu_percent_of_a_core"] = 100.0 * static_cast<double>(ticks1 - ticks0) /
+                                              static_cast<double>(::sysconf(_SC_CLK_TCK)) / wall;
+    state.counters["received_per_second"] = static_cast<double>(received) / wall;
+    state.counters["status_answer_max_ms"] =
+        static_cast<double>(*std::max_element(answers.begin(), answers.end())) / 1e6;
+    report(state, "status_answer", answers);
+  }
+  std::remove(path.c_str());
+  ::rmdir(dir);
+}
+BENCHMARK(BM_ScaledTimeFullLoad)
+    ->ArgName("scale")
+    ->Arg(100)
+    ->Arg(500)
+    ->Arg(2000)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

@@ -70,7 +70,13 @@ void BM_RingTwoProcessesBusyPoll(benchmark::State& state) {
   run_between_processes(
       state,
       [&] {
-        RingWriter w(ring->memory, ring->reader_event.get(), ring->writer_event.get());
+        // The writer maps the ring as the other process does (the daemon creates, a client
+        // maps).
+        auto mapped = RingMemory::map(UniqueFd(::dup(ring->memory.fd())));
+        if (!mapped) {
+          ::_exit(1);
+        }
+        RingWriter w(*mapped, ring->reader_event.get(), ring->writer_event.get());
         Message m{};
         for (uint64_t i = 0; i < kCount;) {
           std::memcpy(m.bytes, &i, sizeof i);
@@ -107,7 +113,13 @@ void BM_RingTwoProcessesBusyPollRuns(benchmark::State& state) {
   run_between_processes(
       state,
       [&] {
-        RingWriter w(ring->memory, ring->reader_event.get(), ring->writer_event.get());
+        // The writer maps the ring as the other process does (the daemon creates, a client
+        // maps).
+        auto mapped = RingMemory::map(UniqueFd(::dup(ring->memory.fd())));
+        if (!mapped) {
+          ::_exit(1);
+        }
+        RingWriter w(*mapped, ring->reader_event.get(), ring->writer_event.get());
         for (uint64_t i = 0; i < kCount;) {
           void* slots = nullptr;
           uint32_t n = 0;

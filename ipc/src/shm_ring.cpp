@@ -8,10 +8,13 @@
 #include <new>
 
 #include <fcntl.h>
+#include <linux/membarrier.h>
 #include <poll.h>
+#include <pthread.h>
 #include <sys/eventfd.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -49,7 +52,44 @@ uint32_t grant_run(uint64_t pos, uint32_t available, uint32_t capacity, uint32_t
   return at;
 }
 
+// -1 unknown, 0 not registered, 1 registered for MEMBARRIER_CMD_GLOBAL_EXPEDITED.
+std::atomic<int> barrier_state{-1};
+
+int membarrier(int cmd) {
+  return static_cast<int>(::syscall(__NR_membarrier, cmd, 0, 0));
+}
+
+int register_barrier() {
+  const int supported = membarrier(MEMBARRIER_CMD_QUERY);
+  const bool ok = supported > 0 && (supported & MEMBARRIER_CMD_GLOBAL_EXPEDITED) != 0 &&
+                  membarrier(MEMBARRIER_CMD_REGISTER_GLOBAL_EXPEDITED) == 0;
+  return ok ? 1 : 0;
+}
+
+// The sleeping side's half of the asymmetric barrier: every thread of every registered process
+// runs a full barrier before this returns (a waiter that could not register relies on the
+// signalling side's fences instead, see RingEvent::signal).
+void sleeper_barrier() {
+  if (ring_barrier_registered()) {
+    membarrier(MEMBARRIER_CMD_GLOBAL_EXPEDITED);
+  }
+}
+
 }  // namespace
+
+bool ring_barrier_registered() {
+  int state = barrier_state.load(std::memory_order_acquire);
+  if (state < 0) {
+    static const bool at_fork = [] {
+      // A forked child has a memory map of its own, not registered: it registers again.
+      return ::pthread_atfork(nullptr, nullptr, [] { barrier_state.store(register_barrier()); }) ==
+             0;
+    }();
+    state = at_fork ? register_barrier() : 0;
+    barrier_state.store(state, std::memory_order_release);
+  }
+  return state == 1;
+}
 
 std::string_view to_string(RingStatus s) {
   switch (s) {
@@ -117,6 +157,7 @@ IpcResult<RingMemory> RingMemory::create(uint32_t capacity, uint32_t element_siz
   h->total_bytes = bytes;
   h->reader_threshold.store(1);
   h->writer_threshold.store(1);
+  h->creator_barrier.store(ring_barrier_registered() ? 1 : 0);
   return m;
 }
 
@@ -154,6 +195,7 @@ IpcResult<RingMemory> RingMemory::map(UniqueFd fd) {
   }
   m.capacity_ = capacity;
   m.element_size_ = element_size;
+  m.header()->mapper_barrier.store(ring_barrier_registered() ? 1 : 0, std::memory_order_seq_cst);
   return m;
 }
 
@@ -185,10 +227,22 @@ RingMemory::~RingMemory() {
 }
 
 void RingEvent::signal() const {
-  flag->store(1, std::memory_order_seq_cst);
+  flag->store(1, std::memory_order_relaxed);
+  // The position and the flag stored before the waiting flag is read (the waiter stores its
+  // waiting flag before it reads ours): a store-load pair. When both processes are registered
+  // the waiter's membarrier orders it; until this side has seen that the other registered
+  // (the mapper says so when it maps), it fences.
+  if (header != nullptr && header->creator_barrier.load(std::memory_order_relaxed) != 0 &&
+      header->mapper_barrier.load(std::memory_order_relaxed) != 0 && ring_barrier_registered()) {
+    std::atomic_signal_fence(std::memory_order_seq_cst);
+  } else {
+    std::atomic_thread_fence(std::memory_order_seq_cst);
+  }
   // One write per arming: the waiter arms again before it sleeps again, so a peer that keeps
-  // its waiting flag set cannot make this side write the eventfd for every element.
-  if (waiting->exchange(0, std::memory_order_seq_cst) != 0 && eventfd >= 0) {
+  // its waiting flag set cannot make this side write the eventfd for every element. The flag
+  // is only read while it is clear, so a busy ring's signal writes nothing of the other side's.
+  if (waiting->load(std::memory_order_relaxed) != 0 &&
+      waiting->exchange(0, std::memory_order_seq_cst) != 0 && eventfd >= 0) {
     const uint64_t one = 1;
     [[maybe_unused]] const ssize_t n = ::write(eventfd, &one, sizeof one);
   }
@@ -208,6 +262,7 @@ bool RingEvent::wait(int timeout_ms) const {
   const int64_t start_ms = monotonic_ns() / 1'000'000;
   while (true) {
     waiting->store(1, std::memory_order_seq_cst);
+    sleeper_barrier();
     if (flag->exchange(0, std::memory_order_seq_cst) != 0) {
       return leave(true);
     }
@@ -231,6 +286,11 @@ bool RingEvent::wait(int timeout_ms) const {
   }
 }
 
+void RingEvent::arm() const {
+  waiting->store(1, std::memory_order_seq_cst);
+  sleeper_barrier();
+}
+
 void RingEvent::disarm() const {
   waiting->store(0, std::memory_order_seq_cst);
   flag->store(0, std::memory_order_relaxed);
@@ -247,9 +307,10 @@ RingWriter::RingWriter(const RingMemory& m, int reader_eventfd, int own_eventfd)
       data_(m.elements()),
       capacity_(m.capacity()),
       size_(m.element_size()),
-      reader_{&hdr_->reader_signalled, &hdr_->reader_waiting, reader_eventfd},
-      own_{&hdr_->writer_signalled, &hdr_->writer_waiting, own_eventfd} {
+      reader_{&hdr_->reader_signalled, &hdr_->reader_waiting, reader_eventfd, hdr_},
+      own_{&hdr_->writer_signalled, &hdr_->writer_waiting, own_eventfd, hdr_} {
   write_ = hdr_->write_pos.load(std::memory_order_relaxed);
+  slot_ = static_cast<uint32_t>(write_ % capacity_);
   last_read_ = hdr_->read_pos.load(std::memory_order_acquire);
 }
 
@@ -266,26 +327,40 @@ bool RingWriter::load_read(uint64_t& read) const {
   return true;
 }
 
-void RingWriter::published(uint64_t new_write, uint64_t read) {
+void RingWriter::published(uint64_t new_write) {
   hdr_->write_pos.store(new_write, std::memory_order_release);
+  wrote_ = true;
   const uint32_t threshold = std::min(
       std::max<uint32_t>(hdr_->reader_threshold.load(std::memory_order_relaxed), 1), capacity_);
+  // A write access that leaves the fill level at or above the threshold signals. Any access
+  // leaves at least one element; beyond that the reader's position is read afresh (an older
+  // one would make the fill look higher than it is).
+  uint64_t read = last_read_;
+  if (threshold > 1 && !load_read(read)) {
+    return;
+  }
   if (new_write - read >= threshold) {
-    reader_.signal();  // a write access that leaves the fill level at or above the threshold
+    reader_.signal();
   }
 }
 
 RingStatus RingWriter::put(const void* element) {
-  uint64_t read;
-  if (!load_read(read)) {
+  if (corrupted_) {
     return RingStatus::corrupted;
   }
-  if (write_ - read == capacity_) {
-    return RingStatus::full;
+  if (write_ - last_read_ == capacity_) {  // full when last looked: look again
+    uint64_t read;
+    if (!load_read(read)) {
+      return RingStatus::corrupted;
+    }
+    if (write_ - read == capacity_) {
+      return RingStatus::full;
+    }
   }
-  std::memcpy(data_ + (write_ % capacity_) * size_, element, size_);
+  std::memcpy(data_ + std::size_t{slot_} * size_, element, size_);
   ++write_;
-  published(write_, read);
+  slot_ = slot_ + 1 == capacity_ ? 0 : slot_ + 1;
+  published(write_);
   return RingStatus::ok;
 }
 
@@ -319,7 +394,8 @@ RingStatus RingWriter::release(uint32_t count) {
     return RingStatus::ok;
   }
   write_ += count;
-  published(write_, read);
+  slot_ = static_cast<uint32_t>(write_ % capacity_);
+  published(write_);
   return RingStatus::ok;
 }
 
@@ -360,9 +436,10 @@ RingReader::RingReader(const RingMemory& m, int writer_eventfd, int own_eventfd)
       data_(m.elements()),
       capacity_(m.capacity()),
       size_(m.element_size()),
-      writer_{&hdr_->writer_signalled, &hdr_->writer_waiting, writer_eventfd},
-      own_{&hdr_->reader_signalled, &hdr_->reader_waiting, own_eventfd} {
+      writer_{&hdr_->writer_signalled, &hdr_->writer_waiting, writer_eventfd, hdr_},
+      own_{&hdr_->reader_signalled, &hdr_->reader_waiting, own_eventfd, hdr_} {
   read_ = hdr_->read_pos.load(std::memory_order_relaxed);
+  slot_ = static_cast<uint32_t>(read_ % capacity_);
   last_write_ = hdr_->write_pos.load(std::memory_order_acquire);
 }
 
@@ -379,28 +456,41 @@ bool RingReader::load_write(uint64_t& write) const {
   return true;
 }
 
-void RingReader::consumed(uint64_t new_read, uint64_t write) {
+void RingReader::consumed(uint64_t new_read) {
   hdr_->read_pos.store(new_read, std::memory_order_release);
   const uint32_t threshold = std::min(
       std::max<uint32_t>(hdr_->writer_threshold.load(std::memory_order_relaxed), 1), capacity_);
+  // A read access that leaves at least `threshold` elements free signals: any access leaves
+  // one; beyond that the writer's position is read afresh (an older one would make the free
+  // room look larger than it is).
+  uint64_t write = last_write_;
+  if (threshold > 1 && !load_write(write)) {
+    return;
+  }
   if (capacity_ - (write - new_read) >= threshold) {
-    writer_.signal();  // a read access that leaves at least `threshold` elements free
+    writer_.signal();
   }
 }
 
 RingStatus RingReader::get(void* element) {
-  uint64_t write;
-  if (!load_write(write)) {
+  if (corrupted_) {
     return RingStatus::corrupted;
   }
-  if (write == read_) {
-    return RingStatus::empty;
+  if (last_write_ == read_) {  // empty when last looked: look again
+    uint64_t write;
+    if (!load_write(write)) {
+      return RingStatus::corrupted;
+    }
+    if (write == read_) {
+      return RingStatus::empty;
+    }
   }
   if (element != nullptr) {
-    std::memcpy(element, data_ + (read_ % capacity_) * size_, size_);
+    std::memcpy(element, data_ + std::size_t{slot_} * size_, size_);
   }
   ++read_;
-  consumed(read_, write);
+  slot_ = slot_ + 1 == capacity_ ? 0 : slot_ + 1;
+  consumed(read_);
   return RingStatus::ok;
 }
 
@@ -434,7 +524,8 @@ RingStatus RingReader::release(uint32_t count) {
     return RingStatus::ok;
   }
   read_ += count;
-  consumed(read_, write);
+  slot_ = static_cast<uint32_t>(read_ % capacity_);
+  consumed(read_);
   return RingStatus::ok;
 }
 

@@ -260,7 +260,20 @@ TEST(ShmRing, CorruptedPositionsAreDetectedAndStick) {
   q.reader.get(nullptr);
   EXPECT_EQ(q.writer.fill_count(), 0u);  // the writer has seen the reader at 1
   q.memory.header()->read_pos.store(0);
+  // The writer reads the reader's position when it needs it (here: for the free count), and
+  // from then on refuses every access.
+  EXPECT_EQ(q.writer.free_count(), 0u);
+  EXPECT_TRUE(q.writer.corrupted());
   EXPECT_EQ(q.writer.put(&e), RingStatus::corrupted);
+  // A writer that has filled the ring reads the reader's position before it writes again.
+  auto f = make(32);
+  const uint32_t capacity = f.memory.capacity();
+  for (uint32_t i = 0; i < capacity; ++i) {
+    ASSERT_EQ(f.writer.put(&e), RingStatus::ok);
+  }
+  EXPECT_EQ(f.writer.put(&e), RingStatus::full);
+  f.memory.header()->read_pos.store(uint64_t{capacity} + 1);  // ahead of the writer
+  EXPECT_EQ(f.writer.put(&e), RingStatus::corrupted);
 }
 
 TEST(ShmRing, MapChecksTheHeaderAndTheSeals) {
@@ -323,6 +336,79 @@ TEST(ShmRing, TwoProcessesExchangeAHundredThousandElementsInOrder) {
   reap.pid = -1;
   EXPECT_TRUE(in_order);
   EXPECT_EQ(status, 0);
+}
+
+// The asymmetric barrier: a ring created by one process and mapped by another records whether
+// each registered for membarrier; with both registered the signals skip their fences and the
+// sleeping side's barrier orders them. Both sides block again and again (a ring of a few
+// elements, woken at every access); a wait that times out while the ring holds what it waited
+// for would be a lost wake-up.
+TEST(ShmRing, SidesThatBlockInTwoProcessesNeverMissAWakeUp) {
+  // Elements that fill the page after the header: a ring of exactly one element.
+  struct Big {
+    uint32_t seq;
+    uint8_t rest[4096 - sizeof(RingHeader) - 4];
+  };
+  auto m = RingMemory::create(1, sizeof(Big), "test-ring-one");
+  auto re = make_eventfd();
+  auto we = make_eventfd();
+  ASSERT_TRUE(m && re && we);
+  ASSERT_EQ(m->capacity(), 1u);
+  Pair p(std::move(*m), std::move(*re), std::move(*we));
+  const uint32_t registered = ring_barrier_registered() ? 1 : 0;
+  EXPECT_EQ(p.memory.header()->creator_barrier.load(), registered);
+  EXPECT_EQ(p.memory.header()->mapper_barrier.load(), 0u);  // nobody mapped it yet
+  constexpr uint32_t kCount = 20000;
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    auto mapped = RingMemory::map(UniqueFd(::dup(p.memory.fd())));
+    if (!mapped || mapped->header()->mapper_barrier.load() != registered) {
+      ::_exit(3);
+    }
+    RingWriter w(*mapped, p.reader_event.get(), p.writer_event.get());
+    for (uint32_t i = 0; i < kCount;) {
+      Big e{};
+      e.seq = i;
+      if (w.put(&e) == RingStatus::ok) {
+        ++i;
+      } else if (!w.wait(2000)) {
+        ::_exit(w.free_count() > 0 ? 2 : 1);  // 2: room, but no wake-up
+      }
+    }
+    ::_exit(0);
+  }
+  struct Reap {
+    pid_t pid;
+    ~Reap() {
+      if (pid > 0) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+      }
+    }
+  } reap{child};
+  uint32_t expected = 0;
+  bool in_order = true;
+  while (expected < kCount) {
+    Big e;
+    const RingStatus s = p.reader.get(&e);
+    if (s == RingStatus::ok) {
+      in_order = in_order && e.seq == expected;
+      ++expected;
+    } else if (s == RingStatus::empty) {
+      if (!p.reader.wait(2000)) {
+        ASSERT_EQ(p.reader.fill_count(), 0u) << "elements waited, no wake-up, at " << expected;
+        FAIL() << "the writer stopped at " << expected;
+      }
+    } else {
+      FAIL() << to_string(s);
+    }
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  reap.pid = -1;
+  EXPECT_TRUE(in_order);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "writer status " << status;
 }
 
 }  // namespace

@@ -51,6 +51,21 @@ TEST(VciCppApi, TheWalkThroughSendsAndReceivesWithAnEvent) {
   EXPECT_EQ(beta.reader->GetDataEntry(&r), VCI_E_RXQUEUE_EMPTY);
   // Reading did not signal it again.
   EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);
+  // The next two messages (the threshold) signal it again, and again after that.
+  for (uint8_t round = 0; round < 2; ++round) {
+    for (uint8_t k = 0; k < 2; ++k) {
+      CANMSG next = one_byte(0x124, static_cast<uint8_t>(round * 2 + k));
+      ASSERT_EQ(alpha.writer->PutDataEntry(&next), VCI_OK);
+    }
+    step_ns(1'000'000);
+    EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0) << "round " << int{round};
+    int taken = 0;
+    while (beta.reader->GetDataEntry(&r) == VCI_OK) {
+      EXPECT_EQ(r.dwMsgId, 0x124u);
+      ++taken;
+    }
+    EXPECT_EQ(taken, 2);
+  }
   EXPECT_GE(canemuEventFd(event), 0);
   EXPECT_EQ(beta.reader->AssignEvent(nullptr), VCI_OK);
   EXPECT_TRUE(CloseHandle(event));

@@ -30,7 +30,7 @@ class Pump {
   }
   void watch(const void* key, const ipc::RingEvent& ring, void* event) {
     std::lock_guard lock(mutex_);
-    ring.arm();  // the other side writes the eventfd on every signal from now on
+    ring.arm();  // the other side's next signal writes the eventfd (the pump arms it again)
     watches_[key] = Watch{&ring, event};
     wake();
   }
@@ -79,6 +79,9 @@ class Pump {
           continue;  // unwatched meanwhile
         }
         drain(it->second.ring->eventfd);
+        // A signal writes the eventfd once per arming: armed again before the flag is taken,
+        // so a signal after this look wakes the pump and one before it is in the flag.
+        it->second.ring->arm();
         if (it->second.ring->flag->exchange(0) != 0) {
           if (EventObj* e = event_of(it->second.event)) {
             e->set();

@@ -64,7 +64,7 @@ class Channel final : private model::ControllerEvents, public Doorbell {
   // if it is idle.
   void kick() override;
   // The client broke a ring (positions out of range); the server drops the client.
-  bool broken() const override { return rx_.corrupted() || tx_.corrupted(); }
+  bool broken() const override { return rx_.corrupted_after_writes() || tx_.corrupted(); }
 
  private:
   Channel(uint32_t id, std::string device, std::size_t bus, model::HostedNode& node, uint16_t flags,

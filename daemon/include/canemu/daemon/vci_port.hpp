@@ -48,7 +48,7 @@ class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
   // --- Doorbell ---
   int doorbell_fd() const override { return rings_.tx().reader_event(); }
   void kick() override;
-  bool broken() const override { return rx_.corrupted() || tx_.corrupted(); }
+  bool broken() const override { return rx_.corrupted_after_writes() || tx_.corrupted(); }
 
  private:
   VciPort(bool v2, ipc::RingPair rings);

@@ -13,7 +13,16 @@
 //
 // Events: each side has an auto-reset event (a flag in the header plus an eventfd). Signalling
 // sets the flag and writes the eventfd only if the other side is blocked in wait(), so a busy
-// ring makes no system call per element.
+// ring makes no system call per element. The "waiting" flags share a cache line that is only
+// written around a sleep: a signal reads the other side's flag and changes it only when it was
+// set, so a busy ring's signals move no cache line between the processes. Each side also reads
+// the other's position only when its last reading leaves no room (no elements) for the access,
+// and, for a threshold above 1, when it must know the exact fill (free) level.
+// The signal's store-load order (position, then the other side's waiting flag) against the
+// waiter's (waiting flag, then position) is kept asymmetrically when both processes could
+// register for membarrier(2)'s global expedited barrier: the signal costs a compiler barrier,
+// and the side about to sleep pays the barrier for both (an interrupt to the CPUs running the
+// other processes), once per sleep instead of a fence per element. Otherwise both use fences.
 #pragma once
 
 #include <atomic>
@@ -29,7 +38,7 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kRingMagic = 0x474E4952;  // "RING"
-inline constexpr uint16_t kRingAbiVersion = 1;
+inline constexpr uint16_t kRingAbiVersion = 2;
 
 struct alignas(64) RingHeader {
   uint32_t magic;
@@ -38,16 +47,20 @@ struct alignas(64) RingHeader {
   uint32_t element_size;
   uint32_t capacity;  // elements
   uint64_t total_bytes;
-  // Written by the writer only.
+  // 1 when the process that created (mapped) the ring is registered for membarrier's global
+  // expedited barrier; written once, before (when) the other side can see the ring.
+  std::atomic<uint32_t> creator_barrier;
+  std::atomic<uint32_t> mapper_barrier;
+  // Written by the writer (the thresholds also by the reader, seldom).
   alignas(64) std::atomic<uint64_t> write_pos;
   std::atomic<uint32_t> reader_threshold;  // the reader's event fires at fill >= threshold
   std::atomic<uint32_t> reader_signalled;  // auto-reset event flag of the reader
   std::atomic<uint32_t> overruns;          // elements the writer could not put
-  // Written by the reader only.
+  // Written by the reader.
   alignas(64) std::atomic<uint64_t> read_pos;
   std::atomic<uint32_t> writer_threshold;  // the writer's event fires at free >= threshold
   std::atomic<uint32_t> writer_signalled;
-  // Set by a side while it blocks in wait().
+  // Set by a side while it blocks, cleared by the signal that wakes it.
   alignas(64) std::atomic<uint32_t> reader_waiting;
   std::atomic<uint32_t> writer_waiting;
 };
@@ -95,6 +108,7 @@ struct RingEvent {
   std::atomic<uint32_t>* flag = nullptr;
   std::atomic<uint32_t>* waiting = nullptr;
   int eventfd = -1;
+  const RingHeader* header = nullptr;  // whether both processes take part in the barrier
   // Threads of this process inside wait() on this event (shared by copies of it): while one
   // sleeps, the shared waiting flag stays set, so another thread's wait() ending (a poll with
   // timeout 0, or the signal it took) never leaves a sleeper without its wake-up.
@@ -108,7 +122,7 @@ struct RingEvent {
   // For a side that sleeps in its own poll loop (canemud's epoll) rather than in wait():
   // arm() makes the next signal write the eventfd; disarm() stops that, resets the event and
   // drains the eventfd.
-  void arm() const { waiting->store(1, std::memory_order_seq_cst); }
+  void arm() const;
   void disarm() const;
 };
 
@@ -130,19 +144,32 @@ class RingWriter {
   bool wait(int timeout_ms) const { return own_.wait(timeout_ms); }
   void count_overrun() { hdr_->overruns.fetch_add(1, std::memory_order_relaxed); }
   bool corrupted() const { return corrupted_; }
+  // Whether the ring is corrupted, having read and checked the reader's position if this side
+  // wrote since the last look (a writer that finds room reads it only now and then): the
+  // daemon's check once per loop pass, one read per ring that was written.
+  bool corrupted_after_writes() const {
+    if (wrote_) {
+      wrote_ = false;
+      uint64_t read;
+      load_read(read);
+    }
+    return corrupted_;
+  }
   // This side's event, for a thread that watches it on the side's behalf (VCI AssignEvent).
   const RingEvent& own_event() const { return own_; }
 
  private:
   bool load_read(uint64_t& read) const;
-  void published(uint64_t new_write, uint64_t read);
+  void published(uint64_t new_write);
 
   RingHeader* hdr_;
   uint8_t* data_;
   uint32_t capacity_;
   uint32_t size_;
   uint32_t acquired_ = 0;
-  uint64_t write_ = 0;  // own position, never read back from shared memory
+  uint64_t write_ = 0;          // own position, never read back from shared memory
+  uint32_t slot_ = 0;           // write_ % capacity_
+  mutable bool wrote_ = false;  // since corrupted_after_writes() last looked
   mutable bool corrupted_ = false;
   mutable uint64_t last_read_ = 0;
   RingEvent reader_;
@@ -178,7 +205,7 @@ class RingReader {
 
  private:
   bool load_write(uint64_t& write) const;
-  void consumed(uint64_t new_read, uint64_t write);
+  void consumed(uint64_t new_read);
 
   RingHeader* hdr_;
   const uint8_t* data_;
@@ -186,11 +213,16 @@ class RingReader {
   uint32_t size_;
   uint32_t acquired_ = 0;
   uint64_t read_ = 0;  // own position, never read back from shared memory
+  uint32_t slot_ = 0;  // read_ % capacity_
   mutable bool corrupted_ = false;
   mutable uint64_t last_write_ = 0;
   RingEvent writer_;
   RingEvent own_;
 };
+
+// Whether this process is registered for membarrier(2)'s global expedited barrier (it tries
+// once, and again in a forked child, whose registration is not inherited).
+bool ring_barrier_registered();
 
 // An eventfd for a ring side (non-blocking, close-on-exec).
 IpcResult<UniqueFd> make_eventfd();

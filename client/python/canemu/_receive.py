@@ -4,10 +4,12 @@ into simulated (or wall-clock) seconds."""
 from __future__ import annotations
 
 import ctypes
+import logging
+import struct
 import time
 from typing import Optional, Tuple
 
-from can import Message
+from can import BusABC, Message
 
 from . import _vci
 from ._calls import _HEADER, _WAIT_SLICE_MS, _call, _can_error, _vci_errors
@@ -21,6 +23,16 @@ _MSG_SIZE = ctypes.sizeof(_vci.CANMSG2)
 _DATA, _DLC, _EDL, _RTR, _SRR = (_vci.CAN_MSGTYPE_DATA, _vci.FLAGS_DLC, _vci.FLAGS2_EDL,
                                  _vci.FLAGS_RTR, _vci.FLAGS_SRR)
 _EXT, _FDR, _ESI, _DLC_TO_LEN = _vci.FLAGS_EXT, _vci.FLAGS2_FDR, _vci.FLAGS2_ESI, _vci.DLC_TO_LEN
+_PASSIVE = _vci.CANEMU_STATE_PASSIVE
+_unpack_header = _HEADER.unpack_from
+# A Message without Message.__init__: _convert_run sets every attribute itself, each as
+# __init__ would (tests/python/test_message_build.py compares it with _convert's).
+_new_message = Message.__new__
+# A CANMSG2 with the 8 data bytes of a classic frame (_convert_run).
+_CLASSIC = struct.Struct("<IIIBBBB8s56x")
+assert _CLASSIC.size == _MSG_SIZE
+# The logger and level of BusABC.recv's "Received" record, which recv's short path writes too.
+_bus_log = logging.getLogger("can.bus")
 
 
 class _ReceiveMixin(_StateMixin):
@@ -39,6 +51,19 @@ class _ReceiveMixin(_StateMixin):
             self._poll_fd = fd.value
         return self._poll_fd
 
+    def recv(self, timeout: Optional[float] = None) -> Optional[Message]:
+        """BusABC.recv, with a short path for a message already converted (_rx_ready) when
+        the channel does the filtering; everything else goes through BusABC.recv and
+        _recv_internal."""
+        if self._hw_filtered:
+            with self._rx_lock:
+                if self._rx_ready and not self._pending:
+                    msg = self._rx_ready.popleft()
+                    if _bus_log.isEnabledFor(self.RECV_LOGGING_LEVEL):
+                        _bus_log.log(self.RECV_LOGGING_LEVEL, "Received: %s", msg)
+                    return msg
+        return BusABC.recv(self, timeout)
+
     def _recv_internal(self, timeout: Optional[float]) -> Tuple[Optional[Message], bool]:
         deadline = None if timeout is None else time.monotonic() + max(timeout, 0.0)
         lib = _vci.lib()
@@ -46,7 +71,13 @@ class _ReceiveMixin(_StateMixin):
             while True:
                 if self._pending:
                     return self._pending.popleft(), True
+                if self._rx_ready:
+                    return self._rx_ready.popleft(), self._hw_filtered
                 if self._rx_next < self._rx_count:
+                    if self._reported != _PASSIVE:
+                        self._convert_run()
+                        if self._rx_ready:
+                            continue
                     offset = self._rx_next * _MSG_SIZE
                     self._rx_next += 1
                     msg, filtered = self._convert(self._rx_batch_view, offset)
@@ -85,6 +116,59 @@ class _ReceiveMixin(_StateMixin):
                 msg, filtered = self._convert(self._rx_view, 0)
                 if msg is not None:
                     return msg, filtered  # what it caused (self._pending) comes next
+
+    def _convert_run(self) -> None:
+        """The data frames of the batch from the next one up to the first message of another
+        kind (or the batch's end) as python-can Messages in _rx_ready, each exactly as
+        _convert makes it, in one pass: the receiving's hot path. Not while the error state is
+        passive: then a frame may end a crossing (_convert), and a message of another kind
+        changes the state, so that the run stops before it."""
+        view = self._rx_batch_view
+        i = self._rx_next
+        at = i * _MSG_SIZE
+        wraps, last = self._wraps, self._last_ticks
+        epoch, offset, channel = self._epoch_ns, self._time_offset, self._channel_name
+        append = self._rx_ready.append
+        new = _new_message
+        for ticks, _, ident, kind, flags2, flags, _, data in _CLASSIC.iter_unpack(
+            view[at : self._rx_count * _MSG_SIZE]
+        ):
+            if kind != _DATA:
+                break
+            if ticks < last:  # _sim_ns, inline
+                wraps += 1
+            last = ticks
+            # Every attribute Message.__init__ sets, as it sets it from _convert's arguments.
+            msg = new(Message)
+            msg.timestamp = (epoch + ((wraps << 32) | ticks) * 1000) / 1e9 + offset
+            msg.arbitration_id = ident
+            msg.is_extended_id = flags & _EXT != 0
+            msg.is_error_frame = False
+            msg.channel = channel
+            msg.is_rx = flags & _SRR == 0
+            msg.bitrate_switch = flags2 & _FDR != 0
+            msg.error_state_indicator = flags2 & _ESI != 0
+            dlc = flags & _DLC
+            if flags2 & _EDL:
+                length = _DLC_TO_LEN[dlc]
+                msg.is_fd = True
+                msg.is_remote_frame = False
+                msg.data = bytearray(view[at + 16 : at + 16 + length])
+                msg.dlc = length
+            else:
+                msg.is_fd = False
+                if flags & _RTR:
+                    msg.is_remote_frame = True
+                    msg.data = bytearray()
+                else:
+                    msg.is_remote_frame = False
+                    msg.data = bytearray(data if dlc >= 8 else data[:dlc])
+                msg.dlc = dlc
+            append(msg)
+            at += _MSG_SIZE
+            i += 1
+        self._rx_next = i
+        self._wraps, self._last_ticks = wraps, last
 
     def _sim_ns(self, ticks: int) -> int:
         """The simulated time in ns of an adapter time stamp (microsecond ticks, 32 bits; the

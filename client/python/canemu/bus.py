@@ -173,6 +173,7 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._rx_taken_ref = ctypes.byref(self._rx_taken)
         self._rx_count = 0  # messages in the batch
         self._rx_next = 0  # the next one to convert
+        self._rx_ready: Deque[Message] = deque()  # converted, not yet returned (_convert_run)
         self._tx_msg = _vci.CANMSG2()
         self._tx_view = memoryview(self._tx_msg).cast("B")
         self._tx_ref = ctypes.byref(self._tx_msg)

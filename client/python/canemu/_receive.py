@@ -31,6 +31,27 @@ _new_message = Message.__new__
 # A CANMSG2 with the 8 data bytes of a classic frame (_convert_run).
 _CLASSIC = struct.Struct("<IIIBBBB8s56x")
 assert _CLASSIC.size == _MSG_SIZE
+
+
+def _frame_fields(flags2: int, flags: int) -> Tuple[bool, bool, bool, bool, bool, bool, int, int]:
+    """What a data frame's bFlags2 and bFlags make of a Message, as _convert reads them:
+    is_extended_id, is_rx, is_remote_frame, is_fd, bitrate_switch, error_state_indicator, dlc
+    and the number of data bytes."""
+    dlc = flags & _DLC
+    if flags2 & _EDL:
+        fd, remote, length = True, False, _DLC_TO_LEN[dlc]
+        dlc = length
+    else:
+        fd, remote = False, bool(flags & _RTR)
+        length = 0 if remote else (dlc if dlc < 8 else 8)
+    return (bool(flags & _EXT), not flags & _SRR, remote, fd, bool(flags2 & _FDR),
+            bool(flags2 & _ESI), dlc, length)
+
+
+# _frame_fields of every bFlags with bFlags2's EDL, FDR and ESI bits (bits 2-4, as bits 10-12
+# of the index): _convert_run looks them up.
+_FRAME_FIELDS = [_frame_fields(index >> 8, index & 0xFF) for index in range(0x2000)]
+assert _vci.FLAGS2_EDL | _vci.FLAGS2_FDR | _vci.FLAGS2_ESI == 0x1C
 # The logger and level of BusABC.recv's "Received" record, which recv's short path writes too.
 _bus_log = logging.getLogger("can.bus")
 
@@ -54,14 +75,20 @@ class _ReceiveMixin(_StateMixin):
     def recv(self, timeout: Optional[float] = None) -> Optional[Message]:
         """BusABC.recv, with a short path for a message already converted (_rx_ready) when
         the channel does the filtering; everything else goes through BusABC.recv and
-        _recv_internal."""
-        if self._hw_filtered:
-            with self._rx_lock:
-                if self._rx_ready and not self._pending:
-                    msg = self._rx_ready.popleft()
-                    if _bus_log.isEnabledFor(self.RECV_LOGGING_LEVEL):
-                        _bus_log.log(self.RECV_LOGGING_LEVEL, "Received: %s", msg)
-                    return msg
+        _recv_internal.
+
+        The short path takes no lock: deque.popleft is atomic, and _rx_ready and _pending are
+        never both non-empty (_recv_internal fills _rx_ready only when _pending is empty, and
+        _pending only when _rx_ready is), so that what it returns is in order."""
+        if self._hw_filtered and not self._pending:
+            try:
+                msg = self._rx_ready.popleft()
+            except IndexError:
+                pass
+            else:
+                if _bus_log.isEnabledFor(self.RECV_LOGGING_LEVEL):
+                    _bus_log.log(self.RECV_LOGGING_LEVEL, "Received: %s", msg)
+                return msg
         return BusABC.recv(self, timeout)
 
     def _recv_internal(self, timeout: Optional[float]) -> Tuple[Optional[Message], bool]:
@@ -127,9 +154,12 @@ class _ReceiveMixin(_StateMixin):
         i = self._rx_next
         at = i * _MSG_SIZE
         wraps, last = self._wraps, self._last_ticks
-        epoch, offset, channel = self._epoch_ns, self._time_offset, self._channel_name
+        offset, channel = self._time_offset, self._channel_name
+        # _sim_ns: epoch + ((wraps << 32) | ticks) * 1000, the same integer as base + ticks *
+        # 1000 (ticks < 2**32), and the same time stamp as _stamp makes of it.
+        base = self._epoch_ns + (wraps << 32) * 1000
         append = self._rx_ready.append
-        new = _new_message
+        new, fields = _new_message, _FRAME_FIELDS
         for ticks, _, ident, kind, flags2, flags, _, data in _CLASSIC.iter_unpack(
             view[at : self._rx_count * _MSG_SIZE]
         ):
@@ -137,33 +167,26 @@ class _ReceiveMixin(_StateMixin):
                 break
             if ticks < last:  # _sim_ns, inline
                 wraps += 1
+                base = self._epoch_ns + (wraps << 32) * 1000
             last = ticks
+            ext, rx, remote, fd, brs, esi, dlc, length = fields[(flags2 & 0x1C) << 8 | flags]
             # Every attribute Message.__init__ sets, as it sets it from _convert's arguments.
             msg = new(Message)
-            msg.timestamp = (epoch + ((wraps << 32) | ticks) * 1000) / 1e9 + offset
+            msg.timestamp = (base + ticks * 1000) / 1e9 + offset
             msg.arbitration_id = ident
-            msg.is_extended_id = flags & _EXT != 0
+            msg.is_extended_id = ext
+            msg.is_remote_frame = remote
             msg.is_error_frame = False
             msg.channel = channel
-            msg.is_rx = flags & _SRR == 0
-            msg.bitrate_switch = flags2 & _FDR != 0
-            msg.error_state_indicator = flags2 & _ESI != 0
-            dlc = flags & _DLC
-            if flags2 & _EDL:
-                length = _DLC_TO_LEN[dlc]
-                msg.is_fd = True
-                msg.is_remote_frame = False
-                msg.data = bytearray(view[at + 16 : at + 16 + length])
-                msg.dlc = length
+            msg.is_fd = fd
+            msg.is_rx = rx
+            msg.bitrate_switch = brs
+            msg.error_state_indicator = esi
+            if length <= 8:
+                msg.data = bytearray(data[:length])
             else:
-                msg.is_fd = False
-                if flags & _RTR:
-                    msg.is_remote_frame = True
-                    msg.data = bytearray()
-                else:
-                    msg.is_remote_frame = False
-                    msg.data = bytearray(data if dlc >= 8 else data[:dlc])
-                msg.dlc = dlc
+                msg.data = bytearray(view[at + 16 : at + 16 + length])
+            msg.dlc = dlc
             append(msg)
             at += _MSG_SIZE
             i += 1

@@ -140,6 +140,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._device = None
         self._control = None
         self._channel = None
+        self._channel_arg = ctypes.c_void_p()  # _channel as send's hot path passes it (_open)
+        self._post = None
         self._scheduler = None
         self._ephemeral: Optional[str] = None
         self._channel_name = channel
@@ -268,6 +270,10 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         handle = _vci.HANDLE()
         _call("canChannelOpen", self._device, controller, 0, ctypes.byref(handle))
         self._channel = handle.value
+        # canChannelPostMessage for send's hot path: without argtypes ctypes converts nothing
+        # (about 0.1 us a call), so the handle goes as a ready c_void_p.
+        self._post = _vci.unconverted("canChannelPostMessage")
+        self._channel_arg = ctypes.c_void_p(self._channel)
         # With receive_own_messages the channel also takes the cyclic list's echoes (SRRA):
         # the firmware hands them only to channels that ask for every self-reception.
         mode = _vci.CAN_FILTER_PASS | (_vci.CAN_FILTER_SRRA if self._receive_own else 0)
@@ -379,6 +385,7 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
             if handle is not None:
                 getattr(lib, name)(handle)
                 setattr(self, attr, None)
+        self._channel_arg = ctypes.c_void_p()
         if self._ephemeral is not None:
             lib.canemuRemoveDevice(self._ephemeral.encode())
             self._ephemeral = None

@@ -17,7 +17,7 @@ from ._daemon import _sim_time
 from ._state import _StateMixin
 from ._vci import VciError
 
-_RX_BATCH = 64  # messages taken from the receive ring in one call (CanemuBus)
+_RX_BATCH = 256  # messages taken from the receive ring in one call (CanemuBus)
 _MSG_SIZE = ctypes.sizeof(_vci.CANMSG2)
 # For the data-frame path of _convert (a global is found faster than a module's attribute).
 _DATA, _DLC, _EDL, _RTR, _SRR = (_vci.CAN_MSGTYPE_DATA, _vci.FLAGS_DLC, _vci.FLAGS2_EDL,

@@ -166,7 +166,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._rx_view = memoryview(self._rx_msg).cast("B")
         self._rx_ref = ctypes.byref(self._rx_msg)  # made once: a call per frame is the hot path
         # Messages are taken from the receive ring up to _RX_BATCH at a time (one call for
-        # them all) and converted one per recv; fileno() turns that off (batch of 1), so that a
+        # them all), the data frames among them converted in one pass into _rx_ready and
+        # handed out one per recv; fileno() turns the batches off (batch of 1), so that a
         # descriptor that is not readable always means that nothing waits (_receive.py).
         self._rx_batch = (_vci.CANMSG2 * _RX_BATCH)()
         self._rx_batch_view = memoryview(self._rx_batch).cast("B")

@@ -19,12 +19,11 @@ from ._vci import VciError
 
 _RX_BATCH = 256  # messages taken from the receive ring in one call (CanemuBus)
 _MSG_SIZE = ctypes.sizeof(_vci.CANMSG2)
-# For the data-frame path of _convert (a global is found faster than a module's attribute).
+# For the data-frame paths (a global is found faster than a module's attribute).
 _DATA, _DLC, _EDL, _RTR, _SRR = (_vci.CAN_MSGTYPE_DATA, _vci.FLAGS_DLC, _vci.FLAGS2_EDL,
                                  _vci.FLAGS_RTR, _vci.FLAGS_SRR)
 _EXT, _FDR, _ESI, _DLC_TO_LEN = _vci.FLAGS_EXT, _vci.FLAGS2_FDR, _vci.FLAGS2_ESI, _vci.DLC_TO_LEN
 _PASSIVE = _vci.CANEMU_STATE_PASSIVE
-_unpack_header = _HEADER.unpack_from
 # A Message without Message.__init__: _convert_run sets every attribute itself, each as
 # __init__ would (tests/python/test_message_build.py compares it with _convert's).
 _new_message = Message.__new__

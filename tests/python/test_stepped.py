@@ -29,6 +29,7 @@ from canemu.bus import (
     CAN_ERR_PROT_BIT,
     CAN_ERR_RESTARTED,
 )
+from canemu._receive import _RX_BATCH
 
 from conftest import CANEMU_CLI, Canemud, drain, frames, ns
 
@@ -142,15 +143,19 @@ def test_gap_between_received_frames_is_the_exact_frame_duration(daemon, bus_nam
 
 
 def test_messages_taken_in_a_batch_come_one_per_recv_in_order(pair):
-    """The interface takes up to 64 waiting messages from the ring in one call: 100 frames
-    waiting come in order, each once, with increasing simulated time stamps."""
+    """The interface takes up to _RX_BATCH (256) waiting messages from the ring in one call:
+    more frames than that waiting come in order, each once, with increasing simulated time
+    stamps."""
     a, b = pair
     drain(b)
-    for i in range(100):
-        a.send(can.Message(arbitration_id=i, data=[i], is_extended_id=False))
-    canemu.step(50 * MS)  # 100 frames of 1 byte at 500 kbit/s take about 13 ms
+    total = _RX_BATCH + 44
+    for start in range(0, total, 100):
+        for i in range(start, min(start + 100, total)):
+            a.send(can.Message(arbitration_id=i, data=[i & 0xFF], is_extended_id=False))
+        canemu.step(50 * MS)  # 100 frames of 1 byte at 500 kbit/s take about 13 ms
     got = data_frames(drain(b))
-    assert [(m.arbitration_id, bytes(m.data)) for m in got] == [(i, bytes([i])) for i in range(100)]
+    assert [(m.arbitration_id, bytes(m.data)) for m in got] == [
+        (i, bytes([i & 0xFF])) for i in range(total)]
     assert all(x.timestamp < y.timestamp for x, y in zip(got, got[1:]))
 
 

@@ -4,10 +4,12 @@ into simulated (or wall-clock) seconds."""
 from __future__ import annotations
 
 import ctypes
+import logging
+import struct
 import time
 from typing import Optional, Tuple
 
-from can import Message
+from can import BusABC, Message
 
 from . import _vci
 from ._calls import _HEADER, _WAIT_SLICE_MS, _call, _can_error, _vci_errors
@@ -15,12 +17,42 @@ from ._daemon import _sim_time
 from ._state import _StateMixin
 from ._vci import VciError
 
-_RX_BATCH = 64  # messages taken from the receive ring in one call (CanemuBus)
+_RX_BATCH = 256  # messages taken from the receive ring in one call (CanemuBus)
 _MSG_SIZE = ctypes.sizeof(_vci.CANMSG2)
-# For the data-frame path of _convert (a global is found faster than a module's attribute).
+# For the data-frame paths (a global is found faster than a module's attribute).
 _DATA, _DLC, _EDL, _RTR, _SRR = (_vci.CAN_MSGTYPE_DATA, _vci.FLAGS_DLC, _vci.FLAGS2_EDL,
                                  _vci.FLAGS_RTR, _vci.FLAGS_SRR)
 _EXT, _FDR, _ESI, _DLC_TO_LEN = _vci.FLAGS_EXT, _vci.FLAGS2_FDR, _vci.FLAGS2_ESI, _vci.DLC_TO_LEN
+_PASSIVE = _vci.CANEMU_STATE_PASSIVE
+# A Message without Message.__init__: _convert_run sets every attribute itself, each as
+# __init__ would (tests/python/test_message_build.py compares it with _convert's).
+_new_message = Message.__new__
+# A CANMSG2 with the 8 data bytes of a classic frame (_convert_run).
+_CLASSIC = struct.Struct("<IIIBBBB8s56x")
+assert _CLASSIC.size == _MSG_SIZE
+
+
+def _frame_fields(flags2: int, flags: int) -> Tuple[bool, bool, bool, bool, bool, bool, int, int]:
+    """What a data frame's bFlags2 and bFlags make of a Message, as _convert reads them:
+    is_extended_id, is_rx, is_remote_frame, is_fd, bitrate_switch, error_state_indicator, dlc
+    and the number of data bytes."""
+    dlc = flags & _DLC
+    if flags2 & _EDL:
+        fd, remote, length = True, False, _DLC_TO_LEN[dlc]
+        dlc = length
+    else:
+        fd, remote = False, bool(flags & _RTR)
+        length = 0 if remote else (dlc if dlc < 8 else 8)
+    return (bool(flags & _EXT), not flags & _SRR, remote, fd, bool(flags2 & _FDR),
+            bool(flags2 & _ESI), dlc, length)
+
+
+# _frame_fields of every bFlags with bFlags2's EDL, FDR and ESI bits (bits 2-4, as bits 10-12
+# of the index): _convert_run looks them up.
+_FRAME_FIELDS = [_frame_fields(index >> 8, index & 0xFF) for index in range(0x2000)]
+assert _vci.FLAGS2_EDL | _vci.FLAGS2_FDR | _vci.FLAGS2_ESI == 0x1C
+# The logger and level of BusABC.recv's "Received" record, which recv's short path writes too.
+_bus_log = logging.getLogger("can.bus")
 
 
 class _ReceiveMixin(_StateMixin):
@@ -39,6 +71,25 @@ class _ReceiveMixin(_StateMixin):
             self._poll_fd = fd.value
         return self._poll_fd
 
+    def recv(self, timeout: Optional[float] = None) -> Optional[Message]:
+        """BusABC.recv, with a short path for a message already converted (_rx_ready) when
+        the channel does the filtering; everything else goes through BusABC.recv and
+        _recv_internal.
+
+        The short path takes no lock: deque.popleft is atomic, and _rx_ready and _pending are
+        never both non-empty (_recv_internal fills _rx_ready only when _pending is empty, and
+        _pending only when _rx_ready is), so that what it returns is in order."""
+        if self._hw_filtered and not self._pending:
+            try:
+                msg = self._rx_ready.popleft()
+            except IndexError:
+                pass
+            else:
+                if _bus_log.isEnabledFor(self.RECV_LOGGING_LEVEL):
+                    _bus_log.log(self.RECV_LOGGING_LEVEL, "Received: %s", msg)
+                return msg
+        return BusABC.recv(self, timeout)
+
     def _recv_internal(self, timeout: Optional[float]) -> Tuple[Optional[Message], bool]:
         deadline = None if timeout is None else time.monotonic() + max(timeout, 0.0)
         lib = _vci.lib()
@@ -46,7 +97,13 @@ class _ReceiveMixin(_StateMixin):
             while True:
                 if self._pending:
                     return self._pending.popleft(), True
+                if self._rx_ready:
+                    return self._rx_ready.popleft(), self._hw_filtered
                 if self._rx_next < self._rx_count:
+                    if self._reported != _PASSIVE:
+                        self._convert_run()
+                        if self._rx_ready:
+                            continue
                     offset = self._rx_next * _MSG_SIZE
                     self._rx_next += 1
                     msg, filtered = self._convert(self._rx_batch_view, offset)
@@ -85,6 +142,55 @@ class _ReceiveMixin(_StateMixin):
                 msg, filtered = self._convert(self._rx_view, 0)
                 if msg is not None:
                     return msg, filtered  # what it caused (self._pending) comes next
+
+    def _convert_run(self) -> None:
+        """The data frames of the batch from the next one up to the first message of another
+        kind (or the batch's end) as python-can Messages in _rx_ready, each exactly as
+        _convert makes it, in one pass: the receiving's hot path. Not while the error state is
+        passive: then a frame may end a crossing (_convert), and a message of another kind
+        changes the state, so that the run stops before it."""
+        view = self._rx_batch_view
+        i = self._rx_next
+        at = i * _MSG_SIZE
+        wraps, last = self._wraps, self._last_ticks
+        offset, channel = self._time_offset, self._channel_name
+        # _sim_ns: epoch + ((wraps << 32) | ticks) * 1000, the same integer as base + ticks *
+        # 1000 (ticks < 2**32), and the same time stamp as _stamp makes of it.
+        base = self._epoch_ns + (wraps << 32) * 1000
+        append = self._rx_ready.append
+        new, fields = _new_message, _FRAME_FIELDS
+        for ticks, _, ident, kind, flags2, flags, _, data in _CLASSIC.iter_unpack(
+            view[at : self._rx_count * _MSG_SIZE]
+        ):
+            if kind != _DATA:
+                break
+            if ticks < last:  # _sim_ns, inline
+                wraps += 1
+                base = self._epoch_ns + (wraps << 32) * 1000
+            last = ticks
+            ext, rx, remote, fd, brs, esi, dlc, length = fields[(flags2 & 0x1C) << 8 | flags]
+            # Every attribute Message.__init__ sets, as it sets it from _convert's arguments.
+            msg = new(Message)
+            msg.timestamp = (base + ticks * 1000) / 1e9 + offset
+            msg.arbitration_id = ident
+            msg.is_extended_id = ext
+            msg.is_remote_frame = remote
+            msg.is_error_frame = False
+            msg.channel = channel
+            msg.is_fd = fd
+            msg.is_rx = rx
+            msg.bitrate_switch = brs
+            msg.error_state_indicator = esi
+            if length <= 8:
+                msg.data = bytearray(data[:length])
+            else:
+                msg.data = bytearray(view[at + 16 : at + 16 + length])
+            msg.dlc = dlc
+            append(msg)
+            at += _MSG_SIZE
+            i += 1
+        self._rx_next = i
+        self._wraps, self._last_ticks = wraps, last
 
     def _sim_ns(self, ticks: int) -> int:
         """The simulated time in ns of an adapter time stamp (microsecond ticks, 32 bits; the

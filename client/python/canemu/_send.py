@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import ctypes
 import logging
+import struct
 import time
 from typing import Optional, Tuple
 
@@ -29,6 +30,10 @@ _DRAIN_MARGIN_NS = 50_000_000
 _DRAIN_POLL_S = 0.002  # between two looks at the FIFO while it drains
 
 log = logging.getLogger("can.canemu")
+
+# A CANMSG2's header and the 8 data bytes of a classic frame (send's hot path).
+_pack_classic = struct.Struct("<IIIBBBB8s").pack_into
+_DATA = _vci.CAN_MSGTYPE_DATA
 
 
 class _SendMixin:
@@ -80,17 +85,47 @@ class _SendMixin:
         if msg.is_error_frame:
             log.debug("%s: error frame not sent: %s", self.channel_info, msg)
             return
-        lib = _vci.lib()
         self._tx_flushed = False
+        # The hot path: a classic data frame, header and data packed in one go, posted with a
+        # call that converts no arguments (_open).
+        data = msg.data
+        ident = msg.arbitration_id
+        length = len(data)
+        if msg.is_extended_id:
+            limit, flags = 0x1FFFFFFF, length | _vci.FLAGS_EXT
+        else:
+            limit, flags = 0x7FF, length
+        if length <= 8 and 0 <= ident <= limit and not (msg.is_fd or msg.is_remote_frame):
+            if self._receive_own:
+                flags |= _vci.FLAGS_SRR
+            hr = None
+            with self._tx_lock:
+                try:
+                    _pack_classic(self._tx_view, 0, 0, 0, ident, _DATA, 0, flags, 0, data)
+                except (struct.error, TypeError):
+                    pass  # data that is neither bytes nor bytearray: the general path
+                else:
+                    hr = self._post(self._channel_arg, self._tx_ref)
+                    if hr == _vci.VCI_E_TXQUEUE_FULL:
+                        hr = self._send_waiting(self._tx_ref, timeout)
+            if hr == _vci.VCI_OK:
+                return
+            if hr is not None:
+                return self._sent(hr, timeout)
+        lib = _vci.lib()
         with self._tx_lock:
             flags, flags2, data = self._wire_fields(msg)
-            # The CANMSG2 header (dwTime 0: at once) and data in one go: the hot path.
+            # The CANMSG2 header (dwTime 0: at once) and data in one go.
             _HEADER.pack_into(self._tx_view, 0, 0, 0, msg.arbitration_id, _vci.CAN_MSGTYPE_DATA,
                               flags2, flags, 0)
             self._tx_view[16 : 16 + len(data)] = data
             hr = lib.canChannelPostMessage(self._channel, self._tx_ref)
             if hr == _vci.VCI_E_TXQUEUE_FULL:
                 hr = self._send_waiting(self._tx_ref, timeout)
+        self._sent(hr, timeout)
+
+    def _sent(self, hr: int, timeout: Optional[float]) -> None:
+        """Raises what a failed post or send (`hr`) means to send's caller."""
         if hr == _vci.VCI_OK:
             return
         if hr in (_vci.VCI_E_TIMEOUT, _vci.VCI_E_TXQUEUE_FULL):

@@ -380,6 +380,15 @@ def lib() -> ctypes.CDLL:
     )
 
 
+def unconverted(func: str):
+    """A second binding of `func` of libvcinpl2.so with its result type but no argtypes: ctypes
+    then converts no argument, so the caller passes ctypes objects only (handles as c_void_p,
+    pointers as byref). For the hot paths."""
+    f = lib()[func]
+    f.restype = HRESULT
+    return f
+
+
 def error_text(hr: int) -> str:
     buf = ctypes.create_string_buffer(512)
     lib().vciFormatError(hr, buf, len(buf))

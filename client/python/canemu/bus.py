@@ -140,6 +140,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._device = None
         self._control = None
         self._channel = None
+        self._channel_arg = ctypes.c_void_p()  # _channel as send's hot path passes it (_open)
+        self._post = None
         self._scheduler = None
         self._ephemeral: Optional[str] = None
         self._channel_name = channel
@@ -164,7 +166,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._rx_view = memoryview(self._rx_msg).cast("B")
         self._rx_ref = ctypes.byref(self._rx_msg)  # made once: a call per frame is the hot path
         # Messages are taken from the receive ring up to _RX_BATCH at a time (one call for
-        # them all) and converted one per recv; fileno() turns that off (batch of 1), so that a
+        # them all), the data frames among them converted in one pass into _rx_ready and
+        # handed out one per recv; fileno() turns the batches off (batch of 1), so that a
         # descriptor that is not readable always means that nothing waits (_receive.py).
         self._rx_batch = (_vci.CANMSG2 * _RX_BATCH)()
         self._rx_batch_view = memoryview(self._rx_batch).cast("B")
@@ -173,6 +176,7 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._rx_taken_ref = ctypes.byref(self._rx_taken)
         self._rx_count = 0  # messages in the batch
         self._rx_next = 0  # the next one to convert
+        self._rx_ready: Deque[Message] = deque()  # converted, not yet returned (_convert_run)
         self._tx_msg = _vci.CANMSG2()
         self._tx_view = memoryview(self._tx_msg).cast("B")
         self._tx_ref = ctypes.byref(self._tx_msg)
@@ -267,6 +271,10 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         handle = _vci.HANDLE()
         _call("canChannelOpen", self._device, controller, 0, ctypes.byref(handle))
         self._channel = handle.value
+        # canChannelPostMessage for send's hot path: without argtypes ctypes converts nothing
+        # (about 0.1 us a call), so the handle goes as a ready c_void_p.
+        self._post = _vci.unconverted("canChannelPostMessage")
+        self._channel_arg = ctypes.c_void_p(self._channel)
         # With receive_own_messages the channel also takes the cyclic list's echoes (SRRA):
         # the firmware hands them only to channels that ask for every self-reception.
         mode = _vci.CAN_FILTER_PASS | (_vci.CAN_FILTER_SRRA if self._receive_own else 0)
@@ -378,6 +386,7 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
             if handle is not None:
                 getattr(lib, name)(handle)
                 setattr(self, attr, None)
+        self._channel_arg = ctypes.c_void_p()
         if self._ephemeral is not None:
             lib.canemuRemoveDevice(self._ephemeral.encode())
             self._ephemeral = None

@@ -1,7 +1,8 @@
 // The latency a VCI C program sees (libvcinpl: CANMSG), in real time: one IXXAT adapter's
 // channel posts a frame (canChannelPostMessage), another adapter's channel on the same 1 Mbit/s
-// bus waits for it, either in canChannelReadMessage with a timeout or in canChannelWaitRxEvent
-// followed by canChannelPeekMessage; the figure is the time from the post until the wait
+// bus waits for it in canChannelReadMessage with a timeout, in canChannelWaitRxEvent followed by
+// canChannelPeekMessage, or by calling canChannelPeekMessage in a loop (a polling program); the
+// figure is the time from the post until the wait
 // returns with the frame, minus the frame's own time on the wire. The VCI libraries block on
 // the receive ring's eventfd at once (no spin), so this is the same check as the spin sweep of
 // BM_ClientDaemonClientLatencyRealtime (daemon_bench) for what VCI programs run.
@@ -77,7 +78,8 @@ struct Adapter {
   }
 };
 
-// range(0): 0 waits in canChannelReadMessage, 1 in canChannelWaitRxEvent + canChannelPeekMessage.
+// range(0): 0 waits in canChannelReadMessage, 1 in canChannelWaitRxEvent + canChannelPeekMessage,
+// 2 polls canChannelPeekMessage.
 void BM_VciCLatencyRealtime(benchmark::State& state) {
   char dir[] = "/tmp/canemu-bench-XXXXXX";
   const std::string folder = ::mkdtemp(dir);
@@ -101,7 +103,7 @@ void BM_VciCLatencyRealtime(benchmark::State& state) {
         state.SkipWithError("the adapters did not open");
         return;
       }
-      const bool wait_event = state.range(0) == 1;
+      const int64_t how = state.range(0);
       CANMSG m{};
       m.dwMsgId = 0x123;
       m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
@@ -124,10 +126,15 @@ void BM_VciCLatencyRealtime(benchmark::State& state) {
           CANMSG got{};
           HRESULT hr = VCI_OK;
           do {  // data frames only (the controller's start leaves an info message)
-            if (wait_event) {
+            if (how == 1) {
               hr = canChannelWaitRxEvent(b.channel, 1000);
               if (hr == VCI_OK) {
                 hr = canChannelPeekMessage(b.channel, &got);
+              }
+            } else if (how == 2) {
+              const int64_t give_up = t0 + 1'000'000'000;
+              while ((hr = canChannelPeekMessage(b.channel, &got)) == VCI_E_RXQUEUE_EMPTY &&
+                     now_ns() < give_up) {
               }
             } else {
               hr = canChannelReadMessage(b.channel, 1000, &got);
@@ -150,9 +157,10 @@ void BM_VciCLatencyRealtime(benchmark::State& state) {
   ::rmdir(dir);
 }
 BENCHMARK(BM_VciCLatencyRealtime)
-    ->ArgName("wait_rx_event")
+    ->ArgName("wait")  // 0 ReadMessage, 1 WaitRxEvent + PeekMessage, 2 PeekMessage polled
     ->Arg(0)
     ->Arg(1)
+    ->Arg(2)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

@@ -132,6 +132,8 @@ class _ReceiveMixin(_StateMixin):
                     else:
                         left = deadline - time.monotonic()
                         if left <= 0:
+                            # (The library's empty look gave up the processor once: a program
+                            # polling recv(0) in a loop does not hold up canemud.)
                             return None, True
                         wait_ms = min(_WAIT_SLICE_MS, max(1, int(left * 1000 + 0.999)))
                     hr = lib.canChannelReadMessage(self._channel, wait_ms, self._rx_ref)

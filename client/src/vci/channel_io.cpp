@@ -2,6 +2,7 @@
 // memory, waiting on their eventfds, without a round trip to canemud.
 #include <algorithm>
 
+#include <sched.h>
 #include <unistd.h>
 
 #include "canemu/ipc/clock.hpp"
@@ -55,7 +56,9 @@ int channel_poll_fd(ChannelObj& c) {
   return c.rings->pair.rx().reader_event();
 }
 
-HRESULT channel_peek(ChannelObj& c, void* msg) {
+namespace {
+// One message if one waits; VCI_E_RXQUEUE_EMPTY otherwise.
+HRESULT take_one(ChannelObj& c, void* msg) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
   }
@@ -70,9 +73,22 @@ HRESULT channel_peek(ChannelObj& c, void* msg) {
       return VCI_E_UNEXPECTED;
   }
 }
+}  // namespace
+
+HRESULT channel_peek(ChannelObj& c, void* msg) {
+  const HRESULT hr = take_one(c, msg);
+  if (hr == VCI_E_RXQUEUE_EMPTY) {
+    // A program that polls in a loop gives up the processor once per empty look: canemud,
+    // woken on this CPU by the frame this program sent, would otherwise wait for the end of
+    // the program's time slice (milliseconds) before it could deliver (docs/vci.md,
+    // "Latency").
+    ::sched_yield();
+  }
+  return hr;
+}
 
 HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
-  HRESULT hr = channel_peek(c, msg);
+  HRESULT hr = take_one(c, msg);
   if (hr != VCI_E_RXQUEUE_EMPTY || timeout_ms == 0) {
     return hr == VCI_E_RXQUEUE_EMPTY ? VCI_E_TIMEOUT : hr;
   }
@@ -83,13 +99,13 @@ HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
   const uint32_t threshold = rx.threshold();
   rx.set_threshold(1);
   while (true) {
-    hr = channel_peek(c, msg);
+    hr = take_one(c, msg);
     if (hr != VCI_E_RXQUEUE_EMPTY) {
       break;
     }
     const int left = left_ms(deadline);
     if (left == 0 || !rx.wait(left)) {
-      hr = channel_peek(c, msg);
+      hr = take_one(c, msg);
       if (hr == VCI_E_RXQUEUE_EMPTY) {
         hr = VCI_E_TIMEOUT;
       }
@@ -160,7 +176,7 @@ HRESULT channel_read_many(ChannelObj& c, uint32_t timeout_ms, void* msgs, uint32
   }
   const std::size_t size = c.rings->pair.element_size();
   for (done = 1; done < count; ++done) {
-    if (channel_peek(c, out + done * size) != VCI_OK) {
+    if (take_one(c, out + done * size) != VCI_OK) {
       break;
     }
   }

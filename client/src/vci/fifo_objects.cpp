@@ -8,6 +8,8 @@
 #include <mutex>
 #include <vector>
 
+#include <sched.h>
+
 #include "com.hpp"
 #include "events.hpp"
 
@@ -23,6 +25,15 @@ struct FifoSide {
   const canemu::ipc::RingMemory* memory = nullptr;
   std::function<void()> release;  // gives the side back (one reader, one writer at a time)
 };
+
+// A reader that polls in a loop gives up the processor once per empty look, as the C API's
+// canChannelPeekMessage does (channel_io.cpp).
+HRESULT yield_if_empty(HRESULT hr) {
+  if (hr == VCI_E_RXQUEUE_EMPTY) {
+    ::sched_yield();
+  }
+  return hr;
+}
 
 UINT16 u16(uint32_t v) {
   return static_cast<UINT16>(std::min<uint32_t>(v, 0xFFFF));
@@ -95,13 +106,13 @@ class Reader final : public FifoEnd<IFifoReader, IID_IFifoReader, canemu::ipc::R
  public:
   using FifoEnd::FifoEnd;
   HRESULT GetDataEntry(PVOID pvData) override {
-    return ring_result(ring_.get(pvData), VCI_E_RXQUEUE_EMPTY);
+    return yield_if_empty(ring_result(ring_.get(pvData), VCI_E_RXQUEUE_EMPTY));
   }
   HRESULT AcquireRead(PVOID* ppvData, PUINT16 pwCount) override {
     const void* p = nullptr;
     uint32_t n = 0;
-    const HRESULT hr =
-        ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n), VCI_E_RXQUEUE_EMPTY);
+    const HRESULT hr = yield_if_empty(
+        ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n), VCI_E_RXQUEUE_EMPTY));
     if (hr == VCI_OK) {
       *ppvData = const_cast<void*>(p);
       if (pwCount != nullptr) {

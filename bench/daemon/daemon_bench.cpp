@@ -716,6 +716,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
 }
 BENCHMARK(BM_BusyBusesRealtime)
     ->ArgNames({"buses", "batch_us"})
+    ->Args({1, 50})   // one busy bus: what the spin costs
     ->Args({16, 0})   // a wake-up per event: the pacing without batching
     ->Args({16, 50})  // batch_us 50: the default
     ->Args({64, 50})

@@ -66,16 +66,28 @@ int register_barrier() {
   return ok ? 1 : 0;
 }
 
-// The sleeping side's half of the asymmetric barrier: every thread of every registered process
-// runs a full barrier before this returns (a waiter that could not register relies on the
-// signalling side's fences instead, see RingEvent::signal).
-void sleeper_barrier() {
-  if (ring_barrier_registered()) {
-    membarrier(MEMBARRIER_CMD_GLOBAL_EXPEDITED);
-  }
+// Whether a signal on the ring may skip its fence (this process's own registration aside).
+bool both_registered(const RingHeader& h) {
+  return h.creator_barrier.load(std::memory_order_relaxed) == 1 &&
+         h.mapper_barrier.load(std::memory_order_relaxed) == 1;
 }
 
 }  // namespace
+
+// The sleeping side's half of the asymmetric barrier: every thread of every registered process
+// runs a full barrier before this returns. A waiter that is not registered (a forked child
+// whose registration failed) or whose barrier failed, on a ring whose signals skip their fence:
+// it makes them fence from now on and, for the signals already under way, issues the slow
+// system-wide barrier that needs no registration.
+void RingEvent::sleeper_barrier() const {
+  if (ring_barrier_registered() && membarrier(MEMBARRIER_CMD_GLOBAL_EXPEDITED) == 0) {
+    return;
+  }
+  if (header != nullptr && both_registered(*header)) {
+    header->mapper_barrier.store(2, std::memory_order_seq_cst);
+    membarrier(MEMBARRIER_CMD_GLOBAL);
+  }
+}
 
 bool ring_barrier_registered() {
   int state = barrier_state.load(std::memory_order_acquire);
@@ -191,11 +203,20 @@ IpcResult<RingMemory> RingMemory::map(UniqueFd fd) {
   if (magic != kRingMagic || version != kRingAbiVersion || element_size == 0 ||
       element_size > 4096 || capacity == 0 || capacity > kMaxCapacity ||
       sizeof(RingHeader) + std::size_t{capacity} * element_size > bytes) {
-    return tl::unexpected(IpcError{EINVAL, "ring header is not valid (magic, version or sizes)"});
+    return tl::unexpected(IpcError{EINVAL, "ring header is not valid (magic, ABI version " +
+                                               std::to_string(version) + " where this side has " +
+                                               std::to_string(kRingAbiVersion) + ", or sizes)"});
   }
   m.capacity_ = capacity;
   m.element_size_ = element_size;
-  m.header()->mapper_barrier.store(ring_barrier_registered() ? 1 : 0, std::memory_order_seq_cst);
+  // Every process that maps the ring must be registered for the signals to skip their fences.
+  std::atomic<uint32_t>& mapper = m.header()->mapper_barrier;
+  if (ring_barrier_registered()) {
+    uint32_t none = 0;
+    mapper.compare_exchange_strong(none, 1, std::memory_order_seq_cst);
+  } else {
+    mapper.store(2, std::memory_order_seq_cst);
+  }
   return m;
 }
 
@@ -227,13 +248,13 @@ RingMemory::~RingMemory() {
 }
 
 void RingEvent::signal() const {
-  flag->store(1, std::memory_order_relaxed);
+  // Release: the flag is never seen before the position this signal announces.
+  flag->store(1, std::memory_order_release);
   // The position and the flag stored before the waiting flag is read (the waiter stores its
   // waiting flag before it reads ours): a store-load pair. When both processes are registered
   // the waiter's membarrier orders it; until this side has seen that the other registered
   // (the mapper says so when it maps), it fences.
-  if (header != nullptr && header->creator_barrier.load(std::memory_order_relaxed) != 0 &&
-      header->mapper_barrier.load(std::memory_order_relaxed) != 0 && ring_barrier_registered()) {
+  if (header != nullptr && both_registered(*header) && ring_barrier_registered()) {
     std::atomic_signal_fence(std::memory_order_seq_cst);
   } else {
     std::atomic_thread_fence(std::memory_order_seq_cst);
@@ -312,6 +333,8 @@ RingWriter::RingWriter(const RingMemory& m, int reader_eventfd, int own_eventfd)
   write_ = hdr_->write_pos.load(std::memory_order_relaxed);
   slot_ = static_cast<uint32_t>(write_ % capacity_);
   last_read_ = hdr_->read_pos.load(std::memory_order_acquire);
+  // The positions found are checked like any other: they bound every access.
+  corrupted_ = !positions_consistent(last_read_, 0, last_read_, write_, capacity_);
 }
 
 bool RingWriter::load_read(uint64_t& read) const {
@@ -441,6 +464,7 @@ RingReader::RingReader(const RingMemory& m, int writer_eventfd, int own_eventfd)
   read_ = hdr_->read_pos.load(std::memory_order_relaxed);
   slot_ = static_cast<uint32_t>(read_ % capacity_);
   last_write_ = hdr_->write_pos.load(std::memory_order_acquire);
+  corrupted_ = !positions_consistent(last_write_, 0, read_, last_write_, capacity_);
 }
 
 bool RingReader::load_write(uint64_t& write) const {

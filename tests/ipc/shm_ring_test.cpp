@@ -411,5 +411,37 @@ TEST(ShmRing, SidesThatBlockInTwoProcessesNeverMissAWakeUp) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "writer status " << status;
 }
 
+// Every process that maps a ring must be registered for its signals to skip their fences: the
+// first mapping records whether it is, and a "not" is for good.
+TEST(ShmRing, TheMappersBarrierFlagOnlyEverGoesToNot) {
+  auto p = make(32);
+  std::atomic<uint32_t>& mapper = p.memory.header()->mapper_barrier;
+  const uint32_t mine = ring_barrier_registered() ? 1 : 2;
+  auto first = RingMemory::map(UniqueFd(::dup(p.memory.fd())));
+  ASSERT_TRUE(first);
+  EXPECT_EQ(mapper.load(), mine);
+  mapper.store(2);  // as a mapper that is not registered leaves it
+  auto second = RingMemory::map(UniqueFd(::dup(p.memory.fd())));
+  ASSERT_TRUE(second);
+  EXPECT_EQ(mapper.load(), 2u);
+}
+
+// A view made on a ring whose positions make no sense is corrupted from the start (its first
+// access would otherwise trust them).
+TEST(ShmRing, AViewOnCorruptPositionsIsCorruptedFromTheStart) {
+  auto p = make(32);
+  p.memory.header()->write_pos.store(uint64_t{p.memory.capacity()} + 5);
+  RingReader reader(p.memory, p.writer_event.get(), p.reader_event.get());
+  EXPECT_TRUE(reader.corrupted());
+  Element out;
+  EXPECT_EQ(reader.get(&out), RingStatus::corrupted);
+  p.memory.header()->write_pos.store(3);
+  p.memory.header()->read_pos.store(4);  // the reader ahead of the writer
+  RingWriter writer(p.memory, p.reader_event.get(), p.writer_event.get());
+  EXPECT_TRUE(writer.corrupted());
+  const Element e = element(1);
+  EXPECT_EQ(writer.put(&e), RingStatus::corrupted);
+}
+
 }  // namespace
 }  // namespace canemu::ipc

@@ -40,6 +40,9 @@ void keep_pollable(ChannelObj& c) {
   }
   ipc::RingReader& rx = c.rings->rx;
   if (rx.fill_count() == 0) {
+    if (rx.own_event().waiting->load(std::memory_order_relaxed) != 0) {
+      return;  // still armed: no signal came since, the next one writes the eventfd
+    }
     rx.disarm();  // drops stale wake-ups
     if (rx.arm_unless_filled()) {
       return;
@@ -78,19 +81,24 @@ HRESULT take_one(ChannelObj& c, void* msg) {
 HRESULT channel_peek(ChannelObj& c, void* msg) {
   const HRESULT hr = take_one(c, msg);
   if (hr == VCI_E_RXQUEUE_EMPTY) {
-    // A program that polls in a loop gives up the processor once per empty look: canemud,
-    // woken on this CPU by the frame this program sent, would otherwise wait for the end of
-    // the program's time slice (milliseconds) before it could deliver (docs/vci.md,
-    // "Latency").
-    ::sched_yield();
+    c.rings->rx_looks.missed();  // a polling loop gives canemud its turn
+  } else if (hr == VCI_OK) {
+    c.rings->rx_looks.hit();
   }
   return hr;
 }
 
 HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
-  HRESULT hr = take_one(c, msg);
-  if (hr != VCI_E_RXQUEUE_EMPTY || timeout_ms == 0) {
+  if (timeout_ms == 0) {  // only a look
+    const HRESULT hr = channel_peek(c, msg);
     return hr == VCI_E_RXQUEUE_EMPTY ? VCI_E_TIMEOUT : hr;
+  }
+  HRESULT hr = take_one(c, msg);
+  if (hr != VCI_E_NOT_INITIALIZED) {
+    c.rings->rx_looks.hit();  // a message, or waiting for one: not polling
+  }
+  if (hr != VCI_E_RXQUEUE_EMPTY) {
+    return hr;
   }
   ipc::RingReader& rx = c.rings->rx;
   const int timeout = timeout_of(timeout_ms);
@@ -117,7 +125,9 @@ HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
   return hr;
 }
 
-HRESULT channel_post(ChannelObj& c, const void* msg) {
+namespace {
+// Puts one message if there is room; VCI_E_TXQUEUE_FULL otherwise.
+HRESULT put_one(ChannelObj& c, const void* msg) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
   }
@@ -134,10 +144,27 @@ HRESULT channel_post(ChannelObj& c, const void* msg) {
       return VCI_E_UNEXPECTED;
   }
 }
+}  // namespace
+
+HRESULT channel_post(ChannelObj& c, const void* msg) {
+  const HRESULT hr = put_one(c, msg);
+  if (hr == VCI_E_TXQUEUE_FULL) {
+    c.rings->tx_looks.missed();  // a sender retrying in a loop gives canemud its turn
+  } else if (hr == VCI_OK) {
+    c.rings->tx_looks.hit();
+  }
+  return hr;
+}
 
 HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg) {
-  HRESULT hr = channel_post(c, msg);
-  if (hr != VCI_E_TXQUEUE_FULL || timeout_ms == 0) {
+  if (timeout_ms == 0) {
+    return channel_post(c, msg);
+  }
+  HRESULT hr = put_one(c, msg);
+  if (c.rings) {
+    c.rings->tx_looks.hit();  // queued, or waiting for room: not polling
+  }
+  if (hr != VCI_E_TXQUEUE_FULL) {
     return hr;
   }
   ipc::RingWriter& tx = c.rings->tx;
@@ -146,13 +173,13 @@ HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg) {
   const uint32_t threshold = tx.threshold();
   tx.set_threshold(1);
   while (true) {
-    hr = channel_post(c, msg);
+    hr = put_one(c, msg);
     if (hr != VCI_E_TXQUEUE_FULL) {
       break;
     }
     const int left = left_ms(deadline);
     if (left == 0 || !tx.wait(left)) {
-      hr = channel_post(c, msg);
+      hr = put_one(c, msg);
       if (hr == VCI_E_TXQUEUE_FULL) {
         hr = VCI_E_TIMEOUT;
       }

@@ -30,8 +30,14 @@ class Pump {
   }
   void watch(const void* key, const ipc::RingEvent& ring, void* event) {
     std::lock_guard lock(mutex_);
+    ring.flag->store(0);  // what was signalled before the event was assigned is not its
     ring.arm();  // the other side's next signal writes the eventfd (the pump arms it again)
     watches_[key] = Watch{&ring, event};
+    if (ring.flag->exchange(0) != 0) {  // signalled while it was being armed
+      if (EventObj* e = event_of(event)) {
+        e->set();
+      }
+    }
     wake();
   }
   void unwatch(const void* key) {

@@ -8,8 +8,6 @@
 #include <mutex>
 #include <vector>
 
-#include <sched.h>
-
 #include "com.hpp"
 #include "events.hpp"
 
@@ -25,15 +23,6 @@ struct FifoSide {
   const canemu::ipc::RingMemory* memory = nullptr;
   std::function<void()> release;  // gives the side back (one reader, one writer at a time)
 };
-
-// A reader that polls in a loop gives up the processor once per empty look, as the C API's
-// canChannelPeekMessage does (channel_io.cpp).
-HRESULT yield_if_empty(HRESULT hr) {
-  if (hr == VCI_E_RXQUEUE_EMPTY) {
-    ::sched_yield();
-  }
-  return hr;
-}
 
 UINT16 u16(uint32_t v) {
   return static_cast<UINT16>(std::min<uint32_t>(v, 0xFFFF));
@@ -96,22 +85,33 @@ class FifoEnd : public Com<Interface, iid> {
     *p = u16(v);
     return VCI_OK;
   }
+  // A look's result: an empty (full) FIFO found again and again is a polling loop, which
+  // gives canemud its turn (PollYield).
+  HRESULT polled(HRESULT hr) {
+    if (hr == VCI_E_RXQUEUE_EMPTY || hr == VCI_E_TXQUEUE_FULL) {
+      looks_.missed();
+    } else if (hr == VCI_OK) {
+      looks_.hit();
+    }
+    return hr;
+  }
   FifoSide side_;
   std::unique_ptr<Ring> own_;
   Ring& ring_;
   std::recursive_mutex mutex_;
+  PollYield looks_;
 };
 
 class Reader final : public FifoEnd<IFifoReader, IID_IFifoReader, canemu::ipc::RingReader> {
  public:
   using FifoEnd::FifoEnd;
   HRESULT GetDataEntry(PVOID pvData) override {
-    return yield_if_empty(ring_result(ring_.get(pvData), VCI_E_RXQUEUE_EMPTY));
+    return polled(ring_result(ring_.get(pvData), VCI_E_RXQUEUE_EMPTY));
   }
   HRESULT AcquireRead(PVOID* ppvData, PUINT16 pwCount) override {
     const void* p = nullptr;
     uint32_t n = 0;
-    const HRESULT hr = yield_if_empty(
+    const HRESULT hr = polled(
         ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n), VCI_E_RXQUEUE_EMPTY));
     if (hr == VCI_OK) {
       *ppvData = const_cast<void*>(p);
@@ -135,13 +135,13 @@ class Writer final : public FifoEnd<IFifoWriter, IID_IFifoWriter, canemu::ipc::R
     if (pvData == nullptr) {
       return VCI_E_INVALIDARG;
     }
-    return ring_result(ring_.put(pvData), VCI_E_TXQUEUE_FULL);
+    return polled(ring_result(ring_.put(pvData), VCI_E_TXQUEUE_FULL));
   }
   HRESULT AcquireWrite(PVOID* ppvData, PUINT16 pwCount) override {
     void* p = nullptr;
     uint32_t n = 0;
-    const HRESULT hr =
-        ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n), VCI_E_TXQUEUE_FULL);
+    const HRESULT hr = polled(
+        ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n), VCI_E_TXQUEUE_FULL));
     if (hr == VCI_OK) {
       *ppvData = p;
       if (pwCount != nullptr) {

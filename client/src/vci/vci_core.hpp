@@ -16,6 +16,8 @@
 #include <string_view>
 #include <vector>
 
+#include <sched.h>
+
 #include "canemu/client/connection.hpp"
 #include "canemu/client/lists.hpp"
 #include "canemu/ipc/protocol.hpp"
@@ -146,6 +148,28 @@ struct Remote : Object {
   uint32_t controller;
 };
 
+// A program that polls a FIFO in a loop (a look that finds it empty, or full, again and again)
+// gives up the processor once per look from the second on: canemud, woken on this CPU by what
+// the program sent, would otherwise wait for the end of the program's time slice before it
+// could deliver (docs/vci.md, "Latency"). A single empty look (the drain after a wake-up,
+// the look before a blocking wait) costs nothing.
+class PollYield {
+ public:
+  void missed() {
+    if (misses_.fetch_add(1, std::memory_order_relaxed) > 0) {
+      ::sched_yield();
+    }
+  }
+  void hit() {
+    if (misses_.load(std::memory_order_relaxed) != 0) {
+      misses_.store(0, std::memory_order_relaxed);
+    }
+  }
+
+ private:
+  std::atomic<uint32_t> misses_{0};
+};
+
 struct Rings {
   Rings(ipc::RingPair mapped, bool has_tx);
   ipc::RingPair pair;
@@ -155,6 +179,8 @@ struct Rings {
   // The C++ API hands out one IFifoReader and one IFifoWriter at a time.
   std::atomic<bool> reader_out{false};
   std::atomic<bool> writer_out{false};
+  PollYield rx_looks;  // the C API's looks that found the receive FIFO empty
+  PollYield tx_looks;  // ... the transmit FIFO full
 };
 
 // A CAN channel, or (Kind::lin_monitor) a LIN monitor: a channel with LINMSG elements and no

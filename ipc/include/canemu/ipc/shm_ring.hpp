@@ -47,8 +47,10 @@ struct alignas(64) RingHeader {
   uint32_t element_size;
   uint32_t capacity;  // elements
   uint64_t total_bytes;
-  // 1 when the process that created (mapped) the ring is registered for membarrier's global
-  // expedited barrier; written once, before (when) the other side can see the ring.
+  // Whether the processes of the ring registered for membarrier's global expedited barrier.
+  // creator_barrier: 1 when the creator did (written before anyone else sees the ring).
+  // mapper_barrier: 0 before anyone mapped it, 1 while every process that mapped it did, 2
+  // (for good) once one did not or its barrier failed.
   std::atomic<uint32_t> creator_barrier;
   std::atomic<uint32_t> mapper_barrier;
   // Written by the writer (the thresholds also by the reader, seldom).
@@ -108,7 +110,7 @@ struct RingEvent {
   std::atomic<uint32_t>* flag = nullptr;
   std::atomic<uint32_t>* waiting = nullptr;
   int eventfd = -1;
-  const RingHeader* header = nullptr;  // whether both processes take part in the barrier
+  RingHeader* header = nullptr;  // whether both processes take part in the barrier
   // Threads of this process inside wait() on this event (shared by copies of it): while one
   // sleeps, the shared waiting flag stays set, so another thread's wait() ending (a poll with
   // timeout 0, or the signal it took) never leaves a sleeper without its wake-up.
@@ -123,6 +125,11 @@ struct RingEvent {
   // arm() makes the next signal write the eventfd; disarm() stops that, resets the event and
   // drains the eventfd.
   void arm() const;
+
+ private:
+  void sleeper_barrier() const;
+
+ public:
   void disarm() const;
 };
 
@@ -194,9 +201,10 @@ class RingReader {
   bool arm_unless_filled();
   void disarm() { own_.disarm(); }
   // Makes the own eventfd readable (armed and signalled): a poll loop comes back to this ring
-  // in its next round, after the other descriptors it serves.
+  // in its next round, after the other descriptors it serves. (One thread arms and signals:
+  // no barrier between processes is needed.)
   void wake_self() const {
-    own_.arm();
+    own_.waiting->store(1, std::memory_order_seq_cst);
     own_.signal();
   }
   uint32_t overruns() const { return hdr_->overruns.load(std::memory_order_relaxed); }

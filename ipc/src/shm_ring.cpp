@@ -254,7 +254,9 @@ void RingEvent::signal() const {
   // waiting flag before it reads ours): a store-load pair. When both processes are registered
   // the waiter's membarrier orders it; until this side has seen that the other registered
   // (the mapper says so when it maps), it fences.
-  if (header != nullptr && both_registered(*header) && ring_barrier_registered()) {
+  // (A process not yet known to be registered counts as not: it fences.)
+  if (header != nullptr && both_registered(*header) &&
+      barrier_state.load(std::memory_order_relaxed) == 1) {
     std::atomic_signal_fence(std::memory_order_seq_cst);
   } else {
     std::atomic_thread_fence(std::memory_order_seq_cst);
@@ -353,16 +355,16 @@ bool RingWriter::load_read(uint64_t& read) const {
 void RingWriter::published(uint64_t new_write) {
   hdr_->write_pos.store(new_write, std::memory_order_release);
   wrote_ = true;
-  const uint32_t threshold = std::min(
-      std::max<uint32_t>(hdr_->reader_threshold.load(std::memory_order_relaxed), 1), capacity_);
   // A write access that leaves the fill level at or above the threshold signals. Any access
   // leaves at least one element; beyond that the reader's position is read afresh (an older
   // one would make the fill look higher than it is).
-  uint64_t read = last_read_;
-  if (threshold > 1 && !load_read(read)) {
+  const uint32_t threshold = hdr_->reader_threshold.load(std::memory_order_relaxed);
+  if (threshold <= 1) {
+    reader_.signal();
     return;
   }
-  if (new_write - read >= threshold) {
+  uint64_t read = last_read_;
+  if (load_read(read) && new_write - read >= std::min(threshold, capacity_)) {
     reader_.signal();
   }
 }
@@ -482,16 +484,16 @@ bool RingReader::load_write(uint64_t& write) const {
 
 void RingReader::consumed(uint64_t new_read) {
   hdr_->read_pos.store(new_read, std::memory_order_release);
-  const uint32_t threshold = std::min(
-      std::max<uint32_t>(hdr_->writer_threshold.load(std::memory_order_relaxed), 1), capacity_);
   // A read access that leaves at least `threshold` elements free signals: any access leaves
   // one; beyond that the writer's position is read afresh (an older one would make the free
   // room look larger than it is).
-  uint64_t write = last_write_;
-  if (threshold > 1 && !load_write(write)) {
+  const uint32_t threshold = hdr_->writer_threshold.load(std::memory_order_relaxed);
+  if (threshold <= 1) {
+    writer_.signal();
     return;
   }
-  if (capacity_ - (write - new_read) >= threshold) {
+  uint64_t write = last_write_;
+  if (load_write(write) && capacity_ - (write - new_read) >= std::min(threshold, capacity_)) {
     writer_.signal();
   }
 }

@@ -106,7 +106,16 @@ void CanBus::load_members() {
   for (NodeId id = 0; id < node_count_; ++id) {
     Node& n = refresh(id);
     if (n.connected && n.participating && n.timing_valid) {
-      members_.push_back(Member{&n, id, n.listen_only, n.self_test, n.fd_capable});
+      Member& m = members_.emplace_back();
+      m.node = &n;
+      m.id = id;
+      m.listen_only = n.listen_only;
+      m.self_test = n.self_test;
+      m.fd_capable = n.fd_capable;
+      m.receiver.id = id;
+      m.receiver.drives = !n.listen_only;
+      m.receiver.self_test = n.self_test;
+      m.receiver.acks = m.receiver.drives;
     }
   }
   members_valid_ = true;
@@ -399,33 +408,39 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   // frame plans its error (and does not acknowledge), one that can acknowledges if it drives.
   uint16_t first = UINT16_MAX;
   bool acked = false;
+  const int8_t* row = decodes_row(tx, brs);
   for (const Member& m : members()) {
     const FaultConfinement& fc = *m.node->fc;
     if (fc.bus_off()) {
       continue;
     }
-    BusParticipant& p = parts.emplace_back();
-    p.id = m.id;
-    p.drives = !m.listen_only;
+    BusParticipant& p = parts.emplace_back(m.receiver);
     p.passive = fc.error_passive();
-    p.self_test = m.self_test;
     if (m.id == tx) {
       p.transmitter = true;
+      p.acks = false;
       p.bits = &e;
       acked = acked || m.self_test;
-    } else if (fd && !m.fd_capable) {
-      p.decodes = false;
+      continue;
+    }
+    bool decodes = false;
+    if (fd && !m.fd_capable) {
       const auto bit = static_cast<uint16_t>(e.field_begin(Field::fdf) + 1);
       p.planned = std::make_pair(CanErrorType::form, bit);
       first = std::min(first, bit);
-    } else if (!decodes(tx, m.id, brs)) {
-      p.decodes = false;
+    } else if (row != nullptr && row[m.id] >= 0) {
+      decodes = row[m.id] == 1;
+    } else {
+      decodes = decodes_slow(tx, m.id, brs);
+      row = decodes_row(tx, brs);
+    }
+    if (!decodes && !p.planned) {
       p.planned = std::make_pair(CanErrorType::stuff, e.arbitration_end);
       first = std::min(first, e.arbitration_end);
-    } else {
-      p.acks = p.drives;
-      acked = acked || p.drives;
     }
+    p.decodes = decodes;
+    p.acks = decodes && p.drives;
+    acked = acked || p.acks;
   }
   if (!acked) {
     first = std::min(first, static_cast<uint16_t>(e.crc_delimiter_index + 1));

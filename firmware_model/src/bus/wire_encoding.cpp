@@ -153,30 +153,6 @@ struct Crc {
   static constexpr std::array<uint32_t, 256> kHigh = make_table(8);
   static constexpr std::array<uint32_t, 256> kLow = make_table(0);
 
-  // Feeds the low `k` (1..16) bits of `v`, most significant first, in one table step: k bits
-  // into the register are k zeros and then those bits (leading zeros leave a cleared register
-  // cleared), plus what stays of the register.
-  static uint32_t feed(uint32_t crc, uint32_t v, uint32_t k) {
-    const uint32_t top = k <= Width ? crc >> (Width - k) : crc << (k - Width);
-    const uint32_t idx = (top ^ v) & 0xFFFF;
-    const uint32_t rest = k < Width ? (crc << k) & kMask : 0u;
-    return rest ^ kHigh[idx >> 8] ^ kLow[idx & 0xFF];
-  }
-
-  // Over the first `bits` (at most 128) of the two words `hi`, `lo`, first bit at the top of `hi`.
-  static uint32_t over_words(uint64_t hi, uint64_t lo, uint32_t bits, uint32_t crc) {
-    uint64_t x = hi;
-    for (uint32_t i = 0; i < bits; i += 16) {
-      if (i == 64) {
-        x = lo;
-      }
-      const uint32_t k = bits - i < 16 ? bits - i : 16;
-      crc = feed(crc, static_cast<uint32_t>(x >> (64 - k)), k);
-      x <<= 16;
-    }
-    return crc;
-  }
-
   template <class Bits>
   static uint32_t over(const Bits& s, uint32_t bits, uint32_t crc) {
     uint32_t i = 0;
@@ -195,6 +171,45 @@ struct Crc {
 };
 
 using Crc15 = Crc<15, kCrc15Poly>;
+
+// CRC-15 of a classic frame, 64 bits a step. From a cleared register leading zeros change
+// nothing, so the destuffed bits (at most 103) are read as two words padded in front; and 64 bits
+// into the register are the register's 15 bits XORed onto the first 15 of them, then fed into a
+// cleared register, which is linear in the 64 bits: eight byte tables, looked up in parallel.
+using Crc15Tables = std::array<std::array<uint16_t, 256>, 8>;
+constexpr Crc15Tables make_crc15_tables() {
+  Crc15Tables t{};
+  for (uint32_t k = 0; k < 8; ++k) {
+    for (uint32_t b = 0; b < 256; ++b) {
+      uint32_t crc = 0;
+      for (uint32_t i = 0; i < 64; ++i) {
+        // Bit i of the word (first = most significant) is bit 7 - (i - 8k) of byte k.
+        const bool bit = i >= 8 * k && i < 8 * k + 8 && ((b >> (7 - (i - 8 * k))) & 1u) != 0;
+        crc = Crc15::step_bit(crc, bit);
+      }
+      t[k][b] = static_cast<uint16_t>(crc);
+    }
+  }
+  return t;
+}
+
+struct Crc15Wide {
+  static constexpr Crc15Tables kTables = make_crc15_tables();
+
+  // 64 bits, first at the top, into the register `crc`.
+  static uint32_t feed64(uint32_t crc, uint64_t v) {
+    v ^= uint64_t{crc} << 49;
+    return uint32_t{kTables[0][v >> 56]} ^ kTables[1][(v >> 48) & 0xFF] ^
+           kTables[2][(v >> 40) & 0xFF] ^ kTables[3][(v >> 32) & 0xFF] ^
+           kTables[4][(v >> 24) & 0xFF] ^ kTables[5][(v >> 16) & 0xFF] ^
+           kTables[6][(v >> 8) & 0xFF] ^ kTables[7][v & 0xFF];
+  }
+  // Over the first `bits` (at most 128) of `x`, first bit at bit 127, from a cleared register.
+  static uint32_t over(uint128 x, uint32_t bits) {
+    const uint128 v = x >> (128 - bits);
+    return feed64(feed64(0, static_cast<uint64_t>(v >> 64)), static_cast<uint64_t>(v));
+  }
+};
 using Crc17 = Crc<17, kCrc17Poly>;
 using Crc21 = Crc<21, kCrc21Poly>;
 
@@ -495,7 +510,7 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
   ShortBits d;
   build_header_and_data(frame, d);
   // CRC-15 over the destuffed bits; the CRC sequence is then stuffed like the rest.
-  const uint32_t crc = Crc15::over_words(d.hi(), d.lo(), d.size, 0);
+  const uint32_t crc = Crc15Wide::over(d.bits, d.size);
   d.append(crc, 15);
 
   Wire3 wire;

@@ -256,6 +256,8 @@ class CanBus final : private EventHandler {
     bool listen_only = false;
     bool self_test = false;
     bool fd_capable = false;
+    // Its part as an error-active receiver that follows the frame and has nothing planned.
+    BusParticipant receiver;
   };
   const std::vector<Member>& members() {
     if (!members_valid_) {
@@ -309,6 +311,11 @@ class CanBus final : private EventHandler {
       }
     }
     return decodes_slow(tx, rx, brs);
+  }
+  // The row of decodes_cache_ for transmitter `tx`, or nullptr while the cache is empty.
+  const int8_t* decodes_row(NodeId tx, bool brs) const {
+    const std::size_t n = node_count_;
+    return decodes_cache_.empty() ? nullptr : decodes_cache_.data() + (brs ? n * n : 0) + tx * n;
   }
   void load_props(Node& n);
   void load_tx(Node& n);

@@ -5,14 +5,18 @@
 
 namespace canemu::model {
 
+void BusLoad::grow() {
+  std::vector<std::pair<SimTime, SimTime>> grown(busy_.empty() ? 64 : 2 * busy_.size());
+  for (std::size_t k = 0; k < busy_count_; ++k) {
+    grown[k] = busy_[(busy_head_ + k) & (busy_.size() - 1)];
+  }
+  busy_ = std::move(grown);
+  busy_head_ = 0;
+}
+
 void BusLoad::record(SimTime start, SimTime end) {
   if (busy_count_ == busy_.size()) {
-    std::vector<std::pair<SimTime, SimTime>> grown(busy_.empty() ? 64 : 2 * busy_.size());
-    for (std::size_t k = 0; k < busy_count_; ++k) {
-      grown[k] = busy_[(busy_head_ + k) & (busy_.size() - 1)];
-    }
-    busy_ = std::move(grown);
-    busy_head_ = 0;
+    grow();
   }
   const std::size_t mask = busy_.size() - 1;
   busy_[(busy_head_ + busy_count_) & mask] = {start, end};

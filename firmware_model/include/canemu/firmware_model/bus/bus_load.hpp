@@ -34,6 +34,7 @@ class BusLoad {
 
  private:
   void add_to_bins(SimTime start, SimTime end);
+  [[gnu::noinline]] void grow();  // busy_ is full: twice the room (kept out of record's way)
 
   // The activities of the last two seconds, oldest first: a ring over busy_ (its size a power of
   // two, doubled when full), so that recording one costs no allocation once it has grown.

@@ -2,38 +2,78 @@
 
 namespace canemu::model {
 
+namespace {
+
+constexpr uint16_t kSame = 0xFFFF;
+
+// The first bit at which the whole bit arrays of `a` and `b` differ (bits past the ends of the
+// frames included), or kSame; `a_smaller`: whether `a` is the smaller bit sequence, that is,
+// has the smaller word where they first differ (first bit first: comparing words as numbers is
+// comparing bit sequences).
+inline uint16_t first_split(const EncodedFrame& a, const EncodedFrame& b, bool& a_smaller) {
+  std::size_t w = 0;
+  while (w + 1 < a.level.size() && a.level[w] == b.level[w]) {
+    ++w;
+  }
+  a_smaller = a.level[w] < b.level[w];
+  const uint64_t x = a.level[w] ^ b.level[w];
+  return x == 0 ? kSame : static_cast<uint16_t>(w * 64 + static_cast<uint32_t>(__builtin_clzll(x)));
+}
+
+}  // namespace
+
 void Arbitration::resolve(std::span<const Contender> contenders) {
   senders_.clear();
   lost_.clear();
   collisions_.clear();
-  const Contender* winner = &contenders.front();
-  for (std::size_t k = 1; k < contenders.size(); ++k) {
-    const EncodedFrame& ec = *contenders[k].bits;
-    const EncodedFrame& best = *winner->bits;
-    // First bit first: comparing words as numbers is comparing bit sequences. (Bits past the
-    // end of a frame only count when two frames are equal up to there, that is, identical.)
-    std::size_t w = 0;
-    while (w + 1 < ec.level.size() && ec.level[w] == best.level[w]) {
-      ++w;
-    }
-    if (ec.level[w] < best.level[w]) {
-      winner = &contenders[k];
-    }
+  // One pass: the winner so far, and where every other contender departs from it. (Bits past the
+  // end of a frame only decide between frames equal up to there, that is, identical.)
+  const std::size_t n = contenders.size();
+  if (split_.size() < n) {
+    split_.resize(n);
   }
-  winning_bits_ = winner->bits;
-  senders_.push_back(winner->node);
-  for (const Contender& c : contenders) {
-    if (&c == winner) {
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < n; ++k) {
+    bool smaller = false;
+    const uint16_t d = first_split(*contenders[k].bits, *contenders[best].bits, smaller);
+    if (!smaller) {
+      split_[k] = d;
       continue;
     }
-    const auto d = first_difference(*c.bits, *winning_bits_);
-    if (!d) {
+    // k wins over the old winner, departing from it at d (so d is a real bit): the others followed
+    // the old winner up to their own split. Those that split before d split from k there too;
+    // those that split after d (or never) share the old winner's bit at d, which k does not; those
+    // that split at d too carry k's bit there, and their split from k lies further on.
+    for (std::size_t i = 0; i < k; ++i) {
+      if (i == best) {
+        continue;
+      }
+      if (split_[i] > d) {
+        split_[i] = d;
+      } else if (split_[i] == d) {
+        bool ignored = false;
+        split_[i] = first_split(*contenders[i].bits, *contenders[k].bits, ignored);
+      }
+    }
+    split_[best] = d;
+    best = k;
+  }
+  const Contender& winner = contenders[best];
+  winning_bits_ = winner.bits;
+  senders_.push_back(winner.node);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k == best) {
+      continue;
+    }
+    const Contender& c = contenders[k];
+    const uint16_t d = split_[k];
+    if (d >= std::min(c.bits->length, winning_bits_->length)) {
       senders_.push_back(c.node);  // the same frame: sent together
-    } else if (*d < c.bits->arbitration_end) {
-      lost_.push_back(AtBit{c.node, *d});
+    } else if (d < c.bits->arbitration_end) {
+      lost_.push_back(AtBit{c.node, d});
     } else {
       senders_.push_back(c.node);
-      collisions_.push_back(AtBit{c.node, *d});
+      collisions_.push_back(AtBit{c.node, d});
     }
   }
 }

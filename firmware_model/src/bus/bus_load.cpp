@@ -5,18 +5,35 @@
 
 namespace canemu::model {
 
+void BusLoad::grow() {
+  std::vector<std::pair<SimTime, SimTime>> grown(busy_.empty() ? 64 : 2 * busy_.size());
+  for (std::size_t k = 0; k < busy_count_; ++k) {
+    grown[k] = busy_[(busy_head_ + k) & (busy_.size() - 1)];
+  }
+  busy_ = std::move(grown);
+  busy_head_ = 0;
+}
+
 void BusLoad::record(SimTime start, SimTime end) {
-  busy_.emplace_back(start, end);
+  if (busy_count_ == busy_.size()) {
+    grow();
+  }
+  const std::size_t mask = busy_.size() - 1;
+  busy_[(busy_head_ + busy_count_) & mask] = {start, end};
+  ++busy_count_;
   add_to_bins(start, end);
-  while (!busy_.empty() && busy_.front().second < end - seconds(2)) {
-    busy_.pop_front();
+  const SimTime forget = end - seconds(2);
+  while (busy_count_ != 0 && busy_[busy_head_].second < forget) {
+    busy_head_ = (busy_head_ + 1) & mask;
+    --busy_count_;
   }
 }
 
 double BusLoad::percent(SimTime now) const {
   const SimTime from = now - seconds(1);
   int64_t busy = 0;
-  for (const auto& [start, end] : busy_) {
+  for (std::size_t k = 0; k < busy_count_; ++k) {
+    const auto& [start, end] = busy_[(busy_head_ + k) & (busy_.size() - 1)];
     const SimTime a = std::max(start, from);
     const SimTime b = std::min(end, now);
     if (b > a) {

@@ -58,6 +58,7 @@ NodeId CanBus::attach(CanController& controller) {
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
   decodes_cache_.clear();
+  members_changed();
   const NodeId id = static_cast<NodeId>(node_count_ - 1);
   if (!busy_) {
     schedule_attempt(scheduler_.now());
@@ -79,6 +80,7 @@ void CanBus::controller_changed(NodeId node) {
   nodes_[node].props_known = false;
   nodes_[node].timing_known = false;
   decodes_cache_.clear();
+  members_changed();
   if (!busy_) {
     schedule_attempt(std::max(scheduler_.now(), free_at_));
   }
@@ -97,6 +99,26 @@ void CanBus::load_props(Node& n) {
   n.fd_capable = n.controller->fd_capable();
   n.recovery = n.controller->bus_off_recovery();
   n.props_known = true;
+}
+
+void CanBus::load_members() {
+  members_.clear();
+  for (NodeId id = 0; id < node_count_; ++id) {
+    Node& n = refresh(id);
+    if (n.connected && n.participating && n.timing_valid) {
+      Member& m = members_.emplace_back();
+      m.node = &n;
+      m.id = id;
+      m.listen_only = n.listen_only;
+      m.self_test = n.self_test;
+      m.fd_capable = n.fd_capable;
+      m.receiver.id = id;
+      m.receiver.drives = !n.listen_only;
+      m.receiver.self_test = n.self_test;
+      m.receiver.acks = m.receiver.drives;
+    }
+  }
+  members_valid_ = true;
 }
 
 bool CanBus::decodes_slow(NodeId tx, NodeId rx, bool brs) {
@@ -187,6 +209,7 @@ void CanBus::set_oscillator_ppm(NodeId node, int32_t ppm) {
 
 void CanBus::set_connected(NodeId node, bool connected) {
   nodes_[node].connected = connected;
+  members_changed();
   if (connected && !busy_) {
     schedule_attempt(std::max(scheduler_.now(), free_at_));
   }
@@ -257,16 +280,19 @@ void CanBus::attempt(SimTime now) {
   std::vector<Arbitration::Contender>& contenders = contenders_;
   contenders.clear();
   std::optional<SimTime> next_ready;
-  for (NodeId id = 0; id < node_count_; ++id) {
-    Node& n = refresh(id);
-    if (!can_transmit(n)) {
+  for (const Member& m : members()) {
+    Node& n = *m.node;
+    if (n.fc->bus_off() || m.listen_only || pending(n) == nullptr) {
       continue;
     }
     if (n.ready_at > now) {
       next_ready = next_ready ? std::min(*next_ready, n.ready_at) : n.ready_at;
       continue;
     }
-    contenders.push_back(Arbitration::Contender{id, &encoded_tx(id)});
+    if (!n.encoded_valid) {
+      load_encoding(n);
+    }
+    contenders.push_back(Arbitration::Contender{m.id, &n.encoded});
   }
   if (contenders.empty()) {
     if (next_ready) {
@@ -313,29 +339,15 @@ void CanBus::run_frame(SimTime sof) {
   if (injector_ != nullptr) {
     fault = injector_->on_frame(FrameContext{sof, tx, tx_frame.frame, e});
   }
-  const FrameRoles roles(e, fault, sof < ack_suppressed_until_);
-  std::vector<BusParticipant>& parts = parts_;
-  parts.clear();
   const bool alone = active.size() == 1;
-  for (NodeId id = 0; id < node_count_; ++id) {
-    Node& n = refresh(id);
-    if (!on_bus(n)) {
-      continue;
-    }
-    const NodeFacts facts{id, n.listen_only, n.fc->error_passive(), n.self_test};
-    BusParticipant& p = parts.emplace_back();
-    if (alone ? id == tx : std::find(active.begin(), active.end(), id) != active.end()) {
-      p = roles.sender(facts, encoded_tx(id), alone ? std::nullopt : arbitration_.collision_of(id));
-    } else if (tx_frame.frame.fd() && !n.fd_capable) {
-      p = roles.receiver(facts, FrameRoles::Decoding::not_fd);
-    } else {
-      p = roles.receiver(facts, decodes(tx, id, tx_frame.frame.brs())
-                                    ? FrameRoles::Decoding::ok
-                                    : FrameRoles::Decoding::timing);
-    }
+  const bool acks_suppressed = sof < ack_suppressed_until_;
+  std::optional<uint16_t> first_bit;
+  if (alone && !fault.error && !fault.suppress_ack && !acks_suppressed) {
+    first_bit = plain_roles(tx, e, tx_frame.frame.fd(), tx_frame.frame.brs());
+  } else {
+    first_bit = general_roles(tx, e, fault, acks_suppressed);
   }
 
-  std::optional<uint16_t> first_bit = roles.first_detection(parts);
   // A dominant hold that overlaps the frame disturbs it.
   const SimTime frame_end = holds_.empty() ? sof : bit_end(e.length - 1u);
   for (const auto& [from, duration] : holds_) {
@@ -359,7 +371,84 @@ void CanBus::run_frame(SimTime sof) {
     }
     scheduler_.schedule_at(latest, [this](SimTime) { report_losses(); });
   }
-  run_error_phase(sof, parts, &e, nominal, data, *first_bit);
+  run_error_phase(sof, parts_, &e, nominal, data, *first_bit);
+}
+
+std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
+                                              const FrameFault& fault, bool acks_suppressed) {
+  const std::vector<NodeId>& active = arbitration_.senders();
+  const Frame& frame = pending(nodes_[tx])->frame;
+  const FrameRoles roles(e, fault, acks_suppressed);
+  std::vector<BusParticipant>& parts = parts_;
+  parts.clear();
+  const bool alone = active.size() == 1;
+  for (NodeId id = 0; id < node_count_; ++id) {
+    Node& n = refresh(id);
+    if (!on_bus(n)) {
+      continue;
+    }
+    const NodeFacts facts{id, n.listen_only, n.fc->error_passive(), n.self_test};
+    BusParticipant& p = parts.emplace_back();
+    if (alone ? id == tx : std::find(active.begin(), active.end(), id) != active.end()) {
+      p = roles.sender(facts, encoded_tx(id), alone ? std::nullopt : arbitration_.collision_of(id));
+    } else if (frame.fd() && !n.fd_capable) {
+      p = roles.receiver(facts, FrameRoles::Decoding::not_fd);
+    } else {
+      p = roles.receiver(facts, decodes(tx, id, frame.brs()) ? FrameRoles::Decoding::ok
+                                                             : FrameRoles::Decoding::timing);
+    }
+  }
+  return roles.first_detection(parts);
+}
+
+std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bool fd, bool brs) {
+  std::vector<BusParticipant>& parts = parts_;
+  parts.clear();
+  // FrameRoles without a fault: the sender plans nothing; a receiver that cannot follow the
+  // frame plans its error (and does not acknowledge), one that can acknowledges if it drives.
+  uint16_t first = UINT16_MAX;
+  bool acked = false;
+  const int8_t* row = decodes_row(tx, brs);
+  for (const Member& m : members()) {
+    const FaultConfinement& fc = *m.node->fc;
+    if (fc.bus_off()) {
+      continue;
+    }
+    BusParticipant& p = parts.emplace_back(m.receiver);
+    p.passive = fc.error_passive();
+    if (m.id == tx) {
+      p.transmitter = true;
+      p.acks = false;
+      p.bits = &e;
+      acked = acked || m.self_test;
+      continue;
+    }
+    bool decodes = false;
+    if (fd && !m.fd_capable) {
+      const auto bit = static_cast<uint16_t>(e.field_begin(Field::fdf) + 1);
+      p.planned = std::make_pair(CanErrorType::form, bit);
+      first = std::min(first, bit);
+    } else if (row != nullptr && row[m.id] >= 0) {
+      decodes = row[m.id] == 1;
+    } else {
+      decodes = decodes_slow(tx, m.id, brs);
+      row = decodes_row(tx, brs);
+    }
+    if (!decodes && !p.planned) {
+      p.planned = std::make_pair(CanErrorType::stuff, e.arbitration_end);
+      first = std::min(first, e.arbitration_end);
+    }
+    p.decodes = decodes;
+    p.acks = decodes && p.drives;
+    acked = acked || p.acks;
+  }
+  if (!acked) {
+    first = std::min(first, static_cast<uint16_t>(e.crc_delimiter_index + 1));
+  }
+  if (first == UINT16_MAX) {
+    return std::nullopt;
+  }
+  return first;
 }
 
 void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,

@@ -153,30 +153,6 @@ struct Crc {
   static constexpr std::array<uint32_t, 256> kHigh = make_table(8);
   static constexpr std::array<uint32_t, 256> kLow = make_table(0);
 
-  // Feeds the low `k` (1..16) bits of `v`, most significant first, in one table step: k bits
-  // into the register are k zeros and then those bits (leading zeros leave a cleared register
-  // cleared), plus what stays of the register.
-  static uint32_t feed(uint32_t crc, uint32_t v, uint32_t k) {
-    const uint32_t top = k <= Width ? crc >> (Width - k) : crc << (k - Width);
-    const uint32_t idx = (top ^ v) & 0xFFFF;
-    const uint32_t rest = k < Width ? (crc << k) & kMask : 0u;
-    return rest ^ kHigh[idx >> 8] ^ kLow[idx & 0xFF];
-  }
-
-  // Over the first `bits` (at most 128) of the two words `hi`, `lo`, first bit at the top of `hi`.
-  static uint32_t over_words(uint64_t hi, uint64_t lo, uint32_t bits, uint32_t crc) {
-    uint64_t x = hi;
-    for (uint32_t i = 0; i < bits; i += 16) {
-      if (i == 64) {
-        x = lo;
-      }
-      const uint32_t k = bits - i < 16 ? bits - i : 16;
-      crc = feed(crc, static_cast<uint32_t>(x >> (64 - k)), k);
-      x <<= 16;
-    }
-    return crc;
-  }
-
   template <class Bits>
   static uint32_t over(const Bits& s, uint32_t bits, uint32_t crc) {
     uint32_t i = 0;
@@ -195,6 +171,45 @@ struct Crc {
 };
 
 using Crc15 = Crc<15, kCrc15Poly>;
+
+// CRC-15 of a classic frame, 64 bits a step. From a cleared register leading zeros change
+// nothing, so the destuffed bits (at most 103) are read as two words padded in front; and 64 bits
+// into the register are the register's 15 bits XORed onto the first 15 of them, then fed into a
+// cleared register, which is linear in the 64 bits: eight byte tables, looked up in parallel.
+using Crc15Tables = std::array<std::array<uint16_t, 256>, 8>;
+constexpr Crc15Tables make_crc15_tables() {
+  Crc15Tables t{};
+  for (uint32_t k = 0; k < 8; ++k) {
+    for (uint32_t b = 0; b < 256; ++b) {
+      uint32_t crc = 0;
+      for (uint32_t i = 0; i < 64; ++i) {
+        // Bit i of the word (first = most significant) is bit 7 - (i - 8k) of byte k.
+        const bool bit = i >= 8 * k && i < 8 * k + 8 && ((b >> (7 - (i - 8 * k))) & 1u) != 0;
+        crc = Crc15::step_bit(crc, bit);
+      }
+      t[k][b] = static_cast<uint16_t>(crc);
+    }
+  }
+  return t;
+}
+
+struct Crc15Wide {
+  static constexpr Crc15Tables kTables = make_crc15_tables();
+
+  // 64 bits, first at the top, into the register `crc`.
+  static uint32_t feed64(uint32_t crc, uint64_t v) {
+    v ^= uint64_t{crc} << 49;
+    return uint32_t{kTables[0][v >> 56]} ^ kTables[1][(v >> 48) & 0xFF] ^
+           kTables[2][(v >> 40) & 0xFF] ^ kTables[3][(v >> 32) & 0xFF] ^
+           kTables[4][(v >> 24) & 0xFF] ^ kTables[5][(v >> 16) & 0xFF] ^
+           kTables[6][(v >> 8) & 0xFF] ^ kTables[7][v & 0xFF];
+  }
+  // Over the first `bits` (at most 128) of `x`, first bit at bit 127, from a cleared register.
+  static uint32_t over(uint128 x, uint32_t bits) {
+    const uint128 v = x >> (128 - bits);
+    return feed64(feed64(0, static_cast<uint64_t>(v >> 64)), static_cast<uint64_t>(v));
+  }
+};
 using Crc17 = Crc<17, kCrc17Poly>;
 using Crc21 = Crc<21, kCrc21Poly>;
 
@@ -235,7 +250,7 @@ void build_header_and_data(const Frame& frame, Bits& d) {
 // Dynamic bit stuffing of `d` into the frame bits `s`, marking stuff bits in `m`: after five
 // equal bits a complementary bit, which starts the next run. `last_may_stuff` is false for
 // CAN FD, where no dynamic stuff bit follows the last bit before the CRC field. (Classic frames
-// are stuffed a byte at a time by table: encode_classic.)
+// are stuffed in registers: stuff_classic.)
 //
 // Runs are found a 64-bit window at a time (bit j equals bit j + 1 for four j in a row), and the
 // bits between two stuff bits are copied as one block, so the cost grows with the number of
@@ -282,9 +297,6 @@ struct WireWriter {
       count -= c;
     }
   }
-  // Stuffs the top `bytes` bytes of `x` by table (kStuffTable, below), from state `state`;
-  // returns the state after them.
-  uint32_t stuff_bytes(uint64_t x, uint32_t bytes, uint32_t state);
   uint32_t size() const { return static_cast<uint32_t>(w * 64 + used); }
   // Stores what the accumulators hold.
   void close() {
@@ -375,95 +387,143 @@ void apply(const Probes& p, EncodedFrame& out) {
   }
 }
 
-// Dynamic stuffing of classic frames, a byte at a time. The state between bytes is the level
-// of the last bit sent and how many bits of that level end the output (1..4; 0 before SOF):
-// state = 5 * level + run. A step takes up to 8 bits and gives what goes on the wire for them,
-// stuff bits included (at most two), with their marks, and the state after them.
-struct StuffStep {
-  uint16_t bits = 0;   // the output, last bit in bit 0
-  uint16_t marks = 0;  // 1 = stuff bit
-  uint8_t count = 0;   // output bits
-  uint8_t state = 0;
+// Up to 192 wire bits in three words held in registers, first bit at the top of w0: a classic
+// frame (at most 118 destuffed bits, 29 stuff bits and 10 more).
+struct Wire3 {
+  uint64_t w0 = 0, w1 = 0, w2 = 0;
+
+  // Inserts `bit` at index `off` of `w`: the bits from there on move one place on; returns the
+  // bit that leaves the word.
+  static uint64_t insert(uint64_t& w, uint32_t off, uint64_t bit) {
+    const uint64_t out = w & 1u;
+    const uint64_t keep = ~(~uint64_t{0} >> off);  // the bits before index `off`
+    w = (w & keep) | (bit << (63 - off)) | ((w & ~keep) >> 1);
+    return out;
+  }
+  // Inserts `bit` at wire index `q`; the last bit of w2 drops (it is past any frame's end).
+  void insert(uint32_t q, uint64_t bit) {
+    if (q < 64) {
+      w2 = (w2 >> 1) | (insert(w1, 0, insert(w0, q, bit)) << 63);
+      return;
+    }
+    if (q < 128) {
+      const uint64_t carry = insert(w1, q - 64, bit);
+      w2 = (w2 >> 1) | (carry << 63);
+      return;
+    }
+    insert(w2, q - 128, bit);
+  }
+  void set(uint32_t q) {
+    const uint64_t b = uint64_t{1} << (63 - (q & 63));
+    if (q < 64) {
+      w0 |= b;
+    } else if (q < 128) {
+      w1 |= b;
+    } else {
+      w2 |= b;
+    }
+  }
+  // Sets the 10 bits from index `q` on.
+  void set10(uint32_t q) {
+    constexpr uint64_t kTen = ~(~uint64_t{0} >> 10);
+    const uint32_t off = q & 63;
+    const uint64_t first = kTen >> off;
+    const uint64_t second = off > 54 ? kTen << (64 - off) : 0;
+    if (q < 64) {
+      w0 |= first;
+      w1 |= second;
+    } else if (q < 128) {
+      w1 |= first;
+      w2 |= second;
+    } else {
+      w2 |= first;
+    }
+  }
+  // Stores the words that `length` bits use.
+  void store(EncodedFrame::Bits& out, uint32_t length) const {
+    out[0] = w0;
+    if (length > 64) {
+      out[1] = w1;
+    }
+    if (length > 128) {
+      out[2] = w2;
+    }
+  }
 };
 
-constexpr StuffStep stuff_run(uint32_t state, uint32_t value, uint32_t nbits) {
-  uint32_t level = state / 5;
-  uint32_t run = state % 5;
-  StuffStep r;
-  auto put = [&](uint32_t bit, uint32_t mark) {
-    r.bits = static_cast<uint16_t>((r.bits << 1) | bit);
-    r.marks = static_cast<uint16_t>((r.marks << 1) | mark);
-    ++r.count;
-  };
-  for (uint32_t i = nbits; i-- > 0;) {
-    const uint32_t b = (value >> i) & 1u;
-    if (run != 0 && b == level) {
-      ++run;
-    } else {
-      level = b;
-      run = 1;
-    }
-    put(b, 0);
-    if (run == 5) {  // the complement follows and starts the next run
-      level ^= 1u;
-      put(level, 1);
-      run = 1;
-    }
-  }
-  r.state = static_cast<uint8_t>(5 * level + run);
-  return r;
+// Bit `i` (0..127, from the top) of the two words `hi`, `lo`.
+inline uint64_t bit_of(uint64_t hi, uint64_t lo, uint32_t i) {
+  return i < 64 ? (hi >> (63 - i)) & 1u : (lo >> (127 - i)) & 1u;
 }
 
-// kStuffTable[256 * state + byte]: a StuffStep packed as bits | marks << 10 | count << 20 |
-// state << 24, one load per byte.
-constexpr std::array<uint32_t, 10 * 256> make_stuff_table() {
-  std::array<uint32_t, 10 * 256> t{};
-  for (uint32_t state = 0; state < 10; ++state) {
-    for (uint32_t v = 0; v < 256; ++v) {
-      const StuffStep r = stuff_run(state, v, 8);
-      t[state * 256 + v] = uint32_t{r.bits} | uint32_t{r.marks} << 10 | uint32_t{r.count} << 20 |
-                           uint32_t{r.state} << 24;
+// The first set bit at index `from` (0..127) or later of `hi`, `lo`; 128 if none.
+inline uint32_t next_set(uint64_t hi, uint64_t lo, uint32_t from) {
+  if (from < 64) {
+    const uint64_t m = hi & (~uint64_t{0} >> from);
+    if (m != 0) {
+      return static_cast<uint32_t>(__builtin_clzll(m));
     }
+    return lo != 0 ? 64 + static_cast<uint32_t>(__builtin_clzll(lo)) : 128;
   }
-  return t;
+  const uint64_t m = lo & (~uint64_t{0} >> (from - 64));
+  return m != 0 ? 64 + static_cast<uint32_t>(__builtin_clzll(m)) : 128;
 }
 
-constexpr std::array<uint32_t, 10 * 256> kStuffTable = make_stuff_table();
-
-uint32_t WireWriter::stuff_bytes(uint64_t x, uint32_t bytes, uint32_t state) {
-  for (uint32_t k = 0; k < bytes; ++k) {
-    const uint32_t e = kStuffTable[state * 256 + static_cast<uint32_t>(x >> 56)];
-    x <<= 8;
-    put(e & 0x3FF, (e >> 10) & 0x3FF, (e >> 20) & 0xF);
-    state = e >> 24;
+// Dynamic stuffing of a classic frame's destuffed bits `d` into `wire` and `marks`; returns the
+// number of stuff bits. Where five equal destuffed bits in a row begin is found for the whole
+// frame at once (bit j equals bit j + 1 for four j in a row). A stuff bit, the complement of the
+// bit p before it, starts the next run: if the four bits after p are all its like, the next stuff
+// bit follows them (found at once too: bit p differs from bit p + 1, which the next three equal);
+// otherwise the next one ends the first run of five that begins after p. So the work grows with
+// the number of stuff bits, a few per frame, not with the number of bits.
+uint32_t stuff_classic(const ShortBits& d, Wire3& wire, Wire3& marks) {
+  const uint32_t n = d.size;  // 34..118
+  const uint128 x = d.bits;
+  const uint128 eq = ~(x ^ (x << 1));  // bit 127 - j: bit j equals bit j + 1
+  // Only what begins at j <= n - 5 lies inside the frame.
+  const uint128 inside = ~uint128{0} << (128 - (n - 4));
+  const uint128 four = (eq << 1) & (eq << 2) & (eq << 3) & inside;
+  const uint128 runs = eq & four;    // bits j..j+4 equal
+  const uint128 after = ~eq & four;  // bit j differs from bits j+1..j+4, which are equal
+  const auto xh = static_cast<uint64_t>(x >> 64);
+  const auto xl = static_cast<uint64_t>(x);
+  const auto rh = static_cast<uint64_t>(runs >> 64);
+  const auto rl = static_cast<uint64_t>(runs);
+  const auto ah = static_cast<uint64_t>(after >> 64);
+  const auto al = static_cast<uint64_t>(after);
+  wire.w0 = xh;
+  wire.w1 = xl;
+  wire.w2 = 0;
+  uint32_t count = 0;
+  uint32_t p = next_set(rh, rl, 0) + 4;  // the destuffed bit the next stuff bit follows
+  while (p < 128) {
+    const uint32_t q = p + 1 + count;  // the stuff bit's index on the wire
+    wire.insert(q, bit_of(xh, xl, p) ^ 1u);
+    marks.set(q);
+    ++count;
+    p = bit_of(ah, al, p) != 0 ? p + 4 : next_set(rh, rl, p + 1) + 4;
   }
-  return state;
+  return count;
 }
 
 void encode_classic(const Frame& frame, EncodedFrame& out) {
   ShortBits d;
   build_header_and_data(frame, d);
   // CRC-15 over the destuffed bits; the CRC sequence is then stuffed like the rest.
-  const uint32_t crc = Crc15::over_words(d.hi(), d.lo(), d.size, 0);
+  const uint32_t crc = Crc15Wide::over(d.bits, d.size);
   d.append(crc, 15);
 
-  WireWriter wr{out.level, out.stuff};
-  const uint32_t whole = d.size / 8;  // 4 to 14 bytes, and 2 or 6 bits
-  uint32_t state = wr.stuff_bytes(d.hi(), std::min(whole, 8u), 0);
-  if (whole > 8) {
-    state = wr.stuff_bytes(d.lo(), whole - 8, state);
-  }
-  if (const uint32_t tail = d.size % 8; tail != 0) {
-    const uint32_t last = static_cast<uint32_t>((d.bits << (8 * whole)) >> 120);
-    const StuffStep st = stuff_run(state, last >> (8 - tail), tail);
-    wr.put(st.bits, st.marks, st.count);
-  }
-  const uint32_t stuffed = wr.size();
+  Wire3 wire;
+  Wire3 marks;
+  const uint32_t stuffed = d.size + stuff_classic(d, wire, marks);
   // CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits.
   out.crc_delimiter_index = static_cast<uint16_t>(stuffed);
-  wr.put(0x3FF, 0, 3 + kEofBits);
-  wr.close();
-  out.length = static_cast<uint16_t>(wr.size());
+  wire.set10(stuffed);
+  const uint32_t length = stuffed + 3 + kEofBits;
+  // The words the frame uses (bits past its end zero), as a word-at-a-time writer leaves them.
+  wire.store(out.level, length);
+  marks.store(out.stuff, length);
+  out.length = static_cast<uint16_t>(length);
   out.dynamic_stuff_bits = static_cast<uint16_t>(stuffed - d.size);
   out.crc = crc;
   out.crc_bits = 15;

@@ -33,13 +33,13 @@ std::size_t SimScheduler::run_until(SimTime limit, std::size_t max_events) {
   limit = std::max(limit, now_);  // time never goes backwards
   std::size_t ran = 0;
   while (ran < max_events) {
-    auto entry = queue_.pop_due(limit);
-    if (!entry) {
+    SimTime at;
+    Target t;
+    if (!queue_.pop_due(limit, at, t)) {
       now_ = limit;
       return ran;
     }
-    now_ = std::max(now_, entry->time);
-    const Target t = entry->payload;
+    now_ = std::max(now_, at);
     if (t.handler != nullptr) {
       t.handler->on_event(now_, t.tag);
     } else {

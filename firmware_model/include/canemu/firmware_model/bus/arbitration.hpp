@@ -65,6 +65,7 @@ class Arbitration {
   const EncodedFrame* winning_bits_ = nullptr;
   std::vector<AtBit> lost_;
   std::vector<AtBit> collisions_;
+  std::vector<uint16_t> split_;  // scratch: where each contender departs from the winner
 };
 
 }  // namespace canemu::model

@@ -34,8 +34,13 @@ class BusLoad {
 
  private:
   void add_to_bins(SimTime start, SimTime end);
+  [[gnu::noinline]] void grow();  // busy_ is full: twice the room (kept out of record's way)
 
-  std::deque<std::pair<SimTime, SimTime>> busy_;
+  // The activities of the last two seconds, oldest first: a ring over busy_ (its size a power of
+  // two, doubled when full), so that recording one costs no allocation once it has grown.
+  std::vector<std::pair<SimTime, SimTime>> busy_;
+  std::size_t busy_head_ = 0;
+  std::size_t busy_count_ = 0;
   // Busy nanoseconds of bins first_bin_, first_bin_ + 1, ...; later bins are idle so far.
   std::deque<int64_t> bins_;
   int64_t first_bin_ = 0;

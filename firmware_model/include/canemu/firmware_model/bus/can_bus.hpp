@@ -245,6 +245,36 @@ class CanBus final : private EventHandler {
     std::vector<Loss> losses;
   };
 
+  // A node that may be on the bus (connected, participating, with a usable bit time) and what a
+  // start of frame needs of it. The list (in node order) is rebuilt at the first look after
+  // anything it depends on changes: attach(), controller_changed(), set_connected(). Bus-off and
+  // error-passive are read from the counters at every frame, since they change with errors and
+  // may be written directly.
+  struct Member {
+    Node* node = nullptr;  // into nodes_, which attach() (the only reallocation) invalidates
+    NodeId id = 0;
+    bool listen_only = false;
+    bool self_test = false;
+    bool fd_capable = false;
+    // Its part as an error-active receiver that follows the frame and has nothing planned.
+    BusParticipant receiver;
+  };
+  const std::vector<Member>& members() {
+    if (!members_valid_) {
+      load_members();
+    }
+    return members_;
+  }
+  void load_members();
+  void members_changed() { members_valid_ = false; }
+  // run_frame's roles for a frame with one sender, no injected fault and acknowledgements
+  // allowed (nearly every frame): what FrameRoles gives, built directly from the members.
+  std::optional<uint16_t> plain_roles(NodeId tx, const EncodedFrame& e, bool fd, bool brs);
+  // The same for any frame, through FrameRoles: `fault` injected, acknowledgements suppressed,
+  // several senders. Both fill parts_ and return the first detection, if any.
+  std::optional<uint16_t> general_roles(NodeId tx, const EncodedFrame& e, const FrameFault& fault,
+                                        bool acks_suppressed);
+
   NodeTiming timing_of(const Node& n) const;
   const Node& refresh_timing(NodeId id);
   // Cached controller state, loaded on first use after a change (fast paths inline).
@@ -281,6 +311,11 @@ class CanBus final : private EventHandler {
       }
     }
     return decodes_slow(tx, rx, brs);
+  }
+  // The row of decodes_cache_ for transmitter `tx`, or nullptr while the cache is empty.
+  const int8_t* decodes_row(NodeId tx, bool brs) const {
+    const std::size_t n = node_count_;
+    return decodes_cache_.empty() ? nullptr : decodes_cache_.data() + (brs ? n * n : 0) + tx * n;
   }
   void load_props(Node& n);
   void load_tx(Node& n);
@@ -348,6 +383,8 @@ class CanBus final : private EventHandler {
   Arbitration arbitration_;
   std::vector<BusParticipant> parts_;
   Completion completion_;
+  std::vector<Member> members_;
+  bool members_valid_ = false;
   // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
   std::vector<int8_t> decodes_cache_;
 

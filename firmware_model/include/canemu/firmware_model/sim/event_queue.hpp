@@ -86,6 +86,21 @@ class EventQueue {
     return e;
   }
 
+  // The same without building an Entry: the earliest event's time and payload into `time` and
+  // `payload`; false if none is due. (Field by field: the entry was usually written just before,
+  // and a wide copy of it would wait for those stores.)
+  bool pop_due(SimTime limit, SimTime& time, Payload& payload) {
+    drop_cancelled();
+    if (heap_.empty() || heap_.front().time > limit) {
+      return false;
+    }
+    time = heap_.front().time;
+    payload = std::move(heap_.front().payload);
+    remove_top();
+    --live_;
+    return true;
+  }
+
  private:
   // A binary heap by hand: the few pending events of an island cost a compare or two per push
   // and pop, without the generic algorithms' set-up. (time, id) is a total order, so the order

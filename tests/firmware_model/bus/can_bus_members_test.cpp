@@ -1,0 +1,248 @@
+// The bus keeps the nodes that may take part in a frame (connected, participating, with a usable
+// bit time) and their listen-only, self-test and CAN FD settings as a list it rebuilds only after
+// attach(), controller_changed() or set_connected(); error states it reads from the counters at
+// every frame. Each test changes one of these between two frames and checks that the second
+// frame comes out exactly as if nothing had been kept (instants, bits and counters as the engine
+// gave before it kept the list).
+#include <gtest/gtest.h>
+
+#include "canemu/firmware_model/bus/can_bus.hpp"
+#include "canemu/firmware_model/bus/fault_plan.hpp"
+#include "test_controller.hpp"
+
+namespace canemu::model {
+namespace {
+
+using testing::k123;
+using testing::kBit;
+using testing::TestController;
+using Fixture = testing::BusFixture;
+
+// k123 is 62 bits: CRC delimiter at bit 52, ACK slot 53; its arbitration field ends at bit 13.
+constexpr int64_t kFrame = 62;
+constexpr uint16_t kAckSlot = 53;
+
+// The bus after a first k123 from `a` at 0 (received by everybody at bit 62), at bit 100.
+void first_frame(Fixture& f, TestController& a) {
+  a.send(k123);
+  f.run_until(100 * kBit);
+  ASSERT_EQ(a.sent.size(), 1u);
+  EXPECT_EQ(a.sent[0].at.ns(), kFrame * kBit);
+}
+
+TEST(CanBusMembers, AnUnpluggedReceiverNoLongerAcknowledgesAndOnePluggedBackDoes) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  first_frame(f, a);
+  ASSERT_EQ(b.received.size(), 1u);
+
+  f.bus.set_connected(b.id(), false);
+  a.send(k123);
+  f.run_until(160 * kBit);
+  // Nobody acknowledges: an ACK error at the ACK slot (its end: 100 + 54 bits).
+  ASSERT_EQ(a.errors.size(), 1u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(a.errors[0].bit, kAckSlot);
+  EXPECT_EQ(a.errors[0].at.ns(), (100 + kAckSlot + 1) * kBit);
+  EXPECT_EQ(a.errors[0].tec, 8);
+  EXPECT_EQ(b.received.size(), 1u);
+  EXPECT_TRUE(b.errors.empty());
+
+  // Plugged back during the error frame: the retry after flag (6 bits), delimiter (8) and
+  // intermission (3) is acknowledged.
+  f.bus.set_connected(b.id(), true);
+  f.run_until(1000 * kBit);
+  const int64_t retry = 100 + kAckSlot + 1 + 6 + 8 + 3;
+  ASSERT_EQ(b.received.size(), 2u);
+  EXPECT_EQ(b.received[1].at.ns(), (retry + kFrame) * kBit);
+  ASSERT_EQ(a.sent.size(), 2u);
+  EXPECT_EQ(a.sent[1].at.ns(), (retry + kFrame) * kBit);
+  EXPECT_EQ(a.errors.size(), 1u);
+  EXPECT_EQ(a.fc.tec(), 7);
+}
+
+TEST(CanBusMembers, AStoppedReceiverAndAListenOnlyOneLeaveTheFrameUnacknowledged) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus), c(f.bus);
+  first_frame(f, a);
+
+  // b stops (no longer participating), c turns listen-only: c still follows the frame, nobody
+  // acknowledges it.
+  b.running = false;
+  f.bus.controller_changed(b.id());
+  c.listen = true;
+  f.bus.controller_changed(c.id());
+  a.send(k123);
+  f.run_until(160 * kBit);
+  ASSERT_EQ(a.errors.size(), 1u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(a.errors[0].at.ns(), (100 + kAckSlot + 1) * kBit);
+  EXPECT_EQ(b.received.size(), 1u);
+  EXPECT_TRUE(b.errors.empty());
+  // c sees a's error flag in the ACK delimiter: a form error a bit later (counted by nobody:
+  // a listen-only node keeps its counters).
+  ASSERT_EQ(c.errors.size(), 1u);
+  EXPECT_EQ(c.errors[0].type, CanErrorType::form);
+  EXPECT_EQ(c.errors[0].role, ErrorRole::receiver);
+  EXPECT_EQ(c.errors[0].bit, kAckSlot + 1);
+  EXPECT_EQ(c.errors[0].at.ns(), (100 + kAckSlot + 2) * kBit);
+
+  // c may acknowledge again: the retry succeeds once c's error frame, a bit behind a's, is over;
+  // b, still stopped, gets nothing.
+  c.listen = false;
+  f.bus.controller_changed(c.id());
+  f.run_until(1000 * kBit);
+  const int64_t retry = 100 + kAckSlot + 2 + 6 + 8 + 3;
+  ASSERT_EQ(c.received.size(), 2u);
+  EXPECT_EQ(c.received[1].at.ns(), (retry + kFrame) * kBit);
+  EXPECT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(a.sent.size(), 2u);
+}
+
+TEST(CanBusMembers, AReceiverSwitchedToAnotherBitRateDetectsAStuffErrorAfterArbitration) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus), c(f.bus);
+  first_frame(f, a);
+
+  b.timing_.nominal = testing::timing_250k();
+  f.bus.controller_changed(b.id());
+  a.send(k123);
+  f.run_until(130 * kBit);
+  // b cannot follow 500 kbit/s: a stuff error at the first bit after the arbitration field.
+  ASSERT_EQ(b.errors.size(), 1u);
+  EXPECT_EQ(b.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(b.errors[0].role, ErrorRole::receiver);
+  EXPECT_EQ(b.errors[0].bit, 13);
+  EXPECT_EQ(b.errors[0].at.ns(), (100 + 14) * kBit);
+  EXPECT_EQ(b.errors[0].rec, 1);
+  // Its error flag is a bit error for a and a stuff error for c, at the first recessive bit of
+  // k123 it overwrites (bit 17).
+  ASSERT_EQ(a.errors.size(), 1u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::bit);
+  EXPECT_EQ(a.errors[0].bit, 17);
+  EXPECT_EQ(a.errors[0].at.ns(), (100 + 18) * kBit);
+  EXPECT_EQ(a.errors[0].tec, 8);
+  ASSERT_EQ(c.errors.size(), 1u);
+  EXPECT_EQ(c.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(c.errors[0].bit, 17);
+  // b sees c's and a's flags after its own: 1 + 8.
+  EXPECT_EQ(b.fc.rec(), 9);
+
+  // Back at 500 kbit/s during the error frame: the retry is received by both.
+  b.timing_.nominal = testing::timing_500k();
+  f.bus.controller_changed(b.id());
+  f.run_until(1000 * kBit);
+  ASSERT_EQ(b.received.size(), 2u);
+  ASSERT_EQ(c.received.size(), 2u);
+  EXPECT_EQ(b.received[1].at.ns(), 197 * kBit);
+  EXPECT_EQ(c.received[1].at.ns(), 197 * kBit);
+  EXPECT_EQ(b.fc.rec(), 8);
+}
+
+TEST(CanBusMembers, ANodeAttachedBetweenFramesReceivesTheNextOne) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  first_frame(f, a);
+  TestController late;
+  late.attach_to(f.bus);
+  a.send(k123);
+  f.run_until(1000 * kBit);
+  ASSERT_EQ(late.received.size(), 1u);
+  EXPECT_EQ(late.received[0].at.ns(), (100 + kFrame) * kBit);
+  EXPECT_EQ(f.bus.stats(late.id()).frames_received, 1u);
+  EXPECT_EQ(b.received.size(), 2u);
+}
+
+TEST(CanBusMembers, CountersWrittenWithoutTellingTheBusStillDecideBusOff) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  first_frame(f, a);
+
+  // Bus-off by a direct write the bus is not told of: b is off the bus for the next frame.
+  b.fc.set_counters(256, 0);
+  a.send(k123);
+  f.run_until(160 * kBit);
+  ASSERT_EQ(a.errors.size(), 1u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::ack);
+  EXPECT_EQ(a.errors[0].at.ns(), (100 + kAckSlot + 1) * kBit);
+  EXPECT_EQ(b.received.size(), 1u);
+  EXPECT_TRUE(b.errors.empty());
+
+  // Back to error-passive (REC 130), again unannounced: b takes part and acknowledges the
+  // retry; the reception takes REC from above 127 back to 127.
+  b.fc.set_counters(0, 130);
+  f.run_until(1000 * kBit);
+  const int64_t retry = 100 + kAckSlot + 1 + 6 + 8 + 3;
+  ASSERT_EQ(b.received.size(), 2u);
+  EXPECT_EQ(b.received[1].at.ns(), (retry + kFrame) * kBit);
+  EXPECT_EQ(b.fc.rec(), 127);
+}
+
+TEST(CanBusMembers, ANodeMadeErrorPassiveByADirectWriteSendsAPassiveFlag) {
+  // As in AReceiverSwitchedToAnotherBitRate...: b cannot follow the frame. Error-passive (by a
+  // write the bus is not told of), its flag is recessive: nobody else sees an error, and the
+  // frame goes through for a and c.
+  Fixture f;
+  TestController a(f.bus), b(f.bus), c(f.bus);
+  first_frame(f, a);
+  b.timing_.nominal = testing::timing_250k();
+  f.bus.controller_changed(b.id());
+  b.fc.set_counters(0, 130);
+  a.send(k123);
+  f.run_until(1000 * kBit);
+  ASSERT_EQ(b.errors.size(), 1u);
+  EXPECT_EQ(b.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(b.errors[0].at.ns(), (100 + 14) * kBit);
+  EXPECT_EQ(b.errors[0].rec, 131);
+  EXPECT_TRUE(a.errors.empty());
+  EXPECT_TRUE(c.errors.empty());
+  ASSERT_EQ(a.sent.size(), 2u);
+  EXPECT_EQ(a.sent[1].at.ns(), (100 + kFrame) * kBit);
+  ASSERT_EQ(c.received.size(), 2u);
+  EXPECT_EQ(c.received[1].at.ns(), (100 + kFrame) * kBit);
+  EXPECT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(a.fc.tec(), 0);
+}
+
+TEST(CanBusMembers, AReceiverThatDropsCanFdSeesAFormErrorAfterFdf) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  a.fd = true;
+  b.fd = true;
+  f.bus.controller_changed(a.id());
+  f.bus.controller_changed(b.id());
+  const Frame fd = *Frame::fd_frame(0x123, std::vector<uint8_t>{1, 2, 3}, false, false);
+  const EncodedFrame e = encode(fd);
+  ASSERT_EQ(e.length, 87);
+  ASSERT_EQ(e.field_begin(Field::fdf), 14);
+  a.send(fd);
+  f.run_until(200 * kBit);
+  ASSERT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(b.received[0].at.ns(), 87 * kBit);
+
+  b.fd = false;
+  f.bus.controller_changed(b.id());
+  a.send(fd);
+  f.run_until(230 * kBit);
+  // A classic controller takes the recessive FDF for the old reserved bit: a form error at the
+  // bit after it; its flag is a bit error for a at the next recessive bit it sends.
+  ASSERT_EQ(b.errors.size(), 1u);
+  EXPECT_EQ(b.errors[0].type, CanErrorType::form);
+  EXPECT_EQ(b.errors[0].bit, 15);
+  EXPECT_EQ(b.errors[0].at.ns(), (200 + 16) * kBit);
+  ASSERT_EQ(a.errors.size(), 1u);
+  EXPECT_EQ(a.errors[0].type, CanErrorType::bit);
+  EXPECT_EQ(a.errors[0].bit, 20);
+  EXPECT_EQ(a.errors[0].at.ns(), (200 + 21) * kBit);
+
+  // CAN FD again: the retry goes through.
+  b.fd = true;
+  f.bus.controller_changed(b.id());
+  f.run_until(1000 * kBit);
+  ASSERT_EQ(b.received.size(), 2u);
+  EXPECT_EQ(b.received[1].at.ns(), 325 * kBit);
+  EXPECT_EQ(b.errors.size(), 1u);
+}
+
+}  // namespace
+}  // namespace canemu::model

@@ -10,6 +10,7 @@
  * bit rate is 500 kbit/s, as on the buses of canemud's default configuration. Built with
  *   cc xcan_talk.c $(pkg-config --cflags --libs canemu-xcan)
  */
+#define _POSIX_C_SOURCE 200809L /* flockfile, also with -std=c11 */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,12 +20,16 @@
 static void on_receive(MAX_HANDLE hChan, ULONG ulSize, const void* pData) {
   const UCHAR* data = (const UCHAR*)pData;
   ULONG i;
+  /* The callback runs on the library's thread: the line is written whole (POSIX stream lock),
+     never mixed with what the main thread prints meanwhile. */
+  flockfile(stdout);
   printf("channel %lu: %lu bytes:", (unsigned long)hChan, (unsigned long)ulSize);
   for (i = 0; i < ulSize; ++i) {
     printf(" %02X", data[i]);
   }
   printf("\n");
   fflush(stdout);
+  funlockfile(stdout);
 }
 
 static void on_bus_error(MAX_HANDLE hChan, ULONG ulSize, const void* pData) {

@@ -6,17 +6,6 @@
 
 namespace canemu::daemon {
 
-std::size_t LatenessHistogram::bucket_of(int64_t ns) {
-  const auto v = static_cast<uint64_t>(ns);
-  if (v < 32) {
-    return static_cast<std::size_t>(v);
-  }
-  // The top five bits (16..31) of v and the position of its highest bit.
-  const int msb = 63 - std::countl_zero(v);
-  const uint64_t mantissa = v >> (msb - 4);
-  return static_cast<std::size_t>(msb - 4) * 16 + static_cast<std::size_t>(mantissa);
-}
-
 int64_t LatenessHistogram::upper_bound_of(std::size_t i) {
   if (i < 32) {
     return static_cast<int64_t>(i);
@@ -50,6 +39,14 @@ ipc::WirePacingFigures LatenessHistogram::figures() const {
   f.p99_ns = quantile(0.99);
   f.max_ns = max_;
   return f;
+}
+
+void LatenessHistogram::merge(const LatenessHistogram& other) {
+  for (std::size_t i = 0; i < kBuckets; ++i) {
+    counts_[i] += other.counts_[i];
+  }
+  count_ += other.count_;
+  max_ = std::max(max_, other.max_);
 }
 
 void LatenessHistogram::clear() {

@@ -291,21 +291,16 @@ void Server::advance_to_now() {
       options_.time.mode == TimeMode::scaled ? 1.0 / options_.time.scale : 1.0;
   int64_t wall = monotonic_ns();
   const int64_t until = wall + kMaxPassWorkNs;
-  for (std::size_t ran = 0;; ++ran) {
-    const std::optional<model::SimTime> next = s.next_event_time();
-    if (!next || *next > target) {
-      s.run_until(target);  // nothing more is due: now() becomes the target
-      break;
-    }
-    if (ran % kEventsPerClock == kEventsPerClock - 1) {
-      wall = monotonic_ns();
-      if (wall >= until) {
-        break;  // the rest waits for the next pass (the timer is due at once)
-      }
-    }
-    const double instant = static_cast<double>(next->ns()) * per_sim_ns;
+  // Each event's lateness against the clock read before its chunk of kEventsPerClock.
+  const auto late = [&](model::SimTime at) {
+    const double instant = static_cast<double>(at.ns()) * per_sim_ns;
     pacing_.event_late(wall - start_mono_ns_ - static_cast<int64_t>(std::min(instant, 9.0e18)));
-    s.run_until(*next, 1);
+  };
+  while (s.run_until(target, kEventsPerClock, late) == kEventsPerClock) {
+    wall = monotonic_ns();
+    if (wall >= until) {
+      break;  // the rest waits for the next pass (the timer is due at once)
+    }
   }
   note_pace(monotonic_ns(), target);
 }

@@ -29,31 +29,15 @@ bool SimScheduler::cancel(EventId id) {
   return queue_.cancel(id);
 }
 
-std::size_t SimScheduler::run_until(SimTime limit, std::size_t max_events) {
-  limit = std::max(limit, now_);  // time never goes backwards
-  std::size_t ran = 0;
-  while (ran < max_events) {
-    SimTime at;
-    Target t;
-    if (!queue_.pop_due(limit, at, t)) {
-      now_ = limit;
-      return ran;
-    }
-    now_ = std::max(now_, at);
-    if (t.handler != nullptr) {
-      t.handler->on_event(now_, t.tag);
-    } else {
-      Action action = std::move(actions_[t.tag]);
-      actions_[t.tag] = nullptr;
-      free_slots_.push_back(t.tag);
-      action(now_);
-    }
-    ++ran;
+void SimScheduler::dispatch(const Target& t) {
+  if (t.handler != nullptr) {
+    t.handler->on_event(now_, t.tag);
+  } else {
+    Action action = std::move(actions_[t.tag]);
+    actions_[t.tag] = nullptr;
+    free_slots_.push_back(t.tag);
+    action(now_);
   }
-  if (!queue_.next_time() || *queue_.next_time() > limit) {
-    now_ = limit;  // exactly `max_events` were due
-  }
-  return ran;
 }
 
 }  // namespace canemu::model

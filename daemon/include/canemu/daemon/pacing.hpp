@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 
@@ -22,7 +23,15 @@ class LatenessHistogram {
  public:
   static constexpr std::size_t kBuckets = 960;  // up to 2^63 ns
 
-  static std::size_t bucket_of(int64_t ns);
+  static std::size_t bucket_of(int64_t ns) {
+    const auto v = static_cast<uint64_t>(ns);
+    if (v < 32) {
+      return static_cast<std::size_t>(v);
+    }
+    // The top five bits (16..31) of v and the position of its highest bit.
+    const int msb = 63 - std::countl_zero(v);
+    return static_cast<std::size_t>(msb - 4) * 16 + static_cast<std::size_t>(v >> (msb - 4));
+  }
   // The largest value bucket `i` holds (what a quantile reports: never below the truth).
   static int64_t upper_bound_of(std::size_t i);
 
@@ -43,6 +52,8 @@ class LatenessHistogram {
   int64_t quantile(double q) const;
   ipc::WirePacingFigures figures() const;
   void clear();
+  // Adds what `other` counted.
+  void merge(const LatenessHistogram& other);
 
  private:
   std::array<uint64_t, kBuckets> counts_{};
@@ -50,25 +61,28 @@ class LatenessHistogram {
   int64_t max_ = 0;
 };
 
-// One figure since start and over the last complete interval.
+// One figure since start and over the last complete interval. A value goes into the current
+// interval only; an interval that ends is added to what came before it.
 class LatenessRecord {
  public:
-  void add(int64_t ns) {
-    total_.add(ns);
-    current_.add(ns);
-  }
+  void add(int64_t ns) { current_.add(ns); }
   // Ends the current interval: its figures become the last interval's.
   void rotate() {
     last_ = current_.figures();
+    before_.merge(current_);
     current_.clear();
   }
-  ipc::WirePacingFigures since_start() const { return total_.figures(); }
+  ipc::WirePacingFigures since_start() const {
+    LatenessHistogram all = before_;
+    all.merge(current_);
+    return all.figures();
+  }
   ipc::WirePacingFigures last_interval() const { return last_; }
   // The current interval's quantile (the spin estimate reads it before rotating).
   const LatenessHistogram& current() const { return current_; }
 
  private:
-  LatenessHistogram total_;
+  LatenessHistogram before_;  // the intervals that ended
   LatenessHistogram current_;
   ipc::WirePacingFigures last_{};
 };

@@ -81,7 +81,32 @@ class SimScheduler {
   std::size_t run_until(SimTime limit) { return run_until(limit, SIZE_MAX); }
   // The same, but at most `max_events`: when that many ran and more are due, now() stays at the
   // last one's instant (the rest run at the next call). So a caller can bound its work per turn.
-  std::size_t run_until(SimTime limit, std::size_t max_events);
+  std::size_t run_until(SimTime limit, std::size_t max_events) {
+    return run_until(limit, max_events, [](SimTime) {});
+  }
+  // The same, calling `before(at)` with each event's instant just before it runs (canemud
+  // measures how late it runs them).
+  template <class Before>
+  std::size_t run_until(SimTime limit, std::size_t max_events, Before&& before) {
+    limit = std::max(limit, now_);  // time never goes backwards
+    std::size_t ran = 0;
+    while (ran < max_events) {
+      SimTime at;
+      Target t;
+      if (!queue_.pop_due(limit, at, t)) {
+        now_ = limit;
+        return ran;
+      }
+      now_ = std::max(now_, at);
+      before(at);
+      dispatch(t);
+      ++ran;
+    }
+    if (!queue_.next_time() || *queue_.next_time() > limit) {
+      now_ = limit;  // exactly `max_events` were due
+    }
+    return ran;
+  }
 
  private:
   // Heap entries stay small: a handler and a tag, or an index into the slots of std::function
@@ -90,6 +115,8 @@ class SimScheduler {
     EventHandler* handler = nullptr;
     uint64_t tag = 0;  // handler's tag, or the action's slot
   };
+  void dispatch(const Target& t);
+
   EventQueue<Target> queue_;
   std::vector<Action> actions_;
   std::vector<std::size_t> free_slots_;

@@ -50,8 +50,8 @@ using bench::now_ns;
 using bench::report;
 using bench::sleep_ns;
 
-constexpr std::size_t kSamples = 2000;
-constexpr int64_t kGapNs = 500'000;  // the bus is idle again long before the next frame
+constexpr std::size_t kSamples = bench::kLatencySamples;
+constexpr int64_t kGapNs = bench::kLatencyGapNs;
 
 std::string write_config(const std::string& dir) {
   const std::string path = dir + "/bench.toml";

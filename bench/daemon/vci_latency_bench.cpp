@@ -28,8 +28,8 @@ using bench::now_ns;
 using bench::report;
 using bench::sleep_ns;
 
-constexpr std::size_t kSamples = 2000;
-constexpr int64_t kGapNs = 500'000;  // the bus is idle again long before the next frame
+constexpr std::size_t kSamples = bench::kLatencySamples;
+constexpr int64_t kGapNs = bench::kLatencyGapNs;
 
 VCIID id_of(const std::string& name) {
   HANDLE e = nullptr;

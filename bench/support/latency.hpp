@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -14,6 +15,11 @@
 #include "canemu/ipc/clock.hpp"
 
 namespace canemu::bench {
+
+// Latency benchmarks take this many samples, each after this long an idle bus (a frame at
+// 1 Mbit/s is over long before the next).
+inline constexpr std::size_t kLatencySamples = 2000;
+inline constexpr int64_t kLatencyGapNs = 500'000;
 
 inline int64_t now_ns() {
   return ipc::monotonic_ns();

@@ -42,6 +42,18 @@ Pair make(uint32_t capacity) {
   return Pair(std::move(*m), std::move(*make_eventfd()), std::move(*make_eventfd()));
 }
 
+// A forked child killed and reaped when the test leaves early (a failing reader must not leave
+// its writer behind); pid -1 once reaped.
+struct Reap {
+  pid_t pid;
+  ~Reap() {
+    if (pid > 0) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, nullptr, 0);
+    }
+  }
+};
+
 Element element(uint32_t seq) {
   Element e{};
   e.seq = seq;
@@ -308,15 +320,7 @@ TEST(ShmRing, TwoProcessesExchangeAHundredThousandElementsInOrder) {
     }
     ::_exit(waited < 20 ? 0 : 1);
   }
-  struct Reap {
-    pid_t pid;
-    ~Reap() {
-      if (pid > 0) {
-        ::kill(pid, SIGKILL);
-        ::waitpid(pid, nullptr, 0);
-      }
-    }
-  } reap{child};
+  Reap reap{child};
   uint32_t expected = 0;
   bool in_order = true;
   while (expected < 100000) {
@@ -378,15 +382,7 @@ TEST(ShmRing, SidesThatBlockInTwoProcessesNeverMissAWakeUp) {
     }
     ::_exit(0);
   }
-  struct Reap {
-    pid_t pid;
-    ~Reap() {
-      if (pid > 0) {
-        ::kill(pid, SIGKILL);
-        ::waitpid(pid, nullptr, 0);
-      }
-    }
-  } reap{child};
+  Reap reap{child};
   uint32_t expected = 0;
   bool in_order = true;
   while (expected < kCount) {

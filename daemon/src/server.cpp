@@ -49,6 +49,7 @@ bool add(int epoll, int fd) {
 
 Server::Server(Simulation& sim, ServerOptions options)
     : sim_(sim), options_(std::move(options)), dispatcher_(sim, options_.time) {
+  pacing_.set_max_spin(int64_t{sim_.config().simulation.spin_us} * 1000);
   dispatcher_.before_status = [this] {
     advance_to_now();
     flush_recorders();

@@ -49,23 +49,26 @@ std::string duration_text(int64_t ns) {
   return fmt::format("{:.2f} ms", static_cast<double>(ns) / 1e6);
 }
 
+// One window's events and wake-ups: "N events late p50 .., p99 .., max ..; wake-ups late
+// p99 .., max .." or "no events".
+std::string pacing_text(const ipc::WirePacingFigures& events,
+                        const ipc::WirePacingFigures& wakeups) {
+  if (events.count == 0) {
+    return "no events";
+  }
+  return fmt::format("{} event{} late p50 {}, p99 {}, max {}; wake-ups late p99 {}, max {}",
+                     events.count, events.count == 1 ? "" : "s", duration_text(events.p50_ns),
+                     duration_text(events.p99_ns), duration_text(events.max_ns),
+                     duration_text(wakeups.p99_ns), duration_text(wakeups.max_ns));
+}
+
 // Real and scaled time: how late events, wake-ups and the timer were (docs/daemon.md, "Pacing").
 void print_pacing(const ipc::WirePacing& p) {
-  std::printf(
-      "pacing, last second: events late p50 %s, p99 %s, max %s (%llu); wake-ups late "
-      "p99 %s, max %s; timer late p99 %s, spin %s (at most %s)\n",
-      duration_text(p.events_last.p50_ns).c_str(), duration_text(p.events_last.p99_ns).c_str(),
-      duration_text(p.events_last.max_ns).c_str(),
-      static_cast<unsigned long long>(p.events_last.count),
-      duration_text(p.wakeups_last.p99_ns).c_str(), duration_text(p.wakeups_last.max_ns).c_str(),
-      duration_text(p.timer_last.p99_ns).c_str(), duration_text(p.spin_ns).c_str(),
-      duration_text(p.max_spin_ns).c_str());
-  std::printf(
-      "pacing since start: events late p50 %s, p99 %s, max %s (%llu); wake-ups late "
-      "p99 %s, max %s\n",
-      duration_text(p.events.p50_ns).c_str(), duration_text(p.events.p99_ns).c_str(),
-      duration_text(p.events.max_ns).c_str(), static_cast<unsigned long long>(p.events.count),
-      duration_text(p.wakeups.p99_ns).c_str(), duration_text(p.wakeups.max_ns).c_str());
+  std::printf("pacing, last second: %s; timer late p99 %s, spin %s (at most %s)\n",
+              pacing_text(p.events_last, p.wakeups_last).c_str(),
+              duration_text(p.timer_last.p99_ns).c_str(), duration_text(p.spin_ns).c_str(),
+              duration_text(p.max_spin_ns).c_str());
+  std::printf("pacing since start: %s\n", pacing_text(p.events, p.wakeups).c_str());
 }
 
 toml::table pacing_json(const ipc::WirePacing& p) {

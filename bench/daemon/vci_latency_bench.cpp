@@ -24,12 +24,6 @@
 namespace {
 
 using namespace canemu;
-using bench::now_ns;
-using bench::report;
-using bench::sleep_ns;
-
-constexpr std::size_t kSamples = bench::kLatencySamples;
-constexpr int64_t kGapNs = bench::kLatencyGapNs;
 
 VCIID id_of(const std::string& name) {
   HANDLE e = nullptr;
@@ -115,10 +109,10 @@ void BM_VciCLatencyRealtime(benchmark::State& state) {
       const int64_t wire_ns = int64_t{model::encode(*frame).length} * 1000;
       std::vector<int64_t> beyond;
       for (auto _ : state) {
-        for (std::size_t i = 0; i < kSamples; ++i) {
-          sleep_ns(kGapNs);
+        for (std::size_t i = 0; i < bench::kLatencySamples; ++i) {
+          bench::sleep_ns(bench::kLatencyGapNs);
           CANMSG out = m;
-          const int64_t t0 = now_ns();
+          const int64_t t0 = bench::now_ns();
           if (canChannelPostMessage(a.channel, &out) != VCI_OK) {
             state.SkipWithError("canChannelPostMessage failed");
             break;
@@ -134,13 +128,13 @@ void BM_VciCLatencyRealtime(benchmark::State& state) {
             } else if (how == 2) {
               const int64_t give_up = t0 + 1'000'000'000;
               while ((hr = canChannelPeekMessage(b.channel, &got)) == VCI_E_RXQUEUE_EMPTY &&
-                     now_ns() < give_up) {
+                     bench::now_ns() < give_up) {
               }
             } else {
               hr = canChannelReadMessage(b.channel, 1000, &got);
             }
           } while (hr == VCI_OK && got.uMsgInfo.Bytes.bType != CAN_MSGTYPE_DATA);
-          const int64_t t1 = now_ns();
+          const int64_t t1 = bench::now_ns();
           if (hr != VCI_OK) {
             state.SkipWithError("the frame did not arrive");
             break;
@@ -149,7 +143,7 @@ void BM_VciCLatencyRealtime(benchmark::State& state) {
         }
       }
       state.counters["frame_wire_us"] = static_cast<double>(wire_ns) / 1000.0;
-      report(state, "beyond_frame", beyond);
+      bench::report(state, "beyond_frame", beyond);
     }
     canemuConnect(nullptr);
   }

@@ -46,6 +46,13 @@ Pair make(uint32_t capacity) {
 // its writer behind); pid -1 once reaped.
 struct Reap {
   pid_t pid;
+  // Waits for the child's end; its wait status.
+  int wait() {
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    pid = -1;
+    return status;
+  }
   ~Reap() {
     if (pid > 0) {
       ::kill(pid, SIGKILL);
@@ -335,9 +342,7 @@ TEST(ShmRing, TwoProcessesExchangeAHundredThousandElementsInOrder) {
       FAIL() << to_string(s);
     }
   }
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  reap.pid = -1;
+  const int status = reap.wait();
   EXPECT_TRUE(in_order);
   EXPECT_EQ(status, 0);
 }
@@ -400,9 +405,7 @@ TEST(ShmRing, SidesThatBlockInTwoProcessesNeverMissAWakeUp) {
       FAIL() << to_string(s);
     }
   }
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  reap.pid = -1;
+  const int status = reap.wait();
   EXPECT_TRUE(in_order);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "writer status " << status;
 }

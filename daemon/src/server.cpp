@@ -253,6 +253,9 @@ void Server::reload() {
       fresh->simulation.time = *options_.time_override;
     }
     const ReloadReport r = sim_.reload(*fresh);
+    if (pacing_.max_spin_ns() != int64_t{sim_.config().simulation.spin_us} * 1000) {
+      pacing_.set_max_spin(int64_t{sim_.config().simulation.spin_us} * 1000);
+    }
     access_.resolve(sim_.config().security);
     dispatcher_.set_ring_quota(std::size_t{sim_.config().security.ring_mib_per_user} << 20);
     if (!socket_from_systemd_) {
@@ -351,9 +354,6 @@ void Server::arm_timer() {
       deadline_ns_ = std::max(due, last_wake_ns_ + int64_t{sc.batch_us} * 1000);
       // Woken a little early (as early as the timer has lately been late, at most spin_us),
       // the loop spins to the deadline.
-      if (pacing_.max_spin_ns() != int64_t{sc.spin_us} * 1000) {
-        pacing_.set_max_spin(int64_t{sc.spin_us} * 1000);  // at start and after a reload
-      }
       const int64_t wall = std::max<int64_t>(1, deadline_ns_ - pacing_.spin_ns());
       armed_ns_ = wall;
       armed_ahead_ = wall > monotonic_ns();

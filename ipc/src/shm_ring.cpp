@@ -274,9 +274,8 @@ void RingEvent::signal() const {
   flag->store(1, std::memory_order_release);
   // The position and the flag stored before the waiting flag is read (the waiter stores its
   // waiting flag before it reads ours): a store-load pair. When both processes are registered
-  // the waiter's membarrier orders it; until this side has seen that the other registered
-  // (the mapper says so when it maps), it fences.
-  // (A process not yet known to be registered counts as not: it fences.)
+  // the waiter's membarrier orders it; otherwise (the mapper not yet known to be registered,
+  // or this process not) this side fences.
   if (header != nullptr && both_registered(*header) &&
       barrier_state.load(std::memory_order_relaxed) == 1) {
     std::atomic_signal_fence(std::memory_order_seq_cst);

@@ -28,7 +28,7 @@ _PASSIVE = _vci.CANEMU_STATE_PASSIVE
 # __init__ would (tests/python/test_message_build.py compares it with _convert's).
 _new_message = Message.__new__
 # A CANMSG2 with the 8 data bytes of a classic frame (_convert_run).
-_CLASSIC = struct.Struct("<IIIBBBB8s56x")
+_CLASSIC = struct.Struct(_HEADER.format + "8s56x")
 assert _CLASSIC.size == _MSG_SIZE
 
 

@@ -32,7 +32,7 @@ _DRAIN_POLL_S = 0.002  # between two looks at the FIFO while it drains
 log = logging.getLogger("can.canemu")
 
 # A CANMSG2's header and the 8 data bytes of a classic frame (send's hot path).
-_pack_classic = struct.Struct("<IIIBBBB8s").pack_into
+_pack_classic = struct.Struct(_HEADER.format + "8s").pack_into
 _DATA = _vci.CAN_MSGTYPE_DATA
 
 

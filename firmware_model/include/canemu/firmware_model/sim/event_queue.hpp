@@ -72,12 +72,9 @@ class EventQueue {
   }
 
   // Removes and returns the earliest event, if any.
-  std::optional<Entry> pop() { return pop_due(SimTime::from_ns(INT64_MAX)); }
-
-  // Removes and returns the earliest event if it is due at or before `limit`.
-  std::optional<Entry> pop_due(SimTime limit) {
+  std::optional<Entry> pop() {
     drop_cancelled();
-    if (heap_.empty() || heap_.front().time > limit) {
+    if (heap_.empty()) {
       return std::nullopt;
     }
     std::optional<Entry> e(std::move(heap_.front()));
@@ -86,9 +83,9 @@ class EventQueue {
     return e;
   }
 
-  // The same without building an Entry: the earliest event's time and payload into `time` and
-  // `payload`; false if none is due. (Field by field: the entry was usually written just before,
-  // and a wide copy of it would wait for those stores.)
+  // Removes the earliest event if it is due at or before `limit`: its time and payload into
+  // `time` and `payload`; false if none is due. (Field by field, not as an Entry: the entry was
+  // usually written just before, and a wide copy of it would wait for those stores.)
   bool pop_due(SimTime limit, SimTime& time, Payload& payload) {
     drop_cancelled();
     if (heap_.empty() || heap_.front().time > limit) {

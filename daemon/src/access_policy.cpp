@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include <fcntl.h>
 #include <grp.h>
 #include <pwd.h>
 #include <sys/socket.h>
@@ -13,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "canemu/daemon/log.hpp"
+#include "canemu/ipc/unique_fd.hpp"
 
 namespace canemu::daemon {
 
@@ -89,11 +91,43 @@ bool AccessPolicy::in_groups(int fd, uint32_t gid, const std::vector<uint32_t>& 
   return false;
 }
 
-std::string AccessPolicy::apply_socket_permissions(const std::string& path,
+tl::expected<AccessPolicy::SocketFile, std::string> AccessPolicy::socket_file(
+    const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) {
+    return tl::unexpected(fmt::format("cannot look at {}: {}", path, std::strerror(errno)));
+  }
+  if (!S_ISSOCK(st.st_mode)) {
+    return tl::unexpected(fmt::format("{} is not a socket", path));
+  }
+  return SocketFile{static_cast<uint64_t>(st.st_dev), static_cast<uint64_t>(st.st_ino)};
+}
+
+std::string AccessPolicy::apply_socket_permissions(const std::string& path, const SocketFile& bound,
                                                    const SecurityConfig& security) {
+  // The file itself, never what a link at its place points to: a descriptor of the path (not
+  // followed), checked to be the socket that was bound, and changed through that descriptor.
+  const int fd = ::open(path.c_str(), O_PATH | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) {
+    return fmt::format("cannot open {}: {}; its mode and group are left as they are", path,
+                       std::strerror(errno));
+  }
+  const ipc::UniqueFd file(fd);
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISSOCK(st.st_mode) ||
+      static_cast<uint64_t>(st.st_dev) != bound.dev ||
+      static_cast<uint64_t>(st.st_ino) != bound.ino) {
+    return fmt::format(
+        "{} is no longer the socket canemud bound ({} is there now); its mode and group are left "
+        "as they are",
+        path,
+        S_ISLNK(st.st_mode)    ? "a symbolic link"
+        : S_ISSOCK(st.st_mode) ? "another socket"
+                               : "another file");
+  }
   if (!security.socket_group.empty()) {
     if (const group* gr = ::getgrnam(security.socket_group.c_str())) {
-      if (::chown(path.c_str(), static_cast<uid_t>(-1), gr->gr_gid) != 0) {
+      if (::fchownat(fd, "", static_cast<uid_t>(-1), gr->gr_gid, AT_EMPTY_PATH) != 0) {
         return fmt::format("cannot give {} to group {}: {}", path, security.socket_group,
                            std::strerror(errno));
       }
@@ -102,7 +136,9 @@ std::string AccessPolicy::apply_socket_permissions(const std::string& path,
                    security.socket_group, path, ::getegid());
     }
   }
-  if (::chmod(path.c_str(), static_cast<mode_t>(security.socket_mode)) != 0) {
+  // chmod has no form for a descriptor opened with O_PATH; /proc names that very file.
+  if (::chmod(fmt::format("/proc/self/fd/{}", fd).c_str(),
+              static_cast<mode_t>(security.socket_mode)) != 0) {
     return fmt::format("cannot set mode {:04o} on {}: {}", security.socket_mode, path,
                        std::strerror(errno));
   }

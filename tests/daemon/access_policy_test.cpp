@@ -13,6 +13,7 @@
 #include <memory>
 
 #include "canemu/daemon/log.hpp"
+#include "canemu/ipc/seqpacket.hpp"
 #include "canemu/ipc/unique_fd.hpp"
 
 namespace canemu::daemon {
@@ -109,15 +110,16 @@ TEST(AccessPolicy, TheServiceGroupIsAllowedByDefaultAndItsAbsenceIsNoWarning) {
 TEST(AccessPolicy, TheSocketGetsTheConfiguredModeAndGroup) {
   char dir[] = "/tmp/canemu-perm-XXXXXX";
   const std::string file = std::string(::mkdtemp(dir)) + "/canemud.sock";
-  FILE* f = std::fopen(file.c_str(), "w");
-  ASSERT_NE(f, nullptr);
-  std::fclose(f);
+  auto listening = ipc::listen_seqpacket(file);
+  ASSERT_TRUE(listening) << listening.error().message;
+  auto bound = AccessPolicy::socket_file(file);
+  ASSERT_TRUE(bound) << bound.error();
   const group* own = ::getgrgid(::getegid());
   ASSERT_NE(own, nullptr);
   SecurityConfig security;
   security.socket_mode = 0640;
   security.socket_group = own->gr_name;
-  EXPECT_EQ(AccessPolicy::apply_socket_permissions(file, security), "");
+  EXPECT_EQ(AccessPolicy::apply_socket_permissions(file, *bound, security), "");
   struct stat st {};
   ASSERT_EQ(::stat(file.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 07777, 0640u);
@@ -125,17 +127,65 @@ TEST(AccessPolicy, TheSocketGetsTheConfiguredModeAndGroup) {
   log::Capture capture;
   security.socket_mode = 0600;
   security.socket_group = "no-such-group-canemu";
-  EXPECT_EQ(AccessPolicy::apply_socket_permissions(file, security), "");
+  EXPECT_EQ(AccessPolicy::apply_socket_permissions(file, *bound, security), "");
   ASSERT_EQ(::stat(file.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 07777, 0600u);
   ASSERT_EQ(capture.lines().size(), 1u);
   EXPECT_NE(capture.lines()[0].find("socket_group \"no-such-group-canemu\" does not exist"),
             std::string::npos)
       << capture.lines()[0];
-  EXPECT_NE(AccessPolicy::apply_socket_permissions(file + ".missing", security)
-                .find("cannot set mode 0600 on " + file + ".missing: No such file or directory"),
+  EXPECT_NE(AccessPolicy::apply_socket_permissions(file + ".missing", *bound, security)
+                .find("cannot open " + file + ".missing: No such file or directory"),
             std::string::npos);
   ::unlink(file.c_str());
+  ::rmdir(dir);
+}
+
+// A reload applies the mode and group to the socket that was bound, never to what a link or
+// another file at its path leads to (canemud runs as root there).
+TEST(AccessPolicy, ALinkOrAnotherFileInTheSocketsPlaceIsLeftAlone) {
+  char dir[] = "/tmp/canemu-perm-XXXXXX";
+  const std::string folder = ::mkdtemp(dir);
+  const std::string file = folder + "/canemud.sock";
+  const std::string victim = folder + "/victim";
+  auto listening = ipc::listen_seqpacket(file);
+  ASSERT_TRUE(listening) << listening.error().message;
+  auto bound = AccessPolicy::socket_file(file);
+  ASSERT_TRUE(bound) << bound.error();
+  FILE* f = std::fopen(victim.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fclose(f);
+  ASSERT_EQ(::chmod(victim.c_str(), 0600), 0);
+  SecurityConfig security;
+  security.socket_mode = 0666;
+  const auto mode_of = [](const std::string& path) {
+    struct stat st {};
+    EXPECT_EQ(::stat(path.c_str(), &st), 0) << path;
+    return st.st_mode & 07777;
+  };
+  // A symbolic link to another file in its place.
+  ASSERT_EQ(::unlink(file.c_str()), 0);
+  ASSERT_EQ(::symlink(victim.c_str(), file.c_str()), 0);
+  EXPECT_NE(AccessPolicy::apply_socket_permissions(file, *bound, security)
+                .find("is no longer the socket canemud bound (a symbolic link is there now)"),
+            std::string::npos);
+  EXPECT_EQ(mode_of(victim), 0600u);
+  // A hard link to another file.
+  ASSERT_EQ(::unlink(file.c_str()), 0);
+  ASSERT_EQ(::link(victim.c_str(), file.c_str()), 0);
+  EXPECT_NE(AccessPolicy::apply_socket_permissions(file, *bound, security).find("another file"),
+            std::string::npos);
+  EXPECT_EQ(mode_of(victim), 0600u);
+  // Another socket bound at the path.
+  ASSERT_EQ(::unlink(file.c_str()), 0);
+  auto other = ipc::listen_seqpacket(file);
+  ASSERT_TRUE(other) << other.error().message;
+  ASSERT_EQ(::chmod(file.c_str(), 0600), 0);
+  EXPECT_NE(AccessPolicy::apply_socket_permissions(file, *bound, security).find("another socket"),
+            std::string::npos);
+  EXPECT_EQ(mode_of(file), 0600u);
+  ::unlink(file.c_str());
+  ::unlink(victim.c_str());
   ::rmdir(dir);
 }
 

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <tl/expected.hpp>
+
 #include "canemu/daemon/config.hpp"
 
 namespace canemu::daemon {
@@ -25,9 +27,17 @@ class AccessPolicy {
   // Whether that peer is an administrator: root, canemud's own user, or a member of
   // `admin_groups` (it may clear every fault scenario).
   bool admin(int fd, uint32_t uid, uint32_t gid) const;
-  // Gives the socket file at `path` the configured mode and group. Returns what went wrong, or
-  // an empty string; a group that does not exist is a warning in the log, not an error.
-  static std::string apply_socket_permissions(const std::string& path,
+  // The socket file canemud bound, as lstat saw it just after the bind.
+  struct SocketFile {
+    uint64_t dev = 0;
+    uint64_t ino = 0;
+  };
+  // Identifies the socket file at `path` (not following a link); an error names the problem.
+  static tl::expected<SocketFile, std::string> socket_file(const std::string& path);
+  // Gives the socket file at `path` the configured mode and group, if it is still the file
+  // `bound` (a link or another file put in its place is left alone: docs/security.md). Returns
+  // what went wrong, or an empty string; a group that does not exist is a warning in the log.
+  static std::string apply_socket_permissions(const std::string& path, const SocketFile& bound,
                                               const SecurityConfig& security);
 
   const std::vector<uint32_t>& uids() const { return uids_; }

@@ -18,6 +18,7 @@
 #include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "canemu/ipc/text_file.hpp"
 #include "capture_config_reader.hpp"
 #include "lin_config_reader.hpp"
 #include "toml_checker.hpp"
@@ -97,13 +98,15 @@ void read_security(Checker& c, const toml::table& root, Config& cfg) {
   c.only_keys(*t, "security",
               {"allowed_users", "allowed_groups", "admin_groups", "socket_mode", "socket_group",
                "max_clients_per_user", "ring_mib_per_user"});
-  if (auto v = c.strings(*t, "security", "admin_groups")) {
+  // Each name is looked up at every reload, in the event loop: the lists are short.
+  constexpr std::string_view kUseAGroup = " (give more users a group and list the group)";
+  if (auto v = c.strings(*t, "security", "admin_groups", kMaxSecurityNames)) {
     cfg.security.admin_groups = *v;
   }
-  if (auto v = c.strings(*t, "security", "allowed_users")) {
+  if (auto v = c.strings(*t, "security", "allowed_users", kMaxSecurityNames, kUseAGroup)) {
     cfg.security.allowed_users = *v;
   }
-  if (auto v = c.strings(*t, "security", "allowed_groups")) {
+  if (auto v = c.strings(*t, "security", "allowed_groups", kMaxSecurityNames)) {
     cfg.security.allowed_groups = *v;
   }
   // Permission bits read as octal, so the error says them in octal too.
@@ -547,16 +550,7 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
 }
 
 tl::expected<std::string, std::string> read_text_file(const std::string& path) {
-  errno = 0;
-  std::ifstream in(path);
-  if (!in) {
-    const int error = errno;
-    return tl::unexpected(fmt::format("{}: cannot be read ({})", path,
-                                      error != 0 ? std::strerror(error) : "unknown reason"));
-  }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  return ipc::read_text_file(path, kMaxConfigFileBytes);
 }
 
 tl::expected<Config, ConfigErrors> load_config_file(const std::string& path) {

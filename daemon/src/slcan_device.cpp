@@ -6,9 +6,11 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
+#include <sstream>
 
 #include <fmt/format.h>
+
+#include "canemu/ipc/text_file.hpp"
 
 namespace canemu::daemon {
 
@@ -16,13 +18,15 @@ using model::sorcus::EepromWords;
 using model::sorcus::kEepromWords;
 
 tl::expected<EepromWords, std::string> load_eeprom_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    if (errno == ENOENT) {
-      return model::sorcus::slcan_eeprom_defaults();
-    }
-    return tl::unexpected(fmt::format("{}: cannot be read: {}", path, std::strerror(errno)));
+  if (::access(path.c_str(), F_OK) != 0 && errno == ENOENT) {
+    return model::sorcus::slcan_eeprom_defaults();
   }
+  // 64 words of four digits, with comments: a few KiB at most.
+  auto file = ipc::read_text_file(path, 64 * 1024);
+  if (!file) {
+    return tl::unexpected(file.error());
+  }
+  std::istringstream in(*file);
   EepromWords words{};
   std::size_t n = 0;
   std::string text;

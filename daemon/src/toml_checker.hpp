@@ -116,8 +116,10 @@ class Checker {
     return std::nullopt;
   }
 
+  // An array of at most `max` strings (`why` says what to do instead of a longer one).
   std::optional<std::vector<std::string>> strings(const toml::table& t, std::string_view path,
-                                                  std::string_view name) {
+                                                  std::string_view name, std::size_t max = 1024,
+                                                  std::string_view why = {}) {
     const toml::node* n = t.get(name);
     if (n == nullptr) {
       return std::nullopt;
@@ -125,6 +127,10 @@ class Checker {
     const toml::array* a = n->as_array();
     if (a == nullptr) {
       error(*n, key(path, name), "must be an array of strings");
+      return std::nullopt;
+    }
+    if (a->size() > max) {
+      error(*n, key(path, name), fmt::format("{} entries; at most {}{}", a->size(), max, why));
       return std::nullopt;
     }
     std::vector<std::string> out;

@@ -2,7 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
+#include <fmt/format.h>
+
 #include "../support/many_buses.hpp"
+#include "../support/temp_dir.hpp"
+#include "canemu/daemon/scenario.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -222,6 +228,46 @@ TEST(Config, MissingFileIsAClearError) {
   ASSERT_FALSE(c);
   EXPECT_EQ(c.error().front(),
             "/nonexistent/canemu.toml: cannot be read (No such file or directory)");
+}
+
+// Files a person names are read whole but bounded: a device without end, a directory or a
+// huge file is an error that says so, never a process that reads until memory runs out.
+TEST(Config, AFileWithoutEndADirectoryAndAHugeFileAreClearErrors) {
+  auto zero = load_config_file("/dev/zero");
+  ASSERT_FALSE(zero);
+  EXPECT_EQ(zero.error().front(),
+            "/dev/zero: larger than 1 MiB, the most canemu reads from such a file");
+  testing::TempDir dir;
+  auto folder = load_config_file(dir.path.string());
+  ASSERT_FALSE(folder);
+  EXPECT_EQ(folder.error().front(), dir.path.string() + ": is a directory, not a file");
+  const std::string huge = (dir.path / "huge.toml").string();
+  {
+    std::ofstream f(huge);
+    f << std::string(kMaxConfigFileBytes, '#') << "\n";
+  }
+  auto big = load_config_file(huge);
+  ASSERT_FALSE(big);
+  EXPECT_EQ(big.error().front(),
+            huge + ": larger than 1 MiB, the most canemu reads from such a file");
+  auto scenario = load_scenario_file("/dev/zero");
+  ASSERT_FALSE(scenario);
+  EXPECT_NE(scenario.error().front().find("/dev/zero: larger than 1 MiB"), std::string::npos);
+}
+
+// [security] lists are looked up at every reload in the event loop: they are short.
+TEST(Config, SecurityListsAreBounded) {
+  std::string users;
+  for (std::size_t i = 0; i <= kMaxSecurityNames; ++i) {
+    users += fmt::format("{}\"user{}\"", i == 0 ? "" : ", ", i);
+  }
+  const auto e = errors_of("[security]\nallowed_users = [" + users + "]\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], fmt::format("t.toml:2:17: security.allowed_users: {} entries; at most {} (give "
+                              "more users a group and list the group)",
+                              kMaxSecurityNames + 1, kMaxSecurityNames));
+  users.resize(users.rfind(','));  // exactly the most allowed
+  EXPECT_TRUE(parse_config("[security]\nallowed_users = [" + users + "]\n", "t.toml"));
 }
 
 TEST(TimeSetting, ParsesTheThreeModes) {

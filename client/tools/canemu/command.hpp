@@ -10,12 +10,16 @@
 #include "canemu/client/connection.hpp"
 #include "canemu/ipc/channel_message.hpp"
 #include "canemu/ipc/protocol.hpp"
+#include "canemu/ipc/text_file.hpp"
 
 namespace CLI {
 class App;
 }
 
 namespace canemu::cli {
+
+// A file the CLI reads for the daemon (a scenario, LIN tables) is at most this long.
+inline constexpr std::size_t kMaxTextFileBytes = std::size_t{1} << 20;
 
 // A subcommand as main() sees it: its parser (set when the user chose it) and what runs it.
 // `run` returns the process's exit code; it may throw std::exception for a bad argument.

@@ -59,16 +59,11 @@ int load_scenario_text(const std::string& socket, const std::string& source,
 }
 
 int run_load(const std::string& socket, const std::string& file) {
-  errno = 0;
-  std::ifstream in(file);
-  if (!in) {
-    const int error = errno;
-    return fail(fmt::format("{}: cannot be read ({})", file,
-                            error != 0 ? std::strerror(error) : "unknown reason"));
+  auto text = ipc::read_text_file(file, kMaxTextFileBytes);
+  if (!text) {
+    return fail(text.error());
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  return load_scenario_text(socket, file, text.str());
+  return load_scenario_text(socket, file, *text);
 }
 
 int run_list(const std::string& socket) {

@@ -70,11 +70,7 @@ tl::expected<std::string, std::string> tables_of(const LinOptions& o) {
     if (!o.real.empty() || !o.schedule.empty() || !o.bus.empty()) {
       return tl::unexpected(std::string("--bus, --real and --schedule belong to an LDF file"));
     }
-    std::ifstream in(o.file);
-    if (!in) {
-      return tl::unexpected(fmt::format("{}: cannot be read", o.file));
-    }
-    return std::string(std::istreambuf_iterator<char>(in), {});
+    return ipc::read_text_file(o.file, kMaxTextFileBytes);
   }
   if (o.bus.empty()) {
     return tl::unexpected(std::string("an LDF file needs --bus (the LIN bus its cluster runs on)"));

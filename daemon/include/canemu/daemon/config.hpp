@@ -64,7 +64,12 @@ struct TimeSetting {
 tl::expected<TimeSetting, std::string> parse_time_setting(std::string_view text);
 std::string to_string(const TimeSetting& time);
 
-// The whole of a text file; or "PATH: cannot be read (reason)".
+// A configuration or scenario file is at most this long (docs/configuration.md, "Limits").
+inline constexpr std::size_t kMaxConfigFileBytes = std::size_t{1} << 20;
+// A [security] list names at most this many users or groups (a group serves for more).
+inline constexpr std::size_t kMaxSecurityNames = 256;
+// The whole of a configuration or scenario file (at most kMaxConfigFileBytes); or
+// "PATH: cannot be read (reason)", "PATH: is a directory ...", "PATH: larger than ...".
 tl::expected<std::string, std::string> read_text_file(const std::string& path);
 
 // "150ns", "20us", "10ms", "2s", "1.5ms": a duration in ns, at least 0 and at most about 285

@@ -484,8 +484,9 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       auto m = std::make_unique<ipc::FaultLoadRequest>(read_as<ipc::FaultLoadRequest>(data));
       auto r =
           std::make_unique<ipc::FaultLoadReply>(ipc::make_message<ipc::FaultLoadReply>(request_id));
-      const std::string source =
-          ipc::name_of(m->source).empty() ? std::string("<client>") : ipc::name_of(m->source);
+      const std::string source = ipc::name_of(m->source).empty()
+                                     ? std::string("<client>")
+                                     : ipc::printable_name_of(m->source);
       std::vector<std::string> problems;
       if (m->length > ipc::kMaxScenarioText) {
         problems.push_back(fmt::format("{}: {} bytes of text claimed, at most {}", source,
@@ -505,7 +506,7 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
       }
       std::string text;
       for (const std::string& p : problems) {
-        text += p + "\n";
+        text += ipc::printable(p) + "\n";  // a problem may quote the client's text
       }
       ipc::copy_name(r->errors, text);
       send_reply(send, *r);

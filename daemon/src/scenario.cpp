@@ -1,5 +1,7 @@
 #include "canemu/daemon/scenario.hpp"
 
+#include <algorithm>
+
 #include "canemu/daemon/config.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "toml_checker.hpp"
@@ -51,6 +53,25 @@ bool is_node_effect(FaultEffect e) {
          e == FaultEffect::lin_responder_off || e == FaultEffect::lin_wakeup;
 }
 
+// A name a scenario gives (its own, a bus's, a node's): shown in tables and logs, so printable
+// ASCII only (docs/security.md, "Text a client chose").
+std::optional<std::string> name(Checker& c, const toml::table& t, const std::string& path,
+                                std::string_view key, bool required) {
+  auto text = c.string(t, path, key, required);
+  if (!text) {
+    return std::nullopt;
+  }
+  const auto bad = std::find_if_not(text->begin(), text->end(), ipc::is_printable);
+  if (bad != text->end()) {
+    c.error(
+        *t.get(key), Checker::key(path, key),
+        fmt::format("\"{}\" has byte {:#04x} at {}: names are printable ASCII",
+                    ipc::printable(*text), static_cast<unsigned char>(*bad), bad - text->begin()));
+    return std::nullopt;
+  }
+  return text;
+}
+
 // A duration key ("2s", "150ms", "20us", "10ns").
 std::optional<int64_t> duration(Checker& c, const toml::table& t, const std::string& path,
                                 std::string_view name, bool required) {
@@ -100,7 +121,7 @@ void read_match(Checker& c, const toml::table& t, const std::string& path, Fault
   }
   f.match.ext = boolean(c, *m, mpath, "ext");
   f.match.rtr = boolean(c, *m, mpath, "rtr");
-  if (auto from = c.string(*m, mpath, "from", false)) {
+  if (auto from = name(c, *m, mpath, "from", false)) {
     f.match.from = *from;
   }
 }
@@ -133,7 +154,7 @@ void read_lin_match(Checker& c, const toml::table& t, const std::string& path, F
     f.match.id = static_cast<uint32_t>(*id);
     f.match.mask = 0x3F;
   }
-  if (auto from = c.string(*m, mpath, "from", false)) {
+  if (auto from = name(c, *m, mpath, "from", false)) {
     f.match.from = *from;
   }
 }
@@ -228,10 +249,10 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     }
   }
   if (!is_node_effect(f.effect)) {
-    if (auto bus = c.string(t, path, "bus", true)) {
+    if (auto bus = name(c, t, path, "bus", true)) {
       f.bus = *bus;
     }
-  } else if (auto node = c.string(t, path, "node", true)) {
+  } else if (auto node = name(c, t, path, "node", true)) {
     f.node = *node;
   }
   if (is_lin_frame_effect(f.effect)) {
@@ -333,8 +354,8 @@ tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view
   c.only_keys(root, "", {"scenario", "fault"});
   if (const toml::table* head = c.section(root, "scenario")) {
     c.only_keys(*head, "scenario", {"name", "seed"});
-    if (auto name = c.string(*head, "scenario", "name", false)) {
-      s.name = *name;
+    if (auto given = name(c, *head, "scenario", "name", false)) {
+      s.name = *given;
     }
     if (auto seed = c.integer(*head, "scenario", "seed", false, 0, INT64_MAX)) {
       s.seed = static_cast<uint64_t>(*seed);
@@ -352,7 +373,7 @@ tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view
   }
   if (s.name.empty()) {
     const std::size_t slash = source.find_last_of('/');
-    s.name = source.substr(slash == std::string::npos ? 0 : slash + 1);
+    s.name = ipc::printable(source.substr(slash == std::string::npos ? 0 : slash + 1));
   }
   if (s.name.size() >= ipc::kScenarioNameSize) {  // the name `fault list` and `clear` use
     return tl::unexpected(std::vector<std::string>{

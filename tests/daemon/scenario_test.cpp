@@ -104,6 +104,24 @@ tec = 300
       (std::vector<std::string>{"s.toml: no [[fault]] tables: a scenario needs at least one"}));
 }
 
+// Names a scenario gives are shown in `fault list`, `status` and the log: printable ASCII only.
+TEST(Scenario, NamesWithControlCharactersAreRefused) {
+  const auto e = errors_of(
+      "[scenario]\nname = \"evil\\u001b[31m\\nforged\"\n"
+      "[[fault]]\nat = \"0s\"\nnode = \"a\\u0007b\"\neffect = \"node_off\"\n");
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_EQ(e[0],
+            "s.toml:2:8: scenario.name: \"evil?[31m?forged\" has byte 0x1b at 4: names are "
+            "printable ASCII");
+  EXPECT_EQ(e[1],
+            "s.toml:5:8: fault[0].node: \"a?b\" has byte 0x07 at 1: names are printable ASCII");
+  // Without [scenario] name, the file's name serves, made printable.
+  auto s = parse_scenario("[[fault]]\nat = \"0s\"\nnode = \"x:0\"\neffect = \"node_off\"\n",
+                          "dir/bad\x1b.toml");
+  ASSERT_TRUE(s) << s.error().front();
+  EXPECT_EQ(s->name, "bad?.toml");
+}
+
 TEST(Scenario, BabbleNeedsItsFrameAndDuration) {
   auto s = parse_scenario(R"([[fault]]
 at = "1s"

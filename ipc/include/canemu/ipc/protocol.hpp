@@ -164,18 +164,23 @@ std::string name_of(const char (&src)[N]) {
   return std::string(src, strnlen(src, N));
 }
 
-// A name a peer chose (a client's name in its Hello), as canemud keeps and shows it: printable
-// ASCII only, every other byte '?', so that no name can break a table, a log line or a
-// terminal.
-template <std::size_t N>
-std::string printable_name_of(const char (&src)[N]) {
-  std::string s = name_of(src);
+// Text a peer chose, as canemud shows it: printable ASCII only, every other byte '?', so that
+// no text can break a table, a log line or a terminal.
+inline bool is_printable(char c) {
+  return c >= 0x20 && c <= 0x7E;
+}
+inline std::string printable(std::string s) {
   for (char& c : s) {
-    if (c < 0x20 || c > 0x7E) {
+    if (!is_printable(c)) {
       c = '?';
     }
   }
   return s;
+}
+// A name a peer chose (a client's name in its Hello), as canemud keeps and shows it.
+template <std::size_t N>
+std::string printable_name_of(const char (&src)[N]) {
+  return printable(name_of(src));
 }
 
 }  // namespace canemu::ipc

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -29,11 +30,14 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <tuple>
 #include <utility>
 #include <vector>
 
+#include <poll.h>
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -793,6 +797,108 @@ BENCHMARK(BM_ScaledTimeFullLoad)
     ->Arg(100)
     ->Arg(500)
     ->Arg(2000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// Stepped time with N busy 1 Mbit/s buses (BabblingBuses): one client asks for a step of 60 s
+// (the longest allowed) while another asks for the status every 5 ms and canemud pings a watchdog
+// every 50 ms (a datagram socket standing in for systemd's). Reported: how long the step took,
+// the status answers' times while it ran (target: p99 within 50 ms) and the longest gap between
+// two watchdog pings (the unit's WatchdogSec is 10 s; a ping is due every 50 ms here).
+void BM_LongStepServesOthers(benchmark::State& state) {
+  const auto buses = static_cast<int>(state.range(0));
+  char dir[] = "/tmp/canemu-bench-XXXXXX";
+  const std::string folder = ::mkdtemp(dir);
+  const std::string path = folder + "/step.toml";
+  {
+    std::ofstream f(path);
+    f << "[simulation]\ntime = \"stepped\"\n";
+    for (int i = 0; i < buses; ++i) {
+      f << "[[bus]]\nname = \"can" << i << "\"\nbitrate = 1000000\n";
+    }
+  }
+  const std::string notify_path = folder + "/notify";
+  ipc::UniqueFd notify(::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::strncpy(a.sun_path, notify_path.c_str(), sizeof a.sun_path - 1);
+  if (::bind(notify.get(), reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    state.SkipWithError("cannot bind the notification socket");
+    return;
+  }
+  ::setenv("NOTIFY_SOCKET", notify_path.c_str(), 1);
+  ::setenv("WATCHDOG_USEC", "100000", 1);
+  testing::CanemudProcess daemon(CANEMUD_PATH, {"--config=" + path});
+  ::unsetenv("NOTIFY_SOCKET");
+  ::unsetenv("WATCHDOG_USEC");
+  auto c = client::Connection::open(daemon.socket(), "bench-status");
+  auto stepper = client::Connection::open(daemon.socket(), "bench-stepper");
+  if (!daemon.ready() || !c || !stepper) {
+    state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
+    return;
+  }
+  BabblingBuses bus;
+  if (std::string e = bus.open(daemon, *c, buses); !e.empty()) {
+    state.SkipWithError(e.c_str());
+    return;
+  }
+  for (auto _ : state) {
+    std::atomic<bool> done{false};
+    std::vector<int64_t> pings;
+    std::thread watch([&] {
+      char buf[256];
+      while (!done) {
+        pollfd p{notify.get(), POLLIN, 0};
+        if (::poll(&p, 1, 20) == 1 && ::recv(notify.get(), buf, sizeof buf, 0) > 0) {
+          pings.push_back(now_ns());
+        }
+      }
+    });
+    std::vector<int64_t> answers;
+    const int64_t start = now_ns();
+    int64_t step_ns = 0;
+    std::thread step([&] {
+      auto req = ipc::make_message<ipc::TimeStepRequest>();
+      req.step_ns = int64_t{60} * 1'000'000'000;
+      auto r = stepper->call<ipc::TimeStepRequest, ipc::TimeStepReply>(req, -1);
+      step_ns = now_ns() - start;
+      done = true;
+      (void)r;
+    });
+    while (!done) {
+      const int64_t t0 = now_ns();
+      auto r =
+          c->call<ipc::StatusRequest, ipc::StatusReply>(ipc::make_message<ipc::StatusRequest>());
+      if (!done) {
+        answers.push_back(now_ns() - t0);
+      }
+      bus.drain();
+      sleep_ns(5'000'000);
+    }
+    step.join();
+    watch.join();
+    int64_t gap = 0;
+    for (std::size_t i = 1; i < pings.size(); ++i) {
+      if (pings[i] <= start + step_ns) {
+        gap = std::max(gap, pings[i] - pings[i - 1]);
+      }
+    }
+    state.counters["step_wall_s"] = static_cast<double>(step_ns) / 1e9;
+    state.counters["status_answers"] = static_cast<double>(answers.size());
+    state.counters["status_answer_max_ms"] =
+        answers.empty()
+            ? 0.0
+            : static_cast<double>(*std::max_element(answers.begin(), answers.end())) / 1e6;
+    state.counters["watchdog_gap_max_ms"] = static_cast<double>(gap) / 1e6;
+    report(state, "status_answer", answers);
+  }
+  std::remove(path.c_str());
+  ::unlink(notify_path.c_str());
+  ::rmdir(dir);
+}
+BENCHMARK(BM_LongStepServesOthers)
+    ->ArgName("buses")
+    ->Arg(8)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

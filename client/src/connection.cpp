@@ -50,9 +50,9 @@ Result<uint32_t> Connection::receive_one(int timeout_ms) {
   return h.request_id;
 }
 
-Result<void> Connection::receive(uint32_t request_id) {
+Result<void> Connection::receive(uint32_t request_id, int timeout_ms) {
   while (true) {
-    auto id = receive_one(timeout_ms_);
+    auto id = receive_one(timeout_ms);
     if (!id) {
       return tl::unexpected(id.error());
     }

@@ -247,6 +247,7 @@ std::string Distributed::Impl::time_problem(const Peer& p) const {
 }
 
 void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
+  settle();
   const std::string name = get(d.name);
   if (!valid_name(name)) {
     ++counters.dropped;  // not a daemon of ours (names follow the configuration's rule)
@@ -460,6 +461,7 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
   if (get(r.to) != cfg.name) {
     return;
   }
+  settle();
   ++counters.requests_received;
   const std::string from = get(r.from);
   if (!valid_name(from)) {
@@ -587,6 +589,7 @@ void Distributed::Impl::on_event(const canemu_net_Event& e) {
     return;
   }
   Peer& p = pit->second;
+  settle();
   SimScheduler& s = sim.scheduler();
   switch (e.kind) {
     case canemu_net_EV_WELCOME:
@@ -608,13 +611,15 @@ void Distributed::Impl::on_event(const canemu_net_Event& e) {
       return;
     }
     case canemu_net_EV_STEP_DONE: {
-      const std::size_t events = s.run_until(SimTime::from_ns(std::max(e.at_ns, s.now().ns())));
-      if (self->after_step) {
-        self->after_step();
-      }
-      if (get(e.asker) == cfg.name && self->step_done) {
-        self->step_done(e.token, events, s.now().ns());
-      }
+      run_to(SimTime::from_ns(std::max(e.at_ns, s.now().ns())),
+             [this, mine = get(e.asker) == cfg.name, token = e.token](uint64_t events) {
+               if (self->after_step) {
+                 self->after_step();
+               }
+               if (mine && self->step_done) {
+                 self->step_done(token, events, sim.scheduler().now().ns());
+               }
+             });
       return;
     }
     default:

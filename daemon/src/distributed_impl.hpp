@@ -289,6 +289,16 @@ struct Distributed::Impl {
   };
   std::deque<Step> steps;
   bool barrier = false;
+  bool running = false;  // the owner's step runs (Distributed::run_to)
+  int runs_queued = 0;   // runs given to run_to and not ended
+  // A message from another daemon is handled after the runs queued before it.
+  void settle() {
+    if (runs_queued > 0 && self->finish_runs) {
+      self->finish_runs();
+    }
+  }
+  // Runs to `until`, then done(events): in slices through run_to where canemud offers it.
+  void run_to(SimTime until, std::function<void(uint64_t)> done);
   uint64_t step_no = 0;
   std::set<std::string> waiting;
   int64_t barrier_deadline_ms = 0;

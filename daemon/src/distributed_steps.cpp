@@ -8,13 +8,25 @@ namespace canemu::daemon {
 
 void Distributed::Impl::enqueue_step(Step st) {
   steps.push_back(std::move(st));
-  if (!barrier) {
+  if (!barrier && !running) {
     start_next_step();
   }
 }
 
+void Distributed::Impl::run_to(SimTime until, std::function<void(uint64_t)> done) {
+  if (!self->run_to) {
+    done(sim.scheduler().run_until(until));
+    return;
+  }
+  ++runs_queued;
+  self->run_to(until, [this, done = std::move(done)](uint64_t events) {
+    --runs_queued;
+    done(events);
+  });
+}
+
 void Distributed::Impl::start_next_step() {
-  if (steps.empty() || barrier) {
+  if (steps.empty() || barrier || running) {
     return;
   }
   ++step_no;
@@ -49,23 +61,26 @@ void Distributed::Impl::run_step() {
   if (self->before_step) {
     self->before_step();
   }
-  SimScheduler& s = sim.scheduler();
-  const std::size_t events = s.run_until(s.now() + SimDuration(st.ns));
-  if (self->after_step) {
-    self->after_step();
-  }
-  canemu_net_Event e{};
-  e.kind = canemu_net_EV_STEP_DONE;
-  e.at_ns = s.now().ns();
-  e.step = step_no;
-  e.step_ns = st.ns;
-  e.token = st.token;
-  put(e.asker, st.asker);
-  send_event("", e);  // every follower runs to the step's end; the asker answers its client
-  if (st.asker == cfg.name && self->step_done) {
-    self->step_done(st.token, events, s.now().ns());
-  }
-  start_next_step();
+  running = true;
+  run_to(sim.scheduler().now() + SimDuration(st.ns), [this, st](uint64_t events) {
+    running = false;
+    SimScheduler& s = sim.scheduler();
+    if (self->after_step) {
+      self->after_step();
+    }
+    canemu_net_Event e{};
+    e.kind = canemu_net_EV_STEP_DONE;
+    e.at_ns = s.now().ns();
+    e.step = step_no;
+    e.step_ns = st.ns;
+    e.token = st.token;
+    put(e.asker, st.asker);
+    send_event("", e);  // every follower runs to the step's end; the asker answers its client
+    if (st.asker == cfg.name && self->step_done) {
+      self->step_done(st.token, events, s.now().ns());
+    }
+    start_next_step();
+  });
 }
 
 bool Distributed::follows_owner() const {

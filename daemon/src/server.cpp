@@ -63,10 +63,10 @@ Server::Server(Simulation& sim, ServerOptions options)
     }
   };
   dispatcher_.fill_clients = [this](ipc::ClientListReply& r) { fill_clients(r); };
-  dispatcher_.before_step = [this] { kick_all_channels(); };
-  dispatcher_.after_step = [this] {
-    send_outboxes();
-    flush_recorders();
+  // A client's step runs in slices (queue_step_run); the dispatcher's own path is for tests.
+  dispatcher_.defer_step = [this](int64_t step_ns, uint32_t request_id) {
+    queue_local_step(step_ns, request_id);
+    return true;
   };
   dispatcher_.channel_opened = [this](Doorbell& ch) {
     epoll_event ev{};
@@ -128,13 +128,18 @@ ipc::IpcResult<void> Server::open_listener() {
     options_.socket_path.assign(a.sun_path, strnlen(a.sun_path, sizeof a.sun_path));
     return {};
   }
-  auto l = ipc::listen_seqpacket(options_.socket_path);
+  auto l = ipc::listen_seqpacket(options_.socket_path, SOMAXCONN);
   if (!l) {
     return tl::unexpected(l.error());
   }
   listen_ = std::move(*l);
-  if (std::string e =
-          AccessPolicy::apply_socket_permissions(options_.socket_path, sim_.config().security);
+  auto bound = AccessPolicy::socket_file(options_.socket_path);
+  if (!bound) {
+    return tl::unexpected(ipc::IpcError{EPERM, bound.error()});
+  }
+  socket_file_ = *bound;
+  if (std::string e = AccessPolicy::apply_socket_permissions(options_.socket_path, socket_file_,
+                                                             sim_.config().security);
       !e.empty()) {
     return tl::unexpected(ipc::IpcError{EPERM, e});
   }
@@ -193,6 +198,10 @@ ipc::IpcResult<void> Server::open() {
     d->step_done = [this](uint64_t token, uint64_t events_run, int64_t sim_ns) {
       step_done(token, events_run, sim_ns);
     };
+    d->run_to = [this](model::SimTime until, std::function<void(uint64_t)> done) {
+      queue_step_run([until] { return until; }, std::move(done));
+    };
+    d->finish_runs = [this] { finish_step_runs(); };
     d->steps_failed = [this](const std::string& why) {
       for (const auto& [token, p] : std::exchange(pending_steps_, {})) {
         auto c = clients_.find(p.fd);
@@ -203,7 +212,8 @@ ipc::IpcResult<void> Server::open() {
     };
     dispatcher_.defer_step = [this, d](int64_t step_ns, uint32_t request_id) {
       if (!d->follows_owner() && !d->leads_steps()) {
-        return false;  // no other daemon takes part: the step runs at once
+        queue_local_step(step_ns, request_id);  // no other daemon takes part
+        return true;
       }
       const uint64_t token = ++step_tokens_;
       pending_steps_[token] = PendingStep{current_->fd.get(), current_->serial, request_id};
@@ -259,8 +269,8 @@ void Server::reload() {
     access_.resolve(sim_.config().security);
     dispatcher_.set_ring_quota(std::size_t{sim_.config().security.ring_mib_per_user} << 20);
     if (!socket_from_systemd_) {
-      if (std::string e =
-              AccessPolicy::apply_socket_permissions(options_.socket_path, sim_.config().security);
+      if (std::string e = AccessPolicy::apply_socket_permissions(options_.socket_path, socket_file_,
+                                                                 sim_.config().security);
           !e.empty()) {
         log::warning("reload: {}", e);
       }
@@ -379,7 +389,12 @@ bool Server::run_once(int timeout_ms) {
   constexpr int kMaxEvents = 32;
   epoll_event events[kMaxEvents];
   arm_timer();
-  const int n = ::epoll_wait(epoll_.get(), events, kMaxEvents, timeout_ms);
+  const int due_ms = housekeeping();
+  if (due_ms >= 0 && (timeout_ms < 0 || due_ms < timeout_ms)) {
+    timeout_ms = due_ms;
+  }
+  // While a step runs, the loop only looks at what came and runs the step's next slice.
+  const int n = ::epoll_wait(epoll_.get(), events, kMaxEvents, stepping() ? 0 : timeout_ms);
   if (n < 0) {
     if (errno == EINTR) {
       return true;
@@ -421,7 +436,11 @@ bool Server::run_once(int timeout_ms) {
       signalfd_siginfo si{};
       while (::read(signals_.get(), &si, sizeof si) == static_cast<ssize_t>(sizeof si)) {
         if (si.ssi_signo == SIGHUP) {
-          reload();
+          if (stepping()) {
+            reload_waiting_ = true;  // a reload changes the world: after the step
+          } else {
+            reload();
+          }
         } else if (si.ssi_signo == SIGUSR2 && stall_hook_) {
           log::warning("test hook: the event loop stalls now");
           for (;;) {
@@ -434,10 +453,20 @@ bool Server::run_once(int timeout_ms) {
         }
       }
     } else if (auto bell = doorbells_.find(fd); bell != doorbells_.end()) {
-      bell->second->kick();
+      if (!stepping()) {
+        bell->second->kick();
+      } else if (std::find(bells_rung_.begin(), bells_rung_.end(), fd) == bells_rung_.end()) {
+        bells_rung_.push_back(fd);  // what it brings belongs after the step
+      }
     } else {
       serve(fd);
     }
+  }
+  if (stepping()) {
+    run_step_slice();
+  }
+  if (!stepping() && waits_for_steps_) {
+    after_step_runs();
   }
   check_channels();
   flush_recorders();
@@ -547,6 +576,7 @@ void Server::accept_clients() {
     }
     Client c;
     c.fd.reset(fd);
+    c.accepted_ns = monotonic_ns();
     ucred cred{};
     socklen_t len = sizeof cred;
     if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) != 0) {
@@ -557,26 +587,43 @@ void Server::accept_clients() {
     c.session.pid = static_cast<uint32_t>(cred.pid);
     c.session.vci.pid = c.session.pid;
     c.session.vci.uid = c.session.uid;
+    c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
+    // Slots: the connections being served (not refused, not on their way out).
+    const auto served = [this] {
+      return static_cast<std::size_t>(std::count_if(
+          clients_.begin(), clients_.end(),
+          [](const auto& e) { return e.second.refused.empty() && !e.second.closing; }));
+    };
     const auto waiting = static_cast<std::size_t>(std::count_if(
         clients_.begin(), clients_.end(), [](const auto& e) { return !e.second.refused.empty(); }));
-    if (clients_.size() - waiting >= kMaxClients) {
-      reply_error(c, 0, ipc::ErrorCode::permission_denied,
-                  fmt::format("canemud serves at most {} clients", kMaxClients));
+    const std::size_t limit = c.session.admin ? kMaxClients : kMaxClients - kAdminSlots;
+    if (served() >= limit) {
+      evict_silent(c.accepted_ns - kSilentEvictNs);  // frees a slot, if one was silent long
+    }
+    if (served() >= limit) {
+      const std::string why =
+          c.session.admin ? fmt::format("canemud serves at most {} clients", kMaxClients)
+                          : fmt::format(
+                                "canemud serves at most {} clients (the last {} of {} are kept for "
+                                "administrators)",
+                                limit, kAdminSlots, kMaxClients);
+      reply_error(c, 0, ipc::ErrorCode::no_resources, why);
+      log_refusal(fmt::format("refused uid {} (pid {}): {}", c.session.uid, c.session.pid, why));
       continue;
     }
-    c.session.admin = access_.admin(fd, c.session.uid, c.session.gid);
     if (!access_.allowed(fd, c.session.uid, c.session.gid)) {
       c.refused =
           fmt::format("uid {} is not allowed by the [security] configuration", c.session.uid);
-      log::info("refused uid {} (pid {}): not allowed by [security]", c.session.uid, c.session.pid);
+      log_refusal(fmt::format("refused uid {} (pid {}): not allowed by [security]", c.session.uid,
+                              c.session.pid));
     } else if (const std::size_t held = connections_of(c.session.uid);
                c.session.uid != 0 && held >= sim_.config().security.max_clients_per_user) {
       c.refused = fmt::format(
           "uid {} has {} connections to canemud; [security] max_clients_per_user allows {}",
           c.session.uid, held, sim_.config().security.max_clients_per_user);
       c.refused_code = ipc::ErrorCode::no_resources;
-      log::warning("refused uid {} (pid {}): {} connections, the most one user may have",
-                   c.session.uid, c.session.pid, held);
+      log_refusal(fmt::format("refused uid {} (pid {}): {} connections, the most one user may have",
+                              c.session.uid, c.session.pid, held));
     }
     if (!c.refused.empty() && waiting >= kMaxRefusedWaiting) {
       reply_error(c, 0, c.refused_code, c.refused);
@@ -588,6 +635,88 @@ void Server::accept_clients() {
     c.serial = ++client_serials_;
     clients_.emplace(fd, std::move(c));
   }
+}
+
+void Server::log_refusal(const std::string& line) {
+  const int64_t now = monotonic_ns();
+  end_refusal_window(now);
+  if (refusals_logged_ == 0 && refusals_unlogged_ == 0) {
+    refusal_window_ns_ = now;
+  }
+  if (refusals_logged_ < kRefusalLines) {
+    ++refusals_logged_;
+    log::warning("{}", line);
+  } else {
+    ++refusals_unlogged_;
+  }
+}
+
+void Server::end_refusal_window(int64_t now_ns) {
+  if ((refusals_logged_ == 0 && refusals_unlogged_ == 0) ||
+      now_ns - refusal_window_ns_ < kRefusalWindowNs) {
+    return;
+  }
+  if (refusals_unlogged_ > 0) {
+    log::warning("{} more connection{} refused in {} s (the first {} were logged)",
+                 refusals_unlogged_, refusals_unlogged_ == 1 ? "" : "s",
+                 kRefusalWindowNs / 1'000'000'000, kRefusalLines);
+  }
+  refusals_logged_ = 0;
+  refusals_unlogged_ = 0;
+}
+
+bool Server::evict_silent(int64_t before_ns) {
+  Client* oldest = nullptr;
+  for (auto& [fd, c] : clients_) {
+    if (!c.closing && !c.session.greeted && c.refused.empty() && c.accepted_ns < before_ns &&
+        (oldest == nullptr || c.accepted_ns < oldest->accepted_ns)) {
+      oldest = &c;
+    }
+  }
+  if (oldest == nullptr) {
+    return false;
+  }
+  reply_error(*oldest, 0, ipc::ErrorCode::no_resources,
+              fmt::format("canemud is full and this connection had not said hello for {} s",
+                          kSilentEvictNs / 1'000'000'000));
+  log_refusal(
+      fmt::format("closed a connection of uid {} (pid {}): no hello, and its slot was "
+                  "wanted",
+                  oldest->session.uid, oldest->session.pid));
+  oldest->closing = true;
+  return true;
+}
+
+int Server::housekeeping() {
+  const int64_t now = monotonic_ns();
+  end_refusal_window(now);
+  int64_t next = refusals_unlogged_ > 0 ? refusal_window_ns_ + kRefusalWindowNs : INT64_MAX;
+  for (auto& [fd, c] : clients_) {
+    if (c.closing || c.session.greeted) {
+      continue;
+    }
+    const int64_t deadline = c.accepted_ns + kHelloDeadlineNs;
+    if (now < deadline) {
+      next = std::min(next, deadline);
+      continue;
+    }
+    // Silent since it connected: told why (a refused one its refusal) and closed.
+    if (c.refused.empty()) {
+      reply_error(
+          c, 0, ipc::ErrorCode::not_hello,
+          fmt::format("no hello within {} s of connecting", kHelloDeadlineNs / 1'000'000'000));
+      log_refusal(fmt::format("closed a connection of uid {} (pid {}): no hello within {} s",
+                              c.session.uid, c.session.pid, kHelloDeadlineNs / 1'000'000'000));
+    } else {
+      reply_error(c, 0, c.refused_code, c.refused);
+    }
+    c.closing = true;
+  }
+  drop_closing();
+  if (next == INT64_MAX) {
+    return -1;
+  }
+  return static_cast<int>(std::min<int64_t>((next - now) / 1'000'000 + 1, INT32_MAX));
 }
 
 // Connections of `uid` being served (refused and closing ones not counted).
@@ -629,6 +758,9 @@ uint16_t Server::live_clients() {
 }
 
 void Server::drop_closing() {
+  if (stepping()) {
+    return;  // a client's channels and devices leave the world after the step
+  }
   std::vector<int> gone;
   for (const auto& [fd, c] : clients_) {
     if (c.closing) {
@@ -660,8 +792,8 @@ void Server::serve(int fd) {
   if (it == clients_.end()) {
     return;
   }
-  if (it->second.closing) {
-    return;
+  if (it->second.closing || !it->second.held.empty()) {
+    return;  // a held request first (its later ones wait in the socket)
   }
   auto n = ipc::receive_packet(fd, buffer_, 0);
   if (!n && n.error().error_number == ETIMEDOUT) {
@@ -678,7 +810,125 @@ void Server::serve(int fd) {
     it->second.closing = true;
     return;
   }
+  if (stepping() && !reads_only(buffer_)) {
+    it->second.held = buffer_;
+    waits_for_steps_ = true;
+    return;
+  }
   handle(it->second, buffer_);
+}
+
+bool Server::reads_only(const std::vector<uint8_t>& packet) {
+  ipc::MsgHeader h{};
+  if (packet.size() < sizeof h) {
+    return true;  // answered with an error at once
+  }
+  std::memcpy(&h, packet.data(), sizeof h);
+  switch (static_cast<ipc::MsgType>(h.type)) {
+    case ipc::MsgType::hello:
+    case ipc::MsgType::status_request:
+    case ipc::MsgType::channel_status_request:
+    case ipc::MsgType::device_list_request:
+    case ipc::MsgType::client_list_request:
+    case ipc::MsgType::subscribe_request:
+    case ipc::MsgType::fault_list_request:
+    case ipc::MsgType::recorder_list_request:
+    case ipc::MsgType::bridge_list_request:
+    case ipc::MsgType::peer_list_request:
+    case ipc::MsgType::timeline_request:
+      return true;
+    default:
+      return false;
+  }
+}
+
+void Server::queue_local_step(int64_t step_ns, uint32_t request_id) {
+  const PendingStep p{current_->fd.get(), current_->serial, request_id};
+  queue_step_run(
+      [this, step_ns] {
+        kick_all_channels();  // what the clients queued before the step
+        return sim_.scheduler().now() + model::SimDuration(step_ns);
+      },
+      [this, p](uint64_t events) {
+        send_outboxes();
+        flush_recorders();
+        answer_step(p, events, sim_.scheduler().now().ns());
+      });
+}
+
+void Server::queue_step_run(std::function<model::SimTime()> start,
+                            std::function<void(uint64_t events)> done) {
+  StepRun run;
+  run.start = std::move(start);
+  run.done = std::move(done);
+  step_runs_.push_back(std::move(run));
+  waits_for_steps_ = true;
+}
+
+void Server::run_step_slice() {
+  model::SimScheduler& s = sim_.scheduler();
+  const int64_t slice_end = monotonic_ns() + kMaxPassWorkNs;
+  while (!step_runs_.empty()) {
+    StepRun& r = step_runs_.front();
+    if (!r.started) {
+      r.started = true;
+      r.until = r.start();
+    }
+    std::size_t ran = 0;
+    do {
+      ran = s.run_until(r.until, kEventsPerStepClock);
+      r.events += ran;
+    } while (ran == kEventsPerStepClock && monotonic_ns() < slice_end);
+    if (ran == kEventsPerStepClock && s.now() < r.until) {
+      return;  // the slice is over: the rest on the next pass
+    }
+    StepRun ended = std::move(r);
+    step_runs_.pop_front();
+    ended.done(ended.events);  // may queue the next run (a step across hosts)
+    if (monotonic_ns() >= slice_end) {
+      return;
+    }
+  }
+}
+
+void Server::finish_step_runs() {
+  model::SimScheduler& s = sim_.scheduler();
+  while (!step_runs_.empty()) {
+    StepRun ended = std::move(step_runs_.front());
+    step_runs_.pop_front();
+    if (!ended.started) {
+      ended.until = ended.start();
+    }
+    ended.events += s.run_until(ended.until);
+    ended.done(ended.events);
+  }
+}
+
+// The steps have run: what waited for them, in the order the loop would have served it.
+void Server::after_step_runs() {
+  waits_for_steps_ = false;
+  for (const int fd : std::exchange(bells_rung_, {})) {
+    if (auto bell = doorbells_.find(fd); bell != doorbells_.end()) {
+      bell->second->kick();
+    }
+  }
+  if (std::exchange(reload_waiting_, false)) {
+    reload();
+  }
+  for (auto& [fd, c] : clients_) {
+    if (c.held.empty() || c.closing) {
+      continue;
+    }
+    if (stepping() && !reads_only(c.held)) {
+      waits_for_steps_ = true;  // a step asked for by a held request runs first
+      continue;
+    }
+    const std::vector<uint8_t> packet = std::exchange(c.held, {});
+    handle(c, packet);
+  }
+  if (stepping()) {
+    waits_for_steps_ = true;
+  }
 }
 
 void Server::reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code,
@@ -696,6 +946,10 @@ void Server::step_done(uint64_t token, uint64_t events_run, int64_t sim_ns) {
   }
   const PendingStep p = it->second;
   pending_steps_.erase(it);
+  answer_step(p, events_run, sim_ns);
+}
+
+void Server::answer_step(const PendingStep& p, uint64_t events_run, int64_t sim_ns) {
   auto c = clients_.find(p.fd);
   if (c == clients_.end() || c->second.serial != p.serial || c->second.closing) {
     return;  // the client left before its step ended

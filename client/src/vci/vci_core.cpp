@@ -50,7 +50,7 @@ HRESULT Library::step(int64_t ns, int64_t& now) {
   while (ns > 0) {
     auto m = ipc::make_message<ipc::TimeStepRequest>();
     m.step_ns = std::min(ns, kMaxStep);
-    auto r = connection_->call<ipc::TimeStepRequest, ipc::TimeStepReply>(m);
+    auto r = connection_->call<ipc::TimeStepRequest, ipc::TimeStepReply>(m, -1);
     if (!r) {
       return r.error().message.find("not_stepped") != std::string::npos
                  ? (set_detail(r.error().message), VCI_E_INVALID_STATE)

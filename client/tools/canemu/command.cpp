@@ -55,7 +55,7 @@ client::Result<TimeBase> time_base(client::Connection& c, bool sim_time) {
 client::Result<ipc::TimeStepReply> step_time(client::Connection& c, int64_t ns) {
   auto req = ipc::make_message<ipc::TimeStepRequest>();
   req.step_ns = ns;
-  return c.call<ipc::TimeStepRequest, ipc::TimeStepReply>(req);
+  return c.call<ipc::TimeStepRequest, ipc::TimeStepReply>(req, -1);
 }
 
 std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base) {

@@ -28,12 +28,18 @@ class Connection {
   // error naming the code and the daemon's message).
   template <class Request, class Reply>
   Result<Reply> call(Request request) {
+    return call<Request, Reply>(request, timeout_ms_);
+  }
+  // The same, waiting up to `timeout_ms` for the reply (-1: as long as canemud is there; a
+  // time step takes as long as its events do).
+  template <class Request, class Reply>
+  Result<Reply> call(Request request, int timeout_ms) {
     request.header.request_id = ++next_id_;
     auto sent = ipc::send_message(fd_.get(), request);
     if (!sent) {
       return tl::unexpected(sent.error());
     }
-    auto got = receive(request.header.request_id);
+    auto got = receive(request.header.request_id, timeout_ms);
     if (!got) {
       return tl::unexpected(got.error());
     }
@@ -52,7 +58,7 @@ class Connection {
 
  private:
   Connection(ipc::UniqueFd fd, int timeout_ms) : fd_(std::move(fd)), timeout_ms_(timeout_ms) {}
-  Result<void> receive(uint32_t request_id);
+  Result<void> receive(uint32_t request_id, int timeout_ms);
   // Takes one packet: queues it if it is a notification. Returns its request id.
   Result<uint32_t> receive_one(int timeout_ms);
   template <class Reply>

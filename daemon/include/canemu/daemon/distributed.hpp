@@ -103,6 +103,11 @@ class Distributed : public Doorbell {
   std::function<void()> before_step;
   std::function<void()> after_step;
   std::function<void(uint64_t token, uint64_t events_run, int64_t sim_ns)> step_done;
+  // Runs simulated time to `until`, then calls done(events run): canemud runs it in slices
+  // between which it serves its clients. Unset: at once.
+  std::function<void(model::SimTime until, std::function<void(uint64_t events)> done)> run_to;
+  // Runs what run_to queued to its end now: a message from another daemon comes after it.
+  std::function<void()> finish_runs;
   // The owner whose steps these are is gone: the steps asked of it will not be answered.
   std::function<void(const std::string& why)> steps_failed;
 

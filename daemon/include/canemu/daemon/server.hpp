@@ -6,6 +6,7 @@
 #pragma once
 
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -53,7 +54,11 @@ class Server {
     // dropped (closing at once could discard the answer with the request still unread).
     std::string refused;
     ipc::ErrorCode refused_code = ipc::ErrorCode::permission_denied;
-    uint64_t serial = 0;  // tells a later client on the same descriptor apart
+    uint64_t serial = 0;      // tells a later client on the same descriptor apart
+    int64_t accepted_ns = 0;  // CLOCK_MONOTONIC: it must say hello within kHelloDeadlineNs
+    // A request that changes the world, read while a step ran: handled when the steps are done
+    // (the client's later requests stay in its socket until then).
+    std::vector<uint8_t> held;
   };
   // A step request answered when the step has run across hosts (Distributed::step).
   struct PendingStep {
@@ -66,11 +71,63 @@ class Server {
   uint64_t client_serials_ = 0;
   Client* current_ = nullptr;  // the client whose request is being handled
   void step_done(uint64_t token, uint64_t events_run, int64_t sim_ns);
+  void answer_step(const PendingStep& p, uint64_t events_run, int64_t sim_ns);
+
+  // Stepped time: a step runs in slices of at most kMaxPassWorkNs of wall time, between which
+  // the loop serves new clients, requests that only read, the watchdog and signals. Requests
+  // that change the world, doorbells and reloads wait until the steps have run, so a step
+  // takes everything queued before it and nothing that came while it ran (docs/daemon.md,
+  // "Long steps"). Steps asked for while one runs run after it, in order.
+  struct StepRun {
+    std::function<model::SimTime()> start;  // called when the run begins: returns its end
+    std::function<void(uint64_t events)> done;
+    model::SimTime until;
+    bool started = false;
+    uint64_t events = 0;
+  };
+  std::deque<StepRun> step_runs_;
+  std::vector<int> bells_rung_;   // doorbells that rang during a step: kicked once it has run
+  bool reload_waiting_ = false;   // a SIGHUP during a step
+  bool waits_for_steps_ = false;  // something above, or a held request, waits for the steps
+  bool stepping() const { return !step_runs_.empty(); }
+  void queue_local_step(int64_t step_ns, uint32_t request_id);
+  void queue_step_run(std::function<model::SimTime()> start,
+                      std::function<void(uint64_t events)> done);
+  // Runs what is queued to its end now (a message from another daemon must come after it).
+  void finish_step_runs();
+  // Runs the current step for one slice; when the last one has ended, what waited is served.
+  void run_step_slice();
+  void after_step_runs();
+  // Requests a client may make while a step runs: they read the world and change nothing.
+  static bool reads_only(const std::vector<uint8_t>& packet);
   static constexpr std::size_t kMaxClients = 256;
   // Refused peers kept until their first request (to answer it with the reason): at most this
   // many at once, so that refused peers never take the slots of allowed ones; beyond it a refused
   // peer is told at once and closed.
   static constexpr std::size_t kMaxRefusedWaiting = 16;
+  // The last kAdminSlots of the kMaxClients are kept for administrators (root, the daemon's
+  // user, [security] admin_groups), so `canemu status` works however many clients there are.
+  static constexpr std::size_t kAdminSlots = 4;
+  // A connection says hello at once: one that has not within kHelloDeadlineNs is told so and
+  // closed; when every slot is taken, a new connection takes the slot of the oldest one that has
+  // been silent for kSilentEvictNs (docs/security.md).
+  static constexpr int64_t kHelloDeadlineNs = 5'000'000'000;
+  static constexpr int64_t kSilentEvictNs = 1'000'000'000;
+  // Closes the oldest connection that has not said hello since before `before_ns`; false if
+  // there is none.
+  bool evict_silent(int64_t before_ns);
+  // Refusals are logged, at most kRefusalLines in kRefusalWindowNs; then one line says how many
+  // more there were.
+  static constexpr int kRefusalLines = 5;
+  static constexpr int64_t kRefusalWindowNs = 10'000'000'000;
+  int64_t refusal_window_ns_ = 0;  // CLOCK_MONOTONIC the current window began
+  int refusals_logged_ = 0;
+  uint64_t refusals_unlogged_ = 0;
+  void log_refusal(const std::string& line);
+  void end_refusal_window(int64_t now_ns);
+  // Drops connections past their hello deadline; returns the ms until the next deadline of
+  // this housekeeping (-1: none).
+  int housekeeping();
 
   model::SimTime wall_to_sim() const;
   void advance_to_now();
@@ -111,7 +168,8 @@ class Server {
   int64_t last_wake_ns_ = 0;  // CLOCK_MONOTONIC of the loop's last wake-up
   int64_t deadline_ns_ = 0;   // of the armed timer (0: none)
   bool accepting_ = true;
-  bool socket_from_systemd_ = false;  // socket activation: systemd owns the file
+  bool socket_from_systemd_ = false;      // socket activation: systemd owns the file
+  AccessPolicy::SocketFile socket_file_;  // the file bound (its mode and group follow reloads)
   AccessPolicy access_;
   bool running_ = true;
   bool stall_hook_ = false;  // CANEMU_TEST_HOOKS=stall-on-sigusr2
@@ -127,6 +185,9 @@ class Server {
   // The clock is read every kEventsPerClock events: an event's lateness is measured against
   // the last reading (at most the time that many events take, a few microseconds, early).
   static constexpr std::size_t kEventsPerClock = 8;
+  // A step's slice reads the clock every kEventsPerStepClock events (nobody waits on an
+  // event's instant there).
+  static constexpr std::size_t kEventsPerStepClock = 64;
   Pacing pacing_;
   int64_t armed_ns_ = 0;      // CLOCK_MONOTONIC the timer is armed for (the deadline less the spin)
   bool armed_ahead_ = false;  // ... and that instant was still ahead when armed

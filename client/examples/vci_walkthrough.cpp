@@ -4,7 +4,7 @@
 //
 // Written as for IXXAT's SDK on Windows: only <windows.h> is left out (vcisdk.h brings the
 // event functions). Run it against canemud with two adapters on one bus, e.g.
-//   CANEMU_SOCKET=/tmp/canemud.sock ./vci_walkthrough
+//   CANEMU_SOCKET=$XDG_RUNTIME_DIR/canemu.sock ./vci_walkthrough
 #include <stdio.h>
 #include <string.h>
 

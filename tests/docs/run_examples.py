@@ -18,9 +18,12 @@ and files written by one command are seen by the next. Background processes stil
 the end of the page are stopped. The page fails at the first command whose output differs, with
 both texts.
 
-Socket paths of the form /tmp/canemu-NAME.sock in commands and in expected output are moved
-into the scratch directory, so that two checkouts running their tests at once do not share a
-daemon's socket.
+Pages keep what is the reader's own in `$XDG_RUNTIME_DIR` (sockets; config/examples/
+cyclonedds-loopback.xml makes it Cyclone DDS's discovery tag too), so that two users on one
+machine do not meet. The session gets a `$XDG_RUNTIME_DIR` of its own, a fresh directory in the
+scratch directory, so that two runs at once (two checkouts, two build trees) do not share a
+daemon's socket or a DDS rig either. A command that names a path in /tmp, which every user and
+every run shares, fails the page before anything runs.
 
 Usage: run_examples.py PAGE.md [--repo DIR] [--build DIR] [--timeout S] [--show]
 (--build: what `build` stands for, default the repository's build/)
@@ -40,7 +43,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 MARK = "@@canemu-example@@"
-PRIVATE_SOCKET = re.compile(r"/tmp/(canemu[\w.-]*\.sock)\b")
+SHARED_PATH = re.compile(r"(?<![\w./$}-])/tmp(/|\b)")
 
 
 @dataclass
@@ -133,19 +136,28 @@ def run_page(page_path: Path, repo: Path, timeout: float, show: bool = False,
     if not commands:
         print(f"{page_path}: no ```console examples")
         return 0
+    shared = [c for c in commands if SHARED_PATH.search(c.text)]
+    for c in shared:
+        print(f"{page_path}:{c.line}: $ {c.text}")
+        print("  names a path in /tmp, which every user and every test run shares: use "
+              "$XDG_RUNTIME_DIR (tests/README.md)")
+    if shared:
+        print(f"{page_path}: {len(commands)} commands, FAILED")
+        return 1
     with tempfile.TemporaryDirectory(prefix="canemu-examples-") as scratch:
         work = Path(scratch)
-        for c in commands:
-            c.text = PRIVATE_SOCKET.sub(rf"{scratch}/\1", c.text)
-            c.expected = [PRIVATE_SOCKET.sub(rf"{scratch}/\1", e) for e in c.expected]
         logs = work / ".logs"
         logs.mkdir()
+        # The reader's runtime directory: this run's own (mode 0700, as systemd makes it).
+        runtime = work / ".run"
+        runtime.mkdir(mode=0o700)
         for name in ("config", "client", "docs", ".venv"):
             if (repo / name).exists():
                 (work / name).symlink_to(repo / name)
         (work / "build").symlink_to(build or repo / "build")
         env = dict(os.environ)
         env.pop("CANEMU_SOCKET", None)
+        env["XDG_RUNTIME_DIR"] = str(runtime)
         proc = subprocess.Popen(
             ["bash", "--noprofile", "--norc", "-m"],
             stdin=subprocess.PIPE,

@@ -1,39 +1,76 @@
 #include "canemu/client/connection.hpp"
 
+#include <cerrno>
 #include <cstring>
 
 #include <unistd.h>
 
 namespace canemu::client {
 
+namespace {
+
+// "code: text" of an ErrorReply in `packet` (checked), nothing for another message.
+std::optional<std::string> error_text(const uint8_t* packet, std::size_t size) {
+  ipc::MsgHeader h;
+  std::memcpy(&h, packet, sizeof h);
+  if (h.type != static_cast<uint16_t>(ipc::MsgType::error_reply) ||
+      size < sizeof(ipc::ErrorReply)) {
+    return std::nullopt;
+  }
+  ipc::ErrorReply e;
+  std::memcpy(&e, packet, sizeof e);
+  return std::string(ipc::to_string(static_cast<ipc::ErrorCode>(e.code))) + ": " +
+         ipc::name_of(e.message);
+}
+
+}  // namespace
+
 Result<Connection> Connection::open(const std::string& path, const std::string& client_name,
                                     int timeout_ms) {
   auto fd = ipc::connect_seqpacket(path);
   if (!fd) {
     IpcError e = fd.error();
-    e.message += " (is canemud running? start it with 'make run' or 'canemud --socket " + path +
-                 "', or set CANEMU_SOCKET)";
+    if (e.error_number == EACCES) {
+      // canemud may well run: the socket's permissions keep this user out.
+      e.message = "this user is not allowed to use canemud's socket " + path + " (" +
+                  std::strerror(EACCES) +
+                  "): it is not in the socket's group (canemu under systemd) or not among "
+                  "the users and groups [security] allows (docs/security.md)";
+    } else {
+      e.message += " (is canemud running? start it with 'make run' or 'canemud --socket " + path +
+                   "', or set CANEMU_SOCKET)";
+    }
     return tl::unexpected(e);
   }
-  Connection c(std::move(*fd), timeout_ms);
+  Connection c(std::move(*fd), timeout_ms, path);
   auto hello = ipc::make_message<ipc::Hello>();
   hello.client_pid = static_cast<uint32_t>(::getpid());
   ipc::copy_name(hello.client_name, client_name);
   auto reply = c.call<ipc::Hello, ipc::HelloReply>(hello);
   if (!reply) {
+    if (c.lost_ && c.parting_) {
+      // Refused and closed at once (canemud's client limit, or too many refused peers wait):
+      // its answer came before the close.
+      return tl::unexpected(
+          IpcError{reply.error().error_number, "canemud refused the connection: " + *c.parting_});
+    }
     return tl::unexpected(reply.error());
   }
   c.server_pid_ = reply->server_pid;
   return c;
 }
 
-Result<uint32_t> Connection::receive_one(int timeout_ms) {
-  auto n = ipc::receive_packet(fd_.get(), buffer_, timeout_ms, &fds_);
+Result<uint32_t> Connection::receive_one(int timeout_ms, std::vector<ipc::UniqueFd>* fds) {
+  auto n = ipc::receive_packet(fd_.get(), buffer_, timeout_ms, fds);
   if (!n) {
-    return tl::unexpected(n.error());
+    const int e = n.error().error_number;
+    if (e == ETIMEDOUT || e == EMSGSIZE) {
+      return tl::unexpected(n.error());  // nothing yet, or one oversized packet: still open
+    }
+    return tl::unexpected(broken());
   }
   if (*n == 0) {
-    return tl::unexpected(IpcError{0, "canemud closed the connection"});
+    return tl::unexpected(broken());
   }
   const ipc::ErrorCode check = ipc::check_message(buffer_.data(), *n);
   if (check != ipc::ErrorCode::none) {
@@ -46,13 +83,50 @@ Result<uint32_t> Connection::receive_one(int timeout_ms) {
     ipc::Notification note;
     std::memcpy(&note, buffer_.data(), sizeof note);
     notifications_.push_back(note);
+  } else if (h.request_id == 0) {
+    if (auto text = error_text(buffer_.data(), *n)) {
+      parting_ = std::move(text);  // why canemud closes the connection next
+    }
   }
   return h.request_id;
 }
 
+IpcError Connection::broken() {
+  if (lost_) {
+    return *lost_;
+  }
+  // A refusal or a revocation is an ErrorReply just before the close. A connection closed with
+  // a request of ours unread reports ECONNRESET once, before what is queued.
+  std::vector<uint8_t> packet;
+  for (int resets = 0; !parting_;) {
+    auto n = ipc::receive_packet(fd_.get(), packet, 0);
+    if (!n && n.error().error_number == ECONNRESET && ++resets < 2) {
+      continue;
+    }
+    if (!n || *n == 0) {
+      break;
+    }
+    if (ipc::check_message(packet.data(), *n) == ipc::ErrorCode::none) {
+      parting_ = error_text(packet.data(), *n);
+    }
+  }
+  lost_ = parting_
+              ? IpcError{ECONNRESET, "canemud closed the connection: " + *parting_}
+              : IpcError{ECONNRESET, "canemud went away: the connection to " + path_ + " closed"};
+  return *lost_;
+}
+
+std::optional<IpcError> Connection::lost() {
+  // Everything that came; a closed connection ends it (a receive that fails other than by
+  // finding nothing calls broken()).
+  while (!lost_ && receive_one(0, nullptr)) {
+  }
+  return lost_;
+}
+
 Result<void> Connection::receive(uint32_t request_id, int timeout_ms) {
   while (true) {
-    auto id = receive_one(timeout_ms);
+    auto id = receive_one(timeout_ms, &fds_);
     if (!id) {
       return tl::unexpected(id.error());
     }
@@ -74,7 +148,7 @@ Result<void> Connection::subscribe(uint32_t events) {
 
 std::optional<ipc::Notification> Connection::next_notification(int timeout_ms) {
   while (notifications_.empty()) {
-    auto id = receive_one(timeout_ms);
+    auto id = receive_one(timeout_ms, &fds_);
     if (!id) {
       return std::nullopt;  // nothing within the time (or the connection broke)
     }

@@ -127,6 +127,21 @@ TEST(Access, TheSocketsModeAndGroupKeepOutWhoeverMayNotWriteToIt) {
   const auto ask = [&] { return connect_and_ask(d.socket()); };
   EXPECT_EQ(as_user(kNobody, kNogroup, {}, ask), kRefusedByTheKernel);
   EXPECT_EQ(as_user(kNobody, kNogroup, {rig.users}, ask), kServed);
+  // The refused user is told that it may not use the socket (not how to start canemud, which
+  // runs), with the socket's path.
+  const std::string socket = d.socket();
+  EXPECT_EQ(as_user(kNobody, kNogroup, {},
+                    [&] {
+                      auto c = client::Connection::open(socket, "outsider");
+                      const std::string m = c ? std::string() : c.error().message;
+                      std::fprintf(stderr, "refused with: %s\n", m.c_str());
+                      return m.find("is not allowed to use canemud's socket " + socket) !=
+                                         std::string::npos &&
+                                     m.find("make run") == std::string::npos
+                                 ? 0
+                                 : 1;
+                    }),
+            0);
 }
 
 TEST(Access, AReloadThatRevokesAPeerDropsItsConnection) {
@@ -297,6 +312,65 @@ TEST(Access, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
   int status = 0;
   ::waitpid(child, &status, 0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == kServed);
+}
+
+// A refusal reaches the refused peer as its reason even when canemud closes the connection at
+// once (16 refused peers wait for their answer already): the client reads the answer queued on
+// the closed connection instead of reporting a broken pipe or a reset connection.
+TEST(Access, APeerRefusedAtOnceIsToldWhy) {
+  if (skip_unless_root()) {
+    GTEST_SKIP() << "needs root to run clients as other users";
+  }
+  Rig rig;
+  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  rig.write(
+      "allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n"
+      "max_clients_per_user = 1\n");
+  Daemon d("stepped", {"--config=" + rig.file});
+  open_folder(d);
+  const std::string socket = d.socket();
+  const auto user = [&] {
+    auto first = client::Connection::open(socket, "quota");
+    if (!first) {
+      return 10;
+    }
+    // Over the quota and silent: refused, each waits for its first request. Accepted before
+    // the next connection, which queues behind them.
+    std::vector<ipc::UniqueFd> silent;
+    for (int k = 0; k < 16; ++k) {
+      auto fd = ipc::connect_seqpacket(socket);
+      if (!fd) {
+        return 20;
+      }
+      silent.push_back(std::move(*fd));
+    }
+    auto refused = client::Connection::open(socket, "quota");
+    if (refused) {
+      return 30;
+    }
+    std::fprintf(stderr, "refused with: %s\n", refused.error().message.c_str());
+    return refused.error().message.find(
+               "uid 65534 has 1 connections to canemud; [security] max_clients_per_user "
+               "allows 1") != std::string::npos
+               ? 0
+               : 40;
+  };
+  EXPECT_EQ(as_user(kNobody, rig.users, {}, user), 0);
+}
+
+// The client beyond canemud's 256 is told so, although canemud closes its connection at once.
+TEST(Access, TheClientBeyondCanemudsLimitIsToldWhy) {
+  Daemon d;
+  std::vector<ipc::UniqueFd> held;
+  for (int k = 0; k < 256; ++k) {
+    auto fd = ipc::connect_seqpacket(d.socket());
+    ASSERT_TRUE(fd) << fd.error().message;
+    held.push_back(std::move(*fd));
+  }
+  auto refused = client::Connection::open(d.socket(), "the 257th");
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("canemud serves at most 256 clients"), std::string::npos)
+      << refused.error().message;
 }
 
 // Quotas per user ([security] max_clients_per_user, ring_mib_per_user): a user past its share

@@ -3,8 +3,10 @@
 #pragma once
 
 #include <fcntl.h>
+#include <grp.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,28 +22,50 @@ extern char** environ;
 
 namespace canemu {
 
-// canemu with `args` on the daemon's socket; stdout (and stderr) through pipes.
+// Who a client process runs as (a test that runs as root starts clients as other users).
+struct Credentials {
+  uid_t uid = 0;
+  gid_t gid = 0;
+  std::vector<gid_t> groups;
+};
+
+// canemu with `args` on the daemon's socket; stdout (and stderr) through pipes. With `as`, it
+// runs with those credentials (the test must run as root).
 struct Cli {
   pid_t pid = -1;
   int out = -1;
   int err = -1;
-  Cli(const testing::Daemon& d, std::vector<std::string> args) {
+  Cli(const testing::Daemon& d, std::vector<std::string> args, const Credentials* as = nullptr) {
     int o[2];
     int e[2];
     EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
     EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, o[1], 1);
-    posix_spawn_file_actions_adddup2(&actions, e[1], 2);
     args.insert(args.begin(), {CANEMU_PATH, "--socket", d.socket()});
     std::vector<char*> argv;
     for (std::string& a : args) {
       argv.push_back(a.data());
     }
     argv.push_back(nullptr);
-    EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
-    posix_spawn_file_actions_destroy(&actions);
+    if (as != nullptr) {
+      pid = ::fork();
+      if (pid == 0) {
+        if (::dup2(o[1], 1) < 0 || ::dup2(e[1], 2) < 0 ||
+            ::setgroups(as->groups.size(), as->groups.data()) != 0 || ::setgid(as->gid) != 0 ||
+            ::setuid(as->uid) != 0) {
+          ::_exit(127);
+        }
+        ::execve(CANEMU_PATH, argv.data(), environ);
+        ::_exit(127);
+      }
+      EXPECT_GT(pid, 0);
+    } else {
+      posix_spawn_file_actions_t actions;
+      posix_spawn_file_actions_init(&actions);
+      posix_spawn_file_actions_adddup2(&actions, o[1], 1);
+      posix_spawn_file_actions_adddup2(&actions, e[1], 2);
+      EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
+      posix_spawn_file_actions_destroy(&actions);
+    }
     ::close(o[1]);
     ::close(e[1]);
     out = o[0];
@@ -68,11 +92,34 @@ struct Cli {
     }
     return text;
   }
+  // Reads `fd` until what came holds `text`, it closes, or `timeout_ms` passes without data.
+  static std::string read_until(int fd, const std::string& text, int timeout_ms = 10'000) {
+    std::string got;
+    char buf[512];
+    while (got.find(text) == std::string::npos && testing::readable(fd, timeout_ms)) {
+      const ssize_t n = ::read(fd, buf, sizeof buf);
+      if (n <= 0) {
+        break;
+      }
+      got.append(buf, static_cast<std::size_t>(n));
+    }
+    return got;
+  }
   int wait() {
     int status = 0;
     ::waitpid(pid, &status, 0);
     pid = -1;
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  // The exit code once it ends within `timeout_ms`; -2 if it still runs then (-1: killed by a
+  // signal).
+  int wait_for(int timeout_ms) {
+    const int pidfd = static_cast<int>(::syscall(SYS_pidfd_open, pid, 0));
+    const bool ended = pidfd >= 0 && testing::readable(pidfd, timeout_ms);
+    if (pidfd >= 0) {
+      ::close(pidfd);
+    }
+    return ended ? wait() : -2;
   }
 };
 

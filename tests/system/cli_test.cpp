@@ -2,8 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <string>
 #include <vector>
+
+#include <grp.h>
+#include <sys/stat.h>
 
 #include <fmt/format.h>
 
@@ -369,6 +373,73 @@ TEST(CliDump, AcknowledgesByDefaultAndListenOnlyDoesNot) {
   Cli lone(d, {"send", "can0", "123#1122", "--step", "1ms"});
   EXPECT_EQ(lone.wait(), 1);
   EXPECT_NE(Cli::read_all(lone.err).find("is a node on can0 acknowledging"), std::string::npos);
+}
+
+// canemu dump and record (on a CAN and a LIN bus) end when canemud goes away, here stopped by
+// SIGTERM: exit code 1 and the reason, naming the socket, instead of listening on forever.
+TEST(CliDump, DumpAndRecordEndWithTheReasonWhenCanemudStops) {
+  Daemon d;
+  const std::string file = d.dir() + "/recorded.log";
+  Cli dump(d, {"dump", "can0"});
+  Cli record(d, {"record", "can0", "-o", file});
+  Cli lin(d, {"dump", "lin0"});
+  for (Cli* c : {&dump, &record, &lin}) {
+    ASSERT_NE(Cli::read_until(c->err, "listening on").find("listening on"), std::string::npos);
+  }
+  EXPECT_EQ(d.terminate(10'000), 0);
+  for (Cli* c : {&dump, &record, &lin}) {
+    EXPECT_EQ(c->wait_for(10'000), 1);
+    const std::string err = Cli::read_all(c->err, 1000);
+    EXPECT_NE(err.find("canemu: canemud went away: the connection to " + d.socket() + " closed"),
+              std::string::npos)
+        << err;
+    if (c == &record) {  // what it wrote is said too
+      EXPECT_NE(err.find("0 frame(s) recorded in " + file), std::string::npos) << err;
+    }
+  }
+  ::unlink(file.c_str());
+}
+
+// canemu dump and record run by a user whom a reload no longer allows end with canemud's
+// reason (its answer queued before it closed the connection) and exit code 1.
+TEST(CliDump, DumpAndRecordEndWithTheReasonWhenAReloadRevokesTheirUser) {
+  if (::geteuid() != 0) {
+    GTEST_SKIP() << "needs root to run canemu as another user";
+  }
+  const group* users = ::getgrnam("users");
+  ASSERT_NE(users, nullptr) << "the machine has no group \"users\"";
+  char dir[] = "/tmp/canemu-revoke-XXXXXX";
+  const std::string file = std::string(::mkdtemp(dir)) + "/canemud.toml";
+  const auto configure = [&](const std::string& groups) {
+    FILE* f = std::fopen(file.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(("[[bus]]\nname = \"can0\"\n\n[security]\nallowed_groups = " + groups +
+                "\nsocket_mode = 0o666\nsocket_group = \"\"\n")
+                   .c_str(),
+               f);
+    std::fclose(f);
+  };
+  configure("[\"users\"]");
+  Daemon d("stepped", {"--config=" + file});
+  ::chmod(d.dir().c_str(), 0755);  // the socket's folder: reachable by the other user
+  const Credentials member{65534, 65534, {users->gr_gid}};
+  Cli dump(d, {"dump", "can0"}, &member);
+  Cli record(d, {"record", "can0", "-o", "-"}, &member);
+  for (Cli* c : {&dump, &record}) {
+    ASSERT_NE(Cli::read_until(c->err, "listening on").find("listening on"), std::string::npos);
+  }
+  configure("[]");
+  d.signal(SIGHUP);
+  for (Cli* c : {&dump, &record}) {
+    EXPECT_EQ(c->wait_for(10'000), 1);
+    const std::string err = Cli::read_all(c->err, 1000);
+    EXPECT_NE(err.find("canemu: canemud closed the connection: permission_denied: uid 65534 is "
+                       "no longer allowed by the [security] configuration"),
+              std::string::npos)
+        << err;
+  }
+  ::unlink(file.c_str());
+  ::rmdir(dir);
 }
 
 // canemu gen in stepped time moves time itself: -n frames, one per gap, each at the end of its

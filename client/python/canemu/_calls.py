@@ -24,10 +24,13 @@ def _can_error(e: VciError, initializing: bool = False) -> can.CanError:
     being made (or the process connects), CanOperationError otherwise. Every VciError that
     reaches a caller of this package goes through here."""
     text = str(e)
-    if e.hr == _vci.VCI_E_DISCONNECTED:
+    # How to start canemud only when nobody listened (the library's text then asks "is canemud
+    # running?"); not when canemud refused this client, closed the connection or went away: its
+    # reason is in the text already.
+    if e.hr == _vci.VCI_E_DISCONNECTED and "is canemud running?" in text:
         text += (
             "; canemud is not running or not reachable: start it with `make run` in the canemu "
-            "folder, `systemctl start canemu`, or `canemud --config FILE`, and set CANEMU_SOCKET "
+            "folder, `systemctl start canemud`, or `canemud --config FILE`, and set CANEMU_SOCKET "
             "(or the bus's socket= argument) when it listens elsewhere"
         )
     if initializing:

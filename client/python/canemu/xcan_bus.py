@@ -214,7 +214,7 @@ class XcanBus(BusABC):
                      "acceptance filter: another bus object or program holds them)")
         elif e.code == _xcan.ERR_XCAN_NO_DAEMON:
             text += ("; canemud is not running or not reachable: start it with `make run`, "
-                     "`systemctl start canemu` or `canemud --config FILE`, and set "
+                     "`systemctl start canemud` or `canemud --config FILE`, and set "
                      "CANEMU_SOCKET (or the bus's socket= argument) when it listens elsewhere")
         return text
 

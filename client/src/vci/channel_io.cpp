@@ -1,8 +1,11 @@
 // The channel data path of the VCI libraries: reading and writing a channel's rings in shared
 // memory, waiting on their eventfds, without a round trip to canemud.
 #include <algorithm>
+#include <mutex>
+#include <string>
 
 #include <sched.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "canemu/ipc/clock.hpp"
@@ -25,6 +28,45 @@ int left_ms(int64_t deadline_ms) {
 }
 
 }  // namespace
+
+namespace {
+
+// CLOCK_MONOTONIC_COARSE in milliseconds: a clock read without a system call, good to a few ms.
+int64_t coarse_ms() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC_COARSE, &ts);
+  return int64_t{ts.tv_sec} * 1000 + ts.tv_nsec / 1'000'000;
+}
+
+// A blocking wait on a ring looks at the connection at least this often.
+constexpr int kLinkWaitSliceMs = 100;
+
+}  // namespace
+
+HRESULT channel_link(ChannelObj& c, bool now) {
+  Rings& r = *c.rings;
+  if (!r.link_lost.load(std::memory_order_acquire)) {
+    if (!now) {
+      const int64_t t = coarse_ms();
+      if (t - r.link_checked_ms.load(std::memory_order_relaxed) < kLinkCheckMs) {
+        return VCI_OK;
+      }
+      r.link_checked_ms.store(t, std::memory_order_relaxed);
+    }
+    std::string why;
+    if (Library::get().link(r.generation, why) == VCI_OK) {
+      return VCI_OK;
+    }
+    std::lock_guard lock(r.lost_mutex);
+    if (!r.link_lost.load(std::memory_order_relaxed)) {
+      r.lost_reason = std::move(why);
+      r.link_lost.store(true, std::memory_order_release);
+    }
+  }
+  std::lock_guard lock(r.lost_mutex);
+  set_detail(r.lost_reason);
+  return VCI_E_DISCONNECTED;
+}
 
 int timeout_of(uint32_t ms) {
   return ms == 0xFFFFFFFFU ? -1 : static_cast<int>(std::min<uint32_t>(ms, 0x7FFFFFFF));
@@ -60,7 +102,8 @@ int channel_poll_fd(ChannelObj& c) {
 }
 
 namespace {
-// One message if one waits; VCI_E_RXQUEUE_EMPTY otherwise.
+// One message if one waits; VCI_E_RXQUEUE_EMPTY otherwise, VCI_E_DISCONNECTED when canemud
+// is gone (what it delivered before is read first).
 HRESULT take_one(ChannelObj& c, void* msg) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
@@ -70,10 +113,29 @@ HRESULT take_one(ChannelObj& c, void* msg) {
       return VCI_OK;
     case ipc::RingStatus::empty:
       keep_pollable(c);
-      return VCI_E_RXQUEUE_EMPTY;
+      return channel_link(c, false) == VCI_OK ? VCI_E_RXQUEUE_EMPTY : VCI_E_DISCONNECTED;
     default:
       set_detail("the receive ring is corrupted");
       return VCI_E_UNEXPECTED;
+  }
+}
+
+// Waits for `ring`'s event up to `timeout` ms (-1: forever) in slices, looking at the connection
+// after each: VCI_OK when signalled, VCI_E_TIMEOUT, or VCI_E_DISCONNECTED when canemud is gone.
+template <class Ring>
+HRESULT wait_event(ChannelObj& c, const Ring& ring, int timeout) {
+  const int64_t deadline = timeout < 0 ? -1 : now_ms() + timeout;
+  while (true) {
+    const int left = left_ms(deadline);
+    if (ring.wait(left < 0 ? kLinkWaitSliceMs : std::min(left, kLinkWaitSliceMs))) {
+      return VCI_OK;
+    }
+    if (HRESULT hr = channel_link(c, true); hr != VCI_OK) {
+      return hr;
+    }
+    if (left_ms(deadline) == 0) {
+      return VCI_E_TIMEOUT;
+    }
   }
 }
 }  // namespace
@@ -111,11 +173,11 @@ HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
     if (hr != VCI_E_RXQUEUE_EMPTY) {
       break;
     }
-    const int left = left_ms(deadline);
-    if (left == 0 || !rx.wait(left)) {
-      hr = take_one(c, msg);
-      if (hr == VCI_E_RXQUEUE_EMPTY) {
-        hr = VCI_E_TIMEOUT;
+    hr = wait_event(c, rx, left_ms(deadline));
+    if (hr != VCI_OK) {
+      // One more look: a message that came as the time ran out.
+      if (const HRESULT last = take_one(c, msg); last != VCI_E_RXQUEUE_EMPTY) {
+        hr = last;
       }
       break;
     }
@@ -126,13 +188,17 @@ HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
 }
 
 namespace {
-// Puts one message if there is room; VCI_E_TXQUEUE_FULL otherwise.
+// Puts one message if there is room; VCI_E_TXQUEUE_FULL otherwise, VCI_E_DISCONNECTED when
+// canemud is gone (nobody would take it).
 HRESULT put_one(ChannelObj& c, const void* msg) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
   }
   if (!c.rings->has_tx) {
     return VCI_E_ACCESSDENIED;  // initialized without a transmit FIFO
+  }
+  if (channel_link(c, false) != VCI_OK) {
+    return VCI_E_DISCONNECTED;
   }
   switch (c.rings->tx.put(msg)) {
     case ipc::RingStatus::ok:
@@ -177,11 +243,11 @@ HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg) {
     if (hr != VCI_E_TXQUEUE_FULL) {
       break;
     }
-    const int left = left_ms(deadline);
-    if (left == 0 || !tx.wait(left)) {
-      hr = put_one(c, msg);
-      if (hr == VCI_E_TXQUEUE_FULL) {
-        hr = VCI_E_TIMEOUT;
+    hr = wait_event(c, tx, left_ms(deadline));
+    if (hr != VCI_OK) {
+      // One more try: room that came as the time ran out.
+      if (const HRESULT last = put_one(c, msg); last != VCI_E_TXQUEUE_FULL) {
+        hr = last;
       }
       break;
     }
@@ -233,16 +299,16 @@ HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
   }
-  const bool signalled = c.rings->rx.wait(timeout_of(timeout_ms));
+  const HRESULT hr = wait_event(c, c.rings->rx, timeout_of(timeout_ms));
   keep_pollable(c);
-  return signalled ? VCI_OK : VCI_E_TIMEOUT;
+  return hr;
 }
 
 HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
   }
-  return c.rings->tx.wait(timeout_of(timeout_ms)) ? VCI_OK : VCI_E_TIMEOUT;
+  return wait_event(c, c.rings->tx, timeout_of(timeout_ms));
 }
 
 uint8_t rx_load(const ChannelObj& c) {

@@ -98,7 +98,7 @@ std::string format_error(HRESULT hr) {
       text = "end of file";
       break;
     case static_cast<uint32_t>(VCI_E_DISCONNECTED):
-      text = "disconnected: canemud cannot be reached";
+      text = "disconnected from canemud";
       break;
     case static_cast<uint32_t>(VCI_E_WRONG_FLASHFWVERSION):
       text = "wrong flash firmware version";

@@ -29,15 +29,39 @@ HRESULT Library::failed(const ipc::IpcError& e) {
   if (e.message.rfind("canemud: ", 0) == 0) {
     return VCI_E_UNEXPECTED;  // the daemon refused the request; the connection is fine
   }
-  connection_.reset();  // gone: the next call connects again
+  drop_locked(e.message);  // gone: the next call connects again
   return VCI_E_DISCONNECTED;
+}
+
+void Library::drop_locked(std::string why) {
+  if (connection_) {
+    connection_.reset();
+    lost_reason_ = std::move(why);
+  }
 }
 
 HRESULT Library::reconnect(const std::string& socket) {
   std::lock_guard lock(mutex_);
-  connection_.reset();
+  drop_locked("the connection to canemud it was opened on was closed by canemuConnect");
   socket_ = socket;
   return connect_locked();
+}
+
+HRESULT Library::link(uint64_t generation, std::string& why) {
+  std::unique_lock lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) {
+    return VCI_OK;
+  }
+  if (generation == generation_ && connection_) {
+    auto gone = connection_->lost();
+    if (!gone) {
+      return VCI_OK;
+    }
+    drop_locked(gone->message);
+  }
+  why = generation == generation_ ? lost_reason_
+                                  : "the connection to canemud it was opened on is closed";
+  return VCI_E_DISCONNECTED;
 }
 
 HRESULT Library::step(int64_t ns, int64_t& now) {
@@ -105,14 +129,19 @@ HRESULT Library::connect_locked() {
     return VCI_E_DISCONNECTED;
   }
   connection_.emplace(std::move(*c));
+  ++generation_;
+  lost_reason_.clear();
   return VCI_OK;
 }
 
 HRESULT Library::call(ipc::VciRequest& request, ipc::VciReply& reply,
-                      std::vector<ipc::UniqueFd>* fds) {
+                      std::vector<ipc::UniqueFd>* fds, uint64_t* generation) {
   std::lock_guard lock(mutex_);
   if (HRESULT hr = connect_locked(); hr != VCI_OK) {
     return hr;
+  }
+  if (generation != nullptr) {
+    *generation = generation_;
   }
   request.header = ipc::make_message<ipc::VciRequest>().header;
   auto r = connection_->call<ipc::VciRequest, ipc::VciReply>(request);
@@ -299,7 +328,8 @@ HRESULT Library::map_rings(ChannelObj& channel, ipc::VciRequest& m, bool has_tx,
                            uint32_t rx_threshold, uint32_t tx_threshold) {
   ipc::VciReply r{};
   std::vector<ipc::UniqueFd> fds;
-  if (HRESULT hr = call(m, r, &fds); hr != VCI_OK) {
+  uint64_t generation = 0;
+  if (HRESULT hr = call(m, r, &fds, &generation); hr != VCI_OK) {
     return hr;
   }
   const uint32_t element = channel.element_size();
@@ -316,6 +346,7 @@ HRESULT Library::map_rings(ChannelObj& channel, ipc::VciRequest& m, bool has_tx,
   auto rings = std::make_shared<Rings>(std::move(*mapped), has_tx);
   rings->rx.set_threshold(std::max<uint32_t>(rx_threshold, 1));
   rings->tx.set_threshold(std::max<uint32_t>(tx_threshold, 1));
+  rings->generation = generation;
   channel.rings = std::move(rings);
   return VCI_OK;
 }

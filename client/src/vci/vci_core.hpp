@@ -181,6 +181,13 @@ struct Rings {
   std::atomic<bool> writer_out{false};
   PollYield rx_looks;  // the C API's looks that found the receive FIFO empty
   PollYield tx_looks;  // ... the transmit FIFO full
+  // The connection to canemud the rings came with (numbered by Library::call) and whether it is
+  // gone: then nobody serves the rings any more (channel_link).
+  uint64_t generation = 0;
+  std::atomic<int64_t> link_checked_ms{0};
+  std::atomic<bool> link_lost{false};
+  std::mutex lost_mutex;
+  std::string lost_reason;  // under lost_mutex, set before link_lost
 };
 
 // A CAN channel, or (Kind::lin_monitor) a LIN monitor: a channel with LINMSG elements and no
@@ -210,9 +217,15 @@ class Library {
   HRESULT reconnect(const std::string& socket);
   // Stepped time: runs the emulation `ns` further; `now` gets the simulated time after it.
   HRESULT step(int64_t ns, int64_t& now);
-  // One VCI request. `fds` receives the descriptors of the reply.
+  // One VCI request. `fds` receives the descriptors of the reply, `generation` the number of
+  // the connection it went over.
   HRESULT call(ipc::VciRequest& request, ipc::VciReply& reply,
-               std::vector<ipc::UniqueFd>* fds = nullptr);
+               std::vector<ipc::UniqueFd>* fds = nullptr, uint64_t* generation = nullptr);
+  // Whether connection number `generation` (connections are numbered from 1 as they are made)
+  // is still up: VCI_OK, or VCI_E_DISCONNECTED with the reason in `why` (what canemud said
+  // before it closed it, or that it went away). Never waits: while another thread's request
+  // holds the connection, VCI_OK (that request finds out itself).
+  HRESULT link(uint64_t generation, std::string& why);
   HRESULT list_devices(std::vector<DeviceDesc>& out, uint32_t* generation = nullptr);
   // canemud's status, every page of it: buses, nodes, simulated time and time mode.
   HRESULT status(client::Status& out);
@@ -246,9 +259,13 @@ class Library {
   // reply.
   HRESULT map_rings(ChannelObj& channel, ipc::VciRequest& m, bool has_tx, uint32_t rx_threshold,
                     uint32_t tx_threshold);
+  // Drops the connection, `why` being the reason channels opened over it are told.
+  void drop_locked(std::string why);
   std::mutex mutex_;
   std::optional<Connection> connection_;
-  std::string socket_;  // empty: ipc::socket_path()'s search
+  std::string socket_;       // empty: ipc::socket_path()'s search
+  uint64_t generation_ = 0;  // of connection_, or of the last one
+  std::string lost_reason_;  // why connection number generation_ went, once it did
 };
 
 // --- channel data path (no daemon round trip) ---
@@ -270,6 +287,12 @@ HRESULT channel_send_many(ChannelObj& c, uint32_t timeout_ms, const void* msgs, 
                           uint32_t& done);
 HRESULT channel_wait_rx(ChannelObj& c, uint32_t timeout_ms);
 HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms);
+// VCI_OK while the connection the channel's rings came with is up; VCI_E_DISCONNECTED (the
+// reason as the detail) once canemud closed it or went away, from then on. With `now` it
+// looks at the connection; otherwise at most once every kLinkCheckMs (the data path's calls:
+// a clock read, no system call).
+inline constexpr int64_t kLinkCheckMs = 10;
+HRESULT channel_link(ChannelObj& c, bool now);
 // For canemuChannelEventFd: from now on the receive ring's eventfd is readable whenever messages
 // wait (and may be readable spuriously); returns it.
 int channel_poll_fd(ChannelObj& c);

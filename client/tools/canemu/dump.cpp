@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
@@ -86,9 +87,15 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
                o.bus.c_str(), ch->device().c_str(), o.listen_only ? "listen-only" : "acknowledging",
                ch->info().bitrate, base->wall_clock ? "wall-clock seconds" : "simulated seconds");
   uint64_t written = 0;
+  std::optional<client::IpcError> gone;
   while (!g_stop && (o.count == 0 || written < o.count)) {
     auto m = ch->receive(200);
     if (!m) {
+      // Nothing came: canemud may have closed the connection (it stopped, or a reload no
+      // longer allows this user), and then nothing comes any more.
+      if ((gone = c->lost())) {
+        break;
+      }
       continue;
     }
     if (m->lost_before != 0) {
@@ -110,7 +117,7 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
                  static_cast<unsigned long long>(out->frames()), o.output.c_str(),
                  std::string(ipc::to_string(*format)).c_str());
   }
-  return 0;
+  return gone ? fail(gone->message) : 0;
 }
 
 Command add_dump(CLI::App& app, const std::string& socket) {

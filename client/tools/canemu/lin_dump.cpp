@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <span>
 
 #include <fmt/format.h>
@@ -116,12 +117,16 @@ int run_lin_record(client::Connection& c, const CaptureRun& o, const TimeBase& b
       base.wall_clock ? "wall-clock seconds" : "simulated seconds");
   uint64_t taken = 0;
   bool overflowed = false;
+  std::optional<client::IpcError> gone;
   while (!stop && (o.count == 0 || taken < o.count)) {
     auto m = tap->next(200);
     if (!m) {
       return fail(m.error().message);
     }
     if (!*m) {
+      if ((gone = c.lost())) {
+        break;  // canemud closed the connection: nothing comes any more
+      }
       continue;
     }
     const LINMSG& msg = (*m)->msg;
@@ -149,7 +154,7 @@ int run_lin_record(client::Connection& c, const CaptureRun& o, const TimeBase& b
     std::fprintf(stderr, "canemu: %llu record(s) recorded in %s (pcap, LINKTYPE_LIN)\n",
                  static_cast<unsigned long long>(out->frames()), o.output.c_str());
   }
-  return 0;
+  return gone ? fail(gone->message) : 0;
 }
 
 std::string lin_line(const LINMSG& m, int64_t at_ns, const std::string& bus) {
@@ -198,7 +203,13 @@ int run_lin_dump(client::Connection& c, const std::string& bus, uint32_t bitrate
     if (!m) {
       return fail(m.error().message);
     }
-    const std::string line = *m ? lin_line((*m)->msg, (*m)->at_ns + base.offset_ns, bus) : "";
+    if (!*m) {
+      if (auto gone = c.lost()) {
+        return fail(gone->message);  // canemud closed the connection: nothing comes any more
+      }
+      continue;
+    }
+    const std::string line = lin_line((*m)->msg, (*m)->at_ns + base.offset_ns, bus);
     if (line.empty()) {
       continue;
     }

@@ -20,12 +20,15 @@ using Result = ipc::IpcResult<T>;
 class Connection {
  public:
   // Connects to the daemon at `path` (see ipc::socket_path) and says hello. Fails with a message
-  // that says how to start canemud when nobody listens.
+  // that says how to start canemud when nobody listens, that this user may not use the socket
+  // when its permissions refuse (EACCES), and with canemud's reason when canemud refuses this
+  // client (also when it closed the connection at once after saying why).
   static Result<Connection> open(const std::string& path, const std::string& client_name,
                                  int timeout_ms = 2000);
 
   // Sends `request` and waits for its reply of type Reply (or an ErrorReply, returned as an
-  // error naming the code and the daemon's message).
+  // error naming the code and the daemon's message). Once canemud closed the connection, every
+  // call fails with lost()'s reason.
   template <class Request, class Reply>
   Result<Reply> call(Request request) {
     return call<Request, Reply>(request, timeout_ms_);
@@ -34,10 +37,13 @@ class Connection {
   // time step takes as long as its events do).
   template <class Request, class Reply>
   Result<Reply> call(Request request, int timeout_ms) {
+    if (lost_) {
+      return tl::unexpected(*lost_);
+    }
     request.header.request_id = ++next_id_;
     auto sent = ipc::send_message(fd_.get(), request);
     if (!sent) {
-      return tl::unexpected(sent.error());
+      return tl::unexpected(broken());
     }
     auto got = receive(request.header.request_id, timeout_ms);
     if (!got) {
@@ -56,11 +62,24 @@ class Connection {
   // The oldest notification, waiting up to `timeout_ms` (0: only what came already).
   std::optional<ipc::Notification> next_notification(int timeout_ms);
 
+  // Whether canemud closed this connection, without waiting: nothing while it is open; once it
+  // is closed, why: what canemud said before it closed it (an ErrorReply: a refusal, access
+  // revoked by a reload), else that canemud went away, naming the socket. Takes what came
+  // meanwhile (notifications queue up). For a client that otherwise only uses its rings.
+  std::optional<IpcError> lost();
+
  private:
-  Connection(ipc::UniqueFd fd, int timeout_ms) : fd_(std::move(fd)), timeout_ms_(timeout_ms) {}
+  Connection(ipc::UniqueFd fd, int timeout_ms, std::string path)
+      : fd_(std::move(fd)), timeout_ms_(timeout_ms), path_(std::move(path)) {}
   Result<void> receive(uint32_t request_id, int timeout_ms);
-  // Takes one packet: queues it if it is a notification. Returns its request id.
-  Result<uint32_t> receive_one(int timeout_ms);
+  // Takes one packet: queues it if it is a notification, keeps canemud's parting word (an
+  // ErrorReply of no request). Returns its request id. The descriptors that came with it go
+  // to `fds` (nullptr: closed).
+  Result<uint32_t> receive_one(int timeout_ms, std::vector<ipc::UniqueFd>* fds);
+  // The connection broke (a send or receive failed, or canemud closed it): reads what canemud
+  // sent before it closed (a reset connection reports the reset first, then gives what is
+  // queued) and returns the reason that lost() gives from now on.
+  IpcError broken();
   template <class Reply>
   Result<Reply> expect() {
     const ipc::MsgHeader* h = reinterpret_cast<const ipc::MsgHeader*>(buffer_.data());
@@ -78,6 +97,9 @@ class Connection {
 
   ipc::UniqueFd fd_;
   int timeout_ms_;
+  std::string path_;
+  std::optional<std::string> parting_;  // an ErrorReply of no request: "code: text"
+  std::optional<IpcError> lost_;
   uint32_t next_id_ = 0;
   uint32_t server_pid_ = 0;
   std::vector<uint8_t> buffer_;

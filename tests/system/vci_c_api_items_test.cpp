@@ -79,9 +79,9 @@ TEST(VciCFunctions, FindDeviceByClassCountsTheInstancesOfAClass) {
   EXPECT_EQ(vciFindDeviceByClass(alpha.DeviceClass, 0, nullptr), VCI_E_INVALIDARG);
 }
 
-// The receive event follows its threshold (2 messages here); the transmit event fires when
-// canemud's reads leave at least its threshold free (VCI: events are signalled by the other
-// side's access only), so it is not signalled before the line takes a frame.
+// The receive event follows its threshold (2 messages here), signalled by canemud's writes; the
+// transmit event means room, at least its threshold free (2 here): a new FIFO has it at once, a
+// FIFO filled beyond it waits until the line takes frames.
 TEST(VciCFunctions, WaitRxEventAndWaitTxEventFollowTheThresholds) {
   VciDaemon d;
   Adapter beta("beta");
@@ -92,26 +92,18 @@ TEST(VciCFunctions, WaitRxEventAndWaitTxEventFollowTheThresholds) {
   EXPECT_EQ(canChannelWaitRxEvent(alpha.control, 0), VCI_E_INVHANDLE);
   EXPECT_EQ(canChannelWaitTxEvent(alpha.control, 0), VCI_E_INVHANDLE);
   EXPECT_EQ(canChannelWaitRxEvent(alpha.channel, 0), VCI_E_TIMEOUT);
-  EXPECT_EQ(canChannelWaitTxEvent(alpha.channel, 0), VCI_E_TIMEOUT);
+  EXPECT_EQ(canChannelWaitTxEvent(alpha.channel, 0), VCI_OK);       // an empty FIFO has room
+  EXPECT_EQ(canChannelWaitTxEvent(alpha.channel, 60'000), VCI_OK);  // at once, not in a minute
   SimClock clock;
-  // Offline: the posted frames stay in the FIFO.
+  // Offline: the posted frames stay in the FIFO, which still has room.
   std::vector<CANMSG> three(3, data(0x201, {1}));
   UINT32 done = 0;
   ASSERT_EQ(canChannelPostMsgMult(alpha.channel, three.data(), 3, &done), VCI_OK);
   EXPECT_EQ(done, 3u);
-  // A waiter in another thread wakes when the line takes a frame (simulated time).
-  std::atomic<bool> woke{false};
-  std::atomic<HRESULT> tx{VCI_E_UNEXPECTED};
-  std::thread waiter([&] {
-    tx = canChannelWaitTxEvent(alpha.channel, 60'000);
-    woke = true;
-  });
+  EXPECT_EQ(canChannelWaitTxEvent(alpha.channel, 0), VCI_OK);
   clock.to(1'000'000);
-  EXPECT_FALSE(woke);
   ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);  // the INFO START: 1 of 2
   clock.to(2'000'000);
-  waiter.join();
-  EXPECT_EQ(tx.load(), VCI_OK);
   EXPECT_EQ(beta.frames().size(), 3u);
   EXPECT_EQ(canChannelWaitRxEvent(alpha.channel, 0), VCI_E_TIMEOUT);
   beta.post(data(0x123, {0x11, 0x22}));
@@ -123,6 +115,38 @@ TEST(VciCFunctions, WaitRxEventAndWaitTxEventFollowTheThresholds) {
   EXPECT_EQ(got[0].abData[0], CAN_INFO_START);
   EXPECT_EQ(got[0].dwTime, 1000u);
   EXPECT_EQ(got[1].dwTime, end_of(2000, 0x123, {0x11, 0x22}));
+}
+
+// A full transmit FIFO has no room: canChannelWaitTxEvent waits until the line has taken as many
+// frames as the threshold asks to be free (simulated time), in another thread.
+TEST(VciCFunctions, WaitTxEventWaitsForRoomInAFullFifo) {
+  VciDaemon d;
+  Adapter beta("beta");
+  Parts alpha("alpha");
+  ASSERT_EQ(canChannelInitialize(alpha.channel, 16, 1, 4, 2), VCI_OK);
+  ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
+  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
+  CANMSG one = data(0x201, {1});
+  std::size_t posted = 0;
+  while (canChannelPostMessage(alpha.channel, &one) == VCI_OK) {  // capacity: at least 4
+    ++posted;
+  }
+  ASSERT_GE(posted, 4u);
+  EXPECT_EQ(canChannelWaitTxEvent(alpha.channel, 0), VCI_E_TIMEOUT);
+  SimClock clock;
+  std::atomic<bool> woke{false};
+  std::atomic<HRESULT> tx{VCI_E_UNEXPECTED};
+  std::thread waiter([&] {
+    tx = canChannelWaitTxEvent(alpha.channel, 60'000);
+    woke = true;
+  });
+  clock.to(1'000'000);
+  EXPECT_FALSE(woke);  // offline: nothing leaves
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  clock.to(2'000'000);
+  waiter.join();
+  EXPECT_EQ(tx.load(), VCI_OK);
+  EXPECT_GE(beta.frames().size(), 2u);
 }
 
 // The several-message calls: the *MsgMult forms take the count after the array, the legacy

@@ -308,7 +308,14 @@ HRESULT channel_wait_tx(ChannelObj& c, uint32_t timeout_ms) {
   if (!c.rings) {
     return VCI_E_NOT_INITIALIZED;
   }
-  return wait_event(c, c.rings->tx, timeout_of(timeout_ms));
+  // The C API's transmit event means room: at least the threshold's free entries. A FIFO that
+  // has them already (a new one, or one canemud emptied) is not waited on (docs/vci.md).
+  const ipc::RingWriter& tx = c.rings->tx;
+  const uint32_t capacity = c.rings->pair.tx().memory().capacity();
+  if (c.rings->has_tx && capacity - tx.fill_count() >= std::max<uint32_t>(tx.threshold(), 1)) {
+    return VCI_OK;
+  }
+  return wait_event(c, tx, timeout_of(timeout_ms));
 }
 
 uint8_t rx_load(const ChannelObj& c) {

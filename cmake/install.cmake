@@ -93,7 +93,11 @@ file(WRITE ${PROJECT_BINARY_DIR}/install-doc/changelog
 execute_process(COMMAND gzip -9nf ${PROJECT_BINARY_DIR}/install-doc/changelog)
 install(FILES ${PROJECT_BINARY_DIR}/install-doc/changelog.gz DESTINATION ${CMAKE_INSTALL_DOCDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}
-        FILES_MATCHING PATTERN "*.md")
+        FILES_MATCHING PATTERN "*.md" PATTERN examples EXCLUDE)
+# What lintian reports of the package and is accepted, each with its reason
+# (tests/install/check_lintian.sh fails on any other tag).
+install(FILES ${PROJECT_SOURCE_DIR}/packaging/debian/lintian-overrides
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/lintian/overrides RENAME canemu)
 
 # The Python package where Debian's python3 finds it, with the entry point that makes
 # can.Bus(interface="canemu") work.
@@ -124,10 +128,12 @@ set(CPACK_PACKAGE_NAME canemu)
 set(CPACK_PACKAGE_VENDOR "canemu")
 set(CPACK_PACKAGE_CONTACT "${CANEMU_PACKAGE_CONTACT}")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "emulated IXXAT and SORCUS CAN/LIN adapters")
-set(CPACK_PACKAGE_DESCRIPTION
-    "canemud emulates IXXAT (VCI) and SORCUS CAN and LIN interface adapters\n"
-    "down to the controller silicon, in real time; programs written for them\n"
-    "link canemu's client libraries and run without hardware.")
+# One string: set() with several would make a list, whose ";" separators begin the Description's
+# continuation lines (CPack puts the text after the summary, each line indented by one space).
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
+       "canemud emulates IXXAT (VCI) and SORCUS CAN and LIN interface adapters\n"
+       "down to the controller silicon, in real time; programs written for them\n"
+       "link canemu's client libraries and run without hardware.")
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)

@@ -55,6 +55,11 @@ install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemu.sysusers DESTINATION lib/sysu
         RENAME canemu.conf)
 install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemu.tmpfiles DESTINATION lib/tmpfiles.d
         RENAME canemu.conf)
+# The drop-ins that open the bridges' address families to canemud.service (not active until an
+# administrator links them into /etc/systemd/system/canemud.service.d/: docs/security.md).
+install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemud.service.d/socketcan.conf
+              ${PROJECT_SOURCE_DIR}/systemd/canemud.service.d/ip.conf
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/systemd)
 install(CODE "set(CANEMU_SOURCE_DIR \"${PROJECT_SOURCE_DIR}\")
               set(CANEMU_STAGE \"${PROJECT_BINARY_DIR}/install-systemd\")
               set(CANEMU_BINDIR \"${CMAKE_INSTALL_BINDIR}\")")
@@ -88,7 +93,11 @@ file(WRITE ${PROJECT_BINARY_DIR}/install-doc/changelog
 execute_process(COMMAND gzip -9nf ${PROJECT_BINARY_DIR}/install-doc/changelog)
 install(FILES ${PROJECT_BINARY_DIR}/install-doc/changelog.gz DESTINATION ${CMAKE_INSTALL_DOCDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}
-        FILES_MATCHING PATTERN "*.md")
+        FILES_MATCHING PATTERN "*.md" PATTERN examples EXCLUDE)
+# What lintian reports of the package and is accepted, each with its reason
+# (tests/install/check_lintian.sh fails on any other tag).
+install(FILES ${PROJECT_SOURCE_DIR}/packaging/debian/lintian-overrides
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/lintian/overrides RENAME canemu)
 
 # The Python package where Debian's python3 finds it, with the entry point that makes
 # can.Bus(interface="canemu") work.
@@ -119,10 +128,12 @@ set(CPACK_PACKAGE_NAME canemu)
 set(CPACK_PACKAGE_VENDOR "canemu")
 set(CPACK_PACKAGE_CONTACT "${CANEMU_PACKAGE_CONTACT}")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "emulated IXXAT and SORCUS CAN/LIN adapters")
-set(CPACK_PACKAGE_DESCRIPTION
-    "canemud emulates IXXAT (VCI) and SORCUS CAN and LIN interface adapters\n"
-    "down to the controller silicon, in real time; programs written for them\n"
-    "link canemu's client libraries and run without hardware.")
+# One string: set() with several would make a list, whose ";" separators begin the Description's
+# continuation lines (CPack puts the text after the summary, each line indented by one space).
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
+       "canemud emulates IXXAT (VCI) and SORCUS CAN and LIN interface adapters\n"
+       "down to the controller silicon, in real time; programs written for them\n"
+       "link canemu's client libraries and run without hardware.")
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
@@ -132,7 +143,8 @@ set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
 set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS_POLICY ">=")
 set(CPACK_STRIP_FILES ON)
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, python3, python3-can")
+# init-system-helpers: deb-systemd-helper and deb-systemd-invoke in the maintainer scripts.
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, init-system-helpers (>= 1.54~), python3, python3-can")
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")  # canemu plot
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/packaging/debian/conffiles ${PROJECT_SOURCE_DIR}/packaging/debian/postinst

@@ -1,9 +1,14 @@
 #include "canemu/daemon/bridge.hpp"
 
+#include <linux/can.h>
+#include <sys/socket.h>
+
+#include <cerrno>
 #include <cstring>
 
 #include "canemu/daemon/channel.hpp"
 #include "canemu/firmware_model/bus/frame.hpp"
+#include "canemu/ipc/unique_fd.hpp"
 
 namespace canemu::daemon {
 
@@ -29,6 +34,17 @@ std::optional<ipc::ChannelMessage> frame_message(const FrameFields& f) {
     std::memcpy(m.data, f.data, bytes);
   }
   return m;
+}
+
+std::optional<std::string> refused_family(int family) {
+  const bool can = family == AF_CAN;
+  const ipc::UniqueFd probe(
+      ::socket(family, (can ? SOCK_RAW : SOCK_DGRAM) | SOCK_CLOEXEC, can ? CAN_RAW : 0));
+  if (probe.valid() || errno != EAFNOSUPPORT) {
+    return std::nullopt;
+  }
+  return can ? "AF_CAN refused (no CAN in the kernel, or no drop-in socketcan.conf)"
+             : "AF_INET refused (no drop-in ip.conf)";
 }
 
 std::unique_ptr<Bridge> Bridge::start(BridgeOptions options, std::size_t bus, HostedNode& node,

@@ -1,5 +1,7 @@
 #include "canemu/daemon/simulation.hpp"
 
+#include <sys/socket.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
@@ -50,6 +52,10 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
   std::unique_ptr<Simulation> sim(new Simulation(config));
   std::vector<std::string> errors;
   if (sim->config_.distributed.enabled) {
+    if (auto refused = refused_family(AF_INET)) {
+      return tl::unexpected(std::vector<std::string>{
+          fmt::format("{}: [distributed]: {}", sim->config_.source, *refused)});
+    }
     auto link = Distributed::open(*sim, sim->config_);
     if (!link) {
       return tl::unexpected(std::vector<std::string>{
@@ -137,6 +143,9 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
             other->options().bus, prefix, url));
       }
     }
+    if (auto refused = refused_family(AF_INET)) {
+      return tl::unexpected("LCM bridge of " + b.bus + ": " + *refused);
+    }
     auto transport = open_lcm(b.bus, url, prefix);
     if (!transport) {
       return tl::unexpected(transport.error());
@@ -169,6 +178,9 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
               other->options().bus, o.topic_prefix, o.domain, o.partition));
         }
       }
+    }
+    if (auto refused = refused_family(AF_INET)) {
+      return tl::unexpected("DDS bridge of " + b.bus + ": " + *refused);
     }
     auto transport = open_dds(b.bus, o);
     if (!transport) {

@@ -89,7 +89,10 @@ tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interfa
   }
   ipc::UniqueFd s(::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW));
   if (!s.valid()) {
-    return failed("socket(PF_CAN)");
+    const int error = errno;
+    const auto refused = error == EAFNOSUPPORT ? refused_family(AF_CAN) : std::nullopt;
+    return tl::unexpected(interface + ": " +
+                          refused.value_or(std::string("socket(PF_CAN): ") + std::strerror(error)));
   }
   const unsigned index = ::if_nametoindex(interface.c_str());
   if (index == 0) {

@@ -5,12 +5,19 @@
 
 #include <linux/can.h>
 #include <linux/can/error.h>
+#include <linux/filter.h>
+#include <linux/seccomp.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <deque>
+#include <iterator>
 
 #include <gtest/gtest.h>
 
@@ -411,6 +418,62 @@ TEST(SocketCanBridge, WithoutCanModulesTheInterfaceCannotBeOpenedAndSaysWhy) {
   EXPECT_EQ(port.error().substr(0, 11), "vcan-none: ") << port.error();
   EXPECT_EQ(open_can_raw("a-name-that-is-too-long", false).error(),
             "\"a-name-that-is-too-long\" is not an interface name (1 to 15 characters)");
+}
+
+// socket() of any family but AF_UNIX fails with EAFNOSUPPORT from now on, as in canemud.service
+// as shipped (RestrictAddressFamilies=AF_UNIX installs such a seccomp filter).
+void refuse_every_family_but_unix() {
+  sock_filter filter[] = {
+      BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, nr)),
+      BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, __NR_socket, 0, 3),
+      BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, args[0])),
+      BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, AF_UNIX, 1, 0),
+      BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ERRNO | EAFNOSUPPORT),
+      BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
+  };
+  sock_fprog program{static_cast<unsigned short>(std::size(filter)), filter};
+  if (::prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 ||
+      ::prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, &program) != 0) {
+    ::_exit(2);
+  }
+}
+
+TEST(SocketCanBridge, ABridgeWhoseAddressFamilyIsRefusedNamesTheDropInThatAllowsIt) {
+  EXPECT_EQ(refused_family(AF_INET), std::nullopt);  // this machine allows IP sockets
+  int out[2];
+  ASSERT_EQ(::pipe(out), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // no gtest here: what the child found goes through the pipe
+    refuse_every_family_but_unix();
+    auto sim = world(kClassic);
+    BridgeConfig lcm;
+    lcm.kind = "lcm";
+    lcm.bus = "can0";
+    BridgeConfig dds = lcm;
+    dds.kind = "dds";
+    const std::string found = std::string(refused_family(AF_UNIX) ? "AF_UNIX refused" : "-") +
+                              "\n" + open_can_raw("vcan0", false).error() + "\n" +
+                              sim->add_bridge(lcm).error() + "\n" + sim->add_bridge(dds).error();
+    const bool written =
+        ::write(out[1], found.data(), found.size()) == static_cast<ssize_t>(found.size());
+    ::_exit(written ? 0 : 3);
+  }
+  ::close(out[1]);
+  std::string found;
+  char buffer[512];
+  for (ssize_t n; (n = ::read(out[0], buffer, sizeof buffer)) > 0;) {
+    found.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(out[0]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  EXPECT_EQ(found,
+            "-\n"
+            "vcan0: AF_CAN refused (no CAN in the kernel, or no drop-in socketcan.conf)\n"
+            "LCM bridge of can0: AF_INET refused (no drop-in ip.conf)\n"
+            "DDS bridge of can0: AF_INET refused (no drop-in ip.conf)");
 }
 
 TEST(BridgeConfig, ReadsTheTableAndNamesEveryMistake) {

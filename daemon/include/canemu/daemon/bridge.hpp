@@ -76,6 +76,13 @@ struct FrameFields {
 // of range, a length other than the DLC's). Bridge::offer() checks the rest.
 std::optional<ipc::ChannelMessage> frame_message(const FrameFields& f);
 
+// Why a bridge cannot open when this process may not create sockets of `family` (AF_CAN for
+// SocketCAN; AF_INET for LCM, DDS and [distributed]): socket() fails with EAFNOSUPPORT where a
+// sandbox refuses the family (canemud.service without the drop-in that allows it,
+// docs/security.md) or the kernel lacks it. Short enough for an error reply with the interface's
+// name before it. Nothing when such a socket opens.
+std::optional<std::string> refused_family(int family);
+
 // What a transport did with something the bridge gave it.
 enum class Delivery : uint8_t {
   sent,     // counted as written

@@ -76,8 +76,15 @@ install(CODE [[
   file(WRITE "${CANEMU_STAGE}/canemud.service" "${unit}")
   file(INSTALL "${CANEMU_STAGE}/canemud.service"
        DESTINATION "${CMAKE_INSTALL_PREFIX}/lib/systemd/system")
-  file(INSTALL "${CANEMU_SOURCE_DIR}/config/default.toml" DESTINATION "${etc}/canemu"
-       RENAME canemud.toml)
+  # The configuration is the administrator's once it is there: installed only where none is
+  # (as the package's conffile is kept on upgrade), never overwritten by a second install.
+  if(EXISTS "$ENV{DESTDIR}${etc}/canemu/canemud.toml")
+    message(STATUS "Kept: $ENV{DESTDIR}${etc}/canemu/canemud.toml (the default is "
+                   "${CANEMU_SOURCE_DIR}/config/default.toml)")
+  else()
+    file(INSTALL "${CANEMU_SOURCE_DIR}/config/default.toml" DESTINATION "${etc}/canemu"
+         RENAME canemud.toml)
+  endif()
 ]])
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/examples ${PROJECT_SOURCE_DIR}/config/faults
         DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu)

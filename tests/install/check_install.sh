@@ -33,6 +33,11 @@ done
 grep -q "configuration OK" <<<"$("$dest/usr/bin/canemud" --check-config "$dest/etc/canemu/canemud.toml")" ||
   fail "the installed configuration does not load"
 grep -q "bits:" <<<"$("$dest/usr/bin/canemu" calc frame 123#11)" || fail "canemu calc does not run"
+# A second install keeps the administrator's configuration.
+echo "# edited by the administrator" >>"$dest/etc/canemu/canemud.toml"
+DESTDIR=$dest cmake --install "$build" --prefix /usr >/dev/null
+grep -qx "# edited by the administrator" "$dest/etc/canemu/canemud.toml" ||
+  fail "a second install overwrote /etc/canemu/canemud.toml"
 
 # A program of the user's own, built only from what was installed.
 export PKG_CONFIG_PATH=$libdir/pkgconfig

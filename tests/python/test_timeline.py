@@ -8,13 +8,14 @@ import json
 import os
 import subprocess
 import sys
+from decimal import Decimal
 
 import can
 
 import canemu
 from canemu.plot import series
 
-from conftest import CANEMU_CLI, bus_errors, drain, load
+from conftest import CANEMU_CLI, bus_errors, drain, frames, load, ns
 
 US = 1_000
 MS = 1_000_000
@@ -141,3 +142,57 @@ count = 20
             assert b"<svg" in data and b"acks missing" in data
     bad = cli(daemon, "plot", "can0", "-o", str(tmp_path / "x.bmp"), check=False, env=env)
     assert bad.returncode == 1 and "must end in .pdf, .png, .svg" in bad.stderr
+
+
+def rows(daemon, bus, node) -> list:
+    """`canemu timeline BUS NODE`'s table as (at_ns, tec, rec, state), read from its text."""
+    out = []
+    for line in cli(daemon, "timeline", bus, node).stdout.splitlines():
+        words = line.split()
+        if len(words) >= 5 and words[0][0].isdigit() and "." in words[0] and words[1].isdigit():
+            out.append((int(Decimal(words[0]) * 10**9), int(words[1]), int(words[2]), words[3]))
+    return out
+
+
+def test_the_plot_shows_every_change_of_a_recovery_at_its_instant(daemon, nodes):
+    a, b = nodes
+    load(daemon, """
+[scenario]
+name = "passive"
+
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x123, mask = 0x7FF }
+effect = "ack_error"
+count = 16
+""")
+    for _ in range(40):
+        a.send(msg(0x123))
+    canemu.step(50 * MS)
+    received = frames(drain(b))
+    assert len(received) == 40
+    table = rows(daemon, "can0", a.node_name)
+    # 16 ACK errors to error-passive (128), then one count-down per frame that went, each at
+    # the instant the receiver has for it: 127 .. 96 warning, 95 .. 88 error-active.
+    assert [r[1] for r in table[:16]] == [8 * (k + 1) for k in range(16)]
+    assert table[15][3] == "error-passive"
+    assert table[16:] == [
+        (ns(m.timestamp), 127 - k, 0, "warning" if 127 - k >= 96 else "error-active")
+        for k, m in enumerate(received)
+    ]
+    # The picture's TEC and REC lines: a step at each row, at its instant, from 0 at time 0 to
+    # the end of the timeline.
+    from canemu.plot import figure
+
+    t = timeline(daemon, "can0", a.node_name)
+    fig = figure(t)
+    lines = {line.get_label(): line for line in fig.axes[1].get_lines()}
+    for key, column in (("TEC", 1), ("REC", 2)):
+        line = lines[f"{a.node_name} {key}"]
+        assert line.get_drawstyle() == "steps-post"
+        x, y = list(line.get_xdata()), list(line.get_ydata())
+        assert x[0] == 0.0 and y[0] == 0
+        assert [round(v * 1e9) for v in x[1:-1]] == [r[0] for r in table]
+        assert y[1:-1] == [r[column] for r in table]
+        assert x[-1] == t["now_ns"] / 1e9 and y[-1] == table[-1][column]

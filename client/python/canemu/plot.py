@@ -49,11 +49,9 @@ def series(timeline: dict) -> dict:
     return {"load": (xs, ys), "nodes": nodes, "end": end}
 
 
-def draw(timeline: dict, output: str, title: str | None = None) -> None:
-    """Writes the picture of `timeline` to `output`."""
-    suffix = Path(output).suffix.lower()
-    if suffix not in FORMATS:
-        raise ValueError(f"{output}: the picture's name must end in {', '.join(sorted(FORMATS))}")
+def figure(timeline: dict, title: str | None = None):
+    """The matplotlib Figure of `timeline`: its second axes hold one line per node and counter,
+    labelled "NODE TEC" and "NODE REC", drawn as steps after each point of series()."""
     import matplotlib
 
     matplotlib.use("Agg")  # files only, no display
@@ -82,6 +80,17 @@ def draw(timeline: dict, output: str, title: str | None = None) -> None:
     if lines["nodes"]:
         bottom.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
+    return fig
+
+
+def draw(timeline: dict, output: str, title: str | None = None) -> None:
+    """Writes the picture of `timeline` to `output`."""
+    suffix = Path(output).suffix.lower()
+    if suffix not in FORMATS:
+        raise ValueError(f"{output}: the picture's name must end in {', '.join(sorted(FORMATS))}")
+    fig = figure(timeline, title)
+    import matplotlib.pyplot as plt
+
     fig.savefig(output)
     plt.close(fig)
 

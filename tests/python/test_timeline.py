@@ -11,11 +11,12 @@ import sys
 from decimal import Decimal
 
 import can
+import pytest
 
 import canemu
 from canemu.plot import series
 
-from conftest import CANEMU_CLI, bus_errors, drain, frames, load, ns
+from conftest import CANEMU_CLI, REPO, bus_errors, drain, frames, load, ns
 
 US = 1_000
 MS = 1_000_000
@@ -140,8 +141,6 @@ count = 20
             assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
         else:
             assert b"<svg" in data and b"acks missing" in data
-    bad = cli(daemon, "plot", "can0", "-o", str(tmp_path / "x.bmp"), check=False, env=env)
-    assert bad.returncode == 1 and "must end in .pdf, .png, .svg" in bad.stderr
 
 
 def rows(daemon, bus, node) -> list:
@@ -196,3 +195,54 @@ count = 16
         assert [round(v * 1e9) for v in x[1:-1]] == [r[0] for r in table]
         assert y[1:-1] == [r[column] for r in table]
         assert x[-1] == t["now_ns"] / 1e9 and y[-1] == table[-1][column]
+
+
+def plot(daemon, out, env) -> subprocess.CompletedProcess:
+    return cli(daemon, "plot", "can0", "-o", str(out), check=False, env=env)
+
+
+def test_each_plot_error_has_its_own_message(daemon, nodes, tmp_path):
+    env = dict(os.environ, CANEMU_PYTHON=sys.executable)
+    # A format matplotlib is not asked for: which ones work, no word of packages.
+    gif = plot(daemon, tmp_path / "run.gif", env)
+    assert gif.returncode == 1
+    assert "cannot draw a .gif file; the formats are .pdf, .png and .svg" in gif.stderr
+    assert "matplotlib" not in gif.stderr and "package" not in gif.stderr
+    bare = plot(daemon, tmp_path / "run", env)
+    assert bare.returncode == 1 and "needs an extension for the format" in bare.stderr
+    # A folder that is not there: named.
+    missing = plot(daemon, tmp_path / "nope" / "run.png", env)
+    assert missing.returncode == 1
+    assert f"no folder {tmp_path / 'nope'}" in missing.stderr
+    assert "matplotlib" not in missing.stderr and "package" not in missing.stderr
+    # An interpreter without matplotlib: how to install it.
+    fake = tmp_path / "no-matplotlib"
+    (fake / "matplotlib").mkdir(parents=True)
+    (fake / "matplotlib" / "__init__.py").write_text(
+        "raise ModuleNotFoundError(\"No module named 'matplotlib'\", name='matplotlib')\n")
+    python = tmp_path / "python-without-matplotlib"
+    python.write_text(f"#!/bin/sh\nPYTHONPATH={fake} exec {sys.executable} \"$@\"\n")
+    python.chmod(0o755)
+    bare_python = plot(daemon, tmp_path / "run.png", dict(os.environ, CANEMU_PYTHON=str(python)))
+    assert bare_python.returncode == 1
+    assert f"matplotlib is not installed for {sys.executable}" in bare_python.stderr
+    assert "pip install matplotlib" in bare_python.stderr
+    assert "apt install python3-matplotlib" in bare_python.stderr
+    assert not (tmp_path / "run.png").exists()
+    # An interpreter that cannot be run.
+    none = plot(daemon, tmp_path / "run.png", dict(os.environ, CANEMU_PYTHON=str(tmp_path / "nix")))
+    assert none.returncode == 1 and f"cannot run {tmp_path / 'nix'}" in none.stderr
+
+
+@pytest.mark.skipif(not (REPO / ".venv" / "bin" / "python").exists(), reason="no .venv (make deps)")
+def test_plot_from_the_build_tree_finds_the_repositorys_venv(daemon, nodes, tmp_path):
+    # The python3 on PATH has neither matplotlib nor canemu; CANEMU_PYTHON is not set.
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "python3").write_text("#!/bin/sh\necho 'the python3 on PATH' >&2\nexit 1\n")
+    (bin_dir / "python3").chmod(0o755)
+    env = {k: v for k, v in os.environ.items() if k != "CANEMU_PYTHON"}
+    env["PATH"] = f"{bin_dir}:{env.get('PATH', '/usr/bin:/bin')}"
+    done = plot(daemon, tmp_path / "run.svg", env)
+    assert done.returncode == 0, done.stderr
+    assert b"<svg" in (tmp_path / "run.svg").read_bytes()

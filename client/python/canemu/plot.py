@@ -6,6 +6,10 @@ The picture has two panels over the same time axis: the bus load in percent per 
 and TEC and REC of each node with the error-warning (96), error-passive (128) and bus-off (256)
 limits. The file's extension chooses the format (.png, .svg, .pdf).
 
+Every error is told for what it is, with exit status 2: a format that is not one of these, a
+folder that is not there, matplotlib missing (with how to install it), a file that cannot be
+written, input that is not the timeline.
+
 `series()` gives the lines as numbers, so that what is drawn can be checked without looking.
 """
 
@@ -83,16 +87,49 @@ def figure(timeline: dict, title: str | None = None):
     return fig
 
 
-def draw(timeline: dict, output: str, title: str | None = None) -> None:
-    """Writes the picture of `timeline` to `output`."""
-    suffix = Path(output).suffix.lower()
+class PlotError(Exception):
+    """What keeps the picture from being drawn, in words for the person who asked."""
+
+
+def check_output(output: str) -> None:
+    """Refuses, before anything is drawn, a name whose extension is not a format of FORMATS and
+    a folder that is not there."""
+    path = Path(output)
+    suffix = path.suffix.lower()
+    formats = sorted(FORMATS)
+    if not suffix:
+        raise PlotError(f"{output}: the name needs an extension for the format: "
+                        f"{', '.join(formats[:-1])} or {formats[-1]}")
     if suffix not in FORMATS:
-        raise ValueError(f"{output}: the picture's name must end in {', '.join(sorted(FORMATS))}")
+        raise PlotError(f"{output}: cannot draw a {suffix} file; the formats are "
+                        f"{', '.join(formats[:-1])} and {formats[-1]}")
+    folder = path.parent
+    if not folder.exists():
+        raise PlotError(f"{output}: no folder {folder} (make it first)")
+    if not folder.is_dir():
+        raise PlotError(f"{output}: {folder} is not a folder")
+
+
+def draw(timeline: dict, output: str, title: str | None = None) -> None:
+    """Writes the picture of `timeline` to `output` (PlotError when it cannot)."""
+    check_output(output)
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError as e:
+        raise PlotError(
+            f"matplotlib is not installed for {sys.executable} ({e}): install it with "
+            f"`sudo apt install python3-matplotlib` (Debian's python3) or `{sys.executable} -m pip "
+            f"install matplotlib` (a virtual environment), or name an interpreter that has it in "
+            f"CANEMU_PYTHON") from e
     fig = figure(timeline, title)
     import matplotlib.pyplot as plt
 
-    fig.savefig(output)
-    plt.close(fig)
+    try:
+        fig.savefig(output)
+    except OSError as e:
+        raise PlotError(f"{output}: cannot write it: {e.strerror or e}") from e
+    finally:
+        plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -101,15 +138,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--title", default=None)
     parser.add_argument("--input", default="-", help="the timeline JSON (default: standard input)")
     args = parser.parse_args(argv)
-    text = sys.stdin.read() if args.input == "-" else Path(args.input).read_text()
     try:
-        timeline = json.loads(text)
-        draw(timeline, args.output, args.title)
-    except (ValueError, KeyError, OSError) as e:
-        print(f"canemu.plot: {e}", file=sys.stderr)
-        return 2
-    except ImportError as e:
-        print(f"canemu.plot: matplotlib is needed to draw ({e})", file=sys.stderr)
+        check_output(args.output)
+        try:
+            text = sys.stdin.read() if args.input == "-" else Path(args.input).read_text()
+        except OSError as e:
+            raise PlotError(f"{args.input}: cannot read the timeline: {e.strerror or e}") from e
+        try:
+            timeline = json.loads(text)
+        except ValueError as e:
+            raise PlotError(f"the timeline is not JSON: {e}") from e
+        try:
+            draw(timeline, args.output, args.title)
+        except (KeyError, TypeError) as e:
+            raise PlotError(f"the timeline lacks {e} (the JSON of canemu timeline --json)") from e
+    except PlotError as e:
+        print(f"canemu: plot: {e}", file=sys.stderr)
         return 2
     return 0
 

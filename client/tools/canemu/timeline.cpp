@@ -240,7 +240,10 @@ int run_timeline(const std::string& socket, const Options& o) {
   return 0;
 }
 
-// The timeline as JSON into `python3 -m canemu.plot` (CANEMU_PYTHON names another interpreter).
+// canemu.plot's exit status when it refused with a message of its own.
+constexpr int kPlotRefused = 2;
+
+// The timeline as JSON into `python3 -m canemu.plot` (python_interpreter() chooses which).
 int run_plot(const std::string& socket, const Options& o) {
   auto t = ask(socket, "canemu plot", o);
   if (!t) {
@@ -252,13 +255,18 @@ int run_plot(const std::string& socket, const Options& o) {
   }
   const PythonRun run =
       run_python_module("canemu.plot", args, one_line_json(to_json(*t)) + "\n", false);
+  if (!run.error.empty()) {
+    return fail(fmt::format("plot: cannot run {}: {} (CANEMU_PYTHON names the interpreter)",
+                            run.interpreter, run.error));
+  }
+  if (run.status == kPlotRefused) {
+    return 1;  // canemu.plot has said why: the format, the folder, matplotlib, the file
+  }
   if (run.status != 0) {
-    std::fprintf(stderr,
-                 "canemu: plot: %s -m canemu.plot %s (it needs the canemu Python package and "
-                 "matplotlib; CANEMU_PYTHON names the interpreter)\n",
-                 run.interpreter.c_str(),
-                 run.error.empty() ? "failed" : ("cannot run: " + run.error).c_str());
-    return 1;
+    return fail(fmt::format(
+        "plot: {} -m canemu.plot ended with status {} (is the canemu Python package installed "
+        "for that interpreter? CANEMU_PYTHON names another)",
+        run.interpreter, run.status));
   }
   return 0;
 }

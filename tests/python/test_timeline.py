@@ -246,3 +246,52 @@ def test_plot_from_the_build_tree_finds_the_repositorys_venv(daemon, nodes, tmp_
     done = plot(daemon, tmp_path / "run.svg", env)
     assert done.returncode == 0, done.stderr
     assert b"<svg" in (tmp_path / "run.svg").read_bytes()
+
+
+def test_a_python_can_nodes_history_stays_readable_after_it_closed(daemon):
+    a = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+    b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+    drain(a)
+    drain(b)
+    load(daemon, """
+[scenario]
+name = "three acks missing"
+
+[[fault]]
+at = "0s"
+bus = "can0"
+match = { id = 0x123, mask = 0x7FF }
+effect = "ack_error"
+count = 3
+""")
+    a.send(msg(0x123))
+    canemu.step(5 * MS)
+    name = a.node_name
+    [before] = timeline(daemon, "can0", name)["nodes"]
+    assert [s["tec"] for s in before["samples"]] == [8, 16, 24, 23]
+    a.shutdown()
+    canemu.step(1 * MS)
+    # Under the name it had, marked gone at the instant it went, with every change it had.
+    [after] = timeline(daemon, "can0", name)["nodes"]
+    assert after["samples"] == before["samples"] and after["gone_at_ns"] == 5 * MS
+    assert "gone_at_ns" not in timeline(daemon, "can0", b.node_name)["nodes"][0]
+    text = cli(daemon, "timeline", "can0", name).stdout
+    assert f"node {name} (gone at 0.005000000 s): 4 changes of its error counters" in text
+    # Listed with the bus's nodes when none is named, and drawn.
+    everyone = {n["name"]: n for n in timeline(daemon, "can0")["nodes"]}
+    assert everyone[name]["gone_at_ns"] == 5 * MS and b.node_name in everyone
+    from canemu.plot import series
+
+    x, tec = series(timeline(daemon, "can0", name))["nodes"][name]["tec"]
+    assert x[-1] == 0.005 and tec[-1] == 23  # held until it went, not to now
+    # Offered when a name is not found.
+    done = cli(daemon, "timeline", "can0", "vci99:0", check=False)
+    assert done.returncode == 1 and 'no CAN node named "vci99:0"' in done.stderr
+    assert f"gone from can0, their history kept: {name}" in done.stderr
+    # The next device of that name (the next python-can run) replaces it.
+    c = can.Bus(interface="canemu", channel="can0", auto_restart=False)
+    assert c.node_name == name
+    [fresh] = timeline(daemon, "can0", name)["nodes"]
+    assert fresh["samples"] == [] and "gone_at_ns" not in fresh
+    b.shutdown()
+    c.shutdown()

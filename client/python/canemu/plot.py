@@ -26,8 +26,10 @@ LIMITS = {"warning": 96, "passive": 128, "bus-off": 256}
 
 def series(timeline: dict) -> dict:
     """The lines of the picture, times in seconds: `load` (x, percent) with a point at the start
-    and end of every bin, and per node `tec` and `rec` as steps (x, value) from simulated time 0
-    (counters 0) to the timeline's end."""
+    and end of every bin, and per node `tec` and `rec` as steps (x, value): from simulated time 0
+    (counters 0), one point at the instant of each of the node's samples (every row of `canemu
+    timeline`), and the last value held to the timeline's end, or for a node whose device has
+    gone (`gone_at_ns`) to the instant it went."""
     end = timeline["now_ns"] / 1e9
     load = timeline["load"]
     bin_s = load["bin_ns"] / 1e9
@@ -46,8 +48,9 @@ def series(timeline: dict) -> dict:
                 x, y = steps[key]
                 x.append(s["at_ns"] / 1e9)
                 y.append(s[key])
+        until = node["gone_at_ns"] / 1e9 if "gone_at_ns" in node else end
         for x, y in steps.values():
-            x.append(end)
+            x.append(max(until, x[-1]))
             y.append(y[-1])
         nodes[node["name"]] = {key: (x, y) for key, (x, y) in steps.items()}
     return {"load": (xs, ys), "nodes": nodes, "end": end}
@@ -69,9 +72,11 @@ def figure(timeline: dict, title: str | None = None):
     top.set_ylabel("bus load (%)")
     top.set_ylim(0, 100)
     top.grid(True, alpha=0.3)
+    gone = {n["name"] for n in timeline["nodes"] if "gone_at_ns" in n}
     for name, counters in lines["nodes"].items():
-        (line,) = bottom.step(*counters["tec"], where="post", label=f"{name} TEC")
-        bottom.step(*counters["rec"], where="post", label=f"{name} REC", linestyle="--",
+        suffix = " (gone)" if name in gone else ""
+        (line,) = bottom.step(*counters["tec"], where="post", label=f"{name} TEC{suffix}")
+        bottom.step(*counters["rec"], where="post", label=f"{name} REC{suffix}", linestyle="--",
                     color=line.get_color())
     for label, value in LIMITS.items():
         bottom.axhline(value, color="grey", linewidth=0.6, linestyle=":")

@@ -638,6 +638,8 @@ Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t 
   if (config_.remote(config_.buses[bus])) {
     distributed_->name_node(node, name);
   }
+  // The next device of a name replaces the history of the last one.
+  gone_nodes_.forget(name);
   devices_.add_ephemeral(name, bus, node, owner_pid);
   return DeviceLease(this, std::move(name));
 }
@@ -648,6 +650,8 @@ Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t
   // together (1 us), and the same frame carries the same time stamp on all of them.
   const int64_t now_ns = scheduler_.now().ns();
   const SimTime power_on = SimTime::from_ns(now_ns - now_ns % 1000);
+  // The next device of a name replaces the history of the last one.
+  gone_nodes_.forget(name);
   if (lin_buses_[bus] != nullptr) {  // an adapter with one LIN controller
     devices_.add_lin_ephemeral(
         name, bus, owner_pid,
@@ -655,6 +659,7 @@ Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t
     return DeviceLease(this, std::move(name));
   }
   HostedNode& node = nodes_.spare(bus);
+  buses_[bus]->reset_stats(node.node());  // a pooled node: its history is an earlier device's
   if (config_.remote(config_.buses[bus])) {
     distributed_->name_node(node, name);
   }
@@ -666,9 +671,11 @@ Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t
 
 void Simulation::remove_ephemeral(const std::string& name) {
   // Faults that name the device end with it; its node, kept for a later device, comes back
-  // plugged in and on its nominal clock.
+  // plugged in and on its nominal clock. Its counter timeline stays readable.
   if (const DeviceRegistry::Ephemeral* e = devices_.find_ephemeral(name)) {
     scenarios_.device_gone(e->name, e->bus, *e->node);
+    gone_nodes_.keep(e->name, e->bus, scheduler_.now(),
+                     buses_[e->bus]->stats(e->node->node()).timeline);
   }
   devices_.remove_ephemeral(name);
 }

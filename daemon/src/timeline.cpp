@@ -47,21 +47,33 @@ TimelineAnswer answer_timeline(const Simulation& sim, const ipc::TimelineRequest
     for (uint32_t k = 0; k < r->count; ++k) {
       r->busy_ns[k] = static_cast<uint32_t>(bins[first + k].busy.ns());
     }
+    for (const GoneNodes::Node* g : sim.gone_nodes().on_bus(*bus)) {
+      if (r->gone_count < ipc::kMaxGoneNodes) {
+        ipc::copy_name(r->gone[r->gone_count++], g->name);
+      }
+    }
     return r;
   }
+  // A device's node, else one whose ephemeral device has gone.
   const auto node = sim.devices().find_node(node_name);
-  if (!node) {
+  const GoneNodes::Node* gone = node ? nullptr : sim.gone_nodes().find(node_name);
+  if (!node && gone == nullptr) {
     return TimelineError{ipc::ErrorCode::bad_argument,
                          fmt::format("no CAN node named \"{}\" (see canemu status)", node_name)};
   }
-  if (!bus_name.empty() && sim.bus_index(bus_name) != node->bus) {
+  const std::size_t bus = node ? node->bus : gone->bus;
+  if (!bus_name.empty() && sim.bus_index(bus_name) != bus) {
     return TimelineError{ipc::ErrorCode::bad_argument,
                          fmt::format("node \"{}\" is not on bus \"{}\"", node_name, bus_name)};
   }
-  const model::CounterTimeline& t = sim.bus(node->bus).stats(node->id).timeline;
+  const model::CounterTimeline& t = node ? sim.bus(bus).stats(node->id).timeline : gone->timeline;
   auto r = std::make_unique<ipc::TimelineReply>(ipc::make_message<ipc::TimelineReply>(request_id));
   ipc::copy_name(r->node, node_name);
   r->now_ns = now.ns();
+  if (gone != nullptr) {
+    r->gone = 1;
+    r->gone_at_ns = gone->gone_at.ns();
+  }
   r->total = static_cast<uint32_t>(t.samples().size());
   r->forgotten = t.forgotten();
   const std::size_t first = std::min<std::size_t>(m.first, t.samples().size());

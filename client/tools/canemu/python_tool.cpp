@@ -9,14 +9,58 @@
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string_view>
 
 namespace canemu::cli {
+
+namespace {
+
+constexpr std::string_view kSourceKey = "CMAKE_HOME_DIRECTORY:INTERNAL=";
+
+// The repository's .venv/bin/python when this canemu runs from a build tree: the folder of the
+// executable or one of its two parents holds a CMakeCache.txt whose source folder has a .venv
+// (`make deps`). Empty for an installed canemu.
+std::string build_tree_python() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) {
+    return {};
+  }
+  fs::path dir = exe.parent_path();
+  for (int up = 0; up < 3 && !dir.empty(); ++up, dir = dir.parent_path()) {
+    std::ifstream cache(dir / "CMakeCache.txt");
+    if (!cache) {
+      continue;
+    }
+    for (std::string line; std::getline(cache, line);) {
+      if (line.starts_with(kSourceKey)) {
+        const fs::path python = fs::path(line.substr(kSourceKey.size())) / ".venv/bin/python";
+        return ::access(python.c_str(), X_OK) == 0 ? python.string() : std::string();
+      }
+    }
+    return {};
+  }
+  return {};
+}
+
+}  // namespace
+
+std::string python_interpreter() {
+  const char* env = std::getenv("CANEMU_PYTHON");
+  if (env != nullptr && *env != '\0') {
+    return env;
+  }
+  std::string venv = build_tree_python();
+  return venv.empty() ? "python3" : venv;
+}
 
 PythonRun run_python_module(const std::string& module, const std::vector<std::string>& args,
                             const std::string& input, bool capture_output) {
   PythonRun run;
-  const char* env = std::getenv("CANEMU_PYTHON");
-  run.interpreter = env != nullptr && *env != '\0' ? env : "python3";
+  run.interpreter = python_interpreter();
   std::vector<std::string> words{run.interpreter, "-m", module};
   words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;

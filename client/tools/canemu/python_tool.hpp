@@ -1,5 +1,6 @@
 // The canemu commands that are Python underneath (plot: matplotlib; lin load: ldfparser) run
-// `python3 -m MODULE` of the canemu package; CANEMU_PYTHON names another interpreter.
+// `python3 -m MODULE` of the canemu package; CANEMU_PYTHON names another interpreter, and a
+// canemu run from a build tree takes the repository's .venv/bin/python when there is one.
 #pragma once
 
 #include <string>
@@ -13,6 +14,10 @@ struct PythonRun {
   std::string error;   // why it could not run
   std::string interpreter;
 };
+
+// CANEMU_PYTHON if set, else the build tree's .venv/bin/python if this canemu runs from one and
+// it exists, else "python3".
+std::string python_interpreter();
 
 // `input` goes to the module's standard input (written whole before its output is read: one of
 // the two should be small); its standard error stays the caller's.

@@ -1,6 +1,8 @@
 // canemu timeline: what happened on a bus over time, from canemud's records: the load in bins of
 // 100 ms of simulated time and, per node, every change of its error counters and state with its
-// cause. canemu plot: the same drawn by matplotlib (the canemu Python package's canemu.plot).
+// cause, also of nodes whose ephemeral devices have gone (canemud keeps the newest of each bus).
+// canemu plot: the same drawn by matplotlib (the canemu Python package's canemu.plot).
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -8,6 +10,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <toml++/toml.h>
 #include <CLI/CLI.hpp>
 
@@ -26,6 +29,8 @@ namespace {
 struct NodeTimeline {
   std::string name;
   uint64_t forgotten = 0;
+  bool gone = false;  // its ephemeral device went at gone_at_ns; canemud keeps its history
+  int64_t gone_at_ns = 0;
   std::vector<ipc::WireCounterSample> samples;
 };
 
@@ -35,8 +40,18 @@ struct Timeline {
   int64_t start_ns = 0;  // of the first load bin
   uint32_t bin_ns = 0;
   std::vector<uint32_t> busy_ns;
+  std::vector<std::string> gone;  // nodes gone from the bus whose history is kept
   std::vector<NodeTimeline> nodes;
 };
+
+// An error about node `name`, with the nodes gone from the bus that it may have meant.
+std::string unknown_node(const std::string& error, const std::string& name, const Timeline& t) {
+  if (t.gone.empty() || std::find(t.gone.begin(), t.gone.end(), name) != t.gone.end()) {
+    return error;
+  }
+  return fmt::format("{}; nodes gone from {}, their history kept: {}", error, t.bus,
+                     fmt::join(t.gone, ", "));
+}
 
 // Every page of the load history of `bus` and of each node's timeline.
 tl::expected<Timeline, std::string> fetch(client::Connection& c, const std::string& bus,
@@ -55,6 +70,9 @@ tl::expected<Timeline, std::string> fetch(client::Connection& c, const std::stri
       t.start_ns = r->start_ns;
       t.now_ns = r->now_ns;
       t.bin_ns = r->bin_ns;
+      for (uint32_t k = 0; k < std::min<std::size_t>(r->gone_count, ipc::kMaxGoneNodes); ++k) {
+        t.gone.push_back(ipc::name_of(r->gone[k]));
+      }
     }
     t.busy_ns.insert(t.busy_ns.end(), r->busy_ns, r->busy_ns + r->count);
     first += r->count;
@@ -62,7 +80,7 @@ tl::expected<Timeline, std::string> fetch(client::Connection& c, const std::stri
       break;
     }
   }
-  if (nodes.empty()) {  // every CAN node of the bus that canemu status lists
+  if (nodes.empty()) {  // every CAN node of the bus that canemu status lists, then gone ones
     auto s = client::fetch_status(c);
     if (!s) {
       return tl::unexpected(s.error().message);
@@ -73,6 +91,7 @@ tl::expected<Timeline, std::string> fetch(client::Connection& c, const std::stri
         nodes.push_back(ipc::name_of(n.name));
       }
     }
+    nodes.insert(nodes.end(), t.gone.begin(), t.gone.end());
   }
   for (const std::string& name : nodes) {
     NodeTimeline n;
@@ -84,9 +103,11 @@ tl::expected<Timeline, std::string> fetch(client::Connection& c, const std::stri
       m.first = first;
       auto r = c.call<ipc::TimelineRequest, ipc::TimelineReply>(m);
       if (!r) {
-        return tl::unexpected(r.error().message);
+        return tl::unexpected(unknown_node(r.error().message, name, t));
       }
       n.forgotten = r->forgotten;
+      n.gone = r->gone != 0;
+      n.gone_at_ns = r->gone_at_ns;
       n.samples.insert(n.samples.end(), r->samples, r->samples + r->count);
       first += r->count;
       if (r->count == 0 || first >= r->total) {
@@ -160,8 +181,9 @@ void print_text(const Timeline& t) {
   }
   for (const NodeTimeline& n : t.nodes) {
     std::printf(
-        "node %s: %zu change%s of its error counters%s\n", n.name.c_str(), n.samples.size(),
-        n.samples.size() == 1 ? "" : "s",
+        "node %s%s: %zu change%s of its error counters%s\n", n.name.c_str(),
+        n.gone ? fmt::format(" (gone at {:.9f} s)", seconds(n.gone_at_ns)).c_str() : "",
+        n.samples.size(), n.samples.size() == 1 ? "" : "s",
         n.forgotten > 0 ? fmt::format(" ({} older ones forgotten)", n.forgotten).c_str() : "");
     if (n.samples.empty()) {
       continue;
@@ -197,9 +219,13 @@ toml::table to_json(const Timeline& t) {
       }
       samples.push_back(std::move(row));
     }
-    nodes.push_back(toml::table{{"name", n.name},
-                                {"forgotten", static_cast<int64_t>(n.forgotten)},
-                                {"samples", std::move(samples)}});
+    toml::table node{{"name", n.name},
+                     {"forgotten", static_cast<int64_t>(n.forgotten)},
+                     {"samples", std::move(samples)}};
+    if (n.gone) {
+      node.insert("gone_at_ns", n.gone_at_ns);
+    }
+    nodes.push_back(std::move(node));
   }
   return toml::table{{"bus", t.bus},
                      {"now_ns", t.now_ns},
@@ -240,7 +266,10 @@ int run_timeline(const std::string& socket, const Options& o) {
   return 0;
 }
 
-// The timeline as JSON into `python3 -m canemu.plot` (CANEMU_PYTHON names another interpreter).
+// canemu.plot's exit status when it refused with a message of its own.
+constexpr int kPlotRefused = 2;
+
+// The timeline as JSON into `python3 -m canemu.plot` (python_interpreter() chooses which).
 int run_plot(const std::string& socket, const Options& o) {
   auto t = ask(socket, "canemu plot", o);
   if (!t) {
@@ -252,13 +281,18 @@ int run_plot(const std::string& socket, const Options& o) {
   }
   const PythonRun run =
       run_python_module("canemu.plot", args, one_line_json(to_json(*t)) + "\n", false);
+  if (!run.error.empty()) {
+    return fail(fmt::format("plot: cannot run {}: {} (CANEMU_PYTHON names the interpreter)",
+                            run.interpreter, run.error));
+  }
+  if (run.status == kPlotRefused) {
+    return 1;  // canemu.plot has said why: the format, the folder, matplotlib, the file
+  }
   if (run.status != 0) {
-    std::fprintf(stderr,
-                 "canemu: plot: %s -m canemu.plot %s (it needs the canemu Python package and "
-                 "matplotlib; CANEMU_PYTHON names the interpreter)\n",
-                 run.interpreter.c_str(),
-                 run.error.empty() ? "failed" : ("cannot run: " + run.error).c_str());
-    return 1;
+    return fail(fmt::format(
+        "plot: {} -m canemu.plot ended with status {} (is the canemu Python package installed "
+        "for that interpreter? CANEMU_PYTHON names another)",
+        run.interpreter, run.status));
   }
   return 0;
 }

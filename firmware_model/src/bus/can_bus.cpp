@@ -701,16 +701,9 @@ bool withdraw_tx(CanBus* bus, NodeId node, std::optional<TxFrame>& tx) {
 }
 
 void CounterTimeline::add(const CounterSample& s) {
-  const std::size_t n = samples_.size();
-  // A run of count-downs by good frames in one state: its first and its latest sample.
-  if (s.cause == CounterCause::success && n >= 2 &&
-      samples_[n - 1].cause == CounterCause::success &&
-      samples_[n - 2].cause == CounterCause::success && samples_[n - 1].state == s.state &&
-      samples_[n - 2].state == s.state) {
-    samples_.back() = s;
-    return;
-  }
-  if (n == kSamples) {
+  // Every change, count-downs by good frames too: a run of them kept as its ends only would be
+  // drawn as a flat line and a cliff (TEC held at 127 for the whole run, then 96).
+  if (samples_.size() == kSamples) {
     samples_.pop_front();
     ++forgotten_;
   }

@@ -22,6 +22,7 @@
 #include "canemu/daemon/config.hpp"
 #include "canemu/daemon/device_registry.hpp"
 #include "canemu/daemon/distributed.hpp"
+#include "canemu/daemon/gone_nodes.hpp"
 #include "canemu/daemon/lin_nodes.hpp"
 #include "canemu/daemon/node_pool.hpp"
 #include "canemu/daemon/recorder.hpp"
@@ -124,6 +125,10 @@ class Simulation {
   // classic bus, the CAN FD controller on a CAN FD bus, a LIN controller on a LIN bus) and its
   // firmware, listed with the configured adapters while the lease lives.
   DeviceLease add_vci_device(std::string name, std::size_t bus, uint32_t owner_pid);
+  // The counter timelines of ephemeral devices' CAN nodes after their devices went: the newest
+  // kGoneNodesPerBus per bus, each until a device of its name comes (docs/daemon.md, timeline).
+  static constexpr std::size_t kGoneNodesPerBus = GoneNodes::kPerBus;
+  const GoneNodes& gone_nodes() const { return gone_nodes_; }
 
   // ---- recorders ([[recorder]], set at start) ----
   const std::vector<std::unique_ptr<Recorder>>& recorders() const { return recorders_; }
@@ -187,6 +192,7 @@ class Simulation {
   std::vector<SimulatedLinNode> lin_nodes_;                     // on lin_buses_ (gone before them)
   NodePool nodes_;
   DeviceRegistry devices_;
+  GoneNodes gone_nodes_;
   ScenarioRunner scenarios_;
   std::vector<std::unique_ptr<Recorder>> recorders_;  // on nodes_'s nodes, lin_buses_
   std::vector<std::unique_ptr<Bridge>> bridges_;      // on nodes_'s nodes

@@ -1,6 +1,7 @@
 // What happened over time, for `canemu timeline` and `canemu plot`: a node's error counters and
 // state (model::CounterTimeline) and a bus's load in 100 ms bins (model::BusLoad::history), in
-// pages of the protocol's fixed-size replies.
+// pages of the protocol's fixed-size replies; the nodes of ephemeral devices that have gone from
+// Simulation::gone_nodes().
 #pragma once
 
 #include <cstdint>

@@ -21,7 +21,7 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 4;
+inline constexpr uint16_t kProtocolVersion = 5;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 // A fault scenario's name: up to 63 bytes and the terminating zero.

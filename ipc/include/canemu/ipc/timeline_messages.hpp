@@ -12,6 +12,8 @@ namespace canemu::ipc {
 
 inline constexpr std::size_t kMaxTimelineSamples = 900;
 inline constexpr std::size_t kMaxLoadBins = 3000;
+// Nodes of ephemeral devices that have gone whose timelines a bus keeps (the newest ones).
+inline constexpr std::size_t kMaxGoneNodes = 16;
 
 // Asks for node `node`'s counter timeline (TimelineReply), or with `node` empty for bus `bus`'s
 // load history (LoadHistoryReply), from sample or bin `first` on (the replies come in pages).
@@ -51,6 +53,9 @@ struct TimelineReply {
   uint32_t count = 0;      // in this reply, from `first` on
   uint64_t forgotten = 0;  // older samples no longer kept
   int64_t now_ns = 0;      // simulated time of the reply
+  int64_t gone_at_ns = 0;  // when `gone`: the instant the node's device went
+  uint8_t gone = 0;        // 1: the node's (ephemeral) device has gone, its timeline is kept
+  uint8_t reserved[7] = {};
   WireCounterSample samples[kMaxTimelineSamples];
 };
 static_assert(sizeof(TimelineReply) <= kMaxMessageSize);
@@ -61,9 +66,12 @@ struct LoadHistoryReply {
   int64_t start_ns = 0;  // of the first bin in this reply
   int64_t now_ns = 0;
   uint32_t bin_ns = 0;
-  uint32_t total = 0;  // bins that ended by now_ns and are kept
-  uint32_t count = 0;  // in this reply
-  uint32_t reserved = 0;
+  uint32_t total = 0;       // bins that ended by now_ns and are kept
+  uint32_t count = 0;       // in this reply
+  uint32_t gone_count = 0;  // names in `gone`
+  // The nodes gone from this bus whose timelines are kept, oldest first (TimelineRequest names
+  // them as any other node).
+  char gone[kMaxGoneNodes][kNameSize] = {};
   uint32_t busy_ns[kMaxLoadBins] = {};
 };
 static_assert(sizeof(LoadHistoryReply) <= kMaxMessageSize);

@@ -95,9 +95,9 @@ struct CounterSample {
   ErrorRole role = ErrorRole::transmitter;  // cause error or severe
 };
 
-// A node's error counters and state over time (`canemu timeline`): every change caused by an
-// error, a recovery or a write, and of each run of changes by successful frames in one state its
-// first and its last; the newest kSamples, with the number of older ones forgotten.
+// A node's error counters and state over time (`canemu timeline`): every change, by an error, a
+// good frame, a recovery or a write, at its instant; the newest kSamples, with the number of
+// older ones forgotten.
 class CounterTimeline {
  public:
   static constexpr std::size_t kSamples = 1024;

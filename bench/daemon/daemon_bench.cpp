@@ -585,6 +585,20 @@ struct BabblingBuses {
     }
     return loaded->applied == 1 ? std::string() : std::string(loaded->errors);
   }
+  // open() once canemud runs; false (the benchmark skipped with the reason) when canemud did not
+  // start or the buses could not be made to babble.
+  bool start(benchmark::State& state, const testing::CanemudProcess& daemon,
+             client::Result<client::Connection>& c, int buses) {
+    if (!daemon.ready() || !c) {
+      state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
+      return false;
+    }
+    if (std::string e = open(daemon, *c, buses); !e.empty()) {
+      state.SkipWithError(e.c_str());
+      return false;
+    }
+    return true;
+  }
   // Takes what the receivers hold; returns how many.
   uint64_t drain() {
     uint64_t n = 0;
@@ -619,13 +633,8 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
   }
   testing::CanemudProcess daemon(CANEMUD_PATH, {"--config=" + path});
   auto c = client::Connection::open(daemon.socket(), "bench-busy");
-  if (!daemon.ready() || !c) {
-    state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
-    return;
-  }
   BabblingBuses bus;
-  if (std::string e = bus.open(daemon, *c, buses); !e.empty()) {
-    state.SkipWithError(e.c_str());
+  if (!bus.start(state, daemon, c, buses)) {
     return;
   }
   uint64_t received = 0;
@@ -744,13 +753,8 @@ void BM_ScaledTimeFullLoad(benchmark::State& state) {
   }
   testing::CanemudProcess daemon(CANEMUD_PATH, {"--config=" + path});
   auto c = client::Connection::open(daemon.socket(), "bench-scaled");
-  if (!daemon.ready() || !c) {
-    state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
-    return;
-  }
   BabblingBuses bus;
-  if (std::string e = bus.open(daemon, *c, 1); !e.empty()) {
-    state.SkipWithError(e.c_str());
+  if (!bus.start(state, daemon, c, 1)) {
     return;
   }
   std::vector<int64_t> answers;
@@ -832,14 +836,13 @@ void BM_LongStepServesOthers(benchmark::State& state) {
   ::unsetenv("NOTIFY_SOCKET");
   ::unsetenv("WATCHDOG_USEC");
   auto c = client::Connection::open(daemon.socket(), "bench-status");
-  auto stepper = client::Connection::open(daemon.socket(), "bench-stepper");
-  if (!daemon.ready() || !c || !stepper) {
-    state.SkipWithError(("canemud did not start: " + daemon.log()).c_str());
+  BabblingBuses bus;
+  if (!bus.start(state, daemon, c, buses)) {
     return;
   }
-  BabblingBuses bus;
-  if (std::string e = bus.open(daemon, *c, buses); !e.empty()) {
-    state.SkipWithError(e.c_str());
+  auto stepper = client::Connection::open(daemon.socket(), "bench-stepper");
+  if (!stepper) {
+    state.SkipWithError(stepper.error().message.c_str());
     return;
   }
   for (auto _ : state) {

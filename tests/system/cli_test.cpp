@@ -502,5 +502,15 @@ TEST(CliErrors, BadArgumentsExitOneAndSayWhatIsWrong) {
   }
 }
 
+// `canemu --socket DIR`: the path is a directory, not a canemud that is not running.
+TEST(CliErrors, ASocketPathThatIsADirectoryIsNamedSo) {
+  Daemon d;
+  Cli cli(d, {"--socket", d.dir(), "status"});
+  EXPECT_EQ(Cli::read_all(cli.err), "canemu: " + d.dir() +
+                                        " is a directory, not canemud's socket: did you mean " +
+                                        d.socket() + "?\n");
+  EXPECT_EQ(cli.wait(), 1);
+}
+
 }  // namespace
 }  // namespace canemu

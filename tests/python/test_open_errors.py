@@ -83,6 +83,12 @@ def test_python_cans_ixxat_interface_names_the_can_controllers(daemon):
         text = opening_error(interface="ixxat", channel=channel, bitrate=500000)
         assert text == ("Could not open and initialize channel: function canChannelOpen failed "
                         f"(invalid argument ({says}))"), text
+    # The reason is that call's: the next failure does not carry it.
+    import can.interfaces.ixxat.canlib_vcinpl as vcinpl
+
+    closing = r"^function vciDeviceClose failed \(invalid handle\)$"
+    with pytest.raises(vcinpl.VCIError, match=closing):
+        vcinpl._canlib.vciDeviceClose(vcinpl.HANDLE(0x1234))
 
 
 def test_python_cans_ixxat_interface_without_daemon_names_the_socket(daemon):

@@ -52,13 +52,14 @@ inline HRESULT open_on_device(HANDLE hDevice, UINT32 can_no, Object::Kind kind, 
     return VCI_E_INVHANDLE;
   }
   if (can_no >= dev->desc.controller_fd.size()) {
-    set_detail(no_can_controller(dev->desc, can_no));
+    set_call_detail(VCI_E_INVALIDARG, no_can_controller(dev->desc, can_no));
     return VCI_E_INVALIDARG;
   }
   const HRESULT hr = open_on_line(dev->desc, can_no, kind, v2, exclusive, out);
   if (hr == VCI_E_INVALIDARG && can_no < dev->desc.controller_lin.size() &&
       dev->desc.controller_lin[can_no]) {
-    set_detail(no_can_controller(dev->desc, can_no));  // canemud refused a CAN object on it
+    // canemud refused a CAN object on it
+    set_call_detail(VCI_E_INVALIDARG, no_can_controller(dev->desc, can_no));
   }
   return hr;
 }

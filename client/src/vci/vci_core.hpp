@@ -33,6 +33,10 @@ namespace canemu::client::vci {
 // (e.g. where canemud was looked for).
 std::string format_error(HRESULT hr);
 void set_detail(std::string detail);
+// A detail of this call's failure `hr` only: it goes with `hr` and is forgotten when the thread
+// next looks up or closes a handle (an argument error of one call is no reason for the next).
+void set_call_detail(HRESULT hr, std::string detail);
+void forget_call_detail();
 
 // The VCI version all three libraries report (vciGetVersion, vciGetVersionEx, VciGetVersion):
 // the VCI 4 interfaces they implement, and canemu's own version as the build number

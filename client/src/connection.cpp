@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace canemu::client {
@@ -23,6 +24,59 @@ std::optional<std::string> error_text(const uint8_t* packet, std::size_t size) {
          ipc::name_of(e.message);
 }
 
+// What a path is when it is not a socket (stat's st_mode), with its article.
+std::string kind_of(mode_t mode) {
+  if (S_ISDIR(mode)) {
+    return "a directory";
+  }
+  if (S_ISREG(mode)) {
+    return "a regular file";
+  }
+  if (S_ISFIFO(mode)) {
+    return "a FIFO";
+  }
+  if (S_ISCHR(mode)) {
+    return "a character device";
+  }
+  if (S_ISBLK(mode)) {
+    return "a block device";
+  }
+  return "no socket";
+}
+
+bool is_socket(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode);
+}
+
+// Why connecting to `path` failed (not EACCES), as the user can act on it: a path that is no
+// socket is named for what it is (a directory, with canemud's socket in it if there is one);
+// otherwise canemud is not running there, and how to start it.
+std::string not_reached(const std::string& path, const IpcError& e) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISSOCK(st.st_mode)) {
+    const std::string inside = path + (path.ends_with('/') ? "" : "/") + "canemud.sock";
+    if (S_ISDIR(st.st_mode) && is_socket(inside)) {
+      return path + " is a directory, not canemud's socket: did you mean " + inside + "?";
+    }
+    return path + " is " + kind_of(st.st_mode) +
+           ", not canemud's socket: give the socket's own path (what canemud --socket was "
+           "given; under systemd /run/canemu/canemud.sock)";
+  }
+  const std::string start = ": start it with 'systemctl start canemud' or 'canemud --socket " +
+                            path + "', or set CANEMU_SOCKET to the socket it listens on";
+  if (e.error_number == ENOENT || e.error_number == ECONNREFUSED) {
+    return "canemud is not running at " + path + start;  // no socket, or nobody behind it
+  }
+  if (e.error_number == EPROTOTYPE) {
+    return path + " is a socket of another kind, not canemud's (a SOCK_SEQPACKET socket)";
+  }
+  if (e.error_number == ENAMETOOLONG) {
+    return e.message;  // the path itself cannot be a socket's
+  }
+  return "canemud is not reachable at " + path + " (" + std::strerror(e.error_number) + ")";
+}
+
 }  // namespace
 
 Result<Connection> Connection::open(const std::string& path, const std::string& client_name,
@@ -37,8 +91,7 @@ Result<Connection> Connection::open(const std::string& path, const std::string& 
                   "): it is not in the socket's group (canemu under systemd) or not among "
                   "the users and groups [security] allows (docs/security.md)";
     } else {
-      e.message += " (is canemud running? start it with 'make run' or 'canemud --socket " + path +
-                   "', or set CANEMU_SOCKET)";
+      e.message = not_reached(path, e);
     }
     return tl::unexpected(e);
   }

@@ -83,6 +83,10 @@ std::vector<uint8_t> CaptureWriter::file_header() const {
 }
 
 void CaptureWriter::record(int64_t ns, const socketcan::Frame& f) {
+  record(ns, options_.bus, f);
+}
+
+void CaptureWriter::record(int64_t ns, std::string_view bus, const socketcan::Frame& f) {
   if (options_.lin) {
     return;
   }
@@ -90,7 +94,7 @@ void CaptureWriter::record(int64_t ns, const socketcan::Frame& f) {
   if (options_.format == CaptureFormat::pcap) {
     socketcan::append_pcap_record(one, ns, f);
   } else {
-    const std::string line = socketcan::candump_line(ns, options_.bus, f) + "\n";
+    const std::string line = socketcan::candump_line(ns, bus, f) + "\n";
     one.assign(line.begin(), line.end());
   }
   append(one);

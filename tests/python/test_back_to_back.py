@@ -414,7 +414,9 @@ def test_a_wrong_bitrate_cannot_talk(realtime_daemon):
 def test_unknown_channel_names_what_exists(realtime_daemon):
     with pytest.raises(can.CanInitializationError, match="buses: can0, can1, fd0"):
         can.Bus(interface="canemu", channel="nosuch")
-    with pytest.raises(can.CanInitializationError, match="numbered from 0"):
+    with pytest.raises(can.CanInitializationError,
+                       match="adapter ixxat0 has 2 CAN controllers, ixxat0:0 on can0 and "
+                             "ixxat0:1 on can1$"):
         can.Bus(interface="canemu", channel="ixxat0:2")
 
 

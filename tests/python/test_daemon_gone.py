@@ -78,7 +78,7 @@ def test_the_client_beyond_canemuds_limit_hears_why(daemon):
 def test_no_daemon_names_the_unit_to_start(daemon):
     try:
         with pytest.raises(can.CanInitializationError,
-                           match="canemud is not running.*`systemctl start canemud`"):
+                           match="canemud is not running at .*'systemctl start canemud'"):
             can.Bus(interface="canemu", channel="can0", socket=daemon.dir + "/nobody.sock")
     finally:
         canemu.connect(daemon.socket)

@@ -279,10 +279,45 @@ TEST(Canemud, ASecondDaemonDoesNotStealALiveSocket) {
   EXPECT_EQ(status(c).bus_count, 3);
 }
 
+// Nobody listening: short, naming the socket tried and the two ways to start canemud.
 TEST(Canemud, NobodyListeningIsAClearError) {
   auto c = client::Connection::open("/tmp/canemu-nobody-listens.sock", "t");
   ASSERT_FALSE(c);
-  EXPECT_NE(c.error().message.find("is canemud running?"), std::string::npos);
+  EXPECT_EQ(c.error().message,
+            "canemud is not running at /tmp/canemu-nobody-listens.sock: start it with "
+            "'systemctl start canemud' or 'canemud --socket /tmp/canemu-nobody-listens.sock', "
+            "or set CANEMU_SOCKET to the socket it listens on");
+}
+
+// A path that is there but is no socket (a directory, a file) is named for what it is, not
+// taken for a canemud that is not running.
+TEST(Canemud, APathThatIsNoSocketIsNamedForWhatItIs) {
+  char dir[] = "/tmp/canemu-not-a-socket-XXXXXX";
+  ASSERT_NE(::mkdtemp(dir), nullptr);
+  auto c = client::Connection::open(dir, "t");
+  ASSERT_FALSE(c);
+  EXPECT_EQ(c.error().message,
+            std::string(dir) +
+                " is a directory, not canemud's socket: give the socket's own path (what "
+                "canemud --socket was given; under systemd /run/canemu/canemud.sock)");
+  // With canemud's socket in it, the message names that one.
+  Daemon d;
+  auto in_dir = client::Connection::open(d.dir(), "t");
+  ASSERT_FALSE(in_dir);
+  EXPECT_EQ(in_dir.error().message,
+            d.dir() + " is a directory, not canemud's socket: did you mean " + d.socket() + "?");
+  const std::string file = std::string(dir) + "/plain";
+  FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fclose(f);
+  auto plain = client::Connection::open(file, "t");
+  ASSERT_FALSE(plain);
+  EXPECT_EQ(plain.error().message,
+            file +
+                " is a regular file, not canemud's socket: give the socket's own path (what "
+                "canemud --socket was given; under systemd /run/canemu/canemud.sock)");
+  ::unlink(file.c_str());
+  ::rmdir(dir);
 }
 
 // Socket activation as systemd does it: the listening socket as descriptor 3, LISTEN_FDS and

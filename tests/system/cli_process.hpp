@@ -29,18 +29,23 @@ struct Credentials {
   std::vector<gid_t> groups;
 };
 
-// canemu with `args` on the daemon's socket; stdout (and stderr) through pipes. With `as`, it
-// runs with those credentials (the test must run as root).
+// canemu with `args` on the daemon's socket (unless `args` start with another --socket); stdout
+// (and stderr) through pipes. With `as`, it runs with those credentials (the test must run as
+// root); with `cwd`, in that directory.
 struct Cli {
   pid_t pid = -1;
   int out = -1;
   int err = -1;
-  Cli(const testing::Daemon& d, std::vector<std::string> args, const Credentials* as = nullptr) {
+  Cli(const testing::Daemon& d, std::vector<std::string> args, const Credentials* as = nullptr,
+      const std::string& cwd = "") {
     int o[2];
     int e[2];
     EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
     EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
-    args.insert(args.begin(), {CANEMU_PATH, "--socket", d.socket()});
+    if (args.empty() || args[0] != "--socket") {  // a test may name another socket
+      args.insert(args.begin(), {"--socket", d.socket()});
+    }
+    args.insert(args.begin(), CANEMU_PATH);
     std::vector<char*> argv;
     for (std::string& a : args) {
       argv.push_back(a.data());
@@ -50,6 +55,7 @@ struct Cli {
       pid = ::fork();
       if (pid == 0) {
         if (::dup2(o[1], 1) < 0 || ::dup2(e[1], 2) < 0 ||
+            (!cwd.empty() && ::chdir(cwd.c_str()) != 0) ||
             ::setgroups(as->groups.size(), as->groups.data()) != 0 || ::setgid(as->gid) != 0 ||
             ::setuid(as->uid) != 0) {
           ::_exit(127);
@@ -63,6 +69,9 @@ struct Cli {
       posix_spawn_file_actions_init(&actions);
       posix_spawn_file_actions_adddup2(&actions, o[1], 1);
       posix_spawn_file_actions_adddup2(&actions, e[1], 2);
+      if (!cwd.empty()) {
+        posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
+      }
       EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
       posix_spawn_file_actions_destroy(&actions);
     }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -375,6 +376,125 @@ TEST(CliDump, AcknowledgesByDefaultAndListenOnlyDoesNot) {
   EXPECT_NE(Cli::read_all(lone.err).find("is a node on can0 acknowledging"), std::string::npos);
 }
 
+// The lines of `text` that hold one of `wanted` (frame texts), in order.
+std::string lines_with(const std::string& text, const std::vector<std::string>& wanted) {
+  std::string out;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = text.find('\n', at);
+    const std::string line = text.substr(at, end - at);
+    for (const std::string& w : wanted) {
+      if (line.ends_with(" " + w)) {
+        out += line + "\n";
+      }
+    }
+    at = end == std::string::npos ? text.size() : end + 1;
+  }
+  return out;
+}
+
+// candump's bus arguments: several buses in one dump, each with its filters
+// (<id>:<mask>, <id>~<mask>; an 8-digit identifier is a 29-bit one), and no error frames once a
+// filter list is given without #<mask>, as candump's socket gets none. The first lines say what
+// each bus lets through.
+TEST(CliDump, TakesCandumpsFiltersOnSeveralBuses) {
+  Daemon d;
+  Cli dump(d, {"dump", "can0,123:7FF,00000456:9FFFFFFF", "can1,400~7F0", "-n", "4"});
+  std::string err = Cli::read_until(dump.err, "listening on can1");
+  ASSERT_NE(err.find("listening on can1"), std::string::npos) << err;
+  Cli send0(d, {"send", "can0", "124#01", "123#11", "00000123#R", "456#22", "00000456#33", "--step",
+                "1ms"});
+  const std::string sent0 = Cli::read_all(send0.out);
+  EXPECT_EQ(send0.wait(), 0) << Cli::read_all(send0.err);
+  Cli send1(d, {"send", "can1", "405#01", "7FF#02", "--step", "1ms"});
+  const std::string sent1 = Cli::read_all(send1.out);
+  EXPECT_EQ(send1.wait(), 0) << Cli::read_all(send1.err);
+  // 123:7FF takes 123 in both formats and remote frames; 00000456:9FFFFFFF only the 29-bit 456.
+  const std::string expected =
+      lines_with(sent0, {"123#11", "00000123#R", "00000456#33"}) + lines_with(sent1, {"7FF#02"});
+  EXPECT_EQ(std::count(expected.begin(), expected.end(), '\n'), 4) << sent0 << sent1;
+  EXPECT_EQ(Cli::read_all(dump.out), expected);
+  EXPECT_EQ(dump.wait(), 0);
+  err += Cli::read_all(dump.err);
+  EXPECT_EQ(err,
+            "canemu: listening on can0 as eph1 (acknowledging, 500000 bit/s, time stamps in "
+            "simulated seconds)\n"
+            "canemu: on can0: frames that match 123:7FF or 00000456:9FFFFFFF; no error frames "
+            "(#<mask> selects them)\n"
+            "canemu: listening on can1 as eph2 (acknowledging, 500000 bit/s, time stamps in "
+            "simulated seconds)\n"
+            "canemu: on can1: frames that match 400~7F0; no error frames (#<mask> selects "
+            "them)\n");
+}
+
+// `any` dumps every CAN bus (not the LIN bus), each line naming its bus.
+TEST(CliDump, AnyDumpsEveryCanBus) {
+  Daemon d;
+  Cli dump(d, {"dump", "any", "--no-errors", "-n", "2"});
+  const std::string err = Cli::read_until(dump.err, "listening on can1");
+  ASSERT_NE(err.find("listening on can1"), std::string::npos) << err;
+  EXPECT_EQ(err.find("lin0"), std::string::npos) << err;
+  Cli send0(d, {"send", "can0", "123#11", "--step", "1ms"});
+  const std::string sent0 = Cli::read_all(send0.out);
+  EXPECT_EQ(send0.wait(), 0);
+  Cli send1(d, {"send", "can1", "321#22", "--step", "1ms"});
+  const std::string sent1 = Cli::read_all(send1.out);
+  EXPECT_EQ(send1.wait(), 0);
+  EXPECT_EQ(Cli::read_all(dump.out), sent0 + sent1);
+  EXPECT_EQ(dump.wait(), 0);
+}
+
+// -l is candump's: the log goes into candump-YYYY-MM-DD_HHMMSS.log in the current directory,
+// nothing on standard output, and the node still acknowledges (a lone sender gets its frame
+// out). Listen-only is --listen-only.
+TEST(CliDump, LogsIntoACandumpNamedFileWithL) {
+  Daemon d;
+  const std::string dir = d.dir() + "/logs";
+  ASSERT_EQ(::mkdir(dir.c_str(), 0700), 0);
+  Cli dump(d, {"dump", "can0", "-l", "-n", "1"}, nullptr, dir);
+  std::string err = Cli::read_until(dump.err, "listening on");
+  ASSERT_NE(err.find("listening on can0 as eph1 (acknowledging"), std::string::npos) << err;
+  Cli send(d, {"send", "can0", "123#1122", "--step", "1ms"});
+  const std::string sent = Cli::read_all(send.out);
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  EXPECT_EQ(Cli::read_all(dump.out), "");
+  EXPECT_EQ(dump.wait(), 0);
+  err += Cli::read_all(dump.err);
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    files.push_back(e.path().filename().string());
+  }
+  ASSERT_EQ(files.size(), 1u);
+  const std::string& name = files[0];
+  EXPECT_TRUE(name.size() == 29 && name.starts_with("candump-") && name.ends_with(".log") &&
+              name[12] == '-' && name[15] == '-' && name[18] == '_')
+      << name;
+  EXPECT_NE(err.find("canemu: logging into " + name), std::string::npos) << err;
+  FILE* f = std::fopen((dir + "/" + name).c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  char text[256] = {};
+  const std::size_t n = std::fread(text, 1, sizeof text - 1, f);
+  std::fclose(f);
+  EXPECT_EQ(std::string(text, n), sent);
+}
+
+// What a dump cannot do is refused before it listens, saying why.
+TEST(CliDump, RefusesWhatItCannotDoSayingWhy) {
+  Daemon d;
+  for (const auto& [args, says] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"dump", "can0,123"}, "'123' is not <id>:<mask>, <id>~<mask>, #<error mask> or j"},
+           {{"dump", "can9,123:7FF"}, "no bus named \"can9\" (buses: can0, can1, lin0)"},
+           {{"dump", "can0", "can1", "--format", "pcap"}, "one bus per pcap capture"},
+           {{"dump", "lin0,123:7FF"}, "lin0 is a LIN bus"},
+           {{"dump", "can0", "lin0"}, "lin0 is a LIN bus"},
+           {{"dump", "can0", "-l", "-o", "x.log"}, "-l"}}) {
+    Cli dump(d, args);
+    const std::string err = Cli::read_all(dump.err);
+    EXPECT_NE(err.find(says), std::string::npos) << says << ": " << err;
+    EXPECT_EQ(dump.wait(), 1) << says;
+  }
+}
+
 // canemu dump and record (on a CAN and a LIN bus) end when canemud goes away, here stopped by
 // SIGTERM: exit code 1 and the reason, naming the socket, instead of listening on forever.
 TEST(CliDump, DumpAndRecordEndWithTheReasonWhenCanemudStops) {
@@ -500,6 +620,16 @@ TEST(CliErrors, BadArgumentsExitOneAndSayWhatIsWrong) {
     EXPECT_EQ(err.find("stoul"), std::string::npos) << err;
     EXPECT_EQ(cli.wait(), 1) << c.says;
   }
+}
+
+// `canemu --socket DIR`: the path is a directory, not a canemud that is not running.
+TEST(CliErrors, ASocketPathThatIsADirectoryIsNamedSo) {
+  Daemon d;
+  Cli cli(d, {"--socket", d.dir(), "status"});
+  EXPECT_EQ(Cli::read_all(cli.err), "canemu: " + d.dir() +
+                                        " is a directory, not canemud's socket: did you mean " +
+                                        d.socket() + "?\n");
+  EXPECT_EQ(cli.wait(), 1);
 }
 
 }  // namespace

@@ -19,20 +19,24 @@ _HEADER = struct.Struct("<IIIBBBB")
 _WAIT_SLICE_MS = 100  # blocking calls wait in slices so that Ctrl-C and shutdown get through
 
 
+_DISCONNECTED = "disconnected from canemud ("
+
+
 def _can_error(e: VciError, initializing: bool = False) -> can.CanError:
     """The python-can exception for a failed VCI call: CanInitializationError while a bus is
     being made (or the process connects), CanOperationError otherwise. Every VciError that
-    reaches a caller of this package goes through here."""
+    reaches a caller of this package goes through here. `error_code` is the VCI result."""
     text = str(e)
-    # How to start canemud only when nobody listened (the library's text then asks "is canemud
-    # running?"); not when canemud refused this client, closed the connection or went away: its
-    # reason is in the text already.
-    if e.hr == _vci.VCI_E_DISCONNECTED and "is canemud running?" in text:
-        text += (
-            "; canemud is not running or not reachable: start it with `make run` in the canemu "
-            "folder, `systemctl start canemud`, or `canemud --config FILE`, and set CANEMU_SOCKET "
-            "(or the bus's socket= argument) when it listens elsewhere"
-        )
+    library_text = getattr(e, "text", "")
+    if (initializing and e.hr == _vci.VCI_E_DISCONNECTED
+            and library_text.startswith(_DISCONNECTED) and library_text.endswith(")")):
+        # Not reaching canemud: the library's reason alone says it all (canemud not running
+        # at the socket, and how to start it; the path is no socket; this user may not use it;
+        # canemud refused this client), without the call, the code in hex and python-can's
+        # "[Error Code N]".
+        error = can.CanInitializationError(library_text[len(_DISCONNECTED):-1])
+        error.error_code = e.hr
+        return error
     if initializing:
         return can.CanInitializationError(text, error_code=e.hr)
     return can.CanOperationError(text, error_code=e.hr)

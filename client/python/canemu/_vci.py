@@ -250,6 +250,7 @@ class VciError(Exception):
         super().__init__(f"{call}: {text} (0x{hr:08X})")
         self.call = call
         self.hr = hr
+        self.text = text  # the library's own text (vciFormatError)
 
 
 def _library_candidates(filename: str = "libvcinpl2.so") -> list:

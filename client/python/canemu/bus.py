@@ -89,6 +89,37 @@ def _is_xcan_channel(channel: Any, socket: Optional[str]) -> bool:
         return False  # the VCI path reports it
 
 
+def _controller_names(info, lin: bool) -> List[str]:
+    """An adapter's CAN (or LIN) controllers as "ixxat0:1 on can1"."""
+    name = info.szName.decode()
+    return [
+        f"{name}:{k} on {info.aszBus[k].value.decode()}"
+        for k in range(info.bControllers)
+        if (info.abFd[k] == _vci.CANEMU_LIN_CONTROLLER) == lin
+    ]
+
+
+def _and(items: List[str]) -> str:
+    """"a", "a and b", "a, b and c"."""
+    return " and ".join(items) if len(items) < 3 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _controllers_of(info) -> str:
+    """What an adapter has: "adapter ixxat0 has 2 CAN controllers, ixxat0:0 on can0 and
+    ixxat0:1 on can1, and 1 LIN controller, ixxat0:2 on lin0"."""
+    can_ones = _controller_names(info, lin=False)
+    lin_ones = _controller_names(info, lin=True)
+
+    def counted(items: List[str], kind: str) -> str:
+        return f"{len(items)} {kind} controller{'s' if len(items) != 1 else ''}" + (
+            f", {_and(items)}" if items else "")
+
+    text = f"adapter {info.szName.decode()} has {counted(can_ones, 'CAN')}"
+    if lin_ones:
+        text += f", and {counted(lin_ones, 'LIN')}"
+    return text
+
+
 class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
     """A node on a bus that canemud emulates.
 
@@ -212,7 +243,11 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         device, _, number = channel.rpartition(":")
         if device and number.isdigit():
             controller = int(number)
-            _call("canemuFindDevice", device.encode(), ctypes.byref(info))
+            hr = _vci.lib().canemuFindDevice(device.encode(), ctypes.byref(info))
+            if hr == _vci.VCI_E_NO_MORE_ITEMS:
+                raise ValueError(f"channel {channel!r}: canemud has no adapter {device} "
+                                 f"({self._what_exists()})")
+            _vci.check("canemuFindDevice", hr)
         else:
             controller = 0
             found = self._find_bus(channel)
@@ -234,10 +269,13 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
             self._ephemeral = name.value.decode()
             _call("canemuFindDevice", name.value, ctypes.byref(info))
         if controller >= info.bControllers:
+            raise ValueError(f"channel {channel!r}: {_controllers_of(info)}")
+        if info.abFd[controller] == _vci.CANEMU_LIN_CONTROLLER:
             raise ValueError(
-                f"channel {channel!r}: adapter {info.szName.decode()} has "
-                f"{info.bControllers} CAN controller(s), numbered from 0"
-            )
+                f"channel {channel!r} is the LIN controller of {info.szName.decode()} on "
+                f"{info.aszBus[controller].value.decode()} (canemu.lin's Commander and "
+                f"Responder open it); its CAN controllers are "
+                f"{_and(_controller_names(info, lin=False)) or 'none'}")
         self._device_name = info.szName.decode()
         self._controller = controller
         self._epoch_ns = info.qwEpochNs
@@ -314,14 +352,15 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         return None
 
     def _unknown_channel(self, channel: str) -> str:
+        return (f"channel {channel!r} is neither a bus nor DEVICE:N of an adapter of canemud "
+                f"({self._what_exists()})")
+
+    def _what_exists(self) -> str:
+        """canemud's buses and the CAN controllers of its adapters, with their buses."""
         names = [b["name"] for b in _buses()]
-        adapters = [
-            f"{d.szName.decode()}:{k}" for d in _devices() for k in range(d.bControllers)
-        ]
-        return (
-            f"channel {channel!r} is neither a bus nor DEVICE:N of an adapter of canemud "
-            f"(buses: {', '.join(names) or 'none'}; controllers: {', '.join(adapters) or 'none'})"
-        )
+        controllers = [c for d in _devices() for c in _controller_names(d, lin=False)]
+        return (f"buses: {', '.join(names) or 'none'}; "
+                f"CAN controllers: {', '.join(controllers) or 'none'}")
 
     def _init_line(self, bus, bitrate, data_bitrate, timing, listen_only):
         # The controller's clock and timing ranges, as the library reports them.

@@ -52,9 +52,16 @@ inline HRESULT open_on_device(HANDLE hDevice, UINT32 can_no, Object::Kind kind, 
     return VCI_E_INVHANDLE;
   }
   if (can_no >= dev->desc.controller_fd.size()) {
+    set_call_detail(VCI_E_INVALIDARG, no_can_controller(dev->desc, can_no));
     return VCI_E_INVALIDARG;
   }
-  return open_on_line(dev->desc, can_no, kind, v2, exclusive, out);
+  const HRESULT hr = open_on_line(dev->desc, can_no, kind, v2, exclusive, out);
+  if (hr == VCI_E_INVALIDARG && can_no < dev->desc.controller_lin.size() &&
+      dev->desc.controller_lin[can_no]) {
+    // canemud refused a CAN object on it
+    set_call_detail(VCI_E_INVALIDARG, no_can_controller(dev->desc, can_no));
+  }
+  return hr;
 }
 
 // canChannelGetControl, canSchedulerGetControl: the control unit of the line a channel or

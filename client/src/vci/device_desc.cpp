@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstring>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "vci_core.hpp"
@@ -47,6 +48,44 @@ VCIDEVICECAPS DeviceDesc::caps() const {
             : VCI_BUS_CTRL(VCI_BUS_CAN, controller_fd[i] ? CAN_CTRL_IFICFD : CAN_CTRL_SJA1000));
   }
   return c;
+}
+
+namespace {
+// "0 (can0)", "0 (can0) and 1 (can1)", "0 (a), 1 (b) and 2 (c)".
+std::string numbered(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    out += (i == 0 ? "" : i + 1 == items.size() ? " and " : ", ") + items[i];
+  }
+  return out;
+}
+}  // namespace
+
+std::string no_can_controller(const DeviceDesc& device, uint32_t asked) {
+  std::vector<std::string> can;
+  std::vector<std::string> lin;
+  for (std::size_t i = 0; i < device.controller_lin.size(); ++i) {
+    const std::string bus = i < device.buses.size() ? device.buses[i] : "";
+    (device.controller_lin[i] ? lin : can).push_back(std::to_string(i) + " (" + bus + ")");
+  }
+  const std::string can_text =
+      can.empty() ? "it has no CAN controller"
+                  : (can.size() == 1 ? "its CAN controller is " : "its CAN controllers are ") +
+                        numbered(can);
+  const bool is_lin = asked < device.controller_lin.size() && device.controller_lin[asked];
+  if (is_lin) {
+    const std::string bus = asked < device.buses.size() ? device.buses[asked] : "";
+    return "controller " + std::to_string(asked) + " of " + device.name +
+           " is its LIN controller (" + bus + "); " + can_text;
+  }
+  std::string text = device.name + " has no controller " + std::to_string(asked) + "; " + can_text;
+  if (lin.size() == 1) {
+    const std::size_t open = lin[0].find(" (");
+    text += ", " + lin[0].substr(0, open) + " is its LIN controller" + lin[0].substr(open);
+  } else if (!lin.empty()) {
+    text += ", " + numbered(lin) + " are its LIN controllers";
+  }
+  return text;
 }
 
 namespace {

@@ -11,11 +11,27 @@ namespace canemu::client::vci {
 namespace {
 
 thread_local std::string t_detail;
+thread_local bool t_call_detail = false;  // t_detail is set_call_detail's, for t_call_hr only
+thread_local HRESULT t_call_hr = VCI_OK;
 
 }  // namespace
 
 void set_detail(std::string detail) {
   t_detail = std::move(detail);
+  t_call_detail = false;
+}
+
+void set_call_detail(HRESULT hr, std::string detail) {
+  t_detail = std::move(detail);
+  t_call_detail = true;
+  t_call_hr = hr;
+}
+
+void forget_call_detail() {
+  if (t_call_detail) {
+    t_detail.clear();
+    t_call_detail = false;
+  }
 }
 
 std::string format_error(HRESULT hr) {
@@ -155,7 +171,7 @@ std::string format_error(HRESULT hr) {
       text = fmt::format("unknown error {:#010x}", code);
       break;
   }
-  if (hr != VCI_OK && !t_detail.empty()) {
+  if (hr != VCI_OK && !t_detail.empty() && (!t_call_detail || hr == t_call_hr)) {
     text += " (" + t_detail + ")";
   }
   return text;

@@ -34,6 +34,7 @@ void* register_object(std::unique_ptr<Object> object) {
 }
 
 Object* lookup(void* handle, Object::Kind kind) {
+  forget_call_detail();
   Registry& r = registry();
   std::lock_guard lock(r.mutex);
   auto* p = static_cast<Object*>(handle);
@@ -44,6 +45,7 @@ Object* lookup(void* handle, Object::Kind kind) {
 }
 
 bool unregister_object(void* handle, Object::Kind kind) {
+  forget_call_detail();
   std::unique_ptr<Object> doomed;
   {
     Registry& r = registry();

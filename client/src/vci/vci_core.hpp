@@ -33,6 +33,10 @@ namespace canemu::client::vci {
 // (e.g. where canemud was looked for).
 std::string format_error(HRESULT hr);
 void set_detail(std::string detail);
+// A detail of this call's failure `hr` only: it goes with `hr` and is forgotten when the thread
+// next looks up or closes a handle (an argument error of one call is no reason for the next).
+void set_call_detail(HRESULT hr, std::string detail);
+void forget_call_detail();
 
 // The VCI version all three libraries report (vciGetVersion, vciGetVersionEx, VciGetVersion):
 // the VCI 4 interfaces they implement, and canemu's own version as the build number
@@ -84,6 +88,12 @@ struct DeviceDesc {
 
 // The device class GUIDs this library reports (ours; documented in docs/vci.md).
 GUID device_class(uint8_t model);
+
+// Why `device` has no CAN controller number `asked` (beyond its controllers, or a LIN
+// controller), naming the CAN controllers it has with their buses, and its LIN controllers:
+// "ixxat0 has no controller 5; its CAN controllers are 0 (can0) and 1 (can1), 2 is its LIN
+// controller (lin0)".
+std::string no_can_controller(const DeviceDesc& device, uint32_t asked);
 
 // A device of canemud's list by VCIID, by hardware ID, or the `instance`th of a class. `hr`
 // says why there is none: VCI_E_INVALIDARG (VCIID), VCI_E_NO_MORE_ITEMS (the others), or the

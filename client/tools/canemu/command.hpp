@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "canemu/client/connection.hpp"
 #include "canemu/ipc/channel_message.hpp"
@@ -72,13 +73,16 @@ client::Result<ipc::TimeStepReply> step_time(client::Connection& c, int64_t ns);
 // One line of a candump -L log with the time stamp on `base`.
 std::string log_line(const ipc::ChannelMessage& m, const std::string& bus, const TimeBase& base);
 
-// What canemu dump and canemu record do: a channel on `bus` whose frames and errors go to
-// `output` ("-": standard output) as a candump log or pcap capture, until interrupted or `count`
-// frames (0: no limit).
+// What canemu dump and canemu record do: a channel on `bus` (dump: on each bus of `bus_args`)
+// whose frames and errors go to `output` ("-": standard output) as a candump log or pcap
+// capture, until interrupted or `count` frames (0: no limit).
 struct CaptureRun {
   std::string bus;
+  // dump: candump's bus arguments, <bus>[,filter]* or any (dump_filter.hpp); empty: `bus`.
+  std::vector<std::string> bus_args;
   std::string output;
-  std::string format;  // "candump", "pcap"; empty: by the file name and the bus (dump.cpp)
+  bool log_file = false;  // dump -l: into candump-YYYY-MM-DD_HHMMSS.log, as candump -l
+  std::string format;     // "candump", "pcap"; empty: by the file name and the bus (dump.cpp)
   uint32_t bitrate = 0;
   uint64_t count = 0;
   uint64_t max_bytes = 0;  // rotation (record only)

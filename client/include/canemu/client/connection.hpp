@@ -20,9 +20,11 @@ using Result = ipc::IpcResult<T>;
 class Connection {
  public:
   // Connects to the daemon at `path` (see ipc::socket_path) and says hello. Fails with a message
-  // that says how to start canemud when nobody listens, that this user may not use the socket
-  // when its permissions refuse (EACCES), and with canemud's reason when canemud refuses this
-  // client (also when it closed the connection at once after saying why).
+  // that names the socket and says how to start canemud when nobody listens, that `path` is a
+  // directory or a file when it is no socket (naming canemud's socket in that directory if there
+  // is one), that this user may not use the socket when its permissions refuse (EACCES), and with
+  // canemud's reason when canemud refuses this client (also when it closed the connection at
+  // once after saying why).
   static Result<Connection> open(const std::string& path, const std::string& client_name,
                                  int timeout_ms = 2000);
 

@@ -59,6 +59,9 @@ class CaptureWriter {
   // into a CAN recording only, a LIN message into a LIN recording only (others are ignored).
   void record(int64_t ns, const socketcan::Frame& f);
   void record(int64_t ns, const lin_pcap::Message& m);
+  // A CAN frame whose candump line names `bus` rather than options().bus (a dump of several
+  // buses into one log); a pcap record is the same either way.
+  void record(int64_t ns, std::string_view bus, const socketcan::Frame& f);
   // Writes what is pending; false when the write failed (see error() and lost()).
   bool flush();
 

@@ -26,26 +26,12 @@ struct Cli {
   int out = -1;
   int err = -1;
   Cli(const testing::Daemon& d, std::vector<std::string> args) {
-    int o[2];
-    int e[2];
-    EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
-    EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, o[1], 1);
-    posix_spawn_file_actions_adddup2(&actions, e[1], 2);
-    args.insert(args.begin(), {CANEMU_PATH, "--socket", d.socket()});
-    std::vector<char*> argv;
-    for (std::string& a : args) {
-      argv.push_back(a.data());
-    }
-    argv.push_back(nullptr);
-    EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(o[1]);
-    ::close(e[1]);
-    out = o[0];
-    err = e[0];
+    args.insert(args.begin(), {"--socket", d.socket()});
+    start(CANEMU_PATH, std::move(args));
+  }
+  // `program` (canemu or canemud) with `args` alone, no daemon's socket.
+  Cli(const std::string& program, std::vector<std::string> args) {
+    start(program, std::move(args));
   }
   ~Cli() {
     if (pid > 0) {
@@ -54,6 +40,30 @@ struct Cli {
     }
     ::close(out);
     ::close(err);
+  }
+  Cli(const Cli&) = delete;
+  Cli& operator=(const Cli&) = delete;
+  void start(const std::string& program, std::vector<std::string> args) {
+    int o[2];
+    int e[2];
+    EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
+    EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, o[1], 1);
+    posix_spawn_file_actions_adddup2(&actions, e[1], 2);
+    args.insert(args.begin(), program);
+    std::vector<char*> argv;
+    for (std::string& a : args) {
+      argv.push_back(a.data());
+    }
+    argv.push_back(nullptr);
+    EXPECT_EQ(::posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(o[1]);
+    ::close(e[1]);
+    out = o[0];
+    err = e[0];
   }
   // Reads `fd` until it closes or `timeout_ms` passes without data.
   static std::string read_all(int fd, int timeout_ms = 10'000) {

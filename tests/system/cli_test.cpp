@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -429,6 +431,31 @@ TEST(CliErrors, BadArgumentsExitOneAndSayWhatIsWrong) {
     EXPECT_EQ(err.find("stoul"), std::string::npos) << err;
     EXPECT_EQ(cli.wait(), 1) << c.says;
   }
+}
+
+}  // namespace
+}  // namespace canemu
+
+namespace canemu {
+namespace {
+
+// The habits a user of can-utils brings: cangen's -g is milliseconds, so a bare number is a gap
+// in ms (units still work: CliGen.SendsCountFramesAtExactInstantsInSteppedTime).
+TEST(CliHabits, AGenGapWithoutAUnitIsMilliseconds) {
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  Cli gen(d, {"gen", "can0", "-n", "2", "-g", "1", "-I", "i", "-L", "2", "-D", "i", "-v"});
+  EXPECT_EQ(Cli::read_all(gen.out),
+            "(0000000000.000134) can0 000#0001\n"
+            "(0000000000.001134) can0 001#0102\n");
+  EXPECT_EQ(Cli::read_all(gen.err),
+            "canemu: generating on can0 as eph2 (500000 bit/s, a frame every 1ms)\n"
+            "canemu: 2 frame(s) sent on can0\n");
+  EXPECT_EQ(gen.wait(), 0);
+  Cli half(d, {"gen", "can0", "-n", "1", "-g", "0.5"});
+  EXPECT_NE(Cli::read_all(half.err).find("a frame every 0.5ms"), std::string::npos);
+  EXPECT_EQ(half.wait(), 0);
 }
 
 }  // namespace

@@ -157,11 +157,23 @@ class Generator {
   uint64_t n_ = 0;
 };
 
-int run_gen(const std::string& socket, const GenOptions& o) {
-  const auto gap = ipc::parse_duration(o.gap);
+// cangen's -g: a number is milliseconds ("10", "0.5"); with a unit, any duration ("500us").
+std::optional<int64_t> parse_gap(const std::string& text, std::string& shown) {
+  const bool bare = !text.empty() && text.find_first_not_of("0123456789.") == std::string::npos;
+  shown = bare && text != "0" ? text + "ms" : text;
+  return ipc::parse_duration(shown);
+}
+
+int run_gen(const std::string& socket, GenOptions o) {
+  std::string gap_text;
+  const auto gap = parse_gap(o.gap, gap_text);
   if (!gap) {
-    return fail(fmt::format("-g '{}' is not a duration (examples: 0, 10ms, 500us)", o.gap));
+    return fail(fmt::format(
+        "-g '{}' is not a duration (milliseconds as cangen's -g: 10, 0.5; or with a unit: 0, "
+        "10ms, 500us)",
+        o.gap));
   }
+  o.gap = gap_text;
   const auto id = parse_mode(o.id, true);
   const uint64_t id_limit = o.extended ? 0x1FFFFFFF : 0x7FF;
   if (!id || (id->kind == Mode::fixed && id->value > id_limit)) {
@@ -301,7 +313,9 @@ Command add_gen(CLI::App& app, const std::string& socket) {
       "gen", "generate frames on a bus as cangen does, e.g. 'gen can0 -g 10ms -n 100'");
   auto o = std::make_shared<GenOptions>();
   gen->add_option("BUS", o->bus, "bus name")->required();
-  gen->add_option("-g,--gap", o->gap, "time between frames (default 200ms; 0: back to back)");
+  gen->add_option("-g,--gap", o->gap,
+                  "time between frames: ms as cangen's -g (10, 0.5), or with a unit (500us); "
+                  "default 200ms, 0 back to back");
   gen->add_option("-n,--count", o->count, "stop after this many frames (default: until Ctrl-C)");
   gen->add_option("-I,--id", o->id, "identifier: r random (default), i increment, or hex");
   gen->add_option("-L,--length", o->length,

@@ -29,7 +29,16 @@ int main(int argc, char** argv) {
   app.add_option("--time", time,
                  "time mode, overriding the configuration: realtime, stepped, "
                  "scaled:F");
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", "canemud " CANEMU_VERSION, "print canemud's version and exit");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {  // --help, --version
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // The parser's sentence, and exit 1 as for every other failure (not CLI11's own codes).
+    app.exit(e);
+    return 1;
+  }
 
   const bool checking = !check_file.empty();
   const std::string& file = checking ? check_file : config_file;

@@ -458,5 +458,20 @@ TEST(CliHabits, AGenGapWithoutAUnitIsMilliseconds) {
   EXPECT_EQ(half.wait(), 0);
 }
 
+TEST(CliHabits, CanemuAndCanemudSayTheirVersionAndBadArgumentsExitOne) {
+  Cli canemu(CANEMU_PATH, {"--version"});
+  EXPECT_EQ(Cli::read_all(canemu.out), "canemu " CANEMU_PROJECT_VERSION "\n");
+  EXPECT_EQ(canemu.wait(), 0);
+  Cli canemud(CANEMUD_PATH, {"--version"});
+  EXPECT_EQ(Cli::read_all(canemud.out), "canemud " CANEMU_PROJECT_VERSION "\n");
+  EXPECT_EQ(canemud.wait(), 0);
+  Cli bogus(CANEMUD_PATH, {"--bogus"});
+  EXPECT_NE(Cli::read_all(bogus.err).find("--bogus"), std::string::npos);
+  EXPECT_EQ(bogus.wait(), 1);
+  Cli help(CANEMUD_PATH, {"--help"});
+  EXPECT_NE(Cli::read_all(help.out).find("--version"), std::string::npos);
+  EXPECT_EQ(help.wait(), 0);
+}
+
 }  // namespace
 }  // namespace canemu

@@ -1,6 +1,8 @@
 // canemud: parse the command line, load and check the configuration, build the simulation, run.
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <system_error>
 
 #include <sys/resource.h>
 
@@ -12,6 +14,32 @@
 #include "canemu/daemon/scenario.hpp"
 #include "canemu/daemon/server.hpp"
 #include "canemu/daemon/simulation.hpp"
+
+namespace {
+
+// The canemu command to suggest: the one this build made when canemud is the one this build
+// made (run from the build tree; relative to the working directory when below it, as
+// `build/bin/canemu` after `make run`), else `canemu` as installed, from the PATH.
+std::string canemu_command() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec || self != fs::weakly_canonical(CANEMU_BUILD_CANEMUD, ec) || ec ||
+      !fs::exists(CANEMU_BUILD_CANEMU, ec)) {
+    return "canemu";
+  }
+  const fs::path canemu = fs::weakly_canonical(CANEMU_BUILD_CANEMU, ec);
+  const fs::path here = fs::current_path(ec);
+  if (!ec) {
+    const fs::path below = canemu.lexically_relative(here);
+    if (!below.empty() && *below.begin() != "..") {
+      return below.string();
+    }
+  }
+  return canemu.string();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace canemu::daemon;
@@ -114,6 +142,6 @@ int main(int argc, char** argv) {
   std::fputs(summary(*config).c_str(), stderr);
   std::fputs(scenarios.c_str(), stderr);
   log::info("listening on {}", server.socket_path());
-  log::info("try: CANEMU_SOCKET={} build/bin/canemu status", server.socket_path());
+  log::info("try: CANEMU_SOCKET={} {} status", server.socket_path(), canemu_command());
   return server.run();
 }

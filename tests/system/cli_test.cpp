@@ -473,5 +473,32 @@ TEST(CliHabits, CanemuAndCanemudSayTheirVersionAndBadArgumentsExitOne) {
   EXPECT_EQ(help.wait(), 0);
 }
 
+// canemud's hint names the canemu beside it when it runs from a build tree, else `canemu` as
+// installed.
+TEST(CliHabits, CanemudSuggestsTheCanemuOfItsOwnTree) {
+  {
+    Daemon d;
+    // This build's canemu: relative to the working directory when below it, else its full path.
+    const std::string hint = fmt::format("try: CANEMU_SOCKET={} ", d.socket());
+    ASSERT_TRUE(d.read_log_until(" status\n", 10'000)) << d.log();
+    const std::size_t at = d.log().find(hint);
+    ASSERT_NE(at, std::string::npos) << d.log();
+    const std::size_t end = d.log().find(" status\n", at);
+    const std::string named = d.log().substr(at + hint.size(), end - at - hint.size());
+    EXPECT_EQ(std::filesystem::canonical(named), std::filesystem::canonical(CANEMU_PATH));
+  }
+  char dir[] = "/tmp/canemu-installed-XXXXXX";
+  const std::string bin = std::string(::mkdtemp(dir)) + "/canemud";
+  std::filesystem::copy_file(CANEMUD_PATH, bin);
+  {
+    testing::CanemudProcess installed(bin, {"--time=stepped"});
+    ASSERT_TRUE(installed.ready()) << installed.log();
+    const std::string line =
+        fmt::format("try: CANEMU_SOCKET={} canemu status\n", installed.socket());
+    EXPECT_TRUE(installed.read_log_until(line, 10'000)) << installed.log();
+  }
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace canemu

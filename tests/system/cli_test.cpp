@@ -500,5 +500,19 @@ TEST(CliHabits, CanemudSuggestsTheCanemuOfItsOwnTree) {
   std::filesystem::remove_all(dir);
 }
 
+// CAN FD frames on a classic bus: the cause said as it is, before anything is sent.
+TEST(CliHabits, CanFdOnAClassicBusIsRefusedForThatReason) {
+  Daemon d;
+  Cli send(d, {"send", "can0", "123##1AA", "--step", "1ms"});
+  EXPECT_EQ(Cli::read_all(send.err),
+            "canemu: '123##1AA': a CAN FD frame, and can0 is a classic CAN bus (CAN FD needs a "
+            "bus of kind can-fd)\n");
+  EXPECT_EQ(send.wait(), 1);
+  Cli gen(d, {"gen", "can0", "-f", "-n", "1"});
+  EXPECT_EQ(Cli::read_all(gen.err),
+            "canemu: -f: can0 is a classic CAN bus (CAN FD needs a bus of kind can-fd)\n");
+  EXPECT_EQ(gen.wait(), 1);
+}
+
 }  // namespace
 }  // namespace canemu

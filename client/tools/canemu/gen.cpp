@@ -25,6 +25,7 @@
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "command.hpp"
+#include "lin_send.hpp"
 
 namespace canemu::cli {
 
@@ -227,6 +228,9 @@ int run_gen(const std::string& socket, GenOptions o) {
     return fail(base.error().message);
   }
   const bool stepped = base->stepped();
+  if (const auto kind = bus_kind(*c, o.bus); o.fd && kind && kind->first == ipc::WireBusKind::can) {
+    return fail("-f: " + classic_bus_text(o.bus));
+  }
   client::ChannelOptions co;
   co.bus = o.bus;
   co.bitrate = o.bitrate;
@@ -297,10 +301,13 @@ int run_gen(const std::string& socket, GenOptions o) {
   const uint64_t pending = queued - sent - dropped;
   std::fprintf(stderr, "canemu: %llu frame(s) sent on %s", static_cast<unsigned long long>(sent),
                o.bus.c_str());
-  if (dropped != 0 || pending != 0) {
-    std::fprintf(stderr, ", %llu given up, %llu not sent: is a node on %s acknowledging?",
-                 static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(pending),
-                 o.bus.c_str());
+  if (dropped != 0) {
+    std::fprintf(stderr, ", %llu given up by its node after errors",
+                 static_cast<unsigned long long>(dropped));
+  }
+  if (pending != 0) {
+    std::fprintf(stderr, ", %llu not sent: is a node on %s acknowledging at %u bit/s?",
+                 static_cast<unsigned long long>(pending), o.bus.c_str(), ch->info().bitrate);
   }
   std::fprintf(stderr, "\n");
   return dropped == 0 && pending == 0 ? 0 : 1;

@@ -458,6 +458,46 @@ TEST(CliHabits, AGenGapWithoutAUnitIsMilliseconds) {
   EXPECT_EQ(half.wait(), 0);
 }
 
+// Identifiers on the command line are hex, as candump writes them and as send and gen -I read
+// them: fault inject's --id and --mask too, with or without 0x.
+TEST(CliHabits, FaultIdentifiersAndMasksAreHex) {
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  // --mask 700 is 0x700: 0x123 matches 0x100 in the top three bits (decimal 700, 0x2BC, would
+  // not let it match).
+  // The faults hit once each, one after the other.
+  const auto hit_once = [&d] {
+    Cli json(d, {"status", "--json"});
+    const std::string j = Cli::read_all(json.out);
+    EXPECT_EQ(json.wait(), 0);
+    std::size_t n = 0;
+    for (std::size_t at = j.find("\"hits\" : 1,"); at != std::string::npos;
+         at = j.find("\"hits\" : 1,", at + 1)) {
+      ++n;
+    }
+    return n;
+  };
+  for (const std::vector<std::string>& match : std::vector<std::vector<std::string>>{
+           {"--id", "100", "--mask", "700"}, {"--id", "0x123", "--mask", "0x7FF"}}) {
+    std::vector<std::string> args{"fault", "inject", "--effect", "bit_error",
+                                  "--bus", "can0",   "--count",  "1"};
+    args.insert(args.end(), match.begin(), match.end());
+    Cli inject(d, args);
+    EXPECT_EQ(inject.wait(), 0) << Cli::read_all(inject.err);
+    Cli send(d, {"send", "can0", "123#11", "--step", "5ms"});
+    EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  }
+  EXPECT_EQ(hit_once(), 2u);
+  Cli bad(d, {"fault", "inject", "--effect", "bit_error", "--bus", "can0", "--id", "12G"});
+  EXPECT_EQ(Cli::read_all(bad.err),
+            "canemu: --id '12G': not a hex identifier (123 or 0x123, as candump writes it)\n");
+  EXPECT_EQ(bad.wait(), 1);
+  Cli gen(d, {"gen", "can0", "-n", "1", "-I", "0x123", "-L", "0", "-v"});
+  EXPECT_NE(Cli::read_all(gen.out).find(" can0 123#\n"), std::string::npos);
+  EXPECT_EQ(gen.wait(), 0);
+}
+
 TEST(CliHabits, CanemuAndCanemudSayTheirVersionAndBadArgumentsExitOne) {
   Cli canemu(CANEMU_PATH, {"--version"});
   EXPECT_EQ(Cli::read_all(canemu.out), "canemu " CANEMU_PROJECT_VERSION "\n");

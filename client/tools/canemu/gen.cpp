@@ -175,7 +175,9 @@ int run_gen(const std::string& socket, GenOptions o) {
         o.gap));
   }
   o.gap = gap_text;
-  const auto id = parse_mode(o.id, true);
+  // Hex as candump writes it; a 0x in front is allowed.
+  const bool prefixed = o.id.size() > 2 && o.id[0] == '0' && (o.id[1] == 'x' || o.id[1] == 'X');
+  const auto id = parse_mode(prefixed ? o.id.substr(2) : o.id, true);
   const uint64_t id_limit = o.extended ? 0x1FFFFFFF : 0x7FF;
   if (!id || (id->kind == Mode::fixed && id->value > id_limit)) {
     return fail(fmt::format("-I '{}': r, i or a hex identifier up to {:X}{}", o.id, id_limit,
@@ -324,7 +326,8 @@ Command add_gen(CLI::App& app, const std::string& socket) {
                   "time between frames: ms as cangen's -g (10, 0.5), or with a unit (500us); "
                   "default 200ms, 0 back to back");
   gen->add_option("-n,--count", o->count, "stop after this many frames (default: until Ctrl-C)");
-  gen->add_option("-I,--id", o->id, "identifier: r random (default), i increment, or hex");
+  gen->add_option("-I,--id", o->id,
+                  "identifier: r random (default), i increment, or hex (123 or 0x123)");
   gen->add_option("-L,--length", o->length,
                   "length: r random DLC (default), i increment, or bytes");
   gen->add_option("-D,--data", o->data, "data: r random (default), i increment, or hex bytes");

@@ -185,7 +185,7 @@ count = 3
     text = cli(daemon, "status").stdout
     assert "three acks missing" in text and "ack_error" in text
     row = next(line for line in text.splitlines() if line.startswith("three acks missing"))
-    assert row.split()[-3:] == ["4", "3", "done"]
+    assert row.split()[-7:] == ["4", "3", "done", "id", "0x123", "mask", "0x7FF"]
 
 
 def test_a_rejected_load_changes_nothing(daemon, nodes):

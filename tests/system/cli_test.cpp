@@ -498,6 +498,48 @@ TEST(CliHabits, FaultIdentifiersAndMasksAreHex) {
   EXPECT_EQ(gen.wait(), 0);
 }
 
+// fault list shows what each fault matches, so that a rule that never hits says why.
+TEST(CliHabits, FaultListShowsEachFaultsMatch) {
+  Daemon d;
+  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
+           {"--effect", "bit_error", "--bus", "can0", "--id", "7B"},
+           {"--effect", "crc_error", "--bus", "can0", "--id", "100", "--mask", "7F0", "--ext",
+            "--from", "ixxat0:0"},
+           {"--effect", "ack_error", "--bus", "can1", "--rtr"},
+           {"--effect", "lin_checksum_error", "--bus", "lin0", "--id", "20"},
+           {"--effect", "node_off", "--node", "ixxat0:1"},
+           {"--effect", "babble", "--node", "ixxat0:0", "--id", "1AB", "--duration", "1ms"}}) {
+    std::vector<std::string> all{"fault", "inject"};
+    all.insert(all.end(), args.begin(), args.end());
+    Cli inject(d, all);
+    EXPECT_EQ(inject.wait(), 0) << Cli::read_all(inject.err);
+  }
+  Cli list(d, {"fault", "list"});
+  const std::string listed = Cli::read_all(list.out);
+  EXPECT_EQ(list.wait(), 0);
+  std::vector<std::string> lines;
+  for (std::size_t at = 0; at < listed.size();) {
+    const std::size_t end = listed.find('\n', at);
+    lines.push_back(listed.substr(at, end - at));
+    at = end == std::string::npos ? listed.size() : end + 1;
+  }
+  ASSERT_EQ(lines.size(), 7u) << listed;
+  // The last column, after the state.
+  EXPECT_TRUE(lines[0].ends_with(" STATE   MATCH")) << listed;
+  const std::vector<std::string> matches{
+      "id 0x7B", "id 0x100 mask 0x7F0 ext from ixxat0:0", "rtr", "id 0x20", "-", "sends 0x1AB"};
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    EXPECT_TRUE(lines[k + 1].ends_with("  " + matches[k])) << matches[k] << "\n" << listed;
+  }
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("\"match\" : {\"ext\" : true,\"from\" : \"ixxat0:0\",\"id\" : 256,"
+                   "\"mask\" : 2032}"),
+            std::string::npos)
+      << j;
+}
+
 TEST(CliHabits, CanemuAndCanemudSayTheirVersionAndBadArgumentsExitOne) {
   Cli canemu(CANEMU_PATH, {"--version"});
   EXPECT_EQ(Cli::read_all(canemu.out), "canemu " CANEMU_PROJECT_VERSION "\n");

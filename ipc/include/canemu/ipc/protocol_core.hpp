@@ -21,7 +21,7 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 4;
+inline constexpr uint16_t kProtocolVersion = 5;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 // A fault scenario's name: up to 63 bytes and the terminating zero.
@@ -518,6 +518,13 @@ constexpr std::string_view to_string(WireFaultState state) {
   return "?";
 }
 
+// What FaultEntry's match describes: nothing (an effect on a bus or node), the CAN or LIN frames
+// a frame effect hits, or the frame babble sends (its id and ext).
+enum class WireFaultMatch : uint8_t { none = 0, can = 1, lin = 2, babble = 3 };
+// A condition of a match on a frame's kind: either, or only one (ext: standard / extended;
+// rtr: data / remote frames).
+enum class WireMatchFlag : uint8_t { any = 0, no = 1, yes = 2 };
+
 struct FaultEntry {
   char scenario[kScenarioNameSize] = {};
   char effect[24] = {};
@@ -530,8 +537,16 @@ struct FaultEntry {
   int64_t until_ns = 0;
   uint64_t seen = 0;
   uint64_t hits = 0;
+  uint8_t match = 0;      // WireFaultMatch
+  uint8_t match_ext = 0;  // WireMatchFlag
+  uint8_t match_rtr = 0;  // WireMatchFlag
+  uint8_t reserved2 = 0;
+  uint32_t match_id = 0;
+  uint32_t match_mask = 0;  // identifier bits that must equal match_id; 0: any identifier
+  uint32_t reserved3 = 0;
+  char match_from[kNameSize] = {};  // the transmitting (CAN) or commanding (LIN) node; "": any
 };
-static_assert(sizeof(FaultEntry) == kScenarioNameSize + 24 + 32 + 8 + 32);
+static_assert(sizeof(FaultEntry) == kScenarioNameSize + 24 + 32 + 8 + 32 + 16 + kNameSize);
 
 struct FaultListRequest {
   MsgHeader header;

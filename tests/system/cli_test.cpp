@@ -596,5 +596,59 @@ TEST(CliHabits, CanFdOnAClassicBusIsRefusedForThatReason) {
   EXPECT_EQ(gen.wait(), 1);
 }
 
+// Column widths follow their content: a long scenario name and effect, and the long state
+// names of a timeline, keep every column in its place.
+TEST(CliHabits, FaultListAndTimelineColumnsFitTheirContent) {
+  Daemon d;
+  const std::string name(63, 'n');
+  char dir[] = "/tmp/canemu-columns-XXXXXX";
+  const std::string file = std::string(::mkdtemp(dir)) + "/long.toml";
+  FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fprintf(f,
+               "[scenario]\nname = \"%s\"\n[[fault]]\neffect = \"error_counters\"\nat = \"0s\"\n"
+               "node = \"ixxat0:0\"\ntec = 130\nrec = 0\n[[fault]]\n"
+               "effect = \"lin_checksum_error\"\nat = \"0s\"\nbus = \"lin0\"\n",
+               name.c_str());
+  std::fclose(f);
+  Cli load(d, {"fault", "load", file});
+  EXPECT_EQ(load.wait(), 0) << Cli::read_all(load.err);
+  Cli step(d, {"time", "step", "1ms"});
+  EXPECT_EQ(step.wait(), 0);
+  // Each header's column starts where its values start (names left, numbers right-aligned).
+  const auto lines_of = [](const std::string& text) {
+    std::vector<std::string> lines;
+    for (std::size_t at = 0; at < text.size();) {
+      const std::size_t end = text.find('\n', at);
+      lines.push_back(text.substr(at, end - at));
+      at = end == std::string::npos ? text.size() : end + 1;
+    }
+    return lines;
+  };
+  Cli list(d, {"fault", "list"});
+  const auto rows = lines_of(Cli::read_all(list.out));
+  EXPECT_EQ(list.wait(), 0);
+  ASSERT_EQ(rows.size(), 3u);
+  const std::string& header = rows[0];
+  const std::string& row = rows[2];
+  EXPECT_EQ(row.find("lin_checksum_error"), header.find("EFFECT")) << header << "\n" << row;
+  EXPECT_EQ(row.find(" lin0 ") + 1, header.find("TARGET")) << header << "\n" << row;
+  EXPECT_EQ(row.find(" 9 ") + 1, header.find("LINE") + 3) << header << "\n" << row;
+  EXPECT_EQ(row.find("pending"), std::string::npos);
+  EXPECT_EQ(row.find("active"), header.find("STATE")) << header << "\n" << row;
+
+  Cli timeline(d, {"timeline", "can0", "ixxat0:0"});
+  const auto t = lines_of(Cli::read_all(timeline.out));
+  EXPECT_EQ(timeline.wait(), 0);
+  ASSERT_GE(t.size(), 4u);
+  const std::string& th = t[t.size() - 2];
+  const std::string& tr = t[t.size() - 1];
+  EXPECT_NE(tr.find("error-passive"), std::string::npos) << th << "\n" << tr;
+  EXPECT_EQ(tr.find("error-passive"), th.find("state")) << th << "\n" << tr;
+  EXPECT_EQ(tr.find("counters written"), th.find("cause")) << th << "\n" << tr;
+  ::unlink(file.c_str());
+  ::rmdir(dir);
+}
+
 }  // namespace
 }  // namespace canemu

@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "text_table.hpp"
+
 namespace canemu::cli {
 
 namespace {
@@ -66,18 +68,27 @@ tl::expected<ipc::FaultListReply, std::string> fault_list(client::Connection& c)
 }
 
 void print_faults(const ipc::FaultListReply& r) {
-  std::printf("%-24s %5s %-15s %-12s %14s %14s %8s %8s %-7s %s\n", "SCENARIO", "LINE", "EFFECT",
-              "TARGET", "AT", "UNTIL", "SEEN", "HITS", "STATE", "MATCH");
+  using Align = TextTable::Align;
+  TextTable table({{"SCENARIO", Align::left, 24},
+                   {"LINE", Align::right, 5},
+                   {"EFFECT", Align::left, 15},
+                   {"TARGET", Align::left, 12},
+                   {"AT", Align::right, 14},
+                   {"UNTIL", Align::right, 14},
+                   {"SEEN", Align::right, 8},
+                   {"HITS", Align::right, 8},
+                   {"STATE", Align::left, 7},
+                   {"MATCH"}});
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::FaultEntry& e = r.faults[i];
-    const std::string until =
-        e.has_until ? fmt::format("{:.6f}", static_cast<double>(e.until_ns) / 1e9) : "-";
-    std::printf("%-24s %5u %-15s %-12s %14.6f %14s %8llu %8llu %-7s %s\n",
-                ipc::name_of(e.scenario).c_str(), e.line, ipc::name_of(e.effect).c_str(),
-                ipc::name_of(e.target).c_str(), static_cast<double>(e.at_ns) / 1e9, until.c_str(),
-                static_cast<unsigned long long>(e.seen), static_cast<unsigned long long>(e.hits),
-                state_name(e.state).c_str(), match_text(e).c_str());
+    const auto seconds = [](int64_t ns) {
+      return fmt::format("{:.6f}", static_cast<double>(ns) / 1e9);
+    };
+    table.add({ipc::name_of(e.scenario), std::to_string(e.line), ipc::name_of(e.effect),
+               ipc::name_of(e.target), seconds(e.at_ns), e.has_until ? seconds(e.until_ns) : "-",
+               std::to_string(e.seen), std::to_string(e.hits), state_name(e.state), match_text(e)});
   }
+  table.print();
   if (r.total > r.count) {
     std::printf("(%u more not shown)\n", r.total - r.count);
   }

@@ -64,6 +64,8 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
     s->bus = static_cast<uint16_t>(bus);
     FaultConfinement& fc = controller.confinement();
     s->state = static_cast<uint8_t>(fc.state());
+    s->mode = static_cast<uint8_t>(controller.participating() ? ipc::WireNodeMode::running
+                                                              : ipc::WireNodeMode::init);
     s->tec = fc.tec();
     s->rec = fc.rec();
     const Distributed* d = sim.distributed();

@@ -219,8 +219,9 @@ TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
                    "xcan0          sorcus-x-can-2i      config   can0 can1\n"),
             std::string::npos)
       << t;
-  EXPECT_NE(t.find("xcan0:0        can0         error-active      0    0"), std::string::npos) << t;
-  EXPECT_NE(t.find("xcan0:1        can1         error-active      0    0"), std::string::npos) << t;
+  // No program initialized the modules: their 82527s are in their init mode.
+  EXPECT_NE(t.find("xcan0:0        can0         init              0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("xcan0:1        can1         init              0    0"), std::string::npos) << t;
 
   Cli json(d, {"status", "--json"});
   const std::string j = Cli::read_all(json.out);
@@ -230,8 +231,7 @@ TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
                    "\"owner_pid\" : 0}"),
             std::string::npos)
       << j;
-  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"error-active\""),
-            std::string::npos)
+  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"init\""), std::string::npos)
       << j;
 }
 
@@ -254,7 +254,7 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   EXPECT_EQ(text.wait(), 0);
   EXPECT_NE(t.find("time stepped, simulated 0.010000000 s, 2 clients"), std::string::npos) << t;
   EXPECT_NE(t.find("can0         can        500000"), std::string::npos) << t;
-  EXPECT_NE(t.find("ixxat0:1       can1         error-active      0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("ixxat0:1       can1         init              0    0"), std::string::npos) << t;
   EXPECT_NE(t.find("probe:0        can1         error-active"), std::string::npos) << t;
   EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1"), std::string::npos)
       << t;
@@ -648,6 +648,24 @@ TEST(CliHabits, FaultListAndTimelineColumnsFitTheirContent) {
   EXPECT_EQ(tr.find("counters written"), th.find("cause")) << th << "\n" << tr;
   ::unlink(file.c_str());
   ::rmdir(dir);
+}
+
+// A configured adapter's controller that no program started is in its init mode: status says
+// init, not error-active; a started one (an ephemeral node) is error-active.
+TEST(CliHabits, StatusShowsControllersNotStartedAsInit) {
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("ixxat0:0       can0         init              0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("eph1:0         can0         error-active      0    0"), std::string::npos) << t;
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("\"name\" : \"ixxat0:1\",\"rec\" : 0,\"state\" : \"init\""), std::string::npos)
+      << j;
 }
 
 }  // namespace

@@ -23,7 +23,9 @@ namespace canemu::cli {
 
 namespace {
 
-// A CAN node's error state; a LIN controller's "online" or "offline".
+// A CAN node's error state, or "init" while its controller takes no part in bus traffic (not
+// started; bus-off, which also stops an SJA1000, stays bus-off); a LIN controller's "online" or
+// "offline".
 std::string state_name(const ipc::StatusNode& n) {
   switch (static_cast<ipc::WireLinState>(n.lin)) {
     case ipc::WireLinState::none:
@@ -32,6 +34,10 @@ std::string state_name(const ipc::StatusNode& n) {
       return "offline";
     case ipc::WireLinState::online:
       return "online";
+  }
+  if (static_cast<ipc::WireNodeMode>(n.mode) == ipc::WireNodeMode::init &&
+      static_cast<ipc::WireErrorState>(n.state) != ipc::WireErrorState::bus_off) {
+    return "init";
   }
   return error_state_name(n.state);
 }

@@ -184,6 +184,10 @@ constexpr std::string_view to_string(WireBusKind kind) {
 enum class WireErrorState : uint8_t { active = 0, warning = 1, passive = 2, bus_off = 3 };
 // A LIN controller's state in StatusNode.lin (it has no error counters).
 enum class WireLinState : uint8_t { none = 0, offline = 1, online = 2 };
+// Whether a CAN node's controller takes part in bus traffic (StatusNode.mode): `init` while it
+// is in reset or initialization mode (an adapter no program has started, a stopped line, an
+// SJA1000 in sleep), as the VCI's CAN_STATUS_ININIT says.
+enum class WireNodeMode : uint8_t { running = 0, init = 1 };
 
 struct StatusBus {
   char name[kNameSize] = {};
@@ -205,11 +209,13 @@ struct StatusNode {
   uint8_t lin = 0;            // WireLinState: 0 for a CAN node
   uint16_t tec = 0;
   uint16_t rec = 0;
+  uint8_t mode = 0;  // WireNodeMode (CAN nodes)
+  uint8_t reserved[7] = {};
   uint64_t frames_sent = 0;
   uint64_t frames_received = 0;
   uint64_t errors = 0;
 };
-static_assert(sizeof(StatusNode) == 64);
+static_assert(sizeof(StatusNode) == 72);
 
 // How late things ran, in ns (real and scaled time; all zero in stepped time).
 struct WirePacingFigures {
@@ -261,7 +267,7 @@ struct StatusReply {
   WirePacing pacing;
 };
 static_assert(sizeof(StatusReply) ==
-              16 + 40 + 64 * kStatusPageBuses + 64 * kStatusPageNodes + 8 + 16 + 208);
+              16 + 40 + 64 * kStatusPageBuses + 72 * kStatusPageNodes + 8 + 16 + 208);
 static_assert(sizeof(StatusReply) <= kMaxMessageSize);
 
 struct TimeStepRequest {

@@ -17,10 +17,11 @@
 
 namespace {
 
-// The canemu command to suggest: the one this build made when canemud is the one this build
-// made (run from the build tree; relative to the working directory when below it, as
-// `build/bin/canemu` after `make run`), else `canemu` as installed, from the PATH.
-std::string canemu_command() {
+// The canemu command to suggest: when canemud is the program this build made (run from the build
+// tree), the canemu beside it, written as canemud was started (`build/bin/canemud` from the
+// source folder gives `build/bin/canemu`; a full path, a full path); else, and when it was
+// found on the PATH, `canemu` (installed, or the build's bin folder on the PATH).
+std::string canemu_command(const char* argv0) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
@@ -28,15 +29,12 @@ std::string canemu_command() {
       !fs::exists(CANEMU_BUILD_CANEMU, ec)) {
     return "canemu";
   }
-  const fs::path canemu = fs::weakly_canonical(CANEMU_BUILD_CANEMU, ec);
-  const fs::path here = fs::current_path(ec);
-  if (!ec) {
-    const fs::path below = canemu.lexically_relative(here);
-    if (!below.empty() && *below.begin() != "..") {
-      return below.string();
-    }
+  const std::string started = argv0 != nullptr ? argv0 : "";
+  const std::size_t slash = started.rfind('/');
+  if (slash == std::string::npos) {
+    return "canemu";
   }
-  return canemu.string();
+  return started.substr(0, slash + 1) + fs::path(CANEMU_BUILD_CANEMU).filename().string();
 }
 
 }  // namespace
@@ -142,6 +140,6 @@ int main(int argc, char** argv) {
   std::fputs(summary(*config).c_str(), stderr);
   std::fputs(scenarios.c_str(), stderr);
   log::info("listening on {}", server.socket_path());
-  log::info("try: CANEMU_SOCKET={} {} status", server.socket_path(), canemu_command());
+  log::info("try: CANEMU_SOCKET={} {} status", server.socket_path(), canemu_command(argv[0]));
   return server.run();
 }

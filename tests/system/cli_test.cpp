@@ -560,7 +560,7 @@ TEST(CliHabits, CanemuAndCanemudSayTheirVersionAndBadArgumentsExitOne) {
 TEST(CliHabits, CanemudSuggestsTheCanemuOfItsOwnTree) {
   {
     Daemon d;
-    // This build's canemu: relative to the working directory when below it, else its full path.
+    // This build's canemu, written as canemud was started (here by its full path).
     const std::string hint = fmt::format("try: CANEMU_SOCKET={} ", d.socket());
     ASSERT_TRUE(d.read_log_until(" status\n", 10'000)) << d.log();
     const std::size_t at = d.log().find(hint);

@@ -1,6 +1,8 @@
 // canemud: parse the command line, load and check the configuration, build the simulation, run.
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <system_error>
 
 #include <sys/resource.h>
 
@@ -12,6 +14,30 @@
 #include "canemu/daemon/scenario.hpp"
 #include "canemu/daemon/server.hpp"
 #include "canemu/daemon/simulation.hpp"
+
+namespace {
+
+// The canemu command to suggest: when canemud is the program this build made (run from the build
+// tree), the canemu beside it, written as canemud was started (`build/bin/canemud` from the
+// source folder gives `build/bin/canemu`; a full path, a full path); else, and when it was
+// found on the PATH, `canemu` (installed, or the build's bin folder on the PATH).
+std::string canemu_command(const char* argv0) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec || self != fs::weakly_canonical(CANEMU_BUILD_CANEMUD, ec) || ec ||
+      !fs::exists(CANEMU_BUILD_CANEMU, ec)) {
+    return "canemu";
+  }
+  const std::string started = argv0 != nullptr ? argv0 : "";
+  const std::size_t slash = started.rfind('/');
+  if (slash == std::string::npos) {
+    return "canemu";
+  }
+  return started.substr(0, slash + 1) + fs::path(CANEMU_BUILD_CANEMU).filename().string();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace canemu::daemon;
@@ -29,7 +55,16 @@ int main(int argc, char** argv) {
   app.add_option("--time", time,
                  "time mode, overriding the configuration: realtime, stepped, "
                  "scaled:F");
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", "canemud " CANEMU_VERSION, "print canemud's version and exit");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {  // --help, --version
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // The parser's sentence, and exit 1 as for every other failure (not CLI11's own codes).
+    app.exit(e);
+    return 1;
+  }
 
   const bool checking = !check_file.empty();
   const std::string& file = checking ? check_file : config_file;
@@ -105,6 +140,6 @@ int main(int argc, char** argv) {
   std::fputs(summary(*config).c_str(), stderr);
   std::fputs(scenarios.c_str(), stderr);
   log::info("listening on {}", server.socket_path());
-  log::info("try: CANEMU_SOCKET={} build/bin/canemu status", server.socket_path());
+  log::info("try: CANEMU_SOCKET={} {} status", server.socket_path(), canemu_command(argv[0]));
   return server.run();
 }

@@ -532,6 +532,22 @@ void ControlDispatcher::handle(Session& c, const uint8_t* data, std::size_t size
         e.until_ns = f.until_ns.value_or(0);
         e.seen = f.seen;
         e.hits = f.hits;
+        // The match, so that a rule that never hits shows why.
+        const auto flag = [](const std::optional<bool>& v) {
+          return static_cast<uint8_t>(!v   ? ipc::WireMatchFlag::any
+                                      : *v ? ipc::WireMatchFlag::yes
+                                           : ipc::WireMatchFlag::no);
+        };
+        using Frames = ScenarioRunner::FaultStatus::Frames;
+        e.match = static_cast<uint8_t>(f.frames == Frames::can      ? ipc::WireFaultMatch::can
+                                       : f.frames == Frames::lin    ? ipc::WireFaultMatch::lin
+                                       : f.frames == Frames::babble ? ipc::WireFaultMatch::babble
+                                                                    : ipc::WireFaultMatch::none);
+        e.match_id = f.match.id;
+        e.match_mask = f.match.mask;
+        e.match_ext = flag(f.match.ext);
+        e.match_rtr = flag(f.match.rtr);
+        ipc::copy_name(e.match_from, f.match.from);
       }
       send_reply(send, *r);
       return;

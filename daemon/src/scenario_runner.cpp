@@ -552,6 +552,18 @@ std::vector<ScenarioRunner::FaultStatus> ScenarioRunner::status() const {
                      0,
                      a.state->fired,
                      State::pending};
+      if (f.effect <= FaultEffect::ack_error) {
+        st.frames = FaultStatus::Frames::can;
+        st.match = f.match;
+      } else if (is_lin_frame_effect(f.effect)) {
+        st.frames = FaultStatus::Frames::lin;
+        st.match = f.match;
+      } else if (f.effect == FaultEffect::babble) {
+        st.frames = FaultStatus::Frames::babble;
+        st.match.id = f.id;
+        st.match.mask = f.ext ? 0x1FFFFFFF : 0x7FF;
+        st.match.ext = f.ext;
+      }
       if (f.until_ns) {
         st.until_ns = (a.start + SimDuration(*f.until_ns)).ns();
       } else if (f.duration_ns > 0) {

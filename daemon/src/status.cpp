@@ -54,8 +54,9 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
     }
     return &r.nodes[r.node_count++];
   };
+  // `started`: the controller takes part in bus traffic (out of its reset or init mode).
   auto add_controller = [&](const std::string& name, std::size_t bus, CanController& controller,
-                            NodeId id) {
+                            NodeId id, bool started) {
     ipc::StatusNode* s = next_slot();
     if (s == nullptr) {
       return;
@@ -64,6 +65,7 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
     s->bus = static_cast<uint16_t>(bus);
     FaultConfinement& fc = controller.confinement();
     s->state = static_cast<uint8_t>(fc.state());
+    s->mode = static_cast<uint8_t>(started ? ipc::WireNodeMode::running : ipc::WireNodeMode::init);
     s->tec = fc.tec();
     s->rec = fc.rec();
     const Distributed* d = sim.distributed();
@@ -73,8 +75,10 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
     s->frames_received = st.frames_received;
     s->errors = st.errors_as_transmitter.total() + st.errors_as_receiver.total();
   };
+  // A node its driver runs: started while the driver has it on the bus (the controller of a
+  // node on another daemon's bus is there, not here).
   auto add_node = [&](const std::string& name, std::size_t bus, HostedNode& node) {
-    add_controller(name, bus, node.controller(), node.node());
+    add_controller(name, bus, node.controller(), node.node(), node.running());
   };
   // A LIN controller: online or offline, and what it did (no error counters).
   auto add_lin = [&](const std::string& name, std::size_t bus, const ixxat::LinLine& line) {
@@ -125,13 +129,14 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
   for (const DeviceRegistry::Xcan& x : devices.xcan()) {
     for (unsigned i = 0; i < x.buses.size(); ++i) {
       model::I82527& chip = x.device->module().chip(i);
-      add_controller(fmt::format("{}:{}", x.config.name, i), x.buses[i], chip, chip.node());
+      add_controller(fmt::format("{}:{}", x.config.name, i), x.buses[i], chip, chip.node(),
+                     chip.participating());
     }
   }
   // SL-CANi interfaces, the same way.
   for (const DeviceRegistry::Slcan& s : devices.slcan()) {
     model::I82527& chip = s.device->module().chip();
-    add_controller(s.config.name + ":0", s.bus, chip, chip.node());
+    add_controller(s.config.name + ":0", s.bus, chip, chip.node(), chip.participating());
   }
   r.node_total = static_cast<uint16_t>(index);
 }

@@ -8,6 +8,9 @@
 
 #include "../support/many_buses.hpp"
 #include "canemu/daemon/simulation.hpp"
+#include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
+#include "vci/cantype.h"
+#include "vci/vcierr.h"
 
 namespace canemu::daemon {
 namespace {
@@ -83,6 +86,29 @@ TEST(Status, ListsTheBusesThenEveryDevicesNodes) {
   EXPECT_EQ(r.nodes[3].bus, 1u);
   EXPECT_EQ(r.nodes[3].state, static_cast<uint8_t>(model::ErrorState::active));
   EXPECT_EQ(r.nodes[3].tec, 0u);
+}
+
+// A configured adapter's controller no program started is in its init (reset) mode; its line
+// initialized and started, as a VCI program's canControlInitialize and canControlStart do, it
+// takes part in traffic.
+TEST(Status, SaysWhichControllersAreInTheirInitMode) {
+  auto sim = default_world();
+  auto r = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>());
+  fill_status(*sim, *r);
+  ASSERT_EQ(r->node_count, 3u);
+  const auto init = static_cast<uint8_t>(ipc::WireNodeMode::init);
+  const auto running = static_cast<uint8_t>(ipc::WireNodeMode::running);
+  EXPECT_EQ(r->nodes[0].mode, init);
+  EXPECT_EQ(r->nodes[1].mode, init);
+  model::ixxat::CanLine& line = *sim->devices().configured()[0].controllers[0].line;
+  model::ixxat::LineInit settings;
+  settings.btr0 = CAN_BT0_500KB;
+  settings.btr1 = CAN_BT1_500KB;
+  ASSERT_EQ(line.init_line(settings), VCI_OK);
+  ASSERT_EQ(line.start_line(), VCI_OK);
+  fill_status(*sim, *r);
+  EXPECT_EQ(r->nodes[0].mode, running);
+  EXPECT_EQ(r->nodes[1].mode, init);
 }
 
 std::unique_ptr<Simulation> many_buses_world(std::size_t buses, std::size_t controllers) {

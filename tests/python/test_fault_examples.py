@@ -91,7 +91,7 @@ def load_example(daemon: Daemon, file: str) -> int:
 
 ROW = re.compile(r"^(?P<scenario>.+?)\s+(?P<line>\d+) (?P<effect>\S+)\s+(?P<target>\S+)\s+"
                  r"(?P<at>\d+\.\d{6})\s+(?P<until>\S+)\s+(?P<seen>\d+)\s+(?P<hits>\d+) "
-                 r"(?P<state>\w+)$")
+                 r"(?P<state>\w+)\s+(?P<match>\S.*)$")
 
 
 def fault_list(daemon: Daemon) -> list:
@@ -100,7 +100,7 @@ def fault_list(daemon: Daemon) -> list:
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines[0].split() == ["SCENARIO", "LINE", "EFFECT", "TARGET", "AT", "UNTIL", "SEEN",
-                                "HITS", "STATE"]
+                                "HITS", "STATE", "MATCH"]
     rows = []
     for line in lines[1:]:
         m = ROW.match(line)

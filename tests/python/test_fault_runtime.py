@@ -185,7 +185,7 @@ count = 3
     text = cli(daemon, "status").stdout
     assert "three acks missing" in text and "ack_error" in text
     row = next(line for line in text.splitlines() if line.startswith("three acks missing"))
-    assert row.split()[-3:] == ["4", "3", "done"]
+    assert row.split()[-7:] == ["4", "3", "done", "id", "0x123", "mask", "0x7FF"]
 
 
 def test_a_rejected_load_changes_nothing(daemon, nodes):
@@ -349,7 +349,10 @@ def test_inject_oscillator_counters_and_random_errors(daemon, nodes):
 @pytest.mark.parametrize(
     "args, says",
     [
-        (["--effect", "bit_error", "--bus", "can0", "--id", "0xZZ"], "--id '0xZZ': not a number"),
+        (["--effect", "bit_error", "--bus", "can0", "--id", "0xZZ"],
+         "--id '0xZZ': not a hex identifier"),
+        (["--effect", "babble", "--node", "ixxat0:0", "--duration", "1ms", "--id", "800"],
+         "--id '800': above 7FF, the largest 11-bit identifier (29-bit ones with --ext)"),
         (["--effect", "bit_error", "--bus", "can0", "--count", "many"], "--count 'many': not a number"),
         (["--effect", "bit_error", "--bus", "can0", "--ext", "--std"], "--ext and --std"),
         (["--effect", "bit_error", "--bus", "can0", "--data", "11"], "--data: only babble"),

@@ -469,7 +469,8 @@ duration = "1ms"
             [str(CANEMU_CLI), "--socket", daemon.socket, "fault", "list"],
             capture_output=True, text=True, timeout=30, check=True).stdout.splitlines()
             if "babble" in line]
-        assert row.split()[-3:] == ["0", "0", "done"]  # seen, hits: it did nothing
+        # seen, hits: it did nothing; the frame it would have sent last
+        assert row.split()[-5:] == ["0", "0", "done", "sends", "0x100"]
     finally:
         c.shutdown()
 
@@ -557,7 +558,7 @@ effect = "line_error"
     listed = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, "fault", "list"],
                             capture_output=True, text=True, timeout=30, check=True).stdout
     [row] = [line for line in listed.splitlines() if "line_error" in line]
-    assert row.split()[-2:] == ["2", "done"]  # fired twice: the fault and its end
+    assert row.split()[-3:] == ["2", "done", "-"]  # fired twice: the fault and its end; no match
 
 
 def test_line_error_on_both_wires_cuts_the_node_off(low_speed):

@@ -38,14 +38,32 @@ struct Cli {
   int err = -1;
   Cli(const testing::Daemon& d, std::vector<std::string> args, const Credentials* as = nullptr,
       const std::string& cwd = "") {
+    if (args.empty() || args[0] != "--socket") {  // a test may name another socket
+      args.insert(args.begin(), {"--socket", d.socket()});
+    }
+    start(CANEMU_PATH, std::move(args), as, cwd);
+  }
+  // `program` (canemu or canemud) with `args` alone, no daemon's socket.
+  Cli(const std::string& program, std::vector<std::string> args) {
+    start(program, std::move(args));
+  }
+  ~Cli() {
+    if (pid > 0) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, nullptr, 0);
+    }
+    ::close(out);
+    ::close(err);
+  }
+  Cli(const Cli&) = delete;
+  Cli& operator=(const Cli&) = delete;
+  void start(const std::string& program, std::vector<std::string> args,
+             const Credentials* as = nullptr, const std::string& cwd = "") {
     int o[2];
     int e[2];
     EXPECT_EQ(::pipe2(o, O_CLOEXEC), 0);
     EXPECT_EQ(::pipe2(e, O_CLOEXEC), 0);
-    if (args.empty() || args[0] != "--socket") {  // a test may name another socket
-      args.insert(args.begin(), {"--socket", d.socket()});
-    }
-    args.insert(args.begin(), CANEMU_PATH);
+    args.insert(args.begin(), program);
     std::vector<char*> argv;
     for (std::string& a : args) {
       argv.push_back(a.data());
@@ -60,7 +78,7 @@ struct Cli {
             ::setuid(as->uid) != 0) {
           ::_exit(127);
         }
-        ::execve(CANEMU_PATH, argv.data(), environ);
+        ::execve(program.c_str(), argv.data(), environ);
         ::_exit(127);
       }
       EXPECT_GT(pid, 0);
@@ -72,21 +90,13 @@ struct Cli {
       if (!cwd.empty()) {
         posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
       }
-      EXPECT_EQ(::posix_spawn(&pid, CANEMU_PATH, &actions, nullptr, argv.data(), environ), 0);
+      EXPECT_EQ(::posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ), 0);
       posix_spawn_file_actions_destroy(&actions);
     }
     ::close(o[1]);
     ::close(e[1]);
     out = o[0];
     err = e[0];
-  }
-  ~Cli() {
-    if (pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-    ::close(out);
-    ::close(err);
   }
   // Reads `fd` until it closes or `timeout_ms` passes without data.
   static std::string read_all(int fd, int timeout_ms = 10'000) {

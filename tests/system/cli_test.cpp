@@ -222,8 +222,9 @@ TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
                    "xcan0          sorcus-x-can-2i      config   can0 can1\n"),
             std::string::npos)
       << t;
-  EXPECT_NE(t.find("xcan0:0        can0         error-active      0    0"), std::string::npos) << t;
-  EXPECT_NE(t.find("xcan0:1        can1         error-active      0    0"), std::string::npos) << t;
+  // No program initialized the modules: their 82527s are in their init mode.
+  EXPECT_NE(t.find("xcan0:0        can0         init              0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("xcan0:1        can1         init              0    0"), std::string::npos) << t;
 
   Cli json(d, {"status", "--json"});
   const std::string j = Cli::read_all(json.out);
@@ -233,8 +234,7 @@ TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
                    "\"owner_pid\" : 0}"),
             std::string::npos)
       << j;
-  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"error-active\""),
-            std::string::npos)
+  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"init\""), std::string::npos)
       << j;
 }
 
@@ -257,7 +257,7 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   EXPECT_EQ(text.wait(), 0);
   EXPECT_NE(t.find("time stepped, simulated 0.010000000 s, 2 clients"), std::string::npos) << t;
   EXPECT_NE(t.find("can0         can        500000"), std::string::npos) << t;
-  EXPECT_NE(t.find("ixxat0:1       can1         error-active      0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("ixxat0:1       can1         init              0    0"), std::string::npos) << t;
   EXPECT_NE(t.find("probe:0        can1         error-active"), std::string::npos) << t;
   EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1"), std::string::npos)
       << t;
@@ -630,6 +630,241 @@ TEST(CliErrors, ASocketPathThatIsADirectoryIsNamedSo) {
                                         " is a directory, not canemud's socket: did you mean " +
                                         d.socket() + "?\n");
   EXPECT_EQ(cli.wait(), 1);
+}
+
+}  // namespace
+}  // namespace canemu
+
+namespace canemu {
+namespace {
+
+// The habits a user of can-utils brings: cangen's -g is milliseconds, so a bare number is a gap
+// in ms (units still work: CliGen.SendsCountFramesAtExactInstantsInSteppedTime).
+TEST(CliHabits, AGenGapWithoutAUnitIsMilliseconds) {
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  Cli gen(d, {"gen", "can0", "-n", "2", "-g", "1", "-I", "i", "-L", "2", "-D", "i", "-v"});
+  EXPECT_EQ(Cli::read_all(gen.out),
+            "(0000000000.000134) can0 000#0001\n"
+            "(0000000000.001134) can0 001#0102\n");
+  EXPECT_EQ(Cli::read_all(gen.err),
+            "canemu: generating on can0 as eph2 (500000 bit/s, a frame every 1ms)\n"
+            "canemu: 2 frame(s) sent on can0\n");
+  EXPECT_EQ(gen.wait(), 0);
+  Cli half(d, {"gen", "can0", "-n", "1", "-g", "0.5"});
+  EXPECT_NE(Cli::read_all(half.err).find("a frame every 0.5ms"), std::string::npos);
+  EXPECT_EQ(half.wait(), 0);
+}
+
+// Identifiers on the command line are hex, as candump writes them and as send and gen -I read
+// them: fault inject's --id and --mask too, with or without 0x.
+TEST(CliHabits, FaultIdentifiersAndMasksAreHex) {
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  // --mask 700 is 0x700: 0x123 matches 0x100 in the top three bits (decimal 700, 0x2BC, would
+  // not let it match).
+  // The faults hit once each, one after the other.
+  const auto hit_once = [&d] {
+    Cli json(d, {"status", "--json"});
+    const std::string j = Cli::read_all(json.out);
+    EXPECT_EQ(json.wait(), 0);
+    std::size_t n = 0;
+    for (std::size_t at = j.find("\"hits\" : 1,"); at != std::string::npos;
+         at = j.find("\"hits\" : 1,", at + 1)) {
+      ++n;
+    }
+    return n;
+  };
+  for (const std::vector<std::string>& match : std::vector<std::vector<std::string>>{
+           {"--id", "100", "--mask", "700"}, {"--id", "0x123", "--mask", "0x7FF"}}) {
+    std::vector<std::string> args{"fault", "inject", "--effect", "bit_error",
+                                  "--bus", "can0",   "--count",  "1"};
+    args.insert(args.end(), match.begin(), match.end());
+    Cli inject(d, args);
+    EXPECT_EQ(inject.wait(), 0) << Cli::read_all(inject.err);
+    Cli send(d, {"send", "can0", "123#11", "--step", "5ms"});
+    EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  }
+  EXPECT_EQ(hit_once(), 2u);
+  Cli bad(d, {"fault", "inject", "--effect", "bit_error", "--bus", "can0", "--id", "12G"});
+  EXPECT_EQ(Cli::read_all(bad.err),
+            "canemu: --id '12G': not a hex identifier (123 or 0x123, as candump writes it)\n");
+  EXPECT_EQ(bad.wait(), 1);
+  Cli gen(d, {"gen", "can0", "-n", "1", "-I", "0x123", "-L", "0", "-v"});
+  EXPECT_NE(Cli::read_all(gen.out).find(" can0 123#\n"), std::string::npos);
+  EXPECT_EQ(gen.wait(), 0);
+}
+
+// fault list shows what each fault matches, so that a rule that never hits says why.
+TEST(CliHabits, FaultListShowsEachFaultsMatch) {
+  Daemon d;
+  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
+           {"--effect", "bit_error", "--bus", "can0", "--id", "7B"},
+           {"--effect", "crc_error", "--bus", "can0", "--id", "100", "--mask", "7F0", "--ext",
+            "--from", "ixxat0:0"},
+           {"--effect", "ack_error", "--bus", "can1", "--rtr"},
+           {"--effect", "lin_checksum_error", "--bus", "lin0", "--id", "20"},
+           {"--effect", "node_off", "--node", "ixxat0:1"},
+           {"--effect", "babble", "--node", "ixxat0:0", "--id", "1AB", "--duration", "1ms"}}) {
+    std::vector<std::string> all{"fault", "inject"};
+    all.insert(all.end(), args.begin(), args.end());
+    Cli inject(d, all);
+    EXPECT_EQ(inject.wait(), 0) << Cli::read_all(inject.err);
+  }
+  Cli list(d, {"fault", "list"});
+  const std::string listed = Cli::read_all(list.out);
+  EXPECT_EQ(list.wait(), 0);
+  std::vector<std::string> lines;
+  for (std::size_t at = 0; at < listed.size();) {
+    const std::size_t end = listed.find('\n', at);
+    lines.push_back(listed.substr(at, end - at));
+    at = end == std::string::npos ? listed.size() : end + 1;
+  }
+  ASSERT_EQ(lines.size(), 7u) << listed;
+  // The last column, after the state.
+  EXPECT_TRUE(lines[0].ends_with(" STATE   MATCH")) << listed;
+  const std::vector<std::string> matches{
+      "id 0x7B", "id 0x100 mask 0x7F0 ext from ixxat0:0", "rtr", "id 0x20", "-", "sends 0x1AB"};
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    EXPECT_TRUE(lines[k + 1].ends_with("  " + matches[k])) << matches[k] << "\n" << listed;
+  }
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("\"match\" : {\"ext\" : true,\"from\" : \"ixxat0:0\",\"id\" : 256,"
+                   "\"mask\" : 2032}"),
+            std::string::npos)
+      << j;
+}
+
+TEST(CliHabits, CanemuAndCanemudSayTheirVersionAndBadArgumentsExitOne) {
+  Cli canemu(CANEMU_PATH, {"--version"});
+  EXPECT_EQ(Cli::read_all(canemu.out), "canemu " CANEMU_PROJECT_VERSION "\n");
+  EXPECT_EQ(canemu.wait(), 0);
+  Cli canemud(CANEMUD_PATH, {"--version"});
+  EXPECT_EQ(Cli::read_all(canemud.out), "canemud " CANEMU_PROJECT_VERSION "\n");
+  EXPECT_EQ(canemud.wait(), 0);
+  Cli bogus(CANEMUD_PATH, {"--bogus"});
+  EXPECT_NE(Cli::read_all(bogus.err).find("--bogus"), std::string::npos);
+  EXPECT_EQ(bogus.wait(), 1);
+  Cli help(CANEMUD_PATH, {"--help"});
+  EXPECT_NE(Cli::read_all(help.out).find("--version"), std::string::npos);
+  EXPECT_EQ(help.wait(), 0);
+}
+
+// canemud's hint names the canemu beside it when it runs from a build tree, else `canemu` as
+// installed.
+TEST(CliHabits, CanemudSuggestsTheCanemuOfItsOwnTree) {
+  {
+    Daemon d;
+    // This build's canemu, written as canemud was started (here by its full path).
+    const std::string hint = fmt::format("try: CANEMU_SOCKET={} ", d.socket());
+    ASSERT_TRUE(d.read_log_until(" status\n", 10'000)) << d.log();
+    const std::size_t at = d.log().find(hint);
+    ASSERT_NE(at, std::string::npos) << d.log();
+    const std::size_t end = d.log().find(" status\n", at);
+    const std::string named = d.log().substr(at + hint.size(), end - at - hint.size());
+    EXPECT_EQ(std::filesystem::canonical(named), std::filesystem::canonical(CANEMU_PATH));
+  }
+  char dir[] = "/tmp/canemu-installed-XXXXXX";
+  const std::string bin = std::string(::mkdtemp(dir)) + "/canemud";
+  std::filesystem::copy_file(CANEMUD_PATH, bin);
+  {
+    testing::CanemudProcess installed(bin, {"--time=stepped"});
+    ASSERT_TRUE(installed.ready()) << installed.log();
+    const std::string line =
+        fmt::format("try: CANEMU_SOCKET={} canemu status\n", installed.socket());
+    EXPECT_TRUE(installed.read_log_until(line, 10'000)) << installed.log();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// CAN FD frames on a classic bus: the cause said as it is, before anything is sent.
+TEST(CliHabits, CanFdOnAClassicBusIsRefusedForThatReason) {
+  Daemon d;
+  Cli send(d, {"send", "can0", "123##1AA", "--step", "1ms"});
+  EXPECT_EQ(Cli::read_all(send.err),
+            "canemu: '123##1AA': a CAN FD frame, and can0 is a classic CAN bus (CAN FD needs a "
+            "bus of kind can-fd)\n");
+  EXPECT_EQ(send.wait(), 1);
+  Cli gen(d, {"gen", "can0", "-f", "-n", "1"});
+  EXPECT_EQ(Cli::read_all(gen.err),
+            "canemu: -f: can0 is a classic CAN bus (CAN FD needs a bus of kind can-fd)\n");
+  EXPECT_EQ(gen.wait(), 1);
+}
+
+// Column widths follow their content: a long scenario name and effect, and the long state
+// names of a timeline, keep every column in its place.
+TEST(CliHabits, FaultListAndTimelineColumnsFitTheirContent) {
+  Daemon d;
+  const std::string name(63, 'n');
+  char dir[] = "/tmp/canemu-columns-XXXXXX";
+  const std::string file = std::string(::mkdtemp(dir)) + "/long.toml";
+  FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fprintf(f,
+               "[scenario]\nname = \"%s\"\n[[fault]]\neffect = \"error_counters\"\nat = \"0s\"\n"
+               "node = \"ixxat0:0\"\ntec = 130\nrec = 0\n[[fault]]\n"
+               "effect = \"lin_checksum_error\"\nat = \"0s\"\nbus = \"lin0\"\n",
+               name.c_str());
+  std::fclose(f);
+  Cli load(d, {"fault", "load", file});
+  EXPECT_EQ(load.wait(), 0) << Cli::read_all(load.err);
+  Cli step(d, {"time", "step", "1ms"});
+  EXPECT_EQ(step.wait(), 0);
+  // Each header's column starts where its values start (names left, numbers right-aligned).
+  const auto lines_of = [](const std::string& text) {
+    std::vector<std::string> lines;
+    for (std::size_t at = 0; at < text.size();) {
+      const std::size_t end = text.find('\n', at);
+      lines.push_back(text.substr(at, end - at));
+      at = end == std::string::npos ? text.size() : end + 1;
+    }
+    return lines;
+  };
+  Cli list(d, {"fault", "list"});
+  const auto rows = lines_of(Cli::read_all(list.out));
+  EXPECT_EQ(list.wait(), 0);
+  ASSERT_EQ(rows.size(), 3u);
+  const std::string& header = rows[0];
+  const std::string& row = rows[2];
+  EXPECT_EQ(row.find("lin_checksum_error"), header.find("EFFECT")) << header << "\n" << row;
+  EXPECT_EQ(row.find(" lin0 ") + 1, header.find("TARGET")) << header << "\n" << row;
+  EXPECT_EQ(row.find(" 9 ") + 1, header.find("LINE") + 3) << header << "\n" << row;
+  EXPECT_EQ(row.find("pending"), std::string::npos);
+  EXPECT_EQ(row.find("active"), header.find("STATE")) << header << "\n" << row;
+
+  Cli timeline(d, {"timeline", "can0", "ixxat0:0"});
+  const auto t = lines_of(Cli::read_all(timeline.out));
+  EXPECT_EQ(timeline.wait(), 0);
+  ASSERT_GE(t.size(), 4u);
+  const std::string& th = t[t.size() - 2];
+  const std::string& tr = t[t.size() - 1];
+  EXPECT_NE(tr.find("error-passive"), std::string::npos) << th << "\n" << tr;
+  EXPECT_EQ(tr.find("error-passive"), th.find("state")) << th << "\n" << tr;
+  EXPECT_EQ(tr.find("counters written"), th.find("cause")) << th << "\n" << tr;
+  ::unlink(file.c_str());
+  ::rmdir(dir);
+}
+
+// A configured adapter's controller that no program started is in its init mode: status says
+// init, not error-active; a started one (an ephemeral node) is error-active.
+TEST(CliHabits, StatusShowsControllersNotStartedAsInit) {
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("ixxat0:0       can0         init              0    0"), std::string::npos) << t;
+  EXPECT_NE(t.find("eph1:0         can0         error-active      0    0"), std::string::npos) << t;
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("\"name\" : \"ixxat0:1\",\"rec\" : 0,\"state\" : \"init\""), std::string::npos)
+      << j;
 }
 
 }  // namespace

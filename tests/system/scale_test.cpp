@@ -47,13 +47,14 @@ void step(client::Connection& c, int64_t ns) {
   ASSERT_TRUE(r) << r.error().message;
 }
 
-// One node of `canemu status --json`: its keys in the order the JSON has them.
+// One node of `canemu status --json`: its keys in the order the JSON has them. A configured
+// adapter's controller no program started is in its init mode.
 std::string json_node(const std::string& name, const std::string& bus, uint64_t sent,
-                      uint64_t received) {
+                      uint64_t received, const std::string& state = "init") {
   return fmt::format(
       "{{\"bus\" : \"{}\",\"errors\" : 0,\"frames_received\" : {},\"frames_sent\" : {},"
-      "\"name\" : \"{}\",\"rec\" : 0,\"state\" : \"error-active\",\"tec\" : 0}}",
-      bus, received, sent, name);
+      "\"name\" : \"{}\",\"rec\" : 0,\"state\" : \"{}\",\"tec\" : 0}}",
+      bus, received, sent, name, state);
 }
 
 // Three frames are 0.015 % of the last second: 0.0 %.
@@ -100,7 +101,8 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
   for (std::size_t k = 0; k < 256; ++k) {
     nodes += json_node(many_buses_node(k), fmt::format("bus{}", k % 64), 0, 0) + ",";
   }
-  nodes += json_node("tx63:0", "bus63", 3, 0) + "," + json_node("rx63:0", "bus63", 0, 3) + "]";
+  nodes += json_node("tx63:0", "bus63", 3, 0, "error-active") + "," +
+           json_node("rx63:0", "bus63", 0, 3, "error-active") + "]";
   EXPECT_NE(j.find(nodes), std::string::npos) << j;
   // The devices: 64 configured adapters, then the two ephemeral ones.
   EXPECT_NE(j.find("\"model\" : \"ixxat-usb-to-can\",\"name\" : \"dev63\",\"nodes\" : "
@@ -127,7 +129,7 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
   EXPECT_NE(t.find("\nbus63        can       1000000         0    0.0%          3        0\n"),
             std::string::npos)
       << t;
-  EXPECT_NE(t.find("\ndev63:3        bus63        error-active      0    0          0          0"
+  EXPECT_NE(t.find("\ndev63:3        bus63        init              0    0          0          0"
                    "        0\ntx63:0         bus63        error-active      0    0          3"
                    "          0        0\n"),
             std::string::npos)

@@ -71,6 +71,10 @@ std::string error_state_name(uint8_t state) {
   return std::string(model::to_string(static_cast<model::ErrorState>(state)));
 }
 
+std::string classic_bus_text(const std::string& bus) {
+  return bus + " is a classic CAN bus (CAN FD needs a bus of kind can-fd)";
+}
+
 int fail(const std::string& message) {
   std::fprintf(stderr, "canemu: %s\n", message.c_str());
   return 1;

@@ -97,6 +97,9 @@ int run_capture(const std::string& socket, const CaptureRun& run);
 // A node's error state from the protocol (WireErrorState) by the model's name: "error-active"...
 std::string error_state_name(uint8_t state);
 
+// Why CAN FD frames cannot go on `bus`, a classic CAN bus: "can0 is a classic CAN bus (...)".
+std::string classic_bus_text(const std::string& bus);
+
 // Prints "canemu: <message>" to stderr; returns the exit code of a failed command (1).
 int fail(const std::string& message);
 

@@ -31,6 +31,24 @@ tl::expected<int64_t, std::string> option_integer(const char* option, const std:
   return value;
 }
 
+// An identifier or mask, in hex as candump writes identifiers (and as `send` and `gen -I` read
+// them): "123" or "0x123" is 0x123, at most `max`.
+tl::expected<int64_t, std::string> option_identifier(const char* option, const std::string& text,
+                                                     uint32_t max, const char* why) {
+  const bool prefixed = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
+  const std::string digits = prefixed ? text.substr(2) : text;
+  if (digits.empty() || digits.size() > 8 ||
+      digits.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos) {
+    return tl::unexpected(fmt::format(
+        "{} '{}': not a hex identifier (123 or 0x123, as candump writes it)", option, text));
+  }
+  const int64_t value = std::stoll(digits, nullptr, 16);
+  if (value > max) {
+    return tl::unexpected(fmt::format("{} '{}': above {:X}{}", option, text, max, why));
+  }
+  return value;
+}
+
 }  // namespace
 
 void add_inject_options(CLI::App& inject, InjectOptions& o) {
@@ -41,8 +59,8 @@ void add_inject_options(CLI::App& inject, InjectOptions& o) {
   inject.add_option("--node", o.node, "node, DEVICE:N or a device's name");
   inject.add_option("--duration", o.duration, "ack_suppress, stuck_dominant, babble");
   inject.add_option("--from", o.from, "match: transmitting node");
-  inject.add_option("--id", o.id, "match: identifier (0x100); babble: its frame's");
-  inject.add_option("--mask", o.mask, "match: identifier mask (0x7FF)");
+  inject.add_option("--id", o.id, "match: identifier in hex (100 or 0x100); babble: its frame's");
+  inject.add_option("--mask", o.mask, "match: identifier mask in hex (7FF or 0x7FF)");
   inject.add_flag("--ext", o.ext, "match: extended frames only; babble: 29-bit id");
   inject.add_flag("--std", o.std_id, "match: standard frames only");
   inject.add_flag("--rtr", o.rtr, "match: remote frames only");
@@ -60,12 +78,12 @@ void add_inject_options(CLI::App& inject, InjectOptions& o) {
   inject.add_option("--pulse", o.pulse, "lin_wakeup: 250us (default) to 5ms");
   inject.footer(
       "Examples:\n"
-      "  canemu fault inject --effect bit_error --bus can0 --id 0x1A0 --count 3\n"
+      "  canemu fault inject --effect bit_error --bus can0 --id 1A0 --count 3\n"
       "  canemu fault inject --effect random_errors --bus can0 --bit-error-rate 1e-4 --until 2s\n"
       "  canemu fault inject --effect node_off --node ixxat0:1 --at 1s --until 1.5s\n"
       "  canemu fault inject --effect babble --node ixxat0:0 --id 0 --data DEADBEEF "
       "--duration 500ms\n"
-      "  canemu fault inject --effect lin_checksum_error --bus lin0 --id 0x20 --count 1\n"
+      "  canemu fault inject --effect lin_checksum_error --bus lin0 --id 20 --count 1\n"
       "  canemu fault inject --effect lin_wakeup --node ixxat0:2 --at 10ms");
 }
 
@@ -101,10 +119,20 @@ tl::expected<std::string, std::string> inject_scenario(const InjectOptions& o) {
       fault.insert("count", *n);
     }
   }
+  // Identifiers and masks in hex; at most 29 bits, 11 for babble's standard frame, 6 on LIN.
+  const bool lin = o.effect.starts_with("lin_");
+  const bool standard_babble = o.effect == "babble" && !o.ext;
+  const uint32_t id_max = lin ? 0x3F : standard_babble ? 0x7FF : 0x1FFFFFFF;
+  const char* id_why = lin ? ", the largest LIN identifier"
+                       : standard_babble
+                           ? ", the largest 11-bit identifier (29-bit ones with --ext)"
+                           : ", the largest 29-bit identifier";
   std::optional<int64_t> id, mask;
-  for (auto [option, given, out] : {std::tuple{"--id", &o.id, &id}, {"--mask", &o.mask, &mask}}) {
+  for (auto [option, given, out, max, why] :
+       {std::tuple{"--id", &o.id, &id, id_max, id_why},
+        {"--mask", &o.mask, &mask, uint32_t{0x1FFFFFFF}, ", the largest 29-bit mask"}}) {
     if (*given) {
-      auto n = option_integer(option, **given);
+      auto n = option_identifier(option, **given, max, why);
       if (!n) {
         return tl::unexpected(n.error());
       }

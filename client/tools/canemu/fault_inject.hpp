@@ -21,7 +21,7 @@ struct InjectOptions {
   std::string at = "0s";
   std::optional<std::string> until, bus, node, duration, from, wire;
   std::optional<std::string> where, pulse;  // lin_bit_error, lin_wakeup
-  std::optional<std::string> id, mask;      // 0x1A0 or 416
+  std::optional<std::string> id, mask;      // hex: 1A0 or 0x1A0
   bool ext = false;
   bool std_id = false;
   bool rtr = false;

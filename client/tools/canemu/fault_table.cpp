@@ -1,10 +1,13 @@
 #include "fault_table.hpp"
 
 #include <cstdio>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
+
+#include "text_table.hpp"
 
 namespace canemu::cli {
 
@@ -14,7 +17,46 @@ std::string state_name(uint8_t state) {
   return std::string(ipc::to_string(static_cast<ipc::WireFaultState>(state)));
 }
 
+ipc::WireFaultMatch match_kind(const ipc::FaultEntry& e) {
+  return static_cast<ipc::WireFaultMatch>(e.match);
+}
+ipc::WireMatchFlag flag(uint8_t v) {
+  return static_cast<ipc::WireMatchFlag>(v);
+}
+
 }  // namespace
+
+std::string match_text(const ipc::FaultEntry& e) {
+  const bool ext = flag(e.match_ext) == ipc::WireMatchFlag::yes;
+  switch (match_kind(e)) {
+    case ipc::WireFaultMatch::none:
+      return "-";
+    case ipc::WireFaultMatch::babble:
+      return fmt::format("sends 0x{:X}{}", e.match_id, ext ? " ext" : "");
+    case ipc::WireFaultMatch::can:
+    case ipc::WireFaultMatch::lin:
+      break;
+  }
+  std::string text;
+  const auto add = [&text](const std::string& part) { text += (text.empty() ? "" : " ") + part; };
+  if (e.match_mask != 0) {
+    const uint32_t all = match_kind(e) == ipc::WireFaultMatch::lin ? 0x3F : 0x1FFFFFFF;
+    add(fmt::format("id 0x{:X}", e.match_id));
+    if (e.match_mask != all) {
+      add(fmt::format("mask 0x{:X}", e.match_mask));
+    }
+  }
+  if (flag(e.match_ext) != ipc::WireMatchFlag::any) {
+    add(ext ? "ext" : "std");
+  }
+  if (flag(e.match_rtr) != ipc::WireMatchFlag::any) {
+    add(flag(e.match_rtr) == ipc::WireMatchFlag::yes ? "rtr" : "data");
+  }
+  if (const std::string from = ipc::printable_name_of(e.match_from); !from.empty()) {
+    add("from " + from);
+  }
+  return text.empty() ? "any" : text;
+}
 
 tl::expected<ipc::FaultListReply, std::string> fault_list(client::Connection& c) {
   auto r = c.call<ipc::FaultListRequest, ipc::FaultListReply>(
@@ -26,22 +68,65 @@ tl::expected<ipc::FaultListReply, std::string> fault_list(client::Connection& c)
 }
 
 void print_faults(const ipc::FaultListReply& r) {
-  std::printf("%-24s %5s %-15s %-12s %14s %14s %8s %8s %s\n", "SCENARIO", "LINE", "EFFECT",
-              "TARGET", "AT", "UNTIL", "SEEN", "HITS", "STATE");
+  using Align = TextTable::Align;
+  TextTable table({{"SCENARIO", Align::left, 24},
+                   {"LINE", Align::right, 5},
+                   {"EFFECT", Align::left, 15},
+                   {"TARGET", Align::left, 12},
+                   {"AT", Align::right, 14},
+                   {"UNTIL", Align::right, 14},
+                   {"SEEN", Align::right, 8},
+                   {"HITS", Align::right, 8},
+                   {"STATE", Align::left, 7},
+                   {"MATCH"}});
   for (uint16_t i = 0; i < r.count; ++i) {
     const ipc::FaultEntry& e = r.faults[i];
-    const std::string until =
-        e.has_until ? fmt::format("{:.6f}", static_cast<double>(e.until_ns) / 1e9) : "-";
-    std::printf("%-24s %5u %-15s %-12s %14.6f %14s %8llu %8llu %s\n",
-                ipc::name_of(e.scenario).c_str(), e.line, ipc::name_of(e.effect).c_str(),
-                ipc::name_of(e.target).c_str(), static_cast<double>(e.at_ns) / 1e9, until.c_str(),
-                static_cast<unsigned long long>(e.seen), static_cast<unsigned long long>(e.hits),
-                state_name(e.state).c_str());
+    const auto seconds = [](int64_t ns) {
+      return fmt::format("{:.6f}", static_cast<double>(ns) / 1e9);
+    };
+    table.add({ipc::name_of(e.scenario), std::to_string(e.line), ipc::name_of(e.effect),
+               ipc::name_of(e.target), seconds(e.at_ns), e.has_until ? seconds(e.until_ns) : "-",
+               std::to_string(e.seen), std::to_string(e.hits), state_name(e.state), match_text(e)});
   }
+  table.print();
   if (r.total > r.count) {
     std::printf("(%u more not shown)\n", r.total - r.count);
   }
 }
+
+namespace {
+
+// A frame effect's "match" (the keys of the scenario language's match, each where it is set), or
+// babble's "frame" (id, ext); nothing for other effects.
+std::optional<toml::table> match_json(const ipc::FaultEntry& e) {
+  const auto as_bool = [](uint8_t v) { return flag(v) == ipc::WireMatchFlag::yes; };
+  switch (match_kind(e)) {
+    case ipc::WireFaultMatch::none:
+      return std::nullopt;
+    case ipc::WireFaultMatch::babble:
+      return toml::table{{"id", static_cast<int64_t>(e.match_id)}, {"ext", as_bool(e.match_ext)}};
+    case ipc::WireFaultMatch::can:
+    case ipc::WireFaultMatch::lin:
+      break;
+  }
+  toml::table m;
+  if (e.match_mask != 0) {
+    m.insert("id", static_cast<int64_t>(e.match_id));
+    m.insert("mask", static_cast<int64_t>(e.match_mask));
+  }
+  if (flag(e.match_ext) != ipc::WireMatchFlag::any) {
+    m.insert("ext", as_bool(e.match_ext));
+  }
+  if (flag(e.match_rtr) != ipc::WireMatchFlag::any) {
+    m.insert("rtr", as_bool(e.match_rtr));
+  }
+  if (const std::string from = ipc::printable_name_of(e.match_from); !from.empty()) {
+    m.insert("from", from);
+  }
+  return m;
+}
+
+}  // namespace
 
 toml::array faults_array(const ipc::FaultListReply& r) {
   toml::array faults;
@@ -57,6 +142,9 @@ toml::array faults_array(const ipc::FaultListReply& r) {
                   {"state", state_name(e.state)}};
     if (e.has_until) {
       t.insert("until_ns", e.until_ns);
+    }
+    if (auto m = match_json(e)) {
+      t.insert(match_kind(e) == ipc::WireFaultMatch::babble ? "frame" : "match", std::move(*m));
     }
     faults.push_back(std::move(t));
   }

@@ -15,6 +15,10 @@ namespace canemu::cli {
 // Asks canemud for its fault list; the error's text on failure.
 tl::expected<ipc::FaultListReply, std::string> fault_list(client::Connection& c);
 
+// What a fault's frames must be, as `fault list` shows it: "id 0x123 mask 0x7F0 ext from
+// ixxat0:0", "any" (every frame), babble's "sends 0x123", "-" for effects on no frame.
+std::string match_text(const ipc::FaultEntry& e);
+
 // Every fault, one line each under a header line.
 void print_faults(const ipc::FaultListReply& r);
 

@@ -25,6 +25,7 @@
 #include "canemu/ipc/duration.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "command.hpp"
+#include "lin_send.hpp"
 
 namespace canemu::cli {
 
@@ -157,12 +158,26 @@ class Generator {
   uint64_t n_ = 0;
 };
 
-int run_gen(const std::string& socket, const GenOptions& o) {
-  const auto gap = ipc::parse_duration(o.gap);
+// cangen's -g: a number is milliseconds ("10", "0.5"); with a unit, any duration ("500us").
+std::optional<int64_t> parse_gap(const std::string& text, std::string& shown) {
+  const bool bare = !text.empty() && text.find_first_not_of("0123456789.") == std::string::npos;
+  shown = bare && text != "0" ? text + "ms" : text;
+  return ipc::parse_duration(shown);
+}
+
+int run_gen(const std::string& socket, GenOptions o) {
+  std::string gap_text;
+  const auto gap = parse_gap(o.gap, gap_text);
   if (!gap) {
-    return fail(fmt::format("-g '{}' is not a duration (examples: 0, 10ms, 500us)", o.gap));
+    return fail(fmt::format(
+        "-g '{}' is not a duration (milliseconds as cangen's -g: 10, 0.5; or with a unit: 0, "
+        "10ms, 500us)",
+        o.gap));
   }
-  const auto id = parse_mode(o.id, true);
+  o.gap = gap_text;
+  // Hex as candump writes it; a 0x in front is allowed.
+  const bool prefixed = o.id.size() > 2 && o.id[0] == '0' && (o.id[1] == 'x' || o.id[1] == 'X');
+  const auto id = parse_mode(prefixed ? o.id.substr(2) : o.id, true);
   const uint64_t id_limit = o.extended ? 0x1FFFFFFF : 0x7FF;
   if (!id || (id->kind == Mode::fixed && id->value > id_limit)) {
     return fail(fmt::format("-I '{}': r, i or a hex identifier up to {:X}{}", o.id, id_limit,
@@ -215,6 +230,9 @@ int run_gen(const std::string& socket, const GenOptions& o) {
     return fail(base.error().message);
   }
   const bool stepped = base->stepped();
+  if (const auto kind = bus_kind(*c, o.bus); o.fd && kind && kind->first == ipc::WireBusKind::can) {
+    return fail("-f: " + classic_bus_text(o.bus));
+  }
   client::ChannelOptions co;
   co.bus = o.bus;
   co.bitrate = o.bitrate;
@@ -285,10 +303,13 @@ int run_gen(const std::string& socket, const GenOptions& o) {
   const uint64_t pending = queued - sent - dropped;
   std::fprintf(stderr, "canemu: %llu frame(s) sent on %s", static_cast<unsigned long long>(sent),
                o.bus.c_str());
-  if (dropped != 0 || pending != 0) {
-    std::fprintf(stderr, ", %llu given up, %llu not sent: is a node on %s acknowledging?",
-                 static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(pending),
-                 o.bus.c_str());
+  if (dropped != 0) {
+    std::fprintf(stderr, ", %llu given up by its node after errors",
+                 static_cast<unsigned long long>(dropped));
+  }
+  if (pending != 0) {
+    std::fprintf(stderr, ", %llu not sent: is a node on %s acknowledging at %u bit/s?",
+                 static_cast<unsigned long long>(pending), o.bus.c_str(), ch->info().bitrate);
   }
   std::fprintf(stderr, "\n");
   return dropped == 0 && pending == 0 ? 0 : 1;
@@ -301,9 +322,12 @@ Command add_gen(CLI::App& app, const std::string& socket) {
       "gen", "generate frames on a bus as cangen does, e.g. 'gen can0 -g 10ms -n 100'");
   auto o = std::make_shared<GenOptions>();
   gen->add_option("BUS", o->bus, "bus name")->required();
-  gen->add_option("-g,--gap", o->gap, "time between frames (default 200ms; 0: back to back)");
+  gen->add_option("-g,--gap", o->gap,
+                  "time between frames: ms as cangen's -g (10, 0.5), or with a unit (500us); "
+                  "default 200ms, 0 back to back");
   gen->add_option("-n,--count", o->count, "stop after this many frames (default: until Ctrl-C)");
-  gen->add_option("-I,--id", o->id, "identifier: r random (default), i increment, or hex");
+  gen->add_option("-I,--id", o->id,
+                  "identifier: r random (default), i increment, or hex (123 or 0x123)");
   gen->add_option("-L,--length", o->length,
                   "length: r random DLC (default), i increment, or bytes");
   gen->add_option("-D,--data", o->data, "data: r random (default), i increment, or hex bytes");

@@ -3,7 +3,7 @@
 // wire model. One file per subcommand (command.hpp).
 //
 // Exit codes: 0 success, 1 any failure (a bad argument, canemud unreachable, a refused request,
-// frames not sent), as can-utils do; `--help` exits 0.
+// frames not sent), as can-utils do; `--help` and `--version` exit 0.
 #include <exception>
 #include <string>
 #include <vector>
@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   using namespace canemu::cli;
   CLI::App app{"canemu: talk to canemud, and calculate CAN frames and bit timings"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "canemu " CANEMU_VERSION, "print canemu's version and exit");
   std::string socket;
   app.add_option("--socket", socket, "canemud's control socket (default: $CANEMU_SOCKET, ...)");
   app.add_option("--wait", g_connect_wait_s,
@@ -33,6 +34,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     // CLI11's own exit codes (100+) are not ours: every bad argument is exit 1, with the

@@ -225,6 +225,14 @@ std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
                n.state == st ? 1 : 0);
     }
   }
+  e.family("canemu_node_started", "gauge",
+           "1 while a CAN node's controller takes part in bus traffic, 0 in its init mode.");
+  for (const ipc::StatusNode& n : s.nodes) {
+    if (!is_lin(n)) {
+      e.sample("canemu_node_started", node_label(n),
+               static_cast<ipc::WireNodeMode>(n.mode) == ipc::WireNodeMode::running ? 1 : 0);
+    }
+  }
   e.family("canemu_lin_node_online", "gauge", "1 while a LIN node takes part in the bus.");
   for (const ipc::StatusNode& n : s.nodes) {
     if (is_lin(n)) {

@@ -76,15 +76,21 @@ int run_send(const std::string& socket, const SendOptions& o) {
     return fail("--step needs stepped time; canemud runs " +
                 std::string(ipc::to_string(base->mode)));
   }
-  if (auto kind = bus_kind(*c, o.bus); kind && kind->first == ipc::WireBusKind::lin) {
+  const auto kind = bus_kind(*c, o.bus);
+  if (kind && kind->first == ipc::WireBusKind::lin) {
     return send_lin(*c, o, step_ns, *base);
   }
+  const bool classic_bus = kind && kind->first == ipc::WireBusKind::can;
   std::vector<ipc::ChannelMessage> messages;
   for (const std::string& text : o.frames) {
     std::string error;
     auto m = parse_cansend(text, error);
     if (!m) {
       return fail(fmt::format("'{}': {}", text, error));
+    }
+    // As cansend on an interface without CAN FD: refused before anything is sent.
+    if ((m->flags & ipc::kMsgFd) != 0 && classic_bus) {
+      return fail(fmt::format("'{}': a CAN FD frame, and {}", text, classic_bus_text(o.bus)));
     }
     messages.push_back(*m);
   }
@@ -96,6 +102,12 @@ int run_send(const std::string& socket, const SendOptions& o) {
   auto ch = client::Channel::open(*c, co);
   if (!ch) {
     return fail(ch.error().message);
+  }
+  for (std::size_t k = 0; k < messages.size() && !ch->info().fd_capable; ++k) {
+    if ((messages[k].flags & ipc::kMsgFd) != 0) {
+      return fail(fmt::format("'{}': a CAN FD frame, and {} sends classic CAN frames only",
+                              o.frames[k], ch->device()));
+    }
   }
   for (const ipc::ChannelMessage& m : messages) {
     auto sent = ch->send(m, o.timeout_ms);
@@ -126,9 +138,7 @@ int run_send(const std::string& socket, const SendOptions& o) {
       ++done;
     } else if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped)) {
       m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
-      std::fprintf(stderr,
-                   "canemu: %s: not sent (given up after an error, or a CAN FD frame on a classic "
-                   "CAN bus)\n",
+      std::fprintf(stderr, "canemu: %s: not sent (its node gave it up after an error)\n",
                    candump_frame(*m).c_str());
       ++failed;
       ++done;

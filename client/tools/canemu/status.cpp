@@ -17,12 +17,15 @@
 #include "capture_table.hpp"
 #include "command.hpp"
 #include "fault_table.hpp"
+#include "text_table.hpp"
 
 namespace canemu::cli {
 
 namespace {
 
-// A CAN node's error state; a LIN controller's "online" or "offline".
+// A CAN node's error state, or "init" while its controller takes no part in bus traffic (not
+// started; bus-off, which also stops an SJA1000, stays bus-off); a LIN controller's "online" or
+// "offline".
 std::string state_name(const ipc::StatusNode& n) {
   switch (static_cast<ipc::WireLinState>(n.lin)) {
     case ipc::WireLinState::none:
@@ -31,6 +34,10 @@ std::string state_name(const ipc::StatusNode& n) {
       return "offline";
     case ipc::WireLinState::online:
       return "online";
+  }
+  if (static_cast<ipc::WireNodeMode>(n.mode) == ipc::WireNodeMode::init &&
+      static_cast<ipc::WireErrorState>(n.state) != ipc::WireErrorState::bus_off) {
+    return "init";
   }
   return error_state_name(n.state);
 }
@@ -285,37 +292,55 @@ void print_tables(const client::Connection& c, const client::Status& s, const st
   if (static_cast<ipc::WireTimeMode>(s.time_mode) != ipc::WireTimeMode::stepped) {
     print_pacing(s.pacing);
   }
-  std::printf("%-12s %-7s %9s %9s %7s %10s %8s\n", "BUS", "KIND", "BITRATE", "DATA", "LOAD",
-              "FRAMES", "ERRORS");
+  using Align = TextTable::Align;
+  const auto n = [](uint64_t v) { return std::to_string(v); };
+  TextTable bus_table({{"BUS", Align::left, 12},
+                       {"KIND", Align::left, 7},
+                       {"BITRATE", Align::right, 9},
+                       {"DATA", Align::right, 9},
+                       {"LOAD", Align::right, 7},
+                       {"FRAMES", Align::right, 10},
+                       {"ERRORS", Align::right, 8}});
   for (const ipc::StatusBus& b : s.buses) {
-    const std::string kind = kind_name(b.kind) + (b.low_speed ? "-ls" : "");
-    std::printf("%-12s %-7s %9u %9u %6.1f%% %10llu %8llu\n", ipc::name_of(b.name).c_str(),
-                kind.c_str(), b.bitrate, b.data_bitrate, b.load_permille / 10.0,
-                static_cast<unsigned long long>(b.frames),
-                static_cast<unsigned long long>(b.error_frames));
+    bus_table.add({ipc::name_of(b.name), kind_name(b.kind) + (b.low_speed ? "-ls" : ""),
+                   n(b.bitrate), n(b.data_bitrate), fmt::format("{:.1f}%", b.load_permille / 10.0),
+                   n(b.frames), n(b.error_frames)});
   }
-  std::printf("%-14s %-12s %-14s %4s %4s %10s %10s %8s\n", "NODE", "BUS", "STATE", "TEC", "REC",
-              "SENT", "RECEIVED", "ERRORS");
-  for (const ipc::StatusNode& n : s.nodes) {
-    std::printf("%-14s %-12s %-14s %4u %4u %10llu %10llu %8llu\n", ipc::name_of(n.name).c_str(),
-                s.bus_name(n).c_str(), state_name(n).c_str(), n.tec, n.rec,
-                static_cast<unsigned long long>(n.frames_sent),
-                static_cast<unsigned long long>(n.frames_received),
-                static_cast<unsigned long long>(n.errors));
+  bus_table.print();
+  TextTable node_table({{"NODE", Align::left, 14},
+                        {"BUS", Align::left, 12},
+                        {"STATE", Align::left, 14},
+                        {"TEC", Align::right, 4},
+                        {"REC", Align::right, 4},
+                        {"SENT", Align::right, 10},
+                        {"RECEIVED", Align::right, 10},
+                        {"ERRORS", Align::right, 8}});
+  for (const ipc::StatusNode& node : s.nodes) {
+    node_table.add({ipc::name_of(node.name), s.bus_name(node), state_name(node), n(node.tec),
+                    n(node.rec), n(node.frames_sent), n(node.frames_received), n(node.errors)});
   }
-  std::printf("%-14s %-20s %-8s %s\n", "DEVICE", "MODEL", "OWNER", "BUSES");
+  node_table.print();
+  TextTable device_table({{"DEVICE", Align::left, 14},
+                          {"MODEL", Align::left, 20},
+                          {"OWNER", Align::left, 8},
+                          {"BUSES"}});
   for (const ipc::DeviceEntry& d : devices.devices) {
     std::string buses;
     for (const std::string& b : device_buses(d)) {
       buses += (buses.empty() ? "" : " ") + b;
     }
-    std::printf("%-14s %-20s %-8s %s\n", ipc::name_of(d.name).c_str(), model_name(d.model).c_str(),
-                d.ephemeral ? std::to_string(d.owner_pid).c_str() : "config", buses.c_str());
+    device_table.add({ipc::name_of(d.name), model_name(d.model),
+                      d.ephemeral ? std::to_string(d.owner_pid) : "config", buses});
   }
-  std::printf("%-20s %8s %8s %8s\n", "CLIENT", "PID", "UID", "CHANNELS");
+  device_table.print();
+  TextTable client_table({{"CLIENT", Align::left, 20},
+                          {"PID", Align::right, 8},
+                          {"UID", Align::right, 8},
+                          {"CHANNELS", Align::right, 8}});
   for (const ipc::ClientEntry& e : clients) {
-    std::printf("%-20s %8u %8u %8u\n", ipc::name_of(e.name).c_str(), e.pid, e.uid, e.channels);
+    client_table.add({ipc::name_of(e.name), n(e.pid), n(e.uid), n(e.channels)});
   }
+  client_table.print();
   if (faults.total > 0) {
     print_faults(faults);
   }

@@ -21,6 +21,7 @@
 #include "command.hpp"
 #include "fault_table.hpp"
 #include "python_tool.hpp"
+#include "text_table.hpp"
 
 namespace canemu::cli {
 
@@ -188,11 +189,18 @@ void print_text(const Timeline& t) {
     if (n.samples.empty()) {
       continue;
     }
-    std::printf("  %-20s %5s %5s  %-8s %s\n", "time (s)", "TEC", "REC", "state", "cause");
+    using Align = TextTable::Align;
+    TextTable table({{"time (s)", Align::left, 20},
+                     {"TEC", Align::right, 5},
+                     {"REC", Align::right, 5},
+                     {"state", Align::left, 0, 2},
+                     {"cause"}},
+                    "  ");
     for (const ipc::WireCounterSample& s : n.samples) {
-      std::printf("  %-20.9f %5u %5u  %-8s %s\n", seconds(s.at_ns), s.tec, s.rec,
-                  error_state_name(s.state).c_str(), cause_text(s).c_str());
+      table.add({fmt::format("{:.9f}", seconds(s.at_ns)), std::to_string(s.tec),
+                 std::to_string(s.rec), error_state_name(s.state), cause_text(s)});
     }
+    table.print();
   }
 }
 

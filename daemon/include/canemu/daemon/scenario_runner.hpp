@@ -76,6 +76,11 @@ class ScenarioRunner {
     uint64_t seen;  // frame effects: matching frames; others: 0
     uint64_t hits;  // frame effects: frames hit; others: times fired
     State state;
+    // What `match` describes: the CAN or LIN frames a frame effect hits, or babble's own frame
+    // (its id, with every bit in the mask, and ext); nothing for other effects.
+    enum class Frames : uint8_t { none, can, lin, babble };
+    Frames frames = Frames::none;
+    FaultMatch match{};
   };
   std::vector<FaultStatus> status() const;
 

@@ -21,7 +21,7 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 5;
+inline constexpr uint16_t kProtocolVersion = 6;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 // A fault scenario's name: up to 63 bytes and the terminating zero.
@@ -184,6 +184,10 @@ constexpr std::string_view to_string(WireBusKind kind) {
 enum class WireErrorState : uint8_t { active = 0, warning = 1, passive = 2, bus_off = 3 };
 // A LIN controller's state in StatusNode.lin (it has no error counters).
 enum class WireLinState : uint8_t { none = 0, offline = 1, online = 2 };
+// Whether a CAN node's controller takes part in bus traffic (StatusNode.mode): `init` while it
+// is in reset or initialization mode (an adapter no program has started, a stopped line, an
+// SJA1000 in sleep), as the VCI's CAN_STATUS_ININIT says.
+enum class WireNodeMode : uint8_t { running = 0, init = 1 };
 
 struct StatusBus {
   char name[kNameSize] = {};
@@ -205,11 +209,13 @@ struct StatusNode {
   uint8_t lin = 0;            // WireLinState: 0 for a CAN node
   uint16_t tec = 0;
   uint16_t rec = 0;
+  uint8_t mode = 0;  // WireNodeMode (CAN nodes)
+  uint8_t reserved[7] = {};
   uint64_t frames_sent = 0;
   uint64_t frames_received = 0;
   uint64_t errors = 0;
 };
-static_assert(sizeof(StatusNode) == 64);
+static_assert(sizeof(StatusNode) == 72);
 
 // How late things ran, in ns (real and scaled time; all zero in stepped time).
 struct WirePacingFigures {
@@ -261,7 +267,7 @@ struct StatusReply {
   WirePacing pacing;
 };
 static_assert(sizeof(StatusReply) ==
-              16 + 40 + 64 * kStatusPageBuses + 64 * kStatusPageNodes + 8 + 16 + 208);
+              16 + 40 + 64 * kStatusPageBuses + 72 * kStatusPageNodes + 8 + 16 + 208);
 static_assert(sizeof(StatusReply) <= kMaxMessageSize);
 
 struct TimeStepRequest {
@@ -518,6 +524,13 @@ constexpr std::string_view to_string(WireFaultState state) {
   return "?";
 }
 
+// What FaultEntry's match describes: nothing (an effect on a bus or node), the CAN or LIN frames
+// a frame effect hits, or the frame babble sends (its id and ext).
+enum class WireFaultMatch : uint8_t { none = 0, can = 1, lin = 2, babble = 3 };
+// A condition of a match on a frame's kind: either, or only one (ext: standard / extended;
+// rtr: data / remote frames).
+enum class WireMatchFlag : uint8_t { any = 0, no = 1, yes = 2 };
+
 struct FaultEntry {
   char scenario[kScenarioNameSize] = {};
   char effect[24] = {};
@@ -530,8 +543,16 @@ struct FaultEntry {
   int64_t until_ns = 0;
   uint64_t seen = 0;
   uint64_t hits = 0;
+  uint8_t match = 0;      // WireFaultMatch
+  uint8_t match_ext = 0;  // WireMatchFlag
+  uint8_t match_rtr = 0;  // WireMatchFlag
+  uint8_t reserved2 = 0;
+  uint32_t match_id = 0;
+  uint32_t match_mask = 0;  // identifier bits that must equal match_id; 0: any identifier
+  uint32_t reserved3 = 0;
+  char match_from[kNameSize] = {};  // the transmitting (CAN) or commanding (LIN) node; "": any
 };
-static_assert(sizeof(FaultEntry) == kScenarioNameSize + 24 + 32 + 8 + 32);
+static_assert(sizeof(FaultEntry) == kScenarioNameSize + 24 + 32 + 8 + 32 + 16 + kNameSize);
 
 struct FaultListRequest {
   MsgHeader header;

@@ -106,8 +106,8 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR
 install(FILES ${PROJECT_SOURCE_DIR}/packaging/debian/lintian-overrides
         DESTINATION ${CMAKE_INSTALL_DATADIR}/lintian/overrides RENAME canemu)
 
-# The Python package where Debian's python3 finds it, with the entry point that makes
-# can.Bus(interface="canemu") work.
+# The Python package where Debian's python3 finds it, with the entry points that make
+# can.Bus(interface="canemu") work and bring the pytest plugin (docs/testing.md).
 set(CANEMU_PYTHON_DIR lib/python3/dist-packages)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu DESTINATION ${CANEMU_PYTHON_DIR}
         FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
@@ -125,7 +125,8 @@ file(WRITE ${dist_info}/METADATA
      "Metadata-Version: 2.1\nName: canemu\nVersion: ${PROJECT_VERSION}\n"
      "Summary: python-can interface and tools of canemu, the CAN/LIN adapter emulator\n"
      "Requires-Dist: python-can>=4.1\n")
-file(WRITE ${dist_info}/entry_points.txt "[can.interface]\ncanemu = canemu.bus:CanemuBus\n")
+file(WRITE ${dist_info}/entry_points.txt
+     "[can.interface]\ncanemu = canemu.bus:CanemuBus\n\n[pytest11]\ncanemu = canemu.pytest_plugin\n")
 file(WRITE ${dist_info}/INSTALLER "canemu\n")
 file(WRITE ${dist_info}/top_level.txt "canemu\n")
 install(DIRECTORY ${dist_info} DESTINATION ${CANEMU_PYTHON_DIR})

@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
   std::string check_file;
   std::string socket;
   std::string time;
+  bool print_default = false;
   app.add_option("--config", config_file, "configuration file (default: the embedded one)");
   app.add_option("--check-config", check_file, "check FILE, print a summary and exit")
       ->option_text("FILE");
@@ -55,6 +56,8 @@ int main(int argc, char** argv) {
   app.add_option("--time", time,
                  "time mode, overriding the configuration: realtime, stepped, "
                  "scaled:F");
+  app.add_flag("--print-default-config", print_default,
+               "print the embedded configuration (what canemud runs without --config) and exit");
   app.set_version_flag("--version", "canemud " CANEMU_VERSION, "print canemud's version and exit");
   try {
     app.parse(argc, argv);
@@ -66,6 +69,11 @@ int main(int argc, char** argv) {
     return 1;
   }
 
+  if (print_default) {
+    const std::string_view text = embedded_default_config();
+    std::fwrite(text.data(), 1, text.size(), stdout);
+    return std::fflush(stdout) == 0 ? 0 : 1;
+  }
   const bool checking = !check_file.empty();
   const std::string& file = checking ? check_file : config_file;
   auto config = file.empty() ? load_default_config() : load_config_file(file);

@@ -50,10 +50,12 @@ cc -std=c11 -Wall -Werror -o "$dest/stalk" "$src/client/examples/sl64_talk.c" \
 grep -q "libvcinpl.so.0 => $libdir" <<<"$(LD_LIBRARY_PATH=$libdir ldd "$dest/talk")" ||
   fail "the program does not load the installed libvcinpl.so.0"
 
-PYTHONPATH=$dest/usr/lib/python3/dist-packages python3 - <<'PY' || fail "python-can does not find canemu"
+PYTHONPATH=$dest/usr/lib/python3/dist-packages python3 - <<'PY' || fail "python-can or pytest does not find canemu"
 from importlib.metadata import entry_points
 names = [e.value for e in entry_points().select(group="can.interface") if e.name == "canemu"]
 assert names == ["canemu.bus:CanemuBus"], names
+plugins = [e.value for e in entry_points().select(group="pytest11") if e.name == "canemu"]
+assert plugins == ["canemu.pytest_plugin"], plugins
 PY
 
 unit=$dest/usr/lib/systemd/system

@@ -161,6 +161,26 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
   EXPECT_EQ(none.wait(), 1);
 }
 
+// A scenario file whose path is longer than the request's source field: its errors name the
+// whole path, not a cut one.
+TEST(Cli, AScenarioWithALongPathIsNamedWhole) {
+  Daemon d;
+  const std::string dir = d.dir() + "/a-folder-with-a-name-long-enough-to-pass-sixty-four-bytes";
+  std::filesystem::create_directories(dir);
+  const std::string file = dir + "/bad-scenario.toml";
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("[[fault]]\nat = \"0s\"\neffect = \"ack_error\"\nbus = \"nope\"\n", f);
+  std::fclose(f);
+  ASSERT_GT(file.size(), 64u);
+  Cli load(d, {"fault", "load", file});
+  EXPECT_EQ(Cli::read_all(load.err), file +
+                                         ":1: ack_error: no bus named \"nope\"\ncanemu: scenario "
+                                         "rejected; nothing of it applied\n");
+  EXPECT_EQ(load.wait(), 1);
+  std::filesystem::remove_all(dir);
+}
+
 // A client's name is the peer's choice: canemud keeps printable ASCII only, and the JSON
 // escapes quotes, so a name can neither add a field nor break a line or a table row.
 TEST(Cli, HostileClientNameCannotForgeStatusFields) {

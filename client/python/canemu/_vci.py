@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+import shutil
 from pathlib import Path
 from typing import Optional
 
@@ -262,6 +263,13 @@ def _library_candidates(filename: str = "libvcinpl2.so") -> list:
     # A source checkout: client/python/canemu -> the repository's build tree.
     repo = Path(__file__).resolve().parents[3]
     names.append(str(repo / "build" / "lib" / filename))
+    # The build tree of the canemud a test would start ($CANEMUD, else canemud on the PATH):
+    # BUILD/bin/canemud -> BUILD/lib.
+    canemud = os.environ.get("CANEMUD") or shutil.which("canemud")
+    if canemud:
+        beside = Path(canemud).resolve().parent.parent / "lib" / filename
+        if str(beside) not in names:
+            names.append(str(beside))
     names.append(filename)  # the dynamic linker's search (an installed canemu)
     return names
 

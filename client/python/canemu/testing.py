@@ -50,6 +50,9 @@ class Daemon:
         ``["ip", "netns", "exec", "host-a"]``: canemud in that network namespace); it must end
         in canemud's own process (exec), as SIGTERM goes to the process started.
     :param env: more environment variables for canemud (on top of this process's own).
+    :param links: more entries of the configuration's folder, name -> an existing path they
+        link to (the files a configuration names by relative path); not the configuration's
+        own name (canemu.toml), the socket's (canemud.sock) or one of `files`.
 
     The process talks to this daemon from now on (canemu.connect).
     """
@@ -63,8 +66,12 @@ class Daemon:
         args: Sequence[str] = (),
         wrap: Sequence[str] = (),
         env: Optional[Mapping[str, str]] = None,
+        links: Optional[Mapping[str, Path]] = None,
     ) -> None:
         self.dir = tempfile.mkdtemp(prefix="canemu-")
+        for name, target in (links or {}).items():
+            if name not in ("canemu.toml", "canemud.sock") and name not in (files or {}):
+                os.symlink(target, os.path.join(self.dir, name))
         self.socket = os.path.join(self.dir, "canemud.sock")
         self.config = os.path.join(self.dir, "canemu.toml") if config is not None else None
         for name, text in (files or {}).items():

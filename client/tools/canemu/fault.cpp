@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <regex>
@@ -37,7 +38,11 @@ int load_scenario_text(const std::string& socket, const std::string& source,
     return fail(c.error().message);
   }
   auto m = std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
-  ipc::copy_name(m->source, source);
+  // A path too long for the request goes as its file name (canemud's default scenario name is
+  // that anyway), and the errors get the whole path back.
+  const std::string sent =
+      source.size() < sizeof m->source ? source : std::filesystem::path(source).filename().string();
+  ipc::copy_name(m->source, sent);
   m->length = static_cast<uint32_t>(text.size());
   std::memcpy(m->text, text.data(), text.size());
   auto r = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*m);
@@ -49,6 +54,17 @@ int load_scenario_text(const std::string& socket, const std::string& source,
     if (source == kInjectSource) {
       // The scenario was written from the options: its line numbers mean nothing to the user.
       errors = std::regex_replace(errors, std::regex(kInjectSource + ":[0-9]+(:[0-9]+)?: "), "");
+    } else if (sent != source) {
+      std::string whole;
+      std::size_t at = 0;
+      while (at < errors.size()) {
+        const std::size_t end = std::min(errors.find('\n', at), errors.size());
+        const std::string line = errors.substr(at, end - at);
+        whole += line.rfind(sent + ":", 0) == 0 ? source + line.substr(sent.size()) : line;
+        whole += end < errors.size() ? "\n" : "";
+        at = end + 1;
+      }
+      errors = whole;
     }
     std::fputs(errors.c_str(), stderr);
     return fail("scenario rejected; nothing of it applied");

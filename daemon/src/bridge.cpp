@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "canemu/daemon/channel.hpp"
+#include "canemu/daemon/log.hpp"
 #include "canemu/firmware_model/bus/frame.hpp"
 #include "canemu/ipc/unique_fd.hpp"
 
@@ -99,9 +100,17 @@ void Bridge::kick() {
 
 void Bridge::offer(const ipc::ChannelMessage* m) {
   ++stats_.received;
-  const auto frame = m ? to_tx_frame(*m) : Result<TxFrame>(tl::unexpected(ModelError{}));
-  if (!frame || (frame->frame.fd() && !options_.fd)) {
-    ++stats_.rejected;
+  if (m == nullptr) {
+    refuse("a message that is no frame");
+    return;
+  }
+  const auto frame = to_tx_frame(*m);
+  if (!frame) {
+    refuse("a frame the bus cannot carry (" + frame.error().message + ")");
+    return;
+  }
+  if (frame->frame.fd() && !options_.fd) {
+    refuse("a CAN FD frame (the bus is a classic CAN bus)");
     return;
   }
   if (queue_.size() >= options_.queue_frames) {
@@ -109,6 +118,39 @@ void Bridge::offer(const ipc::ChannelMessage* m) {
     return;
   }
   queue_.push_back(*frame);
+}
+
+void Bridge::reject(std::string_view why) {
+  ++stats_.received;
+  refuse(why);
+}
+
+void Bridge::refuse(std::string_view why) {
+  ++stats_.rejected;
+  const SimTime now = node_.now();
+  if (reject_lines_ > 0 && (now - reject_window_).ns() >= kRejectWindowNs) {
+    if (reject_unlogged_ > 0) {
+      log::write(log::Level::warning, log::At{"bridge", now},
+                 fmt::format("{} (bus {}): {} more rejected in the {} s from t={}.{:09} s "
+                             "(not logged one by one)",
+                             transport_->name(), options_.bus, reject_unlogged_,
+                             kRejectWindowNs / 1'000'000'000, reject_window_.ns() / 1'000'000'000,
+                             reject_window_.ns() % 1'000'000'000));
+    }
+    reject_lines_ = 0;
+    reject_unlogged_ = 0;
+  }
+  if (reject_lines_ == 0) {
+    reject_window_ = now;
+  }
+  if (reject_lines_ < kRejectLines) {
+    ++reject_lines_;
+    log::write(log::Level::warning, log::At{"bridge", now},
+               fmt::format("{} (bus {}): rejected {} ({} rejected so far)", transport_->name(),
+                           options_.bus, why, stats_.rejected));
+  } else {
+    ++reject_unlogged_;
+  }
 }
 
 std::optional<TxFrame> Bridge::next_tx() {

@@ -243,7 +243,16 @@ void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& s
   if (channel_opened) {
     channel_opened(**added);
   }
-  send_reply(send, ipc::make_message<ipc::BridgeAddReply>(request_id));
+  auto reply = ipc::make_message<ipc::BridgeAddReply>(request_id);
+  if (m.kind == ipc::kBridgeSocketCan) {
+    const Bridge& bridge = **added;
+    const auto mtu = interface_mtu((*added)->transport().fd(), b.interface);
+    if (const auto warning =
+            mtu ? mtu_warning(b.interface, b.bus, bridge.options().fd, *mtu) : std::nullopt) {
+      ipc::copy_name(reply.warning, *warning);
+    }
+  }
+  send_reply(send, reply);
 }
 
 void ControlDispatcher::channel_status(Session& c, const ipc::ChannelStatusRequest& m,

@@ -11,6 +11,7 @@
 
 #include "canemu/daemon/dds_bridge.hpp"
 #include "canemu/daemon/lcm_bridge.hpp"
+#include "canemu/daemon/log.hpp"
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
@@ -191,11 +192,19 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
     resolved.channel_prefix = o.topic_prefix;
     return add_bridge(resolved, std::move(*transport));
   }
-  auto port = open_can_raw(b.interface, bus && config_.buses[*bus].kind == BusKind::can_fd);
+  auto port = open_can_raw(b.interface);
   if (!port) {
     return tl::unexpected("bridge to " + port.error());
   }
-  return add_bridge(b, std::move(*port));
+  const bool fd_bus = bus && config_.buses[*bus].kind == BusKind::can_fd;
+  const auto mtu = interface_mtu(port->get(), b.interface);
+  auto added = add_bridge(b, std::move(*port));
+  if (added && mtu) {
+    if (const auto warning = mtu_warning(b.interface, b.bus, fd_bus, *mtu)) {
+      log::warning("bridge to {}: {}", b.interface, *warning);
+    }
+  }
+  return added;
 }
 
 tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b,

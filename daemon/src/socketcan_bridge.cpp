@@ -3,11 +3,14 @@
 #include <linux/can.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+
+#include <fmt/format.h>
 
 #include "canemu/daemon/channel.hpp"
 #include "canemu/ipc/socketcan.hpp"
@@ -41,12 +44,14 @@ void SocketCanTransport::receive(Bridge& bridge) {
         bridge.counters().kernel_dropped = dropped;
       }
     }
-    // Anything but a frame (a short read, an error frame, a bad length or identifier) is
-    // counted and skipped by the bridge.
-    const auto f = ipc::socketcan::from_struct(buffer, static_cast<std::size_t>(n));
-    std::string error;
-    const auto m = f ? ipc::socketcan::to_message(*f, error) : std::nullopt;
-    bridge.offer(m ? &*m : nullptr);
+    // Anything but a frame this bus carries (a short read, an error frame, CAN FD on a classic
+    // bus, a bad length) is counted as rejected and logged with the reason by the bridge.
+    const auto m = frame_from_interface(buffer, static_cast<std::size_t>(n), bridge.options().fd);
+    if (m) {
+      bridge.offer(&*m);
+    } else {
+      bridge.reject(m.error());
+    }
   }
 }
 
@@ -79,7 +84,61 @@ Delivery SocketCanTransport::restarted(SimTime, uint16_t, uint16_t) {
   return write_frame(ipc::socketcan::restarted_frame());
 }
 
-tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interface, bool fd) {
+tl::expected<ipc::ChannelMessage, std::string> frame_from_interface(const uint8_t* bytes,
+                                                                    std::size_t size, bool fd_bus) {
+  namespace sc = ipc::socketcan;
+  const auto f = sc::from_struct(bytes, size);
+  if (!f) {
+    return tl::unexpected(
+        fmt::format("a read of {} bytes, neither a struct can_frame ({}) nor a canfd_frame ({})",
+                    size, sc::kCanMtu, sc::kCanFdMtu));
+  }
+  const uint8_t len = bytes[4];  // as the program wrote it (from_struct keeps what fits)
+  const std::string text = sc::candump_text(*f);
+  if (f->can_id & sc::kErrFlag) {
+    return tl::unexpected("the error frame " + text +
+                          " (an error frame reports what a controller saw; it is no frame to send "
+                          "on a bus)");
+  }
+  if (f->fd && !fd_bus) {
+    return tl::unexpected("the CAN FD frame " + text + " (the bus is a classic CAN bus)");
+  }
+  if (len > (f->fd ? 64 : 8)) {
+    return tl::unexpected(fmt::format("{} (its length {} is above {})", text, len, f->fd ? 64 : 8));
+  }
+  std::string error;
+  auto m = sc::to_message(*f, error);
+  if (!m) {
+    return tl::unexpected(text + " (" + error + ")");
+  }
+  return *m;
+}
+
+std::optional<std::string> mtu_warning(const std::string& interface, const std::string& bus,
+                                       bool fd_bus, int mtu) {
+  if (!fd_bus || mtu == static_cast<int>(ipc::socketcan::kCanFdMtu)) {
+    return std::nullopt;
+  }
+  return fmt::format(
+      "{} has MTU {}, not {} (CAN FD): the CAN FD frames of {} cannot be written to it (counted "
+      "as IF-DROP) and programs cannot send CAN FD frames on it; classic frames pass. For CAN FD: "
+      "ip link set {} down; ip link set {} mtu 72 up",
+      interface, mtu, ipc::socketcan::kCanFdMtu, bus, interface, interface);
+}
+
+std::optional<int> interface_mtu(int fd, const std::string& interface) {
+  ifreq ifr{};
+  if (interface.empty() || interface.size() >= IFNAMSIZ) {
+    return std::nullopt;
+  }
+  std::memcpy(ifr.ifr_name, interface.data(), interface.size());
+  if (::ioctl(fd, SIOCGIFMTU, &ifr) != 0) {
+    return std::nullopt;
+  }
+  return ifr.ifr_mtu;
+}
+
+tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interface) {
   const auto failed = [&](const char* call) {
     return tl::unexpected(interface + ": " + call + ": " + std::strerror(errno));
   };
@@ -98,9 +157,18 @@ tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interfa
   if (index == 0) {
     return failed("if_nametoindex");
   }
+  // CAN FD frames and every error class arrive whatever the bus, so that what a classic bus
+  // cannot carry is read, counted as rejected and logged rather than filtered out unseen by the
+  // kernel (a socket without CAN_RAW_FD_FRAMES does not receive FD frames; one without an
+  // error mask no error frames).
   const int on = 1;
-  if (fd && ::setsockopt(s.get(), SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on) != 0) {
+  if (::setsockopt(s.get(), SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on) != 0) {
     return failed("setsockopt CAN_RAW_FD_FRAMES");
+  }
+  const can_err_mask_t every_error = CAN_ERR_MASK;
+  if (::setsockopt(s.get(), SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &every_error, sizeof every_error) !=
+      0) {
+    return failed("setsockopt CAN_RAW_ERR_FILTER");
   }
   if (::setsockopt(s.get(), SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on) != 0) {
     return failed("setsockopt SO_RXQ_OVFL");

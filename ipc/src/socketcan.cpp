@@ -106,11 +106,13 @@ std::optional<ChannelMessage> to_message(const Frame& f, std::string& error) {
       error = "CAN FD has no remote frames";
       return std::nullopt;
     }
-    const auto* at = std::find(std::begin(kFdLength), std::end(kFdLength), f.len);
-    if (at == std::end(kFdLength)) {
-      error = "CAN FD length " + std::to_string(f.len) + " is no DLC's length";
+    if (f.len > 64) {
+      error = "CAN FD length " + std::to_string(f.len) + " is above 64";
       return std::nullopt;
     }
+    // A length between two DLCs' lengths takes the next DLC, as the kernel's CAN FD drivers
+    // send it (canfd_sanitize_len()): the bytes up to that length are zero.
+    const auto* at = std::lower_bound(std::begin(kFdLength), std::end(kFdLength), f.len);
     m.dlc = static_cast<uint8_t>(at - std::begin(kFdLength));
     m.flags |= kMsgFd | ((f.flags & kFdBrs) ? kMsgBrs : 0) | ((f.flags & kFdEsi) ? kMsgEsi : 0);
   } else {

@@ -11,6 +11,9 @@ ip link add dev vcan0 type vcan && ip link set vcan0 up
 ip link add dev vcan1 type vcan && ip link set vcan1 mtu 72 up
 ip link add dev vcan2 type vcan && ip link set vcan2 up
 ip link add dev vcan3 type vcan && ip link set vcan3 up
+ip link add dev vcan4 type vcan && ip link set vcan4 mtu 72 up
+ip link add dev vcan5 type vcan && ip link set vcan5 mtu 16 up
+echo "GUEST: a new vcan's MTU: $(cat /sys/class/net/vcan0/mtu) (vcan0 as created)"
 
 cat > /tmp/canemu.toml <<'TOML'
 [[bus]]
@@ -211,6 +214,64 @@ result a_bridge_restarts_after_bus_off "can1 321#AB
 bus-off 1, restarted 1, restarts 1" "$(cut -d' ' -f2- /tmp/t10)
 bus-off $(grep -c ' 20000240#' /tmp/t10b), restarted $(grep -c ' 20000100#' /tmp/t10b), restarts $restarts"
 canemu bridge remove vcan3 >/dev/null
+
+# 11. What a classic bus cannot carry, written on its interface (vcan4 at MTU 72, so that
+# cansend may write CAN FD there): a CAN FD frame and an error frame reach the bridge, are
+# counted as rejected and logged with the reason; a frame after them goes out.
+rejected() {  # the bridge of $1's rejected count
+  canemu bridge list --json | tr '}' '\n' | grep "\"$1\"" | sed 's/.*"rejected" *: *\([0-9]*\).*/\1/'
+}
+rejected_reached() {  # INTERFACE COUNT
+  [ "$(rejected "$1")" -ge "$2" ]
+}
+canemu bridge add can0 vcan4 >/dev/null
+canemu dump can0 -n 1 >/tmp/t11 2>/tmp/t11.err &
+pid=$!
+wait_for listening /tmp/t11.err
+cansend vcan4 123##1AABB
+cansend vcan4 20000080#0000000000000000
+cansend vcan4 321#01
+wait_pid $pid
+wait_for rejected_reached vcan4 2
+result what_a_classic_bus_cannot_carry_is_rejected_with_the_reason "can0 321#01
+rejected 2
+the CAN FD frame 123##1AABB (the bus is a classic CAN bus) (1 rejected so far)
+the error frame 20000080#0000000000000000 (an error frame reports what a controller saw; it is no frame to send on a bus) (2 rejected so far)" \
+  "$(cut -d' ' -f2- /tmp/t11)
+rejected $(rejected vcan4)
+$(grep 'bridge on vcan4 (bus can0): rejected' /tmp/canemud.log | sed 's/.*: rejected //')"
+canemu bridge remove vcan4 >/dev/null
+
+# 12. Error frames as Debian 12's candump (can-utils 2020.11) shows them: `candump -e vcan4`
+# alone sets no error mask and shows none; with `,#FFFFFFFF` they come, and for a class with
+# CAN_ERR_CNT (0x200, newer than this candump) it says "Error class 0x288 is invalid" on stderr
+# and prints the frame's line again instead of the words.
+canemu bridge add can1 vcan4 --error-frames >/dev/null
+n=$(receivers vcan4)
+candump -e vcan4 >/tmp/t12a 2>&1 &
+plain=$!
+candump -e -n 1 vcan4,0:0,#FFFFFFFF >/tmp/t12b 2>/tmp/t12b.err &
+pid=$!
+wait_for more_receivers vcan4 $((n + 1))
+canemu send can1 100#11 --bitrate 250000 --timeout 200 >/dev/null 2>&1
+wait_pid $pid
+kill $plain
+tab=$(printf '\t')
+result candump_e_shows_error_frames_with_a_mask_only "0 lines
+  vcan4  20000288   [8]  00 00 04 05 00 00 00 01   ERRORFRAME
+${tab}20000288   [8]  00 00 04 05 00 00 00 01   ERRORFRAME
+Error class 0x288 is invalid" "$(wc -l </tmp/t12a) lines
+$(cat /tmp/t12b)
+$(cat /tmp/t12b.err)"
+canemu bridge remove vcan4 >/dev/null
+
+# 13. A CAN FD bus bridged to an interface at MTU 16 (vcan5): added, with a warning that says
+# what will not pass and how to raise the MTU.
+canemu bridge add fd0 vcan5 >/tmp/t13 2>/tmp/t13.err
+result an_fd_bus_on_a_classic_mtu_interface_is_warned_about "fd0 bridged to vcan5
+canemu: warning: vcan5 has MTU 16, not 72 (CAN FD): the CAN FD frames of fd0 cannot be written to it (counted as IF-DROP) and programs cannot send CAN FD frames on it; classic frames pass. For CAN FD: ip link set vcan5 down; ip link set vcan5 mtu 72 up" \
+  "$(cat /tmp/t13 /tmp/t13.err)"
+canemu bridge remove vcan5 >/dev/null
 
 canemu status
 guest_summary

@@ -172,11 +172,32 @@ TEST(SocketCan, FramesFromASocketBecomeChannelMessages) {
     EXPECT_EQ(back->dlc, m.dlc);
     EXPECT_EQ(std::memcmp(back->data, m.data, sizeof m.data), 0);
   }
+  // A CAN FD length between two DLCs' lengths goes out as kernel drivers send it
+  // (canfd_sanitize_len()): the next DLC, the bytes up to its length zero.
+  Frame odd;
+  odd.fd = true;
+  odd.flags = kFdFdf;
+  odd.len = 13;
+  for (uint8_t k = 0; k < 13; ++k) {
+    odd.data[k] = static_cast<uint8_t>(k + 1);
+  }
+  odd.data[13] = 0xEE;  // beyond len: not part of the frame
+  const auto padded = to_message(odd, error);
+  ASSERT_TRUE(padded) << error;
+  EXPECT_EQ(padded->dlc, 10);
+  EXPECT_EQ(padded->flags, kMsgFd);
+  EXPECT_EQ(padded->data[12], 13);
+  for (int k = 13; k < 64; ++k) {
+    EXPECT_EQ(padded->data[k], 0) << k;
+  }
+  odd.len = 49;
+  ASSERT_TRUE(to_message(odd, error));
+  EXPECT_EQ(to_message(odd, error)->dlc, 15);
   Frame bad;
   bad.fd = true;
-  bad.len = 13;
+  bad.len = 65;
   EXPECT_FALSE(to_message(bad, error));
-  EXPECT_EQ(error, "CAN FD length 13 is no DLC's length");
+  EXPECT_EQ(error, "CAN FD length 65 is above 64");
   bad.len = 8;
   bad.can_id = kRtrFlag | 0x100;
   EXPECT_FALSE(to_message(bad, error));

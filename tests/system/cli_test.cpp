@@ -604,6 +604,68 @@ TEST(CliGen, SendsCountFramesAtExactInstantsInSteppedTime) {
   EXPECT_EQ(gen.wait(), 0);
 }
 
+// In real and scaled time gen's waits are simulated time: a simulation far behind the wall clock
+// (scaled:0.001, a frame of 8 bytes takes about 0.23 s of wall time) makes the confirmations
+// late, and gen waits for them instead of counting its frames as not sent after --timeout ms of
+// wall time.
+TEST(CliGen, ASimulationBehindTheWallClockCountsNoFrameAsNotSent) {
+  Daemon d("scaled:0.001");
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  Cli gen(d, {"gen", "can0", "-n", "3", "-g", "0", "-L", "8", "--timeout", "100"});
+  EXPECT_EQ(Cli::read_all(gen.err, 30'000),
+            "canemu: generating on can0 as eph2 (500000 bit/s, a frame every 0)\n"
+            "canemu: 3 frame(s) sent on can0\n");
+  EXPECT_EQ(gen.wait(), 0);
+}
+
+// A frame nobody acknowledges is still counted as not sent, after --timeout ms of simulated time.
+TEST(CliGen, AFrameNobodyAcknowledgesIsNotSentAfterTheTimeout) {
+  Daemon d("realtime");
+  Cli gen(d, {"gen", "can0", "-n", "1", "-g", "0", "--timeout", "50"});
+  EXPECT_EQ(Cli::read_all(gen.err),
+            "canemu: generating on can0 as eph1 (500000 bit/s, a frame every 0)\n"
+            "canemu: 0 frame(s) sent on can0, 1 not sent: is a node on can0 acknowledging at "
+            "500000 bit/s?\n");
+  EXPECT_EQ(gen.wait(), 1);
+}
+
+// A line of a candump log with a classic DLC above 8 (`_X`, as candump and canemu write it) is
+// sent again as it was: 8 bytes, the DLC 14 on the wire.
+TEST(CliSend, ALoggedFrameWithADlcAboveEightIsSentAgainAsItWas) {
+  Daemon d;
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  Cli send(d, {"send", "can0", "123#1122334455667788_E", "123#R8_9", "--step", "1ms"});
+  const std::string out = Cli::read_all(send.out);
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  model::FrameSpec data;
+  data.id = 0x123;
+  data.dlc = 14;
+  const std::vector<uint8_t> bytes{0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88};
+  data.data = bytes;
+  model::FrameSpec remote;
+  remote.id = 0x123;
+  remote.remote = true;
+  remote.dlc = 9;
+  const model::BitTiming nominal{5'000'000, 1, 7, 2, 1, 1};
+  const int64_t first =
+      model::frame_duration(model::encode(*model::Frame::create(data)), nominal).ns();
+  const int64_t second =
+      first + 3 * 2000 +
+      model::frame_duration(model::encode(*model::Frame::create(remote)), nominal).ns();
+  EXPECT_EQ(out, fmt::format("(0000000000.{:06}) can0 123#1122334455667788_E\n"
+                             "(0000000000.{:06}) can0 123#R8_9\n",
+                             first / 1000, second / 1000));
+  for (const auto& [text, says] : std::vector<std::pair<std::string, std::string>>{
+           {"123#112233_E", "'123#112233_E': '_E' follows 8 data bytes only, not 3"},
+           {"123#1122334455667788_7", "'123#1122334455667788_7': '_7': a classic DLC above 8"}}) {
+    Cli bad(d, {"send", "can0", text, "--step", "1ms"});
+    EXPECT_NE(Cli::read_all(bad.err).find(says), std::string::npos) << says;
+    EXPECT_EQ(bad.wait(), 1) << says;
+  }
+}
+
 TEST(CliGen, RefusesOptionsThatMakeNoFrame) {
   Daemon d;
   for (const auto& [args, says] : std::vector<std::pair<std::vector<std::string>, std::string>>{

@@ -134,6 +134,10 @@ int run_add(const std::string& socket, const BridgeArgs& a) {
   }
   std::printf("%s bridged to %s%s\n", a.bus.c_str(), a.interface.c_str(),
               how.empty() ? "" : (" (" + how + ")").c_str());
+  if (const std::string warning = ipc::name_of(r->warning); !warning.empty()) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "canemu: warning: %s\n", warning.c_str());
+  }
   return 0;
 }
 

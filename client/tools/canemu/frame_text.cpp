@@ -41,6 +41,26 @@ std::optional<ipc::ChannelMessage> parse_cansend(std::string_view text, std::str
     m.flags |= ipc::kMsgExtended;
   }
   std::string_view rest = text.substr(hash + 1);
+  // candump's `_X` after 8 data bytes or R8 (can-utils' len8_dlc): a classic frame's DLC 9..F,
+  // which still carries 8 bytes.
+  std::optional<uint8_t> raw_dlc;
+  if (const std::size_t underscore = rest.find('_'); underscore != std::string_view::npos) {
+    const std::string_view suffix = rest.substr(underscore + 1);
+    if (!rest.empty() && rest[0] == '#') {
+      error = "a CAN FD frame takes no _DLC suffix (its length gives the DLC)";
+      return std::nullopt;
+    }
+    if (suffix.size() != 1 || !std::isxdigit(static_cast<unsigned char>(suffix[0])) ||
+        hex(suffix[0]) < 9) {
+      error = fmt::format(
+          "'_{}': a classic DLC above 8 is one hex digit 9..F after 8 data bytes or R8, as "
+          "candump writes it (123#1122334455667788_E, 123#R8_E)",
+          suffix);
+      return std::nullopt;
+    }
+    raw_dlc = static_cast<uint8_t>(hex(suffix[0]));
+    rest = rest.substr(0, underscore);
+  }
   bool fd = false;
   if (!rest.empty() && rest[0] == '#') {
     if (rest.size() < 2 || !std::isxdigit(static_cast<unsigned char>(rest[1]))) {
@@ -54,12 +74,16 @@ std::optional<ipc::ChannelMessage> parse_cansend(std::string_view text, std::str
   } else if (!rest.empty() && (rest[0] == 'R' || rest[0] == 'r')) {
     m.flags |= ipc::kMsgRemote;
     rest = rest.substr(1);
-    if (rest.size() > 1 ||
-        (rest.size() == 1 && !std::isdigit(static_cast<unsigned char>(rest[0])))) {
+    if (rest.size() > 1 || (rest.size() == 1 && (rest[0] < '0' || rest[0] > '8'))) {
       error = "a remote frame takes one length digit (0..8) after R";
       return std::nullopt;
     }
     m.dlc = rest.empty() ? 0 : static_cast<uint8_t>(rest[0] - '0');
+    if (raw_dlc && m.dlc != 8) {
+      error = fmt::format("'_{:X}' follows R8 only (a remote frame's DLC above 8)", *raw_dlc);
+      return std::nullopt;
+    }
+    m.dlc = raw_dlc.value_or(m.dlc);
     rest = {};
   }
   std::size_t length = 0;
@@ -88,6 +112,13 @@ std::optional<ipc::ChannelMessage> parse_cansend(std::string_view text, std::str
       return std::nullopt;
     }
     m.dlc = *dlc;
+    if (raw_dlc && length != 8) {
+      error =
+          fmt::format("'_{:X}' follows 8 data bytes only, not {} (a DLC above 8 still carries 8)",
+                      *raw_dlc, length);
+      return std::nullopt;
+    }
+    m.dlc = raw_dlc.value_or(m.dlc);
   }
   // Everything else (identifier range, flag combinations) as the daemon will check it.
   auto checked = to_frame(m);

@@ -15,7 +15,9 @@ namespace canemu::cli {
 
 // A frame to send from cansend syntax: <id>#<data>, <id>#R[<len>], <id>##<flags><data>; 3 hex
 // digits make an 11-bit identifier, 8 a 29-bit one; data as hex pairs, optionally separated by
-// '.'. Nothing, with `error` set, when the text is not a valid frame.
+// '.'; a classic frame's DLC above 8 as candump writes it, `_X` (9..F) after 8 data bytes or R8
+// (123#1122334455667788_E, 123#R8_E). Nothing, with `error` set, when the text is not a valid
+// frame.
 std::optional<ipc::ChannelMessage> parse_cansend(std::string_view text, std::string& error);
 
 // The frame text of a message as ipc/socketcan.hpp writes it: `123#1122`, `123#R4`,

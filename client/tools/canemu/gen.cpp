@@ -3,11 +3,15 @@
 // data, one frame every --gap, until --count frames or an interrupt.
 //
 // Time: in real and scaled time the gap is wall-clock time between handing frames to the node (a
-// frame then waits for the bus like any other). In stepped time canemu gen moves time itself: it
-// queues a frame and steps simulated time by the gap (at least 1 us), so a stepped bus gets
-// traffic without another client stepping; frames then go out at exact simulated instants.
-// Random choices come from a seeded generator (--seed, default 1): the same options give the same
-// frames.
+// frame then waits for the bus like any other); waits for room in the transmit FIFO and for the
+// last confirmations end after --timeout ms of simulated time without progress, so that a
+// simulation running behind the wall clock counts no frame as not sent. In stepped time canemu gen
+// moves time itself: it queues a frame and steps simulated time by the gap (at least 1 us), so a
+// stepped bus gets traffic without another client stepping; frames then go out at exact simulated
+// instants. Random choices come from a seeded generator (--seed, default 1): the same options give
+// the same frames.
+#include <algorithm>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -250,11 +254,19 @@ int run_gen(const std::string& socket, GenOptions o) {
 
   Generator gen(o, *id, *length, *data, fixed_data);
   uint64_t queued = 0, sent = 0, dropped = 0;
+  // Real and scaled time: the node's progress in simulated time. Waits end after --timeout ms
+  // of simulated time without a frame sent or given up, never after wall-clock time: a
+  // simulation behind the wall clock (a busy machine, a slow scale) delays the confirmations
+  // but loses nothing, while a frame nobody acknowledges is retried for that long.
+  int64_t progress_ns = 0;
   const auto confirmations = [&](int wait_ms) {
+    int handled = 0;
     while (auto m = ch->receive(wait_ms)) {
       wait_ms = 0;
       if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_done)) {
         ++sent;
+        ++handled;
+        progress_ns = std::max(progress_ns, m->timestamp_ns);
         if (o.verbose) {
           m->kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
           std::printf("%s\n", log_line(*m, o.bus, *base).c_str());
@@ -262,17 +274,47 @@ int run_gen(const std::string& socket, GenOptions o) {
         }
       } else if (m->kind == static_cast<uint8_t>(ipc::ChannelMessageKind::tx_dropped)) {
         ++dropped;
+        ++handled;
+        progress_ns = std::max(progress_ns, m->timestamp_ns);
       }
       if (sent + dropped == queued) {
         break;
       }
     }
+    return handled;
+  };
+  // The simulated instant a wait began (or the last progress since): a stall is --timeout ms of
+  // simulated time after it with nothing confirmed.
+  int64_t wait_from_ns = 0;
+  const auto begin_wait = [&] {
+    auto now = ch->status();
+    wait_from_ns = now ? now->sim_time_ns : 0;
+  };
+  const auto stalled = [&] {
+    auto now = ch->status();
+    return !now || now->sim_time_ns - std::max(wait_from_ns, progress_ns) >=
+                       int64_t{o.timeout_ms} * 1'000'000;
   };
   const int64_t step_ns = std::max<int64_t>(*gap, 1000);
-  while (!g_stop && (o.count == 0 || queued < o.count)) {
-    auto put = ch->send(gen.next(), o.timeout_ms);
+  bool stuck = false;
+  while (!g_stop && !stuck && (o.count == 0 || queued < o.count)) {
+    const ipc::ChannelMessage next = gen.next();
+    auto put = ch->send(next, stepped ? o.timeout_ms : 0);
+    if (!put && !stepped && put.error().error_number == EAGAIN) {
+      // The transmit FIFO is full: wait for room while the node makes progress.
+      begin_wait();
+      while (!put && put.error().error_number == EAGAIN && !g_stop) {
+        if (confirmations(10) == 0 && stalled()) {
+          stuck = true;
+          break;
+        }
+        put = ch->send(next, 0);
+      }
+    }
     if (!put) {
-      std::fprintf(stderr, "canemu: %s\n", put.error().message.c_str());
+      if (!stuck && !g_stop) {
+        std::fprintf(stderr, "canemu: %s\n", put.error().message.c_str());
+      }
       break;
     }
     ++queued;
@@ -287,16 +329,19 @@ int run_gen(const std::string& socket, GenOptions o) {
     confirmations(0);
   }
   // The frames still on their way get their time on the bus: stepped, up to 10 s of simulated
-  // time in 10 ms steps (256 frames at 5 kbit/s take about 7 s); otherwise up to --timeout.
-  for (int round = 0; sent + dropped < queued && round < 1000; ++round) {
+  // time in 10 ms steps (256 frames at 5 kbit/s take about 7 s); otherwise until --timeout ms of
+  // simulated time pass without one sent.
+  if (!stepped && sent + dropped < queued && !stuck) {
+    begin_wait();
+  }
+  for (int round = 0; sent + dropped < queued && !stuck && (!stepped || round < 1000); ++round) {
     if (stepped) {
       auto r = step_time(*c, 10'000'000);
       if (!r) {
         return fail(r.error().message);
       }
       confirmations(0);
-    } else {
-      confirmations(o.timeout_ms);
+    } else if (confirmations(50) == 0 && stalled()) {
       break;
     }
   }
@@ -341,7 +386,8 @@ Command add_gen(CLI::App& app, const std::string& socket) {
   gen->add_option("--bitrate", o->bitrate, "the sender's bit/s (default: the bus's)");
   gen->add_option("--seed", o->seed, "seed of the random choices (default 1)");
   gen->add_option("--timeout", o->timeout_ms,
-                  "ms to wait when the node's transmit FIFO is full (default 2000)")
+                  "ms of simulated time without a frame sent before giving up, when the "
+                  "transmit FIFO is full and at the end (default 2000)")
       ->check(CLI::Range(0, 3'600'000));
   return {gen, [&socket, o] { return run_gen(socket, *o); }};
 }

@@ -153,9 +153,11 @@ Command add_send(CLI::App& app, const std::string& socket) {
   auto* send = app.add_subcommand("send", "send frames on a bus, e.g. 'send can0 123#1122'");
   auto o = std::make_shared<SendOptions>();
   send->add_option("BUS", o->bus, "bus name")->required();
-  send->add_option("FRAME", o->frames,
-                   "cansend syntax: 123#1122, 12345678#R4, 123##1AABB; on a LIN bus 10#0102 "
-                   "(published), 10# (the header alone), sleep")
+  send->add_option(
+          "FRAME", o->frames,
+          "cansend syntax: 123#1122, 12345678#R4, 123##1AABB, 123#1122334455667788_E; on a LIN "
+          "bus 10#0102 "
+          "(published), 10# (the header alone), sleep")
       ->required();
   send->add_flag("--classic", o->classic, "LIN: the classic checksum (default enhanced)");
   send->add_option("--bitrate", o->bitrate, "the sender's bit/s (default: the bus's)");

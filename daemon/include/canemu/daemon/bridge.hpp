@@ -24,6 +24,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "canemu/daemon/doorbell.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
@@ -145,8 +146,15 @@ class Bridge final : private model::ControllerEvents, public Doorbell {
   std::optional<std::string> restart();
 
   // For the transport: a message arrived from outside, as a frame to send, or nullptr when it
-  // was no frame at all. Anything the bus cannot carry is counted and skipped.
+  // was no frame at all. Anything the bus cannot carry is rejected (as reject() does).
   void offer(const ipc::ChannelMessage* m);
+  // For the transport: something arrived from outside that this bus cannot carry, for the reason
+  // `why` (what it was and the rule): counted as rejected and logged with the reason. The log is
+  // rate-limited: the first kRejectLines rejections of every kRejectWindow of simulated time get
+  // a line each; the first line of a later window says how many the window before left out.
+  void reject(std::string_view why);
+  static constexpr int kRejectLines = 3;
+  static constexpr int64_t kRejectWindowNs = 10'000'000'000;
   // For the transport: its own counters (kernel_dropped).
   BridgeStats& counters() { return stats_; }
 
@@ -166,6 +174,8 @@ class Bridge final : private model::ControllerEvents, public Doorbell {
                      uint16_t rec) override;
 
   void restart_after_bus_off();
+  // Counts a rejection (not what arrived: the caller did) and logs it, rate-limited.
+  void refuse(std::string_view why);
 
   BridgeOptions options_;
   std::size_t bus_;
@@ -174,6 +184,10 @@ class Bridge final : private model::ControllerEvents, public Doorbell {
   std::deque<model::TxFrame> queue_;
   BridgeStats stats_;
   std::optional<model::EventId> restart_event_;  // the automatic restart, while due
+  // The rejection log's window: its start, the lines it gave, the rejections it left out.
+  model::SimTime reject_window_{};
+  int reject_lines_ = 0;
+  uint64_t reject_unlogged_ = 0;
 };
 
 }  // namespace canemu::daemon

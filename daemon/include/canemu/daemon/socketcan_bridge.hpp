@@ -18,7 +18,10 @@
 // a CAN_RAW socket in canemud (open_can_raw) and one end of a SOCK_SEQPACKET pair in tests.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <tl/expected.hpp>
@@ -56,8 +59,27 @@ class SocketCanTransport final : public BridgeTransport {
   ipc::UniqueFd port_;
 };
 
-// A CAN_RAW socket bound to `interface`, non-blocking and close-on-exec, with CAN FD frames
-// when `fd` and every error class readable; the error names the interface and the failing call.
-tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interface, bool fd);
+// What the bridge makes of `size` bytes read from the interface's socket, for a CAN FD bus
+// (`fd_bus`) or a classic one: the frame to send, or why the bus cannot carry it (the frame in
+// candump's text and the rule): a read that is no struct can_frame or canfd_frame, an error
+// frame (the interface's own controller's report, no frame for a bus), a CAN FD frame on a
+// classic bus, a CAN FD remote frame, a length above 8 (classic) or 64 (FD). A CAN FD length
+// between two DLCs' lengths is sent with the next DLC (ipc::socketcan::to_message).
+tl::expected<ipc::ChannelMessage, std::string> frame_from_interface(const uint8_t* bytes,
+                                                                    std::size_t size, bool fd_bus);
+
+// A CAN_RAW socket bound to `interface`, non-blocking and close-on-exec, that reads CAN FD frames
+// and every error class whatever the bus (so that what the bus cannot carry arrives and is
+// counted as rejected, never lost unseen); the error names the interface and the failing call.
+tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interface);
+
+// What `canemu bridge add` and canemud's log say when a CAN FD bus (`fd_bus`) is bridged to an
+// interface whose MTU (`mtu`) is not CANFD_MTU: its FD frames cannot be written there or sent
+// from there. Nothing otherwise.
+std::optional<std::string> mtu_warning(const std::string& interface, const std::string& bus,
+                                       bool fd_bus, int mtu);
+
+// The MTU of `interface` (SIOCGIFMTU on the bridge's socket `fd`); nothing when it cannot be read.
+std::optional<int> interface_mtu(int fd, const std::string& interface);
 
 }  // namespace canemu::daemon

@@ -74,9 +74,14 @@ struct BridgeAddRequest {
 };
 static_assert(sizeof(BridgeAddRequest) == 16 + 64 + 8 + 128 + 64);
 
+// `warning`: what the bridge will not do although it was added (empty: nothing), for the user:
+// a CAN FD bus on an interface whose MTU is not 72 (its FD frames cannot pass there).
+inline constexpr std::size_t kBridgeWarningSize = 384;
 struct BridgeAddReply {
   MsgHeader header;
+  char warning[kBridgeWarningSize] = {};
 };
+static_assert(sizeof(BridgeAddReply) == 16 + kBridgeWarningSize);
 
 // The SocketCAN bridge on `interface`, or the LCM bridge of bus `bus`.
 struct BridgeRemoveRequest {

@@ -88,8 +88,10 @@ std::optional<Frame> from_message(const ChannelMessage& m);
 Frame restarted_frame();
 
 // The channel message of a frame read from a CAN_RAW socket (kind frame): identifier, flags and
-// DLC from can_id, len, flags and len8_dlc. Error frames and lengths that are no CAN (FD) length
-// give nothing and `error` says why; identifiers are checked by whoever sends the message.
+// DLC from can_id, len, flags and len8_dlc. A CAN FD length between two DLCs' lengths (13) takes
+// the next DLC (10: 16 bytes, the rest zero), as the kernel's CAN FD drivers send it
+// (canfd_sanitize_len()). Error frames, FD remote frames and lengths above 8 (classic) or 64
+// (FD) give nothing and `error` says why; identifiers are checked by whoever sends the message.
 std::optional<ChannelMessage> to_message(const Frame& f, std::string& error);
 
 // The struct can_frame (16 bytes) or canfd_frame (72 bytes) in host byte order, as write() on a

@@ -53,6 +53,35 @@ TEST(FrameText, RefusesWhatIsNotAFrameAndSaysWhy) {
   EXPECT_EQ(refused("800#"), "identifier 0x800 does not fit 11 bits (maximum 0x7FF)");
 }
 
+// candump writes a classic DLC above 8 as a `_X` suffix (can-utils' len8_dlc): such a line of a
+// recording is sent again as it was, with its DLC.
+TEST(FrameText, ReadsTheDlcSuffixOfAClassicFrameAsCandumpWritesIt) {
+  auto m = parse("123#1122334455667788_E");
+  EXPECT_EQ(m.flags, 0);
+  EXPECT_EQ(m.dlc, 14);
+  EXPECT_EQ(m.data[7], 0x88);
+  m = parse("12345678#R8_9");
+  EXPECT_EQ(m.flags, ipc::kMsgExtended | ipc::kMsgRemote);
+  EXPECT_EQ(m.dlc, 9);
+  m = parse("7FF#11.22.33.44.55.66.77.88_f");
+  EXPECT_EQ(m.dlc, 15);
+  for (const char* text : {"123#1122334455667788_E", "12345678#R8_9", "7FF#0102030405060708_F"}) {
+    EXPECT_EQ(candump_frame(parse(text)), text);
+  }
+  EXPECT_EQ(refused("123#112233_E"),
+            "'_E' follows 8 data bytes only, not 3 (a DLC above 8 still carries 8)");
+  EXPECT_EQ(refused("123#R4_E"), "'_E' follows R8 only (a remote frame's DLC above 8)");
+  const std::string digit =
+      " a classic DLC above 8 is one hex digit 9..F after 8 data bytes or R8, as candump writes "
+      "it (123#1122334455667788_E, 123#R8_E)";
+  EXPECT_EQ(refused("123#1122334455667788_8"), "'_8':" + digit);
+  EXPECT_EQ(refused("123#1122334455667788_"), "'_':" + digit);
+  EXPECT_EQ(refused("123#1122334455667788_EE"), "'_EE':" + digit);
+  EXPECT_EQ(refused("123##11122334455667788_E"),
+            "a CAN FD frame takes no _DLC suffix (its length gives the DLC)");
+  EXPECT_EQ(refused("123#R9"), "a remote frame takes one length digit (0..8) after R");
+}
+
 TEST(FrameText, WritesFramesBackInTheSameSyntax) {
   for (const char* text : {"123#1122", "1ABCDEF0#", "12345678#R4", "7FF#R",
                            "123##3000102030405060708090A0B", "7FF#0102030405060708", "001##0"}) {

@@ -150,3 +150,26 @@ def test_names_that_are_no_lin_controller_are_refused(daemon):
             master.send_header(0x40)
     with pytest.raises(canemu._vci.VciError):
         Responder("nosuchbus")
+
+
+def test_reset_then_start_puts_the_node_back_with_an_empty_table(daemon):
+    with Responder("lin0") as door, Commander("lin0") as master:
+        door.set_response(0x20, b"\x11")
+        drain(door)
+        door.reset()
+        door.start()  # goes on: initialised again with the mode and bit rate it was opened with
+        assert [m.info for m in drain(door)] == ["reset", "start"]
+        drain(master)
+        t0 = now_ns()
+        master.send_header(0x20)  # the table was emptied: nobody answers
+        canemu.step(20_000_000)
+        assert drain(master) == [LinMessage("error", bits(t0, 34 + 126), error="no-response")]
+        door.set_response(0x20, b"\x22")
+        t1 = now_ns()
+        master.send_header(0x20)
+        canemu.step(10_000_000)
+        assert drain(master) == [LinMessage("frame", bits(t1, 54), id=0x20, data=b"\x22",
+                                            enhanced=True)]
+        assert drain(door)[-1] == LinMessage("frame", bits(t1, 54), id=0x20, data=b"\x22",
+                                             enhanced=True, own=True)
+

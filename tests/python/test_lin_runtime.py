@@ -149,6 +149,18 @@ def test_node_names_are_scoped_by_bus(two_buses, tmp_path):
     assert [r[:3] for r in rows(d)] == [["bcm", "lin0", "on"], ["doorleft", "lin0", "on"],
                                         ["doorright", "lin0", "on"], ["bcm", "lin1", "on"],
                                         ["doorright", "lin1", "on"], ["doorleft", "lin1", "on"]]
+    # A fault's node: BUS/NAME, or the rule's bus picks it; a bare name two buses have is not
+    # guessed.
+    bad = cli(d, "fault", "inject", "--effect", "lin_responder_off", "--node", "doorright",
+              check=False)
+    assert bad.returncode == 1
+    assert ('no LIN node named "doorright" (a LIN controller DEVICE:N or a [[lin_node]]; one of '
+            'a name several buses have: with the rule\'s bus, or as BUS/NAME)') in bad.stderr
+    cli(d, "fault", "inject", "--effect", "lin_responder_off", "--node", "lin0/doorright")
+    cli(d, "fault", "inject", "--effect", "lin_checksum_error", "--bus", "lin1", "--from", "bcm")
+    bad = cli(d, "fault", "inject", "--effect", "lin_checksum_error", "--bus", "lin1",
+              "--from", "lin0/bcm", check=False)
+    assert "node lin0/bcm is not on bus lin1" in bad.stderr
     cli(d, "lin", "remove", "lin0/bcm")
     cli(d, "lin", "remove", "bcm")  # only lin1 has one now
     assert [r[:2] for r in rows(d)] == [["doorleft", "lin0"], ["doorright", "lin0"],

@@ -204,13 +204,12 @@ void read_lin_nodes(Checker& c, const toml::table& root, Config& cfg) {
                 {"name", "bus", "bitrate", "powered", "schedule", "response", "schedules"});
     LinNodeConfig node;
     node.line = static_cast<uint32_t>(t.source().begin.line);
-    if (auto name = c.string(t, path, "name", true)) {
-      if (!valid_name(*name)) {
-        c.error(*t.get("name"), path + ".name", kNameRule);
-      } else if (!names.insert(*name).second) {
-        c.error(*t.get("name"), path + ".name",
-                fmt::format("a LIN node named \"{}\" exists already", *name));
-      }
+    const auto name = c.string(t, path, "name", true);
+    const bool name_ok = name && valid_name(*name);
+    if (name && !name_ok) {
+      c.error(*t.get("name"), path + ".name", kNameRule);
+    }
+    if (name) {
       node.name = *name;
     }
     if (auto bus = c.string(t, path, "bus", true)) {
@@ -223,6 +222,11 @@ void read_lin_nodes(Checker& c, const toml::table& root, Config& cfg) {
                             to_string(b->kind)));
       }
       node.bus = *bus;
+    }
+    // Names are scoped by bus: two clusters (LDFs) may each have a node of one name.
+    if (name_ok && !names.insert(node.bus + "/" + *name).second) {
+      c.error(*t.get("name"), path + ".name",
+              fmt::format("a LIN node named \"{}\" exists on \"{}\" already", *name, node.bus));
     }
     if (auto rate = c.integer(t, path, "bitrate", false, model::lin::kMinBitrate,
                               model::lin::kMaxBitrate)) {

@@ -139,13 +139,21 @@ ScenarioRunner::resolve(const Scenario& s) const {
     }
     if (lin_effect) {
       // LIN nodes: a LIN controller ("DEVICE:N") or a simulated node, by name.
+      // Simulated nodes' names are scoped by bus: the rule's bus picks among nodes of one name.
       const std::string& lin_name = !f.node.empty() ? f.node : f.match.from;
       if (!lin_name.empty()) {
-        r.lin_node = find_lin_node ? find_lin_node(lin_name) : std::nullopt;
+        const bool bare = lin_name.find_first_of("/:") == std::string::npos;
+        if (find_lin_node && bare && !f.bus.empty()) {
+          r.lin_node = find_lin_node(f.bus + "/" + lin_name);
+        }
+        if (!r.lin_node && find_lin_node) {
+          r.lin_node = find_lin_node(lin_name);
+        }
         if (!r.lin_node) {
           where(
               fmt::format("no LIN node named \"{}\" (a LIN controller DEVICE:N or a "
-                          "[[lin_node]])",
+                          "[[lin_node]]; one of a name several buses have: with the rule's bus, "
+                          "or as BUS/NAME)",
                           lin_name));
           continue;
         }

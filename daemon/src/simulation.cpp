@@ -21,6 +21,19 @@
 
 namespace canemu::daemon {
 
+namespace {
+
+// "BUS/NAME" as the bus's name and the node's; a bare NAME: no bus.
+std::pair<std::string_view, std::string_view> split_lin_name(std::string_view name) {
+  const auto slash = name.find('/');
+  if (slash == std::string_view::npos) {
+    return {{}, name};
+  }
+  return {name.substr(0, slash), name.substr(slash + 1)};
+}
+
+}  // namespace
+
 using namespace canemu::model;
 
 std::optional<HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
@@ -329,12 +342,18 @@ std::optional<ScenarioRunner::LinNodeRef> Simulation::find_lin_node(std::string_
       return ScenarioRunner::LinNodeRef{e.bus, e.line->controller().node()};
     }
   }
+  // Simulated nodes: "BUS/NAME", or a NAME only one bus has.
+  const auto [bus, node] = split_lin_name(name);
+  std::optional<ScenarioRunner::LinNodeRef> found;
   for (const SimulatedLinNode& n : lin_nodes_) {
-    if (n.name == name) {
-      return ScenarioRunner::LinNodeRef{n.bus, n.ecu->node()};
+    if (n.name == node && (bus.empty() || config_.buses[n.bus].name == bus)) {
+      if (found) {
+        return std::nullopt;  // on several buses
+      }
+      found = ScenarioRunner::LinNodeRef{n.bus, n.ecu->node()};
     }
   }
-  return std::nullopt;
+  return found;
 }
 
 std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {
@@ -699,15 +718,29 @@ Simulation::DeviceLease::~DeviceLease() {
 
 namespace canemu::daemon {
 
-namespace {
-
-std::vector<SimulatedLinNode>::iterator find_named(std::vector<SimulatedLinNode>& nodes,
-                                                   const std::string& name) {
-  return std::find_if(nodes.begin(), nodes.end(),
-                      [&](const SimulatedLinNode& n) { return n.name == name; });
+// Names are scoped by bus: `name` is "BUS/NAME", or a NAME that only one bus has.
+tl::expected<std::vector<SimulatedLinNode>::iterator, std::string> Simulation::find_lin_named(
+    std::string_view name) {
+  const auto [bus, node] = split_lin_name(name);
+  std::vector<std::vector<SimulatedLinNode>::iterator> found;
+  for (auto it = lin_nodes_.begin(); it != lin_nodes_.end(); ++it) {
+    if (it->name == node && (bus.empty() || config_.buses[it->bus].name == bus)) {
+      found.push_back(it);
+    }
+  }
+  if (found.empty()) {
+    return tl::unexpected(fmt::format("no simulated LIN node named \"{}\"", name));
+  }
+  if (found.size() > 1) {
+    std::vector<std::string> where;
+    for (auto it : found) {
+      where.push_back(fmt::format("{}/{}", config_.buses[it->bus].name, it->name));
+    }
+    return tl::unexpected(fmt::format("LIN nodes named \"{}\" are on several buses: name one as {}",
+                                      name, fmt::join(where, " or ")));
+  }
+  return found.front();
 }
-
-}  // namespace
 
 tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::load_lin_nodes(
     std::string_view text, const std::string& source) {
@@ -724,8 +757,9 @@ tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::loa
     // there is a conflict.
     for (const SimulatedLinNode& other : lin_nodes_) {
       const bool replaced =
-          std::any_of(configs->begin(), configs->end(),
-                      [&](const LinNodeConfig& c) { return c.name == other.name; });
+          std::any_of(configs->begin(), configs->end(), [&](const LinNodeConfig& c) {
+            return c.name == other.name && c.bus == config_.buses[other.bus].name;
+          });
       if (!replaced && config_.buses[other.bus].name == n.bus &&
           !other.ecu->running_schedule().empty()) {
         errors.push_back(fmt::format(
@@ -740,31 +774,34 @@ tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::loa
   }
   std::vector<std::string> names;
   for (const LinNodeConfig& n : *configs) {
-    if (auto old = find_named(lin_nodes_, n.name); old != lin_nodes_.end()) {
-      lin_nodes_.erase(old);  // replaced: it leaves the bus first
-    }
+    // Names are scoped by bus: a node of this name on another bus stays.
     const std::size_t bus = *bus_index(n.bus);
+    std::erase_if(lin_nodes_, [&](const SimulatedLinNode& old) {
+      return old.name == n.name && old.bus == bus;  // replaced: it leaves the bus first
+    });
     lin_nodes_.push_back(make_lin_node(n, bus, *lin_buses_[bus], config_.buses[bus].bitrate));
-    names.push_back(n.name);
+    names.push_back(fmt::format("{}/{}", n.bus, n.name));
   }
   return names;
 }
 
 std::optional<std::string> Simulation::power_lin_node(const std::string& name, bool on) {
-  auto it = find_named(lin_nodes_, name);
-  if (it == lin_nodes_.end()) {
-    return fmt::format("no simulated LIN node named \"{}\"", name);
+  auto found = find_lin_named(name);
+  if (!found) {
+    return found.error();
   }
+  auto it = *found;
   it->ecu->set_powered(on);
   return std::nullopt;
 }
 
 std::optional<std::string> Simulation::run_lin_schedule(const std::string& name,
                                                         const std::string& table) {
-  auto it = find_named(lin_nodes_, name);
-  if (it == lin_nodes_.end()) {
-    return fmt::format("no simulated LIN node named \"{}\"", name);
+  auto found = find_lin_named(name);
+  if (!found) {
+    return found.error();
   }
+  auto it = *found;
   if (table.empty()) {
     it->ecu->stop_schedule();
     return std::nullopt;
@@ -782,10 +819,11 @@ std::optional<std::string> Simulation::run_lin_schedule(const std::string& name,
 }
 
 std::optional<std::string> Simulation::remove_lin_node(const std::string& name) {
-  auto it = find_named(lin_nodes_, name);
-  if (it == lin_nodes_.end()) {
-    return fmt::format("no simulated LIN node named \"{}\"", name);
+  auto found = find_lin_named(name);
+  if (!found) {
+    return found.error();
   }
+  auto it = *found;
   lin_nodes_.erase(it);
   return std::nullopt;
 }

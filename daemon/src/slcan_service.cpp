@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -40,7 +41,7 @@ void SlcanService::hook(const std::shared_ptr<SlcanDevice>& device) {
     m.task = c.task;
     m.func = c.func;
     m.handle = c.handle;
-    m.status = c.status;
+    m.status = c.kind == SlcanServiceCall::Kind::error ? c.status : c.id;
     m.sim_time_ns = c.at.ns();
     s->outbox.push_back(bytes_of(m));
   };
@@ -173,7 +174,10 @@ bool SlcanService::call(SlcanDevice& device, SlcanSession& session, const ipc::S
     }
     case ipc::SlcanOp::get_id: {
       ULONG v = 0;
-      r.ret = mod.get_id(m.handle, v);
+      r.ret = mod.get_id(m.handle, v,
+                         (m.flags & ipc::kSlcanGetIdOfCall) != 0 && m.handle == 0
+                             ? std::optional<ULONG>(m.value)
+                             : std::nullopt);
       r.value = v;
       return true;
     }

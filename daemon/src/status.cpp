@@ -200,6 +200,18 @@ void fill_device_list(const Simulation& sim, ipc::DeviceListReply& r, std::size_
       ipc::copy_name(e.buses[k], x.config.controllers[k]);
     }
   }
+  // SL-CANi S-Links: no VCI object id either; the one controller is the node NAME:0.
+  for (const DeviceRegistry::Slcan& x : devices.slcan()) {
+    ipc::DeviceEntry* slot = next_slot();
+    if (slot == nullptr) {
+      continue;
+    }
+    ipc::DeviceEntry& e = *slot;
+    ipc::copy_name(e.name, x.config.name);
+    e.model = static_cast<uint8_t>(ipc::WireDeviceModel::sorcus_sl_cani);
+    e.controller_count = 1;
+    ipc::copy_name(e.buses[0], sim.bus_config(x.bus).name);
+  }
   // An ephemeral device's entry: one controller on `bus`, of the client `owner_pid`; a VCI
   // adapter when `vci_id` is set.
   auto add_ephemeral = [&](const std::string& name, std::size_t bus, uint32_t owner_pid,

@@ -185,7 +185,7 @@ name = "c"
 bus = "nowhere"
 )");
   const std::vector<std::string> expected{
-      "t.toml:20:8: lin_node[1].name: a LIN node named \"a\" exists already",
+      "t.toml:20:8: lin_node[1].name: a LIN node named \"a\" exists on \"lin0\" already",
       "t.toml:33:6: lin_node[1].response[1].id: the node has a response for 0x05 already",
       "t.toml:27:8: lin_node[1].schedules[1].name: the node has a schedule named \"s\" already",
       "t.toml:22:12: lin_node[1].schedule: another LIN node runs a schedule on \"lin0\" already; "
@@ -193,6 +193,28 @@ bus = "nowhere"
       "t.toml:38:7: lin_node[2].bus: no bus is named \"nowhere\"",
   };
   EXPECT_EQ(e, expected);
+}
+
+TEST(LinConfig, NamesAreScopedByBusSoTwoClustersMayShareANodeName) {
+  auto c = parse_config(std::string(kBuses) + R"(
+[[bus]]
+name = "lin1"
+kind = "lin"
+bitrate = 19200
+
+[[lin_node]]
+name = "bcm"
+bus = "lin0"
+
+[[lin_node]]
+name = "bcm"
+bus = "lin1"
+)",
+                        "t.toml");
+  ASSERT_TRUE(c.has_value()) << c.error().front();
+  ASSERT_EQ(c->lin_nodes.size(), 2u);
+  EXPECT_EQ(c->lin_nodes[0].bus, "lin0");
+  EXPECT_EQ(c->lin_nodes[1].bus, "lin1");
 }
 
 }  // namespace

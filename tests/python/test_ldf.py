@@ -107,3 +107,72 @@ def test_an_ldf_cluster_runs_with_a_real_program_as_one_responder():
         if program is not None and program.poll() is None:
             program.kill()
         daemon.stop()
+
+
+SEATS = REPO / "tests" / "data" / "lin" / "seats_iso17987.ldf"
+WIPERS = REPO / "tests" / "data" / "lin" / "wipers_j2602.ldf"
+
+
+def test_an_iso17987_ldf_imports_with_each_publishers_checksum(tmp_path):
+    nodes = ldf.lin_nodes(str(SEATS), "lin0")
+    assert [n["name"] for n in nodes] == ["seatctrl", "seatmodule", "lumbar"]
+    ctrl, seat, lumbar = nodes
+    assert ctrl["schedules"] == [{"name": "seats", "slots": [
+        {"frame": 0x08, "delay": "10ms"}, {"frame": 0x18, "delay": "10ms"},
+        {"frame": 0x19, "delay": "10ms"}]}]
+    assert ctrl["response"] == [{"id": 0x08, "data": [0x00], "checksum": "enhanced"}]
+    assert seat["response"] == [{"id": 0x18, "data": [42, 0x00], "checksum": "enhanced"}]
+    # A LIN 1.3 slave in the ISO 17987 cluster: classic, as on its wire.
+    assert lumbar["response"] == [{"id": 0x19, "data": [7, 0x00], "checksum": "classic"}]
+    out = subprocess.run([sys.executable, "-m", "canemu.ldf", str(SEATS), "--bus", "lin0"],
+                         capture_output=True, text=True)
+    assert out.returncode == 0 and out.stderr == ""
+    config = tmp_path / "lin.toml"
+    config.write_text(LIN_BUS + out.stdout)
+    check = subprocess.run([str(CANEMUD), "--check-config", str(config)], capture_output=True,
+                           text=True)
+    assert check.returncode == 0, check.stderr
+    assert "lin node seatctrl on lin0 (commander, schedule seats)" in check.stdout
+
+
+def test_a_j2602_ldf_imports_at_10417_bits_with_enhanced_checksums(tmp_path):
+    warnings = []
+    nodes = ldf.lin_nodes(str(WIPERS), "lin0", warn=warnings.append)
+    assert warnings == []
+    assert [(n["name"], n["bitrate"]) for n in nodes] == [("body", 10417), ("wiper", 10417)]
+    body, wiper = nodes
+    assert body["schedule"] == "wiping"
+    assert body["response"] == [{"id": 0x01, "data": [0x00], "checksum": "enhanced"}]
+    # J2602's status byte (APINFO 0, ERR 0), park 1, speed 3.
+    assert wiper["response"] == [{"id": 0x02, "data": [0x00, 0x01, 0x03],
+                                  "checksum": "enhanced"}]
+    out = subprocess.run([sys.executable, "-m", "canemu.ldf", str(WIPERS), "--bus", "lin0"],
+                         capture_output=True, text=True)
+    assert out.returncode == 0 and out.stderr == ""
+    config = tmp_path / "lin.toml"
+    config.write_text(LIN_BUS.replace("19200", "10417") + out.stdout)
+    check = subprocess.run([str(CANEMUD), "--check-config", str(config)], capture_output=True,
+                           text=True)
+    assert check.returncode == 0, check.stderr
+    assert "lin node wiper on lin0 (responder)" in check.stdout
+
+
+def test_a_j2602_ldf_at_another_rate_is_taken_with_a_warning_and_2021_is_named(tmp_path):
+    fast = tmp_path / "fast.ldf"
+    fast.write_text(WIPERS.read_text().replace("10.417 kbps", "19.2 kbps"))
+    warnings = []
+    nodes = ldf.lin_nodes(str(fast), "lin0", warn=warnings.append)
+    assert nodes[0]["bitrate"] == 19200
+    assert warnings == [f"{fast}: an SAE J2602 cluster at 19200 bit/s (J2602-1 names 10417 "
+                        f"bit/s); taken as written"]
+    done = subprocess.run([sys.executable, "-m", "canemu.ldf", str(fast), "--bus", "lin0"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0
+    assert done.stderr == f"canemu.ldf: warning: {warnings[0]}\n"
+    later = tmp_path / "j2602_2021.ldf"
+    later.write_text(WIPERS.read_text().replace('"J2602_1_1.0"', '"J2602_1_2.0"'))
+    done = subprocess.run([sys.executable, "-m", "canemu.ldf", str(later), "--bus", "lin0"],
+                          capture_output=True, text=True)
+    assert done.returncode == 1
+    assert done.stderr.startswith(f"canemu.ldf: {later}: ldfparser ")
+    assert "does not take it: J2602_1_2.0" in done.stderr and "Traceback" not in done.stderr

@@ -150,3 +150,41 @@ def test_names_that_are_no_lin_controller_are_refused(daemon):
             master.send_header(0x40)
     with pytest.raises(canemu._vci.VciError):
         Responder("nosuchbus")
+
+
+def test_reset_then_start_puts_the_node_back_with_an_empty_table(daemon):
+    with Responder("lin0") as door, Commander("lin0") as master:
+        door.set_response(0x20, b"\x11")
+        drain(door)
+        door.reset()
+        door.start()  # goes on: initialised again with the mode and bit rate it was opened with
+        assert [m.info for m in drain(door)] == ["reset", "start"]
+        drain(master)
+        t0 = now_ns()
+        master.send_header(0x20)  # the table was emptied: nobody answers
+        canemu.step(20_000_000)
+        assert drain(master) == [LinMessage("error", bits(t0, 34 + 126), error="no-response")]
+        door.set_response(0x20, b"\x22")
+        t1 = now_ns()
+        master.send_header(0x20)
+        canemu.step(10_000_000)
+        assert drain(master) == [LinMessage("frame", bits(t1, 54), id=0x20, data=b"\x22",
+                                            enhanced=True)]
+        assert drain(door)[-1] == LinMessage("frame", bits(t1, 54), id=0x20, data=b"\x22",
+                                             enhanced=True, own=True)
+
+
+def test_two_responders_with_the_same_response_both_see_it_as_their_own(daemon):
+    with Responder("lin0") as a, Responder("lin0") as b, Commander("lin0") as master:
+        a.set_response(0x20, b"\x11\x22")
+        b.set_response(0x20, b"\x11\x22")
+        for n in (a, b, master):
+            drain(n)
+        t0 = now_ns()
+        master.send_header(0x20)
+        canemu.step(10_000_000)
+        frame = LinMessage("frame", bits(t0, 64), id=0x20, data=b"\x11\x22", enhanced=True)
+        assert drain(master) == [frame]
+        # Both sent every bit of it (identical bits collide into no error), as on a real bus.
+        assert drain(a) == [LinMessage(**{**frame.__dict__, "own": True})]
+        assert drain(b) == [LinMessage(**{**frame.__dict__, "own": True})]

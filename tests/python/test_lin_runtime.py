@@ -112,3 +112,56 @@ def test_mistakes_change_nothing(daemon, tmp_path):
     assert "an LDF file needs --bus" in done.stderr
     assert set(nodes(daemon)) == {"bcm", "doorleft"}
     assert nodes(daemon)["bcm"] == ["lin0", "on", "normal"]
+
+
+@pytest.fixture
+def two_buses():
+    d = Canemud("stepped", extra=LIN + LIN.replace("lin0", "lin1"))
+    yield d
+    d.stop()
+
+
+def rows(daemon) -> list:
+    return [r.split()[:4] for r in cli(daemon, "lin", "list").stdout.splitlines()[1:]]
+
+
+def test_node_names_are_scoped_by_bus(two_buses, tmp_path):
+    d = two_buses
+    cli(d, "lin", "load", str(DOORS), "--bus", "lin0")
+    # The same LDF as a second cluster: its nodes join lin1; lin0's stay as they were.
+    cli(d, "lin", "load", str(DOORS), "--bus", "lin1", "--schedule", "Events")
+    assert rows(d) == [["bcm", "lin0", "on", "normal"], ["doorleft", "lin0", "on", "-"],
+                       ["doorright", "lin0", "on", "-"], ["bcm", "lin1", "on", "events"],
+                       ["doorleft", "lin1", "on", "-"], ["doorright", "lin1", "on", "-"]]
+    # A bare name that two buses have is refused with the names to use.
+    done = cli(d, "lin", "off", "bcm", check=False)
+    assert done.returncode == 1
+    assert ('LIN nodes named "bcm" are on several buses: name one as lin0/bcm or lin1/bcm'
+            in done.stderr)
+    cli(d, "lin", "off", "lin1/doorleft")
+    cli(d, "lin", "schedule", "lin1/bcm", "--stop")
+    assert rows(d)[3:5] == [["bcm", "lin1", "on", "-"], ["doorleft", "lin1", "off", "-"]]
+    assert rows(d)[:2] == [["bcm", "lin0", "on", "normal"], ["doorleft", "lin0", "on", "-"]]
+    # Loading a node again replaces the one of that name on its own bus only.
+    again = tmp_path / "again.toml"
+    again.write_text('[[lin_node]]\nname = "doorleft"\nbus = "lin1"\n')
+    cli(d, "lin", "load", str(again))
+    assert [r[:3] for r in rows(d)] == [["bcm", "lin0", "on"], ["doorleft", "lin0", "on"],
+                                        ["doorright", "lin0", "on"], ["bcm", "lin1", "on"],
+                                        ["doorright", "lin1", "on"], ["doorleft", "lin1", "on"]]
+    # A fault's node: BUS/NAME, or the rule's bus picks it; a bare name two buses have is not
+    # guessed.
+    bad = cli(d, "fault", "inject", "--effect", "lin_responder_off", "--node", "doorright",
+              check=False)
+    assert bad.returncode == 1
+    assert ('no LIN node named "doorright" (a LIN controller DEVICE:N or a [[lin_node]]; one of '
+            'a name several buses have: with the rule\'s bus, or as BUS/NAME)') in bad.stderr
+    cli(d, "fault", "inject", "--effect", "lin_responder_off", "--node", "lin0/doorright")
+    cli(d, "fault", "inject", "--effect", "lin_checksum_error", "--bus", "lin1", "--from", "bcm")
+    bad = cli(d, "fault", "inject", "--effect", "lin_checksum_error", "--bus", "lin1",
+              "--from", "lin0/bcm", check=False)
+    assert "node lin0/bcm is not on bus lin1" in bad.stderr
+    cli(d, "lin", "remove", "lin0/bcm")
+    cli(d, "lin", "remove", "bcm")  # only lin1 has one now
+    assert [r[:2] for r in rows(d)] == [["doorleft", "lin0"], ["doorright", "lin0"],
+                                        ["doorright", "lin1"], ["doorleft", "lin1"]]

@@ -258,6 +258,26 @@ TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
       << j;
 }
 
+// An SL-CANi is a DEVICE row too (model, its bus), beside its node NAME:0
+// (config/examples/sl-cani.toml).
+TEST(Cli, StatusListsAnSlCaniAsADeviceRowBesideItsNode) {
+  Daemon d("stepped", {"--config", CANEMU_SOURCE_DIR "/config/examples/sl-cani.toml"});
+  Cli text(d, {"status"});
+  const std::string t = Cli::read_all(text.out);
+  EXPECT_EQ(text.wait(), 0);
+  EXPECT_NE(t.find("sl0            sorcus-sl-cani       config   can0\n"), std::string::npos) << t;
+  EXPECT_NE(t.find("sl0:0          can0 "), std::string::npos) << t;
+
+  Cli json(d, {"status", "--json"});
+  const std::string j = Cli::read_all(json.out);
+  EXPECT_EQ(json.wait(), 0);
+  EXPECT_NE(j.find("{\"buses\" : [\"can0\"],\"ephemeral\" : false,\"model\" : "
+                   "\"sorcus-sl-cani\",\"name\" : \"sl0\",\"nodes\" : [\"sl0:0\"],"
+                   "\"owner_pid\" : 0}"),
+            std::string::npos)
+      << j;
+}
+
 // status (text and JSON), time step and calc, as a user types them.
 TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   Daemon d;

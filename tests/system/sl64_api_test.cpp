@@ -71,6 +71,17 @@ std::vector<Call> wait_calls(std::size_t n) {
   return g_calls;
 }
 
+// The acceptance mask's routine (task 100, function 6) of a bus monitor, as the manual uses it:
+// each call reads the ID of its frame with sl064_get_id(slot, 0, ...).
+std::vector<ULONG> g_ids;
+void monitor_service(USHORT, USHORT, SL064Handle* handle, USHORT, ULONG*) {
+  ULONG id = 0xFFFFFFFF;
+  const USHORT ret = sl064_get_id(1, *handle, &id);
+  std::lock_guard lock(g_mutex);
+  g_ids.push_back(ret == 0 ? id : 0xEEEEEEEE);
+  g_cv.notify_all();
+}
+
 // A call's return value and then the diagnosis.
 std::pair<USHORT, USHORT> diag(USHORT ret) {
   return {ret, sl064_get_diagnosis(kSlot)};
@@ -399,6 +410,38 @@ TEST(Sl64Api, Function14GivesAServiceRequestThatEvaluateSrqReads) {
   EXPECT_EQ(sl064_evaluate_srq(&slot, &got), 0);
   EXPECT_EQ(slot, kSlot);
   EXPECT_EQ(got, h);
+}
+
+TEST(Sl64Api, EachMaskRoutineCallReadsItsOwnFramesIdInStepTime) {
+  Sl64Daemon x;
+  Adapter alpha("alpha");
+  {
+    std::lock_guard lock(g_mutex);
+    g_ids.clear();
+  }
+  ASSERT_EQ(canemu_sl064_install_message_service(100, 6, monitor_service), 0);
+  ASSERT_EQ(diag(sl064_config_module(kSlot, 100, 5)), kOk);
+  Sl64Daemon::object(0x10, _SL064_PASSIVE);
+  ULONG mask = 0;  // every unconfigured frame to the routine
+  ASSERT_EQ(diag(sl064_set_acceptance_mask(kSlot, &mask, 0, 100, 6)), kOk);
+  ASSERT_EQ(diag(sl064_start_com(kSlot)), kOk);
+  const std::vector<ULONG> ids = {0x101, 0x202, 0x303, 0x404, 0x505, 0x606, 0x707, 0x7EF};
+  for (ULONG id : ids) {
+    alpha.post(data(id, {1}));
+  }
+  step_ns(5'000'000);  // all eight frames in one step, before any routine runs
+  std::vector<ULONG> got;
+  {
+    std::unique_lock lock(g_mutex);
+    g_cv.wait_for(lock, std::chrono::seconds(10), [&] { return g_ids.size() >= ids.size(); });
+    got = g_ids;
+  }
+  EXPECT_EQ(got, ids);
+  EXPECT_EQ(canemu_sl064_lost_calls(kSlot), 0u);
+  ULONG last = 0;  // outside a routine: the last unconfigured frame's
+  EXPECT_EQ(diag(sl064_get_id(kSlot, 0, &last)), kOk);
+  EXPECT_EQ(last, 0x7EFu);
+  EXPECT_EQ(canemu_sl064_install_message_service(100, 6, nullptr), 0);
 }
 
 TEST(Sl64Api, TheExampleTalksBetweenTwoSlots) {

@@ -72,6 +72,9 @@ SL64API USHORT canemu_sl064_driver_task(UCHAR micro_slot);
 /* canemu: waits up to `timeout_ms` (-1: for ever) for a service request of function 14; its
  * word (80h | slot << 8), or 0 when none came. */
 SL64API USHORT canemu_sl064_wait_srq(int timeout_ms);
+/* canemu: routine calls for this slot dropped because 65536 calls were already waiting for the
+ * routine thread (a routine slower than the bus), since the last canemu_sl064_connect. */
+SL64API ULONG canemu_sl064_lost_calls(UCHAR micro_slot);
 /* canemu: the S-Link's EEPROM (64 words). Writing: words 13..19 and 32..63; the word persists
  * in canemud's state file. 0, or 42h (read-only word, no such slot). */
 SL64API USHORT canemu_sl064_eeprom_read(UCHAR micro_slot, USHORT word, USHORT* value);

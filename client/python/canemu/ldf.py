@@ -10,8 +10,16 @@ values; the master (unless it is real) runs the LDF's schedule tables. From the 
 Decisions (docs/lin.md, "LDF import"):
 
 - A frame's data are its signals' initial values, encoded by ldfparser.
-- The checksum is enhanced for LIN 2.x clusters (classic for diagnostic frames, as on the
-  wire), classic for LIN 1.x.
+- The checksum of a frame follows its publisher's protocol (a slave's ``LIN_protocol``, the
+  master's: the cluster's ``LIN_protocol_version``): classic for LIN 1.x, enhanced for LIN 2.x,
+  ISO 17987 (``"ISO17987:2015"``) and SAE J2602-1 (``"J2602_1_1.0"``, built on LIN 2.0);
+  diagnostic frames are classic on the wire whatever the cluster.
+- SAE J2602 where it differs from LIN 2.0: its language version (``"J2602_3_1.0"``) is read as
+  LIN 2.0's; node attributes without a ``response_tolerance`` get J2602's 40 % (ldfparser's
+  defaults: 40 %, a 48-bit header, 100 ms wake-up and power-on), which canemud's LIN timing
+  (the 1.4 factor of LIN 2.x) already is. J2602-1 names 10.417 kbit/s: an LDF that says
+  otherwise is taken as written (the import warns). ``J2602_1_2.0`` (J2602:2021) is refused by
+  ldfparser; its error is shown.
 - An event-triggered frame's associated frames answer it from their publishers; the LDF's
   collision resolving table is not needed (the commander polls the associated frames itself)
   but stays a table of its own.
@@ -24,10 +32,37 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any, Dict, Iterable, List, Optional
+from typing import Any, Callable, Dict, Iterable, List, Optional
 
 MASTER_REQUEST = 0x3C
 SLAVE_RESPONSE = 0x3D
+
+
+J2602_BITRATE = 10417  # SAE J2602-1: 10.417 kbit/s
+
+
+def _is_j2602(version: Any) -> bool:
+    return type(version).__name__ == "J2602Version"
+
+
+def _checksum(version: Any, path: str) -> str:
+    """The checksum model of a node speaking `version` (ldfparser's LinVersion,
+    Iso17987Version or J2602Version)."""
+    kind = type(version).__name__
+    if kind in ("Iso17987Version", "J2602Version"):
+        return "enhanced"  # ISO 17987 is LIN 2.2A's successor; J2602-1 is built on LIN 2.0
+    if kind == "LinVersion":
+        return "enhanced" if version.major >= 2 else "classic"
+    raise ValueError(f"{path}: protocol version {version!s} is not LIN 1.x/2.x, ISO 17987 or "
+                     f"SAE J2602")
+
+
+def _ldfparser_version() -> str:
+    try:
+        from importlib.metadata import version
+        return version("ldfparser")
+    except Exception:  # not installed as a distribution
+        return "(unknown version)"
 
 
 def _delay(seconds: float) -> str:
@@ -36,13 +71,18 @@ def _delay(seconds: float) -> str:
 
 
 def lin_nodes(path: str, bus: str, real: Iterable[str] = (),
-              schedule: Optional[str] = None) -> List[Dict[str, Any]]:
+              schedule: Optional[str] = None,
+              warn: Optional[Callable[[str], None]] = None) -> List[Dict[str, Any]]:
     """The ``[[lin_node]]`` tables (as dicts) for the LDF at `path` on `bus`, without the nodes
     named in `real`. `schedule`: the table the master runs from the start (default: the
-    first). ValueError naming what does not fit."""
+    first). `warn` gets what is imported although a standard says otherwise. ValueError naming
+    what does not fit."""
     import ldfparser  # only needed here
 
-    ldf = ldfparser.parse_ldf(path)
+    try:
+        ldf = ldfparser.parse_ldf(path)
+    except ValueError as e:  # what ldfparser refuses, e.g. a J2602:2021 ("J2602_1_2.0") LDF
+        raise ValueError(f"{path}: ldfparser {_ldfparser_version()} does not take it: {e}") from e
     master = ldf.get_master()
     slaves = ldf.get_slaves()
     names = [master.name] + [s.name for s in slaves]
@@ -50,9 +90,14 @@ def lin_nodes(path: str, bus: str, real: Iterable[str] = (),
     for r in real:
         if r not in names:
             raise ValueError(f"{path}: no node is named {r!r} (nodes: {', '.join(names)})")
-    version = float(ldf.get_protocol_version())
-    checksum = "enhanced" if version >= 2.0 else "classic"
+    cluster = ldf.get_protocol_version()
     bitrate = int(ldf.get_baudrate())
+    checksum_of = {master.name: _checksum(cluster, path)}
+    for s in slaves:
+        checksum_of[s.name] = _checksum(getattr(s, "lin_protocol", None) or cluster, path)
+    if _is_j2602(cluster) and bitrate != J2602_BITRATE and warn is not None:
+        warn(f"{path}: an SAE J2602 cluster at {bitrate} bit/s (J2602-1 names 10417 bit/s); "
+             f"taken as written")
 
     carried_by: Dict[int, int] = {}  # frame ID -> the event-triggered frame that carries it
     for et in ldf.get_event_triggered_frames():
@@ -68,7 +113,7 @@ def lin_nodes(path: str, bus: str, real: Iterable[str] = (),
             entry: Dict[str, Any] = {
                 "id": f.frame_id,
                 "data": list(f.encode_raw(values)),
-                "checksum": checksum,
+                "checksum": checksum_of[node_name],
             }
             if f.frame_id in carried_by:
                 entry["event_triggered"] = carried_by[f.frame_id]
@@ -162,7 +207,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument("--schedule", help="the table the master runs (default: the first)")
     args = parser.parse_args(argv)
     try:
-        nodes = lin_nodes(args.ldf, args.bus, args.real, args.schedule)
+        nodes = lin_nodes(args.ldf, args.bus, args.real, args.schedule,
+                          warn=lambda text: print(f"canemu.ldf: warning: {text}", file=sys.stderr))
     except (OSError, ValueError) as e:
         print(f"canemu.ldf: {e}", file=sys.stderr)
         return 1

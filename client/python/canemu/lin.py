@@ -138,6 +138,7 @@ class LinNode:
         self._control = None
         self._monitor = None
         self._ephemeral: Optional[str] = None
+        self._initialized = False
         info = _vci.CANEMU_DEVICEINFO()
         device, _, number = channel.rpartition(":")
         if device and number.isdigit():
@@ -175,8 +176,10 @@ class LinNode:
             handle = HANDLE()
             _call("linControlOpen", self._device, controller, ctypes.byref(handle))
             self._control = handle.value
-            mode = self._mode | (LIN_OPMODE_ERRORS if errors else 0)
-            _call("linControlInitialize", self._control, mode, bitrate)
+            self._opmode = self._mode | (LIN_OPMODE_ERRORS if errors else 0)
+            self._bitrate = bitrate
+            _call("linControlInitialize", self._control, self._opmode, bitrate)
+            self._initialized = True
             _call("linControlStart", self._control, 1)
         except (VciError, ValueError):
             self.close()
@@ -213,10 +216,18 @@ class LinNode:
                 return message
 
     def reset(self) -> None:
-        """Stops the controller and clears its response table; start() goes on."""
+        """Takes the node off the bus and empties its response table (the VCI's ResetLine:
+        the controller is left uninitialised). start() goes on."""
         _call("linControlReset", self._control)
+        self._initialized = False
 
     def start(self) -> None:
+        """Puts the node on the bus again: after reset(), first initialised with the mode and
+        bit rate it was opened with (as a VCI program calls InitLine after ResetLine); its
+        response table starts empty."""
+        if not self._initialized:
+            _call("linControlInitialize", self._control, self._opmode, self._bitrate)
+            self._initialized = True
         _call("linControlStart", self._control, 1)
 
     def close(self) -> None:

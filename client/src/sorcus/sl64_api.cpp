@@ -1,8 +1,10 @@
 // libsl64.so: the sl064_* functions over canemud's SL-CANi requests (ipc::SlcanRequest), with
 // the service routines as functions of the program run on one thread of the library.
+#include <algorithm>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <iterator>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -16,6 +18,16 @@ namespace {
 
 constexpr unsigned kSlots = SL064_SLOTS;
 using Key = std::pair<USHORT, USHORT>;
+
+// Decision: routine calls wait for the routine thread in a queue of at most this many (about
+// 2.5 MB); a call that finds it full is dropped and counted for its slot
+// (canemu_sl064_lost_calls), as an interrupt the card could not serve.
+constexpr std::size_t kMaxQueuedCalls = 65536;
+
+// On the routine thread, while the acceptance mask's routine runs for an unconfigured frame:
+// its slot and the frame's ID, which sl064_get_id(slot, 0, ...) passes back to canemud.
+thread_local int t_call_slot = -1;
+thread_local ULONG t_call_id = 0;
 
 class Library {
  public:
@@ -145,6 +157,7 @@ class Library {
       held_ = 0;
       queue_.clear();
       srq_.clear();
+      std::fill(std::begin(lost_), std::end(lost_), ULONG{0});
     }
     return link_.reconnect(socket != nullptr ? socket : "") ? USHORT{0} : USHORT{SL064_E_DRIVER};
   }
@@ -200,10 +213,23 @@ class Library {
       srq_ready_.notify_all();
       return;
     }
+    if (queue_.size() >= kMaxQueuedCalls) {
+      if (e.slot < kSlots) {
+        ++lost_[e.slot];
+      }
+      return;
+    }
     queue_.push_back(e);
     queued_.notify_one();
   }
 
+ public:
+  ULONG lost_calls(UCHAR slot) {
+    std::lock_guard lock(mutex_);
+    return slot < kSlots ? lost_[slot] : 0;
+  }
+
+ private:
   void callback_loop() {
     std::unique_lock lock(mutex_);
     while (true) {
@@ -229,7 +255,12 @@ class Library {
           const SL064MessageService f = it->second;
           lock.unlock();
           SL064Handle handle = e.handle;
+          if (handle == 0) {
+            t_call_slot = e.slot;  // the mask's routine: its frame's ID for sl064_get_id
+            t_call_id = e.status;
+          }
           f(e.task, sizeof handle, &handle, 0, nullptr);
+          t_call_slot = -1;
           lock.lock();
         }
       }
@@ -240,6 +271,7 @@ class Library {
   uint32_t held_ = 0;
   uint64_t generation_ = 0;
   USHORT local_[kSlots] = {};
+  ULONG lost_[kSlots] = {};  // routine calls dropped on a full queue, since the connection
   std::map<Key, SL064MessageService> message_;
   std::map<Key, SL064ErrorService> error_;
   std::deque<ipc::SlcanEventMsg> queue_;
@@ -374,8 +406,13 @@ USHORT sl064_set_acceptance_mask(UCHAR micro_slot, ULONG* mask, USHORT usage, US
 
 USHORT sl064_get_id(UCHAR micro_slot, SL064Handle handle, ULONG* id_var) {
   SlcanReply r{};
-  const USHORT ret = Library::get().op(micro_slot, SlcanOp::get_id, r,
-                                       [&](SlcanRequest& m) { m.handle = handle; });
+  const USHORT ret = Library::get().op(micro_slot, SlcanOp::get_id, r, [&](SlcanRequest& m) {
+    m.handle = handle;
+    if (handle == 0 && canemu::client::sl64::t_call_slot == micro_slot) {
+      m.flags = canemu::ipc::kSlcanGetIdOfCall;  // the frame this routine was called for
+      m.value = canemu::client::sl64::t_call_id;
+    }
+  });
   if (id_var != nullptr && ret == 0) {
     *id_var = r.value;
   }
@@ -470,6 +507,10 @@ USHORT canemu_sl064_eeprom_write(UCHAR micro_slot, USHORT word, USHORT value) {
     m.value = word;
     m.handle = value;
   });
+}
+
+ULONG canemu_sl064_lost_calls(UCHAR micro_slot) {
+  return Library::get().lost_calls(micro_slot);
 }
 
 USHORT canemu_sl064_connect(const char* socket) {

@@ -94,6 +94,9 @@ tl::expected<std::string, std::string> tables_of(const LinOptions& o) {
 
 }  // namespace
 
+// Names are scoped by bus (two clusters may each have a "bcm").
+constexpr const char* kNodeHelp = "the node: NAME, or BUS/NAME when several buses have a NAME";
+
 Command add_lin(CLI::App& app, const std::string& socket) {
   auto* lin = app.add_subcommand("lin", "canemud's simulated LIN nodes at run time");
   lin->require_subcommand(1);
@@ -105,18 +108,22 @@ Command add_lin(CLI::App& app, const std::string& socket) {
   load->add_option("--schedule", o->schedule, "LDF: the master's schedule table to run");
   auto* list = lin->add_subcommand("list", "the simulated LIN nodes");
   auto* on = lin->add_subcommand("on", "switch a node on");
-  on->add_option("NODE", o->node)->required();
+  on->add_option("NODE", o->node, kNodeHelp)->required();
   auto* off = lin->add_subcommand("off", "switch a node off (it answers nothing, sends nothing)");
-  off->add_option("NODE", o->node)->required();
+  off->add_option("NODE", o->node, kNodeHelp)->required();
   auto* schedule = lin->add_subcommand("schedule", "run a commander's schedule table, or --stop");
-  schedule->add_option("NODE", o->node)->required();
+  schedule->add_option("NODE", o->node, kNodeHelp)->required();
   schedule->add_option("TABLE", o->table, "the table to run from its first slot, now");
   schedule->add_flag("--stop", o->stop, "stop the schedule");
   auto* remove = lin->add_subcommand("remove", "remove a node from its bus");
-  remove->add_option("NODE", o->node)->required();
+  remove->add_option("NODE", o->node, kNodeHelp)->required();
   return {lin, [&socket, o, load, list, on, off, schedule, remove] {
             auto m =
                 std::make_unique<ipc::LinNodeRequest>(ipc::make_message<ipc::LinNodeRequest>());
+            if (o->node.size() >= sizeof m->name) {
+              return fail(fmt::format("{}: a node is named in at most {} characters", o->node,
+                                      sizeof m->name - 1));
+            }
             ipc::copy_name(m->name, o->node);
             if (load->parsed()) {
               auto text = tables_of(*o);

@@ -135,6 +135,7 @@ void LinBus::start_next(SimTime now) {
   wire_.clear();
   bit_errors_.clear();
   responder_ = kNoNode;
+  responders_.clear();
   if (current_.kind == RequestKind::wakeup) {
     frame_faults_ = {};
     step_ = scheduler_.schedule_at(now + current_.pulse, *this, tag_wakeup_end);
@@ -321,6 +322,7 @@ void LinBus::header_end(SimTime now) {
         if (responder_ == kNoNode) {
           responder_ = txs[t].node;
         }
+        responders_.push_back(txs[t].node);
       }
     }
     wire_.push_back(c);
@@ -366,6 +368,7 @@ void LinBus::response_end(SimTime now) {
   ++stats_.frames;
   e.kind = Event::Kind::frame;
   e.responder = responder_;
+  e.responders = responders_;
   e.response.size = static_cast<uint8_t>(wire_.size() - 1);
   std::copy(wire_.begin(), wire_.end() - 1, e.response.data.begin());
   e.response.checksum = *kind;

@@ -153,6 +153,11 @@ TEST_F(LinBusTest, TwoRespondersWithTheSameResponseDoNotCollide) {
   EXPECT_EQ(listener.seen[0].kind, Event::Kind::frame);
   EXPECT_EQ(listener.seen[0].responder, responder.id);  // the first node that completed
   EXPECT_EQ(twin.seen.at(0).kind, Event::Kind::frame);
+  // Both sent every bit: each is a responder of the frame (its own, `sor` in its monitor).
+  EXPECT_EQ(listener.seen[0].responders, (std::vector<LinNodeId>{responder.id, twin.id}));
+  EXPECT_TRUE(twin.seen[0].responded(twin.id));
+  EXPECT_TRUE(responder.seen.at(0).responded(responder.id));
+  EXPECT_FALSE(listener.seen[0].responded(listener.id));
 }
 
 TEST_F(LinBusTest, CollidingRespondersSeeBitErrorsAndListenersAChecksumError) {

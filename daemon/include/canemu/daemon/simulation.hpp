@@ -72,12 +72,14 @@ class Simulation {
   // The simulated LIN nodes ([[lin_node]]), in configuration order.
   const std::vector<SimulatedLinNode>& lin_nodes() const { return lin_nodes_; }
   // ---- simulated LIN nodes at run time (`canemu lin`, docs/lin.md) ----
-  // Loads [[lin_node]] tables: a node of a name that runs already is replaced; a bus keeps at
-  // most one commander running a schedule. All or nothing; the names loaded, or every problem.
+  // Loads [[lin_node]] tables: a node of a name that runs on that bus already is replaced
+  // (names are scoped by bus: another bus's node of that name stays); a bus keeps at most one
+  // commander running a schedule. All or nothing; the nodes loaded ("BUS/NAME"), or every
+  // problem.
   tl::expected<std::vector<std::string>, std::vector<std::string>> load_lin_nodes(
       std::string_view text, const std::string& source);
-  // Switches node `name` on or off, runs its schedule table `table` ("": stops its schedule), or
-  // removes it; the reason when it cannot.
+  // Switches node `name` ("BUS/NAME", or a NAME only one bus has) on or off, runs its schedule
+  // table `table` ("": stops its schedule), or removes it; the reason when it cannot.
   std::optional<std::string> power_lin_node(const std::string& name, bool on);
   std::optional<std::string> run_lin_schedule(const std::string& name, const std::string& table);
   std::optional<std::string> remove_lin_node(const std::string& name);
@@ -170,6 +172,9 @@ class Simulation {
   }
   // A LIN controller ("DEVICE:N", configured or ephemeral) or a simulated LIN node, by name.
   std::optional<ScenarioRunner::LinNodeRef> find_lin_node(std::string_view name) const;
+  // A simulated LIN node by "BUS/NAME", or by a NAME that only one bus has; else the reason.
+  tl::expected<std::vector<SimulatedLinNode>::iterator, std::string> find_lin_named(
+      std::string_view name);
 
   void add_bus(const BusConfig& b);
   // Builds a device whose buses exist; an error (and nothing added) if a controller cannot run

@@ -120,14 +120,15 @@ USHORT SlcanModule::clear_msg(SL064Handle handle) {
   return done(SL064_DIAG_OK);
 }
 
-USHORT SlcanModule::get_id(SL064Handle handle, ULONG& id) {
+USHORT SlcanModule::get_id(SL064Handle handle, ULONG& id, std::optional<ULONG> call_id) {
   if (phase_ != Phase::configured) {
     return done(SL064_DIAG_CALL_ORDER);
   }
   if (handle == 0 && mask_set_) {
-    // Decision (digest §7.17): handle 0 names the last unconfigured message the mask's service
-    // routine was called for.
-    id = unconfigured_id_;
+    // Decision (digest §7.17): handle 0 names the unconfigured message the mask's service
+    // routine was called for: the routine's own call's (the library passes it back), outside a
+    // routine the last one a call was made for.
+    id = call_id.value_or(unconfigured_id_);
     return done(SL064_DIAG_OK);
   }
   const int k = object_of(handle);
@@ -160,6 +161,9 @@ USHORT SlcanModule::evaluate_srq(SL064Handle& handle) {
   const Srq r = srq_.front();
   srq_.pop_front();
   handle = r.handle;
+  if (r.handle == 0 && r.status == 0) {
+    unconfigured_id_ = r.id;  // get_id(0) now names this request's frame
+  }
   return r.status;
 }
 
@@ -192,7 +196,7 @@ void SlcanModule::call(SlcanServiceCall c) {
     // Function 14: the cause is stored, the PC gets a service request. With the lock enabled,
     // the controller's interrupt stays locked until sl064_end_of_srq.
     if (srq_.size() < kSrqDepth) {
-      srq_.push_back(Srq{c.handle, static_cast<USHORT>(c.status)});
+      srq_.push_back(Srq{c.handle, static_cast<USHORT>(c.status), c.id});
     } else {
       ++srq_overflows_;
     }
@@ -264,8 +268,11 @@ void SlcanModule::unconfigured(const Frame& frame) {
     ++discarded_;
     return;
   }
-  unconfigured_id_ = frame.id();
-  call(SlcanServiceCall{{}, SlcanServiceCall::Kind::message, mask_task_, mask_func_, 0, 0});
+  if (!(mask_task_ == driver_task() && mask_func_ == SL064_SRQ_SERVICE_FUNC)) {
+    unconfigured_id_ = frame.id();  // with function 14: when its request is evaluated
+  }
+  call(SlcanServiceCall{
+      {}, SlcanServiceCall::Kind::message, mask_task_, mask_func_, 0, 0, frame.id()});
 }
 
 }  // namespace canemu::model::sorcus

@@ -94,7 +94,7 @@ void LinController::on_lin_event(const Event& e) {
     detected_ = e.bitrate;
   }
   if (listener_ != nullptr) {
-    listener_->on_lin(e, e.kind == Event::Kind::frame && e.responder == id_);
+    listener_->on_lin(e, e.kind == Event::Kind::frame && e.responded(id_));
   }
 }
 

@@ -184,7 +184,7 @@ void LinEcu::on_lin_event(const Event& e) {
   switch (e.kind) {
     case Event::Kind::frame:
       ++counters_.frames;
-      if (e.responder == id_) {
+      if (e.responded(id_)) {
         ++counters_.responses;
         changed_[et_answer_.value_or(e.id)] = false;  // went out whole
       }

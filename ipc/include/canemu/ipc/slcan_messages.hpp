@@ -32,7 +32,7 @@ enum class SlcanOp : uint16_t {
   send_data_request = 11,    // handle
   clear_msg = 12,            // handle
   set_acceptance_mask = 13,  // value = mask, flags = usage, task, func; reply: value = mask
-  get_id = 14,               // handle; reply: value
+  get_id = 14,               // handle, flags (kSlcanGetIdOfCall), value; reply: value
   get_msg_count = 15,        // handle; reply: value
   set_led = 16,              // value
   get_led = 17,              // reply: value
@@ -46,6 +46,11 @@ enum class SlcanOp : uint16_t {
 };
 
 inline constexpr std::size_t kSlcanEepromWords = 64;
+
+// SlcanRequest.flags of get_id with handle 0: the acceptance mask's routine asks for the frame
+// its call was for; `value` is that call's SlcanEventMsg.status (the frame's ID). Without the
+// flag, handle 0 reads the last unconfigured frame a call was made for.
+inline constexpr uint16_t kSlcanGetIdOfCall = 1;
 
 struct SlcanRequest {
   MsgHeader header;
@@ -86,8 +91,10 @@ struct SlcanEventMsg {
   uint16_t task = 0;
   uint16_t func = 0;
   uint16_t handle = 0;
-  uint32_t status = 0;  // error: 1 heavily disturbed, 2 bus-off
-  uint16_t word = 0;    // service_request: 80h | slot << 8
+  // error: 1 heavily disturbed, 2 bus-off; message with handle 0 (the acceptance mask's
+  // routine): the unconfigured frame's identifier, e.g. 0x123 or 0x18DAF110 (29 bits).
+  uint32_t status = 0;
+  uint16_t word = 0;  // service_request: 80h | slot << 8
   uint16_t reserved = 0;
   int64_t sim_time_ns = 0;
 };

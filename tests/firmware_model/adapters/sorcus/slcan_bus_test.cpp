@@ -294,5 +294,55 @@ TEST(SlcanBus, UnconfiguredMessagesThroughTheMaskGoToItsRoutineWithHandle0) {
   EXPECT_EQ(id, 0x123u);
 }
 
+TEST(SlcanBus, EightUnconfiguredFramesBackToBackGiveEightCallsEachWithItsOwnId) {
+  Slcan x;
+  x.configure();
+  x.object(0x10, _SL064_PASSIVE);
+  ULONG mask = 0;
+  ASSERT_EQ(x.diag(x.m.set_acceptance_mask(mask, 0, kTask, kFunc)), kOk);
+  ASSERT_EQ(x.diag(x.m.start_com()), kOk);
+  const std::vector<ULONG> ids = {0x101, 0x202, 0x303, 0x404, 0x505, 0x606, 0x707, 0x7EF};
+  for (ULONG id : ids) {
+    x.peer.send(data_frame(id, {1}));
+  }
+  x.run_until(2'000'000);  // all eight before anyone reads an ID
+  ASSERT_EQ(x.message_calls(), std::vector<SL064Handle>(8, 0));
+  std::vector<ULONG> got;
+  for (const SlcanServiceCall& c : x.log.calls) {
+    ULONG id = 0;
+    EXPECT_EQ(x.diag(x.m.get_id(0, id, c.id)), kOk);
+    got.push_back(id);
+  }
+  EXPECT_EQ(got, ids);
+  ULONG last = 0;  // outside a routine: the last one
+  EXPECT_EQ(x.diag(x.m.get_id(0, last)), kOk);
+  EXPECT_EQ(last, 0x7EFu);
+}
+
+TEST(SlcanBus, WithFunction14AsTheMasksRoutineEachRequestKeepsItsFramesId) {
+  Slcan x;
+  x.configure();
+  x.object(0x10, _SL064_PASSIVE);
+  ULONG mask = 0;
+  ASSERT_EQ(x.diag(x.m.set_acceptance_mask(mask, 0, x.m.driver_task(), SL064_SRQ_SERVICE_FUNC)),
+            kOk);
+  ASSERT_EQ(x.diag(x.m.start_com()), kOk);
+  for (ULONG id : {0x111, 0x222, 0x333}) {
+    x.peer.send(data_frame(id, {1}));
+  }
+  x.run_until(1'000'000);
+  ASSERT_EQ(x.log.requests.size(), 3u);
+  std::vector<ULONG> got;
+  for (int i = 0; i < 3; ++i) {
+    SL064Handle h = 9;
+    EXPECT_EQ(x.m.evaluate_srq(h), 0);
+    EXPECT_EQ(h, 0);
+    ULONG id = 0;
+    EXPECT_EQ(x.diag(x.m.get_id(0, id)), kOk);
+    got.push_back(id);
+  }
+  EXPECT_EQ(got, (std::vector<ULONG>{0x111, 0x222, 0x333}));
+}
+
 }  // namespace
 }  // namespace canemu::model::sorcus

@@ -23,6 +23,7 @@
 //   response (8 bytes) unless the commander said how long it expects (schedules know it).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <deque>
@@ -71,7 +72,14 @@ struct Event {
                                   // data characters received (size 0..8)
   uint8_t checksum_byte = 0;      // frame and checksum error: the last character received
   LinNodeId sender = kNoNode;     // who sent the header (or the wake-up pulse)
-  LinNodeId responder = kNoNode;  // who sent the response (frame)
+  LinNodeId responder = kNoNode;  // who sent the response (frame): the first in node order
+  // frame: every node that sent the whole response. Several when their characters were the
+  // same (identical bits on the wire collide into no error: each sent all of them, as on a
+  // real bus, so each sees the frame as its own).
+  std::vector<LinNodeId> responders;
+  bool responded(LinNodeId n) const {
+    return std::find(responders.begin(), responders.end(), n) != responders.end();
+  }
   ErrorKind error = ErrorKind::other;
   uint32_t bitrate = 0;  // the frame's (the commander's) bit rate; 0 for bus inactivity
 };
@@ -206,6 +214,7 @@ class LinBus final : private EventHandler {
   std::vector<uint8_t> wire_;              // the response characters as the wire carried them
   std::vector<LinNodeId> bit_errors_;      // responders that read back something else
   LinNodeId responder_ = kNoNode;          // the responder that completed the response
+  std::vector<LinNodeId> responders_;      // every one that did (node order)
   std::optional<EventId> step_;            // the frame's next event
   std::vector<EventId> bit_error_events_;  // responders' bit errors still to come
   std::optional<EventId> inactivity_;

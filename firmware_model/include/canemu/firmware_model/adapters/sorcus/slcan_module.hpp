@@ -57,6 +57,10 @@ struct SlcanServiceCall {
   USHORT func = 0;
   SL064Handle handle = 0;  // message: the object (0: an unconfigured message, see get_id)
   ULONG status = 0;        // error: SL064_STATUS_HEAVY or SL064_STATUS_BUS_OFF
+  // message with handle 0: the identifier of the unconfigured frame this call is for. Each call
+  // carries its own, so that calls queued before the routine runs (the routine is a function of
+  // the PC program, run later than the card would) each read their frame's ID (get_id).
+  ULONG id = 0;
 };
 
 class SlcanSink {
@@ -132,11 +136,16 @@ class SlcanModule {
   USHORT send_data_request(SL064Handle handle);
   USHORT clear_msg(SL064Handle handle);
   USHORT set_acceptance_mask(ULONG& mask, USHORT usage, USHORT serv_task, USHORT serv_func);
-  USHORT get_id(SL064Handle handle, ULONG& id);
+  // Handle 0 (with the acceptance mask set): `call_id` when the caller is the mask's routine
+  // serving a call (SlcanServiceCall::id, which the library passes back), else the ID of the
+  // last unconfigured frame a call was made for.
+  USHORT get_id(SL064Handle handle, ULONG& id, std::optional<ULONG> call_id = std::nullopt);
   USHORT get_msg_count(SL064Handle handle, ULONG& count);
   void set_led(UCHAR on) { led_ = on != 0; }
   UCHAR get_led() const { return led_ ? 1 : 0; }
-  // 0 with a handle: that object's success; 1 or 2: the error status; 0 with handle 0: none.
+  // 0 with a handle: that object's success; 1 or 2: the error status; 0 with handle 0: none,
+  // or (the acceptance mask's routine being function 14) an unconfigured frame, whose ID
+  // get_id(0) then reads: each request keeps its own ID in the bounded request buffer.
   USHORT evaluate_srq(SL064Handle& handle);
   void enable_int_mask() { int_mask_ = true; }
   void end_of_srq();
@@ -178,6 +187,7 @@ class SlcanModule {
   struct Srq {
     SL064Handle handle = 0;
     USHORT status = 0;
+    ULONG id = 0;  // handle 0 (the mask's): the unconfigured frame's ID
   };
 
   USHORT done(USHORT diagnosis);  // stores it; the return value
@@ -215,7 +225,7 @@ class SlcanModule {
   USHORT err_func_ = 0;
   USHORT mask_task_ = 0;
   USHORT mask_func_ = 0;
-  ULONG unconfigured_id_ = 0;  // get_id with handle 0
+  ULONG unconfigured_id_ = 0;  // get_id with handle 0 outside a routine: the last call's
   std::vector<Object> objects_;
   USHORT handle_base_ = 0;  // handles of the current configuration are base + 1..
   USHORT diag_ = 0;

@@ -6,6 +6,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include <fmt/format.h>
+
 #include "canemu/daemon/channel.hpp"
 #include "canemu/daemon/log.hpp"
 #include "canemu/firmware_model/bus/frame.hpp"
@@ -15,14 +17,23 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
-std::optional<ipc::ChannelMessage> frame_message(const FrameFields& f) {
-  if (f.id < 0 || f.id > UINT32_MAX || f.dlc < 0 || f.dlc > 15) {
-    return std::nullopt;
+tl::expected<ipc::ChannelMessage, std::string> frame_message(const FrameFields& f) {
+  if (f.id < 0 || f.id > (f.extended ? 0x1FFFFFFF : 0x7FF)) {
+    return tl::unexpected(
+        fmt::format("id {} is no {} identifier", f.id, f.extended ? "29-bit" : "11-bit"));
+  }
+  if (f.dlc < 0 || f.dlc > 15) {
+    return tl::unexpected(fmt::format("dlc {} is outside 0..15", f.dlc));
   }
   const auto dlc = static_cast<uint8_t>(f.dlc);
   const std::size_t bytes = f.remote ? 0 : dlc_to_length(dlc, f.fd);
   if (f.len < 0 || static_cast<std::size_t>(f.len) != bytes) {
-    return std::nullopt;
+    return tl::unexpected(fmt::format("len {} is not the {} bytes a{} frame of dlc {} has", f.len,
+                                      bytes,
+                                      f.remote ? " remote"
+                                      : f.fd   ? " CAN FD"
+                                               : " classic",
+                                      f.dlc));
   }
   ipc::ChannelMessage m;
   m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
@@ -98,59 +109,35 @@ void Bridge::kick() {
   node_.kick();
 }
 
+void Bridge::reject(BridgeReject why, const std::string& detail, uint64_t n) {
+  stats_.received += n;
+  stats_.rejected += n;
+  rejections_.add(static_cast<std::size_t>(why), detail, n);
+}
+
 void Bridge::offer(const ipc::ChannelMessage* m) {
-  ++stats_.received;
   if (m == nullptr) {
-    refuse("a message that is no frame");
+    reject(BridgeReject::not_a_frame, "rejected a message that is no frame");
     return;
   }
   const auto frame = to_tx_frame(*m);
   if (!frame) {
-    refuse("a frame the bus cannot carry (" + frame.error().message + ")");
+    reject(BridgeReject::bad_fields, fmt::format("rejected a frame with id 0x{:X}, dlc {}: {}",
+                                                 m->id, m->dlc, frame.error().message));
     return;
   }
   if (frame->frame.fd() && !options_.fd) {
-    refuse("a CAN FD frame (the bus is a classic CAN bus)");
+    reject(BridgeReject::fd_on_classic,
+           fmt::format("rejected a CAN FD frame (id 0x{:X}, dlc {}): {} is a classic CAN bus",
+                       frame->frame.id(), frame->frame.dlc(), options_.bus));
     return;
   }
+  ++stats_.received;
   if (queue_.size() >= options_.queue_frames) {
     ++stats_.queue_dropped;
     return;
   }
   queue_.push_back(*frame);
-}
-
-void Bridge::reject(std::string_view why) {
-  ++stats_.received;
-  refuse(why);
-}
-
-void Bridge::refuse(std::string_view why) {
-  ++stats_.rejected;
-  const SimTime now = node_.now();
-  if (reject_lines_ > 0 && (now - reject_window_).ns() >= kRejectWindowNs) {
-    if (reject_unlogged_ > 0) {
-      log::write(log::Level::warning, log::At{"bridge", now},
-                 fmt::format("{} (bus {}): {} more rejected in the {} s from t={}.{:09} s "
-                             "(not logged one by one)",
-                             transport_->name(), options_.bus, reject_unlogged_,
-                             kRejectWindowNs / 1'000'000'000, reject_window_.ns() / 1'000'000'000,
-                             reject_window_.ns() % 1'000'000'000));
-    }
-    reject_lines_ = 0;
-    reject_unlogged_ = 0;
-  }
-  if (reject_lines_ == 0) {
-    reject_window_ = now;
-  }
-  if (reject_lines_ < kRejectLines) {
-    ++reject_lines_;
-    log::write(log::Level::warning, log::At{"bridge", now},
-               fmt::format("{} (bus {}): rejected {} ({} rejected so far)", transport_->name(),
-                           options_.bus, why, stats_.rejected));
-  } else {
-    ++reject_unlogged_;
-  }
 }
 
 std::optional<TxFrame> Bridge::next_tx() {

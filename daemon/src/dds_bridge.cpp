@@ -17,6 +17,7 @@
 
 #include "canemu_dds.h"
 #include "dds_frame_fields.hpp"
+#include "dds_log.hpp"
 #include "ros2_can_msgs.h"
 #endif
 
@@ -109,15 +110,34 @@ canemu_dds_Frame to_dds(SimTime at, const Frame& frame, bool own) {
   return m;
 }
 
-std::optional<ipc::ChannelMessage> to_message(const canemu_dds_Frame& f) {
-  return frame_message({f.id, f.extended, f.remote, f.fd, f.brs, f.esi, f.dlc, f.len, f.data});
+// A sample of `topic` for the bridge to send: offered, or rejected with the reason.
+void offer_sample(const canemu_dds_Frame& f, Bridge& bridge, const std::string& topic) {
+  const auto m =
+      frame_message({f.id, f.extended, f.remote, f.fd, f.brs, f.esi, f.dlc, f.len, f.data});
+  if (!m) {
+    bridge.reject(BridgeReject::bad_fields,
+                  fmt::format("rejected a Frame on {}: {}", topic, m.error()));
+    return;
+  }
+  bridge.offer(&*m);
 }
 
-// ROS 2's can_msgs/msg/Frame (classic frames only: 8 data bytes) and back. An error frame or a
-// dlc above 8 is no frame to send.
-std::optional<ipc::ChannelMessage> to_message(const can_msgs_msg_dds__Frame_& f) {
-  if (f.is_error || f.dlc > 8) {
-    return std::nullopt;
+// ROS 2's can_msgs/msg/Frame (classic frames only: 8 data bytes). An error frame or a dlc above
+// 8 is no frame to send.
+void offer_sample(const can_msgs_msg_dds__Frame_& f, Bridge& bridge, const std::string& topic) {
+  if (f.is_error) {
+    bridge.reject(BridgeReject::error_frame,
+                  fmt::format("rejected a Frame with is_error on {}: error frames are the "
+                              "bus's, not sent",
+                              topic));
+    return;
+  }
+  if (f.dlc > 8) {
+    bridge.reject(BridgeReject::bad_fields,
+                  fmt::format("rejected a Frame on {}: dlc {} is above 8 (can_msgs carries "
+                              "classic frames)",
+                              topic, f.dlc));
+    return;
   }
   ipc::ChannelMessage m;
   m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);
@@ -128,7 +148,7 @@ std::optional<ipc::ChannelMessage> to_message(const can_msgs_msg_dds__Frame_& f)
   if (!f.is_rtr) {
     std::memcpy(m.data, f.data, f.dlc);
   }
-  return m;
+  bridge.offer(&m);
 }
 
 class DdsTransport final : public BridgeTransport {
@@ -136,6 +156,7 @@ class DdsTransport final : public BridgeTransport {
   DdsTransport(std::string bus, DdsOptions options)
       : bus_(std::move(bus)), options_(std::move(options)) {}
   ~DdsTransport() override {
+    undecodable_.clear();  // Cyclone's log no longer reaches this bridge
     if (participant_ > 0) {
       dds_delete(participant_);  // and everything in it; waits for running listeners
     }
@@ -182,14 +203,18 @@ class DdsTransport final : public BridgeTransport {
     frames_ = writer(publisher, &canemu_dds_Frame_desc, p + "frames", qos);
     errors_ = writer(publisher, &canemu_dds_BusError_desc, p + "errors", qos);
     states_ = writer(publisher, &canemu_dds_NodeState_desc, p + "states", qos);
-    tx_ = reader(subscriber, &canemu_dds_Frame_desc, p + "tx", inbound, listener);
+    tx_topic_ = p + "tx";
+    tx_ = reader(subscriber, &canemu_dds_Frame_desc, tx_topic_, inbound, listener);
+    watch_undecodable(tx_topic_);
     bool ok =
         publisher > 0 && subscriber > 0 && frames_ > 0 && errors_ > 0 && states_ > 0 && tx_ > 0;
     if (ok && options_.ros2) {
       const std::string base = "rt/" + bus_ + "/";
       ros_from_ = writer(participant_, &can_msgs_msg_dds__Frame__desc, base + "from_can_bus", qos);
-      ros_to_ = reader(participant_, &can_msgs_msg_dds__Frame__desc, base + "to_can_bus", inbound,
-                       listener);
+      ros_to_topic_ = base + "to_can_bus";
+      ros_to_ =
+          reader(participant_, &can_msgs_msg_dds__Frame__desc, ros_to_topic_, inbound, listener);
+      watch_undecodable(ros_to_topic_);
       ok = ros_from_ > 0 && ros_to_ > 0;
     }
     dds_delete_listener(listener);
@@ -209,8 +234,19 @@ class DdsTransport final : public BridgeTransport {
   void receive(Bridge& bridge) override {
     uint64_t rung = 0;
     [[maybe_unused]] const auto n = ::read(wake_, &rung, sizeof rung);
-    const bool more =
-        take<canemu_dds_Frame>(tx_, bridge) | take<can_msgs_msg_dds__Frame_>(ros_to_, bridge);
+    // Samples Cyclone could not decode never reach a reader: its log says so (dds_log.hpp),
+    // and they are counted here, as what is no frame.
+    for (auto& [topic, counter] : undecodable_) {
+      if (const uint64_t lost = counter->take(); lost > 0) {
+        bridge.reject(BridgeReject::not_a_frame,
+                      fmt::format("rejected {} sample{} on {} that Cyclone DDS could not decode "
+                                  "(another type of the same name?)",
+                                  lost, lost == 1 ? "" : "s", topic),
+                      lost);
+      }
+    }
+    const bool more = take<canemu_dds_Frame>(tx_, bridge, tx_topic_) |
+                      take<can_msgs_msg_dds__Frame_>(ros_to_, bridge, ros_to_topic_);
     if (more) {
       ring();  // the rest on the loop's next turn
     }
@@ -304,7 +340,7 @@ class DdsTransport final : public BridgeTransport {
   // Takes up to kMaxTakesPerKick samples of `reader` (loaned from Cyclone), offering each valid
   // one; true if there may be more.
   template <typename Sample>
-  bool take(dds_entity_t reader, Bridge& bridge) {
+  bool take(dds_entity_t reader, Bridge& bridge, const std::string& topic) {
     if (reader <= 0) {
       return false;
     }
@@ -318,8 +354,7 @@ class DdsTransport final : public BridgeTransport {
       }
       for (dds_return_t i = 0; i < n; ++i) {
         if (infos[i].valid_data) {
-          const auto m = to_message(*static_cast<const Sample*>(samples[i]));
-          bridge.offer(m ? &*m : nullptr);
+          offer_sample(*static_cast<const Sample*>(samples[i]), bridge, topic);
         }
       }
       dds_return_loan(reader, samples, n);
@@ -341,8 +376,15 @@ class DdsTransport final : public BridgeTransport {
     return delivered(dds_write(states_, &m));
   }
 
+  void watch_undecodable(const std::string& topic) {
+    undecodable_.emplace_back(
+        topic, std::make_unique<UndecodableSamples>(options_.domain, topic, [this] { ring(); }));
+  }
+
   std::string bus_;
   DdsOptions options_;
+  std::string tx_topic_, ros_to_topic_;
+  std::vector<std::pair<std::string, std::unique_ptr<UndecodableSamples>>> undecodable_;
   int wake_ = -1;
   dds_entity_t participant_ = 0;
   dds_entity_t frames_ = 0, errors_ = 0, states_ = 0, tx_ = 0, ros_from_ = 0, ros_to_ = 0;

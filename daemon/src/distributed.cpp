@@ -36,6 +36,7 @@ std::string default_daemon_name() {
 #ifdef CANEMU_HAVE_DDS
 
 Distributed::Impl::~Impl() {
+  undecodable.clear();  // Cyclone's log no longer rings this daemon's doorbell
   for (RemoteNode* n : nodes) {
     n->unlink();
   }
@@ -122,6 +123,10 @@ std::optional<std::string> Distributed::Impl::open() {
   r_daemons = reader(t_daemons);
   r_requests = reader(t_requests);
   r_events = reader(t_events);
+  for (const char* name : {"canemu/net/daemons", "canemu/net/requests", "canemu/net/events"}) {
+    undecodable.push_back(
+        std::make_unique<UndecodableSamples>(cfg.domain, name, [this] { on_data(0, this); }));
+  }
   dds_delete_listener(listener);
   dds_delete_qos(rq);
   dds_delete_qos(wq);
@@ -176,8 +181,9 @@ void Distributed::Impl::announce(bool leaving) {
   d.uses._length = static_cast<uint32_t>(use_storage.size());
   d.uses._maximum = d.uses._length;
   d.uses._release = false;
-  if (dds_write(w_daemons, &d) != DDS_RETCODE_OK) {
-    ++counters.dropped;
+  if (const dds_return_t rc = dds_write(w_daemons, &d); rc != DDS_RETCODE_OK) {
+    drop(NetDrop::not_written,
+         fmt::format("DDS did not take this daemon's announcement: {}", dds_strretcode(rc)));
   }
 }
 
@@ -186,8 +192,9 @@ bool Distributed::Impl::send_request(const std::string& owner, canemu_net_Reques
   r.from_boot = boot;
   put(r.to, owner);
   r.seq = ++req_seq;
-  if (dds_write(w_requests, &r) != DDS_RETCODE_OK) {
-    ++counters.dropped;
+  if (const dds_return_t rc = dds_write(w_requests, &r); rc != DDS_RETCODE_OK) {
+    drop(NetDrop::not_written, fmt::format("DDS did not take a request ({}) for daemon {}: {}",
+                                           request_name(r.kind), owner, dds_strretcode(rc)));
     return false;
   }
   ++counters.requests_sent;
@@ -199,8 +206,10 @@ void Distributed::Impl::send_event(const std::string& to, canemu_net_Event& e) {
   e.from_boot = boot;
   put(e.to, to);
   e.seq = ++ev_seq;
-  if (dds_write(w_events, &e) != DDS_RETCODE_OK) {
-    ++counters.dropped;
+  if (const dds_return_t rc = dds_write(w_events, &e); rc != DDS_RETCODE_OK) {
+    drop(NetDrop::not_written,
+         fmt::format("DDS did not take an event ({}) for daemon {}: {}", event_name(e.kind),
+                     to.empty() ? std::string("every follower") : to, dds_strretcode(rc)));
     return;
   }
   ++counters.events_sent;
@@ -250,7 +259,10 @@ void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
   settle();
   const std::string name = get(d.name);
   if (!valid_name(name)) {
-    ++counters.dropped;  // not a daemon of ours (names follow the configuration's rule)
+    // Not a daemon of ours (names follow the configuration's rule).
+    drop(NetDrop::unknown_daemon,
+         fmt::format("dropped an announcement from \"{}\": a daemon's name {}", printable(name),
+                     kNameRule));
     return;
   }
   if (name == cfg.name) {
@@ -269,8 +281,6 @@ void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
     p = Peer{};
     p.name = name;
     p.boot = d.boot;
-    log::info("daemon {} ({} time, protocol {}, version {}) joined", name,
-              time_text(d.time_mode, d.scale), d.protocol, get(d.version));
   }
   if (d.leaving) {
     if (!p.gone) {
@@ -291,6 +301,7 @@ void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
     p.buses.push_back(printable(get(d.buses._buffer[i].name)));
     p.owned.emplace_back(p.buses.back(), d.buses._buffer[i]);
   }
+  const std::string was_refused = p.refused;
   bool uses_ours = false;
   for (uint32_t i = 0; i < d.uses._length && i < 64; ++i) {
     uses_ours = uses_ours || get(d.uses._buffer[i]).starts_with(cfg.name + "/");
@@ -305,6 +316,16 @@ void Distributed::Impl::on_daemon(const canemu_net_Daemon& d) {
         "it uses this daemon's buses in stepped time, and this daemon follows daemon {}'s steps "
         "(an owner follows nobody)",
         stepped_owner);
+  }
+  // The log says what status says: joined, or refused with the reason (and any change).
+  const std::string who = fmt::format("daemon {} (time {}, protocol {}, version {})", name,
+                                      time_text(p.time_mode, p.scale), p.protocol, p.version);
+  if (fresh || p.refused != was_refused) {
+    if (p.refused.empty()) {
+      log::info("{} {}", who, fresh ? "joined" : "is accepted now");
+    } else {
+      log::warning("{} refused: {}", who, p.refused);
+    }
   }
   // Simulated time there minus here: its time when it wrote this, against ours now, is the
   // offset less the link's delay, so the largest such value is the best estimate.
@@ -331,6 +352,9 @@ void Distributed::Impl::hello(const Peer& p) {
 }
 
 void Distributed::Impl::peer_gone(Peer& p, const std::string& why) {
+  if (p.follower && (barrier || running)) {
+    step_dropped.push_back(fmt::format("daemon {} ({})", p.name, why));
+  }
   p.gone = true;
   p.gone_reason = why;
   p.welcomed = false;
@@ -404,7 +428,21 @@ void Distributed::Impl::open_hosted(const canemu_net_Request& r) {
     return clock >= 1'000'000 && clock <= 1'000'000'000 && prescaler >= 1 && prescaler <= 1024 &&
            tseg1 >= 1 && tseg1 <= 256 && tseg2 >= 1 && tseg2 <= 128 && sjw >= 1 && sjw <= tseg2;
   };
-  if (!timing_ok(r.clock_hz, r.n_prescaler, r.n_tseg1, r.n_tseg2, r.n_sjw) ||
+  // A classic controller may be given by its SJA1000 registers alone (ddstypes/canemu_net.idl):
+  // their timing at the IXXAT's 16 MHz is its nominal timing.
+  BitTiming nominal{r.clock_hz, r.n_prescaler, r.n_tseg1, r.n_tseg2, r.n_sjw, 1};
+  const bool registers_only = !r.fd && r.clock_hz == 0 && r.n_prescaler == 0 && r.n_tseg1 == 0 &&
+                              r.n_tseg2 == 0 && r.n_sjw == 0 && (r.btr0 != 0 || r.btr1 != 0);
+  if (registers_only) {
+    auto t = sja1000::decode_btr(r.btr0, r.btr1);
+    if (!t) {
+      refuse(fmt::format("BTR0 0x{:02X} BTR1 0x{:02X} are no SJA1000 timing: {}", r.btr0, r.btr1,
+                         t.error().message));
+      return;
+    }
+    nominal = *t;
+  }
+  if (!timing_ok(nominal.clock_hz, nominal.prescaler, nominal.tseg1, nominal.tseg2, nominal.sjw) ||
       (r.fd && !timing_ok(r.clock_hz, r.d_prescaler, r.d_tseg1, r.d_tseg2, r.d_sjw)) ||
       r.restart_ns < 0) {
     refuse(
@@ -431,11 +469,12 @@ void Distributed::Impl::open_hosted(const canemu_net_Request& r) {
     hosted[{daemon, r.node}] = std::move(made);
   }
   h->opened = r.seq;
+  h->fd = r.fd && h->node->fd_capable();
   h->queue.clear();
   HostedNodeSettings s;
   s.btr0 = r.btr0;
   s.btr1 = r.btr1;
-  s.nominal = BitTiming{r.clock_hz, r.n_prescaler, r.n_tseg1, r.n_tseg2, r.n_sjw, 1};
+  s.nominal = nominal;
   s.data = BitTiming{r.clock_hz, r.d_prescaler, r.d_tseg1, r.d_tseg2, r.d_sjw, 1};
   s.listen_only = r.listen_only;
   s.fd = r.fd;
@@ -465,7 +504,9 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
   ++counters.requests_received;
   const std::string from = get(r.from);
   if (!valid_name(from)) {
-    ++counters.dropped;
+    drop(NetDrop::unknown_daemon,
+         fmt::format("dropped a request ({}) from \"{}\": a daemon's name {}", request_name(r.kind),
+                     printable(from), kNameRule));
     return;
   }
   auto pit = peers.find(from);
@@ -476,11 +517,20 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
   if (!p.announced || !p.refused.empty() || p.gone) {
     // Not heard announcing itself yet (its time mode and protocol unchecked), refused, or let
     // go: nothing it asks is done. A daemon says hello again each heartbeat until answered.
-    ++counters.dropped;
+    drop(NetDrop::not_accepted,
+         fmt::format("dropped a request ({}) from daemon {}: it is {}", request_name(r.kind), from,
+                     p.gone               ? "gone (" + p.gone_reason + ")"
+                     : !p.refused.empty() ? "refused (" + p.refused + ")"
+                                          : std::string("not heard announcing itself yet")));
     return;
   }
   if (p.next_request != 0 && r.seq > p.next_request) {
-    counters.dropped += r.seq - p.next_request;  // lost on the way (a reader that fell behind)
+    // Lost on the way (a reader that fell behind).
+    drop(NetDrop::lost,
+         fmt::format("{} request{} from daemon {} lost on the way (sequence {} after {})",
+                     r.seq - p.next_request, r.seq - p.next_request == 1 ? "" : "s", from, r.seq,
+                     p.next_request - 1),
+         r.seq - p.next_request);
   }
   p.next_request = r.seq + 1;
   if (r.kind == canemu_net_REQ_HELLO) {
@@ -503,7 +553,10 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
         r.step_ns <= int64_t{60} * 1'000'000'000) {
       enqueue_step(Step{r.step_ns, from, r.step});
     } else {
-      ++counters.dropped;
+      drop(NetDrop::malformed,
+           fmt::format("dropped a step request of {} ns from daemon {}: {}", r.step_ns, from,
+                       !stepped() || !stepped_owner.empty() ? "this daemon leads no steps"
+                                                            : "a step is 1 ns to 60 s"));
     }
     return;
   }
@@ -515,7 +568,10 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
   }
   Hosted* h = find_hosted(from, r.node);
   if (h == nullptr) {
-    ++counters.dropped;
+    drop(NetDrop::no_node,
+         fmt::format("dropped a request ({}) from daemon {}: its node {} ({}) "
+                     "is not open here",
+                     request_name(r.kind), from, r.node, printable(get(r.device))));
     return;
   }
   switch (r.kind) {
@@ -534,7 +590,9 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
       break;
     case canemu_net_REQ_NAME: {
       if (!valid_name(get(r.device))) {
-        ++counters.dropped;
+        drop(NetDrop::malformed,
+             fmt::format("dropped a name request from daemon {}: \"{}\" is not a device name", from,
+                         printable(get(r.device))));
         break;
       }
       const std::string name = from + "/" + get(r.device);
@@ -547,7 +605,24 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
     case canemu_net_REQ_TX: {
       auto f = frame_of_fields(r);
       if (!f) {
-        ++counters.dropped;
+        drop(NetDrop::malformed,
+             fmt::format("dropped a frame of daemon {}'s node {}: id 0x{:X}, dlc {}, {} bytes{}{} "
+                         "is no frame",
+                         from, printable(get(r.device)), r.id, r.dlc, r.len, r.fd ? ", CAN FD" : "",
+                         r.remote ? ", remote" : ""));
+        break;
+      }
+      if (f->fd() && !h->fd) {
+        // As the LCM and DDS bridges: a frame this node's controller does not send is rejected,
+        // not put on the wire as something else; the node's driver hears it was not sent.
+        drop(NetDrop::fd_on_classic,
+             fmt::format("rejected a CAN FD frame (id 0x{:X}, dlc {}) of daemon {}'s node {}: "
+                         "{}",
+                         f->id(), f->dlc(), from, printable(get(r.device)),
+                         sim.bus_config(h->bus).kind == BusKind::can
+                             ? sim.bus_config(h->bus).name + " is a classic CAN bus"
+                             : std::string("the node was opened as a classic controller")));
+        h->emit(canemu_net_EV_DROPPED, sim.scheduler().now(), &*f);
         break;
       }
       if (h->queue.size() >= kOwnerQueue) {
@@ -559,7 +634,8 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
       break;
     }
     default:
-      ++counters.dropped;
+      drop(NetDrop::malformed,
+           fmt::format("dropped a request of unknown kind {} from daemon {}", r.kind, from));
       break;
   }
 }
@@ -567,8 +643,11 @@ void Distributed::Impl::on_request(const canemu_net_Request& r) {
 SimTime Distributed::Impl::local_time(const Peer& owner, int64_t owner_ns) {
   const int64_t now = sim.scheduler().now().ns();
   const int64_t here = owner_ns - owner.offset_ns;
+  // The offset underestimates by the heartbeat's delay, so an event is normally a little late
+  // here (the link's delay beyond the fastest heartbeat's): late beyond kLateBoundNs counts.
   if (here < now) {
-    ++counters.late;
+    counters.late_max_ns = std::max(counters.late_max_ns, now - here);
+    counters.late += now - here > kLateBoundNs ? 1 : 0;
   }
   return SimTime::from_ns(std::min(here, now));
 }
@@ -585,7 +664,12 @@ void Distributed::Impl::on_event(const canemu_net_Event& e) {
   }
   ++counters.events_received;
   if (pit == peers.end() || pit->second.boot != e.from_boot || pit->second.gone) {
-    ++counters.dropped;
+    drop(NetDrop::not_accepted,
+         fmt::format("dropped an event ({}) from daemon {}: it is {}", event_name(e.kind),
+                     printable(from),
+                     pit == peers.end()                ? "not heard announcing itself"
+                     : pit->second.boot != e.from_boot ? "of another boot than the one heard"
+                                                       : "gone (" + pit->second.gone_reason + ")"));
     return;
   }
   Peer& p = pit->second;
@@ -612,12 +696,13 @@ void Distributed::Impl::on_event(const canemu_net_Event& e) {
     }
     case canemu_net_EV_STEP_DONE: {
       run_to(SimTime::from_ns(std::max(e.at_ns, s.now().ns())),
-             [this, mine = get(e.asker) == cfg.name, token = e.token](uint64_t events) {
+             [this, mine = get(e.asker) == cfg.name, token = e.token,
+              note = printable(get(e.text))](uint64_t events) {
                if (self->after_step) {
                  self->after_step();
                }
                if (mine && self->step_done) {
-                 self->step_done(token, events, sim.scheduler().now().ns());
+                 self->step_done(token, events, sim.scheduler().now().ns(), note);
                }
              });
       return;
@@ -631,7 +716,9 @@ void Distributed::Impl::on_event(const canemu_net_Event& e) {
       return;
     }
   }
-  ++counters.dropped;
+  drop(NetDrop::no_node,
+       fmt::format("dropped an event ({}) from daemon {}: node {} is not open here",
+                   event_name(e.kind), from, e.node));
 }
 
 void Distributed::Impl::deliver(RemoteNode& n, const canemu_net_Event& e, const Peer& owner) {
@@ -645,6 +732,7 @@ void Distributed::Impl::deliver(RemoteNode& n, const canemu_net_Event& e, const 
   const SimTime at = SimTime::from_ns(e.at_ns);
   if (at <= s.now()) {
     counters.late += at < s.now() ? 1 : 0;
+    counters.late_max_ns = std::max(counters.late_max_ns, (s.now() - at).ns());
     n.deliver(e, s.now());
     return;
   }
@@ -688,6 +776,15 @@ void Distributed::Impl::receive() {
       }
     }
   };
+  for (const auto& u : undecodable) {
+    if (const uint64_t lost = u->take(); lost > 0) {
+      drop(NetDrop::undecodable,
+           fmt::format("{} sample{} on {} that Cyclone DDS could not decode (a daemon of another "
+                       "protocol, or no daemon of canemu's)",
+                       lost, lost == 1 ? "" : "s", u->topic()),
+           lost);
+    }
+  }
   drain(r_daemons, [&](void* s) { on_daemon(*static_cast<const canemu_net_Daemon*>(s)); });
   drain(r_requests, [&](void* s) { on_request(*static_cast<const canemu_net_Request*>(s)); });
   drain(r_events, [&](void* s) { on_event(*static_cast<const canemu_net_Event*>(s)); });

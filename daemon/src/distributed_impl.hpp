@@ -25,10 +25,13 @@
 
 #include "canemu/daemon/distributed.hpp"
 #include "canemu/daemon/log.hpp"
+#include "canemu/daemon/reject_log.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
+#include "canemu/ipc/protocol.hpp"
 #include "canemu_net.h"
 #include "dds_frame_fields.hpp"
+#include "dds_log.hpp"
 
 namespace canemu::daemon {
 
@@ -61,12 +64,19 @@ inline std::string get(const char (&src)[N]) {
 }
 
 // Text from another daemon, shown in logs and status: what is not printable ASCII becomes '?'.
-inline std::string printable(std::string s) {
-  for (char& ch : s) {
-    const auto u = static_cast<unsigned char>(ch);
-    ch = u >= 0x20 && u < 0x7F ? ch : '?';
-  }
-  return s;
+using ipc::printable;
+
+inline const char* request_name(uint8_t kind) {
+  static constexpr const char* kNames[] = {"open",    "online", "offline", "close", "transmit",
+                                           "restart", "name",   "step",    "ready", "hello"};
+  return kind < std::size(kNames) ? kNames[kind] : "unknown";
+}
+
+inline const char* event_name(uint8_t kind) {
+  static constexpr const char* kNames[] = {
+      "received",         "transmitted", "dropped", "error",      "state",     "overrun",
+      "arbitration lost", "refused",     "unknown", "step begin", "step done", "welcome"};
+  return kind < std::size(kNames) ? kNames[kind] : "unknown";
 }
 
 inline uint8_t wire_time_mode(TimeMode m) {
@@ -145,6 +155,17 @@ struct Distributed::Impl {
   uint64_t req_seq = 0;
   uint64_t ev_seq = 0;
   DistributedCounters counters;
+  RejectLog<kNetDropReasons> drops{"distributed", kNetDropNames};
+  // A message dropped (or, NetDrop::fd_on_classic, a frame rejected) for reason `why`; `detail`
+  // names the rule and the daemon. Counted by reason and logged (rate-limited).
+  void drop(NetDrop why, const std::string& detail, uint64_t n = 1) {
+    (why == NetDrop::fd_on_classic ? counters.rejected : counters.dropped) += n;
+    counters.by_reason[static_cast<std::size_t>(why)] += n;
+    counters.last_reason = detail;
+    drops.add(static_cast<std::size_t>(why), detail, n);
+  }
+  // Samples of the link's topics Cyclone could not decode (dds_log.hpp).
+  std::vector<std::unique_ptr<UndecodableSamples>> undecodable;
 
   // Another daemon, as heard.
   struct Peer {
@@ -200,6 +221,7 @@ struct Distributed::Impl {
     uint64_t opened = 0;
     std::size_t bus = 0;
     HostedNode* node = nullptr;
+    bool fd = false;  // its controller sends CAN FD frames (opened so, on a CAN FD bus)
     Simulation::DeviceLease lease;
     std::deque<TxFrame> queue;
 
@@ -301,6 +323,9 @@ struct Distributed::Impl {
   void run_to(SimTime until, std::function<void(uint64_t)> done);
   uint64_t step_no = 0;
   std::set<std::string> waiting;
+  // Followers let go from the step's barrier to its end ("daemon b (why)"): its answer names them.
+  std::vector<std::string> step_dropped;
+  std::string step_note() const;
   int64_t barrier_deadline_ms = 0;
   bool stepped() const { return time.mode == TimeMode::stepped; }
   bool leads() const {
@@ -453,7 +478,11 @@ class RemoteNode final : public HostedNode {
       case canemu_net_EV_OVERRUN: {
         auto f = frame_of_fields(e);
         if (!f) {
-          ++link_->counters.dropped;
+          link_->drop(
+              NetDrop::malformed,
+              fmt::format("dropped an event ({}) of daemon {} for node {} of bus {}: its "
+                          "frame (id 0x{:X}, dlc {}, {} bytes) is none",
+                          event_name(e.kind), owner_, device_, bus_name_, e.id, e.dlc, e.len));
           return;
         }
         if (e.kind == canemu_net_EV_RX) {
@@ -576,7 +605,12 @@ class RemoteNode final : public HostedNode {
       opened_ = *seq;
     }
   }
+  // Online, offline, restart, name, close: for a node the owner has opened (a driver that
+  // stops a line it has closed already asks nothing of the owner).
   void request(uint8_t kind) {
+    if (!programmed_) {
+      return;
+    }
     canemu_net_Request r{};
     r.kind = kind;
     send(r);

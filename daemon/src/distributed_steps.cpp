@@ -31,6 +31,7 @@ void Distributed::Impl::start_next_step() {
   }
   ++step_no;
   waiting.clear();
+  step_dropped.clear();
   for (const auto& [name, p] : peers) {
     if (p.follower && !p.gone) {
       waiting.insert(name);
@@ -75,12 +76,25 @@ void Distributed::Impl::run_step() {
     e.step_ns = st.ns;
     e.token = st.token;
     put(e.asker, st.asker);
+    const std::string note = step_note();
+    put(e.text, note);
     send_event("", e);  // every follower runs to the step's end; the asker answers its client
     if (st.asker == cfg.name && self->step_done) {
-      self->step_done(st.token, events, s.now().ns());
+      self->step_done(st.token, events, s.now().ns(), note);
     }
     start_next_step();
   });
+}
+
+std::string Distributed::Impl::step_note() const {
+  if (step_dropped.empty()) {
+    return {};
+  }
+  std::string names;
+  for (const std::string& d : step_dropped) {
+    names += (names.empty() ? "" : "; ") + d;
+  }
+  return fmt::format("let go during the step: {}", names);
 }
 
 bool Distributed::follows_owner() const {

@@ -3,6 +3,8 @@
 #include <cctype>
 #include <cstring>
 
+#include <fmt/format.h>
+
 #include "canemu/firmware_model/bus/frame.hpp"
 
 #ifdef CANEMU_HAVE_LCM
@@ -158,31 +160,42 @@ class LcmTransport final : public BridgeTransport {
     return delivered(canemu_lcm_state_t_publish(lcm_, states_.c_str(), &m));
   }
 
-  static void on_tx(const lcm_recv_buf_t* rbuf, const char*, void* user) {
+  static void on_tx(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
     auto* self = static_cast<LcmTransport*>(user);
-    if (self->receiving_ != nullptr) {
-      const auto m = to_message(rbuf->data, rbuf->data_size);
-      self->receiving_->offer(m ? &*m : nullptr);
+    if (self->receiving_ == nullptr) {
+      return;
     }
+    Bridge& bridge = *self->receiving_;
+    canemu_lcm_frame_t f{};
+    if (!decode(rbuf->data, rbuf->data_size, f)) {
+      bridge.reject(BridgeReject::not_a_frame,
+                    fmt::format("rejected a message on {} that is no canemu_lcm.frame_t ({} bytes)",
+                                channel, rbuf->data_size));
+      return;
+    }
+    const auto m =
+        frame_message({f.id, f.extended != 0, f.remote != 0, f.fd != 0, f.brs != 0, f.esi != 0,
+                       f.dlc, f.len, reinterpret_cast<const uint8_t*>(f.data)});
+    if (!m) {
+      bridge.reject(BridgeReject::bad_fields,
+                    fmt::format("rejected a frame_t on {}: {}", channel, m.error()));
+      return;
+    }
+    bridge.offer(&*m);
   }
 
-  // A frame_t as a frame to send; nothing if it is none or its fields disagree.
-  static std::optional<ipc::ChannelMessage> to_message(const void* data, uint32_t size) {
+  // A frame_t in `data`, all of it; false if the bytes are none.
+  static bool decode(const void* data, uint32_t size, canemu_lcm_frame_t& f) {
     if (size > static_cast<uint32_t>(INT32_MAX)) {
-      return std::nullopt;
+      return false;
     }
-    canemu_lcm_frame_t f{};
     const int used = canemu_lcm_frame_t_decode(data, 0, static_cast<int>(size), &f);
     if (used < 0) {
-      return std::nullopt;
+      return false;
     }
     canemu_lcm_frame_t_decode_cleanup(
         &f);  // frees nothing: the type has no arrays of variable size
-    if (static_cast<uint32_t>(used) != size) {
-      return std::nullopt;
-    }
-    return frame_message({f.id, f.extended != 0, f.remote != 0, f.fd != 0, f.brs != 0, f.esi != 0,
-                          f.dlc, f.len, reinterpret_cast<const uint8_t*>(f.data)});
+    return static_cast<uint32_t>(used) == size;
   }
 
   static constexpr int kMaxHandlesPerKick = 256;

@@ -195,9 +195,8 @@ ipc::IpcResult<void> Server::open() {
       send_outboxes();
       flush_recorders();
     };
-    d->step_done = [this](uint64_t token, uint64_t events_run, int64_t sim_ns) {
-      step_done(token, events_run, sim_ns);
-    };
+    d->step_done = [this](uint64_t token, uint64_t events_run, int64_t sim_ns,
+                          const std::string& note) { step_done(token, events_run, sim_ns, note); };
     d->run_to = [this](model::SimTime until, std::function<void(uint64_t)> done) {
       queue_step_run([until] { return until; }, std::move(done));
     };
@@ -939,17 +938,19 @@ void Server::reply_error(Client& c, uint32_t request_id, ipc::ErrorCode code,
   (void)ipc::send_message(c.fd.get(), e);
 }
 
-void Server::step_done(uint64_t token, uint64_t events_run, int64_t sim_ns) {
+void Server::step_done(uint64_t token, uint64_t events_run, int64_t sim_ns,
+                       const std::string& note) {
   auto it = pending_steps_.find(token);
   if (it == pending_steps_.end()) {
     return;
   }
   const PendingStep p = it->second;
   pending_steps_.erase(it);
-  answer_step(p, events_run, sim_ns);
+  answer_step(p, events_run, sim_ns, note);
 }
 
-void Server::answer_step(const PendingStep& p, uint64_t events_run, int64_t sim_ns) {
+void Server::answer_step(const PendingStep& p, uint64_t events_run, int64_t sim_ns,
+                         const std::string& note) {
   auto c = clients_.find(p.fd);
   if (c == clients_.end() || c->second.serial != p.serial || c->second.closing) {
     return;  // the client left before its step ended
@@ -957,6 +958,7 @@ void Server::answer_step(const PendingStep& p, uint64_t events_run, int64_t sim_
   auto r = ipc::make_message<ipc::TimeStepReply>(p.request_id);
   r.events_run = events_run;
   r.sim_time_ns = sim_ns;
+  ipc::copy_name(r.note, note);
   if (!ipc::send_message(p.fd, r)) {
     c->second.closing = true;
   }

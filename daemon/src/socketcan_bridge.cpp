@@ -50,7 +50,7 @@ void SocketCanTransport::receive(Bridge& bridge) {
     if (m) {
       bridge.offer(&*m);
     } else {
-      bridge.reject(m.error());
+      bridge.reject(m.error().why, "rejected " + m.error().detail);
     }
   }
 }
@@ -84,32 +84,39 @@ Delivery SocketCanTransport::restarted(SimTime, uint16_t, uint16_t) {
   return write_frame(ipc::socketcan::restarted_frame());
 }
 
-tl::expected<ipc::ChannelMessage, std::string> frame_from_interface(const uint8_t* bytes,
-                                                                    std::size_t size, bool fd_bus) {
+tl::expected<ipc::ChannelMessage, InterfaceReject> frame_from_interface(const uint8_t* bytes,
+                                                                        std::size_t size,
+                                                                        bool fd_bus) {
   namespace sc = ipc::socketcan;
   const auto f = sc::from_struct(bytes, size);
   if (!f) {
-    return tl::unexpected(
+    return tl::unexpected(InterfaceReject{
+        BridgeReject::not_a_frame,
         fmt::format("a read of {} bytes, neither a struct can_frame ({}) nor a canfd_frame ({})",
-                    size, sc::kCanMtu, sc::kCanFdMtu));
+                    size, sc::kCanMtu, sc::kCanFdMtu)});
   }
   const uint8_t len = bytes[4];  // as the program wrote it (from_struct keeps what fits)
   const std::string text = sc::candump_text(*f);
   if (f->can_id & sc::kErrFlag) {
-    return tl::unexpected("the error frame " + text +
-                          " (an error frame reports what a controller saw; it is no frame to send "
-                          "on a bus)");
+    return tl::unexpected(InterfaceReject{
+        BridgeReject::error_frame,
+        "the error frame " + text +
+            " (an error frame reports what a controller saw; it is no frame to send on a bus)"});
   }
   if (f->fd && !fd_bus) {
-    return tl::unexpected("the CAN FD frame " + text + " (the bus is a classic CAN bus)");
+    return tl::unexpected(
+        InterfaceReject{BridgeReject::fd_on_classic,
+                        "the CAN FD frame " + text + " (the bus is a classic CAN bus)"});
   }
   if (len > (f->fd ? 64 : 8)) {
-    return tl::unexpected(fmt::format("{} (its length {} is above {})", text, len, f->fd ? 64 : 8));
+    return tl::unexpected(
+        InterfaceReject{BridgeReject::bad_fields,
+                        fmt::format("{} (its length {} is above {})", text, len, f->fd ? 64 : 8)});
   }
   std::string error;
   auto m = sc::to_message(*f, error);
   if (!m) {
-    return tl::unexpected(text + " (" + error + ")");
+    return tl::unexpected(InterfaceReject{BridgeReject::bad_fields, text + " (" + error + ")"});
   }
   return *m;
 }

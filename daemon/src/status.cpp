@@ -13,6 +13,18 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
+std::string bridge_node_name(const Bridge& b) {
+  switch (b.kind()) {
+    case BridgeKind::lcm:
+      return "lcm:" + b.options().bus;
+    case BridgeKind::dds:
+      return "dds:" + b.options().bus;
+    case BridgeKind::socketcan:
+      break;
+  }
+  return "socketcan:" + b.options().interface;
+}
+
 void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_bus,
                  std::size_t first_node) {
   const SimTime now = sim.scheduler().now();
@@ -108,6 +120,10 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
   }
   for (const DeviceRegistry::LinEphemeral& e : devices.lin_ephemeral()) {
     add_lin(e.name + ":0", e.bus, *e.line);
+  }
+  // Bridges' nodes, by what they join: "socketcan:vcan0", "lcm:can0", "dds:can0".
+  for (const auto& b : sim.bridges()) {
+    add_node(bridge_node_name(*b), b->bus(), b->node());
   }
   // Simulated LIN nodes: powered (online) or switched off; sent: headers and responses.
   for (const SimulatedLinNode& l : sim.lin_nodes()) {
@@ -308,6 +324,11 @@ void fill_bridge_list(const Simulation& sim, ipc::BridgeListReply& r, std::size_
     e.received = st.received;
     ipc::copy_name(e.url, b.options().url);
     ipc::copy_name(e.channel_prefix, b.options().channel_prefix);
+    static_assert(ipc::kBridgeRejectReasons == kBridgeRejectReasons);
+    for (std::size_t k = 0; k < kBridgeRejectReasons; ++k) {
+      e.rejected_by[k] = b.rejections().count(k);
+    }
+    ipc::copy_name(e.last_rejected, ipc::printable(b.rejections().last()));
   }
 }
 
@@ -349,6 +370,15 @@ void fill_peer_list(const Simulation& sim, ipc::PeerListReply& r, std::size_t fi
   r.counters.events_received = c.events_received;
   r.counters.dropped = c.dropped;
   r.counters.late = c.late;
+  r.counters.rejected = c.rejected;
+  r.counters.late_max_ns = c.late_max_ns;
+  r.counters.late_bound_ns =
+      sim.config().simulation.time.mode == TimeMode::stepped ? 0 : kLateBoundNs;
+  static_assert(ipc::kNetDropReasons == kNetDropReasons);
+  for (std::size_t k = 0; k < kNetDropReasons; ++k) {
+    r.counters.by_reason[k] = c.by_reason[k];
+  }
+  copy_printable(r.counters.last_reason, c.last_reason);
 
   const std::vector<PeerStatus> peers = d->peers();
   r.peer_total = static_cast<uint16_t>(std::min<std::size_t>(peers.size(), UINT16_MAX));

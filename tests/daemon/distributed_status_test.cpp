@@ -19,6 +19,7 @@
 
 #include "bridge_test_support.hpp"
 #include "canemu/daemon/distributed.hpp"
+#include "canemu/daemon/log.hpp"
 #include "canemu/daemon/simulation.hpp"
 #include "canemu/daemon/status.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
@@ -300,12 +301,12 @@ struct RawDaemon {
     return d.current_count >= 1 && r.current_count >= 1 && e.current_count >= 1;
   }
   // Announces itself speaking `protocol`, in real time, using daemon a's can0.
-  void announce(uint16_t protocol) {
+  void announce(uint16_t protocol, const std::string& version = "raw-test") {
     canemu_net_Daemon d{};
     put_text(d.name, name);
     d.boot = boot;
     d.protocol = protocol;
-    put_text(d.version, "raw-test");
+    put_text(d.version, version);
     d.time_mode = canemu_net_TIME_REALTIME;
     d.scale = 1.0;
     char uses[1][32] = {"a/can0"};
@@ -404,6 +405,31 @@ TEST(DistributedStatus, APeerOfAnotherProtocolIsRefusedAndItsHelloNotAnswered) {
   EXPECT_EQ(peer(*a, "r", keep)->hosted_nodes, 0u);
 }
 
+TEST(DistributedStatus, TheLogSaysWhatStatusSaysInPrintableText) {
+  auto a = daemon_named("a", kBusA);
+  ASSERT_TRUE(a);
+  RawDaemon r("r");
+  ASSERT_TRUE(r.ok());
+  ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
+  log::Capture capture;
+  // A daemon of another protocol with control characters in its version: refused, and the log
+  // says refused with the reason (not "joined"), its version printable as status shows it.
+  r.announce(canemu_net_PROTOCOL + 1, "1.0\x1b[2J\n");
+  std::vector<PeerStatus> keep;
+  ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep) != nullptr; }));
+  EXPECT_EQ(peer(*a, "r", keep)->state, "refused");
+  EXPECT_EQ(peer(*a, "r", keep)->version, "1.0?[2J?");
+  std::vector<std::string> about_r;
+  for (const std::string& line : capture.lines()) {
+    if (line.find("daemon r ") != std::string::npos) {
+      about_r.push_back(line);
+    }
+  }
+  EXPECT_EQ(about_r, (std::vector<std::string>{
+                         "<4>canemud: daemon r (time realtime, protocol 2, version 1.0?[2J?) "
+                         "refused: protocol 2, this daemon speaks 1"}));
+}
+
 TEST(DistributedStatus, ADaemonNamedAgainstTheRuleIsNotListedAndCountsAsDropped) {
   auto a = daemon_named("a", kBusA);
   ASSERT_TRUE(a);
@@ -478,6 +504,16 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
   }));
   EXPECT_EQ(a->distributed()->counters().dropped, before.dropped + 1);
   EXPECT_EQ(a->distributed()->counters().events_sent, before.events_sent);  // no EV_DROPPED
+  // Why, which rule and which daemon: by reason, and the last reason in the status reply.
+  EXPECT_EQ(a->distributed()->counters().by_reason[static_cast<std::size_t>(NetDrop::malformed)],
+            1u);
+  EXPECT_EQ(a->distributed()->counters().last_reason,
+            "dropped a frame of daemon r's node ecu: id 0x123, dlc 15, 64 bytes is no frame");
+  auto reply = std::make_unique<ipc::PeerListReply>(ipc::make_message<ipc::PeerListReply>());
+  fill_peer_list(*a, *reply, 0, 0);
+  EXPECT_EQ(reply->counters.by_reason[static_cast<std::size_t>(NetDrop::malformed)], 1u);
+  EXPECT_EQ(ipc::name_of(reply->counters.last_reason),
+            "dropped a frame of daemon r's node ecu: id 0x123, dlc 15, 64 bytes is no frame");
 
   // 3. The owner goes on: online and a valid frame, which goes out on can0 when a's time runs.
   r.request(request_of(canemu_net_REQ_ONLINE, 1));
@@ -508,6 +544,85 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
       model::encode(*frame), controller_timing(false, 500000, 0, 875)->nominal);
   EXPECT_EQ(bits.ns(), 106'000);  // 53 bits (canemu calc frame 123#42)
   EXPECT_EQ(e.at_ns, (start + bits).ns());
+  acker.stop();
+}
+
+TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpenANode) {
+  auto a = daemon_named("a", kBusA);
+  ASSERT_TRUE(a);
+  model::HostedNode& acker = a->spare_node(0);
+  acker.start(*controller_timing(false, 500000, 0, 875), nullptr,
+              [] { return std::optional<model::TxFrame>(); });
+  RawDaemon r("r");
+  ASSERT_TRUE(r.ok());
+  ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
+  r.announce(canemu_net_PROTOCOL);
+  std::vector<PeerStatus> keep;
+  ASSERT_TRUE(pump({a.get()}, [&] {
+    const PeerStatus* p = peer(*a, "r", keep);
+    return p != nullptr && p->state == "up";
+  }));
+  std::vector<canemu_net_Event> events;
+  auto next_event = [&](canemu_net_Event& out) {
+    if (!pump({a.get()}, [&] { return !r.take(events).empty(); })) {
+      return false;
+    }
+    out = events.front();
+    events.erase(events.begin());
+    return true;
+  };
+  canemu_net_Event e{};
+  r.request(request_of(canemu_net_REQ_HELLO));
+  ASSERT_TRUE(next_event(e));
+  EXPECT_EQ(e.kind, canemu_net_EV_WELCOME);
+
+  // 1. A classic node given by its SJA1000 registers alone (the IDL's rule): opened.
+  canemu_net_Request open = open_request(1);
+  open.clock_hz = 0;
+  open.n_prescaler = open.n_tseg1 = open.n_tseg2 = open.n_sjw = 0;
+  ASSERT_EQ(open.btr0, 0x00);  // 500 kbit/s at 16 MHz, 87.5 %
+  ASSERT_EQ(open.btr1, 0x1C);
+  r.request(open);
+  r.request(request_of(canemu_net_REQ_ONLINE, 1));
+  ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep)->hosted_nodes == 1; }));
+  EXPECT_TRUE(r.take(events).empty()) << "event kind " << int(events.front().kind);
+
+  // 2. A remote request with the FD flag, DLC 9 and 12 bytes for that classic node: rejected
+  // as the LCM and DDS bridges reject it, with the reason, and the node's driver hears it was
+  // not sent (EV_DROPPED); nothing goes on the wire.
+  const DistributedCounters before = a->distributed()->counters();
+  canemu_net_Request tx = request_of(canemu_net_REQ_TX, 1);
+  tx.id = 0x123;
+  tx.fd = true;
+  tx.dlc = 9;
+  tx.len = 12;
+  r.request(tx);
+  ASSERT_TRUE(next_event(e));
+  EXPECT_EQ(e.kind, canemu_net_EV_DROPPED);
+  EXPECT_EQ(e.id, 0x123u);
+  EXPECT_TRUE(e.fd);
+  const DistributedCounters& after = a->distributed()->counters();
+  EXPECT_EQ(after.rejected, before.rejected + 1);
+  EXPECT_EQ(after.dropped, before.dropped);
+  EXPECT_EQ(after.by_reason[static_cast<std::size_t>(NetDrop::fd_on_classic)], 1u);
+  EXPECT_EQ(after.last_reason,
+            "rejected a CAN FD frame (id 0x123, dlc 9) of daemon r's node ecu: can0 is a classic "
+            "CAN bus");
+  a->scheduler().run_until(a->scheduler().now() + model::SimDuration(1'000'000));
+  EXPECT_EQ(a->bus(0).frames_on_bus(), 0u);
+
+  // 3. The same frame classic (DLC 8, 8 bytes) goes out: the node works.
+  tx.fd = false;
+  tx.dlc = 8;
+  tx.len = 8;
+  const uint64_t received = a->distributed()->counters().requests_received;
+  r.request(tx);
+  ASSERT_TRUE(pump({a.get()},
+                   [&] { return a->distributed()->counters().requests_received == received + 1; }));
+  a->scheduler().run_until(a->scheduler().now() + model::SimDuration(1'000'000));
+  EXPECT_EQ(a->bus(0).frames_on_bus(), 1u);
+  ASSERT_TRUE(next_event(e));
+  EXPECT_EQ(e.kind, canemu_net_EV_TX_DONE);
   acker.stop();
 }
 

@@ -146,6 +146,15 @@ TEST(LcmBridge, FramesFromTxGoOutOnTheBusAndEveryFrameIsPublishedWithItsExactTim
   EXPECT_EQ(ipc::name_of(list.bridges[0].channel_prefix), "CANEMU_CAN0_");
   EXPECT_EQ(list.bridges[0].received, 2u);
   EXPECT_EQ(list.bridges[0].to_interface, 3u);
+  // The bridge's node is in the NODE table, named by what it joins, with its counts.
+  auto status = std::make_unique<ipc::StatusReply>(ipc::make_message<ipc::StatusReply>());
+  fill_status(*sim, *status);
+  ASSERT_EQ(status->node_count, 1u);
+  EXPECT_EQ(ipc::name_of(status->nodes[0].name), "lcm:can0");
+  EXPECT_EQ(status->nodes[0].bus, 0u);
+  EXPECT_EQ(status->nodes[0].mode, static_cast<uint8_t>(ipc::WireNodeMode::running));
+  EXPECT_EQ(status->nodes[0].frames_sent, 2u);
+  EXPECT_EQ(status->nodes[0].frames_received, 1u);
 }
 
 TEST(LcmBridge, WhatIsNoFrameOfTheBusIsCountedNotSent) {

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+from dataclasses import dataclass
 
 import can
 import pytest
@@ -23,6 +24,17 @@ cyclonedds = pytest.importorskip(
 
 import canemu  # noqa: E402
 from canemu.testing import Daemon  # noqa: E402
+from cyclonedds.idl import IdlStruct  # noqa: E402
+from cyclonedds.idl.annotations import final  # noqa: E402
+from cyclonedds.idl.types import int64  # noqa: E402
+
+
+@dataclass
+@final
+class Short(IdlStruct, typename="canemu::dds::Frame"):
+    """Another type of canemu's Frame's name: only a time stamp, so canemud cannot decode it."""
+
+    timestamp_ns: int64 = 0
 
 MS = 1_000_000
 DOMAIN = 1 + os.getpid() % 200
@@ -175,6 +187,13 @@ def test_frames_both_ways_with_exact_times_and_ros2_topics(world):
         "states": "canemu/can0/states", "tx": "canemu/can0/tx",
         "ros2_from_can_bus": "rt/can0/from_can_bus", "ros2_to_can_bus": "rt/can0/to_can_bus"}
     assert (entry["received"], entry["sent"], entry["rejected"], entry["published"]) == (4, 3, 1, 4)
+    # Why: by reason, and the last one with its rule and topic (also in canemud's log).
+    assert entry["rejected_by"] == {"not_a_frame": 0, "bad_fields": 0, "fd_on_classic_bus": 0,
+                                    "error_frame": 1}
+    why = ("rejected a Frame with is_error on rt/can0/to_can_bus: error frames are the bus's, "
+           "not sent")
+    assert entry["last_rejected"] == why
+    world["daemon"].wait_log(f"DDS bridge of can0: {why}")
     assert json.loads(cli(world, "status", "--json"))["bridges"] == [entry]
     table = cli(world, "bridge", "list").splitlines()
     assert table[0].split()[:2] == ["DDS-BRIDGE", "TOPICS"]
@@ -228,3 +247,33 @@ def test_what_is_wrong_is_said(world):
     assert refused("bridge", "add", "can1", "--ros2", "vcan0").endswith(
         "--ros2 is for DDS bridges (--dds)")
     assert refused("bridge", "remove", "can1", "--dds").endswith("no DDS bridge on bus \"can1\"")
+
+
+def test_samples_that_do_not_decode_are_counted_with_the_reason(world):
+    # A peer whose type has canemu's name and other fields (here: only a time stamp): Cyclone
+    # DDS in canemud cannot decode its samples, which never reach the bridge's reader; they are
+    # counted as rejected (not a frame), with the topic, and logged.
+    from cyclonedds.core import Policy, Qos
+    from cyclonedds.domain import DomainParticipant
+    from cyclonedds.pub import DataWriter, Publisher
+    from cyclonedds.topic import Topic
+    from cyclonedds.util import duration
+
+    before = bridges(world)[0]
+    other = DomainParticipant(DOMAIN)
+    writer = DataWriter(Publisher(other, qos=Qos(Policy.Partition(["canemu"]))),
+                        Topic(other, "canemu/can0/tx", Short),
+                        qos=Qos(Policy.Reliability.Reliable(duration(seconds=1)),
+                                Policy.History.KeepAll, Policy.Durability.Volatile))
+    wait_until(lambda: len(writer.get_matched_subscriptions()) == 1,
+               "the bridge's reader matches the peer's writer")
+    writer.write(Short(timestamp_ns=1))
+    writer.write(Short(timestamp_ns=2))
+    wait_until(lambda: bridges(world)[0]["rejected"] == before["rejected"] + 2,
+               "two undecodable samples counted")
+    entry = bridges(world)[0]
+    assert entry["received"] == before["received"] + 2
+    assert entry["sent"] == before["sent"]
+    assert entry["rejected_by"]["not_a_frame"] == before["rejected_by"]["not_a_frame"] + 2
+    assert "on canemu/can0/tx that Cyclone DDS could not decode" in entry["last_rejected"]
+    world["daemon"].wait_log("that Cyclone DDS could not decode (another type of the same name?)")

@@ -134,6 +134,88 @@ def test_stepped_arbitration_and_time_stamps_across_daemons(env):
             ecu_b.shutdown()
 
 
+def test_a_follower_with_self_reception_gets_back_every_frame_it_queued(env):
+    # Several frames queued at once on b reach the owner together (the node's window); each one
+    # sent comes back to b's program as its own, at its instant on the owner's bus.
+    with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a, \
+            Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud")) as b:
+        t0 = attached_step(b)
+        assert step(a, 1000) == t0 + 1000
+        t0 += 1000
+        ecu_a = Peer(a)  # acknowledges
+        ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket,
+                        receive_own_messages=True)
+        try:
+            for ident in (0x101, 0x102, 0x103):
+                ecu_b.send(can.Message(arbitration_id=ident, is_extended_id=False,
+                                       data=[ident & 0xFF]))
+            step(b, 1_000_000)
+            at, expected = t0, []
+            for ident in (0x101, 0x102, 0x103):
+                text = f"{ident:03X}#{ident & 0xFF:02X}"
+                duration, with_gap = frame_ns(text)
+                expected.append((ident, f"{ident & 0xFF:02x}", at + duration))
+                at += with_gap
+            assert frames(ecu_b) == expected
+            assert ecu_a.frames() == expected
+        finally:
+            ecu_a.close()
+            ecu_b.shutdown()
+
+
+def test_a_follower_bus_closing_normally_drops_nothing(env):
+    # A python-can program on b opens can0, sends a frame and closes its bus as programs do:
+    # nothing was lost, so neither daemon counts anything dropped (the owner counted one per
+    # close, for a request of a node it had closed already).
+    with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a, \
+            Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud")) as b:
+        attached_step(b)
+        ecu_a = Peer(a)
+        ecu_b = Peer(b)
+        try:
+            ecu_b.send(0x123, "01")
+            step(b, 1_000_000)
+            assert [(i, d) for i, d, _ in ecu_a.frames()] == [(0x123, "01")]
+        finally:
+            ecu_b.close()
+        wait_until(lambda: not any(k.startswith("b/") for k in nodes(a)),
+                   "b's node leaves a's can0")
+        step(b, 1_000_000)  # anything still on its way has arrived after a step's round trip
+        ecu_a.close()
+        for daemon in (a, b):
+            counters = json.loads(cli(daemon, "status", "--json"))["distributed"]["counters"]
+            assert (counters["dropped"], counters["last_reason"]) == (0, ""), daemon.log
+
+
+def test_late_counts_events_beyond_its_bound_only(env):
+    # Real time on an idle link on one host: an event reaches the follower a little after its
+    # instant (the link's delay beyond the fastest heartbeat's, tens of microseconds), which is
+    # normal; `late` counts events placed more than 1 ms after it (it counted about 9 of 10
+    # before). The largest delay seen is shown beside it.
+    canemud = str(BUILD / "bin" / "canemud")
+    with Daemon(config("a", "realtime"), canemud=canemud) as a, \
+            Daemon(config("b", "realtime", owner="a"), canemud=canemud) as b:
+        ecu_b = Peer(b)
+        ecu_a = Peer(a)
+        try:
+            wait_until(lambda: any(k.startswith("b/") for k in nodes(a)), "b's node on a's can0")
+            got: list = []
+            for i in range(20):
+                ecu_a.send(0x100 + i, "01")
+                wait_until(lambda: got.extend(ecu_b.frames()) or len(got) > i,
+                           f"frame {i} reaches b")
+            assert [ident for ident, _, _ in got] == [0x100 + i for i in range(20)]
+        finally:
+            ecu_a.close()
+            ecu_b.close()
+        counters = json.loads(cli(b, "status", "--json"))["distributed"]["counters"]
+        assert counters["late_bound_ns"] == 1_000_000
+        assert counters["events_received"] >= 20
+        # 0 on an idle link; a loaded machine may delay an event beyond 1 ms now and then.
+        assert counters["late"] <= 2, counters
+        assert 0 <= counters["late_max_ns"]
+
+
 def test_a_follower_that_dies_leaves_the_bus_and_steps_go_on(env):
     with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a:
         b = Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud"))
@@ -148,10 +230,12 @@ def test_a_follower_that_dies_leaves_the_bus_and_steps_go_on(env):
         finally:
             b.stop()
         # The owner's next step waits at the barrier for b at most timeout_ms (1 s), then lets
-        # it go: its node leaves can0, and the step ends.
+        # it go: its node leaves can0, and the step ends, its answer naming the follower let go.
         started = time.monotonic()
-        step(a, 1_000_000)
+        answer = cli(a, "time", "step", "1ms").splitlines()
         assert time.monotonic() - started < TIMEOUT
+        assert answer[0].startswith("simulated time ")
+        assert len(answer) == 2 and answer[1].startswith("let go during the step: daemon b (")
         assert not any(k.startswith("b/") for k in nodes(a))
         a.wait_log("daemon b is gone")
 

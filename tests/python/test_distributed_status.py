@@ -103,8 +103,9 @@ def test_status_json_shows_the_owner_up_and_the_remote_bus_attached(pair):
     d = json.loads(canemu(b, "status", "--json"))["distributed"]
     assert (d["name"], d["domain"], d["partition"]) == ("b", DOMAIN, PARTITION)
     assert (d["heartbeat_ms"], d["timeout_ms"]) == (50, 5000)
-    assert sorted(d["counters"]) == ["dropped", "events_received", "events_sent", "late",
-                                     "requests_received", "requests_sent"]
+    assert sorted(d["counters"]) == ["by_reason", "dropped", "events_received", "events_sent",
+                                     "last_reason", "late", "late_bound_ns", "late_max_ns",
+                                     "rejected", "requests_received", "requests_sent"]
     assert d["counters"]["dropped"] == 0
     assert d["counters"]["requests_received"] == 0  # a has no node on b's buses
     assert d["counters"]["requests_sent"] >= 1  # its hello at least
@@ -136,7 +137,8 @@ def test_status_tables_show_the_daemon_and_remote_bus(pair):
     _, b = pair
     text = canemu(b, "status")
     assert re.search(r"^daemon b, DDS domain %d, partition %s: requests sent \d+, received 0; "
-                     r"events sent \d+, received \d+; dropped 0, late 0$" % (DOMAIN, PARTITION),
+                     r"events sent \d+, received \d+; dropped 0, rejected 0, "
+                     r"late \(> 1\.00 ms\) 0, max \d+\.\d+ (us|ms)$" % (DOMAIN, PARTITION),
                      text, re.M), text
     assert re.search(r"^DAEMON\s+STATE\s+VERSION\s+TIME\s+HEARD\s+HOSTED\s+BUSES\s+REASON$", text,
                      re.M), text

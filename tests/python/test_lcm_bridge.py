@@ -97,6 +97,11 @@ def test_list_and_status_count_what_came_and_went(session):
                                  "states": "CANEMU_CAN0_STATES", "tx": "CANEMU_CAN0_TX"}
     assert (entry["received"], entry["sent"], entry["rejected"], entry["published"]) == (4, 3, 1, 4)
     assert (entry["queue_dropped"], entry["publish_failed"], entry["dropped"]) == (0, 0, 1)
+    # Why it was rejected: by reason, and the last one with its rule and channel.
+    assert entry["rejected_by"] == {"not_a_frame": 0, "bad_fields": 1, "fd_on_classic_bus": 0,
+                                    "error_frame": 0}
+    assert entry["last_rejected"] == ("rejected a frame_t on CANEMU_CAN0_TX: len 1 is not the 2 "
+                                      "bytes a classic frame of dlc 2 has")
     assert entry["state"] == "error-active"
     assert session["table"].splitlines()[1].split() == [
         "can0", "CANEMU_CAN0_*", "error-active", "0", "0", "0", "4", "0", "0", "4", "3", "0", "1",

@@ -122,6 +122,21 @@ void print_bridges(const std::vector<ipc::BridgeEntry>& r) {
   print_bus_bridges(r, ipc::kBridgeDds);
 }
 
+namespace {
+
+// Why the bridge rejected what it rejected: "rejected_by" with a count per reason, and
+// "last_rejected" with the last one's rule and place ("" while none was).
+void add_rejections(toml::table& entry, const ipc::BridgeEntry& e) {
+  toml::table by;
+  for (std::size_t k = 0; k < ipc::kBridgeRejectReasons; ++k) {
+    by.insert(ipc::kBridgeRejectNames[k], static_cast<int64_t>(e.rejected_by[k]));
+  }
+  entry.insert("rejected_by", std::move(by));
+  entry.insert("last_rejected", ipc::printable_name_of(e.last_rejected));
+}
+
+}  // namespace
+
 toml::array bridges_array(const std::vector<ipc::BridgeEntry>& r) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array out;
@@ -182,27 +197,30 @@ toml::array bridges_array(const std::vector<ipc::BridgeEntry>& r) {
       for (auto&& [key, value] : where) {
         entry.insert(key, value);
       }
+      add_rejections(entry, e);
       out.push_back(std::move(entry));
       continue;
     }
-    out.push_back(toml::table{{"kind", "socketcan"},
-                              {"bus", ipc::name_of(e.bus)},
-                              {"interface", ipc::name_of(e.interface)},
-                              {"error_frames", e.error_frames != 0},
-                              {"restart_ms", i64(e.restart_ms)},
-                              {"restarts", i64(e.restarts)},
-                              {"state", error_state_name(e.state)},
-                              {"tec", i64(e.tec)},
-                              {"rec", i64(e.rec)},
-                              {"queued", i64(e.queued)},
-                              {"to_interface", i64(e.to_interface)},
-                              {"from_interface", i64(e.from_interface)},
-                              {"error_frames_written", i64(e.error_frames_written)},
-                              {"to_interface_dropped", i64(e.to_interface_dropped)},
-                              {"kernel_dropped", i64(e.kernel_dropped)},
-                              {"queue_dropped", i64(e.queue_dropped)},
-                              {"rejected", i64(e.rejected)},
-                              {"tx_failed", i64(e.tx_failed)}});
+    toml::table entry{{"kind", "socketcan"},
+                      {"bus", ipc::name_of(e.bus)},
+                      {"interface", ipc::name_of(e.interface)},
+                      {"error_frames", e.error_frames != 0},
+                      {"restart_ms", i64(e.restart_ms)},
+                      {"restarts", i64(e.restarts)},
+                      {"state", error_state_name(e.state)},
+                      {"tec", i64(e.tec)},
+                      {"rec", i64(e.rec)},
+                      {"queued", i64(e.queued)},
+                      {"to_interface", i64(e.to_interface)},
+                      {"from_interface", i64(e.from_interface)},
+                      {"error_frames_written", i64(e.error_frames_written)},
+                      {"to_interface_dropped", i64(e.to_interface_dropped)},
+                      {"kernel_dropped", i64(e.kernel_dropped)},
+                      {"queue_dropped", i64(e.queue_dropped)},
+                      {"rejected", i64(e.rejected)},
+                      {"tx_failed", i64(e.tx_failed)}};
+    add_rejections(entry, e);
+    out.push_back(std::move(entry));
   }
   return out;
 }

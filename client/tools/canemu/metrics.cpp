@@ -120,8 +120,12 @@ void expose_distributed(Exposition& e, const client::PeerList& d) {
   e.family("canemu_distributed_dropped_total", "counter",
            "Messages between daemons lost on the way, not taken by DDS, or for no node.");
   e.sample("canemu_distributed_dropped_total", "", c.dropped);
+  e.family("canemu_distributed_rejected_total", "counter",
+           "Frames of another daemon's node that its controller does not send (CAN FD on a "
+           "classic bus).");
+  e.sample("canemu_distributed_rejected_total", "", c.rejected);
   e.family("canemu_distributed_late_total", "counter",
-           "Events applied after their simulated instant had passed here.");
+           "Events placed more than 1 ms after their instant (stepped time: any delay).");
   e.sample("canemu_distributed_late_total", "", c.late);
   e.family("canemu_peer_up", "gauge",
            "1 while another daemon is heard and accepted, 0 when it is gone or refused.");

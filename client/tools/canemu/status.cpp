@@ -143,19 +143,29 @@ toml::table distributed_json(const client::PeerList& d) {
                                  {"nodes", i64(b.nodes)}});
   }
   const ipc::WireDistributedCounters& c = d.counters;
-  return toml::table{{"name", d.name},
-                     {"domain", i64(d.domain)},
-                     {"partition", d.partition},
-                     {"heartbeat_ms", i64(d.heartbeat_ms)},
-                     {"timeout_ms", i64(d.timeout_ms)},
-                     {"counters", toml::table{{"requests_sent", i64(c.requests_sent)},
-                                              {"requests_received", i64(c.requests_received)},
-                                              {"events_sent", i64(c.events_sent)},
-                                              {"events_received", i64(c.events_received)},
-                                              {"dropped", i64(c.dropped)},
-                                              {"late", i64(c.late)}}},
-                     {"peers", std::move(peers)},
-                     {"remote_buses", std::move(remote)}};
+  toml::table by_reason;
+  for (std::size_t k = 0; k < ipc::kNetDropReasons; ++k) {
+    by_reason.insert(ipc::kNetDropNames[k], i64(c.by_reason[k]));
+  }
+  return toml::table{
+      {"name", d.name},
+      {"domain", i64(d.domain)},
+      {"partition", d.partition},
+      {"heartbeat_ms", i64(d.heartbeat_ms)},
+      {"timeout_ms", i64(d.timeout_ms)},
+      {"counters", toml::table{{"requests_sent", i64(c.requests_sent)},
+                               {"requests_received", i64(c.requests_received)},
+                               {"events_sent", i64(c.events_sent)},
+                               {"events_received", i64(c.events_received)},
+                               {"dropped", i64(c.dropped)},
+                               {"rejected", i64(c.rejected)},
+                               {"by_reason", std::move(by_reason)},
+                               {"last_reason", ipc::printable_name_of(c.last_reason)},
+                               {"late", i64(c.late)},
+                               {"late_bound_ns", i64(c.late_bound_ns)},
+                               {"late_max_ns", i64(c.late_max_ns)}}},
+      {"peers", std::move(peers)},
+      {"remote_buses", std::move(remote)}};
 }
 
 // One table row, without the blanks a last empty column leaves.
@@ -168,11 +178,20 @@ void print_row(std::string row) {
 // daemons, and a REMOTE BUS table of its buses they simulate (when it has any).
 void print_distributed(const client::PeerList& d) {
   const ipc::WireDistributedCounters& c = d.counters;
+  // late: beyond the bound in real and scaled time (any delay in stepped time), and the largest
+  // delay seen.
+  const std::string late =
+      c.late_bound_ns > 0 ? fmt::format("late (> {}) {}, max {}", duration_text(c.late_bound_ns),
+                                        c.late, duration_text(c.late_max_ns))
+                          : fmt::format("late {}", c.late);
   std::puts(fmt::format("daemon {}, DDS domain {}, partition {}: requests sent {}, received {}; "
-                        "events sent {}, received {}; dropped {}, late {}",
+                        "events sent {}, received {}; dropped {}, rejected {}, {}",
                         d.name, d.domain, d.partition, c.requests_sent, c.requests_received,
-                        c.events_sent, c.events_received, c.dropped, c.late)
+                        c.events_sent, c.events_received, c.dropped, c.rejected, late)
                 .c_str());
+  if (const std::string last = ipc::printable_name_of(c.last_reason); !last.empty()) {
+    std::puts(fmt::format("last dropped or rejected: {}", last).c_str());
+  }
   const char* peer_row = "{:<14} {:<8} {:<12} {:<12} {:>10} {:>6} {:<24} {}";
   print_row(fmt::format(fmt::runtime(peer_row), "DAEMON", "STATE", "VERSION", "TIME", "HEARD",
                         "HOSTED", "BUSES", "REASON"));

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/ipc/protocol.hpp"
 #include "command.hpp"
 
 namespace canemu::cli {
@@ -29,6 +30,10 @@ int run_step(const std::string& socket, const std::string& duration) {
   std::printf("simulated time %.9f s (%llu events)\n",
               static_cast<double>(reply->sim_time_ns) / 1e9,
               static_cast<unsigned long long>(reply->events_run));
+  // Across hosts: the step ran, but without the followers it let go (they are gone).
+  if (const std::string note = ipc::printable(ipc::name_of(reply->note)); !note.empty()) {
+    std::printf("%s\n", note.c_str());
+  }
   return 0;
 }
 

@@ -19,6 +19,7 @@
 // counted in BridgeStats, which `canemu bridge list` and `canemu status` show.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -26,13 +27,28 @@
 #include <string>
 #include <string_view>
 
+#include <tl/expected.hpp>
+
 #include "canemu/daemon/doorbell.hpp"
+#include "canemu/daemon/reject_log.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/channel_message.hpp"
 
 namespace canemu::daemon {
 
 enum class BridgeKind : uint8_t { socketcan = 0, lcm = 1, dds = 2 };
+
+// Why something from outside was rejected (BridgeStats::rejected), as counted by reason; the
+// numbers are ipc::kBridgeReject*'s.
+enum class BridgeReject : uint8_t {
+  not_a_frame = 0,    // another type, bytes that do not decode (DDS: a sample Cyclone could not)
+  bad_fields = 1,     // an identifier or DLC out of range, a length other than the DLC's
+  fd_on_classic = 2,  // a CAN FD frame for a classic bus
+  error_frame = 3,    // an error frame (ROS 2's is_error, SocketCAN's CAN_ERR_FLAG)
+};
+inline constexpr std::size_t kBridgeRejectReasons = 4;
+inline constexpr std::array<std::string_view, kBridgeRejectReasons> kBridgeRejectNames = {
+    "not_a_frame", "bad_fields", "fd_on_classic_bus", "error_frame"};
 
 // The counters' names are the SocketCAN bridge's; "interface" is whatever the transport
 // reaches (for LCM: its channels).
@@ -73,9 +89,9 @@ struct FrameFields {
   int len = 0;  // data bytes the message says it has
   const uint8_t* data = nullptr;
 };
-// Those fields as a frame for a bridge to send; nothing if they disagree (an identifier or DLC out
-// of range, a length other than the DLC's). Bridge::offer() checks the rest.
-std::optional<ipc::ChannelMessage> frame_message(const FrameFields& f);
+// Those fields as a frame for a bridge to send; what is wrong if they disagree (an identifier or
+// DLC out of range, a length other than the DLC's). Bridge::offer() checks the rest.
+tl::expected<ipc::ChannelMessage, std::string> frame_message(const FrameFields& f);
 
 // Why a bridge cannot open when this process may not create sockets of `family` (AF_CAN for
 // SocketCAN; AF_INET for LCM, DDS and [distributed]): socket() fails with EAFNOSUPPORT where a
@@ -146,22 +162,25 @@ class Bridge final : private model::ControllerEvents, public Doorbell {
   std::optional<std::string> restart();
 
   // For the transport: a message arrived from outside, as a frame to send, or nullptr when it
-  // was no frame at all. Anything the bus cannot carry is rejected (as reject() does).
+  // was no frame at all. Anything the bus cannot carry is counted and skipped, with the reason.
   void offer(const ipc::ChannelMessage* m);
-  // For the transport: something arrived from outside that this bus cannot carry, for the reason
-  // `why` (what it was and the rule): counted as rejected and logged with the reason. The log is
-  // rate-limited: the first kRejectLines rejections of every kRejectWindow of simulated time get
-  // a line each; the first line of a later window says how many the window before left out.
-  void reject(std::string_view why);
-  static constexpr int kRejectLines = 3;
-  static constexpr int64_t kRejectWindowNs = 10'000'000'000;
+  // For the transport: `n` messages arrived that are no frame to send, for reason `why`;
+  // `detail` says which rule (and where from, when the transport knows): counted as received
+  // and rejected, logged (rate-limited), and kept as the last reason.
+  void reject(BridgeReject why, const std::string& detail, uint64_t n = 1);
+  // Rejections by reason (kBridgeRejectNames) and the last one with its details.
+  const RejectLog<kBridgeRejectReasons>& rejections() const { return rejections_; }
   // For the transport: its own counters (kernel_dropped).
   BridgeStats& counters() { return stats_; }
 
  private:
   Bridge(BridgeOptions options, std::size_t bus, model::HostedNode& node,
          std::unique_ptr<BridgeTransport> transport)
-      : options_(std::move(options)), bus_(bus), node_(node), transport_(std::move(transport)) {}
+      : options_(std::move(options)),
+        bus_(bus),
+        node_(node),
+        transport_(std::move(transport)),
+        rejections_(transport_->name(), kBridgeRejectNames) {}
 
   std::optional<model::TxFrame> next_tx();
   void count(Delivery d, uint64_t& counter);
@@ -174,8 +193,6 @@ class Bridge final : private model::ControllerEvents, public Doorbell {
                      uint16_t rec) override;
 
   void restart_after_bus_off();
-  // Counts a rejection (not what arrived: the caller did) and logs it, rate-limited.
-  void refuse(std::string_view why);
 
   BridgeOptions options_;
   std::size_t bus_;
@@ -184,10 +201,7 @@ class Bridge final : private model::ControllerEvents, public Doorbell {
   std::deque<model::TxFrame> queue_;
   BridgeStats stats_;
   std::optional<model::EventId> restart_event_;  // the automatic restart, while due
-  // The rejection log's window: its start, the lines it gave, the rejections it left out.
-  model::SimTime reject_window_{};
-  int reject_lines_ = 0;
-  uint64_t reject_unlogged_ = 0;
+  RejectLog<kBridgeRejectReasons> rejections_;
 };
 
 }  // namespace canemu::daemon

@@ -12,11 +12,13 @@
 // its eventfd, and the loop's kick() applies what came; a timerfd paces the heartbeats.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <tl/expected.hpp>
@@ -52,14 +54,40 @@ struct RemoteBusStatus {
   uint32_t nodes = 0;  // this daemon's nodes on it
 };
 
+// Why a message to or from another daemon was dropped (or, a frame no node of the bus sends,
+// rejected): DistributedCounters::by_reason, ipc::WireDistributedCounters's order.
+enum class NetDrop : uint8_t {
+  unknown_daemon = 0,  // from a name that breaks the configuration's rule: no daemon of canemu's
+  not_accepted = 1,    // from a daemon not heard announcing itself, refused, or gone
+  lost = 2,            // a gap in a daemon's sequence numbers: lost on the way
+  no_node = 3,         // for a node that is not open (any more)
+  malformed = 4,       // a field out of range, a frame that is none, a kind unknown
+  not_written = 5,     // DDS did not take what this daemon wrote
+  undecodable = 6,     // a sample Cyclone DDS could not decode (another type of the same name)
+  fd_on_classic = 7,   // rejected: a CAN FD frame for a node that sends classic frames only
+};
+inline constexpr std::size_t kNetDropReasons = 8;
+inline constexpr std::array<std::string_view, kNetDropReasons> kNetDropNames = {
+    "unknown_daemon", "not_accepted", "lost",        "no_node",
+    "malformed",      "not_written",  "undecodable", "fd_on_classic_bus"};
+
 struct DistributedCounters {
   uint64_t requests_sent = 0;      // to owners
   uint64_t requests_received = 0;  // from daemons using this daemon's buses
   uint64_t events_sent = 0;
   uint64_t events_received = 0;
-  uint64_t dropped = 0;  // messages DDS did not take (a full reader), or came for no node
-  uint64_t late = 0;     // events applied after their simulated instant had passed here
+  uint64_t dropped = 0;   // messages lost, not taken by DDS, from no daemon accepted, for no node
+  uint64_t rejected = 0;  // frames of another daemon's node that its controller does not send
+  // Real and scaled time: events placed more than kLateBoundNs after their instant here (the
+  // owner's time converted); stepped time: events applied after their instant had passed.
+  uint64_t late = 0;
+  int64_t late_max_ns = 0;  // the largest such delay seen, within the bound or beyond
+  std::array<uint64_t, kNetDropReasons> by_reason{};  // dropped and rejected, by NetDrop
+  std::string last_reason;                            // the last one, with its rule and its daemon
 };
+// Real and scaled time: an event of a remote bus placed later than this after the instant it
+// happened at on the owner counts as late (docs/distributed.md, "Status and counters").
+inline constexpr int64_t kLateBoundNs = 1'000'000;
 
 class Distributed : public Doorbell {
  public:
@@ -99,10 +127,12 @@ class Distributed : public Doorbell {
   // answers it once the step has run here. The error says why not.
   std::optional<std::string> step(int64_t step_ns, uint64_t token);
   // The server's parts of a step: before it (idle transmitters look at their rings), after it
-  // (outboxes, recorders), and the answer to step(token).
+  // (outboxes, recorders), and the answer to step(token); `note` names the followers let go
+  // while the step waited for them or ran ("" when none was).
   std::function<void()> before_step;
   std::function<void()> after_step;
-  std::function<void(uint64_t token, uint64_t events_run, int64_t sim_ns)> step_done;
+  std::function<void(uint64_t token, uint64_t events_run, int64_t sim_ns, const std::string& note)>
+      step_done;
   // Runs simulated time to `until`, then calls done(events run): canemud runs it in slices
   // between which it serves its clients. Unset: at once.
   std::function<void(model::SimTime until, std::function<void(uint64_t events)> done)> run_to;

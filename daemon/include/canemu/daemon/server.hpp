@@ -70,8 +70,9 @@ class Server {
   uint64_t step_tokens_ = 0;
   uint64_t client_serials_ = 0;
   Client* current_ = nullptr;  // the client whose request is being handled
-  void step_done(uint64_t token, uint64_t events_run, int64_t sim_ns);
-  void answer_step(const PendingStep& p, uint64_t events_run, int64_t sim_ns);
+  void step_done(uint64_t token, uint64_t events_run, int64_t sim_ns, const std::string& note);
+  void answer_step(const PendingStep& p, uint64_t events_run, int64_t sim_ns,
+                   const std::string& note = {});
 
   // Stepped time: a step runs in slices of at most kMaxPassWorkNs of wall time, between which
   // the loop serves new clients, requests that only read, the watchdog and signals. Requests

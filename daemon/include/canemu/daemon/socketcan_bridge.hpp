@@ -65,8 +65,13 @@ class SocketCanTransport final : public BridgeTransport {
 // frame (the interface's own controller's report, no frame for a bus), a CAN FD frame on a
 // classic bus, a CAN FD remote frame, a length above 8 (classic) or 64 (FD). A CAN FD length
 // between two DLCs' lengths is sent with the next DLC (ipc::socketcan::to_message).
-tl::expected<ipc::ChannelMessage, std::string> frame_from_interface(const uint8_t* bytes,
-                                                                    std::size_t size, bool fd_bus);
+struct InterfaceReject {
+  BridgeReject why;
+  std::string detail;  // "the CAN FD frame 123##1AABB (the bus is a classic CAN bus)"
+};
+tl::expected<ipc::ChannelMessage, InterfaceReject> frame_from_interface(const uint8_t* bytes,
+                                                                        std::size_t size,
+                                                                        bool fd_bus);
 
 // A CAN_RAW socket bound to `interface`, non-blocking and close-on-exec, that reads CAN FD frames
 // and every error class whatever the bus (so that what the bus cannot carry arrives and is

@@ -6,12 +6,17 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 
 #include "canemu/ipc/protocol.hpp"
 
 namespace canemu::daemon {
 
 class Simulation;
+class Bridge;
+
+// A bridge's node in the NODE table: "socketcan:IFACE", "lcm:BUS", "dds:BUS".
+std::string bridge_node_name(const Bridge& b);
 
 void fill_status(const Simulation& sim, ipc::StatusReply& reply, std::size_t first_bus = 0,
                  std::size_t first_node = 0);

@@ -91,7 +91,7 @@ uint32_t CanLine::ticks(SimTime t) const {
 
 uint32_t CanLine::status_flags() const {
   uint32_t s = 0;
-  if (loaded_) {
+  if (!loaded_.empty()) {
     s |= CAN_STATUS_TXPEND;
   }
   if (controller_overrun_) {
@@ -185,7 +185,7 @@ void CanLine::release_if_unused() {
   }
   detector_.cancel();
   node_.stop();
-  loaded_.reset();
+  loaded_.clear();
   staged_.reset();
   state_ = LineState::not_initialized;
   configured_ = false;
@@ -214,17 +214,21 @@ void CanLine::release_loaded(bool keep) {
     count_dropped(*staged_);
     staged_.reset();
   }
-  if (loaded_ && !node_.frame_on_wire()) {
-    if (keep && !staged_) {
-      staged_ = loaded_;
-      staged_not_before_ = scheduler_.now();
-    } else {
-      count_dropped(*loaded_);
+  if (!loaded_.empty() && !node_.frame_on_wire()) {
+    // The first is kept when asked; the others (a node of another daemon's bus has up to its
+    // window of frames loaded) are dropped and counted, as the staging slot holds one.
+    for (const Loaded& l : loaded_) {
+      if (keep && !staged_) {
+        staged_ = l;
+        staged_not_before_ = scheduler_.now();
+      } else {
+        count_dropped(l);
+      }
     }
-    loaded_.reset();
+    loaded_.clear();
   }
   // A frame on the wire completes; its outcome reaches frame_transmitted() or
-  // transmission_dropped() with loaded_ still set.
+  // transmission_dropped() with loaded_ still holding it.
 }
 
 void CanLine::count_dropped(const Loaded& l) {
@@ -482,7 +486,7 @@ std::optional<TxFrame> CanLine::load(Loaded l) {
     count_dropped(l);  // the line's modes changed since the message was taken
     return std::nullopt;
   }
-  loaded_ = std::move(l);
+  loaded_.push_back(std::move(l));
   last_load_ = scheduler_.now();
   loaded_once_ = true;
   return tx;
@@ -559,11 +563,13 @@ void CanLine::frame_received(SimTime at, const Frame& frame, bool own) {
 }
 
 void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
-  if (!loaded_) {
+  if (loaded_.empty()) {
     return;
   }
-  const Loaded done = *loaded_;
-  loaded_.reset();
+  // Frames end in the order they were loaded (one transmit buffer, or the owner's queue of a
+  // node on another daemon's bus).
+  const Loaded done = loaded_.front();
+  loaded_.pop_front();
   if (done.channel) {
     distributor_.count_sent(*done.channel);
   }
@@ -577,9 +583,9 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
 }
 
 void CanLine::transmission_dropped(SimTime, const Frame&) {
-  if (loaded_) {
-    count_dropped(*loaded_);
-    loaded_.reset();
+  if (!loaded_.empty()) {
+    count_dropped(loaded_.front());
+    loaded_.pop_front();
   }
 }
 

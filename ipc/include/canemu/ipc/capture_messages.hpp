@@ -52,6 +52,16 @@ inline constexpr uint32_t kMaxBridgeRestartMs = 60'000;  // as a channel's resta
 inline constexpr std::size_t kLcmUrlSize = 128;
 inline constexpr std::size_t kLcmPrefixSize = 64;
 
+// Why a bridge rejected what came from outside: BridgeEntry::rejected_by's order, and the names
+// `canemu bridge list --json` gives them.
+inline constexpr std::size_t kBridgeRejectReasons = 4;
+inline constexpr const char* kBridgeRejectNames[kBridgeRejectReasons] = {
+    "not_a_frame",        // another type, bytes that do not decode, a DDS sample Cyclone could not
+    "bad_fields",         // an identifier or DLC out of range, a length other than the DLC's
+    "fd_on_classic_bus",  // a CAN FD frame for a classic bus
+    "error_frame"};       // an error frame
+inline constexpr std::size_t kBridgeReasonSize = 96;  // texts are cut to 95 bytes
+
 // BridgeAddRequest.kind and the others
 inline constexpr uint8_t kBridgeSocketCan = 0;
 inline constexpr uint8_t kBridgeLcm = 1;
@@ -143,8 +153,12 @@ struct BridgeEntry {
   uint64_t received = 0;
   char url[kLcmUrlSize] = {};
   char channel_prefix[kLcmPrefixSize] = {};
+  // `rejected` by reason, in the order of kBridgeRejectNames; the last rejection, why and where.
+  uint64_t rejected_by[kBridgeRejectReasons] = {};
+  char last_rejected[kBridgeReasonSize] = {};
 };
-static_assert(sizeof(BridgeEntry) == 64 + 16 + 80 + 128 + 64);
+static_assert(sizeof(BridgeEntry) ==
+              64 + 16 + 80 + 128 + 64 + 8 * kBridgeRejectReasons + kBridgeReasonSize);
 
 struct BridgeListReply {
   MsgHeader header;

@@ -61,15 +61,29 @@ struct RemoteBusEntry {
 static_assert(sizeof(RemoteBusEntry) == 2 * kNameSize + kStateSize + kReasonSize + 8);
 
 // Messages to and from other daemons since canemud started.
+// Why messages were dropped or frames rejected: WireDistributedCounters::by_reason's order, and
+// the names `canemu status --json` gives them (docs/distributed.md, "Status and counters").
+inline constexpr std::size_t kNetDropReasons = 8;
+inline constexpr const char* kNetDropNames[kNetDropReasons] = {
+    "unknown_daemon", "not_accepted", "lost",        "no_node",
+    "malformed",      "not_written",  "undecodable", "fd_on_classic_bus"};
+
 struct WireDistributedCounters {
   uint64_t requests_sent = 0;      // to owners of this daemon's remote buses
   uint64_t requests_received = 0;  // from daemons with nodes on this daemon's buses
   uint64_t events_sent = 0;
   uint64_t events_received = 0;
-  uint64_t dropped = 0;  // lost on the way, not taken by DDS, or for no node
-  uint64_t late = 0;     // events applied after their simulated instant had passed here
+  uint64_t dropped = 0;  // lost on the way, not taken by DDS, from no daemon accepted, for no node
+  // Real and scaled time: events placed more than late_bound_ns after their instant (the owner's
+  // time converted); stepped time: events applied after their instant had passed.
+  uint64_t late = 0;
+  uint64_t rejected = 0;      // frames of another daemon's node that its controller does not send
+  int64_t late_max_ns = 0;    // the largest delay of an event seen, within the bound or beyond
+  int64_t late_bound_ns = 0;  // the bound of `late` (real and scaled time)
+  uint64_t by_reason[kNetDropReasons] = {};  // dropped and rejected, by reason
+  char last_reason[kReasonSize] = {};        // the last one: the rule and the daemon
 };
-static_assert(sizeof(WireDistributedCounters) == 48);
+static_assert(sizeof(WireDistributedCounters) == 72 + 8 * kNetDropReasons + kReasonSize);
 
 struct PeerListReply {
   MsgHeader header;
@@ -91,9 +105,9 @@ struct PeerListReply {
   PeerEntry peers[kPeerPage];
   RemoteBusEntry buses[kRemoteBusPage];
 };
-static_assert(sizeof(PeerListReply) == 16 + 8 + kNameSize + kPartitionSize + 8 + 48 + 16 +
-                                           kPeerPage * sizeof(PeerEntry) +
-                                           kRemoteBusPage * sizeof(RemoteBusEntry));
+static_assert(sizeof(PeerListReply) ==
+              16 + 8 + kNameSize + kPartitionSize + 8 + sizeof(WireDistributedCounters) + 16 +
+                  kPeerPage * sizeof(PeerEntry) + kRemoteBusPage * sizeof(RemoteBusEntry));
 static_assert(sizeof(PeerListReply) <= kMaxMessageSize);
 
 }  // namespace canemu::ipc

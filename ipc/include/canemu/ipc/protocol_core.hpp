@@ -276,12 +276,16 @@ struct TimeStepRequest {
 };
 static_assert(sizeof(TimeStepRequest) == 24);
 
+inline constexpr std::size_t kStepNoteSize = 160;
 struct TimeStepReply {
   MsgHeader header;
   int64_t sim_time_ns = 0;  // after the step
   uint64_t events_run = 0;
+  // Across hosts: the followers the step let go ("let go during the step: daemon b (why)"), or
+  // empty. The step ran all the same.
+  char note[kStepNoteSize] = {};
 };
-static_assert(sizeof(TimeStepReply) == 32);
+static_assert(sizeof(TimeStepReply) == 32 + kStepNoteSize);
 
 // ---- channels (the data plane) ----
 

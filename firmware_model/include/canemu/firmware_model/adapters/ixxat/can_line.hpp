@@ -21,6 +21,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <vector>
 
@@ -223,7 +224,9 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
 
   Distributor distributor_;
 
-  std::optional<Loaded> loaded_;  // the frame in the controller's transmit buffer
+  // The frames handed to the controller and not yet done, oldest first: one in an SJA1000's or
+  // the FD controller's transmit buffer; up to the node's window on another daemon's bus.
+  std::deque<Loaded> loaded_;
   std::optional<Loaded> staged_;  // taken from a FIFO, waiting for its delay or a restart
   SimTime staged_not_before_;
   SimTime last_load_;

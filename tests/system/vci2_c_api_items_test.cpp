@@ -470,6 +470,83 @@ TEST(Vci2CItems, Item117_RawTimingOutsideTheCapabilityRangesIsRejected) {
   EXPECT_EQ(init(n, data), VCI_OK);
 }
 
+// 116 with bit/s timings the clock does not make as they are (issue 34): the controller takes
+// the nearest timing it has (docs/vci.md, "Bit timing in bit/s form"), the line status shows
+// it, and such a line talks to one initialized with the exact presets. python-can's ixxat
+// presets for 500 kbit/s / 2 Mbit/s, the guide's 8/2 example, and 80/20.
+TEST(Vci2CItems, Item116_BitPerSecondTimingsTakeTheNearestTimingAndShowIt) {
+  VciDaemon d(kAdapters);
+  const CANBTP pc_nominal{0, 500000, 6400, 1600, 1600, 0};
+  const CANBTP pc_data{0, 2000000, 1600, 400, 400, 1600};
+  testing::Line alpha("alpha", kMode, kFd, pc_nominal, pc_data);
+  FdAdapter beta("beta");
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  // 160 quanta of one 80 MHz clock (80 %), and 40 in the data phase; SJW and TDO in quanta.
+  const CANBTP shown_nominal{0, 500000, 128, 32, 32, 0};
+  const CANBTP shown_data{0, 2000000, 32, 8, 8, 32};
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &shown_nominal, sizeof(CANBTP)), 0)
+      << s.sBtpSdr.dwBPS << " " << s.sBtpSdr.wTS1 << "/" << s.sBtpSdr.wTS2 << " " << s.sBtpSdr.wSJW;
+  EXPECT_EQ(std::memcmp(&s.sBtpFdr, &shown_data, sizeof(CANBTP)), 0)
+      << s.sBtpFdr.dwBPS << " " << s.sBtpFdr.wTS1 << "/" << s.sBtpFdr.wTS2 << " " << s.sBtpFdr.wSJW
+      << " " << s.sBtpFdr.wTDO;
+  // FD frames with the rate switch both ways, at the same instants as between exact presets.
+  std::vector<uint8_t> twelve{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  SimClock clock;
+  alpha.post(msg(0x123, twelve, true, true));
+  clock.to(2'000'000);
+  auto got = drain(beta.channel);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x123u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(std::memcmp(got[0].abData, twelve.data(), twelve.size()), 0);
+  EXPECT_EQ(got[0].dwTime, fd_end(0, 0x123, twelve, true));
+  beta.post(msg(0x321, twelve, true, true));
+  clock.to(4'000'000);
+  got = drain(alpha.channel);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x321u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(got[0].dwTime, fd_end(2000, 0x321, twelve, true));
+
+  // The guide's 8/2 at 500 kbit/s on the FD controller: 10 quanta of 16 clocks, as asked.
+  CANBTP guide{0, 500000, 8, 2, 1, 0};
+  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &guide, nullptr),
+            VCI_OK);
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &guide, sizeof(CANBTP)), 0);
+  // 80/20 with SJW 20: 80 quanta of 2 clocks, SJW 16.
+  CANBTP eighty{0, 500000, 80, 20, 20, 0};
+  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &eighty, nullptr),
+            VCI_OK);
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  const CANBTP eighty_shown{0, 500000, 64, 16, 16, 0};
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &eighty_shown, sizeof(CANBTP)), 0);
+
+  // The SJA1000 (8 MHz, 16 clocks a bit at 500 kbit/s): 8/2 becomes 13/3 (81.25 %), SJW 2.
+  HANDLE gamma = testing::device_named("gamma");
+  HANDLE control = nullptr;
+  ASSERT_EQ(canControlOpen(gamma, 0, &control), VCI_OK);
+  ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &guide, nullptr),
+            VCI_OK);
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  const CANBTP sja_shown{0, 500000, 13, 3, 2, 0};
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &sja_shown, sizeof(CANBTP)), 0)
+      << s.sBtpSdr.dwBPS << " " << s.sBtpSdr.wTS1 << "/" << s.sBtpSdr.wTS2 << " " << s.sBtpSdr.wSJW;
+  // A rate the clock cannot come within 0.5 % of is still refused: 4 kbit/s (the slowest is
+  // 8 MHz / (64 x 25) = 5 kbit/s).
+  CANBTP slow{0, 4000, 14, 2, 1, 0};
+  EXPECT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &slow, nullptr),
+            VCI_E_INVALIDARG);
+  canControlClose(control);
+  vciDeviceClose(gamma);
+}
+
 // The v2 cyclic list: its status carries the line's, FD frames go out, Suspend stops it,
 // Resume continues, StopMessage keeps an entry, Reset empties the list.
 TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {

@@ -547,6 +547,50 @@ TEST(Vci2CItems, Item116_BitPerSecondTimingsTakeTheNearestTimingAndShowIt) {
   vciDeviceClose(gamma);
 }
 
+// Issue 34: a data message whose identifier does not fit its format (above 7FFh standard,
+// above 29 bits extended) is refused by the library when it is posted, VCI_E_INVALIDARG with
+// vciFormatError naming it, and nothing is queued (docs/vci.md); the largest identifiers of
+// each format go out.
+TEST(Vci2CItems, IdentifiersThatDoNotFitTheirFormatAreRefusedWhenPosted) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  CANMSG2 standard = msg(0x800, {0x11});
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &standard), VCI_E_INVALIDARG);
+  char text[VCI_MAX_ERRSTRLEN];
+  vciFormatError(VCI_E_INVALIDARG, text, sizeof text);
+  EXPECT_STREQ(text,
+               "invalid argument (identifier 0x800 does not fit 11 bits (ext = 0: at most 0x7FF); "
+               "the message was not queued)");
+  CANMSG2 extended = msg(0x20000000, {0x22});
+  extended.uMsgInfo.Bits.ext = 1;
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &extended), VCI_E_INVALIDARG);
+  EXPECT_EQ(canChannelSendMessage(alpha.channel, 100, &extended), VCI_E_INVALIDARG);
+  // PostMsgMult queues what comes before the first refused message, and says how many.
+  CANMSG2 batch[3] = {msg(0x7FF, {0x33}), msg(0xFFFFFFFF, {0x44}), msg(0x100, {0x55})};
+  batch[0].uMsgInfo.Bits.ext = 0;
+  UINT32 done = 99;
+  EXPECT_EQ(canChannelPostMsgMult(alpha.channel, batch, 3, &done), VCI_OK);
+  EXPECT_EQ(done, 1u);
+  EXPECT_EQ(canChannelPostMsgMult(alpha.channel, batch + 1, 2, &done), VCI_E_INVALIDARG);
+  EXPECT_EQ(done, 0u);
+  CANMSG2 largest = msg(0x1FFFFFFF, {0x66});
+  largest.uMsgInfo.Bits.ext = 1;
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &largest), VCI_OK);
+  SimClock clock;
+  clock.to(2'000'000);
+  const auto got = drain(beta.channel);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].dwMsgId, 0x7FFu);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.ext, 0u);
+  EXPECT_EQ(got[1].dwMsgId, 0x1FFFFFFFu);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.ext, 1u);
+  // Only data messages carry an identifier that must fit.
+  CANMSG2 error_type = msg(0xFFFFFFFF, {});
+  error_type.uMsgInfo.Bytes.bType = CAN_MSGTYPE_ERROR;
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &error_type), VCI_OK);
+}
+
 // The v2 cyclic list: its status carries the line's, FD frames go out, Suspend stops it,
 // Resume continues, StopMessage keeps an entry, Reset empties the list.
 TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {

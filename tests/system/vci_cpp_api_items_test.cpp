@@ -841,6 +841,46 @@ TEST(VciCppItems, Item116_InitLineTakesTheNearestTimingOfABitPerSecondCanbtp) {
   EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
 }
 
+// Issue 34: through the C++ API's FIFO writer a data message whose identifier does not fit its
+// format is refused too: PutDataEntry, and ReleaseWrite of written entries (nothing is handed
+// over; the program may correct the entry and release again).
+TEST(VciCppItems, IdentifiersThatDoNotFitTheirFormatAreRefusedByTheWriter) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  step_ns(1'000'000);
+  drain(beta.reader.p, false);
+  CANMSG standard = one_byte(0x800, 0x11);
+  EXPECT_EQ(alpha.writer->PutDataEntry(&standard), VCI_E_INVALIDARG);
+  char text[256];
+  VciFormatError(VCI_E_INVALIDARG, text, sizeof text);
+  EXPECT_STREQ(text,
+               "invalid argument (identifier 0x800 does not fit 11 bits (ext = 0: at most 0x7FF); "
+               "the message was not queued)");
+  CANMSG extended = one_byte(0x20000000, 0x22);
+  extended.uMsgInfo.Bits.ext = 1;
+  EXPECT_EQ(alpha.writer->PutDataEntry(&extended), VCI_E_INVALIDARG);
+  PVOID space = nullptr;
+  UINT16 count = 0;
+  ASSERT_EQ(alpha.writer->AcquireWrite(&space, &count), VCI_OK);
+  ASSERT_GE(count, 2);
+  auto* entries = static_cast<CANMSG*>(space);
+  entries[0] = one_byte(0x123, 0x33);
+  entries[1] = extended;
+  EXPECT_EQ(alpha.writer->ReleaseWrite(2), VCI_E_INVALIDARG);
+  UINT16 fill = 99;
+  ASSERT_EQ(alpha.writer->GetFillCount(&fill), VCI_OK);
+  EXPECT_EQ(fill, 0);
+  entries[1].dwMsgId = 0x1FFFFFFF;  // corrected: the largest 29-bit identifier
+  EXPECT_EQ(alpha.writer->ReleaseWrite(2), VCI_OK);
+  step_ns(1'000'000);
+  const auto got = drain(beta.reader.p, true);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].dwMsgId, 0x123u);
+  EXPECT_EQ(got[1].dwMsgId, 0x1FFFFFFFu);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.ext, 1u);
+}
+
 // ---------------------------------------------------------------- cyclic transmit list
 
 CANCYCLICTXMSG cyclic(UINT32 id, UINT16 cycle, std::vector<uint8_t> data = {0x11}) {

@@ -144,6 +144,44 @@ TEST(VciBtpConversion, PythonCansFdPresets) {
                {{kRaw, 4, 31, 8, 8, 32}, {0, 500'000, 32, 8, 8, 32}, false});
 }
 
+TEST(VciBtpConversion, EveryPythonCanPresetIsTaken) {
+  // can.interfaces.ixxat.constants (python-can 4.1 and 4.6): what the line status shows.
+  struct Row {
+    ixxat::Btp request;
+    ixxat::Btp shown;
+  };
+  const Row nominal[] = {
+      {{0, 250'000, 6400, 1600, 1600, 0}, {0, 250'000, 256, 64, 64, 0}},
+      {{0, 500'000, 6400, 1600, 1600, 0}, {0, 500'000, 128, 32, 32, 0}},
+      {{0, 1'000'000, 6400, 1600, 1600, 0}, {0, 1'000'000, 64, 16, 16, 0}},
+  };
+  const Row data[] = {
+      {{0, 500'000, 6400, 1600, 1600, 6400}, {0, 500'000, 32, 8, 8, 32}},
+      {{0, 833'333, 1600, 400, 400, 1620}, {0, 833'333, 19, 5, 5, 19}},  // 80 MHz / 96
+      {{0, 1'000'000, 1600, 400, 400, 1600}, {0, 1'000'000, 32, 8, 8, 32}},
+      {{0, 1'538'461, 1000, 300, 300, 1040}, {0, 1'538'462, 20, 6, 6, 21}},  // 80 MHz / 52
+      {{0, 2'000'000, 1600, 400, 400, 1600}, {0, 2'000'000, 32, 8, 8, 32}},
+      {{0, 4'000'000, 800, 200, 200, 800}, {0, 4'000'000, 16, 4, 4, 16}},
+      {{0, 5'000'000, 600, 200, 200, 600}, {0, 5'000'000, 12, 4, 4, 12}},
+      {{0, 6'666'666, 400, 200, 200, 402}, {0, 6'666'667, 8, 4, 4, 8}},  // 80 MHz / 12
+      {{0, 8'000'000, 400, 100, 100, 250}, {0, 8'000'000, 8, 2, 2, 5}},
+      {{0, 10'000'000, 300, 100, 100, 200}, {0, 10'000'000, 6, 2, 2, 4}},
+  };
+  const auto fields = [](const ixxat::Btp& b) {
+    return std::vector<uint32_t>{b.mode, b.bps, b.ts1, b.ts2, b.sjw, b.tdo};
+  };
+  for (const Row& r : nominal) {
+    auto c = ixxat::convert_btp(r.request, ixxat::kFdNominalRange, ixxat::Phase::nominal);
+    ASSERT_TRUE(c) << c.error().message;
+    EXPECT_EQ(fields(c->shown), fields(r.shown)) << r.request.bps;
+  }
+  for (const Row& r : data) {
+    auto c = ixxat::convert_btp(r.request, ixxat::kFdDataRange, ixxat::Phase::data);
+    ASSERT_TRUE(c) << c.error().message;
+    EXPECT_EQ(fields(c->shown), fields(r.shown)) << r.request.bps;
+  }
+}
+
 TEST(VciBtpConversion, TheNearestRateFirstThenSamplePointThenQuanta) {
   // 300 kbit/s is 266.67 clocks: 267 clocks (299,625.47 bit/s, 0.125 % slow) beat 266. 267 is
   // 1 x 267 or 3 x 89 quanta; 87.5 % gives 234/267 = 78/89, equally close: 89 quanta are

@@ -190,6 +190,7 @@ void CanLine::release_if_unused() {
   state_ = LineState::not_initialized;
   configured_ = false;
   init_ = LineInit{};
+  shown_ = LineTimings{};
   autobaud_pending_ = false;
   autobaud_table_.clear();
   controller_overrun_ = false;

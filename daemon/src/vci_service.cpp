@@ -249,6 +249,7 @@ void VciService::open(VciSession& session, const ipc::VciRequest& m, ipc::VciRep
       break;
   }
   if (h) {
+    h->where = fmt::format("{} CAN {}", device, m.controller);
     add_handle(session, std::move(h), r);
   }
 }
@@ -338,6 +339,14 @@ void VciService::control(VciHandle& h, const ipc::VciRequest& m, ipc::VciReply& 
         init.btr1 = p.bBtReg1;
       }
       r.hresult = line.init_line(init);
+      if (r.hresult == VCI_OK) {
+        // A bit/s timing the controller could not take as it was: what it took instead.
+        for (const std::string& text : ixxat::timing_conversions(init, line.fd_controller())) {
+          log::notice("VCI {}: {}", h.where, text);
+        }
+      } else if (auto why = ixxat::timing_error(init, line.fd_controller())) {
+        log::warning("VCI {}: InitLine refused (VCI_E_INVALIDARG): {}", h.where, *why);
+      }
       break;
     }
     case ipc::VciOp::control_reset:

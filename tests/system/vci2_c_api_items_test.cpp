@@ -470,6 +470,127 @@ TEST(Vci2CItems, Item117_RawTimingOutsideTheCapabilityRangesIsRejected) {
   EXPECT_EQ(init(n, data), VCI_OK);
 }
 
+// 116 with bit/s timings the clock does not make as they are (issue 34): the controller takes
+// the nearest timing it has (docs/vci.md, "Bit timing in bit/s form"), the line status shows
+// it, and such a line talks to one initialized with the exact presets. python-can's ixxat
+// presets for 500 kbit/s / 2 Mbit/s, the guide's 8/2 example, and 80/20.
+TEST(Vci2CItems, Item116_BitPerSecondTimingsTakeTheNearestTimingAndShowIt) {
+  VciDaemon d(kAdapters);
+  const CANBTP pc_nominal{0, 500000, 6400, 1600, 1600, 0};
+  const CANBTP pc_data{0, 2000000, 1600, 400, 400, 1600};
+  testing::Line alpha("alpha", kMode, kFd, pc_nominal, pc_data);
+  FdAdapter beta("beta");
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  // 160 quanta of one 80 MHz clock (80 %), and 40 in the data phase; SJW and TDO in quanta.
+  const CANBTP shown_nominal{0, 500000, 128, 32, 32, 0};
+  const CANBTP shown_data{0, 2000000, 32, 8, 8, 32};
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &shown_nominal, sizeof(CANBTP)), 0)
+      << s.sBtpSdr.dwBPS << " " << s.sBtpSdr.wTS1 << "/" << s.sBtpSdr.wTS2 << " " << s.sBtpSdr.wSJW;
+  EXPECT_EQ(std::memcmp(&s.sBtpFdr, &shown_data, sizeof(CANBTP)), 0)
+      << s.sBtpFdr.dwBPS << " " << s.sBtpFdr.wTS1 << "/" << s.sBtpFdr.wTS2 << " " << s.sBtpFdr.wSJW
+      << " " << s.sBtpFdr.wTDO;
+  // FD frames with the rate switch both ways, at the same instants as between exact presets.
+  std::vector<uint8_t> twelve{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  SimClock clock;
+  alpha.post(msg(0x123, twelve, true, true));
+  clock.to(2'000'000);
+  auto got = drain(beta.channel);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x123u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.edl, 1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(std::memcmp(got[0].abData, twelve.data(), twelve.size()), 0);
+  EXPECT_EQ(got[0].dwTime, fd_end(0, 0x123, twelve, true));
+  beta.post(msg(0x321, twelve, true, true));
+  clock.to(4'000'000);
+  got = drain(alpha.channel);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x321u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  EXPECT_EQ(got[0].dwTime, fd_end(2000, 0x321, twelve, true));
+
+  // The guide's 8/2 at 500 kbit/s on the FD controller: 10 quanta of 16 clocks, as asked.
+  CANBTP guide{0, 500000, 8, 2, 1, 0};
+  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &guide, nullptr),
+            VCI_OK);
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &guide, sizeof(CANBTP)), 0);
+  // 80/20 with SJW 20: 80 quanta of 2 clocks, SJW 16.
+  CANBTP eighty{0, 500000, 80, 20, 20, 0};
+  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &eighty, nullptr),
+            VCI_OK);
+  ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
+  const CANBTP eighty_shown{0, 500000, 64, 16, 16, 0};
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &eighty_shown, sizeof(CANBTP)), 0);
+
+  // The SJA1000 (8 MHz, 16 clocks a bit at 500 kbit/s): 8/2 becomes 13/3 (81.25 %), SJW 2.
+  HANDLE gamma = testing::device_named("gamma");
+  HANDLE control = nullptr;
+  ASSERT_EQ(canControlOpen(gamma, 0, &control), VCI_OK);
+  ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &guide, nullptr),
+            VCI_OK);
+  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  const CANBTP sja_shown{0, 500000, 13, 3, 2, 0};
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &sja_shown, sizeof(CANBTP)), 0)
+      << s.sBtpSdr.dwBPS << " " << s.sBtpSdr.wTS1 << "/" << s.sBtpSdr.wTS2 << " " << s.sBtpSdr.wSJW;
+  // A rate the clock cannot come within 0.5 % of is still refused: 4 kbit/s (the slowest is
+  // 8 MHz / (64 x 25) = 5 kbit/s).
+  CANBTP slow{0, 4000, 14, 2, 1, 0};
+  EXPECT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
+                                 CAN_FILTER_INCL, 2048, 2048, &slow, nullptr),
+            VCI_E_INVALIDARG);
+  canControlClose(control);
+  vciDeviceClose(gamma);
+}
+
+// Issue 34: a data message whose identifier does not fit its format (above 7FFh standard,
+// above 29 bits extended) is refused by the library when it is posted, VCI_E_INVALIDARG with
+// vciFormatError naming it, and nothing is queued (docs/vci.md); the largest identifiers of
+// each format go out.
+TEST(Vci2CItems, IdentifiersThatDoNotFitTheirFormatAreRefusedWhenPosted) {
+  VciDaemon d(kAdapters);
+  FdAdapter alpha("alpha");
+  FdAdapter beta("beta");
+  CANMSG2 standard = msg(0x800, {0x11});
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &standard), VCI_E_INVALIDARG);
+  char text[VCI_MAX_ERRSTRLEN];
+  vciFormatError(VCI_E_INVALIDARG, text, sizeof text);
+  EXPECT_STREQ(text,
+               "invalid argument (identifier 0x800 does not fit 11 bits (ext = 0: at most 0x7FF); "
+               "the message was not queued)");
+  CANMSG2 extended = msg(0x20000000, {0x22});
+  extended.uMsgInfo.Bits.ext = 1;
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &extended), VCI_E_INVALIDARG);
+  EXPECT_EQ(canChannelSendMessage(alpha.channel, 100, &extended), VCI_E_INVALIDARG);
+  // PostMsgMult queues what comes before the first refused message, and says how many.
+  CANMSG2 batch[3] = {msg(0x7FF, {0x33}), msg(0xFFFFFFFF, {0x44}), msg(0x100, {0x55})};
+  batch[0].uMsgInfo.Bits.ext = 0;
+  UINT32 done = 99;
+  EXPECT_EQ(canChannelPostMsgMult(alpha.channel, batch, 3, &done), VCI_OK);
+  EXPECT_EQ(done, 1u);
+  EXPECT_EQ(canChannelPostMsgMult(alpha.channel, batch + 1, 2, &done), VCI_E_INVALIDARG);
+  EXPECT_EQ(done, 0u);
+  CANMSG2 largest = msg(0x1FFFFFFF, {0x66});
+  largest.uMsgInfo.Bits.ext = 1;
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &largest), VCI_OK);
+  SimClock clock;
+  clock.to(2'000'000);
+  const auto got = drain(beta.channel);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].dwMsgId, 0x7FFu);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.ext, 0u);
+  EXPECT_EQ(got[1].dwMsgId, 0x1FFFFFFFu);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.ext, 1u);
+  // Only data messages carry an identifier that must fit.
+  CANMSG2 error_type = msg(0xFFFFFFFF, {});
+  error_type.uMsgInfo.Bytes.bType = CAN_MSGTYPE_ERROR;
+  EXPECT_EQ(canChannelPostMessage(alpha.channel, &error_type), VCI_OK);
+}
+
 // The v2 cyclic list: its status carries the line's, FD frames go out, Suspend stops it,
 // Resume continues, StopMessage keeps an entry, Reset empties the list.
 TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {

@@ -784,6 +784,103 @@ TEST(VciCppItems, Item117_RawTimingOutsideTheRangesIsRefused) {
   EXPECT_EQ(init_with(with(sdr, smin.dwBPS, sdr.wTS1, sdr.wTS2), fdr), VCI_OK);
 }
 
+// 116 with bit/s timings the clock does not make as they are (issue 34): ICanControl2::InitLine
+// takes the nearest timing (docs/vci.md, "Bit timing in bit/s form") and GetLineStatus shows
+// it; the line exchanges FD frames with the rate switch with one on the exact presets.
+TEST(VciCppItems, Item116_InitLineTakesTheNearestTimingOfABitPerSecondCanbtp) {
+  VciDaemon d(kFdAdapters);
+  V2Adapter beta("beta", CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA);
+  Ref<IBalObject> bal;
+  ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
+  Ref<ICanSocket2> socket;
+  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
+  Ref<ICanChannel2> channel;
+  ASSERT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
+  ASSERT_EQ(channel->Initialize(64, 16, 0, CAN_FILTER_PASS), VCI_OK);
+  Ref<IFifoReader> reader;
+  Ref<IFifoWriter> writer;
+  ASSERT_EQ(channel->GetReader(reader.out()), VCI_OK);
+  ASSERT_EQ(channel->GetWriter(writer.out()), VCI_OK);
+  ASSERT_EQ(channel->Activate(), VCI_OK);
+  Ref<ICanControl2> control;
+  ASSERT_EQ(channel->GetControl(control.out()), VCI_OK);
+  CANINITLINE2 init{};
+  init.bOpMode = kMode;
+  init.bExMode = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
+  init.bSFMode = CAN_FILTER_PASS;
+  init.bEFMode = CAN_FILTER_PASS;
+  init.sBtpSdr = CANBTP{0, 500000, 80, 20, 20, 0};          // 80 % in steps of 1 %
+  init.sBtpFdr = CANBTP{0, 2000000, 1600, 400, 400, 1600};  // python-can's 2 Mbit/s preset
+  ASSERT_EQ(control->InitLine(&init), VCI_OK);
+  CANLINESTATUS2 s{};
+  ASSERT_EQ(control->GetLineStatus(&s), VCI_OK);
+  // 80 quanta of 2 clocks (80 MHz), SJW 16; 40 data quanta of one clock, SJW 8, TDO 32.
+  const CANBTP nominal{0, 500000, 64, 16, 16, 0};
+  const CANBTP data{0, 2000000, 32, 8, 8, 32};
+  EXPECT_EQ(std::memcmp(&s.sBtpSdr, &nominal, sizeof nominal), 0);
+  EXPECT_EQ(std::memcmp(&s.sBtpFdr, &data, sizeof data), 0);
+  ASSERT_EQ(control->StartLine(), VCI_OK);
+  drain<CANMSG2>(reader.p, false);
+  drain<CANMSG2>(beta.reader.p, false);
+  CANMSG2 m = msg2(0x1A5, std::vector<uint8_t>(20, 0x3C));  // 20 bytes: DLC 11
+  m.uMsgInfo.Bits.edl = 1;
+  m.uMsgInfo.Bits.fdr = 1;
+  ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+  step_ns(1'000'000);
+  auto got = drain<CANMSG2>(beta.reader.p, true);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x1A5u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.dlc, 11u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  m.dwMsgId = 0x5A1;
+  beta.post(m);
+  step_ns(1'000'000);
+  got = drain<CANMSG2>(reader.p, true);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].dwMsgId, 0x5A1u);
+  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+}
+
+// Issue 34: through the C++ API's FIFO writer a data message whose identifier does not fit its
+// format is refused too: PutDataEntry, and ReleaseWrite of written entries (nothing is handed
+// over; the program may correct the entry and release again).
+TEST(VciCppItems, IdentifiersThatDoNotFitTheirFormatAreRefusedByTheWriter) {
+  VciDaemon d;
+  Adapter alpha("alpha");
+  Adapter beta("beta");
+  step_ns(1'000'000);
+  drain(beta.reader.p, false);
+  CANMSG standard = one_byte(0x800, 0x11);
+  EXPECT_EQ(alpha.writer->PutDataEntry(&standard), VCI_E_INVALIDARG);
+  char text[256];
+  VciFormatError(VCI_E_INVALIDARG, text, sizeof text);
+  EXPECT_STREQ(text,
+               "invalid argument (identifier 0x800 does not fit 11 bits (ext = 0: at most 0x7FF); "
+               "the message was not queued)");
+  CANMSG extended = one_byte(0x20000000, 0x22);
+  extended.uMsgInfo.Bits.ext = 1;
+  EXPECT_EQ(alpha.writer->PutDataEntry(&extended), VCI_E_INVALIDARG);
+  PVOID space = nullptr;
+  UINT16 count = 0;
+  ASSERT_EQ(alpha.writer->AcquireWrite(&space, &count), VCI_OK);
+  ASSERT_GE(count, 2);
+  auto* entries = static_cast<CANMSG*>(space);
+  entries[0] = one_byte(0x123, 0x33);
+  entries[1] = extended;
+  EXPECT_EQ(alpha.writer->ReleaseWrite(2), VCI_E_INVALIDARG);
+  UINT16 fill = 99;
+  ASSERT_EQ(alpha.writer->GetFillCount(&fill), VCI_OK);
+  EXPECT_EQ(fill, 0);
+  entries[1].dwMsgId = 0x1FFFFFFF;  // corrected: the largest 29-bit identifier
+  EXPECT_EQ(alpha.writer->ReleaseWrite(2), VCI_OK);
+  step_ns(1'000'000);
+  const auto got = drain(beta.reader.p, true);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].dwMsgId, 0x123u);
+  EXPECT_EQ(got[1].dwMsgId, 0x1FFFFFFFu);
+  EXPECT_EQ(got[1].uMsgInfo.Bits.ext, 1u);
+}
+
 // ---------------------------------------------------------------- cyclic transmit list
 
 CANCYCLICTXMSG cyclic(UINT32 id, UINT16 cycle, std::vector<uint8_t> data = {0x11}) {

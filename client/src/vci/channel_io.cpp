@@ -1,12 +1,16 @@
 // The channel data path of the VCI libraries: reading and writing a channel's rings in shared
 // memory, waiting on their eventfds, without a round trip to canemud.
 #include <algorithm>
+#include <cstddef>
+#include <cstring>
 #include <mutex>
 #include <string>
 
 #include <sched.h>
 #include <time.h>
 #include <unistd.h>
+
+#include <fmt/format.h>
 
 #include "canemu/ipc/clock.hpp"
 #include "vci_core.hpp"
@@ -187,6 +191,33 @@ HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
   return hr;
 }
 
+HRESULT check_tx_message(const void* msg, std::size_t element_size) {
+  uint32_t id = 0;
+  CANMSGINFO info{};
+  if (element_size == sizeof(CANMSG2)) {
+    std::memcpy(&id, static_cast<const uint8_t*>(msg) + offsetof(CANMSG2, dwMsgId), sizeof id);
+    std::memcpy(&info, static_cast<const uint8_t*>(msg) + offsetof(CANMSG2, uMsgInfo), sizeof info);
+  } else if (element_size == sizeof(CANMSG)) {
+    std::memcpy(&id, static_cast<const uint8_t*>(msg) + offsetof(CANMSG, dwMsgId), sizeof id);
+    std::memcpy(&info, static_cast<const uint8_t*>(msg) + offsetof(CANMSG, uMsgInfo), sizeof info);
+  } else {
+    return VCI_OK;
+  }
+  if (info.Bytes.bType != CAN_MSGTYPE_DATA) {
+    return VCI_OK;  // the firmware drops what is not a data message (counted)
+  }
+  const bool ext = info.Bits.ext != 0;
+  const uint32_t max = ext ? CAN_MSGID_MASK29 : CAN_MSGID_MASK11;
+  if (id <= max) {
+    return VCI_OK;
+  }
+  set_call_detail(VCI_E_INVALIDARG,
+                  fmt::format("identifier 0x{:X} does not fit {} bits (ext = {}: at most 0x{:X}); "
+                              "the message was not queued",
+                              id, ext ? 29 : 11, ext ? 1 : 0, max));
+  return VCI_E_INVALIDARG;
+}
+
 namespace {
 // Puts one message if there is room; VCI_E_TXQUEUE_FULL otherwise, VCI_E_DISCONNECTED when
 // canemud is gone (nobody would take it).
@@ -196,6 +227,9 @@ HRESULT put_one(ChannelObj& c, const void* msg) {
   }
   if (!c.rings->has_tx) {
     return VCI_E_ACCESSDENIED;  // initialized without a transmit FIFO
+  }
+  if (const HRESULT hr = check_tx_message(msg, c.rings->pair.element_size()); hr != VCI_OK) {
+    return hr;
   }
   if (channel_link(c, false) != VCI_OK) {
     return VCI_E_DISCONNECTED;

@@ -22,6 +22,9 @@ struct FifoSide {
   std::shared_ptr<void> owner;  // keeps the ring's memory
   const canemu::ipc::RingMemory* memory = nullptr;
   std::function<void()> release;  // gives the side back (one reader, one writer at a time)
+  // A channel's transmit FIFO: the size of its messages (CANMSG or CANMSG2), each checked by
+  // check_tx_message() before it is handed over. 0: a FIFO of any data, not checked.
+  std::size_t tx_message_size = 0;
 };
 
 UINT16 u16(uint32_t v) {
@@ -135,6 +138,11 @@ class Writer final : public FifoEnd<IFifoWriter, IID_IFifoWriter, canemu::ipc::R
     if (pvData == nullptr) {
       return VCI_E_INVALIDARG;
     }
+    if (side_.tx_message_size != 0) {
+      if (const HRESULT hr = check_tx_message(pvData, side_.tx_message_size); hr != VCI_OK) {
+        return hr;
+      }
+    }
     return polled(ring_result(ring_.put(pvData), VCI_E_TXQUEUE_FULL));
   }
   HRESULT AcquireWrite(PVOID* ppvData, PUINT16 pwCount) override {
@@ -144,17 +152,40 @@ class Writer final : public FifoEnd<IFifoWriter, IID_IFifoWriter, canemu::ipc::R
         ring_result(ring_.acquire(ppvData == nullptr ? nullptr : &p, &n), VCI_E_TXQUEUE_FULL));
     if (hr == VCI_OK) {
       *ppvData = p;
+      acquired_ = static_cast<uint8_t*>(p);
+      acquired_count_ = n;
       if (pwCount != nullptr) {
         *pwCount = u16(n);
       } else {
         ring_.limit_acquired(1);
+        acquired_count_ = std::min<uint32_t>(n, 1);
       }
     }
     return hr;
   }
   HRESULT ReleaseWrite(UINT16 wCount) override {
-    return ring_result(ring_.release(wCount), VCI_E_INVALIDARG);
+    // A channel's messages are checked before any is handed over: one that cannot be sent
+    // refuses the release, and the program may correct it and release again.
+    if (side_.tx_message_size != 0 && acquired_ != nullptr && wCount <= acquired_count_) {
+      for (uint32_t i = 0; i < wCount; ++i) {
+        const HRESULT hr = check_tx_message(acquired_ + std::size_t{i} * side_.tx_message_size,
+                                            side_.tx_message_size);
+        if (hr != VCI_OK) {
+          return hr;
+        }
+      }
+    }
+    const HRESULT hr = ring_result(ring_.release(wCount), VCI_E_INVALIDARG);
+    if (hr == VCI_OK) {
+      acquired_ = nullptr;
+      acquired_count_ = 0;
+    }
+    return hr;
   }
+
+ private:
+  uint8_t* acquired_ = nullptr;  // what the last AcquireWrite gave, until its release
+  uint32_t acquired_count_ = 0;
 };
 
 }  // namespace
@@ -185,9 +216,9 @@ HRESULT get_writer(const std::shared_ptr<Rings>& rings, IFifoWriter** pp) {
   if (rings->writer_out.exchange(true)) {
     return VCI_E_ACCESSDENIED;
   }
-  *pp = new Writer(
-      FifoSide{rings, &rings->pair.tx().memory(), [rings] { rings->writer_out = false; }},
-      rings->tx);
+  FifoSide side{rings, &rings->pair.tx().memory(), [rings] { rings->writer_out = false; }};
+  side.tx_message_size = rings->pair.element_size();
+  *pp = new Writer(std::move(side), rings->tx);
   return VCI_OK;
 }
 

@@ -283,6 +283,11 @@ class Library {
 HRESULT channel_peek(ChannelObj& c, void* msg);
 // As channel_peek, waiting up to `timeout_ms` (INFINITE: 0xFFFFFFFF) for one.
 HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg);
+// Whether a program may queue `msg` (a CANMSG or CANMSG2, by `element_size`) in a channel's
+// transmit FIFO: a data message's identifier must fit its format (11 bits, 29 with `ext`).
+// VCI_E_INVALIDARG otherwise, with vciFormatError's detail naming the identifier
+// (docs/vci.md: refused, never masked).
+HRESULT check_tx_message(const void* msg, std::size_t element_size);
 HRESULT channel_post(ChannelObj& c, const void* msg);
 HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg);
 // Up to `count` messages into `msgs` (an array of the channel's element type), waiting up to

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "canemu/daemon/ring_budget.hpp"
@@ -36,7 +37,8 @@ class VciHandle {
   ~VciHandle();
   VciHandle(const VciHandle&) = delete;
   VciHandle& operator=(const VciHandle&) = delete;
-  uint32_t uid = 0;  // the owner's: its ring memory counts against that user's quota
+  uint32_t uid = 0;   // the owner's: its ring memory counts against that user's quota
+  std::string where;  // the line, for the log: "ADAPTER CAN n"
 
   Kind kind() const { return kind_; }
   bool is_lin() const { return kind_ == Kind::lin_control || kind_ == Kind::lin_monitor; }

@@ -139,8 +139,8 @@ CANLINESTATUS2 CanLine::line_status2() const {
     if (autobaud_pending_) {
       // No rate yet: the timing fields stay zero.
     } else if (init_.v2) {
-      s.sBtpSdr = init_.sdr;
-      s.sBtpFdr = init_.fdr;
+      s.sBtpSdr = shown_.sdr;  // the timing taken (docs/vci.md, bit timing in bit/s form)
+      s.sBtpFdr = shown_.fdr;
     } else if (!fd_controller()) {
       s.sBtpSdr = btp_of_btr(settings_.btr0, settings_.btr1);
     }
@@ -190,6 +190,7 @@ void CanLine::release_if_unused() {
   state_ = LineState::not_initialized;
   configured_ = false;
   init_ = LineInit{};
+  shown_ = LineTimings{};
   autobaud_pending_ = false;
   autobaud_table_.clear();
   controller_overrun_ = false;
@@ -249,6 +250,7 @@ HRESULT CanLine::init_line(const LineInit& init) {
   release_loaded(false);
   init_ = init;
   settings_ = *settings;
+  shown_ = init.v2 ? shown_timings(init, fd_controller()) : LineTimings{};
   autobaud_pending_ = (init.op_mode & CAN_OPMODE_AUTOBAUD) != 0;
   autobaud_table_.clear();
   if (autobaud_pending_) {
@@ -667,6 +669,7 @@ void CanLine::detection_ended() {
     init_.btr0 = found.btr0;
     init_.btr1 = found.btr1;
     init_.sdr = found.sdr;
+    shown_ = init_.v2 ? shown_timings(init_, fd_controller()) : LineTimings{};
     autobaud_pending_ = false;
     node_.configure(settings_, this, [this] { return next_tx(); });
     node_.go_online();

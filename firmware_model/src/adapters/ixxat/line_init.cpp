@@ -149,6 +149,57 @@ tl::expected<HostedNodeSettings, HRESULT> line_settings(const LineInit& init, bo
   return s;
 }
 
+namespace {
+
+// The phases of a v2 init the controller is programmed with: the nominal one always, the data
+// one with CAN_EXMODE_FASTDATA.
+template <class F>
+void each_phase(const LineInit& init, bool fd_controller, F&& f) {
+  f(init.sdr, fd_controller ? kFdNominalRange : kSja1000BtpRange, Phase::nominal);
+  if (fd_controller && (init.ex_mode & CAN_EXMODE_FASTDATA) != 0) {
+    f(init.fdr, kFdDataRange, Phase::data);
+  }
+}
+
+}  // namespace
+
+LineTimings shown_timings(const LineInit& init, bool fd_controller) {
+  LineTimings shown{init.sdr, init.fdr};
+  each_phase(init, fd_controller, [&](const CANBTP& b, const BtpRange& range, Phase phase) {
+    if (auto c = convert_btp(to_btp(b), range, phase)) {
+      (phase == Phase::nominal ? shown.sdr : shown.fdr) = to_canbtp(c->shown);
+    }
+  });
+  return shown;
+}
+
+std::vector<std::string> timing_conversions(const LineInit& init, bool fd_controller) {
+  std::vector<std::string> lines;
+  if (!init.v2 || (init.op_mode & CAN_OPMODE_AUTOBAUD) != 0) {
+    return lines;
+  }
+  each_phase(init, fd_controller, [&](const CANBTP& b, const BtpRange& range, Phase phase) {
+    auto c = convert_btp(to_btp(b), range, phase);
+    if (c && !c->exact) {
+      lines.push_back(describe_conversion(to_btp(b), *c, range, phase));
+    }
+  });
+  return lines;
+}
+
+std::optional<std::string> timing_error(const LineInit& init, bool fd_controller) {
+  std::optional<std::string> why;
+  if (!init.v2 || (init.op_mode & CAN_OPMODE_AUTOBAUD) != 0) {
+    return why;
+  }
+  each_phase(init, fd_controller, [&](const CANBTP& b, const BtpRange& range, Phase phase) {
+    if (auto t = decode_btp(to_btp(b), range, phase); !t && !why) {
+      why = t.error().message;
+    }
+  });
+  return why;
+}
+
 // The raw CANBTP of an SJA1000 timing: the prescaler counts the chip's 8 MHz CAN clock (half the
 // oscillator), so BRP + 1.
 CANBTP btp_of_btr(uint8_t btr0, uint8_t btr1) {

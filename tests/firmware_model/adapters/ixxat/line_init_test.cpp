@@ -128,8 +128,8 @@ TEST(LineInit, ModesTheLineDoesNotHaveAreInvalidArguments) {
   LineInit bad_filter = v2(b500);
   bad_filter.sf_mode = 0x7F;
   EXPECT_EQ(ixxat::line_settings(bad_filter, false, false).error(), VCI_E_INVALIDARG);
-  // 500 kbit/s cannot be made of 3 quanta.
-  EXPECT_EQ(ixxat::line_settings(v2({0, 500'000, 2, 1, 1, 0}), false, false).error(),
+  // 4 kbit/s is below the SJA1000's slowest rate (8 MHz / (64 x 25 quanta) = 5 kbit/s).
+  EXPECT_EQ(ixxat::line_settings(v2({0, 4'000, 14, 2, 1, 0}), false, false).error(),
             VCI_E_INVALIDARG);
 }
 

@@ -213,6 +213,7 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   LineState state_ = LineState::not_initialized;
   LineInit init_{};
   bool configured_ = false;  // init_line() succeeded since the line was last released
+  LineTimings shown_;        // v2: the timings the line status shows (shown_timings())
   HostedNodeSettings settings_;
   bool control_open_ = false;
   FilterPair filters_;

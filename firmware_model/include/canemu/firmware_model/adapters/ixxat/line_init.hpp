@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <tl/expected.hpp>
@@ -44,6 +46,24 @@ inline constexpr BtpRange kSja1000BtpRange{
 // fields are ignored: the settings are those of the first of autobaud_candidates().
 tl::expected<HostedNodeSettings, HRESULT> line_settings(const LineInit& init, bool fd_controller,
                                                         bool low_speed);
+
+// What CANLINESTATUS2 shows for a v2 `init` that line_settings() took: the timing the
+// controller runs, in the form the request used. A bit/s CANBTP shows what convert_btp() made
+// of it (its `shown` form: the same numbers as the request when the clock makes it exactly);
+// a raw one is shown as given, and so is sBtpFdr without CAN_EXMODE_FASTDATA.
+struct LineTimings {
+  CANBTP sdr{};
+  CANBTP fdr{};
+};
+LineTimings shown_timings(const LineInit& init, bool fd_controller);
+
+// For a v2 `init` that line_settings() took: one line (describe_conversion()) for each bit/s
+// CANBTP the controller could not take as it was (another rate, number of quanta, SJW or TDO).
+std::vector<std::string> timing_conversions(const LineInit& init, bool fd_controller);
+
+// Why line_settings() refuses the timing of a v2 `init` (the first phase it cannot run), or
+// nothing when the timings are not what it refuses.
+std::optional<std::string> timing_error(const LineInit& init, bool fd_controller);
 
 // What CAN_OPMODE_AUTOBAUD tries, in order: `init` without AUTOBAUD, with the timing of
 // 1000, 800, 500, 250, 125, 100, 50, 20 and 10 kbit/s (BTR0/BTR1 for a v1 init, CANBTP for v2).

@@ -108,8 +108,13 @@ result cangen_arrives_whole_at_the_bus_rate "1000 at or below the bus rate" "$(w
 
 # 6. More than the bus can take: what the bridge could not send is counted, nothing vanishes
 # (sent on the bus, dropped at the full queue, or dropped by the kernel before it was read).
+# `canemu bridge list --json` one bridge per line (its nested "rejected_by" table flattened,
+# so that a line holds the whole entry).
+bridge_entries() {
+  canemu bridge list --json | sed 's/"rejected_by" *: *{[^}]*}/"rejected_by": 0/g' | tr '}' '\n'
+}
 accounted() {
-  canemu bridge list --json | tr '}' '\n' | grep '"vcan0"' | awk -F'[:,]' '{
+  bridge_entries | grep '"vcan0"' | awk -F'[:,]' '{
     for (i = 1; i < NF; i++) if ($i ~ /"(from_interface|queue_dropped|rejected|kernel_dropped)"/) s += $(i + 1)
   } END {print s + 0}'
 }
@@ -148,7 +153,7 @@ $(cat /tmp/t7b)"
 # 8. A bridge added while canemud runs: cansequence from vcan3 through can0 to vcan0 loses
 # nothing (1000 frames, within the bridge's queue); then the bridge is removed.
 written() {  # frames the bridge of $1 wrote to its interface
-  canemu bridge list --json | tr '}' '\n' | grep "\"$1\"" | sed 's/.*"to_interface" *: *\([0-9]*\).*/\1/'
+  bridge_entries | grep "\"$1\"" | sed 's/.*"to_interface" *: *\([0-9]*\).*/\1/'
 }
 wrote() {  # INTERFACE COUNT
   [ "$(written "$1")" -ge "$2" ]
@@ -209,7 +214,7 @@ wait_for more_receivers vcan3 "$n"
 cansend vcan3 321#AB
 wait_pid $pid 20
 kill $cd
-restarts=$(canemu bridge list --json | tr '}' '\n' | grep '"vcan3"' | sed 's/.*"restarts" *: *\([0-9]*\).*/\1/')
+restarts=$(bridge_entries | grep '"vcan3"' | sed 's/.*"restarts" *: *\([0-9]*\).*/\1/')
 result a_bridge_restarts_after_bus_off "can1 321#AB
 bus-off 1, restarted 1, restarts 1" "$(cut -d' ' -f2- /tmp/t10)
 bus-off $(grep -c ' 20000240#' /tmp/t10b), restarted $(grep -c ' 20000100#' /tmp/t10b), restarts $restarts"
@@ -219,7 +224,7 @@ canemu bridge remove vcan3 >/dev/null
 # cansend may write CAN FD there): a CAN FD frame and an error frame reach the bridge, are
 # counted as rejected and logged with the reason; a frame after them goes out.
 rejected() {  # the bridge of $1's rejected count
-  canemu bridge list --json | tr '}' '\n' | grep "\"$1\"" | sed 's/.*"rejected" *: *\([0-9]*\).*/\1/'
+  bridge_entries | grep "\"$1\"" | sed 's/.*"rejected" *: *\([0-9]*\).*/\1/'
 }
 rejected_reached() {  # INTERFACE COUNT
   [ "$(rejected "$1")" -ge "$2" ]
@@ -235,11 +240,11 @@ wait_pid $pid
 wait_for rejected_reached vcan4 2
 result what_a_classic_bus_cannot_carry_is_rejected_with_the_reason "can0 321#01
 rejected 2
-the CAN FD frame 123##1AABB (the bus is a classic CAN bus) (1 rejected so far)
-the error frame 20000080#0000000000000000 (an error frame reports what a controller saw; it is no frame to send on a bus) (2 rejected so far)" \
+the CAN FD frame 123##1AABB (the bus is a classic CAN bus)
+the error frame 20000080#0000000000000000 (an error frame reports what a controller saw; it is no frame to send on a bus)" \
   "$(cut -d' ' -f2- /tmp/t11)
 rejected $(rejected vcan4)
-$(grep 'bridge on vcan4 (bus can0): rejected' /tmp/canemud.log | sed 's/.*: rejected //')"
+$(grep 'bridge on vcan4: rejected' /tmp/canemud.log | sed 's/.*: rejected //')"
 canemu bridge remove vcan4 >/dev/null
 
 # 12. Error frames as Debian 12's candump (can-utils 2020.11) shows them: `candump -e vcan4`

@@ -154,3 +154,49 @@ def test_fd_frames_with_bit_rate_switch_both_ways(ixxat, other):
             bytes(back.data)) == (0x1ABCDE0F, True, True, True, payload[:12])
     # Nothing else: no error frames (both nodes run the same rates).
     assert ixxat.recv(0) is None
+
+
+CLASSIC = """
+[simulation]
+time = "stepped"
+seed = 1
+
+[[bus]]
+name = "can0"
+kind = "can"
+bitrate = 500000
+
+[[device]]
+name = "ixxat0"
+model = "ixxat-usb-to-can"
+controllers = ["can0"]
+"""
+
+
+def test_fd_frames_on_a_classic_adapter_are_refused_not_lost():
+    """fd=True on an SJA1000 adapter: the bus opens (the backend sees no FD capability and asks
+    for no FD mode), classic frames go out, and an FD frame is refused by send() with the
+    reason instead of vanishing in the firmware."""
+    d = Daemon(CLASSIC, canemud=str(CANEMUD))
+    ixxat_shim.install()
+    try:
+        bus = can.Bus(interface="ixxat", channel=0, fd=True, bitrate=500000,
+                      data_bitrate=2000000)
+        other = can.Bus(interface="canemu", channel="can0")
+        try:
+            drain(other)
+            with pytest.raises(can.CanOperationError,
+                               match="a CAN FD message \\(id 0x123, edl = 1, fdr = 1\\) on a "
+                                     "controller without CAN FD"):
+                bus.send(can.Message(arbitration_id=0x123, data=bytes(12), is_fd=True,
+                                     bitrate_switch=True, is_extended_id=False))
+            bus.send(can.Message(arbitration_id=0x124, data=b"\x01", is_extended_id=False))
+            canemu.step(1 * MS)
+            got = [m for m in drain(other) if not m.is_error_frame]
+            assert [(m.arbitration_id, m.is_fd, bytes(m.data)) for m in got] == [
+                (0x124, False, b"\x01")]
+        finally:
+            other.shutdown()
+            bus.shutdown()
+    finally:
+        d.stop()

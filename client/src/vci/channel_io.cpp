@@ -191,7 +191,7 @@ HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg) {
   return hr;
 }
 
-HRESULT check_tx_message(const void* msg, std::size_t element_size) {
+HRESULT check_tx_message(const void* msg, std::size_t element_size, bool can_fd) {
   uint32_t id = 0;
   CANMSGINFO info{};
   if (element_size == sizeof(CANMSG2)) {
@@ -205,6 +205,14 @@ HRESULT check_tx_message(const void* msg, std::size_t element_size) {
   }
   if (info.Bytes.bType != CAN_MSGTYPE_DATA) {
     return VCI_OK;  // the firmware drops what is not a data message (counted)
+  }
+  if (element_size == sizeof(CANMSG2) && !can_fd && (info.Bits.edl != 0 || info.Bits.fdr != 0)) {
+    set_call_detail(VCI_E_INVALIDARG,
+                    fmt::format("a CAN FD message (id 0x{:X}, edl = {}, fdr = {}) on a controller "
+                                "without CAN FD (no CAN_FEATURE_EXTDATA); the message was not "
+                                "queued",
+                                id, unsigned{info.Bits.edl}, unsigned{info.Bits.fdr}));
+    return VCI_E_INVALIDARG;
   }
   const bool ext = info.Bits.ext != 0;
   const uint32_t max = ext ? CAN_MSGID_MASK29 : CAN_MSGID_MASK11;
@@ -228,7 +236,8 @@ HRESULT put_one(ChannelObj& c, const void* msg) {
   if (!c.rings->has_tx) {
     return VCI_E_ACCESSDENIED;  // initialized without a transmit FIFO
   }
-  if (const HRESULT hr = check_tx_message(msg, c.rings->pair.element_size()); hr != VCI_OK) {
+  if (const HRESULT hr = check_tx_message(msg, c.rings->pair.element_size(), c.rings->can_fd);
+      hr != VCI_OK) {
     return hr;
   }
   if (channel_link(c, false) != VCI_OK) {

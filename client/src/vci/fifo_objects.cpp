@@ -25,6 +25,7 @@ struct FifoSide {
   // A channel's transmit FIFO: the size of its messages (CANMSG or CANMSG2), each checked by
   // check_tx_message() before it is handed over. 0: a FIFO of any data, not checked.
   std::size_t tx_message_size = 0;
+  bool can_fd = false;  // ... on a CAN FD controller
 };
 
 UINT16 u16(uint32_t v) {
@@ -139,7 +140,8 @@ class Writer final : public FifoEnd<IFifoWriter, IID_IFifoWriter, canemu::ipc::R
       return VCI_E_INVALIDARG;
     }
     if (side_.tx_message_size != 0) {
-      if (const HRESULT hr = check_tx_message(pvData, side_.tx_message_size); hr != VCI_OK) {
+      if (const HRESULT hr = check_tx_message(pvData, side_.tx_message_size, side_.can_fd);
+          hr != VCI_OK) {
         return hr;
       }
     }
@@ -169,7 +171,7 @@ class Writer final : public FifoEnd<IFifoWriter, IID_IFifoWriter, canemu::ipc::R
     if (side_.tx_message_size != 0 && acquired_ != nullptr && wCount <= acquired_count_) {
       for (uint32_t i = 0; i < wCount; ++i) {
         const HRESULT hr = check_tx_message(acquired_ + std::size_t{i} * side_.tx_message_size,
-                                            side_.tx_message_size);
+                                            side_.tx_message_size, side_.can_fd);
         if (hr != VCI_OK) {
           return hr;
         }
@@ -218,6 +220,7 @@ HRESULT get_writer(const std::shared_ptr<Rings>& rings, IFifoWriter** pp) {
   }
   FifoSide side{rings, &rings->pair.tx().memory(), [rings] { rings->writer_out = false; }};
   side.tx_message_size = rings->pair.element_size();
+  side.can_fd = rings->can_fd;
   *pp = new Writer(std::move(side), rings->tx);
   return VCI_OK;
 }

@@ -344,6 +344,8 @@ HRESULT Library::map_rings(ChannelObj& channel, ipc::VciRequest& m, bool has_tx,
     return VCI_E_UNEXPECTED;
   }
   auto rings = std::make_shared<Rings>(std::move(*mapped), has_tx);
+  rings->can_fd = channel.controller < channel.device.controller_fd.size() &&
+                  channel.device.controller_fd[channel.controller];
   rings->rx.set_threshold(std::max<uint32_t>(rx_threshold, 1));
   rings->tx.set_threshold(std::max<uint32_t>(tx_threshold, 1));
   rings->generation = generation;

@@ -186,6 +186,9 @@ struct Rings {
   ipc::RingReader rx;  // this process's views: it reads the receive FIFO, writes the transmit one
   ipc::RingWriter tx;
   bool has_tx;
+  // The channel's controller is a CAN FD one (DeviceDesc::controller_fd): only then may its
+  // messages carry EDL/FDR (check_tx_message).
+  bool can_fd = false;
   // The C++ API hands out one IFifoReader and one IFifoWriter at a time.
   std::atomic<bool> reader_out{false};
   std::atomic<bool> writer_out{false};
@@ -284,10 +287,11 @@ HRESULT channel_peek(ChannelObj& c, void* msg);
 // As channel_peek, waiting up to `timeout_ms` (INFINITE: 0xFFFFFFFF) for one.
 HRESULT channel_read(ChannelObj& c, uint32_t timeout_ms, void* msg);
 // Whether a program may queue `msg` (a CANMSG or CANMSG2, by `element_size`) in a channel's
-// transmit FIFO: a data message's identifier must fit its format (11 bits, 29 with `ext`).
-// VCI_E_INVALIDARG otherwise, with vciFormatError's detail naming the identifier
-// (docs/vci.md: refused, never masked).
-HRESULT check_tx_message(const void* msg, std::size_t element_size);
+// transmit FIFO: a data message's identifier must fit its format (11 bits, 29 with `ext`), and
+// a CAN FD message (EDL or FDR) needs a CAN FD controller (`can_fd`). VCI_E_INVALIDARG
+// otherwise, with vciFormatError's detail naming what is wrong (docs/vci.md: refused, never
+// masked or dropped unseen).
+HRESULT check_tx_message(const void* msg, std::size_t element_size, bool can_fd);
 HRESULT channel_post(ChannelObj& c, const void* msg);
 HRESULT channel_send(ChannelObj& c, uint32_t timeout_ms, const void* msg);
 // Up to `count` messages into `msgs` (an array of the channel's element type), waiting up to

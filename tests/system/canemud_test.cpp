@@ -546,7 +546,9 @@ TEST(Canemud, AScaleThatCannotBeKeptLagsVisiblyAndRequestsAreStillAnswered) {
     last = status(c);
     slowest = std::max(slowest, ipc::monotonic_ns() - t0);
   }
-  EXPECT_LT(slowest, 100'000'000) << "slowest status answer " << slowest / 1000 << " us";
+  // Answered, not stalled behind the overload (which never ends): within a second even on a
+  // machine as busy as a sanitizer build beside another test (a few ms when it is not).
+  EXPECT_LT(slowest, 1'000'000'000) << "slowest status answer " << slowest / 1000 << " us";
   std::printf("slowest status answer under overload: %.1f ms; lag %.3f s, achieved x%.0f\n",
               static_cast<double>(slowest) / 1e6, static_cast<double>(last.lag_ns) / 1e9,
               last.achieved_scale);

@@ -15,16 +15,12 @@ a failing test's report shows them.
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 import json
 import os
-import re
-import select
 import shutil
 import subprocess
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -34,27 +30,12 @@ except ImportError:  # pragma: no cover - Python 3.9 and 3.10
     import tomli as tomllib
 
 from . import _daemon, _vci
+from ._program import ExpectationFailed, Program
+from ._trace import Duration, Frame, Watch, duration_ns, parse_candump_line
 from .testing import Daemon, find_canemud
 
-Duration = Union[int, float, str]
-
-_UNITS_NS = {"ns": 1, "us": 1_000, "ms": 1_000_000, "s": 1_000_000_000}
-_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ns|us|ms|s)\s*$")
-
-
-def duration_ns(value: Duration) -> int:
-    """A duration in ns: a number is milliseconds (as cangen's -g), a string carries its unit
-    ("150us", "2.5ms", "1s"). ValueError naming the value otherwise."""
-    if isinstance(value, bool):
-        raise ValueError(f"duration {value!r}: a number of ms or a text such as '10ms'")
-    if isinstance(value, (int, float)):
-        if value < 0:
-            raise ValueError(f"duration {value!r} is negative")
-        return round(value * 1_000_000)
-    m = _DURATION.match(str(value))
-    if m is None:
-        raise ValueError(f"duration {value!r}: a number of ms or a text such as '10ms', '150us'")
-    return round(float(m.group(1)) * _UNITS_NS[m.group(2)])
+__all__ = ["Bench", "CanemudDied", "Duration", "ExpectationFailed", "Frame", "Node", "Program",
+           "duration_ns", "find_canemu", "parse_candump_line"]
 
 
 def find_canemu() -> str:
@@ -78,65 +59,6 @@ class CanemudDied(RuntimeError):
     """canemud ended while a test used it."""
 
 
-class ExpectationFailed(AssertionError):
-    """What a test waited for did not come; the message says what came instead."""
-
-
-@dataclass
-class Frame:
-    """A frame (or error frame) of a bus's candump log."""
-
-    timestamp: float  # seconds: simulated time (canemud's recorders)
-    bus: str
-    id: int
-    data: bytes
-    is_extended_id: bool
-    is_fd: bool = False
-    bitrate_switch: bool = False
-    is_remote_frame: bool = False
-    is_error_frame: bool = False
-    line: str = ""  # as the log has it
-
-    def __str__(self) -> str:
-        return self.line
-
-
-_CAN_EFF_FLAG = 0x80000000
-_CAN_ERR_FLAG = 0x20000000
-_LOG_LINE = re.compile(r"^\((\d+\.\d+)\)\s+(\S+)\s+([0-9A-Fa-f]+)(##|#)(\S*)$")
-
-
-def parse_candump_line(line: str) -> Optional[Frame]:
-    """A candump -L line as a Frame; None for what is not one."""
-    m = _LOG_LINE.match(line.strip())
-    if m is None:
-        return None
-    stamp, bus, ident_text, sep, rest = m.groups()
-    ident = int(ident_text, 16)
-    extended = len(ident_text) == 8
-    error = extended and bool(ident & _CAN_ERR_FLAG)
-    fd = sep == "##"
-    brs = remote = False
-    if fd:
-        flags, rest = int(rest[:1] or "0", 16), rest[1:]
-        brs = bool(flags & 1)
-    elif rest.startswith("R"):
-        remote, rest = True, ""
-    rest = rest.split("_", 1)[0]  # a classic frame's DLC above 8 (ID#DATA_X)
-    return Frame(
-        timestamp=float(stamp),
-        bus=bus,
-        id=ident & (0x1FFFFFFF if extended else 0x7FF),
-        data=bytes.fromhex(rest),
-        is_extended_id=extended and not error,
-        is_fd=fd,
-        bitrate_switch=brs,
-        is_remote_frame=remote,
-        is_error_frame=error,
-        line=line.strip(),
-    )
-
-
 @dataclass
 class Node:
     """A node as `canemu status --json` lists it."""
@@ -154,98 +76,6 @@ class Node:
         return (f"{self.name} on {self.bus}: {self.state}, TEC {self.tec}, REC {self.rec}, "
                 f"{self.frames_sent} sent, {self.frames_received} received, "
                 f"{self.errors} errors")
-
-
-class _Watch:
-    """Wakes up when a file in a folder changes (inotify), so that waiting in real time waits on
-    the recorders' writes, not on a clock."""
-
-    _IN_MODIFY = 0x2
-    _IN_NONBLOCK = 0o4000
-    _IN_CLOEXEC = 0o2000000
-
-    def __init__(self, folder: Path) -> None:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
-        self.fd = libc.inotify_init1(self._IN_NONBLOCK | self._IN_CLOEXEC)
-        if self.fd < 0:
-            raise OSError(ctypes.get_errno(), "inotify_init1")
-        if libc.inotify_add_watch(self.fd, str(folder).encode(), self._IN_MODIFY) < 0:
-            os.close(self.fd)
-            raise OSError(ctypes.get_errno(), f"inotify_add_watch {folder}")
-
-    def wait(self, seconds: float) -> None:
-        """Until a file changed or `seconds` passed."""
-        ready, _, _ = select.select([self.fd], [], [], max(seconds, 0.0))
-        if ready:
-            try:
-                while os.read(self.fd, 4096):
-                    pass
-            except BlockingIOError:
-                pass
-
-    def close(self) -> None:
-        os.close(self.fd)
-
-
-@dataclass
-class Program:
-    """A program under test started by Bench.start, its output going to files in the trace
-    folder (so that it never blocks on a full pipe)."""
-
-    args: List[str]
-    proc: subprocess.Popen
-    stdout_path: Path
-    stderr_path: Path
-    returncode: Optional[int] = None
-    _watch: Optional[_Watch] = field(default=None, repr=False)
-
-    @property
-    def stdout(self) -> str:
-        return self.stdout_path.read_text(errors="replace")
-
-    @property
-    def stderr(self) -> str:
-        return self.stderr_path.read_text(errors="replace")
-
-    def wait(self, timeout: float = 30.0) -> int:
-        """Its exit status once it ends; ExpectationFailed, with its output, when it runs on
-        for `timeout` seconds (it is killed then)."""
-        try:
-            self.returncode = self.proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            self.kill()
-            raise ExpectationFailed(
-                f"{self.args[0]} did not end within {timeout} s; its output:\n"
-                f"{self.stdout}{self.stderr}") from None
-        return self.returncode
-
-    def expect_output(self, text: str, timeout: float = 10.0) -> str:
-        """Waits until its standard output holds `text`; returns the first line holding it.
-        ExpectationFailed with what it printed when it does not come in `timeout` seconds of
-        wall-clock time or the program ends first."""
-        deadline = time.monotonic() + timeout
-        while True:
-            out = self.stdout
-            at = out.find(text)
-            if at >= 0:
-                begin = out.rfind("\n", 0, at) + 1
-                end = out.find("\n", at)
-                return out[begin : end if end >= 0 else len(out)]
-            ended = self.proc.poll() is not None
-            left = deadline - time.monotonic()
-            if ended or left <= 0:
-                what = (f"it ended with status {self.proc.returncode}" if ended else
-                        f"not within {timeout} s")
-                raise ExpectationFailed(f"{self.args[0]} did not print {text!r} ({what}); "
-                                        f"its output:\n{out}{self.stderr}")
-            assert self._watch is not None
-            self._watch.wait(min(left, 0.5))  # a write to its output files wakes this up
-
-    def kill(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-        self.returncode = self.proc.wait()
-
 
 class Bench:
     """A private canemud and what a test does with it.
@@ -296,7 +126,7 @@ class Bench:
         self._pending: Dict[str, List[Frame]] = {}
         self._buses: List[Any] = []
         self._programs: List[Program] = []
-        self._watch: Optional[_Watch] = None
+        self._watch: Optional[Watch] = None
         self._scenarios = 0
         self._told_dead = False
         self.time_mode = time
@@ -308,7 +138,7 @@ class Bench:
             self.log_path.write_text(str(e))
             raise
         self.socket = self.daemon.socket
-        self._watch = _Watch(self.trace_dir)
+        self._watch = Watch(self.trace_dir)
         _, mode = _daemon.sim_time()
         self.stepped = mode == _vci.CANEMU_TIME_STEPPED
         self.scale = 1.0

@@ -65,8 +65,74 @@ check() {
     "$(includes client/tools 'canemu/daemon/')"
   report "the daemon may not include the client:" "$(includes daemon 'canemu/client/')"
 
+  # 6. Rooms of the daemon (ARCHITECTURE.md, "Inside canemud"): a room includes only the rooms
+  #    it points to (public headers by their canemu/daemon/ROOM/ path, private ones by ROOM/).
+  local dinc=daemon/include/canemu/daemon dsrc=daemon/src
+  for room in base config bridges world distributed vci sorcus control loop; do
+    case $room in
+      base) below='base' ;;
+      config) below='config' ;;
+      bridges) below='base|config|bridges' ;;
+      world) below='base|config|bridges|world' ;;
+      distributed) below='base|config|bridges|world|distributed' ;;
+      vci) below='base|config|world|vci' ;;
+      sorcus) below='base|config|world|sorcus' ;;
+      control) below='base|config|bridges|world|distributed|vci|sorcus|control' ;;
+      loop) below='base|config|bridges|world|distributed|vci|sorcus|control|loop' ;;
+    esac
+    report "daemon/$room may include only $below:" \
+      "$( (includes $dinc/$room 'canemu/daemon/'; includes $dsrc/$room 'canemu/daemon/') |
+        grep -vE "#include *[<\"]canemu/daemon/($below)/"
+        (includes $dinc/$room '[a-z_]+/[a-z_]+\.hpp'; includes $dsrc/$room '[a-z_]+/[a-z_]+\.hpp') |
+        grep -E '#include *"' | grep -vE '#include *"canemu/' | grep -vE "\"($below)/")"
+  done
+  report "daemon headers must be in a room (daemon/include/canemu/daemon/ROOM/):" \
+    "$(find $dinc -maxdepth 1 -name '*.hpp' 2>/dev/null)$(includes daemon 'canemu/daemon/[a-z_]+\.hpp')"
+
+  # 7. No include circle between the daemon's files: a file and its header are one unit, and
+  #    the units' includes form no cycle.
+  report "include circle in the daemon:" "$(python3 - daemon <<'PY'
+import os, re, sys
+# A unit is a public header and the sources of the same name; a private header (under src/)
+# belongs to whoever includes it: its includes count as theirs.
+public, files = set(), {}
+for d, _, fs in os.walk(sys.argv[1]):
+    for f in fs:
+        if f.endswith(('.cpp', '.hpp')):
+            name = os.path.splitext(f)[0]
+            files.setdefault(name, []).append(os.path.join(d, f))
+            if f.endswith('.hpp') and '/include/' in d:
+                public.add(name)
+inc = re.compile(r'#include *"(?:canemu/daemon/)?(?:[a-z_]+/)?([a-z_]+)\.hpp"')
+def reach(name, seen):
+    out = set()
+    for p in files.get(name, []):
+        for m in inc.finditer(open(p).read()):
+            n = m.group(1)
+            if n in public:
+                out.add(n)
+            elif n in files and n not in seen:
+                seen.add(n)
+                out |= reach(n, seen)
+    return out
+edges = {u: reach(u, {u}) - {u} for u in public}
+state = {}
+def visit(u, path):
+    state[u] = 1
+    for v in sorted(edges[u]):
+        if state.get(v) == 1:
+            print(' -> '.join(path[path.index(v):] + [v]))
+        elif v not in state:
+            visit(v, path + [v])
+    state[u] = 2
+for u in sorted(public):
+    if u not in state:
+        visit(u, [u])
+PY
+)"
+
   [ $status -eq 0 ] &&
-    echo "layering: the model is pure and layered (sim <- bus <- chips <- adapters), the vendor headers are a leaf, ipc/client/tools/daemon keep their arrows"
+    echo "layering: the model is pure and layered (sim <- bus <- chips <- adapters), the vendor headers are a leaf, ipc/client/tools/daemon keep their arrows, the daemon's rooms theirs, no include circle"
   return $status
 }
 
@@ -86,8 +152,13 @@ self_test() {
     "firmware_model/include/vci/planted.h|#include \"canemu/firmware_model/bus/frame.hpp\""
     "ipc/src/planted.cpp|#include \"canemu/client/channel.hpp\""
     "client/src/planted.cpp|#include \"canemu/firmware_model/bus/frame.hpp\""
-    "client/tools/canemu/planted.cpp|#include \"canemu/daemon/config.hpp\""
+    "client/tools/canemu/planted.cpp|#include \"canemu/daemon/config/config.hpp\""
     "daemon/src/planted.cpp|#include \"canemu/client/channel.hpp\""
+    "daemon/src/config/planted.cpp|#include \"canemu/daemon/base/log.hpp\""
+    "daemon/include/canemu/daemon/world/planted.hpp|#include \"canemu/daemon/loop/server.hpp\""
+    "daemon/src/vci/planted.cpp|#include \"sorcus/service_replies.hpp\""
+    "daemon/include/canemu/daemon/planted.hpp|#include <string>"
+    "daemon/src/world/device_registry.hpp|#include \"canemu/daemon/world/simulation.hpp\""
   )
   local c file line
   for c in "${cases[@]}"; do

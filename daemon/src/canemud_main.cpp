@@ -9,11 +9,12 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
-#include "canemu/daemon/config.hpp"
-#include "canemu/daemon/log.hpp"
-#include "canemu/daemon/scenario.hpp"
-#include "canemu/daemon/server.hpp"
-#include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/config/config.hpp"
+#include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/config/scenario.hpp"
+#include "canemu/daemon/distributed/distributed.hpp"
+#include "canemu/daemon/loop/server.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 
 namespace {
 
@@ -95,7 +96,7 @@ int main(int argc, char** argv) {
     config->simulation.time = *t;
     time_override = *t;
   }
-  auto sim = Simulation::build(*config);
+  auto sim = Simulation::build(*config, Distributed::open_remote);
   if (!sim) {
     for (const std::string& e : sim.error()) {
       std::fprintf(stderr, "%s\n", e.c_str());

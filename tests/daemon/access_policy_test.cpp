@@ -1,6 +1,6 @@
 // [security]: root and the daemon's own user always, listed users by uid, listed groups by the
 // peer's groups as the kernel reports them; names that do not exist are logged and left out.
-#include "canemu/daemon/access_policy.hpp"
+#include "canemu/daemon/loop/access_policy.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <cstdio>
 #include <memory>
 
-#include "canemu/daemon/log.hpp"
+#include "canemu/daemon/base/log.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 #include "canemu/ipc/unique_fd.hpp"
 

@@ -15,8 +15,8 @@
 
 #include <gtest/gtest.h>
 
-#include "canemu/daemon/config.hpp"
-#include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/config/config.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 
 namespace canemu::daemon::bridge_test {
 

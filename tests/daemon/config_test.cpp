@@ -1,4 +1,4 @@
-#include "canemu/daemon/config.hpp"
+#include "canemu/daemon/config/config.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 
 #include "../support/many_buses.hpp"
 #include "../support/temp_dir.hpp"
-#include "canemu/daemon/scenario.hpp"
+#include "canemu/daemon/config/scenario.hpp"
 
 namespace canemu::daemon {
 namespace {

@@ -4,7 +4,7 @@
 // other. What arrives for the bridge wakes its eventfd, as in canemud's loop: the test waits on
 // that descriptor (with a timeout) and then kicks the bridge. The same bridge runs between
 // processes in tests/python/test_dds_bridge.py.
-#include "canemu/daemon/dds_bridge.hpp"
+#include "canemu/daemon/bridges/dds_bridge.hpp"
 
 #include <poll.h>
 #include <unistd.h>
@@ -18,8 +18,8 @@
 #include <gtest/gtest.h>
 
 #include "bridge_test_support.hpp"
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 #include "canemu_dds.h"
 #include "ros2_can_msgs.h"
 

@@ -1,6 +1,6 @@
 // The device registry: names to nodes, VCI object ids and hardware ids, the generation and the
 // notifications of ephemeral devices.
-#include "canemu/daemon/device_registry.hpp"
+#include "canemu/daemon/world/device_registry.hpp"
 
 #include <gtest/gtest.h>
 

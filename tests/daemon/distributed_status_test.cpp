@@ -18,10 +18,10 @@
 #include <gtest/gtest.h>
 
 #include "bridge_test_support.hpp"
-#include "canemu/daemon/distributed.hpp"
-#include "canemu/daemon/log.hpp"
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/distributed/distributed.hpp"
+#include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "canemu_net.h"
 
@@ -42,7 +42,7 @@ std::unique_ptr<Simulation> daemon_named(const std::string& name, const std::str
     ADD_FAILURE() << config.error().front();
     return nullptr;
   }
-  auto sim = Simulation::build(*config);
+  auto sim = Simulation::build(*config, Distributed::open_remote);
   if (!sim) {
     ADD_FAILURE() << sim.error().front();
     return nullptr;
@@ -60,8 +60,8 @@ bool pump(const std::vector<Simulation*>& sims, Done done,
   const auto deadline = std::chrono::steady_clock::now() + limit;
   std::vector<Doorbell*> bells;
   for (Simulation* s : sims) {
-    bells.push_back(s->distributed());
-    bells.push_back(&s->distributed()->heartbeat());
+    bells.push_back(Distributed::of(*s));
+    bells.push_back(&Distributed::of(*s)->heartbeat());
   }
   while (!done()) {
     if (std::chrono::steady_clock::now() > deadline) {
@@ -85,7 +85,7 @@ bool pump(const std::vector<Simulation*>& sims, Done done,
 
 const PeerStatus* peer(const Simulation& sim, const std::string& name,
                        std::vector<PeerStatus>& keep) {
-  keep = sim.distributed()->peers();
+  keep = sim.remote()->peers();
   for (const PeerStatus& p : keep) {
     if (p.name == name) {
       return &p;
@@ -95,7 +95,7 @@ const PeerStatus* peer(const Simulation& sim, const std::string& name,
 }
 
 std::string remote_state(const Simulation& sim) {
-  const auto buses = sim.distributed()->remote_buses();
+  const auto buses = sim.remote()->remote_buses();
   return buses.empty() ? std::string() : buses.front().state;
 }
 
@@ -162,7 +162,7 @@ TEST(DistributedStatus, AttachedBusAndUpPeerAsTheReplyCarriesThem) {
   EXPECT_LT(e.last_heard_ms, 5000);
   EXPECT_EQ(ra->bus_total, 0u);
   EXPECT_EQ(ra->bus_count, 0u);
-  const DistributedCounters& ca = a->distributed()->counters();
+  const DistributedCounters& ca = Distributed::of(*a)->counters();
   EXPECT_EQ(ra->counters.requests_sent, ca.requests_sent);
   EXPECT_EQ(ra->counters.requests_received, ca.requests_received);
   EXPECT_EQ(ra->counters.events_sent, ca.events_sent);
@@ -193,7 +193,7 @@ TEST(DistributedStatus, AttachedBusAndUpPeerAsTheReplyCarriesThem) {
   EXPECT_EQ(ipc::name_of(can0.state), "attached");
   EXPECT_EQ(ipc::name_of(can0.reason), "");
   EXPECT_EQ(can0.nodes, 1u);
-  EXPECT_EQ(rb->counters.requests_sent, b->distributed()->counters().requests_sent);
+  EXPECT_EQ(rb->counters.requests_sent, Distributed::of(*b)->counters().requests_sent);
   EXPECT_EQ(rb->counters.requests_received, 0u);
   EXPECT_EQ(rb->counters.dropped, 0u);
 
@@ -387,12 +387,12 @@ TEST(DistributedStatus, APeerOfAnotherProtocolIsRefusedAndItsHelloNotAnswered) {
   EXPECT_EQ(p.hosted_nodes, 0u);
 
   // Its hello reaches a (counted received) and is not done (counted dropped): no welcome.
-  const DistributedCounters before = a->distributed()->counters();
+  const DistributedCounters before = Distributed::of(*a)->counters();
   r.request(request_of(canemu_net_REQ_HELLO));
   ASSERT_TRUE(pump({a.get()}, [&] {
-    return a->distributed()->counters().requests_received == before.requests_received + 1;
+    return Distributed::of(*a)->counters().requests_received == before.requests_received + 1;
   }));
-  const DistributedCounters& after = a->distributed()->counters();
+  const DistributedCounters& after = Distributed::of(*a)->counters();
   EXPECT_EQ(after.dropped, before.dropped + 1);
   EXPECT_EQ(after.events_sent, before.events_sent);
   // a answers a request as it handles it (above), and delivery within the process takes well
@@ -436,11 +436,11 @@ TEST(DistributedStatus, ADaemonNamedAgainstTheRuleIsNotListedAndCountsAsDropped)
   RawDaemon r("Bad Name!");
   ASSERT_TRUE(r.ok());
   ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
-  const uint64_t dropped = a->distributed()->counters().dropped;
+  const uint64_t dropped = Distributed::of(*a)->counters().dropped;
   r.announce(canemu_net_PROTOCOL);
-  ASSERT_TRUE(pump({a.get()}, [&] { return a->distributed()->counters().dropped == dropped + 1; }));
-  EXPECT_TRUE(a->distributed()->peers().empty());
-  EXPECT_EQ(a->distributed()->counters().requests_received, 0u);
+  ASSERT_TRUE(pump({a.get()}, [&] { return Distributed::of(*a)->counters().dropped == dropped + 1; }));
+  EXPECT_TRUE(Distributed::of(*a)->peers().empty());
+  EXPECT_EQ(Distributed::of(*a)->counters().requests_received, 0u);
 }
 
 TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
@@ -493,21 +493,21 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
   // 2. The node opened properly, then a classic frame of DLC 15 carrying 64 bytes: dropped.
   r.request(open_request(1));
   ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep)->hosted_nodes == 1; }));
-  const DistributedCounters before = a->distributed()->counters();
+  const DistributedCounters before = Distributed::of(*a)->counters();
   canemu_net_Request tx = request_of(canemu_net_REQ_TX, 1);
   tx.id = 0x123;
   tx.dlc = 15;
   tx.len = 64;
   r.request(tx);
   ASSERT_TRUE(pump({a.get()}, [&] {
-    return a->distributed()->counters().requests_received == before.requests_received + 1;
+    return Distributed::of(*a)->counters().requests_received == before.requests_received + 1;
   }));
-  EXPECT_EQ(a->distributed()->counters().dropped, before.dropped + 1);
-  EXPECT_EQ(a->distributed()->counters().events_sent, before.events_sent);  // no EV_DROPPED
+  EXPECT_EQ(Distributed::of(*a)->counters().dropped, before.dropped + 1);
+  EXPECT_EQ(Distributed::of(*a)->counters().events_sent, before.events_sent);  // no EV_DROPPED
   // Why, which rule and which daemon: by reason, and the last reason in the status reply.
-  EXPECT_EQ(a->distributed()->counters().by_reason[static_cast<std::size_t>(NetDrop::malformed)],
+  EXPECT_EQ(Distributed::of(*a)->counters().by_reason[static_cast<std::size_t>(NetDrop::malformed)],
             1u);
-  EXPECT_EQ(a->distributed()->counters().last_reason,
+  EXPECT_EQ(Distributed::of(*a)->counters().last_reason,
             "dropped a frame of daemon r's node ecu: id 0x123, dlc 15, 64 bytes is no frame");
   auto reply = std::make_unique<ipc::PeerListReply>(ipc::make_message<ipc::PeerListReply>());
   fill_peer_list(*a, *reply, 0, 0);
@@ -522,9 +522,9 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
   tx.data[0] = 0x42;
   r.request(tx);
   ASSERT_TRUE(pump({a.get()}, [&] {
-    return a->distributed()->counters().requests_received == before.requests_received + 3;
+    return Distributed::of(*a)->counters().requests_received == before.requests_received + 3;
   }));
-  EXPECT_EQ(a->distributed()->counters().dropped, before.dropped + 1);
+  EXPECT_EQ(Distributed::of(*a)->counters().dropped, before.dropped + 1);
   const model::SimTime start = a->scheduler().now();
   a->scheduler().run_until(start + model::SimDuration(1'000'000));
   EXPECT_EQ(a->bus(0).frames_on_bus(), 1u);
@@ -590,7 +590,7 @@ TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpe
   // 2. A remote request with the FD flag, DLC 9 and 12 bytes for that classic node: rejected
   // as the LCM and DDS bridges reject it, with the reason, and the node's driver hears it was
   // not sent (EV_DROPPED); nothing goes on the wire.
-  const DistributedCounters before = a->distributed()->counters();
+  const DistributedCounters before = Distributed::of(*a)->counters();
   canemu_net_Request tx = request_of(canemu_net_REQ_TX, 1);
   tx.id = 0x123;
   tx.fd = true;
@@ -601,7 +601,7 @@ TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpe
   EXPECT_EQ(e.kind, canemu_net_EV_DROPPED);
   EXPECT_EQ(e.id, 0x123u);
   EXPECT_TRUE(e.fd);
-  const DistributedCounters& after = a->distributed()->counters();
+  const DistributedCounters& after = Distributed::of(*a)->counters();
   EXPECT_EQ(after.rejected, before.rejected + 1);
   EXPECT_EQ(after.dropped, before.dropped);
   EXPECT_EQ(after.by_reason[static_cast<std::size_t>(NetDrop::fd_on_classic)], 1u);
@@ -615,10 +615,10 @@ TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpe
   tx.fd = false;
   tx.dlc = 8;
   tx.len = 8;
-  const uint64_t received = a->distributed()->counters().requests_received;
+  const uint64_t received = Distributed::of(*a)->counters().requests_received;
   r.request(tx);
   ASSERT_TRUE(pump({a.get()},
-                   [&] { return a->distributed()->counters().requests_received == received + 1; }));
+                   [&] { return Distributed::of(*a)->counters().requests_received == received + 1; }));
   a->scheduler().run_until(a->scheduler().now() + model::SimDuration(1'000'000));
   EXPECT_EQ(a->bus(0).frames_on_bus(), 1u);
   ASSERT_TRUE(next_event(e));

@@ -3,7 +3,7 @@
 // instance (lcm_instance()); what LCM delivers is handled when the bridge is kicked, as canemud
 // does when the instance's descriptor is readable. The same bridge runs over udpm:// between
 // processes in tests/python/test_lcm_bridge.py.
-#include "canemu/daemon/lcm_bridge.hpp"
+#include "canemu/daemon/bridges/lcm_bridge.hpp"
 
 #include <lcm/lcm.h>
 
@@ -14,8 +14,8 @@
 #include <gtest/gtest.h>
 
 #include "bridge_test_support.hpp"
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 #include "canemu_lcm/error_t.hpp"
 #include "canemu_lcm/frame_t.hpp"
 #include "canemu_lcm/state_t.hpp"

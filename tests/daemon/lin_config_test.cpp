@@ -1,7 +1,7 @@
 // [[lin_node]]: every key read, and every mistake named with its place.
 #include <gtest/gtest.h>
 
-#include "canemu/daemon/config.hpp"
+#include "canemu/daemon/config/config.hpp"
 
 namespace canemu::daemon {
 namespace {

@@ -1,6 +1,6 @@
 // The logging facade: sd-daemon priority prefixes, the program name, the simulated time where a
 // line carries one, the level filter and the capture tests use.
-#include "canemu/daemon/log.hpp"
+#include "canemu/daemon/base/log.hpp"
 
 #include <gtest/gtest.h>
 

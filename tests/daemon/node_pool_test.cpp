@@ -1,6 +1,6 @@
 // The pool of nodes for ephemeral devices: the controller the bus needs, reused once stopped,
 // never taken from the bus.
-#include "canemu/daemon/node_pool.hpp"
+#include "canemu/daemon/world/node_pool.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The lateness histogram and the spin that follows the timer (daemon/src/pacing.cpp).
-#include "canemu/daemon/pacing.hpp"
+#include "canemu/daemon/loop/pacing.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // [[recorder]]: canemud's recorders write what their bus carries, with error frames, at the
 // simulated instants, and never lose frames silently.
-#include "canemu/daemon/recorder.hpp"
+#include "canemu/daemon/bridges/recorder.hpp"
 
 #include <cstdio>
 #include <deque>
@@ -14,8 +14,8 @@
 #include "../support/many_buses.hpp"
 #include "../support/temp_dir.hpp"
 
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 #include "canemu/ipc/socketcan.hpp"
 
 namespace canemu::daemon {

@@ -1,15 +1,15 @@
 // The scenario runner on the world of the default configuration: names resolved against the
 // running simulation, all or nothing; every effect with its consequence on the wire; the fault
 // log with simulated times.
-#include "canemu/daemon/scenario_runner.hpp"
+#include "canemu/daemon/world/scenario_runner.hpp"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
-#include "canemu/daemon/log.hpp"
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 #include "canemu/firmware_model/chips/sja1000/sja1000_node.hpp"
 
 namespace canemu::daemon {

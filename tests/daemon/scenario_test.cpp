@@ -1,5 +1,5 @@
 // Fault scenario files: checked whole, every problem with file, line and key.
-#include "canemu/daemon/scenario.hpp"
+#include "canemu/daemon/config/scenario.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The world and its reload: what may change while canemud runs is applied, the rest is
 // reported and stays; ephemeral devices come and go with their leases.
-#include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 
 #include <gtest/gtest.h>
 
@@ -117,7 +117,7 @@ TEST(SimulationReload, BusesOfOtherDaemonsNeedDistributedFromTheStart) {
                 "restart)"}));
   EXPECT_EQ(sim->bus_count(), 3u);
   EXPECT_TRUE(sim->config().buses[0].owner.empty());
-  EXPECT_EQ(sim->distributed(), nullptr);
+  EXPECT_EQ(sim->remote(), nullptr);
 }
 
 }  // namespace canemu::daemon

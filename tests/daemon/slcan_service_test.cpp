@@ -2,7 +2,7 @@
 // (written atomically, read at start-up), its interface as a node (status), and the protocol's
 // SL-CANi requests: slots held per client, every sl064_* call answered with its return value
 // and diagnosis, service routine calls to the client holding the slot.
-#include "canemu/daemon/slcan_service.hpp"
+#include "canemu/daemon/sorcus/slcan_service.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "canemu/daemon/scenario.hpp"
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/config/scenario.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 
 namespace canemu::daemon {
 namespace {

@@ -1,7 +1,7 @@
 // The SocketCAN bridge on the host: the interface is played by one end of a SOCK_SEQPACKET pair
 // (whole frames per packet, as a CAN_RAW socket gives them), the kernel's programs by the other.
 // This machine's kernel has no CAN modules; the same bridge runs against vcan in tests/guest/.
-#include "canemu/daemon/socketcan_bridge.hpp"
+#include "canemu/daemon/bridges/socketcan_bridge.hpp"
 
 #include <linux/can.h>
 #include <linux/can/error.h>
@@ -24,11 +24,11 @@
 #include <gtest/gtest.h>
 
 #include "bridge_test_support.hpp"
-#include "canemu/daemon/channel.hpp"
-#include "canemu/daemon/log.hpp"
-#include "canemu/daemon/scenario.hpp"
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/base/channel.hpp"
+#include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/config/scenario.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 #include "canemu/ipc/socketcan.hpp"
 
 namespace canemu::daemon {

@@ -1,13 +1,13 @@
 // What the protocol reports of the world built from the default configuration (can0 and can1
 // at 500 kbit/s, ixxat0 with a controller on each) and an ephemeral VCI adapter.
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/world/status.hpp"
 
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
 
 #include "../support/many_buses.hpp"
-#include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "vci/cantype.h"
 #include "vci/vcierr.h"

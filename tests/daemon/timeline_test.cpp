@@ -1,7 +1,7 @@
 // canemu timeline's answers: the counter history of an ephemeral device's node stays readable
 // after the device went (a python-can program that ended), bounded per bus, until a device of
 // the same name comes.
-#include "canemu/daemon/timeline.hpp"
+#include "canemu/daemon/world/timeline.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Stand-alone VCI FIFOs between clients: created by one, reached by id by others of the same
 // user, one reader and one writer in all, freed (and its memory given back) when nobody holds it.
-#include "canemu/daemon/vci_fifos.hpp"
+#include "canemu/daemon/vci/vci_fifos.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The X-CAN-2i in canemud: the device model in the configuration, its interfaces as nodes
 // (status, faults), and the protocol's X-CAN requests checked field by field, with blocking
 // services answered at their simulated instant.
-#include "canemu/daemon/xcan_service.hpp"
+#include "canemu/daemon/sorcus/xcan_service.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "canemu/daemon/scenario.hpp"
-#include "canemu/daemon/simulation.hpp"
-#include "canemu/daemon/status.hpp"
+#include "canemu/daemon/config/scenario.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 
 namespace canemu::daemon {
 namespace {

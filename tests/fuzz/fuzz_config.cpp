@@ -7,9 +7,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "canemu/daemon/config.hpp"
-#include "canemu/daemon/scenario.hpp"
-#include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/config/config.hpp"
+#include "canemu/daemon/config/scenario.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace canemu::daemon;

@@ -13,7 +13,7 @@
 #include <memory>
 #include <string>
 
-#include "canemu/daemon/control_dispatcher.hpp"
+#include "canemu/daemon/control/control_dispatcher.hpp"
 #include "fuzz_world.hpp"
 
 namespace {
@@ -28,12 +28,18 @@ const daemon::Config& config() {
   return c;
 }
 
+// One client, as the server would count it.
+struct OneClient final : daemon::LoopServices {
+  uint16_t client_count() override { return 1; }
+};
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   auto sim = fuzzing::fresh_simulation(config());
-  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
-  dispatcher.client_count = [] { return uint16_t{1}; };
+  OneClient loop;
+  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0},
+                                       loop);
   daemon::Session session;
   const auto check_reply = [](const void* reply, size_t bytes, std::span<const int> fds) {
     if (ipc::check_message(reply, bytes) != ipc::ErrorCode::none) {

@@ -19,7 +19,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "canemu/daemon/control_dispatcher.hpp"
+#include "canemu/daemon/control/control_dispatcher.hpp"
 #include "fuzz_world.hpp"
 #include "vci/cantype.h"
 
@@ -63,15 +63,22 @@ void check(const void* reply, std::size_t bytes) {
   }
 }
 
+// One client, as the server would count it, whose last channel's doorbell is watched.
+struct OneClient final : daemon::LoopServices {
+  daemon::Doorbell* bell = nullptr;
+  uint16_t client_count() override { return 1; }
+  void watch(daemon::Doorbell& d) override { bell = &d; }
+  void unwatch(daemon::Doorbell&) override { bell = nullptr; }
+};
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   auto sim = fuzzing::fresh_simulation(config());
-  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0});
-  dispatcher.client_count = [] { return uint16_t{1}; };
-  daemon::Doorbell* bell = nullptr;
-  dispatcher.channel_opened = [&bell](daemon::Doorbell& d) { bell = &d; };
-  dispatcher.channel_closing = [&bell](daemon::Doorbell&) { bell = nullptr; };
+  OneClient loop;
+  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0},
+                                       loop);
+  daemon::Doorbell*& bell = loop.bell;
   daemon::Session session;
   std::vector<int> fds;
   uint32_t last_handle = 0;  // of the last VCI reply

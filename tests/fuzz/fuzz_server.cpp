@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "canemu/daemon/log.hpp"
-#include "canemu/daemon/server.hpp"
+#include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/loop/server.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "fuzz_world.hpp"
 

@@ -6,8 +6,8 @@
 #include <memory>
 #include <string_view>
 
-#include "canemu/daemon/config.hpp"
-#include "canemu/daemon/simulation.hpp"
+#include "canemu/daemon/config/config.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 
 namespace canemu::fuzzing {
 

@@ -1,0 +1,31 @@
+// What the server's event loop wakes when a client rings: a channel whose transmit ring got
+// elements while the daemon slept on it. Ephemeral channels (channel.hpp) and VCI channels
+// (vci_port.hpp) are both.
+#pragma once
+
+namespace canemu::daemon {
+
+class Doorbell {
+ public:
+  // Readable when the client put elements while the daemon slept.
+  virtual int doorbell_fd() const = 0;
+  // The doorbell rang (or the loop wants idle transmitters to look again).
+  virtual void kick() = 0;
+  // The client broke a ring; the server drops the client.
+  virtual bool broken() const = 0;
+
+ protected:
+  ~Doorbell() = default;
+};
+
+// Who watches doorbells (the server's loop): told of each one as it comes and before it goes.
+class DoorbellWatch {
+ public:
+  virtual void watch(Doorbell& bell) = 0;
+  virtual void unwatch(Doorbell& bell) = 0;
+
+ protected:
+  ~DoorbellWatch() = default;
+};
+
+}  // namespace canemu::daemon

@@ -1,0 +1,127 @@
+// The control protocol's requests, answered: checks every message (ipc::check_message), keeps
+// each client's session state, and produces the replies. The server owns the sockets and calls
+// it with each packet; the fuzz target calls it with arbitrary bytes.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+
+#include "canemu/daemon/base/channel.hpp"
+#include "canemu/daemon/config/config.hpp"
+#include "canemu/daemon/base/ring_budget.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/sorcus/slcan_service.hpp"
+#include "canemu/daemon/vci/vci_service.hpp"
+#include "canemu/daemon/sorcus/xcan_service.hpp"
+
+namespace canemu::daemon {
+
+// A channel and the ephemeral device it runs on; the device is unregistered after the channel
+// has stopped its node.
+struct SessionChannel {
+  RingBudget budget;
+  Simulation::DeviceLease lease;
+  std::unique_ptr<Channel> channel;
+};
+
+inline constexpr std::size_t kMaxChannelsPerClient = 16;
+
+// `canemu lin`: the answer to a LinNodeRequest (lin_node_service.cpp).
+std::unique_ptr<ipc::LinNodeReply> answer_lin_nodes(Simulation& sim, const ipc::LinNodeRequest& m,
+                                                    uint32_t request_id);
+
+// What the daemon knows of one client.
+struct Session {
+  bool greeted = false;
+  std::string name;
+  uint32_t pid = 0;  // from SO_PEERCRED
+  uint32_t uid = 0;
+  uint32_t gid = 0;     // primary group, from SO_PEERCRED
+  bool admin = false;   // may clear every fault scenario ([security] admin_groups)
+  uint32_t events = 0;  // subscribed notifications (ipc::kEvent*)
+  uint32_t next_channel = 1;
+  std::map<uint32_t, SessionChannel> channels;
+  VciSession vci;
+  XcanSession xcan;
+  SlcanSession slcan;
+};
+
+// What the dispatcher asks of the server's loop (loop/server.cpp). The defaults are those of
+// a dispatcher alone (the fuzz targets): a step runs at once, doorbells go unwatched, no client
+// is counted.
+class LoopServices : public DoorbellWatch {
+ public:
+  // Before a status reply: the server brings simulated time to "now" and writes what the
+  // recorders hold.
+  virtual void before_status() {}
+  virtual uint16_t client_count() { return 0; }
+  // Fills what only the server knows of time: the lag and the achieved scale.
+  virtual void fill_pace(ipc::StatusReply&) {}
+  // Fills the page of clients from the reply's `first` on, and their total.
+  virtual void fill_clients(ipc::ClientListReply&) {}
+  // Before a time step runs the dispatcher's own way: idle nodes take what their clients put.
+  virtual void before_step() {}
+  // After it ran, before its reply: what the step made for clients goes out (X-CAN callbacks,
+  // the ends of blocking services).
+  virtual void after_step() {}
+  // Takes a step request over (true) and answers it later: canemud runs steps in slices, and
+  // across hosts when every daemon in it is ready. False: the dispatcher runs it at once.
+  virtual bool defer_step(int64_t /*step_ns*/, uint32_t /*request_id*/) { return false; }
+  // A channel (ephemeral, VCI, a bridge's) was opened or is about to close.
+  void watch(Doorbell&) override {}
+  void unwatch(Doorbell&) override {}
+
+ protected:
+  ~LoopServices() = default;
+};
+
+class ControlDispatcher {
+ public:
+  using Send = std::function<void(const void* data, std::size_t size, std::span<const int> fds)>;
+
+  ControlDispatcher(Simulation& sim, TimeSetting time, LoopServices& loop)
+      : sim_(sim), time_(time), loop_(loop), vci_(sim, rings_, loop), xcan_(sim), slcan_(sim) {}
+
+  // The ring memory one user's channels and FIFOs may hold together (root: no quota).
+  void set_ring_quota(std::size_t bytes) { rings_.set_user_quota(bytes); }
+  const RingLedger& rings() const { return rings_; }
+
+  // Handles one packet of `size` bytes; `send` gets each reply.
+  void handle(Session& session, const uint8_t* data, std::size_t size, const Send& send);
+  // The client went away: everything it opened is closed (before its session is destroyed).
+  void end_session(Session& session);
+  // Calls f(doorbell) for every ring pair the session has.
+  template <class F>
+  static void for_each_ring(Session& session, F&& f) {
+    for (auto& [id, sc] : session.channels) {
+      f(static_cast<Doorbell&>(*sc.channel));
+    }
+    for (auto& [id, h] : session.vci.handles) {
+      if (VciPort* port = h->port(); port != nullptr) {
+        f(static_cast<Doorbell&>(*port));
+      }
+    }
+  }
+
+ private:
+  void error(const Send& send, uint32_t request_id, ipc::ErrorCode code, const std::string& text);
+  void open_channel(Session& c, const ipc::OpenChannelRequest& m, const Send& send);
+  void channel_status(Session& c, const ipc::ChannelStatusRequest& m, const Send& send);
+  void add_bridge(const ipc::BridgeAddRequest& m, const Send& send, uint32_t request_id);
+
+  Simulation& sim_;
+  TimeSetting time_;
+  LoopServices& loop_;
+  RingLedger rings_;
+  VciService vci_;
+  XcanService xcan_;
+  SlcanService slcan_;
+};
+
+}  // namespace canemu::daemon

@@ -1,0 +1,650 @@
+// What the files of buses across hosts share (distributed.cpp: the link between daemons;
+// distributed_steps.cpp: stepped time's barrier; distributed_status.cpp: what status shows):
+// the link's state (Distributed::Impl), the nodes this daemon runs on other daemons' buses
+// (RemoteNode) and small helpers. Private to them; only in builds with Cyclone DDS.
+#pragma once
+
+#ifdef CANEMU_HAVE_DDS
+
+#include <sys/eventfd.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <deque>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <dds/dds.h>
+#include <fmt/format.h>
+
+#include "canemu/daemon/distributed/distributed.hpp"
+#include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/base/reject_log.hpp"
+#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/firmware_model/chips/sja1000/btr.hpp"
+#include "canemu/ipc/protocol.hpp"
+#include "canemu_net.h"
+#include "bridges/dds_frame_fields.hpp"
+#include "bridges/dds_log.hpp"
+
+namespace canemu::daemon {
+
+using namespace canemu::model;
+
+namespace net_detail {
+
+constexpr uint32_t kTxWindow = 64;       // frames a remote node has on their way to the owner
+constexpr std::size_t kOwnerQueue = 64;  // frames the owner keeps for one remote node
+constexpr int32_t kWriterDepth = 4096;   // samples a writer keeps for readers catching up
+constexpr int32_t kReaderSamples = 8192;
+constexpr uint32_t kMaxTakesPerKick = 512;
+
+inline int64_t monotonic_ms() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return int64_t{ts.tv_sec} * 1000 + ts.tv_nsec / 1'000'000;
+}
+
+template <std::size_t N>
+inline void put(char (&dst)[N], std::string_view s) {
+  const std::size_t n = std::min(s.size(), N - 1);
+  std::memcpy(dst, s.data(), n);
+  dst[n] = '\0';
+}
+
+template <std::size_t N>
+inline std::string get(const char (&src)[N]) {
+  return std::string(src, strnlen(src, N));
+}
+
+// Text from another daemon, shown in logs and status: what is not printable ASCII becomes '?'.
+using ipc::printable;
+
+inline const char* request_name(uint8_t kind) {
+  static constexpr const char* kNames[] = {"open",    "online", "offline", "close", "transmit",
+                                           "restart", "name",   "step",    "ready", "hello"};
+  return kind < std::size(kNames) ? kNames[kind] : "unknown";
+}
+
+inline const char* event_name(uint8_t kind) {
+  static constexpr const char* kNames[] = {
+      "received",         "transmitted", "dropped", "error",      "state",     "overrun",
+      "arbitration lost", "refused",     "unknown", "step begin", "step done", "welcome"};
+  return kind < std::size(kNames) ? kNames[kind] : "unknown";
+}
+
+inline uint8_t wire_time_mode(TimeMode m) {
+  switch (m) {
+    case TimeMode::realtime:
+      return canemu_net_TIME_REALTIME;
+    case TimeMode::scaled:
+      return canemu_net_TIME_SCALED;
+    case TimeMode::stepped:
+      return canemu_net_TIME_STEPPED;
+  }
+  return canemu_net_TIME_REALTIME;
+}
+
+inline std::string time_text(uint8_t mode, double scale) {
+  switch (mode) {
+    case canemu_net_TIME_REALTIME:
+      return "realtime";
+    case canemu_net_TIME_SCALED:
+      return fmt::format("scaled:{}", scale);
+    case canemu_net_TIME_STEPPED:
+      return "stepped";
+  }
+  return fmt::format("unknown time mode {}", mode);
+}
+
+inline uint8_t wire_bus_kind(BusKind k) {
+  switch (k) {
+    case BusKind::can:
+      return canemu_net_BUS_CAN;
+    case BusKind::can_fd:
+      return canemu_net_BUS_CAN_FD;
+    case BusKind::lin:
+      return canemu_net_BUS_LIN;
+  }
+  return canemu_net_BUS_CAN;
+}
+
+// A controller that never takes part in the traffic of the bus it sits on: it gives a node of a
+// remote bus a node id on the bus here (which carries nothing) and keeps the counters the owner
+// last reported.
+class MirrorController final : public CanController {
+ public:
+  NodeTiming timing() const override { return {}; }
+  bool participating() const override { return false; }
+  BusOffRecovery bus_off_recovery() const override { return BusOffRecovery::on_restart; }
+  const TxFrame* pending_tx() override { return nullptr; }
+  FaultConfinement& confinement() override { return fc_; }
+  void on_frame(SimTime, const Frame&, bool) override {}
+  void on_tx_done(SimTime) override {}
+  void on_tx_dropped(SimTime) override {}
+  void on_arbitration_lost(SimTime, uint16_t, uint16_t) override {}
+  void on_error(const BusErrorEvent&) override {}
+  void on_state_change(SimTime, ErrorState) override {}
+
+ private:
+  FaultConfinement fc_;
+};
+
+}  // namespace net_detail
+
+using namespace net_detail;
+
+class RemoteNode;
+
+struct Distributed::Impl {
+  Simulation& sim;
+  DistributedConfig cfg;
+  TimeSetting time;
+  uint64_t boot = 0;
+  int wake = -1;
+  int timer = -1;
+  dds_entity_t participant = 0;
+  dds_entity_t w_daemons = 0, w_requests = 0, w_events = 0;
+  dds_entity_t r_daemons = 0, r_requests = 0, r_events = 0;
+  uint64_t req_seq = 0;
+  uint64_t ev_seq = 0;
+  DistributedCounters counters;
+  RejectLog<kNetDropReasons> drops{"distributed", kNetDropNames};
+  // A message dropped (or, NetDrop::fd_on_classic, a frame rejected) for reason `why`; `detail`
+  // names the rule and the daemon. Counted by reason and logged (rate-limited).
+  void drop(NetDrop why, const std::string& detail, uint64_t n = 1) {
+    (why == NetDrop::fd_on_classic ? counters.rejected : counters.dropped) += n;
+    counters.by_reason[static_cast<std::size_t>(why)] += n;
+    counters.last_reason = detail;
+    drops.add(static_cast<std::size_t>(why), detail, n);
+  }
+  // Samples of the link's topics Cyclone could not decode (dds_log.hpp).
+  std::vector<std::unique_ptr<UndecodableSamples>> undecodable;
+
+  // Another daemon, as heard.
+  struct Peer {
+    std::string name;
+    uint64_t boot = 0;
+    uint16_t protocol = 0;
+    std::string version;
+    uint8_t time_mode = 0;
+    double scale = 1.0;
+    int64_t heard_ms = 0;    // monotonic
+    bool announced = false;  // its Daemon sample came (protocol, time mode known)
+    bool gone = false;
+    std::string gone_reason;
+    std::string refused;  // why this daemon will not use its buses
+    std::vector<std::string> buses;
+    std::vector<std::pair<std::string, canemu_net_OwnedBus>> owned;
+    // As owner of buses this daemon uses:
+    bool welcomed = false;  // it answered our hello: our requests reach it
+    bool offset_known = false;
+    int64_t offset_ns = 0;  // its simulated time minus ours (the largest estimate so far)
+    // As user of our buses:
+    uint64_t next_request = 0;  // the seq expected next
+    bool follower = false;      // stepped time: its steps are ours (it said hello, stepped)
+  };
+  std::map<std::string, Peer> peers;
+  uint64_t next_event_from(const std::string&);
+
+  // ---- this daemon's nodes on remote buses ----
+  std::vector<RemoteNode*> nodes;
+  uint32_t next_node = 1;
+  bool attached(const std::string& owner) const {
+    auto it = peers.find(owner);
+    return it != peers.end() && !it->second.gone && it->second.refused.empty() &&
+           it->second.welcomed;
+  }
+  // Why remote bus `b` cannot be used as declared here (its owner runs it otherwise), or "".
+  std::string bus_problem(const BusConfig& b) const;
+  bool usable(const BusConfig& b) const { return attached(b.owner) && bus_problem(b).empty(); }
+  // Says hello to `p` if this daemon uses a bus of it.
+  void hello(const Peer& p);
+
+  // ---- other daemons' nodes on this daemon's buses ----
+  struct Hosted final : ControllerEvents {
+    ~Hosted() override {
+      if (node != nullptr) {
+        node->stop();
+        node->claim(false);
+      }
+    }
+    Impl* link = nullptr;
+    std::string daemon;
+    uint32_t number = 0;
+    uint64_t opened = 0;
+    std::size_t bus = 0;
+    HostedNode* node = nullptr;
+    bool fd = false;  // its controller sends CAN FD frames (opened so, on a CAN FD bus)
+    Simulation::DeviceLease lease;
+    std::deque<TxFrame> queue;
+
+    void emit(uint8_t kind, SimTime at, const Frame* f = nullptr, bool own = false) {
+      canemu_net_Event e{};
+      e.kind = kind;
+      e.at_ns = at.ns();
+      e.own = own;
+      if (f != nullptr) {
+        put_frame_fields(e, *f);
+      }
+      send(e);
+    }
+    void send(canemu_net_Event& e) {
+      e.node = number;
+      e.opened = opened;
+      link->send_event(daemon, e);
+    }
+    void fill_state(canemu_net_Event& e) {
+      FaultConfinement& fc = node->controller().confinement();
+      e.state = static_cast<uint8_t>(fc.state());
+      e.tec = fc.tec();
+      e.rec = fc.rec();
+    }
+    void frame_received(SimTime at, const Frame& frame, bool own) override {
+      emit(canemu_net_EV_RX, at, &frame, own);
+    }
+    void frame_transmitted(SimTime at, const Frame& frame) override {
+      emit(canemu_net_EV_TX_DONE, at, &frame);
+    }
+    void transmission_dropped(SimTime at, const Frame& frame) override {
+      emit(canemu_net_EV_DROPPED, at, &frame);
+    }
+    void overrun(SimTime at, const Frame& lost) override { emit(canemu_net_EV_OVERRUN, at, &lost); }
+    void arbitration_lost(SimTime at, uint16_t bit) override {
+      canemu_net_Event e{};
+      e.kind = canemu_net_EV_ARB_LOST;
+      e.at_ns = at.ns();
+      e.bit = bit;
+      send(e);
+    }
+    void bus_error(const BusErrorEvent& b) override {
+      canemu_net_Event e{};
+      e.kind = canemu_net_EV_ERROR;
+      e.at_ns = b.at.ns();
+      e.error_type = static_cast<uint8_t>(b.type);
+      e.role = static_cast<uint8_t>(b.role);
+      e.bit = b.bit;
+      e.destuffed_bit = b.destuffed_bit;
+      e.field = static_cast<uint8_t>(b.field);
+      e.extended_frame = b.extended_frame;
+      e.in_frame = b.in_frame;
+      e.data_phase = b.data_phase;
+      fill_state(e);
+      e.tec = b.tec;
+      e.rec = b.rec;
+      send(e);
+    }
+    void state_changed(SimTime at, ErrorState state, uint16_t tec, uint16_t rec) override {
+      canemu_net_Event e{};
+      e.kind = canemu_net_EV_STATE;
+      e.at_ns = at.ns();
+      e.state = static_cast<uint8_t>(state);
+      e.tec = tec;
+      e.rec = rec;
+      send(e);
+    }
+    std::optional<TxFrame> next() {
+      if (queue.empty()) {
+        return std::nullopt;
+      }
+      TxFrame f = queue.front();
+      queue.pop_front();
+      return f;
+    }
+  };
+  std::map<std::pair<std::string, uint32_t>, std::unique_ptr<Hosted>> hosted;
+
+  // ---- stepped time ----
+  StepLoop* loop = nullptr;     // the server's loop (Distributed::set_step_loop)
+  std::string stepped_owner;    // follower: the owner whose steps this daemon's are
+  // Leader: the steps asked for, the one at the barrier, who has still to say ready.
+  struct Step {
+    int64_t ns = 0;
+    std::string asker;
+    uint64_t token = 0;
+  };
+  std::deque<Step> steps;
+  bool barrier = false;
+  bool running = false;  // the owner's step runs (Distributed::run_to)
+  int runs_queued = 0;   // runs given to run_to and not ended
+  // A message from another daemon is handled after the runs queued before it.
+  void settle() {
+    if (runs_queued > 0 && loop != nullptr) {
+      loop->finish_runs();
+    }
+  }
+  // Runs to `until`, then done(events): in slices through run_to where canemud offers it.
+  void run_to(SimTime until, std::function<void(uint64_t)> done);
+  uint64_t step_no = 0;
+  std::set<std::string> waiting;
+  // Followers let go from the step's barrier to its end ("daemon b (why)"): its answer names them.
+  std::vector<std::string> step_dropped;
+  std::string step_note() const;
+  int64_t barrier_deadline_ms = 0;
+  bool stepped() const { return time.mode == TimeMode::stepped; }
+  bool leads() const {
+    if (!stepped() || !stepped_owner.empty()) {
+      return false;
+    }
+    return std::any_of(peers.begin(), peers.end(),
+                       [](const auto& p) { return p.second.follower && !p.second.gone; });
+  }
+  void enqueue_step(Step s);
+  void start_next_step();
+  void run_step();
+  void deliver(RemoteNode& n, const canemu_net_Event& e, const Peer& owner);
+
+  // The heartbeat timer as a doorbell of the loop.
+  struct Heartbeat final : Doorbell {
+    Impl* impl = nullptr;
+    int doorbell_fd() const override { return impl->timer; }
+    void kick() override { impl->tick(); }
+    bool broken() const override { return false; }
+  } heartbeat;
+
+  Impl(Simulation& s, const Config& config)
+      : sim(s), cfg(config.distributed), time(config.simulation.time) {
+    heartbeat.impl = this;
+    if (stepped()) {
+      for (const BusConfig& b : config.buses) {
+        if (config.remote(b)) {
+          stepped_owner = b.owner;  // the configuration reader allows one owner in stepped time
+          break;
+        }
+      }
+    }
+    std::random_device rd;
+    boot = (uint64_t{rd()} << 32) ^ rd() ^ static_cast<uint64_t>(monotonic_ms());
+  }
+  ~Impl();
+
+  std::optional<std::string> open();
+  void tick();
+  void receive();
+  void announce(bool leaving);
+  bool send_request(const std::string& owner, canemu_net_Request& r);
+  void send_event(const std::string& to, canemu_net_Event& e);
+
+  void on_daemon(const canemu_net_Daemon& d);
+  void on_request(const canemu_net_Request& r);
+  void on_event(const canemu_net_Event& e);
+  void peer_gone(Peer& p, const std::string& why);
+  void owner_up(Peer& p);
+  void drop_hosted_of(const std::string& daemon, const std::string& why);
+  void open_hosted(const canemu_net_Request& r);
+  Hosted* find_hosted(const std::string& daemon, uint32_t number) {
+    auto it = hosted.find({daemon, number});
+    return it == hosted.end() ? nullptr : it->second.get();
+  }
+  // Whether this daemon's time mode lets it use a bus of `p`, or why not.
+  std::string time_problem(const Peer& p) const;
+  SimTime local_time(const Peer& owner, int64_t owner_ns);
+
+  static void on_data(dds_entity_t, void* self) {
+    const uint64_t one = 1;
+    [[maybe_unused]] const auto n = ::write(static_cast<Impl*>(self)->wake, &one, sizeof one);
+  }
+};
+
+// A node of this daemon's on a bus another daemon simulates: the driver above it (an ephemeral
+// channel, a VCI line, a bridge, a recorder) sees a HostedNode; its controller is a node of the
+// owner's simulation, programmed, fed and heard through the link.
+class RemoteNode final : public HostedNode {
+ public:
+  RemoteNode(SimScheduler& scheduler, CanBus& placeholder, Distributed::Impl& link, uint32_t number,
+             std::size_t bus, std::string bus_name, std::string owner, bool fd)
+      : HostedNode(scheduler, placeholder),
+        link_(&link),
+        number_(number),
+        bus_(bus),
+        bus_name_(std::move(bus_name)),
+        owner_(std::move(owner)),
+        fd_(fd),
+        device_(fmt::format("n{}", number)),
+        id_(placeholder.attach(mirror_)) {
+    link.nodes.push_back(this);
+  }
+  ~RemoteNode() override {
+    if (link_ != nullptr) {
+      if (programmed_) {
+        request(canemu_net_REQ_CLOSE);
+      }
+      std::erase(link_->nodes, this);
+    }
+  }
+
+  NodeId node() const override { return id_; }
+  CanController& controller() override { return mirror_; }
+  bool fd_capable() const override { return fd_; }
+  const std::string& owner() const { return owner_; }
+  const std::string& bus_name() const { return bus_name_; }
+  uint32_t number() const { return number_; }
+  bool in_use() const { return programmed_; }
+  std::size_t bus() const { return bus_; }
+  // What the owner reported of this node: frames, errors, arbitration lost.
+  const NodeStats& stats() const { return stats_; }
+  void unlink() { link_ = nullptr; }
+
+  void set_device(const std::string& device) {
+    device_ = device;
+    if (programmed_) {
+      request(canemu_net_REQ_NAME);
+    }
+  }
+
+  // The owner (again) answers: the node is opened there as it is here.
+  void replay() {
+    if (!programmed_) {
+      return;
+    }
+    send_open();
+    if (online_) {
+      request(canemu_net_REQ_ONLINE);
+    }
+    if (reported_off_) {  // back on the bus, error-active with fresh counters
+      reported_off_ = false;
+      mirror_.confinement().reset();
+      events()->state_changed(now(), ErrorState::active, 0, 0);
+    }
+    kick();
+  }
+
+  // The owner is gone: the node is off the bus until it comes back.
+  void owner_lost() {
+    if (!programmed_ || !online_ || reported_off_) {
+      return;
+    }
+    reported_off_ = true;
+    FaultConfinement& fc = mirror_.confinement();
+    fc.set_counters(256, fc.rec());
+    events()->state_changed(now(), ErrorState::bus_off, fc.tec(), fc.rec());
+  }
+
+  void deliver(const canemu_net_Event& e, SimTime at) {
+    if (e.opened != opened_) {
+      return;  // for the node as it was opened before
+    }
+    ::canemu::model::ControllerEvents* ev = events();
+    switch (e.kind) {
+      case canemu_net_EV_RX:
+      case canemu_net_EV_TX_DONE:
+      case canemu_net_EV_DROPPED:
+      case canemu_net_EV_OVERRUN: {
+        auto f = frame_of_fields(e);
+        if (!f) {
+          link_->drop(
+              NetDrop::malformed,
+              fmt::format("dropped an event ({}) of daemon {} for node {} of bus {}: its "
+                          "frame (id 0x{:X}, dlc {}, {} bytes) is none",
+                          event_name(e.kind), owner_, device_, bus_name_, e.id, e.dlc, e.len));
+          return;
+        }
+        if (e.kind == canemu_net_EV_RX) {
+          stats_.frames_received += e.own ? 0 : 1;
+          ev->frame_received(at, *f, e.own);
+        } else if (e.kind == canemu_net_EV_TX_DONE) {
+          ++stats_.frames_sent;
+          ev->frame_transmitted(at, *f);
+        } else if (e.kind == canemu_net_EV_DROPPED) {
+          ev->transmission_dropped(at, *f);
+        } else {
+          ev->overrun(at, *f);
+        }
+        return;
+      }
+      case canemu_net_EV_ARB_LOST:
+        ++stats_.arbitration_lost;
+        ev->arbitration_lost(at, e.bit);
+        return;
+      case canemu_net_EV_ERROR: {
+        mirror_.confinement().set_counters(e.tec, e.rec);
+        BusErrorEvent b;
+        b.at = at;
+        b.type = static_cast<CanErrorType>(std::min<uint8_t>(e.error_type, 4));
+        b.role = e.role == 0 ? ErrorRole::transmitter : ErrorRole::receiver;
+        b.bit = e.bit;
+        b.destuffed_bit = e.destuffed_bit;
+        b.field = static_cast<Field>(std::min<uint8_t>(e.field, static_cast<uint8_t>(Field::eof)));
+        b.extended_frame = e.extended_frame;
+        b.in_frame = e.in_frame;
+        b.data_phase = e.data_phase;
+        b.tec = e.tec;
+        b.rec = e.rec;
+        ++(b.role == ErrorRole::transmitter ? stats_.errors_as_transmitter
+                                            : stats_.errors_as_receiver)[b.type];
+        ev->bus_error(b);
+        return;
+      }
+      case canemu_net_EV_STATE:
+        mirror_.confinement().set_counters(e.tec, e.rec);
+        ev->state_changed(at, static_cast<ErrorState>(std::min<uint8_t>(e.state, 3)), e.tec, e.rec);
+        return;
+      case canemu_net_EV_REFUSED:
+        log::warning("node {} of bus {} (owner {}): {}", device_, bus_name_, owner_,
+                     printable(get(e.text)));
+        owner_lost();
+        return;
+      default:
+        return;
+    }
+  }
+
+ private:
+  void program(const HostedNodeSettings& settings) override {
+    stats_ = NodeStats{};  // a node configured afresh starts counting afresh, as a local one
+    settings_ = settings;
+    programmed_ = true;
+    online_ = false;
+    reported_off_ = false;
+    mirror_.confinement().reset();
+    send_open();
+  }
+  void go_on_bus(const HostedNodeSettings&) override {
+    online_ = true;
+    request(canemu_net_REQ_ONLINE);  // without the owner (yet): frames wait for replay()
+  }
+  void go_off_bus() override {
+    online_ = false;
+    request(canemu_net_REQ_OFFLINE);
+  }
+  void leave_bus_off(const HostedNodeSettings&) override { request(canemu_net_REQ_RESTART); }
+  bool buffer_free() override { return usable(); }
+  bool usable() const { return link_ != nullptr && link_->usable(link_->sim.bus_config(bus_)); }
+  void load(const TxFrame& tx) override {
+    canemu_net_Request r{};
+    r.kind = canemu_net_REQ_TX;
+    r.single_shot = tx.single_shot;
+    r.self_reception = tx.self_reception;
+    put_frame_fields(r, tx.frame);
+    send(r);
+  }
+  void abort_tx() override {}
+  void release_received() override {}
+  void released() override {
+    if (programmed_) {
+      request(canemu_net_REQ_CLOSE);  // the owner gives its node back
+    }
+    programmed_ = false;
+    online_ = false;
+    reported_off_ = false;
+  }
+  uint32_t tx_window() const override { return kTxWindow; }
+  bool restarts_itself() const override { return true; }
+
+  void send_open() {
+    canemu_net_Request r{};
+    r.kind = canemu_net_REQ_OPEN;
+    r.fd = fd_ && settings_.fd;
+    r.listen_only = settings_.listen_only;
+    r.btr0 = settings_.btr0;
+    r.btr1 = settings_.btr1;
+    if (!r.fd && settings_.nominal.clock_hz == 0) {
+      // An SJA1000 programmed by its registers alone (a VCI line's BTR0/BTR1): the timing they
+      // give, which the owner checks.
+      if (auto t = sja1000::decode_btr(settings_.btr0, settings_.btr1)) {
+        settings_.nominal = *t;
+      }
+    }
+    r.clock_hz = settings_.nominal.clock_hz;
+    r.n_prescaler = settings_.nominal.prescaler;
+    r.n_tseg1 = settings_.nominal.tseg1;
+    r.n_tseg2 = settings_.nominal.tseg2;
+    r.n_sjw = settings_.nominal.sjw;
+    r.d_prescaler = settings_.data.prescaler;
+    r.d_tseg1 = settings_.data.tseg1;
+    r.d_tseg2 = settings_.data.tseg2;
+    r.d_sjw = settings_.data.sjw;
+    r.restart_ns = settings_.restart_delay.ns();
+    if (auto seq = send(r)) {
+      opened_ = *seq;
+    }
+  }
+  // Online, offline, restart, name, close: for a node the owner has opened (a driver that
+  // stops a line it has closed already asks nothing of the owner).
+  void request(uint8_t kind) {
+    if (!programmed_) {
+      return;
+    }
+    canemu_net_Request r{};
+    r.kind = kind;
+    send(r);
+  }
+  std::optional<uint64_t> send(canemu_net_Request& r) {
+    if (!usable()) {
+      return std::nullopt;  // replay() sends what matters once the owner answers
+    }
+    r.node = number_;
+    put(r.bus, bus_name_);
+    put(r.device, device_);
+    if (!link_->send_request(owner_, r)) {
+      return std::nullopt;
+    }
+    return r.seq;
+  }
+
+  Distributed::Impl* link_;
+  uint32_t number_;
+  std::size_t bus_;
+  std::string bus_name_;
+  std::string owner_;
+  bool fd_;
+  std::string device_;
+  MirrorController mirror_;
+  NodeId id_;
+  HostedNodeSettings settings_;
+  bool programmed_ = false;
+  bool online_ = false;
+  bool reported_off_ = false;  // owner_lost() told the driver the node is off the bus
+  uint64_t opened_ = 0;
+  NodeStats stats_;
+};
+
+}  // namespace canemu::daemon
+
+#endif

@@ -13,12 +13,12 @@
 #include <utility>
 
 #include "canemu/daemon/base/channel.hpp"
-#include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/base/ring_budget.hpp"
-#include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/sorcus/slcan_service.hpp"
-#include "canemu/daemon/vci/vci_service.hpp"
 #include "canemu/daemon/sorcus/xcan_service.hpp"
+#include "canemu/daemon/vci/vci_service.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 
 namespace canemu::daemon {
 
@@ -32,7 +32,7 @@ struct SessionChannel {
 
 inline constexpr std::size_t kMaxChannelsPerClient = 16;
 
-// `canemu lin`: the answer to a LinNodeRequest (lin_node_service.cpp).
+// `canemu lin`: the answer to a LinNodeRequest (lin_requests.cpp).
 std::unique_ptr<ipc::LinNodeReply> answer_lin_nodes(Simulation& sim, const ipc::LinNodeRequest& m,
                                                     uint32_t request_id);
 
@@ -114,6 +114,36 @@ class ControlDispatcher {
   void open_channel(Session& c, const ipc::OpenChannelRequest& m, const Send& send);
   void channel_status(Session& c, const ipc::ChannelStatusRequest& m, const Send& send);
   void add_bridge(const ipc::BridgeAddRequest& m, const Send& send, uint32_t request_id);
+
+  // One handler per request type, each area's in a file of its own: session_requests.cpp (hello,
+  // subscribe, clients), world_requests.cpp (status, lists, timeline, time step),
+  // channel_requests.cpp, bridge_requests.cpp, fault_requests.cpp, lin_requests.cpp, and the
+  // adapters' services (vci/, sorcus/) from control_dispatcher.cpp.
+  using Handler = void (ControlDispatcher::*)(Session&, const uint8_t*, uint32_t, const Send&);
+  static Handler handler_for(ipc::MsgType type);
+  void on_hello(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_subscribe(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_client_list(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_status(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_time_step(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_timeline(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_device_list(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_recorder_list(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_bridge_list(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_peer_list(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_open_channel(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_close_channel(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_channel_status(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_bridge_add(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_bridge_remove(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_bridge_restart(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_fault_load(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_fault_list(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_fault_clear(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_lin_node(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_vci(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_xcan(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_slcan(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
 
   Simulation& sim_;
   TimeSetting time_;

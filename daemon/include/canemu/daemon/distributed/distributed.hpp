@@ -23,8 +23,8 @@
 
 #include <tl/expected.hpp>
 
-#include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/base/doorbell.hpp"
+#include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/world/remote_buses.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"

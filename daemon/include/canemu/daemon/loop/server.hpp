@@ -13,10 +13,10 @@
 #include <string>
 #include <utility>
 
-#include "canemu/daemon/loop/access_policy.hpp"
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/control/control_dispatcher.hpp"
 #include "canemu/daemon/distributed/distributed.hpp"
+#include "canemu/daemon/loop/access_policy.hpp"
 #include "canemu/daemon/loop/pacing.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/ipc/seqpacket.hpp"

@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "canemu/daemon/base/ring_budget.hpp"
-#include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/vci/vci_fifos.hpp"
 #include "canemu/daemon/vci/vci_lin_port.hpp"
 #include "canemu/daemon/vci/vci_port.hpp"
+#include "canemu/daemon/world/simulation.hpp"
 #include "canemu/ipc/protocol.hpp"
 
 namespace canemu::daemon {
@@ -96,7 +96,6 @@ class VciService {
   // `bells` is told of every VCI channel's doorbell as it opens and before it closes.
   VciService(Simulation& sim, RingLedger& rings, DoorbellWatch& bells)
       : sim_(sim), rings_(rings), bells_(bells), fifos_(rings) {}
-
 
   void handle(VciSession& session, const ipc::VciRequest& m, const Send& send);
   // Everything the session opened, closed (the client went away).

@@ -28,5 +28,4 @@ struct SimulatedLinNode {
 SimulatedLinNode make_lin_node(const LinNodeConfig& config, std::size_t bus_index,
                                model::lin::LinBus& bus, uint32_t bus_bitrate);
 
-
 }  // namespace canemu::daemon

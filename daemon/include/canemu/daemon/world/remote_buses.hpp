@@ -88,8 +88,8 @@ class RemoteBuses {
   virtual const std::string& name() const = 0;
   // A node on remote bus `bus` (its CanBus here carries no traffic: every node's controller
   // runs on the owner), of a CAN FD controller when `fd`, else a classic one.
-  virtual std::unique_ptr<model::HostedNode> make_node(std::size_t bus,
-                                                       model::CanBus& placeholder, bool fd) = 0;
+  virtual std::unique_ptr<model::HostedNode> make_node(std::size_t bus, model::CanBus& placeholder,
+                                                       bool fd) = 0;
   // The device a node of a remote bus serves got its name: the owner lists the node as
   // "DAEMON/NAME" (faults name it so).
   virtual void name_node(model::HostedNode& node, const std::string& device) = 0;

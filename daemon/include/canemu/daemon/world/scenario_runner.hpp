@@ -22,8 +22,8 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/config/config.hpp"
-#include "canemu/daemon/world/device_registry.hpp"
 #include "canemu/daemon/config/scenario.hpp"
+#include "canemu/daemon/world/device_registry.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/fault_plan.hpp"
 #include "canemu/firmware_model/bus/lin_fault_plan.hpp"

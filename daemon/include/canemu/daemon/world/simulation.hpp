@@ -19,15 +19,15 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/bridges/bridge.hpp"
+#include "canemu/daemon/bridges/recorder.hpp"
+#include "canemu/daemon/bridges/socketcan_bridge.hpp"
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/world/device_registry.hpp"
-#include "canemu/daemon/world/remote_buses.hpp"
 #include "canemu/daemon/world/gone_nodes.hpp"
 #include "canemu/daemon/world/lin_nodes.hpp"
 #include "canemu/daemon/world/node_pool.hpp"
-#include "canemu/daemon/bridges/recorder.hpp"
+#include "canemu/daemon/world/remote_buses.hpp"
 #include "canemu/daemon/world/scenario_runner.hpp"
-#include "canemu/daemon/bridges/socketcan_bridge.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/lin_bus.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"

@@ -5,8 +5,9 @@
 
 #include <fmt/format.h>
 
-#include "canemu/daemon/control/control_dispatcher.hpp"
 #include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/control/control_dispatcher.hpp"
+#include "control/requests.hpp"
 
 namespace canemu::daemon {
 
@@ -77,6 +78,11 @@ std::unique_ptr<ipc::LinNodeReply> answer_lin_nodes(Simulation& sim, const ipc::
     e.responses = n.ecu->counters().responses;
   }
   return r;
+}
+
+void ControlDispatcher::on_lin_node(Session&, const uint8_t* data, uint32_t request_id,
+                                    const Send& send) {
+  send_reply(send, *answer_lin_nodes(sim_, read_as<ipc::LinNodeRequest>(data), request_id));
 }
 
 }  // namespace canemu::daemon

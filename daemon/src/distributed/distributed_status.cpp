@@ -2,7 +2,7 @@
 // and why one cannot be used, its remote nodes' statistics.
 #ifdef CANEMU_HAVE_DDS
 
-#include "distributed_impl.hpp"
+#include "remote_node.hpp"
 
 namespace canemu::daemon {
 

@@ -9,8 +9,8 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
-#include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/config/scenario.hpp"
 #include "canemu/daemon/distributed/distributed.hpp"
 #include "canemu/daemon/loop/server.hpp"

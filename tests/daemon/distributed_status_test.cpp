@@ -18,8 +18,8 @@
 #include <gtest/gtest.h>
 
 #include "bridge_test_support.hpp"
-#include "canemu/daemon/distributed/distributed.hpp"
 #include "canemu/daemon/base/log.hpp"
+#include "canemu/daemon/distributed/distributed.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
@@ -438,7 +438,8 @@ TEST(DistributedStatus, ADaemonNamedAgainstTheRuleIsNotListedAndCountsAsDropped)
   ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
   const uint64_t dropped = Distributed::of(*a)->counters().dropped;
   r.announce(canemu_net_PROTOCOL);
-  ASSERT_TRUE(pump({a.get()}, [&] { return Distributed::of(*a)->counters().dropped == dropped + 1; }));
+  ASSERT_TRUE(
+      pump({a.get()}, [&] { return Distributed::of(*a)->counters().dropped == dropped + 1; }));
   EXPECT_TRUE(Distributed::of(*a)->peers().empty());
   EXPECT_EQ(Distributed::of(*a)->counters().requests_received, 0u);
 }
@@ -617,8 +618,9 @@ TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpe
   tx.len = 8;
   const uint64_t received = Distributed::of(*a)->counters().requests_received;
   r.request(tx);
-  ASSERT_TRUE(pump({a.get()},
-                   [&] { return Distributed::of(*a)->counters().requests_received == received + 1; }));
+  ASSERT_TRUE(pump({a.get()}, [&] {
+    return Distributed::of(*a)->counters().requests_received == received + 1;
+  }));
   a->scheduler().run_until(a->scheduler().now() + model::SimDuration(1'000'000));
   EXPECT_EQ(a->bus(0).frames_on_bus(), 1u);
   ASSERT_TRUE(next_event(e));

@@ -1,6 +1,6 @@
 // Reading [[lin_node]] tables (lin_config.hpp), checked with every problem reported.
-#include "canemu/daemon/config/config.hpp"
 #include "lin_config_reader.hpp"
+#include "canemu/daemon/config/config.hpp"
 
 #include <set>
 

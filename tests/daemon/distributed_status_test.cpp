@@ -121,7 +121,7 @@ TEST(DistributedStatus, AttachedBusAndUpPeerAsTheReplyCarriesThem) {
   // A node of b on the remote bus, programmed and on the bus: a runs its controller.
   model::HostedNode& node = b->spare_node(0);
   auto lease = b->add_ephemeral("eph1", 0, node, 4711);
-  node.start(*controller_timing(false, 500000, 500000, 875), nullptr,
+  node.start(*node_timing(false, {500000, 0, 875}), nullptr,
              [] { return std::optional<model::TxFrame>(); });
   std::vector<PeerStatus> keep;
   // b's requests may reach a before its announcement does: a then knows b by name only.
@@ -356,7 +356,7 @@ canemu_net_Request request_of(uint8_t kind, uint32_t node = 0) {
 
 // A REQ_OPEN for node `node` on can0 programmed as an SJA1000 at 500 kbit/s.
 canemu_net_Request open_request(uint32_t node) {
-  const model::HostedNodeSettings t = *controller_timing(false, 500000, 0, 875);
+  const model::HostedNodeSettings t = *node_timing(false, {500000, 0, 875});
   canemu_net_Request r = request_of(canemu_net_REQ_OPEN, node);
   r.btr0 = t.btr0;
   r.btr1 = t.btr1;
@@ -449,7 +449,7 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
   ASSERT_TRUE(a);
   // A node of a's own on can0, to acknowledge frames.
   model::HostedNode& acker = a->spare_node(0);
-  acker.start(*controller_timing(false, 500000, 0, 875), nullptr,
+  acker.start(*node_timing(false, {500000, 0, 875}), nullptr,
               [] { return std::optional<model::TxFrame>(); });
   RawDaemon r("r");
   ASSERT_TRUE(r.ok());
@@ -541,8 +541,8 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
   const auto frame = model::Frame::create(
       model::FrameSpec{.id = 0x123, .dlc = 1, .data = std::span<const uint8_t>(tx.data, 1)});
   ASSERT_TRUE(frame);
-  const model::SimDuration bits = model::frame_duration(
-      model::encode(*frame), controller_timing(false, 500000, 0, 875)->nominal);
+  const model::SimDuration bits =
+      model::frame_duration(model::encode(*frame), node_timing(false, {500000, 0, 875})->nominal);
   EXPECT_EQ(bits.ns(), 106'000);  // 53 bits (canemu calc frame 123#42)
   EXPECT_EQ(e.at_ns, (start + bits).ns());
   acker.stop();
@@ -552,7 +552,7 @@ TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpe
   auto a = daemon_named("a", kBusA);
   ASSERT_TRUE(a);
   model::HostedNode& acker = a->spare_node(0);
-  acker.start(*controller_timing(false, 500000, 0, 875), nullptr,
+  acker.start(*node_timing(false, {500000, 0, 875}), nullptr,
               [] { return std::optional<model::TxFrame>(); });
   RawDaemon r("r");
   ASSERT_TRUE(r.ok());

@@ -57,7 +57,7 @@ struct Traffic {
   Receiver receiver;
   model::HostedNode* tx = nullptr;
   Traffic(Simulation& sim, std::vector<model::Frame> frames) : queue(frames.begin(), frames.end()) {
-    const auto timing = controller_timing(false, 500'000, 500'000, 875);
+    const auto timing = node_timing(false, {500'000, 0, 875});
     sim.spare_node(0).start(*timing, &receiver, [] { return std::optional<model::TxFrame>(); });
     tx = &sim.spare_node(0);
     tx->start(*timing, nullptr, [this]() -> std::optional<model::TxFrame> {
@@ -101,7 +101,7 @@ TEST(Recorder, RecordsErrorFramesAsCandumpEShowsThem) {
       world("[[recorder]]\nbus = \"can0\"\npath = \"" + (dir.path / "can0.log").string() + "\"\n");
   // Nobody acknowledges: the sender's ACK errors, which the listen-only recorder sees as form
   // errors... or not at all; what it records must be error frames of CAN_ERR_FLAG.
-  const auto timing = controller_timing(false, 500'000, 500'000, 875);
+  const auto timing = node_timing(false, {500'000, 0, 875});
   model::HostedNode& tx = sim->spare_node(0);
   bool sent = false;
   tx.start(*timing, nullptr, [&]() -> std::optional<model::TxFrame> {

@@ -311,7 +311,7 @@ TEST(SocketCanBridge, ErrorFramesOnlyWhenAskedFor) {
   auto b = sim->add_bridge({"socketcan", "can0", "vcan1", true, 0}, std::move(loud.bridge));
   ASSERT_TRUE(b);
   model::HostedNode& wrong = sim->spare_node(0);
-  const auto slow = controller_timing(false, 250'000, 250'000, 875);
+  const auto slow = node_timing(false, {250'000, 0, 875});
   bool sent = false;
   wrong.start(*slow, nullptr, [&]() -> std::optional<model::TxFrame> {
     if (sent) {

@@ -54,19 +54,17 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
           fmt::format("bus \"{}\" is a LIN bus; CAN channels need a CAN bus", bus_name));
     return;
   }
-  const uint32_t bitrate = m.bitrate != 0 ? m.bitrate : bc.bitrate;
-  const uint32_t sample_point = m.sample_point != 0 ? m.sample_point : bc.sample_point;
+  const bool fd = bc.kind == BusKind::can_fd;
+  const NodeRates rates = node_rates(bc, fd, {m.bitrate, m.data_bitrate, m.sample_point});
+  const uint32_t bitrate = rates.bitrate;
+  const uint32_t data_bitrate = rates.data_bitrate;
+  const uint32_t sample_point = rates.sample_point;
   if (sample_point >= 1000) {
     error(send, rid, ipc::ErrorCode::bad_argument,
           fmt::format("sample point {} is not below 1000 per mille", sample_point));
     return;
   }
-  const bool fd = bc.kind == BusKind::can_fd;
-  const uint32_t data_bitrate = !fd ? 0
-                                : m.data_bitrate != 0
-                                    ? m.data_bitrate
-                                    : (bc.data_bitrate != 0 ? bc.data_bitrate : bitrate);
-  const auto timing = controller_timing(fd, bitrate, data_bitrate, sample_point);
+  const auto timing = node_timing(fd, rates);
   if (!timing) {
     error(send, rid, ipc::ErrorCode::bad_bit_timing,
           fd ? fmt::format("the CAN FD controller at 80 MHz cannot run at {} / {} bit/s", bitrate,

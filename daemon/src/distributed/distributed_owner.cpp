@@ -93,7 +93,7 @@ void Distributed::Impl::open_hosted(const canemu_net_Request& r) {
   if (bc.kind == BusKind::can && r.btr0 == 0 && r.btr1 == 0) {
     // A CAN FD controller's node on a classic bus, which this daemon runs on SJA1000s: their
     // registers for the bus's rate.
-    if (auto t = controller_timing(false, bc.bitrate, 0, bc.sample_point)) {
+    if (auto t = node_timing(false, node_rates(bc, false))) {
       s.btr0 = t->btr0;
       s.btr1 = t->btr1;
     }

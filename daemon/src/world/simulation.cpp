@@ -23,8 +23,21 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
-std::optional<HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
-                                                    uint32_t data_bitrate, uint32_t sample_point) {
+NodeRates node_rates(const BusConfig& bus, bool fd, const NodeRates& asked) {
+  NodeRates r;
+  r.bitrate = asked.bitrate != 0 ? asked.bitrate : bus.bitrate;
+  r.sample_point = asked.sample_point != 0 ? asked.sample_point : bus.sample_point;
+  r.data_bitrate = !fd                       ? 0
+                   : asked.data_bitrate != 0 ? asked.data_bitrate
+                   : bus.data_bitrate != 0   ? bus.data_bitrate
+                                             : r.bitrate;
+  return r;
+}
+
+std::optional<HostedNodeSettings> node_timing(bool fd, const NodeRates& rates) {
+  const uint32_t bitrate = rates.bitrate;
+  const uint32_t data_bitrate = rates.data_bitrate;
+  const uint32_t sample_point = rates.sample_point;
   HostedNodeSettings s;
   if (!fd) {
     const auto btr = sja1000::btr_for(bitrate, sample_point);
@@ -100,8 +113,8 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
 
 std::optional<HostedNodeSettings> Simulation::bus_timing(std::size_t bus) const {
   const BusConfig& bc = config_.buses[bus];
-  return controller_timing(bc.kind == BusKind::can_fd, bc.bitrate,
-                           bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate, bc.sample_point);
+  const bool fd = bc.kind == BusKind::can_fd;
+  return node_timing(fd, node_rates(bc, fd));
 }
 
 void Simulation::add_bus(const BusConfig& b) {
@@ -150,8 +163,7 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
                          config_.source, d.line, d.name, bc.name);
     }
     const bool fd = d.model != DeviceModel::ixxat_usb_to_can;
-    const auto timing = controller_timing(
-        fd, bc.bitrate, bc.data_bitrate != 0 ? bc.data_bitrate : bc.bitrate, bc.sample_point);
+    const auto timing = node_timing(fd, node_rates(bc, fd));
     if (!timing) {
       return fmt::format("{}:{}: device {}: {} cannot run bus {} at {} bit/s", config_.source,
                          d.line, d.name, fd ? "the CAN FD controller" : "an SJA1000 at 16 MHz",

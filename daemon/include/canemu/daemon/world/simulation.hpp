@@ -35,13 +35,21 @@
 
 namespace canemu::daemon {
 
-// The timing a controller needs: for an SJA1000 (`fd` false) the BTR0/BTR1 values for
-// `bitrate` and their decoded timing; for the CAN FD controller the nominal timing for
-// `bitrate` and the data timing for `data_bitrate`. Nothing if the clock cannot make a rate
-// exactly. Only the timing fields of the result are set.
-std::optional<model::HostedNodeSettings> controller_timing(bool fd, uint32_t bitrate,
-                                                           uint32_t data_bitrate,
-                                                           uint32_t sample_point);
+// The rates a node runs at (bit/s, sample point in per mille).
+struct NodeRates {
+  uint32_t bitrate = 0;
+  uint32_t data_bitrate = 0;  // the data phase's; 0 on a classic controller
+  uint32_t sample_point = 0;
+};
+// The rates of a node on bus `bus`: what `asked` gives, the bus's where it gives 0. A CAN FD
+// controller (`fd`) runs its data phase at the bus's data_bitrate, or at its bit rate where the
+// bus has no bit-rate switch (data_bitrate 0); a classic controller has none. The one place
+// where a bus's configuration becomes a node's rates.
+NodeRates node_rates(const BusConfig& bus, bool fd, const NodeRates& asked = {});
+// The timing a controller needs for `rates`: for an SJA1000 (`fd` false) the BTR0/BTR1 values
+// and their decoded timing; for the CAN FD controller the nominal and the data timing. Nothing
+// if the clock cannot make a rate exactly. Only the timing fields of the result are set.
+std::optional<model::HostedNodeSettings> node_timing(bool fd, const NodeRates& rates);
 
 // What a configuration reload did and what it left as it was, one line each.
 struct ReloadReport {

@@ -118,7 +118,7 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu_lcm DESTINATION ${C
 if(CANEMU_LCM)
   install(DIRECTORY ${PROJECT_BINARY_DIR}/include/canemu_lcm DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endif()
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/lcmtypes/canemu_lcm DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/lcm
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/daemon/src/bridges/lcm_types/canemu_lcm DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/lcm
         FILES_MATCHING PATTERN "*.lcm")
 set(dist_info ${PROJECT_BINARY_DIR}/install-python/canemu-${PROJECT_VERSION}.dist-info)
 file(WRITE ${dist_info}/METADATA
@@ -162,7 +162,7 @@ set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 include(CPack)
 # The DDS bridge's types (docs/bridges.md): the IDL files for any DDS implementation's IDL
 # compiler, and the Python types beside canemu.
-install(FILES ${PROJECT_SOURCE_DIR}/ddstypes/canemu_dds.idl ${PROJECT_SOURCE_DIR}/ddstypes/ros2_can_msgs.idl
+install(FILES ${PROJECT_SOURCE_DIR}/daemon/src/bridges/dds_types/canemu_dds.idl ${PROJECT_SOURCE_DIR}/daemon/src/bridges/dds_types/ros2_can_msgs.idl
         DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/idl)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu_dds DESTINATION ${CANEMU_PYTHON_DIR}
         FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)

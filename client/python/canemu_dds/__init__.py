@@ -1,6 +1,6 @@
 """canemu's DDS types for Cyclone DDS's Python binding (PyPI: cyclonedds).
 
-The same types as ddstypes/canemu_dds.idl and ddstypes/ros2_can_msgs.idl, which canemud's DDS
+The same types as daemon/src/bridges/dds_types/canemu_dds.idl and ros2_can_msgs.idl, which canemud's DDS
 bridge is built from (docs/bridges.md): Frame, BusError and NodeState on the topics
 <prefix>frames, <prefix>errors, <prefix>states and <prefix>tx (prefix canemu/<bus>/ by default,
 partition "canemu"), and ROS 2's can_msgs/msg/Frame as ROS 2's middleware names it, on

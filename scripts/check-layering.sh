@@ -49,12 +49,15 @@ check() {
           includes $src/$room '(sim|bus|chips|adapters)/') | grep -vE "[<\"](canemu/firmware_model/)?($below)/")"
   done
 
-  # 4. The vendor data-type headers (VCI, SORCUS) are a leaf: they include only each other and the C library.
+  # 4. The vendor headers (vendor_abi/: VCI, SORCUS) are a leaf: they include only each other and
+  #    the C library. The model speaks their data types, never their APIs (the client's).
   local vendor
   for vendor in vci sorcus; do
-    report "firmware_model/include/$vendor (vendor headers) may include only each other:" \
-      "$(includes $fm/include/$vendor '' | grep -vE "#include *[<\"](($vendor/)?[a-z0-9_]+\.h|std[a-z]+\.h)[\">]")"
+    report "vendor_abi/include/$vendor (vendor headers) may include only each other:" \
+      "$(includes vendor_abi/include/$vendor '' | grep -vE "#include *[<\"](($vendor/)?[a-z0-9_]+\.h|std[a-z]+\.h)[\">]")"
   done
+  report "firmware_model may include of the vendor headers only the data types:" \
+    "$(includes $fm '((vci|sorcus)/)?(vcinpl[a-z0-9_]*|vcisdk|canemu_vci|canemu_events|xcan|sl64lib)\.h')"
 
   # 5. ipc includes only ipc; the client libraries only client and ipc; the CLI (client/tools)
   #    also the model, never the daemon; the daemon never the client.
@@ -149,7 +152,8 @@ self_test() {
     "firmware_model/src/chips/planted.cpp|#include \"adapters/ixxat/x.hpp\""
     "firmware_model/include/canemu/firmware_model/bus/planted.hpp|#include \"canemu/firmware_model/chips/hosted_node.hpp\""
     "firmware_model/include/canemu/firmware_model/sim/planted.hpp|#include \"canemu/firmware_model/bus/frame.hpp\""
-    "firmware_model/include/vci/planted.h|#include \"canemu/firmware_model/bus/frame.hpp\""
+    "vendor_abi/include/vci/planted.h|#include \"canemu/firmware_model/bus/frame.hpp\""
+    "firmware_model/src/adapters/planted.cpp|#include \"vci/vcinpl.h\""
     "ipc/src/planted.cpp|#include \"canemu/client/channel.hpp\""
     "client/src/planted.cpp|#include \"canemu/firmware_model/bus/frame.hpp\""
     "client/tools/canemu/planted.cpp|#include \"canemu/daemon/config/config.hpp\""
@@ -166,7 +170,7 @@ self_test() {
     line=${c#*|}
     rm -rf "$scratch/tree"
     mkdir -p "$scratch/tree"
-    (cd "$here" && git ls-files -z firmware_model ipc client daemon | xargs -0 cp --parents -t "$scratch/tree")
+    (cd "$here" && git ls-files -z vendor_abi firmware_model ipc client daemon | xargs -0 cp --parents -t "$scratch/tree")
     mkdir -p "$scratch/tree/$(dirname "$file")"
     echo "$line" >"$scratch/tree/$file"
     if (check "$scratch/tree" >/dev/null); then
@@ -176,7 +180,7 @@ self_test() {
   done
   rm -rf "$scratch/tree"
   mkdir -p "$scratch/tree"
-  (cd "$here" && git ls-files -z firmware_model ipc client daemon | xargs -0 cp --parents -t "$scratch/tree")
+  (cd "$here" && git ls-files -z vendor_abi firmware_model ipc client daemon | xargs -0 cp --parents -t "$scratch/tree")
   if ! (check "$scratch/tree" >/dev/null); then
     echo "self-test: the unchanged tree is reported"
     failures=$((failures + 1))

@@ -9,36 +9,47 @@
 namespace canemu::client {
 
 DaemonLink::~DaemonLink() {
-  {
-    std::lock_guard lock(mutex_);
-    disconnect_locked();
-  }
-  if (receiver_.joinable()) {
-    receiver_.join();
-  }
+  std::unique_lock lock(mutex_);
+  stop_receiver(lock);
 }
 
-void DaemonLink::disconnect_locked() {
+void DaemonLink::stop_receiver(std::unique_lock<std::mutex>& lock) {
   if (connection_) {
     ::shutdown(connection_->fd(), SHUT_RDWR);  // the receive thread sees the end and leaves
   }
-}
-
-bool DaemonLink::reconnect(const std::string& socket) {
-  std::unique_lock lock(mutex_);
-  disconnect_locked();
   lock.unlock();
   if (receiver_.joinable()) {
     receiver_.join();  // it takes the lock on its way out
   }
   lock.lock();
-  connection_.reset();
-  broken_ = false;
-  socket_ = socket;
-  return socket.empty() || connect_locked();
 }
 
-bool DaemonLink::connect() {
+void DaemonLink::drop_locked(std::string why) {
+  if (!connection_) {
+    return;
+  }
+  lost_reason_ = std::move(why);
+  if (concurrent_) {
+    ::shutdown(connection_->fd(), SHUT_RDWR);  // the receive thread ends the waits and leaves
+  } else {
+    connection_.reset();
+  }
+}
+
+void DaemonLink::reconnect(const std::string& socket, std::string why) {
+  std::unique_lock lock(mutex_);
+  if (concurrent_) {
+    stop_receiver(lock);
+  }
+  if (connection_) {
+    connection_.reset();
+    lost_reason_ = std::move(why);
+  }
+  broken_ = false;
+  socket_ = socket;
+}
+
+Result<void> DaemonLink::connect() {
   std::lock_guard lock(mutex_);
   return connect_locked();
 }
@@ -48,9 +59,48 @@ uint64_t DaemonLink::generation() const {
   return generation_;
 }
 
-bool DaemonLink::connect_locked() {
+Result<Connection> DaemonLink::open_another(const std::string& name) const {
+  std::string socket;
+  {
+    std::lock_guard lock(mutex_);
+    socket = socket_;
+  }
+  return Connection::open(ipc::socket_path(socket), name);
+}
+
+std::optional<std::string> DaemonLink::lost(uint64_t generation) {
+  std::unique_lock lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) {
+    return std::nullopt;
+  }
+  if (generation == generation_ && connection_) {
+    if (concurrent_) {
+      if (!broken_) {
+        return std::nullopt;
+      }
+    } else {
+      auto gone = connection_->lost();
+      if (!gone) {
+        return std::nullopt;
+      }
+      drop_locked(gone->message);
+    }
+  }
+  return generation == generation_ ? lost_reason_
+                                   : "the connection to canemud it was opened on is closed";
+}
+
+Result<DaemonLink::Turn> DaemonLink::turn() {
+  std::unique_lock lock(mutex_);
+  if (auto up = connect_locked(); !up) {
+    return tl::unexpected(up.error());
+  }
+  return Turn(this, std::move(lock));
+}
+
+Result<void> DaemonLink::connect_locked() {
   if (connection_ && !broken_) {
-    return true;
+    return {};
   }
   if (connection_) {
     if (receiver_.joinable()) {
@@ -60,13 +110,16 @@ bool DaemonLink::connect_locked() {
   }
   auto c = Connection::open(ipc::socket_path(socket_), client_name_);
   if (!c) {
-    return false;
+    return tl::unexpected(c.error());
   }
   connection_.emplace(std::move(*c));
   broken_ = false;
   ++generation_;
-  receiver_ = std::thread([this, fd = connection_->fd()] { receive_loop(fd); });
-  return true;
+  lost_reason_.clear();
+  if (concurrent_) {
+    receiver_ = std::thread([this, fd = connection_->fd()] { receive_loop(fd); });
+  }
+  return {};
 }
 
 DaemonLink::Outcome DaemonLink::call_raw(const void* request, std::size_t size,
@@ -123,6 +176,9 @@ void DaemonLink::receive_loop(int fd) {
   }
   std::lock_guard lock(mutex_);
   broken_ = true;
+  if (lost_reason_.empty()) {
+    lost_reason_ = "canemud went away: the connection to canemud closed";
+  }
   for (auto& [id, w] : waiters_) {
     w->done = true;
     w->lost = true;

@@ -7,9 +7,9 @@
 #include <iterator>
 #include <map>
 #include <mutex>
-#include <thread>
 #include <utility>
 
+#include "canemu/client/callback_thread.hpp"
 #include "canemu/client/daemon_link.hpp"
 #include "sl64lib.h"
 
@@ -34,16 +34,6 @@ class Library {
   static Library& get() {
     static Library library;
     return library;
-  }
-  ~Library() {
-    {
-      std::lock_guard lock(mutex_);
-      stopping_ = true;
-    }
-    queued_.notify_all();
-    if (caller_.joinable()) {
-      caller_.join();
-    }
   }
 
   // One request for `slot`: true with the reply, false (and diagnosis 22h kept for the slot)
@@ -81,10 +71,8 @@ class Library {
       std::lock_guard lock(mutex_);
       held_ = r.value;
       generation_ = link_.generation();
-      if (!caller_.joinable()) {
-        caller_ = std::thread([this] { callback_loop(); });
-      }
     }
+    routines_.start();
     // The routines installed so far, on every slot now held.
     for (const Key& k : installed()) {
       for (UCHAR s = 0; s < kSlots; ++s) {
@@ -155,11 +143,13 @@ class Library {
       // What the old connection's S-Links said is no one's business any more.
       std::lock_guard lock(mutex_);
       held_ = 0;
-      queue_.clear();
       srq_.clear();
       std::fill(std::begin(lost_), std::end(lost_), ULONG{0});
     }
-    return link_.reconnect(socket != nullptr ? socket : "") ? USHORT{0} : USHORT{SL064_E_DRIVER};
+    routines_.clear();
+    const std::string path = socket != nullptr ? socket : "";
+    link_.reconnect(path);
+    return path.empty() || link_.connect() ? USHORT{0} : USHORT{SL064_E_DRIVER};
   }
 
   bool holds(UCHAR slot) {
@@ -169,7 +159,10 @@ class Library {
   }
 
  private:
-  Library() : link_("sl64", [this](const std::vector<uint8_t>& p) { unsolicited(p); }) {}
+  Library()
+      : routines_([this](const ipc::SlcanEventMsg& e) { run(e); },
+                  CallbackThread<ipc::SlcanEventMsg>::AtEnd::drop_queued, kMaxQueuedCalls),
+        link_("sl64", [this](const std::vector<uint8_t>& p) { unsolicited(p); }) {}
 
   bool no_response(UCHAR slot) {
     std::lock_guard lock(mutex_);
@@ -207,20 +200,18 @@ class Library {
     }
     ipc::SlcanEventMsg e;
     std::memcpy(&e, p.data(), sizeof e);
-    std::lock_guard lock(mutex_);
     if (e.kind == static_cast<uint8_t>(ipc::SlcanEventKind::service_request)) {
+      std::lock_guard lock(mutex_);
       srq_.push_back(e.word);
       srq_ready_.notify_all();
       return;
     }
-    if (queue_.size() >= kMaxQueuedCalls) {
+    if (!routines_.push(e)) {
+      std::lock_guard lock(mutex_);
       if (e.slot < kSlots) {
         ++lost_[e.slot];
       }
-      return;
     }
-    queue_.push_back(e);
-    queued_.notify_one();
   }
 
  public:
@@ -230,41 +221,34 @@ class Library {
   }
 
  private:
-  void callback_loop() {
+  // On the routine thread: the routine installed for the event's task and function, if any.
+  void run(const ipc::SlcanEventMsg& e) {
     std::unique_lock lock(mutex_);
-    while (true) {
-      queued_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
-      if (stopping_) {
+    const Key k{e.task, e.func};
+    if (e.kind == static_cast<uint8_t>(ipc::SlcanEventKind::error)) {
+      auto it = error_.find(k);
+      if (it == error_.end()) {
         return;
       }
-      const ipc::SlcanEventMsg e = queue_.front();
-      queue_.pop_front();
-      const Key k{e.task, e.func};
-      if (e.kind == static_cast<uint8_t>(ipc::SlcanEventKind::error)) {
-        auto it = error_.find(k);
-        if (it != error_.end()) {
-          const SL064ErrorService f = it->second;
-          lock.unlock();
-          ULONG status = e.status;
-          f(e.task, sizeof status, &status, 0, nullptr);
-          lock.lock();
-        }
-      } else {
-        auto it = message_.find(k);
-        if (it != message_.end()) {
-          const SL064MessageService f = it->second;
-          lock.unlock();
-          SL064Handle handle = e.handle;
-          if (handle == 0) {
-            t_call_slot = e.slot;  // the mask's routine: its frame's ID for sl064_get_id
-            t_call_id = e.status;
-          }
-          f(e.task, sizeof handle, &handle, 0, nullptr);
-          t_call_slot = -1;
-          lock.lock();
-        }
-      }
+      const SL064ErrorService f = it->second;
+      lock.unlock();
+      ULONG status = e.status;
+      f(e.task, sizeof status, &status, 0, nullptr);
+      return;
     }
+    auto it = message_.find(k);
+    if (it == message_.end()) {
+      return;
+    }
+    const SL064MessageService f = it->second;
+    lock.unlock();
+    SL064Handle handle = e.handle;
+    if (handle == 0) {
+      t_call_slot = e.slot;  // the mask's routine: its frame's ID for sl064_get_id
+      t_call_id = e.status;
+    }
+    f(e.task, sizeof handle, &handle, 0, nullptr);
+    t_call_slot = -1;
   }
 
   std::mutex mutex_;
@@ -274,12 +258,11 @@ class Library {
   ULONG lost_[kSlots] = {};  // routine calls dropped on a full queue, since the connection
   std::map<Key, SL064MessageService> message_;
   std::map<Key, SL064ErrorService> error_;
-  std::deque<ipc::SlcanEventMsg> queue_;
-  std::condition_variable queued_;
   std::deque<USHORT> srq_;
   std::condition_variable srq_ready_;
-  bool stopping_ = false;
-  std::thread caller_;
+  // The routines' calls, in order, at most kMaxQueuedCalls waiting; those still queued at the
+  // end are dropped.
+  CallbackThread<ipc::SlcanEventMsg> routines_;
   DaemonLink link_;  // last: destroyed first, so no event comes in while the rest goes
 };
 

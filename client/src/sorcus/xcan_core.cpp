@@ -23,7 +23,9 @@ Library& Library::get() {
 }
 
 Library::Library()
-    : link_("xcan", [this](const std::vector<uint8_t>& packet) {
+    : callbacks_([](const Queued& q) { invoke(q.channel, q.callback, q.message); },
+                 CallbackThread<Queued>::AtEnd::run_queued),
+      link_("xcan", [this](const std::vector<uint8_t>& packet) {
         ipc::MsgHeader h;
         std::memcpy(&h, packet.data(), sizeof h);
         if (h.type == static_cast<uint16_t>(ipc::MsgType::xcan_callback)) {
@@ -33,26 +35,12 @@ Library::Library()
         }
       }) {}
 
-Library::~Library() {
-  {
-    std::lock_guard lock(queue_mutex_);
-    stopping_ = true;
-  }
-  queued_.notify_all();
-  if (caller_.joinable()) {
-    caller_.join();
-  }
-}
-
 ULONG Library::reconnect(const std::string& socket) {
   {
     std::lock_guard lock(mutex_);
     handles_.clear();
-    socket_ = socket;
   }
-  if (!link_.reconnect(socket)) {
-    return ERR_XCAN_NO_DAEMON;
-  }
+  link_.reconnect(socket);
   return socket.empty() ? ERR_OK : connect();
 }
 
@@ -68,9 +56,7 @@ ULONG Library::connect() {
     }
     generation_ = g;
   }
-  if (!caller_.joinable()) {
-    caller_ = std::thread([this] { callback_loop(); });
-  }
+  callbacks_.start();
   return ERR_OK;
 }
 
@@ -136,11 +122,7 @@ void Library::deliver(const ipc::XcanCallbackMsg& m) {
     invoke(channel, callback, m);  // directly, on this thread, before the next message
     return;
   }
-  {
-    std::lock_guard lock(queue_mutex_);
-    queue_.push_back(Queued{channel, callback, m});
-  }
-  queued_.notify_one();
+  callbacks_.push(Queued{channel, callback, m});
 }
 
 std::optional<int64_t> Library::callback_time() {
@@ -151,12 +133,7 @@ std::optional<int64_t> Library::callback_time() {
 }
 
 ULONG Library::interfaces(std::vector<CANEMU_XCAN_INTERFACE>& out) {
-  std::string socket;
-  {
-    std::lock_guard lock(mutex_);
-    socket = socket_;
-  }
-  auto c = Connection::open(ipc::socket_path(socket), "xcan");
+  auto c = link_.open_another("xcan");
   if (!c) {
     return ERR_XCAN_NO_DAEMON;
   }
@@ -219,21 +196,6 @@ void Library::invoke(MAX_HANDLE channel, MAX_CALLBACK callback, const ipc::XcanC
     default:
       callback(channel, 0, nullptr);
       return;
-  }
-}
-
-void Library::callback_loop() {
-  std::unique_lock lock(queue_mutex_);
-  while (true) {
-    queued_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
-    if (queue_.empty()) {
-      return;  // stopping, nothing left
-    }
-    const Queued q = queue_.front();
-    queue_.pop_front();
-    lock.unlock();
-    invoke(q.channel, q.callback, q.message);
-    lock.lock();
   }
 }
 

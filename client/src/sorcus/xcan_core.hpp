@@ -1,21 +1,18 @@
-// The machinery behind libxcan.so: one connection to canemud per process (DaemonLink: its
+// The machinery behind libxcan.so: one link to canemud per process (client::DaemonLink: its
 // receive thread gives replies to the thread that waits for them, so blocking services of
 // several threads can wait at once, and callbacks to the channel's function), the
-// buffered-callback thread, and the handles an application holds (modules, MDDs, channels).
+// buffered-callback thread (client::CallbackThread), and the handles an application holds
+// (modules, MDDs, channels).
 #pragma once
 
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <map>
-#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
-#include "canemu/client/connection.hpp"
+#include "canemu/client/callback_thread.hpp"
 #include "canemu/client/daemon_link.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "xcan.h"
@@ -25,7 +22,6 @@ namespace canemu::client::xcan {
 class Library {
  public:
   static Library& get();
-  ~Library();
 
   enum class Kind : uint8_t { module, mdd, channel };
   struct Handle {
@@ -65,21 +61,16 @@ class Library {
   };
   // Connected (the callback thread running); channels of an older connection forgotten.
   ULONG connect();
-  void callback_loop();
   void deliver(const ipc::XcanCallbackMsg& m);
   static void invoke(MAX_HANDLE channel, MAX_CALLBACK callback, const ipc::XcanCallbackMsg& m);
 
   std::mutex mutex_;
-  std::string socket_;
   uint64_t generation_ = 0;  // the connection the handles belong to
   std::map<MAX_HANDLE, Handle> handles_;
   MAX_HANDLE next_handle_ = 1;
 
-  std::mutex queue_mutex_;
-  std::condition_variable queued_;
-  std::deque<Queued> queue_;
-  bool stopping_ = false;
-  std::thread caller_;
+  // Buffered callbacks, in order; those still queued at the end are called.
+  CallbackThread<Queued> callbacks_;
   DaemonLink link_;  // last: its receive thread ends first
 };
 

@@ -6,6 +6,7 @@
 
 #include <cstring>
 
+#include "requests.hpp"
 #include "vci_core.hpp"
 
 namespace canemu::client::vci {
@@ -20,23 +21,11 @@ inline ChannelObj* channel_of(HANDLE h) {
 // Opens a control unit (control), channel or cyclic list on bus `can_no` of `device`.
 inline HRESULT open_on_line(const DeviceDesc& device, UINT32 can_no, Object::Kind kind, bool v2,
                             bool exclusive, PHANDLE out) {
-  ipc::VciOp op = ipc::VciOp::control_open;
-  if (kind == Object::Kind::channel) {
-    op = ipc::VciOp::channel_open;
-  } else if (kind == Object::Kind::scheduler) {
-    op = ipc::VciOp::scheduler_open;
-  }
-  const uint16_t flags =
-      static_cast<uint16_t>((v2 ? ipc::kVciV2 : 0) | (exclusive ? ipc::kVciExclusive : 0));
-  uint32_t handle = 0;
-  if (HRESULT hr = Library::get().open_remote(op, flags, device, can_no, handle); hr != VCI_OK) {
+  std::unique_ptr<Remote> object;
+  if (HRESULT hr = req::open_can(kind, v2, exclusive, device, can_no, object); hr != VCI_OK) {
     return hr;
   }
-  if (kind == Object::Kind::channel) {
-    *out = register_object(std::make_unique<ChannelObj>(handle, device, can_no, v2));
-  } else {
-    *out = register_object(std::make_unique<Remote>(kind, handle, device, can_no));
-  }
+  *out = register_object(std::move(object));
   return VCI_OK;
 }
 
@@ -93,7 +82,7 @@ HRESULT line_struct(HANDLE h, Object::Kind kind, std::size_t offset, T* out) {
     return VCI_E_INVALIDARG;
   }
   ipc::VciReply reply{};
-  if (HRESULT hr = Library::get().line_info(*r, reply); hr != VCI_OK) {
+  if (HRESULT hr = req::line_info(*r, reply); hr != VCI_OK) {
     return hr;
   }
   std::memcpy(out, reply.payload + offset, sizeof(T));
@@ -107,11 +96,10 @@ inline HRESULT simple_call(HANDLE h, Object::Kind kind, ipc::VciOp op,
   if (r == nullptr) {
     return VCI_E_INVHANDLE;
   }
-  return Library::get().simple(*r, op, args, reply);
+  return req::simple(*r, op, args, reply);
 }
 
-// Filter calls: kind as model FilterOp::Kind (0 get mode, 1 set mode, 2 acceptance, 3 add ids,
-// 4 remove ids).
+// Filter calls: `op_kind` one of req::kFilter* (the model's FilterOp::Kind).
 inline HRESULT filter_call(HANDLE h, Object::Kind kind, uint32_t op_kind, BOOL extended,
                            uint8_t mode, UINT32 code, UINT32 mask, PUINT8 mode_out) {
   Remote* r = remote_of(h, kind);
@@ -120,14 +108,8 @@ inline HRESULT filter_call(HANDLE h, Object::Kind kind, uint32_t op_kind, BOOL e
   }
   const ipc::VciOp op =
       kind == Object::Kind::control ? ipc::VciOp::control_filter : ipc::VciOp::channel_filter;
-  return Library::get().filter(*r, op, op_kind, extended != 0, mode, code, mask, mode_out);
+  return req::filter(*r, op, op_kind, extended != 0, mode, code, mask, mode_out);
 }
-
-inline constexpr uint32_t kFilterGetMode = 0;
-inline constexpr uint32_t kFilterSetMode = 1;
-inline constexpr uint32_t kFilterAcceptance = 2;
-inline constexpr uint32_t kFilterAddIds = 3;
-inline constexpr uint32_t kFilterRemoveIds = 4;
 
 // Channel status: the line status (CANLINESTATUS or CANLINESTATUS2, at `line_offset`) and the
 // channel's own flags and fill levels.
@@ -138,11 +120,10 @@ HRESULT channel_status_of(ChannelObj& c, std::size_t line_offset, Status* out) {
   }
   ipc::VciReply info{};
   ipc::VciReply status{};
-  if (HRESULT hr = Library::get().line_info(c, info); hr != VCI_OK) {
+  if (HRESULT hr = req::line_info(c, info); hr != VCI_OK) {
     return hr;
   }
-  if (HRESULT hr = Library::get().simple(c, ipc::VciOp::channel_status, {}, &status);
-      hr != VCI_OK) {
+  if (HRESULT hr = req::simple(c, ipc::VciOp::channel_status, {}, &status); hr != VCI_OK) {
     return hr;
   }
   Status s{};
@@ -164,8 +145,7 @@ HRESULT channel_status(HANDLE h, std::size_t line_offset, Status* out) {
 // The cyclic list's status (CANSCHEDULERSTATUS's two fields).
 inline HRESULT scheduler_status_of(const Remote& list, UINT8* task, UINT8* entries) {
   ipc::VciReply reply{};
-  if (HRESULT hr = Library::get().simple(list, ipc::VciOp::scheduler_status, {}, &reply);
-      hr != VCI_OK) {
+  if (HRESULT hr = req::simple(list, ipc::VciOp::scheduler_status, {}, &reply); hr != VCI_OK) {
     return hr;
   }
   CANSCHEDULERSTATUS s;
@@ -181,19 +161,6 @@ inline HRESULT scheduler_status(HANDLE h, UINT8* task, UINT8* entries) {
 }
 
 // Adds `msg` to the list; `index` (may be null) gets its index, 0xFFFFFFFF on failure.
-inline HRESULT scheduler_add_of(const Remote& list, const CANCYCLICTXMSG2& msg, PUINT32 index) {
-  ipc::VciRequest m{};
-  m.op = static_cast<uint16_t>(ipc::VciOp::scheduler_add);
-  m.handle = list.handle;
-  std::memcpy(m.payload, &msg, sizeof msg);
-  ipc::VciReply reply{};
-  const HRESULT hr = Library::get().call(m, reply);
-  if (index != nullptr) {
-    *index = hr == VCI_OK ? reply.values[0] : 0xFFFFFFFFU;
-  }
-  return hr;
-}
-
 inline HRESULT scheduler_add(HANDLE h, const CANCYCLICTXMSG2& msg, PUINT32 index) {
   Remote* r = remote_of(h, Object::Kind::scheduler);
   if (r == nullptr) {
@@ -202,7 +169,7 @@ inline HRESULT scheduler_add(HANDLE h, const CANCYCLICTXMSG2& msg, PUINT32 index
     }
     return VCI_E_INVHANDLE;
   }
-  return scheduler_add_of(*r, msg, index);
+  return req::scheduler_add(*r, msg, index);
 }
 
 // A classic cyclic message in the v2 layout the daemon takes.
@@ -220,16 +187,7 @@ inline CANCYCLICTXMSG2 to_cyclic2(const CANCYCLICTXMSG& c) {
 template <class Init>
 HRESULT control_init(HANDLE h, const Init& init, bool v2) {
   Remote* r = remote_of(h, Object::Kind::control);
-  if (r == nullptr) {
-    return VCI_E_INVHANDLE;
-  }
-  ipc::VciRequest m{};
-  m.op = static_cast<uint16_t>(ipc::VciOp::control_init);
-  m.flags = v2 ? ipc::kVciV2 : 0;
-  m.handle = r->handle;
-  std::memcpy(m.payload, &init, sizeof init);
-  ipc::VciReply reply{};
-  return Library::get().call(m, reply);
+  return r == nullptr ? VCI_E_INVHANDLE : req::init_line(*r, &init, sizeof init, v2);
 }
 
 }  // namespace canemu::client::vci

@@ -21,16 +21,8 @@ HRESULT line_struct_of(const Bus& bus, const Remote* remote, std::size_t offset,
     return VCI_E_INVALIDARG;
   }
   canemu::ipc::VciReply reply{};
-  HRESULT hr;
-  if (remote != nullptr) {
-    hr = Library::get().line_info(*remote, reply);
-  } else {
-    canemu::ipc::VciRequest m{};
-    m.op = static_cast<uint16_t>(VciOp::line_info);
-    canemu::ipc::copy_name(m.device, bus.device.name);
-    m.controller = bus.no;
-    hr = Library::get().call(m, reply);
-  }
+  const HRESULT hr = remote != nullptr ? req::line_info(*remote, reply)
+                                       : req::line_info(bus.device, bus.no, reply);
   if (hr == VCI_OK) {
     std::memcpy(out, reply.payload + offset, sizeof(T));
   }
@@ -42,17 +34,7 @@ HRESULT filter_of(const Remote& r, VciOp op, uint32_t kind, UINT8 select, UINT8 
   if (select != CAN_FILTER_STD && select != CAN_FILTER_EXT) {
     return VCI_E_INVALIDARG;
   }
-  return Library::get().filter(r, op, kind, select == CAN_FILTER_EXT, mode, code, mask, mode_out);
-}
-
-HRESULT init_line(const Remote& r, const void* init, std::size_t size, bool v2) {
-  canemu::ipc::VciRequest m{};
-  m.op = static_cast<uint16_t>(VciOp::control_init);
-  m.flags = v2 ? canemu::ipc::kVciV2 : 0;
-  m.handle = r.handle;
-  std::memcpy(m.payload, init, size);
-  canemu::ipc::VciReply reply{};
-  return Library::get().call(m, reply);
+  return req::filter(r, op, kind, select == CAN_FILTER_EXT, mode, code, mask, mode_out);
 }
 
 template <class Interface, const IID& iid, bool v2>
@@ -62,17 +44,17 @@ class Control final : public Com<Interface, iid> {
     register_alias(static_cast<Interface*>(this), r_.get());
   }
   ~Control() override { unregister_alias(static_cast<Interface*>(this)); }
-  HRESULT ResetLine() override { return Library::get().simple(*r_, VciOp::control_reset); }
-  HRESULT StartLine() override { return Library::get().simple(*r_, VciOp::control_start); }
-  HRESULT StopLine() override { return Library::get().simple(*r_, VciOp::control_stop); }
+  HRESULT ResetLine() override { return req::simple(*r_, VciOp::control_reset); }
+  HRESULT StartLine() override { return req::simple(*r_, VciOp::control_start); }
+  HRESULT StopLine() override { return req::simple(*r_, VciOp::control_stop); }
   HRESULT SetAccFilter(UINT8 s, UINT32 code, UINT32 mask) override {
-    return filter_of(*r_, VciOp::control_filter, kFilterAcceptance, s, 0, code, mask, nullptr);
+    return filter_of(*r_, VciOp::control_filter, req::kFilterAcceptance, s, 0, code, mask, nullptr);
   }
   HRESULT AddFilterIds(UINT8 s, UINT32 code, UINT32 mask) override {
-    return filter_of(*r_, VciOp::control_filter, kFilterAddIds, s, 0, code, mask, nullptr);
+    return filter_of(*r_, VciOp::control_filter, req::kFilterAddIds, s, 0, code, mask, nullptr);
   }
   HRESULT RemFilterIds(UINT8 s, UINT32 code, UINT32 mask) override {
-    return filter_of(*r_, VciOp::control_filter, kFilterRemoveIds, s, 0, code, mask, nullptr);
+    return filter_of(*r_, VciOp::control_filter, req::kFilterRemoveIds, s, 0, code, mask, nullptr);
   }
 
   // ICanControl
@@ -83,15 +65,14 @@ class Control final : public Com<Interface, iid> {
     // bIndex CAN_OPMODE_LOWSPEED asks for the low-speed coupling (only on a low-speed bus).
     const uint8_t op_mode = table->bIndex == CAN_OPMODE_LOWSPEED ? CAN_OPMODE_LOWSPEED : 0;
     uint32_t index = 0;
-    const HRESULT hr =
-        Library::get().detect(*r_, false, table, sizeof *table, timeout_ms, op_mode, 0, index);
+    const HRESULT hr = req::detect(*r_, false, table, sizeof *table, timeout_ms, op_mode, 0, index);
     if (hr == VCI_OK) {
       table->bIndex = static_cast<UINT8>(index);
     }
     return hr;
   }
   HRESULT InitLine(PCANINITLINE p) {
-    return p == nullptr ? VCI_E_INVALIDARG : init_line(*r_, p, sizeof *p, false);
+    return p == nullptr ? VCI_E_INVALIDARG : req::init_line(*r_, p, sizeof *p, false);
   }
   HRESULT GetLineStatus(PCANLINESTATUS p) {
     return line_struct_of(bus_, r_.get(), canemu::ipc::kVciLineOffset, p);
@@ -103,14 +84,14 @@ class Control final : public Com<Interface, iid> {
     }
     uint32_t index = 0;
     const HRESULT hr =
-        Library::get().detect(*r_, true, table, sizeof *table, timeout_ms, op_mode, ex_mode, index);
+        req::detect(*r_, true, table, sizeof *table, timeout_ms, op_mode, ex_mode, index);
     if (hr == VCI_OK) {
       table->bIndex = static_cast<UINT8>(index);
     }
     return hr;
   }
   HRESULT InitLine(PCANINITLINE2 p) {
-    return p == nullptr ? VCI_E_INVALIDARG : init_line(*r_, p, sizeof *p, true);
+    return p == nullptr ? VCI_E_INVALIDARG : req::init_line(*r_, p, sizeof *p, true);
   }
   HRESULT GetLineStatus(PCANLINESTATUS2 p) {
     return line_struct_of(bus_, r_.get(), canemu::ipc::kVciLine2Offset, p);
@@ -119,10 +100,10 @@ class Control final : public Com<Interface, iid> {
     if (mode == nullptr) {
       return VCI_E_INVALIDARG;
     }
-    return filter_of(*r_, VciOp::control_filter, kFilterGetMode, s, 0, 0, 0, mode);
+    return filter_of(*r_, VciOp::control_filter, req::kFilterGetMode, s, 0, 0, 0, mode);
   }
   HRESULT SetFilterMode(UINT8 s, UINT8 mode, PUINT8 previous) {
-    return filter_of(*r_, VciOp::control_filter, kFilterSetMode, s, mode, 0, 0, previous);
+    return filter_of(*r_, VciOp::control_filter, req::kFilterSetMode, s, mode, 0, 0, previous);
   }
 
  private:
@@ -134,25 +115,7 @@ using CanControl2 = Control<ICanControl2, IID_ICanControl2, true>;
 
 HRESULT open_remote(const Bus& bus, Object::Kind kind, bool v2, bool exclusive,
                     std::unique_ptr<Remote>& out) {
-  VciOp op = VciOp::control_open;
-  if (kind == Object::Kind::channel) {
-    op = VciOp::channel_open;
-  } else if (kind == Object::Kind::scheduler) {
-    op = VciOp::scheduler_open;
-  }
-  uint32_t handle = 0;
-  const uint16_t flags = static_cast<uint16_t>((v2 ? canemu::ipc::kVciV2 : 0) |
-                                               (exclusive ? canemu::ipc::kVciExclusive : 0));
-  if (HRESULT hr = Library::get().open_remote(op, flags, bus.device, bus.no, handle);
-      hr != VCI_OK) {
-    return hr;
-  }
-  if (kind == Object::Kind::channel) {
-    out = std::make_unique<ChannelObj>(handle, bus.device, bus.no, v2);
-  } else {
-    out = std::make_unique<Remote>(kind, handle, bus.device, bus.no);
-  }
-  return VCI_OK;
+  return req::open_can(kind, v2, exclusive, bus.device, bus.no, out);
 }
 
 template <class Interface, const IID& iid, bool v2>
@@ -165,15 +128,15 @@ class Channel final : public Com<Interface, iid> {
   ~Channel() override { unregister_alias(static_cast<Interface*>(this)); }
   HRESULT GetReader(IFifoReader** pp) override { return get_reader(c_->rings, pp); }
   HRESULT GetWriter(IFifoWriter** pp) override { return get_writer(c_->rings, pp); }
-  HRESULT Activate() override { return Library::get().simple(*c_, VciOp::channel_activate); }
-  HRESULT Deactivate() override { return Library::get().simple(*c_, VciOp::channel_deactivate); }
+  HRESULT Activate() override { return req::simple(*c_, VciOp::channel_activate); }
+  HRESULT Deactivate() override { return req::simple(*c_, VciOp::channel_deactivate); }
 
   // ICanChannel
   HRESULT Initialize(UINT16 rx, UINT16 tx) {
     if (rx == 0) {
       return VCI_E_INVALIDARG;
     }
-    return Library::get().init_channel(*c_, rx, 1, tx, 1, 0, CAN_FILTER_PASS);
+    return req::init_channel(*c_, rx, 1, tx, 1, 0, CAN_FILTER_PASS);
   }
   HRESULT GetStatus(PCANCHANSTATUS p) {
     return channel_status_of(*c_, canemu::ipc::kVciLineOffset, p);
@@ -183,7 +146,7 @@ class Channel final : public Com<Interface, iid> {
     if (rx == 0) {
       return VCI_E_INVALIDARG;
     }
-    return Library::get().init_channel(*c_, rx, 1, tx, 1, filter_size, mode);
+    return req::init_channel(*c_, rx, 1, tx, 1, filter_size, mode);
   }
   HRESULT GetStatus(PCANCHANSTATUS2 p) {
     return channel_status_of(*c_, canemu::ipc::kVciLine2Offset, p);
@@ -203,19 +166,19 @@ class Channel final : public Com<Interface, iid> {
     if (mode == nullptr) {
       return VCI_E_INVALIDARG;
     }
-    return filter_of(*c_, VciOp::channel_filter, kFilterGetMode, s, 0, 0, 0, mode);
+    return filter_of(*c_, VciOp::channel_filter, req::kFilterGetMode, s, 0, 0, 0, mode);
   }
   HRESULT SetFilterMode(UINT8 s, UINT8 mode, PUINT8 previous) {
-    return filter_of(*c_, VciOp::channel_filter, kFilterSetMode, s, mode, 0, 0, previous);
+    return filter_of(*c_, VciOp::channel_filter, req::kFilterSetMode, s, mode, 0, 0, previous);
   }
   HRESULT SetAccFilter(UINT8 s, UINT32 code, UINT32 mask) {
-    return filter_of(*c_, VciOp::channel_filter, kFilterAcceptance, s, 0, code, mask, nullptr);
+    return filter_of(*c_, VciOp::channel_filter, req::kFilterAcceptance, s, 0, code, mask, nullptr);
   }
   HRESULT AddFilterIds(UINT8 s, UINT32 code, UINT32 mask) {
-    return filter_of(*c_, VciOp::channel_filter, kFilterAddIds, s, 0, code, mask, nullptr);
+    return filter_of(*c_, VciOp::channel_filter, req::kFilterAddIds, s, 0, code, mask, nullptr);
   }
   HRESULT RemFilterIds(UINT8 s, UINT32 code, UINT32 mask) {
-    return filter_of(*c_, VciOp::channel_filter, kFilterRemoveIds, s, 0, code, mask, nullptr);
+    return filter_of(*c_, VciOp::channel_filter, req::kFilterRemoveIds, s, 0, code, mask, nullptr);
   }
 
  private:
@@ -232,18 +195,14 @@ class Scheduler final : public Com<Interface, iid> {
     register_alias(static_cast<Interface*>(this), r_.get());
   }
   ~Scheduler() override { unregister_alias(static_cast<Interface*>(this)); }
-  HRESULT Resume() override { return Library::get().simple(*r_, VciOp::scheduler_resume); }
-  HRESULT Suspend() override { return Library::get().simple(*r_, VciOp::scheduler_suspend); }
-  HRESULT Reset() override { return Library::get().simple(*r_, VciOp::scheduler_reset); }
-  HRESULT RemMessage(UINT32 i) override {
-    return Library::get().simple(*r_, VciOp::scheduler_remove, {i});
-  }
+  HRESULT Resume() override { return req::simple(*r_, VciOp::scheduler_resume); }
+  HRESULT Suspend() override { return req::simple(*r_, VciOp::scheduler_suspend); }
+  HRESULT Reset() override { return req::simple(*r_, VciOp::scheduler_reset); }
+  HRESULT RemMessage(UINT32 i) override { return req::simple(*r_, VciOp::scheduler_remove, {i}); }
   HRESULT StartMessage(UINT32 i, UINT16 n) override {
-    return Library::get().simple(*r_, VciOp::scheduler_start, {i, n});
+    return req::simple(*r_, VciOp::scheduler_start, {i, n});
   }
-  HRESULT StopMessage(UINT32 i) override {
-    return Library::get().simple(*r_, VciOp::scheduler_stop, {i});
-  }
+  HRESULT StopMessage(UINT32 i) override { return req::simple(*r_, VciOp::scheduler_stop, {i}); }
   // ICanScheduler
   HRESULT GetStatus(PCANSCHEDULERSTATUS p) {
     return p == nullptr ? VCI_E_INVALIDARG : scheduler_status_of(*r_, &p->bTaskStat, p->abMsgStat);
@@ -252,7 +211,7 @@ class Scheduler final : public Com<Interface, iid> {
     if (p == nullptr) {
       return failed_add(index);
     }
-    return scheduler_add_of(*r_, to_cyclic2(*p), index);
+    return req::scheduler_add(*r_, to_cyclic2(*p), index);
   }
   // ICanScheduler2
   HRESULT GetStatus(PCANSCHEDULERSTATUS2 p) {
@@ -266,7 +225,7 @@ class Scheduler final : public Com<Interface, iid> {
     return scheduler_status_of(*r_, &p->bTaskStat, p->abMsgStat);
   }
   HRESULT AddMessage(PCANCYCLICTXMSG2 p, PUINT32 index) {
-    return p == nullptr ? failed_add(index) : scheduler_add_of(*r_, *p, index);
+    return p == nullptr ? failed_add(index) : req::scheduler_add(*r_, *p, index);
   }
 
  private:

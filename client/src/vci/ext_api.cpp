@@ -55,7 +55,7 @@ HRESULT VCIAPI canemuGetControllerState(HANDLE hObject, PUINT8 pbErrorState, PUI
     return VCI_E_INVHANDLE;
   }
   canemu::ipc::VciReply reply{};
-  if (HRESULT hr = Library::get().simple(*r, canemu::ipc::VciOp::controller_state, {}, &reply);
+  if (HRESULT hr = req::simple(*r, canemu::ipc::VciOp::controller_state, {}, &reply);
       hr != VCI_OK) {
     return hr;
   }

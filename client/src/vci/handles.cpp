@@ -6,6 +6,7 @@
 #include <mutex>
 #include <set>
 
+#include "requests.hpp"
 #include "vci_core.hpp"
 
 namespace canemu::client::vci {
@@ -80,7 +81,7 @@ Remote* alias_of(const void* key) {
 }
 
 Remote::~Remote() {
-  Library::get().simple(*this, ipc::VciOp::close);
+  req::simple(*this, ipc::VciOp::close);
 }
 
 Rings::Rings(ipc::RingPair mapped, bool with_tx)

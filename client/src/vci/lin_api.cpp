@@ -109,8 +109,7 @@ HRESULT VCIAPI linMonitorGetStatus(HANDLE hLinMon, PLINMONITORSTATUS pStatus) {
 
 HRESULT VCIAPI linMonitorInitialize(HANDLE hLinMon, UINT16 wFifoSize, UINT16 wThreshold) {
   return on_monitor(hLinMon, [&](ChannelObj& m) {
-    return wFifoSize == 0 ? VCI_E_INVALIDARG
-                          : Library::get().init_lin_monitor(m, wFifoSize, wThreshold);
+    return wFifoSize == 0 ? VCI_E_INVALIDARG : req::init_lin_monitor(m, wFifoSize, wThreshold);
   });
 }
 

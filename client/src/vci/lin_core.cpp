@@ -17,7 +17,7 @@ HRESULT lin_open(const DeviceDesc& device, uint32_t bus_no, Object::Kind kind, b
   const auto op = monitor ? ipc::VciOp::lin_monitor_open : ipc::VciOp::lin_control_open;
   const uint16_t flags = exclusive ? ipc::kVciExclusive : 0;
   uint32_t handle = 0;
-  if (HRESULT hr = Library::get().open_remote(op, flags, device, bus_no, handle); hr != VCI_OK) {
+  if (HRESULT hr = req::open(op, flags, device, bus_no, handle); hr != VCI_OK) {
     return hr;
   }
   if (monitor) {
@@ -52,7 +52,7 @@ HRESULT lin_info(const DeviceDesc& device, uint32_t bus_no, const Remote* object
 }
 
 HRESULT lin_init(const Remote& control, uint8_t op_mode, uint16_t bitrate) {
-  return Library::get().simple(control, ipc::VciOp::lin_init, {op_mode, bitrate});
+  return req::simple(control, ipc::VciOp::lin_init, {op_mode, bitrate});
 }
 
 HRESULT lin_write(const Remote& control, bool send, const LINMSG* msg) {
@@ -69,7 +69,7 @@ HRESULT lin_write(const Remote& control, bool send, const LINMSG* msg) {
 }
 
 HRESULT lin_monitor_activate(const Remote& monitor, bool enable) {
-  return Library::get().simple(
+  return req::simple(
       monitor, enable ? ipc::VciOp::lin_monitor_activate : ipc::VciOp::lin_monitor_deactivate);
 }
 
@@ -83,8 +83,7 @@ HRESULT lin_monitor_status(ChannelObj& monitor, LINMONITORSTATUS* out) {
     return hr;
   }
   ipc::VciReply r{};
-  if (HRESULT hr = Library::get().simple(monitor, ipc::VciOp::lin_monitor_status, {}, &r);
-      hr != VCI_OK) {
+  if (HRESULT hr = req::simple(monitor, ipc::VciOp::lin_monitor_status, {}, &r); hr != VCI_OK) {
     return hr;
   }
   s.fActivated = r.values[1] != 0;

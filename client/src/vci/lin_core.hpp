@@ -5,6 +5,7 @@
 
 #include <memory>
 
+#include "requests.hpp"
 #include "vci_core.hpp"
 
 namespace canemu::client::vci {

@@ -24,9 +24,9 @@ class LinControl final : public Com<ILinControl, IID_ILinControl> {
     }
     return lin_init(*r_, p->bOpMode, p->wBitrate);
   }
-  HRESULT ResetLine() override { return Library::get().simple(*r_, ipc::VciOp::lin_reset); }
-  HRESULT StartLine() override { return Library::get().simple(*r_, ipc::VciOp::lin_start); }
-  HRESULT StopLine() override { return Library::get().simple(*r_, ipc::VciOp::lin_stop); }
+  HRESULT ResetLine() override { return req::simple(*r_, ipc::VciOp::lin_reset); }
+  HRESULT StartLine() override { return req::simple(*r_, ipc::VciOp::lin_start); }
+  HRESULT StopLine() override { return req::simple(*r_, ipc::VciOp::lin_stop); }
   HRESULT GetLineStatus(PLINLINESTATUS p) override {
     return p == nullptr ? VCI_E_INVALIDARG
                         : lin_info(r_->device, r_->controller, r_.get(), nullptr, p);
@@ -45,7 +45,7 @@ class LinMonitor final : public Com<ILinMonitor, IID_ILinMonitor> {
   }
   ~LinMonitor() override { unregister_alias(static_cast<ILinMonitor*>(this)); }
   HRESULT Initialize(UINT16 size) override {
-    return size == 0 ? VCI_E_INVALIDARG : Library::get().init_lin_monitor(*m_, size, 1);
+    return size == 0 ? VCI_E_INVALIDARG : req::init_lin_monitor(*m_, size, 1);
   }
   HRESULT Activate() override { return lin_monitor_activate(*m_, true); }
   HRESULT Deactivate() override { return lin_monitor_activate(*m_, false); }

@@ -3,8 +3,9 @@
 // pointer to one; every HANDLE is checked against the live objects before use), and the
 // channels' rings in shared memory. The libraries only convert their structs and arguments.
 //
-// Thread safety: requests to canemud are serialized on one mutex; a channel's rings follow the
-// VCI rule (one reader and one writer thread at a time, the FIFO Lock/Unlock for more).
+// Thread safety: requests to canemud go one at a time (client::DaemonLink's turns); a channel's
+// rings follow the VCI rule (one reader and one writer thread at a time, the FIFO Lock/Unlock for
+// more).
 #pragma once
 
 #include <atomic>
@@ -19,6 +20,7 @@
 #include <sched.h>
 
 #include "canemu/client/connection.hpp"
+#include "canemu/client/daemon_link.hpp"
 #include "canemu/client/lists.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/ring_pair.hpp"
@@ -244,41 +246,10 @@ class Library {
   HRESULT status(client::Status& out);
   // Waits until the device list changes (VCI_OK) or `timeout_ms` passes (VCI_E_TIMEOUT).
   HRESULT wait_device_change(uint32_t generation, int timeout_ms);
-  // Opens a control unit, channel or cyclic list on controller `controller` of `device`.
-  HRESULT open_remote(ipc::VciOp op, uint16_t flags, const DeviceDesc& device, uint32_t controller,
-                      uint32_t& handle);
-  // A call on a remote object with no payload or arguments beyond `args`.
-  HRESULT simple(const Remote& object, ipc::VciOp op, std::initializer_list<uint32_t> args = {},
-                 ipc::VciReply* reply = nullptr);
-  HRESULT line_info(const Remote& object, ipc::VciReply& reply);
-  HRESULT filter(const Remote& object, ipc::VciOp op, uint32_t kind, bool extended, uint8_t mode,
-                 uint32_t code, uint32_t mask, uint8_t* mode_out);
-  // Bit-rate detection on a control unit: starts it with `table` (CANBTRTABLE, or with `v2`
-  // CANBTPTABLE) and waits for its end, asking canemud every millisecond (without holding the
-  // connection, so that another thread may step time meanwhile). `index` gets the entry found.
-  HRESULT detect(const Remote& control, bool v2, const void* table, std::size_t size,
-                 uint16_t timeout_ms, uint8_t op_mode, uint8_t ex_mode, uint32_t& index);
-  HRESULT init_channel(ChannelObj& channel, uint32_t rx, uint32_t rx_threshold, uint32_t tx,
-                       uint32_t tx_threshold, uint32_t filter_size, uint8_t filter_mode);
-  // A LIN monitor's receive FIFO of at least `rx` LINMSGs.
-  HRESULT init_lin_monitor(ChannelObj& monitor, uint32_t rx, uint32_t rx_threshold);
 
  private:
-  Library() = default;
-  HRESULT connect_locked();
-  // A request that failed: its VCI result (the connection is dropped if it broke).
-  HRESULT failed(const ipc::IpcError& e);
-  // Sends an initialization `m` of `channel` (a channel or monitor) and maps the rings of its
-  // reply.
-  HRESULT map_rings(ChannelObj& channel, ipc::VciRequest& m, bool has_tx, uint32_t rx_threshold,
-                    uint32_t tx_threshold);
-  // Drops the connection, `why` being the reason channels opened over it are told.
-  void drop_locked(std::string why);
-  std::mutex mutex_;
-  std::optional<Connection> connection_;
-  std::string socket_;       // empty: ipc::socket_path()'s search
-  uint64_t generation_ = 0;  // of connection_, or of the last one
-  std::string lost_reason_;  // why connection number generation_ went, once it did
+  Library();
+  DaemonLink link_;  // one request at a time: a reply may bring descriptors
 };
 
 // --- channel data path (no daemon round trip) ---

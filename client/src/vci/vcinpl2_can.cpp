@@ -54,8 +54,7 @@ HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExM
       table.asBTP[i].sFdr = paBtpFDR[i];
     }
   }
-  return Library::get().detect(*r, true, &table, sizeof table, wTimeout, bOpMode, bExMode,
-                               *pdwIndex);
+  return req::detect(*r, true, &table, sizeof table, wTimeout, bOpMode, bExMode, *pdwIndex);
 }
 
 HRESULT VCIAPI canControlInitialize(HANDLE hCanCtl, UINT8 bOpMode, UINT8 bExMode, UINT8 bSFMode,
@@ -82,12 +81,12 @@ HRESULT VCIAPI canControlGetFilterMode(HANDLE hCanCtl, BOOL fExtend, PUINT8 pbMo
   if (pbMode == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  return filter_call(hCanCtl, Kind::control, kFilterGetMode, fExtend, 0, 0, 0, pbMode);
+  return filter_call(hCanCtl, Kind::control, req::kFilterGetMode, fExtend, 0, 0, 0, pbMode);
 }
 
 HRESULT VCIAPI canControlSetFilterMode(HANDLE hCanCtl, BOOL fExtend, UINT8 bMode,
                                        PUINT8 pbPrevMode) {
-  return filter_call(hCanCtl, Kind::control, kFilterSetMode, fExtend, bMode, 0, 0, pbPrevMode);
+  return filter_call(hCanCtl, Kind::control, req::kFilterSetMode, fExtend, bMode, 0, 0, pbPrevMode);
 }
 
 // ---- channels ----
@@ -102,8 +101,8 @@ HRESULT VCIAPI canChannelInitialize(HANDLE hCanChn, UINT16 wRxFifoSize, UINT16 w
   if (wRxFifoSize == 0) {
     return VCI_E_INVALIDARG;
   }
-  return Library::get().init_channel(*c, wRxFifoSize, wRxThreshold, wTxFifoSize, wTxThreshold,
-                                     dwFilterSize, bFilterMode);
+  return req::init_channel(*c, wRxFifoSize, wRxThreshold, wTxFifoSize, wTxThreshold, dwFilterSize,
+                           bFilterMode);
 }
 
 HRESULT VCIAPI canChannelGetControl(HANDLE hCanChn, PHANDLE phCanCtl) {
@@ -114,25 +113,27 @@ HRESULT VCIAPI canChannelGetFilterMode(HANDLE hCanChn, BOOL fExtend, PUINT8 pbMo
   if (pbMode == nullptr) {
     return VCI_E_INVALIDARG;
   }
-  return filter_call(hCanChn, Kind::channel, kFilterGetMode, fExtend, 0, 0, 0, pbMode);
+  return filter_call(hCanChn, Kind::channel, req::kFilterGetMode, fExtend, 0, 0, 0, pbMode);
 }
 
 HRESULT VCIAPI canChannelSetFilterMode(HANDLE hCanChn, BOOL fExtend, UINT8 bMode,
                                        PUINT8 pbPrevMode) {
-  return filter_call(hCanChn, Kind::channel, kFilterSetMode, fExtend, bMode, 0, 0, pbPrevMode);
+  return filter_call(hCanChn, Kind::channel, req::kFilterSetMode, fExtend, bMode, 0, 0, pbPrevMode);
 }
 
 HRESULT VCIAPI canChannelSetAccFilter(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode, UINT32 dwMask) {
-  return filter_call(hCanChn, Kind::channel, kFilterAcceptance, fExtend, 0, dwCode, dwMask,
+  return filter_call(hCanChn, Kind::channel, req::kFilterAcceptance, fExtend, 0, dwCode, dwMask,
                      nullptr);
 }
 
 HRESULT VCIAPI canChannelAddFilterIds(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode, UINT32 dwMask) {
-  return filter_call(hCanChn, Kind::channel, kFilterAddIds, fExtend, 0, dwCode, dwMask, nullptr);
+  return filter_call(hCanChn, Kind::channel, req::kFilterAddIds, fExtend, 0, dwCode, dwMask,
+                     nullptr);
 }
 
 HRESULT VCIAPI canChannelRemFilterIds(HANDLE hCanChn, BOOL fExtend, UINT32 dwCode, UINT32 dwMask) {
-  return filter_call(hCanChn, Kind::channel, kFilterRemoveIds, fExtend, 0, dwCode, dwMask, nullptr);
+  return filter_call(hCanChn, Kind::channel, req::kFilterRemoveIds, fExtend, 0, dwCode, dwMask,
+                     nullptr);
 }
 
 // ---- cyclic transmit list ----

@@ -56,7 +56,7 @@ HRESULT VCIAPI canControlDetectBitrate(HANDLE hCanCtl, UINT16 wTimeout, UINT32 d
   std::memcpy(table.abBtr0, pabBtr0, dwCount);
   std::memcpy(table.abBtr1, pabBtr1, dwCount);
   uint32_t index = 0;
-  const HRESULT hr = Library::get().detect(*r, false, &table, sizeof table, wTimeout, 0, 0, index);
+  const HRESULT hr = req::detect(*r, false, &table, sizeof table, wTimeout, 0, 0, index);
   *plIndex = hr == VCI_OK ? static_cast<INT32>(index) : -1;
   return hr;
 }
@@ -80,8 +80,8 @@ HRESULT VCIAPI canChannelInitialize(HANDLE hCanChn, UINT16 wRxFifoSize, UINT16 w
   if (wRxFifoSize == 0) {
     return VCI_E_INVALIDARG;
   }
-  return Library::get().init_channel(*c, wRxFifoSize, wRxThreshold, wTxFifoSize, wTxThreshold, 0,
-                                     CAN_FILTER_PASS);
+  return req::init_channel(*c, wRxFifoSize, wRxThreshold, wTxFifoSize, wTxThreshold, 0,
+                           CAN_FILTER_PASS);
 }
 
 // ---- several messages at once ----

@@ -21,6 +21,9 @@ namespace Ixxat.Vci3.Bal.Can
   internal sealed class CanControl : CanSocket, ICanControl
   {
     IntPtr handle;
+    CanOperatingModes lastMode;
+    CanBitrate lastBitrate;
+    bool initialized;
 
     internal CanControl(BalObject bal, byte port) : base(bal, port)
     {
@@ -47,6 +50,9 @@ namespace Ixxat.Vci3.Bal.Can
                                             bitrate.ToBtp(), null);
       if (hr != Native.VCI_OK)
         throw new VciException(hr, string.Format("{0}({1}, {2}): {3}", what, mode, bitrate, Native.Text(hr)));
+      lastMode = mode;
+      lastBitrate = bitrate;
+      initialized = true;
     }
 
     public void InitLine(CanOperatingModes operatingMode, CanBitrate bitrate)
@@ -64,6 +70,7 @@ namespace Ixxat.Vci3.Bal.Can
       for (int i = 0; i < bitrateTable.Length; i++)
         Buffer.BlockCopy(bitrateTable[i].ToBtp(), 0, sdr, i * Native.BtpSize, Native.BtpSize);
       uint index;
+      initialized = false;  // afterwards the line is initialized with what was found, or not at all
       uint hr = Native.canControlDetectBitrate(h, 0x03, 0, timeout, (uint)bitrateTable.Length, sdr, fdr, out index);
       if (hr == Native.E_TIMEOUT) return -1;
       Native.Check(hr, "ICanControl.DetectBaud");
@@ -82,7 +89,14 @@ namespace Ixxat.Vci3.Bal.Can
     }
 
     public void StopLine() { Native.Check(Native.canControlStart(H, 0), "ICanControl.StopLine"); }
-    public void ResetLine() { Native.Check(Native.canControlReset(H), "ICanControl.ResetLine"); }
+    // Resets the controller (a frame on the wire is aborted), clears the filters and leaves the
+    // line offline with the modes and bit rate of the last InitLine, ready for StartLine
+    // (section 4.2.4.1; docs/dotnet.md).
+    public void ResetLine()
+    {
+      Native.Check(Native.canControlReset(H), "ICanControl.ResetLine");
+      if (initialized) Init(lastMode, lastBitrate, "ICanControl.ResetLine");
+    }
 
     delegate uint FilterCall(IntPtr h, int ext, uint code, uint mask);
 

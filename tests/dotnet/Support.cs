@@ -14,6 +14,9 @@ using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using NUnit.Framework;
 
+// No test may hang the suite: each ends within a minute.
+[assembly: NUnit.Framework.Timeout(60000)]
+
 namespace Canemu.Tests
 {
   // canemud from this build ($CANEMUD), stopped when disposed.

@@ -131,6 +131,7 @@ namespace Canemu.Tests
         var copy = new List<uint>();
         foreach (var m in T.Drain(r3)) copy.Add(m.Identifier);
         CollectionAssert.AreEqual(order, copy, "both channels of beta got every frame");
+        Assert.AreEqual(0, alpha.Data().Count, "a sibling channel does not see what the other sent");
       }
     }
 

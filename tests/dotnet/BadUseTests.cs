@@ -59,7 +59,8 @@ namespace Canemu.Tests
         e = T.Throws(() => alpha.Channel.Activate());
         Assert.AreEqual(0xE0010006u, e.ErrorCode);
         StringAssert.Contains("ICanChannel is disposed", e.Message);
-        e = T.Throws(() => alpha.Reader.ReadMessage(out _dummy));
+        CanMessage unread;
+        e = T.Throws(() => alpha.Reader.ReadMessage(out unread));
         StringAssert.Contains("ICanMessageReader is disposed", e.Message);
         alpha.Bal.Dispose();
         e = T.Throws(() => alpha.Bal.OpenSocket(0, typeof(ICanSocket)));
@@ -69,8 +70,6 @@ namespace Canemu.Tests
         Assert.IsTrue(daemon.Running);
       }
     }
-
-    static CanMessage _dummy;
 
     [Test]
     public void WithoutCanemudEveryCallSaysWhereItLooked()

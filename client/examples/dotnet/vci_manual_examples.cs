@@ -28,9 +28,14 @@ class CanReceiveSingle
      while( reader.ReadMessage(out message) )
      {
         // Verarbeitung der Nachricht
-        Count++;
-        if (message.FrameType == CanMsgFrameType.Data) Console.WriteLine("ReadMessage: " + Text(message));
+        if (Wanted(message)) { Count++; Console.WriteLine("ReadMessage: " + Text(message)); }
      }
+  }
+
+  // The frames of Send (not beta's cyclic one, which may still be on its way).
+  public static bool Wanted(CanMessage m)
+  {
+    return m.FrameType == CanMsgFrameType.Data && m.Identifier != 0x7E5;
   }
 
   public static string Text(CanMessage m)
@@ -43,6 +48,8 @@ class CanReceiveSingle
 
 class CanReceiveMany
 {
+  public static int Count;
+
   // 4.2.3.1, the second fragment
   public static void DoMessages( ICanMessageReader reader )
   {
@@ -52,7 +59,7 @@ class CanReceiveMany
      for( int i = 0; i < readCount; i++ )
      {
         // Verarbeitung der Nachricht
-        if (messages[i].FrameType == CanMsgFrameType.Data) Console.WriteLine("ReadMessages: " + CanReceiveSingle.Text(messages[i]));
+        if (CanReceiveSingle.Wanted(messages[i])) { Count++; Console.WriteLine("ReadMessages: " + CanReceiveSingle.Text(messages[i])); }
      }
   }
 }
@@ -124,6 +131,8 @@ class LinReceiveSingle
 
 class LinReceiveMany
 {
+  public static int Count;
+
   // 4.3.3.1, the second fragment
   public static void DoMessages( ILinMessageReader reader )
   {
@@ -133,7 +142,7 @@ class LinReceiveMany
   for( int i = 0; i < readCount; i++ )
   {
       // Verarbeitung der Nachricht
-      if (i == 0) Console.WriteLine("LIN ReadMessages: " + LinReceiveSingle.Text(messages[i]));
+      if (messages[i].MessageType == LinMessageType.Data && Count++ == 0) Console.WriteLine("LIN ReadMessages: " + LinReceiveSingle.Text(messages[i]));
   }
   }
 }
@@ -193,11 +202,9 @@ static class Program
       CanMessage drop;
       while (betaReader.ReadMessage(out drop)) { }
       Console.WriteLine("Send: " + CanSend.Send(writer));
-      Thread.Sleep(100);
-      CanReceiveSingle.DoMessages(betaReader);
+      for (int i = 0; i < 500 && CanReceiveSingle.Count < 3; i++) { Thread.Sleep(10); CanReceiveSingle.DoMessages(betaReader); }
       Console.WriteLine("Send: " + CanSend.Send(writer));
-      Thread.Sleep(100);
-      CanReceiveMany.DoMessages(betaReader);
+      for (int i = 0; i < 500 && CanReceiveMany.Count < 3; i++) { Thread.Sleep(10); CanReceiveMany.DoMessages(betaReader); }
 
       // LIN: alpha's LIN controller (port 1) as a slave at the commander's 19200 bit/s.
       ILinControl lin = (ILinControl)alpha.OpenSocket(1, typeof(ILinControl));
@@ -210,10 +217,8 @@ static class Program
       init.Bitrate = LinBitrate.Lin19200Bit;
       lin.InitLine(init);
       lin.StartLine();
-      Thread.Sleep(100);
-      LinReceiveSingle.DoMessages(linReader);
-      Thread.Sleep(100);
-      LinReceiveMany.DoMessages(linReader);
+      for (int i = 0; i < 500 && LinReceiveSingle.Count == 0; i++) { Thread.Sleep(10); LinReceiveSingle.DoMessages(linReader); }
+      for (int i = 0; i < 500 && LinReceiveMany.Count == 0; i++) { Thread.Sleep(10); LinReceiveMany.DoMessages(linReader); }
       return 0;
     }
   }

@@ -47,6 +47,19 @@ foreach(lib vciapi vcinpl vcinpl2)
 endforeach()
 install(FILES ${pc_files} DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 
+# The VCI .NET assembly (docs/dotnet.md) where Debian puts CLI libraries, with its dllmap, and a
+# pkg-config file for the compiler: mcs app.cs $(pkg-config --libs canemu-vcinet2).
+if(TARGET vcinet2)
+  set(CANEMU_CLI_DIR lib/cli/canemu)
+  install(FILES ${PROJECT_BINARY_DIR}/lib/vcinet2.dll ${PROJECT_BINARY_DIR}/lib/vcinet2.dll.config
+          DESTINATION ${CANEMU_CLI_DIR})
+  file(WRITE ${pc_dir}/canemu-vcinet2.pc "prefix=\${pcfiledir}/${pc_up}\n"
+       "assemblydir=\${prefix}/${CANEMU_CLI_DIR}\n\nName: canemu-vcinet2\n"
+       "Description: IXXAT VCI .NET API (Ixxat.Vci3) of canemu, the CAN adapter emulator\n"
+       "Version: ${PROJECT_VERSION}\nLibs: -r:\${assemblydir}/vcinet2.dll\n")
+  install(FILES ${pc_dir}/canemu-vcinet2.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+endif()
+
 # systemd units, sysusers and tmpfiles under the prefix's lib/ (what systemd reads for /usr);
 # the configuration in /etc/canemu for the prefix /usr, else PREFIX/etc/canemu. Decided when
 # installing, so `cmake --install --prefix` and CPack (/usr) both get paths that hold.
@@ -154,6 +167,7 @@ set(CPACK_STRIP_FILES ON)
 # init-system-helpers: deb-systemd-helper and deb-systemd-invoke in the maintainer scripts.
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, init-system-helpers (>= 1.54~), python3, python3-can")
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")  # canemu plot
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "mono-runtime")  # the VCI .NET assembly (/usr/lib/cli/canemu)
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/packaging/debian/conffiles ${PROJECT_SOURCE_DIR}/packaging/debian/postinst
     ${PROJECT_SOURCE_DIR}/packaging/debian/prerm ${PROJECT_SOURCE_DIR}/packaging/debian/postrm

@@ -21,7 +21,8 @@ for f in usr/bin/canemud usr/bin/canemu etc/canemu/canemud.toml \
          usr/include/sorcus/xcan.h usr/include/sorcus/xcan_types.h \
          usr/include/sorcus/sl64lib.h usr/include/sorcus/sl64_types.h \
          usr/share/doc/canemu/security.md usr/share/canemu/examples/two-adapters.toml \
-         usr/lib/python3/dist-packages/canemu/bus.py; do
+         usr/lib/python3/dist-packages/canemu/bus.py \
+         usr/lib/cli/canemu/vcinet2.dll usr/lib/cli/canemu/vcinet2.dll.config; do
   [ -e "$dest/$f" ] || fail "$f was not installed"
 done
 for lib in vcinpl vcinpl2 vciapi xcan sl64; do
@@ -49,6 +50,15 @@ cc -std=c11 -Wall -Werror -o "$dest/stalk" "$src/client/examples/sl64_talk.c" \
   $(pkg-config --cflags --libs canemu-sl64) || fail "sl64_talk.c does not build against the install"
 grep -q "libvcinpl.so.0 => $libdir" <<<"$(LD_LIBRARY_PATH=$libdir ldd "$dest/talk")" ||
   fail "the program does not load the installed libvcinpl.so.0"
+# A C# program against the installed VCI .NET assembly (docs/dotnet.md), when Mono is there;
+# its dllmap names the installed soname.
+if command -v mcs >/dev/null; then
+  mcs -out:"$dest/dotnet_talk.exe" "$src/client/examples/dotnet/dotnet_talk.cs" \
+    $(pkg-config --libs canemu-vcinet2) >/dev/null ||
+    fail "dotnet_talk.cs does not build against the installed vcinet2.dll"
+  grep -q 'target="libvcinpl2.so.0"' "$dest/usr/lib/cli/canemu/vcinet2.dll.config" ||
+    fail "vcinet2.dll.config does not map libvcinpl2.so to libvcinpl2.so.0"
+fi
 
 PYTHONPATH=$dest/usr/lib/python3/dist-packages python3 - <<'PY' || fail "python-can or pytest does not find canemu"
 from importlib.metadata import entry_points
@@ -69,7 +79,8 @@ deb=$(ls "$build"/canemu_*_amd64.deb)
 contents=$(dpkg-deb -c "$deb")
 for f in ./usr/bin/canemud ./etc/canemu/canemud.toml ./usr/lib/systemd/system/canemud.socket \
          ./usr/lib/sysusers.d/canemu.conf ./usr/share/canemu/systemd/socketcan.conf \
-         ./usr/share/canemu/systemd/ip.conf ./usr/share/lintian/overrides/canemu; do
+         ./usr/share/canemu/systemd/ip.conf ./usr/share/lintian/overrides/canemu \
+         ./usr/lib/cli/canemu/vcinet2.dll; do
   grep -q " $f\$" <<<"$contents" || fail "the package lacks $f"
 done
 grep -q "systemd" <<<"$(dpkg-deb -f "$deb" Depends)" || fail "the package does not depend on systemd"

@@ -31,12 +31,10 @@ install: build
 package: build
 	cd $(BUILD_DIR) && cpack -G DEB
 
+# ctest runs everything: the C++ suites, the checks and the docs' examples, and the Python
+# suites under .venv and .venv-debian (tests/CMakeLists.txt; tests/README.md).
 test: deps build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
-	.venv/bin/python -m pytest -q -p no:cacheprovider tests/python
-	.venv-debian/bin/python -m pytest -q -p no:cacheprovider tests/python
-	.venv/bin/python -m pytest -q -p no:cacheprovider client/examples/pytest
-	.venv-debian/bin/python -m pytest -q -p no:cacheprovider client/examples/pytest
 
 asan: deps
 	cmake -S . -B $(ASAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCANEMU_SANITIZE=ON \

@@ -24,6 +24,15 @@ inline Frame frame(uint32_t id, std::vector<uint8_t> data, bool extended = false
   return *f;
 }
 
+inline Frame remote_frame(uint32_t id, uint8_t dlc = 0, bool extended = false) {
+  FrameSpec spec;
+  spec.id = id;
+  spec.extended = extended;
+  spec.remote = true;
+  spec.dlc = dlc;
+  return *Frame::create(spec);
+}
+
 inline constexpr int64_t kBit = 2000;  // ns at 500 kbit/s
 
 // A bus on its own scheduler, with a fault plan plugged in (empty unless a test adds rules).

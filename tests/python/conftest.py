@@ -13,39 +13,18 @@ import pytest
 from canemu.bus import CAN_ERR_BUSERROR
 from canemu.testing import Daemon
 
+from config_text import (CAN0, CAN1, FD0, LIN0, LIN_ADAPTER, bus, device, fault, scenario,  # noqa: F401
+                         table, toml)
+
 REPO = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("CANEMU_BUILD_DIR", REPO / "build"))
 CANEMUD = BUILD / "bin" / "canemud"
 CANEMU_CLI = BUILD / "bin" / "canemu"
 
 # Buses and adapters every test module gets; `time` is the module's choice.
-TOPOLOGY = """
-[[bus]]
-name = "can0"
-kind = "can"
-bitrate = 500000
-
-[[bus]]
-name = "can1"
-kind = "can"
-bitrate = 125000
-
-[[bus]]
-name = "fd0"
-kind = "can-fd"
-bitrate = 500000
-data_bitrate = 2000000
-
-[[device]]
-name = "ixxat0"
-model = "ixxat-usb-to-can"
-controllers = ["can0", "can1"]
-
-[[device]]
-name = "ixxatfd"
-model = "ixxat-usb-to-can-fd"
-controllers = ["fd0"]
-"""
+TOPOLOGY = toml(CAN0, CAN1, FD0,
+                device("ixxat0", "ixxat-usb-to-can", ["can0", "can1"]),
+                device("ixxatfd", "ixxat-usb-to-can-fd", ["fd0"]))
 
 
 class Canemud(Daemon):
@@ -59,10 +38,10 @@ class Canemud(Daemon):
         )
 
 
-def drain(bus) -> list:
+def drain(node) -> list:
     """Every message waiting now, without waiting (in stepped time nothing more comes)."""
     out = []
-    while (msg := bus.recv(0)) is not None:
+    while (msg := node.recv(0)) is not None:
         out.append(msg)
     return out
 
@@ -105,10 +84,10 @@ def stepped_daemon():
 
 
 @pytest.fixture
-def daemon():
-    """A fresh canemud in stepped time for the test (modules with a daemon of their own
-    override it)."""
-    d = Canemud("stepped")
+def daemon(request):
+    """A fresh canemud in stepped time for the test, with the test module's `EXTRA`
+    configuration if it has one (modules with a daemon of their own override it)."""
+    d = Canemud("stepped", extra=getattr(request.module, "EXTRA", ""))
     yield d
     d.stop()
 
@@ -128,6 +107,16 @@ def nodes(daemon):
 def bus_errors(msgs) -> list:
     """The bus-error frames among `msgs`."""
     return [m for m in msgs if m.is_error_frame and m.arbitration_id & CAN_ERR_BUSERROR]
+
+
+def cli(daemon: Daemon, *args: str, check: bool = True, timeout: float = 60,
+        env: dict | None = None) -> subprocess.CompletedProcess:
+    """`canemu --socket SOCKET ARGS...` against `daemon`; with `check`, it must succeed."""
+    done = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, *args],
+                          capture_output=True, text=True, timeout=timeout, env=env)
+    if check:
+        assert done.returncode == 0, done.stderr
+    return done
 
 
 def load(daemon: Daemon, text: str) -> None:

@@ -24,6 +24,8 @@ import canemu
 from canemu.testing import Daemon
 from canemu_lcm import error_t, frame_t, state_t
 
+from config_text import CAN0, CAN1, table, toml
+
 URL = "udpm://239.255.76.67:7667?ttl=0"
 TIMEOUT = 20.0
 MS = 1_000_000
@@ -31,25 +33,8 @@ MS = 1_000_000
 build, work = Path(sys.argv[1]), Path(sys.argv[2])
 CLI = build / "bin" / "canemu"
 
-CONFIG = """
-[simulation]
-time = "stepped"
-seed = 1
-
-[[bus]]
-name = "can0"
-kind = "can"
-bitrate = 500000
-
-[[bus]]
-name = "can1"
-kind = "can"
-bitrate = 125000
-
-[[bridge]]
-kind = "lcm"
-bus = "can0"
-"""
+CONFIG = toml(table("[simulation]", time="stepped", seed=1), CAN0, CAN1,
+              table("[[bridge]]", kind="lcm", bus="can0"))
 
 
 def wait_until(done, what: str, pump=None) -> None:

@@ -48,6 +48,31 @@ def exchange(sender, receiver, msg):
     return got
 
 
+def passes(sender: dict, receiver: dict, msg) -> None:
+    """`msg` from a bus opened with `sender`'s options reaches one opened with `receiver`'s,
+    unchanged."""
+    a = can.Bus(interface="canemu", **sender)
+    b = can.Bus(interface="canemu", **receiver)
+    try:
+        assert_same_frame(msg, exchange(a, b, msg))
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
+def garbled(sender: dict, receiver: dict, msg) -> None:
+    """`msg` from a bus opened with `sender`'s options gives one opened with `receiver`'s only
+    error frames (the two do not talk)."""
+    a = can.Bus(interface="canemu", **sender)
+    b = can.Bus(interface="canemu", **receiver)
+    try:
+        a.send(msg)
+        only_errors(b)
+    finally:
+        a.shutdown()
+        b.shutdown()
+
+
 def assert_same_frame(sent, got):
     assert got.arbitration_id == sent.arbitration_id
     assert got.is_extended_id == sent.is_extended_id
@@ -222,27 +247,15 @@ def test_configured_adapter_controller(realtime_daemon):
 def test_timing_argument_sets_the_controller(realtime_daemon):
     # 500 kbit/s from the SJA1000's 8 MHz: 16 quanta, sample point 87.5 %.
     timing = can.BitTiming(f_clock=8_000_000, brp=1, tseg1=13, tseg2=2, sjw=1)
-    a = can.Bus(interface="canemu", channel="can0", timing=timing)
-    b = can.Bus(interface="canemu", channel="can0")
-    try:
-        msg = can.Message(arbitration_id=0x66, data=[6], is_extended_id=False)
-        assert_same_frame(msg, exchange(a, b, msg))
-    finally:
-        a.shutdown()
-        b.shutdown()
+    passes({"channel": "can0", "timing": timing}, {"channel": "can0"},
+           can.Message(arbitration_id=0x66, data=[6], is_extended_id=False))
 
 
 def test_timing_from_another_clock_keeps_rate_and_sample_point(realtime_daemon):
     # 500 kbit/s at 87.5 % described for a 16 MHz clock: made from the SJA1000's own clock.
     timing = can.BitTiming(f_clock=16_000_000, brp=2, tseg1=13, tseg2=2, sjw=1)
-    a = can.Bus(interface="canemu", channel="can0", timing=timing)
-    b = can.Bus(interface="canemu", channel="can0")
-    try:
-        msg = can.Message(arbitration_id=0x67, data=[7], is_extended_id=False)
-        assert_same_frame(msg, exchange(a, b, msg))
-    finally:
-        a.shutdown()
-        b.shutdown()
+    passes({"channel": "can0", "timing": timing}, {"channel": "can0"},
+           can.Message(arbitration_id=0x67, data=[7], is_extended_id=False))
 
 
 def only_errors(receiver, count: int = 20) -> None:
@@ -264,33 +277,21 @@ def only_errors(receiver, count: int = 20) -> None:
 )
 def test_timing_at_another_rate_cannot_talk(realtime_daemon, timing):
     # The timing wins over the bus's 500 kbit/s: the others see errors, never the frame.
-    a = can.Bus(interface="canemu", channel="can0", timing=can.BitTiming(**timing))
-    b = can.Bus(interface="canemu", channel="can0")
-    try:
-        a.send(can.Message(arbitration_id=0x78, data=[8], is_extended_id=False))
-        only_errors(b)
-    finally:
-        a.shutdown()
-        b.shutdown()
+    garbled({"channel": "can0", "timing": can.BitTiming(**timing)}, {"channel": "can0"},
+            can.Message(arbitration_id=0x78, data=[8], is_extended_id=False))
 
 
 # A can.BitTiming on the CAN FD controller (python-can 4.1 has no BitTimingFd): the nominal
 # phase; the data phase follows data_bitrate (default: the bus's 2 Mbit/s).
+FD = {"channel": "fd0", "fd": True}
 FD_NOMINAL_500K = dict(f_clock=80_000_000, brp=10, tseg1=12, tseg2=3, sjw=1)
 FD_NOMINAL_250K = dict(f_clock=80_000_000, brp=20, tseg1=12, tseg2=3, sjw=1)
 
 
 def test_classic_timing_on_an_fd_controller_sets_the_nominal_phase(realtime_daemon):
-    a = can.Bus(interface="canemu", channel="fd0", fd=True,
-                timing=can.BitTiming(**FD_NOMINAL_500K))
-    b = can.Bus(interface="canemu", channel="fd0", fd=True)
-    try:
-        msg = can.Message(arbitration_id=0x6B, data=bytes(range(24)), is_fd=True,
-                          bitrate_switch=True, is_extended_id=False)
-        assert_same_frame(msg, exchange(a, b, msg))
-    finally:
-        a.shutdown()
-        b.shutdown()
+    passes({**FD, "timing": can.BitTiming(**FD_NOMINAL_500K)}, FD,
+           can.Message(arbitration_id=0x6B, data=bytes(range(24)), is_fd=True,
+                       bitrate_switch=True, is_extended_id=False))
 
 
 @pytest.mark.parametrize(
@@ -305,16 +306,9 @@ def test_classic_timing_on_an_fd_controller_at_another_rate_cannot_talk(
     realtime_daemon, timing, data_bitrate, brs
 ):
     rates = {} if data_bitrate is None else {"data_bitrate": data_bitrate}  # 4.1 wants no None
-    a = can.Bus(interface="canemu", channel="fd0", fd=True, timing=can.BitTiming(**timing),
-                **rates)
-    b = can.Bus(interface="canemu", channel="fd0", fd=True)
-    try:
-        a.send(can.Message(arbitration_id=0x6C, data=bytes(16), is_fd=True, bitrate_switch=brs,
-                           is_extended_id=False))
-        only_errors(b)
-    finally:
-        a.shutdown()
-        b.shutdown()
+    garbled({**FD, "timing": can.BitTiming(**timing), **rates}, FD,
+            can.Message(arbitration_id=0x6C, data=bytes(16), is_fd=True, bitrate_switch=brs,
+                        is_extended_id=False))
 
 
 needs_bit_timing_fd = pytest.mark.skipif(
@@ -326,15 +320,9 @@ def test_fd_timing_argument(realtime_daemon):
     # fd0: 500 kbit/s nominal, 2 Mbit/s data, from the FD controller's 80 MHz.
     timing = can.BitTimingFd(f_clock=80_000_000, nom_brp=2, nom_tseg1=63, nom_tseg2=16,
                              nom_sjw=16, data_brp=1, data_tseg1=29, data_tseg2=10, data_sjw=10)
-    a = can.Bus(interface="canemu", channel="fd0", fd=True, timing=timing)
-    b = can.Bus(interface="canemu", channel="fd0", fd=True)
-    try:
-        msg = can.Message(arbitration_id=0x68, data=bytes(range(32)), is_fd=True,
-                          bitrate_switch=True, is_extended_id=False)
-        assert_same_frame(msg, exchange(a, b, msg))
-    finally:
-        a.shutdown()
-        b.shutdown()
+    passes({**FD, "timing": timing}, FD,
+           can.Message(arbitration_id=0x68, data=bytes(range(32)), is_fd=True,
+                       bitrate_switch=True, is_extended_id=False))
     with pytest.raises(can.CanInitializationError, match="needs a CAN FD controller"):
         can.Bus(interface="canemu", channel="can0", timing=timing)
 
@@ -352,15 +340,9 @@ def test_fd_timing_at_another_rate_cannot_talk(realtime_daemon, nominal_brp, dat
     timing = can.BitTimingFd(f_clock=80_000_000, nom_brp=nominal_brp, nom_tseg1=63,
                              nom_tseg2=16, nom_sjw=16, data_brp=data_brp, data_tseg1=29,
                              data_tseg2=10, data_sjw=10)
-    a = can.Bus(interface="canemu", channel="fd0", fd=True, timing=timing)
-    b = can.Bus(interface="canemu", channel="fd0", fd=True)
-    try:
-        a.send(can.Message(arbitration_id=0x6D, data=bytes(16), is_fd=True, bitrate_switch=brs,
-                           is_extended_id=False))
-        only_errors(b)
-    finally:
-        a.shutdown()
-        b.shutdown()
+    garbled({**FD, "timing": timing}, FD,
+            can.Message(arbitration_id=0x6D, data=bytes(16), is_fd=True, bitrate_switch=brs,
+                        is_extended_id=False))
 
 
 def test_a_wrong_data_bitrate_breaks_fd_frames_with_bit_rate_switch(realtime_daemon):

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import can
 import pytest
 
-from conftest import BUILD, CANEMU_CLI
+from conftest import BUILD, CAN0, CAN1, CANEMU_CLI, table, toml
 from distributed_support import LOOPBACK_URI, TIMEOUT, frame_ns, wait_until
 
 cyclonedds = pytest.importorskip(
@@ -40,26 +40,8 @@ MS = 1_000_000
 DOMAIN = 1 + os.getpid() % 200
 URI = LOOPBACK_URI
 
-CONFIG = f"""
-[simulation]
-time = "stepped"
-
-[[bus]]
-name = "can0"
-kind = "can"
-bitrate = 500000
-
-[[bus]]
-name = "can1"
-kind = "can"
-bitrate = 125000
-
-[[bridge]]
-kind = "dds"
-bus = "can0"
-domain = {DOMAIN}
-ros2 = true
-"""
+CONFIG = toml(table("[simulation]", time="stepped"), CAN0, CAN1,
+              table("[[bridge]]", kind="dds", bus="can0", domain=DOMAIN, ros2=True))
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,8 @@ import pytest
 import canemu
 from canemu.bus import CAN_ERR_PROT_BIT, CAN_ERR_PROT_STUFF
 
-from conftest import CANEMU_CLI, Canemud, bus_errors, drain, fault_load, frames, load
+from conftest import (CANEMU_CLI, Canemud, bus_errors, drain, fault, fault_load, frames, load,
+                      scenario)
 
 US = 1_000
 MS = 1_000_000
@@ -107,17 +108,9 @@ def test_dump_and_log_show_bit_errors_at_their_instants(daemon, nodes):
     a, b = nodes
     assert canemu.sim_time()[0] == 0
     dump = Dump(daemon)
-    load(daemon, """
-[scenario]
-name = "two bit errors"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-effect = "bit_error"
-bit = 24
-count = 2
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", effect="bit_error", bit=24, count=2),
+        name="two bit errors"))
     a.send(msg())
     canemu.step(1 * MS)
     lines = dump.lines(count=3)
@@ -151,17 +144,10 @@ count = 2
 
 def test_status_counts_what_a_fault_did(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[scenario]
-name = "three acks missing"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-match = { id = 0x123, mask = 0x7FF }
-effect = "ack_error"
-count = 3
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
+              count=3),
+        name="three acks missing"))
     a.send(msg(0x100))
     a.send(msg(0x123))
     canemu.step(5 * MS)
@@ -172,8 +158,8 @@ count = 3
     # 0x100 first (TEC stays 0), then 0x123: +8 per ACK error, -1 for its success.
     assert (node_a["tec"], node_a["rec"], node_a["state"]) == (3 * 8 - 1, 0, "error-active")
     assert (node_a["frames_sent"], node_a["errors"]) == (2, 3)
-    [fault] = s["faults"]
-    assert {k: fault[k] for k in ("scenario", "line", "effect", "target", "seen", "hits", "state")} == {
+    [entry] = s["faults"]
+    assert {k: entry[k] for k in ("scenario", "line", "effect", "target", "seen", "hits", "state")} == {
         "scenario": "three acks missing",
         "line": 5,
         "effect": "ack_error",
@@ -190,33 +176,15 @@ count = 3
 
 def test_a_rejected_load_changes_nothing(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[scenario]
-name = "kept"
-
-[[fault]]
-at = "1s"
-bus = "can0"
-effect = "ack_suppress"
-duration = "1ms"
-""")
+    load(daemon, scenario(
+        fault(at="1s", bus="can0", effect="ack_suppress", duration="1ms"),
+        name="kept"))
     before = cli(daemon, "fault", "list").stdout
     log_before = len(daemon.log)
-    done = fault_load(daemon, f"""
-[scenario]
-name = "half good"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-match = {{ from = "{a.node_name}" }}
-effect = "bit_error"
-
-[[fault]]
-at = "0s"
-node = "ghost:0"
-effect = "bus_off"
-""")
+    done = fault_load(daemon, scenario(
+        fault(at="0s", bus="can0", match={"from": a.node_name}, effect="bit_error"),
+        fault(at="0s", node="ghost:0", effect="bus_off"),
+        name="half good"))
     assert done.returncode == 1
     assert ':11: bus_off: no node named "ghost:0"' in done.stderr
     assert "nothing of it applied" in done.stderr
@@ -230,50 +198,31 @@ effect = "bus_off"
 
 def test_clearing_an_active_fault_stops_its_hits(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[scenario]
-name = "endless"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-effect = "stuff_error"
-""")
+    load(daemon, scenario(fault(at="0s", bus="can0", effect="stuff_error"), name="endless"))
     a.send(msg())
     # A stuff error right after the arbitration field: the receivers' flags at bit 14, the
     # transmitter's on top, delimiter and intermission; attempts start every 35 bit times, at
     # 0, 70 and 140 us, each hit at its start of frame.
     canemu.step(200 * US)
-    [fault] = faults(daemon)
-    assert (fault["hits"], fault["state"]) == (3, "active")
+    [entry] = faults(daemon)
+    assert (entry["hits"], entry["state"]) == (3, "active")
     assert cli(daemon, "fault", "clear", "endless").stdout.strip() == "1 scenario cleared"
     canemu.step(1 * MS)
     assert len(bus_errors(drain(a))) == 3
     got = frames(drain(b))
     assert len(got) == 1 and round(got[0].timestamp * 1e9) == (3 * 35 + 64) * BIT
-    [fault] = faults(daemon)
-    assert (fault["hits"], fault["state"]) == (3, "cleared")
+    [entry] = faults(daemon)
+    assert (entry["hits"], entry["state"]) == (3, "cleared")
     daemon.wait_log('scenario "endless" cleared')
 
 
 def test_faults_of_a_device_that_goes_end_with_it(daemon, nodes):
     a, b = nodes
     name = a.node_name
-    load(daemon, f"""
-[scenario]
-name = "on a"
-
-[[fault]]
-at = "0s"
-until = "1s"
-node = "{name}"
-effect = "node_off"
-
-[[fault]]
-at = "500ms"
-node = "{name}"
-effect = "bus_off"
-""")
+    load(daemon, scenario(
+        fault(at="0s", until="1s", node=name, effect="node_off"),
+        fault(at="500ms", node=name, effect="bus_off"),
+        name="on a"))
     canemu.step(1 * MS)
     a.shutdown()
     assert [f["state"] for f in faults(daemon)] == ["cleared", "cleared"]
@@ -309,8 +258,8 @@ def test_inject_matches_remote_frames_by_transmitter(daemon, nodes):
     errors = bus_errors(drain(a))
     assert len(errors) == 1 and errors[0].data[2] == CAN_ERR_PROT_BIT
     assert round(errors[0].timestamp * 1e9) == sent + 21 * BIT  # the end of bit 20
-    [fault] = faults(daemon)
-    assert (fault["effect"], fault["target"], fault["seen"], fault["hits"]) == ("bit_error", "can0", 2, 1)
+    [entry] = faults(daemon)
+    assert (entry["effect"], entry["target"], entry["seen"], entry["hits"]) == ("bit_error", "can0", 2, 1)
     assert [m.arbitration_id for m in frames(drain(b))] == [0x121, 0x131, 0x122]
 
 
@@ -379,17 +328,8 @@ def dump_trace(seed: int) -> list[str]:
         a = can.Bus(interface="canemu", channel="can0")
         b = can.Bus(interface="canemu", channel="can0")
         dump = Dump(d)
-        load(d, f"""
-[scenario]
-seed = {seed}
-
-[[fault]]
-at = "0s"
-until = "20ms"
-bus = "can0"
-effect = "random_errors"
-bit_error_rate = 0.01
-""")
+        load(d, scenario(fault(at="0s", until="20ms", bus="can0", effect="random_errors",
+                               bit_error_rate=0.01), seed=seed))
         for k in range(15):
             a.send(msg(0x100 + k, (k, k)))
             b.send(msg(0x180 + k, (k,)))

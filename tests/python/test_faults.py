@@ -24,7 +24,8 @@ from canemu.bus import (
     CAN_ERR_TRX,
 )
 
-from conftest import CANEMU_CLI, Canemud, bus_errors, drain, fault_load, frames, load, ns
+from conftest import (CANEMU_CLI, Canemud, bus_errors, drain, fault, fault_load, frames, load, ns,
+                      scenario)
 
 US = 1_000
 MS = 1_000_000
@@ -45,14 +46,8 @@ def now_ns():
 def test_bit_errors_take_the_sender_to_bus_off_at_the_32nd(daemon, nodes):
     a, b = nodes
     start = now_ns()
-    load(daemon, f"""
-[[fault]]
-at = "1ms"
-bus = "can0"
-match = {{ from = "{a.node_name}" }}
-effect = "bit_error"
-count = 32
-""")
+    load(daemon, scenario(
+        fault(at="1ms", bus="can0", match={"from": a.node_name}, effect="bit_error", count=32)))
     a.send(msg())  # before the window: acknowledged, untouched
     canemu.step(500 * US)
     assert len(frames(drain(b))) == 1
@@ -75,14 +70,9 @@ count = 32
 
 def test_stuff_errors_are_detected_by_the_receivers(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[[fault]]
-at = "0s"
-bus = "can0"
-match = { id = 0x123, mask = 0x7FF }
-effect = "stuff_error"
-count = 3
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="stuff_error",
+              count=3)))
     a.send(msg(0x124))  # does not match
     a.send(msg(0x123))
     canemu.step(10 * MS)
@@ -101,13 +91,7 @@ count = 3
 
 def test_form_errors_at_the_crc_delimiter(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[[fault]]
-at = "0s"
-bus = "can0"
-effect = "form_error"
-count = 2
-""")
+    load(daemon, scenario(fault(at="0s", bus="can0", effect="form_error", count=2)))
     a.send(msg())
     canemu.step(10 * MS)
     got_b = drain(b)
@@ -122,13 +106,7 @@ count = 2
 
 def test_crc_error_leaves_the_frame_unacknowledged(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[[fault]]
-at = "0s"
-bus = "can0"
-effect = "crc_error"
-count = 1
-""")
+    load(daemon, scenario(fault(at="0s", bus="can0", effect="crc_error", count=1)))
     a.send(msg())
     canemu.step(10 * MS)
     got_b = drain(b)
@@ -143,14 +121,8 @@ count = 1
 
 def test_ack_errors_hit_only_the_matching_frames(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[[fault]]
-at = "0s"
-bus = "can0"
-match = { id = 0x123 }
-effect = "ack_error"
-count = 3
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", match={"id": 0x123}, effect="ack_error", count=3)))
     a.send(msg(0x100))
     a.send(msg(0x123))
     canemu.step(10 * MS)
@@ -163,13 +135,7 @@ count = 3
 
 def test_ack_suppress_leaves_a_sender_error_passive_at_128(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[[fault]]
-at = "0s"
-bus = "can0"
-effect = "ack_suppress"
-duration = "1s"
-""")
+    load(daemon, scenario(fault(at="0s", bus="can0", effect="ack_suppress", duration="1s")))
     a.send(msg())
     canemu.step(500 * MS)
     assert a.state == can.BusState.PASSIVE and a.error_counters() == (128, 0)
@@ -190,13 +156,7 @@ duration = "1s"
 
 def test_stuck_dominant_bus(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[[fault]]
-at = "1ms"
-bus = "can0"
-effect = "stuck_dominant"
-duration = "200us"
-""")
+    load(daemon, scenario(fault(at="1ms", bus="can0", effect="stuck_dominant", duration="200us")))
     canemu.step(5 * MS)
     # 100 dominant bit times (bits 0..99) on an idle bus. Each node takes bit 0 for a start of
     # frame; bit 5 should have been a stuff bit: stuff error (+1); its error flag is bits 6..11;
@@ -212,20 +172,11 @@ duration = "200us"
 
 
 def test_random_errors_are_the_same_for_the_same_seed(nodes, daemon):
-    scenario = """
-[scenario]
-seed = 11
-
-[[fault]]
-at = "0s"
-until = "200ms"
-bus = "can0"
-effect = "random_errors"
-bit_error_rate = 0.002
-"""
+    random_errors = scenario(fault(at="0s", until="200ms", bus="can0", effect="random_errors",
+                               bit_error_rate=0.002), seed=11)
 
     def run(a, b, d):
-        load(d, scenario)
+        load(d, random_errors)
         for k in range(200):
             a.send(msg(0x100 + k % 16, [k % 256]))
         canemu.step(100 * MS)
@@ -256,13 +207,7 @@ bit_error_rate = 0.002
 
 def test_node_off_leaves_the_other_unacknowledged_until_it_is_back(daemon, nodes):
     a, b = nodes
-    load(daemon, f"""
-[[fault]]
-at = "0s"
-until = "100ms"
-node = "{b.node_name}"
-effect = "node_off"
-""")
+    load(daemon, scenario(fault(at="0s", until="100ms", node=b.node_name, effect="node_off")))
     a.send(msg())
     canemu.step(50 * MS)
     assert a.error_counters() == (128, 0)
@@ -274,17 +219,9 @@ effect = "node_off"
 
 def test_node_on_plugs_a_node_in_again(daemon, nodes):
     a, b = nodes
-    load(daemon, f"""
-[[fault]]
-at = "0s"
-node = "{b.node_name}"
-effect = "node_off"
-
-[[fault]]
-at = "30ms"
-node = "{b.node_name}"
-effect = "node_on"
-""")
+    load(daemon, scenario(
+        fault(at="0s", node=b.node_name, effect="node_off"),
+        fault(at="30ms", node=b.node_name, effect="node_on")))
     a.send(msg())
     canemu.step(29 * MS)
     assert frames(drain(b)) == []
@@ -295,12 +232,7 @@ effect = "node_on"
 def test_bus_off_is_forced_at_its_instant(daemon, nodes):
     a, _ = nodes
     start = now_ns()
-    load(daemon, f"""
-[[fault]]
-at = "1ms"
-node = "{a.node_name}"
-effect = "bus_off"
-""")
+    load(daemon, scenario(fault(at="1ms", node=a.node_name, effect="bus_off")))
     canemu.step(MS - 1)
     assert a.state == can.BusState.ACTIVE
     canemu.step(1)
@@ -316,39 +248,21 @@ effect = "bus_off"
 
 def test_error_counters_are_set_and_the_state_follows(daemon, nodes):
     a, _ = nodes
-    load(daemon, f"""
-[[fault]]
-at = "0s"
-node = "{a.node_name}"
-effect = "error_counters"
-tec = 100
-rec = 5
-""")
+    load(daemon, scenario(
+        fault(at="0s", node=a.node_name, effect="error_counters", tec=100, rec=5)))
     assert a.error_counters() == (100, 5)
     assert a.controller_state == canemu.ControllerState.ERROR_WARNING
     warning = [m for m in drain(a) if m.arbitration_id == CAN_ERR_CRTL]
     assert len(warning) == 1 and warning[0].data[1] == CAN_ERR_CRTL_TX_WARNING
-    load(daemon, f"""
-[[fault]]
-at = "0s"
-node = "{a.node_name}"
-effect = "error_counters"
-tec = 130
-rec = 0
-""")
+    load(daemon, scenario(
+        fault(at="0s", node=a.node_name, effect="error_counters", tec=130, rec=0)))
     assert a.state == can.BusState.PASSIVE
 
 
 def test_oscillator_far_off_is_not_understood_until_it_is_back(daemon, nodes):
     a, b = nodes
-    load(daemon, f"""
-[[fault]]
-at = "0s"
-until = "20ms"
-node = "{a.node_name}"
-effect = "oscillator"
-ppm = 30000
-""")
+    load(daemon, scenario(
+        fault(at="0s", until="20ms", node=a.node_name, effect="oscillator", ppm=30000)))
     a.send(msg())
     canemu.step(19 * MS)
     got_b = drain(b)
@@ -364,20 +278,9 @@ def test_oscillator_talks_within_twice_the_tolerance_and_not_beyond(daemon, node
     # receiver's df is the smaller of SJW / (20 x 16) = 0.625 % and 2 / (2 x (13 x 16 - 2)) =
     # 0.485 %, and it decodes a rate off by at most 2 x df = 9709 ppm (docs/wire-model.md).
     a, b = nodes
-    load(daemon, f"""
-[[fault]]
-at = "0s"
-until = "10ms"
-node = "{a.node_name}"
-effect = "oscillator"
-ppm = 9600
-
-[[fault]]
-at = "10ms"
-node = "{a.node_name}"
-effect = "oscillator"
-ppm = 9800
-""")
+    load(daemon, scenario(
+        fault(at="0s", until="10ms", node=a.node_name, effect="oscillator", ppm=9600),
+        fault(at="10ms", node=a.node_name, effect="oscillator", ppm=9800)))
     for k in range(10):
         a.send(msg(0x100 + k, (k,) * 8))
     canemu.step(10 * MS)
@@ -391,19 +294,9 @@ ppm = 9800
 
 def test_lin_effects_on_a_can_bus_are_refused_whole_with_the_reason(daemon, nodes):
     a, _ = nodes
-    done = fault_load(daemon, f"""
-[[fault]]
-at = "0s"
-node = "{a.node_name}"
-effect = "error_counters"
-tec = 50
-rec = 0
-
-[[fault]]
-at = "0s"
-bus = "can0"
-effect = "lin_no_response"
-""")
+    done = fault_load(daemon, scenario(
+        fault(at="0s", node=a.node_name, effect="error_counters", tec=50, rec=0),
+        fault(at="0s", bus="can0", effect="lin_no_response")))
     assert done.returncode != 0
     assert "lin_no_response: bus can0 is a CAN bus; LIN faults need a LIN bus" in done.stderr
     assert a.error_counters() == (0, 0)  # nothing of it applied
@@ -417,15 +310,9 @@ def test_babble_floods_the_bus_and_starves_the_others(daemon):
         for bus in (a, babbler, c):
             drain(bus)
         start = now_ns()
-        load(daemon, f"""
-[[fault]]
-at = "0s"
-node = "{babbler.node_name}"
-effect = "babble"
-id = 0x000
-data = [0xDE, 0xAD, 0xBE, 0xEF]
-duration = "1ms"
-""")
+        load(daemon, scenario(
+            fault(at="0s", node=babbler.node_name, effect="babble", id=0x000,
+                  data=[0xDE, 0xAD, 0xBE, 0xEF], duration="1ms")))
         a.send(msg(0x123))  # loses arbitration to every copy
         canemu.step(2 * MS)
         got = frames(drain(c))
@@ -453,14 +340,8 @@ def test_babble_needs_the_node_on_the_bus(daemon):
     c = can.Bus(interface="canemu", channel="can0")
     try:
         drain(c)
-        load(daemon, """
-[[fault]]
-at = "0s"
-node = "ixxat0:0"
-effect = "babble"
-id = 0x100
-duration = "1ms"
-""")
+        load(daemon, scenario(
+            fault(at="0s", node="ixxat0:0", effect="babble", id=0x100, duration="1ms")))
         canemu.step(2 * MS)
         assert frames(drain(c)) == []
         daemon.wait_log("babble: the node is not on the bus (its line is not started); nothing "
@@ -476,14 +357,9 @@ duration = "1ms"
 
 
 def test_babble_parameters_are_checked(daemon):
-    done = fault_load(daemon, """
-[[fault]]
-at = "0s"
-node = "ixxat0:0"
-effect = "babble"
-id = 0x800
-data = [1, 2, 3, 4, 5, 6, 7, 8, 9]
-""")
+    done = fault_load(daemon, scenario(
+        fault(at="0s", node="ixxat0:0", effect="babble", id=0x800,
+              data=[1, 2, 3, 4, 5, 6, 7, 8, 9])))
     assert done.returncode != 0
     assert "id" in done.stderr and "data" in done.stderr and "duration" in done.stderr
 
@@ -536,13 +412,7 @@ def test_line_error_on_one_wire_is_reported_and_traffic_goes_on(low_speed):
     body = [x for x in canemu.buses() if x["name"] == "body"]
     assert body == [{"name": "body", "kind": "can", "transceiver": "low-speed",
                      "bitrate": 125000, "data_bitrate": 0}]
-    load(daemon, f"""
-[[fault]]
-at = "1ms"
-until = "10ms"
-node = "{b.node_name}"
-effect = "line_error"
-""")
+    load(daemon, scenario(fault(at="1ms", until="10ms", node=b.node_name, effect="line_error")))
     canemu.step(2 * MS)
     trx = drain(b)
     assert len(trx) == 1 and trx[0].is_error_frame and trx[0].arbitration_id == CAN_ERR_TRX
@@ -563,14 +433,8 @@ effect = "line_error"
 
 def test_line_error_on_both_wires_cuts_the_node_off(low_speed):
     daemon, a, b = low_speed
-    load(daemon, f"""
-[[fault]]
-at = "0s"
-until = "50ms"
-node = "{b.node_name}"
-effect = "line_error"
-wire = "both"
-""")
+    load(daemon, scenario(
+        fault(at="0s", until="50ms", node=b.node_name, effect="line_error", wire="both")))
     a.send(msg())
     canemu.step(40 * MS)
     got_b = drain(b)
@@ -583,12 +447,7 @@ wire = "both"
 
 def test_line_error_needs_a_low_speed_bus(daemon, nodes):
     a, _ = nodes
-    done = fault_load(daemon, f"""
-[[fault]]
-at = "0s"
-node = "{a.node_name}"
-effect = "line_error"
-""")
+    done = fault_load(daemon, scenario(fault(at="0s", node=a.node_name, effect="line_error")))
     assert done.returncode != 0
     assert "high-speed bus" in done.stderr and "low-speed" in done.stderr
 
@@ -597,13 +456,7 @@ def test_canemud_stops_cleanly_while_a_line_error_is_still_to_end(low_speed):
     """The scheduled end of a line error must not keep the adapter's line alive past the
     simulation (canemud used to crash at SIGTERM with such a fault pending)."""
     daemon, a, b = low_speed
-    load(daemon, f"""
-[[fault]]
-at = "1ms"
-until = "10s"
-node = "{b.node_name}"
-effect = "line_error"
-""")
+    load(daemon, scenario(fault(at="1ms", until="10s", node=b.node_name, effect="line_error")))
     canemu.step(2 * MS)
     assert [m.arbitration_id for m in drain(b)] == [CAN_ERR_TRX]
     a.shutdown()

@@ -19,26 +19,12 @@ import pytest
 import canemu
 from canemu import ixxat_shim
 from canemu.testing import Daemon
-from conftest import CANEMUD, drain
+from conftest import CAN0, CANEMUD, FD0, device, drain, table, toml
 
 MS = 1_000_000
 
-CONFIG = """
-[simulation]
-time = "stepped"
-seed = 1
-
-[[bus]]
-name = "fd0"
-kind = "can-fd"
-bitrate = 500000
-data_bitrate = 2000000
-
-[[device]]
-name = "ixxatfd"
-model = "ixxat-usb-to-can-fd"
-controllers = ["fd0"]
-"""
+CONFIG = toml(table("[simulation]", time="stepped", seed=1), FD0,
+              device("ixxatfd", "ixxat-usb-to-can-fd", ["fd0"]))
 
 
 @pytest.fixture
@@ -156,21 +142,8 @@ def test_fd_frames_with_bit_rate_switch_both_ways(ixxat, other):
     assert ixxat.recv(0) is None
 
 
-CLASSIC = """
-[simulation]
-time = "stepped"
-seed = 1
-
-[[bus]]
-name = "can0"
-kind = "can"
-bitrate = 500000
-
-[[device]]
-name = "ixxat0"
-model = "ixxat-usb-to-can"
-controllers = ["can0"]
-"""
+CLASSIC = toml(table("[simulation]", time="stepped", seed=1), CAN0,
+               device("ixxat0", "ixxat-usb-to-can", ["can0"]))
 
 
 def test_fd_frames_on_a_classic_adapter_are_refused_not_lost():

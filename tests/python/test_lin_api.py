@@ -10,20 +10,9 @@ import pytest
 import canemu
 from canemu.lin import Commander, LinMessage, Responder, protected_id
 
-from conftest import Canemud, load
+from conftest import LIN0, LIN_ADAPTER, fault, load, scenario, toml
 
-LIN = """
-[[bus]]
-name = "lin0"
-kind = "lin"
-bitrate = 19200
-
-[[device]]
-name = "ixxat1"
-model = "ixxat-usb-to-can"
-controllers = ["can0"]
-lin = ["lin0"]
-"""
+EXTRA = toml(LIN0, LIN_ADAPTER)
 
 RATE = 19200
 
@@ -42,13 +31,6 @@ def checksum(data: bytes, pid: int = 0) -> int:
         if total > 0xFF:
             total -= 0xFF
     return ~total & 0xFF
-
-
-@pytest.fixture
-def daemon():
-    d = Canemud("stepped", extra=LIN)
-    yield d
-    d.stop()
 
 
 def now_ns() -> int:
@@ -111,14 +93,8 @@ def test_sleep_and_wakeup(daemon):
 def test_a_fault_scenario_gives_error_messages(daemon):
     with Responder("lin0") as door, Commander("lin0") as master:
         door.set_response(0x21, b"\xAA")
-        load(daemon, """
-[[fault]]
-at = "0s"
-bus = "lin0"
-effect = "lin_checksum_error"
-match = { id = 0x21 }
-count = 1
-""")
+        load(daemon, scenario(
+            fault(at="0s", bus="lin0", effect="lin_checksum_error", match={"id": 0x21}, count=1)))
         drain(master)
         t0 = now_ns()
         master.send_header(0x21)

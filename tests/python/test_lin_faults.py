@@ -10,49 +10,16 @@ import subprocess
 
 import pytest
 
-from conftest import CANEMU_CLI, Canemud, fault_load
+from conftest import CANEMU_CLI, LIN0, LIN_ADAPTER, cli, fault, fault_load, scenario, table, toml
 
-LIN = """
-[[bus]]
-name = "lin0"
-kind = "lin"
-bitrate = 19200
-
-[[device]]
-name = "ixxat1"
-model = "ixxat-usb-to-can"
-controllers = ["can0"]
-lin = ["lin0"]
-
-[[lin_node]]
-name = "door"
-bus = "lin0"
-
-[[lin_node.response]]
-id = 0x20
-data = [0x11, 0x22]
-"""
+EXTRA = toml(LIN0, LIN_ADAPTER, table("[[lin_node]]", name="door", bus="lin0"),
+             table("[[lin_node.response]]", id=0x20, data=[0x11, 0x22]))
 
 # At 19200 bit/s (bit k from the break at floor(k * 1e9 / 19200) ns): a header ends at bit 34,
 # a two-byte response at bit 64, a no-response error 126 bits after the header.
 def at_bits(start_ms: int, bits: int) -> str:
     ns = start_ms * 1_000_000 + bits * 1_000_000_000 // 19200
     return f"({ns // 1_000_000_000:010}.{ns % 1_000_000_000 // 1000:06})"
-
-
-@pytest.fixture
-def daemon():
-    d = Canemud("stepped", extra=LIN)
-    yield d
-    d.stop()
-
-
-def cli(daemon, *args, check=True) -> subprocess.CompletedProcess:
-    done = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, *args],
-                          capture_output=True, text=True, timeout=60)
-    if check:
-        assert done.returncode == 0, done.stderr
-    return done
 
 
 def send(daemon, *frames) -> list[str]:
@@ -96,14 +63,8 @@ def test_a_broken_header_is_what_the_listeners_see_and_nobody_answers(daemon, ef
     dump = subprocess.Popen([str(CANEMU_CLI), "--socket", daemon.socket, "dump", "lin0", "-n", "2"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert "listening on lin0" in dump.stderr.readline()
-    fault_load(daemon, f"""
-[[fault]]
-at = "0s"
-bus = "lin0"
-effect = "{effect}"
-match = {{ id = 0x20 }}
-count = 1
-""")
+    fault_load(daemon, scenario(
+        fault(at="0s", bus="lin0", effect=effect, match={"id": 0x20}, count=1)))
     assert send(daemon, "20#") == []
     cli(daemon, "send", "lin0", "20#", "--step", "30ms")
     out, _ = dump.communicate(timeout=30)

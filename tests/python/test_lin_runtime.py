@@ -14,32 +14,17 @@ import pytest
 import canemu
 from canemu.lin import Responder
 
-from conftest import CANEMU_CLI, REPO, Canemud
+import conftest
+from conftest import LIN0, REPO, Canemud, toml
 
 DOORS = REPO / "tests" / "data" / "lin" / "doors.ldf"
-LIN = """
-[[bus]]
-name = "lin0"
-kind = "lin"
-bitrate = 19200
-"""
+EXTRA = toml(LIN0)
 MS = 1_000_000
 
 
-@pytest.fixture
-def daemon():
-    d = Canemud("stepped", extra=LIN)
-    yield d
-    d.stop()
-
-
 def cli(daemon, *args, check=True) -> subprocess.CompletedProcess:
-    done = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, *args],
-                          capture_output=True, text=True, timeout=60,
-                          env=dict(os.environ, CANEMU_PYTHON=sys.executable))
-    if check:
-        assert done.returncode == 0, done.stderr
-    return done
+    return conftest.cli(daemon, *args, check=check,
+                        env=dict(os.environ, CANEMU_PYTHON=sys.executable))
 
 
 def frames(node) -> list:
@@ -116,7 +101,7 @@ def test_mistakes_change_nothing(daemon, tmp_path):
 
 @pytest.fixture
 def two_buses():
-    d = Canemud("stepped", extra=LIN + LIN.replace("lin0", "lin1"))
+    d = Canemud("stepped", extra=EXTRA + EXTRA.replace("lin0", "lin1"))
     yield d
     d.stop()
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import can
 import pytest
 
-from conftest import CANEMU_CLI, CANEMUD
+from conftest import CAN0, CANEMU_CLI, CANEMUD, table, toml
 from distributed_support import TIMEOUT, frame_ns, wait_until
 
 pytest.importorskip(
@@ -34,20 +34,8 @@ ALONE = 1.0  # seconds host c's peer looks for the bridge (discovery on a link t
 DOMAIN = 1 + (os.getpid() + 101) % 200
 PEER = Path(__file__).with_name("netns_dds_peer.py")
 
-CONFIG = f"""
-[simulation]
-time = "stepped"
-
-[[bus]]
-name = "can0"
-kind = "can"
-bitrate = 500000
-
-[[bridge]]
-kind = "dds"
-bus = "can0"
-domain = {DOMAIN}
-"""
+CONFIG = toml(table("[simulation]", time="stepped"), CAN0,
+              table("[[bridge]]", kind="dds", bus="can0", domain=DOMAIN))
 
 
 class Peer:

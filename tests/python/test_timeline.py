@@ -16,7 +16,7 @@ import pytest
 import canemu
 from canemu.plot import series
 
-from conftest import CANEMU_CLI, REPO, bus_errors, drain, frames, load, ns
+from conftest import CANEMU_CLI, REPO, bus_errors, drain, fault, frames, load, ns, scenario
 
 US = 1_000
 MS = 1_000_000
@@ -62,17 +62,10 @@ def test_the_load_history_has_the_exact_busy_time_of_each_bin(daemon, nodes):
 
 def test_each_counted_error_is_in_the_senders_timeline_at_its_instant(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[scenario]
-name = "three acks missing"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-match = { id = 0x123, mask = 0x7FF }
-effect = "ack_error"
-count = 3
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
+              count=3),
+        name="three acks missing"))
     a.send(msg(0x123))
     canemu.step(5 * MS)
     errors_a = bus_errors(drain(a))
@@ -111,16 +104,9 @@ def test_bad_names_are_refused_with_the_reason(daemon):
 
 def test_plot_draws_the_timeline(daemon, nodes, tmp_path):
     a, _ = nodes
-    load(daemon, """
-[scenario]
-name = "acks missing"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-effect = "ack_error"
-count = 20
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", effect="ack_error", count=20),
+        name="acks missing"))
     a.send(msg(0x123))
     canemu.step(120 * MS)
     t = timeline(daemon, "can0", a.node_name)
@@ -155,17 +141,10 @@ def rows(daemon, bus, node) -> list:
 
 def test_the_plot_shows_every_change_of_a_recovery_at_its_instant(daemon, nodes):
     a, b = nodes
-    load(daemon, """
-[scenario]
-name = "passive"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-match = { id = 0x123, mask = 0x7FF }
-effect = "ack_error"
-count = 16
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
+              count=16),
+        name="passive"))
     for _ in range(40):
         a.send(msg(0x123))
     canemu.step(50 * MS)
@@ -253,17 +232,10 @@ def test_a_python_can_nodes_history_stays_readable_after_it_closed(daemon):
     b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
     drain(a)
     drain(b)
-    load(daemon, """
-[scenario]
-name = "three acks missing"
-
-[[fault]]
-at = "0s"
-bus = "can0"
-match = { id = 0x123, mask = 0x7FF }
-effect = "ack_error"
-count = 3
-""")
+    load(daemon, scenario(
+        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
+              count=3),
+        name="three acks missing"))
     a.send(msg(0x123))
     canemu.step(5 * MS)
     name = a.node_name

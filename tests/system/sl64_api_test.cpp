@@ -17,20 +17,14 @@
 #include <unistd.h>
 
 #include "canemu/firmware_model/bus/can_error.hpp"
+#include "example_program.hpp"
 #include "sl64lib.h"
 #include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 #include "xcan.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::bits_of;
-using testing::data;
-using testing::kBitUs2;
-using testing::step_ns;
-using testing::VciDaemon;
 
 // can0 at 500 kbit/s: IXXAT adapters alpha and beta, the X-CAN-2i xcan0 (interface 0), the
 // SL-CANi sl0 in slot 1 (channel B); can1 for the X-CAN-2i's interface 1.
@@ -449,36 +443,11 @@ TEST(Sl64Api, TheExampleTalksBetweenTwoSlots) {
                "\n[[device]]\nname = \"sl1\"\nmodel = \"sorcus-sl-cani\"\ncontrollers = "
                "[\"can0\"]\nslot = 2\n");
   canemu_sl064_connect(nullptr);  // the example's slots must be free
-  int out[2];
-  ASSERT_EQ(::pipe(out), 0);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, out[1], 1);
-  posix_spawn_file_actions_addclose(&actions, out[0]);
-  std::vector<std::string> args = {SL64_TALK_PATH, "1", "2", "2"};
-  std::vector<char*> argv;
-  for (std::string& a : args) {
-    argv.push_back(a.data());
-  }
-  argv.push_back(nullptr);
-  std::vector<std::string> env_text = {"CANEMU_SOCKET=" + x.vci.daemon.socket()};
-  std::vector<char*> env = {env_text[0].data(), nullptr};
-  pid_t pid = -1;
-  ASSERT_EQ(::posix_spawn(&pid, SL64_TALK_PATH, &actions, nullptr, argv.data(), env.data()), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(out[1]);
-  int status = -1;
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (::waitpid(pid, &status, WNOHANG) == 0 && std::chrono::steady_clock::now() < give_up) {
-    step_ns(1'000'000);
-  }
-  std::string text;
-  char buffer[512];
-  ssize_t n = 0;
-  while ((n = ::read(out[0], buffer, sizeof buffer)) > 0) {
-    text.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(out[0]);
+  ExampleProgram talk;
+  ASSERT_NO_FATAL_FAILURE(talk.start({SL64_TALK_PATH, "1", "2", "2"}, x.vci.daemon.socket()));
+  talk.step_until_exit();
+  const std::string text = talk.output();
+  const int status = talk.status;
   ASSERT_TRUE(WIFEXITED(status)) << text;
   EXPECT_EQ(WEXITSTATUS(status), 0) << text;
   // Per frame: the sender's routine (after the acknowledgement) and the receiver's, in the
@@ -493,4 +462,4 @@ TEST(Sl64Api, TheExampleTalksBetweenTwoSlots) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

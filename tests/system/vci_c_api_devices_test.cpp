@@ -8,16 +8,8 @@
 #include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::bits_of;
-using testing::data;
-using testing::id_of;
-using testing::kBitUs2;
-using testing::step_ns;
-using testing::VciDaemon;
 
 TEST(VciCApi, EnumerationListsEveryAdapterOnceWithItsIdentity) {
   VciDaemon d;
@@ -139,4 +131,4 @@ TEST(VciCApi, WithoutCanemudEveryCallFailsAtOnceAndSaysWhere) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

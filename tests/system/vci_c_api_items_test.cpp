@@ -15,19 +15,8 @@
 #include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::bits_of;
-using testing::data;
-using testing::id_of;
-using testing::ids_of;
-using testing::kBitUs2;
-using testing::kMode;
-using testing::Parts;
-using testing::SimClock;
-using testing::VciDaemon;
 
 // Three adapters on can0: a third one acknowledges while the one under test does not.
 const char* const kThreeAdapters =
@@ -926,4 +915,4 @@ TEST(VciCItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

@@ -12,16 +12,8 @@
 #include "vci_c_test_support.hpp"
 #include "vcinpl.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::bits_of;
-using testing::data;
-using testing::kBitUs2;
-using testing::kMode;
-using testing::step_ns;
-using testing::VciDaemon;
 
 TEST(VciCApi, TwoProgramsOnTwoAdaptersTalkAtExactInstants) {
   VciDaemon d;
@@ -320,4 +312,4 @@ TEST(VciCApi, TwoProgramsOnTwoAdaptersTalkThroughTheCApi) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

@@ -40,6 +40,8 @@ struct LinAdapter {
   }
   std::vector<std::string> texts() const { return texts_but_start(drain()); }
   HRESULT write(bool send, LINMSG m) const { return linControlWriteMessage(control, send, &m); }
+  HRESULT write_null(bool send) const { return linControlWriteMessage(control, send, nullptr); }
+  HRESULT stop() const { return linControlStart(control, FALSE); }
 };
 
 using Texts = std::vector<std::string>;

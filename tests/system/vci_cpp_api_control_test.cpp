@@ -11,17 +11,8 @@
 #include "vci_cpp_test_support.hpp"
 #include "vcisdk.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::drain;
-using testing::end_of;
-using testing::one_byte;
-using testing::open_bal;
-using testing::Ref;
-using testing::step_ns;
-using testing::VciDaemon;
 
 TEST(VciCppApi, TheControlUnitsStatesAndInfoMessages) {
   VciDaemon d;
@@ -209,4 +200,4 @@ TEST(VciCppApi, TheChannelsControlIsExclusiveAListenOnlyLineNeverSendsAndBusLoad
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

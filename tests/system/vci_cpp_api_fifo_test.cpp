@@ -13,16 +13,8 @@
 #include "vci_cpp_test_support.hpp"
 #include "vcisdk.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::drain;
-using testing::end_of;
-using testing::one_byte;
-using testing::Ref;
-using testing::step_ns;
-using testing::VciDaemon;
 
 TEST(VciCppApi, AStandAloneFifoKeepsOrderCountsAndSignalsOnWritesOnly) {
   VciDaemon d;
@@ -347,4 +339,4 @@ TEST(VciCppApi, EchoesOverrunAndDelayThroughTheFifos) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "vci_cpp_test_support.hpp"
+#include "vci_lin_behaviour.hpp"
 #include "vci_lin_test_support.hpp"
 
 namespace canemu::testing {
@@ -48,9 +49,9 @@ struct LinAdapter {
   }
   std::vector<std::string> texts() const { return texts_but_start(drain()); }
   HRESULT write(bool send, LINMSG m) const { return control->WriteMessage(send, &m); }
+  HRESULT write_null(bool send) const { return control->WriteMessage(send, nullptr); }
+  HRESULT stop() const { return control->StopLine(); }
 };
-
-using Texts = std::vector<std::string>;
 
 TEST(VciCppLin, SocketsAndTheControlUnitOpenOnTheLinBusNumberOnly) {  // 133
   VciDaemon d(kLinAdapters);
@@ -109,13 +110,7 @@ TEST(VciCppLin, InitLineTakesOneToTwentyKbitPerSecondAndStartsAfterIt) {  // 134
   EXPECT_EQ(s.dwStatus, 0U);
   ASSERT_EQ(a.control->StopLine(), VCI_OK);
   ASSERT_EQ(a.control->ResetLine(), VCI_OK);
-  std::vector<std::string> got;
-  for (const LINMSG& m : a.drain()) {
-    got.push_back(text_of(m));
-  }
-  EXPECT_EQ(got, (Texts{event_text(stamp(t), LIN_MSGTYPE_INFO, LIN_INFO_START),
-                        event_text(0, LIN_MSGTYPE_INFO, LIN_INFO_STOP),
-                        event_text(0, LIN_MSGTYPE_INFO, LIN_INFO_RESET)}));
+  EXPECT_EQ(texts_of(a.drain()), start_stop_reset(t));
 }
 
 TEST(VciCppLin, MonitorsHoldLinmsgsAndAnExclusiveOneIsAlone) {  // 136, 137
@@ -191,76 +186,6 @@ TEST(VciCppLin, ASlaveAnswersFromItsTableUntilResetLineEmptiesIt) {  // 138, 139
                    event_text(stamp(no_response_at(t2)), LIN_MSGTYPE_ERROR, LIN_ERROR_SLNORE, 0)}));
 }
 
-TEST(VciCppLin, WriteMessageFollowsTheModeAndNeverWaits) {  // 141, 142, 143, 144, 145
-  VciDaemon d(kLinAdapters);
-  LinAdapter master("alpha", LIN_OPMODE_MASTER);
-  LinAdapter slave("beta");
-  EXPECT_EQ(slave.write(false, lin_type(LIN_MSGTYPE_WAKEUP)), VCI_E_INVALIDARG);
-  EXPECT_EQ(slave.write(false, lin_data(0x40, {1})), VCI_E_INVALIDARG);
-  EXPECT_EQ(slave.write(true, lin_data(0x01, {1})), VCI_E_INVALIDARG);
-  EXPECT_EQ(slave.write(true, lin_type(LIN_MSGTYPE_SLEEP)), VCI_E_INVALIDARG);
-  EXPECT_EQ(master.control->WriteMessage(TRUE, nullptr), VCI_E_INVALIDARG);
-  const int64_t t0 = step_to(1'000'000);
-  ASSERT_EQ(master.write(true, lin_data(0x3B, {1, 2, 3, 4, 5, 6, 7, 8})), VCI_OK);
-  EXPECT_EQ(master.write(true, lin_type(LIN_MSGTYPE_WAKEUP)), VCI_E_TXQUEUE_FULL);
-  const int64_t t1 = step_to(10'000'000);
-  ASSERT_EQ(master.write(true, lin_type(LIN_MSGTYPE_SLEEP)), VCI_OK);
-  const int64_t t2 = step_to(10'000'000);
-  ASSERT_EQ(slave.write(true, lin_type(LIN_MSGTYPE_WAKEUP)), VCI_OK);
-  step_to(1'000'000);
-  const std::vector<uint8_t> sleep{0x00, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
-  EXPECT_EQ(master.texts(),
-            (Texts{frame_text(stamp(frame_end(t0, 8)), 0x3B, {1, 2, 3, 4, 5, 6, 7, 8}, true, true),
-                   frame_text(stamp(frame_end(t1, 8)), 0x3C, sleep, false, true),
-                   event_text(stamp(t2 + 250'000), LIN_MSGTYPE_WAKEUP, 0)}));
-  EXPECT_EQ(slave.texts(),
-            (Texts{frame_text(stamp(frame_end(t0, 8)), 0x3B, {1, 2, 3, 4, 5, 6, 7, 8}, true, false),
-                   frame_text(stamp(frame_end(t1, 8)), 0x3C, sleep, false, false)}));
-}
-
-TEST(VciCppLin, CollidingChecksumsAreAChecksumErrorMessage) {  // 146
-  VciDaemon d(kLinAdapters);
-  LinAdapter master("alpha", LIN_OPMODE_MASTER | LIN_OPMODE_ERRORS);
-  LinAdapter beta("beta");
-  LinAdapter gamma("gamma");
-  ASSERT_EQ(beta.write(false, lin_data(0x20, {0x20}, true)), VCI_OK);
-  ASSERT_EQ(gamma.write(false, lin_data(0x20, {0x20}, false)), VCI_OK);
-  const int64_t t0 = step_to(1'000'000);
-  ASSERT_EQ(master.write(true, lin_data(0x20, {}, true, true)), VCI_OK);
-  step_to(10'000'000);
-  EXPECT_EQ(master.texts(),
-            (Texts{event_text(stamp(frame_end(t0, 1)), LIN_MSGTYPE_ERROR, LIN_ERROR_CHKSUM, 0)}));
-}
-
-// A parity error a scenario puts on one header of 20h: every listener reports it at the end of
-// the header and the responder stays silent (the commander reads back what it sent and sees
-// nothing); the next header, past the fault's count, is answered.
-TEST(VciCppLin, AParityErrorFromAScenarioIsAnErrorMessageOfTheListeners) {  // 146
-  VciDaemon d(kLinAdapters);
-  LinAdapter master("alpha", LIN_OPMODE_MASTER | LIN_OPMODE_ERRORS);
-  LinAdapter beta("beta", LIN_OPMODE_SLAVE | LIN_OPMODE_ERRORS);
-  LinAdapter gamma("gamma", LIN_OPMODE_SLAVE | LIN_OPMODE_ERRORS);
-  ASSERT_EQ(beta.write(false, lin_data(0x20, {0x55})), VCI_OK);
-  testing::load_faults(d.daemon,
-                       "[[fault]]\nat = \"0s\"\nbus = \"lin0\"\neffect = \"lin_parity_error\"\n"
-                       "match = { id = 0x20 }\ncount = 1\n");
-  master.drain();
-  beta.drain();
-  gamma.drain();
-  const int64_t t0 = step_to(1'000'000);
-  ASSERT_EQ(master.write(true, lin_data(0x20, {}, true, true)), VCI_OK);
-  const int64_t t1 = step_to(10'000'000);
-  ASSERT_EQ(master.write(true, lin_data(0x20, {}, true, true)), VCI_OK);
-  step_to(10'000'000);
-  const Texts parity{event_text(stamp(after_bits(t0, 34)), LIN_MSGTYPE_ERROR, LIN_ERROR_PARITY, 0)};
-  const std::string answered = frame_text(stamp(frame_end(t1, 1)), 0x20, {0x55}, true, false);
-  EXPECT_EQ(gamma.texts(), (Texts{parity[0], answered}));
-  // The responder's own response is marked as its own; the commander's is not.
-  EXPECT_EQ(beta.texts(),
-            (Texts{parity[0], frame_text(stamp(frame_end(t1, 1)), 0x20, {0x55}, true, true)}));
-  EXPECT_EQ(master.texts(), (Texts{answered}));
-}
-
 TEST(VciCppLin, AFullMonitorMarksItsLastMessage) {  // 148
   VciDaemon d(kLinAdapters);
   LinAdapter master("alpha", LIN_OPMODE_MASTER);
@@ -283,24 +208,7 @@ TEST(VciCppLin, AFullMonitorMarksItsLastMessage) {  // 148
   EXPECT_EQ(got[capacity - 2].uMsgInfo.Bits.ovr, 0U);
 }
 
-TEST(VciCppLin, TimeStampsWrapAfterTwoToThe32Microseconds) {  // 149
-  VciDaemon d(kLinAdapters);
-  LinAdapter master("alpha", LIN_OPMODE_MASTER);
-  LinAdapter slave("beta");
-  slave.drain();
-  const int64_t t0 = step_to(4'294'967'296'000 - 2'000'000);      // 2 ms before the wrap
-  ASSERT_EQ(master.write(true, lin_data(0x07, {0x77})), VCI_OK);  // 54 bits: ends 2.81 ms later
-  step_to(5'000'000);
-  const std::vector<LINMSG> got = slave.drain();
-  ASSERT_EQ(got.size(), 2U);
-  EXPECT_EQ(got[0].uMsgInfo.Bytes.bType, LIN_MSGTYPE_TMOVR);
-  EXPECT_EQ(got[0].uMsgInfo.Bytes.bDlen, 1);
-  EXPECT_EQ(got[0].dwTime, 0U);
-  EXPECT_EQ(text_of(got[1]),
-            frame_text(static_cast<uint32_t>(stamp(frame_end(t0, 1)) & 0xFFFFFFFFU), 0x07, {0x77},
-                       true, false));
-  EXPECT_EQ(got[1].dwTime, 812U);  // 2812 us after t0, 812 us after the wrap
-}
+INSTANTIATE_TYPED_TEST_SUITE_P(VciCppLin, VciLinBehaviour, LinAdapter);
 
 }  // namespace
 }  // namespace canemu::testing

@@ -114,6 +114,15 @@ std::vector<LINMSG> drain_with(Take take) {
   return got;
 }
 
+// The messages as text.
+inline std::vector<std::string> texts_of(const std::vector<LINMSG>& messages) {
+  std::vector<std::string> got;
+  for (const LINMSG& m : messages) {
+    got.push_back(text_of(m));
+  }
+  return got;
+}
+
 // The messages as text, but for the start's info message.
 inline std::vector<std::string> texts_but_start(const std::vector<LINMSG>& messages) {
   std::vector<std::string> got;
@@ -141,6 +150,14 @@ inline std::string event_text(uint32_t time, uint8_t type, uint8_t data0, uint8_
   m.abData[0] = data0;
   m.abData[1] = data1;
   return text_of(m);
+}
+
+// What a monitor gets when its line is started at `t_ns`, stopped and reset: the info messages
+// (stop and reset are stamped 0).
+inline std::vector<std::string> start_stop_reset(int64_t t_ns) {
+  return {event_text(stamp(t_ns), LIN_MSGTYPE_INFO, LIN_INFO_START),
+          event_text(0, LIN_MSGTYPE_INFO, LIN_INFO_STOP),
+          event_text(0, LIN_MSGTYPE_INFO, LIN_INFO_RESET)};
 }
 
 }  // namespace canemu::testing

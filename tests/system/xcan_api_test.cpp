@@ -13,32 +13,13 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include "example_program.hpp"
 #include "vcinpl.h"
 #include "xcan.h"
 #include "xcan_test_support.hpp"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::bits_of;
-using testing::cps;
-using testing::data;
-using testing::g_mutex;
-using testing::g_seen;
-using testing::k250k;
-using testing::k500k;
-using testing::kBitUs2;
-using testing::kConfig;
-using testing::message_of;
-using testing::record;
-using testing::remote_bits;
-using testing::Seen;
-using testing::status_of;
-using testing::step_ns;
-using testing::VciDaemon;
-using testing::wait_seen;
-using testing::XcanDaemon;
 
 // Runs the canemu command line on the daemon's socket to its end; its exit status.
 int run_canemu(const testing::Daemon& d, std::vector<std::string> args) {
@@ -369,30 +350,12 @@ TEST(XcanApi, GeneralIdRemoteFrameAndTheAnswerThroughTheAcceptanceFilter) {
 TEST(XcanApi, TheExampleTalksWithAnIxxatAdapter) {
   XcanDaemon x;
   Adapter alpha("alpha");
-  int out[2];
-  ASSERT_EQ(::pipe(out), 0);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, out[1], 1);
-  posix_spawn_file_actions_addclose(&actions, out[0]);
-  std::vector<std::string> args = {XCAN_TALK_PATH, "xcan0", "0", "0x100", "0x200", "3"};
-  std::vector<char*> argv;
-  for (std::string& a : args) {
-    argv.push_back(a.data());
-  }
-  argv.push_back(nullptr);
-  std::vector<std::string> env_text = {"CANEMU_SOCKET=" + x.vci.daemon.socket()};
-  std::vector<char*> env = {env_text[0].data(), nullptr};
-  pid_t pid = -1;
-  ASSERT_EQ(::posix_spawn(&pid, XCAN_TALK_PATH, &actions, nullptr, argv.data(), env.data()), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(out[1]);
+  ExampleProgram talk;
+  ASSERT_NO_FATAL_FAILURE(
+      talk.start({XCAN_TALK_PATH, "xcan0", "0", "0x100", "0x200", "3"}, x.vci.daemon.socket()));
   std::vector<CANMSG> frames;
   bool answered = false;
-  int status = -1;
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (::waitpid(pid, &status, WNOHANG) == 0 && std::chrono::steady_clock::now() < give_up) {
-    step_ns(1'000'000);
+  talk.step_until_exit([&] {
     for (const CANMSG& m : alpha.frames()) {
       frames.push_back(m);
       if (!answered) {
@@ -400,16 +363,10 @@ TEST(XcanApi, TheExampleTalksWithAnIxxatAdapter) {
         answered = true;
       }
     }
-  }
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
-  std::string text;
-  char buf[256];
-  ssize_t n;
-  while ((n = ::read(out[0], buf, sizeof buf)) > 0) {
-    text.append(buf, static_cast<std::size_t>(n));
-  }
-  ::close(out[0]);
+  });
+  ASSERT_TRUE(WIFEXITED(talk.status));
+  EXPECT_EQ(WEXITSTATUS(talk.status), 0);
+  const std::string text = talk.output();
   ASSERT_EQ(frames.size(), 3u);
   for (UINT8 k = 0; k < 3; ++k) {
     EXPECT_EQ(frames[k].dwMsgId, 0x100u);
@@ -423,4 +380,4 @@ TEST(XcanApi, TheExampleTalksWithAnIxxatAdapter) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

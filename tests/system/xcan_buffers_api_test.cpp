@@ -12,21 +12,8 @@
 #include "xcan.h"
 #include "xcan_test_support.hpp"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::bits_of;
-using testing::cps;
-using testing::data;
-using testing::g_mutex;
-using testing::g_seen;
-using testing::kBitUs2;
-using testing::message_of;
-using testing::record;
-using testing::Seen;
-using testing::step_ns;
-using testing::XcanDaemon;
 
 // Channels `first`, `first + 1`, ... of one kind on interface 0, with direct callbacks (they
 // have run by the time a later service of this program returns).
@@ -220,4 +207,4 @@ TEST(XcanBuffersApi, FilterExample2PassesZeroToSevenAndTwentyToTwentySevenOfAllI
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

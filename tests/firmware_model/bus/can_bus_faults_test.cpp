@@ -6,15 +6,10 @@
 #include "canemu/firmware_model/bus/fault_plan.hpp"
 #include "test_controller.hpp"
 
-namespace canemu::model {
+namespace canemu::model::testing {
 namespace {
 
-using testing::frame;
-using testing::k123;
-using testing::kBit;
-using testing::kZero;
-using testing::TestController;
-using Fixture = testing::BusFixture;
+using Fixture = BusFixture;
 
 FaultRule rule(CanErrorType type, std::optional<uint64_t> count = std::nullopt) {
   FaultRule r;
@@ -509,7 +504,7 @@ TEST(CounterTimeline, EveryCountDownIsKeptAndTheOldestAreForgotten) {
 }
 
 }  // namespace
-}  // namespace canemu::model
+}  // namespace canemu::model::testing
 
 namespace canemu::model {
 namespace {

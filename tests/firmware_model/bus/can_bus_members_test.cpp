@@ -10,13 +10,10 @@
 #include "canemu/firmware_model/bus/fault_plan.hpp"
 #include "test_controller.hpp"
 
-namespace canemu::model {
+namespace canemu::model::testing {
 namespace {
 
-using testing::k123;
-using testing::kBit;
-using testing::TestController;
-using Fixture = testing::BusFixture;
+using Fixture = BusFixture;
 
 // k123 is 62 bits: CRC delimiter at bit 52, ACK slot 53; its arbitration field ends at bit 13.
 constexpr int64_t kFrame = 62;
@@ -247,4 +244,4 @@ TEST(CanBusMembers, AReceiverThatDropsCanFdSeesAFormErrorAfterFdf) {
 }
 
 }  // namespace
-}  // namespace canemu::model
+}  // namespace canemu::model::testing

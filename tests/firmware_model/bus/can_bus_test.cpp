@@ -4,15 +4,10 @@
 
 #include "test_controller.hpp"
 
-namespace canemu::model {
+namespace canemu::model::testing {
 namespace {
 
-using testing::frame;
-using testing::k123;
-using testing::kBit;
-using testing::kZero;
-using testing::TestController;
-using Fixture = testing::BusFixture;
+using Fixture = BusFixture;
 
 TEST(CanBus, TwoNodesExchangeFramesBackToBackWithExactTimes) {
   Fixture f;
@@ -308,4 +303,4 @@ TEST(CanBus, ReceiveCounterFallsByOneAndFromPassiveBackTo127) {
 }
 
 }  // namespace
-}  // namespace canemu::model
+}  // namespace canemu::model::testing

@@ -18,15 +18,14 @@ using namespace testing;  // line_rig.hpp, hosted_station.hpp
 CANCYCLICTXMSG2 cyclic(uint32_t id, uint16_t cycle, uint8_t incr = CAN_CTXMSG_INC_NO,
                        uint8_t index = 0, std::vector<uint8_t> data = {0x11, 0x22},
                        bool ext = false) {
+  const CANMSG2 frame = msg(id, std::move(data), ext);
   CANCYCLICTXMSG2 m{};
   m.wCycleTime = cycle;
   m.bIncrMode = incr;
   m.bByteIndex = index;
-  m.dwMsgId = id;
-  m.uMsgInfo.Bits.type = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = data.size() & 0x0FU;
-  m.uMsgInfo.Bits.ext = ext ? 1 : 0;
-  std::memcpy(m.abData, data.data(), data.size());
+  m.dwMsgId = frame.dwMsgId;
+  m.uMsgInfo = frame.uMsgInfo;
+  std::memcpy(m.abData, frame.abData, sizeof m.abData);
   return m;
 }
 

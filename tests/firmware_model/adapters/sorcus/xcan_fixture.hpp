@@ -30,14 +30,7 @@ inline int64_t frame_ns(const Frame& f) {
 }
 inline constexpr int64_t kIntermission = 3 * kBit;
 
-inline Frame remote_frame(uint32_t id, uint8_t dlc = 0, bool extended = false) {
-  FrameSpec spec;
-  spec.id = id;
-  spec.extended = extended;
-  spec.remote = true;
-  spec.dlc = dlc;
-  return *Frame::create(spec);
-}
+using model::testing::remote_frame;
 // A valid classic data frame; a test that asks for an impossible one stops here, loudly.
 inline Frame data_frame(uint32_t id, std::vector<uint8_t> data, bool extended = false) {
   auto frame = Frame::classic(id, data, extended);

@@ -15,6 +15,7 @@ namespace {
 using namespace i82527;
 using testing::frame;
 using testing::kBit;
+using testing::remote_frame;
 using Bus = testing::BusFixture;
 
 // SOF through EOF, in ns.
@@ -22,15 +23,6 @@ int64_t ns(const Frame& f) {
   return encode(f).length * kBit;
 }
 constexpr int64_t kIntermission = 3 * kBit;
-
-Frame remote_frame(uint32_t id, uint8_t dlc, bool extended = false) {
-  FrameSpec spec;
-  spec.id = id;
-  spec.extended = extended;
-  spec.remote = true;
-  spec.dlc = dlc;
-  return *Frame::create(spec);
-}
 
 struct Interrupt {
   SimTime at;

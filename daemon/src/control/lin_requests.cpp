@@ -33,16 +33,16 @@ std::unique_ptr<ipc::LinNodeReply> answer_lin_nodes(Simulation& sim, const ipc::
       break;
     }
     case ipc::LinNodeOp::power:
-      if (auto e = sim.power_lin_node(name, m.on != 0)) {
-        error = *e;
+      if (auto done = sim.power_lin_node(name, m.on != 0); !done) {
+        error = done.error().what();
       } else {
         log::info("lin: {} switched {}", name, m.on ? "on" : "off");
       }
       break;
     case ipc::LinNodeOp::schedule: {
       const std::string table = ipc::name_of(m.table);
-      if (auto e = sim.run_lin_schedule(name, table)) {
-        error = *e;
+      if (auto done = sim.run_lin_schedule(name, table); !done) {
+        error = done.error().what();
       } else {
         log::info("lin: {} {}", name,
                   table.empty() ? std::string("stops its schedule")
@@ -51,8 +51,8 @@ std::unique_ptr<ipc::LinNodeReply> answer_lin_nodes(Simulation& sim, const ipc::
       break;
     }
     case ipc::LinNodeOp::remove:
-      if (auto e = sim.remove_lin_node(name)) {
-        error = *e;
+      if (auto done = sim.remove_lin_node(name); !done) {
+        error = done.error().what();
       } else {
         log::info("lin: {} removed", name);
       }

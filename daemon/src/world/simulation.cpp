@@ -85,8 +85,8 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
     sim->add_bus(b);
   }
   for (const DeviceConfig& d : sim->config_.devices) {
-    if (auto error = sim->add_device(d)) {
-      errors.push_back(*error);
+    if (auto added = sim->add_device(d); !added) {
+      errors.push_back(added.error().what());
     }
   }
   // The configuration reader checked that each node's bus is a LIN bus.
@@ -96,19 +96,23 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
         make_lin_node(n, bus, *sim->lin_buses_[bus], sim->config_.buses[bus].bitrate));
   }
   for (const RecorderConfig& r : sim->config_.recorders) {
-    if (auto error = sim->add_recorder(r)) {
-      errors.push_back(*error);
+    if (auto added = sim->add_recorder(r); !added) {
+      errors.push_back(added.error().what());
     }
   }
   for (const BridgeConfig& b : sim->config_.bridges) {
     if (auto added = sim->add_bridge(b); !added) {
-      errors.push_back(fmt::format("{}:{}: {}", sim->config_.source, b.line, added.error()));
+      errors.push_back(fmt::format("{}: {}", sim->place(b.line), added.error()));
     }
   }
   if (!errors.empty()) {
     return tl::unexpected(errors);
   }
   return sim;
+}
+
+std::string Simulation::place(uint32_t line) const {
+  return fmt::format("{}:{}", config_.source, line);
 }
 
 std::optional<HostedNodeSettings> Simulation::bus_timing(std::size_t bus) const {
@@ -145,7 +149,7 @@ std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {
   return std::nullopt;
 }
 
-std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
+Result<> Simulation::add_device(const DeviceConfig& d) {
   if (d.model == DeviceModel::sorcus_x_can_2i) {
     return add_xcan(d);
   }
@@ -159,21 +163,25 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     const BusConfig& bc = config_.buses[bus];
     // Checked against the bus as it runs (a reload leaves changed buses as they were).
     if (bc.kind == BusKind::lin) {
-      return fmt::format("{}:{}: device {}: bus {} is a LIN bus; a CAN controller cannot sit on it",
-                         config_.source, d.line, d.name, bc.name);
+      return fail(Errc::bad_argument,
+                  fmt::format("device {}: bus {} is a LIN bus; a CAN controller cannot sit on it",
+                              d.name, bc.name),
+                  place(d.line));
     }
     const bool fd = d.model != DeviceModel::ixxat_usb_to_can;
     const auto timing = node_timing(fd, node_rates(bc, fd));
     if (!timing) {
-      return fmt::format("{}:{}: device {}: {} cannot run bus {} at {} bit/s", config_.source,
-                         d.line, d.name, fd ? "the CAN FD controller" : "an SJA1000 at 16 MHz",
-                         bc.name, bc.bitrate);
+      return fail(
+          Errc::bad_bit_timing,
+          fmt::format("device {}: {} cannot run bus {} at {} bit/s", d.name,
+                      fd ? "the CAN FD controller" : "an SJA1000 at 16 MHz", bc.name, bc.bitrate),
+          place(d.line));
     }
     buses.push_back(bus);
   }
   std::vector<DeviceRegistry::LinController> lin;
-  if (auto error = lin_controllers(d, lin)) {
-    return error;
+  if (auto added = lin_controllers(d, lin); !added) {
+    return added;
   }
   std::vector<DeviceRegistry::Controller> controllers;
   for (std::size_t i = 0; i < buses.size(); ++i) {
@@ -198,16 +206,17 @@ std::optional<std::string> Simulation::add_device(const DeviceConfig& d) {
     controllers.push_back(std::move(c));
   }
   devices_.add_configured(d, std::move(controllers), std::move(lin));
-  return std::nullopt;
+  return {};
 }
 
-std::optional<std::string> Simulation::lin_controllers(
-    const DeviceConfig& d, std::vector<DeviceRegistry::LinController>& out) {
+Result<> Simulation::lin_controllers(const DeviceConfig& d,
+                                     std::vector<DeviceRegistry::LinController>& out) {
   for (std::size_t i = 0; i < d.lin.size(); ++i) {
     const std::size_t bus = *bus_index(d.lin[i]);
     if (lin_buses_[bus] == nullptr) {  // checked against the bus as it runs
-      return fmt::format("{}:{}: device {}: bus {} is not a LIN bus", config_.source, d.line,
-                         d.name, d.lin[i]);
+      return fail(Errc::bad_argument,
+                  fmt::format("device {}: bus {} is not a LIN bus", d.name, d.lin[i]),
+                  place(d.line));
     }
     // Offline until an application initializes and starts it, as on a real adapter.
     out.push_back(DeviceRegistry::LinController{
@@ -215,34 +224,36 @@ std::optional<std::string> Simulation::lin_controllers(
         std::make_shared<ixxat::LinLine>(scheduler_, *lin_buses_[bus], ixxat::Clocks{},
                                          scheduler_.now())});
   }
-  return std::nullopt;
+  return {};
 }
 
 // The module programs its chips itself (XCAN_BITPARAMS from a client, 20 kbit/s until then), so
 // the buses' rates are not checked here.
-std::optional<std::string> Simulation::add_xcan(const DeviceConfig& d) {
+Result<> Simulation::add_xcan(const DeviceConfig& d) {
   DeviceRegistry::Xcan x;
   x.config = d;
   for (const std::string& bus_name : d.controllers) {
     const std::size_t bus = *bus_index(bus_name);
     const BusConfig& bc = config_.buses[bus];
     if (bc.kind != BusKind::can) {
-      return fmt::format("{}:{}: device {}: bus {} is not a classic CAN bus", config_.source,
-                         d.line, d.name, bc.name);
+      return fail(Errc::bad_argument,
+                  fmt::format("device {}: bus {} is not a classic CAN bus", d.name, bc.name),
+                  place(d.line));
     }
     x.buses.push_back(bus);
   }
   if (x.buses.size() != 2) {
-    return fmt::format("{}:{}: device {}: an X-CAN-2i has 2 interfaces", config_.source, d.line,
-                       d.name);
+    return fail(Errc::bad_argument, fmt::format("device {}: an X-CAN-2i has 2 interfaces", d.name),
+                place(d.line));
   }
   const bool low0 = config_.buses[x.buses[0]].low_speed;
   const bool low1 = config_.buses[x.buses[1]].low_speed;
   if (low0 && !low1) {
-    return fmt::format(
-        "{}:{}: device {}: no X-CAN-2i variant has interface 0 low-speed and 1 "
-        "high-speed",
-        config_.source, d.line, d.name);
+    return fail(Errc::bad_argument,
+                fmt::format("device {}: no X-CAN-2i variant has interface 0 low-speed and 1 "
+                            "high-speed",
+                            d.name),
+                place(d.line));
   }
   const auto variant = low0   ? model::sorcus::XcanVariant::f
                        : low1 ? model::sorcus::XcanVariant::m
@@ -257,22 +268,24 @@ std::optional<std::string> Simulation::add_xcan(const DeviceConfig& d) {
     x.device->module().connect(i, *buses_[x.buses[i]]);
   }
   devices_.add_xcan(std::move(x));
-  return std::nullopt;
+  return {};
 }
 
 // The driver programs the 82527 from the EEPROM at sl064_config_module (20 kbit/s from the
 // factory), so the bus's rate is not checked here. The state file: the configured one, else
 // $STATE_DIRECTORY/NAME.eeprom under systemd, else none.
-std::optional<std::string> Simulation::add_slcan(const DeviceConfig& d) {
+Result<> Simulation::add_slcan(const DeviceConfig& d) {
   const std::size_t bus = *bus_index(d.controllers.at(0));
   const BusConfig& bc = config_.buses[bus];
   if (bc.kind != BusKind::can || bc.low_speed) {
-    return fmt::format("{}:{}: device {}: bus {} is not a high-speed classic CAN bus",
-                       config_.source, d.line, d.name, bc.name);
+    return fail(
+        Errc::bad_argument,
+        fmt::format("device {}: bus {} is not a high-speed classic CAN bus", d.name, bc.name),
+        place(d.line));
   }
   if (d.slot < 0 || d.slot > 5 || devices_.find_slcan_slot(static_cast<unsigned>(d.slot))) {
-    return fmt::format("{}:{}: device {}: slot {} is not free", config_.source, d.line, d.name,
-                       d.slot);
+    return fail(Errc::exists, fmt::format("device {}: slot {} is not free", d.name, d.slot),
+                place(d.line));
   }
   std::string state = d.eeprom;
   if (state.empty()) {
@@ -285,12 +298,12 @@ std::optional<std::string> Simulation::add_slcan(const DeviceConfig& d) {
   auto device =
       std::make_shared<SlcanDevice>(d.name, scheduler_, static_cast<uint8_t>(d.slot), state);
   if (auto loaded = device->load(); !loaded) {
-    return fmt::format("{}:{}: device {}: EEPROM state: {}", config_.source, d.line, d.name,
-                       loaded.error());
+    return fail(Errc::io, fmt::format("device {}: EEPROM state: {}", d.name, loaded.error()),
+                place(d.line));
   }
   device->module().connect(*buses_[bus]);
   devices_.add_slcan(DeviceRegistry::Slcan{d, bus, std::move(device)});
-  return std::nullopt;
+  return {};
 }
 
 Simulation::DeviceLease Simulation::add_ephemeral(std::string name, std::size_t bus,

@@ -16,28 +16,29 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
-std::optional<std::string> Simulation::add_recorder(const RecorderConfig& r) {
+Result<> Simulation::add_recorder(const RecorderConfig& r) {
   const std::size_t bus = *bus_index(r.bus);
   const BusConfig& bc = config_.buses[bus];
   if (lin_buses_[bus] != nullptr) {
     auto recorder = Recorder::start_lin(r, bus, *lin_buses_[bus]);
     if (!recorder) {
-      return fmt::format("{}:{}: {}", config_.source, r.line, recorder.error());
+      return fail(Errc::io, recorder.error(), place(r.line));
     }
     recorders_.push_back(std::move(*recorder));
-    return std::nullopt;
+    return {};
   }
   const auto timing = bus_timing(bus);
   if (!timing) {
-    return fmt::format("{}:{}: recorder of {}: no controller runs at {} bit/s", config_.source,
-                       r.line, r.bus, bc.bitrate);
+    return fail(Errc::bad_bit_timing,
+                fmt::format("recorder of {}: no controller runs at {} bit/s", r.bus, bc.bitrate),
+                place(r.line));
   }
   auto recorder = Recorder::start(r, bus, nodes_.spare(bus), *timing);
   if (!recorder) {
-    return fmt::format("{}:{}: {}", config_.source, r.line, recorder.error());
+    return fail(Errc::io, recorder.error(), place(r.line));
   }
   recorders_.push_back(std::move(*recorder));
-  return std::nullopt;
+  return {};
 }
 
 tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b) {

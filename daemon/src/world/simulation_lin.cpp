@@ -53,8 +53,7 @@ std::optional<ScenarioRunner::LinNodeRef> Simulation::find_lin_node(std::string_
 }
 
 // Names are scoped by bus: `name` is "BUS/NAME", or a NAME that only one bus has.
-tl::expected<std::vector<SimulatedLinNode>::iterator, std::string> Simulation::find_lin_named(
-    std::string_view name) {
+Result<std::vector<SimulatedLinNode>::iterator> Simulation::find_lin_named(std::string_view name) {
   const auto [bus, node] = split_lin_name(name);
   std::vector<std::vector<SimulatedLinNode>::iterator> found;
   for (auto it = lin_nodes_.begin(); it != lin_nodes_.end(); ++it) {
@@ -63,15 +62,16 @@ tl::expected<std::vector<SimulatedLinNode>::iterator, std::string> Simulation::f
     }
   }
   if (found.empty()) {
-    return tl::unexpected(fmt::format("no simulated LIN node named \"{}\"", name));
+    return fail(Errc::not_found, fmt::format("no simulated LIN node named \"{}\"", name));
   }
   if (found.size() > 1) {
     std::vector<std::string> where;
     for (auto it : found) {
       where.push_back(fmt::format("{}/{}", config_.buses[it->bus].name, it->name));
     }
-    return tl::unexpected(fmt::format("LIN nodes named \"{}\" are on several buses: name one as {}",
-                                      name, fmt::join(where, " or ")));
+    return fail(Errc::bad_argument,
+                fmt::format("LIN nodes named \"{}\" are on several buses: name one as {}", name,
+                            fmt::join(where, " or ")));
   }
   return found.front();
 }
@@ -119,47 +119,49 @@ tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::loa
   return names;
 }
 
-std::optional<std::string> Simulation::power_lin_node(const std::string& name, bool on) {
+Result<> Simulation::power_lin_node(const std::string& name, bool on) {
   auto found = find_lin_named(name);
   if (!found) {
-    return found.error();
+    return tl::unexpected(found.error());
   }
   auto it = *found;
   it->ecu->set_powered(on);
-  return std::nullopt;
+  return {};
 }
 
-std::optional<std::string> Simulation::run_lin_schedule(const std::string& name,
-                                                        const std::string& table) {
+Result<> Simulation::run_lin_schedule(const std::string& name, const std::string& table) {
   auto found = find_lin_named(name);
   if (!found) {
-    return found.error();
+    return tl::unexpected(found.error());
   }
   auto it = *found;
   if (table.empty()) {
     it->ecu->stop_schedule();
-    return std::nullopt;
+    return {};
   }
   for (const SimulatedLinNode& other : lin_nodes_) {
     if (&other != &*it && other.bus == it->bus && !other.ecu->running_schedule().empty()) {
-      return fmt::format("{} is the commander of {} already (running {}); stop its schedule first",
-                         other.name, config_.buses[it->bus].name, other.ecu->running_schedule());
+      return fail(
+          Errc::bad_argument,
+          fmt::format("{} is the commander of {} already (running {}); stop its schedule first",
+                      other.name, config_.buses[it->bus].name, other.ecu->running_schedule()));
     }
   }
   if (!it->ecu->run_schedule(table)) {
-    return fmt::format("node {} has no schedule table named \"{}\"", name, table);
+    return fail(Errc::not_found,
+                fmt::format("node {} has no schedule table named \"{}\"", name, table));
   }
-  return std::nullopt;
+  return {};
 }
 
-std::optional<std::string> Simulation::remove_lin_node(const std::string& name) {
+Result<> Simulation::remove_lin_node(const std::string& name) {
   auto found = find_lin_named(name);
   if (!found) {
-    return found.error();
+    return tl::unexpected(found.error());
   }
   auto it = *found;
   lin_nodes_.erase(it);
-  return std::nullopt;
+  return {};
 }
 
 }  // namespace canemu::daemon

@@ -128,8 +128,8 @@ ReloadReport Simulation::reload(const Config& fresh) {
     }
     if (devices_.exists(d.name)) {
       r.refused.push_back(fmt::format("device {}: an ephemeral device has that name", d.name));
-    } else if (auto error = add_device(d)) {
-      r.refused.push_back(*error);
+    } else if (auto added = add_device(d); !added) {
+      r.refused.push_back(added.error().what());
     } else {
       config_.devices.push_back(d);
       devices_.announce(ipc::NotificationKind::device_added, d.name);

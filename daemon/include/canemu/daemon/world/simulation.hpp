@@ -18,6 +18,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/bridges/bridge.hpp"
 #include "canemu/daemon/bridges/recorder.hpp"
 #include "canemu/daemon/bridges/socketcan_bridge.hpp"
@@ -90,9 +91,9 @@ class Simulation {
       std::string_view text, const std::string& source);
   // Switches node `name` ("BUS/NAME", or a NAME only one bus has) on or off, runs its schedule
   // table `table` ("": stops its schedule), or removes it; the reason when it cannot.
-  std::optional<std::string> power_lin_node(const std::string& name, bool on);
-  std::optional<std::string> run_lin_schedule(const std::string& name, const std::string& table);
-  std::optional<std::string> remove_lin_node(const std::string& name);
+  Result<> power_lin_node(const std::string& name, bool on);
+  Result<> run_lin_schedule(const std::string& name, const std::string& table);
+  Result<> remove_lin_node(const std::string& name);
 
   // The timing of a node on bus `bus` at the bus's rates (nothing if no controller runs them).
   std::optional<model::HostedNodeSettings> bus_timing(std::size_t bus) const;
@@ -183,20 +184,20 @@ class Simulation {
   // A LIN controller ("DEVICE:N", configured or ephemeral) or a simulated LIN node, by name.
   std::optional<ScenarioRunner::LinNodeRef> find_lin_node(std::string_view name) const;
   // A simulated LIN node by "BUS/NAME", or by a NAME that only one bus has; else the reason.
-  tl::expected<std::vector<SimulatedLinNode>::iterator, std::string> find_lin_named(
-      std::string_view name);
+  Result<std::vector<SimulatedLinNode>::iterator> find_lin_named(std::string_view name);
 
   void add_bus(const BusConfig& b);
   // Builds a device whose buses exist; an error (and nothing added) if a controller cannot run
   // its bus's timing.
-  std::optional<std::string> add_device(const DeviceConfig& d);
-  std::optional<std::string> add_xcan(const DeviceConfig& d);
+  Result<> add_device(const DeviceConfig& d);
+  // "FILE:LINE" of the configuration, where an error about line `line` of it is.
+  std::string place(uint32_t line) const;
+  Result<> add_xcan(const DeviceConfig& d);
   // The device's LIN controllers (config `lin`), on LIN buses that exist.
-  std::optional<std::string> lin_controllers(const DeviceConfig& d,
-                                             std::vector<DeviceRegistry::LinController>& out);
+  Result<> lin_controllers(const DeviceConfig& d, std::vector<DeviceRegistry::LinController>& out);
 
-  std::optional<std::string> add_recorder(const RecorderConfig& r);
-  std::optional<std::string> add_slcan(const DeviceConfig& d);
+  Result<> add_recorder(const RecorderConfig& r);
+  Result<> add_slcan(const DeviceConfig& d);
   void remove_ephemeral(const std::string& name);
 
   // Declared in the order they depend on each other (and are destroyed in reverse).

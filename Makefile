@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 SOURCES = $(shell git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.h' '*.c' '*.inc' 2>/dev/null)
 
-.PHONY: all deps configure build test asan bench bench-compare fuzz fuzz-long soak format format-check run clean install package
+.PHONY: all deps configure build test tidy asan bench bench-compare fuzz fuzz-long soak format format-check run clean install package
 
 all: build
 
@@ -35,6 +35,10 @@ package: build
 # suites under .venv and .venv-debian (tests/CMakeLists.txt; tests/README.md).
 test: deps build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
+
+# clang-tidy over the daemon's sources with .clang-tidy's checks, every finding an error.
+tidy: deps build
+	scripts/tidy.sh $(BUILD_DIR)
 
 asan: deps
 	cmake -S . -B $(ASAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCANEMU_SANITIZE=ON \

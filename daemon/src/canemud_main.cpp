@@ -40,7 +40,8 @@ std::string canemu_command(const char* argv0) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// An exception out of main is a bug of canemud: it ends the process with its message.
+int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   using namespace canemu::daemon;
   CLI::App app{"canemud: emulated IXXAT and SORCUS CAN/LIN adapters"};
   std::string config_file;

@@ -200,8 +200,10 @@ class DdsTransport final : public BridgeTransport {
                       lost);
       }
     }
-    const bool more = take<canemu_dds_Frame>(tx_, bridge, tx_topic_) |
-                      take<can_msgs_msg_dds__Frame_>(ros_to_, bridge, ros_to_topic_);
+    // Both readers are served on every turn, whatever the first one had.
+    const bool more_frames = take<canemu_dds_Frame>(tx_, bridge, tx_topic_);
+    const bool more_ros = take<can_msgs_msg_dds__Frame_>(ros_to_, bridge, ros_to_topic_);
+    const bool more = more_frames || more_ros;
     if (more) {
       ring();  // the rest on the loop's next turn
     }

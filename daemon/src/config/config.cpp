@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
@@ -197,7 +198,7 @@ void read_buses(Checker& c, const toml::table& root, Config& cfg) {
         c.error(*t.get("sample_point"), path + ".sample_point",
                 fmt::format("{} is outside 0.5..0.95", *sp));
       } else {
-        bus.sample_point = static_cast<uint32_t>(*sp * 1000 + 0.5);
+        bus.sample_point = static_cast<uint32_t>(std::lround(*sp * 1000));
       }
     }
     if (t.get("data_bitrate") != nullptr) {

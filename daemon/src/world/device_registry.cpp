@@ -18,15 +18,15 @@ void DeviceRegistry::add_configured(DeviceConfig config, std::vector<Controller>
       Configured{std::move(config), std::move(controllers), next_vci_id_++, std::move(lin)});
 }
 
-void DeviceRegistry::add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node,
-                                   uint32_t owner_pid,
+void DeviceRegistry::add_ephemeral(const std::string& name, std::size_t bus,
+                                   model::HostedNode& node, uint32_t owner_pid,
                                    std::shared_ptr<model::ixxat::CanLine> line) {
   const uint64_t vci_id = line ? next_vci_id_++ : 0;
   ephemeral_.push_back(Ephemeral{name, bus, &node, owner_pid, std::move(line), vci_id});
   announce(ipc::NotificationKind::device_added, name);
 }
 
-void DeviceRegistry::add_lin_ephemeral(std::string name, std::size_t bus, uint32_t owner_pid,
+void DeviceRegistry::add_lin_ephemeral(const std::string& name, std::size_t bus, uint32_t owner_pid,
                                        std::shared_ptr<model::ixxat::LinLine> line) {
   lin_ephemeral_.push_back(LinEphemeral{name, bus, owner_pid, std::move(line), next_vci_id_++});
   announce(ipc::NotificationKind::device_added, name);

@@ -66,6 +66,7 @@ Result<std::vector<SimulatedLinNode>::iterator> Simulation::find_lin_named(std::
   }
   if (found.size() > 1) {
     std::vector<std::string> where;
+    where.reserve(found.size());
     for (auto it : found) {
       where.push_back(fmt::format("{}/{}", config_.buses[it->bus].name, it->name));
     }

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -50,10 +51,10 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
       const lin::LinBusStats& st = lin->stats();
       s.frames = st.frames;
       s.error_frames = st.errors;
-      s.load_permille = static_cast<uint32_t>(lin->load_percent(now) * 10 + 0.5);
+      s.load_permille = static_cast<uint32_t>(std::lround(lin->load_percent(now) * 10));
       continue;
     }
-    s.load_permille = static_cast<uint32_t>(b.bus_load_percent(now) * 10 + 0.5);
+    s.load_permille = static_cast<uint32_t>(std::lround(b.bus_load_percent(now) * 10));
     s.frames = b.frames_on_bus();
     s.error_frames = b.error_frames_on_bus();
   }

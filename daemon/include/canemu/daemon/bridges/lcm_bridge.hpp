@@ -25,7 +25,7 @@
 #include "canemu/daemon/bridges/bridge.hpp"
 #include "canemu/daemon/config/names.hpp"
 
-struct _lcm_t;  // LCM's lcm_t, for tests
+struct _lcm_t;  // NOLINT(bugprone-reserved-identifier): LCM's own name of lcm_t, for tests
 
 namespace canemu::daemon {
 

@@ -67,7 +67,7 @@ class Distributed final : public RemoteBuses, public Doorbell {
                                                                              const Config& config);
   // The link of `sim`, which opened it with open_remote; nullptr without [distributed].
   static Distributed* of(Simulation& sim);
-  ~Distributed();
+  ~Distributed() override;
   Distributed(const Distributed&) = delete;
   Distributed& operator=(const Distributed&) = delete;
 

@@ -103,9 +103,9 @@ class DeviceRegistry {
   std::shared_ptr<SlcanDevice> find_slcan_slot(unsigned slot) const;
 
   // An ephemeral device with its one node; a VCI adapter when `line` is set.
-  void add_ephemeral(std::string name, std::size_t bus, model::HostedNode& node, uint32_t owner_pid,
-                     std::shared_ptr<model::ixxat::CanLine> line = nullptr);
-  void add_lin_ephemeral(std::string name, std::size_t bus, uint32_t owner_pid,
+  void add_ephemeral(const std::string& name, std::size_t bus, model::HostedNode& node,
+                     uint32_t owner_pid, std::shared_ptr<model::ixxat::CanLine> line = nullptr);
+  void add_lin_ephemeral(const std::string& name, std::size_t bus, uint32_t owner_pid,
                          std::shared_ptr<model::ixxat::LinLine> line);
   // Removes the ephemeral device `name`, CAN or LIN.
   void remove_ephemeral(std::string_view name);

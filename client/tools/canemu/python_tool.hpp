@@ -25,3 +25,11 @@ PythonRun run_python_module(const std::string& module, const std::vector<std::st
                             const std::string& input, bool capture_output);
 
 }  // namespace canemu::cli
+
+namespace canemu::cli {
+
+// Replaces this process with `python3 -m MODULE ARGS` (python_interpreter() chooses which), for
+// a module that runs as long as the command (canemu web); returns why only when that failed.
+std::string exec_python_module(const std::string& module, const std::vector<std::string>& args);
+
+}  // namespace canemu::cli

@@ -84,10 +84,13 @@ def make_app(feed: Feed, allow_control: bool, chart_js: Path = CHART_JS):
             await response.write(b"data: " + json.dumps(feed.snapshot()).encode() + b"\n\n")
             while True:
                 try:
-                    text = await asyncio.wait_for(queue.get(), 15)
-                    await response.write(b"data: " + text.encode() + b"\n\n")
-                except asyncio.TimeoutError:
+                    text = await asyncio.wait_for(queue.get(), 5)
+                except asyncio.TimeoutError:  # also finds a page that has gone
                     await response.write(b": keep-alive\n\n")
+                    continue
+                if text is None:  # canemu web ends
+                    break
+                await response.write(b"data: " + text.encode() + b"\n\n")
         except (ConnectionResetError, asyncio.CancelledError):
             pass
         finally:
@@ -104,6 +107,11 @@ def make_app(feed: Feed, allow_control: bool, chart_js: Path = CHART_JS):
     async def no_icon(request):
         return web.Response(status=204)
 
+    async def end_streams(app):
+        for queue in list(feed.subscribers):
+            queue.put_nowait(None)
+
+    app.on_shutdown.append(end_streams)
     app.router.add_get("/", index)
     app.router.add_get("/favicon.ico", no_icon)
     app.router.add_get("/chart.js", chart)

@@ -289,7 +289,8 @@ def test_actions_with_allow_control(daemon, node):
         faults = len(status(daemon)["faults"])
         for body, words in (({"effect": "no_such"}, "\"effect\" must be one of"),
                             ({"effect": "bus_off", "color": "x"}, "unknown key 'color'"),
-                            ({"effect": "bus_off", "node": "a b"}, "is not a value")):
+                            ({"effect": "bus_off", "node": "a b"}, "is not a value"),
+                            ({"effect": "bus_off", "node": "--help"}, "is not a value")):
             code, text = web.post("/api/fault", body)
             assert code == 400 and words in text, text
         code, text = web.post("/api/fault", "{not json")

@@ -28,7 +28,8 @@ OPTIONS = {"bus": "--bus", "node": "--node", "id": "--id", "mask": "--mask", "at
            "probability": "--probability", "bit_error_rate": "--bit-error-rate", "tec": "--tec",
            "rec": "--rec", "ppm": "--ppm", "wire": "--wire", "data": "--data", "from": "--from",
            "where": "--where", "pulse": "--pulse"}
-VALUE = re.compile(r"^[A-Za-z0-9_.:+-]{1,64}$")
+# A value: no option of its own (a leading "-" only for a negative number, as --ppm takes).
+VALUE = re.compile(r"^(-[0-9][0-9.]*|[A-Za-z0-9_.:+][A-Za-z0-9_.:+-]{0,63})$")
 
 
 def _uid_of_tcp_peer(peer_host: str, peer_port: int, local_port: int) -> Optional[int]:
@@ -95,7 +96,8 @@ def fault_arguments(body: Dict[str, Any], action: str) -> List[str]:
             raise ValueError(f"unknown key {key!r}; the keys are effect, {', '.join(OPTIONS)}")
         text = str(value)
         if isinstance(value, (dict, list)) or not VALUE.match(text):
-            raise ValueError(f"{key}: {text[:40]!r} is not a value (letters, digits, _.:+-)")
+            raise ValueError(f"{key}: {text[:40]!r} is not a value (letters, digits, _.:+-; "
+                             "a leading - only for a negative number)")
         args += [OPTIONS[key], text]
     return args
 

@@ -123,7 +123,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/packaging/debian/lintian-overrides
 # can.Bus(interface="canemu") work and bring the pytest plugin (docs/testing.md).
 set(CANEMU_PYTHON_DIR lib/python3/dist-packages)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu DESTINATION ${CANEMU_PYTHON_DIR}
-        FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
+        FILES_MATCHING PATTERN "*.py" PATTERN "web_static/*" PATTERN "__pycache__" EXCLUDE)
 # The LCM bridge's message types (docs/bridges.md): Python beside canemu, the C++ headers lcm-gen
 # made (<canemu_lcm/frame_t.hpp>) and the .lcm files for other languages' lcm-gen.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu_lcm DESTINATION ${CANEMU_PYTHON_DIR}
@@ -166,7 +166,8 @@ set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS_POLICY ">=")
 set(CPACK_STRIP_FILES ON)
 # init-system-helpers: deb-systemd-helper and deb-systemd-invoke in the maintainer scripts.
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, init-system-helpers (>= 1.54~), python3, python3-can")
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")  # canemu plot
+# canemu plot; canemu web (docs/web.md)
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib, python3-aiohttp, libjs-chart.js")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "mono-runtime")  # the VCI .NET assembly (/usr/lib/cli/canemu)
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/packaging/debian/conffiles ${PROJECT_SOURCE_DIR}/packaging/debian/postinst

@@ -40,6 +40,8 @@ fi
 # .venv-debian: Debian's python3-can (4.1) and pytest, with the same interface on top, and the
 #   LDF import's packages (requirements-lin.txt).
 py=/usr/bin/python3
+# Playwright (canemu web's browser test) drives Debian's chromium: it never downloads a browser.
+export PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1
 want=$(cat requirements.txt requirements-lin.txt client/python/pyproject.toml | sha256sum | cut -d' ' -f1)
 make_venv() {  # DIR, then venv options
   local dir=$1

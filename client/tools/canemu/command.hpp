@@ -45,6 +45,7 @@ Command add_fault(CLI::App& app, const std::string& socket);
 Command add_time(CLI::App& app, const std::string& socket);
 Command add_eeprom(CLI::App& app, const std::string& socket);
 Command add_lin(CLI::App& app, const std::string& socket);
+Command add_web(CLI::App& app, const std::string& socket);
 Command add_calc(CLI::App& app);
 
 // How long connect() keeps trying while nobody listens on the socket (the global --wait option),

@@ -159,7 +159,8 @@ std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
   e.family("canemu_sim_achieved_scale", "gauge",
            "Simulated seconds per real second over the last second (real and scaled time).");
   e.sample("canemu_sim_achieved_scale", "", fmt::format("{:.3f}", s.achieved_scale));
-  e.family("canemu_pacing_lateness_seconds", "gauge",
+  // A summary: quantiles and the count of measurements (no sum: canemud keeps none).
+  e.family("canemu_pacing_lateness_seconds", "summary",
            "Real and scaled time: how late canemud ran simulated events, woke for its timer "
            "deadlines and saw its timer fire (what: events, wakeups, timer), since start or over "
            "the last second (window), as quantiles 0.5, 0.99 and 1 (the max); 0 in stepped time.");
@@ -171,6 +172,8 @@ std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
                fmt::format("what=\"{}\",window=\"{}\",quantile=\"{}\"", what, window, q),
                fmt::format("{:.9f}", static_cast<double>(ns) / 1e9));
     }
+    e.sample("canemu_pacing_lateness_seconds_count",
+             fmt::format("what=\"{}\",window=\"{}\"", what, window), f.count);
   };
   lateness("events", "start", s.pacing.events);
   lateness("events", "last_second", s.pacing.events_last);

@@ -119,4 +119,17 @@ PythonRun run_python_module(const std::string& module, const std::vector<std::st
   return run;
 }
 
+std::string exec_python_module(const std::string& module, const std::vector<std::string>& args) {
+  const std::string interpreter = python_interpreter();
+  std::vector<std::string> words{interpreter, "-m", module};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) {
+    argv.push_back(w.data());
+  }
+  argv.push_back(nullptr);
+  ::execvp(interpreter.c_str(), argv.data());
+  return interpreter + ": " + std::strerror(errno);
+}
+
 }  // namespace canemu::cli

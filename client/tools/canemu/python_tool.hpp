@@ -1,6 +1,7 @@
-// The canemu commands that are Python underneath (plot: matplotlib; lin load: ldfparser) run
-// `python3 -m MODULE` of the canemu package; CANEMU_PYTHON names another interpreter, and a
-// canemu run from a build tree takes the repository's .venv/bin/python when there is one.
+// The canemu commands that are Python underneath (plot: matplotlib; lin load: ldfparser; web:
+// aiohttp) run `python3 -m MODULE` of the canemu package; CANEMU_PYTHON names another
+// interpreter, and a canemu run from a build tree takes the repository's .venv/bin/python when
+// there is one.
 #pragma once
 
 #include <string>
@@ -23,5 +24,9 @@ std::string python_interpreter();
 // the two should be small); its standard error stays the caller's.
 PythonRun run_python_module(const std::string& module, const std::vector<std::string>& args,
                             const std::string& input, bool capture_output);
+
+// Replaces this process with `python3 -m MODULE ARGS` (python_interpreter() chooses which), for
+// a module that runs as long as the command (canemu web); returns why only when that failed.
+std::string exec_python_module(const std::string& module, const std::vector<std::string>& args);
 
 }  // namespace canemu::cli

@@ -1,0 +1,308 @@
+"""What canemu web shows, gathered from canemud through the canemu command line: `canemu status
+--json` every interval (canemud offers no status subscription: its SubscribeRequest announces
+devices coming and going), one `canemu dump any --listen-only --sim-time` for the ID tables, and
+`canemu lin list` while there are LIN buses. Every look becomes one update pushed to the pages
+(web.py); a short history lets a page that opens late draw the last minute."""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import ctypes
+import json
+import signal
+import time
+from typing import Any, Deque, Dict, List, Optional, Set, Tuple
+
+HISTORY_NS = 60_000_000_000  # the graphs show the last minute of simulated time
+HISTORY_POINTS = 2400  # at most this many looks are kept (a minute at 25 ms)
+FAULT_EVENTS = 200  # the newest fault firings kept
+CAN_ERR_FLAG = 0x20000000
+# Effects that hit frames (docs/faults.md), CAN and LIN: their hits have no instant of their own.
+FRAME_EFFECTS = {"bit_error", "stuff_error", "form_error", "crc_error", "ack_error",
+                 "random_errors", "babble", "lin_checksum_error", "lin_parity_error",
+                 "lin_sync_error", "lin_short_break", "lin_bit_error", "lin_no_response",
+                 "lin_responder_off"}
+
+
+def decode_frame(bus: str, can_id: int, data: bytes) -> Optional[List[Tuple[str, str]]]:
+    """The ID table's hook for decoding a frame's signals: (signal, value text) pairs, or None
+    when nothing decodes it. Nothing does yet: DBC decoding plugs in here (docs/web.md)."""
+    return None
+
+
+def _end_with_parent() -> None:
+    """In a child before it runs: SIGTERM when canemu web ends, however it ends (a dump waiting
+    on a quiet bus would otherwise stay)."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM))  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+class IdRow:
+    """One identifier on one bus, as cansniffer shows it: count, period, last data, and which
+    bytes changed since the previous update."""
+
+    __slots__ = ("count", "first_ns", "last_ns", "data", "changed", "text_id")
+
+    def __init__(self, text_id: str, at_ns: int, data: str) -> None:
+        self.text_id = text_id
+        self.count = 0
+        self.first_ns = at_ns
+        self.last_ns = at_ns
+        self.data = data
+        self.changed = 0  # bit i: byte i differs from the frame before it
+
+    def add(self, at_ns: int, data: str) -> None:
+        if self.count:
+            old, new = self.data, data
+            for i in range(0, max(len(old), len(new)), 2):
+                if old[i:i + 2] != new[i:i + 2]:
+                    self.changed |= 1 << (i // 2)
+        self.count += 1
+        self.last_ns = at_ns
+        self.data = data
+
+    def row(self, bus: str) -> Dict[str, Any]:
+        period = (self.last_ns - self.first_ns) / (self.count - 1) / 1e6 if self.count > 1 else None
+        data = bytes.fromhex(self.data) if self.data and self.data[0] != "R" else b""
+        return {"id": self.text_id, "count": self.count, "period_ms": period, "data": self.data,
+                "changed": self.changed,
+                "signals": decode_frame(bus, int(self.text_id, 16), data)}
+
+
+def parse_log_line(line: str) -> Optional[Tuple[int, str, str, str]]:
+    """(time in ns, bus, identifier text, data text) of a candump -L line; data is "R" for a
+    remote frame, "E" for an error frame; None for anything else."""
+    parts = line.split()
+    if len(parts) != 3 or not parts[0].startswith("("):
+        return None
+    stamp, bus, frame = parts
+    seconds, _, micros = stamp[1:-1].partition(".")
+    at_ns = int(seconds) * 1_000_000_000 + int(micros) * 1000
+    ident, sep, data = frame.partition("#")
+    if not sep:
+        return None
+    if len(ident) == 8 and int(ident, 16) & CAN_ERR_FLAG:
+        return at_ns, bus, ident, "E"
+    if data.startswith("#"):  # CAN FD: a flags digit, then the data
+        data = data[2:]
+    elif data.startswith("R"):
+        data = "R"
+    return at_ns, bus, ident, data.partition("_")[0].upper()
+
+
+class Feed:
+    """canemud's state as the pages see it. `canemu` is the command line's path, `base` its
+    global options (--socket)."""
+
+    def __init__(self, canemu: str, base: List[str], interval: float, frames: bool) -> None:
+        self.canemu = canemu
+        self.base = base
+        self.interval = interval
+        self.frames = frames
+        self.subscribers: Set[asyncio.Queue] = set()
+        self.status: Optional[Dict[str, Any]] = None
+        self.error: Optional[str] = None  # why the last look failed
+        self.history: Deque[Dict[str, Any]] = collections.deque(maxlen=HISTORY_POINTS)
+        self.fault_events: Deque[Dict[str, Any]] = collections.deque(maxlen=FAULT_EVENTS)
+        self.id_tables: Dict[str, Dict[str, IdRow]] = {}
+        self.error_frames_seen: Dict[str, int] = {}
+        self.listening: List[str] = []  # the buses whose frames the ID tables count
+        self.capture_note = "" if frames else "ID tables off (--no-frames)"
+        self.lin_text = ""
+        self.looks = 0
+        self._fault_hits: Dict[Tuple[str, int], Tuple[int, str]] = {}
+        self._previous: Optional[Tuple[int, Dict[str, Tuple[int, int]]]] = None
+        self._dump: Optional[asyncio.subprocess.Process] = None
+        self._wake = asyncio.Event()
+        self._last_pid = 0
+        self._rates: Dict[str, Tuple[float, float]] = {}
+
+    def _hide_own(self, status: Dict[str, Any], status_pid: int) -> None:
+        """Leaves out this tool's own clients: the listen-only nodes of its dump (and their
+        device) and the `canemu status` that answered; `clients` counts them still."""
+        own = {status_pid}
+        if self._dump is not None:
+            own.add(self._dump.pid)
+        hidden = set()
+        devices = []
+        for d in status.get("devices", []):
+            if d.get("ephemeral") and d.get("owner_pid") in own:
+                hidden.update(d.get("nodes", []))
+            else:
+                devices.append(d)
+        status["devices"] = devices
+        status["nodes"] = [n for n in status["nodes"] if n["name"] not in hidden]
+        status["client_list"] = [c for c in status.get("client_list", []) if c["pid"] not in own]
+
+    # ---- the command line ----
+    async def run_canemu(self, *args: str, timeout: float = 10.0) -> Tuple[int, str, str]:
+        proc = await asyncio.create_subprocess_exec(
+            self.canemu, *self.base, *args, stdin=asyncio.subprocess.DEVNULL,
+            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
+        self._last_pid = proc.pid
+        try:
+            out, err = await asyncio.wait_for(proc.communicate(), timeout)
+        except asyncio.TimeoutError:
+            proc.kill()
+            await proc.wait()
+            return 1, "", f"canemu {' '.join(args)} did not answer within {timeout:g} s"
+        return proc.returncode, out.decode(errors="replace"), err.decode(errors="replace")
+
+    def look_now(self) -> None:
+        """Takes the next look at once (after an action changed something)."""
+        self._wake.set()
+
+    # ---- the loops ----
+    async def run(self) -> None:
+        tasks = [asyncio.ensure_future(self._poll())]
+        if self.frames:
+            tasks.append(asyncio.ensure_future(self._capture()))
+        try:
+            await asyncio.gather(*tasks)
+        finally:
+            for task in tasks:
+                task.cancel()
+            if self._dump is not None and self._dump.returncode is None:
+                self._dump.kill()
+                await self._dump.wait()
+
+    async def _poll(self) -> None:
+        while True:
+            await self.look()
+            try:
+                await asyncio.wait_for(self._wake.wait(), self.interval)
+            except asyncio.TimeoutError:
+                pass
+            self._wake.clear()
+
+    async def look(self) -> None:
+        code, out, err = await self.run_canemu("status", "--json")
+        status_pid = self._last_pid
+        if code != 0:
+            self.error = err.strip() or f"canemu status ended with status {code}"
+            self.publish({"type": "error", "error": self.error})
+            return
+        self.error = None
+        status = json.loads(out)
+        if any(b["kind"] == "lin" for b in status["buses"]) and self.looks % 8 == 0:
+            code, out, err = await self.run_canemu("lin", "list")
+            self.lin_text = out if code == 0 else err
+        self.looks += 1
+        self._hide_own(status, status_pid)
+        self.status = status
+        self.publish(self.update(status))
+
+    def update(self, status: Dict[str, Any]) -> Dict[str, Any]:
+        """One look as the pages get it: the status, rates since the previous look, the point
+        added to the graphs, fault firings, the ID tables."""
+        now = status["sim_time_ns"]
+        counts = {b["name"]: (b["frames"], b["error_frames"]) for b in status["buses"]}
+        if self._previous is not None and now > self._previous[0]:
+            seconds = (now - self._previous[0]) / 1e9
+            rates = {}
+            for bus, (frames, errors) in counts.items():
+                before = self._previous[1].get(bus, (frames, errors))
+                rates[bus] = ((frames - before[0]) / seconds, (errors - before[1]) / seconds)
+            self._rates = rates
+        if self._previous is None or now != self._previous[0]:
+            self._previous = (now, counts)
+        rates = self._rates  # stepped time: the last step's, until time moves again
+        point = {"t": now,
+                 "load": {b["name"]: b["load_percent"] for b in status["buses"]},
+                 "tec": {n["name"]: n["tec"] for n in status["nodes"]},
+                 "rec": {n["name"]: n["rec"] for n in status["nodes"]},
+                 "state": {n["name"]: n["state"] for n in status["nodes"]}}
+        if not self.history or self.history[-1] != point:
+            self.history.append(point)
+        while self.history and self.history[0]["t"] < now - HISTORY_NS:
+            self.history.popleft()
+        fired = self._fault_firings(status, now)
+        return {"type": "update", "status": status, "rates": rates, "point": point,
+                "fired": fired, "ids": self.id_rows(), "lin": self.lin_text,
+                "listening": self.listening, "capture_note": self.capture_note,
+                "error_frames_seen": self.error_frames_seen, "real_time": time.time()}
+
+    def _fault_firings(self, status: Dict[str, Any], now: int) -> List[Dict[str, Any]]:
+        """Faults whose hits grew or whose state changed since the previous look."""
+        fired = []
+        for f in status.get("faults", []):
+            key = (f["scenario"], f["line"])
+            before = self._fault_hits.get(key, (0, "pending"))
+            if f["hits"] > before[0] or (f["state"] != before[1] and f["state"] == "done"):
+                # A timed effect fired at its instant; a frame effect's hits came at frames
+                # between the previous look and this one: marked at this look.
+                timed = f["effect"] not in FRAME_EFFECTS and f.get("at_ns", now) <= now
+                event = {"t": f["at_ns"] if timed else now, "scenario": f["scenario"],
+                         "line": f["line"], "effect": f["effect"], "target": f["target"],
+                         "hits": f["hits"], "state": f["state"]}
+                fired.append(event)
+                self.fault_events.append(event)
+            self._fault_hits[key] = (f["hits"], f["state"])
+        return fired
+
+    def id_rows(self) -> Dict[str, List[Dict[str, Any]]]:
+        out = {}
+        for bus, table in self.id_tables.items():
+            out[bus] = [row.row(bus) for _, row in sorted(table.items())]
+            for row in table.values():
+                row.changed = 0
+        return out
+
+    def snapshot(self) -> Dict[str, Any]:
+        """What a page that just opened gets: the newest update's parts and the history."""
+        status = self.status
+        ids = {bus: [row.row(bus) for _, row in sorted(table.items())]
+               for bus, table in self.id_tables.items()}
+        return {"type": "snapshot", "status": status, "history": list(self.history),
+                "faults_fired": list(self.fault_events), "ids": ids, "lin": self.lin_text,
+                "listening": self.listening, "capture_note": self.capture_note,
+                "error": self.error, "error_frames_seen": self.error_frames_seen,
+                "real_time": time.time()}
+
+    def publish(self, message: Dict[str, Any]) -> None:
+        text = json.dumps(message, separators=(",", ":"))
+        for queue in list(self.subscribers):
+            if queue.qsize() > 8:  # a page that does not keep up misses updates, not memory
+                continue
+            queue.put_nowait(text)
+
+    # ---- the ID tables ----
+    async def _capture(self) -> None:
+        self._dump = await asyncio.create_subprocess_exec(
+            self.canemu, *self.base, "dump", "any", "--listen-only", "--sim-time",
+            stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE, limit=1 << 20, preexec_fn=_end_with_parent)
+        errors = asyncio.ensure_future(self._dump_stderr(self._dump.stderr))
+        tables = self.id_tables
+        seen = self.error_frames_seen
+        async for raw in self._dump.stdout:
+            parsed = parse_log_line(raw.decode(errors="replace"))
+            if parsed is None:
+                continue
+            at_ns, bus, ident, data = parsed
+            if data == "E":
+                seen[bus] = seen.get(bus, 0) + 1
+                continue
+            table = tables.get(bus)
+            if table is None:
+                table = tables[bus] = {}
+            row = table.get(ident)
+            if row is None:
+                row = table[ident] = IdRow(ident, at_ns, data)
+            row.add(at_ns, data)
+        await errors
+        code = await self._dump.wait()
+        self.capture_note = f"the ID tables stopped: canemu dump ended with status {code}"
+
+    async def _dump_stderr(self, stream) -> None:
+        async for raw in stream:
+            line = raw.decode(errors="replace").strip()
+            # "canemu: listening on can0 as eph1 (listen-only, ...)"
+            if line.startswith("canemu: listening on "):
+                self.listening.append(line.split()[3])
+            elif line:
+                self.capture_note = line
+

@@ -242,10 +242,7 @@ TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
   SimClock clock;
   HANDLE list = nullptr;
   ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 2;
-  m.dwMsgId = 0x100;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  CANCYCLICTXMSG m = cyclic_data(0x100, 2);
   UINT32 index = 99;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(index, 0u);
@@ -524,9 +521,7 @@ TEST(VciCItems, Item71_TwoChannelsTransmitInTurns) {
   Adapter alpha("alpha", false);
   Adapter beta("beta");
   HANDLE second = nullptr;
-  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &second), VCI_OK);
-  ASSERT_EQ(canChannelInitialize(second, 16, 1, 16, 1), VCI_OK);
-  ASSERT_EQ(canChannelActivate(second, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 16, 16, &second));
   for (uint32_t id : {0x101, 0x102, 0x103, 0x104}) {
     alpha.post(data(id, {}));
   }
@@ -652,15 +647,10 @@ TEST(VciCItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
   Adapter beta("beta");
   Parts alpha("alpha");
   HANDLE second = nullptr;
-  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &second), VCI_OK);
-  ASSERT_EQ(canChannelInitialize(second, 16, 1, 0, 0), VCI_OK);
-  ASSERT_EQ(canChannelActivate(second, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 16, 0, &second));
   ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
   ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
-  ASSERT_EQ(canControlSetAccFilter(alpha.control, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
-            VCI_OK);
-  ASSERT_EQ(canControlAddFilterIds(alpha.control, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
-  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(pass_only_0x123_and_start(alpha.control));
   beta.post(data(0x122, {}));
   beta.post(data(0x123, {}));
   SimClock clock;
@@ -807,11 +797,7 @@ TEST(VciCItems, Item127_ACyclicFrameComesEveryCycleExactly) {
   ASSERT_EQ(canSchedulerGetCaps(list, &caps), VCI_OK);
   const uint32_t tick_us = caps.dwCmsDivisor * 1'000'000 / caps.dwClockFreq;
   ASSERT_EQ(tick_us, 1000u);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 5;
-  m.dwMsgId = 0x555;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = 8;
+  CANCYCLICTXMSG m = cyclic_data(0x555, 5, 8);
   UINT32 index = 0;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
@@ -880,10 +866,7 @@ TEST(VciCItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
   Adapter beta("beta");
   HANDLE list = nullptr;
   ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 2;
-  m.dwMsgId = 0x100;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  CANCYCLICTXMSG m = cyclic_data(0x100, 2);
   UINT32 index = 0;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);

@@ -22,6 +22,7 @@ namespace canemu {
 namespace {
 
 using testing::Adapter;
+using testing::cyclic_data;
 using testing::drain;
 using testing::end_of;
 using testing::ids_of;
@@ -884,11 +885,7 @@ TEST(VciCppItems, IdentifiersThatDoNotFitTheirFormatAreRefusedByTheWriter) {
 // ---------------------------------------------------------------- cyclic transmit list
 
 CANCYCLICTXMSG cyclic(UINT32 id, UINT16 cycle, std::vector<uint8_t> data = {0x11}) {
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = cycle;
-  m.dwMsgId = id;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = data.size() & 0x0FU;
+  CANCYCLICTXMSG m = cyclic_data(id, cycle, static_cast<UINT8>(data.size()));
   std::memcpy(m.abData, data.data(), data.size());
   return m;
 }

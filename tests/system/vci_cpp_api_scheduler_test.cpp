@@ -7,16 +7,8 @@
 #include "vci_cpp_test_support.hpp"
 #include "vcisdk.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::cyclic_data;
-using testing::drain;
-using testing::end_of;
-using testing::Ref;
-using testing::step_ns;
-using testing::VciDaemon;
 
 TEST(VciCppApi, TheCyclicListThroughICanScheduler2AndTheTimerOverflow) {
   VciDaemon d;
@@ -142,4 +134,4 @@ TEST(VciCppApi, ICanSchedulerAndICanScheduler2ShareOneList) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

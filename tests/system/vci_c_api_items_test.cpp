@@ -718,20 +718,10 @@ TEST(VciCItems, Item114_TheBtrTableGivesItsBitRates) {
   VciDaemon d;
   Adapter alpha("alpha", false);
   Adapter beta("beta", false);
-  struct Rate {
-    UINT8 btr0, btr1;
-    uint64_t bps;
-  };
-  const Rate rates[] = {
-      {CAN_BT0_5KB, CAN_BT1_5KB, 5'000},       {CAN_BT0_10KB, CAN_BT1_10KB, 10'000},
-      {CAN_BT0_20KB, CAN_BT1_20KB, 20'000},    {CAN_BT0_50KB, CAN_BT1_50KB, 50'000},
-      {CAN_BT0_100KB, CAN_BT1_100KB, 100'000}, {CAN_BT0_125KB, CAN_BT1_125KB, 125'000},
-      {CAN_BT0_250KB, CAN_BT1_250KB, 250'000}, {CAN_BT0_500KB, CAN_BT1_500KB, 500'000},
-      {CAN_BT0_800KB, CAN_BT1_800KB, 800'000}, {CAN_BT0_1000KB, CAN_BT1_1000KB, 1'000'000}};
   ASSERT_EQ(bits_of(0x123, {0x11, 0x22}), 62);
   SimClock clock;
   uint64_t t = 0;
-  for (const Rate& r : rates) {
+  for (const BtrRate& r : kBtrTable) {
     t += 100'000'000;
     clock.to(t);
     for (const Adapter* a : {&alpha, &beta}) {

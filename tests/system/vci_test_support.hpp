@@ -86,6 +86,19 @@ struct SimClock {
   }
 };
 
+// The BTR0/BTR1 pairs of cantype.h's table (SJA1000 at 16 MHz) and the bit rates they give.
+struct BtrRate {
+  UINT8 btr0;
+  UINT8 btr1;
+  uint64_t bps;
+};
+inline constexpr BtrRate kBtrTable[] = {
+    {CAN_BT0_5KB, CAN_BT1_5KB, 5'000},       {CAN_BT0_10KB, CAN_BT1_10KB, 10'000},
+    {CAN_BT0_20KB, CAN_BT1_20KB, 20'000},    {CAN_BT0_50KB, CAN_BT1_50KB, 50'000},
+    {CAN_BT0_100KB, CAN_BT1_100KB, 100'000}, {CAN_BT0_125KB, CAN_BT1_125KB, 125'000},
+    {CAN_BT0_250KB, CAN_BT1_250KB, 250'000}, {CAN_BT0_500KB, CAN_BT1_500KB, 500'000},
+    {CAN_BT0_800KB, CAN_BT1_800KB, 800'000}, {CAN_BT0_1000KB, CAN_BT1_1000KB, 1'000'000}};
+
 // An entry of the cyclic transmit list (CANCYCLICTXMSG or CANCYCLICTXMSG2): a data frame with
 // identifier `id` and `dlc`, sent every `cycle` ticks; its data bytes zero, no increment.
 template <class Cyclic = CANCYCLICTXMSG>

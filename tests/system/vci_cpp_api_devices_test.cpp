@@ -214,11 +214,8 @@ TEST(VciCppApi, DevicesAreFoundByHardwareIdAndByClass) {
   VciDaemon d;
   Adapter beta("beta");
   VCIDEVICEINFO info{};
-  ASSERT_EQ(beta.device->GetDeviceInfo(&info), VCI_OK);
-  Ref<IVciDevice> by_hwid;
-  ASSERT_EQ(VciQueryDeviceByHwid(info.UniqueHardwareId.AsGuid, by_hwid.out()), VCI_OK);
   VCIDEVICEINFO found{};
-  ASSERT_EQ(by_hwid->GetDeviceInfo(&found), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(testing::query_by_hwid(beta.device.p, &info, &found));
   EXPECT_EQ(found.VciObjectId.AsInt64, info.VciObjectId.AsInt64);
   Ref<IVciDevice> second;
   ASSERT_EQ(VciQueryDeviceByClass(info.DeviceClass, 1, second.out()), VCI_OK);

@@ -1041,11 +1041,8 @@ TEST(VciCppItems, Item11_AnUnknownHardwareIdOpensNothing) {
   VciDaemon d;
   Adapter alpha("alpha");
   VCIDEVICEINFO info{};
-  ASSERT_EQ(alpha.device->GetDeviceInfo(&info), VCI_OK);
-  Ref<IVciDevice> same;
-  ASSERT_EQ(VciQueryDeviceByHwid(info.UniqueHardwareId.AsGuid, same.out()), VCI_OK);
   VCIDEVICEINFO found{};
-  ASSERT_EQ(same->GetDeviceInfo(&found), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(testing::query_by_hwid(alpha.device.p, &info, &found));
   EXPECT_EQ(std::memcmp(&found, &info, sizeof info), 0);
   GUID unknown = info.UniqueHardwareId.AsGuid;
   unknown.Data4[7] ^= 0x5A;

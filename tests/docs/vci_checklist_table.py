@@ -9,17 +9,10 @@ import re
 import sys
 from pathlib import Path
 
+from checklist_table import checklist_rows, finish
+
 repo = Path(sys.argv[1])
-page = (repo / "docs" / "vci.md").read_text()
-section = page.split("## Checklist coverage", 1)
-if len(section) != 2:
-    sys.exit("docs/vci.md has no section \"## Checklist coverage\"")
-rows = [line for line in section[1].split("\n## ", 1)[0].splitlines()
-        if re.match(r"\| \d+ \|", line)]
-items = [int(line.split("|")[1]) for line in rows]
-problems = []
-if items != list(range(1, 133)):
-    problems.append(f"the rows are items {items[:3]}...{items[-3:]} ({len(items)}), not 1..132")
+rows, problems = checklist_rows(repo, "vci.md", 132)
 defined: dict[str, set[str]] = {}
 for row in rows:
     item = row.split("|")[1].strip()
@@ -33,8 +26,5 @@ for row in rows:
                                 if path.exists() else [])
         if (suite, test) not in {tuple(t) for t in defined[file]}:
             problems.append(f"item {item}: {file} defines no {suite}.{test}")
-for p in problems:
-    print(p)
-print(f"{len(rows)} rows, {sum(len(v) for v in defined.values())} tests in "
-      f"{len(defined)} files looked at; {len(problems)} problems")
-sys.exit(1 if problems else 0)
+finish(problems, f"{len(rows)} rows, {sum(len(v) for v in defined.values())} tests in "
+       f"{len(defined)} files looked at")

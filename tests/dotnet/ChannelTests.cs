@@ -9,14 +9,8 @@ using NUnit.Framework;
 
 namespace Canemu.Tests
 {
-  [TestFixture]
-  public class ChannelTests
+  public class ChannelTests : DaemonFixture
   {
-    Daemon daemon;
-
-    [SetUp] public void Start() { daemon = new Daemon(Daemon.TwoAdapters); }
-    [TearDown] public void Stop() { daemon.Dispose(); }
-
     [Test]
     public void Item10_NoFifosUntilInitializeAndSizesCountMessages()
     {

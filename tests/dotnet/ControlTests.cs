@@ -10,15 +10,16 @@ using NUnit.Framework;
 
 namespace Canemu.Tests
 {
-  [TestFixture]
-  public class ControlTests
+  public class ControlTests : DaemonFixture
   {
-    const string ThreeAdapters = Daemon.TwoAdapters +
-        "\n[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
-    Daemon daemon;
-
-    [SetUp] public void Start() { daemon = new Daemon(ThreeAdapters); }
-    [TearDown] public void Stop() { daemon.Dispose(); }
+    protected override string Config
+    {
+      get
+      {
+        return Daemon.TwoAdapters +
+            "\n[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
+      }
+    }
 
     static List<uint> Ids(List<CanMessage> got)
     {

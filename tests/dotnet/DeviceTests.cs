@@ -14,10 +14,6 @@ namespace Canemu.Tests
   [TestFixture]
   public class DeviceTests
   {
-    const string WithLin = Daemon.TwoAdapters +
-        "\n[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n\n" +
-        "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\nlin = [\"lin0\"]\n";
-
     [Test]
     public void Item01_AddAndRemoveOfAnAdapterSignalTheAssignedEvent()
     {
@@ -76,7 +72,7 @@ namespace Canemu.Tests
     [Test]
     public void Item03_IdentityClassHardwareIdAndEquipment()
     {
-      using (new Daemon(WithLin))
+      using (new Daemon(Daemon.WithLin))
       {
         var alpha = T.Device("alpha");
         var beta = T.Device("beta");

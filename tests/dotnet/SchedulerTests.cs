@@ -8,29 +8,25 @@ using NUnit.Framework;
 
 namespace Canemu.Tests
 {
-  [TestFixture]
-  public class SchedulerTests
+  public class SchedulerTests : DaemonFixture
   {
-    Daemon daemon;
     Line alpha, beta;
     ICanScheduler list;
 
     [SetUp]
-    public void Start()
+    public void OpenLines()
     {
-      daemon = new Daemon(Daemon.TwoAdapters);
       beta = new Line("beta");
       alpha = new Line("alpha");
       list = T.Open<ICanScheduler>(alpha.Bal);
     }
 
     [TearDown]
-    public void Stop()
+    public void CloseLines()
     {
       list.Dispose();
       alpha.Dispose();
       beta.Dispose();
-      daemon.Dispose();
     }
 
     static CanCyclicTXMsg Cyclic(uint id, ushort cycle, params byte[] data)

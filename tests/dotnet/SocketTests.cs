@@ -11,14 +11,10 @@ namespace Canemu.Tests
   [TestFixture]
   public class SocketTests
   {
-    const string WithLin = Daemon.TwoAdapters +
-        "\n[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n\n" +
-        "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\nlin = [\"lin0\"]\n";
-
     [Test]
     public void Item05_PortIndexIsZeroBasedAndBelowResourcesCount()
     {
-      using (new Daemon(WithLin))
+      using (new Daemon(Daemon.WithLin))
       using (var bal = T.Bal("gamma"))
       {
         Assert.AreEqual(2, bal.Resources.Count);
@@ -40,7 +36,7 @@ namespace Canemu.Tests
     [Test]
     public void Item06_SocketsOpenWhateverElseIsHeld()
     {
-      using (new Daemon(WithLin))
+      using (new Daemon(Daemon.WithLin))
       using (var other = T.Bal("gamma"))
       using (var control = T.Open<ICanControl>(other))
       using (var exclusive = T.Open<ICanChannel>(other))
@@ -78,7 +74,7 @@ namespace Canemu.Tests
     [Test]
     public void Item07_ASecondControlUnitIsRefusedWhileOneIsHeld()
     {
-      using (new Daemon(WithLin))
+      using (new Daemon(Daemon.WithLin))
       using (var one = T.Bal("gamma"))
       using (var two = T.Bal("gamma"))
       {

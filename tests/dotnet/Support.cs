@@ -19,6 +19,19 @@ using NUnit.Framework;
 
 namespace Canemu.Tests
 {
+  // A fixture each of whose tests has a canemud of its own on Config (TwoAdapters unless the
+  // fixture says otherwise), started before the test and stopped after it.
+  [TestFixture]
+  public abstract class DaemonFixture
+  {
+    protected Daemon daemon;
+
+    protected virtual string Config { get { return Daemon.TwoAdapters; } }
+
+    [SetUp] public void StartDaemon() { daemon = new Daemon(Config); }
+    [TearDown] public void StopDaemon() { daemon.Dispose(); }
+  }
+
   // canemud from this build ($CANEMUD), stopped when disposed.
   public sealed class Daemon : IDisposable
   {
@@ -26,6 +39,10 @@ namespace Canemu.Tests
         "[[bus]]\nname = \"can0\"\nkind = \"can\"\nbitrate = 500000\n\n" +
         "[[device]]\nname = \"alpha\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n\n" +
         "[[device]]\nname = \"beta\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\n";
+    // TwoAdapters and gamma, with a CAN controller on can0 and a LIN controller on lin0.
+    public const string WithLin = TwoAdapters +
+        "\n[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n\n" +
+        "[[device]]\nname = \"gamma\"\nmodel = \"ixxat-usb-to-can\"\ncontrollers = [\"can0\"]\nlin = [\"lin0\"]\n";
 
     readonly Process process;
     readonly StringBuilder log = new StringBuilder();

@@ -2,7 +2,10 @@
 // sink was told, with the instants in ns.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <deque>
+#include <utility>
 #include <vector>
 
 #include "canemu/firmware_model/chips/hosted_node.hpp"
@@ -57,5 +60,19 @@ struct Station {
     node.kick();
   }
 };
+
+// A node that went bus-off at `off` (the last state `log` shows) and whose driver restarts it
+// `delay` ns later: bus-off until 128 x 11 recessive bits after the restart (the bus idle),
+// error-active from that instant.
+inline void expect_bus_off_until_recovery(BusFixture& b, const NodeLog& log, int64_t off,
+                                          int64_t delay) {
+  ASSERT_FALSE(log.states.empty());
+  EXPECT_EQ(log.states.back(), std::make_pair(off, ErrorState::bus_off));
+  const int64_t recovered = off + delay + 128 * 11 * kBit;
+  b.run_until(recovered - 1);
+  EXPECT_EQ(log.states.back().second, ErrorState::bus_off);
+  b.run_until(recovered);
+  EXPECT_EQ(log.states.back(), std::make_pair(recovered, ErrorState::active));
+}
 
 }  // namespace canemu::model::testing

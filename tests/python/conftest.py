@@ -46,6 +46,20 @@ def drain(node) -> list:
     return out
 
 
+def bus_pair(channel: str, *, drained: bool, own: dict | None = None, **kwargs):
+    """The body of a fixture of two canemu buses on `channel` (can.Bus arguments `kwargs`, the
+    first's also `own`), their line start messages taken if `drained`: yields them as a pair
+    and shuts them down after (`yield from bus_pair(...)`)."""
+    a = can.Bus(interface="canemu", channel=channel, **kwargs, **(own or {}))
+    b = can.Bus(interface="canemu", channel=channel, **kwargs)
+    if drained:
+        drain(a)
+        drain(b)
+    yield a, b
+    a.shutdown()
+    b.shutdown()
+
+
 def frames(msgs) -> list:
     """The data and remote frames among `msgs` (no error frames)."""
     return [m for m in msgs if not m.is_error_frame]
@@ -95,13 +109,7 @@ def daemon(request):
 @pytest.fixture
 def nodes(daemon):
     """Two nodes of their own on can0 (500 kbit/s), the line start messages taken."""
-    a = can.Bus(interface="canemu", channel="can0", auto_restart=False)
-    b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
-    drain(a)
-    drain(b)
-    yield a, b
-    a.shutdown()
-    b.shutdown()
+    yield from bus_pair("can0", drained=True, auto_restart=False)
 
 
 def bus_errors(msgs) -> list:

@@ -15,7 +15,7 @@ import pytest
 
 import canemu
 
-from conftest import Canemud
+from conftest import Canemud, bus_pair
 
 TIMEOUT = 2.0
 CAN_ACCEPT_FILTER_1 = 0x01  # the channel's acceptance filter let the frame through
@@ -25,11 +25,7 @@ CAN_ACCEPT_FILTER_2 = 0x02  # its ID list did
 @pytest.fixture
 def pair(realtime_daemon):
     """Two nodes of their own on can0 (ephemeral adapters)."""
-    a = can.Bus(interface="canemu", channel="can0")
-    b = can.Bus(interface="canemu", channel="can0")
-    yield a, b
-    a.shutdown()
-    b.shutdown()
+    yield from bus_pair("can0", drained=False)
 
 
 @pytest.fixture

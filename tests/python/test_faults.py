@@ -39,6 +39,16 @@ def msg(arbitration_id=0x123, data=(1, 2)):
     return can.Message(arbitration_id=arbitration_id, data=list(data), is_extended_id=False)
 
 
+def one_frame_under(daemon, a, b, **fault_fields):
+    """a sends one frame while a fault of `fault_fields` hits every frame on can0 from 0 s;
+    what b received in the next 10 ms: its frames, and its bus errors."""
+    load(daemon, scenario(fault(at="0s", bus="can0", **fault_fields)))
+    a.send(msg())
+    canemu.step(10 * MS)
+    got_b = drain(b)
+    return frames(got_b), bus_errors(got_b)
+
+
 def now_ns():
     return canemu.sim_time()[0]
 
@@ -91,12 +101,8 @@ def test_stuff_errors_are_detected_by_the_receivers(daemon, nodes):
 
 def test_form_errors_at_the_crc_delimiter(daemon, nodes):
     a, b = nodes
-    load(daemon, scenario(fault(at="0s", bus="can0", effect="form_error", count=2)))
-    a.send(msg())
-    canemu.step(10 * MS)
-    got_b = drain(b)
-    assert len(frames(got_b)) == 1
-    errors_b = bus_errors(got_b)
+    frames_b, errors_b = one_frame_under(daemon, a, b, effect="form_error", count=2)
+    assert len(frames_b) == 1
     assert len(errors_b) == 2 and all(e.data[2] == CAN_ERR_PROT_FORM for e in errors_b)
     # The transmitter only notices at the ACK delimiter (the receivers' flag there), so its
     # flag overruns theirs: receivers +1 +8 per error, as with stuff errors.
@@ -106,12 +112,8 @@ def test_form_errors_at_the_crc_delimiter(daemon, nodes):
 
 def test_crc_error_leaves_the_frame_unacknowledged(daemon, nodes):
     a, b = nodes
-    load(daemon, scenario(fault(at="0s", bus="can0", effect="crc_error", count=1)))
-    a.send(msg())
-    canemu.step(10 * MS)
-    got_b = drain(b)
-    assert len(frames(got_b)) == 1  # the repetition
-    errors_b = bus_errors(got_b)
+    frames_b, errors_b = one_frame_under(daemon, a, b, effect="crc_error", count=1)
+    assert len(frames_b) == 1  # the repetition
     assert len(errors_b) == 1 and errors_b[0].data[3] == CAN_ERR_PROT_LOC_CRC_SEQ
     errors_a = bus_errors(drain(a))
     assert len(errors_a) == 1 and errors_a[0].arbitration_id & CAN_ERR_ACK

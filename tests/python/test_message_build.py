@@ -20,7 +20,7 @@ from canemu import _vci
 from canemu._receive import _MSG_SIZE, _RX_BATCH, _ReceiveMixin
 from canemu.bus import CAN_ERR_ACK, CAN_ERR_BUSERROR
 
-from conftest import drain, frames
+from conftest import bus_pair, drain, frames
 
 MS = 1_000_000
 # Every attribute a Message has: its slots (python-can 4.1 and 4.6 list the same ones).
@@ -157,13 +157,7 @@ def test_an_error_passive_node_converts_one_frame_at_a_time():
 @pytest.fixture
 def fd_nodes(daemon):
     """Two CAN FD nodes on fd0; the sender also receives its own frames."""
-    a = can.Bus(interface="canemu", channel="fd0", fd=True, receive_own_messages=True)
-    b = can.Bus(interface="canemu", channel="fd0", fd=True)
-    drain(a)
-    drain(b)
-    yield a, b
-    a.shutdown()
-    b.shutdown()
+    yield from bus_pair("fd0", drained=True, own={"receive_own_messages": True}, fd=True)
 
 
 def sent_frames():

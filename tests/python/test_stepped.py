@@ -31,7 +31,7 @@ from canemu.bus import (
 )
 from canemu._receive import _RX_BATCH
 
-from conftest import CANEMU_CLI, Canemud, drain, frames, ns
+from conftest import CANEMU_CLI, Canemud, bus_pair, drain, frames, ns
 
 US = 1_000
 MS = 1_000_000
@@ -69,11 +69,7 @@ def daemon():
 
 @pytest.fixture
 def pair(daemon):
-    a = can.Bus(interface="canemu", channel="can0")
-    b = can.Bus(interface="canemu", channel="can0")
-    yield a, b
-    a.shutdown()
-    b.shutdown()
+    yield from bus_pair("can0", drained=False)
 
 
 def frame_ns(frame: str, bitrate: int, data_bitrate: int | None = None,

@@ -15,12 +15,16 @@ def limits_of(bus) -> _timing.Limits:
     return _timing.Limits.of(caps)
 
 
-def test_the_sja1000_reports_its_8_mhz_clock_and_ranges_and_no_data_phase(realtime_daemon):
-    bus = can.Bus(interface="canemu", channel="ixxat0:1")
+def limits_of_channel(channel, **kwargs) -> _timing.Limits:
+    bus = can.Bus(interface="canemu", channel=channel, **kwargs)
     try:
-        limits = limits_of(bus)
+        return limits_of(bus)
     finally:
         bus.shutdown()
+
+
+def test_the_sja1000_reports_its_8_mhz_clock_and_ranges_and_no_data_phase(realtime_daemon):
+    limits = limits_of_channel("ixxat0:1")
     assert limits == _timing.Limits(
         clock_hz=8_000_000,
         nominal=_timing.Range(brp=(1, 64), tseg1=(1, 16), tseg2=(1, 8), sjw=(1, 4)),
@@ -30,11 +34,7 @@ def test_the_sja1000_reports_its_8_mhz_clock_and_ranges_and_no_data_phase(realti
 
 
 def test_the_can_fd_controller_reports_its_80_mhz_clock_and_both_phases(realtime_daemon):
-    bus = can.Bus(interface="canemu", channel="ixxatfd:0", fd=True)
-    try:
-        limits = limits_of(bus)
-    finally:
-        bus.shutdown()
+    limits = limits_of_channel("ixxatfd:0", fd=True)
     assert limits == _timing.Limits(
         clock_hz=80_000_000,
         nominal=_timing.Range(brp=(1, 1024), tseg1=(1, 256), tseg2=(2, 128), sjw=(1, 128)),

@@ -204,6 +204,15 @@ def test_available_configs_list_both_interfaces(daemon):
     ]
 
 
+def active_after_the_recovery(x):
+    """x, restarted from bus-off, stays off for 128 x 11 recessive bits at 250 kbit/s (5.632
+    ms) and is error-active from then on."""
+    canemu.step(5632 * US - 1)
+    assert x.state == can.BusState.ERROR
+    canemu.step(1)
+    assert x.state == can.BusState.ACTIVE
+
+
 def go_bus_off(x, talkers) -> list:
     """Steps 1 ms at a time, the `talkers` sending a frame each, until `x` (at the wrong bit
     rate, with a frame of its own pending) is bus-off; how many steps that took, and the
@@ -256,10 +265,7 @@ def test_a_wrong_bit_rate_takes_it_bus_off_until_restart(talkers):
         assert x.state == can.BusState.ERROR
         # CMD_STOP, CMD_START: back after 128 x 11 recessive bits at 250 kbit/s (5.632 ms).
         x.restart()
-        canemu.step(5632 * US - 1)
-        assert x.state == can.BusState.ERROR
-        canemu.step(1)
-        assert x.state == can.BusState.ACTIVE
+        active_after_the_recovery(x)
     finally:
         x.flush_tx_buffer()
         x.shutdown()
@@ -271,10 +277,7 @@ def test_auto_restart_leaves_bus_off_by_itself(talkers):
         steps, seen = go_bus_off(x, talkers)
         assert seen and seen[-1].arbitration_id & CAN_ERR_BUSOFF
         # The restart was given with the callback, at the end of the step that saw bus-off.
-        canemu.step(5632 * US - 1)
-        assert x.state == can.BusState.ERROR
-        canemu.step(1)
-        assert x.state == can.BusState.ACTIVE
+        active_after_the_recovery(x)
     finally:
         x.flush_tx_buffer()
         x.shutdown()

@@ -20,6 +20,7 @@ namespace canemu {
 namespace {
 
 using testing::btp;
+using testing::cyclic_data;
 using testing::drain;
 using testing::end_of;
 using testing::FdAdapter;
@@ -51,14 +52,7 @@ UINT32 classic_end(uint32_t start_us, uint32_t id, std::vector<uint8_t> bytes) {
 TEST(Vci2CFunctions, TheGeneralFunctionsAreThoseOfLibvcinpl) {
   EXPECT_EQ(vciInitialize(), VCI_OK);
   char narrow[VCI_MAX_ERRSTRLEN];
-  wchar_t wide[VCI_MAX_ERRSTRLEN];
-  vciFormatErrorA(VCI_E_TIMEOUT, narrow, VCI_MAX_ERRSTRLEN);
-  vciFormatErrorW(VCI_E_TIMEOUT, wide, VCI_MAX_ERRSTRLEN);
-  ASSERT_GT(std::strlen(narrow), 3u);
-  ASSERT_EQ(std::wcslen(wide), std::strlen(narrow));
-  for (std::size_t i = 0; narrow[i] != '\0'; ++i) {
-    EXPECT_EQ(wide[i], static_cast<wchar_t>(narrow[i])) << i;
-  }
+  ASSERT_NO_FATAL_FAILURE(testing::expect_wide_error_text_is_the_narrow_one(narrow));
   char caption[] = "two";
   ::testing::internal::CaptureStderr();
   vciDisplayErrorA(nullptr, caption, VCI_E_TIMEOUT);
@@ -68,17 +62,8 @@ TEST(Vci2CFunctions, TheGeneralFunctionsAreThoseOfLibvcinpl) {
   vciDisplayErrorW(nullptr, wide_caption, VCI_E_TIMEOUT);
   EXPECT_EQ(::testing::internal::GetCapturedStderr(), std::string("two: ") + narrow + "\n");
 
-  VCIID id{};
-  id.AsInt64 = 0x0123456789ABCDEF;
-  char text[17];
-  EXPECT_EQ(vciLuidToCharA(id, text, 16), VCI_E_BUFFER_OVERFLOW);
-  ASSERT_EQ(vciLuidToCharA(id, text, 17), VCI_OK);
-  EXPECT_STREQ(text, "0123456789ABCDEF");
-  VCIID back{};
-  ASSERT_EQ(vciCharToLuidA(text, &back), VCI_OK);
-  EXPECT_EQ(back.AsInt64, id.AsInt64);
   char bad[] = "0123456789ABCDEG";
-  EXPECT_EQ(vciCharToLuidA(bad, &back), VCI_E_FAIL);
+  ASSERT_NO_FATAL_FAILURE(testing::expect_luid_round_trip(vciLuidToCharA, vciCharToLuidA, bad));
 
   const GUID g = {0x12345678, 0x9ABC, 0xDEF0, {0x01, 0x23, 0x45, 0x67, 0x89, 0xAB, 0xCD, 0xEF}};
   char gtext[39];
@@ -260,11 +245,7 @@ TEST(Vci2CFunctions, DetectBitrateFindsTheEntryOfTheTraffic) {
   FdAdapter beta("beta");
   HANDLE list = nullptr;
   ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG2 m{};
-  m.wCycleTime = 1;
-  m.dwMsgId = 0x2A0;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = 1;
+  CANCYCLICTXMSG2 m = cyclic_data<CANCYCLICTXMSG2>(0x2A0, 1, 1);
   UINT32 index = 0;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
@@ -602,10 +583,7 @@ TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
   CANCAPABILITIES2 caps{};
   ASSERT_EQ(canSchedulerGetCaps(list, &caps), VCI_OK);
   ASSERT_EQ(caps.dwCmsClkFreq / caps.dwCmsDivisor, 1000u);  // ticks of 1 ms
-  CANCYCLICTXMSG2 m{};
-  m.wCycleTime = 2;
-  m.dwMsgId = 0x100;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  CANCYCLICTXMSG2 m = cyclic_data<CANCYCLICTXMSG2>(0x100, 2);
   m.uMsgInfo.Bits.edl = 1;
   m.uMsgInfo.Bits.fdr = 1;
   m.uMsgInfo.Bits.dlc = 9;  // 12 bytes

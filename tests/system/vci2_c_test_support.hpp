@@ -42,25 +42,10 @@ inline HANDLE device_named(const std::string& name) {
   return dev;
 }
 
-// What `channel` holds, taken out (`data_only`: only the data frames).
-inline std::vector<CANMSG2> drain(HANDLE channel, bool data_only = true) {
-  std::vector<CANMSG2> got;
-  CANMSG2 m;
-  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
-  return got;
-}
-
 // A controller opened as a program opens it: device, control unit, one PASS channel
 // (activated unless told otherwise), the line initialized with `mode`, `ex_mode` and the
 // timings (`fdr` given only with an extended mode) and started if asked.
-struct Line {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
+struct Line : ControllerHandles {
   Line(const std::string& name, UINT8 mode, UINT8 ex_mode, CANBTP sdr, CANBTP fdr,
        bool start = true, bool activate = true) {
     device = device_named(name);
@@ -74,13 +59,6 @@ struct Line {
     if (start) {
       EXPECT_EQ(canControlStart(control, TRUE), VCI_OK);
     }
-  }
-  Line(const Line&) = delete;
-  Line& operator=(const Line&) = delete;
-  ~Line() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
   }
   HRESULT init(UINT8 mode, UINT8 ex_mode, CANBTP sdr, const CANBTP* fdr) const {
     CANBTP f = fdr != nullptr ? *fdr : CANBTP{};

@@ -19,9 +19,12 @@ namespace canemu {
 namespace {
 
 using testing::Adapter;
+using testing::cyclic_data;
 using testing::data;
 using testing::id_of;
 using testing::kMode;
+using testing::open_channel;
+using testing::pass_only_0x123_and_start;
 using testing::step_ns;
 using testing::step_until;
 using testing::VciDaemon;
@@ -265,10 +268,7 @@ TEST(VciCApi, TheControlUnitsFilterPassesOnlyWhatItAccepts) {
   EXPECT_EQ(ids, (std::vector<uint32_t>{0x100, 0x101, 0x102, 0x103, 0x1ABCDE}));
   // Offline again: only the ID list decides, with one ID in it.
   ASSERT_EQ(canControlStart(alpha.control, FALSE), VCI_OK);
-  ASSERT_EQ(canControlSetAccFilter(alpha.control, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
-            VCI_OK);
-  ASSERT_EQ(canControlAddFilterIds(alpha.control, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
-  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(pass_only_0x123_and_start(alpha.control));
   beta.post(data(0x122, {}));
   beta.post(data(0x123, {}));
   step_ns(5'000'000);
@@ -296,11 +296,7 @@ TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
   Adapter gamma("gamma", true, kMode, 1024, CAN_BT0_250KB, CAN_BT1_250KB);
   HANDLE list = nullptr;
   ASSERT_EQ(canSchedulerOpen(beta.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 1;  // a frame every millisecond
-  m.dwMsgId = 0x2A0;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = 1;
+  CANCYCLICTXMSG m = cyclic_data(0x2A0, 1, 1);  // a frame every millisecond
   UINT32 index = 0;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
@@ -326,9 +322,7 @@ TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
   // With what it found, the third adapter receives the traffic.
   ASSERT_EQ(canControlInitialize(control, kMode, btr0[found], btr1[found]), VCI_OK);
   HANDLE ch = nullptr;
-  ASSERT_EQ(canChannelOpen(dev, 0, FALSE, &ch), VCI_OK);
-  ASSERT_EQ(canChannelInitialize(ch, 64, 1, 0, 0), VCI_OK);
-  ASSERT_EQ(canChannelActivate(ch, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(dev, 64, 0, &ch));
   ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
   step_ns(5'000'000);
   std::size_t frames = 0;

@@ -152,14 +152,7 @@ TEST(VciCApiGeneral, AGuidIsTheBracedRegistryForm) {
 
 TEST(VciCApiGeneral, TheWideErrorTextIsTheNarrowOneTruncatedAlike) {
   char narrow[VCI_MAX_ERRSTRLEN];
-  wchar_t wide[VCI_MAX_ERRSTRLEN];
-  vciFormatErrorA(VCI_E_TIMEOUT, narrow, VCI_MAX_ERRSTRLEN);
-  vciFormatErrorW(VCI_E_TIMEOUT, wide, VCI_MAX_ERRSTRLEN);
-  ASSERT_GT(std::strlen(narrow), 3u);
-  ASSERT_EQ(std::wcslen(wide), std::strlen(narrow));
-  for (std::size_t i = 0; narrow[i] != '\0'; ++i) {
-    EXPECT_EQ(wide[i], static_cast<wchar_t>(narrow[i])) << i;
-  }
+  ASSERT_NO_FATAL_FAILURE(testing::expect_wide_error_text_is_the_narrow_one(narrow));
   wchar_t small[4] = {L'x', L'x', L'x', L'x'};
   vciFormatErrorW(VCI_E_TIMEOUT, small, 4);
   EXPECT_EQ(std::wcslen(small), 3u);

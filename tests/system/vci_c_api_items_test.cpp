@@ -242,10 +242,7 @@ TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
   SimClock clock;
   HANDLE list = nullptr;
   ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 2;
-  m.dwMsgId = 0x100;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  CANCYCLICTXMSG m = cyclic_data(0x100, 2);
   UINT32 index = 99;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(index, 0u);
@@ -524,9 +521,7 @@ TEST(VciCItems, Item71_TwoChannelsTransmitInTurns) {
   Adapter alpha("alpha", false);
   Adapter beta("beta");
   HANDLE second = nullptr;
-  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &second), VCI_OK);
-  ASSERT_EQ(canChannelInitialize(second, 16, 1, 16, 1), VCI_OK);
-  ASSERT_EQ(canChannelActivate(second, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 16, 16, &second));
   for (uint32_t id : {0x101, 0x102, 0x103, 0x104}) {
     alpha.post(data(id, {}));
   }
@@ -652,15 +647,10 @@ TEST(VciCItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
   Adapter beta("beta");
   Parts alpha("alpha");
   HANDLE second = nullptr;
-  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &second), VCI_OK);
-  ASSERT_EQ(canChannelInitialize(second, 16, 1, 0, 0), VCI_OK);
-  ASSERT_EQ(canChannelActivate(second, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 16, 0, &second));
   ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
   ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
-  ASSERT_EQ(canControlSetAccFilter(alpha.control, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
-            VCI_OK);
-  ASSERT_EQ(canControlAddFilterIds(alpha.control, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
-  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(pass_only_0x123_and_start(alpha.control));
   beta.post(data(0x122, {}));
   beta.post(data(0x123, {}));
   SimClock clock;
@@ -728,20 +718,10 @@ TEST(VciCItems, Item114_TheBtrTableGivesItsBitRates) {
   VciDaemon d;
   Adapter alpha("alpha", false);
   Adapter beta("beta", false);
-  struct Rate {
-    UINT8 btr0, btr1;
-    uint64_t bps;
-  };
-  const Rate rates[] = {
-      {CAN_BT0_5KB, CAN_BT1_5KB, 5'000},       {CAN_BT0_10KB, CAN_BT1_10KB, 10'000},
-      {CAN_BT0_20KB, CAN_BT1_20KB, 20'000},    {CAN_BT0_50KB, CAN_BT1_50KB, 50'000},
-      {CAN_BT0_100KB, CAN_BT1_100KB, 100'000}, {CAN_BT0_125KB, CAN_BT1_125KB, 125'000},
-      {CAN_BT0_250KB, CAN_BT1_250KB, 250'000}, {CAN_BT0_500KB, CAN_BT1_500KB, 500'000},
-      {CAN_BT0_800KB, CAN_BT1_800KB, 800'000}, {CAN_BT0_1000KB, CAN_BT1_1000KB, 1'000'000}};
   ASSERT_EQ(bits_of(0x123, {0x11, 0x22}), 62);
   SimClock clock;
   uint64_t t = 0;
-  for (const Rate& r : rates) {
+  for (const BtrRate& r : kBtrTable) {
     t += 100'000'000;
     clock.to(t);
     for (const Adapter* a : {&alpha, &beta}) {
@@ -807,11 +787,7 @@ TEST(VciCItems, Item127_ACyclicFrameComesEveryCycleExactly) {
   ASSERT_EQ(canSchedulerGetCaps(list, &caps), VCI_OK);
   const uint32_t tick_us = caps.dwCmsDivisor * 1'000'000 / caps.dwClockFreq;
   ASSERT_EQ(tick_us, 1000u);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 5;
-  m.dwMsgId = 0x555;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = 8;
+  CANCYCLICTXMSG m = cyclic_data(0x555, 5, 8);
   UINT32 index = 0;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
@@ -880,10 +856,7 @@ TEST(VciCItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
   Adapter beta("beta");
   HANDLE list = nullptr;
   ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 2;
-  m.dwMsgId = 0x100;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  CANCYCLICTXMSG m = cyclic_data(0x100, 2);
   UINT32 index = 0;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
   ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);

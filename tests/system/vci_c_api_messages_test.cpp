@@ -47,9 +47,7 @@ TEST(VciCApi, SelfReceptionReachesEveryChannelOfTheController) {
   Adapter alpha("alpha");
   Adapter beta("beta");
   HANDLE second = nullptr;
-  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &second), VCI_OK);
-  ASSERT_EQ(canChannelInitialize(second, 64, 1, 0, 0), VCI_OK);
-  ASSERT_EQ(canChannelActivate(second, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 64, 0, &second));
   HANDLE exclusive = nullptr;
   EXPECT_EQ(canChannelOpen(alpha.device, 0, TRUE, &exclusive), VCI_E_ACCESSDENIED);
   EXPECT_EQ(exclusive, nullptr);
@@ -141,9 +139,7 @@ TEST(VciCApi, ADelayAboveTheMaximumIsClampedAndHighPriorityGoesFirst) {
   // Two channels: a high-priority frame of the second overtakes the first's waiting frame (not
   // the one already in the controller).
   HANDLE second = nullptr;
-  ASSERT_EQ(canChannelOpen(alpha.device, 0, FALSE, &second), VCI_OK);
-  ASSERT_EQ(canChannelInitialize(second, 64, 1, 16, 1), VCI_OK);
-  ASSERT_EQ(canChannelActivate(second, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 64, 16, &second));
   alpha.post(data(0x201, {1}));
   alpha.post(data(0x202, {2}));
   step_ns(10'000);  // 0x201 is on the wire
@@ -173,12 +169,8 @@ TEST(VciCApi, TheCyclicListSendsOnItsTicksAndIncrementsTheIdentifier) {
   ASSERT_EQ(canSchedulerGetCaps(list, &caps), VCI_OK);
   EXPECT_EQ(caps.dwClockFreq, 1'000'000u);
   EXPECT_EQ(caps.dwCmsDivisor, 1000u);  // 1 ms ticks
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 2;
+  CANCYCLICTXMSG m = cyclic_data(0x7FE, 2, 1);
   m.bIncrMode = CAN_CTXMSG_INC_ID;
-  m.dwMsgId = 0x7FE;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = 1;
   m.abData[0] = 0xA5;
   UINT32 index = 0;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);

@@ -19,36 +19,30 @@ namespace canemu::testing {
 inline constexpr UINT8 kMode = CAN_OPMODE_STANDARD | CAN_OPMODE_EXTENDED | CAN_OPMODE_ERRFRAME;
 inline constexpr int64_t kBitUs2 = 2;  // one bit at 500 kbit/s is 2 us
 
-// What `channel` holds, taken out (`data_only`: only the data frames).
-inline std::vector<CANMSG> drain(HANDLE channel, bool data_only) {
-  std::vector<CANMSG> got;
-  CANMSG m;
-  while (canChannelPeekMessage(channel, &m) == VCI_OK) {
-    if (!data_only || m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      got.push_back(m);
-    }
-  }
-  return got;
+// One more channel on `device`'s controller (receive FIFO `rx`, transmit FIFO `tx`: none if
+// 0), initialized and activated.
+inline void open_channel(HANDLE device, UINT16 rx, UINT16 tx, HANDLE* channel) {
+  ASSERT_EQ(canChannelOpen(device, 0, FALSE, channel), VCI_OK);
+  ASSERT_EQ(canChannelInitialize(*channel, rx, 1, tx, tx == 0 ? 0 : 1), VCI_OK);
+  ASSERT_EQ(canChannelActivate(*channel, TRUE), VCI_OK);
+}
+
+// `control`'s 11-bit filter passes only 0x123 (the acceptance filter shut, the ID list holding
+// it), and the line starts.
+inline void pass_only_0x123_and_start(HANDLE control) {
+  ASSERT_EQ(canControlSetAccFilter(control, FALSE, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE), VCI_OK);
+  ASSERT_EQ(canControlAddFilterIds(control, FALSE, 0x123 << 1, 0xFFF), VCI_OK);
+  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
 }
 
 // An adapter's device, its control unit and a channel (receive FIFO `rx`, transmit FIFO `tx`)
 // initialized but not yet activated.
-struct Parts {
-  HANDLE device = nullptr;
-  HANDLE control = nullptr;
-  HANDLE channel = nullptr;
+struct Parts : ControllerHandles {
   explicit Parts(const std::string& name, UINT16 rx = 64, UINT16 tx = 16) {
     EXPECT_EQ(vciDeviceOpen(id_of(name), &device), VCI_OK);
     EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
     EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
     EXPECT_EQ(canChannelInitialize(channel, rx, 1, tx, 1), VCI_OK);
-  }
-  Parts(const Parts&) = delete;
-  Parts& operator=(const Parts&) = delete;
-  ~Parts() {
-    canChannelClose(channel);
-    canControlClose(control);
-    vciDeviceClose(device);
   }
   // All that arrived.
   std::vector<CANMSG> drain() const { return testing::drain(channel, false); }

@@ -170,11 +170,7 @@ TEST(VciCppApi, TheChannelsControlIsExclusiveAListenOnlyLineNeverSendsAndBusLoad
   // beta sends a frame every millisecond for a second: the load over the last second shows it.
   Ref<ICanScheduler> list;
   ASSERT_EQ(beta.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
-  CANCYCLICTXMSG c{};
-  c.wCycleTime = 1;
-  c.dwMsgId = 0x100;
-  c.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  c.uMsgInfo.Bits.dlc = 8;
+  CANCYCLICTXMSG c = cyclic_data(0x100, 1, 8);
   UINT32 index = 0;
   ASSERT_EQ(list->AddMessage(&c, &index), VCI_OK);
   ASSERT_EQ(list->StartMessage(index, 0), VCI_OK);

@@ -166,17 +166,9 @@ TEST(VciCppApi, InterfaceIdentifiersHaveTheVendorsValues) {
 }
 
 TEST(VciCppApi, IdentifiersRoundTripThroughText) {
-  VCIID luid{};
-  luid.AsInt64 = 0x0123456789ABCDEF;
-  char text[40];
-  EXPECT_EQ(VciLuidToChar(luid, text, 16), VCI_E_BUFFER_OVERFLOW);
-  ASSERT_EQ(VciLuidToChar(luid, text, 17), VCI_OK);
-  EXPECT_STREQ(text, "0123456789ABCDEF");
-  VCIID back{};
-  ASSERT_EQ(VciCharToLuid(text, &back), VCI_OK);
-  EXPECT_EQ(back.AsInt64, luid.AsInt64);
   char garbage[] = "not a luid";
-  EXPECT_EQ(VciCharToLuid(garbage, &back), VCI_E_FAIL);
+  ASSERT_NO_FATAL_FAILURE(testing::expect_luid_round_trip(VciLuidToChar, VciCharToLuid, garbage));
+  char text[40];
   EXPECT_EQ(VciGuidToChar(IID_ICanChannel, text, 38), VCI_E_BUFFER_OVERFLOW);
   ASSERT_EQ(VciGuidToChar(IID_ICanChannel, text, 39), VCI_OK);
   EXPECT_EQ(std::strlen(text), 38u);
@@ -222,11 +214,8 @@ TEST(VciCppApi, DevicesAreFoundByHardwareIdAndByClass) {
   VciDaemon d;
   Adapter beta("beta");
   VCIDEVICEINFO info{};
-  ASSERT_EQ(beta.device->GetDeviceInfo(&info), VCI_OK);
-  Ref<IVciDevice> by_hwid;
-  ASSERT_EQ(VciQueryDeviceByHwid(info.UniqueHardwareId.AsGuid, by_hwid.out()), VCI_OK);
   VCIDEVICEINFO found{};
-  ASSERT_EQ(by_hwid->GetDeviceInfo(&found), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(testing::query_by_hwid(beta.device.p, &info, &found));
   EXPECT_EQ(found.VciObjectId.AsInt64, info.VciObjectId.AsInt64);
   Ref<IVciDevice> second;
   ASSERT_EQ(VciQueryDeviceByClass(info.DeviceClass, 1, second.out()), VCI_OK);

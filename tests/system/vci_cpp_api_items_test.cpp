@@ -22,6 +22,7 @@ namespace canemu {
 namespace {
 
 using testing::Adapter;
+using testing::cyclic_data;
 using testing::drain;
 using testing::end_of;
 using testing::ids_of;
@@ -688,19 +689,8 @@ TEST(VciCppItems, Item114_BtrPairsOfTheTableGiveTheirRates) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  struct Rate {
-    UINT8 btr0;
-    UINT8 btr1;
-    uint64_t bit_ns;
-  };
-  const Rate rates[] = {
-      {CAN_BT0_5KB, CAN_BT1_5KB, 200'000},    {CAN_BT0_10KB, CAN_BT1_10KB, 100'000},
-      {CAN_BT0_20KB, CAN_BT1_20KB, 50'000},   {CAN_BT0_50KB, CAN_BT1_50KB, 20'000},
-      {CAN_BT0_100KB, CAN_BT1_100KB, 10'000}, {CAN_BT0_125KB, CAN_BT1_125KB, 8'000},
-      {CAN_BT0_250KB, CAN_BT1_250KB, 4'000},  {CAN_BT0_500KB, CAN_BT1_500KB, 2'000},
-      {CAN_BT0_800KB, CAN_BT1_800KB, 1'250},  {CAN_BT0_1000KB, CAN_BT1_1000KB, 1'000},
-  };
-  for (const Rate& r : rates) {
+  for (const testing::BtrRate& r : testing::kBtrTable) {
+    const uint64_t bit_ns = 1'000'000'000 / r.bps;
     for (Adapter* a : {&alpha, &beta}) {
       ASSERT_EQ(a->control->ResetLine(), VCI_OK);
       CANINITLINE init{kMode, 0, r.btr0, r.btr1};
@@ -716,9 +706,9 @@ TEST(VciCppItems, Item114_BtrPairsOfTheTableGiveTheirRates) {
     ASSERT_EQ(put(beta.writer, one_byte(0x555, 0xAA)), VCI_OK);
     step_ns(50'000'000);
     const auto got = drain(alpha.reader.p, false);
-    ASSERT_EQ(got.size(), 1u) << r.bit_ns;
+    ASSERT_EQ(got.size(), 1u) << bit_ns;
     EXPECT_EQ(got[0].dwMsgId, 0x555u);
-    EXPECT_EQ(got[0].dwTime, (start + bits_of(0x555, {0xAA}) * r.bit_ns) / 1000) << r.bit_ns;
+    EXPECT_EQ(got[0].dwTime, (start + bits_of(0x555, {0xAA}) * bit_ns) / 1000) << bit_ns;
   }
 }
 
@@ -884,11 +874,7 @@ TEST(VciCppItems, IdentifiersThatDoNotFitTheirFormatAreRefusedByTheWriter) {
 // ---------------------------------------------------------------- cyclic transmit list
 
 CANCYCLICTXMSG cyclic(UINT32 id, UINT16 cycle, std::vector<uint8_t> data = {0x11}) {
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = cycle;
-  m.dwMsgId = id;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = data.size() & 0x0FU;
+  CANCYCLICTXMSG m = cyclic_data(id, cycle, static_cast<UINT8>(data.size()));
   std::memcpy(m.abData, data.data(), data.size());
   return m;
 }
@@ -1055,11 +1041,8 @@ TEST(VciCppItems, Item11_AnUnknownHardwareIdOpensNothing) {
   VciDaemon d;
   Adapter alpha("alpha");
   VCIDEVICEINFO info{};
-  ASSERT_EQ(alpha.device->GetDeviceInfo(&info), VCI_OK);
-  Ref<IVciDevice> same;
-  ASSERT_EQ(VciQueryDeviceByHwid(info.UniqueHardwareId.AsGuid, same.out()), VCI_OK);
   VCIDEVICEINFO found{};
-  ASSERT_EQ(same->GetDeviceInfo(&found), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(testing::query_by_hwid(alpha.device.p, &info, &found));
   EXPECT_EQ(std::memcmp(&found, &info, sizeof info), 0);
   GUID unknown = info.UniqueHardwareId.AsGuid;
   unknown.Data4[7] ^= 0x5A;

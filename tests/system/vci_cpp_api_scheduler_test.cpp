@@ -7,15 +7,8 @@
 #include "vci_cpp_test_support.hpp"
 #include "vcisdk.h"
 
-namespace canemu {
+namespace canemu::testing {
 namespace {
-
-using testing::Adapter;
-using testing::drain;
-using testing::end_of;
-using testing::Ref;
-using testing::step_ns;
-using testing::VciDaemon;
 
 TEST(VciCppApi, TheCyclicListThroughICanScheduler2AndTheTimerOverflow) {
   VciDaemon d;
@@ -23,13 +16,9 @@ TEST(VciCppApi, TheCyclicListThroughICanScheduler2AndTheTimerOverflow) {
   Adapter beta("beta");
   Ref<ICanScheduler2> list;
   ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler2, list.pv()), VCI_OK);
-  CANCYCLICTXMSG2 m{};
-  m.wCycleTime = 3;
+  CANCYCLICTXMSG2 m = cyclic_data<CANCYCLICTXMSG2>(0x55, 3, 1);
   m.bIncrMode = CAN_CTXMSG_INC_8;
   m.bByteIndex = 0;
-  m.dwMsgId = 0x55;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = 1;
   m.abData[0] = 0xFE;
   UINT32 index = 0;
   ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
@@ -64,11 +53,7 @@ TEST(VciCppApi, TheCyclicListRefusesBadEntriesAndASeventeenth) {
   Adapter alpha("alpha");
   Ref<ICanScheduler> list;
   ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 16;  // 16 entries of cycle 16 fill every tick
-  m.dwMsgId = 0x100;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-  m.uMsgInfo.Bits.dlc = 1;
+  CANCYCLICTXMSG m = cyclic_data(0x100, 16, 1);  // 16 entries of cycle 16 fill every tick
   UINT32 index = 0;
   for (UINT32 k = 0; k < 16; ++k) {
     ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
@@ -99,11 +84,7 @@ TEST(VciCppApi, ICanSchedulerAndICanScheduler2ShareOneList) {
   {
     Ref<ICanScheduler> v1;
     ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, v1.pv()), VCI_OK);
-    CANCYCLICTXMSG m{};
-    m.wCycleTime = 2;
-    m.dwMsgId = 0x100;
-    m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-    m.uMsgInfo.Bits.dlc = 1;
+    CANCYCLICTXMSG m = cyclic_data(0x100, 2, 1);
     UINT32 index = 99;
     ASSERT_EQ(v1->AddMessage(&m, &index), VCI_OK);
     EXPECT_EQ(index, 0u);
@@ -116,11 +97,7 @@ TEST(VciCppApi, ICanSchedulerAndICanScheduler2ShareOneList) {
     ASSERT_EQ(v2->GetStatus(&s), VCI_OK);
     EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_BUSY);  // v1's entry, started
     EXPECT_EQ(s.abMsgStat[1], CAN_CTXMSG_STAT_EMPTY);
-    CANCYCLICTXMSG2 m{};
-    m.wCycleTime = 2;
-    m.dwMsgId = 0x200;
-    m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
-    m.uMsgInfo.Bits.dlc = 1;
+    CANCYCLICTXMSG2 m = cyclic_data<CANCYCLICTXMSG2>(0x200, 2, 1);
     UINT32 index = 99;
     ASSERT_EQ(v2->AddMessage(&m, &index), VCI_OK);  // 1/2 + 1/2: every tick taken
     EXPECT_EQ(index, 1u);
@@ -146,10 +123,7 @@ TEST(VciCppApi, ICanSchedulerAndICanScheduler2ShareOneList) {
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);  // opening the list stops the task
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_BUSY);
   EXPECT_EQ(s.abMsgStat[1], CAN_CTXMSG_STAT_BUSY);  // v2's entry
-  CANCYCLICTXMSG m{};
-  m.wCycleTime = 65535;
-  m.dwMsgId = 0x300;
-  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  CANCYCLICTXMSG m = cyclic_data(0x300, 65535);
   UINT32 refused = 0;
   EXPECT_EQ(v1->AddMessage(&m, &refused), VCI_E_OUTOFMEMORY);
   EXPECT_EQ(refused, 0xFFFFFFFFu);
@@ -160,4 +134,4 @@ TEST(VciCppApi, ICanSchedulerAndICanScheduler2ShareOneList) {
 }
 
 }  // namespace
-}  // namespace canemu
+}  // namespace canemu::testing

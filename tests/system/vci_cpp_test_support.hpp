@@ -86,6 +86,14 @@ inline void open_bal(INT64 id, Ref<IBalObject>& bal) {
   ASSERT_EQ(device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, bal.pv()), VCI_OK);
 }
 
+// `device`'s info, and the info of the device VciQueryDeviceByHwid opens by its hardware ID.
+inline void query_by_hwid(IVciDevice* device, VCIDEVICEINFO* info, VCIDEVICEINFO* found) {
+  ASSERT_EQ(device->GetDeviceInfo(info), VCI_OK);
+  Ref<IVciDevice> same;
+  ASSERT_EQ(VciQueryDeviceByHwid(info->UniqueHardwareId.AsGuid, same.out()), VCI_OK);
+  ASSERT_EQ(same->GetDeviceInfo(found), VCI_OK);
+}
+
 inline CANMSG one_byte(UINT32 id, UINT8 b) {
   CANMSG m{};
   m.dwMsgId = id;

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "canemu_vci.h"
+#include "cantype.h"
 #include "daemon_process.hpp"
 
 namespace canemu::testing {
@@ -84,6 +85,47 @@ struct SimClock {
     ASSERT_EQ(now, t_ns);
   }
 };
+
+// The BTR0/BTR1 pairs of cantype.h's table (SJA1000 at 16 MHz) and the bit rates they give.
+struct BtrRate {
+  UINT8 btr0;
+  UINT8 btr1;
+  uint64_t bps;
+};
+inline constexpr BtrRate kBtrTable[] = {
+    {CAN_BT0_5KB, CAN_BT1_5KB, 5'000},       {CAN_BT0_10KB, CAN_BT1_10KB, 10'000},
+    {CAN_BT0_20KB, CAN_BT1_20KB, 20'000},    {CAN_BT0_50KB, CAN_BT1_50KB, 50'000},
+    {CAN_BT0_100KB, CAN_BT1_100KB, 100'000}, {CAN_BT0_125KB, CAN_BT1_125KB, 125'000},
+    {CAN_BT0_250KB, CAN_BT1_250KB, 250'000}, {CAN_BT0_500KB, CAN_BT1_500KB, 500'000},
+    {CAN_BT0_800KB, CAN_BT1_800KB, 800'000}, {CAN_BT0_1000KB, CAN_BT1_1000KB, 1'000'000}};
+
+// An entry of the cyclic transmit list (CANCYCLICTXMSG or CANCYCLICTXMSG2): a data frame with
+// identifier `id` and `dlc`, sent every `cycle` ticks; its data bytes zero, no increment.
+template <class Cyclic = CANCYCLICTXMSG>
+inline Cyclic cyclic_data(UINT32 id, UINT16 cycle, UINT8 dlc = 0) {
+  Cyclic m{};
+  m.wCycleTime = cycle;
+  m.dwMsgId = id;
+  m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
+  m.uMsgInfo.Bits.dlc = dlc & 0x0FU;
+  return m;
+}
+
+// The identifier 0123456789ABCDEF into text through `to_char` (vciLuidToCharA, VciLuidToChar:
+// 16 characters are too few, 17 hold it) and back through `from_char`, which refuses `bad`.
+template <class ToChar, class FromChar>
+void expect_luid_round_trip(ToChar to_char, FromChar from_char, char* bad) {
+  VCIID id{};
+  id.AsInt64 = 0x0123456789ABCDEF;
+  char text[17];
+  EXPECT_EQ(to_char(id, text, 16), VCI_E_BUFFER_OVERFLOW);
+  ASSERT_EQ(to_char(id, text, 17), VCI_OK);
+  EXPECT_STREQ(text, "0123456789ABCDEF");
+  VCIID back{};
+  ASSERT_EQ(from_char(text, &back), VCI_OK);
+  EXPECT_EQ(back.AsInt64, id.AsInt64);
+  EXPECT_EQ(from_char(bad, &back), VCI_E_FAIL);
+}
 
 // The identifiers of `msgs` (CANMSG or CANMSG2), in order.
 template <class Msg>

@@ -105,6 +105,14 @@ ixxat::LineInit autobaud_init(uint8_t op_mode = kOpAll) {
   return init;
 }
 
+// r's line opened, initialized with AUTOBAUD and started, with a channel on `p`.
+void start_autobaud(Rig& r, Port& p) {
+  ASSERT_EQ(r.line.open_control(), VCI_OK);
+  ASSERT_EQ(r.line.init_line(autobaud_init()), VCI_OK);
+  r.channel(p);
+  ASSERT_EQ(r.line.start_line(), VCI_OK);
+}
+
 // Back-to-back frames at 250 kbit/s from t = 0. The line tries 1000, 800 and 500 kbit/s on the
 // first three (each sees an error in its frame and gives way at once) and decodes the fourth
 // with 250 kbit/s: it locks in at the instant the fourth frame is received (the end of its
@@ -167,10 +175,7 @@ TEST(VciCanLine, AutobaudLocksInOnTheFirstFrameThatDecodesAndRunsAtThatRate) {
 TEST(VciCanLine, AutobaudOnASilentBusKeepsListeningUntilTrafficComes) {
   Rig r;
   Port p;
-  ASSERT_EQ(r.line.open_control(), VCI_OK);
-  ASSERT_EQ(r.line.init_line(autobaud_init()), VCI_OK);
-  r.channel(p);
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(start_autobaud(r, p));
   r.send(p, msg(0x321, {5}));
   r.b.run_until(1'000 * kMs);
   EXPECT_FALSE(r.line.autobaud_rate_known());
@@ -198,10 +203,7 @@ TEST(VciCanLine, AutobaudOnASilentBusKeepsListeningUntilTrafficComes) {
 TEST(VciCanLine, AutobaudListeningEndsWithStopResetAndInit) {
   Rig r;
   Port p;
-  ASSERT_EQ(r.line.open_control(), VCI_OK);
-  ASSERT_EQ(r.line.init_line(autobaud_init()), VCI_OK);
-  r.channel(p);
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(start_autobaud(r, p));
   r.b.run_until(1 * kMs);
   ASSERT_EQ(r.line.stop_line(), VCI_OK);
   EXPECT_EQ(r.line.state(), ixxat::LineState::offline);

@@ -48,6 +48,13 @@ struct FdRig {
     EXPECT_EQ(line.activate(id), VCI_OK);
     return id;
   }
+  // The line initialized for FD (init()) and started with one v2 channel (`id`) on `port`.
+  void online(Port& port, ChannelId* id) {
+    ASSERT_EQ(line.open_control(), VCI_OK);
+    ASSERT_EQ(line.init_line(init()), VCI_OK);
+    *id = channel(port, true);
+    ASSERT_EQ(line.start_line(), VCI_OK);
+  }
   void send(Port& port, const CANMSG2& m) {
     port.tx.push_back(m);
     line.tx_ready();
@@ -133,10 +140,8 @@ TEST(VciCanLine, FdFramesReachV2ChannelsAndV1ChannelsOnlyUpTo8Bytes) {
 TEST(VciCanLine, AnFdLineSendsFdFramesAndFdrAloneAsksForTheRateSwitch) {
   FdRig r;
   Port p;
-  ASSERT_EQ(r.line.open_control(), VCI_OK);
-  ASSERT_EQ(r.line.init_line(r.init()), VCI_OK);
-  const ChannelId ch = r.channel(p, true);
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  ChannelId ch{};
+  ASSERT_NO_FATAL_FAILURE(r.online(p, &ch));
   CANMSG2 a = msg(0x200, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
   a.uMsgInfo.Bits.dlc = 9;  // 12 bytes
   a.uMsgInfo.Bits.edl = 1;
@@ -171,10 +176,8 @@ TEST(VciCanLine, AnFdLineSendsFdFramesAndFdrAloneAsksForTheRateSwitch) {
 TEST(VciCanLine, AnFdLineLeavesBusOffAfterARestartAndSendsItsFrameOnce) {
   FdRig r;
   Port p;
-  ASSERT_EQ(r.line.open_control(), VCI_OK);
-  ASSERT_EQ(r.line.init_line(r.init()), VCI_OK);
-  const ChannelId ch = r.channel(p, true);
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  ChannelId ch{};
+  ASSERT_NO_FATAL_FAILURE(r.online(p, &ch));
   FaultRule rule;
   rule.match.transmitter = r.node.node();
   rule.fault.error = CanErrorType::bit;

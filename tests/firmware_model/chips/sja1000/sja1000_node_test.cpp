@@ -126,14 +126,8 @@ TEST(Sja1000Node, RestartsAfterBusOffOnceTheDelayHasPassed) {
   // Bus-off by the host writing 255 to TXERR in reset mode (datasheet 6.4.13).
   a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
   a.node.chip().write(sja1000::TXERR, 255);
-  ASSERT_FALSE(a.log.states.empty());
-  EXPECT_EQ(a.log.states.back(), std::make_pair(100 * kBit, ErrorState::bus_off));
   // Restart at 100 bits + 1 ms, then 128 x 11 recessive bits on the idle bus.
-  const int64_t recovered = 100 * kBit + 1'000'000 + 128 * 11 * kBit;
-  b.run_until(recovered - 1);
-  EXPECT_EQ(a.log.states.back().second, ErrorState::bus_off);
-  b.run_until(recovered);
-  EXPECT_EQ(a.log.states.back(), std::make_pair(recovered, ErrorState::active));
+  ASSERT_NO_FATAL_FAILURE(testing::expect_bus_off_until_recovery(b, a.log, 100 * kBit, 1'000'000));
   EXPECT_EQ(a.node.chip().read(sja1000::TXERR), 0);
 }
 
@@ -204,17 +198,22 @@ TEST(Sja1000Node, AFrameQueuedThroughBusOffGoesOutAfterRecovery) {
   EXPECT_EQ(a.log.received.back().frame, kZero);
 }
 
-// A node stopped while bus-off with a request held in its buffer (the SJA1000 keeps it through
-// bus-off): the next user gets a clean chip, not the old frame.
-TEST(Sja1000Node, AReusedNodeDoesNotSendTheLastUsersFrame) {
-  Bus b;
-  Station a(b), r(b);
+// a and r started, and a bus-off through one bit error on kZero, which it holds in its buffer.
+void bus_off_holding_a_request(Bus& b, Station& a, Station& r) {
   a.start();
   r.start();
   one_error_from_bus_off(b, a);
   a.send(kZero);
   b.run_until(200 * kBit);
   ASSERT_TRUE(a.node.chip().confinement().bus_off());
+}
+
+// A node stopped while bus-off with a request held in its buffer (the SJA1000 keeps it through
+// bus-off): the next user gets a clean chip, not the old frame.
+TEST(Sja1000Node, AReusedNodeDoesNotSendTheLastUsersFrame) {
+  Bus b;
+  Station a(b), r(b);
+  ASSERT_NO_FATAL_FAILURE(bus_off_holding_a_request(b, a, r));
   EXPECT_EQ(a.node.chip().read(sja1000::SR) & sja1000::SR_TBS, 0);  // the request is held
   a.node.stop();
   a.log = Log{};
@@ -234,12 +233,7 @@ TEST(Sja1000Node, AReusedNodeDoesNotSendTheLastUsersFrame) {
 TEST(Sja1000Node, GoingOffTheBusInBusOffAbortsTheHeldRequest) {
   Bus b;
   Station a(b), r(b);
-  a.start();
-  r.start();
-  one_error_from_bus_off(b, a);
-  a.send(kZero);
-  b.run_until(200 * kBit);
-  ASSERT_TRUE(a.node.chip().confinement().bus_off());
+  ASSERT_NO_FATAL_FAILURE(bus_off_holding_a_request(b, a, r));
   ASSERT_EQ(a.node.chip().read(sja1000::MOD) & sja1000::MOD_RM, sja1000::MOD_RM);
   EXPECT_EQ(a.node.chip().read(sja1000::SR) & sja1000::SR_TBS, 0);  // held
   EXPECT_NE(a.node.controller().pending_tx(), nullptr);

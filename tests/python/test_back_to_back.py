@@ -4,6 +4,7 @@ scenarios), in real time: every wait is a recv with a timeout."""
 from __future__ import annotations
 
 import asyncio
+import ctypes
 import os
 import select
 import subprocess
@@ -14,6 +15,7 @@ import can
 import pytest
 
 import canemu
+from canemu import _vci
 
 from conftest import Canemud, bus_pair
 
@@ -501,20 +503,25 @@ FRAMES = [(0x100, False), (0x101, False), (0x200, False), (0x100, True), (0x1234
 
 
 def channel_ids(sender, receiver, frames, marker=(0x7E0, False)):
-    """Like receive_ids, but what comes out of the receiver's channel itself (`_recv_internal`,
-    before python-can's software filter), each with the VCI's acceptance code (bAccept: which
-    stage of the channel's filter let it through); every one must say it was filtered in the
-    channel."""
+    """Like receive_ids, but what comes out of the receiver's channel itself (read from its VCI
+    channel, before python-can's software filter), each data frame with the VCI's acceptance
+    code (bAccept: which stage of the channel's filter let it through). The bus must say the
+    channel does the filtering."""
+    assert receiver._hw_filtered
     for arbitration_id, extended in frames + [marker]:
         sender.send(can.Message(arbitration_id=arbitration_id, is_extended_id=extended))
+    lib = _vci.lib()
+    m = _vci.CANMSG2()
     got = []
     while True:
-        msg, filtered = receiver._recv_internal(TIMEOUT)
-        assert msg is not None, f"the marker did not come; got {got}"
-        assert filtered, msg
-        if (msg.arbitration_id, msg.is_extended_id) == marker:
+        hr = lib.canChannelReadMessage(receiver._channel, int(TIMEOUT * 1000), ctypes.byref(m))
+        assert hr == _vci.VCI_OK, f"the marker did not come; got {got}"
+        if m.bType != _vci.CAN_MSGTYPE_DATA:
+            continue
+        frame = (m.dwMsgId, bool(m.bFlags & _vci.FLAGS_EXT))
+        if frame == marker:
             return got
-        got.append((msg.arbitration_id, msg.is_extended_id, receiver._rx_msg.bAccept))
+        got.append((*frame, m.bAccept))
 
 
 def test_one_filter_per_format_is_the_channel_acceptance_filter(pair):

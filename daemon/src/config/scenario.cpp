@@ -1,6 +1,9 @@
 #include "canemu/daemon/config/scenario.hpp"
 
 #include <algorithm>
+#include <string_view>
+
+#include <fmt/format.h>
 
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/ipc/protocol.hpp"
@@ -100,15 +103,25 @@ std::optional<bool> boolean(Checker& c, const toml::table& t, const std::string&
   return n->as_boolean()->get();
 }
 
-void read_match(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
+// A fault's `match` table, if it has one; anything else in its place is an error that shows
+// `example`.
+const toml::table* match_table(Checker& c, const toml::table& t, const std::string& mpath,
+                               std::string_view example) {
   const toml::node* n = t.get("match");
   if (n == nullptr) {
-    return;
+    return nullptr;
   }
   const toml::table* m = n->as_table();
-  const std::string mpath = path + ".match";
   if (m == nullptr) {
-    c.error(*n, mpath, "must be a table, e.g. { id = 0x100, mask = 0x7FF }");
+    c.error(*n, mpath, fmt::format("must be a table, e.g. {}", example));
+  }
+  return m;
+}
+
+void read_match(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
+  const std::string mpath = path + ".match";
+  const toml::table* m = match_table(c, t, mpath, "{ id = 0x100, mask = 0x7FF }");
+  if (m == nullptr) {
     return;
   }
   c.only_keys(*m, mpath, {"id", "mask", "ext", "rtr", "from"});
@@ -139,14 +152,9 @@ void read_count(Checker& c, const toml::table& t, const std::string& path, Fault
 
 // A LIN frame's match: its identifier (0..3Fh) and the commander that sends its header.
 void read_lin_match(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
-  const toml::node* n = t.get("match");
-  if (n == nullptr) {
-    return;
-  }
-  const toml::table* m = n->as_table();
   const std::string mpath = path + ".match";
+  const toml::table* m = match_table(c, t, mpath, "{ id = 0x10, from = \"ixxat0:2\" }");
   if (m == nullptr) {
-    c.error(*n, mpath, "must be a table, e.g. { id = 0x10, from = \"ixxat0:2\" }");
     return;
   }
   c.only_keys(*m, mpath, {"id", "from"});

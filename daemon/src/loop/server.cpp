@@ -391,6 +391,10 @@ void Server::before_status() {
 void Server::watch(Doorbell& bell) {
   if (epoll_add(epoll_.get(), bell.doorbell_fd())) {
     doorbells_[bell.doorbell_fd()] = &bell;
+  } else {
+    // Its transmit ring is then looked at only when the loop kicks every channel.
+    log::error("cannot watch a doorbell (descriptor {}): {}", bell.doorbell_fd(),
+               std::strerror(errno));
   }
 }
 

@@ -345,3 +345,23 @@ def test_the_id_table_hook_and_log_lines():
     r = row.row("can0")
     assert (r["count"], r["period_ms"], r["data"], r["changed"]) == (2, 10.0, "0103", 0b10)
     assert json.dumps(r)
+
+
+def test_a_page_that_falls_behind_gets_a_snapshot_instead_of_losing_updates():
+    import asyncio
+
+    from canemu._web_feed import RESYNC, RESYNC_AFTER, Feed
+
+    feed = Feed.__new__(Feed)  # publish needs only the subscribers and the count
+    feed.subscribers, feed.resyncs = set(), 0
+    slow = asyncio.Queue()
+    feed.subscribers.add(slow)
+    for n in range(2 * RESYNC_AFTER + 4):
+        feed.publish({"n": n})
+    queued = [slow.get_nowait() for _ in range(slow.qsize())]
+    # Each time the queue is full, what it holds gives way to one RESYNC; the newest updates
+    # follow it.
+    assert feed.resyncs == 2
+    assert queued[0] == RESYNC
+    assert [json.loads(t)["n"] for t in queued[1:]] == list(range(2 * RESYNC_AFTER + 1,
+                                                                 2 * RESYNC_AFTER + 4))

@@ -40,6 +40,11 @@ def _end_with_parent() -> None:
         pass
 
 
+
+# A page's queue holds at most this many updates; then they give way to one RESYNC.
+RESYNC_AFTER = 8
+RESYNC = ""  # in a page's queue: send it a snapshot
+
 class IdRow:
     """One identifier on one bus, as cansniffer shows it: count, period, last data, and which
     bytes changed since the previous update."""
@@ -103,6 +108,9 @@ class Feed:
         self.interval = interval
         self.frames = frames
         self.subscribers: Set[asyncio.Queue] = set()
+        # Pages that fell behind by more than RESYNC_AFTER updates: their queued updates were
+        # replaced by a fresh snapshot (RESYNC), so that they lose nothing; counted here.
+        self.resyncs = 0
         self.status: Optional[Dict[str, Any]] = None
         self.error: Optional[str] = None  # why the last look failed
         self.history: Deque[Dict[str, Any]] = collections.deque(maxlen=HISTORY_POINTS)
@@ -260,14 +268,21 @@ class Feed:
                 "faults_fired": list(self.fault_events), "ids": ids, "lin": self.lin_text,
                 "listening": self.listening, "capture_note": self.capture_note,
                 "error": self.error, "error_frames_seen": self.error_frames_seen,
+                "resyncs": self.resyncs,
                 "real_time": time.time()}
 
     def publish(self, message: Dict[str, Any]) -> None:
         text = json.dumps(message, separators=(",", ":"))
         for queue in list(self.subscribers):
-            if queue.qsize() > 8:  # a page that does not keep up misses updates, not memory
-                continue
-            queue.put_nowait(text)
+            if queue.qsize() < RESYNC_AFTER:
+                queue.put_nowait(text)
+            elif queue.qsize() == RESYNC_AFTER:
+                # A page that does not keep up gets the whole state again once it reads, instead
+                # of the updates it missed (memory stays bounded, nothing is lost).
+                while not queue.empty():
+                    queue.get_nowait()
+                queue.put_nowait(RESYNC)
+                self.resyncs += 1
 
     # ---- the ID tables ----
     async def _capture(self) -> None:

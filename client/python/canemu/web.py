@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import List, Optional
 
 from . import _web_control
-from ._web_feed import Feed
+from ._web_feed import RESYNC, Feed
 
 STATIC = Path(__file__).resolve().parent / "web_static"
 CHART_JS = Path("/usr/share/javascript/chart.js/chart.min.js")
@@ -90,6 +90,8 @@ def make_app(feed: Feed, allow_control: bool, chart_js: Path = CHART_JS):
                     continue
                 if text is None:  # canemu web ends
                     break
+                if text == RESYNC:  # it fell behind: the whole state again
+                    text = json.dumps(feed.snapshot())
                 await response.write(b"data: " + text.encode() + b"\n\n")
         except (ConnectionResetError, asyncio.CancelledError):
             pass

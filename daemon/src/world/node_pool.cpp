@@ -9,6 +9,10 @@ void NodePool::add_bus(model::CanBus& bus, bool fd, Maker make) {
   buses_.push_back(BusNodes{&bus, fd, std::move(make), {}});
 }
 
+void NodePool::add_lin_bus() {
+  buses_.push_back(BusNodes{nullptr, false, {}, {}});
+}
+
 model::HostedNode& NodePool::spare(std::size_t bus) {
   BusNodes& b = buses_[bus];
   for (auto& node : b.nodes) {

@@ -33,18 +33,20 @@ bool is_frame_rule(FaultEffect e) {
 
 }  // namespace
 
-void ScenarioRunner::add_bus(CanBus& bus, const BusConfig& config, lin::LinBus* lin) {
-  buses_.push_back(Bus{&bus, config, std::make_unique<FaultPlan>(), lin, nullptr});
-  bus.set_injector(buses_.back().faults.get());
+void ScenarioRunner::add_bus(CanBus* can, const BusConfig& config, lin::LinBus* lin) {
+  Bus& b = buses_.emplace_back(Bus{can, config, nullptr, lin, nullptr});
   const std::size_t index = buses_.size() - 1;
-  buses_.back().faults->on_hit = [this, index](std::size_t rule, const FrameContext& ctx,
-                                               const FrameFault&) {
-    frame_fault_hit(index, rule, ctx);
-  };
+  if (can != nullptr) {
+    b.faults = std::make_unique<FaultPlan>();
+    can->set_injector(b.faults.get());
+    b.faults->on_hit = [this, index](std::size_t rule, const FrameContext& ctx, const FrameFault&) {
+      frame_fault_hit(index, rule, ctx);
+    };
+  }
   if (lin != nullptr) {
-    buses_.back().lin_faults = std::make_unique<lin::LinFaultPlan>();
-    lin->set_fault_source(buses_.back().lin_faults.get());
-    buses_.back().lin_faults->on_hit = [this, index](std::size_t rule, SimTime at, uint8_t id) {
+    b.lin_faults = std::make_unique<lin::LinFaultPlan>();
+    lin->set_fault_source(b.lin_faults.get());
+    b.lin_faults->on_hit = [this, index](std::size_t rule, SimTime at, uint8_t id) {
       lin_fault_hit(index, rule, at, id);
     };
   }
@@ -244,8 +246,8 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
     }
   }
   for (std::size_t b = 0; b < buses_.size(); ++b) {
-    const std::size_t on_bus =
-        buses_[b].faults->size() + (buses_[b].lin_faults ? buses_[b].lin_faults->size() : 0);
+    const std::size_t on_bus = (buses_[b].faults ? buses_[b].faults->size() : 0) +
+                               (buses_[b].lin_faults ? buses_[b].lin_faults->size() : 0);
     if (on_bus + new_rules[b] > kMaxRulesPerBus) {
       return tl::unexpected(std::vector<std::string>{fmt::format(
           "{}: bus {} would have {} frame fault rules; at most {} are in force on a bus", s.source,

@@ -111,8 +111,8 @@ std::size_t ScenarioRunner::clear(std::string_view name, const MayClear& may,
 }
 
 void ScenarioRunner::retire(AppliedFault& a) {
-  FaultPlan& plan = *buses_[a.bus].faults;
-  if (a.rule && plan.contains(*a.rule)) {
+  if (a.rule && buses_[a.bus].faults->contains(*a.rule)) {
+    FaultPlan& plan = *buses_[a.bus].faults;
     a.final_seen = plan.rule(*a.rule).seen;
     a.final_hits = plan.rule(*a.rule).hits;
     plan.remove(*a.rule);

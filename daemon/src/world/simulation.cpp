@@ -93,7 +93,7 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
   for (const LinNodeConfig& n : sim->config_.lin_nodes) {
     const std::size_t bus = *sim->bus_index(n.bus);
     sim->lin_nodes_.push_back(
-        make_lin_node(n, bus, *sim->lin_buses_[bus], sim->config_.buses[bus].bitrate));
+        make_lin_node(n, bus, *sim->buses_[bus].lin, sim->config_.buses[bus].bitrate));
   }
   for (const RecorderConfig& r : sim->config_.recorders) {
     if (auto added = sim->add_recorder(r); !added) {
@@ -122,22 +122,24 @@ std::optional<HostedNodeSettings> Simulation::bus_timing(std::size_t bus) const 
 }
 
 void Simulation::add_bus(const BusConfig& b) {
-  buses_.push_back(std::make_unique<CanBus>(scheduler_, b.name));
-  std::unique_ptr<lin::LinBus> lin_bus;
+  RunningBus& running = buses_.emplace_back();
   if (b.kind == BusKind::lin) {
     lin::Layout layout;
     layout.bitrate = b.bitrate;
-    lin_bus = std::make_unique<lin::LinBus>(scheduler_, layout);
+    running.lin = std::make_unique<lin::LinBus>(scheduler_, layout);
+    nodes_.add_lin_bus();
+  } else {
+    running.can = std::make_unique<CanBus>(scheduler_, b.name);
+    const bool fd = b.kind == BusKind::can_fd;
+    NodePool::Maker make;
+    if (config_.remote(b)) {
+      make = [this, bus = buses_.size() - 1, fd](CanBus& placeholder) {
+        return remote_->make_node(bus, placeholder, fd);
+      };
+    }
+    nodes_.add_bus(*running.can, fd, std::move(make));
   }
-  lin_buses_.push_back(std::move(lin_bus));
-  NodePool::Maker make;
-  if (config_.remote(b)) {
-    make = [this, bus = buses_.size() - 1, fd = b.kind == BusKind::can_fd](CanBus& placeholder) {
-      return remote_->make_node(bus, placeholder, fd);
-    };
-  }
-  nodes_.add_bus(*buses_.back(), b.kind == BusKind::can_fd, std::move(make));
-  scenarios_.add_bus(*buses_.back(), b, lin_buses_.back().get());
+  scenarios_.add_bus(running.can.get(), b, running.lin.get());
 }
 
 std::optional<std::size_t> Simulation::bus_index(std::string_view name) const {
@@ -190,7 +192,7 @@ Result<> Simulation::add_device(const DeviceConfig& d) {
     c.bus = buses[i];
     // The controller stays in reset (off the bus) until an application initializes and starts
     // it through the VCI, as on a real adapter.
-    CanBus& bus = *buses_[c.bus];
+    CanBus& bus = *buses_[c.bus].can;
     if (config_.remote(config_.buses[c.bus])) {
       c.node = remote_->make_node(c.bus, bus, d.model == DeviceModel::ixxat_usb_to_can_fd);
       // The owner lists it as "DAEMON/DEVICE:0" (controller 0) or "DAEMON/DEVICE-N:0".
@@ -213,7 +215,7 @@ Result<> Simulation::lin_controllers(const DeviceConfig& d,
                                      std::vector<DeviceRegistry::LinController>& out) {
   for (std::size_t i = 0; i < d.lin.size(); ++i) {
     const std::size_t bus = *bus_index(d.lin[i]);
-    if (lin_buses_[bus] == nullptr) {  // checked against the bus as it runs
+    if (buses_[bus].lin == nullptr) {  // checked against the bus as it runs
       return fail(Errc::bad_argument,
                   fmt::format("device {}: bus {} is not a LIN bus", d.name, d.lin[i]),
                   place(d.line));
@@ -221,7 +223,7 @@ Result<> Simulation::lin_controllers(const DeviceConfig& d,
     // Offline until an application initializes and starts it, as on a real adapter.
     out.push_back(DeviceRegistry::LinController{
         fmt::format("{}:{}", d.name, d.controllers.size() + i), bus,
-        std::make_shared<ixxat::LinLine>(scheduler_, *lin_buses_[bus], ixxat::Clocks{},
+        std::make_shared<ixxat::LinLine>(scheduler_, *buses_[bus].lin, ixxat::Clocks{},
                                          scheduler_.now())});
   }
   return {};
@@ -265,7 +267,7 @@ Result<> Simulation::add_xcan(const DeviceConfig& d) {
         model::sorcus::MddVersion::parse(d.mdd_version).value_or(model::sorcus::kMdd3C));
   }
   for (unsigned i = 0; i < 2; ++i) {
-    x.device->module().connect(i, *buses_[x.buses[i]]);
+    x.device->module().connect(i, *buses_[x.buses[i]].can);
   }
   devices_.add_xcan(std::move(x));
   return {};
@@ -301,7 +303,7 @@ Result<> Simulation::add_slcan(const DeviceConfig& d) {
     return fail(Errc::io, fmt::format("device {}: EEPROM state: {}", d.name, loaded.error()),
                 place(d.line));
   }
-  device->module().connect(*buses_[bus]);
+  device->module().connect(*buses_[bus].can);
   devices_.add_slcan(DeviceRegistry::Slcan{d, bus, std::move(device)});
   return {};
 }
@@ -325,14 +327,14 @@ Simulation::DeviceLease Simulation::add_vci_device(std::string name, std::size_t
   const SimTime power_on = SimTime::from_ns(now_ns - now_ns % 1000);
   // The next device of a name replaces the history of the last one.
   gone_nodes_.forget(name);
-  if (lin_buses_[bus] != nullptr) {  // an adapter with one LIN controller
+  if (buses_[bus].lin != nullptr) {  // an adapter with one LIN controller
     devices_.add_lin_ephemeral(
         name, bus, owner_pid,
-        std::make_shared<ixxat::LinLine>(scheduler_, *lin_buses_[bus], ixxat::Clocks{}, power_on));
+        std::make_shared<ixxat::LinLine>(scheduler_, *buses_[bus].lin, ixxat::Clocks{}, power_on));
     return DeviceLease(this, std::move(name));
   }
   HostedNode& node = nodes_.spare(bus);
-  buses_[bus]->reset_stats(node.node());  // a pooled node: its history is an earlier device's
+  buses_[bus].can->reset_stats(node.node());  // a pooled node: its history is an earlier device's
   if (config_.remote(config_.buses[bus])) {
     remote_->name_node(node, name);
   }
@@ -348,7 +350,7 @@ void Simulation::remove_ephemeral(const std::string& name) {
   if (const DeviceRegistry::Ephemeral* e = devices_.find_ephemeral(name)) {
     scenarios_.device_gone(e->name, e->bus, *e->node);
     gone_nodes_.keep(e->name, e->bus, scheduler_.now(),
-                     buses_[e->bus]->stats(e->node->node()).timeline);
+                     buses_[e->bus].can->stats(e->node->node()).timeline);
   }
   devices_.remove_ephemeral(name);
 }

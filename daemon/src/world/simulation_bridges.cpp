@@ -19,8 +19,8 @@ using namespace canemu::model;
 Result<> Simulation::add_recorder(const RecorderConfig& r) {
   const std::size_t bus = *bus_index(r.bus);
   const BusConfig& bc = config_.buses[bus];
-  if (lin_buses_[bus] != nullptr) {
-    auto recorder = Recorder::start_lin(r, bus, *lin_buses_[bus]);
+  if (buses_[bus].lin != nullptr) {
+    auto recorder = Recorder::start_lin(r, bus, *buses_[bus].lin);
     if (!recorder) {
       return fail(Errc::io, recorder.error(), place(r.line));
     }

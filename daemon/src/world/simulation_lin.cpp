@@ -114,7 +114,7 @@ tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::loa
     std::erase_if(lin_nodes_, [&](const SimulatedLinNode& old) {
       return old.name == n.name && old.bus == bus;  // replaced: it leaves the bus first
     });
-    lin_nodes_.push_back(make_lin_node(n, bus, *lin_buses_[bus], config_.buses[bus].bitrate));
+    lin_nodes_.push_back(make_lin_node(n, bus, *buses_[bus].lin, config_.buses[bus].bitrate));
     names.push_back(fmt::format("{}/{}", n.bus, n.name));
   }
   return names;

@@ -39,7 +39,6 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
   const std::size_t last_bus = std::min(sim.bus_count(), first_bus + ipc::kStatusPageBuses);
   for (std::size_t i = first_bus; i < last_bus; ++i) {
     const BusConfig& c = sim.bus_config(i);
-    const CanBus& b = sim.bus(i);
     ipc::StatusBus& s = r.buses[r.bus_count++];
     ipc::copy_name(s.name, c.name);
     s.kind = static_cast<uint8_t>(c.kind);
@@ -54,6 +53,7 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
       s.load_permille = static_cast<uint32_t>(std::lround(lin->load_percent(now) * 10));
       continue;
     }
+    const CanBus& b = sim.bus(i);
     s.load_permille = static_cast<uint32_t>(std::lround(b.bus_load_percent(now) * 10));
     s.frames = b.frames_on_bus();
     s.error_frames = b.error_frames_on_bus();

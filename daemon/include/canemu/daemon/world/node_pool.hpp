@@ -23,6 +23,8 @@ class NodePool {
   // Bus number `bus_count()` from now on: its nodes are CAN FD controllers when `fd`, else
   // SJA1000s; or, when `make` is given, what it makes. The bus must outlive the pool.
   void add_bus(model::CanBus& bus, bool fd, Maker make = {});
+  // Bus number `bus_count()` from now on is a LIN bus: no CAN nodes, spare() is not for it.
+  void add_lin_bus();
   std::size_t bus_count() const { return buses_.size(); }
 
   // A stopped node on bus `bus`, ready to start: one an earlier device left that is reusable()

@@ -41,10 +41,10 @@ class ScenarioRunner {
   ScenarioRunner(const ScenarioRunner&) = delete;
   ScenarioRunner& operator=(const ScenarioRunner&) = delete;
 
-  // Bus number `bus_count()` from now on, configured as `config`: the runner becomes its fault
-  // injector (and, for a LIN bus, the fault source of its engine `lin`). The buses must outlive
-  // the runner.
-  void add_bus(model::CanBus& bus, const BusConfig& config, model::lin::LinBus* lin = nullptr);
+  // Bus number `bus_count()` from now on, configured as `config`, which runs on one engine: a
+  // CAN bus `can` (the runner becomes its fault injector) or a LIN bus `lin` (the runner becomes
+  // its fault source). The engines must outlive the runner.
+  void add_bus(model::CanBus* can, const BusConfig& config, model::lin::LinBus* lin = nullptr);
   // How LIN node names ("DEVICE:N", a simulated node's name) resolve: their bus and node.
   struct LinNodeRef {
     std::size_t bus;
@@ -107,10 +107,10 @@ class ScenarioRunner {
 
  private:
   struct Bus {
-    model::CanBus* bus;
+    model::CanBus* bus;  // a CAN bus's engine, and its frame faults
     BusConfig config;
-    std::unique_ptr<model::FaultPlan> faults;  // frame faults of the scenarios
-    model::lin::LinBus* lin = nullptr;         // a LIN bus's engine, and its frame faults
+    std::unique_ptr<model::FaultPlan> faults;
+    model::lin::LinBus* lin = nullptr;  // a LIN bus's engine, and its frame faults
     std::unique_ptr<model::lin::LinFaultPlan> lin_faults;
   };
   // Shared by a fault's scheduled actions: whether it was cleared, how often it fired.

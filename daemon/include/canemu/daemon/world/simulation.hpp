@@ -70,15 +70,17 @@ class Simulation {
   model::SimScheduler& scheduler() { return scheduler_; }
   const model::SimScheduler& scheduler() const { return scheduler_; }
   const Config& config() const { return config_; }
-  // Bus i is config().buses[i]; both only grow.
+  // Bus i is config().buses[i]; both only grow. A bus runs on one engine: a CanBus for a CAN or
+  // CAN FD bus, a LinBus for a LIN bus.
   std::size_t bus_count() const { return buses_.size(); }
-  model::CanBus& bus(std::size_t i) { return *buses_[i]; }
-  const model::CanBus& bus(std::size_t i) const { return *buses_[i]; }
+  // The CAN engine of bus i, which must be a CAN or CAN FD bus (lin_bus(i) is nullptr).
+  model::CanBus& bus(std::size_t i) { return *buses_[i].can; }
+  const model::CanBus& bus(std::size_t i) const { return *buses_[i].can; }
   std::optional<std::size_t> bus_index(std::string_view name) const;
   const BusConfig& bus_config(std::size_t i) const { return config_.buses[i]; }
-  // The LIN engine of bus i; nullptr unless it is a LIN bus (whose CanBus carries nothing).
-  model::lin::LinBus* lin_bus(std::size_t i) { return lin_buses_[i].get(); }
-  const model::lin::LinBus* lin_bus(std::size_t i) const { return lin_buses_[i].get(); }
+  // The LIN engine of bus i; nullptr unless it is a LIN bus.
+  model::lin::LinBus* lin_bus(std::size_t i) { return buses_[i].lin.get(); }
+  const model::lin::LinBus* lin_bus(std::size_t i) const { return buses_[i].lin.get(); }
 
   // The simulated LIN nodes ([[lin_node]]), in configuration order.
   const std::vector<SimulatedLinNode>& lin_nodes() const { return lin_nodes_; }
@@ -200,17 +202,22 @@ class Simulation {
   Result<> add_slcan(const DeviceConfig& d);
   void remove_ephemeral(const std::string& name);
 
+  // One configured bus as it runs: exactly one of its engines is set.
+  struct RunningBus {
+    std::unique_ptr<model::CanBus> can;       // a CAN or CAN FD bus
+    std::unique_ptr<model::lin::LinBus> lin;  // a LIN bus
+  };
+
   // Declared in the order they depend on each other (and are destroyed in reverse).
   Config config_;
   model::SimScheduler scheduler_;
-  std::vector<std::unique_ptr<model::CanBus>> buses_;
-  std::vector<std::unique_ptr<model::lin::LinBus>> lin_buses_;  // per bus; null for CAN buses
-  std::vector<SimulatedLinNode> lin_nodes_;                     // on lin_buses_ (gone before them)
+  std::vector<RunningBus> buses_;
+  std::vector<SimulatedLinNode> lin_nodes_;  // on LIN buses (gone before them)
   NodePool nodes_;
   DeviceRegistry devices_;
   GoneNodes gone_nodes_;
   ScenarioRunner scenarios_;
-  std::vector<std::unique_ptr<Recorder>> recorders_;  // on nodes_'s nodes, lin_buses_
+  std::vector<std::unique_ptr<Recorder>> recorders_;  // on nodes_'s nodes, LIN buses
   std::vector<std::unique_ptr<Bridge>> bridges_;      // on nodes_'s nodes
   // Other daemons' nodes on nodes_'s nodes; gone first (nodes_'s remote nodes outlive it).
   std::unique_ptr<RemoteBuses> remote_;

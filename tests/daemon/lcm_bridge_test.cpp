@@ -264,7 +264,7 @@ TEST(LcmBridge, ErrorsAndStatesArePublishedAndTheNodeRestartsAfterRestartMs) {
   EXPECT_TRUE(states.messages[3].restarted);
   EXPECT_EQ(states.messages[3].timestamp_ns, off_at + 5'000'000);
   EXPECT_EQ(bridge.stats().restarts, 1u);
-  EXPECT_EQ(bridge.restart(),
+  EXPECT_EQ(bridge.restart().error(),
             "LCM bridge of can0 restarts already (waits for 128 x 11 "
             "recessive bits, 128 left)");
   EXPECT_EQ(bridge.stats().error_frames, errors.messages.size() + states.messages.size());

@@ -452,14 +452,15 @@ TEST(SocketCanBridge, WithoutRestartMsTheNodeStaysBusOffUntilRestartedByHand) {
   ASSERT_TRUE(b);
   SocketCanBridge& bridge = **b;
   const model::FaultConfinement& fc = bridge.node().controller().confinement();
-  EXPECT_EQ(bridge.restart(), "bridge on vcan0 is error-active, not bus-off: nothing to restart");
+  EXPECT_EQ(bridge.restart().error(),
+            "bridge on vcan0 is error-active, not bus-off: nothing to restart");
   bus_off_at(*sim, bridge.node(), 1'000'000);
   run_to(*sim, 1'000'000'000);  // a second: still bus-off
   EXPECT_TRUE(fc.bus_off());
   EXPECT_FALSE(fc.recovering());
-  EXPECT_EQ(bridge.restart(), std::nullopt);
+  EXPECT_TRUE(bridge.restart());
   EXPECT_EQ(bridge.stats().restarts, 1u);
-  EXPECT_EQ(bridge.restart(),
+  EXPECT_EQ(bridge.restart().error(),
             "bridge on vcan0 restarts already (waits for 128 x 11 recessive bits, 128 left)");
   EXPECT_EQ(bridge.stats().restarts, 1u);
   run_to(*sim, 1'000'000'000 + kRecoveryNs);
@@ -480,7 +481,7 @@ TEST(SocketCanBridge, ARestartByHandBeforeTheTimerCountsOnce) {
   SocketCanBridge& bridge = **b;
   bus_off_at(*sim, bridge.node(), 1'000'000);
   run_to(*sim, 2'000'000);
-  EXPECT_EQ(bridge.restart(), std::nullopt);
+  EXPECT_TRUE(bridge.restart());
   run_to(*sim, 200'000'000);  // past the timer's 101 ms
   EXPECT_EQ(bridge.stats().restarts, 1u);
   EXPECT_FALSE(bridge.node().controller().confinement().bus_off());
@@ -558,7 +559,7 @@ TEST(SocketCanBridge, WithoutCanModulesTheInterfaceCannotBeOpenedAndSaysWhy) {
   auto port = open_can_raw("vcan-none");
   ASSERT_FALSE(port);
   // Either the kernel has no CAN (socket fails) or the interface does not exist.
-  EXPECT_EQ(port.error().substr(0, 11), "vcan-none: ") << port.error();
+  EXPECT_EQ(port.error().text.substr(0, 11), "vcan-none: ") << port.error();
   EXPECT_EQ(open_can_raw("a-name-that-is-too-long").error(),
             "\"a-name-that-is-too-long\" is not an interface name (1 to 15 characters)");
 }
@@ -582,7 +583,7 @@ void refuse_every_family_but_unix() {
 }
 
 TEST(SocketCanBridge, ABridgeWhoseAddressFamilyIsRefusedNamesTheDropInThatAllowsIt) {
-  EXPECT_EQ(refused_family(AF_INET), std::nullopt);  // this machine allows IP sockets
+  EXPECT_TRUE(refused_family(AF_INET));  // this machine allows IP sockets
   int out[2];
   ASSERT_EQ(::pipe(out), 0);
   const pid_t child = ::fork();
@@ -595,9 +596,10 @@ TEST(SocketCanBridge, ABridgeWhoseAddressFamilyIsRefusedNamesTheDropInThatAllows
     lcm.bus = "can0";
     BridgeConfig dds = lcm;
     dds.kind = "dds";
-    const std::string found = std::string(refused_family(AF_UNIX) ? "AF_UNIX refused" : "-") +
-                              "\n" + open_can_raw("vcan0").error() + "\n" +
-                              sim->add_bridge(lcm).error() + "\n" + sim->add_bridge(dds).error();
+    const std::string found = std::string(!refused_family(AF_UNIX) ? "AF_UNIX refused" : "-") +
+                              "\n" + open_can_raw("vcan0").error().what() + "\n" +
+                              sim->add_bridge(lcm).error().what() + "\n" +
+                              sim->add_bridge(dds).error().what();
     const bool written =
         ::write(out[1], found.data(), found.size()) == static_cast<ssize_t>(found.size());
     ::_exit(written ? 0 : 3);

@@ -27,7 +27,7 @@ ipc::ChannelMessage to_message(SimTime at, const Frame& frame, ipc::ChannelMessa
   return m;
 }
 
-Result<TxFrame> to_tx_frame(const ipc::ChannelMessage& m) {
+model::Result<TxFrame> to_tx_frame(const ipc::ChannelMessage& m) {
   if (m.kind != static_cast<uint8_t>(ipc::ChannelMessageKind::frame)) {
     return model_error(ModelErrc::invalid_flags,
                        fmt::format("message kind {} is not a frame", m.kind));
@@ -52,13 +52,13 @@ Result<TxFrame> to_tx_frame(const ipc::ChannelMessage& m) {
                  (m.flags & ipc::kMsgSelfReception) != 0};
 }
 
-tl::expected<std::unique_ptr<Channel>, std::string> Channel::open(
-    uint32_t id, std::string device, std::size_t bus, HostedNode& node,
-    const HostedNodeSettings& settings, const Options& options) {
+Result<std::unique_ptr<Channel>> Channel::open(uint32_t id, std::string device, std::size_t bus,
+                                               HostedNode& node, const HostedNodeSettings& settings,
+                                               const Options& options) {
   auto rings = ipc::RingPair::create(options.rx_capacity, options.tx_capacity,
                                      sizeof(ipc::ChannelMessage), "canemu", device);
   if (!rings) {
-    return tl::unexpected(rings.error().message);
+    return fail(Errc::io, rings.error().message);
   }
   std::unique_ptr<Channel> c(
       new Channel(id, std::move(device), bus, node, options.flags, std::move(*rings)));

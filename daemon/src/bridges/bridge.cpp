@@ -48,15 +48,16 @@ tl::expected<ipc::ChannelMessage, std::string> frame_message(const FrameFields& 
   return m;
 }
 
-std::optional<std::string> refused_family(int family) {
+Result<> refused_family(int family) {
   const bool can = family == AF_CAN;
   const ipc::UniqueFd probe(
       ::socket(family, (can ? SOCK_RAW : SOCK_DGRAM) | SOCK_CLOEXEC, can ? CAN_RAW : 0));
   if (probe.valid() || errno != EAFNOSUPPORT) {
-    return std::nullopt;
+    return {};
   }
-  return can ? "AF_CAN refused (no CAN in the kernel, or no drop-in socketcan.conf)"
-             : "AF_INET refused (no drop-in ip.conf)";
+  return fail(Errc::unavailable, can ? "AF_CAN refused (no CAN in the kernel, or no drop-in "
+                                       "socketcan.conf)"
+                                     : "AF_INET refused (no drop-in ip.conf)");
 }
 
 std::unique_ptr<Bridge> Bridge::start(BridgeOptions options, std::size_t bus, HostedNode& node,
@@ -77,15 +78,17 @@ Bridge::~Bridge() {
   node_.stop();
 }
 
-std::optional<std::string> Bridge::restart() {
+Result<> Bridge::restart() {
   const FaultConfinement& fc = node_.controller().confinement();
   if (!fc.bus_off()) {
-    return transport_->name() + " is " + std::string(to_string(fc.state())) +
-           ", not bus-off: nothing to restart";
+    return fail(Errc::bad_argument, transport_->name() + " is " +
+                                        std::string(to_string(fc.state())) +
+                                        ", not bus-off: nothing to restart");
   }
   if (fc.recovering()) {
-    return transport_->name() + " restarts already (waits for 128 x 11 recessive bits, " +
-           std::to_string(fc.recovery_sequences_left()) + " left)";
+    return fail(Errc::bad_argument, transport_->name() +
+                                        " restarts already (waits for 128 x 11 recessive bits, " +
+                                        std::to_string(fc.recovery_sequences_left()) + " left)");
   }
   if (restart_event_) {
     node_.scheduler().cancel(*restart_event_);
@@ -96,7 +99,7 @@ std::optional<std::string> Bridge::restart() {
   if (options_.error_frames) {
     count(transport_->restarted(node_.now(), fc.tec(), fc.rec()), stats_.error_frames);
   }
-  return std::nullopt;
+  return {};
 }
 
 void Bridge::restart_after_bus_off() {

@@ -122,17 +122,19 @@ class DdsTransport final : public BridgeTransport {
   DdsTransport(const DdsTransport&) = delete;
   DdsTransport& operator=(const DdsTransport&) = delete;
 
-  // What failed, if anything.
-  std::optional<std::string> open() {
+  // Opens the participant, the topics and their readers and writers; what failed, if anything.
+  Result<> open() {
     wake_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
     if (wake_ < 0) {
-      return fmt::format("eventfd: {}", std::strerror(errno));
+      return fail(Errc::io, fmt::format("eventfd: {}", std::strerror(errno)));
     }
     participant_ = dds_create_participant(options_.domain, nullptr, nullptr);
     if (participant_ < 0) {
-      return fmt::format("Cyclone DDS cannot join domain {}: {} (CYCLONEDDS_URI: {})",
-                         options_.domain, dds_strretcode(participant_),
-                         std::getenv("CYCLONEDDS_URI") ? std::getenv("CYCLONEDDS_URI") : "unset");
+      return fail(
+          Errc::io,
+          fmt::format("Cyclone DDS cannot join domain {}: {} (CYCLONEDDS_URI: {})", options_.domain,
+                      dds_strretcode(participant_),
+                      std::getenv("CYCLONEDDS_URI") ? std::getenv("CYCLONEDDS_URI") : "unset"));
     }
     dds_qos_t* qos = dds_create_qos();
     dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, 0);
@@ -177,10 +179,11 @@ class DdsTransport final : public BridgeTransport {
     dds_delete_qos(ours);
     dds_delete_qos(qos);
     if (!ok) {
-      return fmt::format("Cyclone DDS cannot make the topics {}* of {} in domain {}: {}", p, bus_,
-                         options_.domain, dds_strretcode(failure_));
+      return fail(Errc::io,
+                  fmt::format("Cyclone DDS cannot make the topics {}* of {} in domain {}: {}", p,
+                              bus_, options_.domain, dds_strretcode(failure_)));
     }
-    return std::nullopt;
+    return {};
   }
 
   int fd() const override { return wake_; }
@@ -354,15 +357,15 @@ bool dds_available() {
   return true;
 }
 
-tl::expected<std::unique_ptr<BridgeTransport>, std::string> open_dds(const std::string& bus,
-                                                                     const DdsOptions& options) {
+Result<std::unique_ptr<BridgeTransport>> open_dds(const std::string& bus,
+                                                  const DdsOptions& options) {
   DdsOptions o = options;
   if (o.topic_prefix.empty()) {
     o.topic_prefix = default_dds_prefix(bus);
   }
   auto t = std::make_unique<DdsTransport>(bus, std::move(o));
-  if (auto problem = t->open()) {
-    return tl::unexpected(*problem);
+  if (auto opened = t->open(); !opened) {
+    return tl::unexpected(opened.error());
   }
   return t;
 }
@@ -373,9 +376,8 @@ bool dds_available() {
   return false;
 }
 
-tl::expected<std::unique_ptr<BridgeTransport>, std::string> open_dds(const std::string&,
-                                                                     const DdsOptions&) {
-  return tl::unexpected(std::string("canemud was built without DDS (cyclonedds-dev, idlc)"));
+Result<std::unique_ptr<BridgeTransport>> open_dds(const std::string&, const DdsOptions&) {
+  return fail(Errc::unavailable, "canemud was built without DDS (cyclonedds-dev, idlc)");
 }
 
 #endif

@@ -175,23 +175,22 @@ bool lcm_available() {
   return true;
 }
 
-tl::expected<std::unique_ptr<BridgeTransport>, std::string> open_lcm(const std::string& bus,
-                                                                     const std::string& url,
-                                                                     const std::string& prefix) {
+Result<std::unique_ptr<BridgeTransport>> open_lcm(const std::string& bus, const std::string& url,
+                                                  const std::string& prefix) {
   lcm_t* lcm = lcm_create(url.c_str());
   if (lcm == nullptr) {
-    return tl::unexpected("LCM cannot open \"" + url + "\"" +
-                          (url.starts_with("udpm://")
-                               ? " (UDP multicast needs a multicast route, even on one host: "
-                                 "docs/bridges.md)"
-                               : ""));
+    return fail(Errc::io, "LCM cannot open \"" + url + "\"" +
+                              (url.starts_with("udpm://")
+                                   ? " (UDP multicast needs a multicast route, even on one host: "
+                                     "docs/bridges.md)"
+                                   : ""));
   }
   auto t = std::make_unique<LcmTransport>(bus, lcm, prefix);
   if (!t->subscribe()) {
-    return tl::unexpected("LCM on \"" + url + "\" cannot subscribe to " + prefix + "TX");
+    return fail(Errc::io, "LCM on \"" + url + "\" cannot subscribe to " + prefix + "TX");
   }
   if (t->fd() < 0) {
-    return tl::unexpected("LCM on \"" + url + "\" has no descriptor to wait on");
+    return fail(Errc::io, "LCM on \"" + url + "\" has no descriptor to wait on");
   }
   return t;
 }
@@ -207,10 +206,9 @@ bool lcm_available() {
   return false;
 }
 
-tl::expected<std::unique_ptr<BridgeTransport>, std::string> open_lcm(const std::string&,
-                                                                     const std::string&,
-                                                                     const std::string&) {
-  return tl::unexpected(std::string("canemud was built without LCM (liblcm-dev, lcm-gen)"));
+Result<std::unique_ptr<BridgeTransport>> open_lcm(const std::string&, const std::string&,
+                                                  const std::string&) {
+  return fail(Errc::unavailable, "canemud was built without LCM (liblcm-dev, lcm-gen)");
 }
 
 _lcm_t* lcm_instance(BridgeTransport&) {

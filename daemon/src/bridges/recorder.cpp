@@ -75,12 +75,12 @@ lp::Message lin_pcap_message(const lin::Event& e) {
   return m;
 }
 
-tl::expected<std::unique_ptr<Recorder>, std::string> Recorder::start(
-    const RecorderConfig& config, std::size_t bus, model::HostedNode& node,
-    model::HostedNodeSettings settings) {
+Result<std::unique_ptr<Recorder>> Recorder::start(const RecorderConfig& config, std::size_t bus,
+                                                  model::HostedNode& node,
+                                                  model::HostedNodeSettings settings) {
   auto writer = ipc::CaptureWriter::open(capture_options(config, false));
   if (!writer) {
-    return tl::unexpected("recorder of " + config.bus + ": " + writer.error().message);
+    return fail(Errc::io, "recorder of " + config.bus + ": " + writer.error().message);
   }
   std::unique_ptr<Recorder> r(new Recorder(config, bus, std::move(*writer)));
   r->node_ = &node;
@@ -89,11 +89,11 @@ tl::expected<std::unique_ptr<Recorder>, std::string> Recorder::start(
   return r;
 }
 
-tl::expected<std::unique_ptr<Recorder>, std::string> Recorder::start_lin(
-    const RecorderConfig& config, std::size_t bus, lin::LinBus& lin_bus) {
+Result<std::unique_ptr<Recorder>> Recorder::start_lin(const RecorderConfig& config, std::size_t bus,
+                                                      lin::LinBus& lin_bus) {
   auto writer = ipc::CaptureWriter::open(capture_options(config, true));
   if (!writer) {
-    return tl::unexpected("recorder of " + config.bus + ": " + writer.error().message);
+    return fail(Errc::io, "recorder of " + config.bus + ": " + writer.error().message);
   }
   std::unique_ptr<Recorder> r(new Recorder(config, bus, std::move(*writer)));
   r->lin_bus_ = &lin_bus;

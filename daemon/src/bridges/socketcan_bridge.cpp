@@ -145,24 +145,26 @@ std::optional<int> interface_mtu(int fd, const std::string& interface) {
   return ifr.ifr_mtu;
 }
 
-tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interface) {
+Result<ipc::UniqueFd> open_can_raw(const std::string& interface) {
   const auto failed = [&](const char* call) {
-    return tl::unexpected(interface + ": " + call + ": " + std::strerror(errno));
+    return fail(Errc::io, interface + ": " + call + ": " + std::strerror(errno));
   };
   if (interface.empty() || interface.size() >= IFNAMSIZ) {
-    return tl::unexpected("\"" + interface + "\" is not an interface name (1 to " +
-                          std::to_string(IFNAMSIZ - 1) + " characters)");
+    return fail(Errc::bad_argument, "\"" + interface + "\" is not an interface name (1 to " +
+                                        std::to_string(IFNAMSIZ - 1) + " characters)");
   }
   ipc::UniqueFd s(::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW));
   if (!s.valid()) {
     const int error = errno;
-    const auto refused = error == EAFNOSUPPORT ? refused_family(AF_CAN) : std::nullopt;
-    return tl::unexpected(interface + ": " +
-                          refused.value_or(std::string("socket(PF_CAN): ") + std::strerror(error)));
+    if (auto family = error == EAFNOSUPPORT ? refused_family(AF_CAN) : Result<>(); !family) {
+      return fail(Errc::unavailable, interface + ": " + family.error().text);
+    }
+    return fail(Errc::io, interface + ": socket(PF_CAN): " + std::strerror(error));
   }
   const unsigned index = ::if_nametoindex(interface.c_str());
   if (index == 0) {
-    return failed("if_nametoindex");
+    return fail(errno == ENODEV ? Errc::not_found : Errc::io,
+                interface + ": if_nametoindex: " + std::strerror(errno));
   }
   // CAN FD frames and every error class arrive whatever the bus, so that what a classic bus
   // cannot carry is read, counted as rejected and logged rather than filtered out unseen by the

@@ -101,7 +101,7 @@ void ControlDispatcher::add_bridge(const ipc::BridgeAddRequest& m, const Send& s
   }
   auto added = sim_.add_bridge(b);
   if (!added) {
-    error(send, request_id, ipc::ErrorCode::bad_argument, added.error());
+    error(send, request_id, ipc::ErrorCode::bad_argument, added.error().what());
     return;
   }
   loop_.watch(**added);
@@ -149,8 +149,8 @@ void ControlDispatcher::on_bridge_restart(Session&, const uint8_t* data, uint32_
     error(send, request_id, ipc::ErrorCode::bad_argument, no_bridge(kind, name));
     return;
   }
-  if (auto problem = bridge->restart()) {
-    error(send, request_id, ipc::ErrorCode::bad_argument, *problem);
+  if (auto restarted = bridge->restart(); !restarted) {
+    error(send, request_id, ipc::ErrorCode::bad_argument, restarted.error().what());
     return;
   }
   send_reply(send, ipc::make_message<ipc::BridgeRestartReply>(request_id));

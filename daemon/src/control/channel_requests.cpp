@@ -94,7 +94,7 @@ void ControlDispatcher::open_channel(Session& c, const ipc::OpenChannelRequest& 
   model::HostedNode& node = sim_.spare_node(*bus);
   auto channel = Channel::open(id, device, *bus, node, settings, options);
   if (!channel) {
-    error(send, rid, ipc::ErrorCode::no_resources, channel.error());
+    error(send, rid, ipc::ErrorCode::no_resources, channel.error().what());
     return;
   }
   SessionChannel& sc = c.channels[id];

@@ -38,11 +38,11 @@ Distributed::Impl::~Impl() {
   }
 }
 
-std::optional<std::string> Distributed::Impl::open() {
+Result<> Distributed::Impl::open() {
   wake = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   timer = ::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
   if (wake < 0 || timer < 0) {
-    return fmt::format("eventfd/timerfd: {}", std::strerror(errno));
+    return fail(Errc::io, fmt::format("eventfd/timerfd: {}", std::strerror(errno)));
   }
   itimerspec its{};
   its.it_interval.tv_sec = cfg.heartbeat_ms / 1000;
@@ -62,9 +62,10 @@ std::optional<std::string> Distributed::Impl::open() {
   [[maybe_unused]] const dds_entity_t domain = dds_create_domain(cfg.domain, config.c_str());
   participant = dds_create_participant(cfg.domain, nullptr, nullptr);
   if (participant < 0) {
-    return fmt::format("Cyclone DDS cannot join domain {}: {} (CYCLONEDDS_URI: {})", cfg.domain,
-                       dds_strretcode(participant),
-                       std::getenv("CYCLONEDDS_URI") ? std::getenv("CYCLONEDDS_URI") : "unset");
+    return fail(Errc::io, fmt::format("Cyclone DDS cannot join domain {}: {} (CYCLONEDDS_URI: {})",
+                                      cfg.domain, dds_strretcode(participant),
+                                      std::getenv("CYCLONEDDS_URI") ? std::getenv("CYCLONEDDS_URI")
+                                                                    : "unset"));
   }
   dds_qos_t* qos = dds_create_qos();
   dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
@@ -119,10 +120,11 @@ std::optional<std::string> Distributed::Impl::open() {
   dds_delete_qos(wq);
   dds_delete_qos(qos);
   if (failure != DDS_RETCODE_OK || pub < 0 || sub < 0) {
-    return fmt::format("Cyclone DDS cannot make the topics canemu/net/* in domain {}: {}",
-                       cfg.domain, dds_strretcode(failure));
+    return fail(Errc::io,
+                fmt::format("Cyclone DDS cannot make the topics canemu/net/* in domain {}: {}",
+                            cfg.domain, dds_strretcode(failure)));
   }
-  return std::nullopt;
+  return {};
 }
 
 void Distributed::Impl::announce(bool leaving) {
@@ -286,21 +288,20 @@ Distributed::~Distributed() {
   impl_->announce(true);
 }
 
-tl::expected<std::unique_ptr<Distributed>, std::string> Distributed::open(Simulation& sim,
-                                                                          const Config& config) {
+Result<std::unique_ptr<Distributed>> Distributed::open(Simulation& sim, const Config& config) {
   auto impl = std::make_unique<Impl>(sim, config);
-  if (auto problem = impl->open()) {
-    return tl::unexpected(*problem);
+  if (auto opened = impl->open(); !opened) {
+    return tl::unexpected(std::move(opened.error()));
   }
   std::unique_ptr<Distributed> d(new Distributed(std::move(impl)));
   return d;
 }
 
-tl::expected<std::unique_ptr<RemoteBuses>, std::string> Distributed::open_remote(
-    Simulation& sim, const Config& config) {
+Result<std::unique_ptr<RemoteBuses>> Distributed::open_remote(Simulation& sim,
+                                                              const Config& config) {
   auto d = open(sim, config);
   if (!d) {
-    return tl::unexpected(d.error());
+    return tl::unexpected(std::move(d.error()));
   }
   return std::unique_ptr<RemoteBuses>(std::move(*d));
 }
@@ -350,13 +351,11 @@ struct Distributed::Impl {};
 Distributed::Distributed(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Distributed::~Distributed() = default;
 
-tl::expected<std::unique_ptr<Distributed>, std::string> Distributed::open(Simulation&,
-                                                                          const Config&) {
-  return tl::unexpected(
-      std::string("canemud was built without DDS (cyclonedds-dev, idlc): [distributed] needs it"));
+Result<std::unique_ptr<Distributed>> Distributed::open(Simulation&, const Config&) {
+  return fail(Errc::unavailable,
+              "canemud was built without DDS (cyclonedds-dev, idlc): [distributed] needs it");
 }
-tl::expected<std::unique_ptr<RemoteBuses>, std::string> Distributed::open_remote(Simulation& sim,
-                                                                                 const Config& c) {
+Result<std::unique_ptr<RemoteBuses>> Distributed::open_remote(Simulation& sim, const Config& c) {
   return tl::unexpected(open(sim, c).error());
 }
 Distributed* Distributed::of(Simulation&) {
@@ -385,8 +384,8 @@ bool Distributed::follows_owner() const {
 bool Distributed::leads_steps() const {
   return false;
 }
-std::optional<std::string> Distributed::step(int64_t, uint64_t) {
-  return std::string("no DDS in this build");
+Result<> Distributed::step(int64_t, uint64_t) {
+  return fail(Errc::unavailable, "no DDS in this build");
 }
 std::vector<PeerStatus> Distributed::peers() const {
   return {};

@@ -366,7 +366,7 @@ struct Distributed::Impl {
   }
   ~Impl();
 
-  std::optional<std::string> open();
+  Result<> open();
   void tick();
   void receive();
   void announce(bool leaving);

@@ -105,24 +105,26 @@ bool Distributed::leads_steps() const {
   return impl_->leads();
 }
 
-std::optional<std::string> Distributed::step(int64_t step_ns, uint64_t token) {
+Result<> Distributed::step(int64_t step_ns, uint64_t token) {
   Impl& d = *impl_;
   if (follows_owner()) {
     if (!d.attached(d.stepped_owner)) {
-      return fmt::format("steps are daemon {}'s, which is not attached ({})", d.stepped_owner,
-                         remote_buses().empty() ? "" : remote_buses().front().reason);
+      return fail(Errc::unavailable,
+                  fmt::format("steps are daemon {}'s, which is not attached ({})", d.stepped_owner,
+                              remote_buses().empty() ? "" : remote_buses().front().reason));
     }
     canemu_net_Request r{};
     r.kind = canemu_net_REQ_STEP;
     r.step_ns = step_ns;
     r.step = token;
     if (!d.send_request(d.stepped_owner, r)) {
-      return fmt::format("DDS did not take the step request for daemon {}", d.stepped_owner);
+      return fail(Errc::io,
+                  fmt::format("DDS did not take the step request for daemon {}", d.stepped_owner));
     }
-    return std::nullopt;
+    return {};
   }
   d.enqueue_step(Impl::Step{step_ns, d.cfg.name, token});
-  return std::nullopt;
+  return {};
 }
 
 }  // namespace canemu::daemon

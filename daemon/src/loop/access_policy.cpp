@@ -91,14 +91,13 @@ bool AccessPolicy::in_groups(int fd, uint32_t gid, const std::vector<uint32_t>& 
   return false;
 }
 
-tl::expected<AccessPolicy::SocketFile, std::string> AccessPolicy::socket_file(
-    const std::string& path) {
+Result<AccessPolicy::SocketFile> AccessPolicy::socket_file(const std::string& path) {
   struct stat st {};
   if (::lstat(path.c_str(), &st) != 0) {
-    return tl::unexpected(fmt::format("cannot look at {}: {}", path, std::strerror(errno)));
+    return fail(Errc::io, fmt::format("cannot look at {}: {}", path, std::strerror(errno)));
   }
   if (!S_ISSOCK(st.st_mode)) {
-    return tl::unexpected(fmt::format("{} is not a socket", path));
+    return fail(Errc::bad_argument, fmt::format("{} is not a socket", path));
   }
   return SocketFile{static_cast<uint64_t>(st.st_dev), static_cast<uint64_t>(st.st_ino)};
 }

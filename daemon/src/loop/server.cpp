@@ -99,7 +99,7 @@ ipc::IpcResult<void> Server::open_listener() {
   listen_ = std::move(*l);
   auto bound = AccessPolicy::socket_file(options_.socket_path);
   if (!bound) {
-    return tl::unexpected(ipc::IpcError{EPERM, bound.error()});
+    return tl::unexpected(ipc::IpcError{EPERM, bound.error().what()});
   }
   socket_file_ = *bound;
   if (std::string e = AccessPolicy::apply_socket_permissions(options_.socket_path, socket_file_,

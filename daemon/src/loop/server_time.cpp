@@ -243,9 +243,9 @@ bool Server::defer_step(int64_t step_ns, uint32_t request_id) {
   }
   const uint64_t token = ++step_tokens_;
   pending_steps_[token] = PendingStep{current_->fd.get(), current_->serial, request_id};
-  if (auto problem = d->step(step_ns, token)) {
+  if (auto stepped = d->step(step_ns, token); !stepped) {
     pending_steps_.erase(token);
-    reply_error(*current_, request_id, ipc::ErrorCode::not_stepped, *problem);
+    reply_error(*current_, request_id, ipc::ErrorCode::not_stepped, stepped.error().what());
   }
   return true;
 }

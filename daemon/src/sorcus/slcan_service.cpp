@@ -218,7 +218,7 @@ bool SlcanService::call(SlcanDevice& device, SlcanSession& session, const ipc::S
       return true;
     case ipc::SlcanOp::eeprom_write:
       if (auto w = device.write_eeprom(m.value, m.handle); !w) {
-        error = "EEPROM: " + w.error();
+        error = "EEPROM: " + w.error().what();
         return false;
       }
       std::copy(mod.eeprom().begin(), mod.eeprom().end(), r.eeprom);

@@ -11,11 +11,10 @@ namespace canemu::daemon {
 
 namespace ixxat = model::ixxat;
 
-tl::expected<std::unique_ptr<VciLinPort>, std::string> VciLinPort::create(uint32_t capacity,
-                                                                          const std::string& name) {
+Result<std::unique_ptr<VciLinPort>> VciLinPort::create(uint32_t capacity, const std::string& name) {
   auto rings = ipc::RingPair::create(capacity, 1, sizeof(LINMSG), "canemu-lin", name);
   if (!rings) {
-    return tl::unexpected(rings.error().message);
+    return fail(Errc::io, rings.error().message);
   }
   return std::unique_ptr<VciLinPort>(new VciLinPort(std::move(*rings)));
 }

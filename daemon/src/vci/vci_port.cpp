@@ -22,16 +22,15 @@ CANMSG2 to_canmsg2(const CANMSG& m) {
   return c;
 }
 
-tl::expected<std::unique_ptr<VciPort>, std::string> VciPort::create(bool v2, uint32_t rx_capacity,
-                                                                    uint32_t tx_capacity,
-                                                                    const std::string& name) {
+Result<std::unique_ptr<VciPort>> VciPort::create(bool v2, uint32_t rx_capacity,
+                                                 uint32_t tx_capacity, const std::string& name) {
   const uint32_t size = v2 ? sizeof(CANMSG2) : sizeof(CANMSG);
   // A channel without a transmit FIFO still gets a ring of one page: the descriptors are the
   // same for every channel.
   auto rings = ipc::RingPair::create(rx_capacity, tx_capacity == 0 ? 1 : tx_capacity, size,
                                      "canemu-vci", name);
   if (!rings) {
-    return tl::unexpected(rings.error().message);
+    return fail(Errc::io, rings.error().message);
   }
   return std::unique_ptr<VciPort>(new VciPort(v2, std::move(*rings)));
 }

@@ -66,9 +66,9 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
   std::unique_ptr<Simulation> sim(new Simulation(config));
   std::vector<std::string> errors;
   if (sim->config_.distributed.enabled) {
-    if (auto refused = refused_family(AF_INET)) {
+    if (auto family = refused_family(AF_INET); !family) {
       return tl::unexpected(std::vector<std::string>{
-          fmt::format("{}: [distributed]: {}", sim->config_.source, *refused)});
+          fmt::format("{}: [distributed]: {}", sim->config_.source, family.error().text)});
     }
     if (!open_remote) {
       return tl::unexpected(std::vector<std::string>{fmt::format(
@@ -77,7 +77,7 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
     auto link = open_remote(*sim, sim->config_);
     if (!link) {
       return tl::unexpected(std::vector<std::string>{
-          fmt::format("{}: [distributed]: {}", sim->config_.source, link.error())});
+          fmt::format("{}: [distributed]: {}", sim->config_.source, link.error().text)});
     }
     sim->remote_ = std::move(*link);
   }
@@ -102,7 +102,7 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
   }
   for (const BridgeConfig& b : sim->config_.bridges) {
     if (auto added = sim->add_bridge(b); !added) {
-      errors.push_back(fmt::format("{}: {}", sim->place(b.line), added.error()));
+      errors.push_back(fmt::format("{}: {}", sim->place(b.line), added.error().text));
     }
   }
   if (!errors.empty()) {
@@ -300,7 +300,8 @@ Result<> Simulation::add_slcan(const DeviceConfig& d) {
   auto device =
       std::make_shared<SlcanDevice>(d.name, scheduler_, static_cast<uint8_t>(d.slot), state);
   if (auto loaded = device->load(); !loaded) {
-    return fail(Errc::io, fmt::format("device {}: EEPROM state: {}", d.name, loaded.error()),
+    return fail(loaded.error().code,
+                fmt::format("device {}: EEPROM state: {}", d.name, loaded.error().text),
                 place(d.line));
   }
   device->module().connect(*buses_[bus].can);

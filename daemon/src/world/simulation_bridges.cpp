@@ -22,7 +22,7 @@ Result<> Simulation::add_recorder(const RecorderConfig& r) {
   if (buses_[bus].lin != nullptr) {
     auto recorder = Recorder::start_lin(r, bus, *buses_[bus].lin);
     if (!recorder) {
-      return fail(Errc::io, recorder.error(), place(r.line));
+      return fail(Errc::io, recorder.error().text, place(r.line));
     }
     recorders_.push_back(std::move(*recorder));
     return {};
@@ -35,20 +35,20 @@ Result<> Simulation::add_recorder(const RecorderConfig& r) {
   }
   auto recorder = Recorder::start(r, bus, nodes_.spare(bus), *timing);
   if (!recorder) {
-    return fail(Errc::io, recorder.error(), place(r.line));
+    return fail(Errc::io, recorder.error().text, place(r.line));
   }
   recorders_.push_back(std::move(*recorder));
   return {};
 }
 
-tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b) {
+Result<Bridge*> Simulation::add_bridge(const BridgeConfig& b) {
   const auto bus = bus_index(b.bus);
   if (b.kind == "lcm") {
     if (!bus) {
-      return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
+      return fail(Errc::not_found, fmt::format("no bus is named \"{}\"", b.bus));
     }
     if (find_bridge(BridgeKind::lcm, b.bus) != nullptr) {
-      return tl::unexpected(fmt::format("{} has an LCM bridge already", b.bus));
+      return fail(Errc::exists, fmt::format("{} has an LCM bridge already", b.bus));
     }
     const std::string url = b.url.empty() ? std::string(kDefaultLcmUrl) : b.url;
     const std::string prefix =
@@ -56,17 +56,17 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
     for (const auto& other : bridges_) {
       if (other->kind() == BridgeKind::lcm && other->options().url == url &&
           other->options().channel_prefix == prefix) {
-        return tl::unexpected(fmt::format(
-            "the LCM bridge of {} uses the channels {}* on {} already (their frames would loop)",
-            other->options().bus, prefix, url));
+        return fail(Errc::exists, fmt::format("the LCM bridge of {} uses the channels {}* on {} "
+                                              "already (their frames would loop)",
+                                              other->options().bus, prefix, url));
       }
     }
-    if (auto refused = refused_family(AF_INET)) {
-      return tl::unexpected("LCM bridge of " + b.bus + ": " + *refused);
+    if (auto family = refused_family(AF_INET); !family) {
+      return fail(Errc::unavailable, "LCM bridge of " + b.bus + ": " + family.error().text);
     }
     auto transport = open_lcm(b.bus, url, prefix);
     if (!transport) {
-      return tl::unexpected(transport.error());
+      return tl::unexpected(std::move(transport.error()));
     }
     BridgeConfig resolved = b;
     resolved.url = url;
@@ -75,10 +75,10 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
   }
   if (b.kind == "dds") {
     if (!bus) {
-      return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
+      return fail(Errc::not_found, fmt::format("no bus is named \"{}\"", b.bus));
     }
     if (find_bridge(BridgeKind::dds, b.bus) != nullptr) {
-      return tl::unexpected(fmt::format("{} has a DDS bridge already", b.bus));
+      return fail(Errc::exists, fmt::format("{} has a DDS bridge already", b.bus));
     }
     DdsOptions o;
     o.domain = b.domain;
@@ -90,19 +90,21 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
       if (other->kind() == BridgeKind::dds && other->options().channel_prefix == o.topic_prefix) {
         const auto theirs = parse_dds_locator(other->options().url);
         if (theirs && theirs->domain == o.domain && theirs->partition == o.partition) {
-          return tl::unexpected(fmt::format(
-              "the DDS bridge of {} uses the topics {}* in domain {}, partition {} already "
-              "(their frames would loop)",
-              other->options().bus, o.topic_prefix, o.domain, o.partition));
+          return fail(
+              Errc::exists,
+              fmt::format(
+                  "the DDS bridge of {} uses the topics {}* in domain {}, partition {} already "
+                  "(their frames would loop)",
+                  other->options().bus, o.topic_prefix, o.domain, o.partition));
         }
       }
     }
-    if (auto refused = refused_family(AF_INET)) {
-      return tl::unexpected("DDS bridge of " + b.bus + ": " + *refused);
+    if (auto family = refused_family(AF_INET); !family) {
+      return fail(Errc::unavailable, "DDS bridge of " + b.bus + ": " + family.error().text);
     }
     auto transport = open_dds(b.bus, o);
     if (!transport) {
-      return tl::unexpected(transport.error());
+      return tl::unexpected(std::move(transport.error()));
     }
     BridgeConfig resolved = b;
     resolved.url = locator;
@@ -111,7 +113,7 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
   }
   auto port = open_can_raw(b.interface);
   if (!port) {
-    return tl::unexpected("bridge to " + port.error());
+    return fail(port.error().code, "bridge to " + port.error().text);
   }
   const bool fd_bus = bus && config_.buses[*bus].kind == BusKind::can_fd;
   const auto mtu = interface_mtu(port->get(), b.interface);
@@ -124,35 +126,36 @@ tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b)
   return added;
 }
 
-tl::expected<Bridge*, std::string> Simulation::add_bridge(const BridgeConfig& b,
-                                                          ipc::UniqueFd port) {
+Result<Bridge*> Simulation::add_bridge(const BridgeConfig& b, ipc::UniqueFd port) {
   for (const auto& other : bridges_) {
     if (other->kind() == BridgeKind::socketcan && other->options().interface == b.interface) {
-      return tl::unexpected(fmt::format("{} is bridged to {} already (its frames would loop)",
-                                        b.interface, other->options().bus));
+      return fail(Errc::exists, fmt::format("{} is bridged to {} already (its frames would loop)",
+                                            b.interface, other->options().bus));
     }
   }
   return add_bridge(b, std::make_unique<SocketCanTransport>(b.interface, std::move(port)));
 }
 
-tl::expected<Bridge*, std::string> Simulation::add_bridge(
-    const BridgeConfig& b, std::unique_ptr<BridgeTransport> transport) {
+Result<Bridge*> Simulation::add_bridge(const BridgeConfig& b,
+                                       std::unique_ptr<BridgeTransport> transport) {
   const auto bus = bus_index(b.bus);
   if (!bus) {
-    return tl::unexpected(fmt::format("no bus is named \"{}\"", b.bus));
+    return fail(Errc::not_found, fmt::format("no bus is named \"{}\"", b.bus));
   }
   const bool lcm = b.kind == "lcm";
   const bool dds = b.kind == "dds";
   const BusConfig& bc = config_.buses[*bus];
   if (bc.kind == BusKind::lin) {
-    return tl::unexpected(fmt::format("\"{}\" is a LIN bus; {} bridges join CAN buses", b.bus,
-                                      lcm   ? "LCM"
-                                      : dds ? "DDS"
-                                            : "SocketCAN"));
+    return fail(Errc::bad_argument,
+                fmt::format("\"{}\" is a LIN bus; {} bridges join CAN buses", b.bus,
+                            lcm   ? "LCM"
+                            : dds ? "DDS"
+                                  : "SocketCAN"));
   }
   const auto timing = bus_timing(*bus);
   if (!timing) {
-    return tl::unexpected(fmt::format("no controller runs bus {} at {} bit/s", b.bus, bc.bitrate));
+    return fail(Errc::bad_bit_timing,
+                fmt::format("no controller runs bus {} at {} bit/s", b.bus, bc.bitrate));
   }
   BridgeOptions o;
   o.kind = lcm ? BridgeKind::lcm : dds ? BridgeKind::dds : BridgeKind::socketcan;

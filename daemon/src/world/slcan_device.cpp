@@ -17,14 +17,14 @@ namespace canemu::daemon {
 using model::sorcus::EepromWords;
 using model::sorcus::kEepromWords;
 
-tl::expected<EepromWords, std::string> load_eeprom_file(const std::string& path) {
+Result<EepromWords> load_eeprom_file(const std::string& path) {
   if (::access(path.c_str(), F_OK) != 0 && errno == ENOENT) {
     return model::sorcus::slcan_eeprom_defaults();
   }
   // 64 words of four digits, with comments: a few KiB at most.
   auto file = ipc::read_text_file(path, 64 * 1024);
   if (!file) {
-    return tl::unexpected(file.error());
+    return fail(Errc::io, file.error());
   }
   std::istringstream in(*file);
   EepromWords words{};
@@ -37,24 +37,24 @@ tl::expected<EepromWords, std::string> load_eeprom_file(const std::string& path)
     unsigned value = 0;
     char extra = 0;
     if (text.size() != 4 || std::sscanf(text.c_str(), "%4x%c", &value, &extra) != 1) {
-      return tl::unexpected(fmt::format(
-          "{}:{}: \"{}\" is not an EEPROM word (4 hex digits, one per line)", path, line, text));
+      return fail(Errc::bad_argument,
+                  fmt::format("{}:{}: \"{}\" is not an EEPROM word (4 hex digits, one per line)",
+                              path, line, text));
     }
     if (n == kEepromWords) {
-      return tl::unexpected(
-          fmt::format("{}:{}: more than {} EEPROM words", path, line, kEepromWords));
+      return fail(Errc::bad_argument,
+                  fmt::format("{}:{}: more than {} EEPROM words", path, line, kEepromWords));
     }
     words[n++] = static_cast<uint16_t>(value);
   }
   if (n != kEepromWords) {
-    return tl::unexpected(
-        fmt::format("{}: {} EEPROM words, but the SL-CANi has {}", path, n, kEepromWords));
+    return fail(Errc::bad_argument,
+                fmt::format("{}: {} EEPROM words, but the SL-CANi has {}", path, n, kEepromWords));
   }
   return words;
 }
 
-tl::expected<void, std::string> save_eeprom_file(const std::string& path,
-                                                 const EepromWords& words) {
+Result<> save_eeprom_file(const std::string& path, const EepromWords& words) {
   std::string text = "# canemu SL-CANi EEPROM: words 0..63, one per line (hex)\n";
   for (uint16_t w : words) {
     text += fmt::format("{:04X}\n", w);
@@ -62,7 +62,7 @@ tl::expected<void, std::string> save_eeprom_file(const std::string& path,
   const std::string tmp = path + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {
-    return tl::unexpected(fmt::format("open {}: {}", tmp, std::strerror(errno)));
+    return fail(Errc::io, fmt::format("open {}: {}", tmp, std::strerror(errno)));
   }
   const auto n = ::write(fd, text.data(), text.size());
   const bool ok = n == static_cast<ssize_t>(text.size()) && ::fsync(fd) == 0;
@@ -70,34 +70,35 @@ tl::expected<void, std::string> save_eeprom_file(const std::string& path,
   ::close(fd);
   if (!ok) {
     ::unlink(tmp.c_str());
-    return tl::unexpected(fmt::format("write {}: {}", tmp, std::strerror(err)));
+    return fail(Errc::io, fmt::format("write {}: {}", tmp, std::strerror(err)));
   }
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const int e = errno;
     ::unlink(tmp.c_str());
-    return tl::unexpected(fmt::format("rename {} to {}: {}", tmp, path, std::strerror(e)));
+    return fail(Errc::io, fmt::format("rename {} to {}: {}", tmp, path, std::strerror(e)));
   }
   return {};
 }
 
-tl::expected<void, std::string> SlcanDevice::load() {
+Result<> SlcanDevice::load() {
   if (state_file_.empty()) {
     return {};
   }
   auto words = load_eeprom_file(state_file_);
   if (!words) {
-    return tl::unexpected(words.error());
+    return tl::unexpected(std::move(words.error()));
   }
   module_.load_eeprom(*words);
   return {};
 }
 
-tl::expected<void, std::string> SlcanDevice::write_eeprom(unsigned word, uint16_t value) {
+Result<> SlcanDevice::write_eeprom(unsigned word, uint16_t value) {
   if (word >= kEepromWords) {
-    return tl::unexpected(fmt::format("word {} does not exist (0..63)", word));
+    return fail(Errc::bad_argument, fmt::format("word {} does not exist (0..63)", word));
   }
   if (!model::sorcus::slcan_eeprom_writable(word)) {
-    return tl::unexpected(fmt::format("word {} is read-only (writable: 13..19 and 32..63)", word));
+    return fail(Errc::bad_argument,
+                fmt::format("word {} is read-only (writable: 13..19 and 32..63)", word));
   }
   EepromWords next = module_.eeprom();
   next[word] = value;

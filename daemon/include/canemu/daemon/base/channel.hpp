@@ -19,6 +19,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/base/doorbell.hpp"
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/ring_pair.hpp"
@@ -39,9 +40,10 @@ class Channel final : private model::ControllerEvents, public Doorbell {
   };
 
   // Makes the rings and starts `node` with `settings`. The error names what failed.
-  static tl::expected<std::unique_ptr<Channel>, std::string> open(
-      uint32_t id, std::string device, std::size_t bus, model::HostedNode& node,
-      const model::HostedNodeSettings& settings, const Options& options);
+  static Result<std::unique_ptr<Channel>> open(uint32_t id, std::string device, std::size_t bus,
+                                               model::HostedNode& node,
+                                               const model::HostedNodeSettings& settings,
+                                               const Options& options);
   // Stops the node (it can then be reused) and unmaps the rings.
   ~Channel() override;
   Channel(const Channel&) = delete;

@@ -5,7 +5,9 @@
 #pragma once
 
 #include <cstdint>
+#include <ostream>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include <tl/expected.hpp>
@@ -27,6 +29,9 @@ struct Error {
   std::string where;  // "file:line" in the configuration, or empty
   // The place and the text, as a log line or a reply shows them.
   std::string what() const { return where.empty() ? text : where + ": " + text; }
+  // An error reads as what() wherever it is compared with a person's text (tests, logs).
+  friend bool operator==(const Error& e, std::string_view text) { return e.what() == text; }
+  friend std::ostream& operator<<(std::ostream& out, const Error& e) { return out << e.what(); }
 };
 
 template <class T = void>

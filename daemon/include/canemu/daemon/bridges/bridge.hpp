@@ -30,6 +30,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/base/doorbell.hpp"
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/base/reject_log.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
 #include "canemu/ipc/channel_message.hpp"
@@ -98,7 +99,7 @@ tl::expected<ipc::ChannelMessage, std::string> frame_message(const FrameFields& 
 // sandbox refuses the family (canemud.service without the drop-in that allows it,
 // docs/security.md) or the kernel lacks it. Short enough for an error reply with the interface's
 // name before it. Nothing when such a socket opens.
-std::optional<std::string> refused_family(int family);
+Result<> refused_family(int family);
 
 // What a transport did with something the bridge gave it.
 enum class Delivery : uint8_t {
@@ -157,9 +158,9 @@ class Bridge final : private model::ControllerEvents, public Doorbell {
   void kick() override;
   bool broken() const override { return false; }
 
-  // Restarts the node from bus-off now; what is wrong otherwise (it is not bus-off, or it
+  // Restarts the node from bus-off now; a bad_argument error otherwise (it is not bus-off, or it
   // restarts already and waits for the recessive bits).
-  std::optional<std::string> restart();
+  Result<> restart();
 
   // For the transport: a message arrived from outside, as a frame to send, or nullptr when it
   // was no frame at all. Anything the bus cannot carry is counted and skipped, with the reason.

@@ -28,6 +28,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/bridges/bridge.hpp"
 #include "canemu/daemon/config/names.hpp"
 
@@ -52,7 +53,7 @@ bool dds_available();
 
 // The DDS transport of bus `bus`; the error says why not (built without DDS, a domain Cyclone
 // cannot create, ...).
-tl::expected<std::unique_ptr<BridgeTransport>, std::string> open_dds(const std::string& bus,
-                                                                     const DdsOptions& options);
+Result<std::unique_ptr<BridgeTransport>> open_dds(const std::string& bus,
+                                                  const DdsOptions& options);
 
 }  // namespace canemu::daemon

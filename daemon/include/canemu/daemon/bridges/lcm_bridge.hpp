@@ -22,6 +22,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/bridges/bridge.hpp"
 #include "canemu/daemon/config/names.hpp"
 
@@ -34,9 +35,8 @@ bool lcm_available();
 
 // The LCM transport of bus `bus` on `url`, subscribed to <prefix>TX; the error says why not
 // (built without LCM, a URL LCM cannot open).
-tl::expected<std::unique_ptr<BridgeTransport>, std::string> open_lcm(const std::string& bus,
-                                                                     const std::string& url,
-                                                                     const std::string& prefix);
+Result<std::unique_ptr<BridgeTransport>> open_lcm(const std::string& bus, const std::string& url,
+                                                  const std::string& prefix);
 
 // The LCM instance of an LCM transport (nullptr for another transport): tests with the memq://
 // provider publish and subscribe on it.

@@ -18,6 +18,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/firmware_model/bus/lin_bus.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
@@ -36,12 +37,12 @@ ipc::lin_pcap::Message lin_pcap_message(const model::lin::Event& e);
 class Recorder final : private model::ControllerEvents, private model::lin::LinNode {
  public:
   // Opens the file and starts `node` (a spare node of the bus) listen-only with `settings`.
-  static tl::expected<std::unique_ptr<Recorder>, std::string> start(
-      const RecorderConfig& config, std::size_t bus, model::HostedNode& node,
-      model::HostedNodeSettings settings);
+  static Result<std::unique_ptr<Recorder>> start(const RecorderConfig& config, std::size_t bus,
+                                                 model::HostedNode& node,
+                                                 model::HostedNodeSettings settings);
   // A LIN bus: opens the file (pcap) and attaches a listener of its own to `lin_bus`.
-  static tl::expected<std::unique_ptr<Recorder>, std::string> start_lin(
-      const RecorderConfig& config, std::size_t bus, model::lin::LinBus& lin_bus);
+  static Result<std::unique_ptr<Recorder>> start_lin(const RecorderConfig& config, std::size_t bus,
+                                                     model::lin::LinBus& lin_bus);
   ~Recorder() override;  // stops (detaches) the node and writes what is pending
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;

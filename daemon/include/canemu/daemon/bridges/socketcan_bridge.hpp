@@ -76,7 +76,7 @@ tl::expected<ipc::ChannelMessage, InterfaceReject> frame_from_interface(const ui
 // A CAN_RAW socket bound to `interface`, non-blocking and close-on-exec, that reads CAN FD frames
 // and every error class whatever the bus (so that what the bus cannot carry arrives and is
 // counted as rejected, never lost unseen); the error names the interface and the failing call.
-tl::expected<ipc::UniqueFd, std::string> open_can_raw(const std::string& interface);
+Result<ipc::UniqueFd> open_can_raw(const std::string& interface);
 
 // What `canemu bridge add` and canemud's log say when a CAN FD bus (`fd_bus`) is bridged to an
 // interface whose MTU (`mtu`) is not CANFD_MTU: its FD frames cannot be written there or sent

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "canemu/daemon/base/channel.hpp"
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/base/ring_budget.hpp"
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/sorcus/slcan_service.hpp"

@@ -24,6 +24,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/base/doorbell.hpp"
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/world/remote_buses.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
@@ -60,11 +61,9 @@ class StepLoop {
 class Distributed final : public RemoteBuses, public Doorbell {
  public:
   // Joins the domain; the error says why not (no Cyclone DDS in this build, no domain).
-  static tl::expected<std::unique_ptr<Distributed>, std::string> open(Simulation& sim,
-                                                                      const Config& config);
+  static Result<std::unique_ptr<Distributed>> open(Simulation& sim, const Config& config);
   // open() as the world asks for it (Simulation::build's `open_remote`).
-  static tl::expected<std::unique_ptr<RemoteBuses>, std::string> open_remote(Simulation& sim,
-                                                                             const Config& config);
+  static Result<std::unique_ptr<RemoteBuses>> open_remote(Simulation& sim, const Config& config);
   // The link of `sim`, which opened it with open_remote; nullptr without [distributed].
   static Distributed* of(Simulation& sim);
   ~Distributed() override;
@@ -98,7 +97,7 @@ class Distributed final : public RemoteBuses, public Doorbell {
   bool leads_steps() const;
   // A client asks for a step of `step_ns` (follows_owner() or leads_steps()); step_done(token)
   // answers it once the step has run here. The error says why not.
-  std::optional<std::string> step(int64_t step_ns, uint64_t token);
+  Result<> step(int64_t step_ns, uint64_t token);
   // The server's loop takes part in the steps (nullptr: none does).
   void set_step_loop(StepLoop* loop);
 

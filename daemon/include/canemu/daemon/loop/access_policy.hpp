@@ -12,6 +12,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/config/config.hpp"
 
 namespace canemu::daemon {
@@ -33,7 +34,7 @@ class AccessPolicy {
     uint64_t ino = 0;
   };
   // Identifies the socket file at `path` (not following a link); an error names the problem.
-  static tl::expected<SocketFile, std::string> socket_file(const std::string& path);
+  static Result<SocketFile> socket_file(const std::string& path);
   // Gives the socket file at `path` the configured mode and group, if it is still the file
   // `bound` (a link or another file put in its place is left alone: docs/security.md). Returns
   // what went wrong, or an empty string; a group that does not exist is a warning in the log.

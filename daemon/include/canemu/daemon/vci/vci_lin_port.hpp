@@ -14,6 +14,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/firmware_model/adapters/ixxat/lin_line.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/ring_pair.hpp"
@@ -23,8 +24,7 @@ namespace canemu::daemon {
 class VciLinPort final : public model::ixxat::LinMonitorPort {
  public:
   // A receive ring of at least `capacity` elements (at most 65535).
-  static tl::expected<std::unique_ptr<VciLinPort>, std::string> create(uint32_t capacity,
-                                                                       const std::string& name);
+  static Result<std::unique_ptr<VciLinPort>> create(uint32_t capacity, const std::string& name);
 
   uint32_t capacity() const { return rings_.rx().memory().capacity(); }
   std::size_t bytes() const { return rings_.element_bytes(); }

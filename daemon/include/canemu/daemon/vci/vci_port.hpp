@@ -17,6 +17,7 @@
 #include <tl/expected.hpp>
 
 #include "canemu/daemon/base/doorbell.hpp"
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu/ipc/ring_pair.hpp"
@@ -26,9 +27,8 @@ namespace canemu::daemon {
 class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
  public:
   // Rings of at least `rx_capacity` / `tx_capacity` elements (at most 65535 each).
-  static tl::expected<std::unique_ptr<VciPort>, std::string> create(bool v2, uint32_t rx_capacity,
-                                                                    uint32_t tx_capacity,
-                                                                    const std::string& name);
+  static Result<std::unique_ptr<VciPort>> create(bool v2, uint32_t rx_capacity,
+                                                 uint32_t tx_capacity, const std::string& name);
   // The line the port's transmit ring feeds (told when the doorbell rings).
   void attach(model::ixxat::CanLine* line) { line_ = line; }
 

@@ -16,6 +16,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/chips/hosted_node.hpp"
@@ -103,7 +104,7 @@ class RemoteBuses {
 };
 
 // Opens the link to the other daemons for [distributed]; the error says why not.
-using RemoteBusesOpener = std::function<tl::expected<std::unique_ptr<RemoteBuses>, std::string>(
-    Simulation& sim, const Config& config)>;
+using RemoteBusesOpener =
+    std::function<Result<std::unique_ptr<RemoteBuses>>(Simulation& sim, const Config& config)>;
 
 }  // namespace canemu::daemon

@@ -157,11 +157,10 @@ class Simulation {
   // tests a stand-in); the error says why not (no such bus, a LIN bus, the interface bridged
   // already, no controller for the bus's rate). add_bridge() opens the CAN_RAW socket itself,
   // or for kind "lcm" the LCM instance, for "dds" the DDS participant and topics.
-  tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b, ipc::UniqueFd port);
-  tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b);
+  Result<Bridge*> add_bridge(const BridgeConfig& b, ipc::UniqueFd port);
+  Result<Bridge*> add_bridge(const BridgeConfig& b);
   // A bridge of `b.bus` over `transport` (b.kind says which kind it is).
-  tl::expected<Bridge*, std::string> add_bridge(const BridgeConfig& b,
-                                                std::unique_ptr<BridgeTransport> transport);
+  Result<Bridge*> add_bridge(const BridgeConfig& b, std::unique_ptr<BridgeTransport> transport);
   // Removes the SocketCAN bridge of `interface` (its node leaves the bus); false if there is
   // none. `before` sees it first (the server stops watching its socket).
   bool remove_bridge(const std::string& interface, const std::function<void(Bridge&)>& before = {});

@@ -12,16 +12,16 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/base/error.hpp"
 #include "canemu/firmware_model/adapters/sorcus/slcan_module.hpp"
 
 namespace canemu::daemon {
 
 // The EEPROM words in `path`; the factory contents when it does not exist. An error names the
 // file, the line and what is wrong.
-tl::expected<model::sorcus::EepromWords, std::string> load_eeprom_file(const std::string& path);
+Result<model::sorcus::EepromWords> load_eeprom_file(const std::string& path);
 // Writes `words` to `path` atomically (temp file, fsync, rename); the error names the call.
-tl::expected<void, std::string> save_eeprom_file(const std::string& path,
-                                                 const model::sorcus::EepromWords& words);
+Result<> save_eeprom_file(const std::string& path, const model::sorcus::EepromWords& words);
 
 class SlcanDevice final : public model::sorcus::SlcanSink {
  public:
@@ -40,10 +40,10 @@ class SlcanDevice final : public model::sorcus::SlcanSink {
   model::sorcus::SlcanModule& module() { return module_; }
 
   // Reads the state file into the EEPROM (at start-up).
-  tl::expected<void, std::string> load();
+  Result<> load();
   // A program's EEPROM write: refused for a read-only word ("word N is read-only"), persisted
   // before it counts (a failed save leaves the EEPROM as it was).
-  tl::expected<void, std::string> write_eeprom(unsigned word, uint16_t value);
+  Result<> write_eeprom(unsigned word, uint16_t value);
 
   std::function<void(const model::sorcus::SlcanServiceCall&)> on_service;
   std::function<void(model::SimTime, USHORT)> on_request;

@@ -1,9 +1,6 @@
 // Checklist items 10-20: message channels, their FIFOs, events, sending.
-using System;
 using System.Collections.Generic;
 using System.Threading;
-using Ixxat.Vci3;
-using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using NUnit.Framework;
 

@@ -21,6 +21,7 @@
 #include "canemu/ipc/channel_message.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 #include "daemon_process.hpp"
+#include "pipe_support.hpp"
 
 namespace canemu {
 namespace {
@@ -153,10 +154,9 @@ TEST_F(AccessAsUsers, TheSocketsModeAndGroupKeepOutWhoeverMayNotWriteToIt) {
 
 TEST_F(AccessAsUsers, AReloadThatRevokesAPeerDropsItsConnection) {
   Daemon& d = start("allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n");
-  int connected[2];
-  int go_on[2];
-  ASSERT_EQ(::pipe(connected), 0);
-  ASSERT_EQ(::pipe(go_on), 0);
+  testing::Pipe connected;
+  testing::Pipe go_on;
+  ASSERT_TRUE(connected.ok() && go_on.ok());
   const std::string socket = d.socket();
   const pid_t child = ::fork();
   if (child == 0) {
@@ -189,9 +189,6 @@ TEST_F(AccessAsUsers, AReloadThatRevokesAPeerDropsItsConnection) {
   // Root stays served.
   auto admin = testing::connect(d, "admin");
   EXPECT_EQ(testing::status(admin).bus_count, 1);
-  for (int fd : {connected[0], connected[1], go_on[0], go_on[1]}) {
-    ::close(fd);
-  }
 }
 
 // Fault scenarios belong to the user who loaded them: another user's client cannot clear one by
@@ -260,14 +257,13 @@ TEST_F(AccessAsUsers, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
     return n;
   };
   const std::size_t before = descriptors();
-  int held[2];
-  int ready[2];
-  ASSERT_EQ(::pipe(held), 0);
-  ASSERT_EQ(::pipe(ready), 0);
+  testing::Pipe held;
+  testing::Pipe ready;
+  ASSERT_TRUE(held.ok() && ready.ok());
   const pid_t child = ::fork();
   if (child == 0) {
-    ::close(held[1]);
-    ::close(ready[0]);
+    held.close(1);
+    ready.close(0);
     const int rc = as_user(kNobody, kNogroup, {}, [&] {
       std::vector<ipc::UniqueFd> silent;
       for (int k = 0; k < 300; ++k) {  // more than the daemon's 256 client slots
@@ -283,19 +279,19 @@ TEST_F(AccessAsUsers, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
     });
     ::_exit(rc);
   }
-  ::close(held[0]);
-  ::close(ready[1]);
+  held.close(0);
+  ready.close(1);
   // Every silent peer has connected (and queues before root's connection).
   char byte = 0;
   ASSERT_EQ(::read(ready[0], &byte, 1), 1);
-  ::close(ready[0]);
+  ready.close(0);
   auto admin = client::Connection::open(socket, "admin");
   ASSERT_TRUE(admin) << admin.error().message;
   EXPECT_EQ(testing::status(*admin).client_count, 1);
   // The 16 waiting refused peers and root's connection.
   EXPECT_LE(descriptors(), before + 16 + 1);
   ASSERT_EQ(::write(held[1], "x", 1), 1);
-  ::close(held[1]);
+  held.close(1);
   int status = 0;
   ::waitpid(child, &status, 0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == kServed);

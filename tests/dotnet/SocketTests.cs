@@ -6,9 +6,10 @@ using NUnit.Framework;
 
 namespace Canemu.Tests
 {
-  [TestFixture]
-  public class SocketTests
+  public class SocketTests : DaemonFixture
   {
+    protected override string Config { get { return Daemon.WithLin; } }
+
     // Two programs' BALs of `device`: while the first holds the object of type TSocket of `port`
     // (`whileHeld` looks at it then), the second is refused it with a message that says `says`;
     // once the first disposed it, the second gets it.
@@ -32,7 +33,6 @@ namespace Canemu.Tests
     [Test]
     public void Item05_PortIndexIsZeroBasedAndBelowResourcesCount()
     {
-      using (new Daemon(Daemon.WithLin))
       using (var bal = T.Bal("gamma"))
       {
         Assert.AreEqual(2, bal.Resources.Count);
@@ -54,7 +54,6 @@ namespace Canemu.Tests
     [Test]
     public void Item06_SocketsOpenWhateverElseIsHeld()
     {
-      using (new Daemon(Daemon.WithLin))
       using (var other = T.Bal("gamma"))
       using (var control = T.Open<ICanControl>(other))
       using (var exclusive = T.Open<ICanChannel>(other))
@@ -92,31 +91,24 @@ namespace Canemu.Tests
     [Test]
     public void Item07_ASecondControlUnitIsRefusedWhileOneIsHeld()
     {
-      using (new Daemon(Daemon.WithLin))
-      {
-        RefusedWhileHeld<ICanControl>("gamma", 0,
-            "the control unit of CAN port 0 of USB-to-CAN (canemu gamma) is in use by another program");
-        RefusedWhileHeld<ILinControl>("gamma", 1, "the control unit of LIN port 1");
-      }
+      RefusedWhileHeld<ICanControl>("gamma", 0,
+          "the control unit of CAN port 0 of USB-to-CAN (canemu gamma) is in use by another program");
+      RefusedWhileHeld<ILinControl>("gamma", 1, "the control unit of LIN port 1");
     }
 
     [Test]
     public void Item08_ASecondCyclicListIsRefusedWhileOneIsHeld()
     {
-      using (new Daemon(Daemon.TwoAdapters))
-      {
-        RefusedWhileHeld<ICanScheduler>("alpha", 0,
-            "the cyclic transmit list of CAN port 0 of USB-to-CAN (canemu alpha) is in use",
-            list => Assert.IsTrue(list.SupportsCyclicMessageScheduler));
-        // Every emulated IXXAT controller has the list, so NotImplementedException (a port
-        // without one) cannot occur: docs/dotnet.md.
-      }
+      RefusedWhileHeld<ICanScheduler>("alpha", 0,
+          "the cyclic transmit list of CAN port 0 of USB-to-CAN (canemu alpha) is in use",
+          list => Assert.IsTrue(list.SupportsCyclicMessageScheduler));
+      // Every emulated IXXAT controller has the list, so NotImplementedException (a port without
+      // one) cannot occur: docs/dotnet.md.
     }
 
     [Test]
     public void Item09_ClosingTheControlKeepsTheSettingsWhileAChannelIsOpen()
     {
-      using (new Daemon(Daemon.TwoAdapters))
       using (var a = new Line("alpha", bitrate: CanBitrate.Cia250KBit))
       using (var b = new Line("beta", bitrate: CanBitrate.Cia250KBit))
       {

@@ -4,7 +4,6 @@ using System;
 using System.Collections;
 using System.Threading;
 using Ixxat.Vci3;
-using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using Ixxat.Vci3.Bal.Lin;
 using NUnit.Framework;

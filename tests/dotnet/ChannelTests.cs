@@ -2,7 +2,6 @@
 using System;
 using System.Collections.Generic;
 using System.Threading;
-using Ixxat.Vci3;
 using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using NUnit.Framework;
@@ -11,28 +10,60 @@ namespace Canemu.Tests
 {
   public class ChannelTests : DaemonFixture
   {
+    // A device's BAL, control unit and a channel, opened and nothing more: the channel has no FIFOs
+    // until Fifos, the line is neither initialized nor started.
+    sealed class Opened : IDisposable
+    {
+      public readonly IBalObject Bal;
+      public readonly ICanControl Control;
+      public readonly ICanChannel Channel;
+      public ICanMessageReader Reader;
+      public ICanMessageWriter Writer;
+
+      public Opened(string device)
+      {
+        Bal = T.Bal(device);
+        Control = T.Open<ICanControl>(Bal);
+        Channel = T.Open<ICanChannel>(Bal);
+      }
+
+      // Channel.Initialize with receive and transmit FIFOs of `rx` and `tx` messages (not
+      // exclusive), and their reader and writer.
+      public void Fifos(ushort rx, ushort tx)
+      {
+        Channel.Initialize(rx, tx, false);
+        Reader = Channel.GetMessageReader();
+        Writer = Channel.GetMessageWriter();
+      }
+
+      public void Dispose()
+      {
+        Channel.Dispose();
+        Control.Dispose();
+        Bal.Dispose();
+      }
+    }
+
     [Test]
     public void Item10_NoFifosUntilInitializeAndSizesCountMessages()
     {
       using (var beta = new Line("beta"))
-      using (var bal = T.Bal("alpha"))
-      using (var control = T.Open<ICanControl>(bal))
-      using (var channel = T.Open<ICanChannel>(bal))
+      using (var alpha = new Opened("alpha"))
       {
-        var e = T.Throws(() => channel.GetMessageReader());
+        var e = T.Throws(() => alpha.Channel.GetMessageReader());
         Assert.AreEqual(0xE0010015u, e.ErrorCode);
         StringAssert.Contains("the channel has no FIFOs yet; call ICanChannel.Initialize first", e.Message);
-        T.Throws(() => channel.GetMessageWriter());
-        T.Throws(() => channel.Activate());
-        e = T.Throws(() => channel.Initialize(0, 4, false));
+        T.Throws(() => alpha.Channel.GetMessageWriter());
+        T.Throws(() => alpha.Channel.Activate());
+        e = T.Throws(() => alpha.Channel.Initialize(0, 4, false));
         StringAssert.Contains("counted in messages and must be at least 1", e.Message);
-        channel.Initialize(10, 5, false);
-        var reader = channel.GetMessageReader();
+        alpha.Channel.Initialize(10, 5, false);
+        var reader = alpha.Channel.GetMessageReader();
         Assert.AreEqual(10, reader.Capacity);
-        Assert.AreEqual(5, channel.GetMessageWriter().Capacity);
-        channel.Activate();
-        control.InitLine(CanOperatingModes.Standard, CanBitrate.Cia500KBit);
-        control.StartLine();
+        Assert.AreEqual(5, alpha.Channel.GetMessageWriter().Capacity);
+        alpha.Channel.Activate();
+        alpha.Control.InitLine(CanOperatingModes.Standard, CanBitrate.Cia500KBit);
+        alpha.Control.StartLine();
         for (byte i = 0; i < 10; i++) beta.Send(T.Msg(0x100u + i, i));
         T.Step(10);
         var got = T.Drain(reader);
@@ -65,29 +96,25 @@ namespace Canemu.Tests
     public void Item12_NothingFlowsUntilTheChannelIsActiveAndTheLineOnline()
     {
       using (var beta = new Line("beta"))
-      using (var bal = T.Bal("alpha"))
-      using (var control = T.Open<ICanControl>(bal))
-      using (var channel = T.Open<ICanChannel>(bal))
+      using (var alpha = new Opened("alpha"))
       {
-        channel.Initialize(16, 16, false);
-        var reader = channel.GetMessageReader();
-        var writer = channel.GetMessageWriter();
-        control.InitLine(CanOperatingModes.Standard, CanBitrate.Cia500KBit);
-        control.StartLine();
+        alpha.Fifos(16, 16);
+        alpha.Control.InitLine(CanOperatingModes.Standard, CanBitrate.Cia500KBit);
+        alpha.Control.StartLine();
         beta.Send(T.Msg(0x1, 1));
-        Assert.IsTrue(writer.SendMessage(T.Msg(0x2, 2)), "queued in the transmit FIFO");
+        Assert.IsTrue(alpha.Writer.SendMessage(T.Msg(0x2, 2)), "queued in the transmit FIFO");
         T.Step(5);
-        Assert.AreEqual(0, T.Drain(reader).Count, "deactivated after open: nothing received");
+        Assert.AreEqual(0, T.Drain(alpha.Reader).Count, "deactivated after open: nothing received");
         Assert.AreEqual(0, beta.Data().Count, "and nothing sent");
-        control.StopLine();
-        channel.Activate();
+        alpha.Control.StopLine();
+        alpha.Channel.Activate();
         beta.Send(T.Msg(0x3, 3));
         T.Step(5);
-        Assert.AreEqual(0, T.Drain(reader).Count, "active, line offline: nothing");
+        Assert.AreEqual(0, T.Drain(alpha.Reader).Count, "active, line offline: nothing");
         Assert.AreEqual(0, beta.Data().Count);
-        control.StartLine();
+        alpha.Control.StartLine();
         T.Step(5);
-        var got = T.Drain(reader);
+        var got = T.Drain(alpha.Reader);
         Assert.AreEqual(1, got.Count, "online: beta's pending frame");
         Assert.AreEqual(3u, got[0].Identifier);
         var sent = beta.Data();
@@ -179,33 +206,29 @@ namespace Canemu.Tests
     public void Item16_TheEventsFollowTheThresholds()
     {
       using (var beta = new Line("beta"))
-      using (var bal = T.Bal("alpha"))
-      using (var control = T.Open<ICanControl>(bal))
-      using (var channel = T.Open<ICanChannel>(bal))
+      using (var alpha = new Opened("alpha"))
       {
-        channel.Initialize(16, 4, false);
-        var reader = channel.GetMessageReader();
-        var writer = channel.GetMessageWriter();
-        reader.Threshold = 3;
-        writer.Threshold = 2;
-        Assert.AreEqual(3, reader.Threshold);
+        alpha.Fifos(16, 4);
+        alpha.Reader.Threshold = 3;
+        alpha.Writer.Threshold = 2;
+        Assert.AreEqual(3, alpha.Reader.Threshold);
         var rx = new AutoResetEvent(false);
         var tx = new AutoResetEvent(false);
-        reader.AssignEvent(rx);
-        writer.AssignEvent(tx);
-        channel.Activate();
-        control.InitLine(CanOperatingModes.Standard, CanBitrate.Cia500KBit);
+        alpha.Reader.AssignEvent(rx);
+        alpha.Writer.AssignEvent(tx);
+        alpha.Channel.Activate();
+        alpha.Control.InitLine(CanOperatingModes.Standard, CanBitrate.Cia500KBit);
         Assert.IsTrue(tx.WaitOne(5000), "an empty FIFO: its free entries exceed 2");
         int queued = 0;
-        while (writer.SendMessage(T.Msg(0x10))) queued++;  // offline: they wait; until full
+        while (alpha.Writer.SendMessage(T.Msg(0x10))) queued++;  // offline: they wait; until full
         Assert.GreaterOrEqual(queued, 4);
         Thread.Sleep(200);
         tx.Reset();
         Assert.IsFalse(tx.WaitOne(300), "no free entry");
-        control.StartLine();
+        alpha.Control.StartLine();
         T.Step(5);
         Assert.IsTrue(tx.WaitOne(5000), "sent: room again");
-        Assert.AreEqual(1, T.Drain(reader, false).Count, "the INFO message of StartLine");
+        Assert.AreEqual(1, T.Drain(alpha.Reader, false).Count, "the INFO message of StartLine");
         Thread.Sleep(200);
         rx.Reset();
         beta.Send(T.Msg(1));
@@ -215,9 +238,9 @@ namespace Canemu.Tests
         beta.Send(T.Msg(3));
         T.Step(5);
         Assert.IsTrue(rx.WaitOne(5000), "the third reaches it");
-        Assert.AreEqual(3, T.Drain(reader).Count);
+        Assert.AreEqual(3, T.Drain(alpha.Reader).Count);
         Assert.IsFalse(rx.WaitOne(300));
-        var e = T.Throws(() => reader.Threshold = 4);
+        var e = T.Throws(() => alpha.Reader.Threshold = 4);
         StringAssert.Contains("only while the channel is deactivated", e.Message);
       }
     }

@@ -1,10 +1,7 @@
 // Checklist items 21-34: the control unit's states, bit rates, bit-rate detection, filters and
 // self reception.
-using System;
 using System.Collections.Generic;
 using System.Threading;
-using Ixxat.Vci3;
-using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using NUnit.Framework;
 
@@ -26,6 +23,25 @@ namespace Canemu.Tests
       var ids = new List<uint>();
       foreach (var m in got) ids.Add(m.Identifier | (m.RemoteTransmissionRequest ? 0x80000000u : 0));
       return ids;
+    }
+
+    // Starts the receiver's line, lets the sender send `burst` and steps `ms`: what the receiver
+    // got.
+    static List<CanMessage> StartAndReceive(Line receiver, Line sender, double ms, params CanMessage[] burst)
+    {
+      receiver.Control.StartLine();
+      sender.Writer.SendMessages(burst);
+      T.Step(ms);
+      return receiver.Data();
+    }
+
+    // A line of `device` whose 11-bit acceptance filter is closed (code and mask None), started.
+    static Line StartedWithStdClosed(string device)
+    {
+      var line = new Line(device, start: false);
+      line.Control.SetAccFilter(CanFilter.Std, CanAccCode.None, CanAccMask.None);
+      line.Control.StartLine();
+      return line;
     }
 
     static CanMessage Rtr(uint id)
@@ -96,10 +112,8 @@ namespace Canemu.Tests
     {
       using (var beta = new Line("beta"))
       using (var gamma = new Line("gamma"))
-      using (var alpha = new Line("alpha", start: false))
+      using (var alpha = StartedWithStdClosed("alpha"))
       {
-        alpha.Control.SetAccFilter(CanFilter.Std, CanAccCode.None, CanAccMask.None);
-        alpha.Control.StartLine();
         beta.Send(T.Msg(0x100, 1));
         T.Step(5);
         Assert.AreEqual(0, alpha.Data().Count, "filtered");
@@ -235,10 +249,8 @@ namespace Canemu.Tests
     public void Item28_ElevenAndTwentyNineBitFiltersAreIndependentAndInitOpensBoth()
     {
       using (var beta = new Line("beta"))
-      using (var alpha = new Line("alpha", start: false))
+      using (var alpha = StartedWithStdClosed("alpha"))
       {
-        alpha.Control.SetAccFilter(CanFilter.Std, CanAccCode.None, CanAccMask.None);
-        alpha.Control.StartLine();
         var ext = T.Msg(0x100, 1);
         ext.ExtendedFrameFormat = true;
         beta.Send(T.Msg(0x100, 1));
@@ -284,10 +296,7 @@ namespace Canemu.Tests
       {
         alpha.Control.SetAccFilter(CanFilter.Std, 0x100 << 1, 0xFFF);
         alpha.Control.AddFilterIds(CanFilter.Std, 0x300 << 1, 0xFFF);
-        alpha.Control.StartLine();
-        beta.Writer.SendMessages(new[] { T.Msg(0x100), T.Msg(0x200), T.Msg(0x300) });
-        T.Step(5);
-        var got = alpha.Data();
+        var got = StartAndReceive(alpha, beta, 5, T.Msg(0x100), T.Msg(0x200), T.Msg(0x300));
         CollectionAssert.AreEqual(new uint[] { 0x100, 0x300 }, Ids(got));
         Assert.AreEqual(CanAcceptReason.AcceptanceFilter, got[0].AcceptReason);
         Assert.AreEqual(CanAcceptReason.FilterList, got[1].AcceptReason);
@@ -301,11 +310,9 @@ namespace Canemu.Tests
       using (var alpha = new Line("alpha", start: false))
       {
         alpha.Control.SetAccFilter(CanFilter.Std, 0x200, 0xFF9);
-        alpha.Control.StartLine();
-        beta.Writer.SendMessages(new[] { T.Msg(0xFF), T.Msg(0x100), T.Msg(0x101), T.Msg(0x102), T.Msg(0x103),
-                                         T.Msg(0x104), Rtr(0x101), T.Msg(0x500) });
-        T.Step(10);
-        CollectionAssert.AreEqual(new uint[] { 0x100, 0x101, 0x102, 0x103 }, Ids(alpha.Data()));
+        var got = StartAndReceive(alpha, beta, 10, T.Msg(0xFF), T.Msg(0x100), T.Msg(0x101), T.Msg(0x102),
+                                  T.Msg(0x103), T.Msg(0x104), Rtr(0x101), T.Msg(0x500));
+        CollectionAssert.AreEqual(new uint[] { 0x100, 0x101, 0x102, 0x103 }, Ids(got));
       }
     }
 
@@ -319,16 +326,12 @@ namespace Canemu.Tests
         alpha.Control.SetAccFilter(CanFilter.Std, CanAccCode.None, CanAccMask.None);
         alpha.Control.AddFilterIds(CanFilter.Std, 0x200, 0xFF9);
         alpha.Control.AddFilterIds(CanFilter.Std, (0x7FF << 1) | 1, 0xFFF);  // one key: RTR 7FFh
-        alpha.Control.StartLine();
-        beta.Writer.SendMessages(burst);
-        T.Step(10);
-        CollectionAssert.AreEqual(new uint[] { 0x100, 0x101, 0x102, 0x103, 0x800007FF }, Ids(alpha.Data()));
+        CollectionAssert.AreEqual(new uint[] { 0x100, 0x101, 0x102, 0x103, 0x800007FF },
+                                  Ids(StartAndReceive(alpha, beta, 10, burst)));
         alpha.Control.StopLine();
         alpha.Control.RemFilterIds(CanFilter.Std, 0x202, 0xFFF);  // 101h
-        alpha.Control.StartLine();
-        beta.Writer.SendMessages(burst);
-        T.Step(10);
-        CollectionAssert.AreEqual(new uint[] { 0x100, 0x102, 0x103, 0x800007FF }, Ids(alpha.Data()));
+        CollectionAssert.AreEqual(new uint[] { 0x100, 0x102, 0x103, 0x800007FF },
+                                  Ids(StartAndReceive(alpha, beta, 10, burst)));
       }
     }
 
@@ -340,16 +343,11 @@ namespace Canemu.Tests
       {
         alpha.Control.AddFilterIds(CanFilter.Std, 0x300 << 1, 0xFFF);
         alpha.Control.SetAccFilter(CanFilter.Std, CanAccCode.None, CanAccMask.None);
-        alpha.Control.StartLine();
-        beta.Writer.SendMessages(new[] { T.Msg(0x100), T.Msg(0x300) });
-        T.Step(5);
-        CollectionAssert.AreEqual(new uint[] { 0x300 }, Ids(alpha.Data()), "only the list admits");
+        var got = StartAndReceive(alpha, beta, 5, T.Msg(0x100), T.Msg(0x300));
+        CollectionAssert.AreEqual(new uint[] { 0x300 }, Ids(got), "only the list admits");
         alpha.Control.StopLine();
         alpha.Control.SetAccFilter(CanFilter.Std, CanAccCode.All, CanAccMask.All);
-        alpha.Control.StartLine();
-        beta.Writer.SendMessages(new[] { T.Msg(0x100), T.Msg(0x300) });
-        T.Step(5);
-        var got = alpha.Data();
+        got = StartAndReceive(alpha, beta, 5, T.Msg(0x100), T.Msg(0x300));
         CollectionAssert.AreEqual(new uint[] { 0x100, 0x300 }, Ids(got), "everything passes");
         Assert.AreEqual(CanAcceptReason.AcceptanceFilter, got[1].AcceptReason, "the list is not asked");
       }
@@ -359,10 +357,8 @@ namespace Canemu.Tests
     public void Item34_SelfReceptionEchoesPastTheFilter()
     {
       using (var beta = new Line("beta"))
-      using (var alpha = new Line("alpha", start: false))
+      using (var alpha = StartedWithStdClosed("alpha"))
       {
-        alpha.Control.SetAccFilter(CanFilter.Std, CanAccCode.None, CanAccMask.None);
-        alpha.Control.StartLine();
         var m = T.Msg(0x123, 1, 2);
         m.SelfReceptionRequest = true;
         alpha.Send(m);

@@ -2,10 +2,8 @@
 // the BAL shared by several clients.
 using System;
 using System.Collections;
-using System.Collections.Generic;
 using System.Threading;
 using Ixxat.Vci3;
-using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using NUnit.Framework;
 

@@ -2,7 +2,6 @@
 // a C# LIN master talking to a [[lin_node]] responder of canemud's configuration.
 using System;
 using System.Collections.Generic;
-using Ixxat.Vci3;
 using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Lin;
 using NUnit.Framework;
@@ -64,6 +63,15 @@ namespace Canemu.Tests
     {
       var m = new LinMessage { ProtId = id, MessageType = LinMessageType.Data, DataLength = (byte)data.Length, ExtendedCrc = true };
       for (int i = 0; i < data.Length; i++) m[i] = data[i];
+      return m;
+    }
+
+    // The header alone (IdOnly) of `id`, for a response of `length` bytes that another node sends.
+    static LinMessage Header(byte id, byte length)
+    {
+      var m = Frame(id);
+      m.DataLength = length;
+      m.IdOnly = true;
       return m;
     }
 
@@ -184,9 +192,7 @@ namespace Canemu.Tests
       {
         alpha.Control.WriteMessage(false, Frame(0x21, 0x05, 0x06));
         alpha.Control.StartLine();
-        var header = Frame(0x21);
-        header.DataLength = 2;
-        header.IdOnly = true;
+        var header = Header(0x21, 2);
         alpha.Control.WriteMessage(true, header);
         T.Step(10);
         var own = alpha.Read();
@@ -210,9 +216,7 @@ namespace Canemu.Tests
         alpha.Control.WriteMessage(true, new LinMessage { MessageType = LinMessageType.Wakeup });
         T.Step(20);
         Assert.AreEqual(1, beta.Read(LinMessageType.Wakeup).Count, "a wake-up pulse");
-        var header = Frame(0x30);
-        header.DataLength = 3;
-        header.IdOnly = true;
+        var header = Header(0x30, 3);
         alpha.Control.WriteMessage(true, header);
         T.Step(20);
         var got = beta.Read();
@@ -244,9 +248,7 @@ namespace Canemu.Tests
       using (new Daemon(Lin))
       using (var alpha = new LinPort("alpha", LinOperatingModes.Master))
       {
-        var header = Frame(0x30);
-        header.DataLength = 3;
-        header.IdOnly = true;
+        var header = Header(0x30, 3);
         alpha.Control.WriteMessage(true, header);
         var e = T.Throws(() => alpha.Control.WriteMessage(true, header));
         Assert.AreEqual(0xE0010013u, e.ErrorCode);
@@ -266,9 +268,7 @@ namespace Canemu.Tests
       using (var alpha = new LinPort("alpha", LinOperatingModes.Master | LinOperatingModes.Errors))
       {
         ulong start = Emulator.Now;
-        var header = Frame(0x30);
-        header.DataLength = 3;
-        header.IdOnly = true;
+        var header = Header(0x30, 3);
         for (int i = 0; i < 3; i++)
         {
           alpha.Control.WriteMessage(true, header);
@@ -281,9 +281,7 @@ namespace Canemu.Tests
         Assert.AreEqual(start / 1000 + 3854, got[0].TimeStamp);
         Assert.AreEqual(10000u, got[1].TimeStamp - got[0].TimeStamp);
         // An identifier nobody answers: the master's own error message says so.
-        var nobody = Frame(0x31);
-        nobody.DataLength = 2;
-        nobody.IdOnly = true;
+        var nobody = Header(0x31, 2);
         alpha.Control.WriteMessage(true, nobody);
         T.Step(20);
         var errors = alpha.Read(LinMessageType.Error);

@@ -1,8 +1,5 @@
 // Checklist items 35-41: the cyclic transmit list and its CanCyclicTXMsg objects.
-using System;
 using System.Collections.Generic;
-using Ixxat.Vci3;
-using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using NUnit.Framework;
 
@@ -34,6 +31,27 @@ namespace Canemu.Tests
       var m = new CanCyclicTXMsg { Identifier = id, CycleTicks = cycle, DataLength = (byte)data.Length };
       for (int i = 0; i < data.Length; i++) m[i] = data[i];
       return m;
+    }
+
+    // Cyclic(id, cycle, data), added to the list.
+    CanCyclicTXMsg Added(uint id, ushort cycle, params byte[] data)
+    {
+      var m = Cyclic(id, cycle, data);
+      list.AddMessage(m);
+      return m;
+    }
+
+    // Adds `a` and `b`, starts each for three repetitions and runs the list for 10 ms: what beta
+    // received.
+    List<CanMessage> ThreeOfEach(CanCyclicTXMsg a, CanCyclicTXMsg b)
+    {
+      list.AddMessage(a);
+      list.AddMessage(b);
+      list.StartMessage(a, 3);
+      list.StartMessage(b, 3);
+      list.Resume();
+      T.Step(10);
+      return beta.Data();
     }
 
     // The tick (1 ms, counted from `from_us`) in which each frame of `id` went out.
@@ -77,10 +95,8 @@ namespace Canemu.Tests
     [Test]
     public void Item36_OneFramePerTickCollisionsTakeTheNextFreeTick()
     {
-      var one = Cyclic(0x1, 2, 1);
-      var two = Cyclic(0x2, 3, 2);
-      list.AddMessage(one);
-      list.AddMessage(two);
+      var one = Added(0x1, 2, 1);
+      var two = Added(0x2, 3, 2);
       list.StartMessage(one);
       list.StartMessage(two);
       long resumeUs = (long)(Emulator.Now / 1000);
@@ -109,10 +125,8 @@ namespace Canemu.Tests
     [Test]
     public void Item38_IdleUntilStartedSuspendedUntilResumeResetRemovesAll()
     {
-      var m = Cyclic(0x10, 2, 1);
-      var idle = Cyclic(0x11, 2, 2);
-      list.AddMessage(m);
-      list.AddMessage(idle);
+      var m = Added(0x10, 2, 1);
+      Added(0x11, 2, 2);  // never started: idle
       list.StartMessage(m);
       T.Step(5);
       Assert.AreEqual(0, beta.Data().Count, "the task is suspended after open");
@@ -147,8 +161,7 @@ namespace Canemu.Tests
     [Test]
     public void Item39_StatusChangesOnlyWithUpdateStatus()
     {
-      var m = Cyclic(0x10, 1, 1);
-      list.AddMessage(m);
+      var m = Added(0x10, 1, 1);
       Assert.AreEqual(CanCyclicTXStatus.Empty, m.Status);
       list.StartMessage(m, 3);
       list.Resume();
@@ -171,15 +184,9 @@ namespace Canemu.Tests
       var ext = Cyclic(0x1FFFFFFE, 2, 2);
       ext.ExtendedFrameFormat = true;
       ext.AutoIncrementMode = CanCyclicTXIncMode.IncId;
-      list.AddMessage(std);
-      list.AddMessage(ext);
-      list.StartMessage(std, 3);
-      list.StartMessage(ext, 3);
-      list.Resume();
-      T.Step(10);
       var s = new List<uint>();
       var x = new List<uint>();
-      foreach (var m in beta.Data()) (m.ExtendedFrameFormat ? x : s).Add(m.Identifier);
+      foreach (var m in ThreeOfEach(std, ext)) (m.ExtendedFrameFormat ? x : s).Add(m.Identifier);
       CollectionAssert.AreEqual(new uint[] { 0x7FE, 0x7FF, 0x000 }, s);
       CollectionAssert.AreEqual(new uint[] { 0x1FFFFFFE, 0x1FFFFFFF, 0x0 }, x);
     }
@@ -193,15 +200,9 @@ namespace Canemu.Tests
       var sixteen = Cyclic(0x21, 2, 0xCC, 0xDD, 0xFE, 0xFF);
       sixteen.AutoIncrementMode = CanCyclicTXIncMode.Inc16;
       sixteen.AutoIncrementIndex = 2;
-      list.AddMessage(eight);
-      list.AddMessage(sixteen);
-      list.StartMessage(eight, 3);
-      list.StartMessage(sixteen, 3);
-      list.Resume();
-      T.Step(10);
       var e8 = new List<string>();
       var e16 = new List<string>();
-      foreach (var m in beta.Data())
+      foreach (var m in ThreeOfEach(eight, sixteen))
       {
         string bytes = "";
         for (int i = 0; i < m.DataLength; i++) bytes += m[i].ToString("X2");

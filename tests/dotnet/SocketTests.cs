@@ -1,20 +1,38 @@
 // Checklist items 5-9: ports, and who may open which socket.
 using System;
-using Ixxat.Vci3;
-using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;
 using Ixxat.Vci3.Bal.Lin;
 using NUnit.Framework;
 
 namespace Canemu.Tests
 {
-  [TestFixture]
-  public class SocketTests
+  public class SocketTests : DaemonFixture
   {
+    protected override string Config { get { return Daemon.WithLin; } }
+
+    // Two programs' BALs of `device`: while the first holds the object of type TSocket of `port`
+    // (`whileHeld` looks at it then), the second is refused it with a message that says `says`;
+    // once the first disposed it, the second gets it.
+    static void RefusedWhileHeld<TSocket>(string device, byte port, string says,
+                                          Action<TSocket> whileHeld = null)
+        where TSocket : class, IDisposable
+    {
+      using (var one = T.Bal(device))
+      using (var two = T.Bal(device))
+      {
+        var held = T.Open<TSocket>(one, port);
+        if (whileHeld != null) whileHeld(held);
+        var e = T.Throws(() => two.OpenSocket(port, typeof(TSocket)));
+        Assert.AreEqual(0xE001000Au, e.ErrorCode);
+        StringAssert.Contains(says, e.Message);
+        held.Dispose();
+        T.Open<TSocket>(two, port).Dispose();
+      }
+    }
+
     [Test]
     public void Item05_PortIndexIsZeroBasedAndBelowResourcesCount()
     {
-      using (new Daemon(Daemon.WithLin))
       using (var bal = T.Bal("gamma"))
       {
         Assert.AreEqual(2, bal.Resources.Count);
@@ -36,7 +54,6 @@ namespace Canemu.Tests
     [Test]
     public void Item06_SocketsOpenWhateverElseIsHeld()
     {
-      using (new Daemon(Daemon.WithLin))
       using (var other = T.Bal("gamma"))
       using (var control = T.Open<ICanControl>(other))
       using (var exclusive = T.Open<ICanChannel>(other))
@@ -74,48 +91,24 @@ namespace Canemu.Tests
     [Test]
     public void Item07_ASecondControlUnitIsRefusedWhileOneIsHeld()
     {
-      using (new Daemon(Daemon.WithLin))
-      using (var one = T.Bal("gamma"))
-      using (var two = T.Bal("gamma"))
-      {
-        var control = T.Open<ICanControl>(one);
-        var e = T.Throws(() => two.OpenSocket(0, typeof(ICanControl)));
-        Assert.AreEqual(0xE001000Au, e.ErrorCode);
-        StringAssert.Contains("the control unit of CAN port 0 of USB-to-CAN (canemu gamma) is in use by another program", e.Message);
-        control.Dispose();
-        T.Open<ICanControl>(two).Dispose();
-        var lin = T.Open<ILinControl>(one, 1);
-        e = T.Throws(() => two.OpenSocket(1, typeof(ILinControl)));
-        Assert.AreEqual(0xE001000Au, e.ErrorCode);
-        StringAssert.Contains("the control unit of LIN port 1", e.Message);
-        lin.Dispose();
-        T.Open<ILinControl>(two, 1).Dispose();
-      }
+      RefusedWhileHeld<ICanControl>("gamma", 0,
+          "the control unit of CAN port 0 of USB-to-CAN (canemu gamma) is in use by another program");
+      RefusedWhileHeld<ILinControl>("gamma", 1, "the control unit of LIN port 1");
     }
 
     [Test]
     public void Item08_ASecondCyclicListIsRefusedWhileOneIsHeld()
     {
-      using (new Daemon(Daemon.TwoAdapters))
-      using (var one = T.Bal("alpha"))
-      using (var two = T.Bal("alpha"))
-      {
-        var list = T.Open<ICanScheduler>(one);
-        Assert.IsTrue(list.SupportsCyclicMessageScheduler);
-        var e = T.Throws(() => two.OpenSocket(0, typeof(ICanScheduler)));
-        Assert.AreEqual(0xE001000Au, e.ErrorCode);
-        StringAssert.Contains("the cyclic transmit list of CAN port 0 of USB-to-CAN (canemu alpha) is in use", e.Message);
-        list.Dispose();
-        T.Open<ICanScheduler>(two).Dispose();
-        // Every emulated IXXAT controller has the list, so NotImplementedException (a port
-        // without one) cannot occur: docs/dotnet.md.
-      }
+      RefusedWhileHeld<ICanScheduler>("alpha", 0,
+          "the cyclic transmit list of CAN port 0 of USB-to-CAN (canemu alpha) is in use",
+          list => Assert.IsTrue(list.SupportsCyclicMessageScheduler));
+      // Every emulated IXXAT controller has the list, so NotImplementedException (a port without
+      // one) cannot occur: docs/dotnet.md.
     }
 
     [Test]
     public void Item09_ClosingTheControlKeepsTheSettingsWhileAChannelIsOpen()
     {
-      using (new Daemon(Daemon.TwoAdapters))
       using (var a = new Line("alpha", bitrate: CanBitrate.Cia250KBit))
       using (var b = new Line("beta", bitrate: CanBitrate.Cia250KBit))
       {

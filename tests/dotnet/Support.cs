@@ -8,7 +8,6 @@ using System.Diagnostics;
 using System.IO;
 using System.Text;
 using System.Threading;
-using Canemu;
 using Ixxat.Vci3;
 using Ixxat.Vci3.Bal;
 using Ixxat.Vci3.Bal.Can;

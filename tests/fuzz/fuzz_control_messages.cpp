@@ -13,7 +13,6 @@
 #include <memory>
 #include <string>
 
-#include "canemu/daemon/control/control_dispatcher.hpp"
 #include "fuzz_world.hpp"
 
 namespace {
@@ -28,19 +27,10 @@ const daemon::Config& config() {
   return c;
 }
 
-// One client, as the server would count it.
-struct OneClient final : daemon::LoopServices {
-  uint16_t client_count() override { return 1; }
-};
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  auto sim = fuzzing::fresh_simulation(config());
-  OneClient loop;
-  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0},
-                                       loop);
-  daemon::Session session;
+  fuzzing::OneClient client(config());
   const auto check_reply = [](const void* reply, size_t bytes, std::span<const int> fds) {
     if (ipc::check_message(reply, bytes) != ipc::ErrorCode::none) {
       std::abort();  // the daemon must only ever send well-formed messages
@@ -72,9 +62,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const size_t length = data[at] | (size_t{data[at + 1]} << 8);
     at += 2;
     const size_t n = length < size - at ? length : size - at;
-    dispatcher.handle(session, data + at, n, check_reply);
+    client.handle(data + at, n, check_reply);
     at += n;
   }
-  dispatcher.end_session(session);
+  client.end();
   return 0;
 }

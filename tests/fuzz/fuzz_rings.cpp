@@ -19,7 +19,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "canemu/daemon/control/control_dispatcher.hpp"
 #include "fuzz_world.hpp"
 #include "vci/cantype.h"
 
@@ -63,23 +62,11 @@ void check(const void* reply, std::size_t bytes) {
   }
 }
 
-// One client, as the server would count it, whose last channel's doorbell is watched.
-struct OneClient final : daemon::LoopServices {
-  daemon::Doorbell* bell = nullptr;
-  uint16_t client_count() override { return 1; }
-  void watch(daemon::Doorbell& d) override { bell = &d; }
-  void unwatch(daemon::Doorbell&) override { bell = nullptr; }
-};
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  auto sim = fuzzing::fresh_simulation(config());
-  OneClient loop;
-  daemon::ControlDispatcher dispatcher(*sim, daemon::TimeSetting{daemon::TimeMode::stepped, 1.0},
-                                       loop);
-  daemon::Doorbell*& bell = loop.bell;
-  daemon::Session session;
+  fuzzing::OneClient client(config());
+  daemon::Doorbell*& bell = client.loop.bell;  // of the channel opened
   std::vector<int> fds;
   uint32_t last_handle = 0;  // of the last VCI reply
   const auto send = [&fds, &last_handle](const void* reply, std::size_t bytes,
@@ -93,9 +80,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       fds.push_back(::dup(fd));
     }
   };
-  const auto ask = [&](const auto& request) {
-    dispatcher.handle(session, reinterpret_cast<const uint8_t*>(&request), sizeof request, send);
-  };
+  const auto ask = [&](const auto& request) { client.handle(&request, sizeof request, send); };
   ask(ipc::make_message<ipc::Hello>(1));
   const uint8_t kind = size > 0 ? data[0] % 3 : 0;  // ephemeral, VCI v1, VCI v2
   std::size_t at = size > 0 ? 1 : 0;
@@ -158,10 +143,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (bell != nullptr && !bell->broken()) {
         bell->kick();
       }
-      dispatcher.handle(session, reinterpret_cast<const uint8_t*>(&step), sizeof step, send);
+      client.handle(&step, sizeof step, send);
     }
   }
-  dispatcher.end_session(session);
+  client.end();
   for (int fd : fds) {
     ::close(fd);
   }

@@ -19,6 +19,13 @@ status() {  # the package's state as dpkg-query abbreviates it ("ii": installed)
   st=$(dpkg-query -W -f='${db:Status-Abbrev}' canemu 2>/dev/null | tr -d ' ')
   [ -n "$st" ] && [ "$st" != un ] && echo "$st" || echo none
 }
+allow_and_add() {  # DROP-IN: the package's DROP-IN.conf linked for the service, stdin added to
+  # its configuration (docs/security.md); both count from the service's next start
+  mkdir -p /etc/systemd/system/canemud.service.d
+  ln -s "/usr/share/canemu/systemd/$1.conf" /etc/systemd/system/canemud.service.d/
+  systemctl daemon-reload
+  cat >>/etc/canemu/canemud.toml
+}
 enabled() {  # UNIT...: what systemctl is-enabled says of each
   for u in "$@"; do
     systemctl is-enabled "$u" 2>/dev/null || true
@@ -126,10 +133,7 @@ result a_socketcan_bridge_needs_the_drop_in "1 said" "$rc $said"
 # The SocketCAN scenarios run against the service with the drop-in that allows them, installed
 # as docs/security.md says, and a bridge from can0 to vcan0 in the configuration.
 systemctl stop canemud.service
-mkdir -p /etc/systemd/system/canemud.service.d
-ln -s /usr/share/canemu/systemd/socketcan.conf /etc/systemd/system/canemud.service.d/
-systemctl daemon-reload
-cat >>/etc/canemu/canemud.toml <<'TOML'
+allow_and_add socketcan <<'TOML'
 
 [[bridge]]
 kind = "socketcan"
@@ -276,9 +280,7 @@ echo "  (canemu status $emulated %, canbusload $kernel % over the list's $count 
 # guest has no other interface; LCM's UDP multicast needs a multicast route).
 ip link set lo multicast on
 ip route add 224.0.0.0/4 dev lo
-ln -s /usr/share/canemu/systemd/ip.conf /etc/systemd/system/canemud.service.d/
-systemctl daemon-reload
-cat >>/etc/canemu/canemud.toml <<'TOML'
+allow_and_add ip <<'TOML'
 
 [[bridge]]
 kind = "lcm"

@@ -27,6 +27,14 @@ Message frame(int id, std::initializer_list<int> data, ChecksumType kind, uint8_
   return m;
 }
 
+// A frame record as encode writes it, in hex, field by field: version 1 (four bytes), the byte of
+// length, checksum type and message type, the PID, the checksum, the error bits, then the
+// payload (words of four bytes).
+std::string frame_record(const char* kinds, const char* protected_id, const char* checksum,
+                         const char* errors, const char* payload) {
+  return std::string("01000000") + kinds + protected_id + checksum + errors + payload;
+}
+
 TEST(LinPcap, TheTestsOwnParityAndChecksumsMatchKnownFrames) {
   // From LIN 2.x: IDs 3Ch and 3Dh are 3Ch and 7Dh protected; the frames canemu send's
   // documentation shows.
@@ -66,36 +74,16 @@ TEST(LinPcap, FramesOfEightBytesTakeTwoPayloadWords) {
   const Message m =
       frame(0x3C, {0x00, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}, ChecksumType::classic, cs);
   // Length 8, type 0, classic 1: 81h.
-  EXPECT_EQ(hex(encode(m)),
-            "01000000"
-            "81"
-            "3C"
-            "00"
-            "00"
-            "00FFFFFF"
-            "FFFFFFFF");
+  EXPECT_EQ(hex(encode(m)), frame_record("81", "3C", "00", "00", "00FFFFFFFFFFFFFF"));
 
   const Message classic =
       frame(0x33, {0xAA, 0xBB}, ChecksumType::classic, inverted_sum({0xAA, 0xBB}));
-  EXPECT_EQ(hex(encode(classic)),
-            "01000000"
-            "21"
-            "73"
-            "99"
-            "00"
-            "AABB0000");
+  EXPECT_EQ(hex(encode(classic)), frame_record("21", "73", "99", "00", "AABB0000"));
 
   const Message five = frame(0x01, {1, 2, 3, 4, 5}, ChecksumType::enhanced,
                              inverted_sum({pid(0x01), 1, 2, 3, 4, 5}));
   EXPECT_EQ(pid(0x01), 0xC1);
-  EXPECT_EQ(hex(encode(five)),
-            "01000000"
-            "52"
-            "C1"
-            "2F"
-            "00"
-            "01020304"
-            "05000000");
+  EXPECT_EQ(hex(encode(five)), frame_record("52", "C1", "2F", "00", "0102030405000000"));
 }
 
 TEST(LinPcap, ErrorsAreBitsBesideWhatWasReceived) {
@@ -104,45 +92,21 @@ TEST(LinPcap, ErrorsAreBitsBesideWhatWasReceived) {
   none.pid = pid(0x20);
   none.errors = kErrorNoSlaveResponse;
   EXPECT_EQ(pid(0x20), 0x20);
-  EXPECT_EQ(hex(encode(none)),
-            "01000000"
-            "00"
-            "20"
-            "00"
-            "01"
-            "00000000");
+  EXPECT_EQ(hex(encode(none)), frame_record("00", "20", "00", "01", "00000000"));
 
   // A response whose checksum matches neither kind: the characters as received.
   Message bad = frame(0x10, {0x01, 0x00}, ChecksumType::unknown, 0xAF);
   bad.errors = kErrorChecksum;
-  EXPECT_EQ(hex(encode(bad)),
-            "01000000"
-            "20"
-            "50"
-            "AF"
-            "08"
-            "01000000");
+  EXPECT_EQ(hex(encode(bad)), frame_record("20", "50", "AF", "08", "01000000"));
 
   Message parity;
   parity.errors = kErrorParity;
-  EXPECT_EQ(hex(encode(parity)),
-            "01000000"
-            "00"
-            "00"
-            "00"
-            "04"
-            "00000000");
+  EXPECT_EQ(hex(encode(parity)), frame_record("00", "00", "00", "04", "00000000"));
 
   Message reserved = frame(0x3E, {0x11}, ChecksumType::enhanced, inverted_sum({pid(0x3E), 0x11}));
   reserved.errors = kErrorInvalidId;
   EXPECT_EQ(pid(0x3E), 0xFE);
-  EXPECT_EQ(hex(encode(reserved)),
-            "01000000"
-            "12"
-            "FE"
-            "EF"
-            "10"
-            "11000000");
+  EXPECT_EQ(hex(encode(reserved)), frame_record("12", "FE", "EF", "10", "11000000"));
 }
 
 TEST(LinPcap, EventsCarryTheirTypeBigEndian) {

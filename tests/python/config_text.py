@@ -49,6 +49,13 @@ def scenario(*faults: str, **fields) -> str:
     return toml(*([table("[scenario]", **fields)] if fields else []), *faults)
 
 
+def missing_acks(count: int, name: str) -> str:
+    """A scenario named `name` in which nobody acknowledges the first `count` frames of ID 0x123
+    on can0 (the fault matches all 11 bits)."""
+    return scenario(fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF},
+                          effect="ack_error", count=count), name=name)
+
+
 # The two classic buses most tests run on.
 CAN0 = bus("can0", "can", 500000)
 CAN1 = bus("can1", "can", 125000)

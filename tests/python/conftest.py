@@ -13,8 +13,8 @@ import pytest
 from canemu.bus import CAN_ERR_BUSERROR
 from canemu.testing import Daemon
 
-from config_text import (CAN0, CAN1, FD0, LIN0, LIN_ADAPTER, bus, device, fault, scenario,  # noqa: F401
-                         table, toml)
+from config_text import (CAN0, CAN1, FD0, LIN0, LIN_ADAPTER, bus, device, fault,  # noqa: F401
+                         missing_acks, scenario, table, toml)
 
 REPO = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("CANEMU_BUILD_DIR", REPO / "build"))

@@ -26,6 +26,9 @@ link instead; test_netns_dds.py runs both. Discovery between two hosts takes som
 way. canemud's AF_UNIX socket is a path in the file system, which network namespaces do not
 separate, so clients of a host's canemud (python-can, ``canemu``) may run in any namespace.
 
+`HostProgram` runs a program inside a host with its output read by threads of its own, so that
+a test waits for its next line with a deadline and a failure shows what it wrote to stderr.
+
 Closing (the ``with`` block's end, also on a failure) kills what was started (SIGTERM, then
 SIGKILL; canemud by `Daemon.stop`), then every process still inside the namespaces, and
 deletes the namespaces, which removes their links. Namespaces left by a run that was killed
@@ -45,6 +48,7 @@ from __future__ import annotations
 import ctypes
 import itertools
 import os
+import queue
 import re
 import selectors
 import shutil
@@ -52,6 +56,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import warnings
 from contextlib import contextmanager
@@ -372,3 +377,35 @@ class Hosts:
 
     def __exit__(self, exc_type, *exc) -> None:
         self.close(quiet=exc_type is not None)
+
+
+class HostProgram:
+    """A program inside a host (`hosts.popen`, ended at its close()), its output lines read by a
+    thread of their own and its stderr kept by another; with `stdin`, it reads from a pipe."""
+
+    def __init__(self, hosts: Hosts, host: str, argv: Sequence[str], stdin: bool = False) -> None:
+        self.host = host
+        self.proc = hosts.popen(host, argv, stdin=subprocess.PIPE if stdin else None,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.lines: queue.Queue = queue.Queue()
+        self.err: List[str] = []
+        for pipe, put in ((self.proc.stdout, self.lines.put), (self.proc.stderr, self.err.append)):
+            threading.Thread(target=self._read, args=(pipe, put), daemon=True).start()
+
+    @staticmethod
+    def _read(pipe, put) -> None:
+        for line in pipe:
+            put(line)
+        put(None)
+
+    def line(self, timeout: float) -> str:
+        """The program's next line, waited for at most `timeout` seconds; an AssertionError
+        with its exit status and stderr when none came."""
+        try:
+            line = self.lines.get(timeout=timeout)
+        except queue.Empty:
+            line = None
+        if line is None:
+            raise AssertionError(f"program in {self.host}: no line within {timeout} s or it ended "
+                                 f"(status {self.proc.poll()}); stderr:\n{''.join(self.err)}")
+        return line

@@ -6,6 +6,7 @@ stepped time. tests/python/test_netns_distributed.py runs daemons in network nam
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -28,6 +29,17 @@ URI = LOOPBACK_URI
 def config(name: str, time_mode: str, owner: str | None = None) -> str:
     return support_config(name, time_mode, owner, domain=DOMAIN,
                           partition=f"canemu-test-{os.getpid()}")
+
+
+@contextlib.contextmanager
+def owner_and_follower(time_mode: str, follower_time: str | None = None, follower_extra: str = ""):
+    """Daemon "a" in `time_mode`, owner of can0, and daemon "b" (in `follower_time`, else the
+    same), whose can0 has owner "a", with `follower_extra` added to b's configuration."""
+    canemud = str(BUILD / "bin" / "canemud")
+    with Daemon(config("a", time_mode), canemud=canemud) as a, \
+            Daemon(config("b", follower_time or time_mode, owner="a") + follower_extra,
+                   canemud=canemud) as b:
+        yield a, b
 
 
 def frames(bus) -> list:
@@ -69,6 +81,13 @@ class Peer:
     def frames(self) -> list:
         return [tuple(f) for f in json.loads(self.ask("recv"))]
 
+    def frames_arriving(self, what: str) -> list:
+        """The frames received, as (can_id, hexdata), waited for until there are some (`what`
+        says which in a failure)."""
+        got: list = []
+        wait_until(lambda: got.extend(self.frames()) or got, what)
+        return [(i, d) for i, d, _ in got]
+
     def errors(self) -> list:
         """Error frames received so far, as (can_id, hexdata)."""
         return [(f[0], f[1]) for f in json.loads(self.ask("errors"))]
@@ -87,8 +106,7 @@ def env():
 
 
 def test_stepped_arbitration_and_time_stamps_across_daemons(env):
-    with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a, \
-            Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud")) as b:
+    with owner_and_follower("stepped") as (a, b):
         t0 = attached_step(b)
         assert step(a, 1000) == t0 + 1000  # one clock, the owner's: a step of a is one of b
         t0 += 1000  # (VCI time stamps tick in microseconds)
@@ -137,8 +155,7 @@ def test_stepped_arbitration_and_time_stamps_across_daemons(env):
 def test_a_follower_with_self_reception_gets_back_every_frame_it_queued(env):
     # Several frames queued at once on b reach the owner together (the node's window); each one
     # sent comes back to b's program as its own, at its instant on the owner's bus.
-    with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a, \
-            Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud")) as b:
+    with owner_and_follower("stepped") as (a, b):
         t0 = attached_step(b)
         assert step(a, 1000) == t0 + 1000
         t0 += 1000
@@ -167,8 +184,7 @@ def test_a_follower_bus_closing_normally_drops_nothing(env):
     # A python-can program on b opens can0, sends a frame and closes its bus as programs do:
     # nothing was lost, so neither daemon counts anything dropped (the owner counted one per
     # close, for a request of a node it had closed already).
-    with Daemon(config("a", "stepped"), canemud=str(BUILD / "bin" / "canemud")) as a, \
-            Daemon(config("b", "stepped", owner="a"), canemud=str(BUILD / "bin" / "canemud")) as b:
+    with owner_and_follower("stepped") as (a, b):
         attached_step(b)
         ecu_a = Peer(a)
         ecu_b = Peer(b)
@@ -192,9 +208,7 @@ def test_late_counts_events_beyond_its_bound_only(env):
     # instant (the link's delay beyond the fastest heartbeat's, tens of microseconds), which is
     # normal; `late` counts events placed more than 1 ms after it (it counted about 9 of 10
     # before). The largest delay seen is shown beside it.
-    canemud = str(BUILD / "bin" / "canemud")
-    with Daemon(config("a", "realtime"), canemud=canemud) as a, \
-            Daemon(config("b", "realtime", owner="a"), canemud=canemud) as b:
+    with owner_and_follower("realtime") as (a, b):
         ecu_b = Peer(b)
         ecu_a = Peer(a)
         try:
@@ -260,9 +274,7 @@ def test_realtime_owner_late_stopping_and_back(env):
 
         wait_until(lambda: sent_by_b() == [1], "b's waiting frame goes out on a's can0")
         ecu_a.send(0x111, "01")
-        back = []
-        wait_until(lambda: back.extend(ecu_b.frames()) or back, "a's frame reaches b")
-        assert [(i, d) for i, d, _ in back] == [(0x111, "01")]
+        assert ecu_b.frames_arriving("a's frame reaches b") == [(0x111, "01")]
         ecu_a.close()
         # The owner stops (it says so as it goes): b's node is off the bus, and its program
         # hears bus-off (CAN_ERR_BUSOFF).
@@ -278,9 +290,7 @@ def test_realtime_owner_late_stopping_and_back(env):
         wait_until(lambda: errs.extend(ecu_b.errors()) or any(
             bytes.fromhex(d)[1] & 0x40 for _, d in errs[-1:]), "error-active again on b")
         ecu_b.send(0x333, "03")
-        got = []
-        wait_until(lambda: got.extend(ecu_a.frames()) or got, "b's frame reaches the new a")
-        assert [(i, d) for i, d, _ in got] == [(0x333, "03")]
+        assert ecu_a.frames_arriving("b's frame reaches the new a") == [(0x333, "03")]
         ecu_a.close()
         ecu_b.close()
     finally:

@@ -6,18 +6,18 @@ Same rig as test_distributed.py: loopback unicast in a DDS domain of this run's 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
 
 from conftest import BUILD
 from distributed_support import TIMEOUT, attached_step, cli, frame_ns, nodes, step, wait_until
-from test_distributed import Peer, config, env
+from test_distributed import Peer, env, owner_and_follower
 
 from canemu.testing import Daemon  # noqa: E402
 
 assert env  # the fixture, used by name below
-CANEMUD = str(BUILD / "bin" / "canemud")
 VCI_C_TALK = str(BUILD / "bin" / "vci_c_talk")
 
 ALPHA = """
@@ -63,24 +63,31 @@ def wait_for_node(owner: Daemon, user: Daemon, name: str) -> None:
         raise AssertionError(f"{e}; the user's log: {said}") from None
 
 
+@contextlib.contextmanager
+def receiving(owner: Daemon, user: Daemon):
+    """vci_c_talk receiving on the user's adapter alpha, ready and listed by the owner as node
+    b/alpha:0; killed on the way out if it has not ended."""
+    receiver = talk(user, "receive", "alpha")
+    try:
+        assert receiver.stdout.readline() == "ready\n"
+        wait_for_node(owner, user, "b/alpha:0")
+        yield receiver
+    finally:
+        receiver.kill()
+        receiver.wait()
+
+
 def test_realtime_vci_adapter_on_a_remote_bus(env):
-    with Daemon(config("a", "realtime"), canemud=CANEMUD) as a, \
-            Daemon(config("b", "realtime", owner="a") + ALPHA, canemud=CANEMUD) as b:
+    with owner_and_follower("realtime", follower_extra=ALPHA) as (a, b):
         wait_until(lambda: remote_state(b) == "attached", "b's can0 attached to a")
         ecu_a = Peer(a)
         try:
             # b's VCI program waits for a frame; a lists its node as b/alpha:0 (the device's name
             # on b and its controller number), and a's program's frame reaches it.
-            receiver = talk(b, "receive", "alpha")
-            try:
-                assert receiver.stdout.readline() == "ready\n"
-                wait_for_node(a, b, "b/alpha:0")
+            with receiving(a, b) as receiver:
                 assert [k for k in nodes(a) if k.startswith("b/")] == ["b/alpha:0"]
                 ecu_a.send(0x1A5, "7E")
                 assert finish(receiver) == "1A5#7E\n"
-            finally:
-                receiver.kill()
-                receiver.wait()
             # Its node is gone from a with the program (the adapter released it).
             wait_until(lambda: not any(k.startswith("b/") for k in nodes(a)),
                        "b's node leaves a when its program ends")
@@ -89,32 +96,23 @@ def test_realtime_vci_adapter_on_a_remote_bus(env):
             # b's VCI program sends 1A5#7E (it waits for its own echo, so it ends once the frame
             # has gone out on a's can0, acknowledged by a's program's controller).
             finish(talk(b, "send", "alpha", "1A5", "7E"))
-            got: list = []
-            wait_until(lambda: got.extend(ecu_a.frames()) or got, "b's frame reaches a")
-            assert [(i, d) for i, d, _ in got] == [(0x1A5, "7e")]
+            assert ecu_a.frames_arriving("b's frame reaches a") == [(0x1A5, "7e")]
         finally:
             ecu_a.close()
 
 
 def test_stepped_vci_adapter_on_a_remote_bus(env):
-    with Daemon(config("a", "stepped"), canemud=CANEMUD) as a, \
-            Daemon(config("b", "stepped", owner="a") + ALPHA, canemud=CANEMUD) as b:
+    with owner_and_follower("stepped", follower_extra=ALPHA) as (a, b):
         attached_step(b)
         ecu_a = Peer(a)
         try:
             # a's program's frame to b's VCI program: queued before a step of a, it goes out at
             # the step's start; b's program prints it once the step ends on b.
-            receiver = talk(b, "receive", "alpha")
-            try:
-                assert receiver.stdout.readline() == "ready\n"
-                wait_for_node(a, b, "b/alpha:0")
+            with receiving(a, b) as receiver:
                 t0 = step(a, 1000)
                 ecu_a.send(0x1A5, "7E")
                 assert step(a, 1_000_000) == t0 + 1_000_000
                 assert finish(receiver) == "1A5#7E\n"
-            finally:
-                receiver.kill()
-                receiver.wait()
             assert ecu_a.frames() == []
 
             # b's VCI program sends and waits for its echo: the test steps b until it ends.
@@ -138,28 +136,22 @@ def test_stepped_vci_adapter_on_a_remote_bus(env):
 
 
 def test_scaled_time_daemons_with_one_factor_exchange_frames(env):
-    with Daemon(config("a", "scaled:2"), canemud=CANEMUD) as a, \
-            Daemon(config("b", "scaled:2", owner="a"), canemud=CANEMUD) as b:
+    with owner_and_follower("scaled:2") as (a, b):
         wait_until(lambda: remote_state(b) == "attached", "b's can0 attached to a")
         assert peers_of(a)["b"]["time"] == "scaled:2"
         ecu_a, ecu_b = Peer(a), Peer(b)
         try:
             ecu_b.send(0x222, "02")
-            got: list = []
-            wait_until(lambda: got.extend(ecu_a.frames()) or got, "b's frame reaches a")
-            assert [(i, d) for i, d, _ in got] == [(0x222, "02")]
+            assert ecu_a.frames_arriving("b's frame reaches a") == [(0x222, "02")]
             ecu_a.send(0x111, "01")
-            back: list = []
-            wait_until(lambda: back.extend(ecu_b.frames()) or back, "a's frame reaches b")
-            assert [(i, d) for i, d, _ in back] == [(0x111, "01")]
+            assert ecu_b.frames_arriving("a's frame reaches b") == [(0x111, "01")]
         finally:
             ecu_a.close()
             ecu_b.close()
 
 
 def test_scaled_time_daemons_with_other_factors_refuse_each_other(env):
-    with Daemon(config("a", "scaled:2"), canemud=CANEMUD) as a, \
-            Daemon(config("b", "scaled:3", owner="a"), canemud=CANEMUD) as b:
+    with owner_and_follower("scaled:2", "scaled:3") as (a, b):
         wait_until(lambda: "b" in peers_of(a) and "a" in peers_of(b)
                    and peers_of(a)["b"]["time"] == "scaled:3", "a and b hear each other")
         pb = peers_of(a)["b"]

@@ -206,6 +206,17 @@ def unacknowledged_attempts(start: int, end: int, bits: int, receiver: bool) -> 
     return sofs
 
 
+def ack_errors_of_attempts(got: list, start: int, end: int, bits: int, receiver: bool):
+    """The start instants of the unacknowledged attempts (unacknowledged_attempts) and the bus
+    errors among `got`, the sender's: each of them an ACK error, one an attempt, flagged at its
+    attempt's ACK delimiter."""
+    sofs = unacknowledged_attempts(start, end, bits, receiver)
+    errors = bus_errors(got)
+    assert all(is_ack_error(e) for e in errors)
+    assert [ns(e.timestamp) for e in errors] == [t + (bits - 8) * BIT for t in sofs]
+    return sofs, errors
+
+
 def test_the_examples_are_the_eight_documented():
     assert sorted(p.name for p in EXAMPLES.glob("*.toml")) == [
         "babbling-node.toml", "corrupt-id.toml", "drifting-oscillator.toml",
@@ -321,11 +332,8 @@ def test_nobody_acknowledges(open_bus, daemon):
     got_s += drain(sender)
     got_p += drain(partner)
 
-    sofs = unacknowledged_attempts(w0, w1, bits, receiver=True)
+    sofs, errors = ack_errors_of_attempts(got_s, w0, w1, bits, receiver=True)
     assert len(sofs) == 6175  # 16 error-active attempts, 6159 error-passive ones
-    errors = bus_errors(got_s)
-    assert all(is_ack_error(e) for e in errors)
-    assert [ns(e.timestamp) for e in errors] == [t + (bits - 8) * BIT for t in sofs]
     # Warning after the 12th error, error-passive after the 16th, and back below 128 (TEC 127)
     # once acknowledged (found when the FIFO is next read empty: at the end of the step).
     assert state_frames(got_s) == [
@@ -383,11 +391,8 @@ def test_unplug_node(open_bus, daemon):
     assert frames(got_p) == []  # its own frame does not go out
     assert partner.error_counters() == (128, 0) and partner.controller_state == Passive
     assert unplugged.error_counters() == (0, 0)
-    sofs = unacknowledged_attempts(w0, w1, bits11, receiver=False)
+    sofs, errors = ack_errors_of_attempts(got_p, w0, w1, bits11, receiver=False)
     assert len(sofs) == 3088  # 16 error-active attempts, 3072 error-passive ones
-    errors = bus_errors(got_p)
-    assert all(is_ack_error(e) for e in errors)
-    assert [ns(e.timestamp) for e in errors] == [t + (bits11 - 8) * BIT for t in sofs]
     assert state_frames(got_p) == [
         (12, WARNING, CAN_ERR_CRTL_TX_WARNING, 0, 0),
         (17, PASSIVE_OR_BACK, CAN_ERR_CRTL_TX_PASSIVE, 128, 0)]

@@ -18,7 +18,7 @@ import canemu
 from canemu.bus import CAN_ERR_PROT_BIT, CAN_ERR_PROT_STUFF
 
 from conftest import (CANEMU_CLI, Canemud, bus_errors, drain, fault, fault_load, frames, load,
-                      scenario)
+                      missing_acks, scenario)
 
 US = 1_000
 MS = 1_000_000
@@ -144,10 +144,7 @@ def test_dump_and_log_show_bit_errors_at_their_instants(daemon, nodes):
 
 def test_status_counts_what_a_fault_did(daemon, nodes):
     a, b = nodes
-    load(daemon, scenario(
-        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
-              count=3),
-        name="three acks missing"))
+    load(daemon, missing_acks(3, "three acks missing"))
     a.send(msg(0x100))
     a.send(msg(0x123))
     canemu.step(5 * MS)

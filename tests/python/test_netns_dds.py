@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import json
 import os
-import queue
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -27,7 +25,7 @@ pytest.importorskip(
     ".venv)")
 
 import canemu  # noqa: E402
-from netns import Hosts, netns_available  # noqa: E402
+from netns import HostProgram, Hosts, netns_available  # noqa: E402
 
 MS = 1_000_000
 ALONE = 1.0  # seconds host c's peer looks for the bridge (discovery on a link takes ~50 ms)
@@ -38,36 +36,15 @@ CONFIG = toml(table("[simulation]", time="stepped"), CAN0,
               table("[[bridge]]", kind="dds", bus="can0", domain=DOMAIN))
 
 
-class Peer:
-    """netns_dds_peer.py inside a host; its JSON lines read by a thread of its own."""
+class Peer(HostProgram):
+    """netns_dds_peer.py inside a host: one JSON line an event."""
 
     def __init__(self, hosts: Hosts, host: str, *args: str) -> None:
-        self.host = host
-        self.proc = hosts.popen(host, [sys.executable, str(PEER), "--domain", str(DOMAIN), *args],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        self.lines: queue.Queue = queue.Queue()
-        self.err: list = []
-        threading.Thread(target=self._read, args=(self.proc.stdout, self.lines.put),
-                         daemon=True).start()
-        threading.Thread(target=self._read, args=(self.proc.stderr, self.err.append),
-                         daemon=True).start()
-
-    @staticmethod
-    def _read(pipe, put) -> None:
-        for line in pipe:
-            put(line)
-        put(None)
+        super().__init__(hosts, host, [sys.executable, str(PEER), "--domain", str(DOMAIN), *args])
 
     def next(self, timeout: float = TIMEOUT) -> dict:
         """The peer's next event, waited for at most `timeout` seconds."""
-        try:
-            line = self.lines.get(timeout=timeout)
-        except queue.Empty:
-            line = None
-        if line is None:
-            raise AssertionError(f"peer in {self.host}: no event within {timeout} s or it ended "
-                                 f"(status {self.proc.poll()}); stderr:\n{''.join(self.err)}")
-        return json.loads(line)
+        return json.loads(self.line(timeout))
 
 
 def bridges(daemon) -> list:

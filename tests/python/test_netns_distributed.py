@@ -13,11 +13,9 @@ from __future__ import annotations
 
 import json
 import os
-import queue
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -26,7 +24,7 @@ import pytest
 from conftest import CANEMUD
 from distributed_support import attached_step, cli, frame_ns, nodes, step, wait_until
 from distributed_support import config as support_config
-from netns import Hosts, netns_available
+from netns import HostProgram, Hosts, netns_available
 
 from canemu.bus import CAN_ERR_BUSOFF, CAN_ERR_CNT, CAN_ERR_CRTL, CAN_ERR_RESTARTED
 
@@ -56,44 +54,19 @@ def state(node: dict) -> tuple:
     return node["state"], node["tec"], node["rec"]
 
 
-class Peer:
+class Peer(HostProgram):
     """distributed_peer.py inside `host`, on that host's canemud; its answers read by a thread of
     its own, so every wait has a deadline."""
 
     def __init__(self, hosts: Hosts, host: str, daemon) -> None:
-        self.host = host
-        self.proc = hosts.popen(host, [sys.executable, str(PEER), daemon.socket],
-                                stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True)
-        self.lines: queue.Queue = queue.Queue()
-        self.err: list = []
-        threading.Thread(target=self._read, args=(self.proc.stdout, self.lines.put),
-                         daemon=True).start()
-        threading.Thread(target=self._read, args=(self.proc.stderr, self.err.append),
-                         daemon=True).start()
-        assert self._line() == "ready"
+        super().__init__(hosts, host, [sys.executable, str(PEER), daemon.socket], stdin=True)
+        assert self.line(TIMEOUT).strip() == "ready"
         self.name = self.ask("name")
-
-    @staticmethod
-    def _read(pipe, put) -> None:
-        for line in pipe:
-            put(line)
-        put(None)
-
-    def _line(self) -> str:
-        try:
-            line = self.lines.get(timeout=TIMEOUT)
-        except queue.Empty:
-            line = None
-        if line is None:
-            raise AssertionError(f"program in {self.host}: no answer within {TIMEOUT} s or it "
-                                 f"ended (status {self.proc.poll()}); stderr:\n{''.join(self.err)}")
-        return line.strip()
 
     def ask(self, line: str) -> str:
         self.proc.stdin.write(line + "\n")
         self.proc.stdin.flush()
-        return self._line()
+        return self.line(TIMEOUT).strip()
 
     def send(self, ident: int, data: str) -> None:
         assert self.ask(f"send {ident:x} {data}") == "sent"

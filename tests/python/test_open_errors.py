@@ -36,26 +36,25 @@ def opening_error(**kwargs) -> str:
     return str(e.value)
 
 
-def test_a_controller_the_adapter_lacks_names_its_can_controllers(daemon):
-    assert opening_error(interface="canemu", channel="ixxat0:5") == (
-        "channel 'ixxat0:5': adapter ixxat0 has 2 CAN controllers, ixxat0:0 on can0 and "
-        "ixxat0:1 on can1, and 1 LIN controller, ixxat0:2 on lin0"
-    )
-    assert opening_error(interface="canemu", channel="ixxat0:2") == (
-        "channel 'ixxat0:2' is the LIN controller of ixxat0 on lin0 (canemu.lin's Commander "
-        "and Responder open it); its CAN controllers are ixxat0:0 on can0 and ixxat0:1 on can1"
-    )
+# A channel that is not there, or not a CAN controller, names what is: a controller the adapter
+# lacks or its LIN controller names its CAN controllers; an adapter or a bus that is not there
+# names the buses and the CAN controllers that are.
+CHANNELS_NOT_THERE = {
+    "ixxat0:5": "channel 'ixxat0:5': adapter ixxat0 has 2 CAN controllers, ixxat0:0 on can0 and "
+                "ixxat0:1 on can1, and 1 LIN controller, ixxat0:2 on lin0",
+    "ixxat0:2": "channel 'ixxat0:2' is the LIN controller of ixxat0 on lin0 (canemu.lin's "
+                "Commander and Responder open it); its CAN controllers are ixxat0:0 on can0 and "
+                "ixxat0:1 on can1",
+    "ixxat9:0": "channel 'ixxat9:0': canemud has no adapter ixxat9 (buses: can0, can1, lin0; "
+                "CAN controllers: ixxat0:0 on can0, ixxat0:1 on can1)",
+    "can9": "channel 'can9' is neither a bus nor DEVICE:N of an adapter of canemud (buses: can0, "
+            "can1, lin0; CAN controllers: ixxat0:0 on can0, ixxat0:1 on can1)",
+}
 
 
-def test_an_adapter_that_is_not_there_names_the_adapters_that_are(daemon):
-    assert opening_error(interface="canemu", channel="ixxat9:0") == (
-        "channel 'ixxat9:0': canemud has no adapter ixxat9 (buses: can0, can1, lin0; "
-        "CAN controllers: ixxat0:0 on can0, ixxat0:1 on can1)"
-    )
-    assert opening_error(interface="canemu", channel="can9") == (
-        "channel 'can9' is neither a bus nor DEVICE:N of an adapter of canemud (buses: can0, "
-        "can1, lin0; CAN controllers: ixxat0:0 on can0, ixxat0:1 on can1)"
-    )
+@pytest.mark.parametrize("channel", CHANNELS_NOT_THERE)
+def test_a_channel_that_is_not_there_names_what_is(daemon, channel):
+    assert opening_error(interface="canemu", channel=channel) == CHANNELS_NOT_THERE[channel]
 
 
 def test_no_daemon_is_a_short_message_naming_the_socket(daemon):

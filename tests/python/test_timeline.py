@@ -16,7 +16,8 @@ import pytest
 import canemu
 from canemu.plot import series
 
-from conftest import CANEMU_CLI, REPO, bus_errors, drain, fault, frames, load, ns, scenario
+from conftest import (CANEMU_CLI, REPO, bus_errors, drain, fault, frames, load, missing_acks, ns,
+                      scenario)
 
 US = 1_000
 MS = 1_000_000
@@ -62,10 +63,7 @@ def test_the_load_history_has_the_exact_busy_time_of_each_bin(daemon, nodes):
 
 def test_each_counted_error_is_in_the_senders_timeline_at_its_instant(daemon, nodes):
     a, b = nodes
-    load(daemon, scenario(
-        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
-              count=3),
-        name="three acks missing"))
+    load(daemon, missing_acks(3, "three acks missing"))
     a.send(msg(0x123))
     canemu.step(5 * MS)
     errors_a = bus_errors(drain(a))
@@ -141,10 +139,7 @@ def rows(daemon, bus, node) -> list:
 
 def test_the_plot_shows_every_change_of_a_recovery_at_its_instant(daemon, nodes):
     a, b = nodes
-    load(daemon, scenario(
-        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
-              count=16),
-        name="passive"))
+    load(daemon, missing_acks(16, "passive"))
     for _ in range(40):
         a.send(msg(0x123))
     canemu.step(50 * MS)
@@ -232,10 +227,7 @@ def test_a_python_can_nodes_history_stays_readable_after_it_closed(daemon):
     b = can.Bus(interface="canemu", channel="can0", auto_restart=False)
     drain(a)
     drain(b)
-    load(daemon, scenario(
-        fault(at="0s", bus="can0", match={"id": 0x123, "mask": 0x7FF}, effect="ack_error",
-              count=3),
-        name="three acks missing"))
+    load(daemon, missing_acks(3, "three acks missing"))
     a.send(msg(0x123))
     canemu.step(5 * MS)
     name = a.node_name

@@ -53,10 +53,9 @@ def playwright_or_skip():
 
 
 @pytest.fixture(scope="module")
-def daemon():
-    d = Canemud("stepped")
-    yield d
-    d.stop()
+def daemon(stepped_daemon):
+    """The module's tests share one canemud in stepped time (conftest's)."""
+    return stepped_daemon
 
 
 @pytest.fixture(scope="module")

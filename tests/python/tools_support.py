@@ -35,6 +35,41 @@ def _ctrl_c_as_at_a_terminal() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+class WatchedText:
+    """Text that a reader thread adds to (`add`, then `end` when its source is done) and that a
+    test waits in for a pattern (`wait_for`), instead of sleeping."""
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self.text = ""
+        self.ended = False
+        self._changed = threading.Condition()
+
+    def add(self, chunk: str) -> None:
+        with self._changed:
+            self.text += chunk
+            self._changed.notify_all()
+
+    def end(self) -> None:
+        with self._changed:
+            self.ended = True
+            self._changed.notify_all()
+
+    def wait_for(self, pattern: str, timeout: float = TIMEOUT) -> re.Match:
+        """The first match of the regular expression `pattern`, waited for; an AssertionError
+        with the whole text once `timeout` seconds have passed or the text has ended."""
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while True:
+                found = re.search(pattern, self.text)
+                if found:
+                    return found
+                left = deadline - time.monotonic()
+                if left <= 0 or self.ended:
+                    raise AssertionError(f"{pattern!r} not in {self.what}:\n{self.text}")
+                self._changed.wait(left)
+
+
 class Tool:
     """`python -m MODULE ARGS` with its standard output and error read into `output` (through
     a pseudo-terminal of `rows` x `cols` when `pty_size` is given, as curses needs one).
@@ -49,10 +84,9 @@ class Tool:
             tool.finish()
 
     def __init__(self, daemon, module: str, args: List[str], pty_size=None, cwd=None) -> None:
-        self.output = ""
         Tool.running.append(self)
-        self._changed = threading.Condition()
         command = [sys.executable, "-m", module, *args]
+        self._output = WatchedText(f"the output of {command}")
         if pty_size is None:
             self.proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                          stderr=subprocess.STDOUT, env=tool_env(daemon), cwd=cwd,
@@ -79,27 +113,19 @@ class Tool:
                 chunk = os.read(self._read_fd, 65536)
             except OSError:  # the pty's other side closed
                 chunk = b""
-            with self._changed:
-                if not chunk:
-                    self._eof = True
-                    self._changed.notify_all()
-                    return
-                self.output += chunk.decode(errors="replace")
-                self._changed.notify_all()
+            if not chunk:
+                self._output.end()
+                return
+            self._output.add(chunk.decode(errors="replace"))
+
+    @property
+    def output(self) -> str:
+        """What the tool wrote so far."""
+        return self._output.text
 
     def wait_for(self, pattern: str, timeout: float = TIMEOUT) -> re.Match:
         """The first match of the regular expression `pattern` in the output, waited for."""
-        deadline = time.monotonic() + timeout
-        with self._changed:
-            while True:
-                found = re.search(pattern, self.output)
-                if found:
-                    return found
-                left = deadline - time.monotonic()
-                if left <= 0 or getattr(self, "_eof", False):
-                    raise AssertionError(f"{pattern!r} not in the output of {self.proc.args}:\n"
-                                         f"{self.output}")
-                self._changed.wait(left)
+        return self._output.wait_for(pattern, timeout)
 
     def write(self, data: bytes) -> None:
         os.write(self._write_fd, data)

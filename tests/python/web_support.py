@@ -16,6 +16,7 @@ import urllib.request
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from conftest import CANEMU_CLI
+from tools_support import WatchedText
 
 TIMEOUT = 20.0
 # Debian's chromium, kept off the network (docs/web.md, "Tests").
@@ -46,30 +47,24 @@ class Web:
             [str(CANEMU_CLI), "--socket", daemon.socket, "web", "--listen", "127.0.0.1:0",
              *args], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE, env=env)
-        self.log = ""
-        self._changed = threading.Condition()
+        self._log = WatchedText("canemu web's log")
         threading.Thread(target=self._read, daemon=True).start()
         served = self.wait_log(r"serving (http://\S+/)")
         self.url = served.group(1)
 
     def _read(self) -> None:
         for raw in self.proc.stderr:
-            with self._changed:
-                self.log += raw.decode(errors="replace")
-                self._changed.notify_all()
-        with self._changed:
-            self._changed.notify_all()
+            self._log.add(raw.decode(errors="replace"))
+        self._log.end()
 
-    def wait_log(self, pattern: str, timeout: float = TIMEOUT):
-        deadline = time.monotonic() + timeout
-        with self._changed:
-            while True:
-                found = re.search(pattern, self.log)
-                if found:
-                    return found
-                left = deadline - time.monotonic()
-                assert left > 0 and self.proc.poll() is None, f"canemu web: {self.log}"
-                self._changed.wait(left)
+    @property
+    def log(self) -> str:
+        """What canemu web logged so far."""
+        return self._log.text
+
+    def wait_log(self, pattern: str, timeout: float = TIMEOUT) -> re.Match:
+        """The first match of `pattern` in the log, waited for."""
+        return self._log.wait_for(pattern, timeout)
 
     def get(self, path: str, headers: Optional[Dict[str, str]] = None) -> Tuple[int, str]:
         return self.request("GET", path, None, headers)

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "canemu/ipc/channel_message.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 #include "daemon_process.hpp"
+#include "pipe_support.hpp"
 
 namespace canemu {
 namespace {
@@ -91,35 +93,41 @@ void open_folder(const Daemon& d) {
   ::chmod(::dirname(path.data()), 0755);
 }
 
-bool skip_unless_root() {
-  return ::geteuid() != 0;
-}
-
-TEST(Access, PeersAreServedByUidPrimaryGroupOrSupplementaryGroupAndNoOneElse) {
-  if (skip_unless_root()) {
-    GTEST_SKIP() << "needs root to run clients as other users";
+// Clients run as other users: the tests need root (else they are skipped) and the machine's
+// group "users"; `start` writes the [security] table `security` into `rig`'s configuration and
+// starts canemud in stepped time on it, its socket's folder open to other users.
+class AccessAsUsers : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (::geteuid() != 0) {
+      GTEST_SKIP() << "needs root to run clients as other users";
+    }
+    ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+  }
+  Daemon& start(const std::string& security) {
+    rig.write(security);
+    daemon_.emplace("stepped", std::vector<std::string>{"--config=" + rig.file});
+    open_folder(*daemon_);
+    return *daemon_;
   }
   Rig rig;
-  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
-  rig.write("allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n");
-  Daemon d("stepped", {"--config=" + rig.file});
-  open_folder(d);
+
+ private:
+  std::optional<Daemon> daemon_;
+};
+
+TEST_F(AccessAsUsers, PeersAreServedByUidPrimaryGroupOrSupplementaryGroupAndNoOneElse) {
+  Daemon& d = start("allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n");
   const auto ask = [&] { return connect_and_ask(d.socket()); };
   EXPECT_EQ(as_user(kNobody, kNogroup, {}, ask), kRefusedByCanemud);
   EXPECT_EQ(as_user(kNobody, kNogroup, {rig.users}, ask), kServed);
   EXPECT_EQ(as_user(kNobody, rig.users, {}, ask), kServed);
 }
 
-TEST(Access, TheSocketsModeAndGroupKeepOutWhoeverMayNotWriteToIt) {
-  if (skip_unless_root()) {
-    GTEST_SKIP() << "needs root to run clients as other users";
-  }
-  Rig rig;
-  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+TEST_F(AccessAsUsers, TheSocketsModeAndGroupKeepOutWhoeverMayNotWriteToIt) {
   // canemud itself would let everyone in; the file lets in only group users.
-  rig.write("allowed_users = [\"nobody\"]\nsocket_mode = 0o660\nsocket_group = \"users\"\n");
-  Daemon d("stepped", {"--config=" + rig.file});
-  open_folder(d);
+  Daemon& d =
+      start("allowed_users = [\"nobody\"]\nsocket_mode = 0o660\nsocket_group = \"users\"\n");
   struct stat st {};
   ASSERT_EQ(::stat(d.socket().c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 07777, 0660u);
@@ -144,19 +152,11 @@ TEST(Access, TheSocketsModeAndGroupKeepOutWhoeverMayNotWriteToIt) {
             0);
 }
 
-TEST(Access, AReloadThatRevokesAPeerDropsItsConnection) {
-  if (skip_unless_root()) {
-    GTEST_SKIP() << "needs root to run clients as other users";
-  }
-  Rig rig;
-  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
-  rig.write("allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n");
-  Daemon d("stepped", {"--config=" + rig.file});
-  open_folder(d);
-  int connected[2];
-  int go_on[2];
-  ASSERT_EQ(::pipe(connected), 0);
-  ASSERT_EQ(::pipe(go_on), 0);
+TEST_F(AccessAsUsers, AReloadThatRevokesAPeerDropsItsConnection) {
+  Daemon& d = start("allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n");
+  testing::Pipe connected;
+  testing::Pipe go_on;
+  ASSERT_TRUE(connected.ok() && go_on.ok());
   const std::string socket = d.socket();
   const pid_t child = ::fork();
   if (child == 0) {
@@ -189,28 +189,18 @@ TEST(Access, AReloadThatRevokesAPeerDropsItsConnection) {
   // Root stays served.
   auto admin = testing::connect(d, "admin");
   EXPECT_EQ(testing::status(admin).bus_count, 1);
-  for (int fd : {connected[0], connected[1], go_on[0], go_on[1]}) {
-    ::close(fd);
-  }
 }
 
 // Fault scenarios belong to the user who loaded them: another user's client cannot clear one by
 // name (permission_denied with the reason) nor by "all" (it is left and counted); a member of
 // [security] admin_groups and root clear every one.
-TEST(Access, AUserClearsOnlyItsOwnScenariosAndAnAdminClearsAll) {
-  if (skip_unless_root()) {
-    GTEST_SKIP() << "needs root to run clients as other users";
-  }
-  Rig rig;
-  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
+TEST_F(AccessAsUsers, AUserClearsOnlyItsOwnScenariosAndAnAdminClearsAll) {
   const group* admins = ::getgrnam("adm");
   ASSERT_NE(admins, nullptr) << "the machine has no group \"adm\"";
   const gid_t adm = admins->gr_gid;
-  rig.write(
+  Daemon& d = start(
       "allowed_groups = [\"users\"]\nadmin_groups = [\"adm\"]\nsocket_mode = 0o666\n"
       "socket_group = \"\"\n");
-  Daemon d("stepped", {"--config=" + rig.file});
-  open_folder(d);
   const std::string socket = d.socket();
   const std::string text =
       "[scenario]\nname = \"mine\"\n\n[[fault]]\nat = \"1s\"\nbus = \"can0\"\n"
@@ -255,14 +245,8 @@ TEST(Access, AUserClearsOnlyItsOwnScenariosAndAnAdminClearsAll) {
 // Refused peers that connect and never ask anything take no slot of an allowed peer and hold no
 // more than 16 descriptors: canemud keeps at most 16 of them waiting for their answer, and
 // closes the rest at once.
-TEST(Access, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
-  if (skip_unless_root()) {
-    GTEST_SKIP() << "needs root to run clients as other users";
-  }
-  Rig rig;
-  rig.write("allowed_groups = []\nsocket_mode = 0o666\nsocket_group = \"\"\n");
-  Daemon d("stepped", {"--config=" + rig.file});
-  open_folder(d);
+TEST_F(AccessAsUsers, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
+  Daemon& d = start("allowed_groups = []\nsocket_mode = 0o666\nsocket_group = \"\"\n");
   const std::string socket = d.socket();
   const auto descriptors = [&d] {
     std::size_t n = 0;
@@ -273,14 +257,13 @@ TEST(Access, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
     return n;
   };
   const std::size_t before = descriptors();
-  int held[2];
-  int ready[2];
-  ASSERT_EQ(::pipe(held), 0);
-  ASSERT_EQ(::pipe(ready), 0);
+  testing::Pipe held;
+  testing::Pipe ready;
+  ASSERT_TRUE(held.ok() && ready.ok());
   const pid_t child = ::fork();
   if (child == 0) {
-    ::close(held[1]);
-    ::close(ready[0]);
+    held.close(1);
+    ready.close(0);
     const int rc = as_user(kNobody, kNogroup, {}, [&] {
       std::vector<ipc::UniqueFd> silent;
       for (int k = 0; k < 300; ++k) {  // more than the daemon's 256 client slots
@@ -296,19 +279,19 @@ TEST(Access, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
     });
     ::_exit(rc);
   }
-  ::close(held[0]);
-  ::close(ready[1]);
+  held.close(0);
+  ready.close(1);
   // Every silent peer has connected (and queues before root's connection).
   char byte = 0;
   ASSERT_EQ(::read(ready[0], &byte, 1), 1);
-  ::close(ready[0]);
+  ready.close(0);
   auto admin = client::Connection::open(socket, "admin");
   ASSERT_TRUE(admin) << admin.error().message;
   EXPECT_EQ(testing::status(*admin).client_count, 1);
   // The 16 waiting refused peers and root's connection.
   EXPECT_LE(descriptors(), before + 16 + 1);
   ASSERT_EQ(::write(held[1], "x", 1), 1);
-  ::close(held[1]);
+  held.close(1);
   int status = 0;
   ::waitpid(child, &status, 0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == kServed);
@@ -317,17 +300,10 @@ TEST(Access, RefusedPeersThatNeverAskTakeNoSlotOfAllowedOnes) {
 // A refusal reaches the refused peer as its reason even when canemud closes the connection at
 // once (16 refused peers wait for their answer already): the client reads the answer queued on
 // the closed connection instead of reporting a broken pipe or a reset connection.
-TEST(Access, APeerRefusedAtOnceIsToldWhy) {
-  if (skip_unless_root()) {
-    GTEST_SKIP() << "needs root to run clients as other users";
-  }
-  Rig rig;
-  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
-  rig.write(
+TEST_F(AccessAsUsers, APeerRefusedAtOnceIsToldWhy) {
+  Daemon& d = start(
       "allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n"
       "max_clients_per_user = 1\n");
-  Daemon d("stepped", {"--config=" + rig.file});
-  open_folder(d);
   const std::string socket = d.socket();
   const auto user = [&] {
     auto first = client::Connection::open(socket, "quota");
@@ -376,17 +352,10 @@ TEST(Access, TheClientBeyondCanemudsLimitIsToldWhy) {
 // Quotas per user ([security] max_clients_per_user, ring_mib_per_user): a user past its share
 // is told which quota and by how much, other users and root keep theirs, and what a user gives
 // back is free again.
-TEST(Access, OneUserHoldsAtMostItsConnectionsAndRingMemory) {
-  if (skip_unless_root()) {
-    GTEST_SKIP() << "needs root to run clients as other users";
-  }
-  Rig rig;
-  ASSERT_NE(rig.users, 0u) << "the machine has no group \"users\"";
-  rig.write(
+TEST_F(AccessAsUsers, OneUserHoldsAtMostItsConnectionsAndRingMemory) {
+  Daemon& d = start(
       "allowed_groups = [\"users\"]\nsocket_mode = 0o666\nsocket_group = \"\"\n"
       "max_clients_per_user = 3\nring_mib_per_user = 1\n");
-  Daemon d("stepped", {"--config=" + rig.file});
-  open_folder(d);
   const std::string socket = d.socket();
   // About 700 KiB of rings: one fits in 1 MiB, two do not.
   client::ChannelOptions big;

@@ -15,6 +15,7 @@
 
 #include <fmt/format.h>
 
+#include "../support/temp_dir.hpp"
 #include "canemu/client/channel.hpp"
 #include "canemu/ipc/clock.hpp"
 #include "cli_process.hpp"
@@ -27,6 +28,7 @@ using testing::connect;
 using testing::Daemon;
 using testing::readable;
 using testing::status;
+using testing::TempDir;
 
 TEST(Canemud, ServesTheEmbeddedDefaultAndStepsTimeExactly) {
   Daemon d;
@@ -442,6 +444,24 @@ std::string write_fast_bus(const std::string& folder, const std::string& extra =
   return config;
 }
 
+// canemud in `time` on bus "fast" alone (write_fast_bus, its configuration in a temporary
+// folder) with a babbling node and a listener on it (babbling_bus; both empty if they did not
+// open), asked through `c`.
+struct BabblingRig {
+  TempDir dir;
+  Daemon d;
+  client::Connection c;
+  std::optional<client::Channel> talker;
+  std::optional<client::Channel> listener;
+  explicit BabblingRig(const std::string& time, const std::string& extra = "",
+                       int bitrate = 1'000'000)
+      : d(time, {"--config=" + write_fast_bus(dir.path.string(), extra, bitrate)}), c(connect(d)) {
+    auto bus = babbling_bus(c);
+    talker = std::move(bus.first);
+    listener = std::move(bus.second);
+  }
+};
+
 void expect_ordered(const ipc::WirePacingFigures& f, const char* what) {
   EXPECT_LE(f.p50_ns, f.p99_ns) << what;
   EXPECT_LE(f.p99_ns, f.max_ns) << what;
@@ -452,22 +472,19 @@ void expect_ordered(const ipc::WirePacingFigures& f, const char* what) {
 // firing, since start and over the last second; the spin follows the timer, at most spin_us.
 // (Figures, not a wall-clock bound: which values they take depends on the machine.)
 TEST(Canemud, MeasuresItsOwnPacingInRealTime) {
-  char dir[] = "/tmp/canemu-pace-XXXXXX";
-  const std::string folder = ::mkdtemp(dir);
   // A bus at 250 kbit/s: busy, yet with room for canemud to sleep between events (so that its
   // timer fires) on a slow machine and in the sanitizer build too.
-  const std::string config = write_fast_bus(folder, "\n[simulation]\nspin_us = 30\n", 250'000);
-  Daemon d("realtime", {"--config=" + config});
-  auto c = connect(d);
-  auto bus = babbling_bus(c);
-  ASSERT_TRUE(bus.first && bus.second);
+  BabblingRig rig("realtime", "\n[simulation]\nspin_us = 30\n", 250'000);
+  ASSERT_TRUE(rig.talker && rig.listener);
+  Daemon& d = rig.d;
+  client::Connection& c = rig.c;
   // Wait (at most 10 s) for a complete second with traffic and a firing of the timer; each look
   // waits for a frame first, so that the asking does not keep canemud awake.
   ipc::StatusReply s{};
   for (const int64_t end = ipc::monotonic_ns() + 10'000'000'000;
        ipc::monotonic_ns() < end &&
        (s.pacing.events_last.count < 1000 || s.pacing.timer.count == 0);) {
-    bus.second->receive(100);
+    rig.listener->receive(100);
     s = status(c);
   }
   const ipc::WirePacing& p = s.pacing;
@@ -495,19 +512,13 @@ TEST(Canemud, MeasuresItsOwnPacingInRealTime) {
             std::string::npos)
       << m;
   EXPECT_NE(m.find("canemu_pacing_spin_seconds "), std::string::npos) << m;
-  ::unlink(config.c_str());
-  ::rmdir(dir);
 }
 
 // In stepped time nothing is late: the figures stay empty and the status prints no pacing.
 TEST(Canemud, SteppedTimeHasNoPacing) {
-  char dir[] = "/tmp/canemu-pace-XXXXXX";
-  const std::string folder = ::mkdtemp(dir);
-  const std::string config = write_fast_bus(folder);
-  Daemon d("stepped", {"--config=" + config});
-  auto c = connect(d);
-  auto bus = babbling_bus(c);
-  ASSERT_TRUE(bus.first && bus.second);
+  BabblingRig rig("stepped");
+  ASSERT_TRUE(rig.talker && rig.listener);
+  client::Connection& c = rig.c;
   auto step = ipc::make_message<ipc::TimeStepRequest>();
   step.step_ns = 10'000'000;
   auto stepped = c.call<ipc::TimeStepRequest, ipc::TimeStepReply>(step);
@@ -518,11 +529,9 @@ TEST(Canemud, SteppedTimeHasNoPacing) {
   EXPECT_EQ(s.pacing.events.count, 0u);
   EXPECT_EQ(s.pacing.wakeups.count, 0u);
   EXPECT_EQ(s.pacing.spin_ns, 0);
-  Cli text(d, {"status"});
+  Cli text(rig.d, {"status"});
   const std::string out = Cli::read_all(text.out);
   EXPECT_EQ(out.find("pacing"), std::string::npos) << out;
-  ::unlink(config.c_str());
-  ::rmdir(dir);
 }
 
 // A simulation that cannot keep the requested scale does not make canemud deaf: a babbling node
@@ -531,13 +540,10 @@ TEST(Canemud, SteppedTimeHasNoPacing) {
 // (a loop pass runs the simulation for 2 ms at most), and the status says how far simulated time
 // lags and what scale was achieved.
 TEST(Canemud, AScaleThatCannotBeKeptLagsVisiblyAndRequestsAreStillAnswered) {
-  char dir[] = "/tmp/canemu-lag-XXXXXX";
-  const std::string folder = ::mkdtemp(dir);
-  const std::string config = write_fast_bus(folder);
-  Daemon d("scaled:20000", {"--config=" + config});
-  auto c = connect(d);
-  auto bus = babbling_bus(c);
-  ASSERT_TRUE(bus.first && bus.second);
+  BabblingRig rig("scaled:20000");
+  ASSERT_TRUE(rig.talker && rig.listener);
+  Daemon& d = rig.d;
+  client::Connection& c = rig.c;
   int64_t slowest = 0;
   ipc::StatusReply last{};
   const int64_t end = ipc::monotonic_ns() + 2'000'000'000;
@@ -559,8 +565,6 @@ TEST(Canemud, AScaleThatCannotBeKeptLagsVisiblyAndRequestsAreStillAnswered) {
   EXPECT_TRUE(d.read_log_until("simulated time lags", 5000)) << d.log();
   // The pacing says the same: events ran far behind their instants.
   EXPECT_GT(last.pacing.events.max_ns, 1'000'000);
-  ::unlink(config.c_str());
-  ::rmdir(dir);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
@@ -13,7 +14,9 @@
 #include "../support/temp_dir.hpp"
 
 #include "cli_process.hpp"
+#include "cli_run_support.hpp"
 #include "daemon_process.hpp"
+#include "shell_support.hpp"
 
 namespace canemu {
 namespace {
@@ -23,6 +26,7 @@ using testing::connect;
 using testing::Daemon;
 
 using testing::read_file;
+using testing::run_shell;
 using testing::TempDir;
 
 std::string hex(const std::string& bytes) {
@@ -41,19 +45,41 @@ constexpr const char* kLog =
     "(0000000000.000124) can0 123#1122\n"
     "(0000000000.000258) can0 12345678#R4\n";
 
+// What tshark (Wireshark; scripts/apt-packages.txt) makes of a capture: `fields` (-e ...) of
+// every record, one line each, separated by `separator` (tshark's -E separator: /s a space, /t
+// a tab).
+std::string tshark_fields(const fs::path& file, const std::string& fields,
+                          const std::string& separator = "/s") {
+  const auto tshark =
+      run_shell("tshark -r " + file.string() + " -T fields -E separator=" + separator + " " +
+                fields + " 2>/dev/null");
+  EXPECT_EQ(tshark.status, 0) << "tshark missing? make deps installs it";
+  return tshark.out;
+}
+
+// canemu send of kFrames on can0, in one step of 1 ms; it must succeed.
+void send_the_frames(const Daemon& d) {
+  Cli send(d, {"send", "can0", kFrames[0], kFrames[1], "--step", "1ms"});
+  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+}
+
+// canemu `args` (a recording of can0) started against `d`, where a node acknowledges on can0,
+// and kFrames sent once it listens. Call it in ASSERT_NO_FATAL_FAILURE.
+void record_the_frames(std::optional<Cli>& cli, const Daemon& d, std::vector<std::string> args) {
+  auto holder = connect(d, "holder");
+  auto partner = partner_on(holder, "can0");
+  ASSERT_NO_FATAL_FAILURE(start_listening(cli, d, std::move(args)));
+  send_the_frames(d);
+}
+
 TEST(CliCapture, DumpWritesPcapWithTheSimulatedInstants) {
   TempDir dir;
   Daemon d;
-  auto holder = connect(d, "holder");
-  auto partner = partner_on(holder, "can0");
-  auto watcher = connect(d, "watcher");
-  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
   const std::string file = (dir.path / "can0.pcap").string();
-  Cli dump(d, {"dump", "can0", "--format", "pcap", "-o", file, "-n", "2"});
-  ASSERT_TRUE(watcher.next_notification(10'000));
-  Cli send(d, {"send", "can0", kFrames[0], kFrames[1], "--step", "1ms"});
-  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
-  EXPECT_EQ(dump.wait(), 0) << Cli::read_all(dump.err);
+  std::optional<Cli> dump;
+  ASSERT_NO_FATAL_FAILURE(
+      record_the_frames(dump, d, {"dump", "can0", "--format", "pcap", "-o", file, "-n", "2"}));
+  EXPECT_EQ(dump->wait(), 0) << Cli::read_all(dump->err);
   EXPECT_EQ(hex(read_file(file)),
             "4D3CB2A1020004000000000000000000"
             "48000000E3000000"
@@ -68,25 +94,18 @@ TEST(CliCapture, DumpWritesPcapWithTheSimulatedInstants) {
 TEST(CliCapture, RecordListensOnlyAndWritesACandumpLog) {
   TempDir dir;
   Daemon d;
-  auto holder = connect(d, "holder");
-  auto partner = partner_on(holder, "can0");
-  auto watcher = connect(d, "watcher");
-  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
   const std::string file = (dir.path / "can0.log").string();
-  Cli record(d, {"record", "can0", "-o", file, "-n", "2"});
-  ASSERT_TRUE(watcher.next_notification(10'000));
-  Cli send(d, {"send", "can0", kFrames[0], kFrames[1], "--step", "1ms"});
-  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
-  EXPECT_EQ(record.wait(), 0);
-  EXPECT_EQ(Cli::read_all(record.err),
+  std::optional<Cli> record;
+  ASSERT_NO_FATAL_FAILURE(record_the_frames(record, d, {"record", "can0", "-o", file, "-n", "2"}));
+  EXPECT_EQ(record->wait(), 0);
+  EXPECT_EQ(Cli::read_all(record->err),
             "canemu: listening on can0 as eph2 (listen-only, 500000 bit/s, time stamps in "
             "simulated seconds)\ncanemu: 2 frame(s) recorded in " +
                 file + " (candump)\n");
   EXPECT_EQ(read_file(file), kLog);
 
-  Cli bad(d, {"record", "can0", "-o", "/nonexistent-dir/x.log"});
-  EXPECT_EQ(bad.wait(), 1);
-  EXPECT_NE(Cli::read_all(bad.err).find("open /nonexistent-dir/x.log: No such file or directory"),
+  EXPECT_NE(refusal_of(d, {"record", "can0", "-o", "/nonexistent-dir/x.log"})
+                .find("open /nonexistent-dir/x.log: No such file or directory"),
             std::string::npos);
 }
 
@@ -99,24 +118,15 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
   Daemon d("stepped", {"--config", config.string()});
   auto holder = connect(d, "holder");
   auto partner = partner_on(holder, "can0");
-  Cli send(d, {"send", "can0", kFrames[0], kFrames[1], "--step", "1ms"});
-  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  send_the_frames(d);
   // Written when the step ended, before its reply.
   EXPECT_EQ(read_file(dir.path / "can0.log"), kLog);
   EXPECT_EQ(read_file(dir.path / "can0.pcap").size(), 24u + 2 * 32);
-  // Wireshark reads the capture back (tshark is in scripts/apt-packages.txt).
-  const std::string command = "tshark -r " + (dir.path / "can0.pcap").string() +
-                              " -T fields -e frame.time_relative -e can.id -e can.flags.xtd"
-                              " -e can.flags.rtr -e can.len -e data.data 2>/dev/null";
-  FILE* tshark = ::popen(command.c_str(), "r");
-  ASSERT_NE(tshark, nullptr);
-  std::string fields;
-  char line[256];
-  while (std::fgets(line, sizeof line, tshark) != nullptr) {
-    fields += line;
-  }
-  EXPECT_EQ(::pclose(tshark), 0) << "tshark missing? make deps installs it";
-  EXPECT_EQ(fields,
+  // Wireshark reads the capture back.
+  EXPECT_EQ(tshark_fields(dir.path / "can0.pcap",
+                          "-e frame.time_relative -e can.id -e can.flags.xtd -e can.flags.rtr "
+                          "-e can.len -e data.data",
+                          "/t"),
             "0.000000000\t291\t0\t0\t2\t1122\n"
             "0.000134000\t305419896\t1\t1\t4\t00000000\n");
 
@@ -128,17 +138,14 @@ TEST(DaemonRecorder, RecordsFromTheStartAndShowsInStatus) {
                       (dir.path / "can0.log").string() + "\n"),
             std::string::npos)
       << text;
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
+  const std::string j = output_of(d, {"status", "--json"});
   EXPECT_NE(j.find("\"recorders\" : [{\"bus\" : \"can0\",\"bytes\" : 71,\"error\" : \"\","
                    "\"errors\" : true,\"format\" : \"candump\",\"frames\" : 2,\"lost\" : 0,"
                    "\"path\" : \"" +
                    (dir.path / "can0.log").string() + "\",\"rotations\" : 0},"),
             std::string::npos)
       << j;
-  Cli metrics(d, {"metrics"});
-  const std::string m = Cli::read_all(metrics.out);
-  EXPECT_EQ(metrics.wait(), 0);
+  const std::string m = output_of(d, {"metrics"});
   EXPECT_NE(m.find("canemu_recorder_frames_total{bus=\"can0\",path=\"" +
                    (dir.path / "can0.log").string() + "\"} 2\n"),
             std::string::npos)
@@ -179,24 +186,6 @@ std::string hex2(int v) {
 constexpr const char* kLinFileHeader =
     "4D3CB2A1020004000000000000000000"
     "10000000D4000000";
-
-// What tshark makes of a capture: `fields` (-e ...) of every record, one line each.
-std::string tshark_fields(const fs::path& file, const std::string& fields) {
-  const std::string command =
-      "tshark -r " + file.string() + " -T fields -E separator=/s " + fields + " 2>/dev/null";
-  FILE* tshark = ::popen(command.c_str(), "r");
-  EXPECT_NE(tshark, nullptr);
-  if (tshark == nullptr) {
-    return "";
-  }
-  std::string out;
-  char line[256];
-  while (std::fgets(line, sizeof line, tshark) != nullptr) {
-    out += line;
-  }
-  EXPECT_EQ(::pclose(tshark), 0) << "tshark missing? make deps installs it";
-  return out;
-}
 
 // canemud's [[recorder]] on a LIN bus whose commander is a simulated node: a frame the commander
 // answers itself, one a simulated responder answers and a header nobody answers, every record at
@@ -240,9 +229,7 @@ TEST(DaemonRecorder, RecordsALinBusAsLinktypeLin) {
                 " 0x00 000164\n"
                 "0.028333333 0x21 0 0x00 0x01 \n");
 
-  Cli status(d, {"status"});
-  const std::string text = Cli::read_all(status.out);
-  EXPECT_EQ(status.wait(), 0);
+  const std::string text = output_of(d, {"status"});
   EXPECT_NE(text.find("lin0         pcap             3          108       0        0 " +
                       (dir.path / "lin0.pcap").string() + "\n"),
             std::string::npos)
@@ -254,15 +241,15 @@ TEST(DaemonRecorder, RecordsALinBusAsLinktypeLin) {
 TEST(CliCapture, RecordOnALinBusWritesLinktypeLin) {
   TempDir dir;
   Daemon d;
-  auto watcher = connect(d, "watcher");
-  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
   const fs::path file = dir.path / "lin0.rec";
-  Cli record(d, {"record", "lin0", "-o", file.string(), "-n", "4"});
-  ASSERT_TRUE(watcher.next_notification(10'000));  // the recorder's adapter is there
+  std::optional<Cli> record;
+  ASSERT_NO_FATAL_FAILURE(start_listening(
+      record, d,
+      {"record", "lin0", "-o", file.string(), "-n", "4"}));  // the recorder's adapter is there
   Cli send(d, {"send", "lin0", "33#AABB", "20#", "sleep", "wakeup", "--step", "30ms"});
   EXPECT_EQ(send.wait(), 1) << Cli::read_all(send.err);  // 20# ends in an error
-  EXPECT_EQ(record.wait(), 0);
-  const std::string err = Cli::read_all(record.err);
+  EXPECT_EQ(record->wait(), 0);
+  const std::string err = Cli::read_all(record->err);
   EXPECT_NE(err.find("(LIN, the rate of each header, time stamps in simulated seconds)\n"
                      "canemu: 5 record(s) recorded in " +
                      file.string() + " (pcap, LINKTYPE_LIN)\n"),
@@ -284,9 +271,7 @@ TEST(CliCapture, RecordOnALinBusWritesLinktypeLin) {
 
   for (const std::string tool : {"record", "dump"}) {
     const fs::path log = dir.path / "lin0.log";
-    Cli bad(d, {tool, "lin0", "--format", "candump", "-o", log.string()});
-    EXPECT_EQ(bad.wait(), 1);
-    EXPECT_EQ(Cli::read_all(bad.err),
+    EXPECT_EQ(refusal_of(d, {tool, "lin0", "--format", "candump", "-o", log.string()}),
               "canemu: a candump log holds CAN frames only; LIN bus lin0 is recorded as pcap "
               "(LINKTYPE_LIN)\n");
     EXPECT_FALSE(fs::exists(log));
@@ -301,28 +286,23 @@ TEST(CliBridge, AddListAndRemoveSayWhatIsWrong) {
   EXPECT_EQ(add.wait(), 1);
   EXPECT_NE(Cli::read_all(add.err).find("canemu: canemud: bad_argument: bridge to vcan-none: "),
             std::string::npos);
-  Cli nobus(d, {"bridge", "add", "can9", "vcan0"});
-  EXPECT_EQ(nobus.wait(), 1);
-  EXPECT_NE(Cli::read_all(nobus.err).find("no bus named \"can9\""), std::string::npos);
-  Cli badname(d, {"bridge", "add", "can0", "a/b"});
-  EXPECT_EQ(badname.wait(), 1);
-  EXPECT_NE(Cli::read_all(badname.err).find("\"a/b\" is not an interface name"), std::string::npos);
-  Cli list(d, {"bridge", "list", "--json"});
-  EXPECT_EQ(Cli::read_all(list.out), "[]\n");
-  EXPECT_EQ(list.wait(), 0);
-  Cli remove(d, {"bridge", "remove", "vcan0"});
-  EXPECT_EQ(remove.wait(), 1);
-  EXPECT_NE(Cli::read_all(remove.err).find("no bridge on interface \"vcan0\""), std::string::npos);
+  EXPECT_NE(refusal_of(d, {"bridge", "add", "can9", "vcan0"}).find("no bus named \"can9\""),
+            std::string::npos);
+  EXPECT_NE(
+      refusal_of(d, {"bridge", "add", "can0", "a/b"}).find("\"a/b\" is not an interface name"),
+      std::string::npos);
+  EXPECT_EQ(output_of(d, {"bridge", "list", "--json"}), "[]\n");
+  EXPECT_NE(refusal_of(d, {"bridge", "remove", "vcan0"}).find("no bridge on interface \"vcan0\""),
+            std::string::npos);
   Cli restart(d, {"bridge", "restart", "vcan0"});
   EXPECT_EQ(restart.wait(), 1);
   EXPECT_EQ(Cli::read_all(restart.err),
             "canemu: canemud: bad_argument: no bridge on interface \"vcan0\"\n");
   for (const std::string ms : {"-5", "60001"}) {
-    Cli bad(d, {"bridge", "add", "can0", "vcan0", "--restart-ms", ms});
-    EXPECT_EQ(bad.wait(), 1);
-    EXPECT_EQ(Cli::read_all(bad.err), "canemu: --restart-ms " + ms +
-                                          " is outside 0..60000 (ms after bus-off; 0: stay "
-                                          "bus-off)\n");
+    EXPECT_EQ(refusal_of(d, {"bridge", "add", "can0", "vcan0", "--restart-ms", ms}),
+              "canemu: --restart-ms " + ms +
+                  " is outside 0..60000 (ms after bus-off; 0: stay "
+                  "bus-off)\n");
   }
   Cli huge(d, {"bridge", "add", "can0", "vcan0", "--restart-ms", "99999999999999999999"});
   EXPECT_NE(huge.wait(), 0);
@@ -351,9 +331,7 @@ TEST(CliBridge, AnLcmBridgeIsAddedListedRestartedAndRemovedByItsBus) {
             "can0 bridged to LCM channels CANEMU_CAN0_* on memq:// (restart 10 ms after "
             "bus-off)\n");
   EXPECT_EQ(add.wait(), 0) << Cli::read_all(add.err);
-  Cli again(d, {"bridge", "add", "can0", "--lcm", "memq://"});
-  EXPECT_EQ(again.wait(), 1);
-  EXPECT_EQ(Cli::read_all(again.err),
+  EXPECT_EQ(refusal_of(d, {"bridge", "add", "can0", "--lcm", "memq://"}),
             "canemu: canemud: bad_argument: can0 has an LCM bridge already\n");
   Cli list(d, {"bridge", "list", "--json"});
   const std::string json = Cli::read_all(list.out);
@@ -361,44 +339,31 @@ TEST(CliBridge, AnLcmBridgeIsAddedListedRestartedAndRemovedByItsBus) {
   EXPECT_NE(json.find("\"kind\" : \"lcm\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"tx\" : \"CANEMU_CAN0_TX\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"url\" : \"memq://\""), std::string::npos) << json;
-  Cli table(d, {"bridge", "list"});
-  const std::string text = Cli::read_all(table.out);
-  EXPECT_EQ(table.wait(), 0);
+  const std::string text = output_of(d, {"bridge", "list"});
   EXPECT_EQ(text.substr(0, 10), "LCM-BRIDGE") << text;
-  Cli restart(d, {"bridge", "restart", "can0", "--lcm"});
-  EXPECT_EQ(restart.wait(), 1);
-  EXPECT_EQ(Cli::read_all(restart.err),
+  EXPECT_EQ(refusal_of(d, {"bridge", "restart", "can0", "--lcm"}),
             "canemu: canemud: bad_argument: LCM bridge of can0 is error-active, not bus-off: "
             "nothing to restart\n");
   Cli remove(d, {"bridge", "remove", "can0", "--lcm"});
   EXPECT_EQ(Cli::read_all(remove.out), "LCM bridge of can0 removed\n");
   EXPECT_EQ(remove.wait(), 0);
-  Cli gone(d, {"bridge", "remove", "can0", "--lcm"});
-  EXPECT_EQ(gone.wait(), 1);
-  EXPECT_EQ(Cli::read_all(gone.err),
+  EXPECT_EQ(refusal_of(d, {"bridge", "remove", "can0", "--lcm"}),
             "canemu: canemud: bad_argument: no LCM bridge on bus \"can0\"\n");
-  Cli none(d, {"bridge", "add", "can0"});
-  EXPECT_EQ(none.wait(), 1);
-  EXPECT_EQ(Cli::read_all(none.err),
+  EXPECT_EQ(refusal_of(d, {"bridge", "add", "can0"}),
             "canemu: which interface? canemu bridge add BUS INTERFACE, or BUS --lcm [URL], or BUS "
             "--dds [DOMAIN/PARTITION]\n");
   Cli both(d, {"bridge", "add", "can0", "vcan0", "--lcm"});
   EXPECT_EQ(both.wait(), 1);
   EXPECT_NE(Cli::read_all(both.err).find("an LCM bridge has no INTERFACE"), std::string::npos);
-  Cli badprefix(d, {"bridge", "add", "can0", "--lcm", "--prefix", "A B"});
-  EXPECT_EQ(badprefix.wait(), 1);
-  EXPECT_EQ(Cli::read_all(badprefix.err),
+  EXPECT_EQ(refusal_of(d, {"bridge", "add", "can0", "--lcm", "--prefix", "A B"}),
             "canemu: canemud: bad_argument: \"A B\" is not a channel prefix (letters, digits, "
             "'_', '-', '.', '/')\n");
-  Cli badurl(d, {"bridge", "add", "can0", "--lcm", "nowhere"});
-  EXPECT_EQ(badurl.wait(), 1);
-  EXPECT_NE(Cli::read_all(badurl.err).find("\"nowhere\" is not an LCM URL"), std::string::npos);
-  Cli two(d, {"bridge", "add", "can0", "--lcm", "--dds"});
-  EXPECT_EQ(two.wait(), 1);
-  EXPECT_EQ(Cli::read_all(two.err), "canemu: --lcm or --dds, not both\n");
-  Cli prefix(d, {"bridge", "add", "can0", "vcan0", "--prefix", "X_"});
-  EXPECT_EQ(prefix.wait(), 1);
-  EXPECT_EQ(Cli::read_all(prefix.err),
+  EXPECT_NE(refusal_of(d, {"bridge", "add", "can0", "--lcm", "nowhere"})
+                .find("\"nowhere\" is not an LCM URL"),
+            std::string::npos);
+  EXPECT_EQ(refusal_of(d, {"bridge", "add", "can0", "--lcm", "--dds"}),
+            "canemu: --lcm or --dds, not both\n");
+  EXPECT_EQ(refusal_of(d, {"bridge", "add", "can0", "vcan0", "--prefix", "X_"}),
             "canemu: --prefix is for LCM and DDS bridges (--lcm, --dds)\n");
 }
 

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,9 +14,11 @@
 
 #include <fmt/format.h>
 
+#include "../support/temp_dir.hpp"
 #include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "cli_process.hpp"
+#include "cli_run_support.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -23,26 +27,34 @@ namespace {
 using testing::connect;
 using testing::Daemon;
 using testing::readable;
+using testing::TempDir;
+
+// canemu send `args` against `d` while `dump` listens: send exits `code`, and both print
+// `expected`.
+void expect_sent_and_dumped(Cli& dump, const Daemon& d, std::vector<std::string> args, int code,
+                            const std::string& expected) {
+  Cli send(d, std::move(args));
+  const std::string sent = Cli::read_all(send.out);
+  EXPECT_EQ(send.wait(), code) << Cli::read_all(send.err);
+  EXPECT_EQ(sent, expected);
+  EXPECT_EQ(Cli::read_all(dump.out), expected);
+}
 
 TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
   Daemon d;
   auto holder = connect(d, "holder");
   auto partner = partner_on(holder, "can0");
-  auto watcher = connect(d, "watcher");
-  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
-  Cli dump(d, {"dump", "can0", "-n", "3"});
-  ASSERT_TRUE(watcher.next_notification(10'000));  // the dump's device is there
-  Cli send(d, {"send", "can0", "123#1122", "12345678#R4", "7FF#0102030405060708", "--step", "1ms"});
-  const std::string sent = Cli::read_all(send.out);
-  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  std::optional<Cli> dump;
+  ASSERT_NO_FATAL_FAILURE(
+      start_listening(dump, d, {"dump", "can0", "-n", "3"}));  // the dump's device is there
   // Each frame at the end of its EOF: 62 bits, then 3 + 64, then 3 + 108 bits at 2 us.
-  const std::string expected =
+  expect_sent_and_dumped(
+      *dump, d,
+      {"send", "can0", "123#1122", "12345678#R4", "7FF#0102030405060708", "--step", "1ms"}, 0,
       "(0000000000.000124) can0 123#1122\n"
       "(0000000000.000258) can0 12345678#R4\n"
-      "(0000000000.000500) can0 7FF#0102030405060708\n";
-  EXPECT_EQ(sent, expected);
-  EXPECT_EQ(Cli::read_all(dump.out), expected);
-  EXPECT_EQ(dump.wait(), 0);
+      "(0000000000.000500) can0 7FF#0102030405060708\n");
+  EXPECT_EQ(dump->wait(), 0);
 }
 
 // On the default configuration's LIN bus: send publishes, sends a header nobody answers and the
@@ -50,26 +62,20 @@ TEST(Cli, SendAndDumpSpeakCanUtilsSyntax) {
 // millisecond after the last one's outcome); dump shows the same.
 TEST(CliLin, SendAndDumpOnALinBus) {
   Daemon d;
-  auto watcher = connect(d, "watcher");
-  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
-  Cli dump(d, {"dump", "lin0", "-n", "4"});
-  ASSERT_TRUE(watcher.next_notification(10'000));  // the dump's adapter is there
-  Cli send(d, {"send", "lin0", "33#AABB", "20#", "sleep", "wakeup", "--step", "30ms"});
-  const std::string sent = Cli::read_all(send.out);
-  EXPECT_EQ(send.wait(), 1) << Cli::read_all(send.err);  // a frame ended in an error
+  std::optional<Cli> dump;
+  ASSERT_NO_FATAL_FAILURE(
+      start_listening(dump, d, {"dump", "lin0", "-n", "4"}));  // the dump's adapter is there
   // 34 + 30 bits from 0; the header from 4 ms, no response 160 bits after it; the
-  // go-to-sleep command from 13 ms, 124 bits (at 19200 bit/s).
-  const std::string expected =
+  // go-to-sleep command from 13 ms, 124 bits (at 19200 bit/s). send exits 1: a frame ended in an
+  // error.
+  expect_sent_and_dumped(
+      *dump, d, {"send", "lin0", "33#AABB", "20#", "sleep", "wakeup", "--step", "30ms"}, 1,
       "(0000000000.003333) lin0 33#AABB pid 73 enhanced checksum 26\n"
       "(0000000000.012333) lin0 error no-response\n"
       "(0000000000.019458) lin0 3C#00FFFFFFFFFFFFFF pid 3C classic checksum 00 go-to-sleep\n"
-      "(0000000000.020250) lin0 wake-up\n";
-  EXPECT_EQ(sent, expected);
-  EXPECT_EQ(Cli::read_all(dump.out), expected);
-  EXPECT_EQ(dump.wait(), 0);
-  Cli bad(d, {"send", "lin0", "40#01", "--step", "1ms"});
-  EXPECT_EQ(bad.wait(), 1);
-  EXPECT_EQ(Cli::read_all(bad.err),
+      "(0000000000.020250) lin0 wake-up\n");
+  EXPECT_EQ(dump->wait(), 0);
+  EXPECT_EQ(refusal_of(d, {"send", "lin0", "40#01", "--step", "1ms"}),
             "canemu: '40#01': a LIN frame is ID#DATA, ID# (the header alone), sleep or wakeup, "
             "with ID 00..3F in hex\n");
 }
@@ -77,8 +83,8 @@ TEST(CliLin, SendAndDumpOnALinBus) {
 // On a CAN FD bus the ephemeral nodes are CAN FD controllers: FD frames with the rate switch go
 // out and are logged in candump's FD syntax.
 TEST(Cli, OnACanFdBusFdFramesGoOutWithTheRateSwitch) {
-  char dir[] = "/tmp/canemu-fd-XXXXXX";
-  const std::string file = std::string(::mkdtemp(dir)) + "/fd.toml";
+  TempDir dir;
+  const std::string file = (dir.path / "fd.toml").string();
   FILE* f = std::fopen(file.c_str(), "w");
   ASSERT_NE(f, nullptr);
   std::fputs(
@@ -89,13 +95,8 @@ TEST(Cli, OnACanFdBusFdFramesGoOutWithTheRateSwitch) {
   Daemon d("stepped", {"--config=" + file});
   auto holder = connect(d, "holder");
   auto partner = partner_on(holder, "fd0");
-  auto watcher = connect(d, "watcher");
-  ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
-  Cli dump(d, {"dump", "fd0", "-n", "2"});
-  ASSERT_TRUE(watcher.next_notification(10'000));
-  Cli send(d, {"send", "fd0", "123##1000102030405060708090A0B", "456#1122", "--step", "1ms"});
-  const std::string sent = Cli::read_all(send.out);
-  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  std::optional<Cli> dump;
+  ASSERT_NO_FATAL_FAILURE(start_listening(dump, d, {"dump", "fd0", "-n", "2"}));
   // The FD frame's exact length with the data phase at 2 Mbit/s, then 3 bits of intermission
   // and the classic frame.
   const auto fd = model::Frame::fd_frame(
@@ -106,13 +107,10 @@ TEST(Cli, OnACanFdBusFdFramesGoOutWithTheRateSwitch) {
   const auto classic = model::Frame::classic(0x456, std::vector<uint8_t>{0x11, 0x22});
   const int64_t second =
       first + 3 * 2000 + model::frame_duration(model::encode(*classic), nominal).ns();
-  const std::string expected =
+  expect_sent_and_dumped(
+      *dump, d, {"send", "fd0", "123##1000102030405060708090A0B", "456#1122", "--step", "1ms"}, 0,
       fmt::format("(0000000000.{:06}) fd0 123##1000102030405060708090A0B\n", first / 1000) +
-      fmt::format("(0000000000.{:06}) fd0 456#1122\n", second / 1000);
-  EXPECT_EQ(sent, expected);
-  EXPECT_EQ(Cli::read_all(dump.out), expected);
-  ::unlink(file.c_str());
-  ::rmdir(dir);
+          fmt::format("(0000000000.{:06}) fd0 456#1122\n", second / 1000));
 }
 
 // Faults at run time: loaded from a file or one from the command line, applied from now, listed
@@ -121,13 +119,12 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
   Daemon d;
   auto holder = connect(d, "holder");
   auto partner = partner_on(holder, "can0");
-  Cli load(d, {"fault", "load", CANEMU_SOURCE_DIR "/config/faults/corrupt-id.toml"});
-  EXPECT_EQ(Cli::read_all(load.out), "scenario \"three CRC errors on 0x1A0\": 1 fault applied\n");
-  EXPECT_EQ(load.wait(), 0);
-  Cli inject(d, {"fault", "inject", "--effect", "bit_error", "--bus", "can0", "--id", "0x123",
-                 "--count", "2"});
-  EXPECT_NE(Cli::read_all(inject.out).find(": 1 fault applied"), std::string::npos);
-  EXPECT_EQ(inject.wait(), 0);
+  EXPECT_EQ(output_of(d, {"fault", "load", CANEMU_SOURCE_DIR "/config/faults/corrupt-id.toml"}),
+            "scenario \"three CRC errors on 0x1A0\": 1 fault applied\n");
+  EXPECT_NE(output_of(d, {"fault", "inject", "--effect", "bit_error", "--bus", "can0", "--id",
+                          "0x123", "--count", "2"})
+                .find(": 1 fault applied"),
+            std::string::npos);
   Cli bad(d, {"fault", "inject", "--effect", "node_off", "--node", "ixxat0:9"});
   EXPECT_EQ(Cli::read_all(bad.err),
             "node_off: no node named \"ixxat0:9\" (configured nodes are "
@@ -136,12 +133,9 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
                                                                                // user never saw
   EXPECT_EQ(bad.wait(), 1);
   // The injected fault hits 0x123 twice: two bit errors, then the frame goes out.
-  Cli send(d, {"send", "can0", "123#11", "--step", "5ms"});
-  EXPECT_EQ(Cli::read_all(send.out), "(0000000000.000246) can0 123#11\n");
-  EXPECT_EQ(send.wait(), 0);
-  Cli list(d, {"fault", "list"});
-  const std::string listed = Cli::read_all(list.out);
-  EXPECT_EQ(list.wait(), 0);
+  EXPECT_EQ(output_of(d, {"send", "can0", "123#11", "--step", "5ms"}),
+            "(0000000000.000246) can0 123#11\n");
+  const std::string listed = output_of(d, {"fault", "list"});
   EXPECT_NE(listed.find("three CRC errors on 0x1A0     6 crc_error       can0              "
                         "12.000000              -        0        0 pending"),
             std::string::npos)
@@ -150,15 +144,10 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
                         "       2 done"),
             std::string::npos)
       << listed;
-  Cli clear(d, {"fault", "clear", "three CRC errors on 0x1A0"});
-  EXPECT_EQ(Cli::read_all(clear.out), "1 scenario cleared\n");
-  EXPECT_EQ(clear.wait(), 0);
-  Cli again(d, {"fault", "list"});
-  EXPECT_NE(Cli::read_all(again.out).find("0        0 cleared"), std::string::npos);
-  EXPECT_EQ(again.wait(), 0);
-  Cli none(d, {"fault", "clear", "nope"});
-  EXPECT_NE(Cli::read_all(none.err).find("no scenario named \"nope\" to clear"), std::string::npos);
-  EXPECT_EQ(none.wait(), 1);
+  EXPECT_EQ(output_of(d, {"fault", "clear", "three CRC errors on 0x1A0"}), "1 scenario cleared\n");
+  EXPECT_NE(output_of(d, {"fault", "list"}).find("0        0 cleared"), std::string::npos);
+  EXPECT_NE(refusal_of(d, {"fault", "clear", "nope"}).find("no scenario named \"nope\" to clear"),
+            std::string::npos);
 }
 
 // A scenario file whose path is longer than the request's source field: its errors name the
@@ -173,11 +162,10 @@ TEST(Cli, AScenarioWithALongPathIsNamedWhole) {
   std::fputs("[[fault]]\nat = \"0s\"\neffect = \"ack_error\"\nbus = \"nope\"\n", f);
   std::fclose(f);
   ASSERT_GT(file.size(), 64u);
-  Cli load(d, {"fault", "load", file});
-  EXPECT_EQ(Cli::read_all(load.err), file +
-                                         ":1: ack_error: no bus named \"nope\"\ncanemu: scenario "
-                                         "rejected; nothing of it applied\n");
-  EXPECT_EQ(load.wait(), 1);
+  EXPECT_EQ(refusal_of(d, {"fault", "load", file}),
+            file +
+                ":1: ack_error: no bus named \"nope\"\ncanemu: scenario "
+                "rejected; nothing of it applied\n");
   std::filesystem::remove_all(dir);
 }
 
@@ -186,15 +174,11 @@ TEST(Cli, AScenarioWithALongPathIsNamedWhole) {
 TEST(Cli, HostileClientNameCannotForgeStatusFields) {
   Daemon d;
   auto c = connect(d, "x\",\"uid\":0\n\x1b[2J");
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
-  EXPECT_EQ(json.wait(), 0);
+  const std::string j = output_of(d, {"status", "--json"});
   EXPECT_EQ(std::count(j.begin(), j.end(), '\n'), 1) << j;
   EXPECT_EQ(j.find('\x1b'), std::string::npos) << j;
   EXPECT_NE(j.find("\"name\" : \"x\\\",\\\"uid\\\":0??[2J\""), std::string::npos) << j;
-  Cli text(d, {"status"});
-  const std::string t = Cli::read_all(text.out);
-  EXPECT_EQ(text.wait(), 0);
+  const std::string t = output_of(d, {"status"});
   EXPECT_NE(t.find("x\",\"uid\":0??[2J"), std::string::npos) << t;
   EXPECT_EQ(t.find('\x1b'), std::string::npos) << t;
 }
@@ -204,9 +188,7 @@ TEST(Cli, MetricsSpeakThePrometheusTextFormat) {
   Daemon d;
   Cli step(d, {"time", "step", "10ms"});
   EXPECT_EQ(step.wait(), 0);
-  Cli metrics(d, {"metrics"});
-  const std::string m = Cli::read_all(metrics.out);
-  EXPECT_EQ(metrics.wait(), 0);
+  const std::string m = output_of(d, {"metrics"});
   for (const char* line :
        {"# HELP canemu_sim_time_seconds Simulated time.\n"
         "# TYPE canemu_sim_time_seconds gauge\n"
@@ -231,51 +213,40 @@ TEST(Cli, MetricsSpeakThePrometheusTextFormat) {
   }
 }
 
-// A SORCUS X-CAN-2i module is a DEVICE row like an IXXAT adapter's (model, buses), and its
-// interfaces are nodes NAME:0 and NAME:1 (config/examples/x-can-2i.toml).
-TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
-  Daemon d("stepped", {"--config", CANEMU_SOURCE_DIR "/config/examples/x-can-2i.toml"});
-  Cli text(d, {"status"});
-  const std::string t = Cli::read_all(text.out);
-  EXPECT_EQ(text.wait(), 0);
-  EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1\n"
-                   "xcan0          sorcus-x-can-2i      config   can0 can1\n"),
-            std::string::npos)
-      << t;
-  // No program initialized the modules: their 82527s are in their init mode.
-  EXPECT_NE(t.find("xcan0:0        can0         init              0    0"), std::string::npos) << t;
-  EXPECT_NE(t.find("xcan0:1        can1         init              0    0"), std::string::npos) << t;
+// canemud on config/examples/`example`: canemu status shows each of `rows`, and canemu status
+// --json each of `json`.
+void expect_status_shows(const std::string& example, std::initializer_list<std::string> rows,
+                         std::initializer_list<std::string> json) {
+  Daemon d("stepped", {"--config", CANEMU_SOURCE_DIR "/config/examples/" + example});
+  expect_holds(output_of(d, {"status"}), rows);
+  expect_holds(output_of(d, {"status", "--json"}), json);
+}
 
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
-  EXPECT_EQ(json.wait(), 0);
-  EXPECT_NE(j.find("{\"buses\" : [\"can0\",\"can1\"],\"ephemeral\" : false,\"model\" : "
-                   "\"sorcus-x-can-2i\",\"name\" : \"xcan0\",\"nodes\" : [\"xcan0:0\",\"xcan0:1\"],"
-                   "\"owner_pid\" : 0}"),
-            std::string::npos)
-      << j;
-  EXPECT_NE(j.find("\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"init\""), std::string::npos)
-      << j;
+// A SORCUS X-CAN-2i module is a DEVICE row like an IXXAT adapter's (model, buses), and its
+// interfaces are nodes NAME:0 and NAME:1 (config/examples/x-can-2i.toml). No program initialized
+// the modules: their 82527s are in their init mode.
+TEST(Cli, StatusListsAnXcanModuleAndItsInterfacesLikeAnIxxatAdapter) {
+  expect_status_shows(
+      "x-can-2i.toml",
+      {"ixxat0         ixxat-usb-to-can     config   can0 can1\n"
+       "xcan0          sorcus-x-can-2i      config   can0 can1\n",
+       "xcan0:0        can0         init              0    0",
+       "xcan0:1        can1         init              0    0"},
+      {"{\"buses\" : [\"can0\",\"can1\"],\"ephemeral\" : false,\"model\" : "
+       "\"sorcus-x-can-2i\",\"name\" : \"xcan0\",\"nodes\" : [\"xcan0:0\",\"xcan0:1\"],"
+       "\"owner_pid\" : 0}",
+       "\"name\" : \"xcan0:1\",\"rec\" : 0,\"state\" : \"init\""});
 }
 
 // An SL-CANi is a DEVICE row too (model, its bus), beside its node NAME:0
 // (config/examples/sl-cani.toml).
 TEST(Cli, StatusListsAnSlCaniAsADeviceRowBesideItsNode) {
-  Daemon d("stepped", {"--config", CANEMU_SOURCE_DIR "/config/examples/sl-cani.toml"});
-  Cli text(d, {"status"});
-  const std::string t = Cli::read_all(text.out);
-  EXPECT_EQ(text.wait(), 0);
-  EXPECT_NE(t.find("sl0            sorcus-sl-cani       config   can0\n"), std::string::npos) << t;
-  EXPECT_NE(t.find("sl0:0          can0 "), std::string::npos) << t;
-
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
-  EXPECT_EQ(json.wait(), 0);
-  EXPECT_NE(j.find("{\"buses\" : [\"can0\"],\"ephemeral\" : false,\"model\" : "
-                   "\"sorcus-sl-cani\",\"name\" : \"sl0\",\"nodes\" : [\"sl0:0\"],"
-                   "\"owner_pid\" : 0}"),
-            std::string::npos)
-      << j;
+  expect_status_shows(
+      "sl-cani.toml",
+      {"sl0            sorcus-sl-cani       config   can0\n", "sl0:0          can0 "},
+      {"{\"buses\" : [\"can0\"],\"ephemeral\" : false,\"model\" : "
+       "\"sorcus-sl-cani\",\"name\" : \"sl0\",\"nodes\" : [\"sl0:0\"],"
+       "\"owner_pid\" : 0}"});
 }
 
 // status (text and JSON), time step and calc, as a user types them.
@@ -288,58 +259,38 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
   auto ch = client::Channel::open(c, o);
   ASSERT_TRUE(ch) << ch.error().message;
 
-  Cli step(d, {"time", "step", "10ms"});
-  EXPECT_NE(Cli::read_all(step.out).find("simulated time 0.010000000 s"), std::string::npos);
-  EXPECT_EQ(step.wait(), 0);
+  EXPECT_NE(output_of(d, {"time", "step", "10ms"}).find("simulated time 0.010000000 s"),
+            std::string::npos);
 
-  Cli text(d, {"status"});
-  const std::string t = Cli::read_all(text.out);
-  EXPECT_EQ(text.wait(), 0);
-  EXPECT_NE(t.find("time stepped, simulated 0.010000000 s, 2 clients"), std::string::npos) << t;
-  EXPECT_NE(t.find("can0         can        500000"), std::string::npos) << t;
-  EXPECT_NE(t.find("ixxat0:1       can1         init              0    0"), std::string::npos) << t;
-  EXPECT_NE(t.find("probe:0        can1         error-active"), std::string::npos) << t;
-  EXPECT_NE(t.find("ixxat0         ixxat-usb-to-can     config   can0 can1"), std::string::npos)
-      << t;
-  EXPECT_NE(t.find("probe          ephemeral"), std::string::npos) << t;
-  EXPECT_NE(t.find("holder"), std::string::npos) << t;
+  expect_holds(output_of(d, {"status"}), {"time stepped, simulated 0.010000000 s, 2 clients",
+                                          "can0         can        500000",
+                                          "ixxat0:1       can1         init              0    0",
+                                          "probe:0        can1         error-active",
+                                          "ixxat0         ixxat-usb-to-can     config   can0 can1",
+                                          "probe          ephemeral", "holder"});
 
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
-  EXPECT_EQ(json.wait(), 0);
+  const std::string j = output_of(d, {"status", "--json"});
   ASSERT_FALSE(j.empty());
   EXPECT_EQ(j.front(), '{');
   EXPECT_EQ(j.substr(j.size() - 2), "}\n");
   // toml++ writes it: keys sorted, `"key" : value`.
-  EXPECT_NE(j.find("\"time_mode\" : \"stepped\""), std::string::npos) << j;
-  EXPECT_NE(j.find("\"sim_time_ns\" : 10000000"), std::string::npos) << j;
-  EXPECT_NE(j.find("{\"bitrate\" : 500000,\"data_bitrate\" : 0,\"error_frames\" : 0,\"frames\" : "
+  expect_holds(j, {"\"time_mode\" : \"stepped\"", "\"sim_time_ns\" : 10000000",
+                   "{\"bitrate\" : 500000,\"data_bitrate\" : 0,\"error_frames\" : 0,\"frames\" : "
                    "0,\"kind\" : \"can\",\"load_percent\" : 0.0,\"name\" : \"can1\","
-                   "\"transceiver\" : \"high-speed\"}"),
-            std::string::npos)
-      << j;
-  EXPECT_NE(j.find("\"ephemeral\" : true,\"model\" : \"ephemeral\",\"name\" : \"probe\""),
-            std::string::npos)
-      << j;
+                   "\"transceiver\" : \"high-speed\"}",
+                   "\"ephemeral\" : true,\"model\" : \"ephemeral\",\"name\" : \"probe\""});
 
-  Cli frame(d, {"calc", "frame", "123#1122"});
-  const std::string f = Cli::read_all(frame.out);
-  EXPECT_EQ(frame.wait(), 0);
-  EXPECT_NE(f.find("DLC      00[1]10\n"), std::string::npos) << f;
-  EXPECT_NE(f.find("bits: 62 (+3 intermission), stuff bits: 2 dynamic, 0 fixed; CRC-15 0x4B7\n"
-                   "at 500000 bit/s: 124000 ns (62 nominal + 0 data-phase bits), 130000 ns with "
-                   "intermission\n"),
-            std::string::npos)
-      << f;
-  Cli btr(d, {"calc", "bittiming", "00", "1C"});
-  EXPECT_EQ(Cli::read_all(btr.out),
+  expect_holds(output_of(d, {"calc", "frame", "123#1122"}),
+               {"DLC      00[1]10\n",
+                "bits: 62 (+3 intermission), stuff bits: 2 dynamic, 0 fixed; CRC-15 0x4B7\n"
+                "at 500000 bit/s: 124000 ns (62 nominal + 0 data-phase bits), 130000 ns with "
+                "intermission\n"});
+  EXPECT_EQ(output_of(d, {"calc", "bittiming", "00", "1C"}),
             "SJA1000 at 16 MHz: 500000.000 bit/s, tq 125.000 ns, 16 quanta (1 + 13 + 2), sample "
             "point 87.5 %, SJW 1, 1 sample per bit\n");
-  EXPECT_EQ(btr.wait(), 0);
 
   // A LIN frame: its protected identifier, the enhanced checksum, the times at 19200 bit/s.
-  Cli lin(d, {"calc", "lin", "10#1122"});
-  EXPECT_EQ(Cli::read_all(lin.out),
+  EXPECT_EQ(output_of(d, {"calc", "lin", "10#1122"}),
             "break    13 dominant bits, delimiter 1 recessive bit\n"
             "sync     0x55\n"
             "PID      0x50 (ID 0x10, parity P0 1 P1 0)\n"
@@ -348,40 +299,29 @@ TEST(Cli, StatusTimeStepAndCalcPrintWhatTheySay) {
             "bits: 64 (header 34, response 30)\n"
             "at 19200 bit/s: 3333333 ns (header 1770833 ns); nominal 3333333 ns, at most "
             "4666666 ns (1.4 x)\n");
-  EXPECT_EQ(lin.wait(), 0);
-  Cli lin_spaced(d, {"calc", "lin", "3C#00", "--bitrate", "20000", "--break-bits", "20",
-                     "--interbyte-bits", "1", "--response-space-bits", "2"});
-  const std::string spaced = Cli::read_all(lin_spaced.out);
+  const std::string spaced =
+      output_of(d, {"calc", "lin", "3C#00", "--bitrate", "20000", "--break-bits", "20",
+                    "--interbyte-bits", "1", "--response-space-bits", "2"});
   // 20 + 1 + 10 + 1 + 10 header bits; 2 + 10 + 1 + 10 response bits: whole 50 us bits.
   EXPECT_NE(spaced.find("checksum 0xFF (classic)\nbits: 65 (header 42, response 23)\n"
                         "at 20000 bit/s: 3250000 ns (header 2100000 ns)"),
             std::string::npos)
       << spaced;
-  EXPECT_EQ(lin_spaced.wait(), 0);
-  Cli bad_lin(d, {"calc", "lin", "40#11"});
-  EXPECT_EQ(Cli::read_all(bad_lin.err),
+  EXPECT_EQ(refusal_of(d, {"calc", "lin", "40#11"}),
             "canemu: '40#11': the identifier is hex 0..3F (examples: 10#1122, "
             "3C#0000000000000000, 21 for a header alone)\n");
-  EXPECT_EQ(bad_lin.wait(), 1);
 
-  Cli bad_step(d, {"time", "step", "soon"});
-  EXPECT_EQ(Cli::read_all(bad_step.err),
+  EXPECT_EQ(refusal_of(d, {"time", "step", "soon"}),
             "canemu: 'soon' is not a duration (examples: 150ns, 20us, 10ms, 2s)\n");
-  EXPECT_EQ(bad_step.wait(), 1);
 }
 
 TEST(Cli, SendRefusesBadFramesAndUnsteppedStepsWithReasons) {
   Daemon d;
-  Cli bad(d, {"send", "can0", "800#11", "--step", "1ms"});
-  EXPECT_EQ(bad.wait(), 1);
-  EXPECT_EQ(Cli::read_all(bad.err),
+  EXPECT_EQ(refusal_of(d, {"send", "can0", "800#11", "--step", "1ms"}),
             "canemu: '800#11': identifier 0x800 does not fit 11 bits (maximum 0x7FF)\n");
-  Cli unstepped(d, {"send", "can0", "123#"});
-  EXPECT_EQ(unstepped.wait(), 1);
-  EXPECT_NE(Cli::read_all(unstepped.err).find("add --step DURATION"), std::string::npos);
-  Cli nobus(d, {"send", "can9", "123#", "--step", "1ms"});
-  EXPECT_EQ(nobus.wait(), 1);
-  EXPECT_NE(Cli::read_all(nobus.err).find("no bus named \"can9\""), std::string::npos);
+  EXPECT_NE(refusal_of(d, {"send", "can0", "123#"}).find("add --step DURATION"), std::string::npos);
+  EXPECT_NE(refusal_of(d, {"send", "can9", "123#", "--step", "1ms"}).find("no bus named \"can9\""),
+            std::string::npos);
 }
 
 }  // namespace
@@ -399,9 +339,8 @@ TEST(CliDump, AcknowledgesByDefaultAndListenOnlyDoesNot) {
   ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
   Cli dump(d, {"dump", "can0", "-n", "1"});
   ASSERT_TRUE(watcher.next_notification(10'000));
-  Cli send(d, {"send", "can0", "123#1122", "--step", "1ms"});
-  EXPECT_EQ(Cli::read_all(send.out), "(0000000000.000124) can0 123#1122\n");
-  EXPECT_EQ(send.wait(), 0);
+  EXPECT_EQ(output_of(d, {"send", "can0", "123#1122", "--step", "1ms"}),
+            "(0000000000.000124) can0 123#1122\n");
   EXPECT_EQ(Cli::read_all(dump.out), "(0000000000.000124) can0 123#1122\n");
   EXPECT_EQ(Cli::read_all(dump.err),
             "canemu: listening on can0 as eph1 (acknowledging, 500000 bit/s, time stamps in "
@@ -411,9 +350,9 @@ TEST(CliDump, AcknowledgesByDefaultAndListenOnlyDoesNot) {
   Cli quiet(d, {"dump", "can0", "--listen-only", "--no-errors", "-n", "1"});
   ASSERT_TRUE(watcher.next_notification(10'000));  // eph1 gone
   ASSERT_TRUE(watcher.next_notification(10'000));  // the listener's device
-  Cli lone(d, {"send", "can0", "123#1122", "--step", "1ms"});
-  EXPECT_EQ(lone.wait(), 1);
-  EXPECT_NE(Cli::read_all(lone.err).find("is a node on can0 acknowledging"), std::string::npos);
+  EXPECT_NE(refusal_of(d, {"send", "can0", "123#1122", "--step", "1ms"})
+                .find("is a node on can0 acknowledging"),
+            std::string::npos);
 }
 
 // The lines of `text` that hold one of `wanted` (frame texts), in order.
@@ -442,13 +381,9 @@ TEST(CliDump, TakesCandumpsFiltersOnSeveralBuses) {
   Cli dump(d, {"dump", "can0,123:7FF,00000456:9FFFFFFF", "can1,400~7F0", "-n", "4"});
   std::string err = Cli::read_until(dump.err, "listening on can1");
   ASSERT_NE(err.find("listening on can1"), std::string::npos) << err;
-  Cli send0(d, {"send", "can0", "124#01", "123#11", "00000123#R", "456#22", "00000456#33", "--step",
-                "1ms"});
-  const std::string sent0 = Cli::read_all(send0.out);
-  EXPECT_EQ(send0.wait(), 0) << Cli::read_all(send0.err);
-  Cli send1(d, {"send", "can1", "405#01", "7FF#02", "--step", "1ms"});
-  const std::string sent1 = Cli::read_all(send1.out);
-  EXPECT_EQ(send1.wait(), 0) << Cli::read_all(send1.err);
+  const std::string sent0 = output_of(d, {"send", "can0", "124#01", "123#11", "00000123#R",
+                                          "456#22", "00000456#33", "--step", "1ms"});
+  const std::string sent1 = output_of(d, {"send", "can1", "405#01", "7FF#02", "--step", "1ms"});
   // 123:7FF takes 123 in both formats and remote frames; 00000456:9FFFFFFF only the 29-bit 456.
   const std::string expected =
       lines_with(sent0, {"123#11", "00000123#R", "00000456#33"}) + lines_with(sent1, {"7FF#02"});
@@ -474,12 +409,8 @@ TEST(CliDump, AnyDumpsEveryCanBus) {
   const std::string err = Cli::read_until(dump.err, "listening on can1");
   ASSERT_NE(err.find("listening on can1"), std::string::npos) << err;
   EXPECT_EQ(err.find("lin0"), std::string::npos) << err;
-  Cli send0(d, {"send", "can0", "123#11", "--step", "1ms"});
-  const std::string sent0 = Cli::read_all(send0.out);
-  EXPECT_EQ(send0.wait(), 0);
-  Cli send1(d, {"send", "can1", "321#22", "--step", "1ms"});
-  const std::string sent1 = Cli::read_all(send1.out);
-  EXPECT_EQ(send1.wait(), 0);
+  const std::string sent0 = output_of(d, {"send", "can0", "123#11", "--step", "1ms"});
+  const std::string sent1 = output_of(d, {"send", "can1", "321#22", "--step", "1ms"});
   EXPECT_EQ(Cli::read_all(dump.out), sent0 + sent1);
   EXPECT_EQ(dump.wait(), 0);
 }
@@ -494,9 +425,7 @@ TEST(CliDump, LogsIntoACandumpNamedFileWithL) {
   Cli dump(d, {"dump", "can0", "-l", "-n", "1"}, nullptr, dir);
   std::string err = Cli::read_until(dump.err, "listening on");
   ASSERT_NE(err.find("listening on can0 as eph1 (acknowledging"), std::string::npos) << err;
-  Cli send(d, {"send", "can0", "123#1122", "--step", "1ms"});
-  const std::string sent = Cli::read_all(send.out);
-  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  const std::string sent = output_of(d, {"send", "can0", "123#1122", "--step", "1ms"});
   EXPECT_EQ(Cli::read_all(dump.out), "");
   EXPECT_EQ(dump.wait(), 0);
   err += Cli::read_all(dump.err);
@@ -568,8 +497,8 @@ TEST(CliDump, DumpAndRecordEndWithTheReasonWhenAReloadRevokesTheirUser) {
   }
   const group* users = ::getgrnam("users");
   ASSERT_NE(users, nullptr) << "the machine has no group \"users\"";
-  char dir[] = "/tmp/canemu-revoke-XXXXXX";
-  const std::string file = std::string(::mkdtemp(dir)) + "/canemud.toml";
+  TempDir dir;
+  const std::string file = (dir.path / "canemud.toml").string();
   const auto configure = [&](const std::string& groups) {
     FILE* f = std::fopen(file.c_str(), "w");
     ASSERT_NE(f, nullptr);
@@ -598,8 +527,6 @@ TEST(CliDump, DumpAndRecordEndWithTheReasonWhenAReloadRevokesTheirUser) {
               std::string::npos)
         << err;
   }
-  ::unlink(file.c_str());
-  ::rmdir(dir);
 }
 
 // canemu gen in stepped time moves time itself: -n frames, one per gap, each at the end of its
@@ -642,12 +569,10 @@ TEST(CliGen, ASimulationBehindTheWallClockCountsNoFrameAsNotSent) {
 // A frame nobody acknowledges is still counted as not sent, after --timeout ms of simulated time.
 TEST(CliGen, AFrameNobodyAcknowledgesIsNotSentAfterTheTimeout) {
   Daemon d("realtime");
-  Cli gen(d, {"gen", "can0", "-n", "1", "-g", "0", "--timeout", "50"});
-  EXPECT_EQ(Cli::read_all(gen.err),
+  EXPECT_EQ(refusal_of(d, {"gen", "can0", "-n", "1", "-g", "0", "--timeout", "50"}),
             "canemu: generating on can0 as eph1 (500000 bit/s, a frame every 0)\n"
             "canemu: 0 frame(s) sent on can0, 1 not sent: is a node on can0 acknowledging at "
             "500000 bit/s?\n");
-  EXPECT_EQ(gen.wait(), 1);
 }
 
 // A line of a candump log with a classic DLC above 8 (`_X`, as candump and canemu write it) is
@@ -656,9 +581,8 @@ TEST(CliSend, ALoggedFrameWithADlcAboveEightIsSentAgainAsItWas) {
   Daemon d;
   auto holder = connect(d, "holder");
   auto partner = partner_on(holder, "can0");
-  Cli send(d, {"send", "can0", "123#1122334455667788_E", "123#R8_9", "--step", "1ms"});
-  const std::string out = Cli::read_all(send.out);
-  EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
+  const std::string out =
+      output_of(d, {"send", "can0", "123#1122334455667788_E", "123#R8_9", "--step", "1ms"});
   model::FrameSpec data;
   data.id = 0x123;
   data.dlc = 14;
@@ -727,11 +651,9 @@ TEST(CliErrors, BadArgumentsExitOneAndSayWhatIsWrong) {
 // `canemu --socket DIR`: the path is a directory, not a canemud that is not running.
 TEST(CliErrors, ASocketPathThatIsADirectoryIsNamedSo) {
   Daemon d;
-  Cli cli(d, {"--socket", d.dir(), "status"});
-  EXPECT_EQ(Cli::read_all(cli.err), "canemu: " + d.dir() +
-                                        " is a directory, not canemud's socket: did you mean " +
-                                        d.socket() + "?\n");
-  EXPECT_EQ(cli.wait(), 1);
+  EXPECT_EQ(refusal_of(d, {"--socket", d.dir(), "status"}),
+            "canemu: " + d.dir() + " is a directory, not canemud's socket: did you mean " +
+                d.socket() + "?\n");
 }
 
 }  // namespace
@@ -769,9 +691,7 @@ TEST(CliHabits, FaultIdentifiersAndMasksAreHex) {
   // not let it match).
   // The faults hit once each, one after the other.
   const auto hit_once = [&d] {
-    Cli json(d, {"status", "--json"});
-    const std::string j = Cli::read_all(json.out);
-    EXPECT_EQ(json.wait(), 0);
+    const std::string j = output_of(d, {"status", "--json"});
     std::size_t n = 0;
     for (std::size_t at = j.find("\"hits\" : 1,"); at != std::string::npos;
          at = j.find("\"hits\" : 1,", at + 1)) {
@@ -790,13 +710,12 @@ TEST(CliHabits, FaultIdentifiersAndMasksAreHex) {
     EXPECT_EQ(send.wait(), 0) << Cli::read_all(send.err);
   }
   EXPECT_EQ(hit_once(), 2u);
-  Cli bad(d, {"fault", "inject", "--effect", "bit_error", "--bus", "can0", "--id", "12G"});
-  EXPECT_EQ(Cli::read_all(bad.err),
-            "canemu: --id '12G': not a hex identifier (123 or 0x123, as candump writes it)\n");
-  EXPECT_EQ(bad.wait(), 1);
-  Cli gen(d, {"gen", "can0", "-n", "1", "-I", "0x123", "-L", "0", "-v"});
-  EXPECT_NE(Cli::read_all(gen.out).find(" can0 123#\n"), std::string::npos);
-  EXPECT_EQ(gen.wait(), 0);
+  EXPECT_EQ(
+      refusal_of(d, {"fault", "inject", "--effect", "bit_error", "--bus", "can0", "--id", "12G"}),
+      "canemu: --id '12G': not a hex identifier (123 or 0x123, as candump writes it)\n");
+  EXPECT_NE(
+      output_of(d, {"gen", "can0", "-n", "1", "-I", "0x123", "-L", "0", "-v"}).find(" can0 123#\n"),
+      std::string::npos);
 }
 
 // fault list shows what each fault matches, so that a rule that never hits says why.
@@ -815,9 +734,7 @@ TEST(CliHabits, FaultListShowsEachFaultsMatch) {
     Cli inject(d, all);
     EXPECT_EQ(inject.wait(), 0) << Cli::read_all(inject.err);
   }
-  Cli list(d, {"fault", "list"});
-  const std::string listed = Cli::read_all(list.out);
-  EXPECT_EQ(list.wait(), 0);
+  const std::string listed = output_of(d, {"fault", "list"});
   std::vector<std::string> lines;
   for (std::size_t at = 0; at < listed.size();) {
     const std::size_t end = listed.find('\n', at);
@@ -832,9 +749,7 @@ TEST(CliHabits, FaultListShowsEachFaultsMatch) {
   for (std::size_t k = 0; k < matches.size(); ++k) {
     EXPECT_TRUE(lines[k + 1].ends_with("  " + matches[k])) << matches[k] << "\n" << listed;
   }
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
-  EXPECT_EQ(json.wait(), 0);
+  const std::string j = output_of(d, {"status", "--json"});
   EXPECT_NE(j.find("\"match\" : {\"ext\" : true,\"from\" : \"ixxat0:0\",\"id\" : 256,"
                    "\"mask\" : 2032}"),
             std::string::npos)
@@ -870,8 +785,8 @@ TEST(CliHabits, CanemudSuggestsTheCanemuOfItsOwnTree) {
     const std::string named = d.log().substr(at + hint.size(), end - at - hint.size());
     EXPECT_EQ(std::filesystem::canonical(named), std::filesystem::canonical(CANEMU_PATH));
   }
-  char dir[] = "/tmp/canemu-installed-XXXXXX";
-  const std::string bin = std::string(::mkdtemp(dir)) + "/canemud";
+  TempDir dir;
+  const std::string bin = (dir.path / "canemud").string();
   std::filesystem::copy_file(CANEMUD_PATH, bin);
   {
     testing::CanemudProcess installed(bin, {"--time=stepped"});
@@ -880,21 +795,16 @@ TEST(CliHabits, CanemudSuggestsTheCanemuOfItsOwnTree) {
         fmt::format("try: CANEMU_SOCKET={} canemu status\n", installed.socket());
     EXPECT_TRUE(installed.read_log_until(line, 10'000)) << installed.log();
   }
-  std::filesystem::remove_all(dir);
 }
 
 // CAN FD frames on a classic bus: the cause said as it is, before anything is sent.
 TEST(CliHabits, CanFdOnAClassicBusIsRefusedForThatReason) {
   Daemon d;
-  Cli send(d, {"send", "can0", "123##1AA", "--step", "1ms"});
-  EXPECT_EQ(Cli::read_all(send.err),
+  EXPECT_EQ(refusal_of(d, {"send", "can0", "123##1AA", "--step", "1ms"}),
             "canemu: '123##1AA': a CAN FD frame, and can0 is a classic CAN bus (CAN FD needs a "
             "bus of kind can-fd)\n");
-  EXPECT_EQ(send.wait(), 1);
-  Cli gen(d, {"gen", "can0", "-f", "-n", "1"});
-  EXPECT_EQ(Cli::read_all(gen.err),
+  EXPECT_EQ(refusal_of(d, {"gen", "can0", "-f", "-n", "1"}),
             "canemu: -f: can0 is a classic CAN bus (CAN FD needs a bus of kind can-fd)\n");
-  EXPECT_EQ(gen.wait(), 1);
 }
 
 // Column widths follow their content: a long scenario name and effect, and the long state
@@ -902,8 +812,8 @@ TEST(CliHabits, CanFdOnAClassicBusIsRefusedForThatReason) {
 TEST(CliHabits, FaultListAndTimelineColumnsFitTheirContent) {
   Daemon d;
   const std::string name(63, 'n');
-  char dir[] = "/tmp/canemu-columns-XXXXXX";
-  const std::string file = std::string(::mkdtemp(dir)) + "/long.toml";
+  TempDir dir;
+  const std::string file = (dir.path / "long.toml").string();
   FILE* f = std::fopen(file.c_str(), "w");
   ASSERT_NE(f, nullptr);
   std::fprintf(f,
@@ -926,9 +836,7 @@ TEST(CliHabits, FaultListAndTimelineColumnsFitTheirContent) {
     }
     return lines;
   };
-  Cli list(d, {"fault", "list"});
-  const auto rows = lines_of(Cli::read_all(list.out));
-  EXPECT_EQ(list.wait(), 0);
+  const auto rows = lines_of(output_of(d, {"fault", "list"}));
   ASSERT_EQ(rows.size(), 3u);
   const std::string& header = rows[0];
   const std::string& row = rows[2];
@@ -938,17 +846,13 @@ TEST(CliHabits, FaultListAndTimelineColumnsFitTheirContent) {
   EXPECT_EQ(row.find("pending"), std::string::npos);
   EXPECT_EQ(row.find("active"), header.find("STATE")) << header << "\n" << row;
 
-  Cli timeline(d, {"timeline", "can0", "ixxat0:0"});
-  const auto t = lines_of(Cli::read_all(timeline.out));
-  EXPECT_EQ(timeline.wait(), 0);
+  const auto t = lines_of(output_of(d, {"timeline", "can0", "ixxat0:0"}));
   ASSERT_GE(t.size(), 4u);
   const std::string& th = t[t.size() - 2];
   const std::string& tr = t[t.size() - 1];
   EXPECT_NE(tr.find("error-passive"), std::string::npos) << th << "\n" << tr;
   EXPECT_EQ(tr.find("error-passive"), th.find("state")) << th << "\n" << tr;
   EXPECT_EQ(tr.find("counters written"), th.find("cause")) << th << "\n" << tr;
-  ::unlink(file.c_str());
-  ::rmdir(dir);
 }
 
 // A configured adapter's controller that no program started is in its init mode: status says
@@ -957,14 +861,10 @@ TEST(CliHabits, StatusShowsControllersNotStartedAsInit) {
   Daemon d;
   auto holder = connect(d, "holder");
   auto partner = partner_on(holder, "can0");
-  Cli text(d, {"status"});
-  const std::string t = Cli::read_all(text.out);
-  EXPECT_EQ(text.wait(), 0);
+  const std::string t = output_of(d, {"status"});
   EXPECT_NE(t.find("ixxat0:0       can0         init              0    0"), std::string::npos) << t;
   EXPECT_NE(t.find("eph1:0         can0         error-active      0    0"), std::string::npos) << t;
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
-  EXPECT_EQ(json.wait(), 0);
+  const std::string j = output_of(d, {"status", "--json"});
   EXPECT_NE(j.find("\"name\" : \"ixxat0:1\",\"rec\" : 0,\"state\" : \"init\""), std::string::npos)
       << j;
 }

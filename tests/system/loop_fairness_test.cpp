@@ -24,6 +24,7 @@
 #include "canemu/client/channel.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 #include "daemon_process.hpp"
+#include "pipe_support.hpp"
 
 namespace canemu {
 namespace {
@@ -293,10 +294,9 @@ TEST(LoopFairness, TheLastSlotsAreKeptForAnAdministrator) {
   Daemon d("stepped", {"--config=" + config});
   std::string socket = d.socket();
   ::chmod(socket.substr(0, socket.rfind('/')).c_str(), 0755);
-  int done[2];
-  int go_on[2];
-  ASSERT_EQ(::pipe(done), 0);
-  ASSERT_EQ(::pipe(go_on), 0);
+  testing::Pipe done;
+  testing::Pipe go_on;
+  ASSERT_TRUE(done.ok() && go_on.ok());
   const pid_t child = ::fork();
   if (child == 0) {
     if (::setgroups(0, nullptr) != 0 || ::setgid(65534) != 0 || ::setuid(65534) != 0) {
@@ -314,12 +314,12 @@ TEST(LoopFairness, TheLastSlotsAreKeptForAnAdministrator) {
     }
     const std::string report = std::to_string(held.size()) + "|" + last;
     [[maybe_unused]] ssize_t w = ::write(done[1], report.data(), report.size());
-    ::close(done[1]);
+    done.close(1);
     char byte = 0;
     [[maybe_unused]] ssize_t r = ::read(go_on[0], &byte, 1);
     ::_exit(0);
   }
-  ::close(done[1]);
+  done.close(1);
   std::string report;
   char buf[1024];
   for (ssize_t n = 0; (n = ::read(done[0], buf, sizeof buf)) > 0;) {
@@ -334,9 +334,6 @@ TEST(LoopFairness, TheLastSlotsAreKeptForAnAdministrator) {
   EXPECT_EQ(testing::status(admin).bus_count, 1);
   ASSERT_EQ(::write(go_on[1], "x", 1), 1);
   ::waitpid(child, nullptr, 0);
-  for (int fd : {done[0], go_on[0], go_on[1]}) {
-    ::close(fd);
-  }
 }
 
 }  // namespace

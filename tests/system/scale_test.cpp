@@ -15,6 +15,7 @@
 #include "canemu/client/channel.hpp"
 #include "canemu/client/lists.hpp"
 #include "cli_process.hpp"
+#include "cli_run_support.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -88,9 +89,7 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
   }
   step(c, 1'000'000);
 
-  Cli json(d, {"status", "--json"});
-  const std::string j = Cli::read_all(json.out);
-  ASSERT_EQ(json.wait(), 0) << Cli::read_all(json.err);
+  const std::string j = output_of(d, {"status", "--json"});
   std::string buses = "\"buses\" : [";
   for (std::size_t i = 0; i < 64; ++i) {
     buses += (i == 0 ? "" : ",") + json_bus(i, i == 63 ? 3 : 0);
@@ -123,9 +122,7 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
   }
 
   // The tables: a row for every bus and node.
-  Cli text(d, {"status"});
-  const std::string t = Cli::read_all(text.out);
-  ASSERT_EQ(text.wait(), 0);
+  const std::string t = output_of(d, {"status"});
   EXPECT_NE(t.find("\nbus63        can       1000000         0    0.0%          3        0\n"),
             std::string::npos)
       << t;
@@ -141,9 +138,7 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
   EXPECT_EQ(rows, 256u + 64u);  // a NODE row per controller, a DEVICE row per adapter
 
   // Metrics of a node on the second page, on a bus of the second page.
-  Cli metrics(d, {"metrics"});
-  const std::string m = Cli::read_all(metrics.out);
-  ASSERT_EQ(metrics.wait(), 0);
+  const std::string m = output_of(d, {"metrics"});
   EXPECT_NE(m.find("canemu_node_frames_received_total{node=\"rx63:0\",bus=\"bus63\"} 3\n"),
             std::string::npos)
       << m;

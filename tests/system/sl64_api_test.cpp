@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "canemu/firmware_model/bus/can_error.hpp"
+#include "canmsg_text_support.hpp"
 #include "example_program.hpp"
 #include "sl64lib.h"
 #include "vci_c_test_support.hpp"
@@ -278,10 +279,7 @@ TEST(Sl64Api, AQueuedObjectIsWarning6AndSendsTheDataSetAfterQueuing) {
   const auto frames = alpha.frames();
   ASSERT_EQ(frames.size(), 15u);
   // Buffer order: 100h, then 101h (chosen already), then 10Eh from buffer 1.
-  EXPECT_EQ(frames[2].dwMsgId, 0x10Eu);
-  EXPECT_EQ(frames[2].uMsgInfo.Bits.dlc, 2u);
-  EXPECT_EQ(frames[2].abData[0], 0xBB);
-  EXPECT_EQ(frames[2].abData[1], 0xCC);
+  EXPECT_EQ(candump_text(frames[2]), "10E#BBCC");
   EXPECT_EQ(wait_calls(15).size(), 15u);  // one message routine call per frame
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "shell_support.hpp"
 #include "vci_cpp_test_support.hpp"
 #include "vcisdk.h"
 
@@ -77,15 +78,9 @@ TEST(VciCppApi, TheWalkThroughProgramRunsUnchanged) {
   testing::ConfigFile config(testing::kTwoAdapters);
   testing::Daemon d("realtime", {"--config=" + config.path()});
   const std::string command = "CANEMU_SOCKET=" + d.socket() + " " + VCI_WALKTHROUGH_PATH + " 2>&1";
-  FILE* out = ::popen(command.c_str(), "r");
-  ASSERT_NE(out, nullptr);
-  std::string text;
-  char buf[256];
-  while (std::fgets(buf, sizeof buf, out) != nullptr) {
-    text += buf;
-  }
-  EXPECT_EQ(::pclose(out), 0) << text;
-  EXPECT_EQ(text,
+  const auto run = testing::run_shell(command);
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_EQ(run.out,
             "adapter: USB-to-CAN (canemu alpha)\n"
             "adapter: USB-to-CAN (canemu beta)\n"
             "received: id 100 data 42\n");

@@ -13,6 +13,7 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include "canmsg_text_support.hpp"
 #include "example_program.hpp"
 #include "vcinpl.h"
 #include "xcan.h"
@@ -118,10 +119,7 @@ TEST(XcanApi, DataFramesBothWaysWithAnIxxatAdapter) {
   step_ns(1'000'000);
   const auto at_alpha = alpha.frames();
   ASSERT_EQ(at_alpha.size(), 1u);
-  EXPECT_EQ(at_alpha[0].dwMsgId, 0x100u);
-  EXPECT_EQ(at_alpha[0].uMsgInfo.Bits.dlc, 3u);
-  EXPECT_EQ(at_alpha[0].abData[0], 0x01);
-  EXPECT_EQ(at_alpha[0].abData[2], 0x03);
+  EXPECT_EQ(candump_text(at_alpha[0]), "100#010203");
   // Written at 1 ms, sent at once on an idle bus.
   EXPECT_EQ(at_alpha[0].dwTime, static_cast<UINT32>(1000 + bits_of(0x100, {1, 2, 3}) * kBitUs2));
 
@@ -224,10 +222,8 @@ TEST(XcanApi, ActiveReceiveObjectAsksByRemoteFrameAndGetsTheAnswer) {
   step_ns(1'000'000);
   const auto asked = alpha.frames();
   ASSERT_EQ(asked.size(), 1u);
-  EXPECT_EQ(asked[0].dwMsgId, 0x400u);
-  EXPECT_EQ(asked[0].uMsgInfo.Bits.rtr, 1u);
   // Asked for at 1 ms, with the DLC of the data the object holds: none yet.
-  EXPECT_EQ(asked[0].uMsgInfo.Bits.dlc, 0u);
+  EXPECT_EQ(candump_text(asked[0]), "400#R0");
   EXPECT_EQ(asked[0].dwTime, static_cast<UINT32>(1000 + remote_bits(0x400, 0) * kBitUs2));
   alpha.post(data(0x400, {0x09, 0x0A, 0x0B}));
   step_ns(1'000'000);
@@ -329,9 +325,7 @@ TEST(XcanApi, GeneralIdRemoteFrameAndTheAnswerThroughTheAcceptanceFilter) {
   step_ns(1'000'000);
   const auto asked = alpha.frames();
   ASSERT_EQ(asked.size(), 1u);
-  EXPECT_EQ(asked[0].dwMsgId, 0x321u);
-  EXPECT_EQ(asked[0].uMsgInfo.Bits.rtr, 1u);
-  EXPECT_EQ(asked[0].uMsgInfo.Bits.dlc, 1u);
+  EXPECT_EQ(candump_text(asked[0]), "321#R1");
   EXPECT_EQ(asked[0].dwTime, static_cast<UINT32>(1000 + remote_bits(0x321, 1) * kBitUs2));
   alpha.post(data(0x321, {0x77}));
   step_ns(1'000'000);

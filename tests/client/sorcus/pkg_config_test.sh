@@ -2,17 +2,13 @@
 # Builds the X-CAN-2i example (client/examples/xcan_talk.c) with nothing but what pkg-config
 # says for the build tree (one include directory, one library) and runs it where no canemud
 # listens: it must say so with the library's code.
-# Usage: pkg_config_test.sh SOURCE_DIR BUILD_DIR PKG_CONFIG C_COMPILER [BUILD_FLAGS]
-# BUILD_FLAGS: what a sanitized build's programs need (-fsanitize=...), nothing of the API.
+# Usage: pkg_config_test.sh BUILD_DIR PKG_CONFIG C_COMPILER CXX_COMPILER [BUILD_FLAGS]
+# (../pkg_config_support.sh; the C++ compiler is not used here).
 set -euo pipefail
-source_dir=$1
-build=$2
-pkg_config=$3
-cc=$4
-build_flags=${5:-}
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
-export PKG_CONFIG_PATH=$build/lib/pkgconfig
+here=$(cd "$(dirname "$0")" && pwd)
+source_dir=$(cd "$here/../../.." && pwd)
+# shellcheck source=../pkg_config_support.sh
+source "$here/../pkg_config_support.sh"
 
 flags=$("$pkg_config" --cflags --libs canemu-xcan)
 echo "canemu-xcan: $flags"

@@ -2,17 +2,11 @@
 # Builds a VCI C program and a VCI C++ program with nothing but what pkg-config says for the
 # build tree (one include directory, one library), runs them and checks what they print.
 # Usage: pkg_config_test.sh BUILD_DIR PKG_CONFIG C_COMPILER CXX_COMPILER [BUILD_FLAGS]
-# BUILD_FLAGS: what a sanitized build's programs need (-fsanitize=...), nothing of the VCI.
+# (../pkg_config_support.sh).
 set -euo pipefail
-build=$1
-pkg_config=$2
-cc=$3
-cxx=$4
-build_flags=${5:-}
 here=$(cd "$(dirname "$0")" && pwd)
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
-export PKG_CONFIG_PATH=$build/lib/pkgconfig
+# shellcheck source=../pkg_config_support.sh
+source "$here/../pkg_config_support.sh"
 
 c_flags=$("$pkg_config" --cflags --libs canemu-vcinpl2)
 cxx_flags=$("$pkg_config" --cflags --libs canemu-vciapi)

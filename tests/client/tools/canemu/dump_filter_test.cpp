@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <ctime>
+#include <initializer_list>
 
 namespace canemu::cli {
 namespace {
@@ -25,6 +26,17 @@ BusFilter parse(std::string_view arg) {
   return b ? *b : BusFilter{};
 }
 
+// `b` lets every frame of `pass` through and none of `drop`.
+void expect_passes(const BusFilter& b, std::initializer_list<sc::Frame> pass,
+                   std::initializer_list<sc::Frame> drop) {
+  for (const sc::Frame& f : pass) {
+    EXPECT_TRUE(b.matches(f)) << b.describe() << ": " << std::hex << f.can_id;
+  }
+  for (const sc::Frame& f : drop) {
+    EXPECT_FALSE(b.matches(f)) << b.describe() << ": " << std::hex << f.can_id;
+  }
+}
+
 const sc::Frame kSff123 = frame(0x123);
 const sc::Frame kSff123Remote = frame(0x123 | sc::kRtrFlag);
 const sc::Frame kEff123 = frame(0x123 | sc::kEffFlag);
@@ -36,53 +48,31 @@ TEST(CliDumpFilter, IdAndMaskMatchAsCandumpSays) {
   const BusFilter b = parse("can0,123:7FF");
   EXPECT_EQ(b.bus, "can0");
   EXPECT_TRUE(b.filtered);
-  EXPECT_TRUE(b.matches(kSff123));
-  EXPECT_TRUE(b.matches(kSff123Remote));
-  EXPECT_TRUE(b.matches(kEff123));
-  EXPECT_FALSE(b.matches(frame(0x124)));
-  EXPECT_TRUE(b.matches(frame(0x7123 | sc::kEffFlag)));  // only the low 11 bits are asked
+  // Only the low 11 bits are asked: 7123h extended passes too.
+  expect_passes(b, {kSff123, kSff123Remote, kEff123, frame(0x7123 | sc::kEffFlag)}, {frame(0x124)});
   // "candump vcan2,123:C00007FF (matches CAN ID 123 - only SFF and non-RTR frames)"
-  const BusFilter sff = parse("can0,123:C00007FF");
-  EXPECT_TRUE(sff.matches(kSff123));
-  EXPECT_FALSE(sff.matches(kSff123Remote));
-  EXPECT_FALSE(sff.matches(kEff123));
+  expect_passes(parse("can0,123:C00007FF"), {kSff123}, {kSff123Remote, kEff123});
   // A mask with CAN_EFF_FLAG and an 11-bit identifier: 11-bit frames only, whatever the mask
   // says about bits 11..28 (the kernel cuts it to SFF | EFF | RTR).
-  const BusFilter sff_only = parse("can0,123:9FFFFFFF");
-  EXPECT_TRUE(sff_only.matches(kSff123));
-  EXPECT_FALSE(sff_only.matches(kEff123));
-  EXPECT_FALSE(sff_only.matches(frame(0x7123 | sc::kEffFlag)));
+  expect_passes(parse("can0,123:9FFFFFFF"), {kSff123}, {kEff123, frame(0x7123 | sc::kEffFlag)});
 }
 
 TEST(CliDumpFilter, AnIdentifierOfEightDigitsIsExtended) {
   // "candump vcan2,12345678:DFFFFFFF (match only for extended CAN ID 12345678)"
-  const BusFilter b = parse("can0,12345678:DFFFFFFF");
-  EXPECT_TRUE(b.matches(frame(0x12345678 | sc::kEffFlag)));
-  EXPECT_FALSE(b.matches(frame(0x12345678 | sc::kEffFlag | sc::kRtrFlag)));
-  EXPECT_FALSE(b.matches(frame(0x12345679 | sc::kEffFlag)));
+  expect_passes(
+      parse("can0,12345678:DFFFFFFF"), {frame(0x12345678 | sc::kEffFlag)},
+      {frame(0x12345678 | sc::kEffFlag | sc::kRtrFlag), frame(0x12345679 | sc::kEffFlag)});
   // The width decides, not the value: 00000123 asks for the extended 123, 123 for the 11-bit.
-  const BusFilter eff = parse("can0,00000123:800007FF");
-  EXPECT_TRUE(eff.matches(kEff123));
-  EXPECT_FALSE(eff.matches(kSff123));
-  const BusFilter sff = parse("can0,123:800007FF");
-  EXPECT_TRUE(sff.matches(kSff123));
-  EXPECT_FALSE(sff.matches(kEff123));
+  expect_passes(parse("can0,00000123:800007FF"), {kEff123}, {kSff123});
+  expect_passes(parse("can0,123:800007FF"), {kSff123}, {kEff123});
 }
 
 TEST(CliDumpFilter, InverseFiltersAndSeveralFilters) {
-  const BusFilter inv = parse("can0,400~7F0");
-  EXPECT_TRUE(inv.matches(kSff123));
-  EXPECT_FALSE(inv.matches(frame(0x405)));
+  expect_passes(parse("can0,400~7F0"), {kSff123}, {frame(0x405)});
   // "0~0" matches no frame at all (candump -l any,0~0,#FFFFFFFF logs error frames only).
-  const BusFilter none = parse("any,0~0,#FFFFFFFF");
-  EXPECT_FALSE(none.matches(kSff123));
-  EXPECT_FALSE(none.matches(kEff123));
-  EXPECT_TRUE(none.matches(kBusError));
+  expect_passes(parse("any,0~0,#FFFFFFFF"), {kBusError}, {kSff123, kEff123});
   // Several filters: any of them.
-  const BusFilter two = parse("can0,123:7FF,400:700");
-  EXPECT_TRUE(two.matches(kSff123));
-  EXPECT_TRUE(two.matches(frame(0x4AB)));
-  EXPECT_FALSE(two.matches(frame(0x124)));
+  expect_passes(parse("can0,123:7FF,400:700"), {kSff123, frame(0x4AB)}, {frame(0x124)});
   // A mask's CAN_ERR_FLAG is dropped (candump), so it stays a frame filter.
   EXPECT_TRUE(parse("can0,123:200007FF").matches(kSff123));
 }
@@ -94,12 +84,8 @@ TEST(CliDumpFilter, JoinAsksForEveryFilter) {
   EXPECT_FALSE(any_of.join);
   EXPECT_TRUE(all_of.join);
   EXPECT_TRUE(parse("can0,J,100:700").join);
-  EXPECT_TRUE(any_of.matches(frame(0x150)));
-  EXPECT_TRUE(all_of.matches(frame(0x150)));
-  EXPECT_TRUE(any_of.matches(frame(0x1FF)));
-  EXPECT_FALSE(all_of.matches(frame(0x1FF)));
-  EXPECT_TRUE(any_of.matches(frame(0x250)));
-  EXPECT_FALSE(all_of.matches(frame(0x250)));
+  expect_passes(any_of, {frame(0x150), frame(0x1FF), frame(0x250)}, {});
+  expect_passes(all_of, {frame(0x150)}, {frame(0x1FF), frame(0x250)});
 }
 
 TEST(CliDumpFilter, ErrorFramesComeByTheirClassesOnly) {
@@ -108,28 +94,21 @@ TEST(CliDumpFilter, ErrorFramesComeByTheirClassesOnly) {
   EXPECT_EQ(alone.bus, "can0");
   EXPECT_FALSE(alone.filtered);
   EXPECT_EQ(alone.error_mask, kErrMask);
-  for (const sc::Frame& f : {kSff123, kSff123Remote, kEff123, kBusError, kBusOff}) {
-    EXPECT_TRUE(alone.matches(f)) << std::hex << f.can_id;
-  }
+  expect_passes(alone, {kSff123, kSff123Remote, kEff123, kBusError, kBusOff}, {});
   EXPECT_EQ(alone.describe(), "");
   EXPECT_EQ(parse("any").bus, "any");
   // A filter list without #mask takes no error frames, as candump's socket does.
   const BusFilter plain = parse("can0,123:7FF");
   EXPECT_EQ(plain.error_mask, 0u);
-  EXPECT_FALSE(plain.matches(kBusError));
-  EXPECT_FALSE(plain.matches(kBusOff));
+  expect_passes(plain, {}, {kBusError, kBusOff});
   // #40: bus-off only; data frames are not touched by it (no frame filter: all of them).
   const BusFilter busoff = parse("can0,#40");
   EXPECT_EQ(busoff.error_mask, sc::kErrBusOff);
-  EXPECT_TRUE(busoff.matches(kBusOff));
-  EXPECT_FALSE(busoff.matches(kBusError));
-  EXPECT_TRUE(busoff.matches(kSff123));
-  EXPECT_TRUE(busoff.matches(kEff123));
+  expect_passes(busoff, {kBusOff, kSff123, kEff123}, {kBusError});
   // Error frames are never matched against the frame filters, joined or not.
   const BusFilter joined = parse("can0,123:7FF,124:7FF,j,#FFFFFFFF");
   EXPECT_EQ(joined.error_mask, kErrMask);
-  EXPECT_TRUE(joined.matches(kBusError));
-  EXPECT_FALSE(joined.matches(kSff123));
+  expect_passes(joined, {kBusError}, {kSff123});
   // The last #mask counts, as in candump.
   EXPECT_EQ(parse("can0,#8,#80").error_mask, 0x80u);
 }

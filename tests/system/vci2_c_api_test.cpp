@@ -100,7 +100,7 @@ TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
   UINT32 revision = 99;
   UINT32 build = 0;
   ASSERT_EQ(vciGetVersion(&major, &minor, &revision, &build), VCI_OK);
-  testing::expect_vci_4_0_0(major, minor, revision, build);
+  testing::expect_vci_4_0_0(major, minor, revision, build, CANEMU_PROJECT_VERSION);
   EXPECT_EQ(vciGetVersion(&major, &minor, nullptr, &build), VCI_E_INVALIDARG);
   // What vcinpl_general.h declares is in this library too.
   VCIID id{};

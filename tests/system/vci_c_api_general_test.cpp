@@ -34,7 +34,7 @@ TEST(VciCApiGeneral, TheVersionIsVci4WithCanemusVersionAsBuildNumber) {
   UINT32 revision = 99;
   UINT32 build = 0;
   ASSERT_EQ(vciGetVersionEx(&major, &minor, &revision, &build), VCI_OK);
-  testing::expect_vci_4_0_0(major, minor, revision, build);
+  testing::expect_vci_4_0_0(major, minor, revision, build, CANEMU_PROJECT_VERSION);
   EXPECT_EQ(vciGetVersion(&major, nullptr), VCI_E_INVALIDARG);
   EXPECT_EQ(vciGetVersionEx(&major, &minor, &revision, nullptr), VCI_E_INVALIDARG);
 }

@@ -194,22 +194,23 @@ inline void expect_guid_text_both_ways(char (&text)[39], wchar_t (&wide)[39]) {
   EXPECT_EQ(std::memcmp(&back, &kGuid, sizeof kGuid), 0);
 }
 
-// The build number both libraries report: canemu's version as major * 10000 + minor * 100 +
-// patch.
-inline UINT32 expected_build() {
+// The build number both libraries report for canemu's `version` ("1.2.3"): major * 10000 +
+// minor * 100 + patch.
+inline UINT32 expected_build(const char* version) {
   unsigned major = 0;
   unsigned minor = 0;
   unsigned patch = 0;
-  EXPECT_EQ(std::sscanf(CANEMU_PROJECT_VERSION, "%u.%u.%u", &major, &minor, &patch), 3);
+  EXPECT_EQ(std::sscanf(version, "%u.%u.%u", &major, &minor, &patch), 3);
   return major * 10000 + minor * 100 + patch;
 }
 
-// The version both libraries report: VCI 4.0.0 with canemu's version as the build number.
-inline void expect_vci_4_0_0(UINT32 major, UINT32 minor, UINT32 revision, UINT32 build) {
+// The version both libraries report: VCI 4.0.0 with canemu's `version` as the build number.
+inline void expect_vci_4_0_0(UINT32 major, UINT32 minor, UINT32 revision, UINT32 build,
+                             const char* version) {
   EXPECT_EQ(major, 4u);
   EXPECT_EQ(minor, 0u);
   EXPECT_EQ(revision, 0u);
-  EXPECT_EQ(build, expected_build());
+  EXPECT_EQ(build, expected_build(version));
 }
 
 }  // namespace canemu::testing

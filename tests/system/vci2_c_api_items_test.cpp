@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <cwchar>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <vector>
@@ -20,7 +21,9 @@ namespace canemu {
 namespace {
 
 using testing::btp;
+using testing::ControlUnit;
 using testing::cyclic_data;
+using testing::CyclicList;
 using testing::drain;
 using testing::end_of;
 using testing::FdAdapter;
@@ -65,20 +68,10 @@ TEST(Vci2CFunctions, TheGeneralFunctionsAreThoseOfLibvcinpl) {
   char bad[] = "0123456789ABCDEG";
   ASSERT_NO_FATAL_FAILURE(testing::expect_luid_round_trip(vciLuidToCharA, vciCharToLuidA, bad));
 
-  const GUID g = {0x12345678, 0x9ABC, 0xDEF0, {0x01, 0x23, 0x45, 0x67, 0x89, 0xAB, 0xCD, 0xEF}};
   char gtext[39];
-  ASSERT_EQ(vciGuidToCharA(g, gtext, 39), VCI_OK);
-  EXPECT_STREQ(gtext, "{12345678-9ABC-DEF0-0123-456789ABCDEF}");
   wchar_t gwide[39];
-  EXPECT_EQ(vciGuidToCharW(g, gwide, 38), VCI_E_BUFFER_OVERFLOW);
-  ASSERT_EQ(vciGuidToCharW(g, gwide, 39), VCI_OK);
-  EXPECT_STREQ(gwide, L"{12345678-9ABC-DEF0-0123-456789ABCDEF}");
+  ASSERT_NO_FATAL_FAILURE(testing::expect_guid_text_both_ways(gtext, gwide));
   GUID gback{};
-  ASSERT_EQ(vciCharToGuidA(gtext, &gback), VCI_OK);
-  EXPECT_EQ(std::memcmp(&gback, &g, sizeof g), 0);
-  gback = GUID{};
-  ASSERT_EQ(vciCharToGuidW(gwide, &gback), VCI_OK);
-  EXPECT_EQ(std::memcmp(&gback, &g, sizeof g), 0);
   EXPECT_EQ(vciCharToGuidA(nullptr, &gback), VCI_E_INVALIDARG);
 
   HANDLE e = nullptr;
@@ -128,13 +121,12 @@ TEST(Vci2CFunctions, DevicesAreEnumeratedFoundAndDescribed) {
   EXPECT_EQ(id.AsInt64, first.VciObjectId.AsInt64);
   HANDLE dev = nullptr;
   ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
-  VCIDEVICECAPS caps{};
-  ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
+  VCIDEVICECAPS caps = testing::device_caps(dev);
   EXPECT_EQ(caps.BusCtrlCount, 1);
   EXPECT_EQ(caps.BusCtrlTypes[0], VCI_CAN_CTRL(CAN_CTRL_IFICFD));
   EXPECT_EQ(vciDeviceClose(dev), VCI_OK);
   ASSERT_EQ(vciDeviceOpen(id_of("gamma"), &dev), VCI_OK);
-  ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
+  caps = testing::device_caps(dev);
   EXPECT_EQ(caps.BusCtrlTypes[0], VCI_CAN_CTRL(CAN_CTRL_SJA1000));
   EXPECT_EQ(vciDeviceGetCaps(dev, nullptr), VCI_E_INVALIDARG);
   EXPECT_EQ(vciDeviceClose(dev), VCI_OK);
@@ -201,16 +193,12 @@ TEST(Vci2CFunctions, TheChannelCallsMoveCanmsg2) {
   EXPECT_EQ(canChannelPeekMsgMult(beta.channel, in, 4, &done), VCI_E_RXQUEUE_EMPTY);
   EXPECT_EQ(done, 0u);
   // A blocking read gives up after its time, counted in simulated time.
-  std::atomic<bool> ended{false};
-  std::atomic<HRESULT> hr{VCI_E_UNEXPECTED};
-  std::thread reader([&] {
+  HRESULT hr = VCI_E_UNEXPECTED;
+  testing::step_while([&] {
     CANMSG2 x;
     hr = canChannelReadMessage(beta.channel, 5, &x);
-    ended = true;
   });
-  testing::step_until(ended);
-  reader.join();
-  EXPECT_EQ(hr.load(), VCI_E_TIMEOUT);
+  EXPECT_EQ(hr, VCI_E_TIMEOUT);
 }
 
 // Channel filter lists: RemFilterIds takes back what AddFilterIds added.
@@ -243,35 +231,19 @@ TEST(Vci2CFunctions, DetectBitrateFindsTheEntryOfTheTraffic) {
   VciDaemon d(kAdapters);
   FdAdapter alpha("alpha");
   FdAdapter beta("beta");
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG2 m = cyclic_data<CANCYCLICTXMSG2>(0x2A0, 1, 1);
-  UINT32 index = 0;
-  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
-  ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
-  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
-  HANDLE dev = nullptr;
-  ASSERT_EQ(vciDeviceOpen(id_of("delta"), &dev), VCI_OK);
-  HANDLE control = nullptr;
-  ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
+  const CyclicList list(alpha.device);
+  list.send_without_end(cyclic_data<CANCYCLICTXMSG2>(0x2A0, 1, 1));
+  const ControlUnit delta("delta");
   CANBTP sdr[] = {btp(250000, 30, 2), kNominal};
   CANBTP fdr[] = {btp(1000000, 18, 2), kData};
   UINT32 found = 99;
-  EXPECT_EQ(canControlDetectBitrate(control, kMode, kFd, 100, 0, sdr, fdr, &found),
+  EXPECT_EQ(canControlDetectBitrate(delta.control, kMode, kFd, 100, 0, sdr, fdr, &found),
             VCI_E_INVALIDARG);
-  std::atomic<bool> done{false};
-  std::atomic<HRESULT> hr{VCI_E_UNEXPECTED};
-  std::thread detector([&] {
-    hr = canControlDetectBitrate(control, kMode, kFd, 100, 2, sdr, fdr, &found);
-    done = true;
-  });
-  testing::step_until(done);
-  detector.join();
-  EXPECT_EQ(hr.load(), VCI_OK);
+  HRESULT hr = VCI_E_UNEXPECTED;
+  testing::step_while(
+      [&] { hr = canControlDetectBitrate(delta.control, kMode, kFd, 100, 2, sdr, fdr, &found); });
+  EXPECT_EQ(hr, VCI_OK);
   EXPECT_EQ(found, 1u);
-  canSchedulerClose(list);
-  canControlClose(control);
-  vciDeviceClose(dev);
 }
 
 // ---------------------------------------------------------------- checklist items
@@ -406,6 +378,13 @@ TEST(Vci2CItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
   }
 }
 
+// `b` with its `field` set to `value`.
+template <class Field, class Value>
+CANBTP with(CANBTP b, Field CANBTP::*field, Value value) {
+  b.*field = static_cast<Field>(value);
+  return b;
+}
+
 // Raw CANBTP values are checked against the capability ranges of each phase.
 TEST(Vci2CItems, Item117_RawTimingOutsideTheCapabilityRangesIsRejected) {
   VciDaemon d(kAdapters);
@@ -429,23 +408,22 @@ TEST(Vci2CItems, Item117_RawTimingOutsideTheCapabilityRangesIsRejected) {
   ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
   EXPECT_EQ(s.sBtpSdr.dwBPS, 10u);
   EXPECT_EQ(s.sBtpFdr.wTS1, 7);
-  CANBTP n = nominal;
-  n.dwBPS = caps.sSdrRangeMax.dwBPS + 1;
-  EXPECT_EQ(init(n, data), VCI_E_INVALIDARG);
-  n = nominal;
-  n.wTS1 = caps.sSdrRangeMax.wTS1 + 1;
-  EXPECT_EQ(init(n, data), VCI_E_INVALIDARG);
-  n = nominal;
-  n.wTS2 = caps.sSdrRangeMin.wTS2 - 1;
-  EXPECT_EQ(init(n, data), VCI_E_INVALIDARG);
-  CANBTP f = data;
-  f.wTS1 = caps.sFdrRangeMax.wTS1 + 1;
-  EXPECT_EQ(init(nominal, f), VCI_E_INVALIDARG);
-  f = data;
-  f.dwBPS = caps.sFdrRangeMax.dwBPS + 1;
-  EXPECT_EQ(init(nominal, f), VCI_E_INVALIDARG);
+  // One value past its range at a time, in either phase: refused.
+  const struct {
+    CANBTP nominal;
+    CANBTP data;
+  } refused[] = {
+      {with(nominal, &CANBTP::dwBPS, caps.sSdrRangeMax.dwBPS + 1), data},
+      {with(nominal, &CANBTP::wTS1, caps.sSdrRangeMax.wTS1 + 1), data},
+      {with(nominal, &CANBTP::wTS2, caps.sSdrRangeMin.wTS2 - 1), data},
+      {nominal, with(data, &CANBTP::wTS1, caps.sFdrRangeMax.wTS1 + 1)},
+      {nominal, with(data, &CANBTP::dwBPS, caps.sFdrRangeMax.dwBPS + 1)},
+  };
+  for (std::size_t k = 0; k < std::size(refused); ++k) {
+    EXPECT_EQ(init(refused[k].nominal, refused[k].data), VCI_E_INVALIDARG) << "case " << k;
+  }
   // At the edges of the ranges it is taken.
-  n = nominal;
+  CANBTP n = nominal;
   n.wTS1 = caps.sSdrRangeMax.wTS1;
   n.wTS2 = caps.sSdrRangeMax.wTS2;
   EXPECT_EQ(init(n, data), VCI_OK);
@@ -493,39 +471,27 @@ TEST(Vci2CItems, Item116_BitPerSecondTimingsTakeTheNearestTimingAndShowIt) {
 
   // The guide's 8/2 at 500 kbit/s on the FD controller: 10 quanta of 16 clocks, as asked.
   CANBTP guide{0, 500000, 8, 2, 1, 0};
-  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
-                                 CAN_FILTER_INCL, 2048, 2048, &guide, nullptr),
-            VCI_OK);
+  ASSERT_EQ(testing::init_classic(alpha.control, guide), VCI_OK);
   ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
   EXPECT_EQ(std::memcmp(&s.sBtpSdr, &guide, sizeof(CANBTP)), 0);
   // 80/20 with SJW 20: 80 quanta of 2 clocks, SJW 16.
   CANBTP eighty{0, 500000, 80, 20, 20, 0};
-  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
-                                 CAN_FILTER_INCL, 2048, 2048, &eighty, nullptr),
-            VCI_OK);
+  ASSERT_EQ(testing::init_classic(alpha.control, eighty), VCI_OK);
   ASSERT_EQ(canControlGetStatus(alpha.control, &s), VCI_OK);
   const CANBTP eighty_shown{0, 500000, 64, 16, 16, 0};
   EXPECT_EQ(std::memcmp(&s.sBtpSdr, &eighty_shown, sizeof(CANBTP)), 0);
 
   // The SJA1000 (8 MHz, 16 clocks a bit at 500 kbit/s): 8/2 becomes 13/3 (81.25 %), SJW 2.
-  HANDLE gamma = testing::device_named("gamma");
-  HANDLE control = nullptr;
-  ASSERT_EQ(canControlOpen(gamma, 0, &control), VCI_OK);
-  ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
-                                 CAN_FILTER_INCL, 2048, 2048, &guide, nullptr),
-            VCI_OK);
-  ASSERT_EQ(canControlGetStatus(control, &s), VCI_OK);
+  const testing::ControlUnit gamma("gamma");
+  ASSERT_EQ(testing::init_classic(gamma.control, guide), VCI_OK);
+  ASSERT_EQ(canControlGetStatus(gamma.control, &s), VCI_OK);
   const CANBTP sja_shown{0, 500000, 13, 3, 2, 0};
   EXPECT_EQ(std::memcmp(&s.sBtpSdr, &sja_shown, sizeof(CANBTP)), 0)
       << s.sBtpSdr.dwBPS << " " << s.sBtpSdr.wTS1 << "/" << s.sBtpSdr.wTS2 << " " << s.sBtpSdr.wSJW;
   // A rate the clock cannot come within 0.5 % of is still refused: 4 kbit/s (the slowest is
   // 8 MHz / (64 x 25) = 5 kbit/s).
   CANBTP slow{0, 4000, 14, 2, 1, 0};
-  EXPECT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
-                                 CAN_FILTER_INCL, 2048, 2048, &slow, nullptr),
-            VCI_E_INVALIDARG);
-  canControlClose(control);
-  vciDeviceClose(gamma);
+  EXPECT_EQ(testing::init_classic(gamma.control, slow), VCI_E_INVALIDARG);
 }
 
 // Issue 34: a data message whose identifier does not fit its format (above 7FFh standard,
@@ -578,8 +544,7 @@ TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
   VciDaemon d(kAdapters);
   FdAdapter alpha("alpha");
   FdAdapter beta("beta");
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  const CyclicList list(alpha.device);
   CANCAPABILITIES2 caps{};
   ASSERT_EQ(canSchedulerGetCaps(list, &caps), VCI_OK);
   ASSERT_EQ(caps.dwCmsClkFreq / caps.dwCmsDivisor, 1000u);  // ticks of 1 ms
@@ -597,8 +562,7 @@ TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
   ASSERT_EQ(canSchedulerRemMessage(list, 1), VCI_OK);
   EXPECT_EQ(canSchedulerStartMessage(list, 1, 0), VCI_E_INVALID_INDEX);
   ASSERT_EQ(canSchedulerStartMessage(list, 0, 0), VCI_OK);
-  CANSCHEDULERSTATUS2 s{};
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  CANSCHEDULERSTATUS2 s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_BUSY);
   EXPECT_EQ(s.abMsgStat[1], CAN_CTXMSG_STAT_EMPTY);
@@ -608,24 +572,18 @@ TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
   SimClock clock;
   clock.to(5'000'000);
   ASSERT_EQ(canSchedulerActivate(list, FALSE), VCI_OK);
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_BUSY);
   clock.to(11'000'000);
   ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
   clock.to(15'500'000);
   ASSERT_EQ(canSchedulerStopMessage(list, 0), VCI_OK);
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_RUNNING);
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_DONE);
   clock.to(20'000'000);
-  ASSERT_EQ(canSchedulerReset(list), VCI_OK);
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
-  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
-  for (UINT8 stat : s.abMsgStat) {
-    EXPECT_EQ(stat, CAN_CTXMSG_STAT_EMPTY);
-  }
-  EXPECT_EQ(canSchedulerStartMessage(list, 0, 0), VCI_E_INVALID_INDEX);
+  list.expect_reset_empties_it();
   ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
   clock.to(30'000'000);
   const auto got = drain(beta.channel);
@@ -641,7 +599,6 @@ TEST(Vci2CItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
     want.push_back(end_of(ms * 1000, *frame));
   }
   EXPECT_EQ(times, want);
-  canSchedulerClose(list);
 }
 
 // ---------------------------------------------------------------- LIN

@@ -81,23 +81,17 @@ TEST(Vci2CApi, CapabilitiesAndLineStatusDescribeTheFdController) {
   EXPECT_EQ(s.sBtpFdr.dwBPS, 2000000u);
   EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
   // The classic adapter through the same interface: no FD modes.
-  HANDLE gamma = device_named("gamma");
-  HANDLE control = nullptr;
-  ASSERT_EQ(canControlOpen(gamma, 0, &control), VCI_OK);
-  ASSERT_EQ(canControlGetCaps(control, &caps), VCI_OK);
+  const testing::ControlUnit gamma("gamma");
+  ASSERT_EQ(canControlGetCaps(gamma.control, &caps), VCI_OK);
   EXPECT_EQ(caps.wCtrlType, CAN_CTRL_SJA1000);
   EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_EXTDATA, 0u);
   CANBTP n = kNominal;
   CANBTP f = kData;
-  EXPECT_EQ(canControlInitialize(control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048, 2048,
-                                 &n, &f),
+  EXPECT_EQ(canControlInitialize(gamma.control, kMode, kFd, CAN_FILTER_INCL, CAN_FILTER_INCL, 2048,
+                                 2048, &n, &f),
             VCI_E_INVALIDARG);
   CANBTP classic = btp(500000, 14, 2);  // 16 quanta of 125 ns: BTR0 0x00, BTR1 0x1C
-  ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
-                                 CAN_FILTER_INCL, 2048, 2048, &classic, nullptr),
-            VCI_OK);
-  canControlClose(control);
-  vciDeviceClose(gamma);
+  ASSERT_EQ(testing::init_classic(gamma.control, classic), VCI_OK);
 }
 
 TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
@@ -106,12 +100,7 @@ TEST(Vci2CApi, TheVersionComesInOneCallAndTheGeneralFunctionsAreThere) {
   UINT32 revision = 99;
   UINT32 build = 0;
   ASSERT_EQ(vciGetVersion(&major, &minor, &revision, &build), VCI_OK);
-  EXPECT_EQ(major, 4u);
-  EXPECT_EQ(minor, 0u);
-  EXPECT_EQ(revision, 0u);
-  unsigned v[3] = {};
-  ASSERT_EQ(std::sscanf(CANEMU_PROJECT_VERSION, "%u.%u.%u", &v[0], &v[1], &v[2]), 3);
-  EXPECT_EQ(build, v[0] * 10000 + v[1] * 100 + v[2]);
+  testing::expect_vci_4_0_0(major, minor, revision, build, CANEMU_PROJECT_VERSION);
   EXPECT_EQ(vciGetVersion(&major, &minor, nullptr, &build), VCI_E_INVALIDARG);
   // What vcinpl_general.h declares is in this library too.
   VCIID id{};
@@ -332,9 +321,7 @@ TEST(Vci2CApi, AJunkFloodDoesNotDelayAnotherClientsAnswers) {
     HANDLE control = nullptr;
     ASSERT_EQ(canControlOpen(gamma, 0, &control), VCI_OK);
     CANBTP classic = btp(500000, 14, 2);
-    ASSERT_EQ(canControlInitialize(control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
-                                   CAN_FILTER_INCL, 2048, 2048, &classic, nullptr),
-              VCI_OK);
+    ASSERT_EQ(testing::init_classic(control, classic), VCI_OK);
     ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
     HANDLE channel = nullptr;
     ASSERT_EQ(canChannelOpen(gamma, 0, FALSE, &channel), VCI_OK);

@@ -42,6 +42,13 @@ inline HANDLE device_named(const std::string& name) {
   return dev;
 }
 
+// Initializes `control`'s line for classic frames alone (CAN_EXMODE_DISABLED) with `mode` at
+// `sdr`, both filters inclusive with 2048 entries.
+inline HRESULT init_classic(HANDLE control, CANBTP sdr, UINT8 mode = kMode) {
+  return canControlInitialize(control, mode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL, CAN_FILTER_INCL,
+                              2048, 2048, &sdr, nullptr);
+}
+
 // A controller opened as a program opens it: device, control unit, one PASS channel
 // (activated unless told otherwise), the line initialized with `mode`, `ex_mode` and the
 // timings (`fdr` given only with an extended mode) and started if asked.

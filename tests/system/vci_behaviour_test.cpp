@@ -193,9 +193,7 @@ TEST(VciBehaviour, AListenOnlyLineKeepsWhatItIsGivenInTheFifoAndNeverShowsTxpend
   // Initialized to send: the three go out in order.
   ASSERT_EQ(canControlReset(gamma.control), VCI_OK);
   CANBTP sdr = k500k;
-  ASSERT_EQ(canControlInitialize(gamma.control, kMode, CAN_EXMODE_DISABLED, CAN_FILTER_INCL,
-                                 CAN_FILTER_INCL, 2048, 2048, &sdr, nullptr),
-            VCI_OK);
+  ASSERT_EQ(testing::init_classic(gamma.control, sdr), VCI_OK);
   ASSERT_EQ(canControlStart(gamma.control, TRUE), VCI_OK);
   step_ns(2'000'000);
   std::vector<uint32_t> ids;

@@ -19,14 +19,17 @@ namespace canemu {
 namespace {
 
 using testing::Adapter;
+using testing::by_type;
+using testing::ByType;
 using testing::cyclic_data;
+using testing::CyclicList;
 using testing::data;
 using testing::id_of;
 using testing::kMode;
 using testing::open_channel;
 using testing::pass_only_0x123_and_start;
 using testing::step_ns;
-using testing::step_until;
+using testing::step_while;
 using testing::VciDaemon;
 
 TEST(VciCApi, TheControlUnitGoesThroughItsStatesAndAnnouncesThem) {
@@ -94,26 +97,18 @@ TEST(VciCApi, ALoneAdapterSeesAckErrorsWarningAndErrorPassive) {
   Adapter alpha("alpha");
   alpha.post(data(0x10, {1}));
   step_ns(10'000'000);
-  std::vector<CANMSG> errors;
-  std::vector<CANMSG> statuses;
-  for (const CANMSG& m : alpha.drain()) {
-    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
-      errors.push_back(m);
-    } else if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_STATUS) {
-      statuses.push_back(m);
-    }
-  }
+  const ByType msgs = by_type(alpha.drain());
   // Every attempt misses its ACK. The 12th error takes TEC to 96 (warning), the 16th to 128
   // (error-passive), where an error-passive transmitter's ACK errors stop counting.
-  ASSERT_GT(errors.size(), 16u);
-  for (std::size_t k = 0; k < errors.size(); ++k) {
-    EXPECT_EQ(errors[k].dwMsgId, CAN_MSGID_ERROR);
-    EXPECT_EQ(errors[k].abData[0], CAN_ERROR_ACK) << k;
-    EXPECT_EQ((errors[k].abData[1] & CAN_STATUS_ERRLIM) != 0, k >= 11) << k;
+  ASSERT_GT(msgs.errors.size(), 16u);
+  for (std::size_t k = 0; k < msgs.errors.size(); ++k) {
+    EXPECT_EQ(msgs.errors[k].dwMsgId, CAN_MSGID_ERROR);
+    EXPECT_EQ(msgs.errors[k].abData[0], CAN_ERROR_ACK) << k;
+    EXPECT_EQ((msgs.errors[k].abData[1] & CAN_STATUS_ERRLIM) != 0, k >= 11) << k;
   }
-  ASSERT_EQ(statuses.size(), 1u);
-  EXPECT_EQ(statuses[0].abData[0] & CAN_STATUS_ERRLIM, CAN_STATUS_ERRLIM);
-  EXPECT_EQ(statuses[0].dwTime, errors[11].dwTime);
+  ASSERT_EQ(msgs.statuses.size(), 1u);
+  EXPECT_EQ(msgs.statuses[0].abData[0] & CAN_STATUS_ERRLIM, CAN_STATUS_ERRLIM);
+  EXPECT_EQ(msgs.statuses[0].dwTime, msgs.errors[11].dwTime);
   UINT8 state = 0;
   UINT16 tec = 0;
   UINT16 rec = 0;
@@ -152,24 +147,17 @@ TEST(VciCApi, ThirtyTwoBitErrorsDriveTheSenderBusOffAndARestartRecovers) {
                        "effect = \"bit_error\"\ncount = 32\n");
   alpha.post(data(0x10, {1}));
   step_ns(20'000'000);
-  std::vector<CANMSG> errors;
-  std::vector<CANMSG> statuses;
-  for (const CANMSG& m : alpha.drain()) {
-    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
-      errors.push_back(m);
-    } else if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_STATUS) {
-      statuses.push_back(m);
-    }
-  }
-  ASSERT_EQ(errors.size(), 32u);
-  for (const CANMSG& e : errors) {
+  const ByType msgs = by_type(alpha.drain());
+  ASSERT_EQ(msgs.errors.size(), 32u);
+  for (const CANMSG& e : msgs.errors) {
     EXPECT_EQ(e.abData[0], CAN_ERROR_BIT);
   }
-  EXPECT_EQ(errors.back().abData[1] & CAN_STATUS_BUSOFF, CAN_STATUS_BUSOFF);
-  ASSERT_EQ(statuses.size(), 2u);  // warning at the 12th error, bus-off at the 32nd
-  EXPECT_EQ(statuses[0].abData[0] & (CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF), CAN_STATUS_ERRLIM);
-  EXPECT_EQ(statuses[1].abData[0] & CAN_STATUS_BUSOFF, CAN_STATUS_BUSOFF);
-  EXPECT_EQ(statuses[1].dwTime, errors.back().dwTime);
+  EXPECT_EQ(msgs.errors.back().abData[1] & CAN_STATUS_BUSOFF, CAN_STATUS_BUSOFF);
+  ASSERT_EQ(msgs.statuses.size(), 2u);  // warning at the 12th error, bus-off at the 32nd
+  EXPECT_EQ(msgs.statuses[0].abData[0] & (CAN_STATUS_ERRLIM | CAN_STATUS_BUSOFF),
+            CAN_STATUS_ERRLIM);
+  EXPECT_EQ(msgs.statuses[1].abData[0] & CAN_STATUS_BUSOFF, CAN_STATUS_BUSOFF);
+  EXPECT_EQ(msgs.statuses[1].dwTime, msgs.errors.back().dwTime);
   UINT8 state = 0;
   UINT16 tec = 0;
   ASSERT_EQ(canemuGetControllerState(alpha.control, &state, &tec, nullptr, nullptr), VCI_OK);
@@ -227,20 +215,12 @@ TEST(VciCApi, ALongReceiveFaultLeavesRecAt255) {
   step_ns(100'000'000);  // to 700 ms: the fault waits for alpha's frame
   alpha.post(data(0x10, {1}));
   step_ns(10'000'000);
-  std::vector<CANMSG> errors;
-  std::vector<CANMSG> frames;
-  for (const CANMSG& m : beta.drain()) {
-    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
-      errors.push_back(m);
-    } else if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_DATA) {
-      frames.push_back(m);
-    }
-  }
-  ASSERT_EQ(errors.size(), 1u);
-  EXPECT_EQ(errors[0].abData[0], CAN_ERROR_STUFF);
-  EXPECT_EQ(errors[0].abData[1], CAN_STATUS_ERRLIM);
-  EXPECT_EQ(errors[0].abData[3], 255);
-  ASSERT_EQ(frames.size(), 1u);  // the repetition
+  const ByType msgs = by_type(beta.drain());
+  ASSERT_EQ(msgs.errors.size(), 1u);
+  EXPECT_EQ(msgs.errors[0].abData[0], CAN_ERROR_STUFF);
+  EXPECT_EQ(msgs.errors[0].abData[1], CAN_STATUS_ERRLIM);
+  EXPECT_EQ(msgs.errors[0].abData[3], 255);
+  ASSERT_EQ(msgs.frames.size(), 1u);  // the repetition
   UINT16 rec = 0;
   ASSERT_EQ(canemuGetControllerState(beta.control, nullptr, nullptr, &rec, nullptr), VCI_OK);
   EXPECT_EQ(rec, 127);
@@ -294,36 +274,22 @@ TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
               "controllers = [\"can0\"]\n");
   Adapter beta("beta", true, kMode, 1024, CAN_BT0_250KB, CAN_BT1_250KB);
   Adapter gamma("gamma", true, kMode, 1024, CAN_BT0_250KB, CAN_BT1_250KB);
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(beta.device, 0, &list), VCI_OK);
-  CANCYCLICTXMSG m = cyclic_data(0x2A0, 1, 1);  // a frame every millisecond
-  UINT32 index = 0;
-  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
-  ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
-  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+  const CyclicList list(beta.device);
+  list.send_without_end(cyclic_data(0x2A0, 1, 1));  // a frame every millisecond
 
-  HANDLE dev = nullptr;
-  ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
-  HANDLE control = nullptr;
-  ASSERT_EQ(canControlOpen(dev, 0, &control), VCI_OK);
+  const testing::ControlUnit alpha("alpha");
   UINT8 btr0[] = {CAN_BT0_500KB, CAN_BT0_250KB, CAN_BT0_125KB};
   UINT8 btr1[] = {CAN_BT1_500KB, CAN_BT1_250KB, CAN_BT1_125KB};
   INT32 found = -2;
-  std::atomic<bool> done{false};
   HRESULT hr = VCI_E_UNEXPECTED;
-  std::thread detector([&] {
-    hr = canControlDetectBitrate(control, 100, 3, btr0, btr1, &found);
-    done = true;
-  });
-  step_until(done);
-  detector.join();
+  step_while([&] { hr = canControlDetectBitrate(alpha.control, 100, 3, btr0, btr1, &found); });
   EXPECT_EQ(hr, VCI_OK);
   EXPECT_EQ(found, 1);
   // With what it found, the third adapter receives the traffic.
-  ASSERT_EQ(canControlInitialize(control, kMode, btr0[found], btr1[found]), VCI_OK);
+  ASSERT_EQ(canControlInitialize(alpha.control, kMode, btr0[found], btr1[found]), VCI_OK);
   HANDLE ch = nullptr;
-  ASSERT_NO_FATAL_FAILURE(open_channel(dev, 64, 0, &ch));
-  ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 64, 0, &ch));
+  ASSERT_EQ(canControlStart(alpha.control, TRUE), VCI_OK);
   step_ns(5'000'000);
   std::size_t frames = 0;
   CANMSG got;
@@ -333,21 +299,12 @@ TEST(VciCApi, DetectBitrateFindsTheRateOfTheTrafficOnTheBus) {
   EXPECT_GE(frames, 4u);
   // On a bus nobody talks on, it gives up after each entry's wait.
   ASSERT_EQ(canSchedulerActivate(list, FALSE), VCI_OK);
-  ASSERT_EQ(canControlReset(control), VCI_OK);
+  ASSERT_EQ(canControlReset(alpha.control), VCI_OK);
   step_ns(5'000'000);
-  done = false;
-  std::thread silent([&] {
-    hr = canControlDetectBitrate(control, 10, 2, btr0, btr1, &found);
-    done = true;
-  });
-  step_until(done);
-  silent.join();
+  step_while([&] { hr = canControlDetectBitrate(alpha.control, 10, 2, btr0, btr1, &found); });
   EXPECT_EQ(hr, VCI_E_TIMEOUT);
   EXPECT_EQ(found, -1);
   canChannelClose(ch);
-  canControlClose(control);
-  canSchedulerClose(list);
-  vciDeviceClose(dev);
 }
 
 TEST(VciCApi, TheTimeStampCounterAnnouncesItsOverflow) {

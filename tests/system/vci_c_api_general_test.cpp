@@ -25,15 +25,6 @@ namespace {
 using testing::id_of;
 using testing::VciDaemon;
 
-// canemu's version as the build number: major * 10000 + minor * 100 + patch.
-UINT32 expected_build() {
-  unsigned major = 0;
-  unsigned minor = 0;
-  unsigned patch = 0;
-  EXPECT_EQ(std::sscanf(CANEMU_PROJECT_VERSION, "%u.%u.%u", &major, &minor, &patch), 3);
-  return major * 10000 + minor * 100 + patch;
-}
-
 TEST(VciCApiGeneral, TheVersionIsVci4WithCanemusVersionAsBuildNumber) {
   UINT32 major = 0;
   UINT32 minor = 99;
@@ -43,10 +34,7 @@ TEST(VciCApiGeneral, TheVersionIsVci4WithCanemusVersionAsBuildNumber) {
   UINT32 revision = 99;
   UINT32 build = 0;
   ASSERT_EQ(vciGetVersionEx(&major, &minor, &revision, &build), VCI_OK);
-  EXPECT_EQ(major, 4u);
-  EXPECT_EQ(minor, 0u);
-  EXPECT_EQ(revision, 0u);
-  EXPECT_EQ(build, expected_build());
+  testing::expect_vci_4_0_0(major, minor, revision, build, CANEMU_PROJECT_VERSION);
   EXPECT_EQ(vciGetVersion(&major, nullptr), VCI_E_INVALIDARG);
   EXPECT_EQ(vciGetVersionEx(&major, &minor, &revision, nullptr), VCI_E_INVALIDARG);
 }
@@ -118,24 +106,14 @@ TEST(VciCApiGeneral, ADevicesVciidSurvivesTheTripThroughText) {
 }
 
 TEST(VciCApiGeneral, AGuidIsTheBracedRegistryForm) {
-  const GUID g = {0x12345678, 0x9ABC, 0xDEF0, {0x01, 0x23, 0x45, 0x67, 0x89, 0xAB, 0xCD, 0xEF}};
+  const GUID g = testing::kGuid;
   char text[39];
-  EXPECT_EQ(vciGuidToCharA(g, text, 38), VCI_E_BUFFER_OVERFLOW);
-  ASSERT_EQ(vciGuidToCharA(g, text, 39), VCI_OK);
-  EXPECT_STREQ(text, "{12345678-9ABC-DEF0-0123-456789ABCDEF}");
   wchar_t wide[39];
-  EXPECT_EQ(vciGuidToCharW(g, wide, 38), VCI_E_BUFFER_OVERFLOW);
-  ASSERT_EQ(vciGuidToCharW(g, wide, 39), VCI_OK);
-  EXPECT_STREQ(wide, L"{12345678-9ABC-DEF0-0123-456789ABCDEF}");
-  ASSERT_EQ(vciGuidToChar(g, text, sizeof text), VCI_OK);
+  ASSERT_NO_FATAL_FAILURE(testing::expect_guid_text_both_ways(text, wide));
+  ASSERT_EQ(vciGuidToChar(g, text, sizeof text), VCI_OK);  // the form without A or W
   EXPECT_STREQ(text, "{12345678-9ABC-DEF0-0123-456789ABCDEF}");
 
   GUID back{};
-  ASSERT_EQ(vciCharToGuidA(text, &back), VCI_OK);
-  EXPECT_EQ(std::memcmp(&back, &g, sizeof g), 0);
-  back = GUID{};
-  ASSERT_EQ(vciCharToGuidW(wide, &back), VCI_OK);
-  EXPECT_EQ(std::memcmp(&back, &g, sizeof g), 0);
   // IUnknown's well-known identifier, in lower case.
   char unknown[] = "{00000000-0000-0000-c000-000000000046}";
   ASSERT_EQ(vciCharToGuid(unknown, &back), VCI_OK);

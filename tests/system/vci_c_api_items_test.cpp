@@ -74,10 +74,8 @@ TEST(VciCFunctions, FindDeviceByClassCountsTheInstancesOfAClass) {
 TEST(VciCFunctions, WaitRxEventAndWaitTxEventFollowTheThresholds) {
   VciDaemon d;
   Adapter beta("beta");
-  Parts alpha("alpha");
-  ASSERT_EQ(canChannelInitialize(alpha.channel, 16, 2, 4, 2), VCI_OK);
-  ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
-  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
+  Parts alpha("alpha", 16, 4, 2, 2);
+  ASSERT_NO_FATAL_FAILURE(alpha.activate_and_init_line());
   EXPECT_EQ(canChannelWaitRxEvent(alpha.control, 0), VCI_E_INVHANDLE);
   EXPECT_EQ(canChannelWaitTxEvent(alpha.control, 0), VCI_E_INVHANDLE);
   EXPECT_EQ(canChannelWaitRxEvent(alpha.channel, 0), VCI_E_TIMEOUT);
@@ -111,10 +109,8 @@ TEST(VciCFunctions, WaitRxEventAndWaitTxEventFollowTheThresholds) {
 TEST(VciCFunctions, WaitTxEventWaitsForRoomInAFullFifo) {
   VciDaemon d;
   Adapter beta("beta");
-  Parts alpha("alpha");
-  ASSERT_EQ(canChannelInitialize(alpha.channel, 16, 1, 4, 2), VCI_OK);
-  ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
-  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
+  Parts alpha("alpha", 16, 4, 1, 2);
+  ASSERT_NO_FATAL_FAILURE(alpha.activate_and_init_line());
   CANMSG one = data(0x201, {1});
   std::size_t posted = 0;
   while (canChannelPostMessage(alpha.channel, &one) == VCI_OK) {  // capacity: at least 4
@@ -192,20 +188,15 @@ TEST(VciCFunctions, TheMultiMessageCallsMoveSeveralMessagesAtOnce) {
   EXPECT_EQ(canChannelPeekMultipleMessages(beta.channel, &count, in), VCI_E_RXQUEUE_EMPTY);
   EXPECT_EQ(count, 0u);
   // A read with a timeout on an empty FIFO ends after its time, in simulated time.
-  std::atomic<bool> ended{false};
-  std::atomic<HRESULT> read{VCI_E_UNEXPECTED};
-  std::atomic<UINT32> read_count{99};
-  std::thread reader([&] {
-    UINT32 n = 8;
+  HRESULT read = VCI_E_UNEXPECTED;
+  UINT32 read_count = 99;
+  testing::step_while([&] {
+    read_count = 8;
     CANMSG buf[8];
-    read = canChannelReadMultipleMessages(beta.channel, 3, &n, buf);
-    read_count = n;
-    ended = true;
+    read = canChannelReadMultipleMessages(beta.channel, 3, &read_count, buf);
   });
-  testing::step_until(ended);
-  reader.join();
-  EXPECT_EQ(read.load(), VCI_E_TIMEOUT);
-  EXPECT_EQ(read_count.load(), 0u);
+  EXPECT_EQ(read, VCI_E_TIMEOUT);
+  EXPECT_EQ(read_count, 0u);
   UINT32 n = 8;
   EXPECT_EQ(canChannelReadMsgMult(beta.channel, 0, in, 8, &n), VCI_E_RXQUEUE_EMPTY);
 }
@@ -230,9 +221,7 @@ TEST(VciCFunctions, PostMsgMultQueuesWhatFitsAndReportsAFullFifoOnlyWhenNothingF
   UINT32 count = 3;
   EXPECT_EQ(canChannelPostMultipleMessages(alpha.channel, &count, many.data()), VCI_E_TXQUEUE_FULL);
   EXPECT_EQ(count, 0u);
-  CANCHANSTATUS s{};
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
-  EXPECT_EQ(s.bTxFifoLoad, 100);
+  EXPECT_EQ(alpha.status().bTxFifoLoad, 100);
 }
 
 TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
@@ -240,8 +229,7 @@ TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
   Adapter alpha("alpha");
   Adapter beta("beta");
   SimClock clock;
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  const CyclicList list(alpha.device);
   CANCYCLICTXMSG m = cyclic_data(0x100, 2);
   UINT32 index = 99;
   ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
@@ -251,8 +239,7 @@ TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
   clock.to(5'000'000);  // sent at 2 and 4 ms
   ASSERT_EQ(canSchedulerStopMessage(list, 0), VCI_OK);
   EXPECT_EQ(canSchedulerStopMessage(list, 5), VCI_E_INVALID_INDEX);  // empty entry
-  CANSCHEDULERSTATUS s{};
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  CANSCHEDULERSTATUS s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_RUNNING);
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_DONE);  // kept, stopped
   clock.to(10'000'000);
@@ -260,13 +247,7 @@ TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
   clock.to(15'000'000);
   ASSERT_EQ(canSchedulerStartMessage(list, 0, 0), VCI_OK);  // at 15 ms: 17, 19, ...
   clock.to(18'000'000);
-  ASSERT_EQ(canSchedulerReset(list), VCI_OK);
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
-  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
-  for (UINT8 stat : s.abMsgStat) {
-    EXPECT_EQ(stat, CAN_CTXMSG_STAT_EMPTY);
-  }
-  EXPECT_EQ(canSchedulerStartMessage(list, 0, 0), VCI_E_INVALID_INDEX);
+  list.expect_reset_empties_it();
   EXPECT_EQ(canSchedulerReset(alpha.channel), VCI_E_INVHANDLE);
   clock.to(30'000'000);
   const auto got = beta.frames();
@@ -275,7 +256,6 @@ TEST(VciCFunctions, StopMessageKeepsTheEntryAndResetEmptiesTheList) {
     want.push_back(end_of(ms * 1000, 0x100, {}));
   }
   EXPECT_EQ(times_of(got), want);
-  canSchedulerClose(list);
 }
 
 // The LIN monitor's reads that no other test of libvcinpl calls: a master's header answered by
@@ -320,14 +300,13 @@ TEST(VciCItems, Item56_NewChannelIsInactiveUntilActivate) {
   SimClock clock;
   beta.post(data(0x123, {0x11, 0x22}));
   clock.to(1'000'000);
-  CANCHANSTATUS s{};
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  CANCHANSTATUS s = alpha.status();
   EXPECT_FALSE(s.fActivated);
   EXPECT_EQ(s.sLineStatus.dwStatus, 0u);  // the line is online
   CANMSG m{};
   EXPECT_EQ(canChannelPeekMessage(alpha.channel, &m), VCI_E_RXQUEUE_EMPTY);
   ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  s = alpha.status();
   EXPECT_TRUE(s.fActivated);
   beta.post(data(0x124, {0x33}));
   clock.to(2'000'000);
@@ -368,8 +347,7 @@ TEST(VciCItems, Item57_ActiveChannelGetsNothingWhileTheLineIsNotOnlineNorAfterDe
   ASSERT_EQ(canChannelPostMessage(alpha.channel, &mine), VCI_OK);
   clock.to(4'000'000);
   EXPECT_TRUE(alpha.drain().empty());
-  CANCHANSTATUS s{};
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  CANCHANSTATUS s = alpha.status();
   EXPECT_FALSE(s.fActivated);
   EXPECT_EQ(ids_of(gamma.frames()), (std::vector<uint32_t>{0x101, 0x102, 0x103, 0x104}));
   // Active again: the waiting frame goes at once.
@@ -394,8 +372,7 @@ TEST(VciCItems, Item66_StopLineAndResetLineLeaveTheChannelFifosAlone) {
   clock.to(2'000'000);
   ASSERT_EQ(canControlReset(alpha.control), VCI_OK);
   clock.to(3'000'000);
-  CANCHANSTATUS s{};
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  CANCHANSTATUS s = alpha.status();
   EXPECT_EQ(s.bTxFifoLoad, 2 * 100 / kPageOfCanmsg);  // 2 of the 64 rounded up to 192
   const auto got = alpha.drain();
   ASSERT_EQ(got.size(), 4u);  // START, the frame, STOP, RESET
@@ -440,12 +417,7 @@ TEST(VciCItems, Item67_InitLineWhileOnlineLeavesTheControllerOffline) {
   const auto got = alpha.drain();
   ASSERT_EQ(got.size(), 1u);  // the INFO START from before: InitLine sends no INFO
   EXPECT_EQ(got[0].abData[0], CAN_INFO_START);
-  std::vector<CANMSG> errors;
-  for (const CANMSG& m : beta.drain()) {
-    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
-      errors.push_back(m);
-    }
-  }
+  const std::vector<CANMSG> errors = of_type(beta.drain(), CAN_MSGTYPE_ERROR);
   ASSERT_FALSE(errors.empty());
   EXPECT_EQ(errors[0].abData[0], CAN_ERROR_ACK);
   EXPECT_EQ(errors[0].dwTime, 1000u + 54 * kBitUs2);  // the ACK slot of bit 53, at its end
@@ -464,8 +436,7 @@ TEST(VciCItems, Item68_ClosingTheControlUnitLeavesTheLineRunning) {
   SimClock clock;
   ASSERT_EQ(canControlClose(alpha.control), VCI_OK);
   alpha.control = nullptr;
-  CANCHANSTATUS s{};
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  CANCHANSTATUS s = alpha.status();
   EXPECT_EQ(s.sLineStatus.dwStatus, 0u);
   EXPECT_EQ(s.sLineStatus.bOpMode, kMode);
   beta.post(data(0x123, {0x11, 0x22}));
@@ -520,8 +491,7 @@ TEST(VciCItems, Item71_TwoChannelsTransmitInTurns) {
   VciDaemon d;
   Adapter alpha("alpha", false);
   Adapter beta("beta");
-  HANDLE second = nullptr;
-  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 16, 16, &second));
+  const ExtraChannel second(alpha.device, 16, 16);
   for (uint32_t id : {0x101, 0x102, 0x103, 0x104}) {
     alpha.post(data(id, {}));
   }
@@ -542,7 +512,6 @@ TEST(VciCItems, Item71_TwoChannelsTransmitInTurns) {
     start = ends.back() + 3 * kBitUs2;
   }
   EXPECT_EQ(times_of(got), ends);
-  canChannelClose(second);
 }
 
 TEST(VciCItems, Item72_ATransmitMessageThatIsNotDataNeverReachesTheBus) {
@@ -566,9 +535,7 @@ TEST(VciCItems, Item72_ATransmitMessageThatIsNotDataNeverReachesTheBus) {
   EXPECT_EQ(got[0].abData[0], CAN_INFO_START);
   EXPECT_EQ(got[1].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].dwTime, 124u);
-  CANCHANSTATUS s{};
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
-  EXPECT_EQ(s.bTxFifoLoad, 0);
+  EXPECT_EQ(alpha.status().bTxFifoLoad, 0);
 }
 
 // One tick is 1 / (dwClockFreq / dwTscDivisor) s; v1 channel, control unit and cyclic list
@@ -646,17 +613,15 @@ TEST(VciCItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
   VciDaemon d;
   Adapter beta("beta");
   Parts alpha("alpha");
-  HANDLE second = nullptr;
-  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 16, 0, &second));
-  ASSERT_EQ(canChannelActivate(alpha.channel, TRUE), VCI_OK);
-  ASSERT_EQ(canControlInitialize(alpha.control, kMode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
+  const ExtraChannel second(alpha.device, 16, 0);
+  ASSERT_NO_FATAL_FAILURE(alpha.activate_and_init_line());
   ASSERT_NO_FATAL_FAILURE(pass_only_0x123_and_start(alpha.control));
   beta.post(data(0x122, {}));
   beta.post(data(0x123, {}));
   SimClock clock;
   clock.to(1'000'000);
   const UINT32 second_end = end_of(end_of(0, 0x122, {}) + 6, 0x123, {});
-  for (HANDLE ch : {alpha.channel, second}) {
+  for (HANDLE ch : {alpha.channel, static_cast<HANDLE>(second)}) {
     const auto got = testing::drain(ch, true);
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].dwMsgId, 0x123u);
@@ -667,7 +632,6 @@ TEST(VciCItems, Item105_AFrameTheControlUnitFilterBlocksReachesNoChannel) {
   for (const CANMSG& m : beta.drain()) {
     EXPECT_NE(m.uMsgInfo.Bytes.bType, CAN_MSGTYPE_ERROR);
   }
-  canChannelClose(second);
 }
 
 TEST(VciCItems, Item112_ASingleShotFrameIsNotRetried) {
@@ -680,12 +644,7 @@ TEST(VciCItems, Item112_ASingleShotFrameIsNotRetried) {
   alpha.post(once);
   SimClock clock;
   clock.to(1'000'000);
-  std::vector<CANMSG> errors;
-  for (const CANMSG& m : alpha.drain()) {
-    if (m.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR) {
-      errors.push_back(m);
-    }
-  }
+  const std::vector<CANMSG> errors = of_type(alpha.drain(), CAN_MSGTYPE_ERROR);
   ASSERT_EQ(errors.size(), 1u);  // one attempt
   EXPECT_EQ(errors[0].abData[0], CAN_ERROR_ACK);
   EXPECT_EQ(errors[0].dwTime, 54u * kBitUs2);
@@ -748,10 +707,8 @@ TEST(VciCItems, Item125_ResumeStartsEveryStartedEntryTogether) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
-  CANSCHEDULERSTATUS s{};
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  const CyclicList list(alpha.device);
+  CANSCHEDULERSTATUS s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
   CANCYCLICTXMSG m{};
   m.wCycleTime = 4;
@@ -766,7 +723,7 @@ TEST(VciCItems, Item125_ResumeStartsEveryStartedEntryTogether) {
   clock.to(10'000'000);
   EXPECT_TRUE(beta.frames().empty());
   ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_RUNNING);
   clock.to(19'500'000);
   const auto got = beta.frames();
@@ -774,15 +731,13 @@ TEST(VciCItems, Item125_ResumeStartsEveryStartedEntryTogether) {
   EXPECT_EQ(times_of(got),
             (std::vector<UINT32>{end_of(14'000, 0x100, {}), end_of(15'000, 0x200, {}),
                                  end_of(18'000, 0x100, {}), end_of(19'000, 0x200, {})}));
-  canSchedulerClose(list);
 }
 
 TEST(VciCItems, Item127_ACyclicFrameComesEveryCycleExactly) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  const CyclicList list(alpha.device);
   CANCAPABILITIES caps{};
   ASSERT_EQ(canSchedulerGetCaps(list, &caps), VCI_OK);
   const uint32_t tick_us = caps.dwCmsDivisor * 1'000'000 / caps.dwClockFreq;
@@ -801,15 +756,13 @@ TEST(VciCItems, Item127_ACyclicFrameComesEveryCycleExactly) {
     want.push_back(end_of(3000 + k * 5 * tick_us, 0x555, std::vector<uint8_t>(8, 0)));
   }
   EXPECT_EQ(times_of(got), want);
-  canSchedulerClose(list);
 }
 
 TEST(VciCItems, Item129_IncrementsOfEightAndSixteenBitsWrap) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  const CyclicList list(alpha.device);
   CANCYCLICTXMSG m{};
   m.wCycleTime = 4;
   m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
@@ -843,40 +796,28 @@ TEST(VciCItems, Item129_IncrementsOfEightAndSixteenBitsWrap) {
   // The little-endian word at byte 1: 0xFFFE, 0xFFFF, 0 (byte 3 untouched).
   EXPECT_EQ(data16,
             (Bytes{{0xAA, 0xFE, 0xFF, 0x07}, {0xAA, 0xFF, 0xFF, 0x07}, {0xAA, 0x00, 0x00, 0x07}}));
-  CANSCHEDULERSTATUS s{};
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  CANSCHEDULERSTATUS s = list.status();
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_DONE);
   EXPECT_EQ(s.abMsgStat[1], CAN_CTXMSG_STAT_DONE);
-  canSchedulerClose(list);
 }
 
 TEST(VciCItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  const CyclicList list(alpha.device);
   CANCYCLICTXMSG m = cyclic_data(0x100, 2);
-  UINT32 index = 0;
-  ASSERT_EQ(canSchedulerAddMessage(list, &m, &index), VCI_OK);
-  ASSERT_EQ(canSchedulerStartMessage(list, index, 0), VCI_OK);
-  ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
+  list.send_without_end(m);
   SimClock clock;
   clock.to(5'000'000);
   ASSERT_EQ(canSchedulerActivate(list, FALSE), VCI_OK);
-  CANSCHEDULERSTATUS s{};
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  CANSCHEDULERSTATUS s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_BUSY);
   clock.to(11'000'000);
   ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);
   clock.to(15'500'000);
-  ASSERT_EQ(canSchedulerReset(list), VCI_OK);
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
-  EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_STOPPED);
-  for (UINT8 stat : s.abMsgStat) {
-    EXPECT_EQ(stat, CAN_CTXMSG_STAT_EMPTY);
-  }
+  list.expect_reset_empties_it();
   ASSERT_EQ(canSchedulerActivate(list, TRUE), VCI_OK);  // nothing left to send
   clock.to(30'000'000);
   std::vector<UINT32> want;
@@ -884,7 +825,6 @@ TEST(VciCItems, Item130_SuspendStopsResumeContinuesAndResetEmptiesTheList) {
     want.push_back(end_of(ms * 1000, 0x100, {}));
   }
   EXPECT_EQ(times_of(beta.frames()), want);
-  canSchedulerClose(list);
 }
 
 }  // namespace

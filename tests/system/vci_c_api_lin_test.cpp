@@ -16,8 +16,7 @@ TEST(VciCLin, TheLinControllerIsNumberedAfterTheCanControllersAndOpensOnce) {  /
   VciDaemon d(kLinAdapters);
   HANDLE dev = nullptr;
   ASSERT_EQ(vciDeviceOpen(id_of("alpha"), &dev), VCI_OK);
-  VCIDEVICECAPS caps{};
-  ASSERT_EQ(vciDeviceGetCaps(dev, &caps), VCI_OK);
+  const VCIDEVICECAPS caps = device_caps(dev);
   EXPECT_EQ(caps.BusCtrlCount, 2);
   EXPECT_EQ(caps.BusCtrlTypes[0], VCI_CAN_CTRL(CAN_CTRL_SJA1000));
   EXPECT_EQ(caps.BusCtrlTypes[1], VCI_LIN_CTRL(LIN_CTRL_UNKNOWN));

@@ -46,8 +46,7 @@ TEST(VciCApi, SelfReceptionReachesEveryChannelOfTheController) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  HANDLE second = nullptr;
-  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 64, 0, &second));
+  const ExtraChannel second(alpha.device, 64, 0);
   HANDLE exclusive = nullptr;
   EXPECT_EQ(canChannelOpen(alpha.device, 0, TRUE, &exclusive), VCI_E_ACCESSDENIED);
   EXPECT_EQ(exclusive, nullptr);
@@ -69,7 +68,6 @@ TEST(VciCApi, SelfReceptionReachesEveryChannelOfTheController) {
   // A channel without a transmit FIFO cannot send.
   CANMSG x = data(1, {});
   EXPECT_EQ(canChannelPostMessage(second, &x), VCI_E_ACCESSDENIED);
-  canChannelClose(second);
 }
 
 TEST(VciCApi, AFullReceiveFifoLosesTheNewestAndMarksTheNextOneThatFits) {
@@ -87,8 +85,7 @@ TEST(VciCApi, AFullReceiveFifoLosesTheNewestAndMarksTheNextOneThatFits) {
   step_ns(20'000'000);
   ASSERT_EQ(canChannelSendMsgMult(beta.channel, 0, burst.data(), 64, &done), VCI_OK);
   step_ns(20'000'000);
-  CANCHANSTATUS s{};
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  CANCHANSTATUS s = alpha.status();
   EXPECT_TRUE(s.fRxOverrun);
   EXPECT_EQ(s.bRxFifoLoad, 100);
   const auto kept = alpha.drain();  // the INFO START and the first frames that fitted
@@ -102,7 +99,7 @@ TEST(VciCApi, AFullReceiveFifoLosesTheNewestAndMarksTheNextOneThatFits) {
   ASSERT_EQ(next.size(), 1u);
   EXPECT_EQ(next[0].dwMsgId, 0x56u);
   EXPECT_EQ(next[0].uMsgInfo.Bits.ovr, 1u);
-  ASSERT_EQ(canChannelGetStatus(alpha.channel, &s), VCI_OK);
+  s = alpha.status();
   EXPECT_TRUE(s.fRxOverrun);  // until the channel is initialized again
 }
 
@@ -138,8 +135,7 @@ TEST(VciCApi, ADelayAboveTheMaximumIsClampedAndHighPriorityGoesFirst) {
   EXPECT_EQ(got[1].dwTime, 65'535u + 124u);
   // Two channels: a high-priority frame of the second overtakes the first's waiting frame (not
   // the one already in the controller).
-  HANDLE second = nullptr;
-  ASSERT_NO_FATAL_FAILURE(open_channel(alpha.device, 64, 16, &second));
+  const ExtraChannel second(alpha.device, 64, 16);
   alpha.post(data(0x201, {1}));
   alpha.post(data(0x202, {2}));
   step_ns(10'000);  // 0x201 is on the wire
@@ -152,16 +148,14 @@ TEST(VciCApi, ADelayAboveTheMaximumIsClampedAndHighPriorityGoesFirst) {
     order.push_back(m.dwMsgId);
   }
   EXPECT_EQ(order, (std::vector<uint32_t>{0x201, 0x300, 0x202}));
-  canChannelClose(second);
 }
 
 TEST(VciCApi, TheCyclicListSendsOnItsTicksAndIncrementsTheIdentifier) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  HANDLE list = nullptr;
+  const CyclicList list(alpha.device);
   HANDLE other = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
   EXPECT_EQ(canSchedulerOpen(beta.device, 0, &other), VCI_OK);  // beta's own list
   HANDLE again = nullptr;
   EXPECT_EQ(canSchedulerOpen(alpha.device, 0, &again), VCI_E_ACCESSDENIED);
@@ -194,15 +188,13 @@ TEST(VciCApi, TheCyclicListSendsOnItsTicksAndIncrementsTheIdentifier) {
               10'000u + 2'000u * (k + 1) + static_cast<UINT32>(bits_of(ids[k], {0xA5}) * kBitUs2))
         << k;
   }
-  CANSCHEDULERSTATUS s{};
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  CANSCHEDULERSTATUS s = list.status();
   EXPECT_EQ(s.bTaskStat, CAN_CTXTSK_STAT_RUNNING);
   EXPECT_EQ(s.abMsgStat[0], CAN_CTXMSG_STAT_DONE);
   EXPECT_EQ(s.abMsgStat[1], CAN_CTXMSG_STAT_EMPTY);
   ASSERT_EQ(canSchedulerRemMessage(list, index), VCI_OK);
   EXPECT_EQ(canSchedulerStartMessage(list, index, 1), VCI_E_INVALID_INDEX);
   canSchedulerClose(other);
-  canSchedulerClose(list);
 }
 
 // In real time a blocked reader wakes when the frame comes, and a writer's doorbell wakes the
@@ -214,8 +206,7 @@ TEST(VciCApi, TheCyclicListAdmitsEntriesUpToOneFramePerTick) {
   VciDaemon d;
   Adapter alpha("alpha");
   Adapter beta("beta");
-  HANDLE list = nullptr;
-  ASSERT_EQ(canSchedulerOpen(alpha.device, 0, &list), VCI_OK);
+  const CyclicList list(alpha.device);
   CANCYCLICTXMSG m{};
   m.uMsgInfo.Bytes.bType = CAN_MSGTYPE_DATA;
   m.uMsgInfo.Bits.dlc = 1;
@@ -232,8 +223,7 @@ TEST(VciCApi, TheCyclicListAdmitsEntriesUpToOneFramePerTick) {
   UINT32 refused = 0;
   EXPECT_EQ(canSchedulerAddMessage(list, &m, &refused), VCI_E_OUTOFMEMORY);
   EXPECT_EQ(refused, 0xFFFFFFFFu);
-  CANSCHEDULERSTATUS s{};
-  ASSERT_EQ(canSchedulerGetStatus(list, &s), VCI_OK);
+  CANSCHEDULERSTATUS s = list.status();
   EXPECT_EQ(s.abMsgStat[3], CAN_CTXMSG_STAT_EMPTY);
   // Removing the cycle-6 entry frees its share: one of cycle 7 fits, leaving 1/42: a further
   // one of cycle 41 does not.
@@ -262,7 +252,6 @@ TEST(VciCApi, TheCyclicListAdmitsEntriesUpToOneFramePerTick) {
   // 7 b, 8 c (due since 6, before a's 8), 9 a, 10 b (due 9), 11 a (due 10), 12 a.
   EXPECT_EQ(ids, (std::vector<uint32_t>{0x100, 0x101, 0x100, 0x100, 0x101, 0x102, 0x100, 0x101,
                                         0x100, 0x100}));
-  canSchedulerClose(list);
 }
 
 TEST(VciCApi, InRealTimeAReaderBlocksUntilTheFrameComes) {

@@ -27,6 +27,11 @@ inline void open_channel(HANDLE device, UINT16 rx, UINT16 tx, HANDLE* channel) {
   ASSERT_EQ(canChannelActivate(*channel, TRUE), VCI_OK);
 }
 
+// open_channel's channel, closed with the object.
+struct ExtraChannel : OwnedHandle<canChannelClose> {
+  ExtraChannel(HANDLE device, UINT16 rx, UINT16 tx) { open_channel(device, rx, tx, &handle_); }
+};
+
 // `control`'s 11-bit filter passes only 0x123 (the acceptance filter shut, the ID list holding
 // it), and the line starts.
 inline void pass_only_0x123_and_start(HANDLE control) {
@@ -35,19 +40,31 @@ inline void pass_only_0x123_and_start(HANDLE control) {
   ASSERT_EQ(canControlStart(control, TRUE), VCI_OK);
 }
 
-// An adapter's device, its control unit and a channel (receive FIFO `rx`, transmit FIFO `tx`)
-// initialized but not yet activated.
+// An adapter's device, its control unit and a channel (receive FIFO `rx`, transmit FIFO `tx`,
+// with their event thresholds) initialized but not yet activated.
 struct Parts : ControllerHandles {
-  explicit Parts(const std::string& name, UINT16 rx = 64, UINT16 tx = 16) {
+  explicit Parts(const std::string& name, UINT16 rx = 64, UINT16 tx = 16, UINT16 rx_threshold = 1,
+                 UINT16 tx_threshold = 1) {
     EXPECT_EQ(vciDeviceOpen(id_of(name), &device), VCI_OK);
     EXPECT_EQ(canControlOpen(device, 0, &control), VCI_OK);
     EXPECT_EQ(canChannelOpen(device, 0, FALSE, &channel), VCI_OK);
-    EXPECT_EQ(canChannelInitialize(channel, rx, 1, tx, 1), VCI_OK);
+    EXPECT_EQ(canChannelInitialize(channel, rx, rx_threshold, tx, tx_threshold), VCI_OK);
+  }
+  // Activates the channel and initializes the line at 500 kbit/s, not yet started.
+  void activate_and_init_line() const {
+    ASSERT_EQ(canChannelActivate(channel, TRUE), VCI_OK);
+    ASSERT_EQ(canControlInitialize(control, kMode, CAN_BT0_500KB, CAN_BT1_500KB), VCI_OK);
   }
   // All that arrived.
   std::vector<CANMSG> drain() const { return testing::drain(channel, false); }
   // The data frames among what arrived.
   std::vector<CANMSG> frames() const { return testing::drain(channel, true); }
+  // The channel's status.
+  CANCHANSTATUS status() const {
+    CANCHANSTATUS s{};
+    EXPECT_EQ(canChannelGetStatus(channel, &s), VCI_OK);
+    return s;
+  }
 };
 
 // One adapter's controller opened as a VCI program opens it: device, control unit, one

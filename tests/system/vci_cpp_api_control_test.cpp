@@ -155,12 +155,9 @@ TEST(VciCppApi, TheChannelsControlIsExclusiveAListenOnlyLineNeverSendsAndBusLoad
   Adapter alpha("alpha");
   Adapter beta("beta");
   // ICanChannel2::GetControl is the control unit, held by alpha's program already.
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> channel2;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, channel2.out()), VCI_OK);
+  V2Channel ch2(alpha.bal.p);
   Ref<ICanControl2> control2;
-  EXPECT_EQ(channel2->GetControl(control2.out()), VCI_E_ACCESSDENIED);
+  EXPECT_EQ(ch2.channel->GetControl(control2.out()), VCI_E_ACCESSDENIED);
   EXPECT_EQ(control2.p, nullptr);
   Ref<IUnknown> bal_unknown;
   EXPECT_EQ(alpha.device->OpenComponent(CLSID_VCIBAL, IID_IUnknown, bal_unknown.pv()), VCI_OK);

@@ -18,71 +18,66 @@ namespace {
 
 TEST(VciCppApi, AStandAloneFifoKeepsOrderCountsAndSignalsOnWritesOnly) {
   VciDaemon d;
-  VCIID id{};
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(VciCreateFifo(&id, 32, 16, IID_IFifoWriter, writer.pv()), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
+  StandAloneFifo fifo(32, 16);
   Ref<IFifoReader> twice;
-  EXPECT_EQ(VciAccessFifo(id, IID_IFifoReader, twice.pv()), VCI_E_ACCESSDENIED);
+  EXPECT_EQ(VciAccessFifo(fifo.id, IID_IFifoReader, twice.pv()), VCI_E_ACCESSDENIED);
   UINT16 capacity = 0;
   UINT16 size = 0;
-  ASSERT_EQ(reader->GetCapacity(&capacity), VCI_OK);
-  ASSERT_EQ(reader->GetEntrySize(&size), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetCapacity(&capacity), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetEntrySize(&size), VCI_OK);
   EXPECT_GE(capacity, 32);
   EXPECT_EQ(size, 16);
-  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
-  ASSERT_EQ(reader->SetThreshold(3), VCI_OK);
-  ASSERT_EQ(reader->AssignEvent(event), VCI_OK);
+  const Event event;
+  ASSERT_EQ(fifo.reader->SetThreshold(3), VCI_OK);
+  ASSERT_EQ(fifo.reader->AssignEvent(event), VCI_OK);
   uint8_t element[16] = {};
   for (uint8_t k = 1; k <= 5; ++k) {
     element[0] = k;
-    ASSERT_EQ(writer->PutDataEntry(element), VCI_OK);
+    ASSERT_EQ(fifo.writer->PutDataEntry(element), VCI_OK);
   }
   EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0);  // the third write crossed 3
   UINT16 fill = 0;
   UINT16 free_count = 0;
-  ASSERT_EQ(reader->GetFillCount(&fill), VCI_OK);
-  ASSERT_EQ(reader->GetFreeCount(&free_count), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetFreeCount(&free_count), VCI_OK);
   EXPECT_EQ(fill, 5);
   EXPECT_EQ(fill + free_count, capacity);
   // Acquire five, release two: the next acquire starts at the third.
   PVOID p = nullptr;
   UINT16 count = 0;
-  ASSERT_EQ(reader->AcquireRead(&p, &count), VCI_OK);
+  ASSERT_EQ(fifo.reader->AcquireRead(&p, &count), VCI_OK);
   EXPECT_EQ(count, 5);
   EXPECT_EQ(static_cast<uint8_t*>(p)[0], 1);
-  ASSERT_EQ(reader->ReleaseRead(2), VCI_OK);
-  ASSERT_EQ(reader->AcquireRead(&p, &count), VCI_OK);
+  ASSERT_EQ(fifo.reader->ReleaseRead(2), VCI_OK);
+  ASSERT_EQ(fifo.reader->AcquireRead(&p, &count), VCI_OK);
   EXPECT_EQ(count, 3);
   EXPECT_EQ(static_cast<uint8_t*>(p)[0], 3);
-  ASSERT_EQ(reader->ReleaseRead(0), VCI_OK);
+  ASSERT_EQ(fifo.reader->ReleaseRead(0), VCI_OK);
   // Acquired without a count pointer, one element may be released.
-  ASSERT_EQ(reader->AcquireRead(&p, nullptr), VCI_OK);
-  EXPECT_EQ(reader->ReleaseRead(2), VCI_E_INVALIDARG);
-  ASSERT_EQ(reader->ReleaseRead(1), VCI_OK);         // the third
-  ASSERT_EQ(reader->GetDataEntry(nullptr), VCI_OK);  // drops the fourth
-  ASSERT_EQ(reader->GetDataEntry(element), VCI_OK);
+  ASSERT_EQ(fifo.reader->AcquireRead(&p, nullptr), VCI_OK);
+  EXPECT_EQ(fifo.reader->ReleaseRead(2), VCI_E_INVALIDARG);
+  ASSERT_EQ(fifo.reader->ReleaseRead(1), VCI_OK);         // the third
+  ASSERT_EQ(fifo.reader->GetDataEntry(nullptr), VCI_OK);  // drops the fourth
+  ASSERT_EQ(fifo.reader->GetDataEntry(element), VCI_OK);
   EXPECT_EQ(element[0], 5);
   EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);  // reads signal nothing
   // Lock is recursive.
-  EXPECT_EQ(reader->Lock(), VCI_OK);
-  EXPECT_EQ(reader->Lock(), VCI_OK);
-  EXPECT_EQ(reader->Unlock(), VCI_OK);
-  EXPECT_EQ(reader->Unlock(), VCI_OK);
+  EXPECT_EQ(fifo.reader->Lock(), VCI_OK);
+  EXPECT_EQ(fifo.reader->Lock(), VCI_OK);
+  EXPECT_EQ(fifo.reader->Unlock(), VCI_OK);
+  EXPECT_EQ(fifo.reader->Unlock(), VCI_OK);
   // Reset only with no reader and writer open.
-  Ref<IVciFifo2> fifo;
-  ASSERT_EQ(VciAccessFifo(id, IID_IVciFifo2, fifo.pv()), VCI_OK);
-  EXPECT_EQ(fifo->Reset(), VCI_E_ACCESSDENIED);
-  reader->AssignEvent(nullptr);
-  reader->Release();
-  reader.p = nullptr;
-  writer->Release();
-  writer.p = nullptr;
-  ASSERT_EQ(fifo->Reset(), VCI_OK);
-  ASSERT_EQ(fifo->GetFillCount(&fill), VCI_OK);
+  Ref<IVciFifo2> whole;
+  ASSERT_EQ(VciAccessFifo(fifo.id, IID_IVciFifo2, whole.pv()), VCI_OK);
+  EXPECT_EQ(whole->Reset(), VCI_E_ACCESSDENIED);
+  fifo.reader->AssignEvent(nullptr);
+  fifo.reader->Release();
+  fifo.reader.p = nullptr;
+  fifo.writer->Release();
+  fifo.writer.p = nullptr;
+  ASSERT_EQ(whole->Reset(), VCI_OK);
+  ASSERT_EQ(whole->GetFillCount(&fill), VCI_OK);
   EXPECT_EQ(fill, 0);
-  CloseHandle(event);
 }
 
 // A FIFO made with VciCreateFifo is reached from another process by its VCIID; there is one
@@ -96,35 +91,26 @@ TEST(VciCppApi, AFifoIsSharedBetweenProcessesWithOneReaderAndOneWriterInAll) {
     uint8_t e[8] = {k};
     ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
   }
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    // Another program: a connection of its own, the reader, the three elements in order.
-    if (canemuConnect(d.daemon.socket().c_str()) != VCI_OK) {
-      ::_exit(10);
-    }
+  // Another program: the reader, the three elements in order; the writer is the first's.
+  ASSERT_NO_FATAL_FAILURE(in_another_program(d, [&id] {
     IFifoReader* reader = nullptr;
     if (VciAccessFifo(id, IID_IFifoReader, reinterpret_cast<PVOID*>(&reader)) != VCI_OK) {
-      ::_exit(11);
+      return 11;
     }
     IFifoWriter* second = nullptr;
     if (VciAccessFifo(id, IID_IFifoWriter, reinterpret_cast<PVOID*>(&second)) !=
         VCI_E_ACCESSDENIED) {
-      ::_exit(12);  // the first program has the writer
+      return 12;
     }
     for (uint8_t k = 1; k <= 3; ++k) {
       uint8_t e[8] = {};
       if (reader->GetDataEntry(e) != VCI_OK || e[0] != k) {
-        ::_exit(13);
+        return 13;
       }
     }
     reader->Release();
-    ::_exit(0);
-  }
-  int status = -1;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+    return 0;
+  }));
   // The reader is free again, and the FIFO empty.
   Ref<IFifoReader> reader;
   ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
@@ -140,37 +126,20 @@ TEST(VciCppApi, AFifoIsSharedBetweenProcessesWithOneReaderAndOneWriterInAll) {
 TEST(VciCppApi, TwoProcessesOpenTheSameBalAndAFifoRoundsToWholePages) {
   VciDaemon d;
   Adapter alpha("alpha");  // this process holds alpha's BAL, control unit and a channel
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    if (canemuConnect(d.daemon.socket().c_str()) != VCI_OK) {
-      ::_exit(10);
-    }
-    IVciDeviceManager* manager = nullptr;
-    IVciDevice* device = nullptr;
-    IBalObject* bal = nullptr;
+  ASSERT_NO_FATAL_FAILURE(with_alpha_bal_in_another_program(d, [](IBalObject* bal) {
     ICanSocket* socket = nullptr;
     ICanChannel* channel = nullptr;
-    VCIID id{};
-    id.AsInt64 = 1;
-    if (VciGetDeviceManager(&manager) != VCI_OK || manager->OpenDevice(id, &device) != VCI_OK ||
-        device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, reinterpret_cast<PVOID*>(&bal)) !=
-            VCI_OK ||
-        bal->OpenSocket(0, IID_ICanSocket, reinterpret_cast<PVOID*>(&socket)) != VCI_OK ||
+    if (bal->OpenSocket(0, IID_ICanSocket, reinterpret_cast<PVOID*>(&socket)) != VCI_OK ||
         socket->CreateChannel(FALSE, &channel) != VCI_OK) {
-      ::_exit(11);
+      return 12;
     }
     ICanControl* control = nullptr;
     if (bal->OpenSocket(0, IID_ICanControl, reinterpret_cast<PVOID*>(&control)) !=
         VCI_E_ACCESSDENIED) {
-      ::_exit(12);  // the first process has the control unit
+      return 13;  // the first process has the control unit
     }
-    ::_exit(0);
-  }
-  int status = -1;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+    return 0;
+  }));
   // The guide's 32 elements of 16 bytes: one 4 KiB page holds the 256-byte header and 240.
   VCIID fifo_id{};
   Ref<IVciFifo> fifo;
@@ -205,65 +174,57 @@ TEST(VciCppApi, AThreadWaitsForTheFifoLockTheOtherHolds) {
 
 TEST(VciCppApi, FifoEdgesFullEmptyInPlaceWritesLevelsAndThresholds) {
   VciDaemon d;
-  VCIID id{};
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(VciCreateFifo(&id, 16, 8, IID_IFifoWriter, writer.pv()), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
-  Ref<IVciFifo> info;
-  ASSERT_EQ(VciAccessFifo(id, IID_IVciFifo, info.pv()), VCI_OK);
+  StandAloneFifo fifo(16, 8);
   UINT16 capacity = 0;
-  ASSERT_EQ(reader->GetCapacity(&capacity), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetCapacity(&capacity), VCI_OK);
   UINT16 size = 0;
-  ASSERT_EQ(reader->GetEntrySize(&size), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetEntrySize(&size), VCI_OK);
   EXPECT_EQ(size, 8);
   // Thresholds above the capacity are clamped.
-  ASSERT_EQ(reader->SetThreshold(0xFFFF), VCI_OK);
+  ASSERT_EQ(fifo.reader->SetThreshold(0xFFFF), VCI_OK);
   UINT16 threshold = 0;
-  ASSERT_EQ(reader->GetThreshold(&threshold), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetThreshold(&threshold), VCI_OK);
   EXPECT_EQ(threshold, capacity);
   // Reading an empty FIFO; acquiring without a place to put the pointer.
   uint8_t e[8] = {};
-  EXPECT_EQ(reader->GetDataEntry(e), VCI_E_RXQUEUE_EMPTY);
+  EXPECT_EQ(fifo.reader->GetDataEntry(e), VCI_E_RXQUEUE_EMPTY);
   PVOID p = nullptr;
   UINT16 n = 0;
-  EXPECT_EQ(reader->AcquireRead(&p, &n), VCI_E_RXQUEUE_EMPTY);
-  EXPECT_EQ(reader->AcquireRead(nullptr, &n), VCI_E_INVALIDARG);
+  EXPECT_EQ(fifo.reader->AcquireRead(&p, &n), VCI_E_RXQUEUE_EMPTY);
+  EXPECT_EQ(fifo.reader->AcquireRead(nullptr, &n), VCI_E_INVALIDARG);
   // Written in place: invisible until released.
-  ASSERT_EQ(writer->AcquireWrite(&p, &n), VCI_OK);
+  ASSERT_EQ(fifo.writer->AcquireWrite(&p, &n), VCI_OK);
   EXPECT_EQ(n, capacity);
   static_cast<uint8_t*>(p)[0] = 0x42;
   UINT16 fill = 1;
-  ASSERT_EQ(reader->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetFillCount(&fill), VCI_OK);
   EXPECT_EQ(fill, 0);
-  ASSERT_EQ(writer->ReleaseWrite(1), VCI_OK);
-  ASSERT_EQ(reader->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(fifo.writer->ReleaseWrite(1), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetFillCount(&fill), VCI_OK);
   EXPECT_EQ(fill, 1);
   // Full: the writer is refused, nothing is overwritten; the level says 100 %.
   for (UINT16 k = 1; k < capacity; ++k) {
     e[0] = static_cast<uint8_t>(k);
-    ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+    ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
   }
-  EXPECT_EQ(writer->PutDataEntry(e), VCI_E_TXQUEUE_FULL);
-  EXPECT_EQ(writer->AcquireWrite(&p, &n), VCI_E_TXQUEUE_FULL);
+  EXPECT_EQ(fifo.writer->PutDataEntry(e), VCI_E_TXQUEUE_FULL);
+  EXPECT_EQ(fifo.writer->AcquireWrite(&p, &n), VCI_E_TXQUEUE_FULL);
   UINT16 level = 0;
-  ASSERT_EQ(info->GetFillLevel(&level), VCI_OK);
+  ASSERT_EQ(fifo.info->GetFillLevel(&level), VCI_OK);
   EXPECT_EQ(level, 100);
-  ASSERT_EQ(reader->GetDataEntry(e), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetDataEntry(e), VCI_OK);
   EXPECT_EQ(e[0], 0x42);
   // A second AssignEvent replaces the first.
-  HANDLE first = CreateEvent(nullptr, FALSE, FALSE, nullptr);
-  HANDLE second = CreateEvent(nullptr, FALSE, FALSE, nullptr);
-  ASSERT_EQ(reader->SetThreshold(1), VCI_OK);
-  ASSERT_EQ(reader->AssignEvent(first), VCI_OK);
-  ASSERT_EQ(reader->AssignEvent(second), VCI_OK);
+  const Event first;
+  const Event second;
+  ASSERT_EQ(fifo.reader->SetThreshold(1), VCI_OK);
+  ASSERT_EQ(fifo.reader->AssignEvent(first), VCI_OK);
+  ASSERT_EQ(fifo.reader->AssignEvent(second), VCI_OK);
   e[0] = 0x99;
-  ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
   EXPECT_EQ(WaitForSingleObject(second, 5000), WAIT_OBJECT_0);
   EXPECT_EQ(WaitForSingleObject(first, 0), WAIT_TIMEOUT);
-  reader->AssignEvent(nullptr);
-  CloseHandle(first);
-  CloseHandle(second);
+  fifo.reader->AssignEvent(nullptr);
 }
 
 TEST(VciCppApi, AWritersEventFiresWhenTheControllerMakesRoom) {
@@ -281,7 +242,7 @@ TEST(VciCppApi, AWritersEventFiresWhenTheControllerMakesRoom) {
   // Ten put; the line may have taken the first already (the writer rang its doorbell).
   EXPECT_GE(free_count + 10, capacity);
   EXPECT_LE(free_count + 9, capacity);
-  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
+  const Event event;
   ASSERT_EQ(alpha.writer->SetThreshold(capacity), VCI_OK);  // all free again
   ASSERT_EQ(alpha.writer->AssignEvent(event), VCI_OK);
   EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);
@@ -290,7 +251,6 @@ TEST(VciCppApi, AWritersEventFiresWhenTheControllerMakesRoom) {
   ASSERT_EQ(alpha.writer->GetFreeCount(&free_count), VCI_OK);
   EXPECT_EQ(free_count, capacity);
   alpha.writer->AssignEvent(nullptr);
-  CloseHandle(event);
 }
 
 TEST(VciCppApi, EchoesOverrunAndDelayThroughTheFifos) {

@@ -22,9 +22,12 @@ namespace canemu {
 namespace {
 
 using testing::Adapter;
+using testing::BalSocket;
+using testing::Channel;
 using testing::cyclic_data;
 using testing::drain;
 using testing::end_of;
+using testing::Event;
 using testing::ids_of;
 using testing::kData;
 using testing::kMode;
@@ -32,8 +35,12 @@ using testing::kNominal;
 using testing::one_byte;
 using testing::open_bal;
 using testing::Ref;
+using testing::StandAloneFifo;
 using testing::step_ns;
+using testing::the_one;
+using testing::TwoAdapters;
 using testing::V2Adapter;
+using testing::V2Channel;
 using testing::vci_id_named;
 using testing::VciDaemon;
 
@@ -88,39 +95,47 @@ CANMSG2 msg2(uint32_t id, std::vector<uint8_t> bytes) {
   return m;
 }
 
+// An entry of the cyclic list: a data frame of `data` every `cycle` ticks.
+CANCYCLICTXMSG cyclic(UINT32 id, UINT16 cycle, std::vector<uint8_t> data = {0x11}) {
+  CANCYCLICTXMSG m = cyclic_data(id, cycle, static_cast<UINT8>(data.size()));
+  std::memcpy(m.abData, data.data(), data.size());
+  return m;
+}
+
+// Adds `m` to `list` and starts it for `count` sends (0: without end); its index.
+UINT32 add_and_start(ICanScheduler* list, CANCYCLICTXMSG m, UINT16 count = 0) {
+  UINT32 index = 99;
+  EXPECT_EQ(list->AddMessage(&m, &index), VCI_OK);
+  EXPECT_EQ(list->StartMessage(index, count), VCI_OK);
+  return index;
+}
+
 // ---------------------------------------------------------------- channels and control unit
 
 // 56: a channel made while the line is online receives nothing until it is activated, and
 // from then on (no INFO START: the line started before).
 TEST(VciCppItems, Item56_NewChannelIsInactiveUntilActivate) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanChannel> fresh;
-  ASSERT_EQ(alpha.socket->CreateChannel(FALSE, fresh.out()), VCI_OK);
-  ASSERT_EQ(fresh->Initialize(64, 16), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(fresh->GetReader(reader.out()), VCI_OK);
+  TwoAdapters bus;
+  Channel fresh(bus.alpha.socket.p, 64, 16, false);
   CANCHANSTATUS s{};
-  ASSERT_EQ(fresh->GetStatus(&s), VCI_OK);
+  ASSERT_EQ(fresh.channel->GetStatus(&s), VCI_OK);
   EXPECT_FALSE(s.fActivated);
   EXPECT_EQ(s.sLineStatus.dwStatus, 0u);  // the line is online
-  ASSERT_EQ(put(beta.writer, one_byte(0x101, 1)), VCI_OK);
+  ASSERT_EQ(put(bus.beta.writer, one_byte(0x101, 1)), VCI_OK);
   step_ns(1'000'000);
-  EXPECT_TRUE(drain(reader.p, false).empty());
-  const auto at_alpha = drain(alpha.reader.p, true);  // the older channel had it
+  EXPECT_TRUE(drain(fresh.reader.p, false).empty());
+  const auto at_alpha = drain(bus.alpha.reader.p, true);  // the older channel had it
   ASSERT_EQ(at_alpha.size(), 1u);
   EXPECT_EQ(at_alpha[0].dwTime, end_of(0x101, {1}));
-  ASSERT_EQ(fresh->Activate(), VCI_OK);
-  ASSERT_EQ(fresh->GetStatus(&s), VCI_OK);
+  ASSERT_EQ(fresh.channel->Activate(), VCI_OK);
+  ASSERT_EQ(fresh.channel->GetStatus(&s), VCI_OK);
   EXPECT_TRUE(s.fActivated);
-  ASSERT_EQ(put(beta.writer, one_byte(0x102, 2)), VCI_OK);  // at 1 ms
+  ASSERT_EQ(put(bus.beta.writer, one_byte(0x102, 2)), VCI_OK);  // at 1 ms
   step_ns(1'000'000);
-  const auto got = drain(reader.p, false);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].uMsgInfo.Bytes.bType, CAN_MSGTYPE_DATA);
-  EXPECT_EQ(got[0].dwMsgId, 0x102u);
-  EXPECT_EQ(got[0].dwTime, 1000u + end_of(0x102, {2}));
+  const auto got = the_one(drain(fresh.reader.p, false));
+  EXPECT_EQ(got.uMsgInfo.Bytes.bType, CAN_MSGTYPE_DATA);
+  EXPECT_EQ(got.dwMsgId, 0x102u);
+  EXPECT_EQ(got.dwTime, 1000u + end_of(0x102, {2}));
 }
 
 // 57: an active channel gets nothing while its line is not initialized or offline; deactivated,
@@ -129,32 +144,22 @@ TEST(VciCppItems, Item57_ActiveChannelIsDeafWhileTheLineIsOfflineAndDeactivatedI
   VciDaemon d(kThreeAdapters);
   Adapter beta("beta");
   Adapter gamma("gamma");  // acknowledges beta's frames while alpha is off the bus
-  Ref<IBalObject> bal;
-  ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket> socket;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
-  Ref<ICanChannel> channel;
-  ASSERT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
-  ASSERT_EQ(channel->Initialize(64, 16), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(channel->GetReader(reader.out()), VCI_OK);
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(channel->GetWriter(writer.out()), VCI_OK);
-  ASSERT_EQ(channel->Activate(), VCI_OK);
+  const BalSocket<ICanSocket> alpha("alpha", IID_ICanSocket);
+  Channel ch(alpha.socket.p, 64, 16, true);
   Ref<ICanControl> control;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
   ASSERT_EQ(put(beta.writer, one_byte(0x101, 1)), VCI_OK);  // the line is not initialized
   step_ns(1'000'000);
-  EXPECT_TRUE(drain(reader.p, false).empty());
+  EXPECT_TRUE(drain(ch.reader.p, false).empty());
   CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
   ASSERT_EQ(control->InitLine(&init), VCI_OK);  // initialized, offline
   ASSERT_EQ(put(beta.writer, one_byte(0x102, 2)), VCI_OK);
   step_ns(1'000'000);
-  EXPECT_TRUE(drain(reader.p, false).empty());
+  EXPECT_TRUE(drain(ch.reader.p, false).empty());
   ASSERT_EQ(control->StartLine(), VCI_OK);  // at 2 ms
   ASSERT_EQ(put(beta.writer, one_byte(0x103, 3)), VCI_OK);
   step_ns(1'000'000);
-  auto got = drain(reader.p, false);
+  auto got = drain(ch.reader.p, false);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].abData[0], CAN_INFO_START);
   EXPECT_EQ(got[0].dwTime, 2000u);
@@ -162,19 +167,19 @@ TEST(VciCppItems, Item57_ActiveChannelIsDeafWhileTheLineIsOfflineAndDeactivatedI
   EXPECT_EQ(got[1].dwTime, 2000u + end_of(0x103, {3}));
   EXPECT_EQ(ids_of(drain(gamma.reader.p, true)), (std::vector<UINT32>{0x101, 0x102, 0x103}));
   // Deactivated at 3 ms: beta's frame does not come in, its own frame does not go out.
-  ASSERT_EQ(channel->Deactivate(), VCI_OK);
+  ASSERT_EQ(ch.channel->Deactivate(), VCI_OK);
   ASSERT_EQ(put(beta.writer, one_byte(0x104, 4)), VCI_OK);
-  ASSERT_EQ(put(writer, one_byte(0x201, 5)), VCI_OK);
+  ASSERT_EQ(put(ch.writer, one_byte(0x201, 5)), VCI_OK);
   step_ns(2'000'000);
-  EXPECT_TRUE(drain(reader.p, false).empty());
+  EXPECT_TRUE(drain(ch.reader.p, false).empty());
   got = drain(gamma.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x104u);
   UINT16 fill = 0;
-  ASSERT_EQ(writer->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(ch.writer->GetFillCount(&fill), VCI_OK);
   EXPECT_EQ(fill, 1);
   // Active again at 5 ms: the waiting frame goes out at once.
-  ASSERT_EQ(channel->Activate(), VCI_OK);
+  ASSERT_EQ(ch.channel->Activate(), VCI_OK);
   step_ns(1'000'000);
   got = drain(gamma.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
@@ -185,34 +190,32 @@ TEST(VciCppItems, Item57_ActiveChannelIsDeafWhileTheLineIsOfflineAndDeactivatedI
 // 66: StopLine and ResetLine leave what the channel's FIFOs hold: the receive FIFO keeps its
 // messages, the transmit FIFO its frames, which go out in order once the line runs again.
 TEST(VciCppItems, Item66_StopAndResetLineKeepTheChannelFifos) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
+  TwoAdapters bus;
+  ASSERT_EQ(put(bus.beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(1'000'000);
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);  // at 1 ms
+  ASSERT_EQ(bus.alpha.control->StopLine(), VCI_OK);  // at 1 ms
   for (UINT32 id : {0x201u, 0x202u}) {
-    ASSERT_EQ(put(alpha.writer, one_byte(id, static_cast<UINT8>(id))), VCI_OK);
+    ASSERT_EQ(put(bus.alpha.writer, one_byte(id, static_cast<UINT8>(id))), VCI_OK);
   }
   step_ns(1'000'000);
-  ASSERT_EQ(alpha.control->ResetLine(), VCI_OK);  // at 2 ms
+  ASSERT_EQ(bus.alpha.control->ResetLine(), VCI_OK);  // at 2 ms
   step_ns(1'000'000);
   UINT16 fill = 0;
-  ASSERT_EQ(alpha.writer->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->GetFillCount(&fill), VCI_OK);
   EXPECT_EQ(fill, 2);
-  const auto got = drain(alpha.reader.p, false);
+  const auto got = drain(bus.alpha.reader.p, false);
   ASSERT_EQ(got.size(), 4u);
   EXPECT_EQ(got[0].abData[0], CAN_INFO_START);
   EXPECT_EQ(got[1].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].dwTime, end_of(0x123, {1}));
   EXPECT_EQ(got[2].abData[0], CAN_INFO_STOP);
   EXPECT_EQ(got[3].abData[0], CAN_INFO_RESET);
-  EXPECT_TRUE(drain(beta.reader.p, true).empty());
+  EXPECT_TRUE(drain(bus.beta.reader.p, true).empty());
   CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
-  ASSERT_EQ(alpha.control->InitLine(&init), VCI_OK);
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);  // at 3 ms
+  ASSERT_EQ(bus.alpha.control->InitLine(&init), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);  // at 3 ms
   step_ns(1'000'000);
-  const auto sent = drain(beta.reader.p, true);
+  const auto sent = drain(bus.beta.reader.p, true);
   ASSERT_EQ(sent.size(), 2u);
   EXPECT_EQ(sent[0].dwMsgId, 0x201u);
   EXPECT_EQ(sent[0].dwTime, 3000u + end_of(0x201, {0x01}));
@@ -230,8 +233,7 @@ TEST(VciCppItems, Item67_InitLineWhileOnlineLeavesTheLineOffline) {
   step_ns(1'000'000);
   CANINITLINE init{CAN_OPMODE_STANDARD, 0, CAN_BT0_500KB, CAN_BT1_500KB};
   ASSERT_EQ(alpha.control->InitLine(&init), VCI_OK);
-  CANLINESTATUS s{};
-  ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
+  CANLINESTATUS s = alpha.line_status();
   EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
   EXPECT_EQ(s.bOpMode, CAN_OPMODE_STANDARD);
   ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
@@ -255,57 +257,52 @@ TEST(VciCppItems, Item67_InitLineWhileOnlineLeavesTheLineOffline) {
 // 68: the control unit released while a channel is open: the line keeps running, receiving and
 // sending; opened again, it shows the running line.
 TEST(VciCppItems, Item68_ReleasingTheControlUnitLeavesTheLineRunning) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
+  TwoAdapters bus;
   step_ns(1'000'000);
-  EXPECT_EQ(alpha.control->Release(), 0u);
-  alpha.control.p = nullptr;
+  EXPECT_EQ(bus.alpha.control->Release(), 0u);
+  bus.alpha.control.p = nullptr;
   CANLINESTATUS s{};
-  ASSERT_EQ(alpha.socket->GetLineStatus(&s), VCI_OK);
+  ASSERT_EQ(bus.alpha.socket->GetLineStatus(&s), VCI_OK);
   EXPECT_EQ(s.dwStatus, 0u);  // online, no ININIT
   EXPECT_EQ(s.bOpMode, kMode);
-  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);  // at 1 ms
+  ASSERT_EQ(put(bus.beta.writer, one_byte(0x123, 1)), VCI_OK);  // at 1 ms
   step_ns(1'000'000);
-  auto got = drain(alpha.reader.p, false);
+  auto got = drain(bus.alpha.reader.p, false);
   ASSERT_EQ(got.size(), 2u);  // the START and the frame: no STOP or RESET
   EXPECT_EQ(got[1].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].dwTime, 1000u + end_of(0x123, {1}));
-  ASSERT_EQ(put(alpha.writer, one_byte(0x124, 2)), VCI_OK);  // at 2 ms
+  ASSERT_EQ(put(bus.alpha.writer, one_byte(0x124, 2)), VCI_OK);  // at 2 ms
   step_ns(1'000'000);
-  got = drain(beta.reader.p, true);
+  got = drain(bus.beta.reader.p, true);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].dwMsgId, 0x124u);
   EXPECT_EQ(got[0].dwTime, 2000u + end_of(0x124, {2}));
   Ref<ICanControl> again;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanControl, again.pv()), VCI_OK);
+  ASSERT_EQ(bus.alpha.bal->OpenSocket(0, IID_ICanControl, again.pv()), VCI_OK);
   ASSERT_EQ(again->GetLineStatus(&s), VCI_OK);
   EXPECT_EQ(s.dwStatus, 0u);
   step_ns(1'000'000);
-  EXPECT_TRUE(drain(alpha.reader.p, false).empty());
+  EXPECT_TRUE(drain(bus.alpha.reader.p, false).empty());
 }
 
 // 69: a channel that is initialized but not active gets no INFO message, neither at StartLine
 // nor at StopLine or ResetLine, and none later when it is activated.
 TEST(VciCppItems, Item69_InactiveChannelsGetNoInfoMessages) {
   VciDaemon d;
-  Ref<IBalObject> bal;
-  ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket> socket;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
+  const BalSocket<ICanSocket> alpha("alpha", IID_ICanSocket);
   Ref<ICanChannel> active;
   Ref<ICanChannel> inactive;
   Ref<IFifoReader> active_reader;
   Ref<IFifoReader> inactive_reader;
   for (auto* c : {&active, &inactive}) {
-    ASSERT_EQ(socket->CreateChannel(FALSE, c->out()), VCI_OK);
+    ASSERT_EQ(alpha.socket->CreateChannel(FALSE, c->out()), VCI_OK);
     ASSERT_EQ((*c)->Initialize(64, 16), VCI_OK);
   }
   ASSERT_EQ(active->GetReader(active_reader.out()), VCI_OK);
   ASSERT_EQ(inactive->GetReader(inactive_reader.out()), VCI_OK);
   ASSERT_EQ(active->Activate(), VCI_OK);
   Ref<ICanControl> control;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
   CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
   ASSERT_EQ(control->InitLine(&init), VCI_OK);
   ASSERT_EQ(control->StartLine(), VCI_OK);
@@ -339,23 +336,16 @@ TEST(VciCppItems, Item69_InactiveChannelsGetNoInfoMessages) {
 // 71: two channels of one controller with frames waiting take turns on the bus; neither
 // starves, and the one with more frames sends its rest at the end.
 TEST(VciCppItems, Item71_TwoChannelsTransmitInTurn) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanChannel> second;
-  ASSERT_EQ(alpha.socket->CreateChannel(FALSE, second.out()), VCI_OK);
-  ASSERT_EQ(second->Initialize(64, 16), VCI_OK);
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(second->GetWriter(writer.out()), VCI_OK);
-  ASSERT_EQ(second->Activate(), VCI_OK);
+  TwoAdapters bus;
+  const Channel second(bus.alpha.socket.p, 64, 16, true);
   for (UINT32 id : {0x101u, 0x102u, 0x103u, 0x104u}) {
-    ASSERT_EQ(put(alpha.writer, one_byte(id, 1)), VCI_OK);
+    ASSERT_EQ(put(bus.alpha.writer, one_byte(id, 1)), VCI_OK);
   }
   for (UINT32 id : {0x201u, 0x202u}) {
-    ASSERT_EQ(put(writer, one_byte(id, 2)), VCI_OK);
+    ASSERT_EQ(put(second.writer, one_byte(id, 2)), VCI_OK);
   }
   step_ns(5'000'000);
-  const auto got = drain(beta.reader.p, true);
+  const auto got = drain(bus.beta.reader.p, true);
   ASSERT_EQ(ids_of(got), (std::vector<UINT32>{0x101, 0x201, 0x102, 0x202, 0x103, 0x104}));
   UINT32 end = 0;  // back to back: each starts 3 bits (6 us) after the previous one ended
   for (std::size_t k = 0; k < got.size(); ++k) {
@@ -367,28 +357,25 @@ TEST(VciCppItems, Item71_TwoChannelsTransmitInTurn) {
 // 72: transmit messages that are not data (INFO, ERROR, STATUS, TIMEOVR) are taken from the FIFO
 // and dropped: they take no bus time and never appear on the bus.
 TEST(VciCppItems, Item72_NonDataTransmitMessagesAreDropped) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
+  TwoAdapters bus;
   for (UINT8 type : {UINT8{CAN_MSGTYPE_INFO}, UINT8{CAN_MSGTYPE_ERROR}, UINT8{CAN_MSGTYPE_STATUS},
                      UINT8{CAN_MSGTYPE_TIMEOVR}}) {
     CANMSG junk = one_byte(0x100 + type, type);
     junk.uMsgInfo.Bytes.bType = type;
-    ASSERT_EQ(alpha.writer->PutDataEntry(&junk), VCI_OK);
+    ASSERT_EQ(bus.alpha.writer->PutDataEntry(&junk), VCI_OK);
   }
-  ASSERT_EQ(put(alpha.writer, one_byte(0x123, 0x5A)), VCI_OK);
+  ASSERT_EQ(put(bus.alpha.writer, one_byte(0x123, 0x5A)), VCI_OK);
   step_ns(2'000'000);
-  const auto got = drain(beta.reader.p, false);
+  const auto got = drain(bus.beta.reader.p, false);
   ASSERT_EQ(got.size(), 2u);  // beta's START and the data frame
   EXPECT_EQ(got[1].uMsgInfo.Bytes.bType, CAN_MSGTYPE_DATA);
   EXPECT_EQ(got[1].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].dwTime, end_of(0x123, {0x5A}));  // first on the bus, at t = 0
   UINT16 fill = 1;
-  ASSERT_EQ(alpha.writer->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->GetFillCount(&fill), VCI_OK);
   EXPECT_EQ(fill, 0);
   // Nothing else came from alpha, and alpha's line is fine.
-  CANLINESTATUS s{};
-  ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
+  CANLINESTATUS s = bus.alpha.line_status();
   EXPECT_EQ(s.dwStatus, 0u);
 }
 
@@ -504,21 +491,13 @@ TEST(VciCppItems, Item75_RtrIsIgnoredOnFdFrames) {
 // 77: receive time stamps count at dwClockFreq / dwTscDivisor (v1) and dwTscClkFreq /
 // dwTscDivisor (v2) ticks per second: frames 250 ms and 1 s apart differ by exactly that.
 TEST(VciCppItems, Item77_TimeStampsCountAtTheCapabilitiesRate) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> channel2;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, channel2.out()), VCI_OK);
-  ASSERT_EQ(channel2->Initialize(64, 0, 0, CAN_FILTER_PASS), VCI_OK);
-  Ref<IFifoReader> reader2;
-  ASSERT_EQ(channel2->GetReader(reader2.out()), VCI_OK);
-  ASSERT_EQ(channel2->Activate(), VCI_OK);
+  TwoAdapters bus;
+  V2Channel ch2(bus.alpha.bal.p);
+  ASSERT_NO_FATAL_FAILURE(ch2.activate_with(64, 0, CAN_FILTER_PASS));
   CANCAPABILITIES caps{};
-  ASSERT_EQ(alpha.socket->GetCapabilities(&caps), VCI_OK);
+  ASSERT_EQ(bus.alpha.socket->GetCapabilities(&caps), VCI_OK);
   CANCAPABILITIES2 caps2{};
-  ASSERT_EQ(socket2->GetCapabilities(&caps2), VCI_OK);
+  ASSERT_EQ(ch2.socket->GetCapabilities(&caps2), VCI_OK);
   ASSERT_GT(caps.dwTscDivisor, 0u);
   ASSERT_GT(caps2.dwTscDivisor, 0u);
   const uint64_t v1_per_s = caps.dwClockFreq / caps.dwTscDivisor;
@@ -532,11 +511,11 @@ TEST(VciCppItems, Item77_TimeStampsCountAtTheCapabilitiesRate) {
       step_ns(when - t);
       t = when;
     }
-    ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
+    ASSERT_EQ(put(bus.beta.writer, one_byte(0x123, 1)), VCI_OK);
   }
   step_ns(1'000'000);
-  const auto v1 = drain(alpha.reader.p, true);
-  const auto v2 = drain<CANMSG2>(reader2.p, true);
+  const auto v1 = drain(bus.alpha.reader.p, true);
+  const auto v2 = drain<CANMSG2>(ch2.reader.p, true);
   ASSERT_EQ(v1.size(), 3u);
   ASSERT_EQ(v2.size(), 3u);
   for (std::size_t k = 0; k < 3; ++k) {
@@ -553,39 +532,36 @@ TEST(VciCppItems, Item77_TimeStampsCountAtTheCapabilitiesRate) {
 // that loses arbitration is never echoed; a normal one is echoed once its retry succeeded,
 // at the end of that retry.
 TEST(VciCppItems, Item92_AnEchoFollowsOnlyASuccessfulTransmission) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
+  TwoAdapters bus;
   step_ns(1'000'000);
-  drain(alpha.reader.p, false);
+  drain(bus.alpha.reader.p, false);
   CANMSG zero = one_byte(0x000, 0);  // identifier 0 wins
   CANMSG lost = one_byte(0x123, 1);
   lost.uMsgInfo.Bits.srr = 1;
   lost.uMsgInfo.Bits.ssm = 1;
-  ASSERT_EQ(beta.writer->PutDataEntry(&zero), VCI_OK);  // both at 1 ms
-  ASSERT_EQ(alpha.writer->PutDataEntry(&lost), VCI_OK);
+  ASSERT_EQ(bus.beta.writer->PutDataEntry(&zero), VCI_OK);  // both at 1 ms
+  ASSERT_EQ(bus.alpha.writer->PutDataEntry(&lost), VCI_OK);
   step_ns(5'000'000);
-  auto got = drain(alpha.reader.p, true);
+  auto got = drain(bus.alpha.reader.p, true);
   ASSERT_EQ(got.size(), 1u);  // beta's frame, no echo
   EXPECT_EQ(got[0].dwMsgId, 0u);
   EXPECT_EQ(got[0].dwTime, 1000u + end_of(0x000, {0}));
-  EXPECT_TRUE(drain(beta.reader.p, true).empty());
+  EXPECT_TRUE(drain(bus.beta.reader.p, true).empty());
   // Again at 6 ms without ssm: the frame loses, is retried after beta's frame and echoed then.
   CANMSG retried = lost;
   retried.uMsgInfo.Bits.ssm = 0;
-  ASSERT_EQ(beta.writer->PutDataEntry(&zero), VCI_OK);
-  ASSERT_EQ(alpha.writer->PutDataEntry(&retried), VCI_OK);
+  ASSERT_EQ(bus.beta.writer->PutDataEntry(&zero), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->PutDataEntry(&retried), VCI_OK);
   step_ns(5'000'000);
-  got = drain(alpha.reader.p, true);
+  got = drain(bus.alpha.reader.p, true);
   ASSERT_EQ(got.size(), 2u);
   const UINT32 retry_end = 6000u + end_of(0x000, {0}) + 6u + end_of(0x123, {1});
   EXPECT_EQ(got[0].dwMsgId, 0u);
   EXPECT_EQ(got[1].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].uMsgInfo.Bits.srr, 1u);
   EXPECT_EQ(got[1].dwTime, retry_end);
-  const auto at_beta = drain(beta.reader.p, true);
-  ASSERT_EQ(at_beta.size(), 1u);
-  EXPECT_EQ(at_beta[0].dwTime, retry_end);
+  const auto at_beta = the_one(drain(bus.beta.reader.p, true));
+  EXPECT_EQ(at_beta.dwTime, retry_end);
 }
 
 // ---------------------------------------------------------------- filters
@@ -595,26 +571,12 @@ TEST(VciCppItems, Item92_AnEchoFollowsOnlyASuccessfulTransmission) {
 TEST(VciCppItems, Item105_ControlUnitFilterBlocksEvenPassChannels) {
   VciDaemon d;
   Adapter beta("beta");
-  Ref<IBalObject> bal;
-  ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket> socket;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
-  Ref<ICanChannel> v1;
-  ASSERT_EQ(socket->CreateChannel(FALSE, v1.out()), VCI_OK);
-  ASSERT_EQ(v1->Initialize(64, 0), VCI_OK);
-  Ref<IFifoReader> v1_reader;
-  ASSERT_EQ(v1->GetReader(v1_reader.out()), VCI_OK);
-  ASSERT_EQ(v1->Activate(), VCI_OK);
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> pass;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, pass.out()), VCI_OK);
-  ASSERT_EQ(pass->Initialize(64, 0, 0, CAN_FILTER_PASS), VCI_OK);
-  Ref<IFifoReader> pass_reader;
-  ASSERT_EQ(pass->GetReader(pass_reader.out()), VCI_OK);
-  ASSERT_EQ(pass->Activate(), VCI_OK);
+  const BalSocket<ICanSocket> alpha("alpha", IID_ICanSocket);
+  const Channel v1(alpha.socket.p, 64, 0, true);
+  V2Channel pass(alpha.bal.p);
+  ASSERT_NO_FATAL_FAILURE(pass.activate_with(64, 0, CAN_FILTER_PASS));
   Ref<ICanControl> control;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
   CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
   ASSERT_EQ(control->InitLine(&init), VCI_OK);
   ASSERT_EQ(control->SetAccFilter(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);  // 0x100..0x103
@@ -624,12 +586,12 @@ TEST(VciCppItems, Item105_ControlUnitFilterBlocksEvenPassChannels) {
   }
   step_ns(2'000'000);
   const UINT32 end = end_of(0x200, {1}) + 6u + end_of(0x101, {1});
-  const auto a = drain(v1_reader.p, true);
+  const auto a = drain(v1.reader.p, true);
   ASSERT_EQ(a.size(), 1u);
   EXPECT_EQ(a[0].dwMsgId, 0x101u);
   EXPECT_EQ(a[0].dwTime, end);
   EXPECT_EQ(a[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_1);
-  const auto b = drain<CANMSG2>(pass_reader.p, true);
+  const auto b = drain<CANMSG2>(pass.reader.p, true);
   ASSERT_EQ(b.size(), 1u);
   EXPECT_EQ(b[0].dwMsgId, 0x101u);
   EXPECT_EQ(b[0].dwTime, end);
@@ -674,10 +636,9 @@ TEST(VciCppItems, Item112_SingleShotFramesAreNotRetried) {
   CANMSG next = one_byte(0x125, 3);
   ASSERT_EQ(alpha.writer->PutDataEntry(&next), VCI_OK);  // at 30 ms
   step_ns(1'000'000);
-  const auto got = drain(beta.reader.p, true);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].dwMsgId, 0x125u);
-  EXPECT_EQ(got[0].dwTime, 30'000u + end_of(0x125, {3}));
+  const auto got = the_one(drain(beta.reader.p, true));
+  EXPECT_EQ(got.dwMsgId, 0x125u);
+  EXPECT_EQ(got.dwTime, 30'000u + end_of(0x125, {3}));
 }
 
 // ---------------------------------------------------------------- bit timing
@@ -686,26 +647,22 @@ TEST(VciCppItems, Item112_SingleShotFramesAreNotRetried) {
 // initialized with the pair takes exactly its bits at that rate, and the line status echoes
 // the pair.
 TEST(VciCppItems, Item114_BtrPairsOfTheTableGiveTheirRates) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
+  TwoAdapters bus;
   for (const testing::BtrRate& r : testing::kBtrTable) {
     const uint64_t bit_ns = 1'000'000'000 / r.bps;
-    for (Adapter* a : {&alpha, &beta}) {
-      ASSERT_EQ(a->control->ResetLine(), VCI_OK);
-      CANINITLINE init{kMode, 0, r.btr0, r.btr1};
-      ASSERT_EQ(a->control->InitLine(&init), VCI_OK);
+    for (Adapter* a : {&bus.alpha, &bus.beta}) {
+      ASSERT_NO_FATAL_FAILURE(a->reinit(r.btr0, r.btr1));
       ASSERT_EQ(a->control->StartLine(), VCI_OK);
     }
     CANLINESTATUS s{};
-    ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
+    ASSERT_EQ(bus.alpha.control->GetLineStatus(&s), VCI_OK);
     EXPECT_EQ(s.bBtReg0, r.btr0);
     EXPECT_EQ(s.bBtReg1, r.btr1);
-    drain(alpha.reader.p, false);
+    drain(bus.alpha.reader.p, false);
     const uint64_t start = now_ns();
-    ASSERT_EQ(put(beta.writer, one_byte(0x555, 0xAA)), VCI_OK);
+    ASSERT_EQ(put(bus.beta.writer, one_byte(0x555, 0xAA)), VCI_OK);
     step_ns(50'000'000);
-    const auto got = drain(alpha.reader.p, false);
+    const auto got = drain(bus.alpha.reader.p, false);
     ASSERT_EQ(got.size(), 1u) << bit_ns;
     EXPECT_EQ(got[0].dwMsgId, 0x555u);
     EXPECT_EQ(got[0].dwTime, (start + bits_of(0x555, {0xAA}) * bit_ns) / 1000) << bit_ns;
@@ -716,14 +673,11 @@ TEST(VciCppItems, Item114_BtrPairsOfTheTableGiveTheirRates) {
 // refused by InitLine, values at the limits are taken.
 TEST(VciCppItems, Item117_RawTimingOutsideTheRangesIsRefused) {
   VciDaemon d(kFdAdapters);
-  Ref<IBalObject> bal;
-  ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket2> socket;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
+  const BalSocket<ICanSocket2> alpha("alpha", IID_ICanSocket2);
   CANCAPABILITIES2 caps{};
-  ASSERT_EQ(socket->GetCapabilities(&caps), VCI_OK);
+  ASSERT_EQ(alpha.socket->GetCapabilities(&caps), VCI_OK);
   Ref<ICanControl2> control;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl2, control.pv()), VCI_OK);
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanControl2, control.pv()), VCI_OK);
   const CANBTP sdr{CAN_BTMODE_RAW, 10, 13, 2, 1, 0};  // 80 MHz / 10 / 16 quanta: 500 kbit/s
   const CANBTP fdr{CAN_BTMODE_RAW, 4, 7, 2, 1, 0};    // 80 MHz / 4 / 10 quanta: 2 Mbit/s
   auto init_with = [&](CANBTP n, CANBTP f) {
@@ -782,18 +736,10 @@ TEST(VciCppItems, Item116_InitLineTakesTheNearestTimingOfABitPerSecondCanbtp) {
   V2Adapter beta("beta", CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA);
   Ref<IBalObject> bal;
   ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket2> socket;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket.pv()), VCI_OK);
-  Ref<ICanChannel2> channel;
-  ASSERT_EQ(socket->CreateChannel(FALSE, channel.out()), VCI_OK);
-  ASSERT_EQ(channel->Initialize(64, 16, 0, CAN_FILTER_PASS), VCI_OK);
-  Ref<IFifoReader> reader;
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(channel->GetReader(reader.out()), VCI_OK);
-  ASSERT_EQ(channel->GetWriter(writer.out()), VCI_OK);
-  ASSERT_EQ(channel->Activate(), VCI_OK);
+  V2Channel ch2(bal.p);
+  ASSERT_NO_FATAL_FAILURE(ch2.activate_with(64, 16, CAN_FILTER_PASS));
   Ref<ICanControl2> control;
-  ASSERT_EQ(channel->GetControl(control.out()), VCI_OK);
+  ASSERT_EQ(ch2.channel->GetControl(control.out()), VCI_OK);
   CANINITLINE2 init{};
   init.bOpMode = kMode;
   init.bExMode = CAN_EXMODE_EXTDATA | CAN_EXMODE_FASTDATA;
@@ -810,38 +756,34 @@ TEST(VciCppItems, Item116_InitLineTakesTheNearestTimingOfABitPerSecondCanbtp) {
   EXPECT_EQ(std::memcmp(&s.sBtpSdr, &nominal, sizeof nominal), 0);
   EXPECT_EQ(std::memcmp(&s.sBtpFdr, &data, sizeof data), 0);
   ASSERT_EQ(control->StartLine(), VCI_OK);
-  drain<CANMSG2>(reader.p, false);
+  drain<CANMSG2>(ch2.reader.p, false);
   drain<CANMSG2>(beta.reader.p, false);
   CANMSG2 m = msg2(0x1A5, std::vector<uint8_t>(20, 0x3C));  // 20 bytes: DLC 11
   m.uMsgInfo.Bits.edl = 1;
   m.uMsgInfo.Bits.fdr = 1;
-  ASSERT_EQ(writer->PutDataEntry(&m), VCI_OK);
+  ASSERT_EQ(ch2.writer->PutDataEntry(&m), VCI_OK);
   step_ns(1'000'000);
-  auto got = drain<CANMSG2>(beta.reader.p, true);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].dwMsgId, 0x1A5u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.dlc, 11u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  CANMSG2 got = the_one(drain<CANMSG2>(beta.reader.p, true));
+  EXPECT_EQ(got.dwMsgId, 0x1A5u);
+  EXPECT_EQ(got.uMsgInfo.Bits.dlc, 11u);
+  EXPECT_EQ(got.uMsgInfo.Bits.fdr, 1u);
   m.dwMsgId = 0x5A1;
   beta.post(m);
   step_ns(1'000'000);
-  got = drain<CANMSG2>(reader.p, true);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].dwMsgId, 0x5A1u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.fdr, 1u);
+  got = the_one(drain<CANMSG2>(ch2.reader.p, true));
+  EXPECT_EQ(got.dwMsgId, 0x5A1u);
+  EXPECT_EQ(got.uMsgInfo.Bits.fdr, 1u);
 }
 
 // Issue 34: through the C++ API's FIFO writer a data message whose identifier does not fit its
 // format is refused too: PutDataEntry, and ReleaseWrite of written entries (nothing is handed
 // over; the program may correct the entry and release again).
 TEST(VciCppItems, IdentifiersThatDoNotFitTheirFormatAreRefusedByTheWriter) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
+  TwoAdapters bus;
   step_ns(1'000'000);
-  drain(beta.reader.p, false);
+  drain(bus.beta.reader.p, false);
   CANMSG standard = one_byte(0x800, 0x11);
-  EXPECT_EQ(alpha.writer->PutDataEntry(&standard), VCI_E_INVALIDARG);
+  EXPECT_EQ(bus.alpha.writer->PutDataEntry(&standard), VCI_E_INVALIDARG);
   char text[256];
   VciFormatError(VCI_E_INVALIDARG, text, sizeof text);
   EXPECT_STREQ(text,
@@ -849,22 +791,22 @@ TEST(VciCppItems, IdentifiersThatDoNotFitTheirFormatAreRefusedByTheWriter) {
                "the message was not queued)");
   CANMSG extended = one_byte(0x20000000, 0x22);
   extended.uMsgInfo.Bits.ext = 1;
-  EXPECT_EQ(alpha.writer->PutDataEntry(&extended), VCI_E_INVALIDARG);
+  EXPECT_EQ(bus.alpha.writer->PutDataEntry(&extended), VCI_E_INVALIDARG);
   PVOID space = nullptr;
   UINT16 count = 0;
-  ASSERT_EQ(alpha.writer->AcquireWrite(&space, &count), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->AcquireWrite(&space, &count), VCI_OK);
   ASSERT_GE(count, 2);
   auto* entries = static_cast<CANMSG*>(space);
   entries[0] = one_byte(0x123, 0x33);
   entries[1] = extended;
-  EXPECT_EQ(alpha.writer->ReleaseWrite(2), VCI_E_INVALIDARG);
+  EXPECT_EQ(bus.alpha.writer->ReleaseWrite(2), VCI_E_INVALIDARG);
   UINT16 fill = 99;
-  ASSERT_EQ(alpha.writer->GetFillCount(&fill), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->GetFillCount(&fill), VCI_OK);
   EXPECT_EQ(fill, 0);
   entries[1].dwMsgId = 0x1FFFFFFF;  // corrected: the largest 29-bit identifier
-  EXPECT_EQ(alpha.writer->ReleaseWrite(2), VCI_OK);
+  EXPECT_EQ(bus.alpha.writer->ReleaseWrite(2), VCI_OK);
   step_ns(1'000'000);
-  const auto got = drain(beta.reader.p, true);
+  const auto got = drain(bus.beta.reader.p, true);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].dwMsgId, 0x123u);
   EXPECT_EQ(got[1].dwMsgId, 0x1FFFFFFFu);
@@ -873,20 +815,11 @@ TEST(VciCppItems, IdentifiersThatDoNotFitTheirFormatAreRefusedByTheWriter) {
 
 // ---------------------------------------------------------------- cyclic transmit list
 
-CANCYCLICTXMSG cyclic(UINT32 id, UINT16 cycle, std::vector<uint8_t> data = {0x11}) {
-  CANCYCLICTXMSG m = cyclic_data(id, cycle, static_cast<UINT8>(data.size()));
-  std::memcpy(m.abData, data.data(), data.size());
-  return m;
-}
-
 // 125: entries started at different times while the task is stopped all count their cycle from
 // the Resume: each sends first one cycle after it.
 TEST(VciCppItems, Item125_ResumeStartsEveryStartedEntryInTheSameTick) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  TwoAdapters bus;
+  const Ref<ICanScheduler> list = bus.alpha.scheduler();
   const UINT16 cycles[] = {4, 6, 10};
   for (UINT32 k = 0; k < 3; ++k) {
     CANCYCLICTXMSG m = cyclic(0x100 + k, cycles[k]);
@@ -897,10 +830,10 @@ TEST(VciCppItems, Item125_ResumeStartsEveryStartedEntryInTheSameTick) {
     step_ns(2'000'000);
   }
   step_ns(1'000'000);
-  EXPECT_TRUE(drain(beta.reader.p, true).empty());
+  EXPECT_TRUE(drain(bus.beta.reader.p, true).empty());
   ASSERT_EQ(list->Resume(), VCI_OK);  // at 7 ms
   step_ns(11'000'000);
-  const auto got = drain(beta.reader.p, true);
+  const auto got = drain(bus.beta.reader.p, true);
   // Ticks 4 (0x100), 6 (0x101), 8 (0x100), 10 (0x102) after the resume.
   ASSERT_EQ(ids_of(got), (std::vector<UINT32>{0x100, 0x101, 0x100, 0x102}));
   const UINT32 ticks[] = {4, 6, 8, 10};
@@ -912,23 +845,17 @@ TEST(VciCppItems, Item125_ResumeStartsEveryStartedEntryInTheSameTick) {
 // 127: an entry sends every wCycleTime ticks; when two are due in one tick the older goes and
 // the other goes one tick later, keeping its rhythm.
 TEST(VciCppItems, Item127_EntriesKeepTheirCycleWithinOneTickOnCollisions) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  TwoAdapters bus;
+  const Ref<ICanScheduler> list = bus.alpha.scheduler();
   for (auto [id, cycle] : {std::pair<UINT32, UINT16>{0x100, 2}, {0x200, 3}}) {
-    CANCYCLICTXMSG m = cyclic(id, cycle);
-    UINT32 index = 0;
-    ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
-    ASSERT_EQ(list->StartMessage(index, 0), VCI_OK);
+    add_and_start(list.p, cyclic(id, cycle));
   }
   ASSERT_EQ(list->Resume(), VCI_OK);  // at 0
   step_ns(13'500'000);
   ASSERT_EQ(list->Suspend(), VCI_OK);
   std::vector<UINT32> a;
   std::vector<UINT32> b;
-  for (const CANMSG& m : drain(beta.reader.p, true)) {
+  for (const CANMSG& m : drain(bus.beta.reader.p, true)) {
     const UINT32 tick = (m.dwTime - end_of(m.dwMsgId, {0x11})) / 1000;
     EXPECT_EQ((m.dwTime - end_of(m.dwMsgId, {0x11})) % 1000, 0u);  // at the tick exactly
     (m.dwMsgId == 0x100 ? a : b).push_back(tick);
@@ -941,11 +868,8 @@ TEST(VciCppItems, Item127_EntriesKeepTheirCycleWithinOneTickOnCollisions) {
 // 129: INC_8 counts a byte up with 255 -> 0, INC_16 the little-endian word at bByteIndex with
 // the carry into the high byte and 65535 -> 0; the count applies after each frame.
 TEST(VciCppItems, Item129_ByteAndWordIncrementsWrap) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  TwoAdapters bus;
+  const Ref<ICanScheduler> list = bus.alpha.scheduler();
   CANCYCLICTXMSG byte = cyclic(0x100, 4, {0xAA, 0xFE, 0xBB});
   byte.bIncrMode = CAN_CTXMSG_INC_8;
   byte.bByteIndex = 1;
@@ -955,15 +879,13 @@ TEST(VciCppItems, Item129_ByteAndWordIncrementsWrap) {
   CANCYCLICTXMSG carry = cyclic(0x300, 4, {0xFF, 0x12});
   carry.bIncrMode = CAN_CTXMSG_INC_16;
   carry.bByteIndex = 0;
-  UINT32 index = 0;
-  for (CANCYCLICTXMSG* m : {&byte, &word, &carry}) {
-    ASSERT_EQ(list->AddMessage(m, &index), VCI_OK);
-    ASSERT_EQ(list->StartMessage(index, 3), VCI_OK);
+  for (const CANCYCLICTXMSG& m : {byte, word, carry}) {
+    add_and_start(list.p, m, 3);
   }
   ASSERT_EQ(list->Resume(), VCI_OK);
   step_ns(20'000'000);
   std::vector<std::vector<uint8_t>> bytes, words, carries;
-  for (const CANMSG& m : drain(beta.reader.p, true)) {
+  for (const CANMSG& m : drain(bus.beta.reader.p, true)) {
     const std::vector<uint8_t> v(m.abData, m.abData + m.uMsgInfo.Bits.dlc);
     (m.dwMsgId == 0x100 ? bytes : m.dwMsgId == 0x200 ? words : carries).push_back(v);
   }
@@ -977,15 +899,9 @@ TEST(VciCppItems, Item129_ByteAndWordIncrementsWrap) {
 // 130: Suspend stops every entry (none sends while suspended), Resume goes on, each counting its
 // cycle from the Resume; Reset empties the list and stops the task.
 TEST(VciCppItems, Item130_SuspendResumeAndResetTheList) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
-  CANCYCLICTXMSG m = cyclic(0x100, 2);
-  UINT32 index = 0;
-  ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
-  ASSERT_EQ(list->StartMessage(index, 0), VCI_OK);
+  TwoAdapters bus;
+  const Ref<ICanScheduler> list = bus.alpha.scheduler();
+  const UINT32 index = add_and_start(list.p, cyclic(0x100, 2));
   ASSERT_EQ(list->Resume(), VCI_OK);  // at 0
   step_ns(5'000'000);
   ASSERT_EQ(list->Suspend(), VCI_OK);  // at 5 ms
@@ -997,7 +913,7 @@ TEST(VciCppItems, Item130_SuspendResumeAndResetTheList) {
   ASSERT_EQ(list->Resume(), VCI_OK);  // at 11 ms
   step_ns(4'500'000);
   std::vector<UINT32> times;
-  for (const CANMSG& f : drain(beta.reader.p, true)) {
+  for (const CANMSG& f : drain(bus.beta.reader.p, true)) {
     times.push_back(f.dwTime - end_of(0x100, {0x11}));
   }
   EXPECT_EQ(times, (std::vector<UINT32>{2'000, 4'000, 13'000, 15'000}));
@@ -1010,7 +926,7 @@ TEST(VciCppItems, Item130_SuspendResumeAndResetTheList) {
   EXPECT_EQ(list->StartMessage(index, 0), VCI_E_INVALID_INDEX);
   ASSERT_EQ(list->Resume(), VCI_OK);
   step_ns(10'000'000);
-  EXPECT_TRUE(drain(beta.reader.p, true).empty());
+  EXPECT_TRUE(drain(bus.beta.reader.p, true).empty());
 }
 
 // ---------------------------------------------------------------- items with no other API test
@@ -1128,30 +1044,26 @@ TEST(VciCppItems, Item24_VersionFillsEveryField) {
 // end, then the rest from its start.
 TEST(VciCppItems, Item32_AcquireReadStopsAtTheEndOfTheRing) {
   VciDaemon d;
-  VCIID id{};
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(VciCreateFifo(&id, 16, 8, IID_IFifoWriter, writer.pv()), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
+  StandAloneFifo fifo(16, 8);
   UINT16 capacity = 0;
-  ASSERT_EQ(reader->GetCapacity(&capacity), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetCapacity(&capacity), VCI_OK);
   uint8_t e[8] = {};
   for (UINT16 k = 0; k + 2 < capacity; ++k) {  // up to two before the end, read again
-    ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
-    ASSERT_EQ(reader->GetDataEntry(nullptr), VCI_OK);
+    ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
+    ASSERT_EQ(fifo.reader->GetDataEntry(nullptr), VCI_OK);
   }
   for (uint8_t k = 1; k <= 5; ++k) {
     e[0] = k;
-    ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+    ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
   }
   PVOID p = nullptr;
   UINT16 n = 0;
-  ASSERT_EQ(reader->AcquireRead(&p, &n), VCI_OK);
+  ASSERT_EQ(fifo.reader->AcquireRead(&p, &n), VCI_OK);
   ASSERT_EQ(n, 2);
   EXPECT_EQ(static_cast<uint8_t*>(p)[0], 1);
   EXPECT_EQ(static_cast<uint8_t*>(p)[8], 2);
-  ASSERT_EQ(reader->ReleaseRead(2), VCI_OK);
-  ASSERT_EQ(reader->AcquireRead(&p, &n), VCI_OK);
+  ASSERT_EQ(fifo.reader->ReleaseRead(2), VCI_OK);
+  ASSERT_EQ(fifo.reader->AcquireRead(&p, &n), VCI_OK);
   ASSERT_EQ(n, 3);
   EXPECT_EQ(static_cast<uint8_t*>(p)[0], 3);
   EXPECT_EQ(static_cast<uint8_t*>(p)[16], 5);
@@ -1161,48 +1073,37 @@ TEST(VciCppItems, Item32_AcquireReadStopsAtTheEndOfTheRing) {
 // before.
 TEST(VciCppItems, Item40_TheReaderEventComesWithTheWriteThatReachesTheThreshold) {
   VciDaemon d;
-  VCIID id{};
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(VciCreateFifo(&id, 16, 8, IID_IFifoWriter, writer.pv()), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
-  HANDLE event = CreateEvent(nullptr, FALSE, FALSE, nullptr);
-  ASSERT_EQ(reader->SetThreshold(3), VCI_OK);
-  ASSERT_EQ(reader->AssignEvent(event), VCI_OK);
+  StandAloneFifo fifo(16, 8);
+  const Event event;
+  ASSERT_EQ(fifo.reader->SetThreshold(3), VCI_OK);
+  ASSERT_EQ(fifo.reader->AssignEvent(event), VCI_OK);
   uint8_t e[8] = {};
-  ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
-  ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
+  ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
   EXPECT_EQ(WaitForSingleObject(event, 0), WAIT_TIMEOUT);
-  ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
   EXPECT_EQ(WaitForSingleObject(event, 5000), WAIT_OBJECT_0);
-  reader->AssignEvent(nullptr);
-  CloseHandle(event);
+  fifo.reader->AssignEvent(nullptr);
 }
 
 // 43: AssignEvent(NULL) takes the event away: writes signal nothing any more.
 TEST(VciCppItems, Item43_AssignEventNullRemovesTheEvent) {
   VciDaemon d;
-  VCIID id{};
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(VciCreateFifo(&id, 16, 8, IID_IFifoWriter, writer.pv()), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(VciAccessFifo(id, IID_IFifoReader, reader.pv()), VCI_OK);
-  HANDLE removed = CreateEvent(nullptr, FALSE, FALSE, nullptr);
-  HANDLE later = CreateEvent(nullptr, FALSE, FALSE, nullptr);
-  ASSERT_EQ(reader->SetThreshold(1), VCI_OK);
-  ASSERT_EQ(reader->AssignEvent(removed), VCI_OK);
-  ASSERT_EQ(reader->AssignEvent(nullptr), VCI_OK);
+  StandAloneFifo fifo(16, 8);
+  const Event removed;
+  const Event later;
+  ASSERT_EQ(fifo.reader->SetThreshold(1), VCI_OK);
+  ASSERT_EQ(fifo.reader->AssignEvent(removed), VCI_OK);
+  ASSERT_EQ(fifo.reader->AssignEvent(nullptr), VCI_OK);
   uint8_t e[8] = {};
-  ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
   // Signals come in order: once `later` has its signal, `removed` would have had its own.
-  ASSERT_EQ(reader->GetDataEntry(nullptr), VCI_OK);
-  ASSERT_EQ(reader->AssignEvent(later), VCI_OK);
-  ASSERT_EQ(writer->PutDataEntry(e), VCI_OK);
+  ASSERT_EQ(fifo.reader->GetDataEntry(nullptr), VCI_OK);
+  ASSERT_EQ(fifo.reader->AssignEvent(later), VCI_OK);
+  ASSERT_EQ(fifo.writer->PutDataEntry(e), VCI_OK);
   EXPECT_EQ(WaitForSingleObject(later, 5000), WAIT_OBJECT_0);
   EXPECT_EQ(WaitForSingleObject(removed, 0), WAIT_TIMEOUT);
-  reader->AssignEvent(nullptr);
-  CloseHandle(removed);
-  CloseHandle(later);
+  fifo.reader->AssignEvent(nullptr);
 }
 
 // 49: the v1 and v2 capabilities of a socket agree; the FD features are there on the FD
@@ -1239,17 +1140,14 @@ TEST(VciCppItems, Item53_V2InitializeNeedsAReceiveFifoAndHandsOutCanmsg2) {
   VciDaemon d;
   Ref<IBalObject> bal;
   ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> channel2;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, channel2.out()), VCI_OK);
+  V2Channel ch2(bal.p);
   Ref<IFifoWriter> writer2;
-  EXPECT_EQ(channel2->GetWriter(writer2.out()), VCI_E_NOT_INITIALIZED);
-  EXPECT_EQ(channel2->Initialize(0, 16, 0, CAN_FILTER_PASS), VCI_E_INVALIDARG);
-  ASSERT_EQ(channel2->Initialize(16, 16, 0, CAN_FILTER_PASS), VCI_OK);
+  EXPECT_EQ(ch2.channel->GetWriter(writer2.out()), VCI_E_NOT_INITIALIZED);
+  EXPECT_EQ(ch2.channel->Initialize(0, 16, 0, CAN_FILTER_PASS), VCI_E_INVALIDARG);
+  ASSERT_EQ(ch2.channel->Initialize(16, 16, 0, CAN_FILTER_PASS), VCI_OK);
   Ref<IFifoReader> reader2;
-  ASSERT_EQ(channel2->GetReader(reader2.out()), VCI_OK);
-  ASSERT_EQ(channel2->GetWriter(writer2.out()), VCI_OK);
+  ASSERT_EQ(ch2.channel->GetReader(reader2.out()), VCI_OK);
+  ASSERT_EQ(ch2.channel->GetWriter(writer2.out()), VCI_OK);
   UINT16 size = 0;
   ASSERT_EQ(reader2->GetEntrySize(&size), VCI_OK);
   EXPECT_EQ(size, sizeof(CANMSG2));
@@ -1283,58 +1181,49 @@ std::vector<CANMSG> exchange(Adapter& alpha, Adapter& beta, std::vector<UINT32> 
 // 64: StopLine: INFO STOP with time 0, the controller offline (ININIT), and the filters as
 // they were.
 TEST(VciCppItems, Item64_StopLineKeepsTheFilters) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  ASSERT_EQ(alpha.control->ResetLine(), VCI_OK);
-  CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
-  ASSERT_EQ(alpha.control->InitLine(&init), VCI_OK);
-  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);  // 0x100..0x103
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
-  EXPECT_EQ(ids_of(exchange(alpha, beta, {0x100, 0x104})), std::vector<UINT32>{0x100});
+  TwoAdapters bus;
+  ASSERT_NO_FATAL_FAILURE(bus.alpha.reinit(CAN_BT0_500KB, CAN_BT1_500KB));
+  ASSERT_EQ(bus.alpha.control->SetAccFilter(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);  // 0x100..0x103
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
+  EXPECT_EQ(ids_of(exchange(bus.alpha, bus.beta, {0x100, 0x104})), std::vector<UINT32>{0x100});
   step_ns(1'000'000);
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
-  CANLINESTATUS s{};
-  ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->StopLine(), VCI_OK);
+  CANLINESTATUS s = bus.alpha.line_status();
   EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
-  const auto stop = drain(alpha.reader.p, false);
-  ASSERT_EQ(stop.size(), 1u);
-  EXPECT_EQ(stop[0].abData[0], CAN_INFO_STOP);
-  EXPECT_EQ(stop[0].dwTime, 0u);
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
-  EXPECT_EQ(ids_of(exchange(alpha, beta, {0x101, 0x104})), std::vector<UINT32>{0x101});
+  const auto stop = the_one(drain(bus.alpha.reader.p, false));
+  EXPECT_EQ(stop.abData[0], CAN_INFO_STOP);
+  EXPECT_EQ(stop.dwTime, 0u);
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
+  EXPECT_EQ(ids_of(exchange(bus.alpha, bus.beta, {0x101, 0x104})), std::vector<UINT32>{0x101});
 }
 
 // 65: ResetLine: INFO RESET with time 0, the controller not initialized, and the ID lists empty
 // (the v1 control unit's 29-bit list of 2048 values has room again).
 TEST(VciCppItems, Item65_ResetLineEmptiesTheFilterLists) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
-  ASSERT_EQ(alpha.control->AddFilterIds(CAN_FILTER_EXT, 0, 0x3FFFF800), VCI_OK);  // 2048 values
-  EXPECT_EQ(alpha.control->AddFilterIds(CAN_FILTER_EXT, 0x1000, 0x3FFFFFFF), VCI_E_OUTOFMEMORY);
-  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
+  TwoAdapters bus;
+  ASSERT_EQ(bus.alpha.control->StopLine(), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->AddFilterIds(CAN_FILTER_EXT, 0, 0x3FFFF800), VCI_OK);  // 2048 values
+  EXPECT_EQ(bus.alpha.control->AddFilterIds(CAN_FILTER_EXT, 0x1000, 0x3FFFFFFF), VCI_E_OUTOFMEMORY);
+  ASSERT_EQ(bus.alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
             VCI_OK);
-  ASSERT_EQ(alpha.control->AddFilterIds(CAN_FILTER_STD, 0x123 << 1, 0xFFF), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->AddFilterIds(CAN_FILTER_STD, 0x123 << 1, 0xFFF), VCI_OK);
   step_ns(1'000'000);
-  ASSERT_EQ(alpha.control->ResetLine(), VCI_OK);
-  CANLINESTATUS s{};
-  ASSERT_EQ(alpha.control->GetLineStatus(&s), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->ResetLine(), VCI_OK);
+  CANLINESTATUS s = bus.alpha.line_status();
   EXPECT_EQ(s.dwStatus, static_cast<UINT32>(CAN_STATUS_ININIT));
-  const auto infos = drain(alpha.reader.p, false);
+  const auto infos = drain(bus.alpha.reader.p, false);
   ASSERT_EQ(infos.size(), 3u);  // START, STOP, RESET
   EXPECT_EQ(infos[2].abData[0], CAN_INFO_RESET);
   EXPECT_EQ(infos[2].dwTime, 0u);
-  EXPECT_EQ(alpha.control->StartLine(), VCI_E_INVALID_STATE);  // not initialized
-  EXPECT_EQ(alpha.control->AddFilterIds(CAN_FILTER_EXT, 0x1000, 0x3FFFFFFF), VCI_OK);  // room
+  EXPECT_EQ(bus.alpha.control->StartLine(), VCI_E_INVALID_STATE);  // not initialized
+  EXPECT_EQ(bus.alpha.control->AddFilterIds(CAN_FILTER_EXT, 0x1000, 0x3FFFFFFF), VCI_OK);  // room
   // The 11-bit list lost 0x123: with the acceptance filter closed, nothing passes.
   CANINITLINE init{kMode, 0, CAN_BT0_500KB, CAN_BT1_500KB};
-  ASSERT_EQ(alpha.control->InitLine(&init), VCI_OK);
-  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
+  ASSERT_EQ(bus.alpha.control->InitLine(&init), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
             VCI_OK);
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
-  EXPECT_TRUE(exchange(alpha, beta, {0x123}).empty());
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
+  EXPECT_TRUE(exchange(bus.alpha, bus.beta, {0x123}).empty());
 }
 
 // 73: the dlc of an FD frame counts 12, 16, 20, 24, 32, 48, 64 bytes for 9..15, on the wire
@@ -1393,32 +1282,21 @@ TEST(VciCppItems, Item85_FifoLoadsAreTheFillInPercent) {
 
 // 91: a frame sent with srr = 0 is seen by no v2 channel of the controller, SRRA or not.
 TEST(VciCppItems, Item91_WithoutSrrNoV2ChannelSeesTheFrame) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> srra;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, srra.out()), VCI_OK);
-  ASSERT_EQ(srra->Initialize(64, 16, 0, CAN_FILTER_PASS | CAN_FILTER_SRRA), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(srra->GetReader(reader.out()), VCI_OK);
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(srra->GetWriter(writer.out()), VCI_OK);
-  ASSERT_EQ(srra->Activate(), VCI_OK);
+  TwoAdapters bus;
+  V2Channel srra(bus.alpha.bal.p);
+  ASSERT_NO_FATAL_FAILURE(srra.activate_with(64, 16, CAN_FILTER_PASS | CAN_FILTER_SRRA));
   CANMSG plain = one_byte(0x321, 1);  // from the v1 channel
-  ASSERT_EQ(alpha.writer->PutDataEntry(&plain), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->PutDataEntry(&plain), VCI_OK);
   CANMSG2 own = msg2(0x322, {2});  // from the v2 channel itself
-  ASSERT_EQ(writer->PutDataEntry(&own), VCI_OK);
+  ASSERT_EQ(srra.writer->PutDataEntry(&own), VCI_OK);
   CANMSG echoed = one_byte(0x323, 3);  // with srr: the SRRA channel sees it
   echoed.uMsgInfo.Bits.srr = 1;
-  ASSERT_EQ(alpha.writer->PutDataEntry(&echoed), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->PutDataEntry(&echoed), VCI_OK);
   step_ns(2'000'000);
-  const auto got = drain<CANMSG2>(reader.p, true);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].dwMsgId, 0x323u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.srr, 0u);
-  EXPECT_EQ(drain(beta.reader.p, true).size(), 3u);  // all three were on the bus
+  const auto got = the_one(drain<CANMSG2>(srra.reader.p, true));
+  EXPECT_EQ(got.dwMsgId, 0x323u);
+  EXPECT_EQ(got.uMsgInfo.Bits.srr, 0u);
+  EXPECT_EQ(drain(bus.beta.reader.p, true).size(), 3u);  // all three were on the bus
 }
 
 // 93: the v1 control unit's filters work in INCL mode: seen through ICanControl2 once the v1
@@ -1440,39 +1318,30 @@ TEST(VciCppItems, Item93_TheV1ControlUnitFiltersInInclMode) {
 // 97: AddFilterIds with a pattern enters every identifier that matches it, RemFilterIds with
 // the same pattern takes them all out again.
 TEST(VciCppItems, Item97_FilterIdsByPattern) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
-  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
-            VCI_OK);
-  ASSERT_EQ(alpha.control->AddFilterIds(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);  // 0x100..0x103
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
-  const auto got = exchange(alpha, beta, {0x0FF, 0x100, 0x101, 0x102, 0x103, 0x104});
+  TwoAdapters bus;
+  ASSERT_NO_FATAL_FAILURE(bus.alpha.stop_with_list_only(CAN_FILTER_STD));
+  ASSERT_EQ(bus.alpha.control->AddFilterIds(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);  // 0x100..0x103
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
+  const auto got = exchange(bus.alpha, bus.beta, {0x0FF, 0x100, 0x101, 0x102, 0x103, 0x104});
   EXPECT_EQ(ids_of(got), (std::vector<UINT32>{0x100, 0x101, 0x102, 0x103}));
   for (const CANMSG& m : got) {
     EXPECT_EQ(m.uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
   }
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
-  ASSERT_EQ(alpha.control->RemFilterIds(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
-  EXPECT_TRUE(exchange(alpha, beta, {0x100, 0x101, 0x102, 0x103}).empty());
+  ASSERT_EQ(bus.alpha.control->StopLine(), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->RemFilterIds(CAN_FILTER_STD, 0x200, 0xFF9), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
+  EXPECT_TRUE(exchange(bus.alpha, bus.beta, {0x100, 0x101, 0x102, 0x103}).empty());
 }
 
 // 98: with CODE_ALL / MASK_ALL the acceptance filter passes every identifier, whatever the list
 // holds.
 TEST(VciCppItems, Item98_CodeAllMaskAllPassesEverything) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
-  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
+  TwoAdapters bus;
+  ASSERT_NO_FATAL_FAILURE(bus.alpha.stop_and_pass_only(CAN_FILTER_STD, 0x123));
+  ASSERT_EQ(bus.alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_ALL, CAN_ACC_MASK_ALL),
             VCI_OK);
-  ASSERT_EQ(alpha.control->AddFilterIds(CAN_FILTER_STD, 0x123 << 1, 0xFFF), VCI_OK);
-  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_ALL, CAN_ACC_MASK_ALL),
-            VCI_OK);
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
-  const auto got = exchange(alpha, beta, {0x000, 0x123, 0x7FF});
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
+  const auto got = exchange(bus.alpha, bus.beta, {0x000, 0x123, 0x7FF});
   EXPECT_EQ(ids_of(got), (std::vector<UINT32>{0x000, 0x123, 0x7FF}));
   for (const CANMSG& m : got) {
     EXPECT_EQ(m.uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_1);
@@ -1483,18 +1352,12 @@ TEST(VciCppItems, Item98_CodeAllMaskAllPassesEverything) {
 TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   VciDaemon d;
   Adapter alpha("alpha");
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> lock;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, lock.out()), VCI_OK);
-  ASSERT_EQ(lock->Initialize(256, 0, 0, CAN_FILTER_LOCK), VCI_OK);
-  Ref<IFifoReader> reader;
-  ASSERT_EQ(lock->GetReader(reader.out()), VCI_OK);
-  ASSERT_EQ(lock->Activate(), VCI_OK);
+  V2Channel lock(alpha.bal.p);
+  ASSERT_NO_FATAL_FAILURE(lock.activate_with(256, 0, CAN_FILTER_LOCK));
   ASSERT_EQ(put(alpha.writer, one_byte(0x10, 1)), VCI_OK);  // alone: ACK errors, then ERRLIM
   step_ns(10'000'000);
   const auto v1 = drain(alpha.reader.p, false);
-  const auto got = drain<CANMSG2>(reader.p, false);
+  const auto got = drain<CANMSG2>(lock.reader.p, false);
   ASSERT_EQ(got.size() + 1, v1.size());  // all of it but the START, which came before
   std::size_t errors = 0;
   std::size_t statuses = 0;
@@ -1511,7 +1374,7 @@ TEST(VciCppItems, Item102_LockStillPassesErrorAndStatusMessages) {
   ASSERT_EQ(put(beta.writer, one_byte(0x20, 2)), VCI_OK);
   step_ns(10'000'000);
   EXPECT_EQ(drain(alpha.reader.p, true).size(), 1u);
-  EXPECT_TRUE(drain<CANMSG2>(reader.p, true).empty());
+  EXPECT_TRUE(drain<CANMSG2>(lock.reader.p, true).empty());
 }
 
 // 104: INFO, ERROR and STATUS messages carry afc = CAN_ACCEPT_ALWAYS; data frames the filter
@@ -1545,66 +1408,52 @@ TEST(VciCppItems, Item107_SetFilterModeGivesThePreviousModeOrNothing) {
   VciDaemon d;
   Ref<IBalObject> bal;
   ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> channel;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, channel.out()), VCI_OK);
-  ASSERT_EQ(channel->Initialize(16, 0, 16, CAN_FILTER_INCL), VCI_OK);
-  ASSERT_EQ(channel->SetFilterMode(CAN_FILTER_STD, CAN_FILTER_EXCL, nullptr), VCI_OK);
+  V2Channel ch2(bal.p);
+  ASSERT_EQ(ch2.channel->Initialize(16, 0, 16, CAN_FILTER_INCL), VCI_OK);
+  ASSERT_EQ(ch2.channel->SetFilterMode(CAN_FILTER_STD, CAN_FILTER_EXCL, nullptr), VCI_OK);
   UINT8 previous = 0;
-  ASSERT_EQ(channel->SetFilterMode(CAN_FILTER_STD, CAN_FILTER_LOCK, &previous), VCI_OK);
+  ASSERT_EQ(ch2.channel->SetFilterMode(CAN_FILTER_STD, CAN_FILTER_LOCK, &previous), VCI_OK);
   EXPECT_EQ(previous, CAN_FILTER_EXCL);
   UINT8 mode = 0;
-  ASSERT_EQ(channel->GetFilterMode(CAN_FILTER_STD, &mode), VCI_OK);
+  ASSERT_EQ(ch2.channel->GetFilterMode(CAN_FILTER_STD, &mode), VCI_OK);
   EXPECT_EQ(mode, CAN_FILTER_LOCK);
-  ASSERT_EQ(channel->GetFilterMode(CAN_FILTER_EXT, &mode), VCI_OK);
+  ASSERT_EQ(ch2.channel->GetFilterMode(CAN_FILTER_EXT, &mode), VCI_OK);
   EXPECT_EQ(mode, CAN_FILTER_INCL);  // the other width unchanged
 }
 
 // 113: a high-priority message overtakes the other channel's waiting frames, never the frames
 // ahead of it in its own FIFO.
 TEST(VciCppItems, Item113_HighPriorityNeverOvertakesItsOwnFifo) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanChannel> second;
-  ASSERT_EQ(alpha.socket->CreateChannel(FALSE, second.out()), VCI_OK);
-  ASSERT_EQ(second->Initialize(64, 16), VCI_OK);
-  Ref<IFifoWriter> writer;
-  ASSERT_EQ(second->GetWriter(writer.out()), VCI_OK);
-  ASSERT_EQ(second->Activate(), VCI_OK);
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);  // everything waits in the FIFOs
+  TwoAdapters bus;
+  const Channel second(bus.alpha.socket.p, 64, 16, true);
+  ASSERT_EQ(bus.alpha.control->StopLine(), VCI_OK);  // everything waits in the FIFOs
   for (UINT32 id : {0x301u, 0x302u}) {
-    ASSERT_EQ(put(alpha.writer, one_byte(id, 1)), VCI_OK);
+    ASSERT_EQ(put(bus.alpha.writer, one_byte(id, 1)), VCI_OK);
   }
   CANMSG urgent = one_byte(0x303, 1);
   urgent.uMsgInfo.Bits.hpm = 1;
-  ASSERT_EQ(alpha.writer->PutDataEntry(&urgent), VCI_OK);
+  ASSERT_EQ(bus.alpha.writer->PutDataEntry(&urgent), VCI_OK);
   for (UINT32 id : {0x401u, 0x402u}) {
-    ASSERT_EQ(put(writer, one_byte(id, 1)), VCI_OK);
+    ASSERT_EQ(put(second.writer, one_byte(id, 1)), VCI_OK);
   }
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
   step_ns(5'000'000);
-  EXPECT_EQ(ids_of(drain(beta.reader.p, true)),
+  EXPECT_EQ(ids_of(drain(bus.beta.reader.p, true)),
             (std::vector<UINT32>{0x301, 0x401, 0x302, 0x303, 0x402}));
 }
 
 // 115: controllers at different rates do not hear each other: beta at 250 kbit/s gets no
 // acknowledge from alpha at 500 kbit/s, and alpha receives no frame.
 TEST(VciCppItems, Item115_DifferentRatesDoNotConnect) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  ASSERT_EQ(beta.control->ResetLine(), VCI_OK);
-  CANINITLINE init{kMode, 0, CAN_BT0_250KB, CAN_BT1_250KB};
-  ASSERT_EQ(beta.control->InitLine(&init), VCI_OK);
-  ASSERT_EQ(beta.control->StartLine(), VCI_OK);
-  drain(beta.reader.p, false);
-  ASSERT_EQ(put(beta.writer, one_byte(0x123, 1)), VCI_OK);
+  TwoAdapters bus;
+  ASSERT_NO_FATAL_FAILURE(bus.beta.reinit(CAN_BT0_250KB, CAN_BT1_250KB));
+  ASSERT_EQ(bus.beta.control->StartLine(), VCI_OK);
+  drain(bus.beta.reader.p, false);
+  ASSERT_EQ(put(bus.beta.writer, one_byte(0x123, 1)), VCI_OK);
   step_ns(20'000'000);
-  EXPECT_TRUE(drain(alpha.reader.p, true).empty());
+  EXPECT_TRUE(drain(bus.alpha.reader.p, true).empty());
   std::size_t errors = 0;
-  for (const CANMSG& x : drain(beta.reader.p, false)) {
+  for (const CANMSG& x : drain(bus.beta.reader.p, false)) {
     errors += x.uMsgInfo.Bytes.bType == CAN_MSGTYPE_ERROR ? 1 : 0;
   }
   EXPECT_GT(errors, 16u);
@@ -1616,15 +1465,12 @@ TEST(VciCppItems, Item115_DifferentRatesDoNotConnect) {
 // the rate adopted and the frames from then on, with exact time stamps).
 TEST(VciCppItems, Item120_AutobaudIsAFeatureAndIgnoresTheBtrFields) {
   VciDaemon d;
-  Ref<IBalObject> bal;
-  ASSERT_NO_FATAL_FAILURE(open_bal(vci_id_named("alpha"), bal));
-  Ref<ICanSocket> socket;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanSocket, socket.pv()), VCI_OK);
+  const BalSocket<ICanSocket> alpha("alpha", IID_ICanSocket);
   CANCAPABILITIES caps{};
-  ASSERT_EQ(socket->GetCapabilities(&caps), VCI_OK);
+  ASSERT_EQ(alpha.socket->GetCapabilities(&caps), VCI_OK);
   EXPECT_EQ(caps.dwFeatures & CAN_FEATURE_AUTOBAUD, static_cast<UINT32>(CAN_FEATURE_AUTOBAUD));
   Ref<ICanControl> control;
-  ASSERT_EQ(bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
+  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanControl, control.pv()), VCI_OK);
   CANINITLINE init{CAN_OPMODE_STANDARD | CAN_OPMODE_AUTOBAUD, 0, 0xFF, 0xFF};
   ASSERT_EQ(control->InitLine(&init), VCI_OK);
   ASSERT_EQ(control->StartLine(), VCI_OK);
@@ -1642,8 +1488,7 @@ TEST(VciCppItems, Item123_CycleTimeZeroIsRefusedTheMaximumTaken) {
   CANCAPABILITIES caps{};
   ASSERT_EQ(alpha.socket->GetCapabilities(&caps), VCI_OK);
   EXPECT_EQ(caps.dwCmsMaxTicks, 65535u);
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  const Ref<ICanScheduler> list = alpha.scheduler();
   CANCYCLICTXMSG m = cyclic(0x100, 0);
   UINT32 index = 0;
   EXPECT_EQ(list->AddMessage(&m, &index), VCI_E_INVALIDARG);
@@ -1655,20 +1500,15 @@ TEST(VciCppItems, Item123_CycleTimeZeroIsRefusedTheMaximumTaken) {
 
 // 128: INC_ID on a 29-bit identifier wraps from 2^29 - 1 to 0.
 TEST(VciCppItems, Item128_IncIdWrapsAt2To29) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  TwoAdapters bus;
+  const Ref<ICanScheduler> list = bus.alpha.scheduler();
   CANCYCLICTXMSG m = cyclic(0x1FFFFFFE, 2);
   m.uMsgInfo.Bits.ext = 1;
   m.bIncrMode = CAN_CTXMSG_INC_ID;
-  UINT32 index = 0;
-  ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
-  ASSERT_EQ(list->StartMessage(index, 3), VCI_OK);
+  add_and_start(list.p, m, 3);
   ASSERT_EQ(list->Resume(), VCI_OK);
   step_ns(10'000'000);
-  const auto got = drain(beta.reader.p, true);
+  const auto got = drain(bus.beta.reader.p, true);
   EXPECT_EQ(ids_of(got), (std::vector<UINT32>{0x1FFFFFFE, 0x1FFFFFFF, 0}));
   for (std::size_t k = 0; k < got.size(); ++k) {
     EXPECT_EQ(got[k].uMsgInfo.Bits.ext, 1u);
@@ -1680,8 +1520,7 @@ TEST(VciCppItems, Item128_IncIdWrapsAt2To29) {
 TEST(VciCppItems, Item131_ARemovedEntryIsEmptyAndItsIndexRefused) {
   VciDaemon d;
   Adapter alpha("alpha");
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
+  const Ref<ICanScheduler> list = alpha.scheduler();
   CANCYCLICTXMSG m = cyclic(0x100, 10);
   UINT32 index = 0;
   ASSERT_EQ(list->AddMessage(&m, &index), VCI_OK);
@@ -1701,46 +1540,36 @@ TEST(VciCppItems, Item131_ARemovedEntryIsEmptyAndItsIndexRefused) {
 // 90: a v2 channel with SRRA gets the other channels' srr frames through its own filter, srr
 // cleared.
 TEST(VciCppItems, Item90_SrraEchoesPassTheChannelsFilter) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  Ref<ICanSocket2> socket2;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanSocket2, socket2.pv()), VCI_OK);
-  Ref<ICanChannel2> srra;
-  ASSERT_EQ(socket2->CreateChannel(FALSE, srra.out()), VCI_OK);
-  ASSERT_EQ(srra->Initialize(64, 0, 16, CAN_FILTER_INCL | CAN_FILTER_SRRA), VCI_OK);
-  ASSERT_EQ(srra->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE), VCI_OK);
-  ASSERT_EQ(srra->AddFilterIds(CAN_FILTER_STD, 0x321 << 1, 0xFFF), VCI_OK);
+  TwoAdapters bus;
+  V2Channel srra(bus.alpha.bal.p);
+  ASSERT_EQ(srra.channel->Initialize(64, 0, 16, CAN_FILTER_INCL | CAN_FILTER_SRRA), VCI_OK);
+  ASSERT_EQ(srra.channel->SetAccFilter(CAN_FILTER_STD, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
+            VCI_OK);
+  ASSERT_EQ(srra.channel->AddFilterIds(CAN_FILTER_STD, 0x321 << 1, 0xFFF), VCI_OK);
   Ref<IFifoReader> reader;
-  ASSERT_EQ(srra->GetReader(reader.out()), VCI_OK);
-  ASSERT_EQ(srra->Activate(), VCI_OK);
+  ASSERT_EQ(srra.channel->GetReader(reader.out()), VCI_OK);
+  ASSERT_EQ(srra.channel->Activate(), VCI_OK);
   for (UINT32 id : {0x321u, 0x322u}) {
     CANMSG m = one_byte(id, 1);
     m.uMsgInfo.Bits.srr = 1;
-    ASSERT_EQ(alpha.writer->PutDataEntry(&m), VCI_OK);
+    ASSERT_EQ(bus.alpha.writer->PutDataEntry(&m), VCI_OK);
   }
   step_ns(2'000'000);
-  const auto got = drain<CANMSG2>(reader.p, true);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].dwMsgId, 0x321u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.srr, 0u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
-  EXPECT_EQ(got[0].dwTime, end_of(0x321, {1}));
-  EXPECT_EQ(ids_of(drain(alpha.reader.p, true)), (std::vector<UINT32>{0x321, 0x322}));  // v1
+  const auto got = the_one(drain<CANMSG2>(reader.p, true));
+  EXPECT_EQ(got.dwMsgId, 0x321u);
+  EXPECT_EQ(got.uMsgInfo.Bits.srr, 0u);
+  EXPECT_EQ(got.uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
+  EXPECT_EQ(got.dwTime, end_of(0x321, {1}));
+  EXPECT_EQ(ids_of(drain(bus.alpha.reader.p, true)), (std::vector<UINT32>{0x321, 0x322}));  // v1
 }
 
 // 100: a 29-bit identifier with the full mask 0x3FFFFFFF selects one (identifier, RTR) pair:
 // not the remote frame of that identifier, not its neighbour.
 TEST(VciCppItems, Item100_AFullMaskSelectsOneIdentifierAndRtrPair) {
-  VciDaemon d;
-  Adapter alpha("alpha");
-  Adapter beta("beta");
-  ASSERT_EQ(alpha.control->StopLine(), VCI_OK);
-  ASSERT_EQ(alpha.control->SetAccFilter(CAN_FILTER_EXT, CAN_ACC_CODE_NONE, CAN_ACC_MASK_NONE),
-            VCI_OK);
-  ASSERT_EQ(alpha.control->AddFilterIds(CAN_FILTER_EXT, 0x1234567 << 1, 0x3FFFFFFF), VCI_OK);
-  ASSERT_EQ(alpha.control->StartLine(), VCI_OK);
-  drain(alpha.reader.p, false);
+  TwoAdapters bus;
+  ASSERT_NO_FATAL_FAILURE(bus.alpha.stop_and_pass_only(CAN_FILTER_EXT, 0x1234567));
+  ASSERT_EQ(bus.alpha.control->StartLine(), VCI_OK);
+  drain(bus.alpha.reader.p, false);
   CANMSG data = one_byte(0x1234567, 1);
   data.uMsgInfo.Bits.ext = 1;
   CANMSG remote = data;
@@ -1748,52 +1577,31 @@ TEST(VciCppItems, Item100_AFullMaskSelectsOneIdentifierAndRtrPair) {
   CANMSG next = data;
   next.dwMsgId = 0x1234568;
   for (CANMSG* m : {&remote, &next, &data}) {
-    ASSERT_EQ(beta.writer->PutDataEntry(m), VCI_OK);
+    ASSERT_EQ(bus.beta.writer->PutDataEntry(m), VCI_OK);
   }
   step_ns(2'000'000);
-  const auto got = drain(alpha.reader.p, true);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].dwMsgId, 0x1234567u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.rtr, 0u);
-  EXPECT_EQ(got[0].uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
+  const auto got = the_one(drain(bus.alpha.reader.p, true));
+  EXPECT_EQ(got.dwMsgId, 0x1234567u);
+  EXPECT_EQ(got.uMsgInfo.Bits.rtr, 0u);
+  EXPECT_EQ(got.uMsgInfo.Bits.afc, CAN_ACCEPT_FILTER_2);
 }
 
 // 121: while one program holds a controller's cyclic list, another program's open is refused.
 TEST(VciCppItems, Item121_AnotherProgramCannotOpenAHeldScheduler) {
   VciDaemon d;
   Adapter alpha("alpha");
-  Ref<ICanScheduler> list;
-  ASSERT_EQ(alpha.bal->OpenSocket(0, IID_ICanScheduler, list.pv()), VCI_OK);
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    if (canemuConnect(d.daemon.socket().c_str()) != VCI_OK) {
-      ::_exit(10);
-    }
-    IVciDeviceManager* manager = nullptr;
-    IVciDevice* device = nullptr;
-    IBalObject* bal = nullptr;
-    VCIID id{};
-    id.AsInt64 = 1;
-    if (VciGetDeviceManager(&manager) != VCI_OK || manager->OpenDevice(id, &device) != VCI_OK ||
-        device->OpenComponent(CLSID_VCIBAL, IID_IBalObject, reinterpret_cast<PVOID*>(&bal)) !=
-            VCI_OK) {
-      ::_exit(11);
-    }
+  const Ref<ICanScheduler> list = alpha.scheduler();
+  ASSERT_NO_FATAL_FAILURE(testing::with_alpha_bal_in_another_program(d, [](IBalObject* bal) {
     PVOID other = &other;
     if (bal->OpenSocket(0, IID_ICanScheduler, &other) != VCI_E_ACCESSDENIED || other != nullptr) {
-      ::_exit(12);
+      return 12;
     }
     other = &other;
     if (bal->OpenSocket(0, IID_ICanScheduler2, &other) != VCI_E_ACCESSDENIED) {
-      ::_exit(13);
+      return 13;
     }
-    ::_exit(0);
-  }
-  int status = -1;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+    return 0;
+  }));
 }
 
 }  // namespace

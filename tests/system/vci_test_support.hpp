@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <unistd.h>
@@ -71,6 +72,19 @@ inline void step_until(const std::atomic<bool>& done) {
     step_ns(1'000'000);
   }
   ASSERT_TRUE(done) << "the waiting call did not return";
+}
+
+// Runs `call`, which blocks until something happens in simulated time, on a thread of its own
+// while this one steps simulated time until it returns (for at most 30 s of wall time).
+template <class Call>
+void step_while(Call call) {
+  std::atomic<bool> done{false};
+  std::thread caller([&] {
+    call();
+    done = true;
+  });
+  step_until(done);
+  caller.join();
 }
 
 // Simulated time from canemud's start (each test starts its own canemud at 0), stepped to

@@ -17,23 +17,23 @@ namespace canemu::daemon {
 
 using namespace canemu::model;
 
-tl::expected<ipc::ChannelMessage, std::string> frame_message(const FrameFields& f) {
+Result<ipc::ChannelMessage> frame_message(const FrameFields& f) {
   if (f.id < 0 || f.id > (f.extended ? 0x1FFFFFFF : 0x7FF)) {
-    return tl::unexpected(
-        fmt::format("id {} is no {} identifier", f.id, f.extended ? "29-bit" : "11-bit"));
+    return fail(Errc::bad_argument,
+                fmt::format("id {} is no {} identifier", f.id, f.extended ? "29-bit" : "11-bit"));
   }
   if (f.dlc < 0 || f.dlc > 15) {
-    return tl::unexpected(fmt::format("dlc {} is outside 0..15", f.dlc));
+    return fail(Errc::bad_argument, fmt::format("dlc {} is outside 0..15", f.dlc));
   }
   const auto dlc = static_cast<uint8_t>(f.dlc);
   const std::size_t bytes = f.remote ? 0 : dlc_to_length(dlc, f.fd);
   if (f.len < 0 || static_cast<std::size_t>(f.len) != bytes) {
-    return tl::unexpected(fmt::format("len {} is not the {} bytes a{} frame of dlc {} has", f.len,
-                                      bytes,
-                                      f.remote ? " remote"
-                                      : f.fd   ? " CAN FD"
-                                               : " classic",
-                                      f.dlc));
+    return fail(Errc::bad_argument,
+                fmt::format("len {} is not the {} bytes a{} frame of dlc {} has", f.len, bytes,
+                            f.remote ? " remote"
+                            : f.fd   ? " CAN FD"
+                                     : " classic",
+                            f.dlc));
   }
   ipc::ChannelMessage m;
   m.kind = static_cast<uint8_t>(ipc::ChannelMessageKind::frame);

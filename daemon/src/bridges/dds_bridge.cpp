@@ -71,7 +71,7 @@ void offer_sample(const canemu_dds_Frame& f, Bridge& bridge, const std::string& 
       frame_message({f.id, f.extended, f.remote, f.fd, f.brs, f.esi, f.dlc, f.len, f.data});
   if (!m) {
     bridge.reject(BridgeReject::bad_fields,
-                  fmt::format("rejected a Frame on {}: {}", topic, m.error()));
+                  fmt::format("rejected a Frame on {}: {}", topic, m.error().text));
     return;
   }
   bridge.offer(&*m);

@@ -141,7 +141,7 @@ class LcmTransport final : public BridgeTransport {
                        f.dlc, f.len, reinterpret_cast<const uint8_t*>(f.data)});
     if (!m) {
       bridge.reject(BridgeReject::bad_fields,
-                    fmt::format("rejected a frame_t on {}: {}", channel, m.error()));
+                    fmt::format("rejected a frame_t on {}: {}", channel, m.error().text));
       return;
     }
     bridge.offer(&*m);

@@ -92,7 +92,7 @@ struct FrameFields {
 };
 // Those fields as a frame for a bridge to send; what is wrong if they disagree (an identifier or
 // DLC out of range, a length other than the DLC's). Bridge::offer() checks the rest.
-tl::expected<ipc::ChannelMessage, std::string> frame_message(const FrameFields& f);
+Result<ipc::ChannelMessage> frame_message(const FrameFields& f);
 
 // Why a bridge cannot open when this process may not create sockets of `family` (AF_CAN for
 // SocketCAN; AF_INET for LCM, DDS and [distributed]): socket() fails with EAFNOSUPPORT where a

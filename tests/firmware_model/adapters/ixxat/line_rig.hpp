@@ -177,6 +177,22 @@ struct Rig {
     EXPECT_EQ(line.activate(*id), VCI_OK);
     return *id;
   }
+  // init(), a v1 channel on `port` and the peer started; the line is not started yet, so the
+  // test can fill the transmit FIFO first.
+  ChannelId ready(Port& port) {
+    init();
+    const ChannelId id = channel(port);
+    peer.start();
+    return id;
+  }
+  // ready(port), `frames` in its transmit FIFO, then the line started: the first frame is
+  // loaded into the controller at once.
+  ChannelId start_with(Port& port, std::vector<CANMSG2> frames) {
+    const ChannelId id = ready(port);
+    port.tx.assign(frames.begin(), frames.end());
+    EXPECT_EQ(line.start_line(), VCI_OK);
+    return id;
+  }
   // init(), a v1 channel on `port`, the line started and the peer started, all at now.
   ChannelId online(Port& port) {
     init();

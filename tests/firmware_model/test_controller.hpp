@@ -3,6 +3,7 @@
 #pragma once
 
 #include <deque>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,24 @@ struct BusFixture {
   BusFixture() { bus.set_injector(&plan); }
   void run_until(int64_t ns) { sched.run_until(SimTime::from_ns(ns)); }
 };
+
+// A fault rule: `type` errors in the first `count` matching frames (every one if none), at `bit`
+// (the type's default bit if none).
+inline FaultRule fault_rule(CanErrorType type, std::optional<uint64_t> count = std::nullopt,
+                            std::optional<uint16_t> bit = std::nullopt) {
+  FaultRule r;
+  r.fault.error = type;
+  r.fault.bit = bit;
+  r.count = count;
+  return r;
+}
+// The same for the frames `node` sends only.
+inline FaultRule errors_from(NodeId node, CanErrorType type, uint64_t count,
+                             std::optional<uint16_t> bit = std::nullopt) {
+  FaultRule r = fault_rule(type, count, bit);
+  r.match.transmitter = node;
+  return r;
+}
 
 // The all-zero standard frame is 50 bits (hand-checked in wire_encoding_test), 0x123 with two
 // bytes 62 bits (golden vector).

@@ -454,11 +454,7 @@ TEST(VciCanLine, ThirtyTwoBitErrorsTakeTheLineBusOffUntilItIsStartedAgain) {
   Rig r;
   Port p;
   const ChannelId ch = r.online(p);
-  FaultRule rule;
-  rule.match.transmitter = r.node.node();
-  rule.fault.error = CanErrorType::bit;
-  rule.count = 32;
-  r.b.plan.add(rule);
+  r.b.plan.add(errors_from(r.node.node(), CanErrorType::bit, 32));
   r.send(p, msg(0x123));
   r.b.run_until(100 * kMs);
   const auto errors = p.of_type(CAN_MSGTYPE_ERROR);
@@ -541,12 +537,8 @@ TEST(VciCanLine, ReceiveErrorsGiveErrorMessagesWithTheirType) {
   r.online(p);
   const NodeId peer = r.peer.node.node();
   for (CanErrorType type : {CanErrorType::stuff, CanErrorType::form, CanErrorType::crc}) {
-    FaultRule rule;
-    rule.match.transmitter = peer;
-    rule.fault.error = type;
-    rule.fault.bit = type == CanErrorType::stuff ? std::optional<uint16_t>(30) : std::nullopt;
-    rule.count = 1;
-    r.b.plan.add(rule);
+    const auto bit = type == CanErrorType::stuff ? std::optional<uint16_t>(30) : std::nullopt;
+    r.b.plan.add(errors_from(peer, type, 1, bit));
   }
   r.peer.send(k123);
   r.b.run_until(10 * kMs);

@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <deque>
+#include <initializer_list>
 #include <ostream>
 #include <tuple>
 #include <vector>
@@ -193,14 +194,26 @@ struct Rig {
     EXPECT_EQ(line.start_line(), VCI_OK);
     return id;
   }
-  // init(), a v1 channel on `port`, the line started and the peer started, all at now.
-  ChannelId online(Port& port) {
+  // A channel to open on `port`: v1, or v2 with its filter setup.
+  struct Open {
+    Port& port;
+    bool v2 = false;
+    ixxat::ChannelSetup setup = {};
+  };
+  // init(), a channel for each of `channels`, the line started and the peer started, all at now;
+  // their ids, in order.
+  std::vector<ChannelId> online(std::initializer_list<Open> channels) {
     init();
-    const ChannelId id = channel(port);
+    std::vector<ChannelId> ids;
+    for (const Open& c : channels) {
+      ids.push_back(channel(c.port, c.v2, c.setup));
+    }
     EXPECT_EQ(line.start_line(), VCI_OK);
     peer.start();
-    return id;
+    return ids;
   }
+  // The same with one v1 channel on `port`.
+  ChannelId online(Port& port) { return online({Open{port}})[0]; }
   void send(Port& port, const CANMSG2& m) {
     port.tx.push_back(m);
     line.tx_ready();

@@ -16,6 +16,7 @@
 namespace canemu::model::sorcus::testing {
 
 using model::testing::kBit;
+using Bytes = std::vector<uint8_t>;
 
 struct LogSink final : XcanSink {
   std::vector<XcanCallback> callbacks;
@@ -107,6 +108,14 @@ struct Xcan {
     const Reply r = m.read_block(h);
     EXPECT_EQ(r.error, uint32_t{ERR_OK});
     return r.data;
+  }
+  // The valid data bytes of each callback so far.
+  std::vector<Bytes> callback_data() const {
+    std::vector<Bytes> out;
+    for (const XcanCallback& c : sink.callbacks) {
+      out.emplace_back(c.data.begin(), c.data.begin() + c.size);
+    }
+    return out;
   }
   uint32_t send_general(ChannelHandle h, ULONG id, std::vector<uint8_t> data, USHORT flags = 0) {
     XCAN_MESSAGE msg{};

@@ -114,6 +114,15 @@ class TestController : public CanController {
   void on_error(const BusErrorEvent& e) override { errors.push_back(e); }
   void on_state_change(SimTime at, ErrorState s) override { states.push_back({at, s}); }
 
+  // The identifiers of the frames received so far, in order.
+  std::vector<uint32_t> received_ids() const {
+    std::vector<uint32_t> ids;
+    for (const Rx& r : received) {
+      ids.push_back(r.frame.id());
+    }
+    return ids;
+  }
+
   struct Rx {
     SimTime at;
     Frame frame;

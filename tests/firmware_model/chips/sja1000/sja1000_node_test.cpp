@@ -44,9 +44,7 @@ TEST(Sja1000Node, PullsFramesAsTheTransmitBufferFreesAndEmptiesTheReceiveFifo) {
   Station a(b), r(b);
   a.start();
   r.start();
-  for (int i = 0; i < 8; ++i) {
-    a.queue.push_back(TxFrame{k123, false, false});
-  }
+  a.queue.assign(8, TxFrame{k123, false, false});
   a.node.kick();
   b.run_until(8 * 65 * kBit);
   // 62 bits each, 3 bits of intermission between: ends at 62, 127, 192, ... bit times.

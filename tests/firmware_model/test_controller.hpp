@@ -68,7 +68,31 @@ inline FaultRule errors_from(NodeId node, CanErrorType type, uint64_t count,
 inline const Frame kZero = *Frame::classic(0x000, {});
 inline const Frame k123 = *Frame::classic(0x123, std::vector<uint8_t>{0x11, 0x22});
 
-class TestController : public CanController {
+// What a node was told of frames and errors, each frame with its instant (`Time`: SimTime, or
+// ns as int64_t).
+template <class Time>
+struct FrameLog {
+  struct Item {
+    Time at;
+    Frame frame;
+    bool own;
+  };
+  std::vector<Item> received;
+  std::vector<Item> sent;
+  std::vector<Time> dropped;
+  std::vector<BusErrorEvent> errors;
+
+  // The identifiers of the frames received so far, in order.
+  std::vector<uint32_t> received_ids() const {
+    std::vector<uint32_t> ids;
+    for (const Item& r : received) {
+      ids.push_back(r.frame.id());
+    }
+    return ids;
+  }
+};
+
+class TestController : public CanController, public FrameLog<SimTime> {
  public:
   explicit TestController(BitTiming nominal = timing_500k()) { timing_.nominal = nominal; }
   // Attached to `bus` at once.
@@ -114,29 +138,11 @@ class TestController : public CanController {
   void on_error(const BusErrorEvent& e) override { errors.push_back(e); }
   void on_state_change(SimTime at, ErrorState s) override { states.push_back({at, s}); }
 
-  // The identifiers of the frames received so far, in order.
-  std::vector<uint32_t> received_ids() const {
-    std::vector<uint32_t> ids;
-    for (const Rx& r : received) {
-      ids.push_back(r.frame.id());
-    }
-    return ids;
-  }
-
-  struct Rx {
-    SimTime at;
-    Frame frame;
-    bool own;
-  };
   struct Lost {
     SimTime at;
     uint16_t bit;
   };
-  std::vector<Rx> received;
-  std::vector<Rx> sent;
-  std::vector<SimTime> dropped;
   std::vector<Lost> lost;
-  std::vector<BusErrorEvent> errors;
   std::vector<StateChange> states;
 
   FaultConfinement fc;

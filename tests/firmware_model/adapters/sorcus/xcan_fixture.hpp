@@ -76,13 +76,8 @@ struct Xcan {
 
   static CPS_XCAN cps(USHORT device, ULONG id, USHORT flags = 0, USHORT timeout = 0,
                       USHORT iface = 0) {
-    CPS_XCAN c{};
-    c.usDevice = device;
-    c.usChannel = iface;
-    c.usFlags = flags;
-    c.usTimeout = timeout;
-    c.ulCanID = id;
-    return c;
+    // Device, interface, index range (0 to 0: set only for bus control), flags, timeout, id.
+    return CPS_XCAN{device, iface, 0, 0, flags, timeout, id};
   }
   // Opens a channel that must open.
   ChannelHandle open(const CPS_XCAN& c, bool callback = true) {

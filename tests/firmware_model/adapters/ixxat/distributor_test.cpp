@@ -128,7 +128,7 @@ TEST(VciCanLine, TwoChannelsBothReceiveEveryFrame) {
 TEST(VciCanLine, AReceivedFrameCarriesItsEndOfFrameInTicksAndItsContent) {
   Rig r;
   Port p;
-  r.online(p);
+  const ChannelId ch = r.online(p);
   r.peer.send(k123);
   r.b.run_until(10 * kMs);
   r.peer.send(classic(0x1ABCDEF, {1, 2, 3, 4, 5, 6, 7, 8}, true));
@@ -150,6 +150,7 @@ TEST(VciCanLine, AReceivedFrameCarriesItsEndOfFrameInTicksAndItsContent) {
   EXPECT_EQ(d[2].dwTime, static_cast<uint32_t>(rtr_end / kUs));
   EXPECT_EQ(d[2].dwMsgId, 0x7FFu);
   EXPECT_EQ(info(d[2]), (Info{CAN_MSGTYPE_DATA, 0, CAN_MSGFLAGS_RTR, CAN_ACCEPT_FILTER_1}));
+  EXPECT_EQ(r.counters(ch).received, 4u);  // INFO START and the three frames
 }
 
 TEST(VciCanLine, TimeStampsCountFromTheEpochAtTheClockRate) {

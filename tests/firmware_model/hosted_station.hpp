@@ -13,16 +13,8 @@
 
 namespace canemu::model::testing {
 
-struct NodeLog : ControllerEvents {
-  struct Item {
-    int64_t at;
-    Frame frame;
-    bool own;
-  };
-  std::vector<Item> received;
-  std::vector<Item> sent;
-  std::vector<int64_t> dropped;
-  std::vector<BusErrorEvent> errors;
+// Instants in ns.
+struct NodeLog : ControllerEvents, FrameLog<int64_t> {
   std::vector<std::pair<int64_t, ErrorState>> states;
   void frame_received(SimTime at, const Frame& f, bool own) override {
     received.push_back({at.ns(), f, own});

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <deque>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,12 +45,54 @@ struct BusFixture {
   void run_until(int64_t ns) { sched.run_until(SimTime::from_ns(ns)); }
 };
 
+// A fault rule: `type` errors in the first `count` matching frames (every one if none), at `bit`
+// (the type's default bit if none).
+inline FaultRule fault_rule(CanErrorType type, std::optional<uint64_t> count = std::nullopt,
+                            std::optional<uint16_t> bit = std::nullopt) {
+  FaultRule r;
+  r.fault.error = type;
+  r.fault.bit = bit;
+  r.count = count;
+  return r;
+}
+// The same for the frames `node` sends only.
+inline FaultRule errors_from(NodeId node, CanErrorType type, uint64_t count,
+                             std::optional<uint16_t> bit = std::nullopt) {
+  FaultRule r = fault_rule(type, count, bit);
+  r.match.transmitter = node;
+  return r;
+}
+
 // The all-zero standard frame is 50 bits (hand-checked in wire_encoding_test), 0x123 with two
 // bytes 62 bits (golden vector).
 inline const Frame kZero = *Frame::classic(0x000, {});
 inline const Frame k123 = *Frame::classic(0x123, std::vector<uint8_t>{0x11, 0x22});
 
-class TestController : public CanController {
+// What a node was told of frames and errors, each frame with its instant (`Time`: SimTime, or
+// ns as int64_t).
+template <class Time>
+struct FrameLog {
+  struct Item {
+    Time at;
+    Frame frame;
+    bool own;
+  };
+  std::vector<Item> received;
+  std::vector<Item> sent;
+  std::vector<Time> dropped;
+  std::vector<BusErrorEvent> errors;
+
+  // The identifiers of the frames received so far, in order.
+  std::vector<uint32_t> received_ids() const {
+    std::vector<uint32_t> ids;
+    for (const Item& r : received) {
+      ids.push_back(r.frame.id());
+    }
+    return ids;
+  }
+};
+
+class TestController : public CanController, public FrameLog<SimTime> {
  public:
   explicit TestController(BitTiming nominal = timing_500k()) { timing_.nominal = nominal; }
   // Attached to `bus` at once.
@@ -95,20 +138,11 @@ class TestController : public CanController {
   void on_error(const BusErrorEvent& e) override { errors.push_back(e); }
   void on_state_change(SimTime at, ErrorState s) override { states.push_back({at, s}); }
 
-  struct Rx {
-    SimTime at;
-    Frame frame;
-    bool own;
-  };
   struct Lost {
     SimTime at;
     uint16_t bit;
   };
-  std::vector<Rx> received;
-  std::vector<Rx> sent;
-  std::vector<SimTime> dropped;
   std::vector<Lost> lost;
-  std::vector<BusErrorEvent> errors;
   std::vector<StateChange> states;
 
   FaultConfinement fc;

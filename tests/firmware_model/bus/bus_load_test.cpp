@@ -3,6 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+#include <vector>
+
+#include "case_name.hpp"
+
 namespace canemu::model {
 namespace {
 
@@ -10,37 +15,49 @@ SimTime at_ms(int64_t ms) {
   return SimTime{} + milliseconds(ms);
 }
 
-TEST(BusLoad, AnIdleBusHasNoLoad) {
-  const BusLoad load;
-  EXPECT_EQ(load.percent(at_ms(1000)), 0.0);
-}
+// Activities on the bus (start and end, in ms) and the load seen at given instants.
+struct LoadCase {
+  const char* name;
+  std::vector<std::pair<int64_t, int64_t>> busy;
+  std::vector<std::pair<int64_t, double>> percent_at;
+};
 
-TEST(BusLoad, BusyTimeCountsAgainstAWholeSecondEvenEarlyOn) {
-  BusLoad load;
-  load.record(at_ms(0), at_ms(250));
-  EXPECT_EQ(load.percent(at_ms(500)), 25.0);
-  EXPECT_EQ(load.percent(at_ms(1000)), 25.0);
-}
+class BusLoadPercent : public ::testing::TestWithParam<LoadCase> {};
 
-TEST(BusLoad, OnlyTheSecondBeforeNowCounts) {
+TEST_P(BusLoadPercent, IsTheBusyTimeOfTheSecondBeforeNow) {
   BusLoad load;
-  load.record(at_ms(0), at_ms(250));
-  load.record(at_ms(900), at_ms(1100));
-  // From 100 ms: 150 ms of the first activity, all 200 ms of the second.
-  EXPECT_EQ(load.percent(at_ms(1100)), 35.0);
-  // At 1000 ms the second activity counts up to now only.
-  EXPECT_EQ(load.percent(at_ms(1000)), 35.0);
-  EXPECT_EQ(load.percent(at_ms(2100)), 0.0);
-}
-
-TEST(BusLoad, BackToBackActivitiesFillTheSecond) {
-  BusLoad load;
-  for (int64_t ms = 0; ms < 1000; ms += 100) {
-    load.record(at_ms(ms), at_ms(ms + 100));
+  for (const auto& [from, to] : GetParam().busy) {
+    load.record(at_ms(from), at_ms(to));
   }
-  EXPECT_EQ(load.percent(at_ms(1000)), 100.0);
-  EXPECT_EQ(load.percent(at_ms(1500)), 50.0);
+  for (const auto& [now, percent] : GetParam().percent_at) {
+    EXPECT_EQ(load.percent(at_ms(now)), percent) << "at " << now << " ms";
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    BusLoad, BusLoadPercent,
+    ::testing::Values(LoadCase{"AnIdleBusHasNoLoad", {}, {{1000, 0.0}}},
+                      LoadCase{"BusyTimeCountsAgainstAWholeSecondEvenEarlyOn",
+                               {{0, 250}},
+                               {{500, 25.0}, {1000, 25.0}}},
+                      // At 1100 ms, from 100 ms: 150 ms of the first activity, all 200 ms of the
+                      // second; at 1000 ms the second activity counts up to now only.
+                      LoadCase{"OnlyTheSecondBeforeNowCounts",
+                               {{0, 250}, {900, 1100}},
+                               {{1100, 35.0}, {1000, 35.0}, {2100, 0.0}}},
+                      LoadCase{"BackToBackActivitiesFillTheSecond",
+                               {{0, 100},
+                                {100, 200},
+                                {200, 300},
+                                {300, 400},
+                                {400, 500},
+                                {500, 600},
+                                {600, 700},
+                                {700, 800},
+                                {800, 900},
+                                {900, 1000}},
+                               {{1000, 100.0}, {1500, 50.0}}}),
+    test_support::CaseName{});
 
 // The load over time, in bins of 100 ms: an activity across a bin boundary counts in both.
 TEST(BusLoad, TheHistoryHasTheBusyTimeOfEveryEndedBinIdleOnesIncluded) {

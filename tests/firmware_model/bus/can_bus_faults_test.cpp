@@ -2,6 +2,9 @@
 // every type, bus-off and its recovery, bit-rate mismatch, unplugged nodes, dominant holds.
 #include <gtest/gtest.h>
 
+#include <optional>
+#include <utility>
+
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/fault_plan.hpp"
 #include "test_controller.hpp"
@@ -11,17 +14,31 @@ namespace {
 
 using Fixture = BusFixture;
 
-FaultRule rule(CanErrorType type, std::optional<uint64_t> count = std::nullopt) {
-  FaultRule r;
-  r.fault.error = type;
-  r.count = count;
-  return r;
+// k123 from `tx` to `rx`, sent once with `rule` planned; the bus then runs for 1 ms.
+struct OneFault {
+  explicit OneFault(const FaultRule& rule) {
+    f.plan.add(rule);
+    tx.send(k123);
+    f.run_until(1'000'000);
+  }
+  Fixture f;
+  TestController tx{f.bus};
+  TestController rx{f.bus};
+};
+
+// A node's first error: its type and the frame bit (none if it saw no error).
+std::optional<std::pair<CanErrorType, uint16_t>> first_error(const TestController& n) {
+  if (n.errors.empty()) {
+    return std::nullopt;
+  }
+  return std::make_pair(n.errors[0].type, n.errors[0].bit);
 }
+using Seen = std::pair<CanErrorType, uint16_t>;
 
 TEST(CanBusFaults, ThirtyTwoBitErrorsDriveTheSenderBusOffAndItRecoversAfter128x11Bits) {
   Fixture f;
   TestController a(f.bus), b(f.bus);
-  f.plan.add(rule(CanErrorType::bit, 32));
+  f.plan.add(fault_rule(CanErrorType::bit, 32));
   std::vector<BusEvent> events;
   f.bus.on_bus_event = [&](const BusEvent& e) { events.push_back(e); };
   a.send(k123);
@@ -65,7 +82,7 @@ TEST(CanBusFaults, ControllerThatRecoversOnlyOnRestartWaitsForIt) {
   a.recovery = BusOffRecovery::on_restart;
   a.attach_to(f.bus);
   b.attach_to(f.bus);
-  f.plan.add(rule(CanErrorType::bit, 32));
+  f.plan.add(fault_rule(CanErrorType::bit, 32));
   a.send(k123);
   f.run_until(50'000'000);
   EXPECT_TRUE(a.fc.bus_off());
@@ -82,10 +99,7 @@ TEST(CanBusFaults, RecoveryCountsElevenRecessiveBitsBetweenOtherNodesFrames) {
   // While other nodes keep the bus busy, each frame leaves one sequence of 11 recessive bits
   // (ACK delimiter, EOF and intermission), so recovery takes 128 frames.
   Fixture f;
-  TestController victim, talker, listener;
-  for (auto* n : {&victim, &talker, &listener}) {
-    n->attach_to(f.bus);
-  }
+  TestController victim(f.bus), talker(f.bus), listener(f.bus);
   victim.fc.set_counters(256, 0);
   f.bus.restart(victim.id());
   ASSERT_TRUE(victim.fc.recovering());
@@ -108,10 +122,7 @@ TEST(CanBusFaults, ASlowOscillatorStillCountsElevenBitsBetweenFrames) {
   // At -3000 ppm the 11 recessive bits between two frames measure 10.97 of the node's bits;
   // counting to the nearest bit, recovery still takes 128 frames.
   Fixture f;
-  TestController victim, talker, listener;
-  for (auto* n : {&victim, &talker, &listener}) {
-    n->attach_to(f.bus);
-  }
+  TestController victim(f.bus), talker(f.bus), listener(f.bus);
   f.bus.set_oscillator_ppm(victim.id(), -3000);
   victim.fc.set_counters(256, 0);
   f.bus.restart(victim.id());
@@ -123,41 +134,26 @@ TEST(CanBusFaults, ASlowOscillatorStillCountsElevenBitsBetweenFrames) {
 }
 
 TEST(CanBusFaults, ReceiversRejectAFrameWhoseLastButOneEofBitIsDominant) {
-  Fixture f;
-  TestController tx(f.bus), rx(f.bus);
-  FaultRule r = rule(CanErrorType::bit, 1);
-  r.fault.bit = 59;  // EOF bit 5: the transmitter's flag starts at EOF bit 6
-  f.plan.add(r);
-  tx.send(k123);
-  f.run_until(1'000'000);
-  ASSERT_EQ(rx.errors.size(), 1u);
-  EXPECT_EQ(rx.errors[0].type, CanErrorType::form);
-  EXPECT_EQ(rx.errors[0].bit, 60);
-  EXPECT_EQ(rx.received.size(), 1u);  // only the retransmission
+  // EOF bit 5: the transmitter's flag starts at EOF bit 6.
+  const OneFault o(fault_rule(CanErrorType::bit, 1, 59));
+  EXPECT_EQ(o.rx.errors.size(), 1u);
+  EXPECT_EQ(first_error(o.rx), (Seen{CanErrorType::form, 60}));
+  EXPECT_EQ(o.rx.received.size(), 1u);  // only the retransmission
 }
 
 TEST(CanBusFaults, AnErrorInTheLastEofBitLeavesReceiversWithTheFrameTwice) {
   // The transmitter's flag starts at the last EOF bit: receivers have already accepted the
   // frame (at the last-but-one EOF bit), and the retransmission arrives again, as on a real bus.
-  Fixture f;
-  TestController tx(f.bus), rx(f.bus);
-  FaultRule r = rule(CanErrorType::bit, 1);
-  r.fault.bit = 60;
-  f.plan.add(r);
-  tx.send(k123);
-  f.run_until(1'000'000);
-  ASSERT_EQ(rx.received.size(), 2u);
-  EXPECT_EQ(rx.received[0].at.ns(), 62 * kBit);  // delivered at the end of EOF
-  EXPECT_EQ(tx.sent.size(), 1u);
+  const OneFault o(fault_rule(CanErrorType::bit, 1, 60));
+  ASSERT_EQ(o.rx.received.size(), 2u);
+  EXPECT_EQ(o.rx.received[0].at.ns(), 62 * kBit);  // delivered at the end of EOF
+  EXPECT_EQ(o.tx.sent.size(), 1u);
 }
 
 TEST(CanBusFaults, SelfReceptionWorksWhenTheFrameSucceedsDespiteAPassiveFlag) {
   Fixture f;
-  TestController tx, rx;
-  TestController slow(testing::timing_250k());
-  for (auto* n : {&tx, &rx, &slow}) {
-    n->attach_to(f.bus);
-  }
+  TestController tx(f.bus), rx(f.bus);
+  TestController slow(f.bus, testing::timing_250k());
   slow.fc.set_counters(0, 200);  // error-passive: its flag does not disturb the others
   tx.send(k123, false, /*self_reception=*/true);
   f.run_until(1'000'000);
@@ -179,11 +175,8 @@ TEST(CanBusFaults, ZeroLengthHoldsChangeNothing) {
 
 TEST(CanBusFaults, CrcErrorOnEveryReceiverEndsInAnAckErrorForTheTransmitter) {
   Fixture f;
-  TestController tx, r1, r2;
-  for (auto* n : {&tx, &r1, &r2}) {
-    n->attach_to(f.bus);
-  }
-  f.plan.add(rule(CanErrorType::crc, 1));
+  TestController tx(f.bus), r1(f.bus), r2(f.bus);
+  f.plan.add(fault_rule(CanErrorType::crc, 1));
   tx.send(k123);
   f.run_until(1'000'000);
   // Receivers with a CRC error give no ACK, so the transmitter detects an ACK error at the ACK
@@ -203,50 +196,33 @@ TEST(CanBusFaults, CrcErrorOnEveryReceiverEndsInAnAckErrorForTheTransmitter) {
 }
 
 TEST(CanBusFaults, InjectedStuffErrorIsDetectedByReceiversAtTheChosenBit) {
-  Fixture f;
-  TestController tx(f.bus), rx(f.bus);
-  FaultRule r = rule(CanErrorType::stuff, 1);
-  r.fault.bit = 30;
-  f.plan.add(r);
-  tx.send(k123);
-  f.run_until(1'000'000);
-  ASSERT_GE(rx.errors.size(), 1u);
-  EXPECT_EQ(rx.errors[0].type, CanErrorType::stuff);
-  EXPECT_EQ(rx.errors[0].bit, 30);
-  EXPECT_EQ(rx.errors[0].at.ns(), 31 * kBit);
-  ASSERT_EQ(tx.errors.size(), 1u);
-  EXPECT_EQ(tx.errors[0].type, CanErrorType::bit);
-  EXPECT_EQ(tx.fc.tec(), 8 - 1);
-  EXPECT_EQ(rx.received.size(), 1u);
+  const OneFault o(fault_rule(CanErrorType::stuff, 1, 30));
+  EXPECT_EQ(first_error(o.rx), (Seen{CanErrorType::stuff, 30}));
+  ASSERT_FALSE(o.rx.errors.empty());
+  EXPECT_EQ(o.rx.errors[0].at.ns(), 31 * kBit);
+  EXPECT_EQ(o.tx.errors.size(), 1u);
+  EXPECT_EQ(o.tx.errors[0].type, CanErrorType::bit);
+  EXPECT_EQ(o.tx.fc.tec(), 8 - 1);
+  EXPECT_EQ(o.rx.received.size(), 1u);
 }
 
 TEST(CanBusFaults, InjectedFormErrorHitsTheCrcDelimiterByDefault) {
-  Fixture f;
-  TestController tx(f.bus), rx(f.bus);
-  f.plan.add(rule(CanErrorType::form, 1));
-  tx.send(k123);
-  f.run_until(1'000'000);
-  ASSERT_GE(rx.errors.size(), 1u);
-  EXPECT_EQ(rx.errors[0].type, CanErrorType::form);
-  EXPECT_EQ(rx.errors[0].bit, encode(k123).crc_delimiter_index);
-  EXPECT_EQ(to_string(rx.errors[0].field), "CRC-del");
+  const OneFault o(fault_rule(CanErrorType::form, 1));
+  EXPECT_EQ(first_error(o.rx), (Seen{CanErrorType::form, encode(k123).crc_delimiter_index}));
+  ASSERT_FALSE(o.rx.errors.empty());
+  EXPECT_EQ(to_string(o.rx.errors[0].field), "CRC-del");
 }
 
 TEST(CanBusFaults, AckErrorOnOneFrameCostsTheTransmitterEightAndTheReceiverOne) {
-  Fixture f;
-  TestController tx(f.bus), rx(f.bus);
-  f.plan.add(rule(CanErrorType::ack, 1));
-  tx.send(k123);
-  f.run_until(1'000'000);
-  ASSERT_EQ(tx.errors.size(), 1u);
-  EXPECT_EQ(tx.errors[0].type, CanErrorType::ack);
-  EXPECT_EQ(tx.errors[0].bit, 53);  // ACK slot: 62 bits, CRC delimiter at 52
-  ASSERT_EQ(rx.errors.size(), 1u);
-  EXPECT_EQ(rx.errors[0].type, CanErrorType::form);  // the flag in the ACK delimiter
-  EXPECT_EQ(rx.errors[0].bit, 54);
-  EXPECT_EQ(rx.fc.rec(), 0);  // +1, then -1 for the retransmission
-  EXPECT_EQ(tx.fc.tec(), 7);
-  EXPECT_EQ(rx.received.size(), 1u);
+  const OneFault o(fault_rule(CanErrorType::ack, 1));
+  EXPECT_EQ(o.tx.errors.size(), 1u);
+  EXPECT_EQ(first_error(o.tx),
+            (Seen{CanErrorType::ack, 53}));  // ACK slot: 62 bits, CRC delimiter at 52
+  EXPECT_EQ(o.rx.errors.size(), 1u);
+  EXPECT_EQ(first_error(o.rx), (Seen{CanErrorType::form, 54}));  // the flag in the ACK delimiter
+  EXPECT_EQ(o.rx.fc.rec(), 0);  // +1, then -1 for the retransmission
+  EXPECT_EQ(o.tx.fc.tec(), 7);
+  EXPECT_EQ(o.rx.received.size(), 1u);
 }
 
 TEST(CanBusFaults, PassiveTransmitterWithAckErrorAndNoDominantBitKeepsItsCounter) {
@@ -278,11 +254,8 @@ TEST(CanBusFaults, UnpluggedNodeLeavesTheOtherUnacknowledged) {
 
 TEST(CanBusFaults, NodeAtAnotherBitRateDestroysFramesUntilItIsErrorPassive) {
   Fixture f;
-  TestController a, b;
-  TestController slow(testing::timing_250k());
-  for (auto* n : {&a, &b, &slow}) {
-    n->attach_to(f.bus);
-  }
+  TestController a(f.bus), b(f.bus);
+  TestController slow(f.bus, testing::timing_250k());
   a.send(k123);
   f.run_until(20'000'000);
   // The slow node detects a stuff error at the end of the arbitration field (bit 13) and, while
@@ -412,7 +385,7 @@ TEST(CanBusFaults, InjectorActsBeforeArbitrationAtFrameBoundaries) {
 TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {
   Fixture f;
   TestController a(f.bus), b(f.bus);
-  FaultRule r = rule(CanErrorType::bit, 2);
+  FaultRule r = fault_rule(CanErrorType::bit, 2);
   r.match.transmitter = a.id();
   r.match.id = 0x120;
   r.match.mask = 0x7F0;
@@ -436,7 +409,7 @@ TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {
 TEST(CanBusFaults, TheCounterTimelineHoldsEveryErrorTheRecoveryAndEachCountDown) {
   Fixture f;
   TestController a(f.bus), b(f.bus);
-  f.plan.add(rule(CanErrorType::bit, 32));
+  f.plan.add(fault_rule(CanErrorType::bit, 32));
   a.send(k123);
   f.run_until(100'000'000);
   ASSERT_EQ(a.errors.size(), 32u);

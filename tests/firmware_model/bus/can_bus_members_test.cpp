@@ -37,6 +37,12 @@ void expect_unacknowledged(const TestController& a, const TestController& b) {
   EXPECT_TRUE(b.errors.empty());
 }
 
+// `n` switched to another nominal bit timing, and the bus told.
+void switch_timing(Fixture& f, TestController& n, const BitTiming& nominal) {
+  n.timing_.nominal = nominal;
+  f.bus.controller_changed(n.id());
+}
+
 TEST(CanBusMembers, AnUnpluggedReceiverNoLongerAcknowledgesAndOnePluggedBackDoes) {
   Fixture f;
   TestController a(f.bus), b(f.bus);
@@ -107,8 +113,7 @@ TEST(CanBusMembers, AReceiverSwitchedToAnotherBitRateDetectsAStuffErrorAfterArbi
   TestController a(f.bus), b(f.bus), c(f.bus);
   first_frame(f, a);
 
-  b.timing_.nominal = testing::timing_250k();
-  f.bus.controller_changed(b.id());
+  switch_timing(f, b, testing::timing_250k());
   a.send(k123);
   f.run_until(130 * kBit);
   // b cannot follow 500 kbit/s: a stuff error at the first bit after the arbitration field.
@@ -132,8 +137,7 @@ TEST(CanBusMembers, AReceiverSwitchedToAnotherBitRateDetectsAStuffErrorAfterArbi
   EXPECT_EQ(b.fc.rec(), 9);
 
   // Back at 500 kbit/s during the error frame: the retry is received by both.
-  b.timing_.nominal = testing::timing_500k();
-  f.bus.controller_changed(b.id());
+  switch_timing(f, b, testing::timing_500k());
   f.run_until(1000 * kBit);
   ASSERT_EQ(b.received.size(), 2u);
   ASSERT_EQ(c.received.size(), 2u);
@@ -184,8 +188,7 @@ TEST(CanBusMembers, ANodeMadeErrorPassiveByADirectWriteSendsAPassiveFlag) {
   Fixture f;
   TestController a(f.bus), b(f.bus), c(f.bus);
   first_frame(f, a);
-  b.timing_.nominal = testing::timing_250k();
-  f.bus.controller_changed(b.id());
+  switch_timing(f, b, testing::timing_250k());
   b.fc.set_counters(0, 130);
   a.send(k123);
   f.run_until(1000 * kBit);

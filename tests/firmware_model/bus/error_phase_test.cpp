@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <ostream>
 #include <vector>
 
 #include "test_controller.hpp"
@@ -43,6 +44,28 @@ ErrorPhase::Setup frame_setup(uint16_t first_bit) {
   return {SimTime{}, &kZeroBits, testing::timing_500k(), testing::timing_500k(), first_bit, {}};
 }
 
+// Who did what, as which role, at which frame bit. step() also checks that the action's instant
+// is the end of that bit (start of frame at 0).
+struct Step {
+  NodeId node;
+  Kind kind;
+  CanErrorType type;
+  ErrorRole role;
+  uint16_t bit;
+  friend bool operator==(const Step&, const Step&) = default;
+  friend std::ostream& operator<<(std::ostream& os, const Step& s) {
+    return os << "{node " << s.node << ", kind " << static_cast<int>(s.kind) << ", "
+              << to_string(s.type) << ", role " << static_cast<int>(s.role) << ", bit " << s.bit
+              << "}";
+  }
+};
+Step step(const ErrorPhase::Action& a) {
+  EXPECT_EQ(a.at.ns(), (a.bit + 1) * kBit) << "node " << a.node << " bit " << a.bit;
+  return {a.node, a.kind, a.type, a.role, a.bit};
+}
+constexpr ErrorRole kTx = ErrorRole::transmitter;
+constexpr ErrorRole kRx = ErrorRole::receiver;
+
 TEST(ErrorPhase, TheDynamicallyStuffedPartOfAClassicFrameEndsAtTheCrcDelimiter) {
   EXPECT_EQ(ErrorPhase::stuffed_end(kZeroBits), 40);
 }
@@ -53,12 +76,7 @@ TEST(ErrorPhase, ALoneActiveTransmitterFlagsTheAckErrorAndEndsAfterItsDelimiter)
   // ACK error at bit 41 (recessive ACK slot), flag 42-47, delimiter 48-55.
   ASSERT_EQ(out.actions.size(), 1u);
   const ErrorPhase::Action& a = out.actions[0];
-  EXPECT_EQ(a.kind, Kind::error);
-  EXPECT_EQ(a.node, 0u);
-  EXPECT_EQ(a.type, CanErrorType::ack);
-  EXPECT_EQ(a.role, ErrorRole::transmitter);
-  EXPECT_EQ(a.bit, 41);
-  EXPECT_EQ(a.at.ns(), 42 * kBit);
+  EXPECT_EQ(step(a), (Step{0, Kind::error, CanErrorType::ack, kTx, 41}));
   EXPECT_TRUE(a.count);  // rule 3: error-active, the exception does not apply
   EXPECT_TRUE(a.in_frame);
   EXPECT_EQ(a.field, Field::ack_slot);
@@ -93,33 +111,15 @@ TEST(ErrorPhase, FlagsSuperposeAndTheFirstDetectorSeesADominantBitAfterItsFlag) 
   const ErrorPhase::Outcome out = ErrorPhase(frame_setup(20), parts).run();
   ASSERT_EQ(out.actions.size(), 4u);
   const auto& r1 = out.actions[0];
-  EXPECT_EQ(r1.node, 1u);
-  EXPECT_EQ(r1.kind, Kind::error);
-  EXPECT_EQ(r1.type, CanErrorType::stuff);
-  EXPECT_EQ(r1.role, ErrorRole::receiver);
-  EXPECT_EQ(r1.bit, 20);
-  EXPECT_EQ(r1.at.ns(), 21 * kBit);
+  EXPECT_EQ(step(r1), (Step{1, Kind::error, CanErrorType::stuff, kRx, 20}));
   EXPECT_EQ(r1.field, Field::dlc);
   EXPECT_EQ(r1.destuffed_bit, 17);
   const auto& tx = out.actions[1];
-  EXPECT_EQ(tx.node, 0u);
-  EXPECT_EQ(tx.type, CanErrorType::bit);
-  EXPECT_EQ(tx.role, ErrorRole::transmitter);
-  EXPECT_EQ(tx.bit, 23);
-  EXPECT_EQ(tx.at.ns(), 24 * kBit);
+  EXPECT_EQ(step(tx), (Step{0, Kind::error, CanErrorType::bit, kTx, 23}));
   EXPECT_EQ(tx.field, Field::crc);  // a stuff bit belongs to the field before it
   EXPECT_EQ(tx.destuffed_bit, 20);
-  const auto& r2 = out.actions[2];
-  EXPECT_EQ(r2.node, 2u);
-  EXPECT_EQ(r2.type, CanErrorType::stuff);
-  EXPECT_EQ(r2.bit, 23);
-  EXPECT_EQ(r2.at.ns(), 24 * kBit);
-  const auto& severe = out.actions[3];
-  EXPECT_EQ(severe.node, 1u);
-  EXPECT_EQ(severe.kind, Kind::severe);
-  EXPECT_EQ(severe.role, ErrorRole::receiver);
-  EXPECT_EQ(severe.bit, 27);
-  EXPECT_EQ(severe.at.ns(), 28 * kBit);
+  EXPECT_EQ(step(out.actions[2]), (Step{2, Kind::error, CanErrorType::stuff, kRx, 23}));
+  EXPECT_EQ(step(out.actions[3]), (Step{1, Kind::severe, CanErrorType::bit, kRx, 27}));
   // Everybody's delimiter: 30-37.
   EXPECT_EQ(out.end_bit, 37u);
   EXPECT_EQ(out.end.ns(), 38 * kBit);

@@ -5,36 +5,44 @@
 
 #include <gtest/gtest.h>
 
+#include "case_name.hpp"
+
 namespace canemu::model {
 namespace {
 
-TEST(FaultConfinement, Rule1ReceiverErrorAddsOne) {
+// Rules 1 to 6: what one error (or one dominant sequence per role) adds to each counter.
+struct CounterRule {
+  const char* name;
+  void (*errors)(FaultConfinement&);
+  uint16_t tec;
+  uint16_t rec;
+};
+
+class FaultConfinementRule : public ::testing::TestWithParam<CounterRule> {};
+
+TEST_P(FaultConfinementRule, AddsToTheCountersItNames) {
   FaultConfinement fc;
-  fc.receiver_detected_error();
-  EXPECT_EQ(fc.rec(), 1);
-  EXPECT_EQ(fc.tec(), 0);
+  GetParam().errors(fc);
+  EXPECT_EQ(fc.tec(), GetParam().tec);
+  EXPECT_EQ(fc.rec(), GetParam().rec);
 }
 
-TEST(FaultConfinement, Rules2And5SevereReceiverErrorAddsEight) {
-  FaultConfinement fc;
-  fc.receiver_severe_error();
-  EXPECT_EQ(fc.rec(), 8);
-}
-
-TEST(FaultConfinement, Rules3And4TransmitterErrorAddsEight) {
-  FaultConfinement fc;
-  fc.transmitter_error();
-  EXPECT_EQ(fc.tec(), 8);
-  EXPECT_EQ(fc.rec(), 0);
-}
-
-TEST(FaultConfinement, Rule6DominantSequencesCountForTheRole) {
-  FaultConfinement fc;
-  fc.dominant_sequence(ErrorRole::transmitter);
-  fc.dominant_sequence(ErrorRole::receiver);
-  EXPECT_EQ(fc.tec(), 8);
-  EXPECT_EQ(fc.rec(), 8);
-}
+INSTANTIATE_TEST_SUITE_P(
+    FaultConfinement, FaultConfinementRule,
+    ::testing::Values(CounterRule{"Rule1ReceiverErrorAddsOne",
+                                  [](FaultConfinement& fc) { fc.receiver_detected_error(); }, 0, 1},
+                      CounterRule{"Rules2And5SevereReceiverErrorAddsEight",
+                                  [](FaultConfinement& fc) { fc.receiver_severe_error(); }, 0, 8},
+                      CounterRule{"Rules3And4TransmitterErrorAddsEight",
+                                  [](FaultConfinement& fc) { fc.transmitter_error(); }, 8, 0},
+                      CounterRule{"Rule6DominantSequencesCountForTheRole",
+                                  [](FaultConfinement& fc) {
+                                    fc.dominant_sequence(ErrorRole::transmitter);
+                                    fc.dominant_sequence(ErrorRole::receiver);
+                                  },
+                                  8, 8}),
+    test_support::CaseName{});
+;
 
 TEST(FaultConfinement, TheReceiveCounterStopsAtTheControllersWidth) {
   FaultConfinement fc(255);
@@ -57,51 +65,76 @@ TEST(FaultConfinement, TheReceiveCounterStopsAtTheControllersWidth) {
   EXPECT_EQ(wide.rec(), 65535);
 }
 
-TEST(FaultConfinement, Rule7SuccessfulTransmissionSubtractsOneDownToZero) {
-  FaultConfinement fc;
-  fc.set_counters(2, 0);
+// Rules 7 and 8: each good frame, from given counters, and the state that follows.
+struct SuccessRule {
+  const char* name;
+  uint16_t tec;  // counters before
+  uint16_t rec;
+  ErrorState before;
+  void (*success)(FaultConfinement&);
+  int frames;
+  uint16_t want_tec;
+  uint16_t want_rec;
+  ErrorState after;
+};
+
+void transmitted(FaultConfinement& fc) {
   fc.transmit_succeeded();
-  EXPECT_EQ(fc.tec(), 1);
-  fc.transmit_succeeded();
-  fc.transmit_succeeded();
-  EXPECT_EQ(fc.tec(), 0);
+}
+void received(FaultConfinement& fc) {
+  fc.receive_succeeded();
 }
 
-TEST(FaultConfinement, Rule8SuccessfulReceptionSubtractsOneOrReturnsTo127) {
+class FaultConfinementSuccess : public ::testing::TestWithParam<SuccessRule> {};
+
+TEST_P(FaultConfinementSuccess, CountsDownAndSetsTheState) {
+  const SuccessRule& c = GetParam();
   FaultConfinement fc;
-  fc.set_counters(0, 5);
-  fc.receive_succeeded();
-  EXPECT_EQ(fc.rec(), 4);
-  fc.set_counters(0, 200);
-  EXPECT_EQ(fc.state(), ErrorState::passive);
-  fc.receive_succeeded();
-  EXPECT_EQ(fc.rec(), 127);
-  EXPECT_EQ(fc.state(), ErrorState::warning);
-  fc.set_counters(0, 0);
-  fc.receive_succeeded();
-  EXPECT_EQ(fc.rec(), 0);
+  fc.set_counters(c.tec, c.rec);
+  EXPECT_EQ(fc.state(), c.before);
+  for (int i = 0; i < c.frames; ++i) {
+    c.success(fc);
+  }
+  EXPECT_EQ(fc.tec(), c.want_tec);
+  EXPECT_EQ(fc.rec(), c.want_rec);
+  EXPECT_EQ(fc.state(), c.after);
+  EXPECT_EQ(fc.error_passive(), c.after == ErrorState::passive);
 }
+
+constexpr ErrorState kActive = ErrorState::active;
+constexpr ErrorState kWarning = ErrorState::warning;
+constexpr ErrorState kPassive = ErrorState::passive;
+
+INSTANTIATE_TEST_SUITE_P(
+    FaultConfinement, FaultConfinementSuccess,
+    ::testing::Values(SuccessRule{"Rule7SuccessfulTransmissionSubtractsOne", 2, 0, kActive,
+                                  transmitted, 1, 1, 0, kActive},
+                      SuccessRule{"Rule7StopsAtZero", 2, 0, kActive, transmitted, 3, 0, 0, kActive},
+                      SuccessRule{"Rule8SuccessfulReceptionSubtractsOne", 0, 5, kActive, received,
+                                  1, 0, 4, kActive},
+                      SuccessRule{"Rule8ReturnsAPassiveReceiverTo127", 0, 200, kPassive, received,
+                                  1, 0, 127, kWarning},
+                      SuccessRule{"Rule8StopsAtZero", 0, 0, kActive, received, 1, 0, 0, kActive},
+                      SuccessRule{"ErrorPassiveReturnsToActiveWhenBothCountersAreAtMost127", 128, 0,
+                                  kPassive, transmitted, 1, 127, 0, kWarning}),
+    test_support::CaseName{});
+;
 
 TEST(FaultConfinement, StatesFollowTheThresholds) {
   FaultConfinement fc;
   EXPECT_EQ(fc.state(), ErrorState::active);
-  fc.set_counters(95, 95);
-  EXPECT_EQ(fc.state(), ErrorState::active);
-  fc.set_counters(96, 0);
-  EXPECT_EQ(fc.state(), ErrorState::warning);
-  fc.set_counters(0, 96);
-  EXPECT_EQ(fc.state(), ErrorState::warning);
-  fc.set_counters(127, 127);
-  EXPECT_EQ(fc.state(), ErrorState::warning);
-  fc.set_counters(128, 0);
-  EXPECT_EQ(fc.state(), ErrorState::passive);
-  EXPECT_TRUE(fc.error_passive());
-  fc.set_counters(0, 128);
-  EXPECT_EQ(fc.state(), ErrorState::passive);
-  fc.set_counters(255, 0);
-  EXPECT_EQ(fc.state(), ErrorState::passive);
-  fc.set_counters(256, 0);
-  EXPECT_EQ(fc.state(), ErrorState::bus_off);
+  struct Row {
+    uint16_t tec;
+    uint16_t rec;
+    ErrorState state;
+  };
+  for (const Row& row : {Row{95, 95, kActive}, Row{96, 0, kWarning}, Row{0, 96, kWarning},
+                         Row{127, 127, kWarning}, Row{128, 0, kPassive}, Row{0, 128, kPassive},
+                         Row{255, 0, kPassive}, Row{256, 0, ErrorState::bus_off}}) {
+    fc.set_counters(row.tec, row.rec);
+    EXPECT_EQ(fc.state(), row.state) << row.tec << "/" << row.rec;
+    EXPECT_EQ(fc.error_passive(), row.state == kPassive) << row.tec << "/" << row.rec;
+  }
 }
 
 TEST(FaultConfinement, WarningLimitIsProgrammable) {
@@ -140,14 +173,6 @@ TEST(FaultConfinement, RecoveryNeeds128SequencesAfterItBegins) {
   EXPECT_EQ(fc.tec(), 0);
   EXPECT_EQ(fc.rec(), 0);
   EXPECT_EQ(fc.state(), ErrorState::active);
-}
-
-TEST(FaultConfinement, ErrorPassiveReturnsToActiveWhenBothCountersAreAtMost127) {
-  FaultConfinement fc;
-  fc.set_counters(128, 0);
-  fc.transmit_succeeded();
-  EXPECT_FALSE(fc.error_passive());
-  EXPECT_EQ(fc.state(), ErrorState::warning);
 }
 
 }  // namespace

@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <optional>
+#include <span>
 #include <vector>
+
+#include "case_name.hpp"
 
 namespace canemu::model {
 namespace {
@@ -62,64 +66,60 @@ TEST(Frame, RejectsAnIdentifierTooWideForItsFormat) {
   EXPECT_EQ(ext.error().message, "identifier 0x20000000 does not fit 29 bits (maximum 0x1FFFFFFF)");
 }
 
-TEST(Frame, RejectsRemoteFramesInCanFd) {
+// Frames the model refuses, each with the error code and the whole message.
+enum Flag : unsigned { kRemote = 1, kFd = 2, kBrs = 4, kEsi = 8 };
+
+FrameSpec spec(uint32_t id, unsigned flags, std::optional<uint8_t> dlc = std::nullopt,
+               std::size_t bytes = 0) {
+  static const std::array<uint8_t, 64> zeros{};
+  FrameSpec s;
+  s.id = id;
+  s.remote = (flags & kRemote) != 0;
+  s.fd = (flags & kFd) != 0;
+  s.brs = (flags & kBrs) != 0;
+  s.esi = (flags & kEsi) != 0;
+  s.dlc = dlc;
+  s.data = std::span<const uint8_t>(zeros).first(bytes);
+  return s;
+}
+
+struct Rejected {
+  const char* name;
   FrameSpec spec;
-  spec.remote = true;
-  spec.fd = true;
-  auto f = Frame::create(spec);
+  ModelErrc code;
+  const char* message;
+};
+
+class FrameRejects : public ::testing::TestWithParam<Rejected> {};
+
+TEST_P(FrameRejects, WithACodeAndAMessageThatSaysWhy) {
+  const auto f = Frame::create(GetParam().spec);
   ASSERT_FALSE(f);
-  EXPECT_EQ(f.error().code, ModelErrc::invalid_flags);
-  EXPECT_NE(f.error().message.find("remote"), std::string::npos);
+  EXPECT_EQ(f.error().code, GetParam().code);
+  EXPECT_EQ(f.error().message, GetParam().message);
 }
 
-TEST(Frame, RejectsBrsAndEsiOnClassicFrames) {
-  FrameSpec spec;
-  spec.brs = true;
-  auto brs = Frame::create(spec);
-  ASSERT_FALSE(brs);
-  EXPECT_EQ(brs.error().message, "BRS is a CAN FD bit: it needs fd set");
-  spec.brs = false;
-  spec.esi = true;
-  auto esi = Frame::create(spec);
-  ASSERT_FALSE(esi);
-  EXPECT_EQ(esi.error().message, "ESI is a CAN FD bit: it needs fd set");
-}
-
-TEST(Frame, RejectsDlcOutOfRange) {
-  FrameSpec spec;
-  spec.dlc = 16;
-  spec.remote = true;
-  auto f = Frame::create(spec);
-  ASSERT_FALSE(f);
-  EXPECT_EQ(f.error().code, ModelErrc::invalid_dlc);
-  EXPECT_EQ(f.error().message, "DLC 16 is out of range 0..15");
-}
-
-TEST(Frame, RejectsDataThatDisagreesWithTheDlc) {
-  const std::array<uint8_t, 3> data{};
-  FrameSpec spec;
-  spec.dlc = 4;
-  spec.data = data;
-  auto f = Frame::create(spec);
-  ASSERT_FALSE(f);
-  EXPECT_EQ(f.error().code, ModelErrc::data_length_mismatch);
-  EXPECT_EQ(f.error().message, "DLC 4 means 4 data bytes, but 3 were given");
-}
-
-TEST(Frame, RejectsFdPayloadLengthsThatNoDlcGives) {
-  const std::vector<uint8_t> data(13);
-  auto f = Frame::fd_frame(0x10, data);
-  ASSERT_FALSE(f);
-  EXPECT_EQ(f.error().code, ModelErrc::data_length_mismatch);
-  EXPECT_NE(f.error().message.find("no DLC gives 13 data bytes"), std::string::npos);
-}
-
-TEST(Frame, RejectsMoreThanEightBytesInAClassicFrame) {
-  const std::vector<uint8_t> data(12);
-  auto f = Frame::classic(0x10, data);
-  ASSERT_FALSE(f);
-  EXPECT_EQ(f.error().message, "12 data bytes exceed the 8 bytes of a classic frame");
-}
+INSTANTIATE_TEST_SUITE_P(
+    Frame, FrameRejects,
+    ::testing::Values(
+        Rejected{"RemoteFramesInCanFd", spec(0, kRemote | kFd), ModelErrc::invalid_flags,
+                 "CAN FD has no remote frames: remote and fd cannot both be set"},
+        Rejected{"BrsOnAClassicFrame", spec(0, kBrs), ModelErrc::invalid_flags,
+                 "BRS is a CAN FD bit: it needs fd set"},
+        Rejected{"EsiOnAClassicFrame", spec(0, kEsi), ModelErrc::invalid_flags,
+                 "ESI is a CAN FD bit: it needs fd set"},
+        Rejected{"DlcOutOfRange", spec(0, kRemote, 16), ModelErrc::invalid_dlc,
+                 "DLC 16 is out of range 0..15"},
+        Rejected{"DataThatDisagreesWithTheDlc", spec(0, 0, 4, 3), ModelErrc::data_length_mismatch,
+                 "DLC 4 means 4 data bytes, but 3 were given"},
+        Rejected{"FdPayloadLengthsThatNoDlcGives", spec(0x10, kFd, std::nullopt, 13),
+                 ModelErrc::data_length_mismatch,
+                 "no DLC gives 13 data bytes (CAN FD lengths above 8 are 12, 16, 20, 24, 32, 48, "
+                 "64)"},
+        Rejected{"MoreThanEightBytesInAClassicFrame", spec(0x10, 0, std::nullopt, 12),
+                 ModelErrc::data_length_mismatch,
+                 "12 data bytes exceed the 8 bytes of a classic frame"}),
+    test_support::CaseName{});
 
 TEST(Frame, RemoteFrameKeepsItsDlcButCarriesNoData) {
   FrameSpec spec;

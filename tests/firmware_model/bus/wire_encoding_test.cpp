@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <initializer_list>
 #include <random>
 #include <string>
 #include <vector>
@@ -27,24 +28,14 @@ std::vector<uint8_t> bytes(std::initializer_list<int> v) {
 TEST(WireEncoding, AllZeroStandardFrameIsTheHandCheckedSequence) {
   FrameSpec spec;
   const EncodedFrame e = encode(make(spec));
-  EXPECT_EQ(e.to_string(),
-            "00000"
-            "1"
-            "00000"
-            "1"
-            "00000"
-            "1"
-            "00000"
-            "1"
-            "00000"
-            "1"
-            "00000"
-            "1"
-            "0000"
-            "1"
-            "1"
-            "1"
-            "1111111");
+  std::string expected;
+  for (int k = 0; k < 6; ++k) {
+    expected += "000001";  // five dominant bits, then a recessive stuff bit
+  }
+  expected += "0000";     // the last four dominant bits: 34 in all
+  expected += "111";      // CRC delimiter, ACK slot, ACK delimiter
+  expected += "1111111";  // EOF
+  EXPECT_EQ(e.to_string(), expected);
   EXPECT_EQ(e.crc, 0u);
   EXPECT_EQ(e.crc_bits, 15);
   EXPECT_EQ(e.dynamic_stuff_bits, 6);
@@ -146,6 +137,14 @@ TEST(WireEncoding, FdFramesUpTo16BytesUseCrc17AndSixFixedStuffBits) {
   EXPECT_EQ(e.length, 22 + 128 + e.dynamic_stuff_bits + 28 + 9);
 }
 
+// Where fields begin in `e`: each (field, first bit) of `begins`.
+void expect_field_begins(const EncodedFrame& e,
+                         std::initializer_list<std::pair<Field, uint16_t>> begins) {
+  for (const auto& [field, bit] : begins) {
+    EXPECT_EQ(e.field_begin(field), bit) << to_string(field);
+  }
+}
+
 TEST(WireEncoding, FieldsOfAStandardFrameAreWhereTheStandardPutsThem) {
   FrameSpec s;
   s.id = 0x123;
@@ -153,14 +152,14 @@ TEST(WireEncoding, FieldsOfAStandardFrameAreWhereTheStandardPutsThem) {
   s.data = data;
   const EncodedFrame e = encode(make(s));
   // 0 00100100011 0 0 0 0010: one stuff bit after the five zeros of RTR..DLC.
-  EXPECT_EQ(e.field_begin(Field::sof), 0);
-  EXPECT_EQ(e.field_begin(Field::base_id), 1);
-  EXPECT_EQ(e.field_begin(Field::rtr), 12);
+  expect_field_begins(e, {{Field::sof, 0},
+                          {Field::base_id, 1},
+                          {Field::rtr, 12},
+                          {Field::ide, 13},
+                          {Field::fdf, 14},
+                          {Field::dlc, 15},
+                          {Field::data, 20}});
   EXPECT_EQ(e.arbitration_end, 13);
-  EXPECT_EQ(e.field_begin(Field::ide), 13);
-  EXPECT_EQ(e.field_begin(Field::fdf), 14);
-  EXPECT_EQ(e.field_begin(Field::dlc), 15);
-  EXPECT_EQ(e.field_begin(Field::data), 20);
   EXPECT_EQ(e.field_at(17), Field::dlc);
   EXPECT_TRUE(e.is_stuff(17));
   EXPECT_EQ(e.field_begin(Field::srr), e.length);  // absent
@@ -174,9 +173,7 @@ TEST(WireEncoding, ArbitrationFieldOfAnExtendedFrameEndsAfterRtr) {
   s.id = 0x15555555;
   s.extended = true;
   const EncodedFrame e = encode(make(s));
-  EXPECT_EQ(e.field_begin(Field::srr), 12);
-  EXPECT_EQ(e.field_begin(Field::ext_id), 14);
-  EXPECT_EQ(e.field_begin(Field::rtr), 32);
+  expect_field_begins(e, {{Field::srr, 12}, {Field::ext_id, 14}, {Field::rtr, 32}});
   EXPECT_EQ(e.arbitration_end, 33);
 }
 

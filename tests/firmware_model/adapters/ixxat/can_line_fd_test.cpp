@@ -48,12 +48,13 @@ struct FdRig {
     EXPECT_EQ(line.activate(id), VCI_OK);
     return id;
   }
-  // The line initialized for FD (init()) and started with one v2 channel (`id`) on `port`.
-  void online(Port& port, ChannelId* id) {
-    ASSERT_EQ(line.open_control(), VCI_OK);
-    ASSERT_EQ(line.init_line(init()), VCI_OK);
-    *id = channel(port, true);
-    ASSERT_EQ(line.start_line(), VCI_OK);
+  // The line initialized for FD (init()) and started with one v2 channel on `port`; its id.
+  ChannelId online(Port& port) {
+    EXPECT_EQ(line.open_control(), VCI_OK);
+    EXPECT_EQ(line.init_line(init()), VCI_OK);
+    const ChannelId id = channel(port, true);
+    EXPECT_EQ(line.start_line(), VCI_OK);
+    return id;
   }
   void send(Port& port, const CANMSG2& m) {
     port.tx.push_back(m);
@@ -75,6 +76,15 @@ Frame fd(uint32_t id, std::size_t length, bool brs) {
     data[k] = static_cast<uint8_t>(k + 1);
   }
   return *Frame::fd_frame(id, data, false, brs);
+}
+
+// The 12-byte FD message 0x200 (DLC 9, bytes 1 to 12), with the rate switch if `fdr`.
+CANMSG2 fd_msg_12(bool fdr) {
+  CANMSG2 m = msg(0x200, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
+  m.uMsgInfo.Bits.dlc = 9;
+  m.uMsgInfo.Bits.edl = 1;
+  m.uMsgInfo.Bits.fdr = fdr ? 1 : 0;
+  return m;
 }
 
 TEST(VciCanLine, AnFdLineInitializedThroughV2ReportsItsTimingAndCapabilities) {
@@ -140,12 +150,8 @@ TEST(VciCanLine, FdFramesReachV2ChannelsAndV1ChannelsOnlyUpTo8Bytes) {
 TEST(VciCanLine, AnFdLineSendsFdFramesAndFdrAloneAsksForTheRateSwitch) {
   FdRig r;
   Port p;
-  ChannelId ch{};
-  ASSERT_NO_FATAL_FAILURE(r.online(p, &ch));
-  CANMSG2 a = msg(0x200, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
-  a.uMsgInfo.Bits.dlc = 9;  // 12 bytes
-  a.uMsgInfo.Bits.edl = 1;
-  a.uMsgInfo.Bits.fdr = 1;
+  const ChannelId ch = r.online(p);
+  const CANMSG2 a = fd_msg_12(true);
   CANMSG2 b = msg(0x201, {0x55});
   b.uMsgInfo.Bits.fdr = 1;
   CANMSG2 c = msg(0x202, {1, 2});
@@ -176,18 +182,9 @@ TEST(VciCanLine, AnFdLineSendsFdFramesAndFdrAloneAsksForTheRateSwitch) {
 TEST(VciCanLine, AnFdLineLeavesBusOffAfterARestartAndSendsItsFrameOnce) {
   FdRig r;
   Port p;
-  ChannelId ch{};
-  ASSERT_NO_FATAL_FAILURE(r.online(p, &ch));
-  FaultRule rule;
-  rule.match.transmitter = r.node.node();
-  rule.fault.error = CanErrorType::bit;
-  rule.count = 32;
-  r.b.plan.add(rule);
-  CANMSG2 m = msg(0x200, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
-  m.uMsgInfo.Bits.dlc = 9;
-  m.uMsgInfo.Bits.edl = 1;
-  m.uMsgInfo.Bits.fdr = 1;
-  r.send(p, m);
+  const ChannelId ch = r.online(p);
+  r.b.plan.add(errors_from(r.node.node(), CanErrorType::bit, 32));
+  r.send(p, fd_msg_12(true));
   r.b.run_until(100 * kMs);
   EXPECT_EQ(r.line.controller_state().state, ErrorState::bus_off);
   EXPECT_EQ(p.of_type(CAN_MSGTYPE_ERROR).size(), 32u);
@@ -221,17 +218,8 @@ InjectedBitError inject_bit_error(uint16_t bit, bool brs) {
   EXPECT_EQ(r.line.init_line(r.init()), VCI_OK);
   r.channel(p, true);
   EXPECT_EQ(r.line.start_line(), VCI_OK);
-  FaultRule rule;
-  rule.match.transmitter = r.node.node();
-  rule.fault.error = CanErrorType::bit;
-  rule.fault.bit = bit;
-  rule.count = 1;
-  r.b.plan.add(rule);
-  CANMSG2 m = msg(0x200, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
-  m.uMsgInfo.Bits.dlc = 9;
-  m.uMsgInfo.Bits.edl = 1;
-  m.uMsgInfo.Bits.fdr = brs ? 1 : 0;
-  r.send(p, m);
+  r.b.plan.add(errors_from(r.node.node(), CanErrorType::bit, 1, bit));
+  r.send(p, fd_msg_12(brs));
   r.b.run_until(2 * kMs);
   InjectedBitError out;
   out.errors = p.of_type(CAN_MSGTYPE_ERROR);

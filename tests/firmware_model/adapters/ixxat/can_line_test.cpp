@@ -13,6 +13,7 @@
 #include "adapters/ixxat/line_rig.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
 #include "canemu/firmware_model/bus/fault_plan.hpp"
+#include "case_name.hpp"
 
 namespace canemu::model {
 namespace {
@@ -303,11 +304,7 @@ TEST(VciCanLine, StopLineAndResetLineLeaveTheChannelFifosAlone) {
 TEST(VciCanLine, AFrameLoadedButNotStartedAtStopLineGoesFirstAfterStartLine) {
   Rig r;
   Port p;
-  r.init();
-  const ChannelId ch = r.channel(p);
-  r.peer.start();
-  p.tx = {msg(0x123), msg(0x124)};
-  ASSERT_EQ(r.line.start_line(), VCI_OK);  // 0x123 is loaded, its frame has not started
+  const ChannelId ch = r.start_with(p, {msg(0x123), msg(0x124)});  // 0x123 is loaded, not started
   EXPECT_EQ(r.line.line_status().dwStatus, static_cast<uint32_t>(CAN_STATUS_TXPEND));
   ASSERT_EQ(r.line.stop_line(), VCI_OK);
   EXPECT_EQ(p.tx.size(), 1u);
@@ -328,11 +325,7 @@ TEST(VciCanLine, AFrameLoadedButNotStartedAtStopLineGoesFirstAfterStartLine) {
 TEST(VciCanLine, ResetLineDropsTheLoadedFrameAndCountsIt) {
   Rig r;
   Port p;
-  r.init();
-  const ChannelId ch = r.channel(p);
-  r.peer.start();
-  p.tx = {msg(0x123), msg(0x124)};
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  const ChannelId ch = r.start_with(p, {msg(0x123), msg(0x124)});
   ASSERT_EQ(r.line.reset_line(), VCI_OK);
   EXPECT_EQ(r.counters(ch).dropped, 1u);
   ASSERT_EQ(r.line.init_line(v1_init()), VCI_OK);
@@ -343,27 +336,22 @@ TEST(VciCanLine, ResetLineDropsTheLoadedFrameAndCountsIt) {
   EXPECT_EQ(r.counters(ch).sent, 1u);
 }
 
-TEST(VciCanLine, AFrameOnTheWireAtStopLineCompletes) {
-  Rig r;
-  Port p;
-  const ChannelId ch = r.online(p);
-  r.send(p, msg(0x123));
-  r.b.run_until(20 * kBit);  // inside the frame
-  ASSERT_EQ(r.line.stop_line(), VCI_OK);
-  r.b.run_until(1 * kMs);
-  ASSERT_EQ(r.peer.log.received.size(), 1u);
-  EXPECT_EQ(r.peer.log.received[0].at, 62 * kBit);
-  EXPECT_EQ(r.counters(ch).sent, 1u);
-  EXPECT_EQ(r.line.line_status().dwStatus, static_cast<uint32_t>(CAN_STATUS_ININIT));
-}
+// STOP and RESET both let a frame already on the wire finish: it is delivered, counted as
+// sent, and nothing is dropped; the line is then in init mode.
+struct Halt {
+  const char* name;
+  HRESULT (ixxat::CanLine::*call)();
+};
 
-TEST(VciCanLine, AFrameOnTheWireAtResetLineCompletes) {
+class VciCanLineHalt : public ::testing::TestWithParam<Halt> {};
+
+TEST_P(VciCanLineHalt, AFrameOnTheWireCompletes) {
   Rig r;
   Port p;
   const ChannelId ch = r.online(p);
   r.send(p, msg(0x123));
   r.b.run_until(20 * kBit);  // inside the frame
-  ASSERT_EQ(r.line.reset_line(), VCI_OK);
+  ASSERT_EQ((r.line.*GetParam().call)(), VCI_OK);
   r.b.run_until(1 * kMs);
   ASSERT_EQ(r.peer.log.received.size(), 1u);
   EXPECT_EQ(r.peer.log.received[0].at, 62 * kBit);
@@ -372,6 +360,11 @@ TEST(VciCanLine, AFrameOnTheWireAtResetLineCompletes) {
   EXPECT_EQ(r.counters(ch).dropped, 0u);
   EXPECT_EQ(r.line.line_status().dwStatus, static_cast<uint32_t>(CAN_STATUS_ININIT));
 }
+
+INSTANTIATE_TEST_SUITE_P(VciCanLine, VciCanLineHalt,
+                         ::testing::Values(Halt{"StopLine", &ixxat::CanLine::stop_line},
+                                           Halt{"ResetLine", &ixxat::CanLine::reset_line}),
+                         test_support::CaseName{});
 
 // ---------------------------------------------------------------- errors and status
 
@@ -461,11 +454,7 @@ TEST(VciCanLine, ThirtyTwoBitErrorsTakeTheLineBusOffUntilItIsStartedAgain) {
   Rig r;
   Port p;
   const ChannelId ch = r.online(p);
-  FaultRule rule;
-  rule.match.transmitter = r.node.node();
-  rule.fault.error = CanErrorType::bit;
-  rule.count = 32;
-  r.b.plan.add(rule);
+  r.b.plan.add(errors_from(r.node.node(), CanErrorType::bit, 32));
   r.send(p, msg(0x123));
   r.b.run_until(100 * kMs);
   const auto errors = p.of_type(CAN_MSGTYPE_ERROR);
@@ -548,12 +537,8 @@ TEST(VciCanLine, ReceiveErrorsGiveErrorMessagesWithTheirType) {
   r.online(p);
   const NodeId peer = r.peer.node.node();
   for (CanErrorType type : {CanErrorType::stuff, CanErrorType::form, CanErrorType::crc}) {
-    FaultRule rule;
-    rule.match.transmitter = peer;
-    rule.fault.error = type;
-    rule.fault.bit = type == CanErrorType::stuff ? std::optional<uint16_t>(30) : std::nullopt;
-    rule.count = 1;
-    r.b.plan.add(rule);
+    const auto bit = type == CanErrorType::stuff ? std::optional<uint16_t>(30) : std::nullopt;
+    r.b.plan.add(errors_from(peer, type, 1, bit));
   }
   r.peer.send(k123);
   r.b.run_until(10 * kMs);

@@ -8,6 +8,7 @@
 
 #include "adapters/ixxat/line_rig.hpp"
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"
+#include "case_name.hpp"
 
 namespace canemu::model {
 namespace {
@@ -32,54 +33,54 @@ TEST(VciCanLine, AFrameFromTheTransmitFifoGoesOutAtOnceAndIsCounted) {
   EXPECT_TRUE(p.data().empty());  // no srr: no echo
 }
 
-TEST(VciCanLine, ADelayedFrameIsHandedOverDwTimeTicksAfterThePreviousOne) {
-  Rig r;
-  Port p;
+// A rig that keeps what happened on the bus (frames with their start and end).
+struct WatchedRig : Rig {
+  explicit WatchedRig(const ixxat::Clocks& clocks = {}) : Rig(clocks) {
+    b.bus.on_bus_event = [this](const BusEvent& e) { events.push_back(e); };
+  }
+  std::vector<int64_t> starts() const {
+    std::vector<int64_t> out;
+    for (const BusEvent& e : events) {
+      out.push_back(e.start.ns());
+    }
+    return out;
+  }
   std::vector<BusEvent> events;
-  r.b.bus.on_bus_event = [&](const BusEvent& e) { events.push_back(e); };
-  r.init();
-  const ChannelId ch = r.channel(p);
-  r.peer.start();
+};
+
+TEST(VciCanLine, ADelayedFrameIsHandedOverDwTimeTicksAfterThePreviousOne) {
+  WatchedRig r;
+  Port p;
   CANMSG2 first = msg(0x123);
   first.dwTime = 5000;  // the first frame after the start is not delayed
   CANMSG2 delayed = msg(0x124);
   delayed.dwTime = 1000;
-  p.tx = {first, delayed, msg(0x125)};
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  const ChannelId ch = r.start_with(p, {first, delayed, msg(0x125)});
   r.b.run_until(5 * kMs);
-  ASSERT_EQ(events.size(), 3u);
-  EXPECT_EQ(events[0].start.ns(), 0);
+  ASSERT_EQ(r.events.size(), 3u);
+  EXPECT_EQ(r.events[0].start.ns(), 0);
   // 1000 ticks after 0x123 was handed over (not after it ended at 124 us).
-  EXPECT_EQ(events[1].start.ns(), 1000 * kUs);
-  EXPECT_EQ(events[1].frame->id(), 0x124u);
-  EXPECT_EQ(events[2].start.ns(), events[1].end.ns() + 3 * kBit);  // no delay: after the IFS
+  EXPECT_EQ(r.events[1].start.ns(), 1000 * kUs);
+  EXPECT_EQ(r.events[1].frame->id(), 0x124u);
+  EXPECT_EQ(r.events[2].start.ns(), r.events[1].end.ns() + 3 * kBit);  // no delay: after the IFS
   EXPECT_EQ(r.counters(ch).sent, 3u);
 }
 
 TEST(VciCanLine, ATransmitDelayAboveTheMaximumIsClamped) {
   ixxat::Clocks clocks;
   clocks.dtx_max_ticks = 300;
-  Rig r(clocks);
+  WatchedRig r(clocks);
   Port p;
-  std::vector<BusEvent> events;
-  r.b.bus.on_bus_event = [&](const BusEvent& e) { events.push_back(e); };
-  r.init();
-  r.channel(p);
-  r.peer.start();
   CANMSG2 delayed = msg(0x124);
   delayed.dwTime = 60000;
-  p.tx = {msg(0x123), delayed};
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
+  r.start_with(p, {msg(0x123), delayed});
   r.b.run_until(5 * kMs);
-  ASSERT_EQ(events.size(), 2u);
-  EXPECT_EQ(events[1].start.ns(), 300 * kUs);
+  EXPECT_EQ(r.starts(), (std::vector<int64_t>{0, 300 * kUs}));
 }
 
 TEST(VciCanLine, TheFirstFrameAfterARestartIsNotDelayed) {
-  Rig r;
+  WatchedRig r;
   Port p;
-  std::vector<BusEvent> events;
-  r.b.bus.on_bus_event = [&](const BusEvent& e) { events.push_back(e); };
   r.online(p);
   r.send(p, msg(0x123));
   r.b.run_until(200 * kUs);
@@ -89,16 +90,13 @@ TEST(VciCanLine, TheFirstFrameAfterARestartIsNotDelayed) {
   p.tx.push_back(delayed);
   ASSERT_EQ(r.line.start_line(), VCI_OK);
   r.b.run_until(5 * kMs);
-  ASSERT_EQ(events.size(), 2u);
-  EXPECT_EQ(events[1].start.ns(), 200 * kUs);
+  EXPECT_EQ(r.starts(), (std::vector<int64_t>{0, 200 * kUs}));
 }
 
 TEST(VciCanLine, ASingleShotFrameThatLosesArbitrationIsNotRetriedNorEchoed) {
   Rig r;
   Port p;
-  r.init();
-  const ChannelId ch = r.channel(p);
-  r.peer.start();
+  const ChannelId ch = r.ready(p);
   r.peer.send(kZero);  // identifier 0 wins
   CANMSG2 m = with_srr(msg(0x123));
   m.uMsgInfo.Bits.ssm = 1;
@@ -136,66 +134,71 @@ TEST(VciCanLine, ASingleShotFrameWithoutAcknowledgeIsGivenUpAfterOneAttempt) {
   EXPECT_EQ(r.line.line_status().dwStatus, 0u);
 }
 
-TEST(VciCanLine, AHighPriorityFrameOfAnotherChannelGoesFirst) {
-  Rig r;
-  Port a, b;
-  r.init();
-  r.channel(a);
-  r.channel(b);
-  r.peer.start();
-  CANMSG2 h = msg(0x303);
-  h.uMsgInfo.Bits.hpm = 1;
-  a.tx = {msg(0x301), msg(0x302)};
-  b.tx = {h};
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
-  r.b.run_until(2 * kMs);
+// Two channels with frames waiting when the line starts: the order the peer receives them in,
+// and what each channel counts as sent.
+struct Turns {
+  const char* name;
+  std::vector<CANMSG2> a;  // the first channel's transmit FIFO
+  std::vector<CANMSG2> b;
+  int64_t run_ns;
   std::vector<uint32_t> order;
-  for (const auto& item : r.peer.log.received) {
-    order.push_back(item.frame.id());
-  }
-  EXPECT_EQ(order, (std::vector<uint32_t>{0x303, 0x301, 0x302}));
-}
+  uint32_t sent_a;
+  uint32_t sent_b;
+};
 
-TEST(VciCanLine, AHighPriorityFrameNeverOvertakesFramesAheadOfItInItsFifo) {
-  Rig r;
-  Port a, b;
-  r.init();
-  r.channel(a);
-  r.channel(b);
-  r.peer.start();
-  CANMSG2 h = msg(0x302);
-  h.uMsgInfo.Bits.hpm = 1;
-  a.tx = {msg(0x301), h};
-  b.tx = {msg(0x303)};
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
-  r.b.run_until(2 * kMs);
-  std::vector<uint32_t> order;
-  for (const auto& item : r.peer.log.received) {
-    order.push_back(item.frame.id());
-  }
-  // 0x302 overtakes the other channel's 0x303, not 0x301 before it.
-  EXPECT_EQ(order, (std::vector<uint32_t>{0x301, 0x302, 0x303}));
-}
+class VciCanLineTurns : public ::testing::TestWithParam<Turns> {};
 
-TEST(VciCanLine, TheDistributorServesTheChannelsRoundRobin) {
+TEST_P(VciCanLineTurns, FramesGoOutInTheDistributorsOrder) {
+  const Turns& c = GetParam();
   Rig r;
   Port a, b;
   r.init();
   const ChannelId ca = r.channel(a);
   const ChannelId cb = r.channel(b);
   r.peer.start();
-  a.tx = {msg(0x101), msg(0x102), msg(0x103), msg(0x104)};
-  b.tx = {msg(0x201), msg(0x202)};
+  a.tx.assign(c.a.begin(), c.a.end());
+  b.tx.assign(c.b.begin(), c.b.end());
   ASSERT_EQ(r.line.start_line(), VCI_OK);
-  r.b.run_until(5 * kMs);
+  r.b.run_until(c.run_ns);
   std::vector<uint32_t> order;
   for (const auto& item : r.peer.log.received) {
     order.push_back(item.frame.id());
   }
-  EXPECT_EQ(order, (std::vector<uint32_t>{0x101, 0x201, 0x102, 0x202, 0x103, 0x104}));
-  EXPECT_EQ(r.counters(ca).sent, 4u);
-  EXPECT_EQ(r.counters(cb).sent, 2u);
+  EXPECT_EQ(order, c.order);
+  EXPECT_EQ(r.counters(ca).sent, c.sent_a);
+  EXPECT_EQ(r.counters(cb).sent, c.sent_b);
 }
+
+CANMSG2 high_priority(CANMSG2 m) {
+  m.uMsgInfo.Bits.hpm = 1;
+  return m;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    VciCanLine, VciCanLineTurns,
+    ::testing::Values(Turns{"AHighPriorityFrameOfAnotherChannelGoesFirst",
+                            {msg(0x301), msg(0x302)},
+                            {high_priority(msg(0x303))},
+                            2 * kMs,
+                            {0x303, 0x301, 0x302},
+                            2,
+                            1},
+                      // 0x302 overtakes the other channel's 0x303, not 0x301 before it.
+                      Turns{"AHighPriorityFrameNeverOvertakesFramesAheadOfItInItsFifo",
+                            {msg(0x301), high_priority(msg(0x302))},
+                            {msg(0x303)},
+                            2 * kMs,
+                            {0x301, 0x302, 0x303},
+                            2,
+                            1},
+                      Turns{"TheDistributorServesTheChannelsRoundRobin",
+                            {msg(0x101), msg(0x102), msg(0x103), msg(0x104)},
+                            {msg(0x201), msg(0x202)},
+                            5 * kMs,
+                            {0x101, 0x201, 0x102, 0x202, 0x103, 0x104},
+                            4,
+                            2}),
+    test_support::CaseName{});
 
 // A listen-only line never sends: the firmware leaves the messages in the transmit FIFO (none
 // reaches the controller: no TXPEND, ever) and skips the cyclic list's entries. It still

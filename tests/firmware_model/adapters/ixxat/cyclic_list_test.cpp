@@ -40,6 +40,14 @@ struct ListRig : Rig {
     online(port);
     EXPECT_EQ(line.open_scheduler(), VCI_OK);
   }
+  // An entry for `id` every `cycle` ticks, started for `count` frames (0: without end), and the
+  // task resumed; its index.
+  uint32_t running(uint32_t id, uint16_t cycle, uint16_t count = 0) {
+    const uint32_t index = *line.scheduler_add(cyclic(id, cycle));
+    EXPECT_EQ(line.scheduler_start(index, count), VCI_OK);
+    EXPECT_EQ(line.scheduler_resume(), VCI_OK);
+    return index;
+  }
   // Start of frame instants of `id`, in list ticks (ms).
   std::vector<int64_t> ticks_of(uint32_t id) const {
     std::vector<int64_t> out;
@@ -104,9 +112,7 @@ TEST(VciCanLine, AnEntryStartedWhileTheTaskRunsCountsItsCycleFromThatMoment) {
 
 TEST(VciCanLine, StartMessageWithACountSendsExactlyThatManyFrames) {
   ListRig r;
-  const uint32_t a = *r.line.scheduler_add(cyclic(0x100, 2));
-  ASSERT_EQ(r.line.scheduler_start(a, 3), VCI_OK);
-  ASSERT_EQ(r.line.scheduler_resume(), VCI_OK);
+  const uint32_t a = r.running(0x100, 2, 3);
   r.b.run_until(5 * kMs + 500 * kUs);
   EXPECT_EQ(r.line.scheduler_status().abMsgStat[a], CAN_CTXMSG_STAT_BUSY);
   r.b.run_until(20 * kMs);
@@ -230,9 +236,7 @@ TEST(VciCanLine, AddMessageRefusesAnEntryThatTakesTheTicksAboveOneFramePerTick) 
 
 TEST(VciCanLine, SuspendStopsTheListResumeRestartsItAndResetEmptiesIt) {
   ListRig r;
-  const uint32_t a = *r.line.scheduler_add(cyclic(0x100, 2));
-  ASSERT_EQ(r.line.scheduler_start(a, 0), VCI_OK);
-  ASSERT_EQ(r.line.scheduler_resume(), VCI_OK);
+  const uint32_t a = r.running(0x100, 2);
   r.b.run_until(5 * kMs);
   ASSERT_EQ(r.line.scheduler_suspend(), VCI_OK);
   EXPECT_EQ(r.line.scheduler_status().bTaskStat, CAN_CTXTSK_STAT_STOPPED);
@@ -254,9 +258,7 @@ TEST(VciCanLine, SuspendStopsTheListResumeRestartsItAndResetEmptiesIt) {
 TEST(VciCanLine, TheListIsExclusiveAndKeepsItsEntriesWhenReopened) {
   ListRig r;
   EXPECT_EQ(r.line.open_scheduler(), VCI_E_ACCESSDENIED);
-  const uint32_t a = *r.line.scheduler_add(cyclic(0x100, 2));
-  ASSERT_EQ(r.line.scheduler_start(a, 0), VCI_OK);
-  ASSERT_EQ(r.line.scheduler_resume(), VCI_OK);
+  const uint32_t a = r.running(0x100, 2);
   r.b.run_until(3 * kMs);
   r.line.close_scheduler();
   EXPECT_FALSE(r.line.scheduler_open());
@@ -269,9 +271,7 @@ TEST(VciCanLine, TheListIsExclusiveAndKeepsItsEntriesWhenReopened) {
 
 TEST(VciCanLine, TheListKeepsItsRhythmButSendsNothingWhileTheLineIsOffline) {
   ListRig r;
-  const uint32_t a = *r.line.scheduler_add(cyclic(0x100, 2));
-  ASSERT_EQ(r.line.scheduler_start(a, 0), VCI_OK);
-  ASSERT_EQ(r.line.scheduler_resume(), VCI_OK);
+  r.running(0x100, 2);
   r.b.run_until(3 * kMs);
   ASSERT_EQ(r.line.stop_line(), VCI_OK);
   r.b.run_until(7 * kMs);

@@ -112,11 +112,7 @@ TEST(VciCanLine, ADelayedFrameOfAChannelDeactivatedMeanwhileIsNotSent) {
 TEST(VciCanLine, TwoChannelsBothReceiveEveryFrame) {
   Rig r;
   Port a, b;
-  r.init();
-  const ChannelId ca = r.channel(a);
-  const ChannelId cb = r.channel(b, true);
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
-  r.peer.start();
+  const std::vector<ChannelId> ch = r.online({{a}, {b, true}});
   r.peer.send(k123);
   r.peer.send(kZero);
   r.b.run_until(1 * kMs);
@@ -125,14 +121,14 @@ TEST(VciCanLine, TwoChannelsBothReceiveEveryFrame) {
     EXPECT_EQ(port->data()[0].dwTime, 124u);
     EXPECT_EQ(port->data()[1].dwTime, 230u);  // (62 + 3 + 50) bits at 2 us
   }
-  EXPECT_EQ(r.counters(ca).received, 3u);  // INFO START and two frames
-  EXPECT_EQ(r.counters(cb).received, 3u);
+  EXPECT_EQ(r.counters(ch[0]).received, 3u);  // INFO START and two frames
+  EXPECT_EQ(r.counters(ch[1]).received, 3u);
 }
 
 TEST(VciCanLine, AReceivedFrameCarriesItsEndOfFrameInTicksAndItsContent) {
   Rig r;
   Port p;
-  r.online(p);
+  const ChannelId ch = r.online(p);
   r.peer.send(k123);
   r.b.run_until(10 * kMs);
   r.peer.send(classic(0x1ABCDEF, {1, 2, 3, 4, 5, 6, 7, 8}, true));
@@ -154,6 +150,7 @@ TEST(VciCanLine, AReceivedFrameCarriesItsEndOfFrameInTicksAndItsContent) {
   EXPECT_EQ(d[2].dwTime, static_cast<uint32_t>(rtr_end / kUs));
   EXPECT_EQ(d[2].dwMsgId, 0x7FFu);
   EXPECT_EQ(info(d[2]), (Info{CAN_MSGTYPE_DATA, 0, CAN_MSGFLAGS_RTR, CAN_ACCEPT_FILTER_1}));
+  EXPECT_EQ(r.counters(ch).received, 4u);  // INFO START and the three frames
 }
 
 TEST(VciCanLine, TimeStampsCountFromTheEpochAtTheClockRate) {
@@ -257,11 +254,7 @@ TEST(VciCanLine, TransmitMessagesThatAreNotDataAreDroppedAndCounted) {
 TEST(VciCanLine, V1ChannelsReceiveEveryEchoWithSrrSet) {
   Rig r;
   Port a, b;
-  r.init();
-  r.channel(a);
-  r.channel(b);
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
-  r.peer.start();
+  r.online({{a}, {b}});
   r.send(a, with_srr(msg(0x123)));
   r.b.run_until(1 * kMs);
   for (Port* port : {&a, &b}) {
@@ -278,11 +271,7 @@ TEST(VciCanLine, V1ChannelsReceiveEveryEchoWithSrrSet) {
 TEST(VciCanLine, AV2ChannelGetsItsOwnEchoEvenWithLockButNotOthersWithoutSrra) {
   Rig r;
   Port x, y;
-  r.init();
-  r.channel(x, true, {0, CAN_FILTER_LOCK});
-  r.channel(y, true, {0, CAN_FILTER_PASS});
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
-  r.peer.start();
+  r.online({{x, true, {0, CAN_FILTER_LOCK}}, {y, true, {0, CAN_FILTER_PASS}}});
   r.send(x, with_srr(msg(0x123)));
   r.send(y, msg(0x124));
   r.b.run_until(1 * kMs);
@@ -321,12 +310,7 @@ TEST(VciCanLine, AV2ChannelWithSrraGetsOthersEchoesThroughItsFilterWithSrrCleare
 TEST(VciCanLine, AFrameSentWithoutSrrIsInvisibleToEveryChannel) {
   Rig r;
   Port a, b, c;
-  r.init();
-  r.channel(a);
-  r.channel(b);
-  r.channel(c, true, {0, CAN_FILTER_PASS | CAN_FILTER_SRRA});
-  ASSERT_EQ(r.line.start_line(), VCI_OK);
-  r.peer.start();
+  r.online({{a}, {b}, {c, true, {0, CAN_FILTER_PASS | CAN_FILTER_SRRA}}});
   r.send(a, msg(0x123));
   r.b.run_until(1 * kMs);
   ASSERT_EQ(r.peer.log.received.size(), 1u);

@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <deque>
+#include <initializer_list>
 #include <ostream>
 #include <tuple>
 #include <vector>
@@ -177,14 +178,42 @@ struct Rig {
     EXPECT_EQ(line.activate(*id), VCI_OK);
     return *id;
   }
-  // init(), a v1 channel on `port`, the line started and the peer started, all at now.
-  ChannelId online(Port& port) {
+  // init(), a v1 channel on `port` and the peer started; the line is not started yet, so the
+  // test can fill the transmit FIFO first.
+  ChannelId ready(Port& port) {
     init();
     const ChannelId id = channel(port);
-    EXPECT_EQ(line.start_line(), VCI_OK);
     peer.start();
     return id;
   }
+  // ready(port), `frames` in its transmit FIFO, then the line started: the first frame is
+  // loaded into the controller at once.
+  ChannelId start_with(Port& port, std::vector<CANMSG2> frames) {
+    const ChannelId id = ready(port);
+    port.tx.assign(frames.begin(), frames.end());
+    EXPECT_EQ(line.start_line(), VCI_OK);
+    return id;
+  }
+  // A channel to open on `port`: v1, or v2 with its filter setup.
+  struct Open {
+    Port& port;
+    bool v2 = false;
+    ixxat::ChannelSetup setup = {};
+  };
+  // init(), a channel for each of `channels`, the line started and the peer started, all at now;
+  // their ids, in order.
+  std::vector<ChannelId> online(std::initializer_list<Open> channels) {
+    init();
+    std::vector<ChannelId> ids;
+    for (const Open& c : channels) {
+      ids.push_back(channel(c.port, c.v2, c.setup));
+    }
+    EXPECT_EQ(line.start_line(), VCI_OK);
+    peer.start();
+    return ids;
+  }
+  // The same with one v1 channel on `port`.
+  ChannelId online(Port& port) { return online({Open{port}})[0]; }
   void send(Port& port, const CANMSG2& m) {
     port.tx.push_back(m);
     line.tx_ready();

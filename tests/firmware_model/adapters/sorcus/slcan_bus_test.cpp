@@ -279,13 +279,19 @@ TEST(SlcanBus, UnderTheInterruptLockTheFirstOfTwoFramesIsLost) {
   EXPECT_EQ(count, 2u);
 }
 
-TEST(SlcanBus, UnconfiguredMessagesThroughTheMaskGoToItsRoutineWithHandle0) {
-  Slcan x;
+// Configured with one object (10h) and the acceptance mask open to every other identifier, its
+// messages for routine `func` of `task`; communication started.
+void start_with_open_mask(Slcan& x, USHORT task, USHORT func) {
   x.configure();
   x.object(0x10, _SL064_PASSIVE);
   ULONG mask = 0;  // everything
-  ASSERT_EQ(x.diag(x.m.set_acceptance_mask(mask, 0, kTask, kFunc)), kOk);
+  ASSERT_EQ(x.diag(x.m.set_acceptance_mask(mask, 0, task, func)), kOk);
   ASSERT_EQ(x.diag(x.m.start_com()), kOk);
+}
+
+TEST(SlcanBus, UnconfiguredMessagesThroughTheMaskGoToItsRoutineWithHandle0) {
+  Slcan x;
+  ASSERT_NO_FATAL_FAILURE(start_with_open_mask(x, kTask, kFunc));
   x.peer.send(data_frame(0x123, {5}));
   x.run_until(500'000);
   ASSERT_EQ(x.message_calls(), (std::vector<SL064Handle>{0}));
@@ -296,11 +302,7 @@ TEST(SlcanBus, UnconfiguredMessagesThroughTheMaskGoToItsRoutineWithHandle0) {
 
 TEST(SlcanBus, EightUnconfiguredFramesBackToBackGiveEightCallsEachWithItsOwnId) {
   Slcan x;
-  x.configure();
-  x.object(0x10, _SL064_PASSIVE);
-  ULONG mask = 0;
-  ASSERT_EQ(x.diag(x.m.set_acceptance_mask(mask, 0, kTask, kFunc)), kOk);
-  ASSERT_EQ(x.diag(x.m.start_com()), kOk);
+  ASSERT_NO_FATAL_FAILURE(start_with_open_mask(x, kTask, kFunc));
   const std::vector<ULONG> ids = {0x101, 0x202, 0x303, 0x404, 0x505, 0x606, 0x707, 0x7EF};
   for (ULONG id : ids) {
     x.peer.send(data_frame(id, {1}));
@@ -321,12 +323,7 @@ TEST(SlcanBus, EightUnconfiguredFramesBackToBackGiveEightCallsEachWithItsOwnId) 
 
 TEST(SlcanBus, WithFunction14AsTheMasksRoutineEachRequestKeepsItsFramesId) {
   Slcan x;
-  x.configure();
-  x.object(0x10, _SL064_PASSIVE);
-  ULONG mask = 0;
-  ASSERT_EQ(x.diag(x.m.set_acceptance_mask(mask, 0, x.m.driver_task(), SL064_SRQ_SERVICE_FUNC)),
-            kOk);
-  ASSERT_EQ(x.diag(x.m.start_com()), kOk);
+  ASSERT_NO_FATAL_FAILURE(start_with_open_mask(x, x.m.driver_task(), SL064_SRQ_SERVICE_FUNC));
   for (ULONG id : {0x111, 0x222, 0x333}) {
     x.peer.send(data_frame(id, {1}));
   }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "adapters/sorcus/slcan_fixture.hpp"
+#include "case_name.hpp"
 
 namespace canemu::model::sorcus {
 namespace {
@@ -13,20 +14,10 @@ using namespace testing;
 using Bytes = std::vector<uint8_t>;
 
 TEST(SlcanEeprom, HoldsTheManualsFactoryContents) {
-  EepromWords expected{};
-  expected[0] = 0x534C;
-  expected[1] = 0x0040;
-  expected[2] = 0x0002;
-  expected[3] = 0x0001;
-  expected[4] = 0x0005;
-  expected[5] = 0x0021;
-  expected[12] = 0x0010;
-  expected[13] = 0x0007;
-  expected[15] = 0x09C4;
-  expected[16] = 0x0010;
-  expected[17] = 0x0003;
-  expected[18] = 0x0002;
-  expected[19] = 0x0001;
+  // Words 0 to 19; the rest are 0.
+  const EepromWords expected{0x534C, 0x0040, 0x0002, 0x0001, 0x0005, 0x0021, 0,
+                             0,      0,      0,      0,      0,      0x0010, 0x0007,
+                             0,      0x09C4, 0x0010, 0x0003, 0x0002, 0x0001};
   EXPECT_EQ(slcan_eeprom_defaults(), expected);
 }
 
@@ -42,40 +33,65 @@ TEST(SlcanEeprom, OnlyWords13To19And32To63AreWritable) {
   EXPECT_FALSE(m.write_eeprom(64, 1));
 }
 
-TEST(SlcanEeprom, TheFactoryTimingIs20KbitAt10MHzWithoutTermination) {
-  const auto s = slcan_settings(slcan_eeprom_defaults());
-  ASSERT_TRUE(s.has_value());
+// EEPROM contents the driver accepts, as changes to the factory words, and the settings they
+// give: the timing on the 10 MHz clock (prescaler in 100 ns steps), termination and format.
+struct Accepted {
+  const char* name;
+  std::vector<std::pair<unsigned, uint16_t>> words;
+  uint32_t prescaler;
+  uint32_t tseg1;
+  uint32_t tseg2;
+  uint32_t sjw;
+  uint32_t bit_100ns;  // the bit time in 100 ns steps
+  bool termination;
+  bool extended;
+};
+
+class SlcanEepromAccepts : public ::testing::TestWithParam<Accepted> {};
+
+TEST_P(SlcanEepromAccepts, TheSettingsTheWordsGive) {
+  const Accepted& c = GetParam();
+  EepromWords w = slcan_eeprom_defaults();
+  for (const auto& [word, value] : c.words) {
+    w[word] = value;
+  }
+  const auto s = slcan_settings(w);
+  ASSERT_TRUE(s.has_value()) << s.error().why;
   EXPECT_EQ(s->timing.clock_hz, 10'000'000u);
-  EXPECT_EQ(s->timing.prescaler, 25u);  // 2500 ns / 100 ns
-  EXPECT_EQ(s->timing.tseg1, 16u);
-  EXPECT_EQ(s->timing.tseg2, 3u);
-  EXPECT_EQ(s->timing.sjw, 2u);
-  EXPECT_EQ(s->timing.quanta_per_bit() * s->timing.prescaler, 500u);  // 50 µs: 20 kbit/s
-  EXPECT_FALSE(s->extended);
-  EXPECT_FALSE(s->termination);
+  EXPECT_EQ(s->timing.prescaler, c.prescaler);
+  EXPECT_EQ(s->timing.tseg1, c.tseg1);
+  EXPECT_EQ(s->timing.tseg2, c.tseg2);
+  EXPECT_EQ(s->timing.sjw, c.sjw);
+  EXPECT_EQ(s->timing.quanta_per_bit() * s->timing.prescaler, c.bit_100ns);
+  EXPECT_EQ(s->termination, c.termination);
+  EXPECT_EQ(s->extended, c.extended);
 }
 
-TEST(SlcanEeprom, Words13And14GiveTerminationAndTheIdentifierFormat) {
-  EepromWords w = slcan_eeprom_defaults();
-  w[13] = 0x000F;
-  w[14] = 0x0001;
-  const auto s = slcan_settings(w);
-  ASSERT_TRUE(s.has_value());
-  EXPECT_TRUE(s->termination);
-  EXPECT_TRUE(s->extended);
-}
-
-TEST(SlcanEeprom, The125KbitTableRowGivesWhatItsParametersGive) {
-  // 400 ns, 16, 2, 1: (16 + 2 + 1) x 400 ns = 7.6 µs, 131.58 kbit/s, not 125 (digest §7.5).
-  EepromWords w = slcan_eeprom_defaults();
-  w[15] = 400;
-  w[16] = 16;
-  w[17] = 2;
-  w[18] = 1;
-  const auto s = slcan_settings(w);
-  ASSERT_TRUE(s.has_value());
-  EXPECT_EQ(s->timing.prescaler * s->timing.quanta_per_bit(), 76u);  // x 100 ns = 7.6 µs
-}
+INSTANTIATE_TEST_SUITE_P(
+    SlcanEeprom, SlcanEepromAccepts,
+    ::testing::Values(
+        // 2500 ns quanta, 16 + 3 + 1: 50 µs, 20 kbit/s.
+        Accepted{"TheFactoryTimingIs20KbitWithoutTermination", {}, 25, 16, 3, 2, 500, false, false},
+        Accepted{"Words13And14GiveTerminationAndTheIdentifierFormat",
+                 {{13, 0x000F}, {14, 0x0001}},
+                 25,
+                 16,
+                 3,
+                 2,
+                 500,
+                 true,
+                 true},
+        // 400 ns, 16, 2, 1: (16 + 2 + 1) x 400 ns = 7.6 µs, 131.58 kbit/s, not 125 (digest §7.5).
+        Accepted{"The125KbitTableRowGivesWhatItsParametersGive",
+                 {{15, 400}, {16, 16}, {17, 2}, {18, 1}},
+                 4,
+                 16,
+                 2,
+                 1,
+                 76,
+                 false,
+                 false}),
+    test_support::CaseName{});
 
 TEST(SlcanEeprom, EachOutOfRangeWordGivesItsDiagnosisNamingTheWord) {
   struct Case {

@@ -10,11 +10,7 @@
 namespace canemu::model::sorcus {
 namespace {
 
-using testing::data_frame;
-using testing::frame_ns;
-using testing::kIntermission;
-using testing::remote_frame;
-using testing::Xcan;
+using namespace testing;  // xcan_fixture.hpp
 using Use = BufferView::Use;
 
 // Objects `first`, `first + 1`, ... of one kind.
@@ -343,8 +339,7 @@ TEST(XcanBuffers, AnExclusiveObjectInBufferFourteenMovesBelowItAtTheFifteenthObj
   x.bus_control();
   x.peer.send(data_frame(0x300, {0x33}));
   x.run_until(1'000'000);
-  ASSERT_EQ(x.sink.callbacks.size(), 1u);
-  EXPECT_EQ(x.sink.callbacks[0].data[0], 0x33);
+  EXPECT_EQ(x.callback_data(), (std::vector<Bytes>{{0x33}}));
 }
 
 // Checklist 6: «Das Eintragen eines Message-Objekts in einen Message-Puffer nimmt eine gewisse

@@ -10,15 +10,7 @@
 namespace canemu::model::sorcus {
 namespace {
 
-using testing::bytes;
-using testing::data_frame;
-using testing::frame_ns;
-using testing::kIntermission;
-using testing::params_500k;
-using testing::remote_frame;
-using testing::Xcan;
-
-using Bytes = std::vector<uint8_t>;
+using namespace testing;  // xcan_fixture.hpp
 
 XCAN_BITPARAMS read_params(Xcan& x, ChannelHandle h) {
   const Reply r = x.m.read_block(h);

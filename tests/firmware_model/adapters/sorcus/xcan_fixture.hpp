@@ -16,6 +16,7 @@
 namespace canemu::model::sorcus::testing {
 
 using model::testing::kBit;
+using Bytes = std::vector<uint8_t>;
 
 struct LogSink final : XcanSink {
   std::vector<XcanCallback> callbacks;
@@ -75,13 +76,8 @@ struct Xcan {
 
   static CPS_XCAN cps(USHORT device, ULONG id, USHORT flags = 0, USHORT timeout = 0,
                       USHORT iface = 0) {
-    CPS_XCAN c{};
-    c.usDevice = device;
-    c.usChannel = iface;
-    c.usFlags = flags;
-    c.usTimeout = timeout;
-    c.ulCanID = id;
-    return c;
+    // Device, interface, index range (0 to 0: set only for bus control), flags, timeout, id.
+    return CPS_XCAN{device, iface, 0, 0, flags, timeout, id};
   }
   // Opens a channel that must open.
   ChannelHandle open(const CPS_XCAN& c, bool callback = true) {
@@ -107,6 +103,14 @@ struct Xcan {
     const Reply r = m.read_block(h);
     EXPECT_EQ(r.error, uint32_t{ERR_OK});
     return r.data;
+  }
+  // The valid data bytes of each callback so far.
+  std::vector<Bytes> callback_data() const {
+    std::vector<Bytes> out;
+    for (const XcanCallback& c : sink.callbacks) {
+      out.emplace_back(c.data.begin(), c.data.begin() + c.size);
+    }
+    return out;
   }
   uint32_t send_general(ChannelHandle h, ULONG id, std::vector<uint8_t> data, USHORT flags = 0) {
     XCAN_MESSAGE msg{};

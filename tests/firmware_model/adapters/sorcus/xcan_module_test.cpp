@@ -9,13 +9,7 @@
 namespace canemu::model::sorcus {
 namespace {
 
-using testing::data_frame;
-using testing::frame_ns;
-using testing::kIntermission;
-using testing::remote_frame;
-using testing::Xcan;
-
-using Bytes = std::vector<uint8_t>;
+using namespace testing;  // xcan_fixture.hpp
 
 TEST(XcanObjects, ActiveSendWritesADataFrameAndCallsBackAfterTheAcknowledgedTransmission) {
   Xcan x;
@@ -160,12 +154,19 @@ TEST(XcanObjects, ActiveReceiveNeedsRemoteAndNoInt) {
             uint32_t{ERR_XCAN_INVALID_CPS});
 }
 
+// The bus running and an active-receive object for 0x300 (a remote frame asks for it, the
+// answer awaited up to `timeout` ms) with a read pending on it.
+ChannelHandle pending_active_read(Xcan& x, USHORT timeout) {
+  x.bus_control();
+  const ChannelHandle h =
+      x.open(Xcan::cps(DEVICE_BUS_IN, 0x300, XCAN_REMOTE | XCAN_NO_INT, timeout));
+  EXPECT_TRUE(x.m.read_block(h).pending.has_value());
+  return h;
+}
+
 TEST(XcanObjects, ActiveReceiveReadSendsARemoteFrameAndCompletesWithTheAnswer) {
   Xcan x;
-  x.bus_control();
-  const ChannelHandle h = x.open(Xcan::cps(DEVICE_BUS_IN, 0x300, XCAN_REMOTE | XCAN_NO_INT, 5000));
-  const Reply r = x.m.read_block(h);
-  ASSERT_TRUE(r.pending.has_value());
+  const ChannelHandle h = pending_active_read(x, 5000);
   const Frame request = remote_frame(0x300, 0);
   x.run_until(frame_ns(request));
   ASSERT_EQ(x.peer.log.received.size(), 1u);
@@ -183,10 +184,7 @@ TEST(XcanObjects, ActiveReceiveReadSendsARemoteFrameAndCompletesWithTheAnswer) {
 
 TEST(XcanObjects, ActiveReceiveReadTimesOutWithoutAnAnswer) {
   Xcan x;
-  x.bus_control();
-  const ChannelHandle h = x.open(Xcan::cps(DEVICE_BUS_IN, 0x300, XCAN_REMOTE | XCAN_NO_INT, 300));
-  const Reply r = x.m.read_block(h);
-  ASSERT_TRUE(r.pending.has_value());
+  pending_active_read(x, 300);
   x.run_until(1'000'000);
   ASSERT_EQ(x.sink.completions.size(), 1u);
   EXPECT_EQ(x.sink.completions[0].error, uint32_t{ERR_XCAN_TIMEOUT});
@@ -300,8 +298,7 @@ TEST(XcanObjects, PassiveReceiveCmdStartSendsARemoteFrameAndTheAnswerCallsBack) 
   EXPECT_EQ(x.peer.log.received[0].frame, request);
   x.peer.send(data_frame(0x400, {0x42}));
   x.run_until(1'000'000);
-  ASSERT_EQ(x.sink.callbacks.size(), 1u);
-  EXPECT_EQ(x.sink.callbacks[0].data[0], 0x42);
+  EXPECT_EQ(x.callback_data(), (std::vector<Bytes>{{0x42}}));
 }
 
 TEST(XcanObjects, ASecondChannelAttachesToTheObjectWithTheSameCpsAndAnotherIsRefused) {

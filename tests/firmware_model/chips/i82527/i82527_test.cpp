@@ -157,6 +157,18 @@ struct Listener : ControllerEvents {
   void overrun(SimTime, const Frame& f) override { lost.push_back(f); }
 };
 
+// Two 82527s on one bus, `a` and `r`, both initialised as a driver does (Node::start()).
+class I82527Pair : public ::testing::Test {
+ protected:
+  I82527Pair() {
+    a.start();
+    r.start();
+  }
+  Bus b;
+  Node a{b};
+  Node r{b};
+};
+
 TEST(I82527, StartsInitialisingWithEveryFlagResetAndNoCounterRegisters) {
   I82527 c;
   EXPECT_EQ(c.read(CONTROL), CONTROL_INI);
@@ -222,12 +234,8 @@ TEST(I82527, BitTimingCountsInTheSystemClockAndIsWritableOnlyWithCce) {
   EXPECT_EQ(c.read(BIT_TIMING0), 0x03);
 }
 
-TEST(I82527, TwoChipsAndAnSja1000ExchangeFramesBothWays) {
-  Bus b;
-  Node a(b), r(b);
+TEST_F(I82527Pair, TwoChipsAndAnSja1000ExchangeFramesBothWays) {
   Sja s(b);
-  a.start();
-  r.start();
   a.setup(1, 0x123, false, true, {0x11, 0x22}, TXIE);
   r.setup(1, 0x123, false, false, {}, RXIE);
   r.setup(2, 0x18FF0010, true, false, {}, RXIE);
@@ -327,12 +335,8 @@ TEST(I82527, LowestObjectNumberTransmitsFirstWhateverTheIdentifiers) {
   EXPECT_EQ(b.bus.stats(s.chip.node()).frames_received, 3u);
 }
 
-TEST(I82527, TransmitObjectAnswersAMatchingRemoteFrameByItself) {
-  Bus b;
-  Node a(b), r(b);
+TEST_F(I82527Pair, TransmitObjectAnswersAMatchingRemoteFrameByItself) {
   Sja s(b);
-  a.start();
-  r.start();
   a.setup(2, 0x321, false, true, {0xCA, 0xFE}, TXIE);
   r.setup(4, 0x321, false, false, {}, RXIE, 2);
   r.request(4);  // a receive object with TxRqst sends a remote frame
@@ -356,12 +360,8 @@ TEST(I82527, TransmitObjectAnswersAMatchingRemoteFrameByItself) {
   EXPECT_EQ(r.stored(4), answer);
 }
 
-TEST(I82527, RemoteRequestedAnswerOvertakesAHigherNumberedObjectThatLostArbitration) {
-  Bus b;
-  Node a(b), r(b);
+TEST_F(I82527Pair, RemoteRequestedAnswerOvertakesAHigherNumberedObjectThatLostArbitration) {
   Sja s(b);
-  a.start();
-  r.start();
   a.setup(2, 0x321, false, true, {0xCA, 0xFE});
   a.setup(5, 0x400, false, true, {0x05});
   r.setup(4, 0x321, false, false, {}, 0, 2);
@@ -378,12 +378,8 @@ TEST(I82527, RemoteRequestedAnswerOvertakesAHigherNumberedObjectThatLostArbitrat
   EXPECT_EQ(r.stored(4), answer);
 }
 
-TEST(I82527, CpuUpdateHoldsTheAnswerUntilTheCpuIsDone) {
-  Bus b;
-  Node a(b), r(b);
+TEST_F(I82527Pair, CpuUpdateHoldsTheAnswerUntilTheCpuIsDone) {
   Sja s(b);
-  a.start();
-  r.start();
   a.setup(2, 0x321, false, true, {0xCA, 0xFE}, TXIE);
   r.setup(4, 0x321, false, false, {}, RXIE, 2);
   a.set_data(2, {0xBE, 0xEF});  // CPUUpd set while the CPU writes
@@ -404,11 +400,7 @@ TEST(I82527, CpuUpdateHoldsTheAnswerUntilTheCpuIsDone) {
   EXPECT_EQ(a.ctrl1(2), 0x55);
 }
 
-TEST(I82527, FrameStoredOverUnreadDataSetsMessageLost) {
-  Bus b;
-  Node a(b), r(b);
-  a.start();
-  r.start();
+TEST_F(I82527Pair, FrameStoredOverUnreadDataSetsMessageLost) {
   a.setup(1, 0x200, false, true, {1});
   r.setup(1, 0x200, false, false, {}, RXIE);
   a.request(1);
@@ -431,11 +423,7 @@ TEST(I82527, FrameStoredOverUnreadDataSetsMessageLost) {
   EXPECT_EQ(r.interrupts.size(), 2u);
 }
 
-TEST(I82527, MessageFifteenKeepsASecondFrameInItsShadowAndTheThirdOverwritesIt) {
-  Bus b;
-  Node a(b), r(b);
-  a.start();
-  r.start();
+TEST_F(I82527Pair, MessageFifteenKeepsASecondFrameInItsShadowAndTheThirdOverwritesIt) {
   a.setup(1, 0x010, false, true, {1});
   a.setup(2, 0x011, false, true, {2});
   a.setup(3, 0x012, false, true, {3});
@@ -476,11 +464,7 @@ TEST(I82527, MessageFifteenKeepsASecondFrameInItsShadowAndTheThirdOverwritesIt) 
   EXPECT_EQ(r.interrupts.size(), 2u);
 }
 
-TEST(I82527, MessageFifteenHoldsTheSecondFrameWithoutLoss) {
-  Bus b;
-  Node a(b), r(b);
-  a.start();
-  r.start();
+TEST_F(I82527Pair, MessageFifteenHoldsTheSecondFrameWithoutLoss) {
   a.setup(1, 0x010, false, true, {1});
   a.setup(2, 0x011, false, true, {2});
   r.setup(15, 0x000, false, false, {}, RXIE);

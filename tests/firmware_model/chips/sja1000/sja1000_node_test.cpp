@@ -36,11 +36,7 @@ void one_error_from_bus_off(Bus& b, Station& a) {
   a.node.chip().write(sja1000::MOD, sja1000::MOD_RM);
   a.node.chip().write(sja1000::TXERR, 248);
   a.node.chip().write(sja1000::MOD, 0);
-  FaultRule rule;
-  rule.match.transmitter = a.node.node();
-  rule.fault.error = CanErrorType::bit;
-  rule.count = 1;
-  b.plan.add(rule);
+  b.plan.add(testing::errors_from(a.node.node(), CanErrorType::bit, 1));
 }
 
 TEST(Sja1000Node, PullsFramesAsTheTransmitBufferFreesAndEmptiesTheReceiveFifo) {
@@ -48,9 +44,7 @@ TEST(Sja1000Node, PullsFramesAsTheTransmitBufferFreesAndEmptiesTheReceiveFifo) {
   Station a(b), r(b);
   a.start();
   r.start();
-  for (int i = 0; i < 8; ++i) {
-    a.queue.push_back(TxFrame{k123, false, false});
-  }
+  a.queue.assign(8, TxFrame{k123, false, false});
   a.node.kick();
   b.run_until(8 * 65 * kBit);
   // 62 bits each, 3 bits of intermission between: ends at 62, 127, 192, ... bit times.

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "case_name.hpp"
 #include "test_controller.hpp"
 
 namespace canemu::model {
@@ -251,19 +252,29 @@ TEST(Sja1000, SingleShotIsTriedOnceAndReleasesTheBufferIncomplete) {
   EXPECT_EQ(b.bus.error_frames_on_bus(), 1u);
 }
 
-TEST(Sja1000, AbortBeforeTheStartOfFrameCancelsTheRequest) {
-  Bus b;
-  Chip a(b), busy(b), r(b);
-  for (auto* c : {&a, &busy, &r}) {
-    c->start();
+// Three chips started; `a` asks to send 0x7FF while `busy`'s 8-byte frame is on the wire (10 bits
+// in), so its request waits for the bus.
+struct WaitingRequest {
+  WaitingRequest() {
+    for (auto* c : {&a, &busy, &r}) {
+      c->start();
+    }
+    busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));
+    b.run_until(10 * kBit);
+    a.send(frame(0x7FF, {}));
   }
-  busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));
-  b.run_until(10 * kBit);  // the other chip's frame is on the wire
-  a.send(frame(0x7FF, {}));
-  a.chip.write(CMR, CMR_AT);
-  EXPECT_EQ(a.chip.read(SR) & (SR_TBS | SR_TCS), SR_TBS);
-  b.run_until(2'000'000);
-  EXPECT_EQ(r.chip.read(RMC), 1);  // only the other chip's frame
+  Bus b;
+  Chip a{b};
+  Chip busy{b};
+  Chip r{b};
+};
+
+TEST(Sja1000, AbortBeforeTheStartOfFrameCancelsTheRequest) {
+  WaitingRequest w;
+  w.a.chip.write(CMR, CMR_AT);
+  EXPECT_EQ(w.a.chip.read(SR) & (SR_TBS | SR_TCS), SR_TBS);
+  w.b.run_until(2'000'000);
+  EXPECT_EQ(w.r.chip.read(RMC), 1);  // only the other chip's frame
 }
 
 TEST(Sja1000, ArbitrationLostCaptureHoldsTheBitNumberUntilRead) {
@@ -285,10 +296,7 @@ TEST(Sja1000, BusOffSetsResetModeAndRecoversAfterTheHostRestartsIt) {
   Chip a(b), r(b);
   a.start();
   r.start();
-  FaultRule rule;
-  rule.fault.error = CanErrorType::bit;
-  rule.count = 32;
-  b.plan.add(rule);
+  b.plan.add(testing::fault_rule(CanErrorType::bit, 32));
   a.send(frame(0x123, {1}));
   b.run_until(20'000'000);
   EXPECT_EQ(a.chip.read(SR) & (SR_BS | SR_ES), SR_BS | SR_ES);
@@ -309,17 +317,46 @@ TEST(Sja1000, BusOffSetsResetModeAndRecoversAfterTheHostRestartsIt) {
   EXPECT_EQ(r.chip.read(RMC), 1);
 }
 
-TEST(Sja1000, ErrorWarningLimitIsProgrammable) {
+// A chip alone on the bus with a programmed error warning limit, sending a frame nobody
+// acknowledges: TXERR climbs by 8 an attempt; ES and its interrupt EI follow the limit, EPI the
+// error-passive state.
+struct WarningLimit {
+  const char* name;
+  uint8_t ewlr;
+  int64_t run_ns;
+  uint8_t txerr;
+  bool es;   // SR
+  bool ei;   // IR
+  bool epi;  // IR
+};
+
+class Sja1000WarningLimit : public ::testing::TestWithParam<WarningLimit> {};
+
+TEST_P(Sja1000WarningLimit, ALoneSender) {
+  const WarningLimit& c = GetParam();
   Bus b;
   Chip a(b);
-  a.chip.write(EWLR, 16);
+  a.chip.write(EWLR, c.ewlr);
   a.start();
   a.send(frame(0x123, {1}));
-  b.run_until(59 * kBit + 100 * kBit);  // two unacknowledged attempts: TXERR 16
-  EXPECT_EQ(a.chip.read(TXERR), 16);
-  EXPECT_TRUE(a.chip.read(SR) & SR_ES);
-  EXPECT_TRUE(a.chip.read(IR) & IR_EI);
+  b.run_until(c.run_ns);
+  EXPECT_EQ(a.chip.read(TXERR), c.txerr);
+  EXPECT_EQ((a.chip.read(SR) & SR_ES) != 0, c.es);
+  const uint8_t ir = a.chip.read(IR);
+  EXPECT_EQ((ir & IR_EI) != 0, c.ei);
+  EXPECT_EQ((ir & IR_EPI) != 0, c.epi);
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    Sja1000, Sja1000WarningLimit,
+    ::testing::Values(
+        // Two unacknowledged attempts: TXERR 16.
+        WarningLimit{"ErrorWarningLimitIsProgrammable", 16, 59 * kBit + 100 * kBit, 16, true, true,
+                     false},
+        // TXERR climbs to 128 and stays: error-passive, but ES (TXERR >= 200) is never set.
+        WarningLimit{"ErrorInterruptFollowsTheEsBitNotTheErrorPassiveState", 200, 20'000'000, 128,
+                     false, false, true}),
+    test_support::CaseName{});
 
 TEST(Sja1000, ErrorCountersAreWritableInResetModeAnd255StartsBusOff) {
   Sja1000 c;
@@ -413,20 +450,6 @@ TEST(Sja1000Interrupts, ArbitrationLostCaptureHoldsUntilReadAndRaisesAliOnce) {
   EXPECT_EQ(a.chip.read(ALC), 9);
 }
 
-TEST(Sja1000Interrupts, ErrorInterruptFollowsTheEsBitNotTheErrorPassiveState) {
-  Bus b;
-  Chip a(b);
-  a.chip.write(EWLR, 200);
-  a.start();
-  a.send(frame(0x123, {1}));
-  b.run_until(20'000'000);  // alone: TXERR climbs to 128 and stays
-  EXPECT_EQ(a.chip.read(TXERR), 128);
-  const uint8_t ir = a.chip.read(IR);
-  EXPECT_TRUE(ir & IR_EPI);  // error-passive reached
-  EXPECT_FALSE(ir & IR_EI);  // ES (TXERR >= 200) never set
-  EXPECT_FALSE(a.chip.read(SR) & SR_ES);
-}
-
 TEST(Sja1000Interrupts, Writing255ToTxerrStartsABusOffThatTheHostSees) {
   Bus b;
   Chip a(b);
@@ -446,19 +469,12 @@ TEST(Sja1000Interrupts, Writing255ToTxerrStartsABusOffThatTheHostSees) {
 }
 
 TEST(Sja1000, EnteringResetModeDropsAPendingRequest) {
-  Bus b;
-  Chip a(b), busy(b), r(b);
-  for (auto* c : {&a, &busy, &r}) {
-    c->start();
-  }
-  busy.send(frame(0x001, {1, 2, 3, 4, 5, 6, 7, 8}));
-  b.run_until(10 * kBit);
-  a.send(frame(0x7FF, {}));  // waits for the bus
-  a.chip.write(MOD, MOD_RM);
-  EXPECT_TRUE(a.chip.read(SR) & SR_TBS);
-  a.chip.write(MOD, 0);
-  b.run_until(2'000'000);
-  EXPECT_EQ(r.chip.read(RMC), 1);  // only the other chip's frame
+  WaitingRequest w;
+  w.a.chip.write(MOD, MOD_RM);
+  EXPECT_TRUE(w.a.chip.read(SR) & SR_TBS);
+  w.a.chip.write(MOD, 0);
+  w.b.run_until(2'000'000);
+  EXPECT_EQ(w.r.chip.read(RMC), 1);  // only the other chip's frame
 }
 
 }  // namespace

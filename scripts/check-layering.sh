@@ -71,17 +71,18 @@ check() {
   # 6. Rooms of the daemon (ARCHITECTURE.md, "Inside canemud"): a room includes only the rooms
   #    it points to (public headers by their canemu/daemon/ROOM/ path, private ones by ROOM/).
   local dinc=daemon/include/canemu/daemon dsrc=daemon/src
-  for room in base config bridges world distributed vci sorcus control loop; do
+  for room in base config bridges restbus world distributed vci sorcus control loop; do
     case $room in
       base) below='base' ;;
       config) below='config' ;;
       bridges) below='base|config|bridges' ;;
-      world) below='base|config|bridges|world' ;;
-      distributed) below='base|config|bridges|world|distributed' ;;
+      restbus) below='base|config|restbus' ;;
+      world) below='base|config|bridges|restbus|world' ;;
+      distributed) below='base|config|bridges|restbus|world|distributed' ;;
       vci) below='base|config|world|vci' ;;
       sorcus) below='base|config|world|sorcus' ;;
-      control) below='base|config|bridges|world|distributed|vci|sorcus|control' ;;
-      loop) below='base|config|bridges|world|distributed|vci|sorcus|control|loop' ;;
+      control) below='base|config|bridges|restbus|world|distributed|vci|sorcus|control' ;;
+      loop) below='base|config|bridges|restbus|world|distributed|vci|sorcus|control|loop' ;;
     esac
     report "daemon/$room may include only $below:" \
       "$( (includes $dinc/$room 'canemu/daemon/'; includes $dsrc/$room 'canemu/daemon/') |

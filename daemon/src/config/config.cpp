@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "can_node_config_reader.hpp"
 #include "canemu/daemon/config/names.hpp"
 #include "canemu/firmware_model/adapters/sorcus/mdd_version.hpp"
 #include "canemu/ipc/duration.hpp"
@@ -498,8 +499,8 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   Config cfg;
   cfg.source = std::move(source);
   c.only_keys(root, "",
-              {"simulation", "security", "distributed", "bus", "device", "lin_node", "scenario",
-               "recorder", "bridge"});
+              {"simulation", "security", "distributed", "bus", "device", "lin_node", "can_node",
+               "scenario", "recorder", "bridge"});
   read_simulation(c, root, cfg);
   read_security(c, root, cfg);
   read_distributed(c, root, cfg);
@@ -524,6 +525,7 @@ tl::expected<Config, ConfigErrors> parse_config(std::string_view text, std::stri
   }
   read_devices(c, root, cfg);
   detail::read_lin_nodes(c, root, cfg);
+  detail::read_can_nodes(c, root, cfg);
   detail::read_recorders(c, root, cfg);
   detail::read_bridges(c, root, cfg);
   c.for_each_table(root, "scenario", [&](const toml::table& t, const std::string& path) {

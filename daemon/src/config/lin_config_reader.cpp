@@ -14,29 +14,6 @@ namespace {
 
 constexpr int64_t kMaxDelayNs = 10'000'000'000;  // 10 s
 
-// Each table of the array of tables `name` inside `t` ([[PATH.name]]).
-template <typename Each>
-void each_nested(Checker& c, const toml::table& t, const std::string& path, std::string_view name,
-                 Each each) {
-  const toml::node* n = t.get(name);
-  if (n == nullptr) {
-    return;
-  }
-  const toml::array* a = n->as_array();
-  if (a == nullptr) {
-    c.error(*n, Checker::key(path, name), fmt::format("must be an array of tables"));
-    return;
-  }
-  for (std::size_t i = 0; i < a->size(); ++i) {
-    const std::string p = fmt::format("{}.{}[{}]", path, name, i);
-    if (const toml::table* e = a->get(i)->as_table()) {
-      each(*e, p);
-    } else {
-      c.error(*a->get(i), p, "must be a table");
-    }
-  }
-}
-
 std::optional<uint8_t> read_id(Checker& c, const toml::table& t, const std::string& path,
                                std::string_view name, bool required) {
   auto v = c.integer(t, path, name, required, 0, model::lin::kMaxId);
@@ -239,10 +216,12 @@ void read_lin_nodes(Checker& c, const toml::table& root, Config& cfg) {
         node.powered = p->as_boolean()->get();
       }
     }
-    each_nested(c, t, path, "response",
-                [&](const toml::table& r, const std::string& p) { read_response(c, r, p, node); });
-    each_nested(c, t, path, "schedules",
-                [&](const toml::table& s, const std::string& p) { read_schedule(c, s, p, node); });
+    c.each_nested(t, path, "response", [&](const toml::table& r, const std::string& p) {
+      read_response(c, r, p, node);
+    });
+    c.each_nested(t, path, "schedules", [&](const toml::table& s, const std::string& p) {
+      read_schedule(c, s, p, node);
+    });
     if (auto run = c.string(t, path, "schedule", false)) {
       const bool known = std::any_of(node.schedules.begin(), node.schedules.end(),
                                      [&](const LinScheduleConfig& s) { return s.name == *run; });

@@ -62,6 +62,10 @@ std::string summary(const Config& cfg) {
                      n.schedule.empty() ? "responder" : "commander, schedule " + n.schedule,
                      n.powered ? "" : ", switched off");
   }
+  for (const CanNodeConfig& n : cfg.can_nodes) {
+    s += fmt::format("  can node {} on {} ({} message{}{})\n", n.name, n.bus, n.messages.size(),
+                     n.messages.size() == 1 ? "" : "s", n.powered ? "" : ", switched off");
+  }
   return s;
 }
 

@@ -179,6 +179,30 @@ class Checker {
     }
   }
 
+  // Calls each(table, path) for every table of the array of tables `name` inside `t`
+  // ([[PATH.name]]).
+  template <typename Each>
+  void each_nested(const toml::table& t, const std::string& path, std::string_view name,
+                   Each each) {
+    const toml::node* n = t.get(name);
+    if (n == nullptr) {
+      return;
+    }
+    const toml::array* a = n->as_array();
+    if (a == nullptr) {
+      error(*n, key(path, name), "must be an array of tables");
+      return;
+    }
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const std::string p = fmt::format("{}.{}[{}]", path, name, i);
+      if (const toml::table* e = a->get(i)->as_table()) {
+        each(*e, p);
+      } else {
+        error(*a->get(i), p, "must be a table");
+      }
+    }
+  }
+
   // A string key whose value must be one of the names of `choices`.
   template <typename E, std::size_t N>
   std::optional<E> choice(const toml::table& t, std::string_view path, std::string_view name,

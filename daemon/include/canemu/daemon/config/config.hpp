@@ -13,6 +13,7 @@
 
 #include <tl/expected.hpp>
 
+#include "canemu/daemon/config/can_node_config.hpp"
 #include "canemu/daemon/config/lin_config.hpp"
 
 namespace canemu::daemon {
@@ -162,6 +163,7 @@ struct Config {
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
   std::vector<LinNodeConfig> lin_nodes;   // [[lin_node]]: simulated LIN nodes
+  std::vector<CanNodeConfig> can_nodes;   // [[can_node]]: simulated CAN nodes (restbus)
   std::vector<RecorderConfig> recorders;  // [[recorder]]
   std::vector<BridgeConfig> bridges;      // [[bridge]]
 
@@ -186,6 +188,11 @@ std::string summary(const Config& config);
 // [[lin_node]] tables loaded at run time (`canemu lin load`): checked as the configuration's are,
 // against `buses`; every problem with its line.
 tl::expected<std::vector<LinNodeConfig>, std::vector<std::string>> parse_lin_nodes(
+    std::string_view text, const std::string& source, const std::vector<BusConfig>& buses);
+
+// [[can_node]] tables loaded at run time: checked as the configuration's are, against `buses`;
+// every problem with its line.
+tl::expected<std::vector<CanNodeConfig>, std::vector<std::string>> parse_can_nodes(
     std::string_view text, const std::string& source, const std::vector<BusConfig>& buses);
 
 }  // namespace canemu::daemon

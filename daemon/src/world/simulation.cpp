@@ -95,6 +95,11 @@ tl::expected<std::unique_ptr<Simulation>, std::vector<std::string>> Simulation::
     sim->lin_nodes_.push_back(
         make_lin_node(n, bus, *sim->buses_[bus].lin, sim->config_.buses[bus].bitrate));
   }
+  for (const CanNodeConfig& n : sim->config_.can_nodes) {
+    if (auto added = sim->add_can_node(n); !added) {
+      errors.push_back(added.error().what());
+    }
+  }
   for (const RecorderConfig& r : sim->config_.recorders) {
     if (auto added = sim->add_recorder(r); !added) {
       errors.push_back(added.error().what());

@@ -144,6 +144,14 @@ ReloadReport Simulation::reload(const Config& fresh) {
     r.refused.push_back(
         "lin_node: the simulated LIN nodes stay as they are (a restart changes them)");
   }
+  const bool same_can_nodes =
+      fresh.can_nodes.size() == config_.can_nodes.size() &&
+      std::equal(fresh.can_nodes.begin(), fresh.can_nodes.end(), config_.can_nodes.begin(),
+                 [](const CanNodeConfig& a, const CanNodeConfig& b) { return a.same_as(b); });
+  if (!same_can_nodes) {
+    r.refused.push_back(
+        "can_node: the simulated CAN nodes stay as they are (a restart changes them)");
+  }
   if (fresh.security.allowed_users != config_.security.allowed_users ||
       fresh.security.allowed_groups != config_.security.allowed_groups) {
     config_.security = fresh.security;

@@ -126,6 +126,10 @@ void fill_status(const Simulation& sim, ipc::StatusReply& r, std::size_t first_b
   for (const auto& b : sim.bridges()) {
     add_node(bridge_node_name(*b), b->bus(), b->node());
   }
+  // Simulated CAN nodes by their names: running while powered.
+  for (const SimulatedCanNode& n : sim.can_nodes()) {
+    add_node(n.ecu->name(), n.bus, n.ecu->node());
+  }
   // Simulated LIN nodes: powered (online) or switched off; sent: headers and responses.
   for (const SimulatedLinNode& l : sim.lin_nodes()) {
     ipc::StatusNode* s = next_slot();

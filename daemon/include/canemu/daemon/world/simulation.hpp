@@ -23,6 +23,7 @@
 #include "canemu/daemon/bridges/recorder.hpp"
 #include "canemu/daemon/bridges/socketcan_bridge.hpp"
 #include "canemu/daemon/config/config.hpp"
+#include "canemu/daemon/restbus/can_ecu.hpp"
 #include "canemu/daemon/world/device_registry.hpp"
 #include "canemu/daemon/world/gone_nodes.hpp"
 #include "canemu/daemon/world/lin_nodes.hpp"
@@ -51,6 +52,12 @@ NodeRates node_rates(const BusConfig& bus, bool fd, const NodeRates& asked = {})
 // and their decoded timing; for the CAN FD controller the nominal and the data timing. Nothing
 // if the clock cannot make a rate exactly. Only the timing fields of the result are set.
 std::optional<model::HostedNodeSettings> node_timing(bool fd, const NodeRates& rates);
+
+// A simulated CAN node ([[can_node]], docs/restbus.md) on bus `bus` (the configuration's index).
+struct SimulatedCanNode {
+  std::size_t bus = 0;
+  std::unique_ptr<restbus::CanEcu> ecu;
+};
 
 // What a configuration reload did and what it left as it was, one line each.
 struct ReloadReport {
@@ -96,6 +103,19 @@ class Simulation {
   Result<> power_lin_node(const std::string& name, bool on);
   Result<> run_lin_schedule(const std::string& name, const std::string& table);
   Result<> remove_lin_node(const std::string& name);
+
+  // ---- simulated CAN nodes ([[can_node]], docs/restbus.md) ----
+  // In configuration order, then as loaded.
+  const std::vector<SimulatedCanNode>& can_nodes() const { return can_nodes_; }
+  // Loads [[can_node]] tables: each node starts on a spare node of its bus; one of a name that
+  // runs on that bus already is replaced (names are scoped by bus). All or nothing; the nodes
+  // loaded ("BUS/NAME"), or every problem.
+  tl::expected<std::vector<std::string>, std::vector<std::string>> load_can_nodes(
+      std::string_view text, const std::string& source);
+  // The node `name` ("BUS/NAME", or a NAME only one bus has), or the reason there is none.
+  Result<restbus::CanEcu*> can_node(std::string_view name);
+  // Removes node `name` (its node leaves the bus); the reason when it cannot.
+  Result<> remove_can_node(std::string_view name);
 
   // The timing of a node on bus `bus` at the bus's rates (nothing if no controller runs them).
   std::optional<model::HostedNodeSettings> bus_timing(std::size_t bus) const;
@@ -198,6 +218,10 @@ class Simulation {
   Result<> lin_controllers(const DeviceConfig& d, std::vector<DeviceRegistry::LinController>& out);
 
   Result<> add_recorder(const RecorderConfig& r);
+  // Starts [[can_node]] `n` (its bus a CAN bus of this configuration) on a spare node.
+  Result<> add_can_node(const CanNodeConfig& n);
+  // A simulated CAN node by "BUS/NAME", or by a NAME that only one bus has; else the reason.
+  Result<std::vector<SimulatedCanNode>::iterator> find_can_named(std::string_view name);
   Result<> add_slcan(const DeviceConfig& d);
   void remove_ephemeral(const std::string& name);
 
@@ -218,6 +242,7 @@ class Simulation {
   ScenarioRunner scenarios_;
   std::vector<std::unique_ptr<Recorder>> recorders_;  // on nodes_'s nodes, LIN buses
   std::vector<std::unique_ptr<Bridge>> bridges_;      // on nodes_'s nodes
+  std::vector<SimulatedCanNode> can_nodes_;           // on nodes_'s nodes
   // Other daemons' nodes on nodes_'s nodes; gone first (nodes_'s remote nodes outlive it).
   std::unique_ptr<RemoteBuses> remote_;
 };

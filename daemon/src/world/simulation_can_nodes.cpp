@@ -1,0 +1,118 @@
+// The world's simulated CAN nodes ([[can_node]], docs/restbus.md): started from the
+// configuration on spare nodes of their buses, loaded, found and removed by name at run time.
+#include <algorithm>
+
+#include <fmt/format.h>
+
+#include "canemu/daemon/world/simulation.hpp"
+
+namespace canemu::daemon {
+
+using namespace canemu::model;
+
+namespace {
+
+// "BUS/NAME" as the bus's name and the node's; a bare NAME: no bus.
+std::pair<std::string_view, std::string_view> split_name(std::string_view name) {
+  const auto slash = name.find('/');
+  if (slash == std::string_view::npos) {
+    return {{}, name};
+  }
+  return {name.substr(0, slash), name.substr(slash + 1)};
+}
+
+}  // namespace
+
+Result<> Simulation::add_can_node(const CanNodeConfig& n) {
+  const std::size_t bus = *bus_index(n.bus);
+  const auto timing = bus_timing(bus);
+  if (!timing) {
+    return fail(Errc::bad_bit_timing,
+                fmt::format("can_node {}: no controller runs {} at {} bit/s", n.name, n.bus,
+                            config_.buses[bus].bitrate),
+                place(n.line));
+  }
+  auto ecu = restbus::CanEcu::start(n, nodes_.spare(bus), *timing);
+  if (!ecu) {
+    return fail(ecu.error().code, ecu.error().text, place(n.line));
+  }
+  can_nodes_.push_back(SimulatedCanNode{bus, std::move(*ecu)});
+  return {};
+}
+
+tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::load_can_nodes(
+    std::string_view text, const std::string& source) {
+  auto configs = parse_can_nodes(text, source, config_.buses);
+  if (!configs) {
+    return tl::unexpected(configs.error());
+  }
+  // Everything that could refuse a node is asked before any node changes.
+  std::vector<std::string> errors;
+  for (const CanNodeConfig& n : *configs) {
+    if (!bus_timing(*bus_index(n.bus))) {
+      errors.push_back(fmt::format("{}:{}: can_node {}: no controller runs {} at {} bit/s", source,
+                                   n.line, n.name, n.bus,
+                                   config_.buses[*bus_index(n.bus)].bitrate));
+    } else if (auto ok = restbus::CanEcu::check(n); !ok) {
+      errors.push_back(fmt::format("{}:{}: {}", source, n.line, ok.error().text));
+    }
+  }
+  if (!errors.empty()) {
+    return tl::unexpected(errors);
+  }
+  std::vector<std::string> names;
+  for (const CanNodeConfig& n : *configs) {
+    const std::size_t bus = *bus_index(n.bus);
+    // Replaced: the old node leaves the bus first (its node may carry the new one).
+    std::erase_if(can_nodes_, [&](const SimulatedCanNode& old) {
+      return old.bus == bus && old.ecu->name() == n.name;
+    });
+    auto ecu = restbus::CanEcu::start(n, nodes_.spare(bus), *bus_timing(bus));
+    can_nodes_.push_back(SimulatedCanNode{bus, std::move(*ecu)});
+    names.push_back(fmt::format("{}/{}", n.bus, n.name));
+  }
+  return names;
+}
+
+Result<std::vector<SimulatedCanNode>::iterator> Simulation::find_can_named(std::string_view name) {
+  const auto [bus, node] = split_name(name);
+  std::vector<std::vector<SimulatedCanNode>::iterator> found;
+  for (auto it = can_nodes_.begin(); it != can_nodes_.end(); ++it) {
+    if (it->ecu->name() == node && (bus.empty() || config_.buses[it->bus].name == bus)) {
+      found.push_back(it);
+    }
+  }
+  if (found.empty()) {
+    return fail(Errc::not_found, fmt::format("no simulated CAN node named \"{}\"", name));
+  }
+  if (found.size() > 1) {
+    std::vector<std::string> where;
+    where.reserve(found.size());
+    for (auto it : found) {
+      where.push_back(fmt::format("{}/{}", config_.buses[it->bus].name, it->ecu->name()));
+    }
+    return fail(Errc::bad_argument,
+                fmt::format("CAN nodes named \"{}\" are on several buses: name one as {}", name,
+                            fmt::join(where, " or ")));
+  }
+  return found.front();
+}
+
+Result<restbus::CanEcu*> Simulation::can_node(std::string_view name) {
+  auto found = find_can_named(name);
+  if (!found) {
+    return tl::unexpected(found.error());
+  }
+  return (*found)->ecu.get();
+}
+
+Result<> Simulation::remove_can_node(std::string_view name) {
+  auto found = find_can_named(name);
+  if (!found) {
+    return tl::unexpected(found.error());
+  }
+  can_nodes_.erase(*found);
+  return {};
+}
+
+}  // namespace canemu::daemon

@@ -7,6 +7,7 @@
 
 #include "canemu/daemon/restbus/signal_codec.hpp"
 #include "canemu/daemon/world/simulation.hpp"
+#include "canemu/daemon/world/status.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 
 namespace canemu::daemon {
@@ -463,6 +464,78 @@ TEST(CanEcu, AFrameStillWaitingIsReplacedByTheNextCyclesOne) {
   EXPECT_EQ(c.replaced, 1u);
   EXPECT_EQ(c.sent, 4u);
   EXPECT_EQ(w.starts(0x200).size(), 4u);
+}
+
+}  // namespace
+}  // namespace canemu::daemon
+
+namespace canemu::daemon {
+namespace {
+
+using namespace canemu::model;
+
+constexpr std::string_view kLoaded = R"(
+[[can_node]]
+name = "MOTOR"
+bus = "can0"
+powered = false
+
+[[can_node.message]]
+name = "MOTOR_STATUS"
+id = 0x190
+length = 1
+cycle = "10ms"
+)";
+
+TEST(SimulationCanNodes, AreListedInStatusByNameAndLoadedReplacedAndRemovedAtRunTime) {
+  World w(kTwo);
+  auto r = std::make_unique<ipc::StatusReply>();
+  fill_status(*w.sim, *r);
+  ASSERT_EQ(r->node_count, 2u);  // (the acknowledging node is nobody's: not listed)
+  EXPECT_EQ(ipc::name_of(r->nodes[0].name), "LOW");
+  EXPECT_EQ(ipc::name_of(r->nodes[1].name), "HIGH");
+  EXPECT_EQ(r->nodes[1].mode, static_cast<uint8_t>(ipc::WireNodeMode::running));
+
+  auto loaded = w.sim->load_can_nodes(kLoaded, "more.toml");
+  ASSERT_TRUE(loaded) << loaded.error().front();
+  EXPECT_EQ(*loaded, std::vector<std::string>{"can0/MOTOR"});
+  ASSERT_TRUE(w.sim->can_node("can0/MOTOR"));
+  EXPECT_FALSE(w.ecu("MOTOR").powered());
+  fill_status(*w.sim, *r);
+  ASSERT_EQ(r->node_count, 3u);
+  EXPECT_EQ(ipc::name_of(r->nodes[2].name), "MOTOR");
+  EXPECT_EQ(r->nodes[2].mode, static_cast<uint8_t>(ipc::WireNodeMode::init));
+  w.ecu("MOTOR").power(true);
+  w.run_until(ms(1));
+  EXPECT_EQ(w.starts(0x190).size(), 1u);
+
+  // The same name on the same bus: replaced (its node leaves the bus first).
+  std::string again(kLoaded);
+  again.replace(again.find("id = 0x190"), 10, "id = 0x191");
+  ASSERT_TRUE(w.sim->load_can_nodes(again, "more.toml"));
+  EXPECT_EQ(w.sim->can_nodes().size(), 3u);
+  EXPECT_EQ(w.ecu("MOTOR").config().messages[0].id, 0x191u);
+
+  EXPECT_EQ(w.sim->load_can_nodes("[[can_node]]\nname = \"X\"\nbus = \"can1\"\n", "bad.toml")
+                .error()
+                .front(),
+            "bad.toml:3:7: can_node[0].bus: no bus is named \"can1\"");
+  EXPECT_EQ(w.sim->remove_can_node("can1/MOTOR").error(),
+            "no simulated CAN node named \"can1/MOTOR\"");
+  ASSERT_TRUE(w.sim->remove_can_node("MOTOR"));
+  EXPECT_EQ(w.sim->can_node("MOTOR").error(), "no simulated CAN node named \"MOTOR\"");
+  EXPECT_EQ(w.sim->can_nodes().size(), 2u);
+}
+
+TEST(SimulationCanNodes, StayAsTheyAreOnAReload) {
+  World w(kTwo);
+  Config fresh = w.sim->config();
+  fresh.can_nodes.pop_back();
+  const ReloadReport r = w.sim->reload(fresh);
+  EXPECT_EQ(r.refused, std::vector<std::string>{
+                           "can_node: the simulated CAN nodes stay as they are (a restart "
+                           "changes them)"});
+  EXPECT_EQ(w.sim->can_nodes().size(), 2u);
 }
 
 }  // namespace

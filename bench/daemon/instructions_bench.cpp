@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "../../tests/support/canemud_process.hpp"
+#include "../support/babbling_buses.hpp"
 #include "../support/saturating.hpp"
 #include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
@@ -132,46 +133,8 @@ std::optional<Count> daemon_count(int buses, int64_t ms, std::string& error) {
     if (!daemon.ready() || !c) {
       error = "canemud did not start under valgrind: " + daemon.log();
     } else {
-      std::deque<client::Connection> owners;  // a client may open 16 channels: one per bus
-      std::deque<client::Channel> channels;
-      std::vector<client::Channel*> receivers;
-      std::string scenario = "[scenario]\nname = \"babble\"\n";
-      for (int i = 0; i < buses && error.empty(); ++i) {
-        auto owner = client::Connection::open(daemon.socket(), "bench-bus" + std::to_string(i));
-        if (!owner) {
-          error = owner.error().message;
-          break;
-        }
-        owners.push_back(std::move(*owner));
-        client::ChannelOptions o;
-        o.bus = "can" + std::to_string(i);
-        o.device = "tx" + std::to_string(i);
-        o.rx_capacity = 16;
-        o.tx_capacity = 16;
-        auto tx = client::Channel::open(owners.back(), o);
-        o.device = "rx" + std::to_string(i);
-        o.rx_capacity = 2048;
-        auto rx = client::Channel::open(owners.back(), o);
-        if (!tx || !rx) {
-          error = (!tx ? tx.error() : rx.error()).message;
-          break;
-        }
-        channels.push_back(std::move(*tx));
-        channels.push_back(std::move(*rx));
-        receivers.push_back(&channels.back());
-        scenario += "[[fault]]\nat = \"0s\"\nnode = \"tx" + std::to_string(i) +
-                    ":0\"\neffect = \"babble\"\nid = 0\ndata = [1, 2, 3, 4, 5, 6, 7, 8]\n"
-                    "duration = \"3600s\"\n";
-      }
-      auto load =
-          std::make_unique<ipc::FaultLoadRequest>(ipc::make_message<ipc::FaultLoadRequest>());
-      ipc::copy_name(load->source, "bench");
-      load->length = static_cast<uint32_t>(scenario.size());
-      std::memcpy(load->text, scenario.data(), std::min(scenario.size(), sizeof load->text));
-      auto loaded = c->call<ipc::FaultLoadRequest, ipc::FaultLoadReply>(*load);
-      if (error.empty() && (!loaded || loaded->applied != 1)) {
-        error = "the babble scenario was refused";
-      }
+      bench::BabblingBuses busy;
+      error = busy.open(daemon, *c, buses);
       double received = 0;
       for (int64_t at = 0; error.empty() && at < ms * 1'000'000; at += kStepNs) {
         auto step = ipc::make_message<ipc::TimeStepRequest>();
@@ -179,14 +142,8 @@ std::optional<Count> daemon_count(int buses, int64_t ms, std::string& error) {
         if (!c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(step)) {
           error = "a step failed";
         }
-        ipc::ChannelMessage m;
-        for (client::Channel* r : receivers) {
-          while (r->rx().get(&m) == ipc::RingStatus::ok) {
-            received += m.kind == static_cast<uint8_t>(ipc::ChannelMessageKind::frame) ? 1 : 0;
-          }
-        }
+        received += static_cast<double>(busy.drain());
       }
-      channels.clear();
       if (daemon.terminate(60'000) != 0) {
         error = error.empty() ? "canemud did not end within a minute under valgrind" : error;
       }

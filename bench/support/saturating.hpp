@@ -12,13 +12,34 @@ namespace canemu::bench {
 
 namespace model = canemu::model;
 
-// Always has a frame to send: the next of a fixed random set.
-class Saturating final : public model::CanController {
+// What both controllers below share: a fixed bit timing, always taking part, automatic recovery
+// from bus-off, and nothing to do on the bus's other events.
+class BenchController : public model::CanController {
+ public:
+  explicit BenchController(model::BitTiming t) { timing_.nominal = t; }
+  model::NodeTiming timing() const override { return timing_; }
+  bool participating() const override { return true; }
+  model::BusOffRecovery bus_off_recovery() const override {
+    return model::BusOffRecovery::automatic;
+  }
+  model::FaultConfinement& confinement() override { return fc_; }
+  void on_tx_done(model::SimTime) override {}
+  void on_tx_dropped(model::SimTime) override {}
+  void on_arbitration_lost(model::SimTime, uint16_t, uint16_t) override {}
+  void on_error(const model::BusErrorEvent&) override {}
+  void on_state_change(model::SimTime, model::ErrorState) override {}
+
+ private:
+  model::NodeTiming timing_;
+  model::FaultConfinement fc_;
+};
+
+// Always has a frame to send: the next of a fixed set.
+class Saturating final : public BenchController {
  public:
   static constexpr std::size_t kFrames = 64;  // a power of two
   // kFrames frames of random 11-bit identifiers and data from `seed`.
-  Saturating(uint32_t seed, model::BitTiming t) {
-    timing_.nominal = t;
+  Saturating(uint32_t seed, model::BitTiming t) : BenchController(t) {
     std::mt19937 rng(seed);
     for (std::size_t i = 0; i < kFrames; ++i) {
       std::vector<uint8_t> data(8);
@@ -30,60 +51,30 @@ class Saturating final : public model::CanController {
   }
   // `frame` again and again.
   Saturating(const model::Frame& frame, model::BitTiming t)
-      : frames_(kFrames, model::TxFrame{frame, false, false}) {
-    timing_.nominal = t;
-  }
+      : BenchController(t), frames_(kFrames, model::TxFrame{frame, false, false}) {}
   model::NodeId id = 0;
   model::CanBus* bus = nullptr;
   uint64_t received = 0;
 
-  model::NodeTiming timing() const override { return timing_; }
-  bool participating() const override { return true; }
-  model::BusOffRecovery bus_off_recovery() const override {
-    return model::BusOffRecovery::automatic;
-  }
   const model::TxFrame* pending_tx() override { return &frames_[next_ & (kFrames - 1)]; }
-  model::FaultConfinement& confinement() override { return fc_; }
   void on_frame(model::SimTime, const model::Frame&, bool) override { ++received; }
   void on_tx_done(model::SimTime) override {
     ++next_;
     bus->tx_changed(id);
   }
-  void on_tx_dropped(model::SimTime) override {}
-  void on_arbitration_lost(model::SimTime, uint16_t, uint16_t) override {}
-  void on_error(const model::BusErrorEvent&) override {}
-  void on_state_change(model::SimTime, model::ErrorState) override {}
 
  private:
-  model::NodeTiming timing_;
-  model::FaultConfinement fc_;
   std::vector<model::TxFrame> frames_;
   std::size_t next_ = 0;
 };
 
 // Takes part in every frame (acknowledges it) and counts what it receives.
-class Receiving final : public model::CanController {
+class Receiving final : public BenchController {
  public:
-  explicit Receiving(model::BitTiming t) { timing_.nominal = t; }
+  using BenchController::BenchController;
   uint64_t received = 0;
-
-  model::NodeTiming timing() const override { return timing_; }
-  bool participating() const override { return true; }
-  model::BusOffRecovery bus_off_recovery() const override {
-    return model::BusOffRecovery::automatic;
-  }
   const model::TxFrame* pending_tx() override { return nullptr; }
-  model::FaultConfinement& confinement() override { return fc_; }
   void on_frame(model::SimTime, const model::Frame&, bool) override { ++received; }
-  void on_tx_done(model::SimTime) override {}
-  void on_tx_dropped(model::SimTime) override {}
-  void on_arbitration_lost(model::SimTime, uint16_t, uint16_t) override {}
-  void on_error(const model::BusErrorEvent&) override {}
-  void on_state_change(model::SimTime, model::ErrorState) override {}
-
- private:
-  model::NodeTiming timing_;
-  model::FaultConfinement fc_;
 };
 
 }  // namespace canemu::bench

@@ -4,7 +4,7 @@
 // other. What arrives for the bridge wakes its eventfd, as in canemud's loop: the test waits on
 // that descriptor (with a timeout) and then kicks the bridge. The same bridge runs between
 // processes in tests/python/test_dds_bridge.py. What every bridge does is bridge_contract.hpp's,
-// run here as Dds/BridgeContract and Dds/MessageBridges.
+// run here as Dds/BridgeContract, and message_bridge_contract.hpp's as Dds/MessageBridges.
 #include "canemu/daemon/bridges/dds_bridge.hpp"
 
 #include <poll.h>
@@ -23,6 +23,7 @@
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
 #include "canemu_dds.h"
+#include "message_bridge_contract.hpp"
 #include "ros2_can_msgs.h"
 
 namespace canemu::daemon {

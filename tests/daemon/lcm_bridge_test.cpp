@@ -3,7 +3,7 @@
 // instance (lcm_instance()); what LCM delivers is handled when the bridge is kicked, as canemud
 // does when the instance's descriptor is readable. The same bridge runs over udpm:// between
 // processes in tests/python/test_lcm_bridge.py. What every bridge does is bridge_contract.hpp's,
-// run here as Lcm/BridgeContract and Lcm/MessageBridges.
+// run here as Lcm/BridgeContract, and message_bridge_contract.hpp's as Lcm/MessageBridges.
 #include "canemu/daemon/bridges/lcm_bridge.hpp"
 
 #include <lcm/lcm.h>
@@ -21,6 +21,7 @@
 #include "canemu_lcm/error_t.hpp"
 #include "canemu_lcm/frame_t.hpp"
 #include "canemu_lcm/state_t.hpp"
+#include "message_bridge_contract.hpp"
 
 namespace canemu::daemon {
 namespace {

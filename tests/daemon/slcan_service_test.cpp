@@ -16,6 +16,7 @@
 #include "canemu/daemon/config/scenario.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
+#include "daemon_test_support.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -141,32 +142,27 @@ TEST(SlcanNodes, StatusShowsTheInterfaceOnItsBus) {
 
 TEST(SlcanNodes, ABusOffFaultTakesTheSLinkOffAndItCannotBabble) {
   auto m = world();
-  auto s = parse_scenario(R"([[fault]]
+  daemon_test::apply_scenario(*m, R"([[fault]]
 at = "1ms"
 node = "sl0:0"
 effect = "bus_off"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  ASSERT_TRUE(m->scenarios().apply(*s, m->scheduler().now()));
+)");
   model::I82527& chip = m->devices().find_slcan_slot(1)->module().chip();
   m->scheduler().run_until(model::SimTime::from_ns(999'999));
   EXPECT_FALSE(chip.confinement().bus_off());
   m->scheduler().run_until(model::SimTime::from_ns(1'000'000));
   EXPECT_TRUE(chip.confinement().bus_off());
-  auto b = parse_scenario(R"([[fault]]
+  const auto refused = daemon_test::scenario_refusal(*m, R"([[fault]]
 at = "2ms"
 node = "sl0:0"
 effect = "babble"
 id = 0x100
 duration = "1ms"
 )",
-                          "b.toml");
-  ASSERT_TRUE(b) << b.error().front();
-  auto applied = m->scenarios().apply(*b, m->scheduler().now());
-  ASSERT_FALSE(applied);
-  EXPECT_NE(applied.error().front().find("sl0:0 is an SL-CANi S-Link"), std::string::npos)
-      << applied.error().front();
+                                                     "b.toml");
+  ASSERT_FALSE(refused.empty());
+  EXPECT_NE(refused.front().find("sl0:0 is an SL-CANi S-Link"), std::string::npos)
+      << refused.front();
 }
 
 struct Service {

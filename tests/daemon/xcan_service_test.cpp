@@ -12,6 +12,7 @@
 #include "canemu/daemon/config/scenario.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
+#include "daemon_test_support.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -133,15 +134,12 @@ TEST(XcanNodes, StatusShowsBothInterfacesOnTheirBuses) {
 
 TEST(XcanNodes, ALineErrorReachesTheModulesTransceiverFromItsInstantToItsEnd) {
   auto m = world();
-  auto s = parse_scenario(R"([[fault]]
+  daemon_test::apply_scenario(*m, R"([[fault]]
 at = "2ms"
 until = "5ms"
 node = "xcan0:1"
 effect = "line_error"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  ASSERT_TRUE(m->scenarios().apply(*s, m->scheduler().now()));
+)");
   model::sorcus::XcanModule& x = m->devices().find_xcan("xcan0")->module();
   m->scheduler().run_until(model::SimTime::from_ns(1'999'999));
   EXPECT_EQ(XCAN_STATUS_FLAGS(x.bus_state(1)) & XCAN_LINE_ERROR, 0u);
@@ -160,14 +158,11 @@ TEST(XcanNodes, ABusOffFaultTakesTheInterfaceOffAtItsInstant) {
   send.usDevice = DEVICE_BUS_OUT;
   send.ulCanID = 0x100;
   ASSERT_TRUE(x.open_channel(send, false));  // the bus is on from the first object
-  auto s = parse_scenario(R"([[fault]]
+  daemon_test::apply_scenario(*m, R"([[fault]]
 at = "1ms"
 node = "xcan0:0"
 effect = "bus_off"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  ASSERT_TRUE(m->scenarios().apply(*s, m->scheduler().now()));
+)");
   m->scheduler().run_until(model::SimTime::from_ns(999'999));
   EXPECT_EQ(XCAN_STATUS_FLAGS(x.bus_state(0)), XCAN_BUS_ON);
   m->scheduler().run_until(model::SimTime::from_ns(1'000'000));
@@ -177,19 +172,16 @@ effect = "bus_off"
 
 TEST(XcanNodes, AnInterfaceCannotBabble) {
   auto m = world();
-  auto s = parse_scenario(R"([[fault]]
+  const auto refused = daemon_test::scenario_refusal(*m, R"([[fault]]
 at = "0s"
 node = "xcan0:0"
 effect = "babble"
 id = 0x100
 duration = "1ms"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  auto applied = m->scenarios().apply(*s, m->scheduler().now());
-  ASSERT_FALSE(applied);
-  EXPECT_NE(applied.error().front().find("xcan0:0 is an X-CAN-2i interface"), std::string::npos)
-      << applied.error().front();
+)");
+  ASSERT_FALSE(refused.empty());
+  EXPECT_NE(refused.front().find("xcan0:0 is an X-CAN-2i interface"), std::string::npos)
+      << refused.front();
 }
 
 // The service with every packet it sends kept.

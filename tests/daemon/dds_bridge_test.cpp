@@ -4,7 +4,8 @@
 // other. What arrives for the bridge wakes its eventfd, as in canemud's loop: the test waits on
 // that descriptor (with a timeout) and then kicks the bridge. The same bridge runs between
 // processes in tests/python/test_dds_bridge.py. What every bridge does is bridge_contract.hpp's,
-// run here as Dds/BridgeContract, and message_bridge_contract.hpp's as Dds/MessageBridges.
+// run here as DdsBridge/BridgeContract, and message_bridge_contract.hpp's as
+// DdsBridge/MessageBridges.
 #include "canemu/daemon/bridges/dds_bridge.hpp"
 
 #include <poll.h>
@@ -379,8 +380,8 @@ TEST(DdsBridge, TheSameTopicsInAnotherPartitionDoNotLoop) {
 }
 
 // The contract (bridge_contract.hpp) through this transport.
-INSTANTIATE_TYPED_TEST_SUITE_P(Dds, BridgeContract, DdsAdapter);
-INSTANTIATE_TYPED_TEST_SUITE_P(Dds, MessageBridges, DdsAdapter);
+INSTANTIATE_TYPED_TEST_SUITE_P(DdsBridge, BridgeContract, DdsAdapter);
+INSTANTIATE_TYPED_TEST_SUITE_P(DdsBridge, MessageBridges, DdsAdapter);
 
 }  // namespace
 }  // namespace canemu::daemon

@@ -3,7 +3,8 @@
 // instance (lcm_instance()); what LCM delivers is handled when the bridge is kicked, as canemud
 // does when the instance's descriptor is readable. The same bridge runs over udpm:// between
 // processes in tests/python/test_lcm_bridge.py. What every bridge does is bridge_contract.hpp's,
-// run here as Lcm/BridgeContract, and message_bridge_contract.hpp's as Lcm/MessageBridges.
+// run here as LcmBridge/BridgeContract, and message_bridge_contract.hpp's as
+// LcmBridge/MessageBridges.
 #include "canemu/daemon/bridges/lcm_bridge.hpp"
 
 #include <lcm/lcm.h>
@@ -200,8 +201,8 @@ TEST(LcmTypes, CppAndCAgreeOnTheWire) {
 }
 
 // The contract (bridge_contract.hpp) through this transport.
-INSTANTIATE_TYPED_TEST_SUITE_P(Lcm, BridgeContract, LcmAdapter);
-INSTANTIATE_TYPED_TEST_SUITE_P(Lcm, MessageBridges, LcmAdapter);
+INSTANTIATE_TYPED_TEST_SUITE_P(LcmBridge, BridgeContract, LcmAdapter);
+INSTANTIATE_TYPED_TEST_SUITE_P(LcmBridge, MessageBridges, LcmAdapter);
 
 }  // namespace
 }  // namespace canemu::daemon

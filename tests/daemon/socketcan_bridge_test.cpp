@@ -1,7 +1,7 @@
 // The SocketCAN bridge on the host: the interface is played by one end of a SOCK_SEQPACKET pair
 // (whole frames per packet, as a CAN_RAW socket gives them), the kernel's programs by the other.
 // This machine's kernel has no CAN modules; the same bridge runs against vcan in tests/guest/.
-// What every bridge does is bridge_contract.hpp's, run here as SocketCan/BridgeContract.
+// What every bridge does is bridge_contract.hpp's, run here as SocketCanBridge/BridgeContract.
 #include "canemu/daemon/bridges/socketcan_bridge.hpp"
 
 #include <linux/can.h>
@@ -508,7 +508,7 @@ TEST(BridgeConfig, ReadsTheTableAndNamesEveryMistake) {
 }
 
 // The contract (bridge_contract.hpp) through this transport.
-INSTANTIATE_TYPED_TEST_SUITE_P(SocketCan, BridgeContract, SocketCanAdapter);
+INSTANTIATE_TYPED_TEST_SUITE_P(SocketCanBridge, BridgeContract, SocketCanAdapter);
 
 }  // namespace
 }  // namespace canemu::daemon

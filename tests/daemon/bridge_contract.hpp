@@ -84,15 +84,14 @@ class BridgeContract : public ::testing::Test {
   }
   // Adds the bridge of `bus` to `sim`, on the channels it would have as the bridge of
   // `channels_of`.
-  tl::expected<Bridge*, std::string> add(Simulation& sim, const std::string& bus,
-                                         uint32_t restart_ms = 0,
-                                         const std::string& channels_of = "") {
+  Result<Bridge*> add(Simulation& sim, const std::string& bus, uint32_t restart_ms = 0,
+                      const std::string& channels_of = "") {
     BridgeConfig b;
     b.kind = T::kTraits.kind;
     b.bus = bus;
     b.restart_ms = restart_ms;
     transport.configure(b, channels_of.empty() ? bus : channels_of);
-    tl::expected<Bridge*, std::string> added;
+    Result<Bridge*> added;
     if constexpr (requires { transport.port(); }) {
       added = sim.add_bridge(b, transport.port());
     } else {
@@ -231,8 +230,8 @@ TYPED_TEST_P(BridgeContract, RestartsRestartMsAfterBusOffThenWaitsForTheRecessiv
   Bridge& bridge = *this->opened;
   BusNode& ecu = *this->beside;
   const model::FaultConfinement& fc = bridge.node().controller().confinement();
-  EXPECT_EQ(bridge.restart(), std::string(TypeParam::kTraits.name) +
-                                  " is error-active, not bus-off: nothing to restart");
+  EXPECT_EQ(error_text(bridge.restart()), std::string(TypeParam::kTraits.name) +
+                                              " is error-active, not bus-off: nothing to restart");
   bus_off_at(*this->simulation, bridge.node(), 1'000'000);
   this->run_to(2'000'000);
   ASSERT_TRUE(fc.bus_off());
@@ -244,7 +243,7 @@ TYPED_TEST_P(BridgeContract, RestartsRestartMsAfterBusOffThenWaitsForTheRecessiv
   this->run_to(6'000'000);  // exactly restart_ms after the bus-off instant
   EXPECT_EQ(bridge.stats().restarts, 1u);
   EXPECT_TRUE(fc.recovering());
-  EXPECT_EQ(bridge.restart(),
+  EXPECT_EQ(error_text(bridge.restart()),
             std::string(TypeParam::kTraits.name) +
                 " restarts already (waits for 128 x 11 recessive bits, 128 left)");
   this->run_to(6'000'000 + kRecoveryNs - 1);

@@ -15,9 +15,10 @@
 
 namespace canemu::daemon::daemon_test {
 
-// The text of the error a simulation's call returned (add_bridge and the like).
+// The text of the error a simulation's call returned (add_bridge, a bridge's restart and the
+// like), as a person reads it; empty if it succeeded.
 std::string error_text(const auto& result) {
-  return result ? std::string() : std::string(result.error());
+  return result ? std::string() : result.error().what();
 }
 
 // The configuration `text` describes; a failure of the test (and an empty configuration) if it

@@ -334,14 +334,15 @@ TEST_F(SocketCanBridge, WithoutRestartMsTheNodeStaysBusOffUntilRestartedByHand) 
   open(kClassic, "can0", false, 0);
   Bridge& bridge = *bridged;
   const model::FaultConfinement& fc = bridge.node().controller().confinement();
-  EXPECT_EQ(bridge.restart(), "bridge on vcan0 is error-active, not bus-off: nothing to restart");
+  EXPECT_EQ(error_text(bridge.restart()),
+            "bridge on vcan0 is error-active, not bus-off: nothing to restart");
   bus_off_at(*simulation, bridge.node(), 1'000'000);
   run_to(*simulation, 1'000'000'000);  // a second: still bus-off
   EXPECT_TRUE(fc.bus_off());
   EXPECT_FALSE(fc.recovering());
-  EXPECT_EQ(bridge.restart(), std::nullopt);
+  EXPECT_TRUE(bridge.restart());
   EXPECT_EQ(bridge.stats().restarts, 1u);
-  EXPECT_EQ(bridge.restart(),
+  EXPECT_EQ(error_text(bridge.restart()),
             "bridge on vcan0 restarts already (waits for 128 x 11 recessive bits, 128 left)");
   EXPECT_EQ(bridge.stats().restarts, 1u);
   run_to(*simulation, 1'000'000'000 + kRecoveryNs);
@@ -359,7 +360,7 @@ TEST_F(SocketCanBridge, ARestartByHandBeforeTheTimerCountsOnce) {
   Bridge& bridge = *bridged;
   bus_off_at(*simulation, bridge.node(), 1'000'000);
   run_to(*simulation, 2'000'000);
-  EXPECT_EQ(bridge.restart(), std::nullopt);
+  EXPECT_TRUE(bridge.restart());
   run_to(*simulation, 200'000'000);  // past the timer's 101 ms
   EXPECT_EQ(bridge.stats().restarts, 1u);
   EXPECT_FALSE(bridge.node().controller().confinement().bus_off());
@@ -415,7 +416,7 @@ TEST_F(SocketCanBridge, WithoutCanModulesTheInterfaceCannotBeOpenedAndSaysWhy) {
   auto port = open_can_raw("vcan-none");
   ASSERT_FALSE(port);
   // Either the kernel has no CAN (socket fails) or the interface does not exist.
-  EXPECT_EQ(port.error().substr(0, 11), "vcan-none: ") << port.error();
+  EXPECT_EQ(port.error().text.substr(0, 11), "vcan-none: ") << port.error();
   EXPECT_EQ(open_can_raw("a-name-that-is-too-long").error(),
             "\"a-name-that-is-too-long\" is not an interface name (1 to 15 characters)");
 }
@@ -439,7 +440,7 @@ void refuse_every_family_but_unix() {
 }
 
 TEST_F(SocketCanBridge, ABridgeWhoseAddressFamilyIsRefusedNamesTheDropInThatAllowsIt) {
-  EXPECT_EQ(refused_family(AF_INET), std::nullopt);  // this machine allows IP sockets
+  EXPECT_TRUE(refused_family(AF_INET));  // this machine allows IP sockets
   int out[2];
   ASSERT_EQ(::pipe(out), 0);
   const pid_t child = ::fork();
@@ -452,8 +453,8 @@ TEST_F(SocketCanBridge, ABridgeWhoseAddressFamilyIsRefusedNamesTheDropInThatAllo
     lcm.bus = "can0";
     BridgeConfig dds = lcm;
     dds.kind = "dds";
-    const std::string found = std::string(refused_family(AF_UNIX) ? "AF_UNIX refused" : "-") +
-                              "\n" + open_can_raw("vcan0").error() + "\n" +
+    const std::string found = std::string(!refused_family(AF_UNIX) ? "AF_UNIX refused" : "-") +
+                              "\n" + error_text(open_can_raw("vcan0")) + "\n" +
                               error_text(sim->add_bridge(lcm)) + "\n" +
                               error_text(sim->add_bridge(dds));
     const bool written =

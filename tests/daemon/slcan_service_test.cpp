@@ -17,6 +17,7 @@
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
 #include "daemon_test_support.hpp"
+#include "sorcus_service_support.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -165,14 +166,9 @@ duration = "1ms"
       << refused.front();
 }
 
-struct Service {
-  std::unique_ptr<Simulation> sim = world();
-  SlcanService service{*sim};
-  std::vector<std::vector<uint8_t>> sent;
-  SlcanService::Send send = [this](const void* data, std::size_t size, std::span<const int>) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    sent.emplace_back(p, p + size);
-  };
+// The service with every packet it sends kept.
+struct Service : daemon_test::KeptPackets<SlcanService> {
+  Service() : KeptPackets(world()) {}
   ipc::SlcanReply call(SlcanSession& s, ipc::SlcanOp op, uint8_t slot = 1,
                        void (*fill)(ipc::SlcanRequest&) = nullptr) {
     auto m = ipc::make_message<ipc::SlcanRequest>(9);
@@ -181,8 +177,7 @@ struct Service {
     if (fill != nullptr) {
       fill(m);
     }
-    sent.clear();
-    service.handle(s, m, send);
+    handle(s, m);
     ipc::SlcanReply r{};
     EXPECT_EQ(sent.size(), 1u);
     if (sent.size() == 1 && sent[0].size() == sizeof r) {

@@ -13,6 +13,7 @@
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
 #include "daemon_test_support.hpp"
+#include "sorcus_service_support.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -185,35 +186,19 @@ duration = "1ms"
 }
 
 // The service with every packet it sends kept.
-struct Service {
-  std::unique_ptr<Simulation> sim = world();
-  XcanService service{*sim};
-  std::vector<std::vector<uint8_t>> sent;
-  XcanService::Send send = [this](const void* data, std::size_t size, std::span<const int>) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    sent.emplace_back(p, p + size);
-  };
-  ipc::XcanReply call(XcanSession& s, ipc::XcanRequest m) {
-    sent.clear();
-    service.handle(s, m, send);
+struct Service : daemon_test::KeptPackets<XcanService> {
+  Service() : KeptPackets(world()) {}
+  ipc::XcanReply call(XcanSession& s, const ipc::XcanRequest& m) {
+    handle(s, m);
     EXPECT_EQ(sent.size(), 1u);
     return reply(0);
   }
-  ipc::XcanReply reply(std::size_t k) {
-    ipc::XcanReply r{};
-    EXPECT_EQ(sent.at(k).size(), sizeof r);
-    std::memcpy(&r, sent.at(k).data(), std::min(sizeof r, sent.at(k).size()));
-    return r;
-  }
+  ipc::XcanReply reply(std::size_t k) const { return packet<ipc::XcanReply>(k); }
   // The ErrorReply code of the one packet sent.
   uint32_t refused(XcanSession& s, const ipc::XcanRequest& m) {
-    sent.clear();
-    service.handle(s, m, send);
+    handle(s, m);
     EXPECT_EQ(sent.size(), 1u);
-    ipc::ErrorReply e{};
-    EXPECT_EQ(sent.at(0).size(), sizeof e);
-    std::memcpy(&e, sent.at(0).data(), std::min(sizeof e, sent.at(0).size()));
-    return e.code;
+    return packet<ipc::ErrorReply>(0).code;
   }
 };
 

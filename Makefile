@@ -77,6 +77,8 @@ bench: deps build
 	  --benchmark_out_format=json $(BENCH_ARGS)
 	$(BUILD_DIR)/bin/vci_bench --benchmark_out=$(BUILD_DIR)/bench-results/vci.json \
 	  --benchmark_out_format=json $(BENCH_ARGS)
+	$(BUILD_DIR)/bin/instructions_bench --benchmark_out=$(BUILD_DIR)/bench-results/instructions.json \
+	  --benchmark_out_format=json
 	.venv/bin/python bench/python/python_can_bench.py --out $(BUILD_DIR)/bench-results/python.json
 	.venv/bin/python bench/python/python_latency_bench.py --out $(BUILD_DIR)/bench-results/python_latency.json
 	.venv/bin/python bench/python/web_bench.py --out $(BUILD_DIR)/bench-results/web.json $(WEB_BENCH_ARGS)

@@ -58,7 +58,8 @@ std::size_t size_of(MsgType type) {
       RecorderListRequest, RecorderListReply, BridgeAddRequest, BridgeAddReply, BridgeRemoveRequest,
       BridgeRemoveReply, BridgeRestartRequest, BridgeRestartReply, BridgeListRequest,
       BridgeListReply, SlcanRequest, SlcanReply, SlcanEventMsg, TimelineRequest, TimelineReply,
-      LinNodeRequest, LinNodeReply, LoadHistoryReply, PeerListRequest, PeerListReply>(type);
+      LinNodeRequest, LinNodeReply, CanNodeRequest, CanNodeReply, LoadHistoryReply, PeerListRequest,
+      PeerListReply>(type);
 }
 
 }  // namespace

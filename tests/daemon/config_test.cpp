@@ -9,15 +9,12 @@
 #include "../support/many_buses.hpp"
 #include "../support/temp_dir.hpp"
 #include "canemu/daemon/config/scenario.hpp"
+#include "daemon_test_support.hpp"
 
 namespace canemu::daemon {
 namespace {
 
-std::vector<std::string> errors_of(std::string_view text) {
-  auto c = parse_config(text, "t.toml");
-  EXPECT_FALSE(c.has_value());
-  return c ? std::vector<std::string>{} : c.error();
-}
+using daemon_test::config_errors;
 
 TEST(Config, EmbeddedDefaultHasTwoCanBusesALinBusAndOneAdapterOnAllThree) {
   auto c = load_default_config();
@@ -92,10 +89,10 @@ TEST(Config, SecurityDefaultsAndTheSocketsModeAndGroup) {
   ASSERT_TRUE(set);
   EXPECT_EQ(set->security.socket_mode, 0600u);
   EXPECT_EQ(set->security.socket_group, "");
-  EXPECT_EQ(errors_of("[security]\nsocket_mode = 0o1777\n"),
+  EXPECT_EQ(config_errors("[security]\nsocket_mode = 0o1777\n"),
             (std::vector<std::string>{
                 "t.toml:2:15: security.socket_mode: 0o1777 is outside 0o000..0o777"}));
-  EXPECT_EQ(errors_of("[security]\nsocket_mode = \"660\"\n"),
+  EXPECT_EQ(config_errors("[security]\nsocket_mode = \"660\"\n"),
             (std::vector<std::string>{
                 "t.toml:2:15: security.socket_mode: must be an integer (octal, such as 0o660)"}));
 }
@@ -110,7 +107,8 @@ TEST(Config, QuotasPerUser) {
   ASSERT_TRUE(set);
   EXPECT_EQ(set->security.max_clients_per_user, 4u);
   EXPECT_EQ(set->security.ring_mib_per_user, 8u);
-  const auto errors = errors_of("[security]\nmax_clients_per_user = 0\nring_mib_per_user = 257\n");
+  const auto errors =
+      config_errors("[security]\nmax_clients_per_user = 0\nring_mib_per_user = 257\n");
   ASSERT_EQ(errors.size(), 2u);
   EXPECT_NE(errors[0].find("t.toml:2:24: security.max_clients_per_user"), std::string::npos)
       << errors[0];
@@ -123,31 +121,31 @@ TEST(Config, LowSpeedTransceiversOnSlowClassicBusesOnly) {
       "[[bus]]\nname = \"body\"\nbitrate = 125000\ntransceiver = \"low-speed\"\n", "t.toml");
   ASSERT_TRUE(cfg);
   EXPECT_TRUE(cfg->buses.at(0).low_speed);
-  EXPECT_EQ(errors_of("[[bus]]\nname = \"b\"\nbitrate = 250000\ntransceiver = \"low-speed\"\n"),
+  EXPECT_EQ(config_errors("[[bus]]\nname = \"b\"\nbitrate = 250000\ntransceiver = \"low-speed\"\n"),
             (std::vector<std::string>{"t.toml:4:15: bus[0].transceiver: a low-speed bus runs at up "
                                       "to 125000 bit/s, not 250000"}));
-  EXPECT_EQ(errors_of("[[bus]]\nname = \"b\"\nkind = \"can-fd\"\nbitrate = 125000\n"
-                      "transceiver = \"low-speed\"\n"),
+  EXPECT_EQ(config_errors("[[bus]]\nname = \"b\"\nkind = \"can-fd\"\nbitrate = 125000\n"
+                          "transceiver = \"low-speed\"\n"),
             (std::vector<std::string>{"t.toml:5:15: bus[0].transceiver: low-speed (ISO 11898-3) "
                                       "transceivers are for classic CAN buses (kind = \"can\")"}));
-  EXPECT_EQ(errors_of("[[bus]]\nname = \"b\"\ntransceiver = \"slow\"\n"),
+  EXPECT_EQ(config_errors("[[bus]]\nname = \"b\"\ntransceiver = \"slow\"\n"),
             (std::vector<std::string>{"t.toml:3:15: bus[0].transceiver: \"slow\" is not a "
                                       "transceiver (high-speed, low-speed)"}));
 }
 
 TEST(Config, UnknownKeysAreErrorsWithFileLineColumnAndKey) {
-  const auto e = errors_of("[[bus]]\nname = \"can0\"\nspeed = 5\n");
+  const auto e = config_errors("[[bus]]\nname = \"can0\"\nspeed = 5\n");
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0],
             "t.toml:3:1: bus[0].speed: unknown key (known here: name, kind, bitrate, "
             "sample_point, data_bitrate, transceiver, owner)");
-  const auto top = errors_of("[buses]\n");
+  const auto top = config_errors("[buses]\n");
   ASSERT_EQ(top.size(), 1u);
   EXPECT_NE(top[0].find("t.toml:1:2: buses: unknown key"), std::string::npos) << top[0];
 }
 
 TEST(Config, CollectsEveryErrorAtOnce) {
-  const auto e = errors_of(R"([simulation]
+  const auto e = config_errors(R"([simulation]
 time = "fast"
 [[bus]]
 name = "can0"
@@ -176,16 +174,16 @@ TEST(Config, TakesSixtyFourBusesAndTwoHundredFiftySixControllersAndNoMore) {
   EXPECT_EQ(most->buses.size(), 64u);
   EXPECT_EQ(most->devices.size(), 64u);
   EXPECT_EQ(most->devices[63].controllers.back(), "bus63");
-  const auto buses = errors_of(testing::many_buses_config(65, 4));
+  const auto buses = config_errors(testing::many_buses_config(65, 4));
   ASSERT_EQ(buses.size(), 1u);
   EXPECT_EQ(buses[0], "t.toml:1:1: bus: 65 buses; at most 64");
-  const auto controllers = errors_of(testing::many_buses_config(64, 257));
+  const auto controllers = config_errors(testing::many_buses_config(64, 257));
   ASSERT_EQ(controllers.size(), 1u);
   EXPECT_EQ(controllers[0], "t.toml:1:1: device: 257 controllers in all; at most 256");
 }
 
 TEST(Config, RejectsControllersOnLinBusesAndDataRatesOnClassicBuses) {
-  const auto e = errors_of(R"([[bus]]
+  const auto e = config_errors(R"([[bus]]
 name = "lin0"
 kind = "lin"
 [[bus]]
@@ -203,7 +201,7 @@ controllers = ["lin0"]
 }
 
 TEST(Config, RejectsBadNamesMissingKeysAndWrongTypes) {
-  const auto e = errors_of(R"([[bus]]
+  const auto e = config_errors(R"([[bus]]
 name = "CAN 0"
 bitrate = "fast"
 [[device]]
@@ -217,7 +215,7 @@ model = "ixxat-usb-to-can"
 }
 
 TEST(Config, SyntaxErrorsNameTheirPlace) {
-  const auto e = errors_of("[[bus]\n");
+  const auto e = config_errors("[[bus]\n");
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0].rfind("t.toml:1:", 0), 0u) << e[0];
   EXPECT_NE(e[0].find("syntax"), std::string::npos);
@@ -261,7 +259,7 @@ TEST(Config, SecurityListsAreBounded) {
   for (std::size_t i = 0; i <= kMaxSecurityNames; ++i) {
     users += fmt::format("{}\"user{}\"", i == 0 ? "" : ", ", i);
   }
-  const auto e = errors_of("[security]\nallowed_users = [" + users + "]\n");
+  const auto e = config_errors("[security]\nallowed_users = [" + users + "]\n");
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0], fmt::format("t.toml:2:17: security.allowed_users: {} entries; at most {} (give "
                               "more users a group and list the group)",

@@ -14,10 +14,9 @@ using namespace canemu::model;
 // Two buses; "ixxat0" configured with a controller on each, plus two spare nodes on bus 0.
 struct Registry {
   SimScheduler scheduler;
-  CanBus can0{scheduler, "can0"};
-  CanBus can1{scheduler, "can1"};
-  Sja1000Node spare_a{scheduler, can0};
-  Sja1000Node spare_b{scheduler, can0};
+  CanBus buses[2]{{scheduler, "can0"}, {scheduler, "can1"}};
+  Sja1000Node spare_a{scheduler, buses[0]};
+  Sja1000Node spare_b{scheduler, buses[0]};
   DeviceRegistry devices;
   std::vector<std::pair<ipc::NotificationKind, std::string>> told;
   Registry() {
@@ -30,7 +29,7 @@ struct Registry {
       DeviceRegistry::Controller c;
       c.name = "ixxat0:" + std::to_string(k);
       c.bus = k;
-      c.node = std::make_unique<Sja1000Node>(scheduler, k == 0 ? can0 : can1);
+      c.node = std::make_unique<Sja1000Node>(scheduler, buses[k]);
       c.line = std::make_shared<ixxat::CanLine>(scheduler, *c.node, ixxat::Clocks{}, SimTime{});
       controllers.push_back(std::move(c));
     }

@@ -444,42 +444,60 @@ TEST(DistributedStatus, ADaemonNamedAgainstTheRuleIsNotListedAndCountsAsDropped)
   EXPECT_EQ(Distributed::of(*a)->counters().requests_received, 0u);
 }
 
-TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
-  auto a = daemon_named("a", kBusA);
-  ASSERT_TRUE(a);
-  // A node of a's own on can0, to acknowledge frames.
-  model::HostedNode& acker = a->spare_node(0);
-  acker.start(*node_timing(false, {500000, 0, 875}), nullptr,
-              [] { return std::optional<model::TxFrame>(); });
-  RawDaemon r("r");
-  ASSERT_TRUE(r.ok());
-  ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
-  r.announce(canemu_net_PROTOCOL);
-  std::vector<PeerStatus> keep;
-  ASSERT_TRUE(pump({a.get()}, [&] {
-    const PeerStatus* p = peer(*a, "r", keep);
-    return p != nullptr && p->state == "up";
-  }));
-  std::vector<canemu_net_Event> events;
-  auto next_event = [&](canemu_net_Event& out) {
+// Daemon a (can0 at 500 kbit/s, with a node of its own to acknowledge frames) and the raw
+// daemon r, up in a's list, that has said hello to a and been welcomed.
+struct WelcomedPeer {
+  std::unique_ptr<Simulation> a = daemon_named("a", kBusA);
+  RawDaemon r{"r"};
+  model::HostedNode* acker = nullptr;
+  std::vector<canemu_net_Event> events;  // r's, not yet taken by next_event()
+  std::vector<PeerStatus> keep;          // what peer() found last
+  uint64_t hello = 0;                    // the hello's request number
+
+  void welcome() {
+    ASSERT_TRUE(a);
+    acker = &a->spare_node(0);
+    acker->start(*node_timing(false, {500000, 0, 875}), nullptr,
+                 [] { return std::optional<model::TxFrame>(); });
+    ASSERT_TRUE(r.ok());
+    ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
+    r.announce(canemu_net_PROTOCOL);
+    ASSERT_TRUE(pump({a.get()}, [&] {
+      const PeerStatus* p = peer(*a, "r", keep);
+      return p != nullptr && p->state == "up";
+    }));
+    canemu_net_Event e{};
+    hello = r.request(request_of(canemu_net_REQ_HELLO));
+    ASSERT_TRUE(next_event(e));
+    EXPECT_EQ(e.kind, canemu_net_EV_WELCOME);
+  }
+  // Waits for r's next event from a.
+  bool next_event(canemu_net_Event& out) {
     if (!pump({a.get()}, [&] { return !r.take(events).empty(); })) {
       return false;
     }
     out = events.front();
     events.erase(events.begin());
     return true;
-  };
+  }
+  ~WelcomedPeer() {
+    if (acker != nullptr) {
+      acker->stop();
+    }
+  }
+};
+
+TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
+  WelcomedPeer w;
+  ASSERT_NO_FATAL_FAILURE(w.welcome());
   canemu_net_Event e{};
-  const uint64_t hello = r.request(request_of(canemu_net_REQ_HELLO));
-  ASSERT_TRUE(next_event(e));
-  EXPECT_EQ(e.kind, canemu_net_EV_WELCOME);
-  EXPECT_EQ(hello, 1u);
+  EXPECT_EQ(w.hello, 1u);
 
   // 1. A REQ_OPEN with a prescaler of 0: refused, the reason naming the timing.
   canemu_net_Request bad = open_request(1);
   bad.n_prescaler = 0;
-  const uint64_t bad_seq = r.request(bad);
-  ASSERT_TRUE(next_event(e));
+  const uint64_t bad_seq = w.r.request(bad);
+  ASSERT_TRUE(w.next_event(e));
   EXPECT_EQ(e.kind, canemu_net_EV_REFUSED);
   EXPECT_EQ(e.node, 1u);
   EXPECT_EQ(e.opened, bad_seq);
@@ -489,48 +507,49 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
                         "sjw {}) is no controller's",
                         bad.clock_hz, bad.n_tseg1, bad.n_tseg2, bad.n_sjw));
   EXPECT_EQ(bad.clock_hz, 16'000'000u);  // the SJA1000's clock: the text above names it
-  EXPECT_EQ(peer(*a, "r", keep)->hosted_nodes, 0u);
+  EXPECT_EQ(peer(*w.a, "r", w.keep)->hosted_nodes, 0u);
 
   // 2. The node opened properly, then a classic frame of DLC 15 carrying 64 bytes: dropped.
-  r.request(open_request(1));
-  ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep)->hosted_nodes == 1; }));
-  const DistributedCounters before = Distributed::of(*a)->counters();
+  w.r.request(open_request(1));
+  ASSERT_TRUE(pump({w.a.get()}, [&] { return peer(*w.a, "r", w.keep)->hosted_nodes == 1; }));
+  const DistributedCounters before = Distributed::of(*w.a)->counters();
   canemu_net_Request tx = request_of(canemu_net_REQ_TX, 1);
   tx.id = 0x123;
   tx.dlc = 15;
   tx.len = 64;
-  r.request(tx);
-  ASSERT_TRUE(pump({a.get()}, [&] {
-    return Distributed::of(*a)->counters().requests_received == before.requests_received + 1;
+  w.r.request(tx);
+  ASSERT_TRUE(pump({w.a.get()}, [&] {
+    return Distributed::of(*w.a)->counters().requests_received == before.requests_received + 1;
   }));
-  EXPECT_EQ(Distributed::of(*a)->counters().dropped, before.dropped + 1);
-  EXPECT_EQ(Distributed::of(*a)->counters().events_sent, before.events_sent);  // no EV_DROPPED
+  EXPECT_EQ(Distributed::of(*w.a)->counters().dropped, before.dropped + 1);
+  EXPECT_EQ(Distributed::of(*w.a)->counters().events_sent, before.events_sent);  // no EV_DROPPED
   // Why, which rule and which daemon: by reason, and the last reason in the status reply.
-  EXPECT_EQ(Distributed::of(*a)->counters().by_reason[static_cast<std::size_t>(NetDrop::malformed)],
-            1u);
-  EXPECT_EQ(Distributed::of(*a)->counters().last_reason,
+  EXPECT_EQ(
+      Distributed::of(*w.a)->counters().by_reason[static_cast<std::size_t>(NetDrop::malformed)],
+      1u);
+  EXPECT_EQ(Distributed::of(*w.a)->counters().last_reason,
             "dropped a frame of daemon r's node ecu: id 0x123, dlc 15, 64 bytes is no frame");
   auto reply = std::make_unique<ipc::PeerListReply>(ipc::make_message<ipc::PeerListReply>());
-  fill_peer_list(*a, *reply, 0, 0);
+  fill_peer_list(*w.a, *reply, 0, 0);
   EXPECT_EQ(reply->counters.by_reason[static_cast<std::size_t>(NetDrop::malformed)], 1u);
   EXPECT_EQ(ipc::name_of(reply->counters.last_reason),
             "dropped a frame of daemon r's node ecu: id 0x123, dlc 15, 64 bytes is no frame");
 
   // 3. The owner goes on: online and a valid frame, which goes out on can0 when a's time runs.
-  r.request(request_of(canemu_net_REQ_ONLINE, 1));
+  w.r.request(request_of(canemu_net_REQ_ONLINE, 1));
   tx.dlc = 1;
   tx.len = 1;
   tx.data[0] = 0x42;
-  r.request(tx);
-  ASSERT_TRUE(pump({a.get()}, [&] {
-    return Distributed::of(*a)->counters().requests_received == before.requests_received + 3;
+  w.r.request(tx);
+  ASSERT_TRUE(pump({w.a.get()}, [&] {
+    return Distributed::of(*w.a)->counters().requests_received == before.requests_received + 3;
   }));
-  EXPECT_EQ(Distributed::of(*a)->counters().dropped, before.dropped + 1);
-  const model::SimTime start = a->scheduler().now();
-  a->scheduler().run_until(start + model::SimDuration(1'000'000));
-  EXPECT_EQ(a->bus(0).frames_on_bus(), 1u);
-  EXPECT_EQ(a->bus(0).error_frames_on_bus(), 0u);
-  ASSERT_TRUE(next_event(e));
+  EXPECT_EQ(Distributed::of(*w.a)->counters().dropped, before.dropped + 1);
+  const model::SimTime start = w.a->scheduler().now();
+  w.a->scheduler().run_until(start + model::SimDuration(1'000'000));
+  EXPECT_EQ(w.a->bus(0).frames_on_bus(), 1u);
+  EXPECT_EQ(w.a->bus(0).error_frames_on_bus(), 0u);
+  ASSERT_TRUE(w.next_event(e));
   EXPECT_EQ(e.kind, canemu_net_EV_TX_DONE);
   EXPECT_EQ(e.node, 1u);
   EXPECT_EQ(e.id, 0x123u);
@@ -545,37 +564,12 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
       model::frame_duration(model::encode(*frame), node_timing(false, {500000, 0, 875})->nominal);
   EXPECT_EQ(bits.ns(), 106'000);  // 53 bits (canemu calc frame 123#42)
   EXPECT_EQ(e.at_ns, (start + bits).ns());
-  acker.stop();
 }
 
 TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpenANode) {
-  auto a = daemon_named("a", kBusA);
-  ASSERT_TRUE(a);
-  model::HostedNode& acker = a->spare_node(0);
-  acker.start(*node_timing(false, {500000, 0, 875}), nullptr,
-              [] { return std::optional<model::TxFrame>(); });
-  RawDaemon r("r");
-  ASSERT_TRUE(r.ok());
-  ASSERT_TRUE(pump({a.get()}, [&] { return r.matched(); }));
-  r.announce(canemu_net_PROTOCOL);
-  std::vector<PeerStatus> keep;
-  ASSERT_TRUE(pump({a.get()}, [&] {
-    const PeerStatus* p = peer(*a, "r", keep);
-    return p != nullptr && p->state == "up";
-  }));
-  std::vector<canemu_net_Event> events;
-  auto next_event = [&](canemu_net_Event& out) {
-    if (!pump({a.get()}, [&] { return !r.take(events).empty(); })) {
-      return false;
-    }
-    out = events.front();
-    events.erase(events.begin());
-    return true;
-  };
+  WelcomedPeer w;
+  ASSERT_NO_FATAL_FAILURE(w.welcome());
   canemu_net_Event e{};
-  r.request(request_of(canemu_net_REQ_HELLO));
-  ASSERT_TRUE(next_event(e));
-  EXPECT_EQ(e.kind, canemu_net_EV_WELCOME);
 
   // 1. A classic node given by its SJA1000 registers alone (the IDL's rule): opened.
   canemu_net_Request open = open_request(1);
@@ -583,49 +577,48 @@ TEST(DistributedStatus, ACanFdFrameForAClassicNodeIsRejectedAndRegistersAloneOpe
   open.n_prescaler = open.n_tseg1 = open.n_tseg2 = open.n_sjw = 0;
   ASSERT_EQ(open.btr0, 0x00);  // 500 kbit/s at 16 MHz, 87.5 %
   ASSERT_EQ(open.btr1, 0x1C);
-  r.request(open);
-  r.request(request_of(canemu_net_REQ_ONLINE, 1));
-  ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep)->hosted_nodes == 1; }));
-  EXPECT_TRUE(r.take(events).empty()) << "event kind " << int(events.front().kind);
+  w.r.request(open);
+  w.r.request(request_of(canemu_net_REQ_ONLINE, 1));
+  ASSERT_TRUE(pump({w.a.get()}, [&] { return peer(*w.a, "r", w.keep)->hosted_nodes == 1; }));
+  EXPECT_TRUE(w.r.take(w.events).empty()) << "event kind " << int(w.events.front().kind);
 
   // 2. A remote request with the FD flag, DLC 9 and 12 bytes for that classic node: rejected
   // as the LCM and DDS bridges reject it, with the reason, and the node's driver hears it was
   // not sent (EV_DROPPED); nothing goes on the wire.
-  const DistributedCounters before = Distributed::of(*a)->counters();
+  const DistributedCounters before = Distributed::of(*w.a)->counters();
   canemu_net_Request tx = request_of(canemu_net_REQ_TX, 1);
   tx.id = 0x123;
   tx.fd = true;
   tx.dlc = 9;
   tx.len = 12;
-  r.request(tx);
-  ASSERT_TRUE(next_event(e));
+  w.r.request(tx);
+  ASSERT_TRUE(w.next_event(e));
   EXPECT_EQ(e.kind, canemu_net_EV_DROPPED);
   EXPECT_EQ(e.id, 0x123u);
   EXPECT_TRUE(e.fd);
-  const DistributedCounters& after = Distributed::of(*a)->counters();
+  const DistributedCounters& after = Distributed::of(*w.a)->counters();
   EXPECT_EQ(after.rejected, before.rejected + 1);
   EXPECT_EQ(after.dropped, before.dropped);
   EXPECT_EQ(after.by_reason[static_cast<std::size_t>(NetDrop::fd_on_classic)], 1u);
   EXPECT_EQ(after.last_reason,
             "rejected a CAN FD frame (id 0x123, dlc 9) of daemon r's node ecu: can0 is a classic "
             "CAN bus");
-  a->scheduler().run_until(a->scheduler().now() + model::SimDuration(1'000'000));
-  EXPECT_EQ(a->bus(0).frames_on_bus(), 0u);
+  w.a->scheduler().run_until(w.a->scheduler().now() + model::SimDuration(1'000'000));
+  EXPECT_EQ(w.a->bus(0).frames_on_bus(), 0u);
 
   // 3. The same frame classic (DLC 8, 8 bytes) goes out: the node works.
   tx.fd = false;
   tx.dlc = 8;
   tx.len = 8;
-  const uint64_t received = Distributed::of(*a)->counters().requests_received;
-  r.request(tx);
-  ASSERT_TRUE(pump({a.get()}, [&] {
-    return Distributed::of(*a)->counters().requests_received == received + 1;
+  const uint64_t received = Distributed::of(*w.a)->counters().requests_received;
+  w.r.request(tx);
+  ASSERT_TRUE(pump({w.a.get()}, [&] {
+    return Distributed::of(*w.a)->counters().requests_received == received + 1;
   }));
-  a->scheduler().run_until(a->scheduler().now() + model::SimDuration(1'000'000));
-  EXPECT_EQ(a->bus(0).frames_on_bus(), 1u);
-  ASSERT_TRUE(next_event(e));
+  w.a->scheduler().run_until(w.a->scheduler().now() + model::SimDuration(1'000'000));
+  EXPECT_EQ(w.a->bus(0).frames_on_bus(), 1u);
+  ASSERT_TRUE(w.next_event(e));
   EXPECT_EQ(e.kind, canemu_net_EV_TX_DONE);
-  acker.stop();
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "canemu/daemon/config/config.hpp"
+#include "daemon_test_support.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -18,13 +19,11 @@ kind = "can"
 )";
 
 std::vector<std::string> errors_of(const std::string& text) {
-  auto c = parse_config(std::string(kBuses) + text, "t.toml");
-  EXPECT_FALSE(c.has_value());
-  return c ? std::vector<std::string>{} : c.error();
+  return daemon_test::config_errors(std::string(kBuses) + text);
 }
 
 TEST(LinConfig, ReadsACommanderAndAResponder) {
-  auto c = parse_config(std::string(kBuses) + R"(
+  const Config c = daemon_test::config_of(std::string(kBuses) + R"(
 [[lin_node]]
 name = "master"
 bus = "lin0"
@@ -61,11 +60,9 @@ checksum = "classic"
 id = 0x31
 data = [0, 0x22]
 event_triggered = 0x30
-)",
-                        "t.toml");
-  ASSERT_TRUE(c) << c.error().front();
-  ASSERT_EQ(c->lin_nodes.size(), 2u);
-  const LinNodeConfig& m = c->lin_nodes[0];
+)");
+  ASSERT_EQ(c.lin_nodes.size(), 2u);
+  const LinNodeConfig& m = c.lin_nodes[0];
   EXPECT_EQ(m.name, "master");
   EXPECT_EQ(m.bus, "lin0");
   EXPECT_EQ(m.bitrate, 0u);
@@ -88,15 +85,15 @@ event_triggered = 0x30
   EXPECT_EQ(slots[2].kind, LinSlotConfig::Kind::sporadic);
   EXPECT_EQ(slots[2].frames, (std::vector<uint8_t>{0x28, 0x29}));
   EXPECT_EQ(m.schedules[1].name, "diag");
-  const LinNodeConfig& d = c->lin_nodes[1];
+  const LinNodeConfig& d = c.lin_nodes[1];
   EXPECT_EQ(d.bitrate, 19000u);
   EXPECT_FALSE(d.powered);
   EXPECT_FALSE(d.responses[0].enhanced);
   EXPECT_EQ(d.responses[1].event_triggered, std::optional<uint8_t>(0x30));
-  EXPECT_NE(summary(*c).find("lin node master on lin0 (commander, schedule normal)"),
+  EXPECT_NE(summary(c).find("lin node master on lin0 (commander, schedule normal)"),
             std::string::npos)
-      << summary(*c);
-  EXPECT_NE(summary(*c).find("lin node door on lin0 (responder, switched off)"), std::string::npos);
+      << summary(c);
+  EXPECT_NE(summary(c).find("lin node door on lin0 (responder, switched off)"), std::string::npos);
 }
 
 TEST(LinConfig, MistakesAreNamedWithTheirPlace) {
@@ -196,7 +193,7 @@ bus = "nowhere"
 }
 
 TEST(LinConfig, NamesAreScopedByBusSoTwoClustersMayShareANodeName) {
-  auto c = parse_config(std::string(kBuses) + R"(
+  const Config c = daemon_test::config_of(std::string(kBuses) + R"(
 [[bus]]
 name = "lin1"
 kind = "lin"
@@ -209,12 +206,10 @@ bus = "lin0"
 [[lin_node]]
 name = "bcm"
 bus = "lin1"
-)",
-                        "t.toml");
-  ASSERT_TRUE(c.has_value()) << c.error().front();
-  ASSERT_EQ(c->lin_nodes.size(), 2u);
-  EXPECT_EQ(c->lin_nodes[0].bus, "lin0");
-  EXPECT_EQ(c->lin_nodes[1].bus, "lin1");
+)");
+  ASSERT_EQ(c.lin_nodes.size(), 2u);
+  EXPECT_EQ(c.lin_nodes[0].bus, "lin0");
+  EXPECT_EQ(c.lin_nodes[1].bus, "lin1");
 }
 
 }  // namespace

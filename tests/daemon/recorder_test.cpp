@@ -13,6 +13,7 @@
 #include "../support/lin_reference.hpp"
 #include "../support/many_buses.hpp"
 #include "../support/temp_dir.hpp"
+#include "daemon_test_support.hpp"
 
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
@@ -307,30 +308,27 @@ TEST(Recorder, TheLinRecordOfEachKindOfError) {
 
 TEST(RecorderConfig, ALinBusIsRecordedAsPcapOnly) {
   const std::string base = std::string(embedded_default_config());
-  auto cfg = parse_config(base + "[[recorder]]\nbus = \"lin0\"\npath = \"lin0.log\"\n",
-                          "/etc/canemu/canemu.toml");
-  ASSERT_TRUE(cfg) << cfg.error().front();
-  EXPECT_TRUE(cfg->recorders.at(0).pcap);
-  auto bad = parse_config(
-      "[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n"
-      "[[recorder]]\nbus = \"lin0\"\npath = \"lin0.log\"\nformat = \"candump\"\n",
-      "t.toml");
-  ASSERT_FALSE(bad);
-  EXPECT_EQ(bad.error(), (std::vector<std::string>{
-                             "t.toml:8:10: recorder[0].format: \"lin0\" is a LIN bus; a candump "
-                             "log holds CAN frames only, format = \"pcap\" records it "
-                             "(LINKTYPE_LIN)"}));
+  const Config cfg = daemon_test::config_of(
+      base + "[[recorder]]\nbus = \"lin0\"\npath = \"lin0.log\"\n", "/etc/canemu/canemu.toml");
+  EXPECT_TRUE(cfg.recorders.at(0).pcap);
+  EXPECT_EQ(
+      daemon_test::config_errors(
+          "[[bus]]\nname = \"lin0\"\nkind = \"lin\"\nbitrate = 19200\n"
+          "[[recorder]]\nbus = \"lin0\"\npath = \"lin0.log\"\nformat = \"candump\"\n"),
+      (std::vector<std::string>{"t.toml:8:10: recorder[0].format: \"lin0\" is a LIN bus; a candump "
+                                "log holds CAN frames only, format = \"pcap\" records it "
+                                "(LINKTYPE_LIN)"}));
 }
 
 TEST(RecorderConfig, ReadsEveryKeyAndNamesEveryMistake) {
   const std::string base = std::string(embedded_default_config());
-  auto cfg = parse_config(base +
-                              "[[recorder]]\nbus = \"can1\"\npath = \"logs/can1.pcap\"\n"
-                              "max_size = \"10MiB\"\nmax_files = 3\nerrors = false\n",
-                          "/etc/canemu/canemu.toml");
-  ASSERT_TRUE(cfg) << cfg.error().front();
-  ASSERT_EQ(cfg->recorders.size(), 1u);
-  const RecorderConfig& r = cfg->recorders[0];
+  const Config cfg =
+      daemon_test::config_of(base +
+                                 "[[recorder]]\nbus = \"can1\"\npath = \"logs/can1.pcap\"\n"
+                                 "max_size = \"10MiB\"\nmax_files = 3\nerrors = false\n",
+                             "/etc/canemu/canemu.toml");
+  ASSERT_EQ(cfg.recorders.size(), 1u);
+  const RecorderConfig& r = cfg.recorders[0];
   EXPECT_EQ(r.bus, "can1");
   EXPECT_EQ(r.path, "/etc/canemu/logs/can1.pcap");
   EXPECT_TRUE(r.pcap);
@@ -338,13 +336,11 @@ TEST(RecorderConfig, ReadsEveryKeyAndNamesEveryMistake) {
   EXPECT_EQ(r.max_files, 3u);
   EXPECT_FALSE(r.errors);
 
-  auto bad = parse_config(
+  const std::vector<std::string> errors = daemon_test::config_errors(
       "[[bus]]\nname = \"can0\"\n[[bus]]\nname = \"can1\"\n"
       "[[recorder]]\nbus = \"can9\"\npath = \"a.log\"\n"
       "format = \"asc\"\nmax_size = \"10MB\"\ncolour = 1\n"
-      "[[recorder]]\nbus = \"can0\"\npath = \"a.log\"\nmax_size = 5\n",
-      "t.toml");
-  ASSERT_FALSE(bad);
+      "[[recorder]]\nbus = \"can0\"\npath = \"a.log\"\nmax_size = 5\n");
   const std::vector<std::string> expected = {
       "t.toml:10:1: recorder[0].colour: unknown key (known here: bus, path, format, max_size, "
       "max_files, errors)",
@@ -355,7 +351,7 @@ TEST(RecorderConfig, ReadsEveryKeyAndNamesEveryMistake) {
       "t.toml:13:8: recorder[1].path: another recorder writes \"a.log\" already",
       "t.toml:14:12: recorder[1].max_size: 5 bytes is outside 1024..1099511627776 (or 0: no "
       "rotation)"};
-  EXPECT_EQ(bad.error(), expected);
+  EXPECT_EQ(errors, expected);
 }
 
 // A recorder on each of 33 buses: a page of 32, then the 33rd; a page beyond the end is empty.

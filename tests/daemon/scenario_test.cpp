@@ -3,14 +3,12 @@
 
 #include <gtest/gtest.h>
 
+#include "daemon_test_support.hpp"
+
 namespace canemu::daemon {
 namespace {
 
-std::vector<std::string> errors_of(std::string_view text) {
-  auto s = parse_scenario(text, "s.toml");
-  EXPECT_FALSE(s.has_value());
-  return s ? std::vector<std::string>{} : s.error();
-}
+using daemon_test::scenario_errors;
 
 TEST(Scenario, ReadsEveryKeyOfAFrameFault) {
   auto s = parse_scenario(R"([scenario]
@@ -48,7 +46,7 @@ probability = 0.5
 }
 
 TEST(Scenario, NamesEveryProblemWithItsLine) {
-  const auto e = errors_of(R"([[fault]]
+  const auto e = scenario_errors(R"([[fault]]
 at = "soon"
 bus = "can0"
 effect = "bit_error"
@@ -100,13 +98,13 @@ tec = 300
                 "s.toml:28:1: fault[5].rec: missing (an integer is required)",
             }));
   EXPECT_EQ(
-      errors_of("[scenario]\nname = \"empty\"\n"),
+      scenario_errors("[scenario]\nname = \"empty\"\n"),
       (std::vector<std::string>{"s.toml: no [[fault]] tables: a scenario needs at least one"}));
 }
 
 // Names a scenario gives are shown in `fault list`, `status` and the log: printable ASCII only.
 TEST(Scenario, NamesWithControlCharactersAreRefused) {
-  const auto e = errors_of(
+  const auto e = scenario_errors(
       "[scenario]\nname = \"evil\\u001b[31m\\nforged\"\n"
       "[[fault]]\nat = \"0s\"\nnode = \"a\\u0007b\"\neffect = \"node_off\"\n");
   ASSERT_EQ(e.size(), 2u);
@@ -142,7 +140,7 @@ duration = "10ms"
   EXPECT_EQ(f.data, (std::vector<uint8_t>{0xDE, 0xAD}));
   EXPECT_EQ(f.duration_ns, 10'000'000);
 
-  const auto e = errors_of(R"([[fault]]
+  const auto e = scenario_errors(R"([[fault]]
 at = "1s"
 node = "ixxat0:0"
 effect = "babble"
@@ -170,11 +168,11 @@ duration = "1ms"
 }
 
 TEST(Scenario, RandomErrorsNeedABitErrorRateInRange) {
-  EXPECT_EQ(errors_of("[[fault]]\nat = \"0s\"\nbus = \"can0\"\neffect = \"random_errors\"\n"),
+  EXPECT_EQ(scenario_errors("[[fault]]\nat = \"0s\"\nbus = \"can0\"\neffect = \"random_errors\"\n"),
             (std::vector<std::string>{
                 "s.toml:1:1: fault[0].bit_error_rate: missing (a number is required)"}));
-  EXPECT_EQ(errors_of("[[fault]]\nat = \"0s\"\nbus = \"can0\"\neffect = \"random_errors\"\n"
-                      "bit_error_rate = 0.5\n"),
+  EXPECT_EQ(scenario_errors("[[fault]]\nat = \"0s\"\nbus = \"can0\"\neffect = \"random_errors\"\n"
+                            "bit_error_rate = 0.5\n"),
             (std::vector<std::string>{
                 "s.toml:5:18: fault[0].bit_error_rate: must be above 0 and at most 0.1"}));
 }

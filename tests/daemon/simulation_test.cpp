@@ -7,6 +7,13 @@
 namespace canemu::daemon {
 namespace {
 
+// What reloading `fresh` refuses, when it applies nothing.
+std::vector<std::string> refused_whole(Simulation& sim, const Config& fresh) {
+  const ReloadReport r = sim.reload(fresh);
+  EXPECT_TRUE(r.applied.empty());
+  return r.refused;
+}
+
 Config default_config() {
   return *load_default_config();
 }
@@ -47,9 +54,7 @@ TEST(SimulationReload, ReportsWhatOnlyARestartChangesAndKeepsIt) {
   fresh.simulation.time.mode = TimeMode::stepped;
   fresh.buses[0].bitrate = 125'000;
   fresh.devices.clear();
-  const ReloadReport r = sim->reload(fresh);
-  EXPECT_TRUE(r.applied.empty());
-  EXPECT_EQ(r.refused,
+  EXPECT_EQ(refused_whole(*sim, fresh),
             (std::vector<std::string>{
                 "simulation.time: stays realtime (a restart changes it)",
                 "simulation.seed: stays 1 (a restart changes it)",
@@ -107,9 +112,7 @@ TEST(SimulationReload, BusesOfOtherDaemonsNeedDistributedFromTheStart) {
   remote.owner = "rig-a";
   fresh.buses.push_back(remote);
   fresh.buses[0].owner = "rig-a";
-  const ReloadReport r = sim->reload(fresh);
-  EXPECT_TRUE(r.applied.empty());
-  EXPECT_EQ(r.refused,
+  EXPECT_EQ(refused_whole(*sim, fresh),
             (std::vector<std::string>{
                 "distributed: stays as it was (a restart changes it)",
                 "bus can0: keeps its settings (can at 500000 bit/s; a restart changes them)",

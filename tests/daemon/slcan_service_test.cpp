@@ -16,6 +16,8 @@
 #include "canemu/daemon/config/scenario.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
+#include "daemon_test_support.hpp"
+#include "sorcus_service_support.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -141,42 +143,32 @@ TEST(SlcanNodes, StatusShowsTheInterfaceOnItsBus) {
 
 TEST(SlcanNodes, ABusOffFaultTakesTheSLinkOffAndItCannotBabble) {
   auto m = world();
-  auto s = parse_scenario(R"([[fault]]
+  daemon_test::apply_scenario(*m, R"([[fault]]
 at = "1ms"
 node = "sl0:0"
 effect = "bus_off"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  ASSERT_TRUE(m->scenarios().apply(*s, m->scheduler().now()));
+)");
   model::I82527& chip = m->devices().find_slcan_slot(1)->module().chip();
   m->scheduler().run_until(model::SimTime::from_ns(999'999));
   EXPECT_FALSE(chip.confinement().bus_off());
   m->scheduler().run_until(model::SimTime::from_ns(1'000'000));
   EXPECT_TRUE(chip.confinement().bus_off());
-  auto b = parse_scenario(R"([[fault]]
+  const auto refused = daemon_test::scenario_refusal(*m, R"([[fault]]
 at = "2ms"
 node = "sl0:0"
 effect = "babble"
 id = 0x100
 duration = "1ms"
 )",
-                          "b.toml");
-  ASSERT_TRUE(b) << b.error().front();
-  auto applied = m->scenarios().apply(*b, m->scheduler().now());
-  ASSERT_FALSE(applied);
-  EXPECT_NE(applied.error().front().find("sl0:0 is an SL-CANi S-Link"), std::string::npos)
-      << applied.error().front();
+                                                     "b.toml");
+  ASSERT_FALSE(refused.empty());
+  EXPECT_NE(refused.front().find("sl0:0 is an SL-CANi S-Link"), std::string::npos)
+      << refused.front();
 }
 
-struct Service {
-  std::unique_ptr<Simulation> sim = world();
-  SlcanService service{*sim};
-  std::vector<std::vector<uint8_t>> sent;
-  SlcanService::Send send = [this](const void* data, std::size_t size, std::span<const int>) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    sent.emplace_back(p, p + size);
-  };
+// The service with every packet it sends kept.
+struct Service : daemon_test::KeptPackets<SlcanService> {
+  Service() : KeptPackets(world()) {}
   ipc::SlcanReply call(SlcanSession& s, ipc::SlcanOp op, uint8_t slot = 1,
                        void (*fill)(ipc::SlcanRequest&) = nullptr) {
     auto m = ipc::make_message<ipc::SlcanRequest>(9);
@@ -185,8 +177,7 @@ struct Service {
     if (fill != nullptr) {
       fill(m);
     }
-    sent.clear();
-    service.handle(s, m, send);
+    handle(s, m);
     ipc::SlcanReply r{};
     EXPECT_EQ(sent.size(), 1u);
     if (sent.size() == 1 && sent[0].size() == sizeof r) {

@@ -12,6 +12,8 @@
 #include "canemu/daemon/config/scenario.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/daemon/world/status.hpp"
+#include "daemon_test_support.hpp"
+#include "sorcus_service_support.hpp"
 
 namespace canemu::daemon {
 namespace {
@@ -133,15 +135,12 @@ TEST(XcanNodes, StatusShowsBothInterfacesOnTheirBuses) {
 
 TEST(XcanNodes, ALineErrorReachesTheModulesTransceiverFromItsInstantToItsEnd) {
   auto m = world();
-  auto s = parse_scenario(R"([[fault]]
+  daemon_test::apply_scenario(*m, R"([[fault]]
 at = "2ms"
 until = "5ms"
 node = "xcan0:1"
 effect = "line_error"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  ASSERT_TRUE(m->scenarios().apply(*s, m->scheduler().now()));
+)");
   model::sorcus::XcanModule& x = m->devices().find_xcan("xcan0")->module();
   m->scheduler().run_until(model::SimTime::from_ns(1'999'999));
   EXPECT_EQ(XCAN_STATUS_FLAGS(x.bus_state(1)) & XCAN_LINE_ERROR, 0u);
@@ -160,14 +159,11 @@ TEST(XcanNodes, ABusOffFaultTakesTheInterfaceOffAtItsInstant) {
   send.usDevice = DEVICE_BUS_OUT;
   send.ulCanID = 0x100;
   ASSERT_TRUE(x.open_channel(send, false));  // the bus is on from the first object
-  auto s = parse_scenario(R"([[fault]]
+  daemon_test::apply_scenario(*m, R"([[fault]]
 at = "1ms"
 node = "xcan0:0"
 effect = "bus_off"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  ASSERT_TRUE(m->scenarios().apply(*s, m->scheduler().now()));
+)");
   m->scheduler().run_until(model::SimTime::from_ns(999'999));
   EXPECT_EQ(XCAN_STATUS_FLAGS(x.bus_state(0)), XCAN_BUS_ON);
   m->scheduler().run_until(model::SimTime::from_ns(1'000'000));
@@ -177,51 +173,32 @@ effect = "bus_off"
 
 TEST(XcanNodes, AnInterfaceCannotBabble) {
   auto m = world();
-  auto s = parse_scenario(R"([[fault]]
+  const auto refused = daemon_test::scenario_refusal(*m, R"([[fault]]
 at = "0s"
 node = "xcan0:0"
 effect = "babble"
 id = 0x100
 duration = "1ms"
-)",
-                          "s.toml");
-  ASSERT_TRUE(s) << s.error().front();
-  auto applied = m->scenarios().apply(*s, m->scheduler().now());
-  ASSERT_FALSE(applied);
-  EXPECT_NE(applied.error().front().find("xcan0:0 is an X-CAN-2i interface"), std::string::npos)
-      << applied.error().front();
+)");
+  ASSERT_FALSE(refused.empty());
+  EXPECT_NE(refused.front().find("xcan0:0 is an X-CAN-2i interface"), std::string::npos)
+      << refused.front();
 }
 
 // The service with every packet it sends kept.
-struct Service {
-  std::unique_ptr<Simulation> sim = world();
-  XcanService service{*sim};
-  std::vector<std::vector<uint8_t>> sent;
-  XcanService::Send send = [this](const void* data, std::size_t size, std::span<const int>) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    sent.emplace_back(p, p + size);
-  };
-  ipc::XcanReply call(XcanSession& s, ipc::XcanRequest m) {
-    sent.clear();
-    service.handle(s, m, send);
+struct Service : daemon_test::KeptPackets<XcanService> {
+  Service() : KeptPackets(world()) {}
+  ipc::XcanReply call(XcanSession& s, const ipc::XcanRequest& m) {
+    handle(s, m);
     EXPECT_EQ(sent.size(), 1u);
     return reply(0);
   }
-  ipc::XcanReply reply(std::size_t k) {
-    ipc::XcanReply r{};
-    EXPECT_EQ(sent.at(k).size(), sizeof r);
-    std::memcpy(&r, sent.at(k).data(), std::min(sizeof r, sent.at(k).size()));
-    return r;
-  }
+  ipc::XcanReply reply(std::size_t k) const { return packet<ipc::XcanReply>(k); }
   // The ErrorReply code of the one packet sent.
   uint32_t refused(XcanSession& s, const ipc::XcanRequest& m) {
-    sent.clear();
-    service.handle(s, m, send);
+    handle(s, m);
     EXPECT_EQ(sent.size(), 1u);
-    ipc::ErrorReply e{};
-    EXPECT_EQ(sent.at(0).size(), sizeof e);
-    std::memcpy(&e, sent.at(0).data(), std::min(sizeof e, sent.at(0).size()));
-    return e.code;
+    return packet<ipc::ErrorReply>(0).code;
   }
 };
 

@@ -45,6 +45,8 @@ Command add_fault(CLI::App& app, const std::string& socket);
 Command add_time(CLI::App& app, const std::string& socket);
 Command add_eeprom(CLI::App& app, const std::string& socket);
 Command add_lin(CLI::App& app, const std::string& socket);
+Command add_restbus(CLI::App& app, const std::string& socket);
+Command add_signal(CLI::App& app, const std::string& socket);
 Command add_web(CLI::App& app, const std::string& socket);
 Command add_calc(CLI::App& app);
 

@@ -22,12 +22,23 @@ int main(int argc, char** argv) {
   app.add_option("--wait", g_connect_wait_s,
                  "seconds to wait for canemud to listen (default 0: fail at once)")
       ->check(CLI::Range(0.0, 3600.0));
-  const std::vector<Command> commands = {
-      add_status(app, socket), add_metrics(app, socket), add_timeline(app, socket),
-      add_plot(app, socket),   add_send(app, socket),    add_gen(app, socket),
-      add_dump(app, socket),   add_record(app, socket),  add_bridge(app, socket),
-      add_fault(app, socket),  add_time(app, socket),    add_eeprom(app, socket),
-      add_lin(app, socket),    add_web(app, socket),     add_calc(app)};
+  const std::vector<Command> commands = {add_status(app, socket),
+                                         add_metrics(app, socket),
+                                         add_timeline(app, socket),
+                                         add_plot(app, socket),
+                                         add_send(app, socket),
+                                         add_gen(app, socket),
+                                         add_dump(app, socket),
+                                         add_record(app, socket),
+                                         add_bridge(app, socket),
+                                         add_fault(app, socket),
+                                         add_time(app, socket),
+                                         add_eeprom(app, socket),
+                                         add_lin(app, socket),
+                                         add_restbus(app, socket),
+                                         add_signal(app, socket),
+                                         add_web(app, socket),
+                                         add_calc(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

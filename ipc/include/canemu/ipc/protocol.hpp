@@ -13,6 +13,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "canemu/ipc/can_node_messages.hpp"
 #include "canemu/ipc/capture_messages.hpp"
 #include "canemu/ipc/distributed_messages.hpp"
 #include "canemu/ipc/lin_node_messages.hpp"
@@ -27,6 +28,10 @@ namespace canemu::ipc {
 // The message type of each struct (and, in protocol.cpp, the size of each type).
 template <class T>
 inline constexpr MsgType type_of_v = MsgType{};
+template <>
+inline constexpr MsgType type_of_v<CanNodeRequest> = MsgType::can_node_request;
+template <>
+inline constexpr MsgType type_of_v<CanNodeReply> = MsgType::can_node_reply;
 template <>
 inline constexpr MsgType type_of_v<LinNodeRequest> = MsgType::lin_node_request;
 template <>

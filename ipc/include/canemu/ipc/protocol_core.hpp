@@ -21,7 +21,7 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 6;
+inline constexpr uint16_t kProtocolVersion = 7;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 // A fault scenario's name: up to 63 bytes and the terminating zero.
@@ -86,6 +86,8 @@ enum class MsgType : uint16_t {
   slcan_event = 102,  // unsolicited, request_id 0
   lin_node_request = 110,
   lin_node_reply = 111,
+  can_node_request = 112,
+  can_node_reply = 113,
   peer_list_request = 120,
   peer_list_reply = 121,
   timeline_request = 160,

@@ -39,8 +39,8 @@ struct CanSignalConfig {
   SignalLayout layout;
   std::optional<double> minimum;  // physical range that `canemu signal set` checks
   std::optional<double> maximum;
-  double initial = 0.0;                  // physical start value (GenSigStartValue)
-  std::optional<double> inactive;        // physical value meaning "not active" (cyclic_if_active)
+  double initial = 0.0;            // physical start value (GenSigStartValue)
+  std::optional<double> inactive;  // physical value meaning "not active" (cyclic_if_active)
   std::string unit;
   bool multiplexer = false;               // the message's multiplexor
   std::vector<uint64_t> multiplexer_ids;  // present only while the multiplexor has one of these
@@ -60,8 +60,8 @@ struct CanMessageConfig {
   std::string name;
   uint32_t id = 0;
   bool extended = false;
-  bool fd = false;   // a CAN FD frame (needs a CAN FD bus)
-  bool brs = false;  // its data phase at the data bit rate
+  bool fd = false;      // a CAN FD frame (needs a CAN FD bus)
+  bool brs = false;     // its data phase at the data bit rate
   uint32_t length = 8;  // payload bytes: 0..8, or a CAN FD length up to 64
   Send send = Send::cyclic;
   int64_t cycle_ns = 0;  // cyclic kinds: the period, 1 ms .. 1 hour

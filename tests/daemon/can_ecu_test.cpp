@@ -520,6 +520,18 @@ TEST(SimulationCanNodes, AreListedInStatusByNameAndLoadedReplacedAndRemovedAtRun
                 .error()
                 .front(),
             "bad.toml:3:7: can_node[0].bus: no bus is named \"can1\"");
+  // Another node of the bus sends that identifier already.
+  std::string clash(kLoaded);
+  clash.replace(clash.find("MOTOR\""), 6, "PUMP\"");
+  clash.replace(clash.find("MOTOR_STATUS"), 12, "PUMP_STATUS");
+  clash.replace(clash.find("id = 0x190"), 10, "id = 0x100");
+  EXPECT_EQ(w.sim->load_can_nodes(clash, "clash.toml").error(),
+            std::vector<std::string>{"clash.toml:2: can_node PUMP: node HIGH sends identifier "
+                                     "0x100 on \"can0\" already (two senders of one identifier "
+                                     "collide on the wire)"});
+  EXPECT_EQ(*w.sim->can_message("can0", "HIGH_PRIO"), &w.ecu("HIGH"));
+  EXPECT_EQ(w.sim->can_message("can0", "NONE").error(),
+            "no simulated CAN node sends a message named \"NONE\" on can0");
   EXPECT_EQ(w.sim->remove_can_node("can1/MOTOR").error(),
             "no simulated CAN node named \"can1/MOTOR\"");
   ASSERT_TRUE(w.sim->remove_can_node("MOTOR"));

@@ -297,6 +297,24 @@ TEST(CanNodeConfig, MultiplexedSignalsShareBitsOnlyUnderDifferentMultiplexorValu
             "(can_node[0].message[0].signal[1]) in the same frames");
 }
 
+TEST(CanNodeConfig, ABussMessagesHaveOneSenderEach) {
+  const std::string other = "[[can_node]]\nname = \"O\"\nbus = \"can0\"\n[[can_node.message]]\n";
+  EXPECT_EQ(
+      errors_of(one(kMessage) + other + "name = \"M\"\nid = 0x11\nlength = 8\ncycle = \"1s\"\n")
+          .front(),
+      "t.toml:25:8: can_node[1].message[0].name: node N sends a message named \"M\" on "
+      "\"can0\" already");
+  EXPECT_EQ(
+      errors_of(one(kMessage) + other + "name = \"M2\"\nid = 16\nlength = 8\ncycle = \"1s\"\n")
+          .front(),
+      "t.toml:26:6: can_node[1].message[0].id: node N sends identifier 0x10 on \"can0\" "
+      "already (two senders of one identifier collide on the wire)");
+  // On another bus they are other messages.
+  std::string fd = other + "name = \"M\"\nid = 0x10\nlength = 8\ncycle = \"1s\"\n";
+  fd.replace(fd.find("can0"), 4, "fd0");
+  EXPECT_TRUE(parse_config(std::string(kBuses) + one(kMessage) + fd, "t.toml").has_value());
+}
+
 TEST(CanNodeConfig, RunTimeLoadsAreCheckedAgainstTheBuses) {
   auto c = parse_config(kBuses, "t.toml");
   ASSERT_TRUE(c);

@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 
 #include <fmt/format.h>
@@ -22,7 +23,7 @@ constexpr int64_t kMinCycleNs = 1'000'000;          // 1 ms
 constexpr int64_t kMaxCycleNs = 3'600'000'000'000;  // 1 h
 constexpr int64_t kMaxDelayNs = kMaxCycleNs;        // 1 h
 constexpr std::size_t kMaxNodeName = 28;            // fits the status's node names
-constexpr std::size_t kMaxSignalName = 128;         // message and signal names
+constexpr std::size_t kMaxSignalName = 63;  // message and signal names: the protocol's 64 bytes
 
 // Payload bit positions (byte * 8 + bit, bit 0 the least significant) of a 64-byte payload.
 using Bits = std::bitset<model::kMaxFdLength * 8>;
@@ -58,7 +59,7 @@ bool node_name_ok(std::string_view s) {
   });
 }
 
-// A message's or signal's name: a DBC identifier of 1 to 128 characters.
+// A message's or signal's name: a DBC identifier of 1 to 63 characters.
 bool identifier_ok(std::string_view s) {
   if (s.empty() || s.size() > kMaxSignalName || std::isdigit(static_cast<unsigned char>(s[0]))) {
     return false;
@@ -68,7 +69,7 @@ bool identifier_ok(std::string_view s) {
   });
 }
 constexpr std::string_view kIdentifierRule =
-    "must be 1 to 128 letters, digits and '_', not starting with a digit (a DBC name)";
+    "must be 1 to 63 letters, digits and '_', not starting with a digit (a DBC name)";
 
 // The payload bits the signal covers, or nothing if one of them lies past `bytes` bytes.
 // Little endian: `start` is the least significant bit, the signal goes up through the bytes.
@@ -443,6 +444,9 @@ void read_message(Checker& c, const toml::table& t, const std::string& path, con
 
 void read_can_nodes(Checker& c, const toml::table& root, Config& cfg) {
   std::set<std::string> names;
+  // Per bus: each message's name and identifier, and which node sends it.
+  std::map<std::string, std::string> message_names;
+  std::map<std::pair<std::string, uint64_t>, std::string> message_ids;
   c.for_each_table(root, "can_node", [&](const toml::table& t, const std::string& path) {
     c.only_keys(t, path, {"name", "bus", "powered", "message"});
     CanNodeConfig node;
@@ -477,7 +481,29 @@ void read_can_nodes(Checker& c, const toml::table& root, Config& cfg) {
     }
     node.powered = boolean(c, t, path, "powered").value_or(true);
     c.each_nested(t, path, "message", [&](const toml::table& m, const std::string& p) {
+      const std::size_t before = node.messages.size();
       read_message(c, m, p, bus, node);
+      if (node.messages.size() == before || node.name.empty() || m.get("name") == nullptr ||
+          m.get("id") == nullptr) {
+        return;
+      }
+      // A bus's messages are found by name (`canemu signal set BUS MESSAGE.SIGNAL`), and two
+      // nodes sending one identifier would collide on the wire.
+      const CanMessageConfig& msg = node.messages.back();
+      const auto by_name = message_names.emplace(node.bus + "/" + msg.name, node.name);
+      if (!by_name.second && by_name.first->second != node.name) {
+        c.error(*m.get("name"), p + ".name",
+                fmt::format("node {} sends a message named \"{}\" on \"{}\" already",
+                            by_name.first->second, msg.name, node.bus));
+      }
+      const uint64_t key = (uint64_t{msg.extended} << 32) | msg.id;
+      const auto by_id = message_ids.emplace(std::make_pair(node.bus, key), node.name);
+      if (!by_id.second && by_id.first->second != node.name) {
+        c.error(*m.get("id"), p + ".id",
+                fmt::format("node {} sends identifier {:#x} on \"{}\" already (two senders "
+                            "of one identifier collide on the wire)",
+                            by_id.first->second, msg.id, node.bus));
+      }
     });
     if (t.get("message") == nullptr) {
       c.error(t.source(), path + ".message",

@@ -57,6 +57,35 @@ tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::loa
       errors.push_back(fmt::format("{}:{}: {}", source, n.line, ok.error().text));
     }
   }
+  // A bus's message names and identifiers stay unique: against the nodes this load keeps.
+  for (const SimulatedCanNode& old : can_nodes_) {
+    const std::string& bus = config_.buses[old.bus].name;
+    const bool replaced = std::any_of(
+        configs->begin(), configs->end(),
+        [&](const CanNodeConfig& c) { return c.bus == bus && c.name == old.ecu->name(); });
+    if (replaced) {
+      continue;
+    }
+    for (const CanNodeConfig& n : *configs) {
+      if (n.bus != bus) {
+        continue;
+      }
+      for (const CanMessageConfig& m : n.messages) {
+        for (const CanMessageConfig& o : old.ecu->config().messages) {
+          if (o.name == m.name) {
+            errors.push_back(fmt::format(
+                "{}:{}: can_node {}: node {} sends a message named \"{}\" on \"{}\" already",
+                source, n.line, n.name, old.ecu->name(), m.name, bus));
+          } else if (o.id == m.id && o.extended == m.extended) {
+            errors.push_back(fmt::format(
+                "{}:{}: can_node {}: node {} sends identifier {:#x} on \"{}\" already (two "
+                "senders of one identifier collide on the wire)",
+                source, n.line, n.name, old.ecu->name(), m.id, bus));
+          }
+        }
+      }
+    }
+  }
   if (!errors.empty()) {
     return tl::unexpected(errors);
   }
@@ -104,6 +133,26 @@ Result<restbus::CanEcu*> Simulation::can_node(std::string_view name) {
     return tl::unexpected(found.error());
   }
   return (*found)->ecu.get();
+}
+
+Result<restbus::CanEcu*> Simulation::can_message(std::string_view bus, std::string_view message) {
+  const auto index = bus_index(bus);
+  if (!index) {
+    return fail(Errc::not_found, fmt::format("no bus is named \"{}\"", bus));
+  }
+  for (SimulatedCanNode& n : can_nodes_) {
+    if (n.bus != *index) {
+      continue;
+    }
+    for (const CanMessageConfig& m : n.ecu->config().messages) {
+      if (m.name == message) {
+        return n.ecu.get();
+      }
+    }
+  }
+  return fail(
+      Errc::not_found,
+      fmt::format("no simulated CAN node sends a message named \"{}\" on {}", message, bus));
 }
 
 Result<> Simulation::remove_can_node(std::string_view name) {

@@ -114,6 +114,9 @@ class Simulation {
       std::string_view text, const std::string& source);
   // The node `name` ("BUS/NAME", or a NAME only one bus has), or the reason there is none.
   Result<restbus::CanEcu*> can_node(std::string_view name);
+  // The node that sends message `message` on bus `bus` (a bus's message names are unique), or
+  // the reason there is none.
+  Result<restbus::CanEcu*> can_message(std::string_view bus, std::string_view message);
   // Removes node `name` (its node leaves the bus); the reason when it cannot.
   Result<> remove_can_node(std::string_view name);
 

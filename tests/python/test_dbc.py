@@ -222,6 +222,23 @@ def test_send_types_delays_fd_floats_and_the_first_sender_not_real(bench):
     assert (fd["fd"], fd["brs"]) == (True, True)
 
 
+def test_send_type_names_of_other_spellings_mean_the_same(bench):
+    """Vector's other names for the same send types, in any case; the empty name as none."""
+    spelled = bench.parent / "spelled.dbc"
+    spelled.write_text(BENCH.replace(
+        '"Cyclic","Spontaneous","CyclicIfActive","CyclicAndSpontaneous","NoMsgSendType"',
+        '"CYCLIC","Event","IfActive","CyclicAndSpontan","vector_leerstring"').replace(
+        '"GenMsgSendType" "NoMsgSendType"', '"GenMsgSendType" "vector_leerstring"'))
+    sends = {m["name"]: m["send"] for node in tomllib.loads(
+        dbc.tables_from_dbc(str(spelled), "fd0"))["can_node"] for m in node.get("message", [])}
+    assert sends == {"ENG_FD": "cyclic_and_on_change", "BCM_LIGHTS": "cyclic_if_active",
+                     "BCM_DOORS": "on_change", "SHARED": "cyclic"}
+    spelled.write_text(BENCH.replace('"Spontaneous"', '"OnChange"'))
+    [doors] = [m for m in tomllib.loads(dbc.tables_from_dbc(str(spelled), "fd0"))["can_node"][1][
+        "message"] if m["name"] == "BCM_DOORS"]
+    assert doors["send"] == "on_change" and "cycle" not in doors
+
+
 def _reference_encode(message: dict, raws: dict) -> bytes:
     """A frame's bytes from raw values by the table keys alone: little endian from `start` (the
     least significant bit) upwards; big endian from `start` (the most significant bit) down

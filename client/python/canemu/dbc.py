@@ -32,8 +32,8 @@ Decisions (docs/restbus.md, "DBC import"), where the DBC leaves a choice open:
 - A CAN FD message (``VFrameFormat`` ``StandardCAN_FD``/``ExtendedCAN_FD``) switches its bit
   rate (``brs``) unless a ``CANFD_BRS`` attribute says ``"0"``.
 - Simple multiplexing is carried (one multiplexor; ``SG_MUL_VAL_`` ranges become
-  ``multiplexer_ids``); a message with several multiplexors or a multiplexed multiplexor
-  (extended multiplexing) is refused.
+  ``multiplexer_ids``); a simulated message with several multiplexors or a multiplexed
+  multiplexor (extended multiplexing) is refused.
 - ``--counter MSG.SIG``: an integer signal, not the multiplexor. ``--checksum
   MSG.SIG=ALGO[:DATA_ID]``: an 8-bit integer signal in one whole byte; the data ID (0..65535,
   default 0) only for ``crc8_sae_j1850``.

@@ -26,6 +26,7 @@ Decisions (docs/restbus.md, "DBC import"), where the DBC leaves a choice open:
   offset). Without one (the signal's attribute, else the attribute definition's default) the
   raw start value is 0, so ``initial`` is the offset. ``GenSigInactiveValue`` (raw, likewise)
   is written as a physical ``inactive`` on the signals of ``cyclic_if_active`` messages only.
+  A start value outside ``minimum``..``maximum`` (an "Init" code) is written as it is.
 - ``minimum``/``maximum`` are written when the DBC gives a range (not ``[0|0]``). A float
   signal (``SIG_VALTYPE_`` 1 or 2) is ``signed = false`` whatever its ``+``/``-``: IEEE 754
   carries its own sign.
@@ -123,8 +124,14 @@ def _send(message: Any, definitions: Mapping[str, Any]) -> Tuple[str, Optional[s
     return send, _ms(cycle_ms, f"message {name}: GenMsgCycleTime")
 
 
-def _physical(signal: Any, raw: Any) -> float:
-    return float(raw) * float(signal.scale) + float(signal.offset)
+def _physical(signal: Any, message: str, raw: Any, attribute: str) -> float:
+    """The physical value of a raw attribute value of `signal`."""
+    try:
+        number = float(raw)
+    except (TypeError, ValueError):
+        raise DbcError(f"signal {message}.{signal.name}: {attribute} {raw!r} is not a "
+                       f"number") from None
+    return number * float(signal.scale) + float(signal.offset)
 
 
 def _signal_type(signal: Any, message: str) -> str:
@@ -154,11 +161,13 @@ def _signal(signal: Any, message: Any, send: str, definitions: Mapping[str, Any]
     raw = signal.raw_initial
     if raw is None:
         raw = _attribute(signal, "GenSigStartValue", definitions)
-    out["initial"] = _physical(signal, raw if raw is not None else 0)
+    out["initial"] = _physical(signal, message.name, raw if raw is not None else 0,
+                               "GenSigStartValue")
     if send == "cyclic_if_active":
         inactive = _attribute(signal, "GenSigInactiveValue", definitions)
         if inactive is not None:
-            out["inactive"] = _physical(signal, inactive)
+            out["inactive"] = _physical(signal, message.name, inactive,
+                                        "GenSigInactiveValue")
     if signal.unit:
         out["unit"] = signal.unit
     if signal.is_multiplexer:

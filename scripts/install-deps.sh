@@ -38,11 +38,12 @@ fi
 # Debian's interpreter, not whatever python3 is first on PATH, so the venv is the same everywhere.
 # .venv: PyPI's pinned packages (requirements.txt) and canemu's python-can interface, editable.
 # .venv-debian: Debian's python3-can (4.1) and pytest, with the same interface on top, and the
-#   LDF import's packages (requirements-lin.txt).
+#   LDF import's packages (requirements-lin.txt) and the DBC import's (requirements-dbc.txt, without
+#   dependencies: cantools would replace Debian's python-can with PyPI's).
 py=/usr/bin/python3
 # Playwright (canemu web's browser test) drives Debian's chromium: it never downloads a browser.
 export PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1
-want=$(cat requirements.txt requirements-lin.txt client/python/pyproject.toml | sha256sum | cut -d' ' -f1)
+want=$(cat requirements.txt requirements-lin.txt requirements-dbc.txt client/python/pyproject.toml | sha256sum | cut -d' ' -f1)
 make_venv() {  # DIR, then venv options
   local dir=$1
   shift
@@ -57,6 +58,7 @@ make_venv() {  # DIR, then venv options
     "$dir/bin/pip" install --quiet --disable-pip-version-check -r requirements.txt
   else
     "$dir/bin/pip" install --quiet --disable-pip-version-check -r requirements-lin.txt
+    "$dir/bin/pip" install --quiet --disable-pip-version-check --no-deps -r requirements-dbc.txt
   fi
   "$dir/bin/pip" install --quiet --disable-pip-version-check --no-deps -e client/python
   echo "$want" > "$stamp"

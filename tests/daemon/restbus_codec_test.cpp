@@ -19,15 +19,13 @@ using Type = SignalLayout::Type;
 
 SignalLayout layout(uint32_t start, uint32_t length, Order order, bool is_signed = false,
                     double scale = 1, double offset = 0, Type type = Type::integer) {
-  SignalLayout s;
-  s.start = start;
-  s.length = length;
-  s.byte_order = order;
-  s.is_signed = is_signed;
-  s.scale = scale;
-  s.offset = offset;
-  s.type = type;
-  return s;
+  return SignalLayout{.start = start,
+                      .length = length,
+                      .byte_order = order,
+                      .type = type,
+                      .is_signed = is_signed,
+                      .scale = scale,
+                      .offset = offset};
 }
 
 struct Placed {

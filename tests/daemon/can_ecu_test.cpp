@@ -327,6 +327,21 @@ TEST(CanEcu, OnChangeMessagesGoAtOnceAndOnlyWhenTheirBitsChange) {
   EXPECT_EQ(w.ecu("DOOR").counters("DOOR_STATE")->last_queued, ms(210));
 }
 
+TEST(CanEcu, AnOnChangeMessageChangedBeforeItsDelayGoesAtTheDelay) {
+  std::string delayed(kKinds);
+  delayed.replace(delayed.find("send = \"on_change\""), 18,
+                  "send = \"on_change\"\ndelay = \"20ms\"");
+  World w(delayed);
+  restbus::CanEcu& ecu = w.ecu("DOOR");
+  w.run_until(ms(5));
+  ASSERT_TRUE(ecu.set_signal("DOOR_EVENT", "open", 1));
+  w.run_until(ms(30));
+  ASSERT_TRUE(ecu.set_signal("DOOR_EVENT", "open", 0));
+  w.run_until(ms(40));
+  EXPECT_EQ(w.starts(0x300), (std::vector<SimTime>{ms(20), ms(30)}));
+  EXPECT_EQ(w.payloads(0x300), (std::vector<std::vector<uint8_t>>{{1}, {0}}));
+}
+
 TEST(CanEcu, CyclicIfActiveSendsOnItsCycleOnlyWhileASignalIsNotInactive) {
   World w(kKinds);
   restbus::CanEcu& ecu = w.ecu("DOOR");

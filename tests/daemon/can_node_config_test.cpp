@@ -138,8 +138,11 @@ bus = "can0"
 [[can_node.message]]
 name = "M"
 id = 1
-length = 0
 cycle = "1ms"
+[[can_node.message.signal]]
+name = "S"
+start = 0
+length = 1
 )",
                         "t.toml");
   ASSERT_TRUE(c.has_value()) << c.error().front();
@@ -149,7 +152,8 @@ cycle = "1ms"
   EXPECT_FALSE(m.extended || m.fd || m.brs);
   EXPECT_EQ(m.send, CanMessageConfig::Send::cyclic);
   EXPECT_EQ(m.delay_ns, 0);
-  EXPECT_TRUE(m.signals.empty());
+  EXPECT_EQ(m.length, 8u);
+  EXPECT_EQ(m.signals[0].layout.byte_order, SignalLayout::ByteOrder::little_endian);
 }
 
 // A node on can0 with one message whose keys are `message` and whose one signal is `signal`.
@@ -169,6 +173,19 @@ std::string sig(std::string_view keys) {
   return std::string("name = \"S\"\nbyte_order = \"little_endian\"\n") + std::string(keys);
 }
 
+TEST(CanNodeConfig, TakesAStartValueOutsideTheRangeAndANodeWithoutMessages) {
+  // DBC files start signals at codes outside their range ("init"); a node that sends nothing
+  // stands for an ECU that only acknowledges.
+  auto c = parse_config(std::string(kBuses) +
+                            one(kMessage, sig("start = 0\nlength = 8\nminimum = "
+                                              "0\nmaximum = 10\ninitial = 11\n")) +
+                            "[[can_node]]\nname = \"Q\"\nbus = \"can0\"\n",
+                        "t.toml");
+  ASSERT_TRUE(c.has_value()) << c.error().front();
+  EXPECT_EQ(c->can_nodes[0].messages[0].signals[0].initial, 11.0);
+  EXPECT_TRUE(c->can_nodes[1].messages.empty());
+}
+
 struct Case {
   std::string text;
   std::string error;
@@ -185,9 +202,6 @@ TEST(CanNodeConfig, RefusesEachMistakeWithItsPlace) {
            std::string(kMessage),
        "t.toml:14:8: can_node[0].name: must be 1 to 28 letters, digits, '_' and '-' (a DBC node "
        "name)"},
-      {"[[can_node]]\nname = \"N\"\nbus = \"can0\"\n",
-       "t.toml:13:1: can_node[0].message: missing: a CAN node sends 1 or more messages "
-       "([[can_node.message]])"},
       {one(kMessage) + one(kMessage),
        "t.toml:22:8: can_node[1].name: a CAN node named \"N\" exists on \"can0\" already"},
       {one(std::string(kMessage) + "speed = 1\n"),
@@ -250,9 +264,6 @@ TEST(CanNodeConfig, RefusesEachMistakeWithItsPlace) {
       {one(kMessage, sig("start = 0\nlength = 8\nchecksum = \"xor8\"\ndata_id = 3\n")),
        "t.toml:27:11: can_node[0].message[0].signal[0].data_id: only a checksum = "
        "\"crc8_sae_j1850\" signal has a data ID"},
-      {one(kMessage, sig("start = 0\nlength = 8\nminimum = 0\nmaximum = 10\ninitial = 11\n")),
-       "t.toml:28:11: can_node[0].message[0].signal[0].initial: 11 is outside the signal's "
-       "range 0..10 (minimum..maximum)"},
       {one(kMessage, sig("start = 0\nlength = 8\ninitial = 256\n")),
        "t.toml:26:11: can_node[0].message[0].signal[0].initial: 256 does not fit the signal's 8 "
        "bits"},

@@ -111,15 +111,12 @@ std::string number_text(double v) {
   return fmt::format("{}", v);
 }
 
-// A physical value key (`initial`, `inactive`): inside minimum..maximum when the signal has
-// them, else inside what the bits hold.
+// A physical value key (`initial`, `inactive`): inside what the bits hold. Not checked against
+// minimum..maximum: DBC files often start a signal at a code outside its range ("init", "not
+// available"); the range is what values set at run time are checked against.
 void check_value(Checker& c, const toml::table& t, const std::string& path, std::string_view key,
                  const CanSignalConfig& s, double v) {
-  if (s.minimum && (v < *s.minimum || v > *s.maximum)) {
-    c.error(*t.get(key), Checker::key(path, key),
-            fmt::format("{} is outside the signal's range {}..{} (minimum..maximum)",
-                        number_text(v), number_text(*s.minimum), number_text(*s.maximum)));
-  } else if (!holds(s.layout, v)) {
+  if (!holds(s.layout, v)) {
     c.error(*t.get(key), Checker::key(path, key),
             fmt::format("{} does not fit the signal's {} bits", number_text(v), s.layout.length));
   }
@@ -192,9 +189,9 @@ std::optional<CanSignalConfig> read_signal(Checker& c, const toml::table& t,
       ok = false;
     }
   }
-  if (auto order = c.choice(t, path, "byte_order", true, kOrders, "byte order")) {
+  if (auto order = c.choice(t, path, "byte_order", false, kOrders, "byte order")) {
     l.byte_order = *order;
-  } else {
+  } else if (t.get("byte_order") != nullptr) {
     ok = false;
   }
   if (auto sign = boolean(c, t, path, "signed")) {
@@ -346,7 +343,9 @@ void read_message(Checker& c, const toml::table& t, const std::string& path, con
     c.error(*t.get("brs"), path + ".brs", "only a CAN FD message (fd = true) switches bit rate");
   }
   bool length_ok = false;
-  if (auto length = c.integer(t, path, "length", true, 0, model::kMaxFdLength)) {
+  if (t.get("length") == nullptr) {
+    length_ok = true;  // 8 bytes
+  } else if (auto length = c.integer(t, path, "length", true, 0, model::kMaxFdLength)) {
     length_ok = model::length_to_dlc(static_cast<std::size_t>(*length), m.fd).has_value();
     if (!length_ok) {
       c.error(
@@ -373,10 +372,6 @@ void read_message(Checker& c, const toml::table& t, const std::string& path, con
   }
   if (auto delay = duration(c, t, path, "delay", 0)) {
     m.delay_ns = *delay;
-    if (!cyclic) {
-      c.error(*t.get("delay"), path + ".delay",
-              "an on_change message has no delay (it is sent when a signal changes)");
-    }
   }
   std::vector<std::pair<Bits, std::string>> placed;  // each signal's bits, its path
   c.each_nested(t, path, "signal", [&](const toml::table& st, const std::string& p) {
@@ -505,10 +500,6 @@ void read_can_nodes(Checker& c, const toml::table& root, Config& cfg) {
                             by_id.first->second, msg.id, node.bus));
       }
     });
-    if (t.get("message") == nullptr) {
-      c.error(t.source(), path + ".message",
-              "missing: a CAN node sends 1 or more messages ([[can_node.message]])");
-    }
     cfg.can_nodes.push_back(std::move(node));
   });
 }

@@ -292,8 +292,19 @@ Result<> CanEcu::set_signal(std::string_view message, std::string_view signal, d
     return {};
   }
   m.raw[*k] = *raw;
-  if (on_change(*m.config) && powered_ && !node_.controller().confinement().bus_off()) {
+  if (!on_change(*m.config) || !powered_ || node_.controller().confinement().bus_off()) {
+    return {};
+  }
+  // Nothing is sent before the message's delay: a change before it goes at the delay (the
+  // first cyclic frame carries it anyway).
+  const SimTime first = started_ + SimDuration(m.config->delay_ns);
+  if (node_.now() >= first) {
     queue(m);
+  } else if (m.config->send == CanMessageConfig::Send::on_change && !m.next) {
+    m.next = node_.scheduler().schedule_at(first, [this, i = *i](SimTime) {
+      messages_[i].next.reset();
+      queue(messages_[i]);
+    });
   }
   return {};
 }

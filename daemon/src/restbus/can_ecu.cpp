@@ -334,6 +334,14 @@ Result<MessageCounters> CanEcu::counters(std::string_view message) const {
   return messages_[*i].counters;
 }
 
+uint64_t CanEcu::frames_sent() const {
+  uint64_t n = 0;
+  for (const Message& m : messages_) {
+    n += m.counters.sent;
+  }
+  return n;
+}
+
 Result<std::vector<uint8_t>> CanEcu::payload(std::string_view message) const {
   auto i = find(message);
   if (!i) {

@@ -63,6 +63,8 @@ class CanEcu : private model::ControllerEvents {
   bool powered() const { return powered_; }
 
   Result<MessageCounters> counters(std::string_view message) const;
+  // Frames of all its messages sent whole.
+  uint64_t frames_sent() const;
   // The payload the message's next frame would carry (counters and checksum as they would be).
   Result<std::vector<uint8_t>> payload(std::string_view message) const;
 

@@ -20,8 +20,7 @@ namespace canemu::daemon::detail {
 namespace {
 
 constexpr int64_t kMinCycleNs = 1'000'000;          // 1 ms
-constexpr int64_t kMaxCycleNs = 3'600'000'000'000;  // 1 h
-constexpr int64_t kMaxDelayNs = kMaxCycleNs;        // 1 h
+constexpr int64_t kMaxCycleNs = 3'600'000'000'000;  // 1 h: the longest cycle and delay
 constexpr std::size_t kMaxNodeName = 28;            // fits the status's node names
 constexpr std::size_t kMaxSignalName = 63;  // message and signal names: the protocol's 64 bytes
 

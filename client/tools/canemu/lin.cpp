@@ -54,7 +54,8 @@ int request(const std::string& socket, ipc::LinNodeRequest& m, bool list) {
     return fail(r.error().message);
   }
   if (!r->ok) {
-    std::fputs(ipc::name_of(r->errors).c_str(), stderr);
+    const std::string errors = ipc::name_of(r->errors);
+    std::fputs((errors.ends_with('\n') ? errors : errors + '\n').c_str(), stderr);
     return fail("nothing changed");
   }
   if (list) {

@@ -55,7 +55,8 @@ tl::expected<std::unique_ptr<ipc::CanNodeReply>, int> call(
       return tl::unexpected(fail(r.error().message));
     }
     if (!r->ok) {
-      std::fputs(ipc::name_of(r->errors).c_str(), stderr);
+      const std::string errors = ipc::name_of(r->errors);
+      std::fputs((errors.ends_with('\n') ? errors : errors + '\n').c_str(), stderr);
       return tl::unexpected(fail("nothing changed"));
     }
     last = std::make_unique<ipc::CanNodeReply>(*r);

@@ -22,7 +22,7 @@ namespace {
 constexpr int64_t kMinCycleNs = 1'000'000;          // 1 ms
 constexpr int64_t kMaxCycleNs = 3'600'000'000'000;  // 1 h: the longest cycle and delay
 constexpr std::size_t kMaxNodeName = 28;            // fits the status's node names
-constexpr std::size_t kMaxSignalName = 63;  // message and signal names: the protocol's 64 bytes
+constexpr std::size_t kMaxSignalName = 127;  // message and signal names: the protocol's 128 bytes
 
 // Payload bit positions (byte * 8 + bit, bit 0 the least significant) of a 64-byte payload.
 using Bits = std::bitset<model::kMaxFdLength * 8>;
@@ -58,7 +58,7 @@ bool node_name_ok(std::string_view s) {
   });
 }
 
-// A message's or signal's name: a DBC identifier of 1 to 63 characters.
+// A message's or signal's name: a DBC identifier of 1 to 127 characters.
 bool identifier_ok(std::string_view s) {
   if (s.empty() || s.size() > kMaxSignalName || std::isdigit(static_cast<unsigned char>(s[0]))) {
     return false;
@@ -68,7 +68,7 @@ bool identifier_ok(std::string_view s) {
   });
 }
 constexpr std::string_view kIdentifierRule =
-    "must be 1 to 63 letters, digits and '_', not starting with a digit (a DBC name)";
+    "must be 1 to 127 letters, digits and '_', not starting with a digit (a DBC name)";
 
 // The payload bits the signal covers, or nothing if one of them lies past `bytes` bytes.
 // Little endian: `start` is the least significant bit, the signal goes up through the bytes.

@@ -29,6 +29,7 @@ ControlDispatcher::Handler ControlDispatcher::handler_for(ipc::MsgType type) {
       {ipc::MsgType::close_channel_request, &ControlDispatcher::on_close_channel},
       {ipc::MsgType::channel_status_request, &ControlDispatcher::on_channel_status},
       {ipc::MsgType::lin_node_request, &ControlDispatcher::on_lin_node},
+      {ipc::MsgType::can_node_request, &ControlDispatcher::on_can_node},
       {ipc::MsgType::timeline_request, &ControlDispatcher::on_timeline},
       {ipc::MsgType::device_list_request, &ControlDispatcher::on_device_list},
       {ipc::MsgType::recorder_list_request, &ControlDispatcher::on_recorder_list},

@@ -14,7 +14,7 @@ inline constexpr std::size_t kMaxCanNodeText = 12288;
 // The most text one load may gather over its requests (a DBC of a whole vehicle as tables).
 inline constexpr std::size_t kMaxCanNodeLoad = 8u << 20;
 inline constexpr std::size_t kMaxCanNodes = 48;
-inline constexpr std::size_t kLongNameSize = 64;  // DBC message and signal names
+inline constexpr std::size_t kLongNameSize = 128;  // DBC message and signal names
 
 enum class CanNodeOp : uint8_t {
   list = 0,
@@ -40,7 +40,7 @@ struct CanNodeRequest {
   char source[64] = {};              // load: shown in errors (the file's name)
   char text[kMaxCanNodeText] = {};   // load, load_part: [[can_node]] tables (TOML)
 };
-static_assert(sizeof(CanNodeRequest) == 16 + 8 + 8 + 32 + 64 + 64 + 64 + kMaxCanNodeText);
+static_assert(sizeof(CanNodeRequest) == 16 + 8 + 8 + 32 + 128 + 128 + 64 + kMaxCanNodeText);
 static_assert(sizeof(CanNodeRequest) <= kMaxMessageSize);
 
 struct CanNodeEntry {

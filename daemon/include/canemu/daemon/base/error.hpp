@@ -30,7 +30,7 @@ struct Error {
   // The place and the text, as a log line or a reply shows them.
   std::string what() const { return where.empty() ? text : where + ": " + text; }
   // An error reads as what() wherever it is compared with a person's text (tests, logs).
-  friend bool operator==(const Error& e, std::string_view text) { return e.what() == text; }
+  friend bool operator==(const Error& e, std::string_view shown) { return e.what() == shown; }
   friend std::ostream& operator<<(std::ostream& out, const Error& e) { return out << e.what(); }
 };
 

@@ -37,6 +37,12 @@ inline constexpr std::size_t kMaxChannelsPerClient = 16;
 std::unique_ptr<ipc::LinNodeReply> answer_lin_nodes(Simulation& sim, const ipc::LinNodeRequest& m,
                                                     uint32_t request_id);
 
+// `canemu restbus`, `canemu signal`: the answer to a CanNodeRequest (can_node_requests.cpp);
+// `pending` gathers a load's parts until its last.
+std::unique_ptr<ipc::CanNodeReply> answer_can_nodes(Simulation& sim, std::string& pending,
+                                                    const ipc::CanNodeRequest& m,
+                                                    uint32_t request_id);
+
 // What the daemon knows of one client.
 struct Session {
   bool greeted = false;
@@ -51,6 +57,7 @@ struct Session {
   VciSession vci;
   XcanSession xcan;
   SlcanSession slcan;
+  std::string can_node_text;  // the parts of a [[can_node]] load so far
 };
 
 // What the dispatcher asks of the server's loop (loop/server.cpp). The defaults are those of
@@ -142,6 +149,7 @@ class ControlDispatcher {
   void on_fault_list(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
   void on_fault_clear(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
   void on_lin_node(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
+  void on_can_node(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
   void on_vci(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
   void on_xcan(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);
   void on_slcan(Session& c, const uint8_t* data, uint32_t request_id, const Send& send);

@@ -118,7 +118,7 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
                          AppliedFault& applied) {
   const FaultSpec& f = *r.spec;
   const std::shared_ptr<FaultSwitch>& state = applied.state;
-  CanBus& b = *buses_[r.bus].bus;
+  CanBus* const b = buses_[r.bus].bus;  // nullptr on a LIN bus (LIN effects use none)
   const SimTime start = applied.start;
   const SimTime at = start + SimDuration(f.at_ns);
   const std::string what = fault_label(name, f);
@@ -133,16 +133,16 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
       break;
     case FaultEffect::ack_suppress: {
       const SimTime until = at + SimDuration(f.duration_ns);
-      when(at, state, [this, &b, until, what] {
-        b.suppress_acks_until(until);
+      when(at, state, [this, b, until, what] {
+        b->suppress_acks_until(until);
         log(what);
       });
       break;
     }
     case FaultEffect::stuck_dominant: {
       const SimDuration d(f.duration_ns);
-      when(at, state, [this, &b, d, what] {
-        b.hold_dominant(scheduler_.now(), d);
+      when(at, state, [this, b, d, what] {
+        b->hold_dominant(scheduler_.now(), d);
         log(what);
       });
       break;
@@ -151,13 +151,13 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
     case FaultEffect::node_on: {
       const NodeId node = r.node->id;
       const bool on = f.effect == FaultEffect::node_on;
-      when(at, state, [this, &b, node, on, what] {
-        b.set_connected(node, on);
+      when(at, state, [this, b, node, on, what] {
+        b->set_connected(node, on);
         log(what);
       });
       if (!on && f.until_ns) {
-        when(start + SimDuration(*f.until_ns), state, [this, &b, node, what] {
-          b.set_connected(node, true);
+        when(start + SimDuration(*f.until_ns), state, [this, b, node, what] {
+          b->set_connected(node, true);
           log(what + " ends");
         });
       }
@@ -170,10 +170,10 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
       const bool off = f.effect == FaultEffect::bus_off;
       const uint16_t tec = f.tec;
       const uint16_t rec = f.rec;
-      when(at, state, [this, &b, controller, node, off, tec, rec, what] {
+      when(at, state, [this, b, controller, node, off, tec, rec, what] {
         FaultConfinement& fc = controller->confinement();
         fc.set_counters(off ? kBusOffLimit : tec, off ? fc.rec() : rec);
-        b.counters_changed(node);
+        b->counters_changed(node);
         log(what);
       });
       break;
@@ -206,7 +206,7 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
       const std::weak_ptr<XcanDevice> weak_xcan = r.node->xcan;
       const unsigned iface = r.node->iface;
       const bool both = f.both_wires;
-      when(at, state, [this, &b, node, weak_line, weak_xcan, iface, both, what] {
+      when(at, state, [this, b, node, weak_line, weak_xcan, iface, both, what] {
         if (auto line = weak_line.lock()) {
           line->set_bus_coupling_error(true);
         }
@@ -214,13 +214,13 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
           xcan->module().set_line_error(iface, true);
         }
         if (both) {
-          b.set_connected(node, false);
+          b->set_connected(node, false);
         }
         log(what);
       });
       if (f.until_ns) {
         when(start + SimDuration(*f.until_ns), state,
-             [this, &b, node, weak_line, weak_xcan, iface, both, what] {
+             [this, b, node, weak_line, weak_xcan, iface, both, what] {
                if (auto line = weak_line.lock()) {
                  line->set_bus_coupling_error(false);
                }
@@ -228,7 +228,7 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
                  xcan->module().set_line_error(iface, false);
                }
                if (both) {
-                 b.set_connected(node, true);
+                 b->set_connected(node, true);
                }
                log(what + " ends");
              });
@@ -261,13 +261,13 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
     case FaultEffect::oscillator: {
       const NodeId node = r.node->id;
       const int32_t ppm = f.ppm;
-      when(at, state, [this, &b, node, ppm, what] {
-        b.set_oscillator_ppm(node, ppm);
+      when(at, state, [this, b, node, ppm, what] {
+        b->set_oscillator_ppm(node, ppm);
         log(what);
       });
       if (f.until_ns) {
-        when(start + SimDuration(*f.until_ns), state, [this, &b, node, what] {
-          b.set_oscillator_ppm(node, 0);
+        when(start + SimDuration(*f.until_ns), state, [this, b, node, what] {
+          b->set_oscillator_ppm(node, 0);
           log(what + " ends");
         });
       }

@@ -1,7 +1,7 @@
 // The canemu commands that are Python underneath (plot: matplotlib; lin load: ldfparser; web:
-// aiohttp) run `python3 -m MODULE` of the canemu package; CANEMU_PYTHON names another
-// interpreter, and a canemu run from a build tree takes the repository's .venv/bin/python when
-// there is one.
+// aiohttp; restbus load and dump --dbc: cantools) run `python3 -m MODULE` of the canemu package;
+// CANEMU_PYTHON names another interpreter, and a canemu run from a build tree takes the
+// repository's .venv/bin/python when there is one.
 #pragma once
 
 #include <string>

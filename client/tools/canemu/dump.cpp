@@ -5,7 +5,8 @@
 // what each channel receives.
 // Like candump on a real interface, its controllers are active and acknowledge what they
 // receive; --listen-only makes them silent observers. -l logs into a file named as candump -l
-// names it. run_capture() also serves canemu record.
+// names it. run_capture() also serves canemu record. --dbc FILE pipes the printed lines through
+// canemu.dbc_decode, which appends each known frame's decoding (docs/restbus.md).
 #include <poll.h>
 
 #include <algorithm>
@@ -29,6 +30,7 @@
 #include "dump_filter.hpp"
 #include "frame_text.hpp"
 #include "lin_dump.hpp"
+#include "python_tool.hpp"
 
 namespace canemu::cli {
 
@@ -318,7 +320,34 @@ Command add_dump(CLI::App& app, const std::string& socket) {
                  "log into candump-YYYY-MM-DD_HHMMSS.log in the current directory, as candump -l "
                  "(listen-only is --listen-only)")
       ->excludes(output);
-  return {dump, [&socket, o] { return run_capture(socket, *o); }};
+  auto dbc = std::make_shared<std::string>();
+  dump->add_option("--dbc", *dbc,
+                   "also decode each frame the DBC knows (its message and signals, as cantools "
+                   "decode --single-line) after its line; through python -m canemu.dbc_decode")
+      ->excludes(output);
+  return {dump, [&socket, o, dbc] {
+            if (dbc->empty()) {
+              return run_capture(socket, *o);
+            }
+            if (o->log_file || o->format == "pcap") {
+              return fail(
+                  "--dbc decodes the lines printed on standard output: not with -l or "
+                  "--format pcap");
+            }
+            const PythonFilter filter = start_python_filter("canemu.dbc_decode", {*dbc});
+            if (filter.status != 0) {
+              if (filter.status > 0) {
+                return filter.status;  // it said why (exit 2: the DBC cannot be read)
+              }
+              return fail(fmt::format(
+                  "--dbc: {} -m canemu.dbc_decode cannot run: {} (it needs the canemu Python "
+                  "package and cantools; CANEMU_PYTHON names the interpreter)",
+                  filter.interpreter, filter.error));
+            }
+            const int status = run_capture(socket, *o);
+            const int decoder = finish_python_filter(filter);
+            return status != 0 ? status : decoder;
+          }};
 }
 
 }  // namespace canemu::cli

@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -117,6 +118,77 @@ PythonRun run_python_module(const std::string& module, const std::vector<std::st
   ::waitpid(pid, &status, 0);
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
+}
+
+PythonFilter start_python_filter(const std::string& module, const std::vector<std::string>& args) {
+  PythonFilter f;
+  f.interpreter = python_interpreter();
+  std::vector<std::string> words{f.interpreter, "-m", module};
+  words.insert(words.end(), args.begin(), args.end());
+  words.insert(words.end(), {"--ready-fd", "3"});
+  std::vector<char*> argv;
+  for (std::string& w : words) {
+    argv.push_back(w.data());
+  }
+  argv.push_back(nullptr);
+  int in[2];
+  int ready[2];
+  if (::pipe2(in, O_CLOEXEC) != 0) {
+    f.error = std::strerror(errno);
+    return f;
+  }
+  if (::pipe2(ready, O_CLOEXEC) != 0) {
+    f.error = std::strerror(errno);
+    ::close(in[0]);
+    ::close(in[1]);
+    return f;
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, ready[1], 3);
+  pid_t pid = 0;
+  const int spawned =
+      ::posix_spawnp(&pid, f.interpreter.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(in[0]);
+  ::close(ready[1]);
+  if (spawned != 0) {
+    ::close(in[1]);
+    ::close(ready[0]);
+    f.error = std::strerror(spawned);
+    return f;
+  }
+  char c = 0;
+  ssize_t n;
+  while ((n = ::read(ready[0], &c, 1)) < 0 && errno == EINTR) {
+  }
+  ::close(ready[0]);
+  if (n != 1) {
+    ::close(in[1]);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    f.status = WIFEXITED(status) && WEXITSTATUS(status) != 0 ? WEXITSTATUS(status) : -1;
+    if (f.status == -1) {
+      f.error = "it ended without reading the file";
+    }
+    return f;
+  }
+  std::fflush(stdout);
+  ::dup2(in[1], STDOUT_FILENO);
+  ::close(in[1]);
+  f.pid = pid;
+  f.status = 0;
+  return f;
+}
+
+int finish_python_filter(const PythonFilter& filter) {
+  std::fflush(stdout);
+  ::close(STDOUT_FILENO);
+  int status = 0;
+  while (::waitpid(filter.pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
 }
 
 std::string exec_python_module(const std::string& module, const std::vector<std::string>& args) {

@@ -1,0 +1,157 @@
+"""Frames of a candump -L log decoded with a CAN database (DBC), as ``canemu dump BUS --dbc
+FILE`` prints them (docs/restbus.md, "Reading frames: canemu dump --dbc").
+
+Every line read is written again as it came; a frame whose identifier the DBC knows gets its
+decoding after it on the same line, in the single-line form of ``cantools decode``::
+
+    (0000000000.100236) can0 101#0000 :: MOTOR_STATUS(MOTOR_STATUS_wheel_error: 0, ...)
+
+A frame the DBC does not know, an error frame and a line that is not a frame stay as they are;
+a remote frame of a known identifier gets its message's name; a frame cantools cannot decode
+(a length that is not the message's) gets the reason. As a filter::
+
+    canemu dump can0 | python -m canemu.dbc_decode vehicle.dbc
+    python -m canemu.dbc_decode vehicle.dbc < candump-2026-01-01_120000.log
+
+``decode(db, arbitration_id, data, is_extended)`` gives the same text for one frame (python-can
+users pass ``msg.arbitration_id``, ``msg.data``, ``msg.is_extended_id``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+from typing import Any, Optional, Tuple
+
+_ERR_FLAG = 0x20000000
+_EFF_MASK = 0x1FFFFFFF
+
+
+class DbcReadError(ValueError):
+    """The file cannot be read as a DBC; the text names the file and why."""
+
+
+def load(path: str) -> Any:
+    """The cantools database of the DBC at `path`; DbcReadError naming what is wrong."""
+    import cantools  # only needed here
+
+    try:
+        with open(path, "rb"):
+            pass
+    except OSError as e:
+        raise DbcReadError(f"{path}: {e.strerror or e}") from None
+    try:
+        return cantools.database.load_file(path, database_format="dbc")
+    except Exception as e:  # cantools' ParseError and the errors of its checks
+        raise DbcReadError(f"{path}: not a DBC cantools {cantools.__version__} reads: {e}") from e
+
+
+def _format(message: Any, decoded: dict) -> str:
+    """cantools decode's single-line form: NAME(SIGNAL: VALUE UNIT, ...), the signals in the
+    message's order, choices by name (without the unit)."""
+    from cantools.database.namedsignalvalue import NamedSignalValue
+
+    parts = []
+    for s in message.signals:
+        if s.name not in decoded:
+            continue  # a multiplexed signal the multiplexor's value does not select
+        value = decoded[s.name]
+        if s.unit and not isinstance(value, (NamedSignalValue, str)):
+            parts.append(f"{s.name}: {value} {s.unit}")
+        else:
+            parts.append(f"{s.name}: {value}")
+    return f"{message.name}({', '.join(parts)})"
+
+
+def decode(db: Any, arbitration_id: int, data: Optional[bytes], is_extended: bool) -> str:
+    """The decoding of one frame as a line shows it after ``::``; "" when `db` does not know the
+    identifier (a standard and an extended identifier of one number are two messages). `data`
+    None: a remote frame."""
+    try:
+        message = db.get_message_by_frame_id(arbitration_id)
+    except KeyError:
+        return ""
+    if bool(message.is_extended_frame) != bool(is_extended):
+        return ""
+    if data is None:
+        return f"{message.name}: remote frame"
+    try:
+        decoded = message.decode(bytes(data), decode_choices=True)
+    except Exception as e:  # cantools' DecodeError: the length, a container, ...
+        reason = str(e) or type(e).__name__
+        return f"{message.name}: not decoded: {reason}"
+    return _format(message, decoded)
+
+
+def parse_frame(text: str) -> Optional[Tuple[int, Optional[bytes], bool]]:
+    """A candump frame (123#11223344, 12345678#R, 123##1AABB, 123#1122334455667788_9) as
+    (identifier, data or None for a remote frame, extended); None for an error frame or text
+    that is not a frame."""
+    ident, sep, rest = text.partition("#")
+    if not sep or len(ident) not in (3, 8):
+        return None
+    try:
+        can_id = int(ident, 16)
+    except ValueError:
+        return None
+    extended = len(ident) == 8
+    if can_id & _ERR_FLAG or can_id > _EFF_MASK:
+        return None
+    if rest.startswith("R"):
+        return can_id, None, extended
+    if rest.startswith("#"):
+        rest = rest[2:]  # CAN FD: the flags nibble, then the data
+    rest = rest.split("_")[0]  # a classic frame's DLC above 8
+    try:
+        return can_id, bytes.fromhex(rest), extended
+    except ValueError:
+        return None
+
+
+def decode_line(db: Any, line: str) -> str:
+    """`line` (without its newline) as it came, with " :: DECODING" when the DBC knows it."""
+    words = line.split()
+    if len(words) != 3 or not words[0].startswith("("):
+        return line
+    frame = parse_frame(words[2])
+    if frame is None:
+        return line
+    text = decode(db, *frame)
+    return f"{line} :: {text}" if text else line
+
+
+def main(argv: Optional[list] = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m canemu.dbc_decode",
+        description="a candump -L log on standard input, each known frame decoded with a DBC")
+    parser.add_argument("dbc", help="the CAN database (DBC) file")
+    parser.add_argument("--ready-fd", type=int, default=-1,
+                        help="a file descriptor to write one line to once the DBC is read, "
+                             "then close (canemu dump --dbc waits for it)")
+    args = parser.parse_args(argv)
+    # The command that feeds this stops on Ctrl-C; this goes on to the end of its lines.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        db = load(args.dbc)
+    except DbcReadError as e:
+        print(f"canemu: --dbc {e}", file=sys.stderr)
+        return 2
+    if args.ready_fd >= 0:
+        os.write(args.ready_fd, b"ready\n")
+        os.close(args.ready_fd)
+    out = sys.stdout
+    try:
+        for line in sys.stdin:
+            out.write(decode_line(db, line.rstrip("\n")) + "\n")
+            out.flush()
+    except BrokenPipeError:
+        # The reader went away (canemu dump --dbc ... | head): the end, as for candump.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -14,6 +14,7 @@
 
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/firmware_model/bus/frame.hpp"
+#include "config/run_time_tables.hpp"
 
 namespace canemu::daemon::detail {
 
@@ -509,26 +510,8 @@ namespace canemu::daemon {
 
 tl::expected<std::vector<CanNodeConfig>, std::vector<std::string>> parse_can_nodes(
     std::string_view text, const std::string& source, const std::vector<BusConfig>& buses) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    return tl::unexpected(std::vector<std::string>{fmt::format(
-        "{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column, e.description())});
-  }
-  detail::Checker c(source);
-  c.only_keys(root, "", {"can_node"});
-  Config cfg;
-  cfg.buses = buses;
-  detail::read_can_nodes(c, root, cfg);
-  if (!c.errors().empty()) {
-    return tl::unexpected(c.errors());
-  }
-  if (cfg.can_nodes.empty()) {
-    return tl::unexpected(
-        std::vector<std::string>{fmt::format("{}: no [[can_node]] tables", source)});
-  }
-  return cfg.can_nodes;
+  return detail::run_time_tables(text, source, buses, "can_node", detail::read_can_nodes,
+                                 &Config::can_nodes);
 }
 
 }  // namespace canemu::daemon

@@ -1,6 +1,7 @@
 // Reading [[lin_node]] tables (lin_config.hpp), checked with every problem reported.
 #include "lin_config_reader.hpp"
 #include "canemu/daemon/config/config.hpp"
+#include "config/run_time_tables.hpp"
 
 #include <set>
 
@@ -246,26 +247,8 @@ namespace canemu::daemon {
 
 tl::expected<std::vector<LinNodeConfig>, std::vector<std::string>> parse_lin_nodes(
     std::string_view text, const std::string& source, const std::vector<BusConfig>& buses) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    return tl::unexpected(std::vector<std::string>{fmt::format(
-        "{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column, e.description())});
-  }
-  detail::Checker c(source);
-  c.only_keys(root, "", {"lin_node"});
-  Config cfg;
-  cfg.buses = buses;
-  detail::read_lin_nodes(c, root, cfg);
-  if (!c.errors().empty()) {
-    return tl::unexpected(c.errors());
-  }
-  if (cfg.lin_nodes.empty()) {
-    return tl::unexpected(
-        std::vector<std::string>{fmt::format("{}: no [[lin_node]] tables", source)});
-  }
-  return cfg.lin_nodes;
+  return detail::run_time_tables(text, source, buses, "lin_node", detail::read_lin_nodes,
+                                 &Config::lin_nodes);
 }
 
 }  // namespace canemu::daemon

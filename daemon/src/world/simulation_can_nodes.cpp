@@ -5,23 +5,11 @@
 #include <fmt/format.h>
 
 #include "canemu/daemon/world/simulation.hpp"
+#include "world/named_nodes.hpp"
 
 namespace canemu::daemon {
 
 using namespace canemu::model;
-
-namespace {
-
-// "BUS/NAME" as the bus's name and the node's; a bare NAME: no bus.
-std::pair<std::string_view, std::string_view> split_name(std::string_view name) {
-  const auto slash = name.find('/');
-  if (slash == std::string_view::npos) {
-    return {{}, name};
-  }
-  return {name.substr(0, slash), name.substr(slash + 1)};
-}
-
-}  // namespace
 
 Result<> Simulation::add_can_node(const CanNodeConfig& n) {
   const std::size_t bus = *bus_index(n.bus);
@@ -104,27 +92,9 @@ tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::loa
 }
 
 Result<std::vector<SimulatedCanNode>::iterator> Simulation::find_can_named(std::string_view name) {
-  const auto [bus, node] = split_name(name);
-  std::vector<std::vector<SimulatedCanNode>::iterator> found;
-  for (auto it = can_nodes_.begin(); it != can_nodes_.end(); ++it) {
-    if (it->ecu->name() == node && (bus.empty() || config_.buses[it->bus].name == bus)) {
-      found.push_back(it);
-    }
-  }
-  if (found.empty()) {
-    return fail(Errc::not_found, fmt::format("no simulated CAN node named \"{}\"", name));
-  }
-  if (found.size() > 1) {
-    std::vector<std::string> where;
-    where.reserve(found.size());
-    for (auto it : found) {
-      where.push_back(fmt::format("{}/{}", config_.buses[it->bus].name, it->ecu->name()));
-    }
-    return fail(Errc::bad_argument,
-                fmt::format("CAN nodes named \"{}\" are on several buses: name one as {}", name,
-                            fmt::join(where, " or ")));
-  }
-  return found.front();
+  return find_named_node(
+      can_nodes_, name, config_.buses, "CAN",
+      [](const SimulatedCanNode& n) -> const std::string& { return n.ecu->name(); });
 }
 
 Result<restbus::CanEcu*> Simulation::can_node(std::string_view name) {

@@ -7,23 +7,11 @@
 
 #include "canemu/daemon/base/log.hpp"
 #include "canemu/daemon/world/simulation.hpp"
+#include "world/named_nodes.hpp"
 
 namespace canemu::daemon {
 
 using namespace canemu::model;
-
-namespace {
-
-// "BUS/NAME" as the bus's name and the node's; a bare NAME: no bus.
-std::pair<std::string_view, std::string_view> split_lin_name(std::string_view name) {
-  const auto slash = name.find('/');
-  if (slash == std::string_view::npos) {
-    return {{}, name};
-  }
-  return {name.substr(0, slash), name.substr(slash + 1)};
-}
-
-}  // namespace
 
 std::optional<ScenarioRunner::LinNodeRef> Simulation::find_lin_node(std::string_view name) const {
   for (const DeviceRegistry::Configured& d : devices_.configured()) {
@@ -39,7 +27,7 @@ std::optional<ScenarioRunner::LinNodeRef> Simulation::find_lin_node(std::string_
     }
   }
   // Simulated nodes: "BUS/NAME", or a NAME only one bus has.
-  const auto [bus, node] = split_lin_name(name);
+  const auto [bus, node] = split_node_name(name);
   std::optional<ScenarioRunner::LinNodeRef> found;
   for (const SimulatedLinNode& n : lin_nodes_) {
     if (n.name == node && (bus.empty() || config_.buses[n.bus].name == bus)) {
@@ -54,27 +42,8 @@ std::optional<ScenarioRunner::LinNodeRef> Simulation::find_lin_node(std::string_
 
 // Names are scoped by bus: `name` is "BUS/NAME", or a NAME that only one bus has.
 Result<std::vector<SimulatedLinNode>::iterator> Simulation::find_lin_named(std::string_view name) {
-  const auto [bus, node] = split_lin_name(name);
-  std::vector<std::vector<SimulatedLinNode>::iterator> found;
-  for (auto it = lin_nodes_.begin(); it != lin_nodes_.end(); ++it) {
-    if (it->name == node && (bus.empty() || config_.buses[it->bus].name == bus)) {
-      found.push_back(it);
-    }
-  }
-  if (found.empty()) {
-    return fail(Errc::not_found, fmt::format("no simulated LIN node named \"{}\"", name));
-  }
-  if (found.size() > 1) {
-    std::vector<std::string> where;
-    where.reserve(found.size());
-    for (auto it : found) {
-      where.push_back(fmt::format("{}/{}", config_.buses[it->bus].name, it->name));
-    }
-    return fail(Errc::bad_argument,
-                fmt::format("LIN nodes named \"{}\" are on several buses: name one as {}", name,
-                            fmt::join(where, " or ")));
-  }
-  return found.front();
+  return find_named_node(lin_nodes_, name, config_.buses, "LIN",
+                         [](const SimulatedLinNode& n) -> const std::string& { return n.name; });
 }
 
 tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::load_lin_nodes(

@@ -23,13 +23,11 @@ tl::expected<std::vector<T>, std::vector<std::string>> run_time_tables(
     std::string_view text, const std::string& source, const std::vector<BusConfig>& buses,
     const char* key, void (*read)(Checker&, const toml::table&, Config&),
     std::vector<T> Config::*field) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    return tl::unexpected(std::vector<std::string>{fmt::format(
-        "{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column, e.description())});
+  auto parsed = parse_toml(text, source);
+  if (!parsed) {
+    return tl::unexpected(parsed.error());
   }
+  const toml::table& root = *parsed;
   Checker c(source);
   c.only_keys(root, "", {key});
   Config cfg;

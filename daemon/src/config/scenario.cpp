@@ -349,13 +349,11 @@ std::string_view to_string(FaultEffect effect) {
 
 tl::expected<Scenario, std::vector<std::string>> parse_scenario(std::string_view text,
                                                                 const std::string& source) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    return tl::unexpected(std::vector<std::string>{fmt::format(
-        "{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column, e.description())});
+  auto parsed = detail::parse_toml(text, source);
+  if (!parsed) {
+    return tl::unexpected(parsed.error());
   }
+  const toml::table& root = *parsed;
   Checker c(source);
   Scenario s;
   s.source = source;

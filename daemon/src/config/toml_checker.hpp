@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
+#include <tl/expected.hpp>
 
 namespace canemu::daemon::detail {
 
@@ -236,5 +237,16 @@ class Checker {
   std::string file_;
   std::vector<std::string> errors_;
 };
+
+// `text` as TOML, or its syntax error as the one problem "SOURCE:LINE:COLUMN: what".
+inline tl::expected<toml::table, std::vector<std::string>> parse_toml(std::string_view text,
+                                                                      const std::string& source) {
+  try {
+    return toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    return tl::unexpected(std::vector<std::string>{fmt::format(
+        "{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column, e.description())});
+  }
+}
 
 }  // namespace canemu::daemon::detail

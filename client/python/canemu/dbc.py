@@ -43,9 +43,10 @@ Decisions (docs/restbus.md, "DBC import"), where the DBC leaves a choice open:
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Tuple
+
+from canemu._toml_text import toml_value
 
 CHECKSUMS = ("crc8_sae_j1850", "xor8", "sum8")
 
@@ -326,42 +327,22 @@ def can_nodes(path: str, bus: str, real: Iterable[str] = (), counters: Iterable[
     return [{"name": n, "bus": bus, "message": sent[n]} for n in sent]
 
 
-def _value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if math.isnan(v):
-            return "nan"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return repr(v)
-    if isinstance(v, str):
-        out = v.replace("\\", "\\\\").replace('"', '\\"')
-        out = "".join(c if 0x20 <= ord(c) != 0x7F else f"\\u{ord(c):04X}" for c in out)
-        return f'"{out}"'
-    if isinstance(v, list):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
-    raise TypeError(f"no TOML for {v!r}")
-
-
 def to_toml(nodes: List[Dict[str, Any]], source: str = "") -> str:
     """The ``[[can_node]]`` tables as TOML text for canemud's configuration."""
     lines = [f"# CAN nodes from {source} (canemu.dbc)" if source else "# CAN nodes (canemu.dbc)"]
     for node in nodes:
         lines += ["", "[[can_node]]"]
-        lines += [f"{k} = {_value(v)}" for k, v in node.items() if k != "message"]
+        lines += [f"{k} = {toml_value(v)}" for k, v in node.items() if k != "message"]
         for m in node["message"]:
             lines += ["", "[[can_node.message]]"]
             for k, v in m.items():
                 if k == "signal":
                     continue
                 comment = f"  # 0x{v:X}" if k == "id" else ""
-                lines.append(f"{k} = {_value(v)}{comment}")
+                lines.append(f"{k} = {toml_value(v)}{comment}")
             for s in m["signal"]:
                 lines += ["", "[[can_node.message.signal]]"]
-                lines += [f"{k} = {_value(v)}" for k, v in s.items()]
+                lines += [f"{k} = {toml_value(v)}" for k, v in s.items()]
     return "\n".join(lines) + "\n"
 
 

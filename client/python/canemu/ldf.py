@@ -34,6 +34,8 @@ import argparse
 import sys
 from typing import Any, Callable, Dict, Iterable, List, Optional
 
+from canemu._toml_text import toml_value
+
 MASTER_REQUEST = 0x3C
 SLAVE_RESPONSE = 0x3D
 
@@ -164,17 +166,8 @@ def _node_name(name: str) -> str:
 
 
 def _value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return f"0x{v:02X}" if v >= 0 else str(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(v, list):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + " }"
-    raise TypeError(f"no TOML for {v!r}")
+    """A TOML value; identifiers and data bytes in hexadecimal."""
+    return toml_value(v, hex_ints=True)
 
 
 def to_toml(nodes: List[Dict[str, Any]], source: str = "") -> str:

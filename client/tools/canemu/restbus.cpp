@@ -201,7 +201,7 @@ Command add_restbus(CLI::App& app, const std::string& socket) {
             }
             ipc::copy_name(parts[0]->name, o->node);
             parts[0]->on = on->parsed() ? 1 : 0;
-            return run(socket, parts, list->parsed() || load->parsed(), false);
+            return run(socket, parts, list->parsed(), false);
           }};
 }
 

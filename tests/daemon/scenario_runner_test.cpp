@@ -246,7 +246,8 @@ effect = "crc_error"
   EXPECT_EQ(applied.error(),
             (std::vector<std::string>{
                 "s.toml:7: bit_error: no bus named \"can9\"",
-                "s.toml:12: bus_off: no node named \"ghost:0\" (configured nodes are DEVICE:N)",
+                "s.toml:12: bus_off: no node named \"ghost:0\" (configured nodes are DEVICE:N; "
+                "simulated CAN nodes NAME, or BUS/NAME where several buses have that NAME)",
                 "s.toml:17: crc_error: node tester is not on bus can1",
             }));
   w.run_until(500'000'000);  // the valid first fault was not applied either

@@ -91,7 +91,8 @@ tec = 300
                 "random_errors, node_off, node_on, bus_off, error_counters, oscillator, "
                 "babble, line_error, lin_bit_error, lin_checksum_error, lin_parity_error, "
                 "lin_sync_error, lin_no_response, lin_short_break, lin_responder_off, "
-                "lin_wakeup)",
+                "lin_wakeup, message_timeout, checksum_error, counter_freeze, counter_jump, "
+                "signal_step, signal_ramp, signal_invalid)",
                 "s.toml:20:9: fault[3].pulse: a LIN wake-up pulse lasts 250 us to 5 ms (LIN 2.x)",
                 "s.toml:26:15: fault[4].probability: must be above 0 and at most 1",
                 "s.toml:32:7: fault[5].tec: 300 is outside 0..255",
@@ -175,6 +176,96 @@ TEST(Scenario, RandomErrorsNeedABitErrorRateInRange) {
                             "bit_error_rate = 0.5\n"),
             (std::vector<std::string>{
                 "s.toml:5:18: fault[0].bit_error_rate: must be above 0 and at most 0.1"}));
+}
+
+TEST(Scenario, ReadsTheKeysOfTheFaultsOnSimulatedNodesMessagesAndSignals) {
+  auto s = parse_scenario(R"([[fault]]
+at = "1s"
+until = "2s"
+bus = "can0"
+message = "ENGINE_DATA"
+effect = "checksum_error"
+count = 3
+
+[[fault]]
+at = "1s"
+bus = "can0"
+signal = "ENGINE_DATA.alive"
+effect = "counter_jump"
+by = 5
+
+[[fault]]
+at = "1s"
+until = "3s"
+bus = "can0"
+signal = "ENGINE_DATA.speed"
+effect = "signal_ramp"
+to = 2500.5
+
+[[fault]]
+at = "1s"
+bus = "can0"
+signal = "ENGINE_DATA.speed"
+effect = "signal_invalid"
+raw = 0xFFFF
+)",
+                          "s.toml");
+  ASSERT_TRUE(s) << s.error().front();
+  ASSERT_EQ(s->faults.size(), 4u);
+  const FaultSpec& sum = s->faults[0];
+  EXPECT_EQ(sum.effect, FaultEffect::checksum_error);
+  EXPECT_EQ(sum.bus, "can0");
+  EXPECT_EQ(sum.message, "ENGINE_DATA");
+  EXPECT_EQ(sum.signal, "");
+  EXPECT_EQ(sum.count, 3u);
+  EXPECT_EQ(sum.until_ns, 2'000'000'000);
+  EXPECT_EQ(s->faults[1].message, "ENGINE_DATA");
+  EXPECT_EQ(s->faults[1].signal, "alive");
+  EXPECT_EQ(s->faults[1].by, 5u);
+  EXPECT_EQ(s->faults[2].value, 2500.5);
+  EXPECT_EQ(s->faults[3].raw, 0xFFFFu);
+  EXPECT_EQ(s->faults[3].value, std::nullopt);
+}
+
+TEST(Scenario, FaultsOnSignalsNeedMessageDotSignalAndTheirValues) {
+  EXPECT_EQ(scenario_errors(R"([[fault]]
+at = "0s"
+bus = "can0"
+signal = "speed"
+effect = "signal_step"
+
+[[fault]]
+at = "0s"
+bus = "can0"
+signal = "A.b"
+effect = "signal_ramp"
+to = 1
+
+[[fault]]
+at = "0s"
+bus = "can0"
+signal = "A.b"
+effect = "signal_invalid"
+value = 1
+raw = 1
+
+[[fault]]
+at = "0s"
+bus = "can0"
+message = "A"
+effect = "counter_freeze"
+)"),
+            (std::vector<std::string>{
+                "s.toml:4:10: fault[0].signal: \"speed\" is not MESSAGE.SIGNAL (e.g. "
+                "\"ENGINE_DATA.ENGINE_SPEED\")",
+                "s.toml:1:1: fault[0].value: missing (the physical value the signal takes)",
+                "s.toml:7:1: fault[1].until: missing (the instant the ramp reaches its value)",
+                "s.toml:14:1: fault[2]: needs either value (a physical value) or raw (the "
+                "signal's bits), not both",
+                "s.toml:25:1: fault[3].message: not a key of counter_freeze (known: at, effect, "
+                "bus, signal, until)",
+                "s.toml:22:1: fault[3].signal: missing (a string is required)",
+            }));
 }
 
 // `fault list` and `fault clear` use the whole name: one that would not fit is refused.

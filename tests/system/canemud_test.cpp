@@ -248,7 +248,7 @@ TEST(Canemud, AppliesTheScenariosOfItsConfigurationOrRefusesToStart) {
   EXPECT_FALSE(refused.ready());
   EXPECT_NE(
       refused.log().find(folder + "/counters.toml:1: bus_off: no node named \"x:0\" (configured "
-                                  "nodes are DEVICE:N)"),
+                                  "nodes are DEVICE:N; simulated CAN nodes NAME"),
       std::string::npos)
       << refused.log();
   EXPECT_NE(refused.log().find("scenario " + folder +

@@ -127,8 +127,9 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
             std::string::npos);
   Cli bad(d, {"fault", "inject", "--effect", "node_off", "--node", "ixxat0:9"});
   EXPECT_EQ(Cli::read_all(bad.err),
-            "node_off: no node named \"ixxat0:9\" (configured nodes are "
-            "DEVICE:N)\ncanemu: scenario rejected; nothing of it applied\n");  // no line numbers
+            "node_off: no node named \"ixxat0:9\" (configured nodes are DEVICE:N; simulated "
+            "CAN nodes NAME, or BUS/NAME where several buses have that NAME)\ncanemu: scenario "
+            "rejected; nothing of it applied\n");  // no line numbers
                                                                                // of a text the
                                                                                // user never saw
   EXPECT_EQ(bad.wait(), 1);

@@ -40,6 +40,13 @@ constexpr NamedValue<FaultEffect> kEffects[] = {
     {FaultEffect::lin_short_break, "lin_short_break"},
     {FaultEffect::lin_responder_off, "lin_responder_off"},
     {FaultEffect::lin_wakeup, "lin_wakeup"},
+    {FaultEffect::message_timeout, "message_timeout"},
+    {FaultEffect::checksum_error, "checksum_error"},
+    {FaultEffect::counter_freeze, "counter_freeze"},
+    {FaultEffect::counter_jump, "counter_jump"},
+    {FaultEffect::signal_step, "signal_step"},
+    {FaultEffect::signal_ramp, "signal_ramp"},
+    {FaultEffect::signal_invalid, "signal_invalid"},
 };
 constexpr NamedValue<bool> kLinWhere[] = {{true, "header"}, {false, "response"}};
 constexpr NamedValue<bool> kWires[] = {{false, "one"}, {true, "both"}};
@@ -192,6 +199,85 @@ void read_babble_frame(Checker& c, const toml::table& t, const std::string& path
   }
 }
 
+// The keys of an effect on a simulated CAN node's message or signal.
+std::vector<std::string_view> restbus_keys(FaultEffect e) {
+  switch (e) {
+    case FaultEffect::message_timeout:
+      return {"bus", "message", "until"};
+    case FaultEffect::checksum_error:
+      return {"bus", "message", "count", "until"};
+    case FaultEffect::counter_freeze:
+      return {"bus", "signal", "until"};
+    case FaultEffect::counter_jump:
+      return {"bus", "signal", "by"};
+    case FaultEffect::signal_step:
+      return {"bus", "signal", "value"};
+    case FaultEffect::signal_ramp:
+      return {"bus", "signal", "to", "until"};
+    default:
+      return {"bus", "signal", "value", "raw", "until"};
+  }
+}
+
+// `message = "NAME"` or `signal = "MESSAGE.SIGNAL"`, and the value keys of the effect.
+void read_restbus(Checker& c, const toml::table& t, const std::string& path, FaultSpec& f) {
+  const FaultEffect e = f.effect;
+  if (e == FaultEffect::message_timeout || e == FaultEffect::checksum_error) {
+    if (auto m = name(c, t, path, "message", true)) {
+      f.message = *m;
+    }
+    if (e == FaultEffect::checksum_error) {
+      read_count(c, t, path, f);
+    }
+    return;
+  }
+  if (auto sig = name(c, t, path, "signal", true)) {
+    const std::size_t dot = sig->find('.');
+    if (dot == std::string::npos || dot == 0 || dot + 1 == sig->size()) {
+      c.error(
+          *t.get("signal"), path + ".signal",
+          fmt::format("\"{}\" is not MESSAGE.SIGNAL (e.g. \"ENGINE_DATA.ENGINE_SPEED\")", *sig));
+    } else {
+      f.message = sig->substr(0, dot);
+      f.signal = sig->substr(dot + 1);
+    }
+  }
+  const auto required = [&](std::string_view key, std::string_view what) {
+    if (t.get(key) == nullptr) {
+      c.error(t.source(), Checker::key(path, key), fmt::format("missing ({})", what));
+    }
+  };
+  switch (e) {
+    case FaultEffect::counter_jump:
+      if (auto by = c.integer(t, path, "by", true, 1, INT64_MAX)) {
+        f.by = static_cast<uint64_t>(*by);
+      }
+      break;
+    case FaultEffect::signal_step:
+      required("value", "the physical value the signal takes");
+      f.value = c.number(t, path, "value");
+      break;
+    case FaultEffect::signal_ramp:
+      required("to", "the physical value the ramp ends at");
+      required("until", "the instant the ramp reaches its value");
+      f.value = c.number(t, path, "to");
+      break;
+    case FaultEffect::signal_invalid:
+      if ((t.get("value") != nullptr) == (t.get("raw") != nullptr)) {
+        c.error(t.source(), path,
+                "needs either value (a physical value) or raw (the signal's bits), not both");
+        break;
+      }
+      f.value = c.number(t, path, "value");
+      if (auto raw = c.integer(t, path, "raw", false, 0, INT64_MAX)) {
+        f.raw = static_cast<uint64_t>(*raw);
+      }
+      break;
+    default:
+      break;
+  }
+}
+
 void read_fault(Checker& c, const toml::table& t, const std::string& path, Scenario& s) {
   FaultSpec f;
   f.line = t.source().begin.line;
@@ -223,6 +309,9 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
     if (f.effect == FaultEffect::lin_bit_error) {
       allow({"where"});
     }
+  } else if (is_restbus_effect(f.effect)) {
+    const std::vector<std::string_view> more = restbus_keys(f.effect);
+    keys.insert(keys.end(), more.begin(), more.end());
   } else if (is_bus_effect(f.effect)) {
     allow({"bus", "duration"});
   } else if (f.effect == FaultEffect::random_errors) {
@@ -334,6 +423,9 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
   if (f.effect == FaultEffect::line_error) {
     f.both_wires = c.choice(t, path, "wire", false, kWires, "wire fault").value_or(false);
   }
+  if (is_restbus_effect(f.effect)) {
+    read_restbus(c, t, path, f);
+  }
   s.faults.push_back(f);
 }
 
@@ -341,6 +433,10 @@ void read_fault(Checker& c, const toml::table& t, const std::string& path, Scena
 
 bool is_lin_frame_effect(FaultEffect e) {
   return e >= FaultEffect::lin_bit_error && e <= FaultEffect::lin_responder_off;
+}
+
+bool is_restbus_effect(FaultEffect e) {
+  return e >= FaultEffect::message_timeout && e <= FaultEffect::signal_invalid;
 }
 
 std::string_view to_string(FaultEffect effect) {

@@ -33,6 +33,27 @@ uint32_t byte_of(const SignalLayout& s) {
   return s.start / 8;
 }
 
+// A checksum is computed as each frame goes out: it cannot be set.
+Result<> settable(const CanMessageConfig& m, const CanSignalConfig& s) {
+  if (s.checksum != ChecksumKind::none) {
+    return fail(
+        Errc::bad_argument,
+        fmt::format("{}.{} is a checksum: it is computed as each frame goes out", m.name, s.name));
+  }
+  return {};
+}
+
+// A ramp's value at `now`: on the straight line from its start to its end, `to` from `until` on.
+template <typename Ramp>
+double ramp_at(const Ramp& r, SimTime now) {
+  if (now >= r.until) {
+    return r.to;
+  }
+  const double part =
+      static_cast<double>((now - r.from).ns()) / static_cast<double>((r.until - r.from).ns());
+  return r.start + (r.to - r.start) * std::max(part, 0.0);
+}
+
 uint64_t mask(uint32_t length) {
   return length >= 64 ? ~uint64_t{0} : (uint64_t{1} << length) - 1;
 }
@@ -131,7 +152,7 @@ void CanEcu::schedule(std::size_t i) {
 void CanEcu::due(std::size_t i) {
   Message& m = messages_[i];
   m.next.reset();
-  if (node_.controller().confinement().bus_off() ||
+  if (m.silent || node_.controller().confinement().bus_off() ||
       (m.config->send == CanMessageConfig::Send::cyclic_if_active && !active(m))) {
     ++m.counters.skipped;
   } else {
@@ -187,7 +208,11 @@ std::vector<uint8_t> CanEcu::build(const Message& m) const {
   }
   if (check) {
     const CanSignalConfig& s = signals[*check];
-    put_raw(payload, s.layout, checksum(s.checksum, s.data_id, payload, byte_of(s.layout)));
+    uint8_t sum = checksum(s.checksum, s.data_id, payload, byte_of(s.layout));
+    if (m.bad_checksum && m.bad_checksum->frames.value_or(1) > 0) {
+      sum = static_cast<uint8_t>(~sum);  // checksum_error: wrong in every bit
+    }
+    put_raw(payload, s.layout, sum);
   }
   return payload;
 }
@@ -203,11 +228,19 @@ std::optional<TxFrame> CanEcu::next_tx() {
     return std::nullopt;
   }
   first->waiting = false;
+  apply_ramps(*first, node_.now());
   const std::vector<uint8_t> payload = build(*first);
-  // The frame carries the counters' values; the next one carries them plus 1.
+  if (const auto& bad = first->bad_checksum; bad && bad->frames.value_or(1) > 0) {
+    ++bad->hits;
+    if (bad->frames) {
+      --*bad->frames;
+    }
+  }
+  // The frame carries the counters' values; the next one carries them plus 1 (unless frozen).
   for (std::size_t k = 0; k < first->config->signals.size(); ++k) {
     const CanSignalConfig& s = first->config->signals[k];
-    if (s.counter) {
+    if (s.counter &&
+        std::find(first->frozen.begin(), first->frozen.end(), k) == first->frozen.end()) {
       first->raw[k] = (first->raw[k] + 1) & mask(s.layout.length);
     }
   }
@@ -241,6 +274,11 @@ void CanEcu::state_changed(SimTime, ErrorState state, uint16_t, uint16_t) {
   }
 }
 
+const CanMessageConfig* CanEcu::message_config(std::string_view message) const {
+  auto i = find(message);
+  return i ? messages_[*i].config : nullptr;
+}
+
 Result<std::size_t> CanEcu::find(std::string_view message) const {
   for (std::size_t i = 0; i < messages_.size(); ++i) {
     if (messages_[i].config->name == message) {
@@ -262,23 +300,26 @@ Result<std::size_t> CanEcu::find_signal(const Message& m, std::string_view signa
               fmt::format("message {} has no signal named \"{}\"", m.config->name, signal));
 }
 
-Result<> CanEcu::set_signal(std::string_view message, std::string_view signal, double physical) {
+Result<CanEcu::Place> CanEcu::find_both(std::string_view message, std::string_view signal) const {
   auto i = find(message);
   if (!i) {
     return tl::unexpected(i.error());
   }
-  Message& m = messages_[*i];
-  auto k = find_signal(m, signal);
+  auto k = find_signal(messages_[*i], signal);
   if (!k) {
     return tl::unexpected(k.error());
   }
-  const CanSignalConfig& s = m.config->signals[*k];
-  if (s.checksum != ChecksumKind::none) {
-    return fail(Errc::bad_argument,
-                fmt::format("{}.{} is a checksum: it is computed as each frame goes out",
-                            m.config->name, s.name));
+  return std::pair{*i, *k};
+}
+
+Result<uint64_t> CanEcu::value_raw(std::size_t i, std::size_t k, double physical,
+                                   bool check_range) const {
+  const Message& m = messages_[i];
+  const CanSignalConfig& s = m.config->signals[k];
+  if (auto ok = settable(*m.config, s); !ok) {
+    return tl::unexpected(ok.error());
   }
-  if (s.minimum && !(physical >= *s.minimum && physical <= *s.maximum)) {
+  if (check_range && s.minimum && !(physical >= *s.minimum && physical <= *s.maximum)) {
     return fail(Errc::bad_argument,
                 fmt::format("{} is outside the range of {}.{}: {}..{}{}", physical, m.config->name,
                             s.name, *s.minimum, *s.maximum, s.unit.empty() ? "" : " " + s.unit));
@@ -288,12 +329,72 @@ Result<> CanEcu::set_signal(std::string_view message, std::string_view signal, d
     return fail(Errc::bad_argument, fmt::format("{} cannot be the value of {}.{}: {}", physical,
                                                 m.config->name, s.name, raw.error().text));
   }
-  if (*raw == m.raw[*k]) {
-    return {};
+  return *raw;
+}
+
+Result<> CanEcu::check_value(std::string_view message, std::string_view signal, double physical,
+                             bool check_range) const {
+  auto at = find_both(message, signal);
+  if (!at) {
+    return tl::unexpected(at.error());
   }
-  m.raw[*k] = *raw;
-  if (!on_change(*m.config) || !powered_ || node_.controller().confinement().bus_off()) {
-    return {};
+  if (auto raw = value_raw(at->first, at->second, physical, check_range); !raw) {
+    return tl::unexpected(raw.error());
+  }
+  return {};
+}
+
+Result<> CanEcu::set_signal(std::string_view message, std::string_view signal, double physical,
+                            bool check_range) {
+  auto at = find_both(message, signal);
+  if (!at) {
+    return tl::unexpected(at.error());
+  }
+  auto raw = value_raw(at->first, at->second, physical, check_range);
+  if (!raw) {
+    return tl::unexpected(raw.error());
+  }
+  change(at->first, at->second, *raw);
+  return {};
+}
+
+Result<CanEcu::Place> CanEcu::check_raw(std::string_view message, std::string_view signal,
+                                        uint64_t raw) const {
+  auto at = find_both(message, signal);
+  if (!at) {
+    return at;
+  }
+  const CanMessageConfig& m = *messages_[at->first].config;
+  const CanSignalConfig& s = m.signals[at->second];
+  if (auto ok = settable(m, s); !ok) {
+    return tl::unexpected(ok.error());
+  }
+  if ((raw & ~mask(s.layout.length)) != 0) {
+    return fail(Errc::bad_argument, fmt::format("raw value {} does not fit the {} bits of {}.{}",
+                                                raw, s.layout.length, m.name, s.name));
+  }
+  return at;
+}
+
+Result<> CanEcu::set_raw_signal(std::string_view message, std::string_view signal, uint64_t raw) {
+  auto at = check_raw(message, signal, raw);
+  if (!at) {
+    return tl::unexpected(at.error());
+  }
+  change(at->first, at->second, raw);
+  return {};
+}
+
+void CanEcu::change(std::size_t i, std::size_t k, uint64_t raw) {
+  Message& m = messages_[i];
+  std::erase_if(m.ramps, [k](const Ramp& r) { return r.signal == k; });
+  if (raw == m.raw[k]) {
+    return;
+  }
+  m.raw[k] = raw;
+  if (!on_change(*m.config) || !powered_ || m.silent ||
+      node_.controller().confinement().bus_off()) {
+    return;
   }
   // Nothing is sent before the message's delay: a change before it goes at the delay (the
   // first cyclic frame carries it anyway).
@@ -301,29 +402,139 @@ Result<> CanEcu::set_signal(std::string_view message, std::string_view signal, d
   if (node_.now() >= first) {
     queue(m);
   } else if (m.config->send == CanMessageConfig::Send::on_change && !m.next) {
-    m.next = node_.scheduler().schedule_at(first, [this, i = *i](SimTime) {
+    m.next = node_.scheduler().schedule_at(first, [this, i](SimTime) {
       messages_[i].next.reset();
       queue(messages_[i]);
     });
   }
-  return {};
 }
 
 Result<double> CanEcu::get_signal(std::string_view message, std::string_view signal) const {
+  auto at = find_both(message, signal);
+  if (!at) {
+    return tl::unexpected(at.error());
+  }
+  const auto [i, k] = *at;
+  const Message& m = messages_[i];
+  const CanSignalConfig& s = m.config->signals[k];
+  if (s.checksum != ChecksumKind::none) {
+    return to_physical(s.layout, get_raw(build(m), s.layout));
+  }
+  for (const Ramp& r : m.ramps) {
+    if (r.signal == k) {  // the value a frame built now would carry
+      return to_physical(s.layout, to_raw(s.layout, ramp_at(r, node_.now())).value_or(m.raw[k]));
+    }
+  }
+  return to_physical(s.layout, m.raw[k]);
+}
+
+Result<uint64_t> CanEcu::raw_signal(std::string_view message, std::string_view signal) const {
+  auto at = find_both(message, signal);
+  if (!at) {
+    return tl::unexpected(at.error());
+  }
+  return messages_[at->first].raw[at->second];
+}
+
+Result<> CanEcu::silence(std::string_view message, bool silent) {
   auto i = find(message);
   if (!i) {
     return tl::unexpected(i.error());
   }
-  const Message& m = messages_[*i];
-  auto k = find_signal(m, signal);
-  if (!k) {
-    return tl::unexpected(k.error());
+  Message& m = messages_[*i];
+  m.silent = silent;
+  if (silent) {
+    m.waiting = false;
   }
-  const CanSignalConfig& s = m.config->signals[*k];
-  if (s.checksum != ChecksumKind::none) {
-    return to_physical(s.layout, get_raw(build(m), s.layout));
+  return {};
+}
+
+Result<CanEcu::Place> CanEcu::check_counter(std::string_view message,
+                                            std::string_view signal) const {
+  auto at = find_both(message, signal);
+  if (at && !messages_[at->first].config->signals[at->second].counter) {
+    return fail(Errc::bad_argument, fmt::format("{}.{} is not a counter", message, signal));
   }
-  return to_physical(s.layout, m.raw[*k]);
+  return at;
+}
+
+Result<> CanEcu::freeze_counter(std::string_view message, std::string_view signal, bool frozen) {
+  auto at = check_counter(message, signal);
+  if (!at) {
+    return tl::unexpected(at.error());
+  }
+  std::vector<std::size_t>& list = messages_[at->first].frozen;
+  std::erase(list, at->second);
+  if (frozen) {
+    list.push_back(at->second);
+  }
+  return {};
+}
+
+Result<std::size_t> CanEcu::check_checksum(std::string_view message) const {
+  auto i = find(message);
+  if (!i) {
+    return i;
+  }
+  const auto& signals = messages_[*i].config->signals;
+  if (std::none_of(signals.begin(), signals.end(),
+                   [](const CanSignalConfig& s) { return s.checksum != ChecksumKind::none; })) {
+    return fail(Errc::bad_argument, fmt::format("message {} has no checksum signal", message));
+  }
+  return i;
+}
+
+Result<> CanEcu::corrupt_checksum(std::string_view message, std::shared_ptr<ChecksumFault> fault) {
+  auto i = check_checksum(message);
+  if (!i) {
+    return tl::unexpected(i.error());
+  }
+  messages_[*i].bad_checksum = std::move(fault);
+  return {};
+}
+
+Result<CanEcu::Place> CanEcu::check_ramp(std::string_view message, std::string_view signal,
+                                         double to) const {
+  auto at = find_both(message, signal);
+  if (!at) {
+    return at;
+  }
+  const CanMessageConfig& m = *messages_[at->first].config;
+  if (m.send == CanMessageConfig::Send::on_change) {
+    return fail(
+        Errc::bad_argument,
+        fmt::format("message {} is sent on change only: a ramp needs a cyclic message", m.name));
+  }
+  if (m.signals[at->second].counter) {
+    return fail(Errc::bad_argument,
+                fmt::format("{}.{} is a counter: it counts by itself", m.name, signal));
+  }
+  if (auto ok = value_raw(at->first, at->second, to, true); !ok) {  // as a value to set
+    return tl::unexpected(ok.error());
+  }
+  return at;
+}
+
+Result<> CanEcu::ramp_signal(std::string_view message, std::string_view signal, SimTime until,
+                             double to) {
+  auto at = check_ramp(message, signal, to);
+  if (!at) {
+    return tl::unexpected(at.error());
+  }
+  const auto [i, k] = *at;
+  Message& m = messages_[i];
+  std::erase_if(m.ramps, [k](const Ramp& r) { return r.signal == k; });
+  const double start = to_physical(m.config->signals[k].layout, m.raw[k]);
+  m.ramps.push_back(Ramp{k, node_.now(), until, start, to});
+  return {};
+}
+
+void CanEcu::apply_ramps(Message& m, SimTime now) {
+  for (const Ramp& r : m.ramps) {
+    const CanSignalConfig& s = m.config->signals[r.signal];
+    m.raw[r.signal] = to_raw(s.layout, ramp_at(r, now)).value_or(m.raw[r.signal]);
+  }
+  std::erase_if(m.ramps, [now](const Ramp& r) { return now >= r.until; });
 }
 
 Result<MessageCounters> CanEcu::counters(std::string_view message) const {

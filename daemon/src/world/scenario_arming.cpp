@@ -258,6 +258,15 @@ void ScenarioRunner::arm(const std::string& name, const Resolved& r, std::size_t
       });
       break;
     }
+    case FaultEffect::message_timeout:
+    case FaultEffect::checksum_error:
+    case FaultEffect::counter_freeze:
+    case FaultEffect::counter_jump:
+    case FaultEffect::signal_step:
+    case FaultEffect::signal_ramp:
+    case FaultEffect::signal_invalid:
+      arm_restbus(applied, what);
+      break;
     case FaultEffect::oscillator: {
       const NodeId node = r.node->id;
       const int32_t ppm = f.ppm;

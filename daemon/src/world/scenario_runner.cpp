@@ -164,11 +164,29 @@ ScenarioRunner::resolve(const Scenario& s) const {
       plan.push_back(r);
       continue;
     }
+    if (is_restbus_effect(f.effect)) {
+      const auto ecu = find_can_message ? find_can_message(f.bus, f.message) : std::nullopt;
+      if (!ecu) {
+        where(fmt::format("no simulated CAN node sends a message named \"{}\" on {}", f.message,
+                          f.bus));
+        continue;
+      }
+      if (auto problem = restbus_problem(f, *ecu->ecu); !problem.empty()) {
+        where(problem);
+        continue;
+      }
+      r.ecu = ecu->ecu;
+      plan.push_back(r);
+      continue;
+    }
     const std::string& node_name = !f.node.empty() ? f.node : f.match.from;
     if (!node_name.empty()) {
-      r.node = devices_.find_node(node_name);
+      r.node = find_node(node_name);
       if (!r.node) {
-        where(fmt::format("no node named \"{}\" (configured nodes are DEVICE:N)", node_name));
+        where(fmt::format(
+            "no node named \"{}\" (configured nodes are DEVICE:N; simulated CAN nodes NAME, or "
+            "BUS/NAME where several buses have that NAME)",
+            node_name));
         continue;
       }
       if (!f.bus.empty() && r.node->bus != r.bus) {
@@ -270,7 +288,21 @@ tl::expected<void, std::vector<std::string>> ScenarioRunner::apply(const Scenari
                          r.node ? r.node->node : nullptr,
                          0,
                          0,
-                         std::nullopt};
+                         std::nullopt,
+                         nullptr,
+                         nullptr};
+    if (r.ecu != nullptr) {  // a message or signal of a simulated CAN node
+      applied.ecu = r.ecu;
+      applied.node = &r.ecu->node();
+      applied.target =
+          fmt::format("{}/{}{}{}", f.bus, f.message, f.signal.empty() ? "" : ".", f.signal);
+      // `fault list` shows the message's frames as the fault's MATCH.
+      if (const CanMessageConfig* m = r.ecu->message_config(f.message)) {
+        applied.spec.match.id = m->id;
+        applied.spec.match.mask = 0x1FFFFFFF;
+        applied.spec.match.ext = m->extended;
+      }
+    }
     arm(s.name, r, k, seed, applied);
     loaded.faults.push_back(std::move(applied));
   }

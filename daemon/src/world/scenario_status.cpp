@@ -28,7 +28,7 @@ std::vector<ScenarioRunner::FaultStatus> ScenarioRunner::status() const {
                      0,
                      a.state->fired,
                      State::pending};
-      if (f.effect <= FaultEffect::ack_error) {
+      if (f.effect <= FaultEffect::ack_error || a.ecu != nullptr) {
         st.frames = FaultStatus::Frames::can;
         st.match = f.match;
       } else if (is_lin_frame_effect(f.effect)) {
@@ -58,6 +58,10 @@ std::vector<ScenarioRunner::FaultStatus> ScenarioRunner::status() const {
           st.hits = a.lin_rule ? plan.rule(*a.lin_rule).hits : a.final_hits;
         }
         over = over || (a.spec.count && st.hits >= *a.spec.count);
+        st.state = now.ns() < st.at_ns ? State::pending : over ? State::done : State::active;
+      } else if (a.checksum) {  // checksum_error: the frames it made wrong
+        st.hits = a.checksum->hits;
+        over = over || (f.count && st.hits >= *f.count);
         st.state = now.ns() < st.at_ns ? State::pending : over ? State::done : State::active;
       } else if (now.ns() < st.at_ns) {
         st.state = State::pending;
@@ -135,7 +139,7 @@ void ScenarioRunner::retire(AppliedFault& a) {
   }
 }
 
-void ScenarioRunner::device_gone(std::string_view device, std::size_t bus, const HostedNode& node) {
+void ScenarioRunner::device_gone(std::string_view what, std::size_t bus, const HostedNode& node) {
   for (LoadedScenario& sc : scenarios_) {
     for (AppliedFault& a : sc.faults) {
       if (a.node != &node || a.state->cleared) {
@@ -143,7 +147,7 @@ void ScenarioRunner::device_gone(std::string_view device, std::size_t bus, const
       }
       a.state->cleared = true;
       retire(a);
-      log(fmt::format("{}: ends, device {} is gone", fault_label(sc.name, a.spec), device));
+      log(fmt::format("{}: ends, {} is gone", fault_label(sc.name, a.spec), what));
     }
   }
   CanBus& b = *buses_[bus].bus;

@@ -354,7 +354,7 @@ void Simulation::remove_ephemeral(const std::string& name) {
   // Faults that name the device end with it; its node, kept for a later device, comes back
   // plugged in and on its nominal clock. Its counter timeline stays readable.
   if (const DeviceRegistry::Ephemeral* e = devices_.find_ephemeral(name)) {
-    scenarios_.device_gone(e->name, e->bus, *e->node);
+    scenarios_.device_gone(fmt::format("device {}", e->name), e->bus, *e->node);
     gone_nodes_.keep(e->name, e->bus, scheduler_.now(),
                      buses_[e->bus].can->stats(e->node->node()).timeline);
   }

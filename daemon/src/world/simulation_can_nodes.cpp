@@ -82,7 +82,11 @@ tl::expected<std::vector<std::string>, std::vector<std::string>> Simulation::loa
     const std::size_t bus = *bus_index(n.bus);
     // Replaced: the old node leaves the bus first (its node may carry the new one).
     std::erase_if(can_nodes_, [&](const SimulatedCanNode& old) {
-      return old.bus == bus && old.ecu->name() == n.name;
+      const bool replaced = old.bus == bus && old.ecu->name() == n.name;
+      if (replaced) {
+        can_node_gone(old);
+      }
+      return replaced;
     });
     auto ecu = restbus::CanEcu::start(n, nodes_.spare(bus), *bus_timing(bus));
     can_nodes_.push_back(SimulatedCanNode{bus, std::move(*ecu)});
@@ -130,8 +134,32 @@ Result<> Simulation::remove_can_node(std::string_view name) {
   if (!found) {
     return tl::unexpected(found.error());
   }
+  can_node_gone(**found);
   can_nodes_.erase(*found);
   return {};
+}
+
+void Simulation::can_node_gone(const SimulatedCanNode& n) {
+  scenarios_.device_gone(
+      fmt::format("simulated CAN node {}/{}", config_.buses[n.bus].name, n.ecu->name()), n.bus,
+      n.ecu->node());
+}
+
+std::optional<ScenarioRunner::CanNodeRef> Simulation::find_can_node(std::string_view name) {
+  auto found = find_can_named(name);
+  if (!found) {
+    return std::nullopt;
+  }
+  return ScenarioRunner::CanNodeRef{(*found)->bus, (*found)->ecu.get()};
+}
+
+std::optional<ScenarioRunner::CanNodeRef> Simulation::find_can_sender(std::string_view bus,
+                                                                      std::string_view message) {
+  auto ecu = can_message(bus, message);
+  if (!ecu) {
+    return std::nullopt;
+  }
+  return ScenarioRunner::CanNodeRef{*bus_index(bus), *ecu};
 }
 
 }  // namespace canemu::daemon

@@ -42,9 +42,19 @@ enum class FaultEffect {
   // on a LIN node
   lin_responder_off,
   lin_wakeup,
+  // on a simulated CAN node's message or signal (docs/faults.md, "Simulated CAN nodes")
+  message_timeout,
+  checksum_error,
+  counter_freeze,
+  counter_jump,
+  signal_step,
+  signal_ramp,
+  signal_invalid,
 };
 // The effects on a LIN bus's frames (rules of its LinFaultPlan), lin_responder_off included.
 bool is_lin_frame_effect(FaultEffect effect);
+// The effects on a simulated CAN node's message or signal (`message` or `signal` on `bus`).
+bool is_restbus_effect(FaultEffect effect);
 std::string_view to_string(FaultEffect effect);
 
 // Which frames a frame effect hits; every part optional.
@@ -78,6 +88,12 @@ struct FaultSpec {
   bool both_wires = false;     // line_error: both wires broken (else one: single-wire mode)
   bool lin_header = false;     // lin_bit_error: in the header (else in the response)
   int64_t pulse_ns = 250'000;  // lin_wakeup: the dominant pulse
+  // A simulated CAN node's message on `bus`, and its signal (`signal = "MESSAGE.SIGNAL"`)
+  std::string message;
+  std::string signal;
+  std::optional<double> value;  // signal_step, signal_invalid: `value`; signal_ramp: `to`
+  std::optional<uint64_t> raw;  // signal_invalid: the raw bits instead of a value
+  uint64_t by = 0;              // counter_jump: values skipped
 };
 
 struct Scenario {

@@ -13,6 +13,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "canemu/daemon/base/error.hpp"
@@ -32,6 +33,14 @@ struct MessageCounters {
   std::optional<model::SimTime> last_queued;  // when the last frame was queued
 };
 
+// A wrong checksum on a message's frames (a scenario's checksum_error): while it is set, the
+// frames carry their checksum with every bit inverted, the next `frames` of them (nothing: every
+// frame until it is lifted). Shared with the scenario that set it, which reads `hits`.
+struct ChecksumFault {
+  std::optional<uint64_t> frames;  // frames still to carry a wrong checksum
+  uint64_t hits = 0;               // frames that went to the controller with one
+};
+
 class CanEcu : private model::ControllerEvents {
  public:
   // The node `config` on `node` (a spare node of its bus, claimed from now on until the ECU
@@ -47,6 +56,8 @@ class CanEcu : private model::ControllerEvents {
 
   const CanNodeConfig& config() const { return config_; }
   const std::string& name() const { return config_.name; }
+  // The message named `message`, or nullptr.
+  const CanMessageConfig* message_config(std::string_view message) const;
   model::HostedNode& node() { return node_; }
   const model::HostedNode& node() const { return node_; }
 
@@ -54,13 +65,47 @@ class CanEcu : private model::ControllerEvents {
   // against what its bits hold; unknown names and checksum signals are refused with the reason,
   // and nothing changes. An on_change or cyclic_and_on_change message whose bits changed is
   // queued at once; the others carry the value in their next frame.
-  Result<> set_signal(std::string_view message, std::string_view signal, double physical);
+  // `check_range` false (a scenario's signal_invalid) checks the value against the bits only.
+  // Setting a signal ends a ramp of it.
+  Result<> set_signal(std::string_view message, std::string_view signal, double physical,
+                      bool check_range = true);
   // The signal's current physical value (a counter's: the value of the next frame).
   Result<double> get_signal(std::string_view message, std::string_view signal) const;
   // Switches the node on (a reset controller joins the bus, the schedule starts again from now)
   // or off (it leaves the bus; waiting frames are dropped). Signal values stay.
   void power(bool on);
   bool powered() const { return powered_; }
+
+  // Faults of a scenario on the node's messages (docs/faults.md, "Simulated CAN nodes"). Each
+  // refuses an unknown message or signal, or a signal of the wrong kind, and changes nothing;
+  // check_* says what it would refuse, and where the message and signal are.
+  using Place = std::pair<std::size_t, std::size_t>;  // a message's index, its signal's
+  // message_timeout: while `silent`, the message sends nothing: its cyclic instants are skipped,
+  // its changes queue nothing and a frame waiting in the node is dropped (one the controller
+  // holds already still goes).
+  Result<> silence(std::string_view message, bool silent);
+  // counter_freeze: while `frozen`, every frame carries the counter's current value.
+  Result<Place> check_counter(std::string_view message, std::string_view signal) const;
+  Result<> freeze_counter(std::string_view message, std::string_view signal, bool frozen);
+  // checksum_error: `fault` on the message's checksum from now (nullptr lifts it).
+  Result<std::size_t> check_checksum(std::string_view message) const;
+  Result<> corrupt_checksum(std::string_view message, std::shared_ptr<ChecksumFault> fault);
+  // A signal's raw bits (a counter's: those of the next frame), and setting them: checked
+  // against the signal's width only, queued at once for an on-change message as set_signal
+  // does (counter_jump, signal_invalid's raw values and their restoring).
+  Result<uint64_t> raw_signal(std::string_view message, std::string_view signal) const;
+  Result<Place> check_raw(std::string_view message, std::string_view signal, uint64_t raw) const;
+  Result<> set_raw_signal(std::string_view message, std::string_view signal, uint64_t raw);
+  // What set_signal would refuse.
+  Result<> check_value(std::string_view message, std::string_view signal, double physical,
+                       bool check_range = true) const;
+  // signal_ramp: from now until `until`, each frame carries the value on the straight line from
+  // the signal's current value to `to` at the instant its payload is built, rounded to the
+  // bits; from `until` on, `to`. `to` is checked as set_signal checks a value; a counter and a
+  // message sent only on change are refused (a ramp changes the frames a cycle sends).
+  Result<Place> check_ramp(std::string_view message, std::string_view signal, double to) const;
+  Result<> ramp_signal(std::string_view message, std::string_view signal, model::SimTime until,
+                       double to);
 
   Result<MessageCounters> counters(std::string_view message) const;
   // Frames of all its messages sent whole.
@@ -69,6 +114,14 @@ class CanEcu : private model::ControllerEvents {
   Result<std::vector<uint8_t>> payload(std::string_view message) const;
 
  private:
+  // A signal on its way from one value to another (signal_ramp).
+  struct Ramp {
+    std::size_t signal;
+    model::SimTime from;
+    model::SimTime until;
+    double start;
+    double to;
+  };
   struct Message {
     const CanMessageConfig* config = nullptr;
     std::vector<uint64_t> raw;  // each signal's current raw value
@@ -76,13 +129,26 @@ class CanEcu : private model::ControllerEvents {
     MessageCounters counters;
     std::optional<model::EventId> next;  // the next schedule instant
     uint64_t due = 0;                    // its index k: delay + k * cycle
+    // Scenario faults
+    bool silent = false;                          // message_timeout
+    std::vector<std::size_t> frozen;              // counter_freeze: the counters frozen
+    std::shared_ptr<ChecksumFault> bad_checksum;  // checksum_error
+    std::vector<Ramp> ramps;                      // signal_ramp
   };
 
   CanEcu(const CanNodeConfig& config, model::HostedNode& node,
          const model::HostedNodeSettings& timing);
   Result<std::size_t> find(std::string_view message) const;
   Result<std::size_t> find_signal(const Message& m, std::string_view signal) const;
+  // The message `message`'s index and the index of its signal `signal`.
+  Result<Place> find_both(std::string_view message, std::string_view signal) const;
+  // The raw bits of `physical` for signal `k` of message `i`, checked as set_signal checks.
+  Result<uint64_t> value_raw(std::size_t i, std::size_t k, double physical, bool check_range) const;
   std::vector<uint8_t> build(const Message& m) const;
+  // Stores a signal's new raw value; an on-change message whose bits changed is queued.
+  void change(std::size_t i, std::size_t k, uint64_t raw);
+  // The ramps' values at `now` into the message's raw values (ended ramps are dropped).
+  void apply_ramps(Message& m, model::SimTime now);
   bool active(const Message& m) const;
   void schedule(std::size_t i);
   void due(std::size_t i);

@@ -23,6 +23,7 @@
 
 #include "canemu/daemon/config/config.hpp"
 #include "canemu/daemon/config/scenario.hpp"
+#include "canemu/daemon/restbus/can_ecu.hpp"
 #include "canemu/daemon/world/device_registry.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/fault_plan.hpp"
@@ -51,6 +52,16 @@ class ScenarioRunner {
     model::lin::LinNodeId node;
   };
   std::function<std::optional<LinNodeRef>(std::string_view name)> find_lin_node;
+  // How simulated CAN nodes ([[can_node]]) resolve: by NAME or BUS/NAME (node effects, `from`),
+  // and as the node that sends a message named `message` on the bus named `bus`. A node that
+  // goes must be announced with device_gone() first.
+  struct CanNodeRef {
+    std::size_t bus;
+    restbus::CanEcu* ecu;
+  };
+  std::function<std::optional<CanNodeRef>(std::string_view name)> find_can_node;
+  std::function<std::optional<CanNodeRef>(std::string_view bus, std::string_view message)>
+      find_can_message;
   std::size_t bus_count() const { return buses_.size(); }
 
   // Who loaded a scenario: the configuration (no uid) or a client running as that uid.
@@ -100,10 +111,11 @@ class ScenarioRunner {
   static constexpr std::size_t kMaxRulesPerUser = 256;
   static constexpr std::size_t kKeptCleared = 32;
 
-  // The ephemeral device `device` with node `node` on bus `bus` is going: the faults that act
-  // on the node or match its frames end, and the node, kept for a later device, is plugged in
-  // and on its nominal clock again.
-  void device_gone(std::string_view device, std::size_t bus, const model::HostedNode& node);
+  // The ephemeral device or simulated CAN node `what` ("device vci3", "simulated CAN node
+  // can0/MOTOR", as the log names it) with node `node` on bus `bus` is going: the faults that
+  // act on the node, its messages and signals or match its frames end, and the node, kept for
+  // a later device, is plugged in and on its nominal clock again.
+  void device_gone(std::string_view what, std::size_t bus, const model::HostedNode& node);
 
  private:
   struct Bus {
@@ -129,6 +141,10 @@ class ScenarioRunner {
     uint64_t final_seen = 0;                  // the rule's counts when it left the plan
     uint64_t final_hits = 0;
     std::optional<std::size_t> lin_rule;  // in the LIN bus's LinFaultPlan (while it is there)
+    // A simulated CAN node's message or signal effect: the node (valid until the fault is
+    // cleared: device_gone() clears it), and checksum_error's frames
+    restbus::CanEcu* ecu = nullptr;
+    std::shared_ptr<restbus::ChecksumFault> checksum;
   };
   struct LoadedScenario {
     std::string name;
@@ -142,7 +158,15 @@ class ScenarioRunner {
     std::size_t bus = 0;
     std::optional<DeviceRegistry::NodeRef> node;  // node effects; frame effects with match.from
     std::optional<LinNodeRef> lin_node;           // LIN node effects; LIN frames' match.from
+    restbus::CanEcu* ecu = nullptr;               // a simulated CAN node's message or signal
   };
+  // A node by name: a device's controller DEVICE:N or an ephemeral device, else a simulated
+  // CAN node NAME or BUS/NAME.
+  std::optional<DeviceRegistry::NodeRef> find_node(std::string_view name) const;
+  // Why fault `f` cannot act on `ecu`'s message or signal ("" when it can).
+  static std::string restbus_problem(const FaultSpec& f, const restbus::CanEcu& ecu);
+  // Puts a message or signal effect to work on its simulated CAN node.
+  void arm_restbus(AppliedFault& applied, const std::string& what);
   void add_lin_rule(const Resolved& r, AppliedFault& applied);
   void lin_fault_hit(std::size_t bus, std::size_t rule, model::SimTime at, uint8_t id);
   // Logs a rule's first hit (with `what_was_hit`) and the hit that reaches its count (a frame

@@ -204,7 +204,17 @@ class Simulation {
         nodes_(scheduler_),
         scenarios_(scheduler_, devices_, config_.simulation.seed) {
     scenarios_.find_lin_node = [this](std::string_view name) { return find_lin_node(name); };
+    scenarios_.find_can_node = [this](std::string_view name) { return find_can_node(name); };
+    scenarios_.find_can_message = [this](std::string_view bus, std::string_view message) {
+      return find_can_sender(bus, message);
+    };
   }
+  // A simulated CAN node by NAME or BUS/NAME, and the one that sends `message` on `bus`.
+  std::optional<ScenarioRunner::CanNodeRef> find_can_node(std::string_view name);
+  std::optional<ScenarioRunner::CanNodeRef> find_can_sender(std::string_view bus,
+                                                            std::string_view message);
+  // The simulated CAN node `n` goes: the faults on it end (before it leaves its node).
+  void can_node_gone(const SimulatedCanNode& n);
   // A LIN controller ("DEVICE:N", configured or ephemeral) or a simulated LIN node, by name.
   std::optional<ScenarioRunner::LinNodeRef> find_lin_node(std::string_view name) const;
   // A simulated LIN node by "BUS/NAME", or by a NAME that only one bus has; else the reason.

@@ -76,6 +76,13 @@ void add_inject_options(CLI::App& inject, InjectOptions& o) {
   inject.add_option("--wire", o.wire, "line_error: one (default) or both");
   inject.add_option("--where", o.where, "lin_bit_error: header or response (default)");
   inject.add_option("--pulse", o.pulse, "lin_wakeup: 250us (default) to 5ms");
+  inject.add_option("--message", o.message,
+                    "a simulated CAN node's message (message_timeout, ...)");
+  inject.add_option("--signal", o.signal, "MESSAGE.SIGNAL (counter_freeze, signal_step, ...)");
+  inject.add_option("--value", o.value, "signal_step, signal_invalid: physical value");
+  inject.add_option("--raw", o.raw, "signal_invalid: the signal's bits (255 or 0xFF)");
+  inject.add_option("--to", o.to, "signal_ramp: the value at --until");
+  inject.add_option("--by", o.by, "counter_jump: values skipped");
   inject.footer(
       "Examples:\n"
       "  canemu fault inject --effect bit_error --bus can0 --id 1A0 --count 3\n"
@@ -84,7 +91,10 @@ void add_inject_options(CLI::App& inject, InjectOptions& o) {
       "  canemu fault inject --effect babble --node ixxat0:0 --id 0 --data DEADBEEF "
       "--duration 500ms\n"
       "  canemu fault inject --effect lin_checksum_error --bus lin0 --id 20 --count 1\n"
-      "  canemu fault inject --effect lin_wakeup --node ixxat0:2 --at 10ms");
+      "  canemu fault inject --effect lin_wakeup --node ixxat0:2 --at 10ms\n"
+      "  canemu fault inject --effect checksum_error --bus can0 --message ENGINE_DATA --count 2\n"
+      "  canemu fault inject --effect signal_ramp --bus can0 --signal ENGINE_DATA.SPEED --to 3000 "
+      "--until 2s");
 }
 
 // Made with toml++ so that every value is quoted and escaped as TOML wants it.
@@ -108,6 +118,18 @@ tl::expected<std::string, std::string> inject_scenario(const InjectOptions& o) {
   put("ppm", o.ppm);
   put("probability", o.probability);
   put("bit_error_rate", o.bit_error_rate);
+  put("message", o.message);
+  put("signal", o.signal);
+  put("value", o.value);
+  put("to", o.to);
+  put("by", o.by);
+  if (o.raw) {
+    auto n = option_integer("--raw", *o.raw);
+    if (!n) {
+      return tl::unexpected(n.error());
+    }
+    fault.insert("raw", *n);
+  }
   if (o.count) {
     if (*o.count == "all") {
       fault.insert("count", "all");

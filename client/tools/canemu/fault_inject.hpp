@@ -30,6 +30,10 @@ struct InjectOptions {
   std::optional<std::string> count;  // a number or "all"
   std::optional<double> probability, bit_error_rate;
   std::optional<std::string> data;  // babble: hex bytes
+  // Faults on simulated CAN nodes' messages and signals
+  std::optional<std::string> message, signal, raw;
+  std::optional<double> value, to;
+  std::optional<int64_t> by;
 };
 
 // The options of `fault inject`, with its examples.

@@ -130,8 +130,8 @@ TEST(Cli, FaultsLoadListInjectAndClear) {
             "node_off: no node named \"ixxat0:9\" (configured nodes are DEVICE:N; simulated "
             "CAN nodes NAME, or BUS/NAME where several buses have that NAME)\ncanemu: scenario "
             "rejected; nothing of it applied\n");  // no line numbers
-                                                                               // of a text the
-                                                                               // user never saw
+                                                   // of a text the
+                                                   // user never saw
   EXPECT_EQ(bad.wait(), 1);
   // The injected fault hits 0x123 twice: two bit errors, then the frame goes out.
   EXPECT_EQ(output_of(d, {"send", "can0", "123#11", "--step", "5ms"}),

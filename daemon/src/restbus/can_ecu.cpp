@@ -82,6 +82,9 @@ Result<std::unique_ptr<CanEcu>> CanEcu::start(const CanNodeConfig& config, Hoste
   for (Message& m : ecu->messages_) {
     for (const CanSignalConfig& s : m.config->signals) {
       m.raw.push_back(*to_raw(s.layout, s.initial));
+      // Checked to fit by the reader, as the initial value is: read once, not every cycle.
+      m.inactive.push_back(s.inactive ? to_raw(s.layout, *s.inactive).value_or(0)
+                                      : std::optional<uint64_t>());
     }
   }
   node.claim(true);
@@ -163,13 +166,9 @@ void CanEcu::due(std::size_t i) {
 }
 
 bool CanEcu::active(const Message& m) const {
-  for (std::size_t k = 0; k < m.config->signals.size(); ++k) {
-    const CanSignalConfig& s = m.config->signals[k];
-    if (s.inactive) {
-      auto inactive = to_raw(s.layout, *s.inactive);
-      if (!inactive || *inactive != m.raw[k]) {
-        return true;
-      }
+  for (std::size_t k = 0; k < m.inactive.size(); ++k) {
+    if (m.inactive[k] && *m.inactive[k] != m.raw[k]) {
+      return true;
     }
   }
   return false;

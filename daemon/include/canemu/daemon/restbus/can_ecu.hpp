@@ -124,8 +124,9 @@ class CanEcu : private model::ControllerEvents {
   };
   struct Message {
     const CanMessageConfig* config = nullptr;
-    std::vector<uint64_t> raw;  // each signal's current raw value
-    bool waiting = false;       // a frame waits for the controller
+    std::vector<uint64_t> raw;                      // each signal's current raw value
+    std::vector<std::optional<uint64_t>> inactive;  // each signal's inactive raw value, if any
+    bool waiting = false;                           // a frame waits for the controller
     MessageCounters counters;
     std::optional<model::EventId> next;  // the next schedule instant
     uint64_t due = 0;                    // its index k: delay + k * cycle

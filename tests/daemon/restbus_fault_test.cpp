@@ -306,6 +306,34 @@ effect = "node_off"
                                                     ms(35), ms(45), ms(55)}));
 }
 
+TEST(RestbusFaults, AMessageTimeoutDropsTheFrameWaitingInTheNodeAndCountsIt) {
+  World w(kNodes);
+  EXPECT_EQ(apply(w, R"([[fault]]
+at = "12ms"
+until = "40ms"
+node = "BRAKE"
+effect = "node_off"
+
+[[fault]]
+at = "28ms"
+until = "33ms"
+bus = "can0"
+message = "BRAKE_DATA"
+effect = "message_timeout"
+)"),
+            std::vector<std::string>{});
+  w.run_until(ms(50) + SimDuration(1));
+  // Unplugged, the frame of 15 ms stays in the controller and the one of 25 ms waits in the
+  // node until the timeout drops it; the one of 35 ms waits again. Back at 40 ms, both go.
+  EXPECT_EQ(w.starts(kBrake),
+            (std::vector<SimTime>{ms(5), ms(40), ms(40) + SimDuration(136'000), ms(45)}));
+  const auto c = *w.ecu("BRAKE").counters("BRAKE_DATA");
+  EXPECT_EQ(c.dropped, 1u);
+  EXPECT_EQ(c.skipped, 0u);
+  EXPECT_EQ(c.queued, 5u);  // 5, 15, 25, 35, 45 ms
+  EXPECT_EQ(c.sent, 4u);
+}
+
 TEST(RestbusFaults, AreRefusedWithTheReasonAndNothingApplies) {
   World w(kNodes);
   EXPECT_EQ(

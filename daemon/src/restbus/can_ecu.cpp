@@ -120,7 +120,7 @@ void CanEcu::power(bool on) {
   if (!on) {
     stop_schedule();
     for (Message& m : messages_) {
-      m.waiting = false;
+      drop(m);
     }
     node_.stop();
     return;
@@ -172,6 +172,13 @@ bool CanEcu::active(const Message& m) const {
     }
   }
   return false;
+}
+
+void CanEcu::drop(Message& m) {
+  if (m.waiting) {
+    m.waiting = false;
+    ++m.counters.dropped;
+  }
 }
 
 void CanEcu::queue(Message& m) {
@@ -268,7 +275,7 @@ void CanEcu::frame_transmitted(SimTime, const Frame& frame) {
 void CanEcu::state_changed(SimTime, ErrorState state, uint16_t, uint16_t) {
   if (state == ErrorState::bus_off) {
     for (Message& m : messages_) {
-      m.waiting = false;  // a controller in bus-off sends nothing; the schedule skips
+      drop(m);  // a controller in bus-off sends nothing; the schedule skips
     }
   }
 }
@@ -443,7 +450,7 @@ Result<> CanEcu::silence(std::string_view message, bool silent) {
   Message& m = messages_[*i];
   m.silent = silent;
   if (silent) {
-    m.waiting = false;
+    drop(m);
   }
   return {};
 }

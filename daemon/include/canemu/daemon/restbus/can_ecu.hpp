@@ -30,6 +30,8 @@ struct MessageCounters {
   uint64_t replaced = 0;  // of them, frames that replaced one still waiting (one per message)
   uint64_t sent = 0;      // frames the controller sent successfully
   uint64_t skipped = 0;   // schedule instants with nothing sent: bus-off, or not active
+  uint64_t dropped = 0;   // frames that waited in the node and were dropped (bus-off, power off,
+                          // message_timeout)
   std::optional<model::SimTime> last_queued;  // when the last frame was queued
 };
 
@@ -154,6 +156,8 @@ class CanEcu : private model::ControllerEvents {
   void schedule(std::size_t i);
   void due(std::size_t i);
   void queue(Message& m);
+  // The message's waiting frame, if any, is dropped (and counted).
+  void drop(Message& m);
   std::optional<model::TxFrame> next_tx();
   void stop_schedule();
 

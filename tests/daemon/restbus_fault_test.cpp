@@ -324,9 +324,10 @@ effect = "message_timeout"
             std::vector<std::string>{});
   w.run_until(ms(50) + SimDuration(1));
   // Unplugged, the frame of 15 ms stays in the controller and the one of 25 ms waits in the
-  // node until the timeout drops it; the one of 35 ms waits again. Back at 40 ms, both go.
-  EXPECT_EQ(w.starts(kBrake),
-            (std::vector<SimTime>{ms(5), ms(40), ms(40) + SimDuration(136'000), ms(45)}));
+  // node until the timeout drops it; the one of 35 ms waits again. Back at 40 ms, both go, after
+  // ENGINE_DATA's frame of 40 ms (lower identifier: 244 us with the intermission), back to back.
+  EXPECT_EQ(w.starts(kBrake), (std::vector<SimTime>{ms(5), ms(40) + SimDuration(244'000),
+                                                    ms(40) + SimDuration(380'000), ms(45)}));
   const auto c = *w.ecu("BRAKE").counters("BRAKE_DATA");
   EXPECT_EQ(c.dropped, 1u);
   EXPECT_EQ(c.skipped, 0u);

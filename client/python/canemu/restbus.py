@@ -148,7 +148,7 @@ def load(path_or_text: Union[str, "os.PathLike[str]"], bus: Optional[str] = None
     str holding a newline, is ``[[can_node]]`` TOML. The tables are checked as a configuration
     file's are and all start at the instant canemud takes them (in stepped time, the current
     simulated time), or none does. A node of a name that runs on its bus already is replaced.
-    RestbusError with canemud's reasons; canemu.dbc.DbcError (a ValueError) for what the
+    The import's notes (a message without a sender skipped) are warnings. RestbusError with canemud's reasons; canemu.dbc.DbcError (a ValueError) for what the
     import cannot carry; ValueError for DBC options with TOML; OSError for a file that cannot
     be read."""
     from . import dbc  # cantools is needed for a DBC only

@@ -65,15 +65,22 @@ def _format(message: Any, decoded: dict) -> str:
     return f"{message.name}({', '.join(parts)})"
 
 
+def message_of(db: Any, arbitration_id: int, is_extended: bool) -> Any:
+    """The cantools message of `db` with that identifier, or None (a standard and an extended
+    identifier of one number are two messages)."""
+    try:
+        message = db.get_message_by_frame_id(arbitration_id)
+    except KeyError:
+        return None
+    return message if bool(message.is_extended_frame) == bool(is_extended) else None
+
+
 def decode(db: Any, arbitration_id: int, data: Optional[bytes], is_extended: bool) -> str:
     """The decoding of one frame as a line shows it after ``::``; "" when `db` does not know the
     identifier (a standard and an extended identifier of one number are two messages). `data`
     None: a remote frame."""
-    try:
-        message = db.get_message_by_frame_id(arbitration_id)
-    except KeyError:
-        return ""
-    if bool(message.is_extended_frame) != bool(is_extended):
+    message = message_of(db, arbitration_id, is_extended)
+    if message is None:
         return ""
     if data is None:
         return f"{message.name}: remote frame"

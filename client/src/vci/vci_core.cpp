@@ -182,6 +182,23 @@ HRESULT Library::status(client::Status& out) {
   return VCI_OK;
 }
 
+HRESULT Library::can_nodes(const client::CanNodeRequests& requests, ipc::CanNodeReply& reply) {
+  auto turn = link_.turn();
+  if (!turn) {
+    return unreachable(turn.error());
+  }
+  client::CanNodeOutcome r = client::call_can_nodes(turn->connection(), requests);
+  if (r.error) {
+    return failed(*turn, *r.error);
+  }
+  if (!r.reply) {
+    set_call_detail(VCI_E_INVALIDARG, r.refused);
+    return VCI_E_INVALIDARG;
+  }
+  reply = *r.reply;
+  return VCI_OK;
+}
+
 HRESULT Library::wait_device_change(uint32_t generation, int timeout_ms) {
   // A connection of its own: waiting must not hold the shared one.
   auto c = link_.open_another("vci-enum");

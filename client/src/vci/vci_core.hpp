@@ -19,6 +19,7 @@
 
 #include <sched.h>
 
+#include "canemu/client/can_nodes.hpp"
 #include "canemu/client/connection.hpp"
 #include "canemu/client/daemon_link.hpp"
 #include "canemu/client/lists.hpp"
@@ -244,6 +245,10 @@ class Library {
   HRESULT list_devices(std::vector<DeviceDesc>& out, uint32_t* generation = nullptr);
   // canemud's status, every page of it: buses, nodes, simulated time and time mode.
   HRESULT status(client::Status& out);
+  // Requests about simulated CAN nodes (a load's parts, or one request), in one turn: VCI_OK
+  // with the last reply; VCI_E_INVALIDARG when canemud refused one (its reason as this call's
+  // detail; nothing changed); VCI_E_DISCONNECTED when it could not be asked.
+  HRESULT can_nodes(const client::CanNodeRequests& requests, ipc::CanNodeReply& reply);
   // Waits until the device list changes (VCI_OK) or `timeout_ms` passes (VCI_E_TIMEOUT).
   HRESULT wait_device_change(uint32_t generation, int timeout_ms);
 

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "canemu/client/can_nodes.hpp"
 #include "canemu/client/connection.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "command.hpp"
@@ -45,23 +46,18 @@ void print_nodes(const ipc::CanNodeReply& r) {
   }
 }
 
-// Sends `m` (and, for a load, the parts before it); the reply, or an exit status.
-tl::expected<std::unique_ptr<ipc::CanNodeReply>, int> call(
-    client::Connection& c, const std::vector<std::unique_ptr<ipc::CanNodeRequest>>& parts) {
-  std::unique_ptr<ipc::CanNodeReply> last;
-  for (const auto& m : parts) {
-    auto r = c.call<ipc::CanNodeRequest, ipc::CanNodeReply>(*m);
-    if (!r) {
-      return tl::unexpected(fail(r.error().message));
-    }
-    if (!r->ok) {
-      const std::string errors = ipc::name_of(r->errors);
-      std::fputs((errors.ends_with('\n') ? errors : errors + '\n').c_str(), stderr);
-      return tl::unexpected(fail("nothing changed"));
-    }
-    last = std::make_unique<ipc::CanNodeReply>(*r);
+// Sends the requests (a load's parts, or one request); the last reply, or an exit status.
+tl::expected<std::unique_ptr<ipc::CanNodeReply>, int> call(client::Connection& c,
+                                                           const client::CanNodeRequests& parts) {
+  client::CanNodeOutcome r = client::call_can_nodes(c, parts);
+  if (r.error) {
+    return tl::unexpected(fail(r.error->message));
   }
-  return last;
+  if (!r.reply) {
+    std::fputs((r.refused + '\n').c_str(), stderr);
+    return tl::unexpected(fail("nothing changed"));
+  }
+  return std::move(r.reply);
 }
 
 // The tables to load: the file itself (TOML), or what canemu.dbc makes of a DBC file.
@@ -98,52 +94,7 @@ tl::expected<std::string, std::string> tables_of(const RestbusOptions& o) {
   return run.output;
 }
 
-std::unique_ptr<ipc::CanNodeRequest> request(ipc::CanNodeOp op) {
-  auto m = std::make_unique<ipc::CanNodeRequest>(ipc::make_message<ipc::CanNodeRequest>());
-  m->op = static_cast<uint8_t>(op);
-  return m;
-}
-
-// The requests of a load: the tables in parts of at most kMaxCanNodeText bytes, the last one
-// `load`, the others `load_part`.
-std::vector<std::unique_ptr<ipc::CanNodeRequest>> load_requests(const std::string& text,
-                                                                const std::string& source) {
-  std::vector<std::unique_ptr<ipc::CanNodeRequest>> parts;
-  std::size_t at = 0;
-  do {
-    const std::size_t n = std::min(text.size() - at, ipc::kMaxCanNodeText);
-    const bool last = at + n == text.size();
-    auto m = request(last ? ipc::CanNodeOp::load : ipc::CanNodeOp::load_part);
-    m->length = static_cast<uint32_t>(n);
-    std::copy_n(text.begin() + static_cast<std::ptrdiff_t>(at), n, m->text);
-    ipc::copy_name(m->source, source);
-    parts.push_back(std::move(m));
-    at += n;
-  } while (at < text.size());
-  return parts;
-}
-
-// MESSAGE.SIGNAL into the request; an error text when it is not that.
-std::string name_signal(ipc::CanNodeRequest& m, const std::string& bus, const std::string& text) {
-  const auto dot = text.find('.');
-  if (dot == std::string::npos || dot == 0 || dot + 1 == text.size()) {
-    return fmt::format("\"{}\" is not MESSAGE.SIGNAL", text);
-  }
-  const std::string message = text.substr(0, dot);
-  const std::string signal = text.substr(dot + 1);
-  if (bus.size() >= sizeof m.name || message.size() >= sizeof m.message ||
-      signal.size() >= sizeof m.signal) {
-    return fmt::format("a bus is named in at most {} characters, a message and a signal in {}",
-                       sizeof m.name - 1, sizeof m.message - 1);
-  }
-  ipc::copy_name(m.name, bus);
-  ipc::copy_name(m.message, message);
-  ipc::copy_name(m.signal, signal);
-  return {};
-}
-
-int run(const std::string& socket, const std::vector<std::unique_ptr<ipc::CanNodeRequest>>& parts,
-        bool list, bool value) {
+int run(const std::string& socket, const client::CanNodeRequests& parts, bool list, bool value) {
   auto c = connect(socket, "canemu restbus");
   if (!c) {
     return fail(c.error().message);
@@ -189,17 +140,15 @@ Command add_restbus(CLI::App& app, const std::string& socket) {
               if (!text) {
                 return fail(text.error());
               }
-              return run(socket, load_requests(*text, o->file), true, false);
+              return run(socket, client::can_node_load_requests(*text, o->file), true, false);
             }
-            std::vector<std::unique_ptr<ipc::CanNodeRequest>> parts;
-            parts.push_back(request(list->parsed()     ? ipc::CanNodeOp::list
-                                    : remove->parsed() ? ipc::CanNodeOp::remove
-                                                       : ipc::CanNodeOp::power));
-            if (o->node.size() >= sizeof parts[0]->name) {
-              return fail(fmt::format("{}: a node is named in at most {} characters", o->node,
-                                      sizeof parts[0]->name - 1));
+            client::CanNodeRequests parts;
+            parts.push_back(client::can_node_request(list->parsed()     ? ipc::CanNodeOp::list
+                                                     : remove->parsed() ? ipc::CanNodeOp::remove
+                                                                        : ipc::CanNodeOp::power));
+            if (std::string e = client::name_can_node(*parts[0], o->node); !e.empty()) {
+              return fail(e);
             }
-            ipc::copy_name(parts[0]->name, o->node);
             parts[0]->on = on->parsed() ? 1 : 0;
             return run(socket, parts, list->parsed(), false);
           }};
@@ -220,10 +169,10 @@ Command add_signal(CLI::App& app, const std::string& socket) {
   get->add_option("BUS", o->bus, "the CAN bus")->required();
   get->add_option("MESSAGE.SIGNAL", o->signal, "the DBC message and signal")->required();
   return {signal, [&socket, o, set] {
-            std::vector<std::unique_ptr<ipc::CanNodeRequest>> parts;
-            parts.push_back(
-                request(set->parsed() ? ipc::CanNodeOp::set_signal : ipc::CanNodeOp::get_signal));
-            if (std::string e = name_signal(*parts[0], o->bus, o->signal); !e.empty()) {
+            client::CanNodeRequests parts;
+            parts.push_back(client::can_node_request(set->parsed() ? ipc::CanNodeOp::set_signal
+                                                                   : ipc::CanNodeOp::get_signal));
+            if (std::string e = client::name_signal(*parts[0], o->bus, o->signal); !e.empty()) {
               return fail(e);
             }
             if (set->parsed()) {

@@ -59,6 +59,16 @@ typedef struct _CANEMU_DEVICEINFO {
   CHAR aszBus[CANEMU_MAX_CONTROLLERS][32]; /* the bus each controller is wired to */
 } CANEMU_DEVICEINFO, *PCANEMU_DEVICEINFO;
 
+/* A simulated CAN node canemud runs (80 bytes), docs/restbus.md. */
+typedef struct _CANEMU_CANNODEINFO {
+  CHAR szName[32];
+  CHAR szBus[32];
+  UINT8 bPowered; /* 1: on the bus; 0: switched off */
+  UINT8 abReserved[3];
+  UINT32 dwMessages; /* messages it sends */
+  UINT64 qwFrames;   /* frames it sent whole */
+} CANEMU_CANNODEINFO, *PCANEMU_CANNODEINFO;
+
 /* Talks to the canemud listening at pszSocket from now on (NULL: $CANEMU_SOCKET or the
  * default path again). The connection to the previous daemon ends: objects opened there are
  * closed by that daemon, and their handles fail from now on (close them first).
@@ -112,6 +122,41 @@ HRESULT VCIAPI canemuGetTime(UINT64* pqwNow, PUINT8 pbTimeMode);
  * VCI_E_INVHANDLE; VCI_E_NOT_INITIALIZED before canChannelInitialize; VCI_E_INVALIDARG for a
  * NULL pFd. */
 HRESULT VCIAPI canemuChannelEventFd(HANDLE hCanChn, int* pFd);
+
+/* Simulated CAN nodes at run time (docs/restbus.md). canemud's refusal (why, one line per
+ * error) is vciFormatError's detail of the failed call: "invalid argument (REASON)"; a refused
+ * call changes nothing. */
+
+/* Loads [[can_node]] tables (TOML text, at most 8 MiB; pszSource, may be NULL, names them in
+ * canemud's errors): they are checked as a configuration file's are and all start, at the
+ * instant canemud takes them, or none does. A node of a name that runs on its bus already is
+ * replaced. VCI_OK; VCI_E_INVALIDARG for NULL tables, or when canemud refuses them. */
+HRESULT VCIAPI canemuLoadCanNodes(const char* pszTables, const char* pszSource);
+
+/* The dwIndex-th simulated CAN node (from 0), the configuration's then the loaded ones in the
+ * order they started (at most the first 48). Same results as canemuEnumBuses. */
+HRESULT VCIAPI canemuEnumCanNodes(UINT32 dwIndex, PCANEMU_CANNODEINFO pInfo);
+
+/* Switches the node pszNode (NAME, or BUS/NAME where several buses have a node of that NAME)
+ * off (fOn FALSE: it leaves the bus, its waiting frames are dropped, its signals stay) or on
+ * (its controller is reset and its schedules start again from now). VCI_OK; VCI_E_INVALIDARG
+ * for NULL or an unknown node. */
+HRESULT VCIAPI canemuPowerCanNode(const char* pszNode, BOOL fOn);
+
+/* Takes the node pszNode off its bus. VCI_OK; VCI_E_INVALIDARG for NULL or an unknown node. */
+HRESULT VCIAPI canemuRemoveCanNode(const char* pszNode);
+
+/* Sets the physical value of pszSignal, "MESSAGE.SIGNAL", of the message a simulated node sends
+ * on the bus pszBus; its next frame carries it (an on-change message goes at once). VCI_OK;
+ * VCI_E_INVALIDARG for NULL, a pszSignal that is not MESSAGE.SIGNAL, or canemud's refusal: no
+ * such message on the bus or signal in it, a value outside the signal's range or bits, a
+ * checksum signal. */
+HRESULT VCIAPI canemuSetSignal(const char* pszBus, const char* pszSignal, double dValue);
+
+/* The physical value of pszSignal ("MESSAGE.SIGNAL" on pszBus) that its next frame carries
+ * (what was set, rounded to the signal's bits) into *pdValue. Same results as canemuSetSignal
+ * (a NULL pdValue is VCI_E_INVALIDARG). */
+HRESULT VCIAPI canemuGetSignal(const char* pszBus, const char* pszSignal, double* pdValue);
 
 #ifdef __cplusplus
 }

@@ -1,8 +1,8 @@
 // The restbus of canemud's benchmarks: one 500 kbit/s bus with 40 simulated ECUs ([[can_node]])
-// sending 300 cyclic 8-byte messages of distinct identifiers, with their signals (4 to 7 each:
+// sending 300 cyclic 8-byte messages of distinct identifiers, with their signals (4 to 8 each:
 // little- and big-endian, signed, scaled and offset, a float; an alive counter on three
-// messages of four, a CRC-8 SAE J1850 checksum on every second one, a sum8 on every fourth) or,
-// as the baseline, the same nodes and messages without signals (payloads of zeros).
+// messages of four, a CRC-8 SAE J1850 checksum on half of them, a sum8 on a quarter) or, as the
+// baseline, the same nodes and messages without signals (payloads of zeros).
 #pragma once
 
 #include <algorithm>

@@ -75,6 +75,8 @@ bench: deps build
 	  --benchmark_out_format=json $(BENCH_ARGS)
 	$(BUILD_DIR)/bin/daemon_bench --benchmark_out=$(BUILD_DIR)/bench-results/daemon.json \
 	  --benchmark_out_format=json $(BENCH_ARGS)
+	$(BUILD_DIR)/bin/restbus_bench --benchmark_out=$(BUILD_DIR)/bench-results/restbus.json \
+	  --benchmark_out_format=json $(BENCH_ARGS)
 	$(BUILD_DIR)/bin/vci_bench --benchmark_out=$(BUILD_DIR)/bench-results/vci.json \
 	  --benchmark_out_format=json $(BENCH_ARGS)
 	$(BUILD_DIR)/bin/instructions_bench --benchmark_out=$(BUILD_DIR)/bench-results/instructions.json \

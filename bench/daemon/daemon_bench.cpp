@@ -44,6 +44,7 @@
 #include "../../tests/support/canemud_process.hpp"
 #include "../support/babbling_buses.hpp"
 #include "../support/latency.hpp"
+#include "../support/process_figures.hpp"
 #include "canemu/client/channel.hpp"
 #include "canemu/client/lists.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
@@ -52,9 +53,11 @@ namespace {
 
 using namespace canemu;
 using bench::BabblingBuses;
+using bench::cpu_ticks_and_switches;
 using bench::now_ns;
 using bench::report;
 using bench::sleep_ns;
+using bench::smoke_run;
 
 constexpr std::size_t kSamples = bench::kLatencySamples;
 constexpr int64_t kGapNs = bench::kLatencyGapNs;
@@ -169,24 +172,6 @@ BENCHMARK(BM_ClientDaemonClientLatencyRealtime)
 //   a_to_b: a client of a to one of b (one hop: the owner's event to b);
 //   b_to_b: a client of b to another of b (two hops: request and event).
 // kDdsSamples per path, fewer in a smoke run (--benchmark_min_time below 0.5 s, as in CI).
-
-// Whether --benchmark_min_time was given below Google Benchmark's default of 0.5 s (a smoke
-// run, as CI's); Google Benchmark keeps the flag to itself.
-bool smoke_run() {
-  std::ifstream f("/proc/self/cmdline");
-  std::string arg;
-  while (std::getline(f, arg, '\0')) {
-    constexpr std::string_view kFlag = "--benchmark_min_time=";
-    if (arg.rfind(kFlag, 0) == 0) {
-      try {
-        return std::stod(arg.substr(kFlag.size())) < 0.5;
-      } catch (const std::exception&) {
-        return false;
-      }
-    }
-  }
-  return false;
-}
 
 std::string distributed_config(const std::string& dir, const std::string& name, int domain,
                                const char* owner_line) {
@@ -463,26 +448,6 @@ void BM_DaemonPeakRss64Clients(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DaemonPeakRss64Clients)->Iterations(1)->Unit(benchmark::kMillisecond);
-
-// utime + stime in clock ticks, and voluntary + involuntary context switches, of a process.
-std::pair<uint64_t, uint64_t> cpu_ticks_and_switches(pid_t pid) {
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
-  // Fields after the command's closing parenthesis: state is field 3, utime 14, stime 15.
-  std::istringstream fields(text.substr(text.rfind(')') + 2));
-  std::vector<std::string> f((std::istream_iterator<std::string>(fields)),
-                             std::istream_iterator<std::string>());
-  const uint64_t ticks = f.size() > 12 ? std::stoull(f[11]) + std::stoull(f[12]) : 0;
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  uint64_t switches = 0;
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.find("ctxt_switches:") != std::string::npos) {
-      switches += std::stoull(line.substr(line.find(':') + 1));
-    }
-  }
-  return {ticks, switches};
-}
 
 // N idle buses; two adapters on the first three, and with 64 buses 64 more adapters with four
 // controllers each (256 controllers on the 64 buses).

@@ -5,9 +5,13 @@
 // - canemud: the same N buses in stepped time, on each an ephemeral channel's node that a
 //   babble fault makes send that frame back to back and a second channel's node that receives
 //   it into its client's ring, which this program drains after every 2 ms step.
+// - canemud on the restbus of bench/support/restbus_config.hpp (40 simulated ECUs, 300 cyclic
+//   messages on one 500 kbit/s bus) in stepped time, with the messages' signals and without
+//   them (the baseline), a channel receiving every frame, drained after every 100 ms step.
 // Each is run twice, for two lengths of simulated time; the difference of the instructions
 // divided by the difference of the frames leaves out start-up and shut-down. The ratio of the
-// two is canemud's cost per bus frame in units of the engine's.
+// first two is canemud's cost per bus frame in units of the engine's; of the last two, what the
+// signals (encoding, counters, checksums) add to a simulated node's frame.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -26,6 +30,7 @@
 
 #include "../../tests/support/canemud_process.hpp"
 #include "../support/babbling_buses.hpp"
+#include "../support/restbus_config.hpp"
 #include "../support/saturating.hpp"
 #include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/bus/can_bus.hpp"
@@ -113,17 +118,17 @@ std::optional<Count> engine_count(int buses, int64_t ms, std::string& error) {
 
 // ---- canemud
 
-std::optional<Count> daemon_count(int buses, int64_t ms, std::string& error) {
+// canemud under callgrind on the configuration `config_text` in stepped time: once canemud
+// runs, `open(daemon, connection, error)` returns the receivers of the run (and what failed in
+// `error`), which live until canemud has ended; then steps of `step_ns` for `ms` of simulated
+// time, each followed by the receivers' `drain()`: the frames received since its last call.
+template <class Open>
+std::optional<Count> canemud_count(const std::string& config_text, int64_t step_ns, int64_t ms,
+                                   Open open, std::string& error) {
   const std::string dir = temp_dir();
-  const std::string config = dir + "/busy.toml";
+  const std::string config = dir + "/bench.toml";
   const std::string out = dir + "/callgrind.out";
-  {
-    std::ofstream f(config);
-    f << "[simulation]\ntime = \"stepped\"\n";
-    for (int i = 0; i < buses; ++i) {
-      f << "[[bus]]\nname = \"can" << i << "\"\nbitrate = 1000000\n";
-    }
-  }
+  std::ofstream(config) << config_text;
   std::optional<Count> count;
   {
     testing::CanemudProcess daemon(
@@ -133,16 +138,15 @@ std::optional<Count> daemon_count(int buses, int64_t ms, std::string& error) {
     if (!daemon.ready() || !c) {
       error = "canemud did not start under valgrind: " + daemon.log();
     } else {
-      bench::BabblingBuses busy;
-      error = busy.open(daemon, *c, buses);
+      auto receivers = open(daemon, *c, error);
       double received = 0;
-      for (int64_t at = 0; error.empty() && at < ms * 1'000'000; at += kStepNs) {
+      for (int64_t at = 0; error.empty() && at < ms * 1'000'000; at += step_ns) {
         auto step = ipc::make_message<ipc::TimeStepRequest>();
-        step.step_ns = kStepNs;
+        step.step_ns = step_ns;
         if (!c->call<ipc::TimeStepRequest, ipc::TimeStepReply>(step)) {
           error = "a step failed";
         }
-        received += static_cast<double>(busy.drain());
+        received += static_cast<double>(receivers.drain());
       }
       if (daemon.terminate(60'000) != 0) {
         error = error.empty() ? "canemud did not end within a minute under valgrind" : error;
@@ -161,12 +165,60 @@ std::optional<Count> daemon_count(int buses, int64_t ms, std::string& error) {
   return count;
 }
 
+std::optional<Count> daemon_count(int buses, int64_t ms, std::string& error) {
+  std::ostringstream config;
+  config << "[simulation]\ntime = \"stepped\"\n";
+  for (int i = 0; i < buses; ++i) {
+    config << "[[bus]]\nname = \"can" << i << "\"\nbitrate = 1000000\n";
+  }
+  const auto open = [&](const testing::CanemudProcess& daemon, client::Connection& c,
+                        std::string& e) {
+    bench::BabblingBuses busy;
+    e = busy.open(daemon, c, buses);
+    return busy;
+  };
+  return canemud_count(config.str(), kStepNs, ms, open, error);
+}
+
+// A channel on can0 receiving every frame.
+struct ChannelReceiver {
+  std::optional<client::Channel> channel;
+  uint64_t drain() {
+    uint64_t n = 0;
+    ipc::ChannelMessage m;
+    while (channel && channel->rx().get(&m) == ipc::RingStatus::ok) {
+      n += m.kind == static_cast<uint8_t>(ipc::ChannelMessageKind::frame) ? 1 : 0;
+    }
+    return n;
+  }
+};
+
+// The restbus (bench/support/restbus_config.hpp) with its signals (`signals` 1) or without (0);
+// steps of 100 ms (some 200 frames each).
+std::optional<Count> restbus_count(int signals, int64_t ms, std::string& error) {
+  const auto open = [](const testing::CanemudProcess&, client::Connection& c, std::string& e) {
+    ChannelReceiver r;
+    client::ChannelOptions o;
+    o.bus = "can0";
+    o.rx_capacity = 4096;
+    auto ch = client::Channel::open(c, o);
+    if (ch) {
+      r.channel.emplace(std::move(*ch));
+    } else {
+      e = ch.error().message;
+    }
+    return r;
+  };
+  return canemud_count(bench::restbus_config(bench::restbus_schedule(), "stepped", signals != 0),
+                       100'000'000, ms, open, error);
+}
+
 // Instructions per frame from runs of `short_ms` and `long_ms` of simulated time.
 template <class Run>
-std::optional<double> per_frame(Run run, int buses, int64_t short_ms, int64_t long_ms,
+std::optional<double> per_frame(Run run, int arg, int64_t short_ms, int64_t long_ms,
                                 std::string& error) {
-  const auto a = run(buses, short_ms, error);
-  const auto b = a ? run(buses, long_ms, error) : std::nullopt;
+  const auto a = run(arg, short_ms, error);
+  const auto b = a ? run(arg, long_ms, error) : std::nullopt;
   if (!a || !b || b->frames <= a->frames) {
     if (error.empty()) {
       error = "no frames between the two runs";
@@ -198,6 +250,25 @@ BENCHMARK(BM_InstructionsPerFrame)
     ->Arg(64)
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
+
+// canemud in stepped time on the restbus of 40 simulated ECUs and 300 cyclic messages at 500
+// kbit/s, with their signals and without (the baseline), from runs of 1 and 2 s of simulated
+// time (the schedule repeats every second, so the difference is one whole period).
+void BM_RestbusInstructionsPerFrame(benchmark::State& state) {
+  for (auto _ : state) {
+    std::string error;
+    const auto baseline = per_frame(restbus_count, 0, 1000, 2000, error);
+    const auto restbus = baseline ? per_frame(restbus_count, 1, 1000, 2000, error) : std::nullopt;
+    if (!baseline || !restbus) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+    state.counters["baseline_instructions_per_frame"] = *baseline;
+    state.counters["restbus_instructions_per_frame"] = *restbus;
+    state.counters["restbus_over_baseline"] = *restbus / *baseline;
+  }
+}
+BENCHMARK(BM_RestbusInstructionsPerFrame)->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
 

@@ -10,79 +10,14 @@
 namespace canemu::daemon {
 namespace {
 
-// ENGINE sends ENGINE_DATA every 10 ms from 0 (speed 1000 rpm, temp 90 C, a 4-bit alive counter
-// in byte 4, a CRC-8 SAE J1850 in byte 7) and ENGINE_EVENT on change; BRAKE sends BRAKE_DATA
-// every 10 ms from 5 ms.
-constexpr std::string_view kNodes = R"(
-[[can_node]]
-name = "ENGINE"
-bus = "can0"
-
-[[can_node.message]]
-name = "ENGINE_DATA"
-id = 0x100
-length = 8
-cycle = "10ms"
-
-[[can_node.message.signal]]
-name = "speed"
-start = 0
-length = 16
-byte_order = "little_endian"
-scale = 0.25
-minimum = 0
-maximum = 8000
-initial = 1000
-unit = "rpm"
-
-[[can_node.message.signal]]
-name = "temp"
-start = 16
-length = 8
-byte_order = "little_endian"
-offset = -40
-minimum = -40
-maximum = 150
-initial = 90
-
-[[can_node.message.signal]]
-name = "alive"
-start = 32
-length = 4
-byte_order = "little_endian"
-counter = true
-
-[[can_node.message.signal]]
-name = "crc"
-start = 56
-length = 8
-byte_order = "little_endian"
-checksum = "crc8_sae_j1850"
-data_id = 0x12
-
-[[can_node.message]]
-name = "ENGINE_EVENT"
-id = 0x101
-length = 1
-send = "on_change"
-
-[[can_node.message.signal]]
-name = "state"
-start = 0
-length = 8
-byte_order = "little_endian"
-
-[[can_node]]
-name = "BRAKE"
-bus = "can0"
-
-[[can_node.message]]
-name = "BRAKE_DATA"
-id = 0x200
-length = 2
-cycle = "10ms"
-delay = "5ms"
-)";
+// ENGINE and BRAKE (tests/data/restbus/engine_and_brake.toml, which says what they send).
+std::string nodes() {
+  auto text = read_text_file(CANEMU_SOURCE_DIR "/tests/data/restbus/engine_and_brake.toml");
+  if (!text) {
+    ADD_FAILURE() << text.error();
+  }
+  return text.value_or("");
+}
 
 constexpr uint32_t kEngine = 0x100;
 constexpr uint32_t kBrake = 0x200;
@@ -130,7 +65,7 @@ std::vector<bool> crc_ok(const World& w) {
 }
 
 TEST(RestbusFaults, AMessageTimeoutSkipsItsCycleInstantsUntilItEnds) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "25ms"
 until = "55ms"
@@ -154,7 +89,7 @@ effect = "message_timeout"
 }
 
 TEST(RestbusFaults, AFrozenCounterRepeatsItsValueAndCountsOnAfterwards) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "15ms"
 until = "45ms"
@@ -172,7 +107,7 @@ effect = "counter_freeze"
 }
 
 TEST(RestbusFaults, ACounterJumpSkipsValuesOnceAndWrapsAtItsWidth) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "25ms"
 bus = "can0"
@@ -188,7 +123,7 @@ by = 14
 }
 
 TEST(RestbusFaults, AChecksumErrorMakesCountFramesCarryAWrongChecksum) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "15ms"
 bus = "can0"
@@ -211,7 +146,7 @@ count = 2
 }
 
 TEST(RestbusFaults, AnInvalidValueGoesOutBeyondTheRangeAndTheValueBeforeComesBack) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "15ms"
 until = "35ms"
@@ -240,7 +175,7 @@ raw = 0xFF
 }
 
 TEST(RestbusFaults, AStepChangesTheNextFrameAndAnOnChangeMessageGoesAtOnce) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "25ms"
 bus = "can0"
@@ -264,7 +199,7 @@ value = 7
 }
 
 TEST(RestbusFaults, ARampCarriesTheValueOnTheLineAtEachFramesInstant) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "20ms"
 until = "60ms"
@@ -282,7 +217,7 @@ to = 2000
 }
 
 TEST(RestbusFaults, ASimulatedNodeGoesBusOffOrIsUnpluggedByItsName) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "25ms"
 node = "ENGINE"
@@ -307,7 +242,7 @@ effect = "node_off"
 }
 
 TEST(RestbusFaults, AMessageTimeoutDropsTheFrameWaitingInTheNodeAndCountsIt) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "12ms"
 until = "40ms"
@@ -336,7 +271,7 @@ effect = "message_timeout"
 }
 
 TEST(RestbusFaults, AreRefusedWithTheReasonAndNothingApplies) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(
       apply(w, R"([[fault]]
 at = "0s"
@@ -427,7 +362,7 @@ value = 1
 }
 
 TEST(RestbusFaults, EndWhenTheirNodeIsRemovedAndANewNodeOfTheNameInheritsNone) {
-  World w(kNodes);
+  World w(nodes());
   EXPECT_EQ(apply(w, R"([[fault]]
 at = "25ms"
 until = "1s"

@@ -304,10 +304,12 @@ bool Sja1000::fifo_push(const Frame& frame) {
   if (fifo_used_ + n > kRxFifoBytes) {
     return false;
   }
+  // The message goes in at the end of what the FIFO holds, wrapping round at its end.
   const std::size_t start = (rbsa_ + fifo_used_) % kRxFifoBytes;
-  for (std::size_t k = 0; k < n; ++k) {
-    fifo_[(start + k) % kRxFifoBytes] = bytes[k];
-  }
+  const std::size_t before_end = std::min(n, kRxFifoBytes - start);
+  std::copy_n(bytes.begin(), before_end, fifo_.begin() + static_cast<std::ptrdiff_t>(start));
+  std::copy_n(bytes.begin() + static_cast<std::ptrdiff_t>(before_end), n - before_end,
+              fifo_.begin());
   fifo_used_ += n;
   ++rmc_;
   return true;
@@ -317,12 +319,7 @@ void Sja1000::fifo_release() {
   if (rmc_ == 0) {
     return;
   }
-  std::array<uint8_t, 13> bytes;
-  for (std::size_t k = 0; k < bytes.size(); ++k) {
-    bytes[k] = fifo_byte(k);
-  }
-  const auto f = unpack_frame(bytes.data());
-  const std::size_t n = f ? pack_frame(*f, bytes) : 3;
+  const std::size_t n = packed_size(fifo_byte(0));  // the released message's bytes
   rbsa_ = (rbsa_ + n) % kRxFifoBytes;
   fifo_used_ -= std::min(n, fifo_used_);
   --rmc_;

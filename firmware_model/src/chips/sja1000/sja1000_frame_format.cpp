@@ -1,6 +1,8 @@
 // PeliCAN frame buffer layout, acceptance filter and error code segments of the SJA1000.
 #include "canemu/firmware_model/chips/sja1000/sja1000.hpp"
 
+#include <algorithm>
+
 namespace canemu::model::sja1000 {
 
 std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out) {
@@ -22,6 +24,12 @@ std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out) {
     out[n++] = b;
   }
   return n;
+}
+
+std::size_t packed_size(uint8_t frame_info) {
+  const std::size_t header = (frame_info & 0x80) != 0 ? 5 : 3;
+  const bool remote = (frame_info & 0x40) != 0;
+  return header + (remote ? 0 : std::min<std::size_t>(frame_info & 0x0F, 8));
 }
 
 std::optional<Frame> unpack_frame(const uint8_t* bytes) {
@@ -58,6 +66,9 @@ bool byte_matches(uint8_t value, uint8_t acr, uint8_t amr, uint8_t compared = 0x
 
 bool accepts(const std::array<uint8_t, 4>& acr, const std::array<uint8_t, 4>& amr, bool single,
              const Frame& frame) {
+  if (amr == std::array<uint8_t, 4>{0xFF, 0xFF, 0xFF, 0xFF}) {
+    return true;  // every bit "don't care", in either mode: the driver's usual accept-all
+  }
   const uint32_t id = frame.id();
   const uint8_t rtr = frame.remote() ? 1 : 0;
   const auto data = frame.data();

@@ -202,6 +202,54 @@ TEST(Sja1000, FullReceiveFifoOverrunsKeepingTheOldestFrames) {
   EXPECT_EQ(r.receive(), frame(0x200, {}));
 }
 
+// The FIFO is a ring of 64 bytes: a message that does not fit before its end goes on at its
+// start, and RBSA follows each release round it.
+TEST(Sja1000, MessagesWrapRoundTheEndOfTheReceiveFifo) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start();
+  int64_t t = 0;
+  const auto pass = [&](const Frame& f) {
+    a.send(f);
+    t += 1'000'000;
+    b.run_until(t);
+  };
+  for (uint8_t i = 0; i < 5; ++i) {  // 5 x 11 bytes, released: RBSA at 55
+    pass(frame(0x100 + i, {i, 1, 2, 3, 4, 5, 6, 7}));
+    ASSERT_TRUE(r.receive());
+  }
+  EXPECT_EQ(r.chip.read(RBSA), 55);
+  const Frame across = frame(0x1ABCDEF0, {9, 8, 7, 6, 5, 4, 3, 2}, true);  // 13 bytes: 55..3
+  pass(across);
+  pass(frame(0x7FF, {0xAA}));  // 4 bytes: 4..7
+  EXPECT_EQ(r.chip.read(RMC), 2);
+  EXPECT_EQ(r.chip.read(FRAME), 0x88);  // EFF, DLC 8, read through the window at RBSA
+  EXPECT_EQ(r.receive(), across);
+  EXPECT_EQ(r.chip.read(RBSA), 4);
+  EXPECT_EQ(r.receive(), frame(0x7FF, {0xAA}));
+  EXPECT_EQ(r.chip.read(RBSA), 8);
+  EXPECT_EQ(r.chip.read(RMC), 0);
+}
+
+// AMR all ones makes every bit "don't care": every frame passes in either filter mode, whatever
+// ACR holds.
+TEST(Sja1000, AnAcceptanceMaskOfAllOnesPassesEveryFrameInBothModes) {
+  const std::array<uint8_t, 4> amr{0xFF, 0xFF, 0xFF, 0xFF};
+  const std::array<uint8_t, 4> acr{0x12, 0x34, 0x56, 0x78};
+  FrameSpec remote;
+  remote.id = 0x1FFFFFFF;
+  remote.extended = true;
+  remote.remote = true;
+  remote.dlc = 3;
+  for (const bool single : {true, false}) {
+    EXPECT_TRUE(accepts(acr, amr, single, frame(0x000, {})));
+    EXPECT_TRUE(accepts(acr, amr, single, frame(0x7FF, {0xFF, 0x00})));
+    EXPECT_TRUE(accepts(acr, amr, single, frame(0x0ABCDEF, {1}, true)));
+    EXPECT_TRUE(accepts(acr, amr, single, *Frame::create(remote)));
+  }
+}
+
 TEST(Sja1000, ListenOnlyChipNeitherAcknowledgesNorCounts) {
   Bus b;
   Chip a(b), l(b);
@@ -385,6 +433,30 @@ TEST(Sja1000FrameFormat, PacksAndUnpacksBothFormats) {
   EXPECT_EQ(bytes[0], 0x44);
   EXPECT_EQ(bytes[2], 0xF0);
   EXPECT_EQ(unpack_frame(bytes.data()), rtr);
+}
+
+// What a released message frees in the receive FIFO is read from its frame information byte:
+// the size pack_frame() wrote, for every format, RTR bit and DLC (9..15 carry 8 data bytes).
+TEST(Sja1000FrameFormat, ThePackedSizeFollowsFromTheFrameInformation) {
+  std::array<uint8_t, 13> bytes;
+  for (const bool extended : {false, true}) {
+    for (const bool remote : {false, true}) {
+      for (uint8_t dlc = 0; dlc <= 15; ++dlc) {
+        FrameSpec s;
+        s.id = 0x123;
+        s.extended = extended;
+        s.remote = remote;
+        s.dlc = dlc;
+        const std::vector<uint8_t> data(remote ? 0 : std::min<std::size_t>(dlc, 8), 0xA5);
+        s.data = data;
+        const Frame f = *Frame::create(s);
+        const std::size_t n = pack_frame(f, bytes);
+        EXPECT_EQ(packed_size(bytes[0]), n)
+            << "ext " << extended << " rtr " << remote << " dlc " << int{dlc};
+        EXPECT_EQ(n, (extended ? 5u : 3u) + data.size());
+      }
+    }
+  }
 }
 
 // RXERR is an 8-bit register and the counter behind it is no wider: a receiver that keeps seeing

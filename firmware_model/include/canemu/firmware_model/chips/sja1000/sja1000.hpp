@@ -88,6 +88,9 @@ inline constexpr std::size_t kRxFifoBytes = 64;
 std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out);
 // Reads a frame from that layout; nothing if the bytes do not describe one.
 std::optional<Frame> unpack_frame(const uint8_t* bytes);
+// The bytes a frame takes in that layout, from its frame information byte alone: what
+// pack_frame() wrote (a DLC above 8 carries 8 data bytes).
+std::size_t packed_size(uint8_t frame_info);
 
 // The acceptance filter (datasheet 6.4.15): single (AFM = 1) or dual filter over identifier,
 // RTR and, for standard frames, the first data bytes. Data bytes a frame does not have are not

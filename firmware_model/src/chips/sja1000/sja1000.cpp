@@ -229,6 +229,31 @@ void Sja1000::write(uint8_t address, uint8_t value) {
   }
 }
 
+void Sja1000::write_transmit(const Frame& frame, uint8_t cmr) {
+  std::array<uint8_t, 13> bytes;
+  const std::size_t n = pack_frame(frame, bytes);
+  const bool request = (cmr & (CMR_TR | CMR_SRR)) != 0;
+  if ((mod_ & MOD_RM) != 0 || tx_ || !request || frame.fd()) {
+    // Written where the buffer is not (reset mode: the acceptance registers), or ignored
+    // (a request pending), or not requested, or not a frame the chip knows (the bytes say what
+    // it sends): register by register.
+    for (std::size_t k = 0; k < n; ++k) {
+      write(static_cast<uint8_t>(FRAME + k), bytes[k]);
+    }
+    command(cmr);
+    return;
+  }
+  // Operating mode, buffer released: the bytes land in the buffer and TR takes them, the frame
+  // being the one they describe.
+  std::copy_n(bytes.begin(), n, tx_buffer_.begin());
+  tx_ = TxFrame{frame, (cmr & CMR_AT) != 0, (cmr & CMR_SRR) != 0};
+  tx_complete_ = false;
+  if (bus_ != nullptr) {
+    bus_->tx_changed(node_);
+  }
+  command(static_cast<uint8_t>(cmr & ~(CMR_TR | CMR_SRR | CMR_AT)));  // RRB, CDO with it
+}
+
 void Sja1000::counters_written() {
   if (bus_ != nullptr) {
     bus_->counters_changed(node_);

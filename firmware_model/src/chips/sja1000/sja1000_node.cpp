@@ -38,16 +38,11 @@ bool Sja1000Node::buffer_free() {
 }
 
 void Sja1000Node::load(const TxFrame& tx) {
-  std::array<uint8_t, 13> bytes;
-  const std::size_t n = pack_frame(tx.frame, bytes);
-  for (std::size_t k = 0; k < n; ++k) {
-    chip_.write(static_cast<uint8_t>(FRAME + k), bytes[k]);
-  }
   uint8_t cmr = tx.self_reception ? CMR_SRR : CMR_TR;
   if (tx.single_shot) {
     cmr |= CMR_AT;
   }
-  chip_.write(CMR, cmr);
+  chip_.write_transmit(tx.frame, cmr);  // the frame's bytes at FRAME, then CMR
 }
 
 void Sja1000Node::abort_tx() {

@@ -250,6 +250,37 @@ TEST(Sja1000, AnAcceptanceMaskOfAllOnesPassesEveryFrameInBothModes) {
   }
 }
 
+// write_transmit() is the driver's register writes in one call: in operating mode the same
+// frame goes out with the same request bits; in reset mode the bytes land where register writes
+// land (the acceptance registers) and nothing is sent; with a request pending it is ignored.
+TEST(Sja1000, WriteTransmitDoesWhatTheRegisterWritesDo) {
+  Bus b;
+  Chip a(b), r(b);
+  a.start();
+  r.start();
+  const Frame f = frame(0x123, {0x11, 0x22});
+  a.chip.write_transmit(f, CMR_TR);
+  EXPECT_EQ(a.chip.read(SR) & (SR_TBS | SR_TCS), 0);  // locked, not complete
+  a.chip.write_transmit(frame(0x456, {}), CMR_TR);    // ignored: a request is pending
+  b.run_until(62 * kBit);
+  EXPECT_EQ(r.receive(), f);
+  EXPECT_EQ(a.chip.read(IR), IR_TI);
+  b.run_until(200 * kBit);
+  EXPECT_FALSE(r.receive().has_value());  // 0x456 was never requested
+  // Self reception with single shot: the frame comes back to its sender.
+  a.chip.write_transmit(frame(0x321, {7}), CMR_SRR | CMR_AT);
+  b.run_until(400 * kBit);
+  EXPECT_EQ(a.receive(), frame(0x321, {7}));
+  EXPECT_EQ(r.receive(), frame(0x321, {7}));
+  // Reset mode: the writes at FRAME.. are ACR0..3 and AMR0..3 there.
+  a.chip.write(MOD, MOD_RM);
+  a.chip.write_transmit(frame(0x7FF, {1, 2, 3, 4, 5}), CMR_TR);
+  EXPECT_EQ(a.chip.read(ACR0), 0x05);  // the frame information byte: DLC 5
+  EXPECT_EQ(a.chip.read(ACR0 + 1), 0xFF);
+  EXPECT_EQ(a.chip.read(ACR0 + 3), 0x01);  // data byte 1
+  EXPECT_EQ(a.chip.read(AMR0), 0x02);      // data byte 2
+}
+
 TEST(Sja1000, ListenOnlyChipNeitherAcknowledgesNorCounts) {
   Bus b;
   Chip a(b), l(b);

@@ -119,6 +119,10 @@ class Sja1000 final : public CanController {
   // ECC re-arms their capture; writes follow the datasheet's access rules per mode.
   uint8_t read(uint8_t address);
   void write(uint8_t address, uint8_t value);
+  // What a driver's writes of `frame` (pack_frame's bytes) into the transmit buffer at FRAME
+  // and then of `cmr` into CMR do, in one call: the same registers and request as those writes,
+  // without reading the frame back out of the buffer's bytes.
+  void write_transmit(const Frame& frame, uint8_t cmr);
 
   // The interrupt line: active while IR has a bit set. IR bits are only set for sources enabled
   // in IER; RI follows the FIFO (set while it holds a message and RIE is set). Called when the

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 
 #include <poll.h>
 #include <sys/socket.h>
@@ -13,6 +14,15 @@
 namespace canemu::ipc {
 
 namespace {
+
+// Where a packet lands before it goes to the caller's vector: room for the largest message,
+// one per thread. Receiving into the vector itself would mean resizing it to that size first,
+// which writes 16 KiB of zeros for every packet, however small.
+uint8_t* landing() {
+  thread_local const std::unique_ptr<uint8_t[]> room =
+      std::make_unique_for_overwrite<uint8_t[]>(kMaxMessageSize);
+  return room.get();
+}
 
 IpcError system_error(const std::string& what) {
   const int e = errno;
@@ -127,7 +137,7 @@ IpcResult<void> send_packet(int fd, const void* data, std::size_t size, std::spa
 
 IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int timeout_ms,
                                       std::vector<UniqueFd>* fds) {
-  buffer.resize(kMaxMessageSize);
+  buffer.clear();
   if (fds != nullptr) {
     fds->clear();
   }
@@ -146,7 +156,8 @@ IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int 
     }
   }
   while (true) {
-    iovec iov{buffer.data(), buffer.size()};
+    uint8_t* const room = landing();
+    iovec iov{room, kMaxMessageSize};
     alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int) * kMaxPassedFds)];
     msghdr msg{};
     msg.msg_iov = &iov;
@@ -174,12 +185,11 @@ IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int 
         }
       }
     }
-    if (static_cast<std::size_t>(n) > buffer.size()) {
-      buffer.clear();
+    if (static_cast<std::size_t>(n) > kMaxMessageSize) {
       return tl::unexpected(IpcError{
           EMSGSIZE, "recv: packet larger than " + std::to_string(kMaxMessageSize) + " bytes"});
     }
-    buffer.resize(static_cast<std::size_t>(n));
+    buffer.assign(room, room + n);
     return static_cast<std::size_t>(n);
   }
 }

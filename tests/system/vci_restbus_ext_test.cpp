@@ -261,6 +261,8 @@ TEST_F(VciRestbus, EachRefusalSaysCanemudsReasonAndChangesNothing) {
             "invalid argument (no simulated CAN node named \"can9/ENGINE\")");
   EXPECT_EQ(said(canemuLoadCanNodes(nullptr, "restbus.toml")),
             "invalid argument (the tables are needed)");
+  // A later failure without a reason of its own does not carry the last one's.
+  EXPECT_EQ(said(canemuEnumCanNodes(0, nullptr)), "invalid argument");
   // Nothing changed: the same nodes, the values as loaded, the next frames as before.
   EXPECT_EQ(nodes(), before);
   EXPECT_EQ(get("can0", temp), 85.5);

@@ -58,6 +58,7 @@ static_assert(sizeof(CANEMU_CANNODEINFO) == 80);
 extern "C" {
 
 HRESULT VCIAPI canemuLoadCanNodes(const char* pszTables, const char* pszSource) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pszTables == nullptr) {
     return invalid("the tables are needed");
   }
@@ -73,6 +74,7 @@ HRESULT VCIAPI canemuLoadCanNodes(const char* pszTables, const char* pszSource) 
 }
 
 HRESULT VCIAPI canemuEnumCanNodes(UINT32 dwIndex, PCANEMU_CANNODEINFO pInfo) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pInfo == nullptr) {
     return VCI_E_INVALIDARG;
   }
@@ -97,19 +99,23 @@ HRESULT VCIAPI canemuEnumCanNodes(UINT32 dwIndex, PCANEMU_CANNODEINFO pInfo) {
 }
 
 HRESULT VCIAPI canemuPowerCanNode(const char* pszNode, BOOL fOn) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   return node_request(ipc::CanNodeOp::power, pszNode, fOn != 0);
 }
 
 HRESULT VCIAPI canemuRemoveCanNode(const char* pszNode) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   return node_request(ipc::CanNodeOp::remove, pszNode, false);
 }
 
 HRESULT VCIAPI canemuSetSignal(const char* pszBus, const char* pszSignal, double dValue) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   auto reply = std::make_unique<ipc::CanNodeReply>();
   return signal_request(ipc::CanNodeOp::set_signal, pszBus, pszSignal, dValue, *reply);
 }
 
 HRESULT VCIAPI canemuGetSignal(const char* pszBus, const char* pszSignal, double* pdValue) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pdValue == nullptr) {
     return invalid("a place for the value is needed");
   }

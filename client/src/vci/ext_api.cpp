@@ -45,11 +45,13 @@ static_assert(sizeof(CANEMU_DEVICEINFO) == 184);
 extern "C" {
 
 HRESULT VCIAPI canemuConnect(const char* pszSocket) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   return Library::get().reconnect(pszSocket != nullptr ? pszSocket : "");
 }
 
 HRESULT VCIAPI canemuGetControllerState(HANDLE hObject, PUINT8 pbErrorState, PUINT16 pwTec,
                                         PUINT16 pwRec, PUINT8 pbLineState) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   Remote* r = any_remote(hObject);
   if (r == nullptr) {
     return VCI_E_INVHANDLE;
@@ -76,6 +78,7 @@ HRESULT VCIAPI canemuGetControllerState(HANDLE hObject, PUINT8 pbErrorState, PUI
 
 HRESULT VCIAPI canemuCreateDevice(const char* pszBus, const char* pszName, PVCIID pVciid,
                                   PCHAR pszNameOut, UINT32 cbNameOut) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pszBus == nullptr || (pszNameOut != nullptr && cbNameOut < canemu::ipc::kNameSize)) {
     return VCI_E_INVALIDARG;
   }
@@ -100,6 +103,7 @@ HRESULT VCIAPI canemuCreateDevice(const char* pszBus, const char* pszName, PVCII
 }
 
 HRESULT VCIAPI canemuRemoveDevice(const char* pszName) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pszName == nullptr) {
     return VCI_E_INVALIDARG;
   }
@@ -111,6 +115,7 @@ HRESULT VCIAPI canemuRemoveDevice(const char* pszName) {
 }
 
 HRESULT VCIAPI canemuStepTime(UINT64 qwNanoseconds, UINT64* pqwNow) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (qwNanoseconds == 0 || qwNanoseconds > static_cast<UINT64>(INT64_MAX)) {
     return VCI_E_INVALIDARG;
   }
@@ -125,6 +130,7 @@ HRESULT VCIAPI canemuStepTime(UINT64 qwNanoseconds, UINT64* pqwNow) {
 }
 
 HRESULT VCIAPI canemuEnumBuses(UINT32 dwIndex, PCANEMU_BUSINFO pInfo) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pInfo == nullptr) {
     return VCI_E_INVALIDARG;
   }
@@ -147,6 +153,7 @@ HRESULT VCIAPI canemuEnumBuses(UINT32 dwIndex, PCANEMU_BUSINFO pInfo) {
 }
 
 HRESULT VCIAPI canemuEnumDevices(UINT32 dwIndex, PCANEMU_DEVICEINFO pInfo) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pInfo == nullptr) {
     return VCI_E_INVALIDARG;
   }
@@ -162,6 +169,7 @@ HRESULT VCIAPI canemuEnumDevices(UINT32 dwIndex, PCANEMU_DEVICEINFO pInfo) {
 }
 
 HRESULT VCIAPI canemuFindDevice(const char* pszName, PCANEMU_DEVICEINFO pInfo) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   if (pszName == nullptr || pInfo == nullptr) {
     return VCI_E_INVALIDARG;
   }
@@ -180,6 +188,7 @@ HRESULT VCIAPI canemuFindDevice(const char* pszName, PCANEMU_DEVICEINFO pInfo) {
 }
 
 HRESULT VCIAPI canemuGetTime(UINT64* pqwNow, PUINT8 pbTimeMode) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   canemu::client::Status status;
   if (HRESULT hr = Library::get().status(status); hr != VCI_OK) {
     return hr;
@@ -194,6 +203,7 @@ HRESULT VCIAPI canemuGetTime(UINT64* pqwNow, PUINT8 pbTimeMode) {
 }
 
 HRESULT VCIAPI canemuChannelEventFd(HANDLE hCanChn, int* pFd) {
+  forget_call_detail();  // an earlier call's reason is not this one's
   ChannelObj* c = channel_of(hCanChn);
   if (c == nullptr) {
     return VCI_E_INVHANDLE;

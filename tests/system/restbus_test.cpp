@@ -3,12 +3,15 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
+#include <string>
 #include <vector>
 
 #include "../support/temp_dir.hpp"
 #include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/bus/frame.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
+#include "canemu/ipc/can_node_messages.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -96,4 +99,31 @@ TEST(Restbus, ANodeOfTheConfigurationSendsItsFramesToAChannelAtTheirInstants) {
 }
 
 }  // namespace
+// A load gathers at most kMaxCanNodeLoad bytes over its parts: one part beyond is refused with
+// the reason, what came before is dropped, and nothing starts.
+TEST(Restbus, ALoadLongerThanOneMebibyteIsRefusedAndNothingStarts) {
+  Daemon d("stepped");
+  auto c = connect(d);
+  auto part = ipc::make_message<ipc::CanNodeRequest>();
+  part.op = static_cast<uint8_t>(ipc::CanNodeOp::load_part);
+  const std::string comment = "# " + std::string(sizeof part.text - 3, 'x') + "\n";
+  std::memcpy(part.text, comment.data(), comment.size());
+  part.length = static_cast<uint32_t>(comment.size());
+  std::size_t sent = 0;
+  std::string refused;
+  while (refused.empty() && sent <= ipc::kMaxCanNodeLoad) {
+    auto r = c.call<ipc::CanNodeRequest, ipc::CanNodeReply>(part);
+    ASSERT_TRUE(r);
+    sent += comment.size();
+    refused = r->ok ? "" : ipc::name_of(r->errors);
+  }
+  EXPECT_EQ(sent, (ipc::kMaxCanNodeLoad / comment.size() + 1) * comment.size());
+  EXPECT_EQ(refused, "the tables are longer than 1048576 bytes");
+  auto list = ipc::make_message<ipc::CanNodeRequest>();
+  list.op = static_cast<uint8_t>(ipc::CanNodeOp::list);
+  auto r = c.call<ipc::CanNodeRequest, ipc::CanNodeReply>(list);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->total, 0u);
+}
+
 }  // namespace canemu

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "canemu/ipc/can_node_messages.hpp"
 #include "vci_c_test_support.hpp"
 
 namespace canemu::testing {
@@ -261,6 +262,9 @@ TEST_F(VciRestbus, EachRefusalSaysCanemudsReasonAndChangesNothing) {
             "invalid argument (no simulated CAN node named \"can9/ENGINE\")");
   EXPECT_EQ(said(canemuLoadCanNodes(nullptr, "restbus.toml")),
             "invalid argument (the tables are needed)");
+  const std::string too_long(ipc::kMaxCanNodeLoad + 1, '\n');  // 1 MiB, as a configuration file
+  EXPECT_EQ(said(canemuLoadCanNodes(too_long.c_str(), nullptr)),
+            "invalid argument (the tables are longer than 1048576 bytes)");
   // A later failure without a reason of its own does not carry the last one's.
   EXPECT_EQ(said(canemuEnumCanNodes(0, nullptr)), "invalid argument");
   // Nothing changed: the same nodes, the values as loaded, the next frames as before.

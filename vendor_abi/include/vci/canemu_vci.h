@@ -127,7 +127,7 @@ HRESULT VCIAPI canemuChannelEventFd(HANDLE hCanChn, int* pFd);
  * error) is vciFormatError's detail of the failed call: "invalid argument (REASON)"; a refused
  * call changes nothing. */
 
-/* Loads [[can_node]] tables (TOML text, at most 8 MiB; pszSource, may be NULL, names them in
+/* Loads [[can_node]] tables (TOML text, at most 1 MiB; pszSource, may be NULL, names them in
  * canemud's errors): they are checked as a configuration file's are and all start, at the
  * instant canemud takes them, or none does. A node of a name that runs on its bus already is
  * replaced. VCI_OK; VCI_E_INVALIDARG for NULL tables, or when canemud refuses them. */

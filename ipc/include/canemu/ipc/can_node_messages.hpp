@@ -11,8 +11,10 @@
 namespace canemu::ipc {
 
 inline constexpr std::size_t kMaxCanNodeText = 12288;
-// The most text one load may gather over its requests (a DBC of a whole vehicle as tables).
-inline constexpr std::size_t kMaxCanNodeLoad = 8u << 20;
+// The most text one load may gather over its requests: 1 MiB, as a configuration file (some
+// 2,000 messages with their signals). canemud checks and starts a load in its loop, which a
+// load of that size holds for some tens of milliseconds; larger restbuses load in parts.
+inline constexpr std::size_t kMaxCanNodeLoad = 1u << 20;
 inline constexpr std::size_t kMaxCanNodes = 48;
 inline constexpr std::size_t kLongNameSize = 128;  // DBC message and signal names
 

@@ -527,8 +527,8 @@ Result<> CanEcu::ramp_signal(std::string_view message, std::string_view signal, 
   if (!at) {
     return tl::unexpected(at.error());
   }
-  const auto [i, k] = *at;
-  Message& m = messages_[i];
+  const std::size_t k = at->second;  // a variable of its own: lambdas capture it
+  Message& m = messages_[at->first];
   std::erase_if(m.ramps, [k](const Ramp& r) { return r.signal == k; });
   const double start = to_physical(m.config->signals[k].layout, m.raw[k]);
   m.ramps.push_back(Ramp{k, node_.now(), until, start, to});

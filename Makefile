@@ -83,7 +83,9 @@ bench: deps build
 	  --benchmark_out_format=json
 	.venv/bin/python bench/python/python_can_bench.py --out $(BUILD_DIR)/bench-results/python.json
 	.venv/bin/python bench/python/python_latency_bench.py --out $(BUILD_DIR)/bench-results/python_latency.json
+	.venv/bin/python bench/python/busy_receivers_bench.py --out $(BUILD_DIR)/bench-results/busy_receivers.json
 	.venv/bin/python bench/python/web_bench.py --out $(BUILD_DIR)/bench-results/web.json $(WEB_BENCH_ARGS)
+	@python3 bench/ratios.py $(BUILD_DIR)/bench-results
 	@echo "bench: results in $(BUILD_DIR)/bench-results/"
 
 # The figures of two result sets side by side with their ratio (bench/compare.py):

@@ -2,10 +2,10 @@
 // - client -> daemon -> client latency in real time on an idle 1 Mbit/s bus: a frame put in one
 //   channel's ring until it comes out of another's, minus the frame's own duration on the wire
 //   (targets p50 <= 30 us, p99 <= 200 us), beside a Unix-socket round trip measured in the
-//   same run;
+//   same run, and the ratio of the two;
 // - the same across two daemons sharing a bus over Cyclone DDS: a client of the follower to
 //   one of the owner and back, and between two clients of the follower, beside two clients of
-//   the owner in the same run;
+//   the owner and two of a daemon without DDS in the same run;
 // - how long after a client is killed its resources are freed (target: 100 ms);
 // - peak resident memory of canemud on the default configuration with 64 clients connected,
 //   each with an open channel (target <= 64 MB);
@@ -13,7 +13,8 @@
 //   processor time and wake-ups per second (target: nothing);
 // - 16 and 64 buses at 1 Mbit/s kept at full load by babbling nodes in real time: canemud's
 //   share of a core and whether simulated time keeps up (target: 64 buses keep up with at most
-//   50 % of a core).
+//   50 % of a core), and canemud's processor time per bus frame over the bus engine's alone,
+//   measured in this process between the windows.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -43,6 +44,7 @@
 
 #include "../../tests/support/canemud_process.hpp"
 #include "../support/babbling_buses.hpp"
+#include "../support/engine_buses.hpp"
 #include "../support/latency.hpp"
 #include "../support/process_figures.hpp"
 #include "canemu/client/channel.hpp"
@@ -125,6 +127,13 @@ void BM_ClientDaemonClientLatencyRealtime(benchmark::State& state) {
   for (auto _ : state) {
     for (std::size_t i = 0; i < kSamples; ++i) {
       sleep_ns(kGapNs);
+      // The baseline, in the same run: one Unix-socket round trip, after the pause as the
+      // frame (right after the frame it would meet what the spins of the frame's way still
+      // occupy).
+      int64_t t = now_ns();
+      (void)!::send(fds[0], &t, sizeof t, 0);
+      (void)!::recv(fds[0], &t, sizeof t, 0);
+      round_trip.push_back(now_ns() - t);
       const int64_t t0 = now_ns();
       if (!a->send(m)) {
         state.SkipWithError("send failed");
@@ -137,11 +146,6 @@ void BM_ClientDaemonClientLatencyRealtime(benchmark::State& state) {
         break;
       }
       beyond.push_back(t1 - t0 - wire_ns);
-      // The baseline, in the same run: one Unix-socket round trip.
-      int64_t t = now_ns();
-      (void)!::send(fds[0], &t, sizeof t, 0);
-      (void)!::recv(fds[0], &t, sizeof t, 0);
-      round_trip.push_back(now_ns() - t);
     }
   }
   ::close(fds[0]);
@@ -150,6 +154,11 @@ void BM_ClientDaemonClientLatencyRealtime(benchmark::State& state) {
   state.counters["frame_wire_us"] = static_cast<double>(wire_ns) / 1000.0;
   report(state, "beyond_frame", beyond);
   report(state, "unix_socket_round_trip", round_trip);
+  // Issue 41's figure: the daemon's p50 in units of the socket's, both interleaved in this run.
+  state.counters["beyond_frame_over_unix_socket_p50"] =
+      bench::percentile(beyond, 0.5) / std::max(bench::percentile(round_trip, 0.5), 1.0);
+  state.counters["beyond_frame_over_unix_socket_p99"] =
+      bench::percentile(beyond, 0.99) / std::max(bench::percentile(round_trip, 0.99), 1.0);
   ::unlink(config.c_str());
   ::rmdir(dir);
 }
@@ -170,7 +179,9 @@ BENCHMARK(BM_ClientDaemonClientLatencyRealtime)
 //   a_to_a: a client of a to another of a (no hop: the baseline, in the same run);
 //   b_to_a: a client of b to one of a (one hop: b's request to the owner);
 //   a_to_b: a client of a to one of b (one hop: the owner's event to b);
-//   b_to_b: a client of b to another of b (two hops: request and event).
+//   b_to_b: a client of b to another of b (two hops: request and event);
+//   one_daemon: a client of a third canemud, without DDS, to another of it (the baseline of
+//   issue 41's figure: b_to_b_over_one_daemon_p50 and _p99).
 // kDdsSamples per path, fewer in a smoke run (--benchmark_min_time below 0.5 s, as in CI).
 
 std::string distributed_config(const std::string& dir, const std::string& name, int domain,
@@ -229,12 +240,14 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
   const auto cleanup = [&] {
     std::remove(config_a.c_str());
     std::remove(config_b.c_str());
+    std::remove((base + "/bench.toml").c_str());
     ::rmdir(base.c_str());
   };
   testing::CanemudProcess da(CANEMUD_PATH, {"--config=" + config_a});
   testing::CanemudProcess db(CANEMUD_PATH, {"--config=" + config_b});
-  if (!da.ready() || !db.ready()) {
-    state.SkipWithError(("canemud did not start: " + da.log() + db.log()).c_str());
+  testing::CanemudProcess dc(CANEMUD_PATH, {"--config=" + write_config(base)});
+  if (!da.ready() || !db.ready() || !dc.ready()) {
+    state.SkipWithError(("canemud did not start: " + da.log() + db.log() + dc.log()).c_str());
     cleanup();
     return;
   }
@@ -252,7 +265,9 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
   auto ca2 = client::Connection::open(da.socket(), "bench-a2");
   auto cb1 = client::Connection::open(db.socket(), "bench-b1");
   auto cb2 = client::Connection::open(db.socket(), "bench-b2");
-  if (!ca1 || !ca2 || !cb1 || !cb2) {
+  auto cc1 = client::Connection::open(dc.socket(), "bench-c1");
+  auto cc2 = client::Connection::open(dc.socket(), "bench-c2");
+  if (!ca1 || !ca2 || !cb1 || !cb2 || !cc1 || !cc2) {
     state.SkipWithError("connections did not open");
     cleanup();
     return;
@@ -264,22 +279,25 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
   auto a2 = client::Channel::open(*ca2, o);
   auto b1 = client::Channel::open(*cb1, o);
   auto b2 = client::Channel::open(*cb2, o);
-  if (!a1 || !a2 || !b1 || !b2) {
+  auto c1 = client::Channel::open(*cc1, o);
+  auto c2 = client::Channel::open(*cc2, o);
+  if (!a1 || !a2 || !b1 || !b2 || !c1 || !c2) {
     state.SkipWithError("channels did not open");
     cleanup();
     return;
   }
-  std::array<client::Channel*, 4> all{&*a1, &*a2, &*b1, &*b2};
+  std::array<client::Channel*, 6> all{&*a1, &*a2, &*b1, &*b2, &*c1, &*c2};
   struct Path {
     const char* name;
     client::Channel* from;
     client::Channel* to;
     std::vector<int64_t> beyond;
   };
-  std::array<Path, 4> paths{{{"a_to_a", &*a1, &*a2, {}},
+  std::array<Path, 5> paths{{{"a_to_a", &*a1, &*a2, {}},
                              {"b_to_a", &*b1, &*a2, {}},
                              {"a_to_b", &*a1, &*b2, {}},
-                             {"b_to_b", &*b1, &*b2, {}}}};
+                             {"b_to_b", &*b1, &*b2, {}},
+                             {"one_daemon", &*c1, &*c2, {}}}};
   const std::size_t samples = smoke_run() ? kDdsSmokeSamples : kDdsSamples;
   uint32_t seq = 0;
   // One frame along `p`, tagged with its sequence number in its first four bytes; the receiver
@@ -345,6 +363,12 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
     report(state, p.name, p.beyond);
     state.counters[std::string(p.name) + "_max_us"] =
         static_cast<double>(*std::max_element(p.beyond.begin(), p.beyond.end())) / 1000.0;
+  }
+  // Issue 41's figure: both hops against one canemud, interleaved in this run.
+  for (const auto& [p, name] : {std::pair{0.5, "p50"}, std::pair{0.99, "p99"}}) {
+    state.counters[std::string("b_to_b_over_one_daemon_") + name] =
+        bench::percentile(paths[3].beyond, p) /
+        std::max(bench::percentile(paths[4].beyond, p), 1.0);
   }
   state.counters["samples_per_path"] = static_cast<double>(samples);
   state.counters["attach_ms"] = static_cast<double>(attach_ns) / 1e6;
@@ -510,11 +534,16 @@ BENCHMARK(BM_IdleBusesCostNothing)
 // N buses at 1 Mbit/s in real time (the event loop waking at most every batch_us), each with a
 // babbling node (an ephemeral channel's node that a babble fault makes send 000#0102030405060708
 // back to back, for 3600 s) and a second channel's node that acknowledges and receives every
-// frame; this process drains the receiving rings every 5 ms. Measured over 3 s after a second of
-// warming up: canemud's processor time and wake-ups, simulated seconds per real second, the
-// largest lag a status reply showed, the frames the buses carried against what back-to-back
-// frames at 1 Mbit/s would be, the frames received, and canemud's own pacing figures over the
-// last second (events, wake-ups and the timer against their instants; docs/daemon.md).
+// frame; this process drains the receiving rings every 5 ms. Measured over three windows of 1 s
+// after a second of warming up: canemud's processor time (/proc/PID/task/*/schedstat, to the
+// nanosecond) and wake-ups, simulated seconds per real second, the largest lag a status reply
+// showed, the frames the buses carried against what back-to-back frames at 1 Mbit/s would be,
+// the frames received, and canemud's own pacing figures over the last second (events, wake-ups
+// and the timer against their instants; docs/daemon.md). Before, between and after the windows
+// this process runs the bus engine alone on the same workload (bench/support/engine_buses.hpp,
+// one thread, some 55,000 frames a turn): canemud's processor time per bus frame in the windows
+// divided by the engine's per frame in the turns is `canemud_over_engine_cpu` (issue 41's goal:
+// at most 2 with 64 buses).
 void BM_BusyBusesRealtime(benchmark::State& state) {
   const auto buses = static_cast<int>(state.range(0));
   char dir[] = "/tmp/canemu-bench-XXXXXX";
@@ -540,7 +569,7 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
     int64_t sim_ns = 0;
     uint64_t frames = 0;
     uint64_t load_permille = 0;
-    uint64_t ticks = 0;
+    uint64_t cpu_ns = 0;
     uint64_t switches = 0;
     ipc::WirePacing pacing;  // canemud's own figures (docs/daemon.md, "Pacing")
   };
@@ -557,7 +586,8 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
       out.frames += b.frames;
       out.load_permille += b.load_permille;
     }
-    std::tie(out.ticks, out.switches) = cpu_ticks_and_switches(daemon.pid());
+    out.cpu_ns = bench::cpu_ns(daemon.pid());
+    out.switches = cpu_ticks_and_switches(daemon.pid()).second;
     max_lag_ns = std::max(max_lag_ns, s->lag_ns);
     out.pacing = s->pacing;
     return out;
@@ -578,22 +608,50 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
       sleep_ns(5'000'000);
     }
   };
+  // The engine alone, in this thread: some 55,000 frames a turn whatever the number of buses.
+  bench::EngineBuses engine(buses);
+  const int64_t engine_turn_ns = 6'400'000'000 / buses;
+  int64_t engine_cpu_ns = 0;
+  uint64_t engine_frames = 0;
+  const auto engine_turn = [&] {
+    drain();
+    const uint64_t f0 = engine.frames();
+    const int64_t t0 = bench::thread_cpu_ns();
+    engine.run(engine_turn_ns);
+    engine_cpu_ns += bench::thread_cpu_ns() - t0;
+    engine_frames += engine.frames() - f0;
+    drain();
+  };
   constexpr int64_t kWarmUpNs = 1'000'000'000;
-  constexpr int64_t kWindowNs = 3'000'000'000;
+  constexpr int kWindows = 3;
+  constexpr int64_t kWindowNs = 1'000'000'000;
   for (auto _ : state) {
+    engine.run(engine_turn_ns / 4);  // warming up
     run_for(kWarmUpNs);
     max_lag_ns = 0;
     const uint64_t received0 = received;
+    uint64_t daemon_cpu_ns = 0;
+    uint64_t daemon_frames = 0;
+    engine_turn();
     const auto a = sample();
-    run_for(kWindowNs);
-    const auto b = sample();
+    std::optional<Sample> b = a;
+    for (int w = 0; w < kWindows && b; ++w) {
+      const auto w0 = w == 0 ? a : sample();
+      run_for(kWindowNs);
+      b = w0 ? sample() : std::nullopt;
+      if (b) {
+        daemon_cpu_ns += b->cpu_ns - w0->cpu_ns;
+        daemon_frames += b->frames - w0->frames;
+      }
+      engine_turn();
+    }
     if (!a || !b) {
       state.SkipWithError("no status");
       return;
     }
     const double wall = static_cast<double>(b->wall_ns - a->wall_ns) / 1e9;
-    state.counters["cpu_percent_of_a_core"] = 100.0 * static_cast<double>(b->ticks - a->ticks) /
-                                              static_cast<double>(::sysconf(_SC_CLK_TCK)) / wall;
+    state.counters["cpu_percent_of_a_core"] =
+        100.0 * static_cast<double>(b->cpu_ns - a->cpu_ns) / 1e9 / wall;
     state.counters["sim_seconds_per_second"] =
         static_cast<double>(b->sim_ns - a->sim_ns) / 1e9 / wall;
     state.counters["wakeups_per_second"] = static_cast<double>(b->switches - a->switches) / wall;
@@ -602,6 +660,13 @@ void BM_BusyBusesRealtime(benchmark::State& state) {
     state.counters["received_per_second"] = static_cast<double>(received - received0) / wall;
     state.counters["mean_bus_load_percent"] =
         static_cast<double>(b->load_permille) / 10.0 / static_cast<double>(buses);
+    const double daemon_us = static_cast<double>(daemon_cpu_ns) / 1e3 /
+                             static_cast<double>(std::max<uint64_t>(daemon_frames, 1));
+    const double engine_us = static_cast<double>(engine_cpu_ns) / 1e3 /
+                             static_cast<double>(std::max<uint64_t>(engine_frames, 1));
+    state.counters["canemud_cpu_us_per_frame"] = daemon_us;
+    state.counters["engine_cpu_us_per_frame"] = engine_us;
+    state.counters["canemud_over_engine_cpu"] = daemon_us / engine_us;
     // canemud's pacing over the last complete second of the window.
     const ipc::WirePacing& p = b->pacing;
     const auto us = [](int64_t ns) { return static_cast<double>(ns) / 1e3; };

@@ -1,5 +1,7 @@
 // Instructions per frame, counted by valgrind's callgrind on fixed workloads, so that any
 // machine agrees on them whatever its speed:
+// - the bus engine alone on firmware_model_bench's workload: one 1 Mbit/s bus at full load
+//   from 4 nodes that always have a frame to send (issue 41's goal: at most 1,000 a frame);
 // - the bus engine alone: N buses at 1 Mbit/s, on each a node sending 000#0102030405060708 back
 //   to back and a node receiving it (firmware_model only, in this program's own child);
 // - canemud: the same N buses in stepped time, on each an ephemeral channel's node that a
@@ -30,6 +32,7 @@
 
 #include "../../tests/support/canemud_process.hpp"
 #include "../support/babbling_buses.hpp"
+#include "../support/engine_buses.hpp"
 #include "../support/restbus_config.hpp"
 #include "../support/saturating.hpp"
 #include "canemu/client/channel.hpp"
@@ -63,31 +66,31 @@ std::string temp_dir() {
   return ::mkdtemp(dir);
 }
 
-// ---- the engine alone (run in a child under callgrind: `instructions_bench --engine BUSES MS`)
+// ---- the engine alone, run in a child under callgrind: `instructions_bench --engine BUSES MS`
+// (bench/support/engine_buses.hpp), or `--engine-nodes NODES MS`: one bus, NODES saturating
+// nodes of random frames in steps of 10 ms (firmware_model_bench's BM_Bus4Nodes1MbitFullLoad).
 
 int run_engine(int buses, int64_t ms) {
+  bench::EngineBuses engine(buses);
+  engine.run(ms * 1'000'000, kStepNs);
+  std::printf("%llu\n", static_cast<unsigned long long>(engine.frames()));
+  return 0;
+}
+
+int run_engine_nodes(int count, int64_t ms) {
   const model::BitTiming t1m = *model::sja1000::decode_btr(0x00, 0x14);
-  const auto frame = *model::Frame::classic(0, std::vector<uint8_t>{1, 2, 3, 4, 5, 6, 7, 8});
   model::SimScheduler sched;
-  std::deque<model::CanBus> bus_list;
-  std::deque<bench::Saturating> senders;
-  std::deque<bench::Receiving> receivers;
-  for (int i = 0; i < buses; ++i) {
-    model::CanBus& bus = bus_list.emplace_back(sched, "can" + std::to_string(i));
-    senders.emplace_back(frame, t1m);
-    senders.back().bus = &bus;
-    senders.back().id = bus.attach(senders.back());
-    receivers.emplace_back(t1m);
-    bus.attach(receivers.back());
+  model::CanBus bus(sched, "bench");
+  std::deque<bench::Saturating> nodes;
+  for (int i = 0; i < count; ++i) {
+    nodes.emplace_back(static_cast<uint32_t>(i + 1), t1m);
+    nodes.back().bus = &bus;
+    nodes.back().id = bus.attach(nodes.back());
   }
-  for (int64_t at = kStepNs; at <= ms * 1'000'000; at += kStepNs) {
+  for (int64_t at = 10'000'000; at <= ms * 1'000'000; at += 10'000'000) {
     sched.run_until(model::SimTime::from_ns(at));
   }
-  uint64_t frames = 0;
-  for (const model::CanBus& bus : bus_list) {
-    frames += bus.frames_on_bus();
-  }
-  std::printf("%llu\n", static_cast<unsigned long long>(frames));
+  std::printf("%llu\n", static_cast<unsigned long long>(bus.frames_on_bus()));
   return 0;
 }
 
@@ -96,12 +99,13 @@ struct Count {
   double frames = 0;
 };
 
-std::optional<Count> engine_count(int buses, int64_t ms, std::string& error) {
+// `mode` is "--engine" (`n` buses) or "--engine-nodes" (`n` nodes on one bus).
+std::optional<Count> engine_child_count(const char* mode, int n, int64_t ms, std::string& error) {
   const std::string dir = temp_dir();
   const std::string out = dir + "/callgrind.out";
   const std::string command = "valgrind --tool=callgrind --callgrind-out-file=" + out + " /proc/" +
-                              std::to_string(::getpid()) + "/exe --engine " +
-                              std::to_string(buses) + " " + std::to_string(ms) + " 2>/dev/null";
+                              std::to_string(::getpid()) + "/exe " + mode + " " +
+                              std::to_string(n) + " " + std::to_string(ms) + " 2>/dev/null";
   FILE* p = ::popen(command.c_str(), "r");
   unsigned long long frames = 0;
   const bool read = p != nullptr && std::fscanf(p, "%llu", &frames) == 1;
@@ -114,6 +118,14 @@ std::optional<Count> engine_count(int buses, int64_t ms, std::string& error) {
     return std::nullopt;
   }
   return Count{*total, static_cast<double>(frames)};
+}
+
+std::optional<Count> engine_count(int buses, int64_t ms, std::string& error) {
+  return engine_child_count("--engine", buses, ms, error);
+}
+
+std::optional<Count> engine_nodes_count(int nodes, int64_t ms, std::string& error) {
+  return engine_child_count("--engine-nodes", nodes, ms, error);
 }
 
 // ---- canemud
@@ -228,6 +240,27 @@ std::optional<double> per_frame(Run run, int arg, int64_t short_ms, int64_t long
   return (b->instructions - a->instructions) / (b->frames - a->frames);
 }
 
+// Issue 41's first figure: the engine alone, 4 nodes at full load, from runs of 100 and 300 ms.
+void BM_EngineInstructionsPerFrame(benchmark::State& state) {
+  for (auto _ : state) {
+    std::string error;
+    const auto engine =
+        per_frame(engine_nodes_count, static_cast<int>(state.range(0)), 100, 300, error);
+    if (!engine) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+    state.counters["instructions_per_frame"] = *engine;
+    std::printf("engine, %d nodes at full load: %.0f instructions per frame (goal <= 1000)\n",
+                static_cast<int>(state.range(0)), *engine);
+  }
+}
+BENCHMARK(BM_EngineInstructionsPerFrame)
+    ->ArgName("nodes")
+    ->Arg(4)
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
+
 void BM_InstructionsPerFrame(benchmark::State& state) {
   const auto buses = static_cast<int>(state.range(0));
   for (auto _ : state) {
@@ -275,6 +308,9 @@ BENCHMARK(BM_RestbusInstructionsPerFrame)->Iterations(1)->Unit(benchmark::kSecon
 int main(int argc, char** argv) {
   if (argc == 4 && std::strcmp(argv[1], "--engine") == 0) {
     return run_engine(std::atoi(argv[2]), std::atoll(argv[3]));
+  }
+  if (argc == 4 && std::strcmp(argv[1], "--engine-nodes") == 0) {
+    return run_engine_nodes(std::atoi(argv[2]), std::atoll(argv[3]));
   }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) {

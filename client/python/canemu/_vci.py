@@ -389,6 +389,16 @@ def lib() -> ctypes.CDLL:
     )
 
 
+def declare(signatures: dict) -> None:
+    """Gives the functions of `signatures` (name: argument types) their argument types and an
+    HRESULT result in libvcinpl2.so, for a module with calls of its own (lin, restbus)."""
+    loaded = lib()
+    for func, args in signatures.items():
+        f = getattr(loaded, func)
+        f.argtypes = args
+        f.restype = HRESULT
+
+
 def unconverted(func: str):
     """A second binding of `func` of libvcinpl2.so with its result type but no argtypes: ctypes
     then converts no argument, so the caller passes ctypes objects only (handles as c_void_p,

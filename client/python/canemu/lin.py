@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import Optional
 
 from . import _vci
-from ._vci import HANDLE, HRESULT, VciError
+from ._vci import HANDLE, VciError
 
 LIN_OPMODE_SLAVE = 0x00
 LIN_OPMODE_MASTER = 0x01
@@ -79,19 +79,15 @@ _SIGNATURES = {
     "linMonitorPeekMessage": (HANDLE, ctypes.POINTER(LINMSG)),
     "linMonitorReadMessage": (HANDLE, ctypes.c_uint32, ctypes.POINTER(LINMSG)),
 }
-_ready = False
+_declared = False
 
 
 def _lib() -> ctypes.CDLL:
-    global _ready
-    lib = _vci.lib()
-    if not _ready:
-        for name, args in _SIGNATURES.items():
-            f = getattr(lib, name)
-            f.argtypes = args
-            f.restype = HRESULT
-        _ready = True
-    return lib
+    global _declared
+    if not _declared:
+        _vci.declare(_SIGNATURES)
+        _declared = True
+    return _vci.lib()
 
 
 def _call(name: str, *args) -> None:

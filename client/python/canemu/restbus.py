@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Tuple, Union
 
 from . import _vci, dbc_decode
-from ._vci import HRESULT, VciError
+from ._vci import VciError
 
 try:
     import tomllib
@@ -61,7 +61,7 @@ _SIGNATURES = {
     "canemuSetSignal": (ctypes.c_char_p, ctypes.c_char_p, ctypes.c_double),
     "canemuGetSignal": (ctypes.c_char_p, ctypes.c_char_p, ctypes.POINTER(ctypes.c_double)),
 }
-_ready = False
+_declared = False
 
 
 class RestbusError(VciError):
@@ -76,15 +76,11 @@ class RestbusError(VciError):
 
 
 def _lib() -> ctypes.CDLL:
-    global _ready
-    lib = _vci.lib()
-    if not _ready:
-        for name, args in _SIGNATURES.items():
-            f = getattr(lib, name)
-            f.argtypes = args
-            f.restype = HRESULT
-        _ready = True
-    return lib
+    global _declared
+    if not _declared:
+        _vci.declare(_SIGNATURES)
+        _declared = True
+    return _vci.lib()
 
 
 def _call(name: str, *args) -> None:

@@ -13,6 +13,13 @@ std::unique_ptr<ipc::CanNodeRequest> can_node_request(ipc::CanNodeOp op) {
   return m;
 }
 
+std::string can_node_load_problem(std::size_t length) {
+  if (length <= ipc::kMaxCanNodeLoad) {
+    return {};
+  }
+  return fmt::format("the tables are longer than {} bytes", ipc::kMaxCanNodeLoad);
+}
+
 CanNodeRequests can_node_load_requests(const std::string& text, const std::string& source) {
   CanNodeRequests parts;
   std::size_t at = 0;

@@ -63,8 +63,9 @@ HRESULT VCIAPI canemuLoadCanNodes(const char* pszTables, const char* pszSource) 
     return invalid("the tables are needed");
   }
   const std::size_t length = std::strlen(pszTables);
-  if (length > ipc::kMaxCanNodeLoad) {
-    return invalid("the tables are longer than " + std::to_string(ipc::kMaxCanNodeLoad) + " bytes");
+  // (The text is made in canemu_client: a std::to_string here would export its template.)
+  if (std::string problem = client::can_node_load_problem(length); !problem.empty()) {
+    return invalid(problem);
   }
   auto reply = std::make_unique<ipc::CanNodeReply>();
   return Library::get().can_nodes(

@@ -4,6 +4,7 @@
 // in turn.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,6 +24,8 @@ std::unique_ptr<ipc::CanNodeRequest> can_node_request(ipc::CanNodeOp op);
 // ipc::kMaxCanNodeText bytes, the last one `load`, the ones before it `load_part`; `source`
 // (the file's name, shown in canemud's errors) in each.
 CanNodeRequests can_node_load_requests(const std::string& text, const std::string& source);
+// Why a load of `length` bytes cannot go to canemud (longer than ipc::kMaxCanNodeLoad), or "".
+std::string can_node_load_problem(std::size_t length);
 
 // The node into `m.name` (power, remove); an error text when it is too long for it.
 std::string name_can_node(ipc::CanNodeRequest& m, const std::string& node);

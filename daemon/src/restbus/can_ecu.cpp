@@ -477,6 +477,33 @@ Result<> CanEcu::freeze_counter(std::string_view message, std::string_view signa
   return {};
 }
 
+Result<CanEcu::Place> CanEcu::check_jump(std::string_view message, std::string_view signal,
+                                         uint64_t by) const {
+  auto at = check_counter(message, signal);
+  if (!at) {
+    return at;
+  }
+  const uint32_t bits = messages_[at->first].config->signals[at->second].layout.length;
+  if ((by & ~mask(bits)) != 0) {
+    return fail(Errc::bad_argument,
+                fmt::format("by = {} is not below 2^{}: the {}-bit counter would skip a whole "
+                            "turn or more",
+                            by, bits, bits));
+  }
+  return at;
+}
+
+Result<> CanEcu::jump_counter(std::string_view message, std::string_view signal, uint64_t by) {
+  auto at = check_jump(message, signal, by);
+  if (!at) {
+    return tl::unexpected(at.error());
+  }
+  const Message& m = messages_[at->first];
+  const uint32_t bits = m.config->signals[at->second].layout.length;
+  change(at->first, at->second, (m.raw[at->second] + by) & mask(bits));
+  return {};
+}
+
 Result<std::size_t> CanEcu::check_checksum(std::string_view message) const {
   auto i = find(message);
   if (!i) {

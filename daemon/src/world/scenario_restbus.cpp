@@ -38,16 +38,7 @@ std::string ScenarioRunner::restbus_problem(const FaultSpec& f, const restbus::C
       keep(ecu.check_counter(f.message, f.signal));
       break;
     case FaultEffect::counter_jump:
-      if (auto at = ecu.check_counter(f.message, f.signal); !at) {
-        keep(at);
-      } else if (const uint32_t bits =
-                     ecu.config().messages[at->first].signals[at->second].layout.length;
-                 bits < 64 && f.by >= (uint64_t{1} << bits)) {
-        ok = fail(Errc::bad_argument,
-                  fmt::format("by = {} is not below 2^{}: the {}-bit counter would skip a whole "
-                              "turn or more",
-                              f.by, bits, bits));
-      }
+      keep(ecu.check_jump(f.message, f.signal, f.by));
       break;
     case FaultEffect::signal_step:
       keep(ecu.check_value(f.message, f.signal, *f.value));
@@ -111,13 +102,8 @@ void ScenarioRunner::arm_restbus(AppliedFault& applied, const std::string& what)
       }
       break;
     case FaultEffect::counter_jump: {
-      const auto place = *ecu->check_counter(message, signal);
-      const uint32_t bits = ecu->config().messages[place.first].signals[place.second].layout.length;
-      const uint64_t mask = bits >= 64 ? ~uint64_t{0} : (uint64_t{1} << bits) - 1;
       const uint64_t by = f.by;
-      when(at, state, [=] {
-        done(ecu->set_raw_signal(message, signal, (*ecu->raw_signal(message, signal) + by) & mask));
-      });
+      when(at, state, [=] { done(ecu->jump_counter(message, signal, by)); });
       break;
     }
     case FaultEffect::signal_step: {

@@ -89,6 +89,10 @@ class CanEcu : private model::ControllerEvents {
   // counter_freeze: while `frozen`, every frame carries the counter's current value.
   Result<Place> check_counter(std::string_view message, std::string_view signal) const;
   Result<> freeze_counter(std::string_view message, std::string_view signal, bool frozen);
+  // counter_jump: the next frame's counter `by` further on than it would have been, wrapping at
+  // its width; `by` must be below 2^width (a whole turn would change nothing).
+  Result<Place> check_jump(std::string_view message, std::string_view signal, uint64_t by) const;
+  Result<> jump_counter(std::string_view message, std::string_view signal, uint64_t by);
   // checksum_error: `fault` on the message's checksum from now (nullptr lifts it).
   Result<std::size_t> check_checksum(std::string_view message) const;
   Result<> corrupt_checksum(std::string_view message, std::shared_ptr<ChecksumFault> fault);

@@ -22,10 +22,53 @@ inline uint16_t first_split(const EncodedFrame& a, const EncodedFrame& b, bool& 
 
 }  // namespace
 
+bool Arbitration::resolve_in_first_word(std::span<const Contender> contenders) {
+  // The smallest first word wins if no other contender has it too.
+  const std::size_t n = contenders.size();
+  std::size_t best = 0;
+  uint64_t best_word = contenders[0].bits->level[0];
+  bool tie = false;
+  for (std::size_t k = 1; k < n; ++k) {
+    const uint64_t w = contenders[k].bits->level[0];
+    tie = tie || w == best_word;
+    if (w < best_word) {
+      best_word = w;
+      best = k;
+      tie = false;
+    }
+  }
+  if (tie) {
+    return false;
+  }
+  // Every other contender must lose within its arbitration field (the first word holds it).
+  for (std::size_t k = 0; k < n; ++k) {
+    const uint64_t x = contenders[k].bits->level[0] ^ best_word;
+    if (k != best &&
+        static_cast<uint32_t>(__builtin_clzll(x)) >= contenders[k].bits->arbitration_end) {
+      return false;
+    }
+  }
+  winning_bits_ = contenders[best].bits;
+  senders_.push_back(contenders[best].node);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k != best) {
+      const uint64_t x = contenders[k].bits->level[0] ^ best_word;
+      lost_.push_back(AtBit{contenders[k].node, static_cast<uint16_t>(__builtin_clzll(x))});
+    }
+  }
+  return true;
+}
+
 void Arbitration::resolve(std::span<const Contender> contenders) {
   senders_.clear();
   lost_.clear();
   collisions_.clear();
+  // Nearly always the identifiers decide within the first 64 bits of the frames.
+  if (resolve_in_first_word(contenders)) {
+    return;
+  }
+  senders_.clear();
+  lost_.clear();
   // One pass: the winner so far, and where every other contender departs from it. (Bits past the
   // end of a frame only decide between frames equal up to there, that is, identical.)
   const std::size_t n = contenders.size();

@@ -14,21 +14,6 @@ void BusLoad::grow() {
   busy_head_ = 0;
 }
 
-void BusLoad::record(SimTime start, SimTime end) {
-  if (busy_count_ == busy_.size()) {
-    grow();
-  }
-  const std::size_t mask = busy_.size() - 1;
-  busy_[(busy_head_ + busy_count_) & mask] = {start, end};
-  ++busy_count_;
-  add_to_bins(start, end);
-  const SimTime forget = end - seconds(2);
-  while (busy_count_ != 0 && busy_[busy_head_].second < forget) {
-    busy_head_ = (busy_head_ + 1) & mask;
-    --busy_count_;
-  }
-}
-
 double BusLoad::percent(SimTime now) const {
   const SimTime from = now - seconds(1);
   int64_t busy = 0;
@@ -45,14 +30,6 @@ double BusLoad::percent(SimTime now) const {
 
 void BusLoad::add_to_bins(SimTime start, SimTime end) {
   const int64_t bin = kBin.ns();
-  // Most activities fall inside the newest bin.
-  if (!bins_.empty()) {
-    const int64_t last = first_bin_ + static_cast<int64_t>(bins_.size()) - 1;
-    if (start.ns() / bin == last && end.ns() <= (last + 1) * bin && end > start) {
-      bins_.back() += (end - start).ns();
-      return;
-    }
-  }
   for (int64_t k = start.ns() / bin; k * bin < end.ns(); ++k) {
     if (bins_.empty()) {
       first_bin_ = k;
@@ -75,6 +52,13 @@ void BusLoad::add_to_bins(SimTime start, SimTime end) {
     const int64_t a = std::max(start.ns(), k * bin);
     const int64_t b = std::min(end.ns(), (k + 1) * bin);
     bins_[static_cast<std::size_t>(k - first_bin_)] += b - a;
+  }
+  if (bins_.empty()) {
+    newest_begin_ns_ = INT64_MAX;
+    newest_end_ns_ = INT64_MIN;
+  } else {
+    newest_begin_ns_ = (first_bin_ + static_cast<int64_t>(bins_.size()) - 1) * bin;
+    newest_end_ns_ = newest_begin_ns_ + bin;
   }
 }
 

@@ -191,6 +191,7 @@ void CanBus::set_oscillator_ppm(NodeId node, int32_t ppm) {
   nodes_[node].oscillator_ppm = std::clamp<int32_t>(ppm, -500'000, 500'000);
   nodes_[node].timing_known = false;
   decodes_cache_.clear();
+  plain_valid_ = false;
 }
 
 void CanBus::set_connected(NodeId node, bool connected) {
@@ -367,6 +368,7 @@ std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
   const FrameRoles roles(e, fault, acks_suppressed);
   std::vector<BusParticipant>& parts = parts_;
   parts.clear();
+  plain_valid_ = false;
   const bool alone = active.size() == 1;
   for (NodeId id = 0; id < node_count_; ++id) {
     Node& n = refresh(id);
@@ -388,6 +390,19 @@ std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
 }
 
 std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bool fd, bool brs) {
+  const std::vector<Member>& ms = members();
+  if (plain_valid_ && plain_tx_ == tx && plain_fd_ == fd && plain_brs_ == brs) {
+    bool same = true;
+    for (std::size_t k = 0; k < ms.size(); ++k) {
+      const FaultConfinement& fc = *ms[k].node->fc;
+      const uint8_t state = (fc.bus_off() ? 2u : 0u) | (fc.error_passive() ? 1u : 0u);
+      same = same && state == plain_states_[k];
+    }
+    if (same) {
+      return std::nullopt;  // parts_ as they are
+    }
+  }
+  plain_valid_ = false;
   std::vector<BusParticipant>& parts = parts_;
   parts.clear();
   // FrameRoles without a fault: the sender plans nothing; a receiver that cannot follow the
@@ -395,7 +410,7 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   uint16_t first = UINT16_MAX;
   bool acked = false;
   const int8_t* row = decodes_row(tx, brs);
-  for (const Member& m : members()) {
+  for (const Member& m : ms) {
     const FaultConfinement& fc = *m.node->fc;
     if (fc.bus_off()) {
       continue;
@@ -432,6 +447,17 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
     first = std::min(first, static_cast<uint16_t>(e.crc_delimiter_index + 1));
   }
   if (first == UINT16_MAX) {
+    // Nothing here depends on the frame beyond its sender, fd and brs: kept for the next one.
+    plain_states_.resize(ms.size());
+    for (std::size_t k = 0; k < ms.size(); ++k) {
+      const FaultConfinement& fc = *ms[k].node->fc;
+      plain_states_[k] =
+          static_cast<uint8_t>((fc.bus_off() ? 2u : 0u) | (fc.error_passive() ? 1u : 0u));
+    }
+    plain_valid_ = true;
+    plain_tx_ = tx;
+    plain_fd_ = fd;
+    plain_brs_ = brs;
     return std::nullopt;
   }
   return first;

@@ -17,7 +17,25 @@ class BusLoad {
  public:
   // The bus was busy from `start` to `end`. Calls come in the order the activities end; what
   // ended more than two seconds before the latest `end` is forgotten.
-  void record(SimTime start, SimTime end);
+  void record(SimTime start, SimTime end) {
+    if (busy_count_ == busy_.size()) {
+      grow();
+    }
+    const std::size_t mask = busy_.size() - 1;
+    busy_[(busy_head_ + busy_count_) & mask] = {start, end};
+    ++busy_count_;
+    // Most activities fall inside the newest bin.
+    if (start.ns() >= newest_begin_ns_ && end.ns() <= newest_end_ns_ && end > start) {
+      bins_.back() += (end - start).ns();
+    } else {
+      add_to_bins(start, end);
+    }
+    const SimTime forget = end - seconds(2);
+    while (busy_count_ != 0 && busy_[busy_head_].second < forget) {
+      busy_head_ = (busy_head_ + 1) & mask;
+      --busy_count_;
+    }
+  }
   // Busy time within the second before `now`, in percent of that second.
   double percent(SimTime now) const;
 
@@ -44,6 +62,9 @@ class BusLoad {
   // Busy nanoseconds of bins first_bin_, first_bin_ + 1, ...; later bins are idle so far.
   std::deque<int64_t> bins_;
   int64_t first_bin_ = 0;
+  // The span of bins_.back(), [begin, end) in ns; empty while there are no bins.
+  int64_t newest_begin_ns_ = INT64_MAX;
+  int64_t newest_end_ns_ = INT64_MIN;
 };
 
 }  // namespace canemu::model

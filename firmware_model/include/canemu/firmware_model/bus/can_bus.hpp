@@ -266,7 +266,10 @@ class CanBus final : private EventHandler {
     return members_;
   }
   void load_members();
-  void members_changed() { members_valid_ = false; }
+  void members_changed() {
+    members_valid_ = false;
+    plain_valid_ = false;
+  }
   // run_frame's roles for a frame with one sender, no injected fault and acknowledgements
   // allowed (nearly every frame): what FrameRoles gives, built directly from the members.
   std::optional<uint16_t> plain_roles(NodeId tx, const EncodedFrame& e, bool fd, bool brs);
@@ -385,6 +388,15 @@ class CanBus final : private EventHandler {
   Completion completion_;
   std::vector<Member> members_;
   bool members_valid_ = false;
+  // The last plain_roles() result, kept while it can be used again: a frame of the same sender
+  // (fd and brs alike) to the same members, each still as bus-off and error-passive as then, and
+  // nobody with an error planned. Forgotten whenever the members or their timings change, and
+  // when general_roles() fills parts_.
+  bool plain_valid_ = false;
+  NodeId plain_tx_ = 0;
+  bool plain_fd_ = false;
+  bool plain_brs_ = false;
+  std::vector<uint8_t> plain_states_;  // per member: 2 bus-off, 1 error-passive
   // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
   std::vector<int8_t> decodes_cache_;
 

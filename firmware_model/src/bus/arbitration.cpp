@@ -6,18 +6,25 @@ namespace {
 
 constexpr uint16_t kSame = 0xFFFF;
 
-// The first bit at which the whole bit arrays of `a` and `b` differ (bits past the ends of the
-// frames included), or kSame; `a_smaller`: whether `a` is the smaller bit sequence, that is,
-// has the smaller word where they first differ (first bit first: comparing words as numbers is
-// comparing bit sequences).
+// The first bit at which the frames `a` and `b` differ, or kSame if they do not differ before
+// the shorter one ends; `a_smaller`: whether `a` carries the dominant bit there (first bit first:
+// comparing words as numbers is comparing bit sequences). Bits past a frame's end are left alone:
+// the encoder does not define them, and identical frames must tie whatever they hold.
 inline uint16_t first_split(const EncodedFrame& a, const EncodedFrame& b, bool& a_smaller) {
-  std::size_t w = 0;
-  while (w + 1 < a.level.size() && a.level[w] == b.level[w]) {
-    ++w;
+  const uint32_t len = std::min(a.length, b.length);
+  for (uint32_t w = 0; w * 64 < len; ++w) {
+    const uint64_t x = a.level[w] ^ b.level[w];
+    if (x != 0) {
+      const uint32_t at = w * 64 + static_cast<uint32_t>(__builtin_clzll(x));
+      if (at >= len) {
+        break;
+      }
+      a_smaller = a.level[w] < b.level[w];
+      return static_cast<uint16_t>(at);
+    }
   }
-  a_smaller = a.level[w] < b.level[w];
-  const uint64_t x = a.level[w] ^ b.level[w];
-  return x == 0 ? kSame : static_cast<uint16_t>(w * 64 + static_cast<uint32_t>(__builtin_clzll(x)));
+  a_smaller = false;
+  return kSame;
 }
 
 }  // namespace
@@ -69,8 +76,8 @@ void Arbitration::resolve(std::span<const Contender> contenders) {
   }
   senders_.clear();
   lost_.clear();
-  // One pass: the winner so far, and where every other contender departs from it. (Bits past the
-  // end of a frame only decide between frames equal up to there, that is, identical.)
+  // One pass: the winner so far, and where every other contender departs from it. Identical
+  // frames tie, and of them the first in `contenders` stays the winner.
   const std::size_t n = contenders.size();
   if (split_.size() < n) {
     split_.resize(n);

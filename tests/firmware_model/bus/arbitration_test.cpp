@@ -32,6 +32,30 @@ TEST(Arbitration, TheLowestIdentifierWinsAndTheOthersLoseAtTheirFirstRecessiveBi
   EXPECT_TRUE(arb.collisions().empty());
 }
 
+TEST(Arbitration, IdenticalFramesTieWhateverTheirEncodingsHoldPastTheEnd) {
+  // What lies past a frame's end is left undefined by the encoder (a reused encoding keeps an
+  // older frame's bits there): it must not pick the winner among identical frames.
+  const EncodedFrame a = encode(frame(0x123, {1, 2, 3, 4, 5, 6, 7, 8}));
+  ASSERT_GT(a.length, 64u);
+  ASSERT_LT(a.length, 128u);
+  EncodedFrame low = a;
+  EncodedFrame high = a;
+  low.level[1] &= ~(~uint64_t{0} >> (a.length - 64));  // dominant after the end
+  high.level[1] |= ~uint64_t{0} >> (a.length - 64);    // recessive after the end
+  low.level[2] = 0;
+  high.level[2] = ~uint64_t{0};
+  for (const bool high_first : {true, false}) {
+    const std::vector<Arbitration::Contender> contenders{{1, high_first ? &high : &low},
+                                                         {2, high_first ? &low : &high}};
+    Arbitration arb;
+    arb.resolve(contenders);
+    EXPECT_EQ(arb.senders(), (std::vector<NodeId>{1, 2})) << high_first;
+    EXPECT_EQ(&arb.winning_bits(), contenders[0].bits) << high_first;
+    EXPECT_TRUE(arb.lost().empty());
+    EXPECT_TRUE(arb.collisions().empty());
+  }
+}
+
 TEST(Arbitration, AStandardFrameBeatsAnExtendedOneWithTheSameBaseIdentifierAtRtr) {
   // 0x123 = 001 0010 0011 has no stuff bit before its RTR, bit 12, where the extended frame
   // sends its recessive SRR.

@@ -2,6 +2,7 @@
 #include "canemu/firmware_model/chips/sja1000/sja1000.hpp"
 
 #include <algorithm>
+#include <cstring>
 
 namespace canemu::model::sja1000 {
 
@@ -20,7 +21,12 @@ std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out) {
     out[n++] = static_cast<uint8_t>(id >> 3);
     out[n++] = static_cast<uint8_t>(((id & 0x07) << 5) | (rtr << 4));
   }
-  for (uint8_t b : frame.data()) {
+  const auto data = frame.data();
+  if (data.size() == 8) {  // most frames: one move, not eight
+    std::memcpy(out.data() + n, data.data(), 8);
+    return n + 8;
+  }
+  for (uint8_t b : data) {
     out[n++] = b;
   }
   return n;

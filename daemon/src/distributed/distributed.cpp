@@ -23,6 +23,9 @@ namespace canemu::daemon {
 #ifdef CANEMU_HAVE_DDS
 
 Distributed::Impl::~Impl() {
+  if (legs.on()) {
+    log::info("{}", legs.summary());
+  }
   undecodable.clear();  // Cyclone's log no longer rings this daemon's doorbell
   for (RemoteNode* n : nodes) {
     n->unlink();
@@ -181,7 +184,12 @@ bool Distributed::Impl::send_request(const std::string& owner, canemu_net_Reques
   r.from_boot = boot;
   put(r.to, owner);
   r.seq = ++req_seq;
-  if (const dds_return_t rc = dds_write(w_requests, &r); rc != DDS_RETCODE_OK) {
+  const int64_t start = legs.on() ? LinkLegs::mono() : 0;
+  const dds_return_t rc = dds_write(w_requests, &r);
+  if (legs.on()) {
+    legs.add(Leg::request_write, LinkLegs::mono() - start);
+  }
+  if (rc != DDS_RETCODE_OK) {
     drop(NetDrop::not_written, fmt::format("DDS did not take a request ({}) for daemon {}: {}",
                                            request_name(r.kind), owner, dds_strretcode(rc)));
     return false;
@@ -195,7 +203,22 @@ void Distributed::Impl::send_event(const std::string& to, canemu_net_Event& e) {
   e.from_boot = boot;
   put(e.to, to);
   e.seq = ++ev_seq;
-  if (const dds_return_t rc = dds_write(w_events, &e); rc != DDS_RETCODE_OK) {
+  int64_t start = 0;
+  if (legs.on()) {
+    start = LinkLegs::mono();
+    const int64_t now = sim.scheduler().now().ns();
+    if (realtime()) {
+      legs.observe(now);
+      if ((e.kind == canemu_net_EV_RX || e.kind == canemu_net_EV_TX_DONE) && e.at_ns == now) {
+        legs.add(Leg::event_wait, legs.since_instant(now));
+      }
+    }
+  }
+  const dds_return_t rc = dds_write(w_events, &e);
+  if (legs.on()) {
+    legs.add(Leg::event_write, LinkLegs::mono() - start);
+  }
+  if (rc != DDS_RETCODE_OK) {
     drop(NetDrop::not_written,
          fmt::format("DDS did not take an event ({}) for daemon {}: {}", event_name(e.kind),
                      to.empty() ? std::string("every follower") : to, dds_strretcode(rc)));
@@ -238,10 +261,17 @@ void Distributed::Impl::tick() {
 void Distributed::Impl::receive() {
   uint64_t rung = 0;
   [[maybe_unused]] const auto n = ::read(wake, &rung, sizeof rung);
+  LinkLegs::Take timing;
+  if (legs.on()) {
+    timing = legs.take();
+    if (realtime()) {
+      legs.observe(sim.scheduler().now().ns());
+    }
+  }
   constexpr int kBatch = 32;
   uint32_t taken = 0;
   bool more = false;
-  auto drain = [&](dds_entity_t reader, auto handle) {
+  auto drain = [&](dds_entity_t reader, int timed, auto handle) {
     while (true) {
       if (taken >= kMaxTakesPerKick) {
         more = true;
@@ -255,6 +285,9 @@ void Distributed::Impl::receive() {
       }
       for (dds_return_t i = 0; i < got; ++i) {
         if (infos[i].valid_data) {
+          if (timed >= 0 && legs.on()) {
+            legs.taken(timing, infos[i].source_timestamp, timed == 1);
+          }
           handle(samples[i]);
         }
       }
@@ -274,9 +307,9 @@ void Distributed::Impl::receive() {
            lost);
     }
   }
-  drain(r_daemons, [&](void* s) { on_daemon(*static_cast<const canemu_net_Daemon*>(s)); });
-  drain(r_requests, [&](void* s) { on_request(*static_cast<const canemu_net_Request*>(s)); });
-  drain(r_events, [&](void* s) { on_event(*static_cast<const canemu_net_Event*>(s)); });
+  drain(r_daemons, -1, [&](void* s) { on_daemon(*static_cast<const canemu_net_Daemon*>(s)); });
+  drain(r_requests, 0, [&](void* s) { on_request(*static_cast<const canemu_net_Request*>(s)); });
+  drain(r_events, 1, [&](void* s) { on_event(*static_cast<const canemu_net_Event*>(s)); });
   if (more) {
     on_data(0, this);  // the rest on the loop's next turn
   }

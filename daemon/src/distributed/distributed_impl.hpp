@@ -34,6 +34,7 @@
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu_net.h"
+#include "distributed_legs.hpp"
 
 namespace canemu::daemon {
 
@@ -388,7 +389,13 @@ struct Distributed::Impl {
   std::string time_problem(const Peer& p) const;
   SimTime local_time(const Peer& owner, int64_t owner_ns);
 
+  LinkLegs legs;  // off unless CANEMU_NET_LEGS is set
+  bool realtime() const { return time.mode == TimeMode::realtime; }
+
   static void on_data(dds_entity_t, void* self) {
+    if (static_cast<Impl*>(self)->legs.on()) {
+      static_cast<Impl*>(self)->legs.rung();
+    }
     const uint64_t one = 1;
     [[maybe_unused]] const auto n = ::write(static_cast<Impl*>(self)->wake, &one, sizeof one);
   }

@@ -97,7 +97,7 @@ Result<> Distributed::Impl::open() {
   };
   const dds_entity_t t_daemons = topic(&canemu_net_Daemon_desc, "canemu/net/daemons");
   const dds_entity_t t_requests = topic(&canemu_net_Request_desc, "canemu/net/requests");
-  const dds_entity_t t_events = topic(&canemu_net_Event_desc, "canemu/net/events");
+  const dds_entity_t t_events = topic(&canemu_net_Events_desc, "canemu/net/events");
   auto writer = [&](dds_entity_t t) {
     const dds_entity_t w = t > 0 ? dds_create_writer(pub, t, wq, nullptr) : t;
     failure = w < 0 ? w : failure;
@@ -198,33 +198,72 @@ bool Distributed::Impl::send_request(const std::string& owner, canemu_net_Reques
   return true;
 }
 
-void Distributed::Impl::send_event(const std::string& to, canemu_net_Event& e) {
-  put(e.from, cfg.name);
-  e.from_boot = boot;
-  put(e.to, to);
-  e.seq = ++ev_seq;
+void Distributed::Impl::send_event(const std::string& to, const canemu_net_Event& e) {
+  // A follower reads what is for it and what is for every follower ("") in the order written:
+  // the two are not reordered against each other.
+  for (Outgoing& o : outgoing) {
+    if (!o.events.empty() && o.to != to && (to.empty() || o.to.empty())) {
+      write_events(o);
+    }
+  }
+  auto it =
+      std::find_if(outgoing.begin(), outgoing.end(), [&](const Outgoing& o) { return o.to == to; });
+  if (it == outgoing.end()) {
+    it = outgoing.insert(outgoing.end(), Outgoing{to, {}});
+  }
+  it->events.push_back(e);
+  if (it->events.size() == kEventsPerSample) {
+    write_events(*it);
+  }
+}
+
+void Distributed::Impl::flush_events() {
+  for (Outgoing& o : outgoing) {
+    if (!o.events.empty()) {
+      write_events(o);
+    }
+  }
+}
+
+void Distributed::Impl::write_events(Outgoing& o) {
+  canemu_net_Events b{};
+  put(b.from, cfg.name);
+  b.from_boot = boot;
+  put(b.to, o.to);
+  b.seq = ++ev_seq;
+  b.list._buffer = o.events.data();
+  b.list._length = static_cast<uint32_t>(o.events.size());
+  b.list._maximum = b.list._length;
+  b.list._release = false;
   int64_t start = 0;
   if (legs.on()) {
     start = LinkLegs::mono();
-    const int64_t now = sim.scheduler().now().ns();
     if (realtime()) {
-      legs.observe(now);
-      if ((e.kind == canemu_net_EV_RX || e.kind == canemu_net_EV_TX_DONE) && e.at_ns == now) {
-        legs.add(Leg::event_wait, legs.since_instant(now));
+      legs.observe(sim.scheduler().now().ns());
+      for (const canemu_net_Event& e : o.events) {
+        if (e.kind == canemu_net_EV_RX || e.kind == canemu_net_EV_TX_DONE) {
+          legs.add(Leg::event_wait, legs.since_instant(e.at_ns));
+          break;
+        }
       }
     }
   }
-  const dds_return_t rc = dds_write(w_events, &e);
+  const dds_return_t rc = dds_write(w_events, &b);
   if (legs.on()) {
     legs.add(Leg::event_write, LinkLegs::mono() - start);
   }
+  const std::size_t n = o.events.size();
   if (rc != DDS_RETCODE_OK) {
     drop(NetDrop::not_written,
-         fmt::format("DDS did not take an event ({}) for daemon {}: {}", event_name(e.kind),
-                     to.empty() ? std::string("every follower") : to, dds_strretcode(rc)));
-    return;
+         fmt::format("DDS did not take {} ({}) for daemon {}: {}",
+                     n == 1 ? std::string("an event") : fmt::format("{} events", n),
+                     event_name(o.events.front().kind),
+                     o.to.empty() ? std::string("every follower") : o.to, dds_strretcode(rc)),
+         n);
+  } else {
+    counters.events_sent += n;
   }
-  ++counters.events_sent;
+  o.events.clear();
 }
 
 void Distributed::Impl::tick() {
@@ -256,6 +295,7 @@ void Distributed::Impl::tick() {
       hello(p);
     }
   }
+  flush_events();
 }
 
 void Distributed::Impl::receive() {
@@ -309,7 +349,8 @@ void Distributed::Impl::receive() {
   }
   drain(r_daemons, -1, [&](void* s) { on_daemon(*static_cast<const canemu_net_Daemon*>(s)); });
   drain(r_requests, 0, [&](void* s) { on_request(*static_cast<const canemu_net_Request*>(s)); });
-  drain(r_events, 1, [&](void* s) { on_event(*static_cast<const canemu_net_Event*>(s)); });
+  drain(r_events, 1, [&](void* s) { on_events(*static_cast<const canemu_net_Events*>(s)); });
+  flush_events();  // the answers to what came
   if (more) {
     on_data(0, this);  // the rest on the loop's next turn
   }
@@ -318,6 +359,7 @@ void Distributed::Impl::receive() {
 Distributed::Distributed(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Distributed::~Distributed() {
+  impl_->flush_events();
   impl_->announce(true);
 }
 
@@ -373,6 +415,10 @@ void Distributed::kick() {
   impl_->receive();
 }
 
+void Distributed::flush() {
+  impl_->flush_events();
+}
+
 Doorbell& Distributed::heartbeat() {
   return impl_->heartbeat;
 }
@@ -408,6 +454,7 @@ int Distributed::doorbell_fd() const {
   return -1;
 }
 void Distributed::kick() {}
+void Distributed::flush() {}
 Doorbell& Distributed::heartbeat() {
   return *this;
 }

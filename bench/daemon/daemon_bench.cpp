@@ -220,6 +220,10 @@ class ScopedEnv {
   std::optional<std::string> old_;
 };
 
+std::string fmt_leg(const char* daemon, const char* leg, const char* p) {
+  return std::string("leg_") + daemon + "_" + leg + "_" + p + "_us";
+}
+
 constexpr std::size_t kDdsSamples = 2000;  // per path
 constexpr std::size_t kDdsSmokeSamples = 50;
 constexpr int64_t kDdsGapNs = 1'000'000;
@@ -235,6 +239,8 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
       "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
       "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
       "</Domain></CycloneDDS>");
+  // Each daemon times the legs of the link's messages and logs them as it stops.
+  const ScopedEnv legs("CANEMU_NET_LEGS", "1");
   const std::string config_a = distributed_config(base, "a", domain, "");
   const std::string config_b = distributed_config(base, "b", domain, "owner = \"a\"\n");
   const auto cleanup = [&] {
@@ -372,6 +378,25 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
   }
   state.counters["samples_per_path"] = static_cast<double>(samples);
   state.counters["attach_ms"] = static_cast<double>(attach_ns) / 1e6;
+  // The legs (p50 and p99, us) as the daemons timed them: the request's on b (its write) and a,
+  // the event's on a (the wait from the frame's end, the write) and b.
+  const std::vector<const char*> legs_b{"request_write", "event_delivery", "event_turn"};
+  const std::vector<const char*> legs_a{"request_delivery", "request_turn", "event_wait",
+                                        "event_write"};
+  for (auto [d, who, names] : {std::tuple{&db, "b", &legs_b}, std::tuple{&da, "a", &legs_a}}) {
+    d->terminate(5000);  // once each: it logs the legs as it stops
+    d->read_log_until("link legs", 1000);
+    for (const char* leg : *names) {
+      const std::size_t at = d->log().find(std::string(leg) + "=");
+      double p50 = 0;
+      double p99 = 0;
+      if (at != std::string::npos &&
+          std::sscanf(d->log().c_str() + at + std::strlen(leg) + 1, "%lf/%lf", &p50, &p99) == 2) {
+        state.counters[fmt_leg(who, leg, "p50")] = p50;
+        state.counters[fmt_leg(who, leg, "p99")] = p99;
+      }
+    }
+  }
   cleanup();
 }
 BENCHMARK(BM_DdsHopLatencyRealtime)

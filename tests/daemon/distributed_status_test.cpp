@@ -265,6 +265,7 @@ struct RawDaemon {
   uint64_t seq = 0;
   dds_entity_t participant;
   dds_entity_t w_daemons = 0, w_requests = 0, r_events = 0;
+  std::string from;  // the owner the events taken last came from
 
   explicit RawDaemon(std::string n)
       : name(std::move(n)), participant(dds_create_participant(test_domain(), nullptr, nullptr)) {
@@ -283,7 +284,7 @@ struct RawDaemon {
     w_requests = dds_create_writer(pub, topic(&canemu_net_Request_desc, "canemu/net/requests"), qos,
                                    nullptr);
     r_events =
-        dds_create_reader(sub, topic(&canemu_net_Event_desc, "canemu/net/events"), qos, nullptr);
+        dds_create_reader(sub, topic(&canemu_net_Events_desc, "canemu/net/events"), qos, nullptr);
     dds_delete_qos(qos);
   }
   ~RawDaemon() { dds_delete(participant); }
@@ -325,7 +326,7 @@ struct RawDaemon {
     EXPECT_EQ(dds_write(w_requests, &r), DDS_RETCODE_OK);
     return r.seq;
   }
-  // The events that came so far, addressed to this daemon.
+  // The events that came so far, addressed to this daemon (each sample gathers some).
   std::vector<canemu_net_Event> take(std::vector<canemu_net_Event>& into) {
     for (;;) {
       void* samples[16] = {};
@@ -335,9 +336,10 @@ struct RawDaemon {
         return into;
       }
       for (dds_return_t i = 0; i < n; ++i) {
-        const auto* e = static_cast<const canemu_net_Event*>(samples[i]);
-        if (infos[i].valid_data && std::string(e->to) == name) {
-          into.push_back(*e);
+        const auto* b = static_cast<const canemu_net_Events*>(samples[i]);
+        if (infos[i].valid_data && std::string(b->to) == name) {
+          from = b->from;
+          into.insert(into.end(), b->list._buffer, b->list._buffer + b->list._length);
         }
       }
       dds_return_loan(r_events, samples, n);
@@ -369,7 +371,7 @@ canemu_net_Request open_request(uint32_t node) {
 }
 
 TEST(DistributedStatus, APeerOfAnotherProtocolIsRefusedAndItsHelloNotAnswered) {
-  ASSERT_EQ(canemu_net_PROTOCOL, 1);  // the reason below names protocols 2 and 1
+  ASSERT_EQ(canemu_net_PROTOCOL, 2);  // the reason below names protocols 3 and 2
   auto a = daemon_named("a", kBusA);
   ASSERT_TRUE(a);
   RawDaemon r("r");
@@ -380,8 +382,8 @@ TEST(DistributedStatus, APeerOfAnotherProtocolIsRefusedAndItsHelloNotAnswered) {
   ASSERT_TRUE(pump({a.get()}, [&] { return peer(*a, "r", keep) != nullptr; }));
   const PeerStatus& p = *peer(*a, "r", keep);
   EXPECT_EQ(p.state, "refused");
-  EXPECT_EQ(p.reason, "protocol 2, this daemon speaks 1");
-  EXPECT_EQ(p.protocol, 2u);
+  EXPECT_EQ(p.reason, "protocol 3, this daemon speaks 2");
+  EXPECT_EQ(p.protocol, 3u);
   EXPECT_EQ(p.version, "raw-test");
   EXPECT_EQ(p.time, "realtime");
   EXPECT_EQ(p.hosted_nodes, 0u);
@@ -426,8 +428,8 @@ TEST(DistributedStatus, TheLogSaysWhatStatusSaysInPrintableText) {
     }
   }
   EXPECT_EQ(about_r, (std::vector<std::string>{
-                         "<4>canemud: daemon r (time realtime, protocol 2, version 1.0?[2J?) "
-                         "refused: protocol 2, this daemon speaks 1"}));
+                         "<4>canemud: daemon r (time realtime, protocol 3, version 1.0?[2J?) "
+                         "refused: protocol 3, this daemon speaks 2"}));
 }
 
 TEST(DistributedStatus, ADaemonNamedAgainstTheRuleIsNotListedAndCountsAsDropped) {
@@ -501,7 +503,7 @@ TEST(DistributedStatus, MalformedRequestsAreRefusedOrDroppedAndTheOwnerGoesOn) {
   EXPECT_EQ(e.kind, canemu_net_EV_REFUSED);
   EXPECT_EQ(e.node, 1u);
   EXPECT_EQ(e.opened, bad_seq);
-  EXPECT_EQ(std::string(e.from), "a");
+  EXPECT_EQ(w.r.from, "a");
   EXPECT_EQ(std::string(e.text),
             fmt::format("the node's bit timing (clock {} Hz, prescaler 0, tseg1 {}, tseg2 {}, "
                         "sjw {}) is no controller's",

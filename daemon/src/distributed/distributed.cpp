@@ -23,6 +23,9 @@ namespace canemu::daemon {
 #ifdef CANEMU_HAVE_DDS
 
 Distributed::Impl::~Impl() {
+  if (legs.on()) {
+    log::info("{}", legs.summary());
+  }
   undecodable.clear();  // Cyclone's log no longer rings this daemon's doorbell
   for (RemoteNode* n : nodes) {
     n->unlink();
@@ -94,7 +97,7 @@ Result<> Distributed::Impl::open() {
   };
   const dds_entity_t t_daemons = topic(&canemu_net_Daemon_desc, "canemu/net/daemons");
   const dds_entity_t t_requests = topic(&canemu_net_Request_desc, "canemu/net/requests");
-  const dds_entity_t t_events = topic(&canemu_net_Event_desc, "canemu/net/events");
+  const dds_entity_t t_events = topic(&canemu_net_Events_desc, "canemu/net/events");
   auto writer = [&](dds_entity_t t) {
     const dds_entity_t w = t > 0 ? dds_create_writer(pub, t, wq, nullptr) : t;
     failure = w < 0 ? w : failure;
@@ -181,7 +184,12 @@ bool Distributed::Impl::send_request(const std::string& owner, canemu_net_Reques
   r.from_boot = boot;
   put(r.to, owner);
   r.seq = ++req_seq;
-  if (const dds_return_t rc = dds_write(w_requests, &r); rc != DDS_RETCODE_OK) {
+  const int64_t start = legs.on() ? LinkLegs::mono() : 0;
+  const dds_return_t rc = dds_write(w_requests, &r);
+  if (legs.on()) {
+    legs.add(Leg::request_write, LinkLegs::mono() - start);
+  }
+  if (rc != DDS_RETCODE_OK) {
     drop(NetDrop::not_written, fmt::format("DDS did not take a request ({}) for daemon {}: {}",
                                            request_name(r.kind), owner, dds_strretcode(rc)));
     return false;
@@ -190,18 +198,72 @@ bool Distributed::Impl::send_request(const std::string& owner, canemu_net_Reques
   return true;
 }
 
-void Distributed::Impl::send_event(const std::string& to, canemu_net_Event& e) {
-  put(e.from, cfg.name);
-  e.from_boot = boot;
-  put(e.to, to);
-  e.seq = ++ev_seq;
-  if (const dds_return_t rc = dds_write(w_events, &e); rc != DDS_RETCODE_OK) {
-    drop(NetDrop::not_written,
-         fmt::format("DDS did not take an event ({}) for daemon {}: {}", event_name(e.kind),
-                     to.empty() ? std::string("every follower") : to, dds_strretcode(rc)));
-    return;
+void Distributed::Impl::send_event(const std::string& to, const canemu_net_Event& e) {
+  // A follower reads what is for it and what is for every follower ("") in the order written:
+  // the two are not reordered against each other.
+  for (Outgoing& o : outgoing) {
+    if (!o.events.empty() && o.to != to && (to.empty() || o.to.empty())) {
+      write_events(o);
+    }
   }
-  ++counters.events_sent;
+  auto it =
+      std::find_if(outgoing.begin(), outgoing.end(), [&](const Outgoing& o) { return o.to == to; });
+  if (it == outgoing.end()) {
+    it = outgoing.insert(outgoing.end(), Outgoing{to, {}});
+  }
+  it->events.push_back(e);
+  if (it->events.size() == kEventsPerSample) {
+    write_events(*it);
+  }
+}
+
+void Distributed::Impl::flush_events() {
+  for (Outgoing& o : outgoing) {
+    if (!o.events.empty()) {
+      write_events(o);
+    }
+  }
+}
+
+void Distributed::Impl::write_events(Outgoing& o) {
+  canemu_net_Events b{};
+  put(b.from, cfg.name);
+  b.from_boot = boot;
+  put(b.to, o.to);
+  b.seq = ++ev_seq;
+  b.list._buffer = o.events.data();
+  b.list._length = static_cast<uint32_t>(o.events.size());
+  b.list._maximum = b.list._length;
+  b.list._release = false;
+  int64_t start = 0;
+  if (legs.on()) {
+    start = LinkLegs::mono();
+    if (realtime()) {
+      legs.observe(sim.scheduler().now().ns());
+      for (const canemu_net_Event& e : o.events) {
+        if (e.kind == canemu_net_EV_RX || e.kind == canemu_net_EV_TX_DONE) {
+          legs.add(Leg::event_wait, legs.since_instant(e.at_ns));
+          break;
+        }
+      }
+    }
+  }
+  const dds_return_t rc = dds_write(w_events, &b);
+  if (legs.on()) {
+    legs.add(Leg::event_write, LinkLegs::mono() - start);
+  }
+  const std::size_t n = o.events.size();
+  if (rc != DDS_RETCODE_OK) {
+    drop(NetDrop::not_written,
+         fmt::format("DDS did not take {} ({}) for daemon {}: {}",
+                     n == 1 ? std::string("an event") : fmt::format("{} events", n),
+                     event_name(o.events.front().kind),
+                     o.to.empty() ? std::string("every follower") : o.to, dds_strretcode(rc)),
+         n);
+  } else {
+    counters.events_sent += n;
+  }
+  o.events.clear();
 }
 
 void Distributed::Impl::tick() {
@@ -233,15 +295,23 @@ void Distributed::Impl::tick() {
       hello(p);
     }
   }
+  flush_events();
 }
 
 void Distributed::Impl::receive() {
   uint64_t rung = 0;
   [[maybe_unused]] const auto n = ::read(wake, &rung, sizeof rung);
+  LinkLegs::Take timing;
+  if (legs.on()) {
+    timing = legs.take();
+    if (realtime()) {
+      legs.observe(sim.scheduler().now().ns());
+    }
+  }
   constexpr int kBatch = 32;
   uint32_t taken = 0;
   bool more = false;
-  auto drain = [&](dds_entity_t reader, auto handle) {
+  auto drain = [&](dds_entity_t reader, int timed, auto handle) {
     while (true) {
       if (taken >= kMaxTakesPerKick) {
         more = true;
@@ -255,6 +325,9 @@ void Distributed::Impl::receive() {
       }
       for (dds_return_t i = 0; i < got; ++i) {
         if (infos[i].valid_data) {
+          if (timed >= 0 && legs.on()) {
+            legs.taken(timing, infos[i].source_timestamp, timed == 1);
+          }
           handle(samples[i]);
         }
       }
@@ -274,9 +347,10 @@ void Distributed::Impl::receive() {
            lost);
     }
   }
-  drain(r_daemons, [&](void* s) { on_daemon(*static_cast<const canemu_net_Daemon*>(s)); });
-  drain(r_requests, [&](void* s) { on_request(*static_cast<const canemu_net_Request*>(s)); });
-  drain(r_events, [&](void* s) { on_event(*static_cast<const canemu_net_Event*>(s)); });
+  drain(r_daemons, -1, [&](void* s) { on_daemon(*static_cast<const canemu_net_Daemon*>(s)); });
+  drain(r_requests, 0, [&](void* s) { on_request(*static_cast<const canemu_net_Request*>(s)); });
+  drain(r_events, 1, [&](void* s) { on_events(*static_cast<const canemu_net_Events*>(s)); });
+  flush_events();  // the answers to what came
   if (more) {
     on_data(0, this);  // the rest on the loop's next turn
   }
@@ -285,6 +359,7 @@ void Distributed::Impl::receive() {
 Distributed::Distributed(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Distributed::~Distributed() {
+  impl_->flush_events();
   impl_->announce(true);
 }
 
@@ -340,6 +415,10 @@ void Distributed::kick() {
   impl_->receive();
 }
 
+void Distributed::flush() {
+  impl_->flush_events();
+}
+
 Doorbell& Distributed::heartbeat() {
   return impl_->heartbeat;
 }
@@ -375,6 +454,7 @@ int Distributed::doorbell_fd() const {
   return -1;
 }
 void Distributed::kick() {}
+void Distributed::flush() {}
 Doorbell& Distributed::heartbeat() {
   return *this;
 }

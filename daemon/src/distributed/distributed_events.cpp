@@ -23,27 +23,38 @@ SimTime Distributed::Impl::local_time(const Peer& owner, int64_t owner_ns) {
   return SimTime::from_ns(std::min(here, now));
 }
 
-void Distributed::Impl::on_event(const canemu_net_Event& e) {
-  const std::string to = get(e.to);
+void Distributed::Impl::on_events(const canemu_net_Events& b) {
+  const std::string to = get(b.to);
   if (to != cfg.name && !to.empty()) {
     return;
   }
-  const std::string from = get(e.from);
+  const std::string from = get(b.from);
   auto pit = peers.find(from);
   if (to.empty() && from != stepped_owner) {
     return;  // another owner's steps
   }
-  ++counters.events_received;
-  if (pit == peers.end() || pit->second.boot != e.from_boot || pit->second.gone) {
-    drop(NetDrop::not_accepted,
-         fmt::format("dropped an event ({}) from daemon {}: it is {}", event_name(e.kind),
-                     printable(from),
-                     pit == peers.end()                ? "not heard announcing itself"
-                     : pit->second.boot != e.from_boot ? "of another boot than the one heard"
-                                                       : "gone (" + pit->second.gone_reason + ")"));
+  const uint32_t n = b.list._length;
+  if (n == 0) {
     return;
   }
-  Peer& p = pit->second;
+  counters.events_received += n;
+  if (pit == peers.end() || pit->second.boot != b.from_boot || pit->second.gone) {
+    drop(NetDrop::not_accepted,
+         fmt::format("dropped {} ({}) from daemon {}: it is {}",
+                     n == 1 ? std::string("an event") : fmt::format("{} events", n),
+                     event_name(b.list._buffer[0].kind), printable(from),
+                     pit == peers.end()                ? "not heard announcing itself"
+                     : pit->second.boot != b.from_boot ? "of another boot than the one heard"
+                                                       : "gone (" + pit->second.gone_reason + ")"),
+         n);
+    return;
+  }
+  for (uint32_t i = 0; i < n; ++i) {
+    on_event(pit->second, from, b.list._buffer[i]);
+  }
+}
+
+void Distributed::Impl::on_event(Peer& p, const std::string& from, const canemu_net_Event& e) {
   settle();
   SimScheduler& s = sim.scheduler();
   switch (e.kind) {

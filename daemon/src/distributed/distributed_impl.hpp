@@ -34,6 +34,7 @@
 #include "canemu/firmware_model/chips/sja1000/btr.hpp"
 #include "canemu/ipc/protocol.hpp"
 #include "canemu_net.h"
+#include "distributed_legs.hpp"
 
 namespace canemu::daemon {
 
@@ -46,6 +47,7 @@ constexpr std::size_t kOwnerQueue = 64;  // frames the owner keeps for one remot
 constexpr int32_t kWriterDepth = 4096;   // samples a writer keeps for readers catching up
 constexpr int32_t kReaderSamples = 8192;
 constexpr uint32_t kMaxTakesPerKick = 512;
+constexpr std::size_t kEventsPerSample = 64;  // canemu_net.idl: Events
 
 inline int64_t monotonic_ms() {
   timespec ts{};
@@ -237,7 +239,7 @@ struct Distributed::Impl {
       }
       send(e);
     }
-    void send(canemu_net_Event& e) {
+    void send(canemu_net_Event e) {
       e.node = number;
       e.opened = opened;
       link->send_event(daemon, e);
@@ -371,11 +373,21 @@ struct Distributed::Impl {
   void receive();
   void announce(bool leaving);
   bool send_request(const std::string& owner, canemu_net_Request& r);
-  void send_event(const std::string& to, canemu_net_Event& e);
+  // An event for daemon `to` ("": every follower): written with the others for `to` when the
+  // loop's turn ends (flush_events), in one sample.
+  void send_event(const std::string& to, const canemu_net_Event& e);
+  struct Outgoing {
+    std::string to;
+    std::vector<canemu_net_Event> events;
+  };
+  std::vector<Outgoing> outgoing;  // by daemon, each in the order its events happened
+  void flush_events();
+  void write_events(Outgoing& o);
 
   void on_daemon(const canemu_net_Daemon& d);
   void on_request(const canemu_net_Request& r);
-  void on_event(const canemu_net_Event& e);
+  void on_events(const canemu_net_Events& b);
+  void on_event(Peer& p, const std::string& from, const canemu_net_Event& e);
   void peer_gone(Peer& p, const std::string& why);
   void owner_up(Peer& p);
   void drop_hosted_of(const std::string& daemon, const std::string& why);
@@ -388,7 +400,13 @@ struct Distributed::Impl {
   std::string time_problem(const Peer& p) const;
   SimTime local_time(const Peer& owner, int64_t owner_ns);
 
+  LinkLegs legs;  // off unless CANEMU_NET_LEGS is set
+  bool realtime() const { return time.mode == TimeMode::realtime; }
+
   static void on_data(dds_entity_t, void* self) {
+    if (static_cast<Impl*>(self)->legs.on()) {
+      static_cast<Impl*>(self)->legs.rung();
+    }
     const uint64_t one = 1;
     [[maybe_unused]] const auto n = ::write(static_cast<Impl*>(self)->wake, &one, sizeof one);
   }

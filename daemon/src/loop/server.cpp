@@ -317,6 +317,9 @@ bool Server::run_once(int timeout_ms) {
   send_outboxes();
   drop_closing();
   send_notifications();
+  if (Distributed* d = Distributed::of(sim_)) {
+    d->flush();  // what this turn did to other daemons' nodes: a sample for each daemon
+  }
   return true;
 }
 

@@ -88,6 +88,10 @@ class Distributed final : public RemoteBuses, public Doorbell {
   // Rung when a heartbeat is due: announces this daemon, says hello to owners not yet
   // answering, and lets daemons not heard from within timeout_ms go.
   Doorbell& heartbeat();
+  // Writes the events this daemon's nodes had for other daemons' nodes since the last call
+  // (one sample per daemon): the loop calls it as each turn ends, kick() and the heartbeat
+  // as they end.
+  void flush();
 
   // ---- stepped time (docs/distributed.md, "Time") ----
   // This daemon uses a remote bus in stepped time: its steps are the owner's.

@@ -168,15 +168,16 @@ controllers = ["can9"]
   EXPECT_EQ(e[4], "t.toml:12:15: device[0].controllers: no bus is named \"can9\"");
 }
 
-TEST(Config, TakesSixtyFourBusesAndTwoHundredFiftySixControllersAndNoMore) {
-  auto most = parse_config(testing::many_buses_config(64, 256), "t.toml");
+TEST(Config, TakesAThousandTwentyFourBusesAndTwoHundredFiftySixControllersAndNoMore) {
+  auto most = parse_config(testing::many_buses_config(1024, 256), "t.toml");
   ASSERT_TRUE(most) << most.error().front();
-  EXPECT_EQ(most->buses.size(), 64u);
+  EXPECT_EQ(most->buses.size(), 1024u);
+  EXPECT_EQ(most->buses.back().name, "bus1023");
   EXPECT_EQ(most->devices.size(), 64u);
-  EXPECT_EQ(most->devices[63].controllers.back(), "bus63");
-  const auto buses = config_errors(testing::many_buses_config(65, 4));
+  EXPECT_EQ(most->devices[63].controllers.back(), "bus255");
+  const auto buses = config_errors(testing::many_buses_config(1025, 4));
   ASSERT_EQ(buses.size(), 1u);
-  EXPECT_EQ(buses[0], "t.toml:1:1: bus: 65 buses; at most 64");
+  EXPECT_EQ(buses[0], "t.toml:1:1: bus: 1025 buses; at most 1024");
   const auto controllers = config_errors(testing::many_buses_config(64, 257));
   ASSERT_EQ(controllers.size(), 1u);
   EXPECT_EQ(controllers[0], "t.toml:1:1: device: 257 controllers in all; at most 256");

@@ -39,13 +39,18 @@ done
 # canemud, canemu and can-utils with the shared libraries they load (the host's).
 # Each library also goes where the guest's loader searches by default: a build tree under /tmp
 # (a CI clone) is hidden by the guest's own /tmp, so its RUNPATH finds nothing there.
+# Copies without debug information: a RelWithDebInfo build's would fill most of the guest's
+# 512 MiB twice over (the initramfs and what the kernel unpacks from it).
 copy_with_libs() {
   cp "$1" "$root/usr/bin/"
+  strip --strip-debug "$root/usr/bin/$(basename "$1")"
   mkdir -p "$root/lib/x86_64-linux-gnu"
   for lib in $(ldd "$1" | awk '/=> \// {print $3} /^\t\/lib/ {print $1}'); do
     mkdir -p "$root$(dirname "$lib")"
-    cp -L "$lib" "$root$lib"
-    cp -L "$lib" "$root/lib/x86_64-linux-gnu/"
+    for to in "$root$lib" "$root/lib/x86_64-linux-gnu/$(basename "$lib")"; do
+      cp -L "$lib" "$to"
+      strip --strip-debug "$to"
+    done
   done
 }
 copy_with_libs "$build/bin/canemud"

@@ -1,6 +1,7 @@
-// canemud with the largest configuration it takes (64 buses, 256 controllers, written by the
-// test): `canemu status --json`, the text tables and `canemu metrics` list every bus and node,
-// though the status comes in several pages; one more bus is refused naming the limit.
+// canemud with many buses (256 buses, 256 controllers, written by the test; it starts with the
+// most it takes, 1024 buses): `canemu status --json`, the text tables and `canemu metrics` list
+// every bus and node, though the status comes in several pages; one more bus than the limit is
+// refused naming it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -67,20 +68,20 @@ std::string json_bus(std::size_t i, uint64_t frames) {
       frames, i);
 }
 
-// 64 buses and 256 controllers (64 adapters of four), a recorder on every bus, two ephemeral
-// nodes on the last bus that exchange three frames: two pages of buses, nodes, devices and
-// recorders.
-TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
+// 256 buses and 256 controllers (64 adapters of four, one controller on each bus), a recorder
+// on every bus, two ephemeral nodes on the last bus that exchange three frames: eight pages of
+// buses, two of nodes, pages of devices and recorders.
+TEST(Scale, StatusListsTwoHundredFiftySixBusesAndEveryControllerWithTheirCounts) {
   testing::TempDir dir;
-  std::string config = many_buses_config(64, 256);
-  for (int b = 0; b < 64; ++b) {  // a recorder on every bus: two pages of recorders
+  std::string config = many_buses_config(256, 256);
+  for (int b = 0; b < 256; ++b) {  // a recorder on every bus: several pages of recorders
     config += fmt::format("[[recorder]]\nbus = \"bus{}\"\npath = \"{}\"\n", b,
                           (dir.path / fmt::format("bus{}.log", b)).string());
   }
   Daemon d("stepped", {"--config=" + write_config(dir, config)});
   auto c = connect(d);
-  auto tx = open(c, "bus63", "tx63");
-  auto rx = open(c, "bus63", "rx63");
+  auto tx = open(c, "bus255", "tx255");
+  auto rx = open(c, "bus255", "rx255");
   for (uint32_t id = 1; id <= 3; ++id) {
     ipc::ChannelMessage m;
     m.id = id;
@@ -91,43 +92,43 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
 
   const std::string j = output_of(d, {"status", "--json"});
   std::string buses = "\"buses\" : [";
-  for (std::size_t i = 0; i < 64; ++i) {
-    buses += (i == 0 ? "" : ",") + json_bus(i, i == 63 ? 3 : 0);
+  for (std::size_t i = 0; i < 256; ++i) {
+    buses += (i == 0 ? "" : ",") + json_bus(i, i == 255 ? 3 : 0);
   }
   buses += "]";
   EXPECT_NE(j.find(buses), std::string::npos) << j;
   std::string nodes = "\"nodes\" : [";
   for (std::size_t k = 0; k < 256; ++k) {
-    nodes += json_node(many_buses_node(k), fmt::format("bus{}", k % 64), 0, 0) + ",";
+    nodes += json_node(many_buses_node(k), fmt::format("bus{}", k), 0, 0) + ",";
   }
-  nodes += json_node("tx63:0", "bus63", 3, 0, "error-active") + "," +
-           json_node("rx63:0", "bus63", 0, 3, "error-active") + "]";
+  nodes += json_node("tx255:0", "bus255", 3, 0, "error-active") + "," +
+           json_node("rx255:0", "bus255", 0, 3, "error-active") + "]";
   EXPECT_NE(j.find(nodes), std::string::npos) << j;
   // The devices: 64 configured adapters, then the two ephemeral ones.
   EXPECT_NE(j.find("\"model\" : \"ixxat-usb-to-can\",\"name\" : \"dev63\",\"nodes\" : "
                    "[\"dev63:0\",\"dev63:1\",\"dev63:2\",\"dev63:3\"]"),
             std::string::npos)
       << j;
-  EXPECT_NE(j.find("\"name\" : \"rx63\",\"nodes\" : [\"rx63:0\"]"), std::string::npos) << j;
-  // The recorders: bus63's, on the second page, wrote the three frames.
-  const std::size_t recorder = j.find("{\"bus\" : \"bus63\",\"bytes\"");
+  EXPECT_NE(j.find("\"name\" : \"rx255\",\"nodes\" : [\"rx255:0\"]"), std::string::npos) << j;
+  // The recorders: bus255's, on the last page, wrote the three frames.
+  const std::size_t recorder = j.find("{\"bus\" : \"bus255\",\"bytes\"");
   ASSERT_NE(recorder, std::string::npos) << j;
   const std::string entry = j.substr(recorder, j.find('}', recorder) - recorder);
   EXPECT_NE(entry.find("\"frames\" : 3,"), std::string::npos) << entry;
-  EXPECT_NE(entry.find("bus63.log"), std::string::npos) << entry;
-  const std::string log = testing::read_file(dir.path / "bus63.log");
+  EXPECT_NE(entry.find("bus255.log"), std::string::npos) << entry;
+  const std::string log = testing::read_file(dir.path / "bus255.log");
   EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 3) << log;
-  for (const char* line : {" bus63 001#00\n", " bus63 002#00\n", " bus63 003#00\n"}) {
+  for (const char* line : {" bus255 001#00\n", " bus255 002#00\n", " bus255 003#00\n"}) {
     EXPECT_NE(log.find(line), std::string::npos) << log;
   }
 
   // The tables: a row for every bus and node.
   const std::string t = output_of(d, {"status"});
-  EXPECT_NE(t.find("\nbus63        can       1000000         0    0.0%          3        0\n"),
+  EXPECT_NE(t.find("\nbus255       can       1000000         0    0.0%          3        0\n"),
             std::string::npos)
       << t;
-  EXPECT_NE(t.find("\ndev63:3        bus63        init              0    0          0          0"
-                   "        0\ntx63:0         bus63        error-active      0    0          3"
+  EXPECT_NE(t.find("\ndev63:3        bus255       init              0    0          0          0"
+                   "        0\ntx255:0        bus255       error-active      0    0          3"
                    "          0        0\n"),
             std::string::npos)
       << t;
@@ -137,12 +138,21 @@ TEST(Scale, StatusListsSixtyFourBusesAndEveryControllerWithTheirCounts) {
   }
   EXPECT_EQ(rows, 256u + 64u);  // a NODE row per controller, a DEVICE row per adapter
 
-  // Metrics of a node on the second page, on a bus of the second page.
+  // Metrics of a node on the second page, on a bus of the last page.
   const std::string m = output_of(d, {"metrics"});
-  EXPECT_NE(m.find("canemu_node_frames_received_total{node=\"rx63:0\",bus=\"bus63\"} 3\n"),
+  EXPECT_NE(m.find("canemu_node_frames_received_total{node=\"rx255:0\",bus=\"bus255\"} 3\n"),
             std::string::npos)
       << m;
-  EXPECT_NE(m.find("canemu_bus_frames_total{bus=\"bus63\"} 3\n"), std::string::npos) << m;
+  EXPECT_NE(m.find("canemu_bus_frames_total{bus=\"bus255\"} 3\n"), std::string::npos) << m;
+
+  // `canemu dump any` listens on all 256 (16 channels to a connection: 16 connections).
+  Cli dump(d, {"dump", "any", "--no-errors", "-n", "1"});
+  const std::string err = Cli::read_until(dump.err, "listening on bus255");
+  ASSERT_NE(err.find("listening on bus255"), std::string::npos) << err;
+  const std::string sent = output_of(d, {"send", "bus255", "123#11", "--step", "1ms"});
+  EXPECT_NE(sent.find(" bus255 123#11"), std::string::npos) << sent;
+  EXPECT_EQ(Cli::read_all(dump.out), sent);
+  EXPECT_EQ(dump.wait(), 0);
 }
 
 // Exactly a page (32 buses, 192 nodes) and one more of each: every entry once, in order.
@@ -217,12 +227,22 @@ TEST(Scale, ClientListReadsEveryPage) {
   EXPECT_EQ(names.count("c64"), 1u);
 }
 
-TEST(Scale, SixtyFiveBusesOrTwoHundredFiftySevenControllersAreRefusedNamingTheLimit) {
+// The most buses a configuration takes run (every one in the status); one more bus, or one
+// more controller than 256, is refused naming the limit.
+TEST(Scale, AThousandTwentyFourBusesRunAndOneMoreBusOrControllerIsRefusedNamingTheLimit) {
   testing::TempDir dir;
+  {
+    Daemon d("stepped", {"--config=" + write_config(dir, many_buses_config(1024, 4))});
+    auto c = connect(d);
+    auto s = client::fetch_status(c);
+    ASSERT_TRUE(s) << s.error().message;
+    ASSERT_EQ(s->buses.size(), 1024u);
+    EXPECT_EQ(ipc::name_of(s->buses.back().name), "bus1023");
+  }
   testing::CanemudProcess buses(CANEMUD_PATH,
-                                {"--config=" + write_config(dir, many_buses_config(65, 4))});
+                                {"--config=" + write_config(dir, many_buses_config(1025, 4))});
   EXPECT_FALSE(buses.ready());
-  EXPECT_NE(buses.log().find("bus: 65 buses; at most 64"), std::string::npos) << buses.log();
+  EXPECT_NE(buses.log().find("bus: 1025 buses; at most 1024"), std::string::npos) << buses.log();
   testing::CanemudProcess controllers(
       CANEMUD_PATH, {"--config=" + write_config(dir, many_buses_config(64, 257))});
   EXPECT_FALSE(controllers.ready());

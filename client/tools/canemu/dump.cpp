@@ -13,6 +13,7 @@
 #include <csignal>
 #include <cstdio>
 #include <ctime>
+#include <deque>
 #include <memory>
 #include <optional>
 #include <string>
@@ -37,6 +38,10 @@ namespace canemu::cli {
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
+
+// canemud opens at most this many channels on one connection (docs/daemon.md): a dump of more
+// buses opens a connection more for each further 16.
+constexpr std::size_t kChannelsPerConnection = 16;
 
 void on_stop_signal(int) {
   g_stop = 1;
@@ -186,8 +191,21 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
         "a pcap capture (LINKTYPE_CAN_SOCKETCAN) does not say which bus a frame was on: one bus "
         "per pcap capture");
   }
+  // Declared before the channels, which close through them: a deque keeps their addresses.
+  std::deque<client::Connection> more;
   std::vector<client::Channel> channels;
   for (const Target& t : *targets) {
+    client::Connection* on = &*c;
+    if (channels.size() >= kChannelsPerConnection) {
+      if (channels.size() % kChannelsPerConnection == 0) {
+        auto extra = connect(socket, o.record ? "canemu record" : "canemu dump");
+        if (!extra) {
+          return fail(extra.error().message);
+        }
+        more.push_back(std::move(*extra));
+      }
+      on = &more.back();
+    }
     const bool errors = std::any_of(t.specs.begin(), t.specs.end(),
                                     [](const BusFilter* f) { return f->error_mask != 0; });
     client::ChannelOptions co;
@@ -196,7 +214,7 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
     co.flags = static_cast<uint16_t>((o.listen_only ? ipc::kChannelListenOnly : 0) |
                                      (errors ? ipc::kChannelReportErrors : 0));
     co.rx_capacity = 4096;
-    auto ch = client::Channel::open(*c, co);
+    auto ch = client::Channel::open(*on, co);
     if (!ch) {
       return fail(ch.error().message);
     }

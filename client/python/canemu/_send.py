@@ -31,11 +31,12 @@ _DRAIN_POLL_S = 0.002  # between two looks at the FIFO while it drains
 
 log = logging.getLogger("can.canemu")
 
-# A classic data frame's CANMSG2 up to its 8 data bytes, from the identifier, bFlags and the
-# data (send's hot path): dwTime 0 (at once), bType CAN_MSGTYPE_DATA (0), bFlags2 and bAccept 0
-# are pad bytes, which pack_into writes as zeros.
-_pack_classic = struct.Struct("<8xI2xB1x8s").pack_into
+# A classic data frame's CANMSG2 as bytes, from the identifier, bFlags and the data (send's
+# hot path): dwTime 0 (at once), bType CAN_MSGTYPE_DATA (0), bFlags2 and bAccept 0 are pad
+# bytes, which struct writes as zeros.
+_pack_classic = struct.Struct("<8xI2xB1x8s56x").pack
 assert _HEADER.format == "<IIIBBBB" and _vci.CAN_MSGTYPE_DATA == 0
+assert struct.calcsize("<8xI2xB1x8s56x") == ctypes.sizeof(_vci.CANMSG2)
 _FULL = _vci.VCI_E_TXQUEUE_FULL
 assert _vci.VCI_OK == 0
 
@@ -91,9 +92,9 @@ class _SendMixin:
             log.debug("%s: error frame not sent: %s", self.channel_info, msg)
             return
         self._tx_flushed = False
-        # The hot path: a classic data frame, header and data packed in one go, posted with a
-        # call that converts no arguments and keeps the GIL (_open); bFlags's EXT and SRR bits
-        # come ready (_tx_flags).
+        # The hot path: a classic data frame, header and data packed in one go into bytes,
+        # which go to a binding that converts no arguments (bytes as a pointer to their data)
+        # and keeps the GIL (_open); bFlags's EXT and SRR bits come ready (_tx_flags).
         data = msg.data
         ident = msg.arbitration_id
         length = len(data)
@@ -106,12 +107,13 @@ class _SendMixin:
             lock.acquire()  # (cheaper than `with`)
             try:
                 try:
-                    _pack_classic(self._tx_view, 0, ident, flags, data)
+                    packed = _pack_classic(ident, flags, data)
                 except (struct.error, TypeError):
                     hr = None  # data that is neither bytes nor bytearray: the general path
                 else:
-                    hr = self._post(self._channel_arg, self._tx_ref)
+                    hr = self._post(self._channel_arg, packed)
                     if hr and hr == _FULL:
+                        self._tx_view[:] = packed
                         hr = self._send_waiting(self._tx_ref, timeout)
             finally:
                 lock.release()

@@ -27,9 +27,13 @@ _PASSIVE = _vci.CANEMU_STATE_PASSIVE
 # A Message without Message.__init__: _convert_run sets every attribute itself, each as
 # __init__ would (tests/python/test_message_build.py compares it with _convert's).
 _new_message = Message.__new__
-# A CANMSG2 with the 8 data bytes of a classic frame (_convert_run).
-_CLASSIC = struct.Struct(_HEADER.format + "8s56x")
-assert _CLASSIC.size == _MSG_SIZE
+# What _convert_run reads of a CANMSG2: dwTime, dwMsgId, bType and bFlags2 | bFlags << 8 (the
+# data it slices from the batch's bytearray).
+_CLASSIC = struct.Struct("<I4xIBH65x")
+assert _CLASSIC.size == _MSG_SIZE and _HEADER.format == "<IIIBBBB"
+# Below this an integer number of nanoseconds is exact as a float, and so are the sums
+# _convert_run makes of a time stamp (a base below it, plus at most 2**32 ticks of 1000 ns).
+_FLOAT_EXACT = 2**53 - 2**32 * 1000
 
 
 def _frame_fields(flags2: int, flags: int) -> Tuple[bool, bool, bool, bool, bool, bool, int, int]:
@@ -47,10 +51,11 @@ def _frame_fields(flags2: int, flags: int) -> Tuple[bool, bool, bool, bool, bool
             bool(flags2 & _ESI), dlc, length)
 
 
-# _frame_fields of every bFlags with bFlags2's EDL, FDR and ESI bits (bits 2-4, as bits 10-12
-# of the index): _convert_run looks them up.
-_FRAME_FIELDS = [_frame_fields(index >> 8, index & 0xFF) for index in range(0x2000)]
+# _frame_fields of every bFlags2 | bFlags << 8, as _convert_run reads them in one number and
+# looks them up (the same 8,192 tuples for bFlags2's bits other than EDL, FDR and ESI).
+_FIELDS_OF = [_frame_fields(index >> 8, index & 0xFF) for index in range(0x2000)]
 assert _vci.FLAGS2_EDL | _vci.FLAGS2_FDR | _vci.FLAGS2_ESI == 0x1C
+_FRAME_FIELDS = [_FIELDS_OF[(bits & 0x1C) << 8 | bits >> 8] for bits in range(0x10000)]
 # The logger and level of BusABC.recv's "Received" record, which recv's short path writes too.
 _bus_log = logging.getLogger("can.bus")
 
@@ -78,8 +83,9 @@ class _ReceiveMixin(_StateMixin):
 
         The short path takes no lock: deque.popleft is atomic, and _rx_ready and _pending are
         never both non-empty (_recv_internal fills _rx_ready only when _pending is empty, and
-        _pending only when _rx_ready is), so that what it returns is in order."""
-        if self._hw_filtered and not self._pending:
+        _pending only when _rx_ready is), so that what it returns is in order, and a message
+        in _rx_ready means that no error frame waits before it."""
+        if self._hw_filtered:
             try:
                 msg = self._rx_ready.popleft()
             except IndexError:
@@ -151,29 +157,37 @@ class _ReceiveMixin(_StateMixin):
         _convert makes it, in one pass: the receiving's hot path. Not while the error state is
         passive: then a frame may end a crossing (_convert), and a message of another kind
         changes the state, so that the run stops before it."""
-        view = self._rx_batch_view
-        i = self._rx_next
-        at = i * _MSG_SIZE
+        view, buf = self._rx_batch_view, self._rx_bytes
+        at = self._rx_next * _MSG_SIZE
         wraps, last = self._wraps, self._last_ticks
-        offset, channel = self._time_offset, self._channel_name
+        offset, channel, epoch = self._time_offset, self._channel_name, self._epoch_ns
         # _sim_ns: epoch + ((wraps << 32) | ticks) * 1000, the same integer as base + ticks *
-        # 1000 (ticks < 2**32), and the same time stamp as _stamp makes of it.
-        base = self._epoch_ns + (wraps << 32) * 1000
+        # 1000 (ticks < 2**32); _stamp divides it by 1e9 as a float. While base stays below
+        # _FLOAT_EXACT the sum is made in floats, exactly, so that the time stamp is the same.
+        base = epoch + (wraps << 32) * 1000
+        exact = base < _FLOAT_EXACT
+        if exact:
+            base = float(base)
         append = self._rx_ready.append
         new, fields = _new_message, _FRAME_FIELDS
-        for ticks, _, ident, kind, flags2, flags, _, data in _CLASSIC.iter_unpack(
-            view[at : self._rx_count * _MSG_SIZE]
-        ):
-            if kind != _DATA:
+        data = at + 16  # where the message's data starts in the batch
+        for ticks, ident, kind, bits in _CLASSIC.iter_unpack(view[at : self._rx_count * _MSG_SIZE]):
+            if kind:  # not CAN_MSGTYPE_DATA
                 break
             if ticks < last:  # _sim_ns, inline
                 wraps += 1
-                base = self._epoch_ns + (wraps << 32) * 1000
+                base = epoch + (wraps << 32) * 1000
+                exact = base < _FLOAT_EXACT
+                if exact:
+                    base = float(base)
             last = ticks
-            ext, rx, remote, fd, brs, esi, dlc, length = fields[(flags2 & 0x1C) << 8 | flags]
+            ext, rx, remote, fd, brs, esi, dlc, length = fields[bits]
             # Every attribute Message.__init__ sets, as it sets it from _convert's arguments.
             msg = new(Message)
-            msg.timestamp = (base + ticks * 1000) / 1e9 + offset
+            if exact:
+                msg.timestamp = (base + ticks * 1000.0) / 1e9 + offset
+            else:
+                msg.timestamp = (base + ticks * 1000) / 1e9 + offset
             msg.arbitration_id = ident
             msg.is_extended_id = ext
             msg.is_remote_frame = remote
@@ -183,15 +197,11 @@ class _ReceiveMixin(_StateMixin):
             msg.is_rx = rx
             msg.bitrate_switch = brs
             msg.error_state_indicator = esi
-            if length <= 8:
-                msg.data = bytearray(data[:length])
-            else:
-                msg.data = bytearray(view[at + 16 : at + 16 + length])
+            msg.data = buf[data : data + length]  # a bytearray of its own
             msg.dlc = dlc
             append(msg)
-            at += _MSG_SIZE
-            i += 1
-        self._rx_next = i
+            data += _MSG_SIZE
+        self._rx_next = (data - 16) // _MSG_SIZE
         self._wraps, self._last_ticks = wraps, last
 
     def _sim_ns(self, ticks: int) -> int:

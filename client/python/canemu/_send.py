@@ -31,15 +31,21 @@ _DRAIN_POLL_S = 0.002  # between two looks at the FIFO while it drains
 
 log = logging.getLogger("can.canemu")
 
-# A CANMSG2's header and the 8 data bytes of a classic frame (send's hot path).
-_pack_classic = struct.Struct(_HEADER.format + "8s").pack_into
-_DATA = _vci.CAN_MSGTYPE_DATA
+# A classic data frame's CANMSG2 as bytes, from the identifier, bFlags and the data (send's
+# hot path): dwTime 0 (at once), bType CAN_MSGTYPE_DATA (0), bFlags2 and bAccept 0 are pad
+# bytes, which struct writes as zeros.
+_pack_classic = struct.Struct("<8xI2xB1x8s56x").pack
+assert _HEADER.format == "<IIIBBBB" and _vci.CAN_MSGTYPE_DATA == 0
+assert struct.calcsize("<8xI2xB1x8s56x") == ctypes.sizeof(_vci.CANMSG2)
+_FULL = _vci.VCI_E_TXQUEUE_FULL
+assert _vci.VCI_OK == 0
 
 
 class _SendMixin:
     """CanemuBus's transmit side. Uses the bus's _channel, _control, _fd, _receive_own,
     _auto_restart, _closed, _tx_lock, _tx_flushed, _listen_only, _bitrate, _data_bitrate,
-    _tx_capacity and its transmit buffer; state and restart come from _StateMixin."""
+    _tx_capacity, _tx_flags, _tx_flags_ext and its transmit buffer; state and restart come from
+    _StateMixin."""
 
     def _wire_fields(self, msg: Message) -> Tuple[int, int, bytes]:
         """`msg` checked and in the VCI's terms: (bFlags, bFlags2, data padded to its DLC).
@@ -86,29 +92,32 @@ class _SendMixin:
             log.debug("%s: error frame not sent: %s", self.channel_info, msg)
             return
         self._tx_flushed = False
-        # The hot path: a classic data frame, header and data packed in one go, posted with a
-        # call that converts no arguments (_open).
+        # The hot path: a classic data frame, header and data packed in one go into bytes,
+        # which go to a binding that converts no arguments (bytes as a pointer to their data)
+        # and keeps the GIL (_open); bFlags's EXT and SRR bits come ready (_tx_flags).
         data = msg.data
         ident = msg.arbitration_id
         length = len(data)
         if msg.is_extended_id:
-            limit, flags = 0x1FFFFFFF, length | _vci.FLAGS_EXT
+            limit, flags = 0x1FFFFFFF, length | self._tx_flags_ext
         else:
-            limit, flags = 0x7FF, length
+            limit, flags = 0x7FF, length | self._tx_flags
         if length <= 8 and 0 <= ident <= limit and not (msg.is_fd or msg.is_remote_frame):
-            if self._receive_own:
-                flags |= _vci.FLAGS_SRR
-            hr = None
-            with self._tx_lock:
+            lock = self._tx_lock
+            lock.acquire()  # (cheaper than `with`)
+            try:
                 try:
-                    _pack_classic(self._tx_view, 0, 0, 0, ident, _DATA, 0, flags, 0, data)
+                    packed = _pack_classic(ident, flags, data)
                 except (struct.error, TypeError):
-                    pass  # data that is neither bytes nor bytearray: the general path
+                    hr = None  # data that is neither bytes nor bytearray: the general path
                 else:
-                    hr = self._post(self._channel_arg, self._tx_ref)
-                    if hr == _vci.VCI_E_TXQUEUE_FULL:
+                    hr = self._post(self._channel_arg, packed)
+                    if hr and hr == _FULL:
+                        self._tx_view[:] = packed
                         hr = self._send_waiting(self._tx_ref, timeout)
-            if hr == _vci.VCI_OK:
+            finally:
+                lock.release()
+            if hr == 0:  # VCI_OK
                 return
             if hr is not None:
                 return self._sent(hr, timeout)

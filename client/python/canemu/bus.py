@@ -179,6 +179,10 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._poll_fd: Optional[int] = None
         self._closed = False
         self._receive_own = bool(receive_own_messages)
+        # bFlags's bits of every frame send's hot path posts: self-reception, and with it the
+        # extended identifier's.
+        self._tx_flags = _vci.FLAGS_SRR if self._receive_own else 0
+        self._tx_flags_ext = self._tx_flags | _vci.FLAGS_EXT
         self._auto_restart = bool(auto_restart)
         self._hw_filtered = True
         self._initializing = True
@@ -200,8 +204,11 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         # them all), the data frames among them converted in one pass into _rx_ready and
         # handed out one per recv; fileno() turns the batches off (batch of 1), so that a
         # descriptor that is not readable always means that nothing waits (_receive.py).
-        self._rx_batch = (_vci.CANMSG2 * _RX_BATCH)()
-        self._rx_batch_view = memoryview(self._rx_batch).cast("B")
+        # The batch's messages are a bytearray's bytes, which the library writes through a
+        # ctypes array on them and _convert_run slices the data of Messages from.
+        self._rx_bytes = bytearray(_RX_BATCH * ctypes.sizeof(_vci.CANMSG2))
+        self._rx_batch = (_vci.CANMSG2 * _RX_BATCH).from_buffer(self._rx_bytes)
+        self._rx_batch_view = memoryview(self._rx_bytes)
         self._rx_batch_max = _RX_BATCH
         self._rx_taken = ctypes.c_uint32()
         self._rx_taken_ref = ctypes.byref(self._rx_taken)
@@ -310,8 +317,9 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         _call("canChannelOpen", self._device, controller, 0, ctypes.byref(handle))
         self._channel = handle.value
         # canChannelPostMessage for send's hot path: without argtypes ctypes converts nothing
-        # (about 0.1 us a call), so the handle goes as a ready c_void_p.
-        self._post = _vci.unconverted("canChannelPostMessage")
+        # (about 0.1 us a call), so the handle goes as a ready c_void_p; it never waits, so the
+        # call keeps the GIL.
+        self._post = _vci.unconverted("canChannelPostMessage", keep_gil=True)
         self._channel_arg = ctypes.c_void_p(self._channel)
         # With receive_own_messages the channel also takes the cyclic list's echoes (SRRA):
         # the firmware hands them only to channels that ask for every self-reception.

@@ -11,7 +11,6 @@ namespace canemu::daemon::restbus {
 using namespace canemu::model;
 using detail::mask;
 using detail::ramp_at;
-using detail::settable;
 
 Result<> CanEcu::silence(std::string_view message, bool silent) {
   auto i = find(message);

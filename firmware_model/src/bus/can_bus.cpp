@@ -154,7 +154,13 @@ void CanBus::load_tx(Node& n) {
 }
 
 void CanBus::load_encoding(Node& n) {
-  encode(pending(n)->frame, n.encoded);
+  // A node that sends again the frame it sent last (a babbling node, a cyclic message whose
+  // payload did not change) keeps its encoding: the same frame has the same bits.
+  const Frame& f = pending(n)->frame;
+  if (!n.encoded_frame || n.encoded_frame->id() != f.id() || !(*n.encoded_frame == f)) {
+    encode(f, n.encoded);
+    n.encoded_frame = f;
+  }
   n.encoded_valid = true;
 }
 

@@ -204,6 +204,7 @@ class CanBus final : private EventHandler {
     const TxFrame* tx = nullptr;
     bool encoded_valid = false;
     EncodedFrame encoded;
+    std::optional<Frame> encoded_frame;  // what `encoded` encodes (kept across frames)
     ErrorState last_state = ErrorState::active;
     // Timing as last seen (controller timing plus injected oscillator offset) and what follows
     // from it; refreshed when it changes.

@@ -49,20 +49,19 @@ bool Arbitration::resolve_in_first_word(std::span<const Contender> contenders) {
   }
   // Every other contender must lose within its arbitration field (the first word holds it).
   for (std::size_t k = 0; k < n; ++k) {
-    const uint64_t x = contenders[k].bits->level[0] ^ best_word;
-    if (k != best &&
-        static_cast<uint32_t>(__builtin_clzll(x)) >= contenders[k].bits->arbitration_end) {
+    if (k == best) {
+      continue;
+    }
+    const auto at =
+        static_cast<uint16_t>(__builtin_clzll(contenders[k].bits->level[0] ^ best_word));
+    if (at >= contenders[k].bits->arbitration_end) {
+      lost_.clear();
       return false;
     }
+    lost_.push_back(AtBit{contenders[k].node, at});
   }
   winning_bits_ = contenders[best].bits;
   senders_.push_back(contenders[best].node);
-  for (std::size_t k = 0; k < n; ++k) {
-    if (k != best) {
-      const uint64_t x = contenders[k].bits->level[0] ^ best_word;
-      lost_.push_back(AtBit{contenders[k].node, static_cast<uint16_t>(__builtin_clzll(x))});
-    }
-  }
   return true;
 }
 
@@ -74,8 +73,6 @@ void Arbitration::resolve(std::span<const Contender> contenders) {
   if (resolve_in_first_word(contenders)) {
     return;
   }
-  senders_.clear();
-  lost_.clear();
   // One pass: the winner so far, and where every other contender departs from it. Identical
   // frames tie, and of them the first in `contenders` stays the winner.
   const std::size_t n = contenders.size();

@@ -62,7 +62,7 @@ class Arbitration {
 
  private:
   // resolve() when the first word of the frames decides: a single smallest one, every other
-  // frame departing from it within its arbitration field. False (and results unspecified) if not.
+  // frame departing from it within its arbitration field. False, with nothing recorded, if not.
   bool resolve_in_first_word(std::span<const Contender> contenders);
 
   std::vector<NodeId> senders_;

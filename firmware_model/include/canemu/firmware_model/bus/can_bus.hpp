@@ -397,7 +397,10 @@ class CanBus final : private EventHandler {
   NodeId plain_tx_ = 0;
   bool plain_fd_ = false;
   bool plain_brs_ = false;
-  std::vector<uint8_t> plain_states_;  // per member: 2 bus-off, 1 error-passive
+  std::vector<uint8_t> plain_states_;  // per member, as plain_state() gives it
+  static uint8_t plain_state(const FaultConfinement& fc) {
+    return static_cast<uint8_t>((fc.bus_off() ? 2u : 0u) | (fc.error_passive() ? 1u : 0u));
+  }
   // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
   std::vector<int8_t> decodes_cache_;
 

@@ -1,10 +1,14 @@
-// What the files of CanBus share (can_bus.cpp: members, frames, error phases;
-// can_bus_states.cpp: error states and bus-off recovery).
+// What the files of CanBus share (can_bus.cpp: members, arbitration, frames that succeed;
+// can_bus_errors.cpp: dominant holds and error phases; can_bus_states.cpp: error states and
+// bus-off recovery).
 #pragma once
 
 #include "canemu/firmware_model/bus/can_bus.hpp"
 
 namespace canemu::model::detail {
+
+// Suspend transmission: the extra bits an error-passive transmitter waits after intermission.
+inline constexpr uint32_t kSuspendBits = 8;
 
 // A duration measured by a node whose oscillator runs `ppm` fast takes proportionally less time.
 inline SimDuration with_ppm(SimDuration d, int32_t ppm) {

@@ -141,7 +141,9 @@ IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int 
   if (fds != nullptr) {
     fds->clear();
   }
-  if (timeout_ms >= 0) {
+  // Without a wait, recvmsg alone says whether a packet is there (no poll before it).
+  const int no_wait = timeout_ms == 0 ? MSG_DONTWAIT : 0;
+  if (timeout_ms > 0) {
     pollfd p{fd, POLLIN, 0};
     int r;
     do {
@@ -164,9 +166,12 @@ IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int 
     msg.msg_iovlen = 1;
     msg.msg_control = control;
     msg.msg_controllen = sizeof control;
-    const ssize_t n = ::recvmsg(fd, &msg, MSG_TRUNC | MSG_CMSG_CLOEXEC);
+    const ssize_t n = ::recvmsg(fd, &msg, MSG_TRUNC | MSG_CMSG_CLOEXEC | no_wait);
     if (n < 0 && errno == EINTR) {
       continue;
+    }
+    if (n < 0 && no_wait != 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+      return tl::unexpected(IpcError{ETIMEDOUT, "no reply within 0 ms"});
     }
     if (n < 0) {
       return tl::unexpected(system_error("recv"));

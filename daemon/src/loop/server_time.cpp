@@ -106,9 +106,15 @@ void Server::arm_timer() {
       its.it_value.tv_nsec = wall % 1'000'000'000;
     }
   }
+  const bool arm = its.it_value.tv_sec != 0 || its.it_value.tv_nsec != 0;
+  if (!arm && !timer_armed_) {
+    return;  // disarmed already (stepped time, nothing due): no call on every turn
+  }
   if (::timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr) != 0) {
     log::error("timerfd_settime: {}", std::strerror(errno));
+    return;
   }
+  timer_armed_ = arm;
 }
 
 void Server::queue_local_step(int64_t step_ns, uint32_t request_id) {

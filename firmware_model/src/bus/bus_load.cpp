@@ -6,24 +6,62 @@
 namespace canemu::model {
 
 void BusLoad::grow() {
-  std::vector<std::pair<SimTime, SimTime>> grown(busy_.empty() ? 64 : 2 * busy_.size());
+  const std::size_t size = busy_.empty() ? 64 : 2 * busy_.size();
+  std::vector<std::pair<SimTime, SimTime>> grown(size);
+  std::vector<int64_t> before(size);
   for (std::size_t k = 0; k < busy_count_; ++k) {
     grown[k] = busy_[(busy_head_ + k) & (busy_.size() - 1)];
+    before[k] = busy_before_[(busy_head_ + k) & (busy_.size() - 1)];
   }
   busy_ = std::move(grown);
+  busy_before_ = std::move(before);
   busy_head_ = 0;
 }
 
 double BusLoad::percent(SimTime now) const {
   const SimTime from = now - seconds(1);
+  const std::size_t mask = busy_.size() - 1;
+  const auto at = [&](std::size_t k) -> const std::pair<SimTime, SimTime>& {
+    return busy_[(busy_head_ + k) & mask];
+  };
   int64_t busy = 0;
-  for (std::size_t k = 0; k < busy_count_; ++k) {
-    const auto& [start, end] = busy_[(busy_head_ + k) & (busy_.size() - 1)];
+  const auto add_clipped = [&](std::size_t k) {
+    const auto& [start, end] = at(k);
     const SimTime a = std::max(start, from);
     const SimTime b = std::min(end, now);
     if (b > a) {
       busy += (b - a).ns();
     }
+  };
+  if (overlapped_) {
+    for (std::size_t k = 0; k < busy_count_; ++k) {
+      add_clipped(k);
+    }
+    return 100.0 * static_cast<double>(busy) / 1e9;
+  }
+  // The activities follow one another: the ones ending after `from` are a tail of the ring (found
+  // by halving), of which only the first may begin before `from` and only the last few end after
+  // `now`; what lies between counts whole, the difference of two running totals.
+  std::size_t lo = 0;
+  std::size_t hi = busy_count_;
+  while (lo < hi) {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    if (at(mid).second > from) {
+      hi = mid;
+    } else {
+      lo = mid + 1;
+    }
+  }
+  hi = busy_count_;
+  while (hi > lo && at(hi - 1).second > now) {
+    add_clipped(--hi);
+  }
+  if (lo < hi && at(lo).first < from) {
+    add_clipped(lo++);
+  }
+  if (lo < hi) {
+    const int64_t upto = hi < busy_count_ ? busy_before_[(busy_head_ + hi) & mask] : busy_total_;
+    busy += upto - busy_before_[(busy_head_ + lo) & mask];
   }
   return 100.0 * static_cast<double>(busy) / 1e9;
 }

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -58,6 +60,41 @@ INSTANTIATE_TEST_SUITE_P(
                                 {900, 1000}},
                                {{1000, 100.0}, {1500, 50.0}}}),
     test_support::CaseName{});
+
+// percent() sums what lies between its edges from running totals: against the busy time added
+// up activity by activity, at instants before, inside and after them, for activities that follow
+// one another (frames with gaps, back to back) and for ones that overlap.
+TEST(BusLoad, PercentIsTheSumOfEveryActivityClippedToTheSecond) {
+  for (const bool overlap : {false, true}) {
+    std::mt19937_64 rng(overlap ? 7 : 3);
+    BusLoad load;
+    std::vector<std::pair<int64_t, int64_t>> kept;  // in us
+    int64_t t = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const int64_t gap = static_cast<int64_t>(rng() % 400);
+      const int64_t start = overlap && i % 7 == 3 ? t - static_cast<int64_t>(rng() % 50) : t + gap;
+      const int64_t end = std::max(start + 1 + static_cast<int64_t>(rng() % 300), t);
+      load.record(SimTime{} + microseconds(start), SimTime{} + microseconds(end));
+      kept.emplace_back(start, end);
+      t = end;
+      if (i % 97 != 0) {
+        continue;
+      }
+      for (const int64_t back : {int64_t{-500}, int64_t{0}, int64_t{150}, int64_t{900'000}}) {
+        const int64_t now = t - back;
+        int64_t busy = 0;
+        for (const auto& [s, e] : kept) {
+          if (e >= t - 2'000'000) {  // what record() keeps: two seconds before the latest end
+            busy += std::max<int64_t>(0, std::min(e, now) - std::max(s, now - 1'000'000));
+          }
+        }
+        EXPECT_DOUBLE_EQ(load.percent(SimTime{} + microseconds(now)),
+                         100.0 * static_cast<double>(busy * 1000) / 1e9)
+            << "overlap " << overlap << ", activity " << i << ", now " << now << " us";
+      }
+    }
+  }
+}
 
 // The load over time, in bins of 100 ms: an activity across a bin boundary counts in both.
 TEST(BusLoad, TheHistoryHasTheBusyTimeOfEveryEndedBinIdleOnesIncluded) {

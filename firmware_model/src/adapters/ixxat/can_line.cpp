@@ -483,7 +483,13 @@ std::optional<TxFrame> CanLine::to_frame(const CANMSG2& msg) const {
 }
 
 std::optional<TxFrame> CanLine::load(Loaded l) {
-  std::optional<TxFrame> tx = to_frame(l.msg);
+  std::optional<TxFrame> tx;
+  if (l.frame && l.op_mode == init_.op_mode && l.ex_mode == init_.ex_mode) {
+    tx = std::move(l.frame);
+    l.frame.reset();
+  } else {
+    tx = to_frame(l.msg);
+  }
   if (!tx) {
     count_dropped(l);  // the line's modes changed since the message was taken
     return std::nullopt;
@@ -509,17 +515,17 @@ std::optional<TxFrame> CanLine::next_tx() {
   }
   const SimTime now = scheduler_.now();
   if (std::optional<CANMSG2> m = cyclic_.take()) {
-    if (auto tx = load(Loaded{*m, std::nullopt})) {
+    if (auto tx = load(Loaded{*m, std::nullopt, std::nullopt, 0, 0})) {
       return tx;
     }
     ++cyclic_rejected_;
   }
   if (!staged_) {
-    auto m = distributor_.take([this](const CANMSG2& msg) { return to_frame(msg).has_value(); });
+    auto m = distributor_.take_converted([this](const CANMSG2& msg) { return to_frame(msg); });
     if (!m) {
       return std::nullopt;
     }
-    staged_ = Loaded{m->first, m->second};
+    staged_ = Loaded{m->msg, m->channel, std::move(m->converted), init_.op_mode, init_.ex_mode};
     staged_not_before_ = now;
     const uint32_t delay = std::min(staged_->msg.dwTime, clocks_.dtx_max_ticks);
     if (delay > 0 && loaded_once_) {

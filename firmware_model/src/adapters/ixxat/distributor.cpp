@@ -187,52 +187,15 @@ void Distributor::echo(const Frame& frame, const CANMSG2& echo, std::optional<Ch
   }
 }
 
-std::optional<std::pair<CANMSG2, ChannelId>> Distributor::take_from(
-    Channel& c, bool hpm_only, const std::function<bool(const CANMSG2&)>& sendable,
-    bool& deferred) {
-  if (!c.active || c.port == nullptr) {
-    return std::nullopt;
-  }
-  uint32_t rejected = 0;
-  while (std::optional<CANMSG2> m = c.port->peek()) {
-    if (!sendable(*m)) {
-      c.port->pop();
-      ++c.counters.rejected;  // not a frame this line can send: dropped, counted
-      if (++rejected == kRejectBudget) {
-        c.port->defer();
-        deferred = true;
-        return std::nullopt;
-      }
-      continue;
-    }
-    if (hpm_only && m->uMsgInfo.Bits.hpm == 0) {
-      return std::nullopt;
-    }
-    c.port->pop();
-    return std::make_pair(*m, c.id);
-  }
-  return std::nullopt;
-}
-
 std::optional<std::pair<CANMSG2, ChannelId>> Distributor::take(
     const std::function<bool(const CANMSG2&)>& sendable) {
-  const std::size_t n = channels_.size();
-  std::vector<bool> deferred(n, false);  // one share per channel and call
-  for (bool hpm_only : {true, false}) {
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t i = (rr_next_ + k) % n;
-      if (deferred[i]) {
-        continue;
-      }
-      bool d = false;
-      if (auto m = take_from(channels_[i], hpm_only, sendable, d)) {
-        rr_next_ = (i + 1) % n;
-        return m;
-      }
-      deferred[i] = d;
-    }
+  auto m = take_converted([&](const CANMSG2& msg) -> std::optional<bool> {
+    return sendable(msg) ? std::optional<bool>(true) : std::nullopt;
+  });
+  if (!m) {
+    return std::nullopt;
   }
-  return std::nullopt;
+  return std::make_pair(m->msg, m->channel);
 }
 
 void Distributor::count_sent(ChannelId id) {

@@ -43,8 +43,8 @@ IpcResult<void> send_message(int fd, const T& message) {
 }
 
 // Receives one packet into `buffer` (resized to what came). An empty packet means the peer
-// closed. `timeout_ms` < 0 waits forever. Descriptors that came with it go to `fds` (opened
-// close-on-exec); without `fds` they are closed.
+// closed. `timeout_ms` < 0 waits forever; 0 does not wait (ETIMEDOUT when nothing is there).
+// Descriptors that came with it go to `fds` (opened close-on-exec); without `fds` they are closed.
 IpcResult<std::size_t> receive_packet(int fd, std::vector<uint8_t>& buffer, int timeout_ms = -1,
                                       std::vector<UniqueFd>* fds = nullptr);
 

@@ -208,6 +208,7 @@ class Server final : private LoopServices, private StepLoop {
   Pacing pacing_;
   int64_t armed_ns_ = 0;      // CLOCK_MONOTONIC the timer is armed for (the deadline less the spin)
   bool armed_ahead_ = false;  // ... and that instant was still ahead when armed
+  bool timer_armed_ = true;   // the timer may be armed (false: disarmed by arm_timer)
   int64_t lag_ns_ = 0;        // simulated ns behind
   std::deque<std::pair<int64_t, int64_t>> pace_;  // (CLOCK_MONOTONIC, simulated) ns
   int64_t lag_logged_ns_ = 0;                     // CLOCK_MONOTONIC of the last lag warning

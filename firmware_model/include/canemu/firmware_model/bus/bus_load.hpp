@@ -22,7 +22,12 @@ class BusLoad {
       grow();
     }
     const std::size_t mask = busy_.size() - 1;
+    if (busy_count_ != 0 && start < busy_[(busy_head_ + busy_count_ - 1) & mask].second) {
+      overlapped_ = true;
+    }
     busy_[(busy_head_ + busy_count_) & mask] = {start, end};
+    busy_before_[(busy_head_ + busy_count_) & mask] = busy_total_;
+    busy_total_ += (end - start).ns();
     ++busy_count_;
     // Most activities fall inside the newest bin.
     if (start.ns() >= newest_begin_ns_ && end.ns() <= newest_end_ns_ && end > start) {
@@ -57,6 +62,12 @@ class BusLoad {
   // The activities of the last two seconds, oldest first: a ring over busy_ (its size a power of
   // two, doubled when full), so that recording one costs no allocation once it has grown.
   std::vector<std::pair<SimTime, SimTime>> busy_;
+  // The busy time of everything recorded before each activity, in ns (a ring beside busy_), and
+  // of everything: percent() sums the activities between its edges as one difference.
+  std::vector<int64_t> busy_before_;
+  int64_t busy_total_ = 0;
+  // Some activity began before the one recorded before it ended: percent() then adds each up.
+  bool overlapped_ = false;
   std::size_t busy_head_ = 0;
   std::size_t busy_count_ = 0;
   // Busy nanoseconds of bins first_bin_, first_bin_ + 1, ...; later bins are idle so far.

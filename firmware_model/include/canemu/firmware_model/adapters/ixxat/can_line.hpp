@@ -166,6 +166,11 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   struct Loaded {
     CANMSG2 msg{};
     std::optional<ChannelId> channel;  // nothing: the cyclic list
+    // The frame made of `msg` when it was taken, under the line's modes then; made again
+    // if they changed before it is loaded.
+    std::optional<TxFrame> frame;
+    uint8_t op_mode = 0;
+    uint8_t ex_mode = 0;
   };
   enum Tag : uint64_t { kTimeOverrun = 1, kDelay = 2 };
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -93,12 +94,23 @@ class Distributor {
 
   // --- from the channels ---
   // The next message to send and its channel: high-priority messages first, then any, the
-  // channels in turn after the one that sent last. Messages `sendable` refuses are taken from
-  // their FIFO and counted as rejected. A high-priority message never overtakes the messages
-  // ahead of it in its FIFO.
+  // channels in turn after the one that sent last. `convert` makes of a message what the line
+  // sends (a std::optional); messages it refuses (nothing) are taken from their FIFO and
+  // counted as rejected. A high-priority message never overtakes the messages ahead of it in
+  // its FIFO. One pass over the channels: each FIFO's head is looked at and converted once.
   // At most kRejectBudget refused messages are taken from one FIFO per call: a channel that
   // fills its FIFO with messages the line cannot send as fast as they are taken is deferred
   // (ChannelPort::defer) instead of holding the firmware.
+  template <class T>
+  struct Taken {
+    CANMSG2 msg;
+    ChannelId channel;
+    T converted;
+  };
+  template <class Convert>
+  auto take_converted(Convert&& convert)
+      -> std::optional<Taken<typename std::invoke_result_t<Convert&, const CANMSG2&>::value_type>>;
+  // The same with a yes/no test.
   std::optional<std::pair<CANMSG2, ChannelId>> take(
       const std::function<bool(const CANMSG2&)>& sendable);
   static constexpr uint32_t kRejectBudget = 1024;
@@ -125,15 +137,54 @@ class Distributor {
   // A v2 channel's own filter on a data frame: false when it blocks; sets afc unless the
   // filter passes everything.
   static bool passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg);
-  // `deferred`: set when the channel's share of refused messages ran out.
-  std::optional<std::pair<CANMSG2, ChannelId>> take_from(
-      Channel& c, bool hpm_only, const std::function<bool(const CANMSG2&)>& sendable,
-      bool& deferred);
-
   std::vector<Channel> channels_;
   ChannelId next_id_ = 1;
   bool exclusive_ = false;
   std::size_t rr_next_ = 0;  // the channel to look at first
 };
+
+template <class Convert>
+auto Distributor::take_converted(Convert&& convert)
+    -> std::optional<Taken<typename std::invoke_result_t<Convert&, const CANMSG2&>::value_type>> {
+  using T = typename std::invoke_result_t<Convert&, const CANMSG2&>::value_type;
+  const std::size_t n = channels_.size();
+  std::optional<Taken<T>> first;  // the first sendable head in turn, unless one of high priority
+  std::size_t first_index = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = (rr_next_ + k) % n;
+    Channel& c = channels_[i];
+    if (!c.active || c.port == nullptr) {
+      continue;
+    }
+    uint32_t rejected = 0;
+    while (std::optional<CANMSG2> m = c.port->peek()) {
+      std::optional<T> t = convert(*m);
+      if (!t) {
+        c.port->pop();
+        ++c.counters.rejected;  // not a frame this line can send: dropped, counted
+        if (++rejected == kRejectBudget) {
+          c.port->defer();
+          break;
+        }
+        continue;
+      }
+      if (m->uMsgInfo.Bits.hpm != 0) {
+        c.port->pop();
+        rr_next_ = (i + 1) % n;
+        return Taken<T>{*m, c.id, std::move(*t)};
+      }
+      if (!first) {
+        first.emplace(Taken<T>{*m, c.id, std::move(*t)});
+        first_index = i;
+      }
+      break;
+    }
+  }
+  if (first) {
+    channels_[first_index].port->pop();
+    rr_next_ = (first_index + 1) % n;
+  }
+  return first;
+}
 
 }  // namespace canemu::model::ixxat

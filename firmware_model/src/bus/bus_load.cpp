@@ -6,31 +6,27 @@
 namespace canemu::model {
 
 void BusLoad::grow() {
-  const std::size_t size = busy_.empty() ? 64 : 2 * busy_.size();
-  std::vector<std::pair<SimTime, SimTime>> grown(size);
-  std::vector<int64_t> before(size);
-  for (std::size_t k = 0; k < busy_count_; ++k) {
-    grown[k] = busy_[(busy_head_ + k) & (busy_.size() - 1)];
-    before[k] = busy_before_[(busy_head_ + k) & (busy_.size() - 1)];
-  }
+  const std::size_t size = busy_size_ == 0 ? 64 : 2 * busy_size_;
+  auto grown = std::make_unique_for_overwrite<Activity[]>(size);
+  // The ring unrolled: from its head to the end of the room, then what wrapped.
+  const std::size_t first = std::min(busy_count_, busy_size_ - busy_head_);
+  std::copy_n(busy_.get() + busy_head_, first, grown.get());
+  std::copy_n(busy_.get(), busy_count_ - first, grown.get() + first);
   busy_ = std::move(grown);
-  busy_before_ = std::move(before);
+  busy_size_ = size;
   busy_head_ = 0;
 }
 
 double BusLoad::percent(SimTime now) const {
   const SimTime from = now - seconds(1);
-  const std::size_t mask = busy_.size() - 1;
-  const auto at = [&](std::size_t k) -> const std::pair<SimTime, SimTime>& {
-    return busy_[(busy_head_ + k) & mask];
-  };
+  const std::size_t mask = busy_size_ - 1;
+  const auto at = [&](std::size_t k) -> const Activity& { return busy_[(busy_head_ + k) & mask]; };
   int64_t busy = 0;
   const auto add_clipped = [&](std::size_t k) {
-    const auto& [start, end] = at(k);
-    const SimTime a = std::max(start, from);
-    const SimTime b = std::min(end, now);
+    const int64_t a = std::max(at(k).start, from.ns());
+    const int64_t b = std::min(at(k).end, now.ns());
     if (b > a) {
-      busy += (b - a).ns();
+      busy += b - a;
     }
   };
   if (overlapped_) {
@@ -46,22 +42,21 @@ double BusLoad::percent(SimTime now) const {
   std::size_t hi = busy_count_;
   while (lo < hi) {
     const std::size_t mid = lo + (hi - lo) / 2;
-    if (at(mid).second > from) {
+    if (at(mid).end > from.ns()) {
       hi = mid;
     } else {
       lo = mid + 1;
     }
   }
   hi = busy_count_;
-  while (hi > lo && at(hi - 1).second > now) {
+  while (hi > lo && at(hi - 1).end > now.ns()) {
     add_clipped(--hi);
   }
-  if (lo < hi && at(lo).first < from) {
+  if (lo < hi && at(lo).start < from.ns()) {
     add_clipped(lo++);
   }
   if (lo < hi) {
-    const int64_t upto = hi < busy_count_ ? busy_before_[(busy_head_ + hi) & mask] : busy_total_;
-    busy += upto - busy_before_[(busy_head_ + lo) & mask];
+    busy += (hi < busy_count_ ? at(hi).before : busy_total_) - at(lo).before;
   }
   return 100.0 * static_cast<double>(busy) / 1e9;
 }

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -18,15 +19,14 @@ class BusLoad {
   // The bus was busy from `start` to `end`. Calls come in the order the activities end; what
   // ended more than two seconds before the latest `end` is forgotten.
   void record(SimTime start, SimTime end) {
-    if (busy_count_ == busy_.size()) {
+    if (busy_count_ == busy_size_) {
       grow();
     }
-    const std::size_t mask = busy_.size() - 1;
-    if (busy_count_ != 0 && start < busy_[(busy_head_ + busy_count_ - 1) & mask].second) {
+    const std::size_t mask = busy_size_ - 1;
+    if (busy_count_ != 0 && start.ns() < busy_[(busy_head_ + busy_count_ - 1) & mask].end) {
       overlapped_ = true;
     }
-    busy_[(busy_head_ + busy_count_) & mask] = {start, end};
-    busy_before_[(busy_head_ + busy_count_) & mask] = busy_total_;
+    busy_[(busy_head_ + busy_count_) & mask] = {start.ns(), end.ns(), busy_total_};
     busy_total_ += (end - start).ns();
     ++busy_count_;
     // Most activities fall inside the newest bin.
@@ -36,7 +36,7 @@ class BusLoad {
       add_to_bins(start, end);
     }
     const SimTime forget = end - seconds(2);
-    while (busy_count_ != 0 && busy_[busy_head_].second < forget) {
+    while (busy_count_ != 0 && busy_[busy_head_].end < forget.ns()) {
       busy_head_ = (busy_head_ + 1) & mask;
       --busy_count_;
     }
@@ -60,11 +60,16 @@ class BusLoad {
   [[gnu::noinline]] void grow();  // busy_ is full: twice the room (kept out of record's way)
 
   // The activities of the last two seconds, oldest first: a ring over busy_ (its size a power of
-  // two, doubled when full), so that recording one costs no allocation once it has grown.
-  std::vector<std::pair<SimTime, SimTime>> busy_;
-  // The busy time of everything recorded before each activity, in ns (a ring beside busy_), and
-  // of everything: percent() sums the activities between its edges as one difference.
-  std::vector<int64_t> busy_before_;
+  // two, doubled when full), so that recording one costs no allocation once it has grown. Each
+  // with the busy time of everything recorded before it, in ns, and busy_total_ that of
+  // everything: percent() sums the activities between its edges as one difference.
+  struct Activity {  // in ns
+    int64_t start;
+    int64_t end;
+    int64_t before;
+  };
+  std::unique_ptr<Activity[]> busy_;  // uninitialised past busy_count_: grown without a fill
+  std::size_t busy_size_ = 0;
   int64_t busy_total_ = 0;
   // Some activity began before the one recorded before it ended: percent() then adds each up.
   bool overlapped_ = false;

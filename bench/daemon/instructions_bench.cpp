@@ -66,6 +66,20 @@ std::string temp_dir() {
   return ::mkdtemp(dir);
 }
 
+// Removes a callgrind output file, or with CANEMU_CALLGRIND_KEEP=DIR moves it there (as
+// callgrind.N.out, N counting up) for callgrind_annotate.
+void done_with(const std::string& out) {
+  static int kept = 0;
+  if (const char* keep = std::getenv("CANEMU_CALLGRIND_KEEP"); keep != nullptr && *keep != 0) {
+    const std::string to = std::string(keep) + "/callgrind." + std::to_string(kept++) + ".out";
+    if (std::rename(out.c_str(), to.c_str()) == 0) {
+      std::fprintf(stderr, "callgrind output kept: %s\n", to.c_str());
+      return;
+    }
+  }
+  done_with(out);
+}
+
 // ---- the engine alone, run in a child under callgrind: `instructions_bench --engine BUSES MS`
 // (bench/support/engine_buses.hpp), or `--engine-nodes NODES MS`: one bus, NODES saturating
 // nodes of random frames in steps of 10 ms (firmware_model_bench's BM_Bus4Nodes1MbitFullLoad).
@@ -111,7 +125,7 @@ std::optional<Count> engine_child_count(const char* mode, int n, int64_t ms, std
   const bool read = p != nullptr && std::fscanf(p, "%llu", &frames) == 1;
   const int status = p != nullptr ? ::pclose(p) : -1;
   const auto total = callgrind_total(out);
-  std::remove(out.c_str());
+  done_with(out);
   ::rmdir(dir.c_str());
   if (!read || status != 0 || !total) {
     error = "the engine's run under valgrind failed (is valgrind installed?)";
@@ -171,7 +185,7 @@ std::optional<Count> canemud_count(const std::string& config_text, int64_t step_
       }
     }
   }
-  std::remove(out.c_str());
+  done_with(out);
   std::remove(config.c_str());
   ::rmdir(dir.c_str());
   return count;

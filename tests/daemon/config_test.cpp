@@ -47,6 +47,9 @@ TEST(Config, ReadsEveryKey) {
 [simulation]
 time = "scaled:2.5"
 seed = 42
+batch_us = 40
+batch_max_us = 2000
+spin_us = 10
 [security]
 allowed_users = ["alice"]
 allowed_groups = ["canemu"]
@@ -69,6 +72,9 @@ controllers = ["fd0"]
   EXPECT_EQ(c->simulation.time.mode, TimeMode::scaled);
   EXPECT_DOUBLE_EQ(c->simulation.time.scale, 2.5);
   EXPECT_EQ(c->simulation.seed, 42u);
+  EXPECT_EQ(c->simulation.batch_us, 40u);
+  EXPECT_EQ(c->simulation.batch_max_us, 2000u);
+  EXPECT_EQ(c->simulation.spin_us, 10u);
   EXPECT_EQ(c->security.allowed_users, (std::vector<std::string>{"alice"}));
   EXPECT_EQ(c->security.allowed_groups, (std::vector<std::string>{"canemu"}));
   EXPECT_EQ(c->buses[0].kind, BusKind::can_fd);
@@ -142,6 +148,16 @@ TEST(Config, UnknownKeysAreErrorsWithFileLineColumnAndKey) {
   const auto top = config_errors("[buses]\n");
   ASSERT_EQ(top.size(), 1u);
   EXPECT_NE(top[0].find("t.toml:1:2: buses: unknown key"), std::string::npos) << top[0];
+}
+
+TEST(Config, TheBatchWindowDefaultsTo50UsWideningTo1000UsAndIsBounded) {
+  auto c = parse_config("[simulation]\n", "t.toml");
+  ASSERT_TRUE(c) << c.error().front();
+  EXPECT_EQ(c->simulation.batch_us, 50u);
+  EXPECT_EQ(c->simulation.batch_max_us, 1000u);
+  const auto e = config_errors("[simulation]\nbatch_max_us = 100001\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], "t.toml:2:16: simulation.batch_max_us: 100001 is outside 0..100000");
 }
 
 TEST(Config, CollectsEveryErrorAtOnce) {

@@ -47,6 +47,19 @@ TEST(SimulationReload, AddsNewBusesAndDevicesAndTellsOfTheDevice) {
   EXPECT_EQ(sim->devices().generation(), 1u);
 }
 
+TEST(SimulationReload, AppliesTheLoopsBatchWindowAndSpinAtOnce) {
+  auto sim = std::move(*Simulation::build(default_config()));
+  Config fresh = default_config();
+  fresh.simulation.batch_us = 20;
+  fresh.simulation.batch_max_us = 20;
+  fresh.simulation.spin_us = 0;
+  const ReloadReport r = sim->reload(fresh);
+  EXPECT_EQ(r.applied,
+            (std::vector<std::string>{"simulation: batch_us 20, batch_max_us 20, spin_us 0"}));
+  EXPECT_TRUE(r.refused.empty());
+  EXPECT_EQ(sim->config().simulation.batch_max_us, 20u);
+}
+
 TEST(SimulationReload, ReportsWhatOnlyARestartChangesAndKeepsIt) {
   auto sim = std::move(*Simulation::build(default_config()));
   Config fresh = default_config();

@@ -72,7 +72,7 @@ void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
   if (t == nullptr) {
     return;
   }
-  c.only_keys(*t, "simulation", {"time", "seed", "batch_us", "spin_us"});
+  c.only_keys(*t, "simulation", {"time", "seed", "batch_us", "batch_max_us", "spin_us"});
   if (auto time = c.string(*t, "simulation", "time", false)) {
     auto parsed = parse_time_setting(*time);
     if (parsed) {
@@ -86,6 +86,9 @@ void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
   }
   if (auto batch = c.integer(*t, "simulation", "batch_us", false, 0, 100'000)) {
     cfg.simulation.batch_us = static_cast<uint32_t>(*batch);
+  }
+  if (auto batch_max = c.integer(*t, "simulation", "batch_max_us", false, 0, 100'000)) {
+    cfg.simulation.batch_max_us = static_cast<uint32_t>(*batch_max);
   }
   if (auto spin = c.integer(*t, "simulation", "spin_us", false, 0, 1000)) {
     cfg.simulation.spin_us = static_cast<uint32_t>(*spin);

@@ -45,7 +45,12 @@ void Server::advance_to_now() {
     const double instant = static_cast<double>(at.ns()) * per_sim_ns;
     pacing_.event_late(wall - start_mono_ns_ - static_cast<int64_t>(std::min(instant, 9.0e18)));
   };
-  while (s.run_until(target, kEventsPerClock, late) == kEventsPerClock) {
+  while (true) {
+    const std::size_t ran = s.run_until(target, kEventsPerClock, late);
+    turn_events_ += ran;
+    if (ran != kEventsPerClock) {
+      break;
+    }
     wall = monotonic_ns();
     if (wall >= until) {
       break;  // the rest waits for the next pass (the timer is due at once)
@@ -96,10 +101,13 @@ void Server::arm_timer() {
       const double offset = std::ceil(static_cast<double>(next->ns()) / scale);
       const int64_t due = start_mono_ns_ + static_cast<int64_t>(std::min(offset, 9.0e18));
       const SimulationConfig& sc = sim_.config().simulation;
-      deadline_ns_ = std::max(due, last_wake_ns_ + int64_t{sc.batch_us} * 1000);
+      batch_.configure(sc.batch_us, sc.batch_max_us);
+      deadline_ns_ = std::max(due, last_wake_ns_ + batch_.window_ns());
       // Woken a little early (as early as the timer has lately been late, at most spin_us),
-      // the loop spins to the deadline.
-      const int64_t wall = std::max<int64_t>(1, deadline_ns_ - pacing_.spin_ns());
+      // the loop spins to the deadline; not when a widened window set it (events come densely
+      // and wait for the window by design: a spin would buy no punctuality worth its cost).
+      const bool widened = batch_.window_ns() > batch_.base_ns() && deadline_ns_ > due;
+      const int64_t wall = std::max<int64_t>(1, deadline_ns_ - (widened ? 0 : pacing_.spin_ns()));
       armed_ns_ = wall;
       armed_ahead_ = wall > monotonic_ns();
       its.it_value.tv_sec = wall / 1'000'000'000;

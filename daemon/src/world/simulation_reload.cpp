@@ -158,11 +158,14 @@ ReloadReport Simulation::reload(const Config& fresh) {
     r.applied.push_back("security: allowed users and groups replaced");
   }
   if (fresh.simulation.batch_us != config_.simulation.batch_us ||
+      fresh.simulation.batch_max_us != config_.simulation.batch_max_us ||
       fresh.simulation.spin_us != config_.simulation.spin_us) {
     config_.simulation.batch_us = fresh.simulation.batch_us;
+    config_.simulation.batch_max_us = fresh.simulation.batch_max_us;
     config_.simulation.spin_us = fresh.simulation.spin_us;
-    r.applied.push_back(fmt::format("simulation: batch_us {}, spin_us {}",
-                                    config_.simulation.batch_us, config_.simulation.spin_us));
+    r.applied.push_back(fmt::format("simulation: batch_us {}, batch_max_us {}, spin_us {}",
+                                    config_.simulation.batch_us, config_.simulation.batch_max_us,
+                                    config_.simulation.spin_us));
   }
   return r;
 }

@@ -89,6 +89,10 @@ struct SimulationConfig {
   // together, each at its exact simulated instant), and wakes spin_us early to spin to the
   // deadline instead of trusting the timer's accuracy.
   uint32_t batch_us = 50;
+  // ... and while events come densely (many busy buses), a wake-up at most once per
+  // batch_max_us, the window doubling from batch_us every wake-up (loop/batch_window.hpp);
+  // batch_max_us <= batch_us: never wider than batch_us.
+  uint32_t batch_max_us = 1000;
   uint32_t spin_us = 20;
 };
 

@@ -17,6 +17,7 @@
 #include "canemu/daemon/control/control_dispatcher.hpp"
 #include "canemu/daemon/distributed/distributed.hpp"
 #include "canemu/daemon/loop/access_policy.hpp"
+#include "canemu/daemon/loop/batch_window.hpp"
 #include "canemu/daemon/loop/pacing.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/ipc/seqpacket.hpp"
@@ -184,6 +185,8 @@ class Server final : private LoopServices, private StepLoop {
   int64_t start_mono_ns_ = 0;
   int64_t last_wake_ns_ = 0;  // CLOCK_MONOTONIC of the loop's last wake-up
   int64_t deadline_ns_ = 0;   // of the armed timer (0: none)
+  BatchWindow batch_;         // how long events gather before the loop wakes for them
+  uint64_t turn_events_ = 0;  // events run since the last wake-up
   bool accepting_ = true;
   bool socket_from_systemd_ = false;      // socket activation: systemd owns the file
   AccessPolicy::SocketFile socket_file_;  // the file bound (its mode and group follow reloads)

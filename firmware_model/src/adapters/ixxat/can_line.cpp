@@ -220,7 +220,7 @@ void CanLine::release_loaded(bool keep) {
     // window of frames loaded) are dropped and counted, as the staging slot holds one.
     for (const Loaded& l : loaded_) {
       if (keep && !staged_) {
-        staged_ = l;
+        staged_ = Staged{l, std::nullopt, 0, 0};
         staged_not_before_ = scheduler_.now();
       } else {
         count_dropped(l);
@@ -482,14 +482,8 @@ std::optional<TxFrame> CanLine::to_frame(const CANMSG2& msg) const {
   return TxFrame{*frame, b.ssm != 0, false};
 }
 
-std::optional<TxFrame> CanLine::load(Loaded l) {
-  std::optional<TxFrame> tx;
-  if (l.frame && l.op_mode == init_.op_mode && l.ex_mode == init_.ex_mode) {
-    tx = std::move(l.frame);
-    l.frame.reset();
-  } else {
-    tx = to_frame(l.msg);
-  }
+std::optional<TxFrame> CanLine::load(Loaded l, std::optional<TxFrame> frame) {
+  std::optional<TxFrame> tx = frame ? std::move(frame) : to_frame(l.msg);
   if (!tx) {
     count_dropped(l);  // the line's modes changed since the message was taken
     return std::nullopt;
@@ -515,7 +509,7 @@ std::optional<TxFrame> CanLine::next_tx() {
   }
   const SimTime now = scheduler_.now();
   if (std::optional<CANMSG2> m = cyclic_.take()) {
-    if (auto tx = load(Loaded{*m, std::nullopt, std::nullopt, 0, 0})) {
+    if (auto tx = load(Loaded{*m, std::nullopt}, std::nullopt)) {
       return tx;
     }
     ++cyclic_rejected_;
@@ -525,7 +519,7 @@ std::optional<TxFrame> CanLine::next_tx() {
     if (!m) {
       return std::nullopt;
     }
-    staged_ = Loaded{m->msg, m->channel, std::move(m->converted), init_.op_mode, init_.ex_mode};
+    staged_ = Staged{{m->msg, m->channel}, std::move(m->converted), init_.op_mode, init_.ex_mode};
     staged_not_before_ = now;
     const uint32_t delay = std::min(staged_->msg.dwTime, clocks_.dtx_max_ticks);
     if (delay > 0 && loaded_once_) {
@@ -540,9 +534,10 @@ std::optional<TxFrame> CanLine::next_tx() {
     delay_event_ = scheduler_.schedule_at(staged_not_before_, *this, kDelay);
     return std::nullopt;
   }
-  Loaded l = *staged_;
+  Staged st = std::move(*staged_);
   staged_.reset();
-  return load(std::move(l));
+  const bool same_modes = st.op_mode == init_.op_mode && st.ex_mode == init_.ex_mode;
+  return load(Loaded{st.msg, st.channel}, same_modes ? std::move(st.frame) : std::nullopt);
 }
 
 void CanLine::frame_received(SimTime at, const Frame& frame, bool own) {

@@ -166,8 +166,10 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   struct Loaded {
     CANMSG2 msg{};
     std::optional<ChannelId> channel;  // nothing: the cyclic list
-    // The frame made of `msg` when it was taken, under the line's modes then; made again
-    // if they changed before it is loaded.
+  };
+  // A message taken from a FIFO and the frame made of it then, under the line's modes then
+  // (made again if they changed before it is loaded; nothing: to be made).
+  struct Staged : Loaded {
     std::optional<TxFrame> frame;
     uint8_t op_mode = 0;
     uint8_t ex_mode = 0;
@@ -187,7 +189,7 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
 
   // The hosted node's source: the next frame for the controller.
   std::optional<TxFrame> next_tx();
-  std::optional<TxFrame> load(Loaded l);
+  std::optional<TxFrame> load(Loaded l, std::optional<TxFrame> frame);
   std::optional<TxFrame> to_frame(const CANMSG2& msg) const;
 
   // A detection ended: the line is not initialized (DetectBaud), or runs with the rate found
@@ -233,7 +235,7 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   // The frames handed to the controller and not yet done, oldest first: one in an SJA1000's or
   // the FD controller's transmit buffer; up to the node's window on another daemon's bus.
   std::deque<Loaded> loaded_;
-  std::optional<Loaded> staged_;  // taken from a FIFO, waiting for its delay or a restart
+  std::optional<Staged> staged_;  // taken from a FIFO, waiting for its delay or a restart
   SimTime staged_not_before_;
   SimTime last_load_;
   bool loaded_once_ = false;

@@ -110,7 +110,7 @@ std::optional<TxFrame> Channel::next_tx() {
       }
       continue;
     }
-    if (status != ipc::RingStatus::empty || armed_) {
+    if (status != ipc::RingStatus::empty || armed_ || !arming_) {
       return std::nullopt;  // corrupted (broken() tells the server), or asleep already
     }
     // Idle with an empty ring: sleep on the doorbell, unless a frame came in meanwhile.

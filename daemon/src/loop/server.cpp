@@ -398,6 +398,7 @@ void Server::before_status() {
 }
 
 void Server::watch(Doorbell& bell) {
+  bell.set_arming(options_.time.mode != TimeMode::stepped);
   if (epoll_add(epoll_.get(), bell.doorbell_fd())) {
     doorbells_[bell.doorbell_fd()] = &bell;
   } else {

@@ -71,8 +71,8 @@ std::optional<CANMSG2> VciPort::peek() {
       std::memcpy(&m, element, sizeof m);
       return to_canmsg2(m);
     }
-    if (status != ipc::RingStatus::empty || armed_) {
-      return std::nullopt;  // corrupted (broken() tells the server), or asleep already
+    if (status != ipc::RingStatus::empty || armed_ || !arming_) {
+      return std::nullopt;  // corrupted (broken() tells the server), asleep already, or stepped
     }
     // Empty: sleep on the doorbell, unless an element came in meanwhile.
     if (tx_.arm_unless_filled()) {

@@ -65,6 +65,7 @@ class Channel final : private model::ControllerEvents, public Doorbell {
   // Called when the doorbell rang, or at any time (before a time step): the node takes a frame
   // if it is idle.
   void kick() override;
+  void set_arming(bool arming) override { arming_ = arming; }
   // The client broke a ring (positions out of range); the server drops the client.
   bool broken() const override { return rx_.corrupted_after_writes() || tx_.corrupted(); }
 
@@ -96,6 +97,7 @@ class Channel final : private model::ControllerEvents, public Doorbell {
   ChannelStats stats_;
   uint32_t lost_pending_ = 0;  // lost since the last message that made it into the ring
   bool armed_ = false;         // sleeping on the doorbell
+  bool arming_ = true;         // whether an empty ring arms it (Doorbell::set_arming)
   // Invalid transmit elements skipped per kick before the loop gets back to other work.
   static constexpr uint32_t kMaxRejectsPerKick = 256;
   uint32_t rejects_left_ = kMaxRejectsPerKick;

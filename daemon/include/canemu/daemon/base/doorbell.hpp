@@ -13,6 +13,10 @@ class Doorbell {
   virtual void kick() = 0;
   // The client broke a ring; the server drops the client.
   virtual bool broken() const = 0;
+  // Whether a transmitter that empties its ring arms the doorbell (the default). Not in stepped
+  // time, where the loop looks at every ring when a step begins (Server::kick_all_channels)
+  // and a doorbell would only wake it for nothing: an arm costs a system-wide memory barrier.
+  virtual void set_arming(bool arming) { (void)arming; }
 
  protected:
   ~Doorbell() = default;

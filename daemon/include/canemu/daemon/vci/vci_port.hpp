@@ -48,6 +48,7 @@ class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
   // --- Doorbell ---
   int doorbell_fd() const override { return rings_.tx().reader_event(); }
   void kick() override;
+  void set_arming(bool arming) override { arming_ = arming; }
   bool broken() const override { return rx_.corrupted_after_writes() || tx_.corrupted(); }
 
  private:
@@ -59,6 +60,7 @@ class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
   ipc::RingWriter rx_;  // canemud's views: it writes the receive FIFO, reads the transmit FIFO
   ipc::RingReader tx_;
   bool armed_ = false;  // sleeping on the doorbell
+  bool arming_ = true;  // whether an empty ring arms it (Doorbell::set_arming)
 };
 
 // CANMSG <-> CANMSG2 (a v1 channel's elements): the first 8 data bytes.

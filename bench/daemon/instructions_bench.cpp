@@ -77,7 +77,7 @@ void done_with(const std::string& out) {
       return;
     }
   }
-  done_with(out);
+  std::remove(out.c_str());
 }
 
 // ---- the engine alone, run in a child under callgrind: `instructions_bench --engine BUSES MS`

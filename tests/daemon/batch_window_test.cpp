@@ -41,8 +41,10 @@ TEST(BatchWindow, DenseEventsDoubleItUpToBatchMaxUsAndThinningOnesBringItBackAtO
   EXPECT_EQ(w.woke(160, t), 1000 * kUs);
   t += 1000 * kUs;
   EXPECT_EQ(w.woke(80, t), 1000 * kUs);
+  EXPECT_TRUE(w.widened());
   t += 1000 * kUs;
   EXPECT_EQ(w.woke(79, t), 50 * kUs);
+  EXPECT_FALSE(w.widened());
   // A lone frame after the load: its wake-up sees few events over a long span.
   t += 20'000 * kUs;
   EXPECT_EQ(w.woke(1, t), 50 * kUs);

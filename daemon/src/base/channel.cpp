@@ -111,7 +111,7 @@ std::optional<TxFrame> Channel::next_tx() {
       continue;
     }
     if (status != ipc::RingStatus::empty || armed_ || !arming_) {
-      return std::nullopt;  // corrupted (broken() tells the server), or asleep already
+      return std::nullopt;  // corrupted (broken() tells the server), asleep already, or stepped
     }
     // Idle with an empty ring: sleep on the doorbell, unless a frame came in meanwhile.
     if (tx_.arm_unless_filled()) {

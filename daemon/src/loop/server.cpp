@@ -266,8 +266,6 @@ bool Server::run_once(int timeout_ms) {
   }
   advance_to_now();  // events are handled at the simulated instant they are seen
   if (options_.time.mode != TimeMode::stepped) {
-    const SimulationConfig& sc = sim_.config().simulation;
-    batch_.configure(sc.batch_us, sc.batch_max_us);
     batch_.woke(turn_events_, last_wake_ns_);  // the events since the wake-up before
     turn_events_ = 0;
   }

@@ -93,6 +93,8 @@ void Server::arm_timer() {
   itimerspec its{};
   deadline_ns_ = 0;
   if (options_.time.mode != TimeMode::stepped) {
+    const SimulationConfig& sc = sim_.config().simulation;
+    batch_.configure(sc.batch_us, sc.batch_max_us);  // a reload may have changed them
     if (auto next = sim_.scheduler().next_event_time()) {
       // Absolute CLOCK_MONOTONIC deadline of the next simulated event, rounded up so the
       // timer never fires before the event is due; no sooner than one batch after the last
@@ -100,13 +102,11 @@ void Server::arm_timer() {
       const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
       const double offset = std::ceil(static_cast<double>(next->ns()) / scale);
       const int64_t due = start_mono_ns_ + static_cast<int64_t>(std::min(offset, 9.0e18));
-      const SimulationConfig& sc = sim_.config().simulation;
-      batch_.configure(sc.batch_us, sc.batch_max_us);
       deadline_ns_ = std::max(due, last_wake_ns_ + batch_.window_ns());
       // Woken a little early (as early as the timer has lately been late, at most spin_us),
       // the loop spins to the deadline; not when a widened window set it (events come densely
       // and wait for the window by design: a spin would buy no punctuality worth its cost).
-      const bool widened = batch_.window_ns() > batch_.base_ns() && deadline_ns_ > due;
+      const bool widened = batch_.widened() && deadline_ns_ > due;
       const int64_t wall = std::max<int64_t>(1, deadline_ns_ - (widened ? 0 : pacing_.spin_ns()));
       armed_ns_ = wall;
       armed_ahead_ = wall > monotonic_ns();

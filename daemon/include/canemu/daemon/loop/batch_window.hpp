@@ -21,13 +21,13 @@ class BatchWindow {
   // `base_us` and `max_us` as configured; no widening when max_us <= base_us. The same values
   // again change nothing (the loop passes them on every turn, reloads included).
   void configure(uint32_t base_us, uint32_t max_us) {
-    if (base_us == base_us_ && max_us == max_us_) {
+    const int64_t base_ns = int64_t{base_us} * 1000;
+    const int64_t max_ns = std::max(base_ns, int64_t{max_us} * 1000);
+    if (base_ns == base_ns_ && max_ns == max_ns_) {
       return;
     }
-    base_us_ = base_us;
-    max_us_ = max_us;
-    base_ns_ = int64_t{base_us} * 1000;
-    max_ns_ = std::max(base_ns_, int64_t{max_us} * 1000);
+    base_ns_ = base_ns;
+    max_ns_ = max_ns;
     window_ns_ = base_ns_;
   }
 
@@ -50,13 +50,12 @@ class BatchWindow {
     return window_ns_;
   }
   int64_t window_ns() const { return window_ns_; }
-  int64_t base_ns() const { return base_ns_; }
+  // Wider than batch_us: events come densely.
+  bool widened() const { return window_ns_ > base_ns_; }
 
  private:
   static constexpr int64_t kFirstWidenedNs = 100'000;  // where widening starts from batch_us 0
 
-  uint32_t base_us_ = 50;
-  uint32_t max_us_ = 50;
   int64_t base_ns_ = 50'000;
   int64_t max_ns_ = 50'000;
   int64_t window_ns_ = 50'000;

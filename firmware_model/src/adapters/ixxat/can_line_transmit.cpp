@@ -76,16 +76,18 @@ std::optional<TxFrame> CanLine::to_frame(const CANMSG2& msg) const {
   return TxFrame{*frame, b.ssm != 0, false};
 }
 
-std::optional<TxFrame> CanLine::load(Loaded l, std::optional<TxFrame> frame) {
-  std::optional<TxFrame> tx = frame ? std::move(frame) : to_frame(l.msg);
-  if (!tx) {
-    count_dropped(l);  // the line's modes changed since the message was taken
-    return std::nullopt;
+std::optional<TxFrame> CanLine::load(const Loaded& l, std::optional<TxFrame>& frame) {
+  if (!frame) {
+    frame = to_frame(l.msg);
+    if (!frame) {
+      count_dropped(l);  // the line's modes changed since the message was taken
+      return std::nullopt;
+    }
   }
-  loaded_.push_back(std::move(l));
+  loaded_.push_back(l);
   last_load_ = scheduler_.now();
   loaded_once_ = true;
-  return tx;
+  return std::move(frame);
 }
 
 std::optional<TxFrame> CanLine::next_tx() {
@@ -103,7 +105,8 @@ std::optional<TxFrame> CanLine::next_tx() {
   }
   const SimTime now = scheduler_.now();
   if (std::optional<CANMSG2> m = cyclic_.take()) {
-    if (auto tx = load(Loaded{*m, std::nullopt}, std::nullopt)) {
+    std::optional<TxFrame> none;
+    if (auto tx = load(Loaded{*m, std::nullopt}, none)) {
       return tx;
     }
     ++cyclic_rejected_;
@@ -113,7 +116,7 @@ std::optional<TxFrame> CanLine::next_tx() {
     if (!m) {
       return std::nullopt;
     }
-    staged_ = Staged{{m->msg, m->channel}, std::move(m->converted), init_.op_mode, init_.ex_mode};
+    staged_.emplace(Staged{{m->msg, m->channel}, std::move(m->converted), init_.op_mode, init_.ex_mode});
     staged_not_before_ = now;
     const uint32_t delay = std::min(staged_->msg.dwTime, clocks_.dtx_max_ticks);
     if (delay > 0 && loaded_once_) {
@@ -128,10 +131,12 @@ std::optional<TxFrame> CanLine::next_tx() {
     delay_event_ = scheduler_.schedule_at(staged_not_before_, *this, kDelay);
     return std::nullopt;
   }
-  Staged st = std::move(*staged_);
+  if (staged_->op_mode != init_.op_mode || staged_->ex_mode != init_.ex_mode) {
+    staged_->frame.reset();  // made again under the modes now
+  }
+  std::optional<TxFrame> tx = load(*staged_, staged_->frame);
   staged_.reset();
-  const bool same_modes = st.op_mode == init_.op_mode && st.ex_mode == init_.ex_mode;
-  return load(Loaded{st.msg, st.channel}, same_modes ? std::move(st.frame) : std::nullopt);
+  return tx;
 }
 
 }  // namespace canemu::model::ixxat

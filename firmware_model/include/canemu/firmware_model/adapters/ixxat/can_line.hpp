@@ -189,7 +189,9 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
 
   // The hosted node's source: the next frame for the controller.
   std::optional<TxFrame> next_tx();
-  std::optional<TxFrame> load(Loaded l, std::optional<TxFrame> frame);
+  // Puts `l` among the loaded frames and returns its frame: `frame`, or made now if empty
+  // (nothing, counted as dropped, if it cannot be made).
+  std::optional<TxFrame> load(const Loaded& l, std::optional<TxFrame>& frame);
   std::optional<TxFrame> to_frame(const CANMSG2& msg) const;
 
   // A detection ended: the line is not initialized (DetectBaud), or runs with the rate found

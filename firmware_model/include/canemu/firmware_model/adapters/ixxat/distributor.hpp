@@ -148,9 +148,11 @@ auto Distributor::take_converted(Convert&& convert)
     -> std::optional<Taken<typename std::invoke_result_t<Convert&, const CANMSG2&>::value_type>> {
   using T = typename std::invoke_result_t<Convert&, const CANMSG2&>::value_type;
   const std::size_t n = channels_.size();
-  std::optional<Taken<T>> first;  // the first sendable head in turn, unless one of high priority
+  // The first sendable head in turn, unless one of high priority comes after it.
+  std::optional<Taken<T>> first;
   std::size_t first_index = 0;
-  for (std::size_t k = 0; k < n; ++k) {
+  bool urgent = false;
+  for (std::size_t k = 0; k < n && !urgent; ++k) {
     const std::size_t i = (rr_next_ + k) % n;
     Channel& c = channels_[i];
     if (!c.active || c.port == nullptr) {
@@ -168,13 +170,9 @@ auto Distributor::take_converted(Convert&& convert)
         }
         continue;
       }
-      if (m->uMsgInfo.Bits.hpm != 0) {
-        c.port->pop();
-        rr_next_ = (i + 1) % n;
-        return Taken<T>{*m, c.id, std::move(*t)};
-      }
-      if (!first) {
-        first.emplace(Taken<T>{*m, c.id, std::move(*t)});
+      urgent = m->uMsgInfo.Bits.hpm != 0;
+      if (!first || urgent) {
+        first.emplace(*m, c.id, std::move(*t));
         first_index = i;
       }
       break;

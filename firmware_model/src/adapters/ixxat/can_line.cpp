@@ -451,18 +451,19 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
   }
   // Frames end in the order they were loaded (one transmit buffer, or the owner's queue of a
   // node on another daemon's bus).
-  const Loaded done = loaded_.front();
+  const std::optional<ChannelId> channel = loaded_.front().channel;
+  const bool echoed = loaded_.front().msg.uMsgInfo.Bits.srr != 0;
   loaded_.pop_front();
-  if (done.channel) {
-    distributor_.count_sent(*done.channel);
+  if (channel) {
+    distributor_.count_sent(*channel);
   }
-  if (done.msg.uMsgInfo.Bits.srr == 0) {
+  if (!echoed) {
     return;  // invisible to the other channels
   }
   // Self reception: the firmware hands the frame to the distributor again.
   CANMSG2 echo = data_message(frame, ticks(at));
   echo.uMsgInfo.Bits.srr = 1;
-  distributor_.echo(frame, echo, done.channel);
+  distributor_.echo(frame, echo, channel);
 }
 
 void CanLine::bus_error(const BusErrorEvent& event) {

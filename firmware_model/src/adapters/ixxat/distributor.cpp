@@ -111,7 +111,7 @@ tl::expected<std::pair<FilterPair*, bool>, HRESULT> Distributor::filters(Channel
   return std::make_pair(&*c->filters, c->active);
 }
 
-void Distributor::deliver(Channel& c, CANMSG2 msg) {
+void Distributor::deliver(Channel& c, const CANMSG2& msg) {
   if (!c.active || c.port == nullptr) {
     return;
   }
@@ -119,10 +119,15 @@ void Distributor::deliver(Channel& c, CANMSG2 msg) {
     ++c.counters.not_shown;  // a CANMSG has no room for it
     return;
   }
+  bool put;
   if (c.lost_pending) {
-    msg.uMsgInfo.Bits.ovr = 1;
+    CANMSG2 marked = msg;
+    marked.uMsgInfo.Bits.ovr = 1;
+    put = c.port->put(marked);
+  } else {
+    put = c.port->put(msg);
   }
-  if (c.port->put(msg)) {
+  if (put) {
     ++c.counters.received;
     c.lost_pending = false;
   } else {
@@ -138,28 +143,28 @@ void Distributor::broadcast(const CANMSG2& msg) {
   }
 }
 
-bool Distributor::passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg) {
+void Distributor::deliver_filtered(Channel& c, const Frame& frame, const CANMSG2& msg) {
   if (!c.filters) {
-    return true;  // v1 channels have no filter of their own
+    deliver(c, msg);  // v1 channels have no filter of their own
+    return;
   }
   const uint8_t a = c.filters->accept(frame.id(), frame.extended(), frame.remote());
   if (a == CAN_ACCEPT_REJECT) {
-    return false;
+    return;
   }
-  if (c.filters->select(frame.extended()).mode() != CAN_FILTER_PASS) {
-    msg.uMsgInfo.Bits.afc = a;  // the last stage that filters sets it
+  if (c.filters->select(frame.extended()).mode() == CAN_FILTER_PASS) {
+    deliver(c, msg);
+    return;
   }
-  return true;
+  CANMSG2 copy = msg;
+  copy.uMsgInfo.Bits.afc = a;  // the last stage that filters sets it
+  deliver(c, copy);
 }
 
 void Distributor::distribute(const Frame& frame, const CANMSG2& msg) {
   for (Channel& c : channels_) {
-    if (!c.active) {
-      continue;
-    }
-    CANMSG2 copy = msg;
-    if (passes_channel_filter(c, frame, copy)) {
-      deliver(c, copy);
+    if (c.active) {
+      deliver_filtered(c, frame, msg);
     }
   }
 }
@@ -181,9 +186,7 @@ void Distributor::echo(const Frame& frame, const CANMSG2& echo, std::optional<Ch
     // keep srr, so that a program can tell them from the bus's traffic.
     CANMSG2 copy = echo;
     copy.uMsgInfo.Bits.srr = from ? 0 : 1;
-    if (passes_channel_filter(c, frame, copy)) {
-      deliver(c, copy);
-    }
+    deliver_filtered(c, frame, copy);
   }
 }
 

@@ -75,13 +75,15 @@ uint8_t Sja1000::status() const {
   if (mod_ & MOD_RM) {
     sr |= SR_RS | SR_TS;
   }
-  if (fc_.tec() >= fc_.warning_limit() || fc_.rec() >= fc_.warning_limit() || fc_.bus_off()) {
-    sr |= SR_ES;
-  }
+  return static_cast<uint8_t>(sr | error_bits());
+}
+
+uint8_t Sja1000::error_bits() const {
   if (fc_.bus_off()) {
-    sr |= SR_BS;
+    return SR_ES | SR_BS;
   }
-  return sr;
+  const uint16_t limit = fc_.warning_limit();
+  return fc_.tec() >= limit || fc_.rec() >= limit ? SR_ES : 0;
 }
 
 uint8_t Sja1000::read(uint8_t address) {
@@ -266,7 +268,6 @@ void Sja1000::command(uint8_t cmr) {
   if (mod_ & MOD_RM) {
     return;  // commands have no effect in reset mode
   }
-  const SimTime at = now();
   if (cmr & (CMR_TR | CMR_SRR)) {
     if (!tx_) {
       if (auto frame = unpack_frame(tx_buffer_.data())) {
@@ -279,6 +280,7 @@ void Sja1000::command(uint8_t cmr) {
       }
     }
   } else if ((cmr & CMR_AT) && tx_) {
+    const SimTime at = now();
     const Frame f = tx_->frame;
     if (withdraw_tx(bus_, node_, tx_)) {
       tx_complete_ = false;
@@ -352,7 +354,7 @@ void Sja1000::fifo_release() {
 
 void Sja1000::update_error_status(SimTime at) {
   // EI on every change of SR.ES or SR.BS (datasheet 6.4.4).
-  const uint8_t bits = status() & (SR_ES | SR_BS);
+  const uint8_t bits = error_bits();
   if (bits != error_status_) {
     error_status_ = bits;
     set_ir(IR_EI, at);

@@ -133,10 +133,10 @@ class Distributor {
 
   Channel* find(ChannelId id);
   const Channel* find(ChannelId id) const;
-  void deliver(Channel& c, CANMSG2 msg);
-  // A v2 channel's own filter on a data frame: false when it blocks; sets afc unless the
-  // filter passes everything.
-  static bool passes_channel_filter(const Channel& c, const Frame& frame, CANMSG2& msg);
+  void deliver(Channel& c, const CANMSG2& msg);
+  // `msg` (a data frame's) through a v2 channel's own filter to the channel, unless it blocks;
+  // afc set unless the filter passes everything.
+  void deliver_filtered(Channel& c, const Frame& frame, const CANMSG2& msg);
   std::vector<Channel> channels_;
   ChannelId next_id_ = 1;
   bool exclusive_ = false;

@@ -160,6 +160,7 @@ class Sja1000 final : public CanController {
   void update_error_status(SimTime at);
   void counters_written();
   uint8_t status() const;
+  uint8_t error_bits() const;  // SR.ES and SR.BS
   // Receive FIFO.
   std::size_t fifo_used() const { return fifo_used_; }
   bool fifo_push(const Frame& frame);

@@ -253,7 +253,9 @@ void Sja1000::write_transmit(const Frame& frame, uint8_t cmr) {
   if (bus_ != nullptr) {
     bus_->tx_changed(node_);
   }
-  command(static_cast<uint8_t>(cmr & ~(CMR_TR | CMR_SRR | CMR_AT)));  // RRB, CDO with it
+  if ((cmr & (CMR_RRB | CMR_CDO)) != 0) {
+    command(static_cast<uint8_t>(cmr & (CMR_RRB | CMR_CDO)));  // what comes with TR
+  }
 }
 
 void Sja1000::counters_written() {

@@ -34,7 +34,7 @@ void Sja1000Node::leave_bus_off(const HostedNodeSettings& settings) {
 
 bool Sja1000Node::buffer_free() {
   // In reset mode (stopped, or bus-off) the buffer's addresses are the acceptance registers.
-  return (chip_.read(MOD) & MOD_RM) == 0 && (chip_.read(SR) & SR_TBS) != 0;
+  return chip_.transmit_buffer_free();
 }
 
 void Sja1000Node::load(const TxFrame& tx) {
@@ -50,7 +50,7 @@ void Sja1000Node::abort_tx() {
 }
 
 void Sja1000Node::release_received() {
-  chip_.write(CMR, CMR_RRB);
+  chip_.release_receive_buffer();
 }
 
 }  // namespace canemu::model

@@ -123,6 +123,11 @@ class Sja1000 final : public CanController {
   // and then of `cmr` into CMR do, in one call: the same registers and request as those writes,
   // without reading the frame back out of the buffer's bytes.
   void write_transmit(const Frame& frame, uint8_t cmr);
+  // What a driver's read of MOD and SR tells of the transmit buffer (operating mode and TBS
+  // set), and what its write of CMR_RRB into CMR does, without the registers' decoding: the
+  // reads have no side effects, and the write is the command.
+  bool transmit_buffer_free() const { return (mod_ & sja1000::MOD_RM) == 0 && !tx_; }
+  void release_receive_buffer() { command(sja1000::CMR_RRB); }
 
   // The interrupt line: active while IR has a bit set. IR bits are only set for sources enabled
   // in IER; RI follows the FIFO (set while it holds a message and RIE is set). Called when the

@@ -116,7 +116,8 @@ std::optional<TxFrame> CanLine::next_tx() {
     if (!m) {
       return std::nullopt;
     }
-    staged_.emplace(Staged{{m->msg, m->channel}, std::move(m->converted), init_.op_mode, init_.ex_mode});
+    staged_.emplace(
+        Staged{{m->msg, m->channel}, std::move(m->converted), init_.op_mode, init_.ex_mode});
     staged_not_before_ = now;
     const uint32_t delay = std::min(staged_->msg.dwTime, clocks_.dtx_max_ticks);
     if (delay > 0 && loaded_once_) {

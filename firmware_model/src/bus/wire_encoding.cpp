@@ -365,37 +365,6 @@ void apply(const Probes& p, EncodedFrame& out) {
   }
 }
 
-// Bit `i` (0..127, from the top) of the two words `hi`, `lo`.
-inline uint64_t bit_of(uint64_t hi, uint64_t lo, uint32_t i) {
-  return i < 64 ? (hi >> (63 - i)) & 1u : (lo >> (127 - i)) & 1u;
-}
-
-// The first set bit at index `from` (0..127) or later of `hi`, `lo`; 128 if none.
-inline uint32_t next_set(uint64_t hi, uint64_t lo, uint32_t from) {
-  if (from < 64) {
-    const uint64_t m = hi & (~uint64_t{0} >> from);
-    if (m != 0) {
-      return static_cast<uint32_t>(__builtin_clzll(m));
-    }
-    return lo != 0 ? 64 + static_cast<uint32_t>(__builtin_clzll(lo)) : 128;
-  }
-  const uint64_t m = lo & (~uint64_t{0} >> (from - 64));
-  return m != 0 ? 64 + static_cast<uint32_t>(__builtin_clzll(m)) : 128;
-}
-
-constexpr uint64_t kTopBit = uint64_t{1} << 63;
-
-// The 64 bits from index `i` of `hi`, `lo`, the bits past 127 read as 0.
-inline uint64_t window_of(uint64_t hi, uint64_t lo, uint32_t i) {
-  if (i == 0) {
-    return hi;
-  }
-  if (i < 64) {
-    return (hi << i) | (lo >> (64 - i));
-  }
-  return i < 128 ? lo << (i - 64) : 0;
-}
-
 // A classic frame's destuffed bits SOF..data, first bit at bit 127: at most 39 + 64 bits. Field
 // order as build_header_and_data's (there are no FD bits here): standard SOF, ID, RTR, IDE, r0,
 // DLC; extended SOF, ID-28..18, SRR, IDE, ID-17..0, RTR, r1, r0, DLC. Returns their number.
@@ -419,64 +388,120 @@ uint32_t classic_header_and_data(const Frame& frame, uint128& x) {
   return 19 + 8 * length;
 }
 
-// Dynamic stuffing of a classic frame's destuffed bits (`n` of them in `x`, SOF..CRC, first
-// at bit 127, zeros after them) into `out.level` and `out.stuff`, up to the CRC delimiter;
-// returns the number of stuff bits.
-//
-// First the stuff bits' places. Where five equal destuffed bits in a row begin is found for the
-// whole frame at once (bit j equals bit j + 1 for four j in a row). A stuff bit, the complement
-// of the bit p before it, starts the next run: if the four bits after p are all its like, the
-// next stuff bit follows them (found at once too: bit p differs from bit p + 1, which the next
-// three equal); otherwise the next one ends the first run of five that begins after p. So this
-// work grows with the number of stuff bits, a few per frame, not with the number of bits.
-//
-// Then the wire, a word at a time (`words` of them, those the frame uses): the word's destuffed
-// bits, opened at each of its stuff bits' places (the bits from there on move one place on,
-// which leaves a copy of the bit before in the gap), and each gap's copy turned into its
-// complement. What the words hold past the last stuffed bit is zero.
-uint32_t stuff_classic(uint128 x, uint32_t n, EncodedFrame& out) {
+// Up to 192 wire bits in three words held in registers, first bit at the top of w0: a classic
+// frame (at most 118 destuffed bits, 29 stuff bits and 10 more).
+struct Wire3 {
+  uint64_t w0 = 0, w1 = 0, w2 = 0;
+
+  // Inserts `bit` at index `off` of `w`: the bits from there on move one place on; returns the
+  // bit that leaves the word.
+  static uint64_t insert(uint64_t& w, uint32_t off, uint64_t bit) {
+    const uint64_t out = w & 1u;
+    const uint64_t keep = ~(~uint64_t{0} >> off);  // the bits before index `off`
+    w = (w & keep) | (bit << (63 - off)) | ((w & ~keep) >> 1);
+    return out;
+  }
+  // Inserts `bit` at wire index `q`; the last bit of w2 drops (it is past any frame's end).
+  void insert(uint32_t q, uint64_t bit) {
+    if (q < 64) {
+      w2 = (w2 >> 1) | (insert(w1, 0, insert(w0, q, bit)) << 63);
+      return;
+    }
+    if (q < 128) {
+      const uint64_t carry = insert(w1, q - 64, bit);
+      w2 = (w2 >> 1) | (carry << 63);
+      return;
+    }
+    insert(w2, q - 128, bit);
+  }
+  void set(uint32_t q) {
+    const uint64_t b = uint64_t{1} << (63 - (q & 63));
+    if (q < 64) {
+      w0 |= b;
+    } else if (q < 128) {
+      w1 |= b;
+    } else {
+      w2 |= b;
+    }
+  }
+  // Sets the 10 bits from index `q` on.
+  void set10(uint32_t q) {
+    constexpr uint64_t kTen = ~(~uint64_t{0} >> 10);
+    const uint32_t off = q & 63;
+    const uint64_t first = kTen >> off;
+    const uint64_t second = off > 54 ? kTen << (64 - off) : 0;
+    if (q < 64) {
+      w0 |= first;
+      w1 |= second;
+    } else if (q < 128) {
+      w1 |= first;
+      w2 |= second;
+    } else {
+      w2 |= first;
+    }
+  }
+  // Stores the words that `length` bits use.
+  void store(EncodedFrame::Bits& out, uint32_t length) const {
+    out[0] = w0;
+    if (length > 64) {
+      out[1] = w1;
+    }
+    if (length > 128) {
+      out[2] = w2;
+    }
+  }
+};
+
+// Bit `i` (0..127, from the top) of the two words `hi`, `lo`.
+inline uint64_t bit_of(uint64_t hi, uint64_t lo, uint32_t i) {
+  return i < 64 ? (hi >> (63 - i)) & 1u : (lo >> (127 - i)) & 1u;
+}
+
+// The first set bit at index `from` (0..127) or later of `hi`, `lo`; 128 if none.
+inline uint32_t next_set(uint64_t hi, uint64_t lo, uint32_t from) {
+  if (from < 64) {
+    const uint64_t m = hi & (~uint64_t{0} >> from);
+    if (m != 0) {
+      return static_cast<uint32_t>(__builtin_clzll(m));
+    }
+    return lo != 0 ? 64 + static_cast<uint32_t>(__builtin_clzll(lo)) : 128;
+  }
+  const uint64_t m = lo & (~uint64_t{0} >> (from - 64));
+  return m != 0 ? 64 + static_cast<uint32_t>(__builtin_clzll(m)) : 128;
+}
+
+// Dynamic stuffing of a classic frame's `n` destuffed bits `x` (SOF..CRC, zeros after them)
+// into `wire` and `marks`; returns the number of stuff bits. Where five equal destuffed bits in a
+// row begin is found for the whole frame at once (bit j equals bit j + 1 for four j in a row). A
+// stuff bit, the complement of the bit p before it, starts the next run: if the four bits after p
+// are all its like, the next stuff bit follows them (found at once too: bit p differs from bit
+// p + 1, which the next three equal); otherwise the next one ends the first run of five that
+// begins after p. So the work grows with the number of stuff bits, a few per frame, not with the
+// number of bits.
+uint32_t stuff_classic(uint128 x, uint32_t n, Wire3& wire, Wire3& marks) {
   const uint128 eq = ~(x ^ (x << 1));  // bit 127 - j: bit j equals bit j + 1
   // Only what begins at j <= n - 5 lies inside the frame.
   const uint128 inside = ~uint128{0} << (128 - (n - 4));
   const uint128 four = (eq << 1) & (eq << 2) & (eq << 3) & inside;
   const uint128 runs = eq & four;    // bits j..j+4 equal
   const uint128 after = ~eq & four;  // bit j differs from bits j+1..j+4, which are equal
+  const auto xh = static_cast<uint64_t>(x >> 64);
+  const auto xl = static_cast<uint64_t>(x);
   const auto rh = static_cast<uint64_t>(runs >> 64);
   const auto rl = static_cast<uint64_t>(runs);
   const auto ah = static_cast<uint64_t>(after >> 64);
   const auto al = static_cast<uint64_t>(after);
-  std::array<uint64_t, 3> marks{};
+  wire.w0 = xh;
+  wire.w1 = xl;
+  wire.w2 = 0;
   uint32_t count = 0;
   uint32_t p = next_set(rh, rl, 0) + 4;  // the destuffed bit the next stuff bit follows
   while (p < 128) {
     const uint32_t q = p + 1 + count;  // the stuff bit's index on the wire
-    marks[q >> 6] |= kTopBit >> (q & 63);
+    wire.insert(q, bit_of(xh, xl, p) ^ 1u);
+    marks.set(q);
     ++count;
     p = bit_of(ah, al, p) != 0 ? p + 4 : next_set(rh, rl, p + 1) + 4;
-  }
-
-  const auto xh = static_cast<uint64_t>(x >> 64);
-  const auto xl = static_cast<uint64_t>(x);
-  // The words up to the end of frame: ten bits past the CRC sequence.
-  const uint32_t words = (n + count + 10 + 63) / 64;
-  uint32_t from = 0;  // the first destuffed bit of the word
-  uint64_t last = 0;  // the last bit of the word before, at the top
-  for (uint32_t w = 0; w < words; ++w) {
-    uint64_t v = window_of(xh, xl, from);
-    const uint64_t m = marks[w];
-    uint32_t opened = 0;
-    for (uint64_t rest = m; rest != 0; ++opened) {
-      const auto at = static_cast<uint32_t>(__builtin_clzll(rest));
-      const uint64_t on = ~uint64_t{0} >> at;  // the bits from the stuff bit's place on
-      v = (v & ~on) | ((v >> 1) & on);
-      rest &= ~(kTopBit >> at);
-    }
-    const uint64_t before = (v >> 1) | last;  // at each place, the bit before it
-    v = (v & ~m) | (~before & m);
-    out.level[w] = v;
-    out.stuff[w] = m;
-    last = v << 63;
-    from += 64 - opened;
   }
   return count;
 }
@@ -488,16 +513,18 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
   const uint32_t crc = Crc15Wide::over(x, head);
   x |= uint128{crc} << (113 - head);
   const uint32_t n = head + 15;
-  const uint32_t stuffed = n + stuff_classic(x, n, out);
+
+  Wire3 wire;
+  Wire3 marks;
+  const uint32_t stuffed = n + stuff_classic(x, n, wire, marks);
   // CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits.
   out.crc_delimiter_index = static_cast<uint16_t>(stuffed);
-  constexpr uint64_t kTen = ~(~uint64_t{0} >> 10);
-  const uint32_t off = stuffed & 63;
-  out.level[stuffed >> 6] |= kTen >> off;
-  if (off > 54) {
-    out.level[(stuffed >> 6) + 1] |= kTen << (64 - off);
-  }
-  out.length = static_cast<uint16_t>(stuffed + 3 + kEofBits);
+  wire.set10(stuffed);
+  const uint32_t length = stuffed + 3 + kEofBits;
+  // The words the frame uses (bits past its end zero), as a word-at-a-time writer leaves them.
+  wire.store(out.level, length);
+  marks.store(out.stuff, length);
+  out.length = static_cast<uint16_t>(length);
   out.dynamic_stuff_bits = static_cast<uint16_t>(stuffed - n);
   out.crc = crc;
   out.crc_bits = 15;

@@ -87,7 +87,7 @@ std::optional<TxFrame> CanLine::load(const Loaded& l, std::optional<TxFrame>& fr
   loaded_.push_back(l);
   last_load_ = scheduler_.now();
   loaded_once_ = true;
-  return std::move(frame);
+  return frame;
 }
 
 std::optional<TxFrame> CanLine::next_tx() {
@@ -116,8 +116,7 @@ std::optional<TxFrame> CanLine::next_tx() {
     if (!m) {
       return std::nullopt;
     }
-    staged_.emplace(
-        Staged{{m->msg, m->channel}, std::move(m->converted), init_.op_mode, init_.ex_mode});
+    staged_.emplace(Staged{{m->msg, m->channel}, m->converted, init_.op_mode, init_.ex_mode});
     staged_not_before_ = now;
     const uint32_t delay = std::min(staged_->msg.dwTime, clocks_.dtx_max_ticks);
     if (delay > 0 && loaded_once_) {

@@ -172,7 +172,7 @@ auto Distributor::take_converted(Convert&& convert)
       }
       urgent = m->uMsgInfo.Bits.hpm != 0;
       if (!first || urgent) {
-        first.emplace(*m, c.id, std::move(*t));
+        first.emplace(Taken<T>{*m, c.id, std::move(*t)});
         first_index = i;
       }
       break;

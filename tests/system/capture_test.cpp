@@ -243,9 +243,9 @@ TEST(CliCapture, RecordOnALinBusWritesLinktypeLin) {
   Daemon d;
   const fs::path file = dir.path / "lin0.rec";
   std::optional<Cli> record;
-  ASSERT_NO_FATAL_FAILURE(start_listening(
+  ASSERT_NO_FATAL_FAILURE(start_listening_lin(
       record, d,
-      {"record", "lin0", "-o", file.string(), "-n", "4"}));  // the recorder's adapter is there
+      {"record", "lin0", "-o", file.string(), "-n", "4"}));  // the recorder's line is started
   Cli send(d, {"send", "lin0", "33#AABB", "20#", "sleep", "wakeup", "--step", "30ms"});
   EXPECT_EQ(send.wait(), 1) << Cli::read_all(send.err);  // 20# ends in an error
   EXPECT_EQ(record->wait(), 0);

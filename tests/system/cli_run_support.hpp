@@ -2,6 +2,7 @@
 // started to listen (dump, record) so that nothing sent after it is missed.
 #pragma once
 
+#include <chrono>
 #include <initializer_list>
 #include <optional>
 #include <string>
@@ -10,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "canemu/client/lists.hpp"
+#include "canemu/ipc/protocol.hpp"
 #include "cli_process.hpp"
 #include "daemon_process.hpp"
 
@@ -46,6 +49,34 @@ inline void start_listening(std::optional<Cli>& cli, const testing::Daemon& d,
   ASSERT_TRUE(watcher.subscribe(ipc::kEventDevices));
   cli.emplace(d, std::move(args));
   ASSERT_TRUE(watcher.next_notification(10'000)) << "canemu opened no node within 10 s";
+}
+
+// The same for canemu on a LIN bus (dump, record), which opens its device, then its monitor,
+// then starts the line, each a request of its own, canemud announcing the device at the first:
+// it also waits (10 s at most) until the status shows the LIN node of canemu's device online.
+inline void start_listening_lin(std::optional<Cli>& cli, const testing::Daemon& d,
+                                std::vector<std::string> args) {
+  ASSERT_NO_FATAL_FAILURE(start_listening(cli, d, std::move(args)));
+  auto c = testing::connect(d, "lin-watcher");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (std::chrono::steady_clock::now() < deadline) {
+    const auto devices = client::fetch_device_list(c);
+    const auto status = client::fetch_status(c);
+    ASSERT_TRUE(devices && status);
+    for (const ipc::DeviceEntry& device : devices->devices) {
+      if (device.owner_pid != static_cast<uint32_t>(cli->pid)) {
+        continue;
+      }
+      const std::string prefix = ipc::name_of(device.name) + ":";
+      for (const ipc::StatusNode& node : status->nodes) {
+        if (ipc::name_of(node.name).rfind(prefix, 0) == 0 &&
+            node.lin == static_cast<uint8_t>(ipc::WireLinState::online)) {
+          return;
+        }
+      }
+    }
+  }
+  FAIL() << "canemu's LIN node was not online within 10 s";
 }
 
 }  // namespace canemu

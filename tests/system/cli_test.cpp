@@ -64,7 +64,7 @@ TEST(CliLin, SendAndDumpOnALinBus) {
   Daemon d;
   std::optional<Cli> dump;
   ASSERT_NO_FATAL_FAILURE(
-      start_listening(dump, d, {"dump", "lin0", "-n", "4"}));  // the dump's adapter is there
+      start_listening_lin(dump, d, {"dump", "lin0", "-n", "4"}));  // the dump's line is started
   // 34 + 30 bits from 0; the header from 4 ms, no response 160 bits after it; the
   // go-to-sleep command from 13 ms, 124 bits (at 19200 bit/s). send exits 1: a frame ended in an
   // error.

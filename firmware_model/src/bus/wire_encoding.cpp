@@ -4,14 +4,15 @@
 #include <bit>
 #include <cstring>
 
+#include "wire_crc.hpp"
+
 namespace canemu::model {
 
 namespace {
 
-// CRC generator polynomials without their top bit (ISO 11898-1:2015, 10.4.2.6).
-constexpr uint32_t kCrc15Poly = 0x4599;
-constexpr uint32_t kCrc17Poly = 0x1685B;
-constexpr uint32_t kCrc21Poly = 0x102899;
+using detail::Crc15Wide;
+using detail::Crc17;
+using detail::Crc21;
 
 uint64_t to_big_endian(uint64_t v) {
   if constexpr (std::endian::native == std::endian::little) {
@@ -102,126 +103,30 @@ struct BitString {
   }
 };
 
-// Table-driven CRC over a bit string (MSB first), 16 bits per step. The register after 16
-// input bits is linear in (register, input): it equals feeding (top 16 register bits ^ input)
-// into a cleared register, plus the register shifted left by 16 when it is wider than 16 bits.
-// That 16-bit feed splits into two 256-entry tables, looked up in parallel.
-template <uint32_t Width, uint32_t Poly>
-struct Crc {
-  static constexpr uint32_t kMask = (1u << Width) - 1;
-
-  static constexpr uint32_t step_bit(uint32_t crc, bool bit) {
-    const uint32_t feedback = (bit ^ ((crc >> (Width - 1)) & 1u)) ? Poly : 0u;
-    return ((crc << 1) & kMask) ^ feedback;
-  }
-  static constexpr uint32_t feed16(uint32_t v) {
-    uint32_t crc = 0;
-    for (int i = 15; i >= 0; --i) {
-      crc = step_bit(crc, (v >> i) & 1u);
-    }
-    return crc;
-  }
-  static constexpr std::array<uint32_t, 256> make_table(uint32_t shift) {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t i = 0; i < 256; ++i) {
-      t[i] = feed16(i << shift);
-    }
-    return t;
-  }
-  static constexpr std::array<uint32_t, 256> kHigh = make_table(8);
-  static constexpr std::array<uint32_t, 256> kLow = make_table(0);
-
-  template <class Bits>
-  static uint32_t over(const Bits& s, uint32_t bits, uint32_t crc) {
-    uint32_t i = 0;
-    for (; i + 16 <= bits; i += 16) {
-      const uint32_t input = (s.byte_at(i) << 8) | s.byte_at(i + 8);
-      const uint32_t top = Width >= 16 ? crc >> (Width - 16) : crc << (16 - Width);
-      const uint32_t idx = (top ^ input) & 0xFFFF;
-      const uint32_t rest = Width > 16 ? (crc << 16) & kMask : 0u;
-      crc = rest ^ kHigh[idx >> 8] ^ kLow[idx & 0xFF];
-    }
-    for (; i < bits; ++i) {
-      crc = step_bit(crc, s.bit(i));
-    }
-    return crc;
-  }
-};
-
-using Crc15 = Crc<15, kCrc15Poly>;
-
-// CRC-15 of a classic frame, 64 bits a step. From a cleared register leading zeros change
-// nothing, so the destuffed bits (at most 103) are read as two words padded in front; and 64 bits
-// into the register are the register's 15 bits XORed onto the first 15 of them, then fed into a
-// cleared register, which is linear in the 64 bits: eight byte tables, looked up in parallel.
-using Crc15Tables = std::array<std::array<uint16_t, 256>, 8>;
-constexpr Crc15Tables make_crc15_tables() {
-  Crc15Tables t{};
-  for (uint32_t k = 0; k < 8; ++k) {
-    for (uint32_t b = 0; b < 256; ++b) {
-      uint32_t crc = 0;
-      for (uint32_t i = 0; i < 64; ++i) {
-        // Bit i of the word (first = most significant) is bit 7 - (i - 8k) of byte k.
-        const bool bit = i >= 8 * k && i < 8 * k + 8 && ((b >> (7 - (i - 8 * k))) & 1u) != 0;
-        crc = Crc15::step_bit(crc, bit);
-      }
-      t[k][b] = static_cast<uint16_t>(crc);
-    }
-  }
-  return t;
-}
-
-struct Crc15Wide {
-  static constexpr Crc15Tables kTables = make_crc15_tables();
-
-  // 64 bits, first at the top, into the register `crc`.
-  static uint32_t feed64(uint32_t crc, uint64_t v) {
-    v ^= uint64_t{crc} << 49;
-    return uint32_t{kTables[0][v >> 56]} ^ kTables[1][(v >> 48) & 0xFF] ^
-           kTables[2][(v >> 40) & 0xFF] ^ kTables[3][(v >> 32) & 0xFF] ^
-           kTables[4][(v >> 24) & 0xFF] ^ kTables[5][(v >> 16) & 0xFF] ^
-           kTables[6][(v >> 8) & 0xFF] ^ kTables[7][v & 0xFF];
-  }
-  // Over the first `bits` (at most 128) of `x`, first bit at bit 127, from a cleared register.
-  static uint32_t over(uint128 x, uint32_t bits) {
-    const uint128 v = x >> (128 - bits);
-    return feed64(feed64(0, static_cast<uint64_t>(v >> 64)), static_cast<uint64_t>(v));
-  }
-};
-using Crc17 = Crc<17, kCrc17Poly>;
-using Crc21 = Crc<21, kCrc21Poly>;
-
-// Builds SOF..data, destuffed (field positions: EncodedFrame::fields()).
-template <class Bits>
-void build_header_and_data(const Frame& frame, Bits& d) {
-  const bool fd = frame.fd();
-  const uint32_t rtr = frame.remote() ? 1u : 0u;  // RRS of CAN FD is always dominant
+// A CAN FD frame's SOF..data, destuffed (field positions: EncodedFrame::fields()). Classic
+// frames are put together in registers: classic_header_and_data.
+void fd_header_and_data(const Frame& frame, BitString& d) {
+  // RRS is always dominant: CAN FD has no remote frames.
   if (frame.extended()) {
-    // SOF, base ID, SRR, IDE, extended ID, RTR/RRS, FDF (r1), r0/res
+    // SOF, base ID, SRR, IDE, extended ID, RRS, FDF, res
     d.append((uint64_t{frame.id() >> 18} << 2) | 0x3u, 14);  // SOF (0), ID-28..18, SRR, IDE
-    d.append((uint64_t{frame.id() & 0x3FFFF} << 3) | (rtr << 2) | (fd ? 0x2u : 0x0u), 21);
+    d.append((uint64_t{frame.id() & 0x3FFFF} << 3) | 0x2u, 21);
   } else {
-    // SOF, ID, RTR/RRS, IDE, FDF (r0), [res]
-    d.append((uint64_t{frame.id()} << 3) | (rtr << 2) | (fd ? 0x1u : 0x0u), 15);
-    if (fd) {
-      d.append(0, 1);
-    }
+    // SOF, ID, RRS, IDE, FDF, res
+    d.append((uint64_t{frame.id()} << 3) | 0x1u, 15);
+    d.append(0, 1);
   }
-  if (fd) {
-    d.append((frame.brs() ? 2u : 0u) | (frame.esi() ? 1u : 0u), 2);
-  }
+  d.append((frame.brs() ? 2u : 0u) | (frame.esi() ? 1u : 0u), 2);
   d.append(frame.dlc(), 4);
   const auto data = frame.data();
-  if (!data.empty()) {
-    std::size_t i = 0;
-    for (; i + 8 <= data.size(); i += 8) {
-      uint64_t v;
-      std::memcpy(&v, data.data() + i, 8);
-      d.append(to_big_endian(v), 64);
-    }
-    for (; i < data.size(); ++i) {
-      d.append(data[i], 8);
-    }
+  std::size_t i = 0;
+  for (; i + 8 <= data.size(); i += 8) {
+    uint64_t v;
+    std::memcpy(&v, data.data() + i, 8);
+    d.append(to_big_endian(v), 64);
+  }
+  for (; i < data.size(); ++i) {
+    d.append(data[i], 8);
   }
 }
 
@@ -347,7 +252,7 @@ void finish(BitString& s, BitString& m, EncodedFrame& out) {
 }
 
 // The destuffed positions of the bits the bus engine needs on every frame: the end of the
-// arbitration field and BRS. Field order (build_header_and_data): standard SOF, ID, RTR/RRS,
+// arbitration field and BRS. Field order (fd_header_and_data): standard SOF, ID, RTR/RRS,
 // IDE, FDF, [res, BRS]; extended SOF, ID, SRR, IDE, ID-ext, RTR/RRS, FDF, res, [BRS].
 Probes probes_for(const EncodedFrame& out) {
   Probes p;
@@ -366,7 +271,7 @@ void apply(const Probes& p, EncodedFrame& out) {
 }
 
 // A classic frame's destuffed bits SOF..data, first bit at bit 127: at most 39 + 64 bits. Field
-// order as build_header_and_data's (there are no FD bits here): standard SOF, ID, RTR, IDE, r0,
+// order as fd_header_and_data's, without the FD bits: standard SOF, ID, RTR, IDE, r0,
 // DLC; extended SOF, ID-28..18, SRR, IDE, ID-17..0, RTR, r1, r0, DLC. Returns their number.
 uint32_t classic_header_and_data(const Frame& frame, uint128& x) {
   const uint64_t rtr = frame.remote() ? 1u : 0u;
@@ -544,7 +449,7 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
 
 void encode_fd(const Frame& frame, EncodedFrame& out) {
   BitString d;
-  build_header_and_data(frame, d);
+  fd_header_and_data(frame, d);
   BitString s;
   BitString m;
   Probes probes = probes_for(out);

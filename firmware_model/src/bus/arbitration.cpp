@@ -68,6 +68,7 @@ bool Arbitration::resolve_in_first_word(std::span<const Contender> contenders) {
 void Arbitration::resolve(std::span<const Contender> contenders) {
   senders_.clear();
   lost_.clear();
+  lost_.fit(contenders.size());
   collisions_.clear();
   // Nearly always the identifiers decide within the first 64 bits of the frames.
   if (resolve_in_first_word(contenders)) {

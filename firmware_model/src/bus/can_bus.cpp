@@ -38,6 +38,8 @@ NodeId CanBus::attach(CanController& controller) {
   n.last_state = n.fc->state();
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
+  contenders_.fit(node_count_);
+  completion_.losses.fit(node_count_);
   decodes_cache_.clear();
   members_changed();
   const NodeId id = static_cast<NodeId>(node_count_ - 1);
@@ -252,7 +254,7 @@ void CanBus::attempt(SimTime now) {
   if (injector_ != nullptr) {
     injector_->before_arbitration(now, *this);
   }
-  std::vector<Arbitration::Contender>& contenders = contenders_;
+  NodeList<Arbitration::Contender>& contenders = contenders_;
   contenders.clear();
   std::optional<SimTime> next_ready;
   for (const Member& m : members()) {
@@ -282,10 +284,15 @@ void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
-  arbitration_.resolve(contenders_);
+  arbitration_.resolve(contenders_.span());
   const std::vector<NodeId>& active = arbitration_.senders();
   const NodeId tx = active.front();
-  in_flight_.assign(active.begin(), active.end());
+  if (active.size() == 1) {
+    in_flight_.clear();  // one sender nearly always: no copy of a range
+    in_flight_.push_back(tx);
+  } else {
+    in_flight_.assign(active.begin(), active.end());
+  }
   const TxFrame& tx_frame = *pending(nodes_[tx]);
   const EncodedFrame& e = encoded_tx(tx);
   const Node& tx_node = refresh_timing(tx);
@@ -301,11 +308,13 @@ void CanBus::run_frame(SimTime sof) {
            with_ppm(frame_prefix_duration(e, nominal, data, bit + 1), tx_timing.oscillator_ppm);
   };
 
+  // A loser contended: its pending frame and encoding are known (attempt()).
   completion_.losses.clear();
-  for (const auto& [id, bit] : arbitration_.lost()) {
-    Node& n = nodes_[id];
-    completion_.losses.push_back(Completion::Loss{id, bit, encoded_tx(id).destuffed_index(bit),
-                                                  bit_end(bit), pending(n)->single_shot});
+  for (const Arbitration::AtBit& lost : arbitration_.lost()) {
+    Node& n = nodes_[lost.node];
+    completion_.losses.push_back(Completion::Loss{lost.node, lost.bit,
+                                                  n.encoded.destuffed_index(lost.bit),
+                                                  bit_end(lost.bit), n.tx->single_shot});
     n.stats.arbitration_lost++;
   }
 
@@ -318,7 +327,9 @@ void CanBus::run_frame(SimTime sof) {
   const bool acks_suppressed = sof < ack_suppressed_until_;
   std::optional<uint16_t> first_bit;
   if (alone && !fault.error && !fault.suppress_ack && !acks_suppressed) {
-    first_bit = plain_roles(tx, e, tx_frame.frame.fd(), tx_frame.frame.brs());
+    const bool fd = tx_frame.frame.fd();
+    const bool brs = tx_frame.frame.brs();
+    first_bit = plain_roles_kept(tx, fd, brs) ? std::nullopt : plain_roles(tx, e, fd, brs);
   } else {
     first_bit = general_roles(tx, e, fault, acks_suppressed);
   }
@@ -379,15 +390,6 @@ std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
 
 std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bool fd, bool brs) {
   const std::vector<Member>& ms = members();
-  if (plain_valid_ && plain_tx_ == tx && plain_fd_ == fd && plain_brs_ == brs) {
-    bool same = true;
-    for (std::size_t k = 0; k < ms.size(); ++k) {
-      same = same && plain_state(*ms[k].node->fc) == plain_states_[k];
-    }
-    if (same) {
-      return std::nullopt;  // parts_ as they are
-    }
-  }
   plain_valid_ = false;
   std::vector<BusParticipant>& parts = parts_;
   parts.clear();
@@ -434,9 +436,9 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   }
   if (first == UINT16_MAX) {
     // Nothing here depends on the frame beyond its sender, fd and brs: kept for the next one.
-    plain_states_.resize(ms.size());
-    for (std::size_t k = 0; k < ms.size(); ++k) {
-      plain_states_[k] = plain_state(*ms[k].node->fc);
+    plain_checks_.clear();
+    for (const Member& m : ms) {
+      plain_checks_.push_back(PlainCheck{m.node->fc, plain_state(*m.node->fc)});
     }
     plain_valid_ = true;
     plain_tx_ = tx;

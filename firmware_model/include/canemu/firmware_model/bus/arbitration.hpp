@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "canemu/firmware_model/bus/can_controller.hpp"
+#include "canemu/firmware_model/bus/node_list.hpp"
 
 namespace canemu::model {
 
@@ -38,7 +39,7 @@ class Arbitration {
   NodeId winner() const { return senders_.front(); }
   const EncodedFrame& winning_bits() const { return *winning_bits_; }
   // Contenders that lost arbitration, with the bit at which they did, in contender order.
-  const std::vector<AtBit>& lost() const { return lost_; }
+  std::span<const AtBit> lost() const { return lost_.span(); }
   // Senders whose frame departs from the winner's after the arbitration field, at that bit.
   const std::vector<AtBit>& collisions() const { return collisions_; }
   // The bit at which `node`'s frame collides with the winner's, if it does.
@@ -67,7 +68,7 @@ class Arbitration {
 
   std::vector<NodeId> senders_;
   const EncodedFrame* winning_bits_ = nullptr;
-  std::vector<AtBit> lost_;
+  NodeList<AtBit> lost_;
   std::vector<AtBit> collisions_;
   std::vector<uint16_t> split_;  // scratch: where each contender departs from the winner
 };

@@ -29,6 +29,7 @@
 #include "canemu/firmware_model/bus/can_controller.hpp"
 #include "canemu/firmware_model/bus/error_phase.hpp"
 #include "canemu/firmware_model/bus/frame_roles.hpp"
+#include "canemu/firmware_model/bus/node_list.hpp"
 #include "canemu/firmware_model/sim/sim_scheduler.hpp"
 
 namespace canemu::model {
@@ -243,7 +244,7 @@ class CanBus final : private EventHandler {
       SimTime at;
       bool single_shot;  // as requested when the frame started
     };
-    std::vector<Loss> losses;
+    NodeList<Loss> losses;
   };
 
   // A node that may be on the bus (connected, participating, with a usable bit time) and what a
@@ -274,6 +275,19 @@ class CanBus final : private EventHandler {
   // run_frame's roles for a frame with one sender, no injected fault and acknowledgements
   // allowed (nearly every frame): what FrameRoles gives, built directly from the members.
   std::optional<uint16_t> plain_roles(NodeId tx, const EncodedFrame& e, bool fd, bool brs);
+  // Whether parts_ holds plain_roles()'s result for a frame of `tx` with this fd and brs, every
+  // member still as bus-off and error-passive as then: checked inline on every frame.
+  bool plain_roles_kept(NodeId tx, bool fd, bool brs) const {
+    if (!plain_valid_ || plain_tx_ != tx || plain_fd_ != fd || plain_brs_ != brs) {
+      return false;
+    }
+    for (const PlainCheck& c : plain_checks_) {
+      if (plain_state(*c.fc) != c.state) {
+        return false;
+      }
+    }
+    return true;
+  }
   // The same for any frame, through FrameRoles: `fault` injected, acknowledgements suppressed,
   // several senders. Both fill parts_ and return the first detection, if any.
   std::optional<uint16_t> general_roles(NodeId tx, const EncodedFrame& e, const FrameFault& fault,
@@ -383,7 +397,7 @@ class CanBus final : private EventHandler {
   std::vector<DominantHold> holds_;  // pending dominant holds
 
   // Scratch space reused from frame to frame, and the frame in flight.
-  std::vector<Arbitration::Contender> contenders_;
+  NodeList<Arbitration::Contender> contenders_;
   Arbitration arbitration_;
   std::vector<BusParticipant> parts_;
   Completion completion_;
@@ -397,7 +411,11 @@ class CanBus final : private EventHandler {
   NodeId plain_tx_ = 0;
   bool plain_fd_ = false;
   bool plain_brs_ = false;
-  std::vector<uint8_t> plain_states_;  // per member, as plain_state() gives it
+  struct PlainCheck {
+    const FaultConfinement* fc;
+    uint8_t state;  // as plain_state() gave it
+  };
+  std::vector<PlainCheck> plain_checks_;  // per member
   static uint8_t plain_state(const FaultConfinement& fc) {
     return static_cast<uint8_t>((fc.bus_off() ? 2u : 0u) | (fc.error_passive() ? 1u : 0u));
   }

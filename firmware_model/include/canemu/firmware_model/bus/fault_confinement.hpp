@@ -13,6 +13,8 @@
 namespace canemu::model {
 
 inline constexpr uint16_t kErrorPassiveLimit = 128;
+static_assert((kErrorPassiveLimit & (kErrorPassiveLimit - 1)) == 0,
+              "error_passive() tests both counters at once: the limit must be a power of two");
 inline constexpr uint16_t kBusOffLimit = 256;
 inline constexpr uint8_t kDefaultWarningLimit = 96;
 inline constexpr uint32_t kBusOffRecoverySequences = 128;  // of 11 consecutive recessive bits
@@ -31,7 +33,8 @@ class FaultConfinement {
   uint16_t rec_limit() const { return rec_limit_; }
   bool bus_off() const { return bus_off_; }
   bool error_passive() const {
-    return !bus_off_ && (tec_ >= kErrorPassiveLimit || rec_ >= kErrorPassiveLimit);
+    // Either counter at 128 or above: their bits from 7 up, taken together (one test, not two).
+    return !bus_off_ && (tec_ | rec_) >= kErrorPassiveLimit;
   }
   ErrorState state() const;
 

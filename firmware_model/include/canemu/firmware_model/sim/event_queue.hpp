@@ -32,18 +32,24 @@ class EventQueue {
 
   EventId push(SimTime time, Payload payload) {
     const EventId id = next_id_++;
-    heap_.push_back(Entry{time, id, std::move(payload), false});
-    sift_up(heap_.size() - 1);
-    ++live_;
+    if (count_ == room_.size()) {
+      grow();
+    }
+    room_[count_] = Entry{time, id, std::move(payload), false};
+    ++count_;
+    if (count_ > 1) {
+      sift_up(count_ - 1);  // out of line: a lone entry (a bus's next event) needs none
+    }
     return id;
   }
 
   // Returns false if the event already ran, was cancelled, or never existed.
   bool cancel(EventId id) {
-    for (Entry& e : heap_) {
+    for (std::size_t k = 0; k < count_; ++k) {
+      Entry& e = room_[k];
       if (e.id == id && !e.cancelled) {
         e.cancelled = true;
-        --live_;
+        ++cancelled_;
         return true;
       }
     }
@@ -52,7 +58,8 @@ class EventQueue {
 
   // The payload of a pending event, or nullptr.
   const Payload* find(EventId id) const {
-    for (const Entry& e : heap_) {
+    for (std::size_t k = 0; k < count_; ++k) {
+      const Entry& e = room_[k];
       if (e.id == id && !e.cancelled) {
         return &e.payload;
       }
@@ -60,26 +67,25 @@ class EventQueue {
     return nullptr;
   }
 
-  bool empty() const { return live_ == 0; }
-  std::size_t size() const { return live_; }
+  bool empty() const { return size() == 0; }
+  std::size_t size() const { return count_ - cancelled_; }
 
   std::optional<SimTime> next_time() {
     drop_cancelled();
-    if (heap_.empty()) {
+    if (count_ == 0) {
       return std::nullopt;
     }
-    return heap_.front().time;
+    return room_[0].time;
   }
 
   // Removes and returns the earliest event, if any.
   std::optional<Entry> pop() {
     drop_cancelled();
-    if (heap_.empty()) {
+    if (count_ == 0) {
       return std::nullopt;
     }
-    std::optional<Entry> e(std::move(heap_.front()));
+    std::optional<Entry> e(std::move(room_[0]));
     remove_top();
-    --live_;
     return e;
   }
 
@@ -88,20 +94,21 @@ class EventQueue {
   // usually written just before, and a wide copy of it would wait for those stores.)
   bool pop_due(SimTime limit, SimTime& time, Payload& payload) {
     drop_cancelled();
-    if (heap_.empty() || heap_.front().time > limit) {
+    if (count_ == 0 || room_[0].time > limit) {
       return false;
     }
-    time = heap_.front().time;
-    payload = std::move(heap_.front().payload);
+    time = room_[0].time;
+    payload = std::move(room_[0].payload);
     remove_top();
-    --live_;
     return true;
   }
 
  private:
-  // A binary heap by hand: the few pending events of an island cost a compare or two per push
-  // and pop, without the generic algorithms' set-up. (time, id) is a total order, so the order
-  // events come out in does not depend on how the heap is arranged.
+  // A binary heap by hand over room_[0, count_): the few pending events of an island cost a
+  // compare or two per push and pop, without the generic algorithms' set-up. (time, id) is a
+  // total order, so the order events come out in does not depend on how the heap is arranged.
+  // The room is grown by hand (entries past count_ are left as they are), so that a push or
+  // pop of the common lone entry is a few stores, not a std::vector's growth path.
   static bool later(const Entry& a, const Entry& b) {
     if (a.time != b.time) {
       return a.time > b.time;
@@ -109,48 +116,61 @@ class EventQueue {
     return a.id > b.id;
   }
 
-  void sift_up(std::size_t i) {
+  [[gnu::noinline]] void grow() { room_.resize(room_.empty() ? 16 : 2 * room_.size()); }
+
+  [[gnu::noinline]] void sift_up(std::size_t i) {
     while (i > 0) {
       const std::size_t parent = (i - 1) / 2;
-      if (!later(heap_[parent], heap_[i])) {
+      if (!later(room_[parent], room_[i])) {
         return;
       }
-      std::swap(heap_[parent], heap_[i]);
+      std::swap(room_[parent], room_[i]);
       i = parent;
     }
   }
 
-  // Replaces the top by the last entry and restores the heap.
+  // Removes the top entry and restores the heap.
   void remove_top() {
-    const std::size_t n = heap_.size() - 1;
-    if (n > 0) {
-      heap_.front() = std::move(heap_.back());
+    if (count_ == 1) {
+      count_ = 0;  // the last one: nothing to restore
+      return;
     }
-    heap_.pop_back();
+    replace_top_by_last();
+  }
+  // Replaces the top by the last entry (there are at least two) and restores the heap.
+  [[gnu::noinline]] void replace_top_by_last() {
+    const std::size_t n = --count_;
+    room_[0] = std::move(room_[n]);
     std::size_t i = 0;
     while (true) {
       const std::size_t l = 2 * i + 1;
       if (l >= n) {
         return;
       }
-      const std::size_t c = l + 1 < n && later(heap_[l], heap_[l + 1]) ? l + 1 : l;
-      if (!later(heap_[i], heap_[c])) {
+      const std::size_t c = l + 1 < n && later(room_[l], room_[l + 1]) ? l + 1 : l;
+      if (!later(room_[i], room_[c])) {
         return;
       }
-      std::swap(heap_[i], heap_[c]);
+      std::swap(room_[i], room_[c]);
       i = c;
     }
   }
 
+  // Cancelled entries are counted, so that a queue without any (nearly always) skips the look.
   void drop_cancelled() {
-    while (!heap_.empty() && heap_.front().cancelled) {
+    if (cancelled_ == 0) {
+      return;
+    }
+    while (count_ != 0 && room_[0].cancelled) {
       remove_top();
+      --cancelled_;
     }
   }
 
-  std::vector<Entry> heap_;
+  std::vector<Entry> room_;
+  std::size_t count_ = 0;  // entries in the heap: room_[0, count_)
   EventId next_id_ = 1;
-  std::size_t live_ = 0;
+  std::size_t cancelled_ = 0;  // entries marked cancelled, still in the heap
 };
 
 }  // namespace canemu::model

@@ -116,18 +116,16 @@ bool CanBus::decodes_slow(NodeId tx, NodeId rx, bool brs) {
   return c == 1;
 }
 
-const CanBus::Node& CanBus::refresh_timing(NodeId id) {
+const CanBus::Node& CanBus::load_timing(NodeId id) {
   Node& n = nodes_[id];
-  if (!n.timing_known) {
-    n.timing = timing_of(n);
-    n.profile = timing_profile(n.timing);
-    const BitTiming& t = n.timing.nominal;
-    const uint128 ps = uint128{t.prescaler} * t.quanta_per_bit() * 1'000'000'000u;
-    n.bit_ns = n.timing.oscillator_ppm == 0 && t.clock_hz != 0 && ps % t.clock_hz == 0
-                   ? static_cast<int64_t>(ps / t.clock_hz)
-                   : 0;
-    n.timing_known = true;
-  }
+  n.timing = timing_of(n);
+  n.profile = timing_profile(n.timing);
+  const BitTiming& t = n.timing.nominal;
+  const uint128 ps = uint128{t.prescaler} * t.quanta_per_bit() * 1'000'000'000u;
+  n.bit_ns = n.timing.oscillator_ppm == 0 && t.clock_hz != 0 && ps % t.clock_hz == 0
+                 ? static_cast<int64_t>(ps / t.clock_hz)
+                 : 0;
+  n.timing_known = true;
   return n;
 }
 

@@ -294,7 +294,11 @@ class CanBus final : private EventHandler {
                                         bool acks_suppressed);
 
   NodeTiming timing_of(const Node& n) const;
-  const Node& refresh_timing(NodeId id);
+  const Node& refresh_timing(NodeId id) {
+    const Node& n = nodes_[id];
+    return n.timing_known ? n : load_timing(id);
+  }
+  const Node& load_timing(NodeId id);
   // Cached controller state, loaded on first use after a change (fast paths inline).
   Node& refresh(NodeId id) {
     Node& n = nodes_[id];

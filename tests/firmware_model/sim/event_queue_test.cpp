@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -65,6 +68,74 @@ TEST(EventQueue, CancellingTheEarliestExposesTheNext) {
   q.push(SimTime::from_ns(9), 2);
   q.cancel(first);
   EXPECT_EQ(q.next_time(), SimTime::from_ns(9));
+}
+
+TEST(EventQueue, ATakenEventIsGoneForEveryOtherCall) {
+  EventQueue<int> q;
+  const EventId a = q.push(SimTime::from_ns(1), 1);
+  q.push(SimTime::from_ns(2), 2);
+  q.push(SimTime::from_ns(3), 3);
+  SimTime at;
+  int payload = 0;
+  EXPECT_FALSE(q.take_due(SimTime::from_ns(0), at, payload));
+  ASSERT_TRUE(q.take_due(SimTime::from_ns(10), at, payload));
+  EXPECT_EQ(at, SimTime::from_ns(1));
+  EXPECT_EQ(payload, 1);
+  EXPECT_EQ(q.size(), 2u);
+  EXPECT_EQ(q.find(a), nullptr);
+  EXPECT_FALSE(q.cancel(a));
+  EXPECT_EQ(q.next_time(), SimTime::from_ns(2));
+  EXPECT_EQ(q.pop()->payload, 2);
+  EXPECT_EQ(q.pop()->payload, 3);
+  EXPECT_TRUE(q.empty());
+}
+
+// Events taken one by one, each followed by a push (which takes the taken entry's place) at the
+// same instant, soon, after everything or in between, and now and then a pending event
+// cancelled: they come out as from a sorted list of (time, order pushed).
+TEST(EventQueue, PushesAfterATakeKeepTheOrderOfASortedList) {
+  EventQueue<int> q;
+  std::set<std::pair<int64_t, int>> model;  // (time, push number)
+  std::map<int, EventId> ids;               // push number -> the queue's id
+  int pushed = 0;
+  auto push = [&](int64_t t) {
+    ids[pushed] = q.push(SimTime::from_ns(t), pushed);
+    model.insert({t, pushed});
+    ++pushed;
+  };
+  std::mt19937 rng(41);
+  for (int i = 0; i < 130; ++i) {
+    push(static_cast<int64_t>(rng() % 1000));
+  }
+  for (int step = 0; step < 5000; ++step) {
+    SimTime at;
+    int payload = -1;
+    ASSERT_TRUE(q.take_due(SimTime::from_ns(INT64_MAX), at, payload));
+    ASSERT_FALSE(model.empty());
+    ASSERT_EQ(std::make_pair(at.ns(), payload), *model.begin()) << step;
+    model.erase(model.begin());
+    const int64_t now = at.ns();
+    switch (rng() % 4) {
+      case 0:
+        push(now);  // at the same instant: after every other event of it
+        break;
+      case 1:
+        push(now + 3);  // soon: near the top
+        break;
+      case 2:
+        push(now + 1000);  // after everything
+        break;
+      default:
+        push(now + static_cast<int64_t>(rng() % 500));
+        break;
+    }
+    if (rng() % 8 == 0 && model.size() > 1) {
+      auto victim = std::next(model.begin(), static_cast<long>(rng() % model.size()));
+      ASSERT_TRUE(q.cancel(ids[victim->second])) << step;
+      model.erase(victim);
+    }
+    ASSERT_EQ(q.size(), model.size()) << step;
+  }
 }
 
 TEST(SteppedClock, AdvancesOnlyForwardAndOnlyWhenTold) {

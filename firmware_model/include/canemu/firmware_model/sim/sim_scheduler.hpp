@@ -93,7 +93,7 @@ class SimScheduler {
     while (ran < max_events) {
       SimTime at;
       Target t;
-      if (!queue_.pop_due(limit, at, t)) {
+      if (!queue_.take_due(limit, at, t)) {
         now_ = limit;
         return ran;
       }

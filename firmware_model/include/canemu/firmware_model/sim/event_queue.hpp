@@ -102,10 +102,10 @@ class EventQueue {
   // Takes the earliest event if it is due at or before `limit`: its time and payload into `time`
   // and `payload` (field by field, not as an Entry: the entry was usually written just before,
   // and a wide copy of it would wait for those stores); false if none is due. The entry leaves
-  // the heap only at the next call: a push then takes its place (one sift down from the top
-  // instead of one down and one up, so that an event's handler that schedules its follow-up, as
-  // a bus's end of frame and bus free do, pays for one), any other call removes it first. So
-  // every call sees the queue as if the event had been removed at once.
+  // the heap only at the next call: a push then takes its place (one restore of the heap instead
+  // of a pop's and a push's, so that an event's handler that schedules its follow-up, as a bus's
+  // end of frame and bus free do, pays for one), any other call removes it first. So every call
+  // sees the queue as if the event had been removed at once.
   bool take_due(SimTime limit, SimTime& time, Payload& payload) {
     settle();
     drop_cancelled();

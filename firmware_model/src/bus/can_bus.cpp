@@ -39,6 +39,7 @@ NodeId CanBus::attach(CanController& controller) {
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
   contenders_.fit(node_count_);
+  in_flight_.fit(node_count_);
   completion_.losses.fit(node_count_);
   decodes_cache_.clear();
   members_changed();
@@ -285,11 +286,9 @@ void CanBus::run_frame(SimTime sof) {
   arbitration_.resolve(contenders_.span());
   const std::vector<NodeId>& active = arbitration_.senders();
   const NodeId tx = active.front();
-  if (active.size() == 1) {
-    in_flight_.clear();  // one sender nearly always: no copy of a range
-    in_flight_.push_back(tx);
-  } else {
-    in_flight_.assign(active.begin(), active.end());
+  in_flight_.clear();
+  for (const NodeId id : active) {
+    in_flight_.push_back(id);
   }
   const TxFrame& tx_frame = *pending(nodes_[tx]);
   const EncodedFrame& e = encoded_tx(tx);

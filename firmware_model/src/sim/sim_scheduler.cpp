@@ -29,15 +29,11 @@ bool SimScheduler::cancel(EventId id) {
   return queue_.cancel(id);
 }
 
-void SimScheduler::dispatch(const Target& t) {
-  if (t.handler != nullptr) {
-    t.handler->on_event(now_, t.tag);
-  } else {
-    Action action = std::move(actions_[t.tag]);
-    actions_[t.tag] = nullptr;
-    free_slots_.push_back(t.tag);
-    action(now_);
-  }
+void SimScheduler::run_action(std::size_t slot) {
+  Action action = std::move(actions_[slot]);
+  actions_[slot] = nullptr;
+  free_slots_.push_back(slot);
+  action(now_);
 }
 
 }  // namespace canemu::model

@@ -392,9 +392,9 @@ class CanBus final : private EventHandler {
   // Set whenever a node may have begun bus-off recovery; cleared when a look finds none, so the
   // per-frame recovery bookkeeping costs nothing on a healthy bus.
   bool maybe_recovering_ = false;
-  std::vector<NodeId> in_flight_;  // transmitters of the current activity
-  SimTime free_at_;                // end of intermission of the last activity
-  SimTime last_dominant_end_;      // recessive run on the wire started here
+  NodeList<NodeId> in_flight_;  // transmitters of the current activity
+  SimTime free_at_;             // end of intermission of the last activity
+  SimTime last_dominant_end_;   // recessive run on the wire started here
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   SimTime attempt_at_;

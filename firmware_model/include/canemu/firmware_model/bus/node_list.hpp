@@ -1,6 +1,7 @@
 // A list of at most one entry per node of a bus, filled anew for every frame (contenders,
-// arbitration losses): its room is made once for the bus's node count (`fit`), so adding an
-// entry is a store and a count, without a std::vector's check for room on every push_back.
+// arbitration losses, the transmitters in flight): its room is made once for the bus's node count
+// (`fit`), so adding an entry is a store and a count, without a std::vector's check for room on
+// every push_back.
 #pragma once
 
 #include <cassert>
@@ -29,7 +30,6 @@ class NodeList {
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
   const T& operator[](std::size_t k) const { return room_[k]; }
-  const T& front() const { return room_[0]; }
   const T* begin() const { return room_.data(); }
   const T* end() const { return room_.data() + size_; }
   std::span<const T> span() const { return {room_.data(), size_}; }

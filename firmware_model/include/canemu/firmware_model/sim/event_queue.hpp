@@ -153,11 +153,12 @@ class EventQueue {
 
   // Removes the top entry and restores the heap.
   void remove_top() {
-    if (count_ == 1) {
-      count_ = 0;  // the last one: nothing to restore
-      return;
+    const std::size_t n = --count_;
+    if (n == 0) {
+      return;  // the last one: nothing to restore
     }
-    replace_top_by_last();
+    room_[0] = std::move(room_[n]);
+    place_top();
   }
   // Restores the heap after room_[0] was replaced. An entry that belongs at the top (the
   // follow-up of an event just run, due soon) stays there after one compare. Any other goes
@@ -192,13 +193,6 @@ class EventQueue {
       i = parent;
     }
     room_[i] = std::move(e);
-  }
-
-  // Replaces the top by the last entry (there are at least two) and restores the heap.
-  void replace_top_by_last() {
-    const std::size_t n = --count_;
-    room_[0] = std::move(room_[n]);
-    place_top();
   }
 
   // Cancelled entries are counted, so that a queue without any (nearly always) skips the look.

@@ -100,9 +100,9 @@ class SimScheduler {
       now_ = std::max(now_, at);
       before(at);
       if (t.handler != nullptr) {
-        t.handler->on_event(now_, t.tag);  // the common case, without a call to dispatch()
+        t.handler->on_event(now_, t.tag);
       } else {
-        dispatch(t);
+        run_action(t.tag);
       }
       ++ran;
     }
@@ -119,7 +119,7 @@ class SimScheduler {
     EventHandler* handler = nullptr;
     uint64_t tag = 0;  // handler's tag, or the action's slot
   };
-  void dispatch(const Target& t);  // an action's (a handler's runs inline in run_until)
+  void run_action(std::size_t slot);  // the std::function in `slot`, which it frees
 
   EventQueue<Target> queue_;
   std::vector<Action> actions_;

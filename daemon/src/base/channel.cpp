@@ -23,7 +23,9 @@ ipc::ChannelMessage to_message(SimTime at, const Frame& frame, ipc::ChannelMessa
                                  (frame.remote() ? ipc::kMsgRemote : 0) |
                                  (frame.fd() ? ipc::kMsgFd : 0) | (frame.brs() ? ipc::kMsgBrs : 0) |
                                  (frame.esi() ? ipc::kMsgEsi : 0) | (own ? ipc::kMsgOwn : 0));
-  std::memcpy(m.data, frame.data().data(), frame.length());
+  // All 64 bytes, zero past the length: a copy of fixed size, no call.
+  static_assert(sizeof m.data == kMaxFdLength);
+  std::memcpy(m.data, frame.padded_data().data(), sizeof m.data);
   return m;
 }
 

@@ -361,6 +361,9 @@ void Server::check_channels() {
 void Server::send_outboxes() {
   for (auto& [fd, c] : clients_) {
     for (auto* out : {&c.session.xcan.outbox, &c.session.slcan.outbox}) {
+      if (out->empty()) {
+        continue;  // nearly always: a pass costs no deque call per client
+      }
       while (!out->empty() && !c.closing) {
         if (!ipc::send_packet(fd, out->front().data(), out->front().size())) {
           c.closing = true;

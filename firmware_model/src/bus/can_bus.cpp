@@ -317,7 +317,7 @@ void CanBus::run_frame(SimTime sof) {
 
   // Everybody on the bus takes part: the transmitters, and every other node as a receiver.
   FrameFault fault;
-  if (injector_ != nullptr) {
+  if (injector_ != nullptr && injector_->frames_wanted()) {
     fault = injector_->on_frame(FrameContext{sof, tx, tx_frame.frame, e});
   }
   const bool alone = active.size() == 1;

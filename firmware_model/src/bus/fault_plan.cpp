@@ -68,6 +68,7 @@ void FaultPlan::remove(std::size_t id) {
   const auto i = static_cast<std::ptrdiff_t>(index_of(id));
   rules_.erase(rules_.begin() + i);
   ids_.erase(ids_.begin() + i);
+  set_frames_wanted(!rules_.empty());
 }
 
 double FaultPlan::draw(FaultRule& rule) {

@@ -87,10 +87,4 @@ Result<Frame> Frame::fd_frame(uint32_t id, std::span<const uint8_t> data, bool e
   return create(spec);
 }
 
-bool operator==(const Frame& a, const Frame& b) {
-  return a.id_ == b.id_ && a.dlc_ == b.dlc_ && a.extended_ == b.extended_ &&
-         a.remote_ == b.remote_ && a.fd_ == b.fd_ && a.brs_ == b.brs_ && a.esi_ == b.esi_ &&
-         std::ranges::equal(a.data(), b.data());
-}
-
 }  // namespace canemu::model

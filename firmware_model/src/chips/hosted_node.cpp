@@ -53,7 +53,7 @@ bool HostedNode::babble(const Frame& frame, SimTime until) {
   if (!running_) {
     return false;
   }
-  babble_ = frame;
+  babble_ = TxFrame{frame, false, false};
   babble_until_ = until;
   const uint64_t generation = generation_;
   scheduler_.schedule_at(until, [this, generation](SimTime) {
@@ -93,7 +93,7 @@ void HostedNode::load_next() {
     if (running_ && tx_loaded_ == 0 && buffer_free()) {
       tx_loaded_ = 1;
       babble_loaded_ = true;
-      load(TxFrame{*babble_, false, false});
+      load(*babble_);
     }
     return;
   }

@@ -78,14 +78,6 @@ uint8_t Sja1000::status() const {
   return static_cast<uint8_t>(sr | error_bits());
 }
 
-uint8_t Sja1000::error_bits() const {
-  if (fc_.bus_off()) {
-    return SR_ES | SR_BS;
-  }
-  const uint16_t limit = fc_.warning_limit();
-  return fc_.tec() >= limit || fc_.rec() >= limit ? SR_ES : 0;
-}
-
 uint8_t Sja1000::read(uint8_t address) {
   const bool reset = (mod_ & MOD_RM) != 0;
   switch (address) {
@@ -232,22 +224,22 @@ void Sja1000::write(uint8_t address, uint8_t value) {
 }
 
 void Sja1000::write_transmit(const Frame& frame, uint8_t cmr) {
-  std::array<uint8_t, 13> bytes;
-  const std::size_t n = pack_frame(frame, bytes);
   const bool request = (cmr & (CMR_TR | CMR_SRR)) != 0;
   if ((mod_ & MOD_RM) != 0 || tx_ || !request || frame.fd()) {
     // Written where the buffer is not (reset mode: the acceptance registers), or ignored
     // (a request pending), or not requested, or not a frame the chip knows (the bytes say what
     // it sends): register by register.
+    std::array<uint8_t, 13> bytes;
+    const std::size_t n = pack_frame(frame, bytes);
     for (std::size_t k = 0; k < n; ++k) {
       write(static_cast<uint8_t>(FRAME + k), bytes[k]);
     }
     command(cmr);
     return;
   }
-  // Operating mode, buffer released: the bytes land in the buffer and TR takes them, the frame
-  // being the one they describe.
-  std::copy_n(bytes.begin(), n, tx_buffer_.begin());
+  // Operating mode, buffer released: the bytes land in the buffer (those past the frame's keep
+  // what they held) and TR takes them, the frame being the one they describe.
+  pack_frame(frame, tx_buffer_);
   tx_ = TxFrame{frame, (cmr & CMR_AT) != 0, (cmr & CMR_SRR) != 0};
   tx_complete_ = false;
   if (bus_ != nullptr) {
@@ -328,13 +320,20 @@ void Sja1000::leave_reset() {
 }
 
 bool Sja1000::fifo_push(const Frame& frame) {
-  std::array<uint8_t, 13> bytes;
-  const std::size_t n = pack_frame(frame, bytes);
+  const std::size_t n = (frame.extended() ? 5 : 3) + std::min<std::size_t>(frame.length(), 8);
   if (fifo_used_ + n > kRxFifoBytes) {
     return false;
   }
   // The message goes in at the end of what the FIFO holds, wrapping round at its end.
   const std::size_t start = (rbsa_ + fifo_used_) % kRxFifoBytes;
+  if (start + n <= kRxFifoBytes) {
+    pack_frame(frame, fifo_.data() + start);  // in one piece: no copy
+    fifo_used_ += n;
+    ++rmc_;
+    return true;
+  }
+  std::array<uint8_t, 13> bytes;
+  pack_frame(frame, bytes);
   const std::size_t before_end = std::min(n, kRxFifoBytes - start);
   std::copy_n(bytes.begin(), before_end, fifo_.begin() + static_cast<std::ptrdiff_t>(start));
   std::copy_n(bytes.begin() + static_cast<std::ptrdiff_t>(before_end), n - before_end,
@@ -354,18 +353,9 @@ void Sja1000::fifo_release() {
   --rmc_;
 }
 
-void Sja1000::update_error_status(SimTime at) {
-  // EI on every change of SR.ES or SR.BS (datasheet 6.4.4).
-  const uint8_t bits = error_bits();
-  if (bits != error_status_) {
-    error_status_ = bits;
-    set_ir(IR_EI, at);
-  }
-}
-
 void Sja1000::on_frame(SimTime at, const Frame& frame, bool own) {
   update_error_status(at);
-  if (!accepts(acr_, amr_, (mod_ & MOD_AFM) != 0, frame)) {
+  if (!accepts_all(amr_) && !accepts(acr_, amr_, (mod_ & MOD_AFM) != 0, frame)) {
     return;
   }
   const bool line_was_active = interrupt_line();

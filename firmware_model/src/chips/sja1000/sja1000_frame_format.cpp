@@ -6,7 +6,7 @@
 
 namespace canemu::model::sja1000 {
 
-std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out) {
+std::size_t pack_frame(const Frame& frame, uint8_t* out) {
   const uint32_t id = frame.id();
   const uint8_t rtr = frame.remote() ? 1 : 0;
   std::size_t n = 0;
@@ -21,21 +21,17 @@ std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out) {
     out[n++] = static_cast<uint8_t>(id >> 3);
     out[n++] = static_cast<uint8_t>(((id & 0x07) << 5) | (rtr << 4));
   }
-  const auto data = frame.data();
+  // At most 8 data bytes: the layout has no room for more (a CAN FD frame's are cut there, as
+  // its DLC above 8 reads as 8 bytes).
+  const auto data = frame.data().first(std::min<std::size_t>(frame.length(), 8));
   if (data.size() == 8) {  // most frames: one move, not eight
-    std::memcpy(out.data() + n, data.data(), 8);
+    std::memcpy(out + n, data.data(), 8);
     return n + 8;
   }
   for (uint8_t b : data) {
     out[n++] = b;
   }
   return n;
-}
-
-std::size_t packed_size(uint8_t frame_info) {
-  const std::size_t header = (frame_info & 0x80) != 0 ? 5 : 3;
-  const bool remote = (frame_info & 0x40) != 0;
-  return header + (remote ? 0 : std::min<std::size_t>(frame_info & 0x0F, 8));
 }
 
 std::optional<Frame> unpack_frame(const uint8_t* bytes) {
@@ -72,7 +68,7 @@ bool byte_matches(uint8_t value, uint8_t acr, uint8_t amr, uint8_t compared = 0x
 
 bool accepts(const std::array<uint8_t, 4>& acr, const std::array<uint8_t, 4>& amr, bool single,
              const Frame& frame) {
-  if (amr == std::array<uint8_t, 4>{0xFF, 0xFF, 0xFF, 0xFF}) {
+  if (accepts_all(amr)) {
     return true;  // every bit "don't care", in either mode: the driver's usual accept-all
   }
   const uint32_t id = frame.id();

@@ -272,6 +272,11 @@ TEST(Sja1000, WriteTransmitDoesWhatTheRegisterWritesDo) {
   b.run_until(400 * kBit);
   EXPECT_EQ(a.receive(), frame(0x321, {7}));
   EXPECT_EQ(r.receive(), frame(0x321, {7}));
+  // The transmit buffer keeps what lies past a shorter frame: 0x321's four bytes, then the
+  // last of 0x123's five.
+  EXPECT_EQ(a.chip.read(TX_BUFFER), 0x01);
+  EXPECT_EQ(a.chip.read(TX_BUFFER + 3), 0x07);
+  EXPECT_EQ(a.chip.read(TX_BUFFER + 4), 0x22);
   // Reset mode: the writes at FRAME.. are ACR0..3 and AMR0..3 there.
   a.chip.write(MOD, MOD_RM);
   a.chip.write_transmit(frame(0x7FF, {1, 2, 3, 4, 5}), CMR_TR);
@@ -464,6 +469,24 @@ TEST(Sja1000FrameFormat, PacksAndUnpacksBothFormats) {
   EXPECT_EQ(bytes[0], 0x44);
   EXPECT_EQ(bytes[2], 0xF0);
   EXPECT_EQ(unpack_frame(bytes.data()), rtr);
+}
+
+// The layout holds at most 8 data bytes: a CAN FD frame's are cut there, within the 13 bytes,
+// and its DLC above 8 reads back as 8 bytes.
+TEST(Sja1000FrameFormat, PacksNoMoreThanEightDataBytes) {
+  std::array<uint8_t, 16> bytes;
+  bytes.fill(0xEE);
+  std::vector<uint8_t> data(64);
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    data[k] = static_cast<uint8_t>(k + 1);
+  }
+  const Frame fd = *Frame::fd_frame(0x1ABCDEF0, data, true);
+  EXPECT_EQ(pack_frame(fd, bytes.data()), 13u);
+  EXPECT_EQ(bytes[0], 0x8F);  // extended, DLC 15
+  EXPECT_EQ(bytes[5], 1);
+  EXPECT_EQ(bytes[12], 8);
+  EXPECT_EQ(bytes[13], 0xEE);  // nothing written past the 13
+  EXPECT_EQ(packed_size(bytes[0]), 13u);
 }
 
 // What a released message frees in the receive FIFO is read from its frame information byte:

@@ -50,8 +50,17 @@ class FaultInjector {
   // Whenever the bus is free and about to look for transmitters: node-level faults (unplug,
   // oscillator, counters) applied here take effect from this start of frame on.
   virtual void before_arbitration(SimTime /*now*/, CanBus& /*bus*/) {}
-  // At every start of frame that wins arbitration.
+  // At every start of frame that wins arbitration, while frames_wanted().
   virtual FrameFault on_frame(const FrameContext&) { return {}; }
+  // Whether on_frame() may return a fault: an injector with nothing to inject says so, and the
+  // bus spares every frame the call (a bus with a fault plan and no rules, the common case).
+  bool frames_wanted() const { return frames_wanted_; }
+
+ protected:
+  void set_frames_wanted(bool wanted) { frames_wanted_ = wanted; }
+
+ private:
+  bool frames_wanted_ = true;
 };
 
 struct ErrorCounts {

@@ -48,10 +48,12 @@ struct FaultRule {
 // stays theirs when others are removed.
 class FaultPlan final : public FaultInjector {
  public:
+  FaultPlan() { set_frames_wanted(false); }
   std::size_t add(FaultRule rule) {
     rule.rng = rule.seed;
     rules_.push_back(rule);
     ids_.push_back(next_id_);
+    set_frames_wanted(true);
     return next_id_++;
   }
   // The rule `id` (it must be there).
@@ -65,6 +67,7 @@ class FaultPlan final : public FaultInjector {
   void clear() {
     rules_.clear();
     ids_.clear();
+    set_frames_wanted(false);
   }
 
   // The first rule that matches, still has hits left and wins its draw decides; every matching

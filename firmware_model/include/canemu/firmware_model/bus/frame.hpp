@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <optional>
 #include <span>
 
@@ -76,10 +77,31 @@ class Frame {
   constexpr std::size_t length() const { return remote_ ? 0 : dlc_to_length(dlc_, fd_); }
   std::span<const uint8_t> data() const { return {data_.data(), length()}; }
 
-  friend bool operator==(const Frame& a, const Frame& b);
+  // All kMaxFdLength data bytes: those past length() are zero (only create() writes them), so
+  // a copy of the whole array needs no length.
+  const std::array<uint8_t, kMaxFdLength>& padded_data() const { return data_; }
+
+  // Equal in every field and data byte. With the bytes past the length zero, the first eight
+  // compare as one word whatever the lengths.
+  friend bool operator==(const Frame& a, const Frame& b) {
+    uint64_t da;
+    uint64_t db;
+    std::memcpy(&da, a.data_.data(), sizeof da);
+    std::memcpy(&db, b.data_.data(), sizeof db);
+    if (a.id_ != b.id_ || da != db || std::memcmp(a.header_tail(), b.header_tail(), 6) != 0) {
+      return false;
+    }
+    const std::size_t n = a.length();
+    return n <= 8 || std::memcmp(a.data_.data() + 8, b.data_.data() + 8, n - 8) == 0;
+  }
 
  private:
   Frame() = default;
+  // dlc_ and the five flags, side by side: six bytes compared as one block.
+  const unsigned char* header_tail() const {
+    static_assert(offsetof(Frame, esi_) == offsetof(Frame, dlc_) + 5);
+    return reinterpret_cast<const unsigned char*>(this) + offsetof(Frame, dlc_);
+  }
 
   std::array<uint8_t, kMaxFdLength> data_{};
   uint32_t id_ = 0;

@@ -142,7 +142,7 @@ class HostedNode : private ControllerEvents {
   bool running_ = false;
   bool claimed_ = false;
   uint32_t tx_loaded_ = 0;       // frames handed to load() and not yet done or dropped
-  std::optional<Frame> babble_;  // while babbling
+  std::optional<TxFrame> babble_;  // while babbling: the request it loads again and again
   SimTime babble_until_;
   bool babble_loaded_ = false;  // the loaded frame is a babbled copy
   uint64_t generation_ = 0;     // start() count: a restart scheduled before a stop is void

@@ -84,19 +84,31 @@ inline constexpr std::size_t kRxFifoBytes = 64;
 
 // Packs a frame in the PeliCAN buffer layout (frame information, identifier bytes, data):
 // 3 + data bytes for a standard frame, 5 + data bytes for an extended one. RTR frames carry no
-// data bytes.
-std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out);
+// data bytes. Writes those bytes at `out` (room for 13) and no others; returns their number.
+std::size_t pack_frame(const Frame& frame, uint8_t* out);
+inline std::size_t pack_frame(const Frame& frame, std::array<uint8_t, 13>& out) {
+  return pack_frame(frame, out.data());
+}
 // Reads a frame from that layout; nothing if the bytes do not describe one.
 std::optional<Frame> unpack_frame(const uint8_t* bytes);
 // The bytes a frame takes in that layout, from its frame information byte alone: what
 // pack_frame() wrote (a DLC above 8 carries 8 data bytes).
-std::size_t packed_size(uint8_t frame_info);
+constexpr std::size_t packed_size(uint8_t frame_info) {
+  const std::size_t header = (frame_info & 0x80) != 0 ? 5 : 3;
+  const std::size_t data = (frame_info & 0x40) != 0 ? 0 : frame_info & 0x0F;
+  return header + (data > 8 ? 8 : data);
+}
 
 // The acceptance filter (datasheet 6.4.15): single (AFM = 1) or dual filter over identifier,
 // RTR and, for standard frames, the first data bytes. Data bytes a frame does not have are not
 // compared.
 bool accepts(const std::array<uint8_t, 4>& acr, const std::array<uint8_t, 4>& amr, bool single,
              const Frame& frame);
+// Whether the mask lets every frame through (every bit "don't care"), whatever the filter mode
+// and code: the reset value, and what drivers that filter in software write.
+inline bool accepts_all(const std::array<uint8_t, 4>& amr) {
+  return amr == std::array<uint8_t, 4>{0xFF, 0xFF, 0xFF, 0xFF};
+}
 
 // SJA1000 error code capture segment (datasheet table 19) of a bit the bus reports.
 uint8_t ecc_segment(const BusErrorEvent& e, uint16_t destuffed_bit, bool extended);
@@ -162,10 +174,23 @@ class Sja1000 final : public CanController {
   void command(uint8_t cmr);
   void enter_reset();
   void leave_reset();
-  void update_error_status(SimTime at);
+  // EI on every change of SR.ES or SR.BS (datasheet 6.4.4); inline, as every frame's end asks.
+  void update_error_status(SimTime at) {
+    const uint8_t bits = error_bits();
+    if (bits != error_status_) {
+      error_status_ = bits;
+      set_ir(sja1000::IR_EI, at);
+    }
+  }
   void counters_written();
   uint8_t status() const;
-  uint8_t error_bits() const;  // SR.ES and SR.BS
+  uint8_t error_bits() const {  // SR.ES and SR.BS
+    if (fc_.bus_off()) {
+      return sja1000::SR_ES | sja1000::SR_BS;
+    }
+    const uint16_t limit = fc_.warning_limit();
+    return fc_.tec() >= limit || fc_.rec() >= limit ? sja1000::SR_ES : 0;
+  }
   // Receive FIFO.
   std::size_t fifo_used() const { return fifo_used_; }
   bool fifo_push(const Frame& frame);

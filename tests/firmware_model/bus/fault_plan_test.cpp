@@ -41,7 +41,6 @@ TEST(FaultPlanProbability, DrawsFromTheSeedAndRepeats) {
   EXPECT_LT(n, 1100);
 }
 
-
 // A bit error rate: the first bit hit (geometric over the frame's bits) becomes a bit error at
 // that bit; frames with no bit hit pass untouched.
 TEST(FaultPlanProbability, ABitErrorRateHitsAtTheFirstBitDrawn) {
@@ -67,7 +66,6 @@ TEST(FaultPlanProbability, ABitErrorRateHitsAtTheFirstBitDrawn) {
   EXPECT_LT(hit, 1840 + 130);
   EXPECT_EQ(plan.rule(0).hits, static_cast<uint64_t>(hit));
 }
-
 
 // Every hit is told, with the rule that hit and the frame; frames no rule hits are not.
 TEST(FaultPlan, TellsEveryHitWithItsRuleAndFrame) {

@@ -141,7 +141,7 @@ class HostedNode : private ControllerEvents {
   TxSource source_;
   bool running_ = false;
   bool claimed_ = false;
-  uint32_t tx_loaded_ = 0;       // frames handed to load() and not yet done or dropped
+  uint32_t tx_loaded_ = 0;         // frames handed to load() and not yet done or dropped
   std::optional<TxFrame> babble_;  // while babbling: the request it loads again and again
   SimTime babble_until_;
   bool babble_loaded_ = false;  // the loaded frame is a babbled copy

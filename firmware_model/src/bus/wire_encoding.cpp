@@ -293,70 +293,6 @@ uint32_t classic_header_and_data(const Frame& frame, uint128& x) {
   return 19 + 8 * length;
 }
 
-// Up to 192 wire bits in three words held in registers, first bit at the top of w0: a classic
-// frame (at most 118 destuffed bits, 29 stuff bits and 10 more).
-struct Wire3 {
-  uint64_t w0 = 0, w1 = 0, w2 = 0;
-
-  // Inserts `bit` at index `off` of `w`: the bits from there on move one place on; returns the
-  // bit that leaves the word.
-  static uint64_t insert(uint64_t& w, uint32_t off, uint64_t bit) {
-    const uint64_t out = w & 1u;
-    const uint64_t keep = ~(~uint64_t{0} >> off);  // the bits before index `off`
-    w = (w & keep) | (bit << (63 - off)) | ((w & ~keep) >> 1);
-    return out;
-  }
-  // Inserts `bit` at wire index `q`; the last bit of w2 drops (it is past any frame's end).
-  void insert(uint32_t q, uint64_t bit) {
-    if (q < 64) {
-      w2 = (w2 >> 1) | (insert(w1, 0, insert(w0, q, bit)) << 63);
-      return;
-    }
-    if (q < 128) {
-      const uint64_t carry = insert(w1, q - 64, bit);
-      w2 = (w2 >> 1) | (carry << 63);
-      return;
-    }
-    insert(w2, q - 128, bit);
-  }
-  void set(uint32_t q) {
-    const uint64_t b = uint64_t{1} << (63 - (q & 63));
-    if (q < 64) {
-      w0 |= b;
-    } else if (q < 128) {
-      w1 |= b;
-    } else {
-      w2 |= b;
-    }
-  }
-  // Sets the 10 bits from index `q` on.
-  void set10(uint32_t q) {
-    constexpr uint64_t kTen = ~(~uint64_t{0} >> 10);
-    const uint32_t off = q & 63;
-    const uint64_t first = kTen >> off;
-    const uint64_t second = off > 54 ? kTen << (64 - off) : 0;
-    if (q < 64) {
-      w0 |= first;
-      w1 |= second;
-    } else if (q < 128) {
-      w1 |= first;
-      w2 |= second;
-    } else {
-      w2 |= first;
-    }
-  }
-  // Stores the words that `length` bits use.
-  void store(EncodedFrame::Bits& out, uint32_t length) const {
-    out[0] = w0;
-    if (length > 64) {
-      out[1] = w1;
-    }
-    if (length > 128) {
-      out[2] = w2;
-    }
-  }
-};
-
 // Bit `i` (0..127, from the top) of the two words `hi`, `lo`.
 inline uint64_t bit_of(uint64_t hi, uint64_t lo, uint32_t i) {
   return i < 64 ? (hi >> (63 - i)) & 1u : (lo >> (127 - i)) & 1u;
@@ -375,15 +311,44 @@ inline uint32_t next_set(uint64_t hi, uint64_t lo, uint32_t from) {
   return m != 0 ? 64 + static_cast<uint32_t>(__builtin_clzll(m)) : 128;
 }
 
+// For each index in a word (first bit at the top): the bits before it, and its own bit.
+constexpr std::array<uint64_t, 64> kBitsBefore = [] {
+  std::array<uint64_t, 64> t{};
+  for (uint32_t i = 1; i < 64; ++i) {
+    t[i] = ~(~uint64_t{0} >> i);
+  }
+  return t;
+}();
+constexpr std::array<uint64_t, 64> kBitAt = [] {
+  std::array<uint64_t, 64> t{};
+  for (uint32_t i = 0; i < 64; ++i) {
+    t[i] = uint64_t{1} << (63 - i);
+  }
+  return t;
+}();
+
+// Bits i..i+63 (i > 0) of the 128 bits `hi`, `lo` (first bit at the top of `hi`); bits past
+// their end read as 0.
+inline uint64_t window_of(uint64_t hi, uint64_t lo, uint32_t i) {
+  if (i < 64) {
+    return (hi << i) | (lo >> (64 - i));
+  }
+  return i < 128 ? lo << (i - 64) : 0;
+}
+
 // Dynamic stuffing of a classic frame's `n` destuffed bits `x` (SOF..CRC, zeros after them)
-// into `wire` and `marks`; returns the number of stuff bits. Where five equal destuffed bits in a
-// row begin is found for the whole frame at once (bit j equals bit j + 1 for four j in a row). A
-// stuff bit, the complement of the bit p before it, starts the next run: if the four bits after p
-// are all its like, the next stuff bit follows them (found at once too: bit p differs from bit
-// p + 1, which the next three equal); otherwise the next one ends the first run of five that
-// begins after p. So the work grows with the number of stuff bits, a few per frame, not with the
-// number of bits.
-uint32_t stuff_classic(uint128 x, uint32_t n, Wire3& wire, Wire3& marks) {
+// into the words of `wire` and `marks` that the frame uses; returns the number of stuff bits.
+// Where five equal destuffed bits in a row begin is found for the whole frame at once (bit j
+// equals bit j + 1 for four j in a row). A stuff bit, the complement of the bit p before it,
+// starts the next run: if the four bits after p are all its like, the next stuff bit follows
+// them (found at once too: bit p differs from bit p + 1, which the next three equal); otherwise
+// the next one ends the first run of five that begins after p. The wire is written a word at a
+// time, left to right: a word starts as the 64 destuffed bits that land there past the stuff
+// bits before it, and each stuff bit inside it is inserted into that one word (the bit it
+// pushes out of the word's end is read again for the next word). So the work grows with the
+// number of stuff bits, a few per frame, and a frame with many (long runs of equal bits, zero
+// bytes) pays a handful of instructions for each.
+uint32_t stuff_classic(uint128 x, uint32_t n, EncodedFrame::Bits& wire, EncodedFrame::Bits& marks) {
   const uint128 eq = ~(x ^ (x << 1));  // bit 127 - j: bit j equals bit j + 1
   // Only what begins at j <= n - 5 lies inside the frame.
   const uint128 inside = ~uint128{0} << (128 - (n - 4));
@@ -396,18 +361,47 @@ uint32_t stuff_classic(uint128 x, uint32_t n, Wire3& wire, Wire3& marks) {
   const auto rl = static_cast<uint64_t>(runs);
   const auto ah = static_cast<uint64_t>(after >> 64);
   const auto al = static_cast<uint64_t>(after);
-  wire.w0 = xh;
-  wire.w1 = xl;
-  wire.w2 = 0;
-  uint32_t count = 0;
+  // The word being written and its marks, in registers; `end` is the wire index after it.
+  uint64_t cur = xh;  // word 0 begins with destuffed bit 0
+  uint64_t cur_marks = 0;
+  uint32_t end = 64;
+  uint32_t count = 0;  // stuff bits so far
+  uint64_t last = 0;   // the last bit of the word before, at the top
+  auto store = [&] {
+    wire[end / 64 - 1] = cur;
+    marks[end / 64 - 1] = cur_marks;
+  };
+  auto next_word = [&] {
+    // The next word begins at wire index `end`, destuffed index `end - count`.
+    store();
+    last = cur << 63;
+    cur = window_of(xh, xl, end - count);
+    cur_marks = 0;
+    end += 64;
+  };
   uint32_t p = next_set(rh, rl, 0) + 4;  // the destuffed bit the next stuff bit follows
   while (p < 128) {
     const uint32_t q = p + 1 + count;  // the stuff bit's index on the wire
-    wire.insert(q, bit_of(xh, xl, p) ^ 1u);
-    marks.set(q);
+    while (q >= end) {
+      next_word();
+    }
+    // The stuff bit goes in at `off`: the bits from there on move one place on, and the bit
+    // before it is copied there and flipped (at the word's start, the word before's last).
+    const uint32_t off = q & 63;
+    const uint64_t keep = kBitsBefore[off];
+    const uint64_t at = kBitAt[off];
+    const uint64_t moved = (cur & ~(keep << 1)) >> 1;
+    cur = ((cur & keep) | moved | (off == 0 ? last : 0)) ^ at;
+    cur_marks |= at;
     ++count;
     p = bit_of(ah, al, p) != 0 ? p + 4 : next_set(rh, rl, p + 1) + 4;
   }
+  // The words the frame uses, its ten recessive bits after the CRC included; the words after
+  // them keep what they held (bits at and after the frame's length are unspecified).
+  while (end < n + count + 3 + kEofBits) {
+    next_word();
+  }
+  store();
   return count;
 }
 
@@ -419,16 +413,17 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
   x |= uint128{crc} << (113 - head);
   const uint32_t n = head + 15;
 
-  Wire3 wire;
-  Wire3 marks;
-  const uint32_t stuffed = n + stuff_classic(x, n, wire, marks);
-  // CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits.
+  const uint32_t stuffed = n + stuff_classic(x, n, out.level, out.stuff);
+  // CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits (the
+  // words that hold them are written, zero past the CRC).
   out.crc_delimiter_index = static_cast<uint16_t>(stuffed);
-  wire.set10(stuffed);
+  constexpr uint64_t kTen = ~(~uint64_t{0} >> 10);
+  const uint32_t off = stuffed & 63;
+  out.level[stuffed / 64] |= kTen >> off;
+  if (off > 54) {
+    out.level[stuffed / 64 + 1] |= kTen << (64 - off);
+  }
   const uint32_t length = stuffed + 3 + kEofBits;
-  // The words the frame uses (bits past its end zero), as a word-at-a-time writer leaves them.
-  wire.store(out.level, length);
-  marks.store(out.stuff, length);
   out.length = static_cast<uint16_t>(length);
   out.dynamic_stuff_bits = static_cast<uint16_t>(stuffed - n);
   out.crc = crc;

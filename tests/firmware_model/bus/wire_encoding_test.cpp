@@ -5,6 +5,7 @@
 #include <initializer_list>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
@@ -243,6 +244,92 @@ TEST(WireEncoding, RandomFramesObeyTheStuffRuleAndTheKernelBounds) {
     for (uint16_t i = e.crc_delimiter_index; i < e.length; ++i) {
       ASSERT_TRUE(e.level_at(i));
     }
+  }
+}
+
+// A classic frame's bits written out one at a time from its fields (SOF, identifier, RTR or
+// SRR, IDE, r1 / r0, DLC, data, a CRC-15 computed bit by bit), stuffed bit by bit, and the ten
+// recessive bits after the CRC: what encode() must produce, stuff marks included.
+std::pair<std::string, std::string> classic_bit_by_bit(const Frame& f) {
+  std::string d;
+  auto put = [&](uint32_t value, int bits) {
+    for (int i = bits - 1; i >= 0; --i) {
+      d += ((value >> i) & 1u) != 0 ? '1' : '0';
+    }
+  };
+  put(0, 1);
+  if (f.extended()) {
+    put(f.id() >> 18, 11);
+    put(3, 2);  // SRR, IDE
+    put(f.id() & 0x3FFFF, 18);
+    put(f.remote() ? 1 : 0, 1);
+    put(0, 2);  // r1, r0
+  } else {
+    put(f.id(), 11);
+    put(f.remote() ? 1 : 0, 1);
+    put(0, 2);  // IDE, r0
+  }
+  put(f.dlc(), 4);
+  for (const uint8_t b : f.data()) {
+    put(b, 8);
+  }
+  uint32_t crc = 0;
+  for (const char c : d) {
+    const bool feedback = (c == '1') != (((crc >> 14) & 1u) != 0);
+    crc = ((crc << 1) & 0x7FFF) ^ (feedback ? 0x4599u : 0u);
+  }
+  put(crc, 15);
+  std::string wire;
+  std::string marks;
+  int run = 0;
+  char last = 'x';
+  for (const char c : d) {
+    wire += c;
+    marks += '0';
+    run = c == last ? run + 1 : 1;
+    last = c;
+    if (run == 5) {
+      last = c == '1' ? '0' : '1';
+      wire += last;
+      marks += '1';
+      run = 1;
+    }
+  }
+  wire += std::string(10, '1');
+  marks += std::string(10, '0');
+  return {wire, marks};
+}
+
+// Against that, 20,000 random classic frames, most of them with long runs of equal bits (zero
+// and 0xFF bytes, identifiers of few ones), so that stuff bits fall everywhere, at the first
+// bit of the second and third words too.
+TEST(WireEncoding, ClassicFramesAreTheirFieldsStuffedBitByBit) {
+  std::mt19937 rng(11);
+  for (int n = 0; n < 20000; ++n) {
+    FrameSpec s;
+    s.extended = rng() % 2;
+    s.remote = rng() % 8 == 0;
+    const auto r = static_cast<uint32_t>(rng());
+    const uint32_t id =
+        r % 4 == 0 ? static_cast<uint32_t>(rng()) : (r % 8 < 4 ? 0u : ~0u) ^ (1u << (rng() % 29));
+    s.id = id & (s.extended ? kMaxExtendedId : kMaxStandardId);
+    const auto dlc = static_cast<uint8_t>(rng() % 16);
+    s.dlc = dlc;
+    std::vector<uint8_t> data(s.remote ? 0 : dlc_to_length(dlc, false));
+    for (auto& b : data) {
+      const uint32_t kind = rng() % 4;
+      b = static_cast<uint8_t>(kind == 0 ? rng() : kind == 1 ? 0xFF : kind == 2 ? 0 : 1);
+    }
+    s.data = data;
+    const Frame f = make(s);
+    const EncodedFrame e = encode(f);
+    const auto [wire, marks] = classic_bit_by_bit(f);
+    ASSERT_EQ(e.to_string(), wire) << "frame " << n;
+    std::string got_marks;
+    for (std::size_t i = 0; i < e.length; ++i) {
+      got_marks += e.is_stuff(i) ? '1' : '0';
+    }
+    ASSERT_EQ(got_marks, marks) << "frame " << n;
   }
 }
 

@@ -453,7 +453,7 @@ void CanLine::frame_transmitted(SimTime at, const Frame& frame) {
   // node on another daemon's bus).
   const std::optional<ChannelId> channel = loaded_.front().channel;
   const bool echoed = loaded_.front().msg.uMsgInfo.Bits.srr != 0;
-  loaded_.pop_front();
+  loaded_.erase(loaded_.begin());
   if (channel) {
     distributor_.count_sent(*channel);
   }

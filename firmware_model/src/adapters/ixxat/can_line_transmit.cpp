@@ -40,7 +40,7 @@ void CanLine::count_dropped(const Loaded& l) {
 void CanLine::transmission_dropped(SimTime, const Frame&) {
   if (!loaded_.empty()) {
     count_dropped(loaded_.front());
-    loaded_.pop_front();
+    loaded_.erase(loaded_.begin());
   }
 }
 

@@ -21,7 +21,6 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <optional>
 #include <vector>
 
@@ -236,7 +235,9 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
 
   // The frames handed to the controller and not yet done, oldest first: one in an SJA1000's or
   // the FD controller's transmit buffer; up to the node's window on another daemon's bus.
-  std::deque<Loaded> loaded_;
+  // In the order loaded; at most the node's transmit window, a few: a vector keeps its room
+  // (a deque of these allocated a block every few frames).
+  std::vector<Loaded> loaded_;
   std::optional<Staged> staged_;  // taken from a FIFO, waiting for its delay or a restart
   SimTime staged_not_before_;
   SimTime last_load_;

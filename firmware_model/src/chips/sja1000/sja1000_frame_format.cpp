@@ -91,7 +91,7 @@ bool accepts(const std::array<uint8_t, 4>& acr, const std::array<uint8_t, 4>& am
   const uint8_t b1 = static_cast<uint8_t>(((id & 0x07) << 5) | (rtr << 4));
   if (single) {
     return byte_matches(b0, acr[0], amr[0]) && byte_matches(b1, acr[1], amr[1], 0xF0) &&
-           (data.size() < 1 || byte_matches(data[0], acr[2], amr[2])) &&
+           (data.empty() || byte_matches(data[0], acr[2], amr[2])) &&
            (data.size() < 2 || byte_matches(data[1], acr[3], amr[3]));
   }
   // Filter 1: ACR0, ACR1 high nibble (ID.20-18, RTR), ACR1 low nibble and ACR3 low nibble

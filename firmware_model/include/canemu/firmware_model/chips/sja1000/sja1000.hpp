@@ -139,7 +139,11 @@ class Sja1000 final : public CanController {
   // set), and what its write of CMR_RRB into CMR does, without the registers' decoding: the
   // reads have no side effects, and the write is the command.
   bool transmit_buffer_free() const { return (mod_ & sja1000::MOD_RM) == 0 && !tx_; }
-  void release_receive_buffer() { command(sja1000::CMR_RRB); }
+  void release_receive_buffer() {
+    if ((mod_ & sja1000::MOD_RM) == 0) {
+      fifo_release();  // what command(CMR_RRB) does: commands do nothing in reset mode
+    }
+  }
 
   // The interrupt line: active while IR has a bit set. IR bits are only set for sources enabled
   // in IER; RI follows the FIFO (set while it holds a message and RIE is set). Called when the

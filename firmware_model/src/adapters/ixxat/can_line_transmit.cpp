@@ -1,8 +1,8 @@
 // The IXXAT line's transmission: the next frame for the controller from the cyclic list or the
 // channels' transmit FIFOs (through the distributor), its conversion, the transmit delay of a
 // staged message, and the frames loaded into the controller until they are done or dropped.
-// The rest of the line (status, control, filters, channels, reception, detection, time stamps)
-// is in can_line.cpp.
+// The rest of the line (status, control, filters, channels, reception, time stamps) is in
+// can_line.cpp, its bit-rate detection in can_line_detection.cpp.
 #include <algorithm>
 
 #include "canemu/firmware_model/adapters/ixxat/can_line.hpp"

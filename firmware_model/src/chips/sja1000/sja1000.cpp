@@ -320,7 +320,7 @@ void Sja1000::leave_reset() {
 }
 
 bool Sja1000::fifo_push(const Frame& frame) {
-  const std::size_t n = (frame.extended() ? 5 : 3) + std::min<std::size_t>(frame.length(), 8);
+  const std::size_t n = packed_size(frame);
   if (fifo_used_ + n > kRxFifoBytes) {
     return false;
   }

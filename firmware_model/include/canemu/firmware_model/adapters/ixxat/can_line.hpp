@@ -234,9 +234,8 @@ class CanLine final : private ControllerEvents, private EventHandler, private Cy
   Distributor distributor_;
 
   // The frames handed to the controller and not yet done, oldest first: one in an SJA1000's or
-  // the FD controller's transmit buffer; up to the node's window on another daemon's bus.
-  // In the order loaded; at most the node's transmit window, a few: a vector keeps its room
-  // (a deque of these allocated a block every few frames).
+  // the FD controller's transmit buffer; up to the node's window on another daemon's bus. A
+  // vector, as they are a few: it keeps its room (a deque allocated a block every few frames).
   std::vector<Loaded> loaded_;
   std::optional<Staged> staged_;  // taken from a FIFO, waiting for its delay or a restart
   SimTime staged_not_before_;

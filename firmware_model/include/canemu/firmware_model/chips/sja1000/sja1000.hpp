@@ -11,6 +11,7 @@
 // in reset mode, 0 otherwise), and clock-out.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -97,6 +98,10 @@ constexpr std::size_t packed_size(uint8_t frame_info) {
   const std::size_t header = (frame_info & 0x80) != 0 ? 5 : 3;
   const std::size_t data = (frame_info & 0x40) != 0 ? 0 : frame_info & 0x0F;
   return header + (data > 8 ? 8 : data);
+}
+// The same from the frame: what pack_frame() writes for it.
+inline std::size_t packed_size(const Frame& frame) {
+  return (frame.extended() ? 5u : 3u) + std::min<std::size_t>(frame.length(), 8);
 }
 
 // The acceptance filter (datasheet 6.4.15): single (AFM = 1) or dual filter over identifier,

@@ -68,10 +68,12 @@ install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemu.sysusers DESTINATION lib/sysu
         RENAME canemu.conf)
 install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemu.tmpfiles DESTINATION lib/tmpfiles.d
         RENAME canemu.conf)
-# The drop-ins that open the bridges' address families to canemud.service (not active until an
-# administrator links them into /etc/systemd/system/canemud.service.d/: docs/security.md).
+# The drop-ins that open the bridges' address families to canemud.service, and the one that lets
+# it hold simulation.cpu_latency_us's request (not active until an administrator links them into
+# /etc/systemd/system/canemud.service.d/: docs/security.md).
 install(FILES ${PROJECT_SOURCE_DIR}/systemd/canemud.service.d/socketcan.conf
               ${PROJECT_SOURCE_DIR}/systemd/canemud.service.d/ip.conf
+              ${PROJECT_SOURCE_DIR}/systemd/canemud.service.d/cpu-latency.conf
         DESTINATION ${CMAKE_INSTALL_DATADIR}/canemu/systemd)
 install(CODE "set(CANEMU_SOURCE_DIR \"${PROJECT_SOURCE_DIR}\")
               set(CANEMU_STAGE \"${PROJECT_BINARY_DIR}/install-systemd\")

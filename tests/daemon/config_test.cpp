@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <fstream>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -50,6 +52,7 @@ seed = 42
 batch_us = 40
 batch_max_us = 2000
 spin_us = 10
+cpu_latency_us = 0
 [security]
 allowed_users = ["alice"]
 allowed_groups = ["canemu"]
@@ -75,6 +78,7 @@ controllers = ["fd0"]
   EXPECT_EQ(c->simulation.batch_us, 40u);
   EXPECT_EQ(c->simulation.batch_max_us, 2000u);
   EXPECT_EQ(c->simulation.spin_us, 10u);
+  EXPECT_EQ(c->simulation.cpu_latency_us, std::optional<uint32_t>(0));
   EXPECT_EQ(c->security.allowed_users, (std::vector<std::string>{"alice"}));
   EXPECT_EQ(c->security.allowed_groups, (std::vector<std::string>{"canemu"}));
   EXPECT_EQ(c->buses[0].kind, BusKind::can_fd);
@@ -158,6 +162,15 @@ TEST(Config, TheBatchWindowDefaultsTo50UsWideningTo1000UsAndIsBounded) {
   const auto e = config_errors("[simulation]\nbatch_max_us = 100001\n");
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0], "t.toml:2:16: simulation.batch_max_us: 100001 is outside 0..100000");
+}
+
+TEST(Config, NoCpuLatencyRequestUnlessOneIsConfiguredWithinItsBounds) {
+  auto c = parse_config("[simulation]\n", "t.toml");
+  ASSERT_TRUE(c) << c.error().front();
+  EXPECT_FALSE(c->simulation.cpu_latency_us);
+  const auto e = config_errors("[simulation]\ncpu_latency_us = -1\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], "t.toml:2:18: simulation.cpu_latency_us: -1 is outside 0..100000");
 }
 
 TEST(Config, CollectsEveryErrorAtOnce) {

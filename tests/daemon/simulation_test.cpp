@@ -4,6 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
 namespace canemu::daemon {
 namespace {
 
@@ -58,6 +63,19 @@ TEST(SimulationReload, AppliesTheLoopsBatchWindowAndSpinAtOnce) {
             (std::vector<std::string>{"simulation: batch_us 20, batch_max_us 20, spin_us 0"}));
   EXPECT_TRUE(r.refused.empty());
   EXPECT_EQ(sim->config().simulation.batch_max_us, 20u);
+}
+
+TEST(SimulationReload, SetsOrRemovesTheCpuLatencyBound) {
+  auto sim = std::move(*Simulation::build(default_config()));
+  Config fresh = default_config();
+  fresh.simulation.cpu_latency_us = 0;
+  EXPECT_EQ(sim->reload(fresh).applied, (std::vector<std::string>{"simulation: cpu_latency_us 0"}));
+  EXPECT_EQ(sim->config().simulation.cpu_latency_us, std::optional<uint32_t>(0));
+  EXPECT_TRUE(sim->reload(fresh).applied.empty());  // unchanged: nothing to say
+  fresh.simulation.cpu_latency_us.reset();
+  EXPECT_EQ(sim->reload(fresh).applied,
+            (std::vector<std::string>{"simulation: cpu_latency_us removed"}));
+  EXPECT_FALSE(sim->config().simulation.cpu_latency_us);
 }
 
 TEST(SimulationReload, ReportsWhatOnlyARestartChangesAndKeepsIt) {

@@ -297,6 +297,24 @@ kinds=$(python3 -c 'import json, sys; print(" ".join(sorted(b["kind"] for b in j
 result lcm_and_dds_bridges_open_with_the_ip_drop_in "dds lcm socketcan" "$kinds"
 [ "$kinds" = "dds lcm socketcan" ] || cat /tmp/t13
 
+# 13a. simulation.cpu_latency_us: the confined service sees no /dev/cpu_dma_latency and says so;
+# with cpu-latency.conf linked it holds the request. The key goes again at once: idle CPUs that
+# poll would slow the rest of this emulated guest.
+sed -i 's/^time = "realtime".*$/&\ncpu_latency_us = 0/' /etc/canemu/canemud.toml
+systemctl restart canemud.service
+wait_for journal_has "simulation.cpu_latency_us 0: no request made: /dev/cpu_dma_latency"
+without=$?
+mkdir -p /etc/systemd/system/canemud.service.d
+ln -s /usr/share/canemu/systemd/cpu-latency.conf /etc/systemd/system/canemud.service.d/
+systemctl daemon-reload
+systemctl restart canemud.service
+wait_for journal_has "CPUs asked to wake within 0 us"
+with=$?
+result the_cpu_latency_request_needs_its_drop_in "0 0" "$without $with"
+[ "$without $with" = "0 0" ] || journalctl -q -o cat -u canemud.service | grep -i "latency" | tail -5
+sed -i '/^cpu_latency_us = 0$/d' /etc/canemu/canemud.toml
+systemctl restart canemud.service
+
 # 14. An upgrade keeps the administrator's choice: units disabled while running stay disabled and
 # are restarted (a new process runs the new program; no automatic restart, which a failure would
 # cause); dpkg -i of the same version is an upgrade (the postinst gets the old version). dpkg -i

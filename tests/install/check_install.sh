@@ -79,7 +79,8 @@ deb=$(ls "$build"/canemu_*_amd64.deb)
 contents=$(dpkg-deb -c "$deb")
 for f in ./usr/bin/canemud ./etc/canemu/canemud.toml ./usr/lib/systemd/system/canemud.socket \
          ./usr/lib/sysusers.d/canemu.conf ./usr/share/canemu/systemd/socketcan.conf \
-         ./usr/share/canemu/systemd/ip.conf ./usr/share/lintian/overrides/canemu \
+         ./usr/share/canemu/systemd/ip.conf ./usr/share/canemu/systemd/cpu-latency.conf \
+         ./usr/share/lintian/overrides/canemu \
          ./usr/lib/cli/canemu/vcinet2.dll; do
   grep -q " $f\$" <<<"$contents" || fail "the package lacks $f"
 done

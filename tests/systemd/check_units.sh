@@ -1,8 +1,9 @@
 #!/bin/bash
 # The units as installed: `systemd-analyze verify` finds nothing, and `systemd-analyze security`
 # rates canemud.service at 0.6 or below ("SAFE": AF_UNIX only, no network), and at 1.8 or below
-# with the drop-ins that open the bridges' address families (systemd/canemud.service.d/); a
-# change that loosens the confinement fails here. Usage: check_units.sh SOURCE_DIR CANEMUD
+# with the drop-ins that open the bridges' address families (systemd/canemud.service.d/), 0.6
+# with the one that lets it hold a CPU latency request; a change that loosens the confinement
+# fails here. Usage: check_units.sh SOURCE_DIR CANEMUD
 set -euo pipefail
 src=$1
 canemud=$2
@@ -34,7 +35,7 @@ check() {
 }
 
 # verify wants the programs the units run to exist: point them at this build.
-for variant in default socketcan ip socketcan+ip; do
+for variant in default socketcan ip socketcan+ip cpu-latency; do
   mkdir -p "$dir/$variant/canemud.service.d"
   sed "s|/usr/bin/canemud|$canemud|g" "$src/systemd/canemud.service" >"$dir/$variant/canemud.service"
   cp "$src/systemd/canemud.socket" "$dir/$variant/"
@@ -46,6 +47,7 @@ check "$dir/default" 6 "canemud.service"
 check "$dir/socketcan" 18 "with socketcan.conf"
 check "$dir/ip" 18 "with ip.conf"
 check "$dir/socketcan+ip" 18 "with socketcan.conf and ip.conf"
+check "$dir/cpu-latency" 6 "with cpu-latency.conf"
 
 # Without a drop-in the service may open AF_UNIX sockets only and has no network.
 grep -qx "RestrictAddressFamilies=AF_UNIX" "$src/systemd/canemud.service" ||

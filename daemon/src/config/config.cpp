@@ -72,7 +72,8 @@ void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
   if (t == nullptr) {
     return;
   }
-  c.only_keys(*t, "simulation", {"time", "seed", "batch_us", "batch_max_us", "spin_us"});
+  c.only_keys(*t, "simulation",
+              {"time", "seed", "batch_us", "batch_max_us", "spin_us", "cpu_latency_us"});
   if (auto time = c.string(*t, "simulation", "time", false)) {
     auto parsed = parse_time_setting(*time);
     if (parsed) {
@@ -92,6 +93,9 @@ void read_simulation(Checker& c, const toml::table& root, Config& cfg) {
   }
   if (auto spin = c.integer(*t, "simulation", "spin_us", false, 0, 1000)) {
     cfg.simulation.spin_us = static_cast<uint32_t>(*spin);
+  }
+  if (auto bound = c.integer(*t, "simulation", "cpu_latency_us", false, 0, 100'000)) {
+    cfg.simulation.cpu_latency_us = static_cast<uint32_t>(*bound);
   }
 }
 

@@ -175,6 +175,7 @@ ipc::IpcResult<void> Server::open() {
   // Timer deadlines are met to the microsecond, not within Linux's default 50 us slack.
   ::prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   start_mono_ns_ = monotonic_ns();
+  hold_cpu_latency();
   // Under systemd (Type=notify): ready once the socket listens. A no-op elsewhere.
   sd_notifyf(0, "READY=1\nSTATUS=listening on %s\nMAINPID=%d", options_.socket_path.c_str(),
              static_cast<int>(::getpid()));
@@ -214,10 +215,30 @@ void Server::reload() {
     for (const std::string& line : r.refused) {
       log::warning("reload: not applied: {}", line);
     }
+    hold_cpu_latency();
     log::info("reload of {} done: {} change{} applied, {} not", fresh->source, r.applied.size(),
               r.applied.size() == 1 ? "" : "s", r.refused.size());
   }
   sd_notify(0, "READY=1");
+}
+
+void Server::hold_cpu_latency() {
+  // Stepped time waits for no wake-up: no request there.
+  const std::optional<uint32_t> bound = options_.time.mode == TimeMode::stepped
+                                            ? std::nullopt
+                                            : sim_.config().simulation.cpu_latency_us;
+  const std::optional<uint32_t> before = cpu_latency_.held();
+  if (bound == before) {
+    return;
+  }
+  if (std::string e = cpu_latency_.hold(bound); !e.empty()) {
+    log::warning("simulation.cpu_latency_us {}: no request made: {}", *bound, e);
+  } else if (bound) {
+    log::info("CPUs asked to wake within {} us while canemud runs ({})", *bound,
+              CpuLatencyRequest::file());
+  } else {
+    log::info("CPU wake-up latency request of {} us ended", *before);
+  }
 }
 
 int Server::run() {

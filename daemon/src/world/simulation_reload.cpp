@@ -167,6 +167,12 @@ ReloadReport Simulation::reload(const Config& fresh) {
                                     config_.simulation.batch_us, config_.simulation.batch_max_us,
                                     config_.simulation.spin_us));
   }
+  if (fresh.simulation.cpu_latency_us != config_.simulation.cpu_latency_us) {
+    config_.simulation.cpu_latency_us = fresh.simulation.cpu_latency_us;
+    const auto& bound = config_.simulation.cpu_latency_us;
+    r.applied.push_back(bound ? fmt::format("simulation: cpu_latency_us {}", *bound)
+                              : std::string("simulation: cpu_latency_us removed"));
+  }
   return r;
 }
 

@@ -94,6 +94,9 @@ struct SimulationConfig {
   // batch_max_us <= batch_us: never wider than batch_us.
   uint32_t batch_max_us = 1000;
   uint32_t spin_us = 20;
+  // Real and scaled time: a bound in microseconds on how long an idle CPU takes to wake,
+  // requested from the kernel while canemud runs (PM QoS, loop/cpu_latency.hpp); none if unset.
+  std::optional<uint32_t> cpu_latency_us;
 };
 
 // The group the packages create (systemd/canemu.sysusers): its members may connect by default.

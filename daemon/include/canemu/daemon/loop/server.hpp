@@ -18,6 +18,7 @@
 #include "canemu/daemon/distributed/distributed.hpp"
 #include "canemu/daemon/loop/access_policy.hpp"
 #include "canemu/daemon/loop/batch_window.hpp"
+#include "canemu/daemon/loop/cpu_latency.hpp"
 #include "canemu/daemon/loop/pacing.hpp"
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/ipc/seqpacket.hpp"
@@ -209,6 +210,9 @@ class Server final : private LoopServices, private StepLoop {
   // event's instant there).
   static constexpr std::size_t kEventsPerStepClock = 64;
   Pacing pacing_;
+  // simulation.cpu_latency_us, held in real and scaled time; the log says what changed.
+  CpuLatencyRequest cpu_latency_;
+  void hold_cpu_latency();
   int64_t armed_ns_ = 0;      // CLOCK_MONOTONIC the timer is armed for (the deadline less the spin)
   bool armed_ahead_ = false;  // ... and that instant was still ahead when armed
   bool timer_armed_ = true;   // the timer may be armed (false: disarmed by arm_timer)

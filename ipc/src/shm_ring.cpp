@@ -406,14 +406,9 @@ RingStatus RingWriter::put(const void* element) {
   copy_element(data_ + std::size_t{slot_} * size_, element, size_);
   ++write_;
   slot_ = slot_ + 1 == capacity_ ? 0 : slot_ + 1;
-  // The next slot's first and last lines, fetched for writing now: a ring of thousands of
-  // elements that its reader drains as they come is written where nothing of it is cached any
-  // more (canemud at 64 busy buses writes 64 such rings), and the fetch then goes on while the
-  // writer does other work instead of stalling the next put (bench/README.md, "The rings'
-  // memory").
-  const uint8_t* next = data_ + std::size_t{slot_} * size_;
-  __builtin_prefetch(next, 1, 3);
-  __builtin_prefetch(next + size_ - 1, 1, 3);
+  // The next slot's ends fetched ahead: cached no more (bench/README.md, "The rings' memory").
+  __builtin_prefetch(data_ + std::size_t{slot_} * size_, 0, 3);
+  __builtin_prefetch(data_ + std::size_t{slot_ + 1} * size_ - 1, 0, 3);
   published(write_);
   return RingStatus::ok;
 }

@@ -304,13 +304,12 @@ sed -i 's/^time = "realtime".*$/&\ncpu_latency_us = 0/' /etc/canemu/canemud.toml
 systemctl restart canemud.service
 wait_for journal_has "simulation.cpu_latency_us 0: no request made: /dev/cpu_dma_latency"
 without=$?
-mkdir -p /etc/systemd/system/canemud.service.d
-ln -s /usr/share/canemu/systemd/cpu-latency.conf /etc/systemd/system/canemud.service.d/
-systemctl daemon-reload
+allow_and_add cpu-latency </dev/null
 systemctl restart canemud.service
 wait_for journal_has "CPUs asked to wake within 0 us"
 with=$?
-result the_cpu_latency_request_needs_its_drop_in "0 0" "$without $with"
+owner=$(stat -c %U /dev/cpu_dma_latency)
+result the_cpu_latency_request_needs_its_drop_in "0 0 canemu" "$without $with $owner"
 [ "$without $with" = "0 0" ] || journalctl -q -o cat -u canemud.service | grep -i "latency" | tail -5
 sed -i '/^cpu_latency_us = 0$/d' /etc/canemu/canemud.toml
 systemctl restart canemud.service

@@ -14,6 +14,8 @@
 #include <string>
 #include <utility>
 
+#include <sys/stat.h>
+
 #include "../support/temp_dir.hpp"
 #include "daemon_process.hpp"
 
@@ -49,17 +51,24 @@ int64_t written(const std::string& path) {
   return v;
 }
 
-// Whether process `pid` has `path` open.
-bool holds(pid_t pid, const std::string& path) {
+// How many of process `pid`'s descriptors are open on the file at `path` (compared by device
+// and inode, not by name).
+int opened(pid_t pid, const std::string& path) {
+  struct stat want {};
+  if (::stat(path.c_str(), &want) != 0) {
+    return 0;
+  }
+  int n = 0;
   const std::filesystem::path fds = "/proc/" + std::to_string(pid) + "/fd";
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(fds, ec)) {
-    std::error_code ignored;
-    if (std::filesystem::read_symlink(e.path(), ignored) == path) {
-      return true;
+    struct stat got {};
+    if (::stat(e.path().c_str(), &got) == 0 && got.st_dev == want.st_dev &&
+        got.st_ino == want.st_ino) {
+      ++n;
     }
   }
-  return false;
+  return n;
 }
 
 void write_file(const std::string& file, const std::string& text) {
@@ -75,31 +84,53 @@ TEST(CpuLatency, RealTimeHoldsTheRequestAReloadChangesOrEndsIt) {
   Daemon d("realtime", {"--config=" + config});
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 0 us", 10'000)) << d.log();
   EXPECT_EQ(written(qos.path()), 0);
-  EXPECT_TRUE(holds(d.pid(), qos.path()));
+  EXPECT_EQ(opened(d.pid(), qos.path()), 1);
 
   write_file(config, "[simulation]\ncpu_latency_us = 25\n\n[[bus]]\nname = \"a\"\n");
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 25 us", 10'000)) << d.log();
   EXPECT_NE(d.log().find("reload: simulation: cpu_latency_us 25"), std::string::npos) << d.log();
   EXPECT_EQ(written(qos.path()), 25);
-  EXPECT_TRUE(holds(d.pid(), qos.path()));
+  EXPECT_EQ(opened(d.pid(), qos.path()), 1);
 
   write_file(config, "[[bus]]\nname = \"a\"\n");
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("CPU wake-up latency request of 25 us ended", 10'000)) << d.log();
   EXPECT_NE(d.log().find("reload: simulation: cpu_latency_us removed"), std::string::npos);
-  EXPECT_FALSE(holds(d.pid(), qos.path()));
+  EXPECT_EQ(opened(d.pid(), qos.path()), 0);
+}
+
+TEST(CpuLatency, ARequestThatCannotBeChangedStaysAsItWas) {
+  testing::TempDir dir;
+  const LatencyFile qos((dir.path / "qos").string());
+  std::ofstream(qos.path()).put('x');
+  const std::string config = (dir.path / "canemud.toml").string();
+  write_file(config, "[simulation]\ncpu_latency_us = 0\n\n[[bus]]\nname = \"a\"\n");
+  Daemon d("realtime", {"--config=" + config});
+  ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 0 us", 10'000)) << d.log();
+  std::filesystem::remove(qos.path());  // the next open fails; the one held stays open
+  write_file(config, "[simulation]\ncpu_latency_us = 25\n\n[[bus]]\nname = \"a\"\n");
+  d.signal(SIGHUP);
+  ASSERT_TRUE(d.read_log_until("the request of 0 us stays", 10'000)) << d.log();
+  EXPECT_NE(d.log().find("simulation.cpu_latency_us 25: no request made: " + qos.path() +
+                         ": No such file or directory"),
+            std::string::npos)
+      << d.log();
+  EXPECT_EQ(d.log().find("request of 0 us ended"), std::string::npos) << d.log();
 }
 
 TEST(CpuLatency, SteppedTimeMakesNoRequest) {
   testing::TempDir dir;
   const LatencyFile qos((dir.path / "qos").string());
+  std::ofstream(qos.path()).put('x');
   const std::string config = (dir.path / "canemud.toml").string();
   write_file(config, "[simulation]\ncpu_latency_us = 0\n\n[[bus]]\nname = \"a\"\n");
   Daemon d("stepped", {"--config=" + config});
   auto c = connect(d);
-  EXPECT_EQ(status(c).bus_count, 1);  // started and serving
-  EXPECT_FALSE(std::filesystem::exists(qos.path()));
+  EXPECT_EQ(status(c).bus_count, 1);   // started and serving, past where a request is made
+  EXPECT_EQ(written(qos.path()), -1);  // still the one byte written above
+  EXPECT_EQ(opened(d.pid(), qos.path()), 0);
+  EXPECT_EQ(d.log().find("cpu_latency"), std::string::npos) << d.log();
   EXPECT_EQ(d.log().find("CPUs asked"), std::string::npos) << d.log();
 }
 

@@ -21,19 +21,23 @@ std::string CpuLatencyRequest::hold(std::optional<uint32_t> us) {
   if (us == held_) {
     return {};
   }
-  fd_.reset();  // closing the file ends the request held
-  held_.reset();
   if (!us) {
+    fd_.reset();  // closing the file ends the request held
+    held_.reset();
     return {};
   }
+  // The new request is made before the old one ends: one that cannot be made leaves the old
+  // one held (held() says which).
   const std::string path = file();
   ipc::UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CLOEXEC));
   if (!fd.valid()) {
     return fmt::format("{}: {} (docs/daemon.md, \"Latency\")", path, std::strerror(errno));
   }
   const int32_t value = static_cast<int32_t>(*us);
-  if (::write(fd.get(), &value, sizeof value) != static_cast<ssize_t>(sizeof value)) {
-    return fmt::format("{}: writing {} us: {}", path, *us, std::strerror(errno));
+  const ssize_t n = ::write(fd.get(), &value, sizeof value);
+  if (n != static_cast<ssize_t>(sizeof value)) {
+    return fmt::format("{}: writing {} us: {}", path, *us,
+                       n < 0 ? std::strerror(errno) : "the file took part of the value");
   }
   fd_ = std::move(fd);
   held_ = us;

@@ -232,7 +232,8 @@ void Server::hold_cpu_latency() {
     return;
   }
   if (std::string e = cpu_latency_.hold(bound); !e.empty()) {
-    log::warning("simulation.cpu_latency_us {}: no request made: {}", *bound, e);
+    log::warning("simulation.cpu_latency_us {}: no request made: {}{}", *bound, e,
+                 before ? fmt::format("; the request of {} us stays", *before) : "");
   } else if (bound) {
     log::info("CPUs asked to wake within {} us while canemud runs ({})", *bound,
               CpuLatencyRequest::file());

@@ -20,7 +20,8 @@ class CpuLatencyRequest {
   // The file written: CANEMU_CPU_LATENCY_FILE if set (for tests), else /dev/cpu_dma_latency.
   static std::string file();
   // Holds a request for `us` microseconds, or none (nullopt); a request held for another bound
-  // ends first. Returns why it could not be made (then none is held), empty if it was.
+  // ends once the new one is made. Returns why it could not be made (then the request held
+  // before, if any, stays), empty if it was.
   std::string hold(std::optional<uint32_t> us);
   std::optional<uint32_t> held() const { return held_; }
 

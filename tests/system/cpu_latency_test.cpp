@@ -75,25 +75,45 @@ void write_file(const std::string& file, const std::string& text) {
   std::ofstream(file) << text;
 }
 
-TEST(CpuLatency, RealTimeHoldsTheRequestAReloadChangesOrEndsIt) {
+// A folder of the test's own with the file canemud writes its request into (one byte in it, as
+// the kernel's device exists before anyone writes it; or none at all with `file` "missing"), and
+// canemud's configuration with one bus and `cpu_latency_us` (none if negative).
+struct Rig {
+  explicit Rig(int64_t bound, const char* file = "qos")
+      : qos((dir.path / (std::string(file) == "missing" ? "no-such-folder/qos" : file)).string()),
+        config((dir.path / "canemud.toml").string()) {
+    if (std::string(file) != "missing") {
+      std::ofstream(qos.path()).put('x');
+    }
+    set(bound);
+  }
+  void set(int64_t bound) const {
+    write_file(config,
+               (bound < 0 ? std::string()
+                          : "[simulation]\ncpu_latency_us = " + std::to_string(bound) + "\n\n") +
+                   "[[bus]]\nname = \"a\"\n");
+  }
   testing::TempDir dir;
-  const LatencyFile qos((dir.path / "qos").string());
-  std::ofstream(qos.path()).put('x');  // the kernel's device exists before anyone writes it
-  const std::string config = (dir.path / "canemud.toml").string();
-  write_file(config, "[simulation]\ncpu_latency_us = 0\n\n[[bus]]\nname = \"a\"\n");
-  Daemon d("realtime", {"--config=" + config});
+  LatencyFile qos;
+  std::string config;
+};
+
+TEST(CpuLatency, RealTimeHoldsTheRequestAReloadChangesOrEndsIt) {
+  const Rig rig(0);
+  const LatencyFile& qos = rig.qos;
+  Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 0 us", 10'000)) << d.log();
   EXPECT_EQ(written(qos.path()), 0);
   EXPECT_EQ(opened(d.pid(), qos.path()), 1);
 
-  write_file(config, "[simulation]\ncpu_latency_us = 25\n\n[[bus]]\nname = \"a\"\n");
+  rig.set(25);
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 25 us", 10'000)) << d.log();
   EXPECT_NE(d.log().find("reload: simulation: cpu_latency_us 25"), std::string::npos) << d.log();
   EXPECT_EQ(written(qos.path()), 25);
   EXPECT_EQ(opened(d.pid(), qos.path()), 1);
 
-  write_file(config, "[[bus]]\nname = \"a\"\n");
+  rig.set(-1);
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("CPU wake-up latency request of 25 us ended", 10'000)) << d.log();
   EXPECT_NE(d.log().find("reload: simulation: cpu_latency_us removed"), std::string::npos);
@@ -101,15 +121,12 @@ TEST(CpuLatency, RealTimeHoldsTheRequestAReloadChangesOrEndsIt) {
 }
 
 TEST(CpuLatency, ARequestThatCannotBeChangedStaysAsItWas) {
-  testing::TempDir dir;
-  const LatencyFile qos((dir.path / "qos").string());
-  std::ofstream(qos.path()).put('x');
-  const std::string config = (dir.path / "canemud.toml").string();
-  write_file(config, "[simulation]\ncpu_latency_us = 0\n\n[[bus]]\nname = \"a\"\n");
-  Daemon d("realtime", {"--config=" + config});
+  const Rig rig(0);
+  const LatencyFile& qos = rig.qos;
+  Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 0 us", 10'000)) << d.log();
   std::filesystem::remove(qos.path());  // the next open fails; the one held stays open
-  write_file(config, "[simulation]\ncpu_latency_us = 25\n\n[[bus]]\nname = \"a\"\n");
+  rig.set(25);
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("the request of 0 us stays", 10'000)) << d.log();
   EXPECT_NE(d.log().find("simulation.cpu_latency_us 25: no request made: " + qos.path() +
@@ -120,12 +137,9 @@ TEST(CpuLatency, ARequestThatCannotBeChangedStaysAsItWas) {
 }
 
 TEST(CpuLatency, SteppedTimeMakesNoRequest) {
-  testing::TempDir dir;
-  const LatencyFile qos((dir.path / "qos").string());
-  std::ofstream(qos.path()).put('x');
-  const std::string config = (dir.path / "canemud.toml").string();
-  write_file(config, "[simulation]\ncpu_latency_us = 0\n\n[[bus]]\nname = \"a\"\n");
-  Daemon d("stepped", {"--config=" + config});
+  const Rig rig(0);
+  const LatencyFile& qos = rig.qos;
+  Daemon d("stepped", {"--config=" + rig.config});
   auto c = connect(d);
   EXPECT_EQ(status(c).bus_count, 1);   // started and serving, past where a request is made
   EXPECT_EQ(written(qos.path()), -1);  // still the one byte written above
@@ -135,11 +149,9 @@ TEST(CpuLatency, SteppedTimeMakesNoRequest) {
 }
 
 TEST(CpuLatency, AFileItCannotOpenIsNamedAndTheDaemonRunsWithoutTheRequest) {
-  testing::TempDir dir;
-  const LatencyFile qos((dir.path / "no-such-folder" / "qos").string());
-  const std::string config = (dir.path / "canemud.toml").string();
-  write_file(config, "[simulation]\ncpu_latency_us = 10\n\n[[bus]]\nname = \"a\"\n");
-  Daemon d("realtime", {"--config=" + config});
+  const Rig rig(10, "missing");
+  const LatencyFile& qos = rig.qos;
+  Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("no request made", 10'000)) << d.log();
   EXPECT_NE(d.log().find("simulation.cpu_latency_us 10: no request made: " + qos.path() +
                          ": No such file or directory"),

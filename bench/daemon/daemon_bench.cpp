@@ -36,6 +36,7 @@
 #include <unistd.h>
 
 #include "../../tests/support/canemud_process.hpp"
+#include "../../tests/support/scoped_env.hpp"
 #include "../support/latency.hpp"
 #include "../support/process_figures.hpp"
 #include "canemu/client/channel.hpp"
@@ -178,30 +179,6 @@ std::string distributed_config(const std::string& dir, const std::string& name, 
   return path;
 }
 
-// Sets an environment variable while it lives (the daemons started meanwhile inherit it).
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const std::string& value) : name_(name) {
-    if (const char* old = ::getenv(name)) {
-      old_ = old;
-    }
-    ::setenv(name, value.c_str(), 1);
-  }
-  ~ScopedEnv() {
-    if (old_) {
-      ::setenv(name_, old_->c_str(), 1);
-    } else {
-      ::unsetenv(name_);
-    }
-  }
-  ScopedEnv(const ScopedEnv&) = delete;
-  ScopedEnv& operator=(const ScopedEnv&) = delete;
-
- private:
-  const char* name_;
-  std::optional<std::string> old_;
-};
-
 std::string fmt_leg(const char* daemon, const char* leg, const char* p) {
   return std::string("leg_") + daemon + "_" + leg + "_" + p + "_us";
 }
@@ -214,7 +191,7 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
   char dir[] = "/tmp/canemu-bench-XXXXXX";
   const std::string base = ::mkdtemp(dir);
   const int domain = 1 + static_cast<int>(::getpid() % 200);
-  const ScopedEnv uri(
+  const testing::ScopedEnv uri(
       "CYCLONEDDS_URI",
       "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/>"
       "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
@@ -222,7 +199,7 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
       "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
       "</Domain></CycloneDDS>");
   // Each daemon times the legs of the link's messages and logs them as it stops.
-  const ScopedEnv legs("CANEMU_NET_LEGS", "1");
+  const testing::ScopedEnv legs("CANEMU_NET_LEGS", "1");
   const std::string config_a = distributed_config(base, "a", domain, "");
   const std::string config_b = distributed_config(base, "b", domain, "owner = \"a\"\n");
   const auto cleanup = [&] {

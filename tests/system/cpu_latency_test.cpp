@@ -7,15 +7,14 @@
 #include <array>
 #include <csignal>
 #include <cstdint>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <utility>
 
 #include <sys/stat.h>
 
+#include "../support/scoped_env.hpp"
 #include "../support/temp_dir.hpp"
 #include "daemon_process.hpp"
 
@@ -25,19 +24,6 @@ namespace {
 using testing::connect;
 using testing::Daemon;
 using testing::status;
-
-// Sets CANEMU_CPU_LATENCY_FILE while it lives; the daemons started meanwhile inherit it.
-class LatencyFile {
- public:
-  explicit LatencyFile(std::string path) : path_(std::move(path)) {
-    ::setenv("CANEMU_CPU_LATENCY_FILE", path_.c_str(), 1);
-  }
-  ~LatencyFile() { ::unsetenv("CANEMU_CPU_LATENCY_FILE"); }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
 
 // The 32-bit value at the start of the file, or -1 if it has fewer than four bytes.
 int64_t written(const std::string& path) {
@@ -75,15 +61,17 @@ void write_file(const std::string& file, const std::string& text) {
   std::ofstream(file) << text;
 }
 
-// A folder of the test's own with the file canemud writes its request into (one byte in it, as
-// the kernel's device exists before anyone writes it; or none at all with `file` "missing"), and
-// canemud's configuration with one bus and `cpu_latency_us` (none if negative).
+// A folder of the test's own, the file canemud is to write its request into
+// (CANEMU_CPU_LATENCY_FILE: one byte in it, as the kernel's device exists before anyone writes
+// it; or, `missing`, a path to nothing), and canemud's configuration with one bus and
+// `cpu_latency_us` (none if negative).
 struct Rig {
-  explicit Rig(int64_t bound, const char* file = "qos")
-      : qos((dir.path / (std::string(file) == "missing" ? "no-such-folder/qos" : file)).string()),
+  explicit Rig(int64_t bound, bool missing = false)
+      : qos((dir.path / (missing ? "no-such-folder/qos" : "qos")).string()),
+        env("CANEMU_CPU_LATENCY_FILE", qos),
         config((dir.path / "canemud.toml").string()) {
-    if (std::string(file) != "missing") {
-      std::ofstream(qos.path()).put('x');
+    if (!missing) {
+      std::ofstream(qos).put('x');
     }
     set(bound);
   }
@@ -94,42 +82,43 @@ struct Rig {
                    "[[bus]]\nname = \"a\"\n");
   }
   testing::TempDir dir;
-  LatencyFile qos;
+  std::string qos;
+  testing::ScopedEnv env;
   std::string config;
 };
 
 TEST(CpuLatency, RealTimeHoldsTheRequestAReloadChangesOrEndsIt) {
   const Rig rig(0);
-  const LatencyFile& qos = rig.qos;
+  const std::string& qos = rig.qos;
   Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 0 us", 10'000)) << d.log();
-  EXPECT_EQ(written(qos.path()), 0);
-  EXPECT_EQ(opened(d.pid(), qos.path()), 1);
+  EXPECT_EQ(written(qos), 0);
+  EXPECT_EQ(opened(d.pid(), qos), 1);
 
   rig.set(25);
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 25 us", 10'000)) << d.log();
   EXPECT_NE(d.log().find("reload: simulation: cpu_latency_us 25"), std::string::npos) << d.log();
-  EXPECT_EQ(written(qos.path()), 25);
-  EXPECT_EQ(opened(d.pid(), qos.path()), 1);
+  EXPECT_EQ(written(qos), 25);
+  EXPECT_EQ(opened(d.pid(), qos), 1);
 
   rig.set(-1);
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("CPU wake-up latency request of 25 us ended", 10'000)) << d.log();
   EXPECT_NE(d.log().find("reload: simulation: cpu_latency_us removed"), std::string::npos);
-  EXPECT_EQ(opened(d.pid(), qos.path()), 0);
+  EXPECT_EQ(opened(d.pid(), qos), 0);
 }
 
 TEST(CpuLatency, ARequestThatCannotBeChangedStaysAsItWas) {
   const Rig rig(0);
-  const LatencyFile& qos = rig.qos;
+  const std::string& qos = rig.qos;
   Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("CPUs asked to wake within 0 us", 10'000)) << d.log();
-  std::filesystem::remove(qos.path());  // the next open fails; the one held stays open
+  std::filesystem::remove(qos);  // the next open fails; the one held stays open
   rig.set(25);
   d.signal(SIGHUP);
   ASSERT_TRUE(d.read_log_until("the request of 0 us stays", 10'000)) << d.log();
-  EXPECT_NE(d.log().find("simulation.cpu_latency_us 25: no request made: " + qos.path() +
+  EXPECT_NE(d.log().find("simulation.cpu_latency_us 25: no request made: " + qos +
                          ": No such file or directory"),
             std::string::npos)
       << d.log();
@@ -138,22 +127,22 @@ TEST(CpuLatency, ARequestThatCannotBeChangedStaysAsItWas) {
 
 TEST(CpuLatency, SteppedTimeMakesNoRequest) {
   const Rig rig(0);
-  const LatencyFile& qos = rig.qos;
+  const std::string& qos = rig.qos;
   Daemon d("stepped", {"--config=" + rig.config});
   auto c = connect(d);
-  EXPECT_EQ(status(c).bus_count, 1);   // started and serving, past where a request is made
-  EXPECT_EQ(written(qos.path()), -1);  // still the one byte written above
-  EXPECT_EQ(opened(d.pid(), qos.path()), 0);
+  EXPECT_EQ(status(c).bus_count, 1);  // started and serving, past where a request is made
+  EXPECT_EQ(written(qos), -1);        // still the one byte written above
+  EXPECT_EQ(opened(d.pid(), qos), 0);
   EXPECT_EQ(d.log().find("cpu_latency"), std::string::npos) << d.log();
   EXPECT_EQ(d.log().find("CPUs asked"), std::string::npos) << d.log();
 }
 
 TEST(CpuLatency, AFileItCannotOpenIsNamedAndTheDaemonRunsWithoutTheRequest) {
-  const Rig rig(10, "missing");
-  const LatencyFile& qos = rig.qos;
+  const Rig rig(10, true);
+  const std::string& qos = rig.qos;
   Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("no request made", 10'000)) << d.log();
-  EXPECT_NE(d.log().find("simulation.cpu_latency_us 10: no request made: " + qos.path() +
+  EXPECT_NE(d.log().find("simulation.cpu_latency_us 10: no request made: " + qos +
                          ": No such file or directory"),
             std::string::npos)
       << d.log();

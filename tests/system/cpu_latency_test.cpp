@@ -125,6 +125,20 @@ TEST(CpuLatency, ARequestThatCannotBeChangedStaysAsItWas) {
   EXPECT_EQ(d.log().find("request of 0 us ended"), std::string::npos) << d.log();
 }
 
+// A file whose open would wait (a FIFO nobody reads) does not hold up the loop: refused at once.
+TEST(CpuLatency, AFileWhoseOpenWouldWaitIsRefusedAtOnce) {
+  const Rig rig(5, true);
+  std::filesystem::create_directory(rig.dir.path / "no-such-folder");
+  ASSERT_EQ(::mkfifo(rig.qos.c_str(), 0600), 0);
+  Daemon d("realtime", {"--config=" + rig.config});
+  ASSERT_TRUE(d.read_log_until("no request made", 10'000)) << d.log();
+  EXPECT_NE(d.log().find("simulation.cpu_latency_us 5: no request made: " + rig.qos),
+            std::string::npos)
+      << d.log();
+  auto c = connect(d);
+  EXPECT_EQ(status(c).bus_count, 1);
+}
+
 TEST(CpuLatency, SteppedTimeMakesNoRequest) {
   const Rig rig(0);
   const std::string& qos = rig.qos;

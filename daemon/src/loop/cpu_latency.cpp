@@ -29,7 +29,8 @@ std::string CpuLatencyRequest::hold(std::optional<uint32_t> us) {
   // The new request is made before the old one ends: one that cannot be made leaves the old
   // one held (held() says which).
   const std::string path = file();
-  ipc::UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CLOEXEC));
+  // Non-blocking: the loop must not wait on the open (a FIFO without a reader would hold it).
+  ipc::UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK));
   if (!fd.valid()) {
     return fmt::format("{}: {} (docs/daemon.md, \"Latency\")", path, std::strerror(errno));
   }

@@ -29,32 +29,22 @@ inline uint16_t first_split(const EncodedFrame& a, const EncodedFrame& b, bool& 
 
 }  // namespace
 
-bool Arbitration::resolve_in_first_word(std::span<const Contender> contenders) {
+bool Arbitration::resolve_in_first_word() {
   // The smallest first word wins if no other contender has it too.
-  const std::size_t n = contenders.size();
-  std::size_t best = 0;
-  uint64_t best_word = contenders[0].bits->level[0];
-  bool tie = false;
-  for (std::size_t k = 1; k < n; ++k) {
-    const uint64_t w = contenders[k].bits->level[0];
-    tie = tie || w == best_word;
-    if (w < best_word) {
-      best_word = w;
-      best = k;
-      tie = false;
-    }
-  }
-  if (tie) {
+  if (tie_) {
     return false;
   }
+  const std::span<const Contender> contenders = contenders_.span();
+  const std::size_t best = smallest_;
+  const uint64_t best_word = smallest_word_;
   // Every other contender must lose within its arbitration field (the first word holds it).
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = 0; k < contenders.size(); ++k) {
     if (k == best) {
       continue;
     }
-    const auto at =
-        static_cast<uint16_t>(__builtin_clzll(contenders[k].bits->level[0] ^ best_word));
-    if (at >= contenders[k].bits->arbitration_end) {
+    const EncodedFrame& bits = *contenders[k].bits;
+    const auto at = static_cast<uint16_t>(__builtin_clzll(bits.level[0] ^ best_word));
+    if (at >= bits.arbitration_end) {
       lost_.clear();
       return false;
     }
@@ -66,16 +56,28 @@ bool Arbitration::resolve_in_first_word(std::span<const Contender> contenders) {
 }
 
 void Arbitration::resolve(std::span<const Contender> contenders) {
+  begin(contenders.size());
+  for (const Contender& c : contenders) {
+    add(c);
+  }
+  resolve();
+}
+
+void Arbitration::resolve() {
   senders_.clear();
   lost_.clear();
-  lost_.fit(contenders.size());
+  lost_.fit(contenders_.size());
   collisions_.clear();
   // Nearly always the identifiers decide within the first 64 bits of the frames.
-  if (resolve_in_first_word(contenders)) {
-    return;
+  if (!resolve_in_first_word()) {
+    resolve_walk();
   }
+}
+
+void Arbitration::resolve_walk() {
   // One pass: the winner so far, and where every other contender departs from it. Identical
   // frames tie, and of them the first in `contenders` stays the winner.
+  const std::span<const Contender> contenders = contenders_.span();
   const std::size_t n = contenders.size();
   if (split_.size() < n) {
     split_.resize(n);

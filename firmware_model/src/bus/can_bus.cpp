@@ -38,7 +38,6 @@ NodeId CanBus::attach(CanController& controller) {
   n.last_state = n.fc->state();
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
-  contenders_.fit(node_count_);
   in_flight_.fit(node_count_);
   completion_.losses.fit(node_count_);
   decodes_cache_.clear();
@@ -253,8 +252,8 @@ void CanBus::attempt(SimTime now) {
   if (injector_ != nullptr) {
     injector_->before_arbitration(now, *this);
   }
-  NodeList<Arbitration::Contender>& contenders = contenders_;
-  contenders.clear();
+  Arbitration& arbitration = arbitration_;
+  arbitration.begin(node_count_);
   std::optional<SimTime> next_ready;
   for (const Member& m : members()) {
     Node& n = *m.node;
@@ -268,9 +267,9 @@ void CanBus::attempt(SimTime now) {
     if (!n.encoded_valid) {
       load_encoding(n);
     }
-    contenders.push_back(Arbitration::Contender{m.id, &n.encoded});
+    arbitration.add(Arbitration::Contender{m.id, &n.encoded});
   }
-  if (contenders.empty()) {
+  if (arbitration.empty()) {
     if (next_ready) {
       schedule_attempt(*next_ready);
     }
@@ -283,7 +282,7 @@ void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
-  arbitration_.resolve(contenders_.span());
+  arbitration_.resolve();
   const std::vector<NodeId>& active = arbitration_.senders();
   const NodeId tx = active.front();
   in_flight_.clear();
@@ -435,7 +434,7 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
     // Nothing here depends on the frame beyond its sender, fd and brs: kept for the next one.
     plain_checks_.clear();
     for (const Member& m : ms) {
-      plain_checks_.push_back(PlainCheck{m.node->fc, plain_state(*m.node->fc)});
+      plain_checks_.push_back(PlainCheck{m.node->fc, m.node->fc->passive_or_off_changes()});
     }
     plain_valid_ = true;
     plain_tx_ = tx;

@@ -33,6 +33,30 @@ class Arbitration {
   // first in `contenders` is the winner. The results below stay until the next call.
   void resolve(std::span<const Contender> contenders);
 
+  // The same in steps, as a bus walks its nodes: begin() with room for `most` contenders, add()
+  // each (in order; their first words are compared as they come, so that the common case needs
+  // no second look at them), then resolve() (at least one added).
+  void begin(std::size_t most) {
+    contenders_.fit(most);
+    contenders_.clear();
+    smallest_ = 0;
+    smallest_word_ = ~uint64_t{0};
+    tie_ = false;
+  }
+  void add(const Contender& c) {
+    // A frame's first bit, SOF, is dominant, so a first word is never all ones: the first one
+    // added is the smallest so far. (Were it, the tie would only send resolve() the long way.)
+    const uint64_t word = c.bits->level[0];
+    if (word <= smallest_word_) {
+      tie_ = word == smallest_word_;  // a smaller one ends any tie
+      smallest_word_ = word;
+      smallest_ = contenders_.size();
+    }
+    contenders_.push_back(c);
+  }
+  bool empty() const { return contenders_.empty(); }
+  void resolve();
+
   // The nodes that send: the winner first, then, in contender order, those with the winner's
   // frame and those that collide with it.
   const std::vector<NodeId>& senders() const { return senders_; }
@@ -62,9 +86,18 @@ class Arbitration {
   }
 
  private:
-  // resolve() when the first word of the frames decides: a single smallest one, every other
-  // frame departing from it within its arbitration field. False, with nothing recorded, if not.
-  bool resolve_in_first_word(std::span<const Contender> contenders);
+  // resolve() when the first word of the frames decides: a single smallest one (add() found
+  // it), every other frame departing from it within its arbitration field. False, with nothing
+  // recorded, if not.
+  bool resolve_in_first_word();
+  // The general walk over the contenders: ties, collisions after the arbitration field.
+  void resolve_walk();
+
+  // What add() gathered.
+  NodeList<Contender> contenders_;
+  std::size_t smallest_ = 0;  // of the smallest first word: the last one to have it (tie_)
+  uint64_t smallest_word_ = ~uint64_t{0};
+  bool tie_ = false;
 
   std::vector<NodeId> senders_;
   const EncodedFrame* winning_bits_ = nullptr;

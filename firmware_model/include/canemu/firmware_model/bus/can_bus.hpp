@@ -291,7 +291,7 @@ class CanBus final : private EventHandler {
       return false;
     }
     for (const PlainCheck& c : plain_checks_) {
-      if (plain_state(*c.fc) != c.state) {
+      if (c.fc->passive_or_off_changes() != c.changes) {
         return false;
       }
     }
@@ -410,7 +410,6 @@ class CanBus final : private EventHandler {
   std::vector<DominantHold> holds_;  // pending dominant holds
 
   // Scratch space reused from frame to frame, and the frame in flight.
-  NodeList<Arbitration::Contender> contenders_;
   Arbitration arbitration_;
   std::vector<BusParticipant> parts_;
   Completion completion_;
@@ -426,12 +425,9 @@ class CanBus final : private EventHandler {
   bool plain_brs_ = false;
   struct PlainCheck {
     const FaultConfinement* fc;
-    uint8_t state;  // as plain_state() gave it
+    uint32_t changes;  // its passive_or_off_changes() then
   };
   std::vector<PlainCheck> plain_checks_;  // per member
-  static uint8_t plain_state(const FaultConfinement& fc) {
-    return static_cast<uint8_t>((fc.bus_off() ? 2u : 0u) | (fc.error_passive() ? 1u : 0u));
-  }
   // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
   std::vector<int8_t> decodes_cache_;
 

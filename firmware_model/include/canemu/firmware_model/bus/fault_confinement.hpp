@@ -27,6 +27,21 @@ class FaultConfinement {
   // 8 bits (255) on the SJA1000 (RXERR) and the CAN FD controller; the default only keeps the
   // 16-bit value from wrapping.
   explicit FaultConfinement(uint16_t rec_limit = 0xFFFF) : rec_limit_(rec_limit) {}
+  FaultConfinement(const FaultConfinement&) = default;
+  // Takes `other`'s counters and state; passive_or_off_changes() changes (it never goes back to
+  // a number it had, so a look at it cannot be fooled by an assignment).
+  FaultConfinement& operator=(const FaultConfinement& other) {
+    const uint32_t changes = changes_ + 1;
+    tec_ = other.tec_;
+    rec_ = other.rec_;
+    rec_limit_ = other.rec_limit_;
+    warning_limit_ = other.warning_limit_;
+    bus_off_ = other.bus_off_;
+    recovering_ = other.recovering_;
+    sequences_seen_ = other.sequences_seen_;
+    changes_ = changes;
+    return *this;
+  }
 
   uint16_t tec() const { return tec_; }
   uint16_t rec() const { return rec_; }
@@ -37,6 +52,10 @@ class FaultConfinement {
     return !bus_off_ && (tec_ | rec_) >= kErrorPassiveLimit;
   }
   ErrorState state() const;
+  // A number that changes whenever bus_off() or error_passive() may have changed (and at other
+  // times too: every counted error, every direct write): a cheap look for whether either still
+  // reads as it did (the bus engine keeps a frame's roles while they do).
+  uint32_t passive_or_off_changes() const { return changes_; }
 
   // The limit for the warning state (SJA1000 EWLR); 96 unless programmed.
   uint8_t warning_limit() const { return warning_limit_; }
@@ -59,6 +78,7 @@ class FaultConfinement {
   // Rule 7: successful transmission: TEC - 1.
   void transmit_succeeded() {
     if (tec_ > 0) {
+      changes_ += tec_ == kErrorPassiveLimit ? 1u : 0u;
       --tec_;
     }
   }
@@ -67,6 +87,7 @@ class FaultConfinement {
   void receive_succeeded() {
     if (rec_ > 127) {
       rec_ = 127;
+      ++changes_;
     } else if (rec_ > 0) {
       --rec_;
     }
@@ -102,6 +123,7 @@ class FaultConfinement {
   bool bus_off_ = false;
   bool recovering_ = false;
   uint32_t sequences_seen_ = 0;
+  uint32_t changes_ = 0;  // passive_or_off_changes()
 };
 
 }  // namespace canemu::model

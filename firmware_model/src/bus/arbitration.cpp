@@ -30,6 +30,10 @@ inline uint16_t first_split(const EncodedFrame& a, const EncodedFrame& b, bool& 
 }  // namespace
 
 bool Arbitration::resolve_in_first_word() {
+  senders_.clear();
+  lost_.clear();
+  lost_.fit(contenders_.size());
+  collisions_.clear();
   // The smallest first word wins if no other contender has it too.
   if (tie_) {
     return false;
@@ -64,10 +68,6 @@ void Arbitration::resolve(std::span<const Contender> contenders) {
 }
 
 void Arbitration::resolve() {
-  senders_.clear();
-  lost_.clear();
-  lost_.fit(contenders_.size());
-  collisions_.clear();
   // Nearly always the identifiers decide within the first 64 bits of the frames.
   if (!resolve_in_first_word()) {
     resolve_walk();

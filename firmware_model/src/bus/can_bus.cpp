@@ -154,10 +154,21 @@ void CanBus::load_encoding(Node& n) {
   // identifier check spares most differing frames the call to operator==.)
   const Frame& f = pending(n)->frame;
   if (!n.encoded_frame || n.encoded_frame->id() != f.id() || !(*n.encoded_frame == f)) {
-    encode(f, n.encoded);
+    n.encoded_whole = encode_head(f, n.encoded);
     n.encoded_frame = f;
   }
   n.encoded_valid = true;
+}
+
+void CanBus::make_whole(Node& n) {
+  encode(*n.encoded_frame, n.encoded);
+  n.encoded_whole = true;
+}
+
+void CanBus::senders_whole() {
+  for (const NodeId id : arbitration_.senders()) {
+    whole_encoding(nodes_[id]);
+  }
 }
 
 void CanBus::tx_changed(NodeId node) {
@@ -282,7 +293,13 @@ void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
-  arbitration_.resolve();
+  if (!arbitration_.resolve_in_first_word()) {
+    // The long walk compares whole frames.
+    for (const Arbitration::Contender& c : arbitration_.contenders()) {
+      whole_encoding(nodes_[c.node]);
+    }
+    arbitration_.resolve_walk();
+  }
   const std::vector<NodeId>& active = arbitration_.senders();
   const NodeId tx = active.front();
   in_flight_.clear();
@@ -317,7 +334,7 @@ void CanBus::run_frame(SimTime sof) {
   // Everybody on the bus takes part: the transmitters, and every other node as a receiver.
   FrameFault fault;
   if (injector_ != nullptr && injector_->frames_wanted()) {
-    fault = injector_->on_frame(FrameContext{sof, tx, tx_frame.frame, e});
+    fault = injector_->on_frame(FrameContext{sof, tx, tx_frame.frame, whole_encoding(nodes_[tx])});
   }
   const bool alone = active.size() == 1;
   const bool acks_suppressed = sof < ack_suppressed_until_;
@@ -353,6 +370,7 @@ void CanBus::run_frame(SimTime sof) {
     }
     scheduler_.schedule_at(latest, [this](SimTime) { report_losses(); });
   }
+  senders_whole();  // the error phase reads their bits (parts_ and `e` point at them)
   run_error_phase(sof, parts_, &e, nominal, data, *first_bit);
 }
 

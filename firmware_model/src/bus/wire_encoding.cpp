@@ -348,6 +348,10 @@ inline uint64_t window_of(uint64_t hi, uint64_t lo, uint32_t i) {
 // pushes out of the word's end is read again for the next word). So the work grows with the
 // number of stuff bits, a few per frame, and a frame with many (long runs of equal bits, zero
 // bytes) pays a handful of instructions for each.
+//
+// With kWhole false only the first word (and its marks) is written: the stuff bits past it are
+// counted, not inserted (encode_head).
+template <bool kWhole>
 uint32_t stuff_classic(uint128 x, uint32_t n, EncodedFrame::Bits& wire, EncodedFrame::Bits& marks) {
   const uint128 eq = ~(x ^ (x << 1));  // bit 127 - j: bit j equals bit j + 1
   // Only what begins at j <= n - 5 lies inside the frame.
@@ -382,8 +386,14 @@ uint32_t stuff_classic(uint128 x, uint32_t n, EncodedFrame::Bits& wire, EncodedF
   uint32_t p = next_set(rh, rl, 0) + 4;  // the destuffed bit the next stuff bit follows
   while (p < 128) {
     const uint32_t q = p + 1 + count;  // the stuff bit's index on the wire
-    while (q >= end) {
-      next_word();
+    if constexpr (kWhole) {
+      while (q >= end) {
+        next_word();
+      }
+    } else if (q >= 64) {
+      ++count;
+      p = bit_of(ah, al, p) != 0 ? p + 4 : next_set(rh, rl, p + 1) + 4;
+      continue;
     }
     // The stuff bit goes in at `off`: the bits from there on move one place on, and the bit
     // before it is copied there and flipped (at the word's start, the word before's last).
@@ -398,13 +408,16 @@ uint32_t stuff_classic(uint128 x, uint32_t n, EncodedFrame::Bits& wire, EncodedF
   }
   // The words the frame uses, its ten recessive bits after the CRC included; the words after
   // them keep what they held (bits at and after the frame's length are unspecified).
-  while (end < n + count + 3 + kEofBits) {
-    next_word();
+  if constexpr (kWhole) {
+    while (end < n + count + 3 + kEofBits) {
+      next_word();
+    }
   }
   store();
   return count;
 }
 
+template <bool kWhole>
 void encode_classic(const Frame& frame, EncodedFrame& out) {
   uint128 x = 0;
   const uint32_t head = classic_header_and_data(frame, x);
@@ -413,14 +426,16 @@ void encode_classic(const Frame& frame, EncodedFrame& out) {
   x |= uint128{crc} << (113 - head);
   const uint32_t n = head + 15;
 
-  const uint32_t stuffed = n + stuff_classic(x, n, out.level, out.stuff);
+  const uint32_t stuffed = n + stuff_classic<kWhole>(x, n, out.level, out.stuff);
   // CRC delimiter, ACK slot (sent recessive), ACK delimiter and EOF: ten recessive bits (the
   // words that hold them are written, zero past the CRC).
   out.crc_delimiter_index = static_cast<uint16_t>(stuffed);
   constexpr uint64_t kTen = ~(~uint64_t{0} >> 10);
   const uint32_t off = stuffed & 63;
-  out.level[stuffed / 64] |= kTen >> off;
-  if (off > 54) {
+  if (kWhole || stuffed < 64) {
+    out.level[stuffed / 64] |= kTen >> off;
+  }
+  if (kWhole && off > 54) {
     out.level[stuffed / 64 + 1] |= kTen << (64 - off);
   }
   const uint32_t length = stuffed + 3 + kEofBits;
@@ -490,9 +505,8 @@ void encode_fd(const Frame& frame, EncodedFrame& out) {
   finish(s, m, out);
 }
 
-}  // namespace
-
-void encode(const Frame& frame, EncodedFrame& out) {
+template <bool kWhole>
+void encode_frame(const Frame& frame, EncodedFrame& out) {
   out.dynamic_stuff_bits = 0;
   out.fixed_stuff_bits = 0;
   out.extended = frame.extended();
@@ -504,8 +518,19 @@ void encode(const Frame& frame, EncodedFrame& out) {
   if (frame.fd()) {
     encode_fd(frame, out);
   } else {
-    encode_classic(frame, out);
+    encode_classic<kWhole>(frame, out);
   }
+}
+
+}  // namespace
+
+void encode(const Frame& frame, EncodedFrame& out) {
+  encode_frame<true>(frame, out);
+}
+
+bool encode_head(const Frame& frame, EncodedFrame& out) {
+  encode_frame<false>(frame, out);
+  return frame.fd() || out.length <= 64;
 }
 
 EncodedFrame encode(const Frame& frame) {

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/fault_plan.hpp"
@@ -380,6 +382,76 @@ TEST(CanBusFaults, InjectorActsBeforeArbitrationAtFrameBoundaries) {
   EXPECT_EQ(a.errors[0].type, CanErrorType::ack);
   EXPECT_EQ(a.errors[0].at.ns(), 1'040'000 + 54 * kBit);
   EXPECT_GE(unplug.calls.size(), 9u);
+}
+
+// A frame longer than a word: at its start the bus encodes only as much as a frame without
+// errors needs (the first word, docs/bus-engine.md "Lists and the queue"); whatever reads
+// further must be given the whole frame.
+const Frame kLong = *Frame::classic(0x555, std::vector<uint8_t>{0xFF, 0, 0xFF, 0, 0x0F, 0xF0, 1, 8});
+
+std::string stuff_marks(const EncodedFrame& e) {
+  std::string marks;
+  for (std::size_t i = 0; i < e.length; ++i) {
+    marks += e.is_stuff(i) ? '1' : '0';
+  }
+  return marks;
+}
+
+TEST(CanBusFaults, AnInjectorIsShownTheWholeEncodingOfAFrameLongerThanAWord) {
+  struct Look final : FaultInjector {
+    std::vector<std::pair<std::string, std::string>> seen;  // bits and stuff marks
+    FrameFault on_frame(const FrameContext& c) override {
+      seen.emplace_back(c.bits.to_string(), stuff_marks(c.bits));
+      return {};
+    }
+  };
+  ASSERT_GT(encode(kLong).length, 64);
+  SimScheduler sched;
+  CanBus bus(sched, "can0");
+  Look look;
+  bus.set_injector(&look);
+  TestController a(bus), b(bus);
+  a.send(kZero);  // its encoding first, in the same node's room
+  a.send(kLong);
+  sched.run_until(SimTime::from_ns(1'000'000));
+  ASSERT_EQ(look.seen.size(), 2u);
+  EXPECT_EQ(look.seen[1].first, encode(kLong).to_string());
+  EXPECT_EQ(look.seen[1].second, stuff_marks(encode(kLong)));
+  EXPECT_EQ(b.received.size(), 2u);
+}
+
+TEST(CanBusFaults, FramesThatDifferOnlyPastTheFirstWordCollideWhereTheyDiffer) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  const Frame other = *Frame::classic(0x555, std::vector<uint8_t>{0xFF, 0, 0xFF, 0, 0x0F, 0xF0, 1, 9});
+  const auto d = Arbitration::first_difference(encode(kLong), encode(other));
+  ASSERT_TRUE(d);
+  ASSERT_GE(*d, 64);
+  ASSERT_TRUE(encode(other).level_at(*d));  // `other` sends recessive there, and sees dominant
+  a.send(kLong);
+  b.send(other);
+  f.run_until(1'000'000);
+  ASSERT_FALSE(b.errors.empty());
+  EXPECT_EQ(b.errors[0].type, CanErrorType::bit);
+  EXPECT_EQ(b.errors[0].bit, *d);
+  EXPECT_EQ(b.errors[0].role, ErrorRole::transmitter);
+  EXPECT_EQ(b.errors[0].at.ns(), (*d + 1) * kBit);
+}
+
+TEST(CanBusFaults, AFrameLongerThanAWordGetsPastAPassiveNodeAtAnotherBitRateBitForBit) {
+  // As NodeAtAnotherBitRateDestroysFramesUntilItIsErrorPassive, with a frame whose bits after
+  // the first word the error phase plays out: the slow node's passive flags leave them alone.
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  TestController slow(f.bus, testing::timing_250k());
+  a.send(kLong);
+  f.run_until(40'000'000);
+  EXPECT_EQ(a.errors.size(), 15u);
+  ASSERT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(b.received[0].frame, kLong);
+  EXPECT_EQ(b.fc.rec(), 15 - 1);
+  EXPECT_EQ(a.fc.tec(), 15 * 8 - 1);
+  EXPECT_EQ(slow.fc.state(), ErrorState::passive);
 }
 
 TEST(FaultPlan, MatchesByTransmitterIdentifierFormatAndOccurrence) {

@@ -5,6 +5,7 @@
 #include <initializer_list>
 #include <random>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -305,6 +306,10 @@ std::pair<std::string, std::string> classic_bit_by_bit(const Frame& f) {
 // bit of the second and third words too.
 TEST(WireEncoding, ClassicFramesAreTheirFieldsStuffedBitByBit) {
   std::mt19937 rng(11);
+  FrameSpec other;  // what encode_head's output held before
+  other.id = 0x7FF;
+  other.extended = true;
+  other.fd = true;
   for (int n = 0; n < 20000; ++n) {
     FrameSpec s;
     s.extended = rng() % 2;
@@ -330,7 +335,35 @@ TEST(WireEncoding, ClassicFramesAreTheirFieldsStuffedBitByBit) {
       got_marks += e.is_stuff(i) ? '1' : '0';
     }
     ASSERT_EQ(got_marks, marks) << "frame " << n;
+    // encode_head: every field and the first word as encode() has them, into an output that
+    // held another frame (words past the first keep what they had unless it says whole).
+    EncodedFrame head = encode(make(other));
+    const EncodedFrame before = head;
+    const bool whole = encode_head(f, head);
+    ASSERT_EQ(whole, e.length <= 64) << "frame " << n;
+    ASSERT_EQ(head.level[0], e.level[0]) << "frame " << n;
+    ASSERT_EQ(head.stuff[0], e.stuff[0]) << "frame " << n;
+    ASSERT_EQ(head.level[1], before.level[1]) << "frame " << n;
+    ASSERT_EQ(head.stuff[1], before.stuff[1]) << "frame " << n;
+    ASSERT_EQ(std::tie(head.length, head.dynamic_stuff_bits, head.crc, head.crc_bits,
+                       head.crc_delimiter_index, head.arbitration_end, head.extended,
+                       head.data_bytes, head.fd, head.brs),
+              std::tie(e.length, e.dynamic_stuff_bits, e.crc, e.crc_bits, e.crc_delimiter_index,
+                       e.arbitration_end, e.extended, e.data_bytes, e.fd, e.brs))
+        << "frame " << n;
   }
+}
+
+TEST(WireEncoding, TheHeadOfACanFdFrameIsTheWholeEncoding) {
+  std::vector<uint8_t> data(64, 0x00);
+  FrameSpec s;
+  s.fd = true;
+  s.brs = true;
+  s.data = data;
+  const Frame f = make(s);
+  EncodedFrame head;
+  ASSERT_TRUE(encode_head(f, head));
+  EXPECT_EQ(head.to_string(), encode(f).to_string());
 }
 
 TEST(FrameLengthBound, ReproducesTheKernelTable) {

@@ -56,6 +56,14 @@ class Arbitration {
   }
   bool empty() const { return contenders_.empty(); }
   void resolve();
+  // resolve() in its two parts, for a caller that must prepare the long walk: the common case,
+  // decided by the first words of the frames (a single smallest one, every other departing
+  // from it within its arbitration field; false, with nothing recorded, if not), and the walk
+  // over the whole frames (ties, collisions after the arbitration field) that decides the rest,
+  // once the first returned false.
+  bool resolve_in_first_word();
+  void resolve_walk();
+  std::span<const Contender> contenders() const { return contenders_.span(); }
 
   // The nodes that send: the winner first, then, in contender order, those with the winner's
   // frame and those that collide with it.
@@ -86,13 +94,6 @@ class Arbitration {
   }
 
  private:
-  // resolve() when the first word of the frames decides: a single smallest one (add() found
-  // it), every other frame departing from it within its arbitration field. False, with nothing
-  // recorded, if not.
-  bool resolve_in_first_word();
-  // The general walk over the contenders: ties, collisions after the arbitration field.
-  void resolve_walk();
-
   // What add() gathered.
   NodeList<Contender> contenders_;
   std::size_t smallest_ = 0;  // of the smallest first word: the last one to have it (tie_)

@@ -213,6 +213,11 @@ class CanBus final : private EventHandler {
     bool tx_known = false;
     const TxFrame* tx = nullptr;
     bool encoded_valid = false;
+    // Whether `encoded` is whole, or its first word only (encode_head): enough for a frame's
+    // start and end without errors, and for FrameRoles (fields and positions in the first word;
+    // CAN FD frames are always whole). whole_encoding() completes it where more is read: the
+    // arbitration's long walk, an injector's look at the frame, the error phase.
+    bool encoded_whole = false;
     EncodedFrame encoded;
     std::optional<Frame> encoded_frame;  // what `encoded` encodes (kept across frames)
     ErrorState last_state = ErrorState::active;
@@ -351,6 +356,16 @@ class CanBus final : private EventHandler {
   void load_props(Node& n);
   void load_tx(Node& n);
   void load_encoding(Node& n);
+  // `n`'s encoding (valid), whole.
+  const EncodedFrame& whole_encoding(Node& n) {
+    if (!n.encoded_whole) {
+      make_whole(n);
+    }
+    return n.encoded;
+  }
+  void make_whole(Node& n);
+  // The encodings of the nodes in arbitration_.senders(), whole.
+  void senders_whole();
   bool decodes_slow(NodeId tx, NodeId rx, bool brs);
 
   static void forget_tx(Node& n) {

@@ -112,6 +112,11 @@ struct EncodedFrame {
 
 void encode(const Frame& frame, EncodedFrame& out);
 EncodedFrame encode(const Frame& frame);
+// What a start of frame without errors needs of the encoding, for less: every field, and of
+// `level` and `stuff` the first word (the arbitration field lies in it), as encode() writes
+// them; the words after it are left as they were unless the result is true (a CAN FD frame is
+// encoded whole, and so is a frame that ends within its first word). encode() gives the rest.
+bool encode_head(const Frame& frame, EncodedFrame& out);
 
 // Bits at the nominal and at the data rate. The BRS bit and the CRC delimiter, where the rate
 // switches at the sample point, are counted as nominal bits; frame_duration() times them

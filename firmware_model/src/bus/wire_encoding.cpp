@@ -273,7 +273,7 @@ void apply(const Probes& p, EncodedFrame& out) {
 // A classic frame's destuffed bits SOF..data, first bit at bit 127: at most 39 + 64 bits. Field
 // order as fd_header_and_data's, without the FD bits: standard SOF, ID, RTR, IDE, r0,
 // DLC; extended SOF, ID-28..18, SRR, IDE, ID-17..0, RTR, r1, r0, DLC. Returns their number.
-uint32_t classic_header_and_data(const Frame& frame, uint128& x) {
+[[gnu::always_inline]] inline uint32_t classic_header_and_data(const Frame& frame, uint128& x) {
   const uint64_t rtr = frame.remote() ? 1u : 0u;
   const uint64_t id = frame.id();
   const uint32_t length = static_cast<uint32_t>(frame.length());

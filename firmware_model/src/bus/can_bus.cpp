@@ -40,6 +40,16 @@ NodeId CanBus::attach(CanController& controller) {
   node_count_ = nodes_.size();
   in_flight_.fit(node_count_);
   completion_.losses.fit(node_count_);
+  receivers_.fit(node_count_);
+  {
+    // nodes_ may have moved: the receivers of a frame on the wire point into it anew.
+    const std::vector<Receiver> kept(receivers_.begin(), receivers_.end());
+    receivers_.clear();
+    for (Receiver r : kept) {
+      r.node = &nodes_[r.id];
+      receivers_.push_back(r);
+    }
+  }
   decodes_cache_.clear();
   members_changed();
   const NodeId id = static_cast<NodeId>(node_count_ - 1);
@@ -381,6 +391,7 @@ std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
   const FrameRoles roles(e, fault, acks_suppressed);
   std::vector<BusParticipant>& parts = parts_;
   parts.clear();
+  receivers_.clear();
   plain_valid_ = false;
   const bool alone = active.size() == 1;
   for (NodeId id = 0; id < node_count_; ++id) {
@@ -398,6 +409,9 @@ std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
       p = roles.receiver(facts, decodes(tx, id, frame.brs()) ? FrameRoles::Decoding::ok
                                                              : FrameRoles::Decoding::timing);
     }
+    if (!p.transmitter && p.decodes) {
+      receivers_.push_back(Receiver{&n, id, p.acks});
+    }
   }
   return roles.first_detection(parts);
 }
@@ -407,6 +421,7 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   plain_valid_ = false;
   std::vector<BusParticipant>& parts = parts_;
   parts.clear();
+  receivers_.clear();
   // FrameRoles without a fault: the sender plans nothing; a receiver that cannot follow the
   // frame plans its error (and does not acknowledge), one that can acknowledges if it drives.
   uint16_t first = UINT16_MAX;
@@ -444,6 +459,9 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
     p.decodes = decodes;
     p.acks = decodes && p.drives;
     acked = acked || p.acks;
+    if (decodes) {
+      receivers_.push_back(Receiver{m.node, m.id, p.acks});
+    }
   }
   if (!acked) {
     first = std::min(first, static_cast<uint16_t>(e.crc_delimiter_index + 1));
@@ -497,14 +515,11 @@ void CanBus::complete_success(SimTime eof_end) {
   report_losses();
   // Receivers first: the frame they get is the transmitter's, which it may drop once told.
   const Frame& frame = c.sent.front()->frame;
-  for (const BusParticipant& p : parts_) {
-    if (p.transmitter || !p.decodes) {
-      continue;
-    }
-    Node& n = nodes_[p.id];
-    if (p.acks && n.fc->rec() > 0) {
+  for (const Receiver& r : receivers_) {
+    Node& n = *r.node;
+    if (r.acks && n.fc->rec() > 0) {
       n.fc->receive_succeeded();
-      report_state(p.id, eof_end);
+      report_state(r.id, eof_end);
     }
     n.stats.frames_received++;
     n.controller->on_frame(eof_end, frame, false);

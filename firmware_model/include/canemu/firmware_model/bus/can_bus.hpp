@@ -427,6 +427,14 @@ class CanBus final : private EventHandler {
   // Scratch space reused from frame to frame, and the frame in flight.
   Arbitration arbitration_;
   std::vector<BusParticipant> parts_;
+  // Of parts_, the receivers that follow the frame (not its senders), in the same order: what
+  // the frame's successful end goes through (pointers into nodes_, valid while parts_ is).
+  struct Receiver {
+    Node* node;
+    NodeId id;
+    bool acks;
+  };
+  NodeList<Receiver> receivers_;
   Completion completion_;
   std::vector<Member> members_;
   bool members_valid_ = false;

@@ -96,9 +96,17 @@ struct Crc15Wide {
            kTables[6][(v >> 8) & 0xFF] ^ kTables[7][v & 0xFF];
   }
   // Over the first `bits` (at most 128) of `x`, first bit at bit 127, from a cleared register.
+  // The bits are moved to the end of the two words, so that the first holds bits - 64 of them
+  // behind zeros: up to 24 (a standard frame's 83 destuffed bits before its CRC), three of its
+  // bytes are looked up, not eight (a zero byte into a cleared register leaves it cleared).
   static uint32_t over(uint128 x, uint32_t bits) {
     const uint128 v = x >> (128 - bits);
-    return feed64(feed64(0, static_cast<uint64_t>(v >> 64)), static_cast<uint64_t>(v));
+    const auto hi = static_cast<uint64_t>(v >> 64);
+    const uint32_t crc = hi < (uint64_t{1} << 24)
+                             ? uint32_t{kTables[5][hi >> 16]} ^ kTables[6][(hi >> 8) & 0xFF] ^
+                                   kTables[7][hi & 0xFF]
+                             : feed64(0, hi);
+    return feed64(crc, static_cast<uint64_t>(v));
   }
 };
 using Crc17 = Crc<17, kCrc17Poly>;

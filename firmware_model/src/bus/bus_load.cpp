@@ -5,6 +5,18 @@
 
 namespace canemu::model {
 
+void BusLoad::make_room(SimTime end) {
+  const int64_t forget = (end - seconds(2)).ns();
+  const std::size_t mask = busy_size_ - 1;
+  while (busy_count_ != 0 && busy_[busy_head_].end < forget) {
+    busy_head_ = (busy_head_ + 1) & mask;
+    --busy_count_;
+  }
+  if (busy_count_ == busy_size_) {
+    grow();
+  }
+}
+
 void BusLoad::grow() {
   const std::size_t size = busy_size_ == 0 ? 64 : 2 * busy_size_;
   auto grown = std::make_unique_for_overwrite<Activity[]>(size);

@@ -17,10 +17,10 @@ namespace canemu::model {
 class BusLoad {
  public:
   // The bus was busy from `start` to `end`. Calls come in the order the activities end; what
-  // ended more than two seconds before the latest `end` is forgotten.
+  // ended more than two seconds before the latest `end` is forgotten when its room is needed.
   void record(SimTime start, SimTime end) {
     if (busy_count_ == busy_size_) {
-      grow();
+      make_room(end);
     }
     const std::size_t mask = busy_size_ - 1;
     if (busy_count_ != 0 && start.ns() < busy_[(busy_head_ + busy_count_ - 1) & mask].end) {
@@ -34,11 +34,6 @@ class BusLoad {
       bins_.back() += (end - start).ns();
     } else {
       add_to_bins(start, end);
-    }
-    const SimTime forget = end - seconds(2);
-    while (busy_count_ != 0 && busy_[busy_head_].end < forget.ns()) {
-      busy_head_ = (busy_head_ + 1) & mask;
-      --busy_count_;
     }
   }
   // Busy time within the second before `now`, in percent of that second.
@@ -57,10 +52,14 @@ class BusLoad {
 
  private:
   void add_to_bins(SimTime start, SimTime end);
-  [[gnu::noinline]] void grow();  // busy_ is full: twice the room (kept out of record's way)
+  // busy_ is full: what ended two seconds before `end` leaves it, and if none did, it gets
+  // twice the room (out of record's way: once every so many activities).
+  [[gnu::noinline]] void make_room(SimTime end);
+  void grow();
 
-  // The activities of the last two seconds, oldest first: a ring over busy_ (its size a power of
-  // two, doubled when full), so that recording one costs no allocation once it has grown. Each
+  // The activities of the last two seconds (and older ones until their room is needed), oldest
+  // first: a ring over busy_ (its size a power of two, doubled when full of the last two
+  // seconds), so that recording one costs no allocation once it has grown. Each
   // with the busy time of everything recorded before it, in ns, and busy_total_ that of
   // everything: percent() sums the activities between its edges as one difference.
   struct Activity {  // in ns

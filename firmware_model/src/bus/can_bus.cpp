@@ -139,7 +139,7 @@ const CanBus::Node& CanBus::load_timing(NodeId id) {
   return n;
 }
 
-void CanBus::report_losses() {
+[[gnu::always_inline]] inline void CanBus::report_losses() {
   for (const Completion::Loss& loss : completion_.losses) {
     Node& n = nodes_[loss.node];
     const SimTime at = loss.at;
@@ -299,7 +299,7 @@ void CanBus::attempt(SimTime now) {
   run_frame(now);
 }
 
-void CanBus::run_frame(SimTime sof) {
+[[gnu::always_inline]] inline void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
@@ -481,7 +481,7 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   return first;
 }
 
-void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
+[[gnu::always_inline]] inline void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
                             const BitTiming& data) {
   const EncodedFrame& e = encoded_tx(tx);
   Completion& c = completion_;
@@ -510,7 +510,7 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
   scheduler_.schedule_at(c.eof_end, *this, kFrameEnd);
 }
 
-void CanBus::complete_success(SimTime eof_end) {
+[[gnu::always_inline]] inline void CanBus::complete_success(SimTime eof_end) {
   Completion& c = completion_;
   report_losses();
   // Receivers first: the frame they get is the transmitter's, which it may drop once told.

@@ -481,8 +481,9 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   return first;
 }
 
-[[gnu::always_inline]] inline void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
-                            const BitTiming& data) {
+[[gnu::always_inline]] inline void CanBus::finish_success(SimTime sof, NodeId tx,
+                                                          const BitTiming& nominal,
+                                                          const BitTiming& data) {
   const EncodedFrame& e = encoded_tx(tx);
   Completion& c = completion_;
   c.ppm = nodes_[tx].timing.oscillator_ppm;

@@ -102,10 +102,10 @@ struct Crc15Wide {
   static uint32_t over(uint128 x, uint32_t bits) {
     const uint128 v = x >> (128 - bits);
     const auto hi = static_cast<uint64_t>(v >> 64);
-    const uint32_t crc = hi < (uint64_t{1} << 24)
-                             ? uint32_t{kTables[5][hi >> 16]} ^ kTables[6][(hi >> 8) & 0xFF] ^
-                                   kTables[7][hi & 0xFF]
-                             : feed64(0, hi);
+    const uint32_t crc =
+        hi < (uint64_t{1} << 24)
+            ? uint32_t{kTables[5][hi >> 16]} ^ kTables[6][(hi >> 8) & 0xFF] ^ kTables[7][hi & 0xFF]
+            : feed64(0, hi);
     return feed64(crc, static_cast<uint64_t>(v));
   }
 };

@@ -75,6 +75,10 @@ void Arbitration::resolve() {
 }
 
 void Arbitration::resolve_walk() {
+  senders_.clear();
+  lost_.clear();
+  lost_.fit(contenders_.size());
+  collisions_.clear();
   // One pass: the winner so far, and where every other contender departs from it. Identical
   // frames tie, and of them the first in `contenders` stays the winner.
   const std::span<const Contender> contenders = contenders_.span();

@@ -33,6 +33,12 @@ double BusLoad::percent(SimTime now) const {
   const SimTime from = now - seconds(1);
   const std::size_t mask = busy_size_ - 1;
   const auto at = [&](std::size_t k) -> const Activity& { return busy_[(busy_head_ + k) & mask]; };
+  // What ended more than two seconds before the newest activity's end counts as forgotten,
+  // whether or not make_room() has dropped it yet: the ring keeps such activities until their
+  // room is needed, and the answer must not depend on that.
+  // `forgotten`: the latest end that counts as forgotten.
+  const int64_t forgotten =
+      busy_count_ == 0 ? INT64_MIN : at(busy_count_ - 1).end - seconds(2).ns() - 1;
   int64_t busy = 0;
   const auto add_clipped = [&](std::size_t k) {
     const int64_t a = std::max(at(k).start, from.ns());
@@ -43,18 +49,22 @@ double BusLoad::percent(SimTime now) const {
   };
   if (overlapped_) {
     for (std::size_t k = 0; k < busy_count_; ++k) {
-      add_clipped(k);
+      if (at(k).end > forgotten) {
+        add_clipped(k);
+      }
     }
     return 100.0 * static_cast<double>(busy) / 1e9;
   }
   // The activities follow one another: the ones ending after `from` are a tail of the ring (found
   // by halving), of which only the first may begin before `from` and only the last few end after
   // `now`; what lies between counts whole, the difference of two running totals.
+  // (Ends come in order, so the forgotten ones are a head of the ring too.)
+  const int64_t after = std::max(from.ns(), forgotten);
   std::size_t lo = 0;
   std::size_t hi = busy_count_;
   while (lo < hi) {
     const std::size_t mid = lo + (hi - lo) / 2;
-    if (at(mid).end > from.ns()) {
+    if (at(mid).end > after) {
       hi = mid;
     } else {
       lo = mid + 1;

@@ -40,15 +40,11 @@ NodeId CanBus::attach(CanController& controller) {
   node_count_ = nodes_.size();
   in_flight_.fit(node_count_);
   completion_.losses.fit(node_count_);
-  receivers_.fit(node_count_);
-  {
-    // nodes_ may have moved: the receivers of a frame on the wire point into it anew.
-    const std::vector<Receiver> kept(receivers_.begin(), receivers_.end());
-    receivers_.clear();
-    for (Receiver r : kept) {
-      r.node = &nodes_[r.id];
-      receivers_.push_back(r);
-    }
+  // nodes_ may have moved: the receivers of a frame on the wire point into it anew, in place (a
+  // controller may attach from a callback while the frame's end walks the list, so its room
+  // grows only where the list is filled: plain_roles(), general_roles()).
+  for (std::size_t k = 0; k < receivers_.size(); ++k) {
+    receivers_[k].node = &nodes_[receivers_[k].id];
   }
   decodes_cache_.clear();
   members_changed();
@@ -139,7 +135,7 @@ const CanBus::Node& CanBus::load_timing(NodeId id) {
   return n;
 }
 
-[[gnu::always_inline]] inline void CanBus::report_losses() {
+void CanBus::report_losses() {
   for (const Completion::Loss& loss : completion_.losses) {
     Node& n = nodes_[loss.node];
     const SimTime at = loss.at;
@@ -299,7 +295,7 @@ void CanBus::attempt(SimTime now) {
   run_frame(now);
 }
 
-[[gnu::always_inline]] inline void CanBus::run_frame(SimTime sof) {
+void CanBus::run_frame(SimTime sof) {
   busy_ = true;
   account_recessive(sof);
 
@@ -392,6 +388,7 @@ std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
   std::vector<BusParticipant>& parts = parts_;
   parts.clear();
   receivers_.clear();
+  receivers_.fit(node_count_);
   plain_valid_ = false;
   const bool alone = active.size() == 1;
   for (NodeId id = 0; id < node_count_; ++id) {
@@ -422,6 +419,7 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   std::vector<BusParticipant>& parts = parts_;
   parts.clear();
   receivers_.clear();
+  receivers_.fit(node_count_);
   // FrameRoles without a fault: the sender plans nothing; a receiver that cannot follow the
   // frame plans its error (and does not acknowledge), one that can acknowledges if it drives.
   uint16_t first = UINT16_MAX;
@@ -481,9 +479,8 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   return first;
 }
 
-[[gnu::always_inline]] inline void CanBus::finish_success(SimTime sof, NodeId tx,
-                                                          const BitTiming& nominal,
-                                                          const BitTiming& data) {
+void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
+                            const BitTiming& data) {
   const EncodedFrame& e = encoded_tx(tx);
   Completion& c = completion_;
   c.ppm = nodes_[tx].timing.oscillator_ppm;
@@ -511,7 +508,7 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   scheduler_.schedule_at(c.eof_end, *this, kFrameEnd);
 }
 
-[[gnu::always_inline]] inline void CanBus::complete_success(SimTime eof_end) {
+void CanBus::complete_success(SimTime eof_end) {
   Completion& c = completion_;
   report_losses();
   // Receivers first: the frame they get is the transmitter's, which it may drop once told.

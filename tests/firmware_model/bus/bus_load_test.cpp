@@ -96,6 +96,25 @@ TEST(BusLoad, PercentIsTheSumOfEveryActivityClippedToTheSecond) {
   }
 }
 
+// What ended two seconds before the newest activity's end is forgotten, whether or not the ring
+// needed its room: a bus held for two seconds after N back-to-back frames reads, half a second
+// into the hold, the hold alone (the frames ended before it began, more than two seconds before
+// its end), whatever N and so however full the ring was.
+TEST(BusLoad, WhatEndedTwoSecondsBeforeTheNewestEndIsForgottenHoweverFullTheRing) {
+  for (const int64_t n : {int64_t{5'000}, int64_t{8'192}, int64_t{16'384}, int64_t{20'000}}) {
+    BusLoad load;
+    const int64_t d = 1'000'000'000 / n;  // ns a frame
+    for (int64_t k = 0; k < n; ++k) {
+      load.record(SimTime::from_ns(k * d), SimTime::from_ns((k + 1) * d));
+    }
+    const SimTime held = SimTime::from_ns(n * d);
+    load.record(held, held + milliseconds(2'010));
+    EXPECT_DOUBLE_EQ(load.percent(held + milliseconds(500)), 50.0) << n << " frames";
+    // A second later than the hold's start plus 1.5 s, still the hold alone.
+    EXPECT_DOUBLE_EQ(load.percent(held + milliseconds(1'500)), 100.0) << n << " frames";
+  }
+}
+
 // The load over time, in bins of 100 ms: an activity across a bin boundary counts in both.
 TEST(BusLoad, TheHistoryHasTheBusyTimeOfEveryEndedBinIdleOnesIncluded) {
   BusLoad load;

@@ -38,7 +38,7 @@ std::optional<std::pair<CanErrorType, uint16_t>> first_error(const TestControlle
 using Seen = std::pair<CanErrorType, uint16_t>;
 
 // A frame longer than a word: at its start the bus encodes only as much as a frame without
-// errors needs (the first word, docs/bus-engine.md "Lists and the queue"); whatever reads
+// errors needs (the first word, docs/bus-engine.md "The head of the encoding"); whatever reads
 // further must be given the whole frame.
 const Frame kLong =
     *Frame::classic(0x555, std::vector<uint8_t>{0xFF, 0, 0xFF, 0, 0x0F, 0xF0, 1, 8});
@@ -424,7 +424,8 @@ TEST(CanBusFaults, AnInjectorIsShownTheWholeEncodingOfAFrameLongerThanAWord) {
   Look look;
   bus.set_injector(&look);
   TestController a(bus), b(bus);
-  a.send(kZero);  // its encoding first, in the same node's room
+  // Another long frame first: its encoding's later words stay in the node's room.
+  a.send(*Frame::classic(0x0F0, std::vector<uint8_t>(8, 0x5A)));
   a.send(kLong);
   sched.run_until(SimTime::from_ns(1'000'000));
   ASSERT_EQ(look.seen.size(), 2u);

@@ -6,6 +6,8 @@
 // gave before it kept the list).
 #include <gtest/gtest.h>
 
+#include <deque>
+
 #include "canemu/firmware_model/bus/can_bus.hpp"
 #include "canemu/firmware_model/bus/fault_plan.hpp"
 #include "test_controller.hpp"
@@ -158,6 +160,39 @@ TEST(CanBusMembers, ANodeAttachedBetweenFramesReceivesTheNextOne) {
   EXPECT_EQ(late.received[0].at.ns(), (100 + kFrame) * kBit);
   EXPECT_EQ(f.bus.stats(late.id()).frames_received, 1u);
   EXPECT_EQ(b.received.size(), 2u);
+}
+
+TEST(CanBusMembers, ANodeAttachedFromAReceiversCallbackLeavesTheFramesEndWhole) {
+  // The frame's end walks its receivers and tells each: a controller that attaches another node
+  // from that call (the node vector may move) leaves the walk intact, every receiver told once.
+  struct Attaching final : TestController {
+    using TestController::TestController;
+    std::deque<TestController>* more = nullptr;
+    CanBus* bus = nullptr;
+    void on_frame(SimTime at, const Frame& frame, bool own) override {
+      TestController::on_frame(at, frame, own);
+      for (int i = 0; i < 4; ++i) {
+        more->emplace_back().attach_to(*bus);
+      }
+    }
+  };
+  Fixture f;
+  std::deque<TestController> more;
+  TestController a(f.bus);
+  Attaching b(f.bus);
+  b.more = &more;
+  b.bus = &f.bus;
+  TestController c(f.bus), d(f.bus);
+  a.send(k123);
+  f.run_until(100 * kBit);
+  EXPECT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(c.received.size(), 1u);
+  EXPECT_EQ(d.received.size(), 1u);
+  ASSERT_EQ(more.size(), 4u);
+  a.send(k123);
+  f.run_until(200 * kBit);
+  EXPECT_EQ(d.received.size(), 2u);
+  EXPECT_EQ(more[0].received.size(), 1u);  // the nodes attached meanwhile get the next frame
 }
 
 TEST(CanBusMembers, CountersWrittenWithoutTellingTheBusStillDecideBusOff) {

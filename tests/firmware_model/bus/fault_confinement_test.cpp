@@ -160,6 +160,50 @@ TEST(FaultConfinement, TransmitCounterAbove255IsBusOffAndFreezesCounting) {
   EXPECT_EQ(fc.rec(), 0);
 }
 
+// passive_or_off_changes() changes whenever error_passive() or bus_off() may have (the bus keeps
+// a frame's roles while it does not): each way in and out of the passive and bus-off states.
+TEST(FaultConfinement, TheChangeNumberMovesWithEveryWayInOrOutOfPassiveAndBusOff) {
+  FaultConfinement fc(255);
+  auto changed = [&fc, last = fc.passive_or_off_changes()]() mutable {
+    const bool moved = fc.passive_or_off_changes() != last;
+    last = fc.passive_or_off_changes();
+    return moved;
+  };
+  fc.set_counters(128, 0);  // a write
+  EXPECT_TRUE(fc.error_passive());
+  EXPECT_TRUE(changed());
+  fc.transmit_succeeded();  // 128 -> 127: active again
+  EXPECT_FALSE(fc.error_passive());
+  EXPECT_TRUE(changed());
+  fc.transmit_succeeded();  // 127 -> 126: no state crossed
+  EXPECT_FALSE(changed());
+  fc.set_counters(0, 200);
+  EXPECT_TRUE(changed());
+  fc.receive_succeeded();  // 200 -> 127: active again
+  EXPECT_FALSE(fc.error_passive());
+  EXPECT_TRUE(changed());
+  fc.receive_succeeded();  // 127 -> 126
+  EXPECT_FALSE(changed());
+  fc.receiver_detected_error();  // a counted error
+  EXPECT_TRUE(changed());
+  for (int i = 0; i < 32; ++i) {
+    fc.transmitter_error();
+  }
+  EXPECT_TRUE(fc.bus_off());
+  EXPECT_TRUE(changed());
+  fc.begin_recovery();
+  EXPECT_TRUE(fc.recessive_sequences(kBusOffRecoverySequences));  // recovered: reset
+  EXPECT_FALSE(fc.bus_off());
+  EXPECT_TRUE(changed());
+  FaultConfinement other(255);
+  other.set_counters(300, 0);
+  fc = other;  // an assignment, even from a copy whose own number happens to match
+  EXPECT_TRUE(fc.bus_off());
+  EXPECT_TRUE(changed());
+  fc.reset();
+  EXPECT_TRUE(changed());
+}
+
 TEST(FaultConfinement, RecoveryNeeds128SequencesAfterItBegins) {
   FaultConfinement fc;
   fc.set_counters(256, 3);

@@ -345,11 +345,13 @@ TEST(WireEncoding, ClassicFramesAreTheirFieldsStuffedBitByBit) {
     ASSERT_EQ(head.stuff[0], e.stuff[0]) << "frame " << n;
     ASSERT_EQ(head.level[1], before.level[1]) << "frame " << n;
     ASSERT_EQ(head.stuff[1], before.stuff[1]) << "frame " << n;
-    ASSERT_EQ(std::tie(head.length, head.dynamic_stuff_bits, head.crc, head.crc_bits,
-                       head.crc_delimiter_index, head.arbitration_end, head.extended,
-                       head.data_bytes, head.fd, head.brs),
-              std::tie(e.length, e.dynamic_stuff_bits, e.crc, e.crc_bits, e.crc_delimiter_index,
-                       e.arbitration_end, e.extended, e.data_bytes, e.fd, e.brs))
+    ASSERT_EQ(
+        std::tie(head.length, head.dynamic_stuff_bits, head.fixed_stuff_bits, head.crc,
+                 head.crc_bits, head.crc_delimiter_index, head.arbitration_end, head.brs_index,
+                 head.stuff_count, head.extended, head.data_bytes, head.fd, head.brs),
+        std::tie(e.length, e.dynamic_stuff_bits, e.fixed_stuff_bits, e.crc, e.crc_bits,
+                 e.crc_delimiter_index, e.arbitration_end, e.brs_index, e.stuff_count, e.extended,
+                 e.data_bytes, e.fd, e.brs))
         << "frame " << n;
   }
 }
@@ -361,9 +363,18 @@ TEST(WireEncoding, TheHeadOfACanFdFrameIsTheWholeEncoding) {
   s.brs = true;
   s.data = data;
   const Frame f = make(s);
-  EncodedFrame head;
+  // Into an output that held a long classic frame.
+  const std::vector<uint8_t> ones(8, 0xFF);
+  FrameSpec before;
+  before.id = 0x0F0;
+  before.data = ones;
+  EncodedFrame head = encode(make(before));
   ASSERT_TRUE(encode_head(f, head));
-  EXPECT_EQ(head.to_string(), encode(f).to_string());
+  const EncodedFrame e = encode(f);
+  EXPECT_EQ(head.to_string(), e.to_string());
+  for (std::size_t i = 0; i < e.length; ++i) {
+    ASSERT_EQ(head.is_stuff(i), e.is_stuff(i)) << i;
+  }
 }
 
 TEST(FrameLengthBound, ReproducesTheKernelTable) {

@@ -59,8 +59,8 @@ class Arbitration {
   // resolve() in its two parts, for a caller that must prepare the long walk: the common case,
   // decided by the first words of the frames (a single smallest one, every other departing
   // from it within its arbitration field; false, with nothing recorded, if not), and the walk
-  // over the whole frames (ties, collisions after the arbitration field) that decides the rest,
-  // once the first returned false.
+  // over the whole frames (ties, collisions after the arbitration field), which decides any
+  // case on its own and is what resolve() does when the first returns false.
   bool resolve_in_first_word();
   void resolve_walk();
   std::span<const Contender> contenders() const { return contenders_.span(); }

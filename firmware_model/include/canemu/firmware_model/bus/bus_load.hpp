@@ -17,7 +17,8 @@ namespace canemu::model {
 class BusLoad {
  public:
   // The bus was busy from `start` to `end`. Calls come in the order the activities end; what
-  // ended more than two seconds before the latest `end` is forgotten when its room is needed.
+  // ended more than two seconds before the latest `end` is forgotten (percent() leaves it out;
+  // its room in the ring is taken back when the ring is full).
   void record(SimTime start, SimTime end) {
     if (busy_count_ == busy_size_) {
       make_room(end);

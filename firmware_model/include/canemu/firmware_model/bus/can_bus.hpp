@@ -375,10 +375,14 @@ class CanBus final : private EventHandler {
 
   void schedule_attempt(SimTime at);
   void attempt(SimTime now);
-  void run_frame(SimTime sof);
-  void finish_success(SimTime sof, NodeId tx, const BitTiming& nominal, const BitTiming& data);
-  void complete_success(SimTime eof_end);
-  void report_losses();
+  // These four are inlined into their callers in can_bus.cpp (the frame's start into attempt(),
+  // its end into on_event()), the only file that calls them.
+  [[gnu::always_inline]] inline void run_frame(SimTime sof);
+  [[gnu::always_inline]] inline void finish_success(SimTime sof, NodeId tx,
+                                                    const BitTiming& nominal,
+                                                    const BitTiming& data);
+  [[gnu::always_inline]] inline void complete_success(SimTime eof_end);
+  [[gnu::always_inline]] inline void report_losses();
   // Plays the bits from `first_bit` on (ErrorPhase) and schedules what follows from them.
   void run_error_phase(SimTime sof, std::span<const BusParticipant> parts, const EncodedFrame* bits,
                        const BitTiming& nominal, const BitTiming& data, uint16_t first_bit);
@@ -428,7 +432,7 @@ class CanBus final : private EventHandler {
   Arbitration arbitration_;
   std::vector<BusParticipant> parts_;
   // Of parts_, the receivers that follow the frame (not its senders), in the same order: what
-  // the frame's successful end goes through (pointers into nodes_, valid while parts_ is).
+  // the frame's successful end goes through. Pointers into nodes_: attach() re-points them.
   struct Receiver {
     Node* node;
     NodeId id;

@@ -28,8 +28,8 @@ class FaultConfinement {
   // 16-bit value from wrapping.
   explicit FaultConfinement(uint16_t rec_limit = 0xFFFF) : rec_limit_(rec_limit) {}
   FaultConfinement(const FaultConfinement&) = default;
-  // Takes `other`'s counters and state; passive_or_off_changes() changes (it never goes back to
-  // a number it had, so a look at it cannot be fooled by an assignment).
+  // Takes `other`'s counters and state; passive_or_off_changes() changes too (it counts on from
+  // its own number, so that a look at it is not fooled by an assignment).
   FaultConfinement& operator=(const FaultConfinement& other) {
     const uint32_t changes = changes_ + 1;
     tec_ = other.tec_;

@@ -30,6 +30,7 @@ class NodeList {
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
   const T& operator[](std::size_t k) const { return room_[k]; }
+  T& operator[](std::size_t k) { return room_[k]; }
   const T* begin() const { return room_.data(); }
   const T* end() const { return room_.data() + size_; }
   std::span<const T> span() const { return {room_.data(), size_}; }

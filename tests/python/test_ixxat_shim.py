@@ -1,5 +1,5 @@
 """python-can's own ``ixxat`` interface, its unmodified source, on canemu's libvcinpl.so through
-canemu.ixxat_shim (docs/python.md, "python-can's ixxat interface").
+canemu.ixxat_shim (docs/python-ixxat.md).
 
 canemud runs its embedded default configuration (config/default.toml: the adapter ixxat0 with
 one SJA1000 on can0 and one on can1, 500 kbit/s) in stepped time, one daemon per test. The

@@ -26,8 +26,8 @@ Both are put back when the import is done. python-can's files are not touched; t
 code runs as shipped, with its Windows branch taken. libvcinpl.so talks to the canemud this
 package talks to: the one of ``canemu.connect()`` (also a later one: libvcinpl.so goes over when
 the backend next enumerates adapters, at its next bus; ``install(socket)`` picks one
-explicitly), else ``$CANEMU_SOCKET`` or the default path. docs/python.md, "python-can's ixxat
-interface", says what python-can's backend then does on canemu.
+explicitly), else ``$CANEMU_SOCKET`` or the default path. docs/python-ixxat.md says what
+python-can's backend then does on canemu.
 """
 
 from __future__ import annotations

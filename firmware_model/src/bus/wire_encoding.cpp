@@ -390,19 +390,17 @@ uint32_t stuff_classic(uint128 x, uint32_t n, EncodedFrame::Bits& wire, EncodedF
       while (q >= end) {
         next_word();
       }
-    } else if (q >= 64) {
-      ++count;
-      p = bit_of(ah, al, p) != 0 ? p + 4 : next_set(rh, rl, p + 1) + 4;
-      continue;
     }
-    // The stuff bit goes in at `off`: the bits from there on move one place on, and the bit
-    // before it is copied there and flipped (at the word's start, the word before's last).
-    const uint32_t off = q & 63;
-    const uint64_t keep = kBitsBefore[off];
-    const uint64_t at = kBitAt[off];
-    const uint64_t moved = (cur & ~(keep << 1)) >> 1;
-    cur = ((cur & keep) | moved | (off == 0 ? last : 0)) ^ at;
-    cur_marks |= at;
+    if (kWhole || q < 64) {
+      // The stuff bit goes in at `off`: the bits from there on move one place on, and the bit
+      // before it is copied there and flipped (at the word's start, the word before's last).
+      const uint32_t off = q & 63;
+      const uint64_t keep = kBitsBefore[off];
+      const uint64_t at = kBitAt[off];
+      const uint64_t moved = (cur & ~(keep << 1)) >> 1;
+      cur = ((cur & keep) | moved | (off == 0 ? last : 0)) ^ at;
+      cur_marks |= at;
+    }
     ++count;
     p = bit_of(ah, al, p) != 0 ? p + 4 : next_set(rh, rl, p + 1) + 4;
   }

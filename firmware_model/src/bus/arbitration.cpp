@@ -30,10 +30,7 @@ inline uint16_t first_split(const EncodedFrame& a, const EncodedFrame& b, bool& 
 }  // namespace
 
 bool Arbitration::resolve_in_first_word() {
-  senders_.clear();
-  lost_.clear();
-  lost_.fit(contenders_.size());
-  collisions_.clear();
+  clear_results();
   // The smallest first word wins if no other contender has it too.
   if (tie_) {
     return false;
@@ -75,10 +72,7 @@ void Arbitration::resolve() {
 }
 
 void Arbitration::resolve_walk() {
-  senders_.clear();
-  lost_.clear();
-  lost_.fit(contenders_.size());
-  collisions_.clear();
+  clear_results();
   // One pass: the winner so far, and where every other contender departs from it. Identical
   // frames tie, and of them the first in `contenders` stays the winner.
   const std::span<const Contender> contenders = contenders_.span();

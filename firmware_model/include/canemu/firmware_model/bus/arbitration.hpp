@@ -38,6 +38,7 @@ class Arbitration {
   // no second look at them), then resolve() (at least one added).
   void begin(std::size_t most) {
     contenders_.fit(most);
+    lost_.fit(most);
     contenders_.clear();
     smallest_ = 0;
     smallest_word_ = ~uint64_t{0};
@@ -94,6 +95,13 @@ class Arbitration {
   }
 
  private:
+  // Both resolve steps start afresh.
+  void clear_results() {
+    senders_.clear();
+    lost_.clear();
+    collisions_.clear();
+  }
+
   // What add() gathered.
   NodeList<Contender> contenders_;
   std::size_t smallest_ = 0;  // of the smallest first word: the last one to have it (tie_)

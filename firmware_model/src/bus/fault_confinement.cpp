@@ -21,7 +21,7 @@ void FaultConfinement::add_tec(uint16_t n) {
   if (bus_off_) {
     return;
   }
-  ++changes_;
+  ++changes_.n;
   tec_ = static_cast<uint16_t>(tec_ + n);
   if (tec_ >= kBusOffLimit) {
     bus_off_ = true;
@@ -34,7 +34,7 @@ void FaultConfinement::add_rec(uint16_t n) {
   if (bus_off_) {
     return;
   }
-  ++changes_;
+  ++changes_.n;
   // The receive counter has no upper state; it stops at the width of the controller's counter.
   rec_ = static_cast<uint16_t>(std::min<uint32_t>(uint32_t{rec_} + n, rec_limit_));
 }
@@ -52,7 +52,7 @@ bool FaultConfinement::recessive_sequences(uint32_t n) {
 }
 
 void FaultConfinement::set_counters(uint16_t tec, uint16_t rec) {
-  ++changes_;
+  ++changes_.n;
   tec_ = tec;
   rec_ = std::min(rec, rec_limit_);
   bus_off_ = tec_ >= kBusOffLimit;
@@ -61,7 +61,7 @@ void FaultConfinement::set_counters(uint16_t tec, uint16_t rec) {
 }
 
 void FaultConfinement::reset() {
-  ++changes_;
+  ++changes_.n;
   tec_ = 0;
   rec_ = 0;
   bus_off_ = false;

@@ -27,21 +27,6 @@ class FaultConfinement {
   // 8 bits (255) on the SJA1000 (RXERR) and the CAN FD controller; the default only keeps the
   // 16-bit value from wrapping.
   explicit FaultConfinement(uint16_t rec_limit = 0xFFFF) : rec_limit_(rec_limit) {}
-  FaultConfinement(const FaultConfinement&) = default;
-  // Takes `other`'s counters and state; passive_or_off_changes() changes too (it counts on from
-  // its own number, so that a look at it is not fooled by an assignment).
-  FaultConfinement& operator=(const FaultConfinement& other) {
-    const uint32_t changes = changes_ + 1;
-    tec_ = other.tec_;
-    rec_ = other.rec_;
-    rec_limit_ = other.rec_limit_;
-    warning_limit_ = other.warning_limit_;
-    bus_off_ = other.bus_off_;
-    recovering_ = other.recovering_;
-    sequences_seen_ = other.sequences_seen_;
-    changes_ = changes;
-    return *this;
-  }
 
   uint16_t tec() const { return tec_; }
   uint16_t rec() const { return rec_; }
@@ -53,9 +38,9 @@ class FaultConfinement {
   }
   ErrorState state() const;
   // A number that changes whenever bus_off() or error_passive() may have changed (and at other
-  // times too: every counted error, every direct write): a cheap look for whether either still
-  // reads as it did (the bus engine keeps a frame's roles while they do).
-  uint32_t passive_or_off_changes() const { return changes_; }
+  // times too: every counted error, every direct write, every assignment): a cheap look for
+  // whether either still reads as it did (the bus engine keeps a frame's roles while they do).
+  uint32_t passive_or_off_changes() const { return changes_.n; }
 
   // The limit for the warning state (SJA1000 EWLR); 96 unless programmed.
   uint8_t warning_limit() const { return warning_limit_; }
@@ -78,7 +63,7 @@ class FaultConfinement {
   // Rule 7: successful transmission: TEC - 1.
   void transmit_succeeded() {
     if (tec_ > 0) {
-      changes_ += tec_ == kErrorPassiveLimit ? 1u : 0u;
+      changes_.n += tec_ == kErrorPassiveLimit ? 1u : 0u;
       --tec_;
     }
   }
@@ -87,7 +72,7 @@ class FaultConfinement {
   void receive_succeeded() {
     if (rec_ > 127) {
       rec_ = 127;
-      ++changes_;
+      ++changes_.n;
     } else if (rec_ > 0) {
       --rec_;
     }
@@ -123,7 +108,18 @@ class FaultConfinement {
   bool bus_off_ = false;
   bool recovering_ = false;
   uint32_t sequences_seen_ = 0;
-  uint32_t changes_ = 0;  // passive_or_off_changes()
+  // passive_or_off_changes(). An assignment of the whole moves it on rather than copying it,
+  // so that a look at it is not fooled by one (the other members are copied as they are).
+  struct ChangeCount {
+    uint32_t n = 0;
+    ChangeCount() = default;
+    ChangeCount(const ChangeCount&) = default;
+    ChangeCount& operator=(const ChangeCount&) {
+      ++n;
+      return *this;
+    }
+  };
+  ChangeCount changes_;
 };
 
 }  // namespace canemu::model

@@ -176,6 +176,16 @@ std::string EncodedFrame::to_string() const {
   return s;
 }
 
+std::string EncodedFrame::stuff_marks() const {
+  std::string s(length, '0');
+  for (std::size_t i = 0; i < length; ++i) {
+    if (is_stuff(i)) {
+      s[i] = '1';
+    }
+  }
+  return s;
+}
+
 BitCounts bit_counts(const EncodedFrame& frame) {
   if (!frame.brs) {
     return BitCounts{frame.length, 0};

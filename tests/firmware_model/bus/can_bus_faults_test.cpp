@@ -43,14 +43,6 @@ using Seen = std::pair<CanErrorType, uint16_t>;
 const Frame kLong =
     *Frame::classic(0x555, std::vector<uint8_t>{0xFF, 0, 0xFF, 0, 0x0F, 0xF0, 1, 8});
 
-std::string stuff_marks(const EncodedFrame& e) {
-  std::string marks;
-  for (std::size_t i = 0; i < e.length; ++i) {
-    marks += e.is_stuff(i) ? '1' : '0';
-  }
-  return marks;
-}
-
 TEST(CanBusFaults, ThirtyTwoBitErrorsDriveTheSenderBusOffAndItRecoversAfter128x11Bits) {
   Fixture f;
   TestController a(f.bus), b(f.bus);
@@ -414,7 +406,7 @@ TEST(CanBusFaults, AnInjectorIsShownTheWholeEncodingOfAFrameLongerThanAWord) {
   struct Look final : FaultInjector {
     std::vector<std::pair<std::string, std::string>> seen;  // bits and stuff marks
     FrameFault on_frame(const FrameContext& c) override {
-      seen.emplace_back(c.bits.to_string(), stuff_marks(c.bits));
+      seen.emplace_back(c.bits.to_string(), c.bits.stuff_marks());
       return {};
     }
   };
@@ -430,7 +422,7 @@ TEST(CanBusFaults, AnInjectorIsShownTheWholeEncodingOfAFrameLongerThanAWord) {
   sched.run_until(SimTime::from_ns(1'000'000));
   ASSERT_EQ(look.seen.size(), 2u);
   EXPECT_EQ(look.seen[1].first, encode(kLong).to_string());
-  EXPECT_EQ(look.seen[1].second, stuff_marks(encode(kLong)));
+  EXPECT_EQ(look.seen[1].second, encode(kLong).stuff_marks());
   EXPECT_EQ(b.received.size(), 2u);
 }
 

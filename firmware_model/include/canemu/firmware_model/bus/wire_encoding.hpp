@@ -108,6 +108,8 @@ struct EncodedFrame {
   uint16_t field_begin(Field field) const;
   // The bits as '0' (dominant) and '1' (recessive), SOF first.
   std::string to_string() const;
+  // The stuff marks the same way: '1' for a stuff bit (dynamic or fixed), '0' for any other.
+  std::string stuff_marks() const;
 };
 
 void encode(const Frame& frame, EncodedFrame& out);

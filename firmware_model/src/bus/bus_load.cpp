@@ -6,7 +6,7 @@
 namespace canemu::model {
 
 void BusLoad::make_room(SimTime end) {
-  const int64_t forget = (end - seconds(2)).ns();
+  const int64_t forget = (end - kKept).ns();
   const std::size_t mask = busy_size_ - 1;
   while (busy_count_ != 0 && busy_[busy_head_].end < forget) {
     busy_head_ = (busy_head_ + 1) & mask;
@@ -38,7 +38,7 @@ double BusLoad::percent(SimTime now) const {
   // room is needed, and the answer must not depend on that.
   // `forgotten`: the latest end that counts as forgotten.
   const int64_t forgotten =
-      busy_count_ == 0 ? INT64_MIN : at(busy_count_ - 1).end - seconds(2).ns() - 1;
+      busy_count_ == 0 ? INT64_MIN : at(busy_count_ - 1).end - kKept.ns() - 1;
   int64_t busy = 0;
   const auto add_clipped = [&](std::size_t k) {
     const int64_t a = std::max(at(k).start, from.ns());

@@ -52,6 +52,8 @@ class BusLoad {
   std::vector<Bin> history(SimTime now) const;
 
  private:
+  // What ended longer than this before the latest activity's end is forgotten (record()).
+  static constexpr SimDuration kKept = seconds(2);
   void add_to_bins(SimTime start, SimTime end);
   // busy_ is full: what ended two seconds before `end` leaves it, and if none did, it gets
   // twice the room (out of record's way: once every so many activities).

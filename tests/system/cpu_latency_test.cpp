@@ -63,14 +63,14 @@ void write_file(const std::string& file, const std::string& text) {
 
 // A folder of the test's own, the file canemud is to write its request into
 // (CANEMU_CPU_LATENCY_FILE: one byte in it, as the kernel's device exists before anyone writes
-// it; or, `missing`, a path to nothing), and canemud's configuration with one bus and
+// it; or, unless `made`, nothing there yet), and canemud's configuration with one bus and
 // `cpu_latency_us` (none if negative).
 struct Rig {
-  explicit Rig(int64_t bound, bool missing = false)
-      : qos((dir.path / (missing ? "no-such-folder/qos" : "qos")).string()),
+  explicit Rig(int64_t bound, bool made = true)
+      : qos((dir.path / "qos").string()),
         env("CANEMU_CPU_LATENCY_FILE", qos),
         config((dir.path / "canemud.toml").string()) {
-    if (!missing) {
+    if (made) {
       std::ofstream(qos).put('x');
     }
     set(bound);
@@ -127,8 +127,7 @@ TEST(CpuLatency, ARequestThatCannotBeChangedStaysAsItWas) {
 
 // A file whose open would wait (a FIFO nobody reads) does not hold up the loop: refused at once.
 TEST(CpuLatency, AFileWhoseOpenWouldWaitIsRefusedAtOnce) {
-  const Rig rig(5, true);
-  std::filesystem::create_directory(rig.dir.path / "no-such-folder");
+  const Rig rig(5, false);
   ASSERT_EQ(::mkfifo(rig.qos.c_str(), 0600), 0);
   Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("no request made", 10'000)) << d.log();
@@ -152,7 +151,7 @@ TEST(CpuLatency, SteppedTimeMakesNoRequest) {
 }
 
 TEST(CpuLatency, AFileItCannotOpenIsNamedAndTheDaemonRunsWithoutTheRequest) {
-  const Rig rig(10, true);
+  const Rig rig(10, false);
   const std::string& qos = rig.qos;
   Daemon d("realtime", {"--config=" + rig.config});
   ASSERT_TRUE(d.read_log_until("no request made", 10'000)) << d.log();

@@ -37,8 +37,7 @@ double BusLoad::percent(SimTime now) const {
   // whether or not make_room() has dropped it yet: the ring keeps such activities until their
   // room is needed, and the answer must not depend on that.
   // `forgotten`: the latest end that counts as forgotten.
-  const int64_t forgotten =
-      busy_count_ == 0 ? INT64_MIN : at(busy_count_ - 1).end - kKept.ns() - 1;
+  const int64_t forgotten = busy_count_ == 0 ? INT64_MIN : at(busy_count_ - 1).end - kKept.ns() - 1;
   int64_t busy = 0;
   const auto add_clipped = [&](std::size_t k) {
     const int64_t a = std::max(at(k).start, from.ns());

@@ -10,21 +10,25 @@ from __future__ import annotations
 import json
 import os
 import re
+import signal
 import socket
 import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import can
 import pytest
 
-from conftest import REPO, Canemud
+from conftest import CANEMU_CLI, REPO, Canemud
 from web_support import Web, browser, cli, frame_times, status
 
 pytest.importorskip("aiohttp", reason="canemu web needs aiohttp (python3-aiohttp)")
 
 MS = 1_000_000
 SCREENSHOT = REPO / "docs" / "web.png"
+DBC = REPO / "tests" / "data" / "dbc" / "socialledge.dbc"
 
 SCENARIO = """
 [scenario]
@@ -328,8 +332,8 @@ def test_the_peer_of_a_loopback_connection_is_known_by_its_uid():
             s.close()
 
 
-def test_the_id_table_hook_and_log_lines():
-    from canemu._web_feed import IdRow, decode_frame, parse_log_line
+def test_log_lines_and_id_rows():
+    from canemu._web_feed import IdRow, parse_log_line
 
     assert parse_log_line("(0000000001.000250) can0 123#1122") == (1_000_250_000, "can0", "123",
                                                                     "1122")
@@ -337,13 +341,106 @@ def test_the_id_table_hook_and_log_lines():
     assert parse_log_line("(0000000000.000001) fd0 123##1AABB")[3] == "AABB"
     assert parse_log_line("(0000000000.000001) can0 12345678#R4")[3] == "R"
     assert parse_log_line("canemu: something") is None
-    assert decode_frame("can0", 0x123, b"\x01") is None  # no DBC decoding yet
     row = IdRow("123", 0, "0102")
     row.add(0, "0102")
     row.add(10 * MS, "0103")
     r = row.row("can0")
     assert (r["count"], r["period_ms"], r["data"], r["changed"]) == (2, 10.0, "0103", 0b10)
+    assert (r["message"], r["signals"], r["note"]) == (None, None, None)  # no --dbc
     assert json.dumps(r)
+
+
+class _NamedDb:
+    """A database that knows every standard identifier as one message, named `name`."""
+
+    class _Message:
+        is_extended_frame = False
+        signals = []
+
+        def __init__(self, name: str) -> None:
+            self.name = name
+
+        def decode(self, data, decode_choices):
+            return {}
+
+    def __init__(self, name: str) -> None:
+        self.message = self._Message(name)
+
+    def get_message_by_frame_id(self, can_id):
+        return self.message
+
+
+def test_the_id_tables_decode_through_dbc_files():
+    pytest.importorskip("cantools", reason="--dbc needs cantools (requirements-dbc.txt)")
+    from canemu._web_feed import IdRow, SignalDecoder, parse_dbc_option
+    from canemu.dbc_decode import load
+
+    assert parse_dbc_option("can1=car.dbc") == ("can1", "car.dbc")
+    assert parse_dbc_option("car.dbc") == (None, "car.dbc")
+    assert parse_dbc_option("dbc/a=b.dbc") == (None, "dbc/a=b.dbc")  # no bus name before "="
+    db = load(str(DBC))
+    everywhere = SignalDecoder([(None, db)])
+
+    def row(text_id: str, data: str, bus: str = "can0", decoder=everywhere):
+        r = IdRow(text_id, 0, data)
+        r.add(0, data)
+        return r.row(bus, decoder)
+
+    # MOTOR_STATUS (400 = 0x190): wheel_error 1, speed 0x03E8 x 0.001 kph.
+    r = row("190", "01E803")
+    assert (r["message"], r["signals"], r["note"]) == (
+        "MOTOR_STATUS", [("MOTOR_STATUS_wheel_error", "1"), ("MOTOR_STATUS_speed_kph", "1.0 kph")],
+        None)
+    assert json.loads(json.dumps(r))["signals"][1] == ["MOTOR_STATUS_speed_kph", "1.0 kph"]
+    # A choice by its name; a length that is not the message's; a remote frame.
+    assert row("064", "01")["signals"] == [("DRIVER_HEARTBEAT_cmd", "DRIVER_HEARTBEAT_cmd_SYNC")]
+    short = row("190", "01")
+    assert short["message"] == "MOTOR_STATUS" and short["signals"] is None
+    assert short["note"].startswith("not decoded: ")
+    assert (row("190", "R")["message"], row("190", "R")["note"]) == ("MOTOR_STATUS",
+                                                                     "remote frame")
+    # Identifiers the file does not know, and 0x190 as an extended identifier.
+    assert row("123", "00")["message"] is None
+    assert row("00000190", "01E803")["message"] is None
+    # A file for one bus decodes that bus only, and comes before the files for every bus.
+    only_can1 = SignalDecoder([("can1", db)])
+    assert row("190", "01E803", "can0", only_can1)["message"] is None
+    assert row("190", "01E803", "can1", only_can1)["message"] == "MOTOR_STATUS"
+    both = SignalDecoder([(None, _NamedDb("FOR_EVERY_BUS")), ("can1", _NamedDb("FOR_CAN1"))])
+    assert row("190", "00", "can1", both)["message"] == "FOR_CAN1"
+    assert row("190", "00", "can0", both)["message"] == "FOR_EVERY_BUS"
+
+    # A row is decoded again when its data changes, not at every update.
+    class Counting(SignalDecoder):
+        calls = 0
+
+        def decode(self, bus, text_id, data):
+            Counting.calls += 1
+            return super().decode(bus, text_id, data)
+
+    counting = Counting([(None, db)])
+    r = IdRow("190", 0, "01E803")
+    r.add(0, "01E803")
+    r.row("can0", counting)
+    r.row("can0", counting)
+    assert Counting.calls == 1
+    r.add(MS, "00D007")
+    assert r.row("can0", counting)["signals"][1] == ("MOTOR_STATUS_speed_kph", "2.0 kph")
+    assert Counting.calls == 2
+
+
+def test_a_dbc_file_that_cannot_be_read_is_named_and_nothing_serves(daemon, tmp_path):
+    pytest.importorskip("cantools", reason="--dbc needs cantools (requirements-dbc.txt)")
+    bad = tmp_path / "bad.dbc"
+    bad.write_text("this is no DBC\n")
+    env = {**os.environ, "CANEMU_PYTHON": sys.executable}
+    for path in (bad, tmp_path / "missing.dbc"):
+        done = subprocess.run([str(CANEMU_CLI), "--socket", daemon.socket, "web", "--listen",
+                               "127.0.0.1:0", "--dbc", f"can0={path}"],
+                              capture_output=True, text=True, timeout=60, env=env)
+        assert done.returncode == 2, done.stderr
+        assert f"canemu: web: --dbc {path}: " in done.stderr
+        assert "serving" not in done.stderr
 
 
 def test_a_page_that_falls_behind_gets_a_snapshot_instead_of_losing_updates():
@@ -364,3 +461,52 @@ def test_a_page_that_falls_behind_gets_a_snapshot_instead_of_losing_updates():
     assert queued[0] == RESYNC
     assert [json.loads(t)["n"] for t in queued[1:]] == list(range(2 * RESYNC_AFTER + 1,
                                                                  2 * RESYNC_AFTER + 4))
+
+
+def test_buses_added_by_a_reload_get_id_tables_decoded_through_the_dbc():
+    """A bus that a reload adds after canemu web started gets its ID table too (a dump of its
+    own), and its frames are decoded through --dbc's file."""
+    pytest.importorskip("cantools", reason="--dbc needs cantools (requirements-dbc.txt)")
+    d = Canemud("stepped")
+    try:
+        web = Web(d, "--dbc", str(DBC))
+        try:
+            web.wait_state(listening_on_every_bus, "the ID tables' listen-only nodes")
+            with open(d.config, "a") as config:
+                config.write('\n[[bus]]\nname = "can2"\nkind = "can"\nbitrate = 500000\n')
+            d.proc.send_signal(signal.SIGHUP)
+            web.wait_state(lambda s: "can2" in s["listening"], "a listen-only node on can2")
+            sender = can.Bus(interface="canemu", channel="can2")
+            acker = can.Bus(interface="canemu", channel="can2")
+            try:
+                sender.send(can.Message(arbitration_id=0x190, data=[1, 0xE8, 3],
+                                        is_extended_id=False))
+                cli(d, "time", "step", "10ms")
+                state = web.wait_state(
+                    lambda s: any(r["id"] == "190" and r["count"] == 1
+                                  for r in s["ids"].get("can2", [])), "0x190 on can2")
+            finally:
+                sender.shutdown()
+                acker.shutdown()
+            row = next(r for r in state["ids"]["can2"] if r["id"] == "190")
+            assert row["message"] == "MOTOR_STATUS"
+            assert row["signals"] == [["MOTOR_STATUS_wheel_error", "1"],
+                                      ["MOTOR_STATUS_speed_kph", "1.0 kph"]]
+            assert sorted(state["listening"]) == ["can0", "can1", "can2", "fd0"]
+            try:
+                import playwright.sync_api as sync_api
+            except ImportError:
+                return  # the page's column: with Playwright (.venv), not under .venv-debian
+            with sync_api.sync_playwright() as p:
+                context = browser(p)
+                page = context.new_page()
+                page.goto(web.url)
+                cell = '#ids-can2 tr[data-id="190"] .signals'
+                page.wait_for_selector(cell)
+                assert page.inner_text(cell) == ("MOTOR_STATUS: MOTOR_STATUS_wheel_error=1 "
+                                                 "MOTOR_STATUS_speed_kph=1.0 kph")
+                context.close()
+        finally:
+            web.stop()
+    finally:
+        d.stop()

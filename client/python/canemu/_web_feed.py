@@ -1,7 +1,8 @@
 """What canemu web shows, gathered from canemud through the canemu command line: `canemu status
 --json` every interval (canemud offers no status subscription: its SubscribeRequest announces
-devices coming and going), one `canemu dump any --listen-only --sim-time` for the ID tables, and
-`canemu lin list` while there are LIN buses. Every look becomes one update pushed to the pages
+devices coming and going), `canemu dump BUS... --listen-only --sim-time` for the ID tables (one
+for the CAN buses of the first look, one more for those a later look finds), and `canemu lin
+list` while there are LIN buses. Every look becomes one update pushed to the pages
 (web.py); a short history lets a page that opens late draw the last minute."""
 
 from __future__ import annotations
@@ -25,10 +26,42 @@ FRAME_EFFECTS = {"bit_error", "stuff_error", "form_error", "crc_error", "ack_err
                  "lin_responder_off"}
 
 
-def decode_frame(bus: str, can_id: int, data: bytes) -> Optional[List[Tuple[str, str]]]:
-    """The ID table's hook for decoding a frame's signals: (signal, value text) pairs, or None
-    when nothing decodes it. Nothing does yet: DBC decoding plugs in here (docs/web.md)."""
-    return None
+class SignalDecoder:
+    """The ID tables' decoding through DBC files (`canemu web --dbc [BUS=]FILE`): a file given
+    with a bus decodes that bus's frames, one without decodes every bus's; a frame is decoded by
+    the first file that knows its identifier, its bus's files before the others, each group in
+    the order given (docs/web.md)."""
+
+    def __init__(self, files: List[Tuple[Optional[str], Any]]) -> None:
+        self.files = files  # (bus or None, cantools database)
+
+    def decode(self, bus: str, text_id: str, data: str) -> Optional[Dict[str, Any]]:
+        """What the ID table shows of a frame (candump's identifier and data text, "R" for a
+        remote frame): {"message": NAME, "signals": [(signal, value text), ...]}, or with
+        "signals" None and "note" saying why; None when no file knows the identifier."""
+        from .dbc_decode import frame_signals
+
+        extended = len(text_id) == 8
+        can_id = int(text_id, 16)
+        payload = None if data.startswith("R") else bytes.fromhex(data)
+        for only in (bus, None):
+            for file_bus, db in self.files:
+                if file_bus != only:
+                    continue
+                parts = frame_signals(db, can_id, payload, extended)
+                if parts is not None:
+                    name, texts, why = parts
+                    return {"message": name, "signals": texts, "note": why}
+        return None
+
+
+def parse_dbc_option(text: str) -> Tuple[Optional[str], str]:
+    """--dbc's value as (bus or None, file): BUS=FILE when the part before the first "=" is a
+    bus name (letters, digits, "_", "-", "."), otherwise the whole text is the file."""
+    bus, sep, path = text.partition("=")
+    if sep and bus and all(c.isalnum() or c in "_-." for c in bus):
+        return bus, path
+    return None, text
 
 
 def _end_with_parent() -> None:
@@ -47,9 +80,11 @@ RESYNC = ""  # in a page's queue: send it a snapshot
 
 class IdRow:
     """One identifier on one bus, as cansniffer shows it: count, period, last data, and which
-    bytes changed since the previous update."""
+    bytes changed since the previous update; decoded through the DBC files when there are some
+    (kept until the data changes)."""
 
-    __slots__ = ("count", "first_ns", "last_ns", "data", "changed", "text_id")
+    __slots__ = ("count", "first_ns", "last_ns", "data", "changed", "text_id", "decoded",
+                 "decoded_data")
 
     def __init__(self, text_id: str, at_ns: int, data: str) -> None:
         self.text_id = text_id
@@ -58,6 +93,8 @@ class IdRow:
         self.last_ns = at_ns
         self.data = data
         self.changed = 0  # bit i: byte i differs from the frame before it
+        self.decoded: Optional[Dict[str, Any]] = None
+        self.decoded_data: Optional[str] = None  # the data `decoded` is of
 
     def add(self, at_ns: int, data: str) -> None:
         if self.count:
@@ -69,12 +106,15 @@ class IdRow:
         self.last_ns = at_ns
         self.data = data
 
-    def row(self, bus: str) -> Dict[str, Any]:
+    def row(self, bus: str, decoder: Optional[SignalDecoder] = None) -> Dict[str, Any]:
         period = (self.last_ns - self.first_ns) / (self.count - 1) / 1e6 if self.count > 1 else None
-        data = bytes.fromhex(self.data) if self.data and self.data[0] != "R" else b""
+        if decoder is not None and self.decoded_data != self.data:
+            self.decoded = decoder.decode(bus, self.text_id, self.data)
+            self.decoded_data = self.data
+        decoded = self.decoded or {}
         return {"id": self.text_id, "count": self.count, "period_ms": period, "data": self.data,
-                "changed": self.changed,
-                "signals": decode_frame(bus, int(self.text_id, 16), data)}
+                "changed": self.changed, "message": decoded.get("message"),
+                "signals": decoded.get("signals"), "note": decoded.get("note") or None}
 
 
 def parse_log_line(line: str) -> Optional[Tuple[int, str, str, str]]:
@@ -102,11 +142,13 @@ class Feed:
     """canemud's state as the pages see it. `canemu` is the command line's path, `base` its
     global options (--socket)."""
 
-    def __init__(self, canemu: str, base: List[str], interval: float, frames: bool) -> None:
+    def __init__(self, canemu: str, base: List[str], interval: float, frames: bool,
+                 decoder: Optional[SignalDecoder] = None) -> None:
         self.canemu = canemu
         self.base = base
         self.interval = interval
         self.frames = frames
+        self.decoder = decoder
         self.subscribers: Set[asyncio.Queue] = set()
         # Pages that fell behind by more than RESYNC_AFTER updates: their queued updates were
         # replaced by a fresh snapshot (RESYNC), so that they lose nothing; counted here.
@@ -123,7 +165,11 @@ class Feed:
         self.looks = 0
         self._fault_hits: Dict[Tuple[str, int], Tuple[int, str]] = {}
         self._previous: Optional[Tuple[int, Dict[str, Tuple[int, int]]]] = None
-        self._dump: Optional[asyncio.subprocess.Process] = None
+        # The dumps that feed the ID tables: one for the CAN buses of the first look, one more
+        # for each look that finds new ones (a reload adds buses); the buses asked for so far.
+        self._dumps: List[asyncio.subprocess.Process] = []
+        self._captures: List[asyncio.Future] = []
+        self._asked: Set[str] = set()
         self._wake = asyncio.Event()
         self._last_pid = 0
         self._rates: Dict[str, Tuple[float, float]] = {}
@@ -132,8 +178,7 @@ class Feed:
         """Leaves out this tool's own clients: the listen-only nodes of its dump (and their
         device) and the `canemu status` that answered; `clients` counts them still."""
         own = {status_pid}
-        if self._dump is not None:
-            own.add(self._dump.pid)
+        own.update(dump.pid for dump in self._dumps)
         hidden = set()
         devices = []
         for d in status.get("devices", []):
@@ -165,17 +210,15 @@ class Feed:
 
     # ---- the loops ----
     async def run(self) -> None:
-        tasks = [asyncio.ensure_future(self._poll())]
-        if self.frames:
-            tasks.append(asyncio.ensure_future(self._capture()))
         try:
-            await asyncio.gather(*tasks)
+            await self._poll()
         finally:
-            for task in tasks:
+            for task in self._captures:
                 task.cancel()
-            if self._dump is not None and self._dump.returncode is None:
-                self._dump.kill()
-                await self._dump.wait()
+            for dump in self._dumps:
+                if dump.returncode is None:
+                    dump.kill()
+                    await dump.wait()
 
     async def _poll(self) -> None:
         while True:
@@ -199,6 +242,12 @@ class Feed:
             code, out, err = await self.run_canemu("lin", "list")
             self.lin_text = out if code == 0 else err
         self.looks += 1
+        if self.frames:
+            new = [b["name"] for b in status["buses"]
+                   if b["kind"] != "lin" and b["name"] not in self._asked]
+            if new:
+                self._asked.update(new)
+                self._captures.append(asyncio.ensure_future(self._capture(new)))
         self._hide_own(status, status_pid)
         self.status = status
         self.publish(self.update(status))
@@ -254,7 +303,7 @@ class Feed:
     def id_rows(self) -> Dict[str, List[Dict[str, Any]]]:
         out = {}
         for bus, table in self.id_tables.items():
-            out[bus] = [row.row(bus) for _, row in sorted(table.items())]
+            out[bus] = [row.row(bus, self.decoder) for _, row in sorted(table.items())]
             for row in table.values():
                 row.changed = 0
         return out
@@ -262,7 +311,7 @@ class Feed:
     def snapshot(self) -> Dict[str, Any]:
         """What a page that just opened gets: the newest update's parts and the history."""
         status = self.status
-        ids = {bus: [row.row(bus) for _, row in sorted(table.items())]
+        ids = {bus: [row.row(bus, self.decoder) for _, row in sorted(table.items())]
                for bus, table in self.id_tables.items()}
         return {"type": "snapshot", "status": status, "history": list(self.history),
                 "faults_fired": list(self.fault_events), "ids": ids, "lin": self.lin_text,
@@ -285,15 +334,17 @@ class Feed:
                 self.resyncs += 1
 
     # ---- the ID tables ----
-    async def _capture(self) -> None:
-        self._dump = await asyncio.create_subprocess_exec(
-            self.canemu, *self.base, "dump", "any", "--listen-only", "--sim-time",
+    async def _capture(self, buses: List[str]) -> None:
+        """The frames of `buses` into the ID tables, through a listen-only dump of them."""
+        dump = await asyncio.create_subprocess_exec(
+            self.canemu, *self.base, "dump", *buses, "--listen-only", "--sim-time",
             stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
             stderr=asyncio.subprocess.PIPE, limit=1 << 20, preexec_fn=_end_with_parent)
-        errors = asyncio.ensure_future(self._dump_stderr(self._dump.stderr))
+        self._dumps.append(dump)
+        errors = asyncio.ensure_future(self._dump_stderr(dump.stderr))
         tables = self.id_tables
         seen = self.error_frames_seen
-        async for raw in self._dump.stdout:
+        async for raw in dump.stdout:
             parsed = parse_log_line(raw.decode(errors="replace"))
             if parsed is None:
                 continue
@@ -309,8 +360,9 @@ class Feed:
                 row = table[ident] = IdRow(ident, at_ns, data)
             row.add(at_ns, data)
         await errors
-        code = await self._dump.wait()
-        self.capture_note = f"the ID tables stopped: canemu dump ended with status {code}"
+        code = await dump.wait()
+        self.capture_note = (f"the ID tables of {', '.join(buses)} stopped: canemu dump ended "
+                             f"with status {code}")
 
     async def _dump_stderr(self, stream) -> None:
         async for raw in stream:

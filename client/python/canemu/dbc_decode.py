@@ -23,7 +23,7 @@ import argparse
 import os
 import signal
 import sys
-from typing import Any, Optional, Tuple
+from typing import Any, List, Optional, Tuple
 
 _ERR_FLAG = 0x20000000
 _EFF_MASK = 0x1FFFFFFF
@@ -48,21 +48,22 @@ def load(path: str) -> Any:
         raise DbcReadError(f"{path}: not a DBC cantools {cantools.__version__} reads: {e}") from e
 
 
-def _format(message: Any, decoded: dict) -> str:
-    """cantools decode's single-line form: NAME(SIGNAL: VALUE UNIT, ...), the signals in the
-    message's order, choices by name (without the unit)."""
+def signal_texts(message: Any, decoded: dict) -> List[Tuple[str, str]]:
+    """(signal, value text) of a decoded frame in the message's order: a value with its unit,
+    a choice by its name (without the unit); a multiplexed signal the multiplexor's value does
+    not select is left out."""
     from cantools.database.namedsignalvalue import NamedSignalValue
 
-    parts = []
+    texts = []
     for s in message.signals:
         if s.name not in decoded:
-            continue  # a multiplexed signal the multiplexor's value does not select
+            continue
         value = decoded[s.name]
         if s.unit and not isinstance(value, (NamedSignalValue, str)):
-            parts.append(f"{s.name}: {value} {s.unit}")
+            texts.append((s.name, f"{value} {s.unit}"))
         else:
-            parts.append(f"{s.name}: {value}")
-    return f"{message.name}({', '.join(parts)})"
+            texts.append((s.name, f"{value}"))
+    return texts
 
 
 def message_of(db: Any, arbitration_id: int, is_extended: bool) -> Any:
@@ -75,21 +76,34 @@ def message_of(db: Any, arbitration_id: int, is_extended: bool) -> Any:
     return message if bool(message.is_extended_frame) == bool(is_extended) else None
 
 
-def decode(db: Any, arbitration_id: int, data: Optional[bytes], is_extended: bool) -> str:
-    """The decoding of one frame as a line shows it after ``::``; "" when `db` does not know the
-    identifier (a standard and an extended identifier of one number are two messages). `data`
-    None: a remote frame."""
+def frame_signals(db: Any, arbitration_id: int, data: Optional[bytes],
+                  is_extended: bool) -> Optional[Tuple[str, Optional[List[Tuple[str, str]]], str]]:
+    """One frame as `db` decodes it, in parts: (message name, its (signal, value text) pairs,
+    "") or, when there are none, (name, None, why: "remote frame" or "not decoded: REASON");
+    None when `db` does not know the identifier. `data` None: a remote frame."""
     message = message_of(db, arbitration_id, is_extended)
     if message is None:
-        return ""
+        return None
     if data is None:
-        return f"{message.name}: remote frame"
+        return message.name, None, "remote frame"
     try:
         decoded = message.decode(bytes(data), decode_choices=True)
     except Exception as e:  # cantools' DecodeError: the length, a container, ...
-        reason = str(e) or type(e).__name__
-        return f"{message.name}: not decoded: {reason}"
-    return _format(message, decoded)
+        return message.name, None, f"not decoded: {str(e) or type(e).__name__}"
+    return message.name, signal_texts(message, decoded), ""
+
+
+def decode(db: Any, arbitration_id: int, data: Optional[bytes], is_extended: bool) -> str:
+    """The decoding of one frame as a line shows it after ``::`` (cantools decode's single-line
+    form: NAME(SIGNAL: VALUE UNIT, ...)); "" when `db` does not know the identifier (a standard
+    and an extended identifier of one number are two messages). `data` None: a remote frame."""
+    parts = frame_signals(db, arbitration_id, data, is_extended)
+    if parts is None:
+        return ""
+    name, texts, why = parts
+    if texts is None:
+        return f"{name}: {why}"
+    return f"{name}({', '.join(f'{signal}: {value}' for signal, value in texts)})"
 
 
 def parse_frame(text: str) -> Optional[Tuple[int, Optional[bytes], bool]]:

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import List, Optional
 
 from . import _web_control
-from ._web_feed import RESYNC, Feed
+from ._web_feed import RESYNC, Feed, SignalDecoder, parse_dbc_option
 
 STATIC = Path(__file__).resolve().parent / "web_static"
 CHART_JS = Path("/usr/share/javascript/chart.js/chart.min.js")
@@ -134,11 +134,31 @@ def parse_listen(text: str):
     return host.strip("[]") or "127.0.0.1", int(port)
 
 
-async def serve(args) -> int:
+def load_dbc_files(specs: List[str]) -> Optional[SignalDecoder]:
+    """The decoder of --dbc's files (None without any); ValueError naming the file and what is
+    wrong with it."""
+    if not specs:
+        return None
+    from .dbc_decode import DbcReadError, load
+
+    files = []
+    for spec in specs:
+        bus, path = parse_dbc_option(spec)
+        try:
+            files.append((bus, load(path)))
+        except DbcReadError as e:
+            raise ValueError(f"--dbc {e}") from None
+        except ImportError as e:  # cantools, which load() imports
+            raise ValueError(f"--dbc needs the cantools package for this Python "
+                             f"({sys.executable}): {e}; it is in requirements-dbc.txt") from None
+    return SignalDecoder(files)
+
+
+async def serve(args, decoder: Optional[SignalDecoder] = None) -> int:
     from aiohttp import web
 
     base: List[str] = ["--socket", args.socket] if args.socket else []
-    feed = Feed(args.canemu, base, args.interval / 1000.0, not args.no_frames)
+    feed = Feed(args.canemu, base, args.interval / 1000.0, not args.no_frames, decoder)
     host, port = parse_listen(args.listen)
     app = make_app(feed, args.allow_control)
     runner = web.AppRunner(app, access_log=None)
@@ -175,6 +195,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--interval", type=int, default=250)
     p.add_argument("--allow-control", action="store_true")
     p.add_argument("--no-frames", action="store_true")
+    p.add_argument("--dbc", action="append", default=[], metavar="[BUS=]FILE")
     args = p.parse_args(argv)
     try:
         import aiohttp  # noqa: F401
@@ -186,7 +207,12 @@ def main(argv: Optional[List[str]] = None) -> int:
         print(f"canemu: web: {e}", file=sys.stderr)
         return 1
     try:
-        return asyncio.run(serve(args))
+        decoder = load_dbc_files(args.dbc)
+    except ValueError as e:
+        print(f"canemu: web: {e}", file=sys.stderr)
+        return 2  # as canemu dump --dbc and canemu.dbc refuse a file
+    try:
+        return asyncio.run(serve(args, decoder))
     except KeyboardInterrupt:
         return 0
 

@@ -25,6 +25,7 @@ struct Options {
   bool allow_control = false;
   unsigned interval_ms = 250;
   bool no_frames = false;
+  std::vector<std::string> dbc;  // [BUS=]FILE
 };
 
 int run_web(const std::string& socket, const Options& o) {
@@ -50,6 +51,9 @@ int run_web(const std::string& socket, const Options& o) {
   if (o.no_frames) {
     args.emplace_back("--no-frames");
   }
+  for (const std::string& d : o.dbc) {
+    args.insert(args.end(), {"--dbc", d});
+  }
   const std::string why = exec_python_module("canemu.web", args);
   return fail(fmt::format("web: cannot run {} (CANEMU_PYTHON names the interpreter)", why));
 }
@@ -70,6 +74,10 @@ Command add_web(CLI::App& app, const std::string& socket) {
       ->check(CLI::Range(50u, 10000u));
   cmd->add_flag("--no-frames", o->no_frames,
                 "no ID tables: open no listen-only channel on the buses");
+  cmd->add_option("--dbc", o->dbc,
+                  "[BUS=]FILE: decode the ID tables' frames with this DBC (on BUS only, or on "
+                  "every bus); may be given several times")
+      ->allow_extra_args(false);
   return {cmd, [&socket, o] { return run_web(socket, *o); }};
 }
 

@@ -264,7 +264,9 @@ function showIds(ids) {
         const byte = r.data.slice(i, i + 2);
         data.append((r.changed >> (i / 2)) & 1 ? el("b", {}, byte) : byte, " ");
       }
-      row.children[4].textContent = r.signals ? r.signals.map(([k, v]) => `${k}=${v}`).join(" ") : "";
+      // Through the DBC files of --dbc: "MESSAGE: signal=value ...", or why not decoded.
+      const signals = r.signals ? r.signals.map(([k, v]) => `${k}=${v}`).join(" ") : (r.note || "");
+      row.children[4].textContent = r.message ? `${r.message}: ${signals}` : "";
     }
   }
 }

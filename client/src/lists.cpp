@@ -138,6 +138,10 @@ Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c) {
                                                                   &ipc::BridgeListReply::bridges);
 }
 
+Result<std::vector<ipc::FaultEntry>> fetch_fault_list(Connection& c) {
+  return every_page<ipc::FaultListRequest, ipc::FaultListReply>(c, &ipc::FaultListReply::faults);
+}
+
 Result<PeerList> fetch_peer_list(Connection& c) {
   PeerList list;
   std::size_t peer_total = 0;

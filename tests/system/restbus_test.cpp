@@ -1,17 +1,24 @@
 // A simulated CAN node ([[can_node]]) of canemud's configuration file, in stepped time: its
-// frames reach a client's channel with their bytes and their exact instants.
+// frames reach a client's channel with their bytes and their exact instants; faults on its
+// signals listed whole, however many and however long their names.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include "../support/temp_dir.hpp"
 #include "canemu/client/channel.hpp"
 #include "canemu/firmware_model/bus/frame.hpp"
 #include "canemu/firmware_model/bus/wire_encoding.hpp"
 #include "canemu/ipc/can_node_messages.hpp"
+#include "cli_run_support.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -124,6 +131,69 @@ TEST(Restbus, ALoadLongerThanOneMebibyteIsRefusedAndNothingStarts) {
   auto r = c.call<ipc::CanNodeRequest, ipc::CanNodeReply>(list);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->total, 0u);
+}
+
+// `canemu fault list` (and the client's fetch_fault_list) gives every fault, more than fit one
+// reply (kFaultPage), each target as long as the message's and signal's names make it.
+TEST(Restbus, EveryFaultIsListedWithItsWholeTarget) {
+  const std::string message = "MOTOR_STATUS_OF_THE_LEFT_REAR_WHEEL_DRIVE_UNIT";
+  const std::string signal = "speed_of_the_wheel_in_kilometres_per_hour";
+  std::string config = kConfig;
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"\"MOTOR_STATUS\"", '"' + message + '"'},
+        {"\"speed\"", '"' + signal + '"'}}) {
+    config.replace(config.find(from), from.size(), to);
+  }
+  TempDir dir;
+  const std::string file = (dir.path / "restbus.toml").string();
+  FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs(config.c_str(), f);
+  std::fclose(f);
+  // Two scenarios (a scenario's text is at most 12 KiB), loaded one after the other.
+  constexpr int kFaults = 2 * static_cast<int>(ipc::kFaultPage) + 5;
+  constexpr int kFirst = kFaults / 2;
+  Daemon d("stepped", {"--config=" + file});
+  for (const int part : {0, 1}) {
+    std::ostringstream scenario;
+    scenario << "[scenario]\nname = \"part" << part << "\"\n";
+    for (int k = part == 0 ? 0 : kFirst; k < (part == 0 ? kFirst : kFaults); ++k) {
+      scenario << "[[fault]]\neffect = \"signal_step\"\nat = \"" << k + 1
+               << "ms\"\nbus = \"can0\"\nsignal = \"" << message << '.' << signal
+               << "\"\nvalue = " << k << "\n";
+    }
+    const std::string scenario_file = (dir.path / fmt::format("part{}.toml", part)).string();
+    f = std::fopen(scenario_file.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(scenario.str().c_str(), f);
+    std::fclose(f);
+    output_of(d, {"fault", "load", scenario_file});
+  }
+
+  const std::string target = "can0/" + message + '.' + signal;
+  ASSERT_GT(target.size(), ipc::kNameSize);
+  auto c = connect(d);
+  const auto listed = client::fetch_fault_list(c);
+  ASSERT_TRUE(listed) << listed.error().message;
+  ASSERT_EQ(listed->size(), static_cast<std::size_t>(kFaults));
+  for (int k = 0; k < kFaults; ++k) {
+    const ipc::FaultEntry& e = (*listed)[static_cast<std::size_t>(k)];
+    EXPECT_EQ(ipc::name_of(e.target), target) << k;
+    // In the order they were applied.
+    EXPECT_EQ(ipc::name_of(e.scenario), k < kFirst ? "part0" : "part1") << k;
+    EXPECT_EQ(e.at_ns, (k + 1) * 1'000'000) << k;
+    EXPECT_EQ(e.line, static_cast<uint32_t>(3 + 6 * (k < kFirst ? k : k - kFirst))) << k;
+  }
+  // The table: a header and a row for each, the target whole.
+  const std::string table = output_of(d, {"fault", "list"});
+  std::size_t rows = 0;
+  for (std::size_t at = table.find(target); at != std::string::npos;
+       at = table.find(target, at + 1)) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, static_cast<std::size_t>(kFaults)) << table;
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), kFaults + 1) << table;
+  EXPECT_EQ(table.find("more not shown"), std::string::npos);
 }
 
 }  // namespace canemu

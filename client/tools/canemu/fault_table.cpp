@@ -3,10 +3,12 @@
 #include <cstdio>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "canemu/client/lists.hpp"
 #include "text_table.hpp"
 
 namespace canemu::cli {
@@ -58,16 +60,15 @@ std::string match_text(const ipc::FaultEntry& e) {
   return text.empty() ? "any" : text;
 }
 
-tl::expected<ipc::FaultListReply, std::string> fault_list(client::Connection& c) {
-  auto r = c.call<ipc::FaultListRequest, ipc::FaultListReply>(
-      ipc::make_message<ipc::FaultListRequest>());
+tl::expected<FaultList, std::string> fault_list(client::Connection& c) {
+  auto r = client::fetch_fault_list(c);
   if (!r) {
     return tl::unexpected(r.error().message);
   }
-  return *r;
+  return std::move(*r);
 }
 
-void print_faults(const ipc::FaultListReply& r) {
+void print_faults(const FaultList& faults) {
   using Align = TextTable::Align;
   TextTable table({{"SCENARIO", Align::left, 24},
                    {"LINE", Align::right, 5},
@@ -79,8 +80,7 @@ void print_faults(const ipc::FaultListReply& r) {
                    {"HITS", Align::right, 8},
                    {"STATE", Align::left, 7},
                    {"MATCH"}});
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::FaultEntry& e = r.faults[i];
+  for (const ipc::FaultEntry& e : faults) {
     const auto seconds = [](int64_t ns) {
       return fmt::format("{:.6f}", static_cast<double>(ns) / 1e9);
     };
@@ -89,9 +89,6 @@ void print_faults(const ipc::FaultListReply& r) {
                std::to_string(e.seen), std::to_string(e.hits), state_name(e.state), match_text(e)});
   }
   table.print();
-  if (r.total > r.count) {
-    std::printf("(%u more not shown)\n", r.total - r.count);
-  }
 }
 
 namespace {
@@ -128,10 +125,9 @@ std::optional<toml::table> match_json(const ipc::FaultEntry& e) {
 
 }  // namespace
 
-toml::array faults_array(const ipc::FaultListReply& r) {
+toml::array faults_array(const FaultList& list) {
   toml::array faults;
-  for (uint16_t i = 0; i < r.count; ++i) {
-    const ipc::FaultEntry& e = r.faults[i];
+  for (const ipc::FaultEntry& e : list) {
     toml::table t{{"scenario", ipc::name_of(e.scenario)},
                   {"line", static_cast<int64_t>(e.line)},
                   {"effect", ipc::name_of(e.effect)},
@@ -151,8 +147,8 @@ toml::array faults_array(const ipc::FaultListReply& r) {
   return faults;
 }
 
-std::string faults_json(const ipc::FaultListReply& r) {
-  return one_line_json(faults_array(r));
+std::string faults_json(const FaultList& faults) {
+  return one_line_json(faults_array(faults));
 }
 
 }  // namespace canemu::cli

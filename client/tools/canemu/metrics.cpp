@@ -143,7 +143,7 @@ void expose_distributed(Exposition& e, const client::PeerList& d) {
   }
 }
 
-std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
+std::string expose(const client::Status& s, const FaultList& faults,
                    const std::vector<ipc::RecorderEntry>& recorders,
                    const std::vector<ipc::BridgeEntry>& bridges, const client::PeerList& peers) {
   Exposition e;
@@ -275,8 +275,7 @@ std::string expose(const client::Status& s, const ipc::FaultListReply& faults,
 
   e.family("canemu_fault_hits_total", "counter",
            "Frames a fault hit, or times a timed fault fired.");
-  for (uint16_t i = 0; i < faults.count; ++i) {
-    const ipc::FaultEntry& f = faults.faults[i];
+  for (const ipc::FaultEntry& f : faults) {
     e.sample("canemu_fault_hits_total",
              fmt::format("scenario=\"{}\",line=\"{}\",effect=\"{}\",target=\"{}\"",
                          label(ipc::name_of(f.scenario)), f.line, label(ipc::name_of(f.effect)),

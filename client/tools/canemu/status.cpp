@@ -225,7 +225,7 @@ void print_distributed(const client::PeerList& d) {
 // only when the daemon has [distributed] (TOML, and so toml++, has no null).
 void print_json(const client::Connection& c, const client::Status& s, const std::string& mode,
                 const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
-                const ipc::FaultListReply& faults, const std::vector<ipc::RecorderEntry>& recorders,
+                const FaultList& faults, const std::vector<ipc::RecorderEntry>& recorders,
                 const std::vector<ipc::BridgeEntry>& bridges, const client::PeerList& peers) {
   const auto i64 = [](uint64_t v) { return static_cast<int64_t>(v); };
   toml::array buses;
@@ -298,8 +298,7 @@ void print_json(const client::Connection& c, const client::Status& s, const std:
 
 void print_tables(const client::Connection& c, const client::Status& s, const std::string& mode,
                   const client::DeviceList& devices, const std::vector<ipc::ClientEntry>& clients,
-                  const ipc::FaultListReply& faults,
-                  const std::vector<ipc::RecorderEntry>& recorders,
+                  const FaultList& faults, const std::vector<ipc::RecorderEntry>& recorders,
                   const std::vector<ipc::BridgeEntry>& bridges, const client::PeerList& peers) {
   std::printf("canemud pid %u, time %s, simulated %.9f s, %u client%s\n", c.server_pid(),
               mode.c_str(), static_cast<double>(s.sim_time_ns) / 1e9, s.client_count,
@@ -360,7 +359,7 @@ void print_tables(const client::Connection& c, const client::Status& s, const st
     client_table.add({ipc::name_of(e.name), n(e.pid), n(e.uid), n(e.channels)});
   }
   client_table.print();
-  if (faults.total > 0) {
+  if (!faults.empty()) {
     print_faults(faults);
   }
   if (!recorders.empty()) {

@@ -41,16 +41,16 @@ void ControlDispatcher::on_fault_load(Session& c, const uint8_t* data, uint32_t 
   send_reply(send, *r);
 }
 
-void ControlDispatcher::on_fault_list(Session&, const uint8_t*, uint32_t request_id,
+void ControlDispatcher::on_fault_list(Session&, const uint8_t* data, uint32_t request_id,
                                       const Send& send) {
+  const auto req = read_as<ipc::FaultListRequest>(data);
   auto r =
       std::make_unique<ipc::FaultListReply>(ipc::make_message<ipc::FaultListReply>(request_id));
   const auto faults = sim_.scenarios().status();
   r->total = static_cast<uint16_t>(std::min<std::size_t>(faults.size(), UINT16_MAX));
-  for (const ScenarioRunner::FaultStatus& f : faults) {
-    if (r->count == ipc::kMaxFaults) {
-      break;
-    }
+  r->first = req.first;
+  for (std::size_t k = req.first; k < r->total && r->count < ipc::kFaultPage; ++k) {
+    const ScenarioRunner::FaultStatus& f = faults[k];
     ipc::FaultEntry& e = r->faults[r->count++];
     ipc::copy_name(e.scenario, f.scenario);
     ipc::copy_name(e.effect, to_string(f.effect));

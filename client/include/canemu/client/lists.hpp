@@ -44,6 +44,8 @@ Result<std::vector<ipc::ClientEntry>> fetch_client_list(Connection& c);
 // missed or listed twice.
 Result<std::vector<ipc::RecorderEntry>> fetch_recorder_list(Connection& c);
 Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c);
+// The faults applied, in the order they were (faults are only added: the pages fit together).
+Result<std::vector<ipc::FaultEntry>> fetch_fault_list(Connection& c);
 
 // [distributed]: this daemon's name, domain, partition and counters (the first page's), every
 // other daemon it heard and every bus of it that another daemon simulates. Without

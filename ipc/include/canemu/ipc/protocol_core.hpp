@@ -21,7 +21,7 @@
 namespace canemu::ipc {
 
 inline constexpr uint32_t kMagic = 0x454E4143;  // "CANE" in memory on little-endian machines
-inline constexpr uint16_t kProtocolVersion = 7;
+inline constexpr uint16_t kProtocolVersion = 8;
 inline constexpr std::size_t kMaxMessageSize = 16384;
 inline constexpr std::size_t kNameSize = 32;
 // A fault scenario's name: up to 63 bytes and the terminating zero.
@@ -491,7 +491,10 @@ enum class NotificationKind : uint32_t { device_added = 1, device_removed = 2 };
 // ---- fault scenarios (docs/faults.md) ----
 
 inline constexpr std::size_t kMaxScenarioText = 12288;
-inline constexpr std::size_t kMaxFaults = 64;
+inline constexpr std::size_t kFaultPage = 48;  // faults in one FaultListReply
+// A fault's target as the list shows it: a bus, a node, or a simulated node's message or signal
+// (BUS/MESSAGE.SIGNAL, names as long as a DBC writes them).
+inline constexpr std::size_t kFaultTargetSize = 128;
 
 // A scenario's text (not a path: the daemon never reads files on a client's behalf), applied
 // from the simulated time the request is handled.
@@ -540,7 +543,7 @@ enum class WireMatchFlag : uint8_t { any = 0, no = 1, yes = 2 };
 struct FaultEntry {
   char scenario[kScenarioNameSize] = {};
   char effect[24] = {};
-  char target[kNameSize] = {};  // bus or node
+  char target[kFaultTargetSize] = {};  // bus, node, or BUS/MESSAGE[.SIGNAL]
   uint32_t line = 0;
   uint8_t state = 0;  // WireFaultState
   uint8_t has_until = 0;
@@ -558,18 +561,26 @@ struct FaultEntry {
   uint32_t reserved3 = 0;
   char match_from[kNameSize] = {};  // the transmitting (CAN) or commanding (LIN) node; "": any
 };
-static_assert(sizeof(FaultEntry) == kScenarioNameSize + 24 + 32 + 8 + 32 + 16 + kNameSize);
+static_assert(sizeof(FaultEntry) ==
+              kScenarioNameSize + 24 + kFaultTargetSize + 8 + 32 + 16 + kNameSize);
 
+// The faults in pages, as the other lists: from the `first` on. Faults are only ever added (a
+// cleared one stays, `cleared`), so pages taken one after the other fit together.
 struct FaultListRequest {
   MsgHeader header;
+  uint16_t first = 0;
+  uint16_t reserved = 0;
+  uint32_t reserved2 = 0;
 };
+static_assert(sizeof(FaultListRequest) == 24);
 
 struct FaultListReply {
   MsgHeader header;
-  uint16_t count = 0;
-  uint16_t total = 0;
-  uint32_t reserved = 0;
-  FaultEntry faults[kMaxFaults];
+  uint16_t count = 0;  // in this page, at most kFaultPage
+  uint16_t total = 0;  // faults applied
+  uint16_t first = 0;  // index of faults[0] among all (the request's)
+  uint16_t reserved = 0;
+  FaultEntry faults[kFaultPage];
 };
 static_assert(sizeof(FaultListReply) <= kMaxMessageSize);
 

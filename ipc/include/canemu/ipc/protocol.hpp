@@ -1,7 +1,8 @@
 // The control protocol between canemud and its clients: fixed-layout messages over an AF_UNIX
 // SOCK_SEQPACKET socket, one message per packet, every one starting with MsgHeader. The
 // messages live in protocol_core.hpp (the daemon's own), capture_messages.hpp (recorders and
-// bridges), distributed_messages.hpp (other daemons), vci_messages.hpp and xcan_messages.hpp
+// bridges), distributed_messages.hpp (other daemons), fault_messages.hpp (fault scenarios),
+// vci_messages.hpp and xcan_messages.hpp
 // (the personalities); this header gathers them with their message types, the constructor of a
 // message and the check of a received one.
 #pragma once
@@ -16,6 +17,7 @@
 #include "canemu/ipc/can_node_messages.hpp"
 #include "canemu/ipc/capture_messages.hpp"
 #include "canemu/ipc/distributed_messages.hpp"
+#include "canemu/ipc/fault_messages.hpp"
 #include "canemu/ipc/lin_node_messages.hpp"
 #include "canemu/ipc/protocol_core.hpp"
 #include "canemu/ipc/slcan_messages.hpp"

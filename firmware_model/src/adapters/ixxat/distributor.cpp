@@ -190,17 +190,6 @@ void Distributor::echo(const Frame& frame, const CANMSG2& echo, std::optional<Ch
   }
 }
 
-std::optional<std::pair<CANMSG2, ChannelId>> Distributor::take(
-    const std::function<bool(const CANMSG2&)>& sendable) {
-  auto m = take_converted([&](const CANMSG2& msg) -> std::optional<bool> {
-    return sendable(msg) ? std::optional<bool>(true) : std::nullopt;
-  });
-  if (!m) {
-    return std::nullopt;
-  }
-  return std::make_pair(m->msg, m->channel);
-}
-
 void Distributor::count_sent(ChannelId id) {
   if (Channel* c = find(id)) {
     ++c->counters.sent;

@@ -8,7 +8,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <optional>
 #include <type_traits>
 #include <utility>
@@ -110,9 +109,6 @@ class Distributor {
   template <class Convert>
   auto take_converted(Convert&& convert)
       -> std::optional<Taken<typename std::invoke_result_t<Convert&, const CANMSG2&>::value_type>>;
-  // The same with a yes/no test.
-  std::optional<std::pair<CANMSG2, ChannelId>> take(
-      const std::function<bool(const CANMSG2&)>& sendable);
   static constexpr uint32_t kRejectBudget = 1024;
   void count_sent(ChannelId id);
   void count_dropped(ChannelId id);

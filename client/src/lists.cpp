@@ -139,7 +139,34 @@ Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c) {
 }
 
 Result<std::vector<ipc::FaultEntry>> fetch_fault_list(Connection& c) {
-  return every_page<ipc::FaultListRequest, ipc::FaultListReply>(c, &ipc::FaultListReply::faults);
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    std::vector<ipc::FaultEntry> faults;
+    uint32_t generation = 0;
+    bool changed = false;
+    for (bool first_page = true;; first_page = false) {
+      auto m = ipc::make_message<ipc::FaultListRequest>();
+      m.first = static_cast<uint16_t>(faults.size());
+      auto r = c.call<ipc::FaultListRequest, ipc::FaultListReply>(m);
+      if (!r) {
+        return tl::unexpected(r.error());
+      }
+      if (first_page) {
+        generation = r->generation;
+      } else if (r->generation != generation) {
+        changed = true;
+        break;
+      }
+      const uint16_t count = std::min<uint16_t>(r->count, ipc::kFaultPage);
+      faults.insert(faults.end(), r->faults, r->faults + count);
+      if (count == 0 || faults.size() >= r->total) {
+        break;
+      }
+    }
+    if (!changed) {
+      return faults;
+    }
+  }
+  return tl::unexpected(kept_changing("the fault list"));
 }
 
 Result<PeerList> fetch_peer_list(Connection& c) {

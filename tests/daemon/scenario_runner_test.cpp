@@ -465,6 +465,27 @@ count = 3
   EXPECT_EQ(kept.back().state, ScenarioRunner::FaultStatus::State::done);
 }
 
+// The fault list's generation (paged readers start over when it changes) moves when cleared
+// scenarios are forgotten, the faults after them moving down, and not when a load adds faults
+// at the end or a clear keeps what it cleared.
+TEST(ScenarioBounds, TheGenerationChangesWhenFaultsMoveOnly) {
+  World w;
+  auto s = parse_scenario(kOneRule, "s.toml");
+  ASSERT_TRUE(s);
+  ScenarioRunner& r = w.sim->scenarios();
+  const uint32_t start = r.generation();
+  for (std::size_t k = 0; k < ScenarioRunner::kKeptCleared; ++k) {
+    ASSERT_TRUE(r.apply(*s, w.sim->scheduler().now()));
+    ASSERT_EQ(r.clear("cycle"), 1u);
+  }
+  EXPECT_EQ(r.generation(), start);  // every cleared one kept
+  ASSERT_TRUE(r.apply(*s, w.sim->scheduler().now()));
+  EXPECT_EQ(r.generation(), start);  // added at the end
+  ASSERT_EQ(r.clear("cycle"), 1u);   // the oldest cleared is forgotten
+  EXPECT_NE(r.generation(), start);
+  EXPECT_EQ(r.status().size(), ScenarioRunner::kKeptCleared);
+}
+
 TEST(ScenarioBounds, ScenariosInForceAndRulesPerBusAreBounded) {
   World w;
   auto s = parse_scenario(kOneRule, "s.toml");

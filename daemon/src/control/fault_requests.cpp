@@ -49,6 +49,7 @@ void ControlDispatcher::on_fault_list(Session&, const uint8_t* data, uint32_t re
   const auto faults = sim_.scenarios().status();
   r->total = static_cast<uint16_t>(std::min<std::size_t>(faults.size(), UINT16_MAX));
   r->first = req.first;
+  r->generation = sim_.scenarios().generation();
   for (std::size_t k = req.first; k < r->total && r->count < ipc::kFaultPage; ++k) {
     const ScenarioRunner::FaultStatus& f = faults[k];
     ipc::FaultEntry& e = r->faults[r->count++];

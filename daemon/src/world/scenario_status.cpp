@@ -107,6 +107,7 @@ std::size_t ScenarioRunner::clear(std::string_view name, const MayClear& may,
     if (it->cleared) {
       it = scenarios_.erase(it);
       --kept;
+      ++generation_;
     } else {
       ++it;
     }

@@ -44,7 +44,8 @@ Result<std::vector<ipc::ClientEntry>> fetch_client_list(Connection& c);
 // missed or listed twice.
 Result<std::vector<ipc::RecorderEntry>> fetch_recorder_list(Connection& c);
 Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c);
-// The faults applied, in the order they were (faults are only added: the pages fit together).
+// The faults applied, in the order they were. A load between pages adds at the end; cleared
+// scenarios forgotten meanwhile (the generation changes) make it start over.
 Result<std::vector<ipc::FaultEntry>> fetch_fault_list(Connection& c);
 
 // [distributed]: this daemon's name, domain, partition and counters (the first page's), every

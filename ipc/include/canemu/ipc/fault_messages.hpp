@@ -85,8 +85,9 @@ struct FaultEntry {
 static_assert(sizeof(FaultEntry) ==
               kScenarioNameSize + 24 + kFaultTargetSize + 8 + 32 + 16 + kNameSize);
 
-// The faults in pages, as the other lists: from the `first` on. Faults are only ever added (a
-// cleared one stays, `cleared`), so pages taken one after the other fit together.
+// The faults in pages, as the other lists: from the `first` on. A load adds faults at the end;
+// what moves them (cleared scenarios forgotten beyond the newest 32) changes the generation, so
+// that a reader of pages of different generations starts over.
 struct FaultListRequest {
   MsgHeader header;
   uint16_t first = 0;
@@ -101,6 +102,8 @@ struct FaultListReply {
   uint16_t total = 0;  // faults applied
   uint16_t first = 0;  // index of faults[0] among all (the request's)
   uint16_t reserved = 0;
+  uint32_t generation = 0;  // changes whenever faults move (not when a load adds some)
+  uint32_t reserved2 = 0;
   FaultEntry faults[kFaultPage];
 };
 static_assert(sizeof(FaultListReply) <= kMaxMessageSize);

@@ -94,6 +94,10 @@ class ScenarioRunner {
     FaultMatch match{};
   };
   std::vector<FaultStatus> status() const;
+  // Changes whenever status()'s faults move: cleared scenarios forgotten (kKeptCleared). A load
+  // only adds at the end, so pages of status() read one after the other fit together while it
+  // stays the same.
+  uint32_t generation() const { return generation_; }
 
   // Clears the faults of the scenario named `name` (empty: of every scenario) that `may` allows
   // (no `may`: all): frame rules stop matching, scheduled effects do not fire. Effects that fired
@@ -196,6 +200,7 @@ class ScenarioRunner {
   uint64_t default_seed_;
   std::vector<Bus> buses_;
   std::vector<LoadedScenario> scenarios_;
+  uint32_t generation_ = 0;
 };
 
 }  // namespace canemu::daemon

@@ -377,9 +377,11 @@ def test_the_id_tables_decode_through_dbc_files():
 
     assert parse_dbc_option("can1=car.dbc") == ("can1", "car.dbc")
     assert parse_dbc_option("car.dbc") == (None, "car.dbc")
-    assert parse_dbc_option("dbc/a=b.dbc") == (None, "dbc/a=b.dbc")  # no bus name before "="
+    # No bus name by canemud's rule before "=": the whole text is the file.
+    for text in ("dbc/a=b.dbc", "./v=2.dbc", "CAN0=car.dbc", "=car.dbc"):
+        assert parse_dbc_option(text) == (None, text)
     db = load(str(DBC))
-    everywhere = SignalDecoder([(None, db)])
+    everywhere = SignalDecoder([(None, "car.dbc", db)])
 
     def row(text_id: str, data: str, bus: str = "can0", decoder=everywhere):
         r = IdRow(text_id, 0, data)
@@ -403,12 +405,23 @@ def test_the_id_tables_decode_through_dbc_files():
     assert row("123", "00")["message"] is None
     assert row("00000190", "01E803")["message"] is None
     # A file for one bus decodes that bus only, and comes before the files for every bus.
-    only_can1 = SignalDecoder([("can1", db)])
+    only_can1 = SignalDecoder([("can1", "car.dbc", db)])
+    assert only_can1.buses() == {"can1": "car.dbc"}
     assert row("190", "01E803", "can0", only_can1)["message"] is None
     assert row("190", "01E803", "can1", only_can1)["message"] == "MOTOR_STATUS"
-    both = SignalDecoder([(None, _NamedDb("FOR_EVERY_BUS")), ("can1", _NamedDb("FOR_CAN1"))])
+    both = SignalDecoder([(None, "a.dbc", _NamedDb("FOR_EVERY_BUS")),
+                          ("can1", "b.dbc", _NamedDb("FOR_CAN1"))])
     assert row("190", "00", "can1", both)["message"] == "FOR_CAN1"
     assert row("190", "00", "can0", both)["message"] == "FOR_EVERY_BUS"
+
+    # Whatever a database does wrong, the row says so and the tool goes on.
+    class Broken(_NamedDb):
+        def get_message_by_frame_id(self, can_id):
+            raise RuntimeError("broken")
+
+    broken = row("190", "00", "can0", SignalDecoder([(None, "x.dbc", Broken("X"))]))
+    assert (broken["message"], broken["signals"], broken["note"]) == (
+        None, None, "x.dbc: not decoded: broken")
 
     # A row is decoded again when its data changes, not at every update.
     class Counting(SignalDecoder):
@@ -418,7 +431,7 @@ def test_the_id_tables_decode_through_dbc_files():
             Counting.calls += 1
             return super().decode(bus, text_id, data)
 
-    counting = Counting([(None, db)])
+    counting = Counting([(None, "car.dbc", db)])
     r = IdRow("190", 0, "01E803")
     r.add(0, "01E803")
     r.row("can0", counting)
@@ -469,9 +482,12 @@ def test_buses_added_by_a_reload_get_id_tables_decoded_through_the_dbc():
     pytest.importorskip("cantools", reason="--dbc needs cantools (requirements-dbc.txt)")
     d = Canemud("stepped")
     try:
-        web = Web(d, "--dbc", str(DBC))
+        web = Web(d, "--dbc", str(DBC), "--dbc", f"can9={DBC}")
         try:
             web.wait_state(listening_on_every_bus, "the ID tables' listen-only nodes")
+            # A file for a bus canemud does not have is named once, with the buses it has.
+            web.wait_log(rf"--dbc can9={re.escape(str(DBC))}: canemud has no bus can9 \(buses: "
+                         r"can0, can1, fd0\); the file decodes nothing")
             with open(d.config, "a") as config:
                 config.write('\n[[bus]]\nname = "can2"\nkind = "can"\nbitrate = 500000\n')
             d.proc.send_signal(signal.SIGHUP)
@@ -510,3 +526,26 @@ def test_buses_added_by_a_reload_get_id_tables_decoded_through_the_dbc():
             web.stop()
     finally:
         d.stop()
+
+
+def test_a_dump_that_cannot_start_is_said_and_its_buses_are_tried_again():
+    import asyncio
+
+    from canemu import _web_feed
+    from canemu._web_feed import Feed
+
+    async def run():
+        feed = Feed("/nonexistent/canemu", [], 0.25, True)
+        status = {"buses": [{"name": "can0", "kind": "can"}, {"name": "lin0", "kind": "lin"}]}
+        feed._capture_new_buses(status)
+        await asyncio.gather(*feed._captures)
+        assert feed.capture_note.startswith("the ID tables of can0 stopped: ")
+        assert "/nonexistent/canemu" in feed.capture_note
+        feed._capture_new_buses(status)  # not again at once
+        assert len(feed._captures) == 1
+        feed._ended["can0"] -= _web_feed.RETRY_S  # as if RETRY_S had passed
+        feed._capture_new_buses(status)
+        assert len(feed._captures) == 2
+        await asyncio.gather(*feed._captures)
+
+    asyncio.run(run())

@@ -12,6 +12,7 @@ import collections
 import ctypes
 import json
 import signal
+import sys
 import time
 from typing import Any, Deque, Dict, List, Optional, Set, Tuple
 
@@ -32,34 +33,52 @@ class SignalDecoder:
     the first file that knows its identifier, its bus's files before the others, each group in
     the order given (docs/web.md)."""
 
-    def __init__(self, files: List[Tuple[Optional[str], Any]]) -> None:
-        self.files = files  # (bus or None, cantools database)
+    def __init__(self, files: List[Tuple[Optional[str], str, Any]]) -> None:
+        self.files = files  # (bus or None, the file's path, its cantools database)
+
+    def buses(self) -> Dict[str, str]:
+        """The buses files were given for, each with the first such file's path."""
+        named: Dict[str, str] = {}
+        for bus, path, _ in self.files:
+            if bus is not None:
+                named.setdefault(bus, path)
+        return named
 
     def decode(self, bus: str, text_id: str, data: str) -> Optional[Dict[str, Any]]:
         """What the ID table shows of a frame (candump's identifier and data text, "R" for a
         remote frame): {"message": NAME, "signals": [(signal, value text), ...]}, or with
         "signals" None and "note" saying why; None when no file knows the identifier."""
-        from .dbc_decode import frame_signals
+        from .dbc_decode import frame_signals, parse_frame
 
-        extended = len(text_id) == 8
-        can_id = int(text_id, 16)
-        payload = None if data.startswith("R") else bytes.fromhex(data)
+        frame = parse_frame(f"{text_id}#{data}")
+        if frame is None:
+            return None
         for only in (bus, None):
-            for file_bus, db in self.files:
+            for file_bus, path, db in self.files:
                 if file_bus != only:
                     continue
-                parts = frame_signals(db, can_id, payload, extended)
+                try:
+                    parts = frame_signals(db, *frame)
+                except Exception as e:  # whatever cantools does, the page goes on
+                    return {"message": None, "signals": None,
+                            "note": f"{path}: not decoded: {str(e) or type(e).__name__}"}
                 if parts is not None:
                     name, texts, why = parts
                     return {"message": name, "signals": texts, "note": why}
         return None
 
 
+def valid_bus_name(text: str) -> bool:
+    """canemud's rule for bus names (docs/configuration.md): 1 to 28 of a-z, 0-9, "_", "-"."""
+    return 1 <= len(text) <= 28 and all(c in "abcdefghijklmnopqrstuvwxyz0123456789_-"
+                                        for c in text)
+
+
 def parse_dbc_option(text: str) -> Tuple[Optional[str], str]:
     """--dbc's value as (bus or None, file): BUS=FILE when the part before the first "=" is a
-    bus name (letters, digits, "_", "-", "."), otherwise the whole text is the file."""
+    bus name by canemud's rule, otherwise the whole text is the file (./v=2.dbc is a file)."""
     bus, sep, path = text.partition("=")
-    if sep and bus and all(c.isalnum() or c in "_-." for c in bus):
+    if sep and valid_bus_name(bus):
         return bus, path
     return None, text
 
@@ -74,6 +93,8 @@ def _end_with_parent() -> None:
 
 
 
+# Seconds after a dump ended before its buses get another (canemud restarted).
+RETRY_S = 5.0
 # A page's queue holds at most this many updates; then they give way to one RESYNC.
 RESYNC_AFTER = 8
 RESYNC = ""  # in a page's queue: send it a snapshot
@@ -170,6 +191,7 @@ class Feed:
         self._dumps: List[asyncio.subprocess.Process] = []
         self._captures: List[asyncio.Future] = []
         self._asked: Set[str] = set()
+        self._ended: Dict[str, float] = {}  # bus -> when its dump ended (time.monotonic)
         self._wake = asyncio.Event()
         self._last_pid = 0
         self._rates: Dict[str, Tuple[float, float]] = {}
@@ -242,12 +264,10 @@ class Feed:
             code, out, err = await self.run_canemu("lin", "list")
             self.lin_text = out if code == 0 else err
         self.looks += 1
+        if self.looks == 1 and self.decoder is not None:
+            self._check_dbc_buses(status)
         if self.frames:
-            new = [b["name"] for b in status["buses"]
-                   if b["kind"] != "lin" and b["name"] not in self._asked]
-            if new:
-                self._asked.update(new)
-                self._captures.append(asyncio.ensure_future(self._capture(new)))
+            self._capture_new_buses(status)
         self._hide_own(status, status_pid)
         self.status = status
         self.publish(self.update(status))
@@ -334,10 +354,54 @@ class Feed:
                 self.resyncs += 1
 
     # ---- the ID tables ----
+    def _check_dbc_buses(self, status: Dict[str, Any]) -> None:
+        """Says once which --dbc BUS=FILE names a bus canemud does not have (a typo decodes
+        nothing)."""
+        have = [b["name"] for b in status["buses"]]
+        for bus, path in self.decoder.buses().items():
+            if bus not in have:
+                print(f"canemu: web: --dbc {bus}={path}: canemud has no bus {bus} (buses: "
+                      f"{', '.join(have) or 'none'}); the file decodes nothing", file=sys.stderr,
+                      flush=True)
+
+    def _capture_new_buses(self, status: Dict[str, Any]) -> None:
+        """A dump of the CAN buses no dump listens on yet: those of the first look, then those
+        a reload added, or whose dump ended RETRY_S ago (canemud restarted)."""
+        now = time.monotonic()
+        for bus, since in list(self._ended.items()):
+            if now - since >= RETRY_S:
+                del self._ended[bus]
+                self._asked.discard(bus)
+        new = [b["name"] for b in status["buses"]
+               if b["kind"] != "lin" and b["name"] not in self._asked]
+        if "any" in new:
+            # `canemu dump any` means every CAN bus: a bus of that name has no dump of its own.
+            new.remove("any")
+            self._asked.add("any")
+            self.capture_note = "bus any has no ID table: canemu dump takes the name for every bus"
+        if new:
+            self._asked.update(new)
+            self._captures.append(asyncio.ensure_future(self._capture(new)))
+
     async def _capture(self, buses: List[str]) -> None:
-        """The frames of `buses` into the ID tables, through a listen-only dump of them."""
+        """The frames of `buses` into the ID tables, through a listen-only dump of them; when
+        it ends (or cannot start), the capture note says why and the buses may be dumped again
+        after RETRY_S."""
+        try:
+            await self._capture_dump(buses)
+        except asyncio.CancelledError:
+            raise
+        except Exception as e:  # the page goes on, and says why the tables stopped
+            self.capture_note = f"the ID tables of {', '.join(buses)} stopped: {e}"
+        now = time.monotonic()
+        for bus in buses:
+            self._ended[bus] = now
+            if bus in self.listening:
+                self.listening.remove(bus)
+
+    async def _capture_dump(self, buses: List[str]) -> None:
         dump = await asyncio.create_subprocess_exec(
-            self.canemu, *self.base, "dump", *buses, "--listen-only", "--sim-time",
+            self.canemu, *self.base, "dump", "--listen-only", "--sim-time", "--", *buses,
             stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
             stderr=asyncio.subprocess.PIPE, limit=1 << 20, preexec_fn=_end_with_parent)
         self._dumps.append(dump)

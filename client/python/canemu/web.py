@@ -145,7 +145,7 @@ def load_dbc_files(specs: List[str]) -> Optional[SignalDecoder]:
     for spec in specs:
         bus, path = parse_dbc_option(spec)
         try:
-            files.append((bus, load(path)))
+            files.append((bus, path, load(path)))
         except DbcReadError as e:
             raise ValueError(f"--dbc {e}") from None
         except ImportError as e:  # cantools, which load() imports

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <utility>
 
 namespace canemu::client {
 
@@ -67,36 +68,6 @@ Result<Status> fetch_status(Connection& c) {
   return tl::unexpected(kept_changing("the status"));
 }
 
-Result<DeviceList> fetch_device_list(Connection& c) {
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    DeviceList list;
-    bool changed = false;
-    for (bool first_page = true;; first_page = false) {
-      auto m = ipc::make_message<ipc::DeviceListRequest>();
-      m.first = static_cast<uint16_t>(list.devices.size());
-      auto r = c.call<ipc::DeviceListRequest, ipc::DeviceListReply>(m);
-      if (!r) {
-        return tl::unexpected(r.error());
-      }
-      if (first_page) {
-        list.generation = r->generation;
-      } else if (r->generation != list.generation) {
-        changed = true;
-        break;
-      }
-      const uint16_t count = std::min<uint16_t>(r->count, ipc::kDevicePage);
-      list.devices.insert(list.devices.end(), r->devices, r->devices + count);
-      if (count == 0 || list.devices.size() >= r->total) {
-        break;
-      }
-    }
-    if (!changed) {
-      return list;
-    }
-  }
-  return tl::unexpected(kept_changing("the device list"));
-}
-
 namespace {
 
 // Page after page of a list without a generation, `Reply::*entries` holding up to `page`.
@@ -119,7 +90,53 @@ Result<std::vector<Entry>> every_page(Connection& c, Entry (Reply::*entries)[N])
   }
 }
 
+// Page after page of a list with a generation (Reply::generation): pages of different
+// generations do not fit together, and the reading starts over. The generation and the entries.
+template <class Request, class Reply, class Entry, std::size_t N>
+Result<std::pair<uint32_t, std::vector<Entry>>> one_generation(Connection& c,
+                                                               Entry (Reply::*entries)[N],
+                                                               const char* what) {
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    std::vector<Entry> all;
+    uint32_t generation = 0;
+    bool changed = false;
+    for (bool first_page = true;; first_page = false) {
+      auto m = ipc::make_message<Request>();
+      m.first = static_cast<uint16_t>(all.size());
+      auto r = c.template call<Request, Reply>(m);
+      if (!r) {
+        return tl::unexpected(r.error());
+      }
+      if (first_page) {
+        generation = r->generation;
+      } else if (r->generation != generation) {
+        changed = true;
+        break;
+      }
+      const std::size_t count = std::min<std::size_t>(r->count, N);
+      const Entry* got = (*r).*entries;
+      all.insert(all.end(), got, got + count);
+      if (count == 0 || all.size() >= r->total) {
+        break;
+      }
+    }
+    if (!changed) {
+      return std::make_pair(generation, std::move(all));
+    }
+  }
+  return tl::unexpected(kept_changing(what));
+}
+
 }  // namespace
+
+Result<DeviceList> fetch_device_list(Connection& c) {
+  auto r = one_generation<ipc::DeviceListRequest, ipc::DeviceListReply>(
+      c, &ipc::DeviceListReply::devices, "the device list");
+  if (!r) {
+    return tl::unexpected(r.error());
+  }
+  return DeviceList{r->first, std::move(r->second)};
+}
 
 Result<std::vector<ipc::ClientEntry>> fetch_client_list(Connection& c) {
   // Clients have no generation: one that comes or goes between pages may be missed or listed
@@ -139,34 +156,12 @@ Result<std::vector<ipc::BridgeEntry>> fetch_bridge_list(Connection& c) {
 }
 
 Result<std::vector<ipc::FaultEntry>> fetch_fault_list(Connection& c) {
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    std::vector<ipc::FaultEntry> faults;
-    uint32_t generation = 0;
-    bool changed = false;
-    for (bool first_page = true;; first_page = false) {
-      auto m = ipc::make_message<ipc::FaultListRequest>();
-      m.first = static_cast<uint16_t>(faults.size());
-      auto r = c.call<ipc::FaultListRequest, ipc::FaultListReply>(m);
-      if (!r) {
-        return tl::unexpected(r.error());
-      }
-      if (first_page) {
-        generation = r->generation;
-      } else if (r->generation != generation) {
-        changed = true;
-        break;
-      }
-      const uint16_t count = std::min<uint16_t>(r->count, ipc::kFaultPage);
-      faults.insert(faults.end(), r->faults, r->faults + count);
-      if (count == 0 || faults.size() >= r->total) {
-        break;
-      }
-    }
-    if (!changed) {
-      return faults;
-    }
+  auto r = one_generation<ipc::FaultListRequest, ipc::FaultListReply>(
+      c, &ipc::FaultListReply::faults, "the fault list");
+  if (!r) {
+    return tl::unexpected(r.error());
   }
-  return tl::unexpected(kept_changing("the fault list"));
+  return std::move(r->second);
 }
 
 Result<PeerList> fetch_peer_list(Connection& c) {

@@ -266,7 +266,7 @@ function showIds(ids) {
       }
       // Through the DBC files of --dbc: "MESSAGE: signal=value ...", or why not decoded.
       const signals = r.signals ? r.signals.map(([k, v]) => `${k}=${v}`).join(" ") : (r.note || "");
-      row.children[4].textContent = r.message ? `${r.message}: ${signals}` : "";
+      row.children[4].textContent = r.message ? `${r.message}: ${signals}` : (r.note || "");
     }
   }
 }

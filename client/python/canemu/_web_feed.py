@@ -118,7 +118,7 @@ class IdRow:
         self.decoded_data: Optional[str] = None  # the data `decoded` is of
 
     def add(self, at_ns: int, data: str) -> None:
-        if self.count:
+        if self.count and data != self.data:
             old, new = self.data, data
             for i in range(0, max(len(old), len(new)), 2):
                 if old[i:i + 2] != new[i:i + 2]:

@@ -528,24 +528,28 @@ def test_buses_added_by_a_reload_get_id_tables_decoded_through_the_dbc():
         d.stop()
 
 
-def test_a_dump_that_cannot_start_is_said_and_its_buses_are_tried_again():
+def test_a_dump_that_ends_or_cannot_start_is_said_and_its_buses_are_tried_again():
     import asyncio
 
     from canemu import _web_feed
     from canemu._web_feed import Feed
 
-    async def run():
-        feed = Feed("/nonexistent/canemu", [], 0.25, True)
-        status = {"buses": [{"name": "can0", "kind": "can"}, {"name": "lin0", "kind": "lin"}]}
+    status = {"buses": [{"name": "can0", "kind": "can"}, {"name": "lin0", "kind": "lin"}]}
+
+    async def run(canemu: str, note: str):
+        feed = Feed(canemu, [], 0.25, True)
         feed._capture_new_buses(status)
+        assert len(feed._captures) == 1  # can0's; none for the LIN bus
         await asyncio.gather(*feed._captures)
-        assert feed.capture_note.startswith("the ID tables of can0 stopped: ")
-        assert "/nonexistent/canemu" in feed.capture_note
+        assert feed.capture_note.startswith(f"the ID tables of can0 stopped: {note}"), \
+            feed.capture_note
+        assert feed._dumps == []  # nothing kept of a dump that ended
         feed._capture_new_buses(status)  # not again at once
-        assert len(feed._captures) == 1
+        assert feed._captures == []
         feed._ended["can0"] -= _web_feed.RETRY_S  # as if RETRY_S had passed
         feed._capture_new_buses(status)
-        assert len(feed._captures) == 2
+        assert len(feed._captures) == 1
         await asyncio.gather(*feed._captures)
 
-    asyncio.run(run())
+    asyncio.run(run("/bin/false", "canemu dump ended with status 1"))  # it ends at once
+    asyncio.run(run("/nonexistent/canemu", ""))  # it cannot start: the reason follows

@@ -1,6 +1,6 @@
 """What canemu web shows, gathered from canemud through the canemu command line: `canemu status
 --json` every interval (canemud offers no status subscription: its SubscribeRequest announces
-devices coming and going), `canemu dump BUS... --listen-only --sim-time` for the ID tables (one
+devices coming and going), `canemu dump --listen-only --sim-time -- BUS...` for the ID tables (one
 for the CAN buses of the first look, one more for those a later look finds), and `canemu lin
 list` while there are LIN buses. Every look becomes one update pushed to the pages
 (web.py); a short history lets a page that opens late draw the last minute."""
@@ -372,6 +372,7 @@ class Feed:
             if now - since >= RETRY_S:
                 del self._ended[bus]
                 self._asked.discard(bus)
+        self._captures = [task for task in self._captures if not task.done()]
         new = [b["name"] for b in status["buses"]
                if b["kind"] != "lin" and b["name"] not in self._asked]
         if "any" in new:
@@ -387,24 +388,29 @@ class Feed:
         """The frames of `buses` into the ID tables, through a listen-only dump of them; when
         it ends (or cannot start), the capture note says why and the buses may be dumped again
         after RETRY_S."""
+        dump: List[asyncio.subprocess.Process] = []
         try:
-            await self._capture_dump(buses)
+            await self._capture_dump(buses, dump)
         except asyncio.CancelledError:
             raise
         except Exception as e:  # the page goes on, and says why the tables stopped
             self.capture_note = f"the ID tables of {', '.join(buses)} stopped: {e}"
+        for ended in dump:
+            self._dumps.remove(ended)
         now = time.monotonic()
         for bus in buses:
             self._ended[bus] = now
             if bus in self.listening:
                 self.listening.remove(bus)
 
-    async def _capture_dump(self, buses: List[str]) -> None:
+    async def _capture_dump(self, buses: List[str], started: List[asyncio.subprocess.Process]):
+        """The dump's lines into the ID tables until it ends; the process in `started`."""
         dump = await asyncio.create_subprocess_exec(
             self.canemu, *self.base, "dump", "--listen-only", "--sim-time", "--", *buses,
             stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
             stderr=asyncio.subprocess.PIPE, limit=1 << 20, preexec_fn=_end_with_parent)
         self._dumps.append(dump)
+        started.append(dump)
         errors = asyncio.ensure_future(self._dump_stderr(dump.stderr))
         tables = self.id_tables
         seen = self.error_frames_seen

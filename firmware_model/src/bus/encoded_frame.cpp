@@ -29,6 +29,17 @@ uint32_t stuff_bits_before(const EncodedFrame& f, uint32_t i) {
   return n;
 }
 
+// The first `length` bits of `words` (the first at the top of words[0]) as '0' and '1'.
+std::string bits_text(const EncodedFrame::Bits& words, std::size_t length) {
+  std::string s(length, '0');
+  for (std::size_t i = 0; i < length; ++i) {
+    if ((words[i >> 6] >> (63 - (i & 63))) & 1u) {
+      s[i] = '1';
+    }
+  }
+  return s;
+}
+
 }  // namespace
 
 std::string_view to_string(Field field) {
@@ -167,23 +178,11 @@ Field EncodedFrame::field_at(std::size_t i) const {
 }
 
 std::string EncodedFrame::to_string() const {
-  std::string s(length, '0');
-  for (std::size_t i = 0; i < length; ++i) {
-    if (level_at(i)) {
-      s[i] = '1';
-    }
-  }
-  return s;
+  return bits_text(level, length);
 }
 
 std::string EncodedFrame::stuff_marks() const {
-  std::string s(length, '0');
-  for (std::size_t i = 0; i < length; ++i) {
-    if (is_stuff(i)) {
-      s[i] = '1';
-    }
-  }
-  return s;
+  return bits_text(stuff, length);
 }
 
 BitCounts bit_counts(const EncodedFrame& frame) {

@@ -16,6 +16,8 @@ import sys
 import time
 from typing import Any, Deque, Dict, List, Optional, Set, Tuple
 
+from .dbc_decode import frame_signals, parse_frame
+
 HISTORY_NS = 60_000_000_000  # the graphs show the last minute of simulated time
 HISTORY_POINTS = 2400  # at most this many looks are kept (a minute at 25 ms)
 FAULT_EVENTS = 200  # the newest fault firings kept
@@ -48,8 +50,6 @@ class SignalDecoder:
         """What the ID table shows of a frame (candump's identifier and data text, "R" for a
         remote frame): {"message": NAME, "signals": [(signal, value text), ...]}, or with
         "signals" None and "note" saying why; None when no file knows the identifier."""
-        from .dbc_decode import frame_signals, parse_frame
-
         frame = parse_frame(f"{text_id}#{data}")
         if frame is None:
             return None
@@ -388,29 +388,33 @@ class Feed:
         """The frames of `buses` into the ID tables, through a listen-only dump of them; when
         it ends (or cannot start), the capture note says why and the buses may be dumped again
         after RETRY_S."""
-        dump: List[asyncio.subprocess.Process] = []
+        stopped = f"the ID tables of {', '.join(buses)} stopped"
         try:
-            await self._capture_dump(buses, dump)
-        except asyncio.CancelledError:
-            raise
-        except Exception as e:  # the page goes on, and says why the tables stopped
-            self.capture_note = f"the ID tables of {', '.join(buses)} stopped: {e}"
-        for ended in dump:
-            self._dumps.remove(ended)
+            dump = await asyncio.create_subprocess_exec(
+                self.canemu, *self.base, "dump", "--listen-only", "--sim-time", "--", *buses,
+                stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
+                stderr=asyncio.subprocess.PIPE, limit=1 << 20, preexec_fn=_end_with_parent)
+        except OSError as e:
+            self.capture_note = f"{stopped}: {e}"
+        else:
+            self._dumps.append(dump)
+            try:
+                code = await self._read_dump(dump)
+                self.capture_note = f"{stopped}: canemu dump ended with status {code}"
+            except Exception as e:  # the page goes on, and says why the tables stopped
+                self.capture_note = f"{stopped}: {e}"
+                if dump.returncode is None:
+                    dump.kill()
+                    await dump.wait()
+            self._dumps.remove(dump)  # (a cancelled task leaves it to run() to end)
         now = time.monotonic()
         for bus in buses:
             self._ended[bus] = now
             if bus in self.listening:
                 self.listening.remove(bus)
 
-    async def _capture_dump(self, buses: List[str], started: List[asyncio.subprocess.Process]):
-        """The dump's lines into the ID tables until it ends; the process in `started`."""
-        dump = await asyncio.create_subprocess_exec(
-            self.canemu, *self.base, "dump", "--listen-only", "--sim-time", "--", *buses,
-            stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.PIPE, limit=1 << 20, preexec_fn=_end_with_parent)
-        self._dumps.append(dump)
-        started.append(dump)
+    async def _read_dump(self, dump: asyncio.subprocess.Process) -> int:
+        """`dump`'s lines into the ID tables until it ends; its exit status."""
         errors = asyncio.ensure_future(self._dump_stderr(dump.stderr))
         tables = self.id_tables
         seen = self.error_frames_seen
@@ -430,9 +434,7 @@ class Feed:
                 row = table[ident] = IdRow(ident, at_ns, data)
             row.add(at_ns, data)
         await errors
-        code = await dump.wait()
-        self.capture_note = (f"the ID tables of {', '.join(buses)} stopped: canemu dump ended "
-                             f"with status {code}")
+        return await dump.wait()
 
     async def _dump_stderr(self, stream) -> None:
         async for raw in stream:

@@ -265,8 +265,8 @@ function showIds(ids) {
         data.append((r.changed >> (i / 2)) & 1 ? el("b", {}, byte) : byte, " ");
       }
       // Through the DBC files of --dbc: "MESSAGE: signal=value ...", or why not decoded.
-      const signals = r.signals ? r.signals.map(([k, v]) => `${k}=${v}`).join(" ") : (r.note || "");
-      row.children[4].textContent = r.message ? `${r.message}: ${signals}` : (r.note || "");
+      const text = r.signals ? r.signals.map(([k, v]) => `${k}=${v}`).join(" ") : (r.note || "");
+      row.children[4].textContent = r.message ? `${r.message}: ${text}` : text;
     }
   }
 }

@@ -126,6 +126,9 @@ def test_the_page_shows_buses_nodes_state_tec_and_id_counts(daemon, node):
             assert next(x for x in s["buses"] if x["name"] == "can1")["error_frames"] >= 1
             assert page.inner_text('#ids-can0 tr[data-id="123"] .data') == "01 04"
             assert page.inner_text(f'#nodes tr[data-node="{name}"] .state') == "error-active"
+            # The dump's summary lines carry the error frames its node saw, per bus.
+            web.wait_state(lambda st: st["error_frames_seen"].get("can1", 0) >= 1,
+                           "can1's error frame in the ID tables' counts")
 
             # The state changes at simulated 1 s after the scenario was applied: the page shows
             # it at the step that crossed that instant, with that step's time, not before.
@@ -332,22 +335,25 @@ def test_the_peer_of_a_loopback_connection_is_known_by_its_uid():
             s.close()
 
 
-def test_log_lines_and_id_rows():
-    from canemu._web_feed import IdRow, parse_log_line
+def _line(ident: str, data: str, count: int = 1, first_ns: int = 0, last_ns: int = 0,
+          changed: int = 0) -> dict:
+    """A `canemu dump --summary` line of can0."""
+    return {"bus": "can0", "id": ident, "count": count, "first_ns": first_ns,
+            "last_ns": last_ns, "data": data, "changed": changed}
 
-    assert parse_log_line("(0000000001.000250) can0 123#1122") == (1_000_250_000, "can0", "123",
-                                                                    "1122")
-    assert parse_log_line("(0000000001.000250) can0 20000288#0000040500000000")[3] == "E"
-    assert parse_log_line("(0000000000.000001) fd0 123##1AABB")[3] == "AABB"
-    assert parse_log_line("(0000000000.000001) can0 12345678#R4")[3] == "R"
-    assert parse_log_line("canemu: something") is None
-    row = IdRow("123", 0, "0102")
-    row.add(0, "0102")
-    row.add(10 * MS, "0103")
+
+def test_id_rows_add_up_summary_lines():
+    from canemu._web_feed import IdRow
+
+    row = IdRow("123", 0)
+    row.add(_line("123", "0102", count=2, first_ns=0, last_ns=10 * MS, changed=0b01))
+    row.add(_line("123", "0103", count=1, first_ns=30 * MS, last_ns=30 * MS, changed=0b10))
     r = row.row("can0")
-    assert (r["count"], r["period_ms"], r["data"], r["changed"]) == (2, 10.0, "0103", 0b10)
+    # Three frames over 30 ms; the bytes changed in either line since the last update.
+    assert (r["count"], r["period_ms"], r["data"], r["changed"]) == (3, 15.0, "0103", 0b11)
     assert (r["message"], r["signals"], r["note"]) == (None, None, None)  # no --dbc
     assert json.dumps(r)
+    assert row.row("can0")["changed"] == 0b11  # the feed clears it once published (id_rows)
 
 
 class _NamedDb:
@@ -384,8 +390,8 @@ def test_the_id_tables_decode_through_dbc_files():
     everywhere = SignalDecoder([(None, "car.dbc", db)])
 
     def row(text_id: str, data: str, bus: str = "can0", decoder=everywhere):
-        r = IdRow(text_id, 0, data)
-        r.add(0, data)
+        r = IdRow(text_id, 0)
+        r.add(_line(text_id, data))
         return r.row(bus, decoder)
 
     # MOTOR_STATUS (400 = 0x190): wheel_error 1, speed 0x03E8 x 0.001 kph.
@@ -432,12 +438,12 @@ def test_the_id_tables_decode_through_dbc_files():
             return super().decode(bus, text_id, data)
 
     counting = Counting([(None, "car.dbc", db)])
-    r = IdRow("190", 0, "01E803")
-    r.add(0, "01E803")
+    r = IdRow("190", 0)
+    r.add(_line("190", "01E803"))
     r.row("can0", counting)
     r.row("can0", counting)
     assert Counting.calls == 1
-    r.add(MS, "00D007")
+    r.add(_line("190", "00D007", first_ns=MS, last_ns=MS))
     assert r.row("can0", counting)["signals"][1] == ("MOTOR_STATUS_speed_kph", "2.0 kph")
     assert Counting.calls == 2
 

@@ -448,6 +448,46 @@ TEST(CliDump, LogsIntoACandumpNamedFileWithL) {
   EXPECT_EQ(std::string(text, n), sent);
 }
 
+// The time stamp in ns of the line of `log` (a candump -L log) that ends with `frame`, or -1.
+int64_t stamp_of(const std::string& log, const std::string& frame) {
+  const std::size_t end = log.find(" " + frame + "\n");
+  if (end == std::string::npos) {
+    return -1;
+  }
+  const std::size_t open = log.rfind('(', end);
+  const std::size_t dot = log.find('.', open);
+  return std::stoll(log.substr(open + 1, dot - open - 1)) * 1'000'000'000 +
+         std::stoll(log.substr(dot + 1, 6)) * 1000;
+}
+
+// --summary: a JSON line per bus and identifier for an interval (here a minute, so that the one
+// written as -n ends the dump holds everything), with the frames' exact time stamps; error
+// frames counted per bus.
+TEST(CliDump, SummaryGivesALinePerBusAndIdentifier) {
+  Daemon d;
+  Cli dump(d, {"dump", "can0", "can1", "--summary", "60000", "-n", "5"});
+  std::string err = Cli::read_until(dump.err, "listening on can1");
+  ASSERT_NE(err.find("listening on can1"), std::string::npos) << err;
+  const std::string sent0 =
+      output_of(d, {"send", "can0", "123#1122", "7FF#R2", "123#1133", "--step", "1ms"});
+  const std::string sent1 = output_of(d, {"send", "can1", "00000456#01", "--step", "1ms"});
+  // At a bit rate nobody else has: the dump's node detects errors, and its first error frame is
+  // the dump's fifth line (-n 5), the last it counts.
+  refusal_of(d, {"send", "can1", "456#01", "--bitrate", "250000", "--step", "2ms"});
+  const std::string out = Cli::read_all(dump.out);
+  EXPECT_EQ(dump.wait(), 0);
+  const std::string expected = fmt::format(
+      "{{\"bus\":\"can0\",\"id\":\"123\",\"count\":2,\"first_ns\":{},\"last_ns\":{},"
+      "\"data\":\"1133\",\"changed\":2}}\n"
+      "{{\"bus\":\"can0\",\"id\":\"7FF\",\"count\":1,\"first_ns\":{},\"last_ns\":{},"
+      "\"data\":\"R\",\"changed\":0}}\n"
+      "{{\"bus\":\"can1\",\"id\":\"00000456\",\"count\":1,\"first_ns\":{},\"last_ns\":{},"
+      "\"data\":\"01\",\"changed\":0}}\n",
+      stamp_of(sent0, "123#1122"), stamp_of(sent0, "123#1133"), stamp_of(sent0, "7FF#R2"),
+      stamp_of(sent0, "7FF#R2"), stamp_of(sent1, "00000456#01"), stamp_of(sent1, "00000456#01"));
+  EXPECT_EQ(out, expected + "{\"bus\":\"can1\",\"error_frames\":1}\n");
+}
+
 // What a dump cannot do is refused before it listens, saying why.
 TEST(CliDump, RefusesWhatItCannotDoSayingWhy) {
   Daemon d;
@@ -457,7 +497,10 @@ TEST(CliDump, RefusesWhatItCannotDoSayingWhy) {
            {{"dump", "can0", "can1", "--format", "pcap"}, "one bus per pcap capture"},
            {{"dump", "lin0,123:7FF"}, "lin0 is a LIN bus"},
            {{"dump", "can0", "lin0"}, "lin0 is a LIN bus"},
-           {{"dump", "can0", "-l", "-o", "x.log"}, "-l"}}) {
+           {{"dump", "can0", "-l", "-o", "x.log"}, "-l"},
+           {{"dump", "can0", "--summary", "100", "-l"},
+            "--summary writes JSON lines, not a pcap capture or a candump log"},
+           {{"dump", "can0", "--summary", "0"}, "--summary"}}) {
     Cli dump(d, args);
     const std::string err = Cli::read_all(dump.err);
     EXPECT_NE(err.find(says), std::string::npos) << says << ": " << err;
@@ -465,19 +508,21 @@ TEST(CliDump, RefusesWhatItCannotDoSayingWhy) {
   }
 }
 
-// canemu dump and record (on a CAN and a LIN bus) end when canemud goes away, here stopped by
-// SIGTERM: exit code 1 and the reason, naming the socket, instead of listening on forever.
+// canemu dump (also --summary) and record (on a CAN and a LIN bus) end when canemud goes away,
+// here stopped by SIGTERM: exit code 1 and the reason, naming the socket, instead of listening
+// on forever.
 TEST(CliDump, DumpAndRecordEndWithTheReasonWhenCanemudStops) {
   Daemon d;
   const std::string file = d.dir() + "/recorded.log";
   Cli dump(d, {"dump", "can0"});
   Cli record(d, {"record", "can0", "-o", file});
   Cli lin(d, {"dump", "lin0"});
-  for (Cli* c : {&dump, &record, &lin}) {
+  Cli summary(d, {"dump", "can1", "--summary", "50"});  // reads its rings without waiting on them
+  for (Cli* c : {&dump, &record, &lin, &summary}) {
     ASSERT_NE(Cli::read_until(c->err, "listening on").find("listening on"), std::string::npos);
   }
   EXPECT_EQ(d.terminate(10'000), 0);
-  for (Cli* c : {&dump, &record, &lin}) {
+  for (Cli* c : {&dump, &record, &lin, &summary}) {
     EXPECT_EQ(c->wait_for(10'000), 1);
     const std::string err = Cli::read_all(c->err, 1000);
     EXPECT_NE(err.find("canemu: canemud went away: the connection to " + d.socket() + " closed"),

@@ -21,7 +21,6 @@ from .dbc_decode import frame_signals, parse_frame
 HISTORY_NS = 60_000_000_000  # the graphs show the last minute of simulated time
 HISTORY_POINTS = 2400  # at most this many looks are kept (a minute at 25 ms)
 FAULT_EVENTS = 200  # the newest fault firings kept
-CAN_ERR_FLAG = 0x20000000
 # Effects that hit frames (docs/faults.md), CAN and LIN: their hits have no instant of their own.
 FRAME_EFFECTS = {"bit_error", "stuff_error", "form_error", "crc_error", "ack_error",
                  "random_errors", "babble", "lin_checksum_error", "lin_parity_error",
@@ -92,9 +91,11 @@ def _end_with_parent() -> None:
         pass
 
 
-
 # Seconds after a dump ended before its buses get another (canemud restarted).
 RETRY_S = 5.0
+# How often the dumps summarise their buses' identifiers (canemu dump --summary): an ID table is
+# at most this much older than the look that shows it.
+SUMMARY_MS = 100
 # A page's queue holds at most this many updates; then they give way to one RESYNC.
 RESYNC_AFTER = 8
 RESYNC = ""  # in a page's queue: send it a snapshot
@@ -102,30 +103,27 @@ RESYNC = ""  # in a page's queue: send it a snapshot
 class IdRow:
     """One identifier on one bus, as cansniffer shows it: count, period, last data, and which
     bytes changed since the previous update; decoded through the DBC files when there are some
-    (kept until the data changes)."""
+    (kept until the data changes). Fed by `canemu dump --summary`'s lines (SUMMARY_MS)."""
 
     __slots__ = ("count", "first_ns", "last_ns", "data", "changed", "text_id", "decoded",
                  "decoded_data")
 
-    def __init__(self, text_id: str, at_ns: int, data: str) -> None:
+    def __init__(self, text_id: str, first_ns: int) -> None:
         self.text_id = text_id
         self.count = 0
-        self.first_ns = at_ns
-        self.last_ns = at_ns
-        self.data = data
-        self.changed = 0  # bit i: byte i differs from the frame before it
+        self.first_ns = first_ns
+        self.last_ns = first_ns
+        self.data = ""
+        self.changed = 0  # bit i: byte i differed between two frames in a row
         self.decoded: Optional[Dict[str, Any]] = None
         self.decoded_data: Optional[str] = None  # the data `decoded` is of
 
-    def add(self, at_ns: int, data: str) -> None:
-        if self.count and data != self.data:
-            old, new = self.data, data
-            for i in range(0, max(len(old), len(new)), 2):
-                if old[i:i + 2] != new[i:i + 2]:
-                    self.changed |= 1 << (i // 2)
-        self.count += 1
-        self.last_ns = at_ns
-        self.data = data
+    def add(self, line: Dict[str, Any]) -> None:
+        """One summary line of this identifier: its frames since the line before."""
+        self.count += line["count"]
+        self.last_ns = line["last_ns"]
+        self.data = line["data"]
+        self.changed |= line["changed"]
 
     def row(self, bus: str, decoder: Optional[SignalDecoder] = None) -> Dict[str, Any]:
         period = (self.last_ns - self.first_ns) / (self.count - 1) / 1e6 if self.count > 1 else None
@@ -136,27 +134,6 @@ class IdRow:
         return {"id": self.text_id, "count": self.count, "period_ms": period, "data": self.data,
                 "changed": self.changed, "message": decoded.get("message"),
                 "signals": decoded.get("signals"), "note": decoded.get("note") or None}
-
-
-def parse_log_line(line: str) -> Optional[Tuple[int, str, str, str]]:
-    """(time in ns, bus, identifier text, data text) of a candump -L line; data is "R" for a
-    remote frame, "E" for an error frame; None for anything else."""
-    parts = line.split()
-    if len(parts) != 3 or not parts[0].startswith("("):
-        return None
-    stamp, bus, frame = parts
-    seconds, _, micros = stamp[1:-1].partition(".")
-    at_ns = int(seconds) * 1_000_000_000 + int(micros) * 1000
-    ident, sep, data = frame.partition("#")
-    if not sep:
-        return None
-    if len(ident) == 8 and int(ident, 16) & CAN_ERR_FLAG:
-        return at_ns, bus, ident, "E"
-    if data.startswith("#"):  # CAN FD: a flags digit, then the data
-        data = data[2:]
-    elif data.startswith("R"):
-        data = "R"
-    return at_ns, bus, ident, data.partition("_")[0].upper()
 
 
 class Feed:
@@ -391,7 +368,8 @@ class Feed:
         stopped = f"the ID tables of {', '.join(buses)} stopped"
         try:
             dump = await asyncio.create_subprocess_exec(
-                self.canemu, *self.base, "dump", "--listen-only", "--sim-time", "--", *buses,
+                self.canemu, *self.base, "dump", "--listen-only", "--sim-time", "--summary",
+                str(SUMMARY_MS), "--", *buses,
                 stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
                 stderr=asyncio.subprocess.PIPE, limit=1 << 20, preexec_fn=_end_with_parent)
         except OSError as e:
@@ -414,25 +392,24 @@ class Feed:
                 self.listening.remove(bus)
 
     async def _read_dump(self, dump: asyncio.subprocess.Process) -> int:
-        """`dump`'s lines into the ID tables until it ends; its exit status."""
+        """`dump`'s summary lines into the ID tables until it ends; its exit status."""
         errors = asyncio.ensure_future(self._dump_stderr(dump.stderr))
         tables = self.id_tables
         seen = self.error_frames_seen
         async for raw in dump.stdout:
-            parsed = parse_log_line(raw.decode(errors="replace"))
-            if parsed is None:
-                continue
-            at_ns, bus, ident, data = parsed
-            if data == "E":
-                seen[bus] = seen.get(bus, 0) + 1
+            line = json.loads(raw)
+            bus = line["bus"]
+            if "error_frames" in line:
+                seen[bus] = seen.get(bus, 0) + line["error_frames"]
                 continue
             table = tables.get(bus)
             if table is None:
                 table = tables[bus] = {}
+            ident = line["id"]
             row = table.get(ident)
             if row is None:
-                row = table[ident] = IdRow(ident, at_ns, data)
-            row.add(at_ns, data)
+                row = table[ident] = IdRow(ident, line["first_ns"])
+            row.add(line)
         await errors
         return await dump.wait()
 

@@ -94,6 +94,8 @@ struct CaptureRun {
   bool listen_only = false;
   bool sim_time = false;
   bool record = false;  // says what it wrote when it stops
+  uint32_t summary_ms =
+      0;  // dump --summary: a line per bus and identifier this often (dump_summary.hpp)
 };
 int run_capture(const std::string& socket, const CaptureRun& run);
 

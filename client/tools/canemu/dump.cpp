@@ -10,6 +10,7 @@
 #include <poll.h>
 
 #include <algorithm>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <ctime>
@@ -17,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -29,6 +31,7 @@
 #include "canemu/ipc/socketcan.hpp"
 #include "command.hpp"
 #include "dump_filter.hpp"
+#include "dump_summary.hpp"
 #include "frame_text.hpp"
 #include "lin_dump.hpp"
 #include "python_tool.hpp"
@@ -42,6 +45,10 @@ volatile std::sig_atomic_t g_stop = 0;
 // canemud opens at most this many channels on one connection (docs/daemon.md): a dump of more
 // buses opens a connection more for each further 16.
 constexpr std::size_t kChannelsPerConnection = 16;
+// The most messages taken from the rings before they are written out.
+constexpr std::size_t kBatch = 4096;
+// How often a --summary dump reads its rings: a busy bus's 4096-message ring holds far longer.
+constexpr std::chrono::milliseconds kSummaryDrain{10};
 
 void on_stop_signal(int) {
   g_stop = 1;
@@ -186,6 +193,9 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
   if (o.log_file && *format == ipc::CaptureFormat::pcap) {
     return fail("-l writes a candump log, as candump -l does; a pcap capture needs -o FILE");
   }
+  if (o.summary_ms != 0 && (*format == ipc::CaptureFormat::pcap || o.log_file)) {
+    return fail("--summary writes JSON lines, not a pcap capture or a candump log");
+  }
   if (targets->size() > 1 && *format == ipc::CaptureFormat::pcap) {
     return fail(
         "a pcap capture (LINKTYPE_CAN_SOCKETCAN) does not say which bus a frame was on: one bus "
@@ -253,12 +263,31 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
   std::vector<Received> batch;
   uint64_t written = 0;
   std::optional<client::IpcError> gone;
+  std::vector<std::string> names;
+  for (const Target& t : *targets) {
+    names.push_back(t.bus);
+  }
+  DumpSummary summary(std::move(names));
+  using Clock = std::chrono::steady_clock;
+  const auto every = std::chrono::milliseconds(o.summary_ms);
+  auto summary_due = Clock::now() + every;
+  // The summary's lines so far, written as the candump lines are (a failed write ends the dump).
+  const auto write_summary = [&] {
+    const std::string lines = summary.take();
+    return lines.empty() || std::fwrite(lines.data(), 1, lines.size(), stdout) == lines.size();
+  };
   while (!g_stop && (o.count == 0 || written < o.count)) {
+    if (o.summary_ms != 0 && Clock::now() >= summary_due) {
+      if (!write_summary() || std::fflush(stdout) != 0) {
+        return fail("cannot write the summary to standard output");
+      }
+      summary_due = Clock::now() + every;
+    }
     // What waits in every ring, then in time order: the buses' lines interleave as they
     // happened.
     batch.clear();
     for (std::size_t i = 0; i < channels.size(); ++i) {
-      while (batch.size() < 4096) {
+      while (batch.size() < kBatch) {
         auto m = channels[i].receive(0);
         if (!m) {
           break;
@@ -277,7 +306,15 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
         }
       }
     }
-    if (batch.empty()) {
+    if (o.summary_ms != 0 && batch.size() < kBatch) {
+      // A summary is not in a hurry: the rings are read every kSummaryDrain (a wake-up each,
+      // instead of one for nearly every delivery of a busy bus), and the lines written when due.
+      if (batch.empty() && (gone = c->lost())) {
+        break;
+      }
+      const auto until = std::min(summary_due, Clock::now() + kSummaryDrain);
+      std::this_thread::sleep_until(until);
+    } else if (batch.empty()) {
       // Nothing came: canemud may have closed the connection (it stopped, or a reload no
       // longer allows this user), and then nothing comes any more.
       if (!wait_any(channels, 200) && (gone = c->lost())) {
@@ -291,7 +328,11 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
       const Target& t = (*targets)[r.target];
       for (const BusFilter* spec : t.specs) {
         if ((o.count == 0 || written < o.count) && spec->matches(r.frame)) {
-          out->record(r.ns + base->offset_ns, t.bus, r.frame);
+          if (o.summary_ms != 0) {
+            summary.add(r.target, r.ns + base->offset_ns, r.frame);
+          } else {
+            out->record(r.ns + base->offset_ns, t.bus, r.frame);
+          }
           ++written;
         }
       }
@@ -299,6 +340,9 @@ int run_capture(const std::string& socket, const CaptureRun& o) {
     if (!out->flush()) {
       return fail(out->error() + fmt::format(" ({} frame(s) lost)", out->lost()));
     }
+  }
+  if (o.summary_ms != 0 && (!write_summary() || std::fflush(stdout) != 0)) {
+    return fail("cannot write the summary to standard output");
   }
   if (o.record) {
     std::fprintf(stderr, "canemu: %llu frame(s) recorded in %s (%s)\n",
@@ -338,11 +382,20 @@ Command add_dump(CLI::App& app, const std::string& socket) {
                  "log into candump-YYYY-MM-DD_HHMMSS.log in the current directory, as candump -l "
                  "(listen-only is --listen-only)")
       ->excludes(output);
+  auto* summary =
+      dump->add_option("--summary", o->summary_ms,
+                       "instead of a line per frame, a JSON line per bus and identifier every MS "
+                       "milliseconds: count, first and last time stamp, last data, bytes changed "
+                       "(docs/cli.md)")
+          ->check(CLI::Range(1u, 3'600'000u))
+          ->option_text("MS")
+          ->excludes(output);
   auto dbc = std::make_shared<std::string>();
   dump->add_option("--dbc", *dbc,
                    "also decode each frame the DBC knows (its message and signals, as cantools "
                    "decode --single-line) after its line; through python -m canemu.dbc_decode")
-      ->excludes(output);
+      ->excludes(output)
+      ->excludes(summary);
   return {dump, [&socket, o, dbc] {
             if (dbc->empty()) {
               return run_capture(socket, *o);

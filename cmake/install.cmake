@@ -126,6 +126,10 @@ install(FILES ${PROJECT_SOURCE_DIR}/packaging/debian/lintian-overrides
 set(CANEMU_PYTHON_DIR lib/python3/dist-packages)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu DESTINATION ${CANEMU_PYTHON_DIR}
         FILES_MATCHING PATTERN "*.py" PATTERN "web_static/*" PATTERN "__pycache__" EXCLUDE)
+# send()'s hot path in C, beside the package (import canemu_speedups), when it was built.
+if(TARGET canemu_speedups)
+  install(TARGETS canemu_speedups LIBRARY DESTINATION ${CANEMU_PYTHON_DIR})
+endif()
 # The LCM bridge's message types (docs/bridges.md): Python beside canemu, the C++ headers lcm-gen
 # made (<canemu_lcm/frame_t.hpp>) and the .lcm files for other languages' lcm-gen.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/client/python/canemu_lcm DESTINATION ${CANEMU_PYTHON_DIR}

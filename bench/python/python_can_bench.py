@@ -27,6 +27,7 @@ from typing import Callable, Dict, List, Optional
 import can
 
 import canemu
+from canemu import _vci
 from canemu.testing import Daemon
 
 BATCH = 200  # frames per round: within the transmit and receive FIFOs
@@ -158,6 +159,8 @@ def main() -> None:
             "frames": args.frames,
             "rounds": args.rounds,
             "batch": BATCH,
+            # send's hot path in C (canemu_speedups; CANEMU_SPEEDUPS=0 measures without it)
+            "speedups": _vci.speedups() is not None,
         },
         "benchmarks": [
             entry("python_can_virtual_bus", virtual),

@@ -66,6 +66,9 @@ names = [e.value for e in entry_points().select(group="can.interface") if e.name
 assert names == ["canemu.bus:CanemuBus"], names
 plugins = [e.value for e in entry_points().select(group="pytest11") if e.name == "canemu"]
 assert plugins == ["canemu.pytest_plugin"], plugins
+# send's hot path in C is installed beside the package, where import finds it.
+import canemu_speedups
+assert canemu_speedups.__file__.endswith("/dist-packages/canemu_speedups.abi3.so"), canemu_speedups.__file__
 PY
 
 unit=$dest/usr/lib/systemd/system

@@ -20,7 +20,7 @@ from canemu import _vci
 from canemu._receive import _FLOAT_EXACT, _MSG_SIZE, _RX_BATCH, _ReceiveMixin
 from canemu.bus import CAN_ERR_ACK, CAN_ERR_BUSERROR
 
-from conftest import bus_pair, drain, frames
+from conftest import bus_pair, drain, frames, ns
 
 MS = 1_000_000
 # Every attribute a Message has: its slots (python-can 4.1 and 4.6 list the same ones).
@@ -317,3 +317,81 @@ def test_send_after_shutdown_is_a_python_can_error(daemon):
     bus.shutdown()
     with pytest.raises(can.CanOperationError):
         bus.send(Message(arbitration_id=1, is_extended_id=False))
+
+
+# ---- send's hot path in C (canemu_speedups) ----
+# Every classic data frame the C path takes: both formats at their extremes, 0 to 8 bytes, the
+# data as bytes and as bytearray.
+C_FRAMES = [Message(arbitration_id=i, is_extended_id=ext, data=d)
+            for i, ext, d in [(0, False, b""), (0x7FF, False, bytearray(b"\x01")),
+                              (0x123, False, bytes(range(8))), (0, True, b"\xff" * 5),
+                              (0x1FFFFFFF, True, bytearray(range(1, 9)))]]
+# What it leaves to the Python path (which sends or refuses each as it always did).
+NOT_C = [Message(arbitration_id=1, is_extended_id=False, is_remote_frame=True, dlc=2),
+         Message(arbitration_id=1, is_extended_id=False, is_error_frame=True),
+         Message(arbitration_id=0x800, is_extended_id=False),
+         Message(arbitration_id=-1, is_extended_id=False),
+         Message(arbitration_id=0x20000000, is_extended_id=True),
+         Message(arbitration_id=1, is_extended_id=False, data=bytes(9))]
+
+
+def test_make_test_builds_the_speedups_and_a_bus_uses_them(nodes):
+    """python3-dev is one of the dependencies, so the C path is there and send() tries it:
+    the other send tests of the suites run through it."""
+    a, _ = nodes
+    assert _vci.speedups() is not None
+    assert a._fast_post is not None
+
+
+def test_the_c_path_takes_classic_data_frames_and_leaves_the_rest(nodes):
+    a, _ = nodes
+    assert all(a._fast_post(m) is True for m in C_FRAMES)
+    assert not any(a._fast_post(m) for m in NOT_C)
+    msg = Message(arbitration_id=1, is_extended_id=False)
+    msg.data = [1, 2]  # a list: python-can takes it, the Python path converts it
+    assert a._fast_post(msg) is False
+    assert a._fast_post("not a message") is False
+
+
+@pytest.mark.parametrize("own", [False, True])
+def test_the_c_path_sends_what_the_python_path_sends(daemon, own):
+    """The same frames through each path, as the other node and the sender itself (with
+    receive_own_messages: bFlags's SRR) receive them: the same messages, the same times after
+    the first."""
+    seen = {}
+    for path in ("c", "python"):
+        a = can.Bus(interface="canemu", channel="can0", receive_own_messages=own)
+        b = can.Bus(interface="canemu", channel="can0")
+        try:
+            canemu.step(10 * MS)
+            drain(a)
+            drain(b)
+            if path == "python":
+                a._fast_post = None
+            for m in C_FRAMES:
+                a.send(m)
+            canemu.step(10 * MS)
+            got = []
+            for node in (a, b):
+                msgs = frames(drain(node))
+                got.append([(m.arbitration_id, m.is_extended_id, bytes(m.data), m.dlc, m.is_rx,
+                             ns(m.timestamp - msgs[0].timestamp)) for m in msgs])
+            seen[path] = got
+        finally:
+            a.shutdown()
+            b.shutdown()
+    assert seen["c"] == seen["python"]
+    theirs = seen["c"][1]
+    assert [(i, ext, d) for i, ext, d, *_ in theirs] == [
+        (m.arbitration_id, m.is_extended_id, bytes(m.data)) for m in C_FRAMES]
+    assert len(seen["c"][0]) == (len(C_FRAMES) if own else 0)
+
+
+def test_the_c_path_ends_before_the_channel_closes(daemon):
+    bus = can.Bus(interface="canemu", channel="can0")
+    poster = bus._poster
+    bus.shutdown()
+    assert bus._fast_post is None
+    assert poster.post(C_FRAMES[0]) is False  # closed: nothing reaches the library
+    with pytest.raises(can.CanOperationError):
+        bus.send(C_FRAMES[0])

@@ -88,6 +88,12 @@ class _SendMixin:
         (what can.bridge and `can.player --error-frames` pass on) is not sent: a controller
         signals errors it detects, it cannot send one at will (fault scenarios make errors,
         docs/faults.md)."""
+        fast = self._fast_post
+        if fast is not None and fast(msg):
+            # canemu_speedups took a classic data frame as the hot path below would have; it
+            # leaves everything else (and a full FIFO, an error) to the paths below.
+            self._tx_flushed = False
+            return
         if msg.is_error_frame:
             log.debug("%s: error frame not sent: %s", self.channel_info, msg)
             return

@@ -7,8 +7,12 @@ canemu_vci.h byte for byte (their sizes are checked when the module loads).
 from __future__ import annotations
 
 import ctypes
+import importlib
+import importlib.machinery
+import importlib.util
 import os
 import shutil
+import sys
 from pathlib import Path
 from typing import Optional
 
@@ -409,6 +413,42 @@ def unconverted(func: str, keep_gil: bool = False):
     f = (ctypes.PyDLL(loaded._name, handle=loaded._handle) if keep_gil else loaded)[func]
     f.restype = HRESULT
     return f
+
+
+_SPEEDUPS = "canemu_speedups"
+_speedups: Optional[object] = None
+_speedups_looked = False
+
+
+def speedups():
+    """canemu_speedups, send()'s hot path in C (client/python/speedups), or None: installed with
+    the package (import canemu_speedups), else the build's, beside the libvcinpl2.so that lib()
+    loaded. None without it, before Python 3.10 (its stable ABI) and with CANEMU_SPEEDUPS=0:
+    the Python path then does the same."""
+    global _speedups, _speedups_looked
+    if _speedups_looked:
+        return _speedups
+    _speedups_looked = True
+    if os.environ.get("CANEMU_SPEEDUPS") == "0" or sys.version_info < (3, 10):
+        return None
+    try:
+        _speedups = importlib.import_module(_SPEEDUPS)
+        return _speedups
+    except ImportError:
+        pass
+    path = Path(lib()._name).parent / f"{_SPEEDUPS}.abi3.so"
+    if ".abi3.so" not in importlib.machinery.EXTENSION_SUFFIXES or not path.is_file():
+        return None
+    spec = importlib.util.spec_from_file_location(_SPEEDUPS, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    _speedups = module
+    return _speedups
+
+
+def address_of(func: str) -> int:
+    """The address of `func` in libvcinpl2.so (for canemu_speedups)."""
+    return ctypes.cast(getattr(lib(), func), ctypes.c_void_p).value
 
 
 def error_text(hr: int) -> str:

@@ -173,6 +173,8 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         self._channel = None
         self._channel_arg = ctypes.c_void_p()  # _channel as send's hot path passes it (_open)
         self._post = None
+        self._poster = None  # canemu_speedups.ClassicPoster, when there is one (_open)
+        self._fast_post = None  # its post(msg): True when msg went into the FIFO
         self._scheduler = None
         self._ephemeral: Optional[str] = None
         self._channel_name = channel
@@ -321,6 +323,13 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         # call keeps the GIL.
         self._post = _vci.unconverted("canChannelPostMessage", keep_gil=True)
         self._channel_arg = ctypes.c_void_p(self._channel)
+        # The same in C, when canemu_speedups is there: send() tries it first.
+        speedups = _vci.speedups()
+        if speedups is not None:
+            self._poster = speedups.ClassicPoster(_vci.address_of("canChannelPostMessage"),
+                                                  self._channel, self._tx_flags,
+                                                  self._tx_flags_ext)
+            self._fast_post = self._poster.post
         # With receive_own_messages the channel also takes the cyclic list's echoes (SRRA):
         # the firmware hands them only to channels that ask for every self-reception.
         mode = _vci.CAN_FILTER_PASS | (_vci.CAN_FILTER_SRRA if self._receive_own else 0)
@@ -423,6 +432,9 @@ class CanemuBus(_ReceiveMixin, _SendMixin, _FilterMixin, _CyclicMixin, BusABC):
         lib = _vci.lib() if _vci._lib is not None else None
         if lib is None:
             return
+        if self._poster is not None:  # no post from C once the channel closes
+            self._poster.close()
+            self._poster = self._fast_post = None
         for name, attr in (
             ("canSchedulerClose", "_scheduler"),
             ("canChannelClose", "_channel"),

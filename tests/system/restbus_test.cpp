@@ -135,21 +135,26 @@ TEST(Restbus, ALoadLongerThanOneMebibyteIsRefusedAndNothingStarts) {
 
 // `canemu fault list` (and the client's fetch_fault_list) gives every fault, more than fit one
 // reply (kFaultPage), each target as long as the message's and signal's names make it.
-TEST(Restbus, EveryFaultIsListedWithItsWholeTarget) {
-  const std::string message = "MOTOR_STATUS_OF_THE_LEFT_REAR_WHEEL_DRIVE_UNIT";
-  const std::string signal = "speed_of_the_wheel_in_kilometres_per_hour";
+// kConfig with its message MOTOR_STATUS and signal speed renamed, into `file`.
+void write_renamed(const std::string& file, const std::string& message, const std::string& signal) {
   std::string config = kConfig;
   for (const auto& [from, to] :
        {std::pair<std::string, std::string>{"\"MOTOR_STATUS\"", '"' + message + '"'},
         {"\"speed\"", '"' + signal + '"'}}) {
     config.replace(config.find(from), from.size(), to);
   }
-  TempDir dir;
-  const std::string file = (dir.path / "restbus.toml").string();
   FILE* f = std::fopen(file.c_str(), "w");
   ASSERT_NE(f, nullptr);
   std::fputs(config.c_str(), f);
   std::fclose(f);
+}
+
+TEST(Restbus, EveryFaultIsListedWithItsWholeTarget) {
+  const std::string message = "MOTOR_STATUS_OF_THE_LEFT_REAR_WHEEL_DRIVE_UNIT";
+  const std::string signal = "speed_of_the_wheel_in_kilometres_per_hour";
+  TempDir dir;
+  const std::string file = (dir.path / "restbus.toml").string();
+  ASSERT_NO_FATAL_FAILURE(write_renamed(file, message, signal));
   // Two scenarios (a scenario's text is at most 12 KiB), loaded one after the other.
   constexpr int kFaults = 2 * static_cast<int>(ipc::kFaultPage) + 5;
   constexpr int kFirst = kFaults / 2;
@@ -163,7 +168,7 @@ TEST(Restbus, EveryFaultIsListedWithItsWholeTarget) {
                << "\"\nvalue = " << k << "\n";
     }
     const std::string scenario_file = (dir.path / fmt::format("part{}.toml", part)).string();
-    f = std::fopen(scenario_file.c_str(), "w");
+    FILE* f = std::fopen(scenario_file.c_str(), "w");
     ASSERT_NE(f, nullptr);
     std::fputs(scenario.str().c_str(), f);
     std::fclose(f);
@@ -194,6 +199,33 @@ TEST(Restbus, EveryFaultIsListedWithItsWholeTarget) {
   EXPECT_EQ(rows, static_cast<std::size_t>(kFaults)) << table;
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), kFaults + 1) << table;
   EXPECT_EQ(table.find("more not shown"), std::string::npos);
+}
+
+// A target longer than a fault entry holds (127 characters) is cut, and ends in "..." to say so.
+TEST(Restbus, ATargetTooLongForTheListEndsInDots) {
+  const std::string message = "MOTOR_STATUS_OF_THE_LEFT_REAR_WHEEL_DRIVE_UNIT_ON_THE_SECOND_AXLE";
+  const std::string signal = "speed_of_the_wheel_in_kilometres_per_hour_as_the_controller_reckons";
+  TempDir dir;
+  const std::string file = (dir.path / "restbus.toml").string();
+  ASSERT_NO_FATAL_FAILURE(write_renamed(file, message, signal));
+  Daemon d("stepped", {"--config=" + file});
+  const std::string scenario_file = (dir.path / "long.toml").string();
+  FILE* f = std::fopen(scenario_file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs(fmt::format("[scenario]\nname = \"long\"\n[[fault]]\neffect = \"signal_step\"\n"
+                         "at = \"1ms\"\nbus = \"can0\"\nsignal = \"{}.{}\"\nvalue = 1\n",
+                         message, signal)
+                 .c_str(),
+             f);
+  std::fclose(f);
+  output_of(d, {"fault", "load", scenario_file});
+  const std::string target = "can0/" + message + '.' + signal;
+  ASSERT_GE(target.size(), ipc::kFaultTargetSize);
+  auto c = connect(d);
+  const auto listed = client::fetch_fault_list(c);
+  ASSERT_TRUE(listed) << listed.error().message;
+  ASSERT_EQ(listed->size(), 1u);
+  EXPECT_EQ(ipc::name_of((*listed)[0].target), target.substr(0, 124) + "...");
 }
 
 }  // namespace canemu

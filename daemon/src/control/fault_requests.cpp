@@ -55,7 +55,11 @@ void ControlDispatcher::on_fault_list(Session&, const uint8_t* data, uint32_t re
     ipc::FaultEntry& e = r->faults[r->count++];
     ipc::copy_name(e.scenario, f.scenario);
     ipc::copy_name(e.effect, to_string(f.effect));
-    ipc::copy_name(e.target, f.target);
+    if (f.target.size() < ipc::kFaultTargetSize) {
+      ipc::copy_name(e.target, f.target);
+    } else {  // longer than an entry holds: cut, and the cut shown
+      ipc::copy_name(e.target, f.target.substr(0, ipc::kFaultTargetSize - 4) + "...");
+    }
     e.line = f.line;
     e.state = static_cast<uint8_t>(f.state);
     e.has_until = f.until_ns ? 1 : 0;

@@ -7,9 +7,11 @@ python-can versions (make test)."""
 from __future__ import annotations
 
 import ctypes
+import sys
 import threading
 import weakref
 from collections import deque
+from pathlib import Path
 
 import can
 import pytest
@@ -395,3 +397,21 @@ def test_the_c_path_ends_before_the_channel_closes(daemon):
     assert poster.post(C_FRAMES[0]) is False  # closed: nothing reaches the library
     with pytest.raises(can.CanOperationError):
         bus.send(C_FRAMES[0])
+
+
+def test_the_speedups_are_never_taken_from_the_current_directory(tmp_path, monkeypatch):
+    """A libvcinpl2.so the dynamic linker found by its name (an installed canemu) has no folder:
+    a canemu_speedups.abi3.so in the current directory is not loaded in its place."""
+    planted = tmp_path / "canemu_speedups.abi3.so"
+    planted.write_bytes(b"not a module")
+    monkeypatch.chdir(tmp_path)
+
+    class ByName:
+        _name = "libvcinpl2.so"
+
+    monkeypatch.setattr(_vci, "_lib", ByName())
+    monkeypatch.setattr(_vci, "_speedups", None)
+    monkeypatch.setattr(_vci, "_speedups_looked", False)
+    monkeypatch.delitem(sys.modules, "canemu_speedups", raising=False)
+    found = _vci.speedups()  # an installed one, or none; never the planted file
+    assert found is None or Path(found.__file__) != planted

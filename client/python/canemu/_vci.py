@@ -421,28 +421,32 @@ _speedups_looked = False
 
 
 def speedups():
-    """canemu_speedups, send()'s hot path in C (client/python/speedups), or None: installed with
-    the package (import canemu_speedups), else the build's, beside the libvcinpl2.so that lib()
-    loaded. None without it, before Python 3.10 (its stable ABI) and with CANEMU_SPEEDUPS=0:
-    the Python path then does the same."""
+    """canemu_speedups, send()'s hot path in C (client/python/speedups), or None: the build's,
+    beside the libvcinpl2.so that lib() loaded from a folder of its own (the two are made
+    together), else one installed with the package (import canemu_speedups). None without it,
+    before Python 3.10 (its stable ABI) and with CANEMU_SPEEDUPS=0: the Python path then does
+    the same."""
     global _speedups, _speedups_looked
     if _speedups_looked:
         return _speedups
     _speedups_looked = True
     if os.environ.get("CANEMU_SPEEDUPS") == "0" or sys.version_info < (3, 10):
         return None
+    name = lib()._name
+    beside = Path(name).resolve().parent / f"{_SPEEDUPS}.abi3.so"
+    # (Only beside a library loaded by its path, which has a '/': one the dynamic linker found
+    # by its name has no folder here, and the current directory is nobody's to load code from.)
+    if ("/" in name and beside.is_file()
+            and ".abi3.so" in importlib.machinery.EXTENSION_SUFFIXES):
+        spec = importlib.util.spec_from_file_location(_SPEEDUPS, beside)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        _speedups = module
+        return _speedups
     try:
         _speedups = importlib.import_module(_SPEEDUPS)
-        return _speedups
     except ImportError:
-        pass
-    path = Path(lib()._name).parent / f"{_SPEEDUPS}.abi3.so"
-    if ".abi3.so" not in importlib.machinery.EXTENSION_SUFFIXES or not path.is_file():
-        return None
-    spec = importlib.util.spec_from_file_location(_SPEEDUPS, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    _speedups = module
+        _speedups = None
     return _speedups
 
 

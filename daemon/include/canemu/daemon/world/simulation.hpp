@@ -164,7 +164,7 @@ class Simulation {
   // firmware, listed with the configured adapters while the lease lives.
   DeviceLease add_vci_device(std::string name, std::size_t bus, uint32_t owner_pid);
   // The counter timelines of ephemeral devices' CAN nodes after their devices went: the newest
-  // kGoneNodesPerBus per bus, each until a device of its name comes (docs/daemon.md, timeline).
+  // kGoneNodesPerBus per bus, each until a device of its name comes (docs/cli.md, "Gone nodes").
   static constexpr std::size_t kGoneNodesPerBus = GoneNodes::kPerBus;
   const GoneNodes& gone_nodes() const { return gone_nodes_; }
 

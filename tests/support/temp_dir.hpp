@@ -1,5 +1,5 @@
 // A fresh temporary directory for one test, removed with everything in it when the test ends;
-// and a file's whole content.
+// and a file's whole content, written and read.
 #pragma once
 
 #include <stdlib.h>
@@ -21,6 +21,13 @@ struct TempDir {
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
 };
+
+// Writes `text` as the whole content of `p`; false when the file cannot be written.
+inline bool write_file(const std::filesystem::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+  return static_cast<bool>(out.flush());
+}
 
 inline std::string read_file(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);

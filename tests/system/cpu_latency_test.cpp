@@ -24,6 +24,7 @@ namespace {
 using testing::connect;
 using testing::Daemon;
 using testing::status;
+using testing::write_file;
 
 // The 32-bit value at the start of the file, or -1 if it has fewer than four bytes.
 int64_t written(const std::string& path) {
@@ -55,10 +56,6 @@ int opened(pid_t pid, const std::string& path) {
     }
   }
   return n;
-}
-
-void write_file(const std::string& file, const std::string& text) {
-  std::ofstream(file) << text;
 }
 
 // A folder of the test's own, the file canemud is to write its request into

@@ -28,6 +28,7 @@ using testing::connect;
 using testing::Daemon;
 using testing::status;
 using testing::TempDir;
+using testing::write_file;
 
 constexpr int64_t kBit = 2000;  // ns at 500 kbit/s
 
@@ -133,28 +134,25 @@ TEST(Restbus, ALoadLongerThanOneMebibyteIsRefusedAndNothingStarts) {
   EXPECT_EQ(r->total, 0u);
 }
 
-// `canemu fault list` (and the client's fetch_fault_list) gives every fault, more than fit one
-// reply (kFaultPage), each target as long as the message's and signal's names make it.
-// kConfig with its message MOTOR_STATUS and signal speed renamed, into `file`.
-void write_renamed(const std::string& file, const std::string& message, const std::string& signal) {
+// kConfig with its message MOTOR_STATUS and signal speed renamed.
+std::string renamed(const std::string& message, const std::string& signal) {
   std::string config = kConfig;
   for (const auto& [from, to] :
        {std::pair<std::string, std::string>{"\"MOTOR_STATUS\"", '"' + message + '"'},
         {"\"speed\"", '"' + signal + '"'}}) {
     config.replace(config.find(from), from.size(), to);
   }
-  FILE* f = std::fopen(file.c_str(), "w");
-  ASSERT_NE(f, nullptr);
-  std::fputs(config.c_str(), f);
-  std::fclose(f);
+  return config;
 }
 
+// `canemu fault list` (and the client's fetch_fault_list) gives every fault, more than fit one
+// reply (kFaultPage), each target as long as the message's and signal's names make it.
 TEST(Restbus, EveryFaultIsListedWithItsWholeTarget) {
   const std::string message = "MOTOR_STATUS_OF_THE_LEFT_REAR_WHEEL_DRIVE_UNIT";
   const std::string signal = "speed_of_the_wheel_in_kilometres_per_hour";
   TempDir dir;
   const std::string file = (dir.path / "restbus.toml").string();
-  ASSERT_NO_FATAL_FAILURE(write_renamed(file, message, signal));
+  ASSERT_TRUE(write_file(file, renamed(message, signal)));
   // Two scenarios (a scenario's text is at most 12 KiB), loaded one after the other.
   constexpr int kFaults = 2 * static_cast<int>(ipc::kFaultPage) + 5;
   constexpr int kFirst = kFaults / 2;
@@ -168,10 +166,7 @@ TEST(Restbus, EveryFaultIsListedWithItsWholeTarget) {
                << "\"\nvalue = " << k << "\n";
     }
     const std::string scenario_file = (dir.path / fmt::format("part{}.toml", part)).string();
-    FILE* f = std::fopen(scenario_file.c_str(), "w");
-    ASSERT_NE(f, nullptr);
-    std::fputs(scenario.str().c_str(), f);
-    std::fclose(f);
+    ASSERT_TRUE(write_file(scenario_file, scenario.str()));
     output_of(d, {"fault", "load", scenario_file});
   }
 
@@ -207,17 +202,14 @@ TEST(Restbus, ATargetTooLongForTheListEndsInDots) {
   const std::string signal = "speed_of_the_wheel_in_kilometres_per_hour_as_the_controller_reckons";
   TempDir dir;
   const std::string file = (dir.path / "restbus.toml").string();
-  ASSERT_NO_FATAL_FAILURE(write_renamed(file, message, signal));
+  ASSERT_TRUE(write_file(file, renamed(message, signal)));
   Daemon d("stepped", {"--config=" + file});
   const std::string scenario_file = (dir.path / "long.toml").string();
-  FILE* f = std::fopen(scenario_file.c_str(), "w");
-  ASSERT_NE(f, nullptr);
-  std::fputs(fmt::format("[scenario]\nname = \"long\"\n[[fault]]\neffect = \"signal_step\"\n"
-                         "at = \"1ms\"\nbus = \"can0\"\nsignal = \"{}.{}\"\nvalue = 1\n",
-                         message, signal)
-                 .c_str(),
-             f);
-  std::fclose(f);
+  ASSERT_TRUE(write_file(scenario_file,
+                         fmt::format("[scenario]\nname = \"long\"\n[[fault]]\n"
+                                     "effect = \"signal_step\"\nat = \"1ms\"\nbus = \"can0\"\n"
+                                     "signal = \"{}.{}\"\nvalue = 1\n",
+                                     message, signal)));
   output_of(d, {"fault", "load", scenario_file});
   const std::string target = "can0/" + message + '.' + signal;
   ASSERT_GE(target.size(), ipc::kFaultTargetSize);

@@ -157,14 +157,28 @@ std::optional<Frame> from_struct(const uint8_t* bytes, std::size_t size) {
   return f;
 }
 
-std::string candump_text(const Frame& f) {
+std::string candump_id(uint32_t can_id) {
   char id[16];
-  if (f.can_id & (kErrFlag | kEffFlag)) {
-    std::snprintf(id, sizeof id, "%08X", f.can_id & (kEffMask | kErrFlag));
+  if (can_id & (kErrFlag | kEffFlag)) {
+    std::snprintf(id, sizeof id, "%08X", can_id & (kEffMask | kErrFlag));
   } else {
-    std::snprintf(id, sizeof id, "%03X", f.can_id & kSffMask);
+    std::snprintf(id, sizeof id, "%03X", can_id & kSffMask);
   }
-  std::string text = id;
+  return id;
+}
+
+std::string candump_data(const Frame& f) {
+  std::string text;
+  text.reserve(2u * f.len);
+  for (std::size_t i = 0; i < f.len; ++i) {
+    text += kHex[f.data[i] >> 4];
+    text += kHex[f.data[i] & 0x0F];
+  }
+  return text;
+}
+
+std::string candump_text(const Frame& f) {
+  std::string text = candump_id(f.can_id);
   const bool dlc_suffix = !f.fd && f.len == 8 && f.len8_dlc > 8 && f.len8_dlc <= 15;
   if (!f.fd && (f.can_id & kRtrFlag) && !(f.can_id & kErrFlag)) {
     text += "#R";
@@ -183,10 +197,7 @@ std::string candump_text(const Frame& f) {
   } else {
     text += '#';
   }
-  for (std::size_t i = 0; i < f.len; ++i) {
-    text += kHex[f.data[i] >> 4];
-    text += kHex[f.data[i] & 0x0F];
-  }
+  text += candump_data(f);
   if (dlc_suffix) {
     text += '_';
     text += kHex[f.len8_dlc];

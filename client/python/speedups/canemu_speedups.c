@@ -1,4 +1,4 @@
-/* canemu_speedups: the python-can interface's send hot path in C (docs/python.md, "Speed").
+/* canemu_speedups: the python-can interface's send hot path in C (docs/python.md, "Measured").
  *
  * CanemuBus.send() puts a classic data frame of 0..8 bytes into the transmit FIFO through
  * canChannelPostMessage of libvcinpl2.so. In Python that is some 0.6 us a frame: the message's
@@ -27,7 +27,8 @@ typedef int32_t (*PostFn)(void* channel, void* message);
 enum { kMessageSize = 80, kIdAt = 8, kFlagsAt = 14, kDataAt = 16 };
 
 typedef struct {
-  PyObject_HEAD PostFn post;
+  PyObject ob_base; /* PyObject_HEAD */
+  PostFn post;
   void* channel;     /* NULL once closed */
   uint8_t flags;     /* bFlags bits of an 11-bit frame besides the DLC (SRR) */
   uint8_t flags_ext; /* those of a 29-bit frame (EXT, SRR) */
@@ -197,7 +198,7 @@ static PyModuleDef_Slot module_slots[] = {
 static struct PyModuleDef module_def = {
     PyModuleDef_HEAD_INIT,
     "canemu_speedups",
-    "The python-can interface's send hot path in C (docs/python.md, \"Speed\").",
+    "The python-can interface's send hot path in C (docs/python.md, \"Measured\").",
     0,
     NULL,
     module_slots,

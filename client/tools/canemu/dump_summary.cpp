@@ -17,17 +17,7 @@ bool remote(const sc::Frame& f) {
 }
 
 std::string data_text(const sc::Frame& f) {
-  if (remote(f)) {
-    return "R";
-  }
-  static constexpr char kHex[] = "0123456789ABCDEF";
-  std::string text;
-  text.reserve(2u * f.len);
-  for (std::size_t i = 0; i < f.len; ++i) {
-    text += kHex[f.data[i] >> 4];
-    text += kHex[f.data[i] & 0x0F];
-  }
-  return text;
+  return remote(f) ? "R" : sc::candump_data(f);
 }
 
 }  // namespace
@@ -88,14 +78,11 @@ std::string DumpSummary::take() {
     if (row.count == 0) {
       continue;
     }
-    const uint32_t id = key.second;
-    const std::string id_text = (id & sc::kEffFlag) != 0 ? fmt::format("{:08X}", id & sc::kEffMask)
-                                                         : fmt::format("{:03X}", id);
     out += fmt::format(
         "{{\"bus\":{},\"id\":\"{}\",\"count\":{},\"first_ns\":{},\"last_ns\":{},\"data\":\"{}\","
         "\"changed\":{}}}\n",
-        quoted_[key.first], id_text, row.count, row.first_ns, row.last_ns, data_text(row.last),
-        row.changed);
+        quoted_[key.first], sc::candump_id(key.second), row.count, row.first_ns, row.last_ns,
+        data_text(row.last), row.changed);
     row.count = 0;
     row.changed = 0;
   }

@@ -103,6 +103,10 @@ std::optional<Frame> from_struct(const uint8_t* bytes, std::size_t size);
 // 2 ESI), `123#1122334455667788_E` (classic DLC above 8), error frames with 8 hex digits
 // `20000288#0000810200000800`.
 std::string candump_text(const Frame& f);
+// Two of its parts: the identifier (3 hex digits; 8 for a 29-bit one, CAN_EFF_FLAG not written,
+// and for an error frame, CAN_ERR_FLAG written) and the data bytes as upper-case hex pairs.
+std::string candump_id(uint32_t can_id);
+std::string candump_data(const Frame& f);
 // One line of a candump -L log: `(seconds.microseconds) bus frame`, seconds with 10 digits.
 // `ns` is the time stamp in nanoseconds (negative ones print as 0).
 std::string candump_line(int64_t ns, std::string_view bus, const Frame& f);

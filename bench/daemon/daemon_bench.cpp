@@ -154,9 +154,10 @@ BENCHMARK(BM_ClientDaemonClientLatencyRealtime)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
-// A bus spanning two daemons over Cyclone DDS, in real time: canemud "a" owns bus "fast"
-// (1 Mbit/s), canemud "b" declares it with owner "a"; both in a DDS domain and partition of
-// this run's own, by unicast over the loopback interface (CYCLONEDDS_URI). Two ephemeral
+// A bus spanning two daemons, in real time: canemud "a" owns bus "fast" (1 Mbit/s), canemud "b"
+// declares it with owner "a"; both in a DDS domain and partition of this run's own, by unicast
+// over the loopback interface (CYCLONEDDS_URI). local_link 1 (the default): b's requests and
+// a's events go over their same-host link; 0: over DDS, as between two hosts. Two ephemeral
 // channels on each daemon (spinning spin_us before they block); frames go round-robin along four
 // paths, each beyond the frame's own duration on the bus:
 //   a_to_a: a client of a to another of a (no hop: the baseline, in the same run);
@@ -168,13 +169,13 @@ BENCHMARK(BM_ClientDaemonClientLatencyRealtime)
 // kDdsSamples per path, fewer in a smoke run (--benchmark_min_time below 0.5 s, as in CI).
 
 std::string distributed_config(const std::string& dir, const std::string& name, int domain,
-                               const char* owner_line) {
+                               const char* owner_line, bool local_link) {
   const std::string path = dir + "/" + name + ".toml";
   std::ofstream f(path);
   f << "[simulation]\ntime = \"realtime\"\n\n[distributed]\nname = \"" << name
     << "\"\ndomain = " << domain << "\npartition = \"canemu-bench-" << ::getpid()
-    << "\"\nheartbeat_ms = 100\ntimeout_ms = 2000\n\n[[bus]]\nname = \"fast\"\nkind = \"can\"\n"
-       "bitrate = 1000000\n"
+    << "\"\nheartbeat_ms = 100\ntimeout_ms = 2000\nlocal_link = " << (local_link ? "true" : "false")
+    << "\n\n[[bus]]\nname = \"fast\"\nkind = \"can\"\nbitrate = 1000000\n"
     << owner_line;
   return path;
 }
@@ -200,8 +201,9 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
       "</Domain></CycloneDDS>");
   // Each daemon times the legs of the link's messages and logs them as it stops.
   const testing::ScopedEnv legs("CANEMU_NET_LEGS", "1");
-  const std::string config_a = distributed_config(base, "a", domain, "");
-  const std::string config_b = distributed_config(base, "b", domain, "owner = \"a\"\n");
+  const bool local_link = state.range(1) != 0;
+  const std::string config_a = distributed_config(base, "a", domain, "", local_link);
+  const std::string config_b = distributed_config(base, "b", domain, "owner = \"a\"\n", local_link);
   const auto cleanup = [&] {
     std::remove(config_a.c_str());
     std::remove(config_b.c_str());
@@ -359,9 +361,8 @@ void BM_DdsHopLatencyRealtime(benchmark::State& state) {
   cleanup();
 }
 BENCHMARK(BM_DdsHopLatencyRealtime)
-    ->ArgName("spin_us")
-    ->Arg(0)
-    ->Arg(200)  // the default
+    ->ArgNames({"spin_us", "local_link"})
+    ->ArgsProduct({{0, 200 /* the default */}, {1 /* the default */, 0}})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

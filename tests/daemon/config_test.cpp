@@ -244,6 +244,22 @@ model = "ixxat-usb-to-can"
   EXPECT_NE(e[3].find("device[0].controllers: missing"), std::string::npos);
 }
 
+TEST(Config, DistributedKeysTheirDefaultsAndTheSameHostLink) {
+  auto c = parse_config("[distributed]\nname = \"rig-a\"\n", "t.toml");
+  ASSERT_TRUE(c) << c.error().front();
+  EXPECT_TRUE(c->distributed.enabled);
+  EXPECT_EQ(c->distributed.name, "rig-a");
+  EXPECT_EQ(c->distributed.heartbeat_ms, 200u);
+  EXPECT_EQ(c->distributed.timeout_ms, 2000u);
+  EXPECT_TRUE(c->distributed.local_link);  // daemons on one host take their link by default
+  auto off = parse_config("[distributed]\nname = \"rig-a\"\nlocal_link = false\n", "t.toml");
+  ASSERT_TRUE(off) << off.error().front();
+  EXPECT_FALSE(off->distributed.local_link);
+  const auto e = config_errors("[distributed]\nname = \"rig-a\"\nlocal_link = \"yes\"\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_NE(e[0].find("distributed.local_link: must be true or false"), std::string::npos) << e[0];
+}
+
 TEST(Config, SyntaxErrorsNameTheirPlace) {
   const auto e = config_errors("[[bus]\n");
   ASSERT_EQ(e.size(), 1u);

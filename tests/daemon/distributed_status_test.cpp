@@ -158,6 +158,7 @@ TEST(DistributedStatus, AttachedBusAndUpPeerAsTheReplyCarriesThem) {
   EXPECT_EQ(e.bus_total, 0u);  // b simulates no bus
   EXPECT_EQ(e.bus_count, 0u);
   EXPECT_EQ(e.hosted_nodes, 1u);
+  EXPECT_EQ(e.linked, 1u);  // one process, one host: b's requests came over its same-host link
   EXPECT_GE(e.last_heard_ms, 0);
   EXPECT_LT(e.last_heard_ms, 5000);
   EXPECT_EQ(ra->bus_total, 0u);
@@ -185,6 +186,7 @@ TEST(DistributedStatus, AttachedBusAndUpPeerAsTheReplyCarriesThem) {
   EXPECT_EQ(ipc::name_of(pa.buses[0]), "can0");
   EXPECT_EQ(ipc::name_of(pa.buses[1]), "can1");
   EXPECT_EQ(pa.hosted_nodes, 0u);
+  EXPECT_EQ(pa.linked, 1u);
   ASSERT_EQ(rb->bus_total, 1u);
   ASSERT_EQ(rb->bus_count, 1u);
   const ipc::RemoteBusEntry& can0 = rb->buses[0];

@@ -24,8 +24,9 @@ LOOPBACK_URI = ("<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInt
 
 
 def config(name: str, time_mode: str, owner: str | None, *, domain: int, partition: str,
-           heartbeat_ms: int = 50, timeout_ms: int = 1000) -> str:
-    """Daemon `name` with one bus can0 at 500 kbit/s, its own or `owner`'s."""
+           heartbeat_ms: int = 50, timeout_ms: int = 1000, local_link: bool = True) -> str:
+    """Daemon `name` with one bus can0 at 500 kbit/s, its own or `owner`'s; `local_link` false:
+    over DDS even on one host."""
     owner_line = f'owner = "{owner}"' if owner else ""
     return f"""
 [simulation]
@@ -37,6 +38,7 @@ domain = {domain}
 partition = "{partition}"
 heartbeat_ms = {heartbeat_ms}
 timeout_ms = {timeout_ms}
+local_link = {"true" if local_link else "false"}
 
 [[bus]]
 name = "can0"

@@ -1,6 +1,8 @@
 """A bus across daemons (docs/distributed.md) on one machine: daemon "a" simulates can0, daemon
-"b" declares can0 with owner "a"; both talk over the loopback interface by unicast in a DDS
-domain of this run's own (CYCLONEDDS_URI), so no root is needed. python-can programs on both
+"b" declares can0 with owner "a"; both announce themselves over the loopback interface by unicast
+in a DDS domain of this run's own (CYCLONEDDS_URI), so no root is needed. Every test runs twice:
+with the same-host link that two daemons on one host use (`link`), and with `local_link = false`,
+all over DDS (`dds`). python-can programs on both
 daemons exchange frames; arbitration, time stamps and error counters are the owner's, exact in
 stepped time. tests/python/test_netns_distributed.py runs daemons in network namespaces."""
 
@@ -26,9 +28,13 @@ DOMAIN = 1 + (os.getpid() + 97) % 200
 URI = LOOPBACK_URI
 
 
+TRANSPORT = "link"  # the env fixture's parameter
+
+
 def config(name: str, time_mode: str, owner: str | None = None) -> str:
     return support_config(name, time_mode, owner, domain=DOMAIN,
-                          partition=f"canemu-test-{os.getpid()}")
+                          partition=f"canemu-test-{os.getpid()}",
+                          local_link=TRANSPORT == "link")
 
 
 @contextlib.contextmanager
@@ -98,16 +104,41 @@ class Peer:
         self.proc.wait(timeout=TIMEOUT)
 
 
-@pytest.fixture()
-def env():
+@contextlib.contextmanager
+def transport(kind: str):
+    global TRANSPORT
+    TRANSPORT = kind
     os.environ["CYCLONEDDS_URI"] = URI  # the daemons inherit it
-    yield
-    del os.environ["CYCLONEDDS_URI"]
+    try:
+        yield kind
+    finally:
+        del os.environ["CYCLONEDDS_URI"]
+        TRANSPORT = "link"
+
+
+@pytest.fixture(params=["link", "dds"])
+def env(request):
+    with transport(request.param) as kind:
+        yield kind
+
+
+@pytest.fixture()
+def link_env():
+    with transport("link") as kind:
+        yield kind
+
+
+def via(daemon, other: str) -> str:
+    """How `daemon` speaks to daemon `other` (status: "link" or "dds")."""
+    peers = json.loads(cli(daemon, "status", "--json"))["distributed"]["peers"]
+    return next(p["via"] for p in peers if p["name"] == other)
 
 
 def test_stepped_arbitration_and_time_stamps_across_daemons(env):
     with owner_and_follower("stepped") as (a, b):
         t0 = attached_step(b)
+        wait_until(lambda: via(a, "b") == env, "a's status shows how b speaks to it")
+        assert via(b, "a") == env
         assert step(a, 1000) == t0 + 1000  # one clock, the owner's: a step of a is one of b
         t0 += 1000  # (VCI time stamps tick in microseconds)
         ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
@@ -243,15 +274,23 @@ def test_a_follower_that_dies_leaves_the_bus_and_steps_go_on(env):
             b.proc.wait()
         finally:
             b.stop()
-        # The owner's next step waits at the barrier for b at most timeout_ms (1 s), then lets
-        # it go: its node leaves can0, and the step ends, its answer naming the follower let go.
-        started = time.monotonic()
-        answer = cli(a, "time", "step", "1ms").splitlines()
-        assert time.monotonic() - started < TIMEOUT
-        assert answer[0].startswith("simulated time ")
-        assert len(answer) == 2 and answer[1].startswith("let go during the step: daemon b (")
+        if env == "link":
+            # Its link closed with its process: the owner lets it go at once, and the next step
+            # has nobody to wait for.
+            a.wait_log("daemon b is gone: its same-host link closed (it closed without a bye")
+            answer = cli(a, "time", "step", "1ms").splitlines()
+            assert len(answer) == 1 and answer[0].startswith("simulated time ")
+        else:
+            # The owner's next step waits at the barrier for b at most timeout_ms (1 s), then
+            # lets it go: its node leaves can0, and the step ends, its answer naming the follower
+            # let go.
+            started = time.monotonic()
+            answer = cli(a, "time", "step", "1ms").splitlines()
+            assert time.monotonic() - started < TIMEOUT
+            assert answer[0].startswith("simulated time ")
+            assert len(answer) == 2 and answer[1].startswith("let go during the step: daemon b (")
+            a.wait_log("daemon b is gone")
         assert not any(k.startswith("b/") for k in nodes(a))
-        a.wait_log("daemon b is gone")
 
 
 def test_realtime_owner_late_stopping_and_back(env):
@@ -309,6 +348,14 @@ def test_a_step_asked_of_a_follower_whose_owner_dies_is_answered(env):
             a.proc.wait()
         finally:
             a.stop()
+        if env == "link":
+            # Its link closed with its process: b lets it go at once and refuses the step.
+            b.wait_log("daemon a is gone: its same-host link closed (it closed without a bye")
+            done = subprocess.run([str(CANEMU_CLI), "--socket", b.socket, "time", "step", "1ms"],
+                                  capture_output=True, text=True, timeout=TIMEOUT)
+            assert done.returncode != 0
+            assert "steps are daemon a's, which is not attached (daemon a is gone)" in done.stderr
+            return
         # b asks the owner, which never answers; once a is let go (timeout_ms) the step is
         # answered with the reason instead of waiting for ever.
         started = time.monotonic()
@@ -317,3 +364,43 @@ def test_a_step_asked_of_a_follower_whose_owner_dies_is_answered(env):
         assert done.returncode != 0
         assert "daemon a, whose steps these are, is gone (not heard from for" in done.stderr
         assert time.monotonic() - started < TIMEOUT
+
+
+def same_host_address(name: str) -> str:
+    """Daemon `name`'s same-host address, from the kernel's list of Unix sockets."""
+    for line in open("/proc/net/unix"):
+        path = line.split()[-1]
+        if path.startswith(f"@canemu-net/{name}/"):
+            return "\0" + path[1:]
+    raise AssertionError(f"no same-host address of daemon {name}")
+
+
+def test_a_same_host_link_speaking_nonsense_is_closed_counted_and_nothing_else_changes(link_env):
+    import socket
+    with owner_and_follower("stepped") as (a, b):
+        attached_step(b)
+        address = same_host_address("a")
+        head = bytes([2, 0, 0, 0]) + (1).to_bytes(4, "little") + bytes(8 + 32 + 8)
+        for junk, why in [(b"abc", "a message of 3 bytes"),
+                          (head, "no hello first"),
+                          (bytes(70000), "a message of 70000 bytes, more than any")]:
+            s = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+            s.settimeout(TIMEOUT)
+            s.connect(address)
+            s.send(junk)
+            assert s.recv(100) == b""  # closed by a
+            s.close()
+            a.wait_log(f"same-host link with a daemon not identified yet closed: {why}")
+        counters = json.loads(cli(a, "status", "--json"))["distributed"]["counters"]
+        assert counters["by_reason"]["malformed"] == 3
+        # b's own link is untouched: its frames still reach a's bus, step by step.
+        ecu_a = Peer(a)
+        ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
+        try:
+            ecu_b.send(can.Message(arbitration_id=0x321, is_extended_id=False, data=[1]))
+            step(b, 1_000_000)
+            assert [(i, d) for i, d, _ in ecu_a.frames()] == [(0x321, "01")]
+            assert via(a, "b") == "link"
+        finally:
+            ecu_a.close()
+            ecu_b.shutdown()

@@ -117,6 +117,7 @@ def test_status_json_shows_the_owner_up_and_the_remote_bus_attached(pair):
     assert peer["buses"] == ["can0", "can1"]
     assert peer["bus_total"] == 2
     assert peer["hosted_nodes"] == 0
+    assert peer["via"] == "link"  # both on this host: b's requests and a's events over its link
     assert 0 <= peer["last_heard_ms"] < 5000
     assert peer["protocol"] >= 1
     # ixxat0's controller sits on can0, but no program has initialized it: no node of b runs on
@@ -128,6 +129,7 @@ def test_status_json_shows_the_owner_up_and_the_remote_bus_attached(pair):
     da = json.loads(canemu(a, "status", "--json"))["distributed"]
     [pb] = da["peers"]
     assert (pb["name"], pb["state"], pb["buses"], pb["bus_total"]) == ("b", "up", ["local"], 1)
+    assert pb["via"] == "link"
     assert da["remote_buses"] == []
     assert da["counters"]["requests_received"] >= 1
     assert da["counters"]["requests_sent"] == 0
@@ -140,9 +142,10 @@ def test_status_tables_show_the_daemon_and_remote_bus(pair):
                      r"events sent \d+, received \d+; dropped 0, rejected 0, "
                      r"late \(> 1\.00 ms\) 0, max \d+\.\d+ (us|ms)$" % (DOMAIN, PARTITION),
                      text, re.M), text
-    assert re.search(r"^DAEMON\s+STATE\s+VERSION\s+TIME\s+HEARD\s+HOSTED\s+BUSES\s+REASON$", text,
+    assert re.search(r"^DAEMON\s+STATE\s+VIA\s+VERSION\s+TIME\s+HEARD\s+HOSTED\s+BUSES\s+REASON$",
+                     text, re.M), text
+    assert re.search(r"^a\s+up\s+link\s+\S+\s+realtime\s+\d+\.\d s\s+0\s+can0,can1\s*$", text,
                      re.M), text
-    assert re.search(r"^a\s+up\s+\S+\s+realtime\s+\d+\.\d s\s+0\s+can0,can1\s*$", text, re.M), text
     assert re.search(r"^REMOTE BUS\s+OWNER\s+STATE\s+NODES\s+REASON$", text, re.M), text
     assert re.search(r"^can0\s+a\s+attached\s+0\s*$", text, re.M), text
 

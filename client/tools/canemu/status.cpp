@@ -132,7 +132,8 @@ toml::table distributed_json(const client::PeerList& d) {
                                 {"last_heard_ms", p.last_heard_ms},
                                 {"buses", std::move(buses)},
                                 {"bus_total", i64(p.bus_total)},
-                                {"hosted_nodes", i64(p.hosted_nodes)}});
+                                {"hosted_nodes", i64(p.hosted_nodes)},
+                                {"via", p.linked != 0 ? "link" : "dds"}});
   }
   toml::array remote;
   for (const ipc::RemoteBusEntry& b : d.remote_buses) {
@@ -192,9 +193,9 @@ void print_distributed(const client::PeerList& d) {
   if (const std::string last = ipc::printable_name_of(c.last_reason); !last.empty()) {
     std::puts(fmt::format("last dropped or rejected: {}", last).c_str());
   }
-  const char* peer_row = "{:<14} {:<8} {:<12} {:<12} {:>10} {:>6} {:<24} {}";
-  print_row(fmt::format(fmt::runtime(peer_row), "DAEMON", "STATE", "VERSION", "TIME", "HEARD",
-                        "HOSTED", "BUSES", "REASON"));
+  const char* peer_row = "{:<14} {:<8} {:<5} {:<12} {:<12} {:>10} {:>6} {:<24} {}";
+  print_row(fmt::format(fmt::runtime(peer_row), "DAEMON", "STATE", "VIA", "VERSION", "TIME",
+                        "HEARD", "HOSTED", "BUSES", "REASON"));
   for (const ipc::PeerEntry& p : d.peers) {
     std::string buses;
     for (const std::string& b : peer_buses(p)) {
@@ -203,11 +204,12 @@ void print_distributed(const client::PeerList& d) {
     if (const std::size_t more = more_buses(p); more > 0) {
       buses += fmt::format(",+{}", more);
     }
-    print_row(fmt::format(
-        fmt::runtime(peer_row), ipc::printable_name_of(p.name), ipc::printable_name_of(p.state),
-        ipc::printable_name_of(p.version), ipc::printable_name_of(p.time),
-        fmt::format("{:.1f} s", static_cast<double>(p.last_heard_ms) / 1e3), p.hosted_nodes,
-        buses.empty() ? "-" : buses, ipc::printable_name_of(p.reason)));
+    print_row(fmt::format(fmt::runtime(peer_row), ipc::printable_name_of(p.name),
+                          ipc::printable_name_of(p.state), p.linked != 0 ? "link" : "dds",
+                          ipc::printable_name_of(p.version), ipc::printable_name_of(p.time),
+                          fmt::format("{:.1f} s", static_cast<double>(p.last_heard_ms) / 1e3),
+                          p.hosted_nodes, buses.empty() ? "-" : buses,
+                          ipc::printable_name_of(p.reason)));
   }
   if (d.remote_buses.empty()) {
     return;

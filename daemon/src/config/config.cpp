@@ -147,7 +147,8 @@ void read_distributed(Checker& c, const toml::table& root, Config& cfg) {
   }
   DistributedConfig& d = cfg.distributed;
   d.enabled = true;
-  c.only_keys(*t, "distributed", {"name", "domain", "partition", "heartbeat_ms", "timeout_ms"});
+  c.only_keys(*t, "distributed",
+              {"name", "domain", "partition", "heartbeat_ms", "timeout_ms", "local_link"});
   if (auto name = c.string(*t, "distributed", "name", false)) {
     if (!valid_name(*name)) {
       c.error(*t->get("name"), "distributed.name", kNameRule);
@@ -173,6 +174,13 @@ void read_distributed(Checker& c, const toml::table& root, Config& cfg) {
   }
   if (auto ms = c.integer(*t, "distributed", "timeout_ms", false, 30, 600'000)) {
     d.timeout_ms = static_cast<uint32_t>(*ms);
+  }
+  if (const toml::node* n = t->get("local_link")) {
+    if (n->is_boolean()) {
+      d.local_link = n->as_boolean()->get();
+    } else {
+      c.error(*n, "distributed.local_link", "must be true or false");
+    }
   }
   if (d.timeout_ms < 3 * d.heartbeat_ms) {
     c.error(*t, "distributed.timeout_ms",

@@ -34,7 +34,12 @@ Distributed::Impl::~Impl() {
   if (participant > 0) {
     dds_delete(participant);
   }
-  for (int fd : {wake, timer}) {
+  for (const auto& l : links) {
+    if (l->fd >= 0) {
+      ::close(l->fd);
+    }
+  }
+  for (int fd : {wake, timer, ep, link_listen}) {
     if (fd >= 0) {
       ::close(fd);
     }
@@ -52,6 +57,9 @@ Result<> Distributed::Impl::open() {
   its.it_interval.tv_nsec = static_cast<long>(cfg.heartbeat_ms % 1000) * 1'000'000;
   its.it_value.tv_nsec = 1'000'000;  // the first at once
   ::timerfd_settime(timer, 0, &its, nullptr);
+  if (auto opened = open_links(); !opened) {
+    return opened;
+  }
 
   // The domain as CYCLONEDDS_URI configures it, with one change: a writer being deleted waits at
   // most 50 ms (not Cyclone's 1 s) for readers to acknowledge what it wrote, so that a daemon
@@ -183,8 +191,16 @@ bool Distributed::Impl::send_request(const std::string& owner, canemu_net_Reques
   put(r.from, cfg.name);
   r.from_boot = boot;
   put(r.to, owner);
-  r.seq = ++req_seq;
+  r.seq = ++req_seq[owner];
   const int64_t start = legs.on() ? LinkLegs::mono() : 0;
+  if (LocalLink* l = link_to(owner)) {
+    link_request(*l, r);
+    if (legs.on()) {
+      legs.add(Leg::request_write, LinkLegs::mono() - start);
+    }
+    ++counters.requests_sent;
+    return true;
+  }
   const dds_return_t rc = dds_write(w_requests, &r);
   if (legs.on()) {
     legs.add(Leg::request_write, LinkLegs::mono() - start);
@@ -226,15 +242,7 @@ void Distributed::Impl::flush_events() {
 }
 
 void Distributed::Impl::write_events(Outgoing& o) {
-  canemu_net_Events b{};
-  put(b.from, cfg.name);
-  b.from_boot = boot;
-  put(b.to, o.to);
-  b.seq = ++ev_seq;
-  b.list._buffer = o.events.data();
-  b.list._length = static_cast<uint32_t>(o.events.size());
-  b.list._maximum = b.list._length;
-  b.list._release = false;
+  const uint64_t seq = ++ev_seq;
   int64_t start = 0;
   if (legs.on()) {
     start = LinkLegs::mono();
@@ -248,21 +256,44 @@ void Distributed::Impl::write_events(Outgoing& o) {
       }
     }
   }
-  const dds_return_t rc = dds_write(w_events, &b);
+  const std::size_t n = o.events.size();
+  // A user on this host gets its events over its link; what is for every follower goes over DDS
+  // and over every user's link (a user with a link reads none of its owner's samples).
+  LocalLink* only = o.to.empty() ? nullptr : link_from(o.to);
+  if (only != nullptr) {
+    link_events(*only, o.to, seq, o.events);
+  } else {
+    if (o.to.empty()) {
+      for (const auto& l : links) {
+        if (l->fd >= 0 && !l->to_owner && link_from(l->peer) == l.get()) {
+          link_events(*l, "", seq, o.events);
+        }
+      }
+    }
+    canemu_net_Events b{};
+    put(b.from, cfg.name);
+    b.from_boot = boot;
+    put(b.to, o.to);
+    b.seq = seq;
+    b.list._buffer = o.events.data();
+    b.list._length = static_cast<uint32_t>(n);
+    b.list._maximum = b.list._length;
+    b.list._release = false;
+    if (const dds_return_t rc = dds_write(w_events, &b); rc != DDS_RETCODE_OK) {
+      drop(NetDrop::not_written,
+           fmt::format("DDS did not take {} ({}) for daemon {}: {}",
+                       n == 1 ? std::string("an event") : fmt::format("{} events", n),
+                       event_name(o.events.front().kind),
+                       o.to.empty() ? std::string("every follower") : o.to, dds_strretcode(rc)),
+           n);
+      o.events.clear();
+      return;
+    }
+  }
   if (legs.on()) {
     legs.add(Leg::event_write, LinkLegs::mono() - start);
   }
-  const std::size_t n = o.events.size();
-  if (rc != DDS_RETCODE_OK) {
-    drop(NetDrop::not_written,
-         fmt::format("DDS did not take {} ({}) for daemon {}: {}",
-                     n == 1 ? std::string("an event") : fmt::format("{} events", n),
-                     event_name(o.events.front().kind),
-                     o.to.empty() ? std::string("every follower") : o.to, dds_strretcode(rc)),
-         n);
-  } else {
-    counters.events_sent += n;
-  }
+  counters.events_sent += n;
   o.events.clear();
 }
 
@@ -296,6 +327,7 @@ void Distributed::Impl::tick() {
     }
   }
   flush_events();
+  links_sweep();
 }
 
 void Distributed::Impl::receive() {
@@ -348,8 +380,19 @@ void Distributed::Impl::receive() {
     }
   }
   drain(r_daemons, -1, [&](void* s) { on_daemon(*static_cast<const canemu_net_Daemon*>(s)); });
-  drain(r_requests, 0, [&](void* s) { on_request(*static_cast<const canemu_net_Request*>(s)); });
-  drain(r_events, 1, [&](void* s) { on_events(*static_cast<const canemu_net_Events*>(s)); });
+  // A daemon with a same-host link to this one speaks over it alone: its samples are not read.
+  drain(r_requests, 0, [&](void* s) {
+    const auto& r = *static_cast<const canemu_net_Request*>(s);
+    if (link_from(get(r.from)) == nullptr) {
+      on_request(r);
+    }
+  });
+  drain(r_events, 1, [&](void* s) {
+    const auto& b = *static_cast<const canemu_net_Events*>(s);
+    if (link_to(get(b.from)) == nullptr) {
+      on_events(b);
+    }
+  });
   flush_events();  // the answers to what came
   if (more) {
     on_data(0, this);  // the rest on the loop's next turn
@@ -361,6 +404,7 @@ Distributed::Distributed(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Distributed::~Distributed() {
   impl_->flush_events();
   impl_->announce(true);
+  impl_->links_bye();
 }
 
 Result<std::unique_ptr<Distributed>> Distributed::open(Simulation& sim, const Config& config) {
@@ -408,11 +452,11 @@ void Distributed::name_node(HostedNode& node, const std::string& device) {
 }
 
 int Distributed::doorbell_fd() const {
-  return impl_->wake;
+  return impl_->ep;
 }
 
 void Distributed::kick() {
-  impl_->receive();
+  impl_->serve();
 }
 
 void Distributed::flush() {

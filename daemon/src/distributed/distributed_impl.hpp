@@ -8,6 +8,7 @@
 
 #ifdef CANEMU_HAVE_DDS
 
+#include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
@@ -16,6 +17,7 @@
 #include <cstring>
 #include <deque>
 #include <map>
+#include <memory>
 #include <random>
 #include <set>
 #include <string>
@@ -119,6 +121,20 @@ inline uint8_t wire_bus_kind(BusKind k) {
   return canemu_net_BUS_CAN;
 }
 
+// A same-host link (docs/distributed.md, "Daemons on one host"): a SOCK_SEQPACKET connection in
+// the abstract namespace from a daemon that uses another's buses (the user, which connects) to
+// that owner (which accepts), carrying what would go between the two over canemu/net/requests
+// and canemu/net/events, in the order written. distributed_link.cpp.
+struct LocalLink {
+  int fd = -1;              // -1 once closed (the link is dropped at the end of the turn)
+  bool to_owner = false;    // this daemon connected: the other one owns buses this one uses
+  bool identified = false;  // the owner's side: the user's hello came and was accepted
+  bool bye = false;         // the other daemon said it stops
+  std::string peer;         // the other daemon's name and boot
+  uint64_t peer_boot = 0;
+  std::deque<std::vector<char>> backlog;  // messages the socket did not take yet, in order
+};
+
 // A controller that never takes part in the traffic of the bus it sits on: it gives a node of a
 // remote bus a node id on the bus here (which carries nothing) and keeps the counters the owner
 // last reported.
@@ -156,7 +172,7 @@ struct Distributed::Impl {
   dds_entity_t participant = 0;
   dds_entity_t w_daemons = 0, w_requests = 0, w_events = 0;
   dds_entity_t r_daemons = 0, r_requests = 0, r_events = 0;
-  uint64_t req_seq = 0;
+  std::map<std::string, uint64_t> req_seq;  // per owner: the sequence of the last request
   uint64_t ev_seq = 0;
   DistributedCounters counters;
   RejectLog<kNetDropReasons> drops{"distributed", kNetDropNames};
@@ -399,6 +415,39 @@ struct Distributed::Impl {
   // Whether this daemon's time mode lets it use a bus of `p`, or why not.
   std::string time_problem(const Peer& p) const;
   SimTime local_time(const Peer& owner, int64_t owner_ns);
+
+  // ---- daemons on one host (distributed_link.cpp) ----
+  int ep = -1;           // the doorbell: `wake` (Cyclone's listeners) and the links' sockets
+  int link_listen = -1;  // this daemon's same-host address, where users connect (-1: none)
+  std::vector<std::unique_ptr<LocalLink>> links;
+  // Owners whose link failed, by the boot it failed with: that boot is spoken to over DDS.
+  std::map<std::string, uint64_t> link_failed;
+  Result<> open_links();
+  static std::string link_address(const std::string& name, uint64_t boot);
+  void serve();  // the loop's kick: what rang in `ep`
+  void link_accept();
+  void link_read(LocalLink& l);
+  void link_message(LocalLink& l, const char* data, std::size_t size);
+  bool link_hello(LocalLink& l, const char* data, std::size_t size);
+  // What send_request() and write_events() send over a link instead of DDS.
+  void link_request(LocalLink& l, const canemu_net_Request& r);
+  void link_events(LocalLink& l, const std::string& to, uint64_t seq,
+                   const std::vector<canemu_net_Event>& events);
+  // Queues a message (type, `to` and `seq` for events, `count` items of `item_size` at `items`).
+  void link_send(LocalLink& l, uint8_t type, const std::string& to, uint64_t seq, const void* items,
+                 uint32_t count, std::size_t item_size);
+  void link_flush(LocalLink& l);
+  // Closes `l` (`malformed`: for what came over it, counted as a malformed message); the other
+  // daemon, if it is the one heard, is let go.
+  void link_close(LocalLink& l, const std::string& why, bool malformed = false);
+  void links_bye();
+  void links_sweep();
+  void try_link(const Peer& owner);
+  // The link to `owner` (its boot as heard) or from user `user`, if one is up.
+  LocalLink* link_to(const std::string& owner);
+  LocalLink* link_from(const std::string& user);
+  // Whether a link with `name` (either way) is up, for status.
+  bool linked(const std::string& name) const;
 
   LinkLegs legs;  // off unless CANEMU_NET_LEGS is set
   bool realtime() const { return time.mode == TimeMode::realtime; }

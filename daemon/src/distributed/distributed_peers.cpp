@@ -108,6 +108,7 @@ void Distributed::Impl::hello(const Peer& p) {
   for (std::size_t i = 0; i < sim.bus_count(); ++i) {
     const BusConfig& b = sim.bus_config(i);
     if (sim.config().remote(b) && b.owner == p.name) {
+      try_link(p);  // an owner on this host: the hello and all after it over the link
       canemu_net_Request r{};
       r.kind = canemu_net_REQ_HELLO;
       send_request(p.name, r);

@@ -47,6 +47,7 @@ std::vector<PeerStatus> Distributed::peers() const {
     for (const auto& [key, h] : impl_->hosted) {
       s.hosted_nodes += key.first == name ? 1 : 0;
     }
+    s.linked = impl_->linked(name);
     out.push_back(std::move(s));
   }
   return out;

@@ -22,7 +22,7 @@ bool same(const BusConfig& a, const BusConfig& b) {
 bool same(const DistributedConfig& a, const DistributedConfig& b) {
   return a.enabled == b.enabled && a.name == b.name && a.domain == b.domain &&
          a.partition == b.partition && a.heartbeat_ms == b.heartbeat_ms &&
-         a.timeout_ms == b.timeout_ms;
+         a.timeout_ms == b.timeout_ms && a.local_link == b.local_link;
 }
 
 bool same(const DeviceConfig& a, const DeviceConfig& b) {

@@ -405,6 +405,7 @@ void fill_peer_list(const Simulation& sim, ipc::PeerListReply& r, std::size_t fi
     }
     e.last_heard_ms = p.last_heard_ms;
     e.hosted_nodes = p.hosted_nodes;
+    e.linked = p.linked ? 1 : 0;
   }
 
   const std::vector<RemoteBusStatus> buses = d->remote_buses();

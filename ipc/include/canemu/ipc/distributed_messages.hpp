@@ -39,10 +39,10 @@ struct PeerEntry {
   char reason[kReasonSize] = {};  // refused or gone: why
   uint16_t protocol = 0;          // of the DDS messages between daemons
   uint8_t bus_count = 0;          // names in `buses`, at most kPeerBuses
-  uint8_t reserved = 0;
-  uint32_t bus_total = 0;     // buses it simulates (more than bus_count: the first kPeerBuses)
-  int64_t last_heard_ms = 0;  // milliseconds since its last heartbeat
-  uint32_t hosted_nodes = 0;  // its nodes on this daemon's buses
+  uint8_t linked = 0;             // 1: a same-host link with it is up (0: DDS)
+  uint32_t bus_total = 0;         // buses it simulates (more than bus_count: the first kPeerBuses)
+  int64_t last_heard_ms = 0;      // milliseconds since its last heartbeat
+  uint32_t hosted_nodes = 0;      // its nodes on this daemon's buses
   uint32_t reserved2 = 0;
   char buses[kPeerBuses][kNameSize] = {};
 };

@@ -157,6 +157,9 @@ struct DistributedConfig {
   std::string partition = "canemu";
   uint32_t heartbeat_ms = 200;  // how often it tells the others it is there
   uint32_t timeout_ms = 2000;   // another daemon not heard from this long is gone
+  // Daemons on one host talk over a Unix socket of their own instead of DDS (docs/distributed.md,
+  // "Daemons on one host").
+  bool local_link = true;
 };
 
 struct Config {

@@ -7,9 +7,12 @@
 //   - as a user of a remote bus ([[bus]] owner = "..."), gives its local clients nodes on it
 //     (model::HostedNode, so ephemeral channels, python-can and VCI adapters work unchanged),
 //     whose controller runs on the owner.
-// Everything rides on Cyclone DDS (ddstypes/canemu_net.idl); nothing here is a network protocol
-// of its own. One object per daemon, a Doorbell of the server's loop: Cyclone's listeners ring
-// its eventfd, and the loop's kick() applies what came; a timerfd paces the heartbeats.
+// Between hosts everything rides on Cyclone DDS (canemu_net.idl); nothing here is a network
+// protocol of its own. Two daemons on one host speak over a Unix socket instead once the DDS
+// announcements have told them of each other (distributed_link.cpp). One object per daemon, a
+// Doorbell of the server's loop: its epoll set holds the eventfd Cyclone's listeners ring and the
+// same-host links' sockets, and the loop's kick() applies what came; a timerfd paces the
+// heartbeats.
 #pragma once
 
 #include <array>

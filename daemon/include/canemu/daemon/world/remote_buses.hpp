@@ -36,6 +36,7 @@ struct PeerStatus {
   int64_t last_heard_ms = 0;       // milliseconds since its last heartbeat
   std::vector<std::string> buses;  // the buses it simulates
   uint32_t hosted_nodes = 0;       // its nodes on this daemon's buses
+  bool linked = false;  // a same-host link with it is up: what goes between the two uses it
 };
 
 // A bus of this daemon that another daemon simulates.

@@ -1,5 +1,6 @@
 """A python-can program of its own on one daemon, for tests with several daemons (one process
-talks to one canemud): opens can0 on the socket given, then obeys lines on standard input:
+talks to one canemud): opens can0 (or the bus named after the socket) on the socket given, then
+obeys lines on standard input:
 "send ID HEXDATA" queues a frame, "burst N ID" queues N frames of that ID whose two data bytes
 count 0 to N - 1, "recv" prints the frames received so far as a JSON list of [id, hexdata,
 timestamp_ns], "errors" the error frames received so far (kept aside by "recv") as the same
@@ -11,7 +12,8 @@ import sys
 
 import can
 
-bus = can.Bus(interface="canemu", channel="can0", socket=sys.argv[1])
+bus = can.Bus(interface="canemu", channel=sys.argv[2] if len(sys.argv) > 2 else "can0",
+              socket=sys.argv[1])
 print("ready", flush=True)
 error_frames = []
 

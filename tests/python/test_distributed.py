@@ -68,11 +68,12 @@ class Peer:
     """tests/python/distributed_peer.py on `daemon`: a python-can program in a process of its
     own (a process talks to one canemud)."""
 
-    def __init__(self, daemon: Daemon) -> None:
+    def __init__(self, daemon: Daemon, channel: str = "can0") -> None:
         import sys
         from pathlib import Path
         self.proc = subprocess.Popen(
-            [sys.executable, str(Path(__file__).with_name("distributed_peer.py")), daemon.socket],
+            [sys.executable, str(Path(__file__).with_name("distributed_peer.py")), daemon.socket,
+             channel],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         assert self.proc.stdout.readline().strip() == "ready"
 
@@ -232,6 +233,44 @@ def test_a_follower_bus_closing_normally_drops_nothing(env):
         for daemon in (a, b):
             counters = json.loads(cli(daemon, "status", "--json"))["distributed"]["counters"]
             assert (counters["dropped"], counters["last_reason"]) == (0, ""), daemon.log
+
+
+def test_a_daemon_using_two_owners_numbers_its_requests_to_each(env):
+    # b uses a's can0 and c's can1 in real time, its requests to the two interleaved: each owner
+    # sees its own numbers 1, 2, 3, ... from b, so neither counts a request lost on the way
+    # (with one sequence for both, each would see the other's numbers as gaps).
+    canemud = str(BUILD / "bin" / "canemud")
+    partition = f"canemu-test-{os.getpid()}"
+    link = "true" if env == "link" else "false"
+
+    def daemon(name: str, buses: str) -> str:
+        return (f'[simulation]\ntime = "realtime"\n\n[distributed]\nname = "{name}"\n'
+                f'domain = {DOMAIN}\npartition = "{partition}"\nheartbeat_ms = 50\n'
+                f"timeout_ms = 1000\nlocal_link = {link}\n\n{buses}")
+
+    bus = '[[bus]]\nname = "{}"\nbitrate = 500000\n{}\n'
+    with Daemon(daemon("a", bus.format("can0", "")), canemud=canemud) as a, \
+            Daemon(daemon("c", bus.format("can1", "")), canemud=canemud) as c, \
+            Daemon(daemon("b", bus.format("can0", 'owner = "a"') + bus.format("can1", 'owner = "c"')),
+                   canemud=canemud) as b:
+        b.wait_log("daemon a answers")
+        b.wait_log("daemon c answers")
+        ecus = [Peer(a), Peer(c, "can1")]  # they acknowledge
+        try:
+            # Each `canemu send` opens a node on its bus, sends, waits for the frame and closes
+            # the node: requests to a and c alternate.
+            for k in range(3):
+                cli(b, "send", "can0", f"1{k:02X}#{k:02X}")
+                cli(b, "send", "can1", f"2{k:02X}#{k:02X}")
+            assert [(i, d) for i, d, _ in ecus[0].frames()] == [(0x100 + k, f"{k:02x}")
+                                                               for k in range(3)]
+        finally:
+            for e in ecus:
+                e.close()
+        for owner in (a, c):
+            counters = json.loads(cli(owner, "status", "--json"))["distributed"]["counters"]
+            assert counters["requests_received"] >= 1 + 3 * 3, owner.log  # hello; open, frame, close
+            assert counters["by_reason"]["lost"] == 0, owner.log
 
 
 def test_late_counts_events_beyond_its_bound_only(env):

@@ -419,9 +419,14 @@ def test_a_same_host_link_speaking_nonsense_is_closed_counted_and_nothing_else_c
     with owner_and_follower("stepped") as (a, b):
         attached_step(b)
         address = same_host_address("a")
-        head = bytes([2, 0, 0, 0]) + (1).to_bytes(4, "little") + bytes(8 + 32 + 8)
+        # A message's head: type, 3 bytes, count, the time written, `to` and a sequence number
+        # (56 bytes); a hello (type 1) is 104 bytes after it, beginning with its magic.
+        def head(kind: int) -> bytes:
+            return bytes([kind, 0, 0, 0]) + (1).to_bytes(4, "little") + bytes(8 + 32 + 8)
+
         for junk, why in [(b"abc", "a message of 3 bytes"),
-                          (head, "no hello first"),
+                          (head(2), "no hello first"),
+                          (head(1) + b"notcanem" + bytes(96), "no canemu daemon's hello"),
                           (bytes(70000), "a message of 70000 bytes, more than any")]:
             s = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
             s.settimeout(TIMEOUT)
@@ -431,7 +436,7 @@ def test_a_same_host_link_speaking_nonsense_is_closed_counted_and_nothing_else_c
             s.close()
             a.wait_log(f"same-host link with a daemon not identified yet closed: {why}")
         counters = json.loads(cli(a, "status", "--json"))["distributed"]["counters"]
-        assert counters["by_reason"]["malformed"] == 3
+        assert counters["by_reason"]["malformed"] == 4
         # b's own link is untouched: its frames still reach a's bus, step by step.
         ecu_a = Peer(a)
         ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
@@ -443,3 +448,26 @@ def test_a_same_host_link_speaking_nonsense_is_closed_counted_and_nothing_else_c
         finally:
             ecu_a.close()
             ecu_b.shutdown()
+
+
+def test_a_follower_whose_owner_has_no_same_host_link_speaks_dds(link_env):
+    # The owner's local_link is off: the follower finds no address to connect to and says its
+    # hello over DDS, and everything goes on as between hosts.
+    canemud = str(BUILD / "bin" / "canemud")
+    owner = support_config("a", "stepped", None, domain=DOMAIN,
+                           partition=f"canemu-test-{os.getpid()}", local_link=False)
+    with Daemon(owner, canemud=canemud) as a, \
+            Daemon(config("b", "stepped", owner="a"), canemud=canemud) as b:
+        attached_step(b)
+        ecu_a = Peer(a)
+        ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
+        try:
+            ecu_b.send(can.Message(arbitration_id=0x42, is_extended_id=False, data=[4, 2]))
+            step(b, 1_000_000)
+            assert [(i, d) for i, d, _ in ecu_a.frames()] == [(0x42, "0402")]
+        finally:
+            ecu_a.close()
+            ecu_b.shutdown()
+        assert via(b, "a") == "dds"
+        wait_until(lambda: via(a, "b") == "dds", "a's status lists b")
+        assert "same-host link" not in b.log

@@ -146,6 +146,10 @@ def test_a_followers_status_counts_the_frames_of_its_nodes(hosts):
     assert remote_nodes(a) == {f"b/{pb.name}": (1, 1)}
     mine = nodes(b)[pb.name]
     assert (mine["frames_sent"], mine["frames_received"]) == (1, 1)
+    # Each host is a network namespace of its own, where the owner's same-host address (in the
+    # abstract namespace) cannot be reached: b speaks to a over DDS, local_link on as it is.
+    peers = json.loads(cli(b, "status", "--json"))["distributed"]["peers"]
+    assert [p["via"] for p in peers if p["name"] == "a"] == ["dds"]
 
 
 def test_a_fault_scenario_on_the_owner_hits_a_remote_node(hosts):

@@ -130,6 +130,8 @@ struct LocalLink {
   bool to_owner = false;    // this daemon connected: the other one owns buses this one uses
   bool identified = false;  // the owner's side: the user's hello came and was accepted
   bool bye = false;         // the other daemon said it stops
+  bool heard = false;       // something came over it
+  bool waits_out = false;   // its socket is watched for room (the backlog is not empty)
   std::string peer;         // the other daemon's name and boot
   uint64_t peer_boot = 0;
   std::deque<std::vector<char>> backlog;  // messages the socket did not take yet, in order

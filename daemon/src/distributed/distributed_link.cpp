@@ -321,7 +321,9 @@ void Distributed::Impl::link_flush(LocalLink& l) {
     const ssize_t n = ::send(l.fd, m.data(), m.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
       // Written when the socket has room again (EPOLLOUT).
-      epoll_watch(ep, EPOLL_CTL_MOD, l.fd, EPOLLIN | EPOLLOUT, &l);
+      if (!l.waits_out) {
+        l.waits_out = epoll_watch(ep, EPOLL_CTL_MOD, l.fd, EPOLLIN | EPOLLOUT, &l);
+      }
       return;
     }
     if (n < 0) {
@@ -330,8 +332,8 @@ void Distributed::Impl::link_flush(LocalLink& l) {
     }
     l.backlog.pop_front();
   }
-  if (l.fd >= 0) {
-    epoll_watch(ep, EPOLL_CTL_MOD, l.fd, EPOLLIN, &l);
+  if (l.fd >= 0 && l.waits_out) {
+    l.waits_out = !epoll_watch(ep, EPOLL_CTL_MOD, l.fd, EPOLLIN, &l);
   }
 }
 
@@ -408,6 +410,7 @@ void Distributed::Impl::link_message(LocalLink& l, const char* data, std::size_t
   std::memcpy(&h, data, sizeof h);
   data += sizeof h;
   size -= sizeof h;
+  l.heard = true;
   if (!l.identified) {
     if (h.type == kHello && h.count == 1) {
       link_hello(l, data, size);
@@ -481,6 +484,14 @@ void Distributed::Impl::link_close(LocalLink& l, const std::string& why, bool ma
   }
   auto p = peers.find(l.peer);
   const bool current = l.identified && p != peers.end() && p->second.boot == l.peer_boot;
+  if (l.to_owner && !l.heard && !l.bye && !malformed) {
+    // The owner closed it before answering anything: it refused the hello (its log says why).
+    log::warning(
+        "distributed: daemon {} closed the same-host link before answering ({}); it is "
+        "spoken to over DDS",
+        who, why);
+    return;
+  }
   if (l.bye) {
     // It said it stops; its DDS announcement says so too, whichever comes first.
     if (current && !p->second.gone) {

@@ -424,19 +424,44 @@ def test_a_same_host_link_speaking_nonsense_is_closed_counted_and_nothing_else_c
         def head(kind: int) -> bytes:
             return bytes([kind, 0, 0, 0]) + (1).to_bytes(4, "little") + bytes(8 + 32 + 8)
 
-        for junk, why in [(b"abc", "a message of 3 bytes"),
-                          (head(2), "no hello first"),
-                          (head(1) + b"notcanem" + bytes(96), "no canemu daemon's hello"),
-                          (bytes(70000), "a message of 70000 bytes, more than any")]:
+        def connect() -> socket.socket:
             s = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
             s.settimeout(TIMEOUT)
             s.connect(address)
+            return s
+
+        def counters() -> dict:
+            return json.loads(cli(a, "status", "--json"))["distributed"]["counters"]
+
+        for k, (junk, why) in enumerate([
+                (b"abc", "a message of 3 bytes"),
+                (head(2), "no hello first"),
+                (head(1) + b"notcanem" + bytes(96), "no canemu daemon's hello"),
+                (bytes(70000), "a message of 70000 bytes, more than any")], start=1):
+            s = connect()
             s.send(junk)
             assert s.recv(100) == b""  # closed by a
             s.close()
-            a.wait_log(f"same-host link with a daemon not identified yet closed: {why}")
-        counters = json.loads(cli(a, "status", "--json"))["distributed"]["counters"]
-        assert counters["by_reason"]["malformed"] == 4
+            c = counters()
+            assert c["by_reason"]["malformed"] == k
+            assert c["last_reason"] == ("same-host link with a daemon not identified yet closed: "
+                                        + why)
+        # Connections that say nothing: 16 may wait for their hello at once, a 17th is refused at
+        # once, and each of the 16 is closed once timeout_ms (1 s) has passed without one.
+        silent = [connect() for _ in range(16)]
+        extra = connect()
+        assert extra.recv(100) == b""
+        extra.close()
+        c = counters()
+        assert c["by_reason"]["not_accepted"] == 1
+        assert c["last_reason"] == ("refused a same-host link: 16 connections have not said hello "
+                                    "yet")
+        for s in silent:
+            assert s.recv(100) == b""
+            s.close()
+        wait_until(lambda: counters()["by_reason"]["malformed"] == 4 + 16, "16 links timed out")
+        assert counters()["last_reason"] == ("same-host link with a daemon not identified yet "
+                                             "closed: no hello within 1000 ms")
         # b's own link is untouched: its frames still reach a's bus, step by step.
         ecu_a = Peer(a)
         ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)

@@ -257,19 +257,24 @@ void Distributed::Impl::write_events(Outgoing& o) {
     }
   }
   const std::size_t n = o.events.size();
-  // A user on this host gets its events over its link; what is for every follower goes over DDS
-  // and over every user's link (a user with a link reads none of its owner's samples).
+  // A user on this host gets its events over its link; what is for every follower goes over
+  // every user's link, and over DDS unless every follower has one (a user with a link reads none
+  // of its owner's samples).
   LocalLink* only = o.to.empty() ? nullptr : link_from(o.to);
+  bool dds = only == nullptr;
   if (only != nullptr) {
     link_events(*only, o.to, seq, o.events);
-  } else {
-    if (o.to.empty()) {
-      for (const auto& l : links) {
-        if (l->fd >= 0 && !l->to_owner && link_from(l->peer) == l.get()) {
-          link_events(*l, "", seq, o.events);
-        }
+  } else if (o.to.empty()) {
+    for (const auto& l : links) {
+      if (l->fd >= 0 && !l->to_owner && link_from(l->peer) == l.get()) {
+        link_events(*l, "", seq, o.events);
       }
     }
+    dds = std::any_of(peers.begin(), peers.end(), [&](const auto& p) {
+      return p.second.follower && !p.second.gone && link_from(p.first) == nullptr;
+    });
+  }
+  if (dds) {
     canemu_net_Events b{};
     put(b.from, cfg.name);
     b.from_boot = boot;
@@ -402,6 +407,7 @@ void Distributed::Impl::receive() {
 Distributed::Distributed(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Distributed::~Distributed() {
+  impl_->stopping = true;  // a link failing from here on lets nobody go (the loop is gone)
   impl_->flush_events();
   impl_->announce(true);
   impl_->links_bye();
@@ -461,6 +467,7 @@ void Distributed::kick() {
 
 void Distributed::flush() {
   impl_->flush_events();
+  impl_->links_sweep();  // a link that closed as it was written to: its daemon is let go now
 }
 
 Doorbell& Distributed::heartbeat() {

@@ -132,6 +132,9 @@ struct LocalLink {
   bool bye = false;         // the other daemon said it stops
   bool heard = false;       // something came over it
   bool waits_out = false;   // its socket is watched for room (the backlog is not empty)
+  std::string gone_why;     // closed: why the other daemon is let go (links_sweep), or ""
+  int64_t opened_ms = 0;    // the owner's side: when it was accepted (a hello is due within
+                            // timeout_ms)
   std::string peer;         // the other daemon's name and boot
   uint64_t peer_boot = 0;
   std::deque<std::vector<char>> backlog;  // messages the socket did not take yet, in order
@@ -422,8 +425,10 @@ struct Distributed::Impl {
   int ep = -1;           // the doorbell: `wake` (Cyclone's listeners) and the links' sockets
   int link_listen = -1;  // this daemon's same-host address, where users connect (-1: none)
   std::vector<std::unique_ptr<LocalLink>> links;
-  // Owners whose link failed, by the boot it failed with: that boot is spoken to over DDS.
-  std::map<std::string, uint64_t> link_failed;
+  // Owners whose link failed, with the boot it failed with: that boot is spoken to over DDS.
+  std::set<std::pair<std::string, uint64_t>> link_failed;
+  bool stopping = false;       // links_bye(): nobody is let go any more
+  bool listen_paused = false;  // out of descriptors: no connections taken until the next sweep
   Result<> open_links();
   static std::string link_address(const std::string& name, uint64_t boot);
   void serve();  // the loop's kick: what rang in `ep`
@@ -443,6 +448,8 @@ struct Distributed::Impl {
   // daemon, if it is the one heard, is let go.
   void link_close(LocalLink& l, const std::string& why, bool malformed = false);
   void links_bye();
+  // Lets go the daemons of the links closed since the last call, drops those links, and times
+  // out connections that did not say hello: at the loop's level only (kick, heartbeat, flush).
   void links_sweep();
   void try_link(const Peer& owner);
   // The link to `owner` (its boot as heard) or from user `user`, if one is up.

@@ -50,6 +50,7 @@ struct Head {
 
 constexpr std::size_t kMaxMessage = sizeof(Head) + kEventsPerSample * sizeof(canemu_net_Event);
 constexpr std::size_t kBacklog = kWriterDepth;  // messages a link holds for a reader behind
+constexpr std::ptrdiff_t kUnidentified = 16;    // connections at once that have not said hello
 
 // What came from another process is made safe to read: texts end within their arrays, and every
 // bool is 0 or 1.
@@ -179,16 +180,29 @@ void Distributed::Impl::link_accept() {
   for (int k = 0; k < 16; ++k) {
     const int fd = ::accept4(link_listen, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) {
-      return;  // EAGAIN: no more (anything else: the next try)
+      if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+        // The connection stays queued: not looked at again before the next sweep, so that the
+        // loop does not spin on it.
+        log::warning("distributed: a same-host connection not taken: {}", std::strerror(errno));
+        listen_paused = ::epoll_ctl(ep, EPOLL_CTL_DEL, link_listen, nullptr) == 0;
+      }
+      return;  // EAGAIN: no more
     }
     std::string why;
-    if (!same_user(fd, why)) {
+    const auto unidentified = std::count_if(links.begin(), links.end(), [](const auto& l) {
+      return l->fd >= 0 && !l->to_owner && !l->identified;
+    });
+    if (unidentified >= kUnidentified) {
+      why = fmt::format("{} connections have not said hello yet", unidentified);
+    }
+    if (!why.empty() || !same_user(fd, why)) {
       drop(NetDrop::not_accepted, fmt::format("refused a same-host link: {}", why));
       ::close(fd);
       continue;
     }
     auto l = std::make_unique<LocalLink>();
     l->fd = fd;
+    l->opened_ms = monotonic_ms();
     if (!epoll_watch(ep, EPOLL_CTL_ADD, fd, EPOLLIN, l.get())) {
       ::close(fd);
       continue;
@@ -201,7 +215,7 @@ void Distributed::Impl::try_link(const Peer& owner) {
   if (!cfg.local_link || owner.boot == 0 || link_to(owner.name) != nullptr) {
     return;
   }
-  if (auto it = link_failed.find(owner.name); it != link_failed.end() && it->second == owner.boot) {
+  if (link_failed.count({owner.name, owner.boot}) != 0) {
     return;
   }
   const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
@@ -211,7 +225,7 @@ void Distributed::Impl::try_link(const Peer& owner) {
     // Another host (or network namespace), an owner without the link: DDS, and no second try
     // with this boot. EAGAIN (its queue of connections full) is tried again at the next hello.
     if (errno != EAGAIN) {
-      link_failed[owner.name] = owner.boot;
+      link_failed.insert({owner.name, owner.boot});
     }
     if (fd >= 0) {
       ::close(fd);
@@ -221,7 +235,7 @@ void Distributed::Impl::try_link(const Peer& owner) {
   std::string why;
   if (!same_user(fd, why)) {
     log::warning("distributed: daemon {}'s same-host address: {}; DDS it is", owner.name, why);
-    link_failed[owner.name] = owner.boot;
+    link_failed.insert({owner.name, owner.boot});
     ::close(fd);
     return;
   }
@@ -275,7 +289,8 @@ bool Distributed::Impl::linked(const std::string& name) const {
   auto p = peers.find(name);
   return p != peers.end() && !p->second.gone &&
          std::any_of(links.begin(), links.end(), [&](const auto& l) {
-           return l->fd >= 0 && l->identified && l->peer == name && l->peer_boot == p->second.boot;
+           return l->fd >= 0 && (l->to_owner ? l->heard : l->identified) && l->peer == name &&
+                  l->peer_boot == p->second.boot;
          });
 }
 
@@ -327,7 +342,9 @@ void Distributed::Impl::link_flush(LocalLink& l) {
       return;
     }
     if (n < 0) {
-      link_close(l, fmt::format("writing to it: {}", std::strerror(errno)));
+      link_close(l, errno == EPIPE || errno == ECONNRESET
+                        ? std::string("it closed without a bye: the daemon ended")
+                        : fmt::format("writing to it: {}", std::strerror(errno)));
       return;
     }
     l.backlog.pop_front();
@@ -343,7 +360,10 @@ void Distributed::Impl::link_read(LocalLink& l) {
     const ssize_t n = ::recv(l.fd, buf.data(), buf.size(), MSG_DONTWAIT | MSG_TRUNC);
     if (n < 0) {
       if (errno != EAGAIN && errno != EWOULDBLOCK) {
-        link_close(l, fmt::format("reading from it: {}", std::strerror(errno)));
+        // A daemon that ends with messages of ours unread leaves ECONNRESET, not an end of file.
+        link_close(l, errno == ECONNRESET
+                          ? std::string("it closed without a bye: the daemon ended")
+                          : fmt::format("reading from it: {}", std::strerror(errno)));
       }
       return;
     }
@@ -480,10 +500,8 @@ void Distributed::Impl::link_close(LocalLink& l, const std::string& why, bool ma
   l.backlog.clear();
   const std::string who = l.peer.empty() ? std::string("a daemon not identified yet") : l.peer;
   if (l.to_owner) {
-    link_failed[l.peer] = l.peer_boot;  // this boot of the owner over DDS from now on
+    link_failed.insert({l.peer, l.peer_boot});  // this boot of the owner over DDS from now on
   }
-  auto p = peers.find(l.peer);
-  const bool current = l.identified && p != peers.end() && p->second.boot == l.peer_boot;
   if (l.to_owner && !l.heard && !l.bye && !malformed) {
     // The owner closed it before answering anything: it refused the hello (its log says why).
     log::warning(
@@ -493,10 +511,7 @@ void Distributed::Impl::link_close(LocalLink& l, const std::string& why, bool ma
     return;
   }
   if (l.bye) {
-    // It said it stops; its DDS announcement says so too, whichever comes first.
-    if (current && !p->second.gone) {
-      peer_gone(p->second, "it stopped");
-    }
+    l.gone_why = "it stopped";  // as its DDS announcement says, whichever comes first
     return;
   }
   if (malformed) {
@@ -506,12 +521,11 @@ void Distributed::Impl::link_close(LocalLink& l, const std::string& why, bool ma
   }
   // Whatever went over the link may be lost with it: the other daemon is let go as one not
   // heard from (its nodes leave, and come back with its next hello or announcement).
-  if (current && !p->second.gone) {
-    peer_gone(p->second, fmt::format("its same-host link closed ({})", why));
-  }
+  l.gone_why = fmt::format("its same-host link closed ({})", why);
 }
 
 void Distributed::Impl::links_bye() {
+  stopping = true;
   for (const auto& l : links) {
     if (l->fd >= 0 && l->identified) {
       link_send(*l, kBye, "", 0, nullptr, 0, 0);
@@ -520,7 +534,33 @@ void Distributed::Impl::links_bye() {
 }
 
 void Distributed::Impl::links_sweep() {
-  std::erase_if(links, [](const std::unique_ptr<LocalLink>& l) { return l->fd < 0; });
+  // The other daemons of links closed since the last sweep are let go here, in the loop's own
+  // turn: a link may close in the middle of a node's callback (a write that failed), where its
+  // nodes must not go.
+  for (std::size_t i = 0; i < links.size();) {
+    LocalLink& l = *links[i];
+    if (l.fd >= 0) {
+      ++i;
+      continue;
+    }
+    if (!stopping && l.identified && !l.gone_why.empty()) {
+      auto p = peers.find(l.peer);
+      if (p != peers.end() && p->second.boot == l.peer_boot && !p->second.gone) {
+        peer_gone(p->second, l.gone_why);
+      }
+    }
+    links.erase(links.begin() + static_cast<std::ptrdiff_t>(i));
+  }
+  const int64_t now = monotonic_ms();
+  for (const auto& l : links) {
+    if (l->fd >= 0 && !l->to_owner && !l->identified &&
+        now - l->opened_ms > static_cast<int64_t>(cfg.timeout_ms)) {
+      link_close(*l, fmt::format("no hello within {} ms", cfg.timeout_ms), true);
+    }
+  }
+  if (link_listen >= 0 && listen_paused) {
+    listen_paused = !epoll_watch(ep, EPOLL_CTL_ADD, link_listen, EPOLLIN, &kListenTag);
+  }
 }
 
 }  // namespace canemu::daemon

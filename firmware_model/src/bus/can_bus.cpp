@@ -38,8 +38,8 @@ NodeId CanBus::attach(CanController& controller) {
   n.last_state = n.fc->state();
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
-  in_flight_.fit(node_count_);
   completion_.losses.fit(node_count_);
+  completion_.sent.fit(node_count_);
   // nodes_ may have moved: the receivers of a frame on the wire point into it anew, in place (a
   // controller may attach from a callback while the frame's end walks the list, so its room
   // grows only where the list is filled: plain_roles(), general_roles()).
@@ -258,12 +258,15 @@ void CanBus::attempt(SimTime now) {
     }
     return;
   }
-  // Holds that are over are forgotten; one that began while the bus was busy starts now.
-  std::erase_if(holds_, [&](const auto& h) { return h.first + h.second <= now; });
-  for (const auto& [from, duration] : holds_) {
-    if (from <= now && now < from + duration) {
-      run_hold(now);
-      return;
+  // Holds that are over are forgotten; one that began while the bus was busy starts now. (Most
+  // buses never have one: the empty list is not walked.)
+  if (!holds_.empty()) {
+    std::erase_if(holds_, [&](const auto& h) { return h.first + h.second <= now; });
+    for (const auto& [from, duration] : holds_) {
+      if (from <= now && now < from + duration) {
+        run_hold(now);
+        return;
+      }
     }
   }
   if (injector_ != nullptr) {
@@ -308,10 +311,7 @@ void CanBus::run_frame(SimTime sof) {
   }
   const std::vector<NodeId>& active = arbitration_.senders();
   const NodeId tx = active.front();
-  in_flight_.clear();
-  for (const NodeId id : active) {
-    in_flight_.push_back(id);
-  }
+  in_flight_ = active;  // the arbitration's list stays as it is until the bus is free again
   const TxFrame& tx_frame = *pending(nodes_[tx]);
   const EncodedFrame& e = encoded_tx(tx);
   const Node& tx_node = refresh_timing(tx);
@@ -503,7 +503,7 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
   frames_on_bus_++;
   bus_load_.record(sof, c.ifs_end);
   if (on_bus_event) {
-    on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.sent.front()->frame, 0});
+    on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.sent[0]->frame, 0});
   }
   scheduler_.schedule_at(c.eof_end, *this, kFrameEnd);
 }
@@ -512,7 +512,7 @@ void CanBus::complete_success(SimTime eof_end) {
   Completion& c = completion_;
   report_losses();
   // Receivers first: the frame they get is the transmitter's, which it may drop once told.
-  const Frame& frame = c.sent.front()->frame;
+  const Frame& frame = c.sent[0]->frame;
   for (const Receiver& r : receivers_) {
     Node& n = *r.node;
     if (r.acks && n.fc->rec() > 0) {
@@ -546,7 +546,7 @@ void CanBus::complete_success(SimTime eof_end) {
 
 void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
   busy_ = false;
-  in_flight_.clear();
+  in_flight_ = {};
   free_at_ = idle_at;
   last_dominant_end_ = last_dominant_end;
   if (maybe_recovering_) {

@@ -27,7 +27,7 @@ void CanBus::hold_dominant(SimTime from, SimDuration duration) {
 
 void CanBus::run_hold(SimTime now) {
   busy_ = true;
-  in_flight_.clear();
+  in_flight_ = {};
   account_recessive(now);
   std::vector<BusParticipant> parts;
   BitTiming nominal;

@@ -248,7 +248,7 @@ class CanBus final : private EventHandler {
     int32_t ppm = 0;
     // The transmitters' frames (in_flight_ order): their pending_tx(), valid until they are told
     // the frame is done.
-    std::vector<const TxFrame*> sent;
+    NodeList<const TxFrame*> sent;
     // Arbitration losses of this frame: node, bit, end of that bit. Reported at the end of the
     // frame (or of its error frame), each with its own instant.
     struct Loss {
@@ -420,9 +420,11 @@ class CanBus final : private EventHandler {
   // Set whenever a node may have begun bus-off recovery; cleared when a look finds none, so the
   // per-frame recovery bookkeeping costs nothing on a healthy bus.
   bool maybe_recovering_ = false;
-  NodeList<NodeId> in_flight_;  // transmitters of the current activity
-  SimTime free_at_;             // end of intermission of the last activity
-  SimTime last_dominant_end_;   // recessive run on the wire started here
+  // Transmitters of the current activity: arbitration_.senders(), which no arbitration changes
+  // before the bus is free again (empty for a dominant hold).
+  std::span<const NodeId> in_flight_;
+  SimTime free_at_;            // end of intermission of the last activity
+  SimTime last_dominant_end_;  // recessive run on the wire started here
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   SimTime attempt_at_;

@@ -444,6 +444,7 @@ struct Distributed::Impl {
   void link_send(LocalLink& l, uint8_t type, const std::string& to, uint64_t seq, const void* items,
                  uint32_t count, std::size_t item_size);
   void link_flush(LocalLink& l);
+  void link_write_failed(LocalLink& l);  // closes `l` with what errno says
   // Closes `l` (`malformed`: for what came over it, counted as a malformed message); the other
   // daemon, if it is the one heard, is let go.
   void link_close(LocalLink& l, const std::string& why, bool malformed = false);

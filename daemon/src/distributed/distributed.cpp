@@ -333,6 +333,7 @@ void Distributed::Impl::tick() {
   }
   flush_events();
   links_sweep();
+  links_resume();
 }
 
 void Distributed::Impl::receive() {

@@ -428,7 +428,7 @@ struct Distributed::Impl {
   // Owners whose link failed, with the boot it failed with: that boot is spoken to over DDS.
   std::set<std::pair<std::string, uint64_t>> link_failed;
   bool stopping = false;       // links_bye(): nobody is let go any more
-  bool listen_paused = false;  // out of descriptors: no connections taken until the next sweep
+  bool listen_paused = false;  // out of descriptors: no connections taken before the heartbeat
   Result<> open_links();
   static std::string link_address(const std::string& name, uint64_t boot);
   void serve();  // the loop's kick: what rang in `ep`
@@ -452,6 +452,7 @@ struct Distributed::Impl {
   // Lets go the daemons of the links closed since the last call, drops those links, and times
   // out connections that did not say hello: at the loop's level only (kick, heartbeat, flush).
   void links_sweep();
+  void links_resume();  // the heartbeat: connections are taken again after a lack of descriptors
   void try_link(const Peer& owner);
   // The link to `owner` (its boot as heard) or from user `user`, if one is up.
   LocalLink* link_to(const std::string& owner);

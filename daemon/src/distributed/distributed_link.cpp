@@ -182,8 +182,8 @@ void Distributed::Impl::link_accept() {
     const int fd = ::accept4(link_listen, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) {
       if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
-        // The connection stays queued: not looked at again before the next sweep, so that the
-        // loop does not spin on it.
+        // The connection stays queued: not looked at again before the next heartbeat
+        // (links_resume), so that the loop does not spin on it.
         log::warning("distributed: a same-host connection not taken: {}", std::strerror(errno));
         listen_paused = ::epoll_ctl(ep, EPOLL_CTL_DEL, link_listen, nullptr) == 0;
       }
@@ -578,6 +578,9 @@ void Distributed::Impl::links_sweep() {
       link_close(*l, fmt::format("no hello within {} ms", cfg.timeout_ms), true);
     }
   }
+}
+
+void Distributed::Impl::links_resume() {
   if (link_listen >= 0 && listen_paused) {
     listen_paused = !epoll_watch(ep, EPOLL_CTL_ADD, link_listen, EPOLLIN, &kListenTag);
   }

@@ -457,6 +457,8 @@ struct Distributed::Impl {
   // The link to `owner` (its boot as heard) or from user `user`, if one is up.
   LocalLink* link_to(const std::string& owner);
   LocalLink* link_from(const std::string& user);
+  // The open link with daemon `name` (its boot as heard) in that direction, or nullptr.
+  LocalLink* find_link(const std::string& name, bool to_owner) const;
   // Whether a link with `name` (either way) is up, for status.
   bool linked(const std::string& name) const;
 

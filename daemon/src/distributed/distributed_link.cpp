@@ -264,10 +264,14 @@ void Distributed::Impl::try_link(const Peer& owner) {
   links.push_back(std::move(l));
 }
 
-LocalLink* Distributed::Impl::link_to(const std::string& owner) {
-  auto p = peers.find(owner);
+LocalLink* Distributed::Impl::find_link(const std::string& name, bool to_owner) const {
+  auto p = peers.find(name);
+  if (p == peers.end()) {
+    return nullptr;
+  }
   for (const auto& l : links) {
-    if (l->fd >= 0 && l->to_owner && l->peer == owner && p != peers.end() &&
+    // A link to an owner is identified from the start; one from a user once its hello came.
+    if (l->fd >= 0 && l->to_owner == to_owner && l->identified && l->peer == name &&
         l->peer_boot == p->second.boot) {
       return l.get();
     }
@@ -275,24 +279,21 @@ LocalLink* Distributed::Impl::link_to(const std::string& owner) {
   return nullptr;
 }
 
+LocalLink* Distributed::Impl::link_to(const std::string& owner) {
+  return find_link(owner, true);
+}
+
 LocalLink* Distributed::Impl::link_from(const std::string& user) {
-  auto p = peers.find(user);
-  for (const auto& l : links) {
-    if (l->fd >= 0 && !l->to_owner && l->identified && l->peer == user && p != peers.end() &&
-        l->peer_boot == p->second.boot) {
-      return l.get();
-    }
-  }
-  return nullptr;
+  return find_link(user, false);
 }
 
 bool Distributed::Impl::linked(const std::string& name) const {
   auto p = peers.find(name);
-  return p != peers.end() && !p->second.gone &&
-         std::any_of(links.begin(), links.end(), [&](const auto& l) {
-           return l->fd >= 0 && (l->to_owner ? l->heard : l->identified) && l->peer == name &&
-                  l->peer_boot == p->second.boot;
-         });
+  if (p == peers.end() || p->second.gone) {
+    return false;
+  }
+  const LocalLink* to = find_link(name, true);
+  return (to != nullptr && to->heard) || find_link(name, false) != nullptr;
 }
 
 void Distributed::Impl::link_send(LocalLink& l, uint8_t type, const std::string& to, uint64_t seq,

@@ -496,3 +496,99 @@ def test_a_follower_whose_owner_has_no_same_host_link_speaks_dds(link_env):
         assert via(b, "a") == "dds"
         wait_until(lambda: via(a, "b") == "dds", "a's status lists b")
         assert "same-host link" not in b.log
+
+
+def test_a_follower_that_stops_reading_has_its_link_closed_and_comes_back_over_dds(link_env):
+    # The owner's bus at full load (eight messages every 1 ms of a simulated node, about twice what
+    # 500 kbit/s carries) and b's program a node on it: the owner writes b's events over the link
+    # for every frame. b stopped (SIGSTOP) reads nothing: the socket fills, then the owner's queue
+    # of 4096 messages, and the owner closes the link and lets b go, long before timeout_ms (60 s)
+    # would. Once b runs again it reads what was left, finds the link closed, lets a go in its
+    # turn, says hello over DDS and its program's node is back on the bus.
+    import signal
+    canemud = str(BUILD / "bin" / "canemud")
+    messages = "".join(f"""
+[[can_node.message]]
+name = "M{k}"
+id = {0x100 + k}
+cycle = "1ms"
+""" for k in range(8))
+
+    def conf(name: str, owner: str | None) -> str:
+        return support_config(name, "realtime", owner, domain=DOMAIN,
+                              partition=f"canemu-test-{os.getpid()}", timeout_ms=60000)
+
+    with Daemon(conf("a", None) + '\n[[can_node]]\nname = "LOAD"\nbus = "can0"\n' + messages,
+                canemud=canemud) as a, Daemon(conf("b", "a"), canemud=canemud) as b:
+        ecu_b = Peer(b)
+        try:
+            assert ecu_b.frames_arriving("the load's frames reach b")
+            assert via(a, "b") == "link"
+            b.proc.send_signal(signal.SIGSTOP)
+            try:
+                a.wait_log("same-host link with b closed: daemon b did not read 4096 messages",
+                           timeout=60)
+                a.wait_log("daemon b is gone: its same-host link closed (daemon b did not read "
+                           "4096 messages)")
+                assert not any(k.startswith("b/") for k in nodes(a))
+            finally:
+                b.proc.send_signal(signal.SIGCONT)
+            b.wait_log("daemon a is gone: its same-host link closed (it closed without a bye)")
+            wait_until(lambda: any(k.startswith("b/") for k in nodes(a)), "b's node back on a")
+            assert via(b, "a") == "dds"
+            wait_until(lambda: via(a, "b") == "dds", "a lists b over DDS")
+            ecu_b.frames()  # what came before
+            assert ecu_b.frames_arriving("the load's frames reach b over DDS")
+        finally:
+            ecu_b.close()
+        counters = json.loads(cli(a, "status", "--json"))["distributed"]["counters"]
+        assert counters["by_reason"]["malformed"] == 0
+
+
+def test_out_of_descriptors_the_owner_leaves_connections_queued_and_takes_them_later(link_env):
+    # a's limit on open files lowered to what it has open: a connection to its same-host address
+    # is queued by the kernel, and a cannot take it (EMFILE). It must not spin on it: it looks again
+    # at every heartbeat (50 ms). Its limit back, it takes the connections, which say no hello and
+    # are closed after timeout_ms (1 s) as any such.
+    import itertools
+    import resource
+    import socket
+    with owner_and_follower("stepped") as (a, b):
+        attached_step(b)
+        address = same_host_address("a")
+        pid = a.proc.pid
+
+        def cpu_seconds() -> float:
+            fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+            return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+        limit = resource.prlimit(pid, resource.RLIMIT_NOFILE)
+        open_fds = {int(f) for f in os.listdir(f"/proc/{pid}/fd")}
+        lowest_free = next(k for k in itertools.count() if k not in open_fds)
+        resource.prlimit(pid, resource.RLIMIT_NOFILE, (lowest_free, limit[1]))
+        queued = []
+        try:
+            for _ in range(3):
+                s = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+                s.settimeout(TIMEOUT)
+                s.connect(address)
+                queued.append(s)
+            a.wait_log("distributed: a same-host connection not taken: Too many open files; "
+                       "tried again at every heartbeat")
+            # A window of 1 s in which a would spin if it looked at the queued connections at
+            # every turn (a whole core); it looks 20 times. A busy machine only lowers the figure.
+            before = cpu_seconds()
+            time.sleep(1.0)
+            assert cpu_seconds() - before < 0.5
+        finally:
+            resource.prlimit(pid, resource.RLIMIT_NOFILE, limit)
+        a.wait_log("distributed: same-host connections are taken again")
+        for s in queued:
+            assert s.recv(100) == b""  # no hello within timeout_ms
+            s.close()
+        assert a.log.count("a same-host connection not taken") == 1
+        counters = json.loads(cli(a, "status", "--json"))["distributed"]["counters"]
+        assert counters["by_reason"]["malformed"] == 3
+        assert counters["last_reason"] == ("same-host link with a daemon not identified yet "
+                                           "closed: no hello within 1000 ms")
+        assert via(a, "b") == "link"

@@ -427,8 +427,9 @@ struct Distributed::Impl {
   std::vector<std::unique_ptr<LocalLink>> links;
   // Owners whose link failed, with the boot it failed with: that boot is spoken to over DDS.
   std::set<std::pair<std::string, uint64_t>> link_failed;
-  bool stopping = false;       // links_bye(): nobody is let go any more
-  bool listen_paused = false;  // out of descriptors: no connections taken before the heartbeat
+  bool stopping = false;        // links_bye(): nobody is let go any more
+  bool listen_paused = false;   // out of descriptors: no connections taken before the heartbeat
+  bool listen_starved = false;  // said so in the log: not again until a connection is taken
   Result<> open_links();
   static std::string link_address(const std::string& name, uint64_t boot);
   void serve();  // the loop's kick: what rang in `ep`

@@ -52,6 +52,9 @@ struct Head {
 constexpr std::size_t kMaxMessage = sizeof(Head) + kEventsPerSample * sizeof(canemu_net_Event);
 constexpr std::size_t kBacklog = kWriterDepth;  // messages a link holds for a reader behind
 constexpr std::ptrdiff_t kUnidentified = 16;    // connections at once that have not said hello
+// An end of file, ECONNRESET or EPIPE: the other daemon ended (killed, it died), or it closed the
+// link itself because this one did not read (kBacklog); which of them, its announcements tell.
+constexpr const char* kClosedWithoutBye = "it closed without a bye";
 
 // What came from another process is made safe to read: texts end within their arrays, and every
 // bool is 0 or 1.
@@ -183,11 +186,22 @@ void Distributed::Impl::link_accept() {
     if (fd < 0) {
       if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
         // The connection stays queued: not looked at again before the next heartbeat
-        // (links_resume), so that the loop does not spin on it.
-        log::warning("distributed: a same-host connection not taken: {}", std::strerror(errno));
+        // (links_resume), so that the loop does not spin on it. Logged once, not at every
+        // heartbeat until there is room.
+        if (!listen_starved) {
+          log::warning(
+              "distributed: a same-host connection not taken: {}; tried again at every "
+              "heartbeat",
+              std::strerror(errno));
+          listen_starved = true;
+        }
         listen_paused = ::epoll_ctl(ep, EPOLL_CTL_DEL, link_listen, nullptr) == 0;
       }
       return;  // EAGAIN: no more
+    }
+    if (listen_starved) {
+      listen_starved = false;
+      log::info("distributed: same-host connections are taken again");
     }
     std::string why;
     const auto unidentified = std::count_if(links.begin(), links.end(), [](const auto& l) {
@@ -339,7 +353,7 @@ void Distributed::Impl::link_send(LocalLink& l, uint8_t type, const std::string&
 
 void Distributed::Impl::link_write_failed(LocalLink& l) {
   link_close(l, errno == EPIPE || errno == ECONNRESET
-                    ? std::string("it closed without a bye: the daemon ended")
+                    ? std::string(kClosedWithoutBye)
                     : fmt::format("writing to it: {}", std::strerror(errno)));
 }
 
@@ -383,13 +397,13 @@ void Distributed::Impl::link_read(LocalLink& l) {
       if (errno != EAGAIN && errno != EWOULDBLOCK) {
         // A daemon that ends with messages of ours unread leaves ECONNRESET, not an end of file.
         link_close(l, errno == ECONNRESET
-                          ? std::string("it closed without a bye: the daemon ended")
+                          ? std::string(kClosedWithoutBye)
                           : fmt::format("reading from it: {}", std::strerror(errno)));
       }
       return;
     }
     if (n == 0) {
-      link_close(l, "it closed without a bye: the daemon ended");
+      link_close(l, kClosedWithoutBye);
       return;
     }
     if (static_cast<std::size_t>(n) > kMaxMessage) {

@@ -287,6 +287,9 @@ void RingEvent::signal() const {
   // is only read while it is clear, so a busy ring's signal writes nothing of the other side's.
   if (waiting->load(std::memory_order_relaxed) != 0 &&
       waiting->exchange(0, std::memory_order_seq_cst) != 0 && eventfd >= 0) {
+    if (woken_ns != nullptr) {
+      woken_ns->store(monotonic_ns(), std::memory_order_release);
+    }
     const uint64_t one = 1;
     [[maybe_unused]] const ssize_t n = ::write(eventfd, &one, sizeof one);
   }
@@ -351,7 +354,8 @@ RingWriter::RingWriter(const RingMemory& m, int reader_eventfd, int own_eventfd)
       data_(m.elements()),
       capacity_(m.capacity()),
       size_(m.element_size()),
-      reader_{&hdr_->reader_signalled, &hdr_->reader_waiting, reader_eventfd, hdr_},
+      reader_{&hdr_->reader_signalled, &hdr_->reader_waiting, reader_eventfd, hdr_,
+              &hdr_->reader_woken_ns},
       own_{&hdr_->writer_signalled, &hdr_->writer_waiting, own_eventfd, hdr_} {
   write_ = hdr_->write_pos.load(std::memory_order_relaxed);
   slot_ = static_cast<uint32_t>(write_ % capacity_);
@@ -485,7 +489,8 @@ RingReader::RingReader(const RingMemory& m, int writer_eventfd, int own_eventfd)
       data_(m.elements()),
       capacity_(m.capacity()),
       size_(m.element_size()),
-      writer_{&hdr_->writer_signalled, &hdr_->writer_waiting, writer_eventfd, hdr_},
+      writer_{&hdr_->writer_signalled, &hdr_->writer_waiting, writer_eventfd, hdr_,
+              &hdr_->writer_woken_ns},
       own_{&hdr_->reader_signalled, &hdr_->reader_waiting, own_eventfd, hdr_} {
   read_ = hdr_->read_pos.load(std::memory_order_relaxed);
   slot_ = static_cast<uint32_t>(read_ % capacity_);

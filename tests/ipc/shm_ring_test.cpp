@@ -1,5 +1,7 @@
 #include "canemu/ipc/shm_ring.hpp"
 
+#include "canemu/ipc/clock.hpp"
+
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -121,6 +123,30 @@ TEST(ShmRing, AWaitingFlagKeptSetCostsOneEventfdWriteNotOnePerElement) {
             static_cast<ssize_t>(sizeof writes));
   EXPECT_EQ(writes, 11u);  // once per setting of the flag, none for the 39 puts after
   EXPECT_EQ(waiting.load(), 0u);
+}
+
+// The writer notes when it woke an armed reader (its CLOCK_MONOTONIC), and the reader takes it
+// once; puts that wake nobody, and the reader waking itself, note nothing.
+TEST(ShmRing, TheWriterNotesWhenItWokeTheReaderAndTheReaderTakesItOnce) {
+  auto p = make(32);
+  const Element e = element(1);
+  EXPECT_EQ(p.reader.take_woken_ns(), 0);
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);  // the reader is not armed
+  EXPECT_EQ(p.reader.take_woken_ns(), 0);
+  ASSERT_EQ(p.reader.get(nullptr), RingStatus::ok);
+  ASSERT_TRUE(p.reader.arm_unless_filled());
+  const int64_t before = monotonic_ns();
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);
+  const int64_t after = monotonic_ns();
+  const int64_t woken = p.reader.take_woken_ns();
+  EXPECT_GE(woken, before);
+  EXPECT_LE(woken, after);
+  EXPECT_EQ(p.reader.take_woken_ns(), 0);       // taken
+  ASSERT_EQ(p.writer.put(&e), RingStatus::ok);  // disarmed by the write: no wake-up, no note
+  EXPECT_EQ(p.reader.take_woken_ns(), 0);
+  p.reader.disarm();
+  p.reader.wake_self();
+  EXPECT_EQ(p.reader.take_woken_ns(), 0);
 }
 
 // wake_self(): the reader's own eventfd becomes readable, so a poll loop comes back to it.

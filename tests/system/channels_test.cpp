@@ -3,13 +3,20 @@
 // and a byte-for-byte repeatable trace in stepped time.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
+#include <climits>
+#include <csignal>
+#include <fstream>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
 
 #include "canemu/client/channel.hpp"
+#include "canemu/ipc/clock.hpp"
 #include "daemon_process.hpp"
 
 namespace canemu {
@@ -449,6 +456,75 @@ TEST(Channels, InRealTimeFramesFlowWithoutSteps) {
       EXPECT_EQ(done->timestamp_ns, m->timestamp_ns);
     }
   }
+}
+
+// In real time a frame starts when its client queued it, not when canemud got round to it: the
+// client's ring notes when it rang the doorbell, and canemud kicks the channel at that instant
+// (docs/daemon.md, "Time"), unless that was more than 10 ms before it woke. canemud is stopped
+// (SIGSTOP) while the client queues a frame and for a while after; the frame's start of frame
+// is placed on the wall clock through canemud's start, bounded by status answers (a sample's
+// simulated time against the wall clock before the request and after the answer).
+TEST(Channels, InRealTimeAFrameStartsWhenItsClientQueuedItNotWhenCanemudWoke) {
+  Daemon d("realtime");
+  auto ca = connect(d, "a");
+  auto cb = connect(d, "b");
+  auto a = open(ca, "can0");
+  auto b = open(cb, "can0");
+  // canemud's start on CLOCK_MONOTONIC lies in [lower, upper]: the tightest of several answers.
+  int64_t lower = INT64_MIN;
+  int64_t upper = INT64_MAX;
+  auto bound_start = [&] {
+    for (int i = 0; i < 8; ++i) {
+      const int64_t asked = ipc::monotonic_ns();
+      const int64_t sim = status(ca).sim_time_ns;
+      const int64_t answered = ipc::monotonic_ns();
+      lower = std::max(lower, asked - sim);
+      upper = std::min(upper, answered - sim);
+    }
+  };
+  auto stopped = [&] {
+    std::ifstream stat("/proc/" + std::to_string(d.pid()) + "/stat");
+    std::string line;
+    std::getline(stat, line);
+    return line.substr(line.rfind(')') + 2, 1) == "T";
+  };
+  // Queues a frame while canemud is stopped, and lets it run again `pause_ns` later; the frame's
+  // start of frame as bounds on the wall clock, and the instants the frame was queued and
+  // canemud let run.
+  struct Run {
+    int64_t sof_from, sof_to, queued_from, queued_to, resumed;
+  };
+  auto run = [&](uint32_t id, int64_t pause_ns) {
+    bound_start();
+    EXPECT_EQ(::kill(d.pid(), SIGSTOP), 0);
+    const int64_t deadline = ipc::monotonic_ns() + 5'000'000'000;
+    while (!stopped() && ipc::monotonic_ns() < deadline) {
+      std::this_thread::yield();
+    }
+    EXPECT_TRUE(stopped());
+    Run r{};
+    r.queued_from = ipc::monotonic_ns();
+    EXPECT_TRUE(a.send(frame(id, {0x11, 0x22})));
+    r.queued_to = ipc::monotonic_ns();
+    std::this_thread::sleep_for(std::chrono::nanoseconds(pause_ns));  // canemud kept stopped
+    r.resumed = ipc::monotonic_ns();
+    EXPECT_EQ(::kill(d.pid(), SIGCONT), 0);
+    auto m = b.receive(5000);
+    EXPECT_TRUE(m);
+    bound_start();
+    // 0x123 or 0x124 with two bytes: 62 bits (124 us) from SOF to the end of EOF.
+    const int64_t sof = (m ? m->timestamp_ns : 0) - 62 * kBit;
+    r.sof_from = lower + sof;
+    r.sof_to = upper + sof;
+    return r;
+  };
+  // Stopped 2 ms: the frame started as it was queued, before canemud ran again.
+  const Run soon = run(0x123, 2'000'000);
+  EXPECT_LT(soon.sof_to, soon.resumed);
+  EXPECT_GE(soon.sof_to, soon.queued_from);
+  // Stopped 30 ms: a ring's note older than 10 ms is not taken; the frame starts once canemud runs.
+  const Run late = run(0x124, 30'000'000);
+  EXPECT_GE(late.sof_from, late.queued_to + 10'000'000);
 }
 
 // Threads that share one channel take turns with lock()/unlock(): nothing is lost or doubled.

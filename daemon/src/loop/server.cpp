@@ -286,6 +286,9 @@ bool Server::run_once(int timeout_ms) {
   if (timer_woke) {
     pacing_.wakeup_late(last_wake_ns_ - deadline_ns_);
   }
+  if (options_.time.mode != TimeMode::stepped) {
+    kick_rung_doorbells(events, n);  // frames queued while the loop slept, at their instants
+  }
   advance_to_now();  // events are handled at the simulated instant they are seen
   if (options_.time.mode != TimeMode::stepped) {
     batch_.woke(turn_events_, last_wake_ns_);  // the events since the wake-up before
@@ -293,6 +296,9 @@ bool Server::run_once(int timeout_ms) {
   }
   for (int i = 0; i < n; ++i) {
     const int fd = events[i].data.fd;
+    if (fd < 0) {
+      continue;  // a doorbell kicked already (kick_rung_doorbells)
+    }
     if (fd == timer_.get()) {
       uint64_t expirations = 0;
       [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);

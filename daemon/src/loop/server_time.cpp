@@ -1,6 +1,7 @@
 // Time in canemud's loop: simulated time mapped to the wall clock (real and scaled time), the
 // timer for the next event, the pace kept, and the steps of stepped time run in slices.
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstring>
 #include <string_view>
@@ -24,7 +25,11 @@ namespace canemu::daemon {
 using ipc::monotonic_ns;
 
 model::SimTime Server::wall_to_sim() const {
-  const double elapsed = static_cast<double>(monotonic_ns() - start_mono_ns_);
+  return wall_to_sim(monotonic_ns());
+}
+
+model::SimTime Server::wall_to_sim(int64_t mono_ns) const {
+  const double elapsed = static_cast<double>(mono_ns - start_mono_ns_);
   const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
   // Saturates instead of overflowing (scaled:1000000 reaches 2^63 ns after 2.5 hours).
   return model::SimTime::from_ns(static_cast<int64_t>(std::min(elapsed * scale, 9.0e18)));
@@ -34,11 +39,16 @@ void Server::advance_to_now() {
   if (options_.time.mode == TimeMode::stepped) {
     return;
   }
-  const model::SimTime target = wall_to_sim();
+  const int64_t wall = monotonic_ns();
+  const model::SimTime target = wall_to_sim(wall);
+  run_events_until(target, wall);
+  note_pace(monotonic_ns(), target);
+}
+
+void Server::run_events_until(model::SimTime target, int64_t wall) {
   model::SimScheduler& s = sim_.scheduler();
   const double per_sim_ns =
       options_.time.mode == TimeMode::scaled ? 1.0 / options_.time.scale : 1.0;
-  int64_t wall = monotonic_ns();
   const int64_t until = wall + kMaxPassWorkNs;
   // Each event's lateness against the clock read before its chunk of kEventsPerClock.
   const auto late = [&](model::SimTime at) {
@@ -56,7 +66,40 @@ void Server::advance_to_now() {
       break;  // the rest waits for the next pass (the timer is due at once)
     }
   }
-  note_pace(monotonic_ns(), target);
+}
+
+void Server::kick_rung_doorbells(epoll_event* events, int n) {
+  struct Rung {
+    int64_t at;
+    int index;
+    Doorbell* bell;
+  };
+  std::array<Rung, 32> rung;
+  std::size_t count = 0;
+  const int64_t wall = last_wake_ns_;
+  for (int i = 0; i < n && count < rung.size(); ++i) {
+    const auto bell = doorbells_.find(events[i].data.fd);
+    if (bell == doorbells_.end()) {
+      continue;
+    }
+    // The client's word, bounded: not in the future, not older than kMaxRungAgeNs (a clock of
+    // another time namespace, a wake-up that came that late): otherwise kicked now, below.
+    const int64_t at = bell->second->take_rung_ns();
+    if (at <= 0 || at > wall || wall - at > kMaxRungAgeNs) {
+      continue;
+    }
+    rung[count++] = Rung{at, i, bell->second};
+  }
+  std::sort(rung.begin(), rung.begin() + static_cast<std::ptrdiff_t>(count),
+            [](const Rung& a, const Rung& b) {
+              return a.at < b.at || (a.at == b.at && a.index < b.index);
+            });
+  for (std::size_t k = 0; k < count; ++k) {
+    // Never before what already ran (run_until does not go back): at the latest of the two.
+    run_events_until(wall_to_sim(rung[k].at), wall);
+    rung[k].bell->kick();
+    events[rung[k].index].data.fd = -1;
+  }
 }
 
 void Server::note_pace(int64_t mono_ns, model::SimTime target) {

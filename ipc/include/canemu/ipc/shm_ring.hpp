@@ -65,6 +65,12 @@ struct alignas(64) RingHeader {
   // Set by a side while it blocks, cleared by the signal that wakes it.
   alignas(64) std::atomic<uint32_t> reader_waiting;
   std::atomic<uint32_t> writer_waiting;
+  // The signalling side's CLOCK_MONOTONIC (ns) when it last woke the other side, written just
+  // before the eventfd; taken (and zeroed) by the side woken: canemud starts a frame a client
+  // queued at that instant rather than at its own wake-up (take_woken_ns). 0: not known (an
+  // older peer, or no wake-up since the last take).
+  std::atomic<int64_t> reader_woken_ns;
+  std::atomic<int64_t> writer_woken_ns;
 };
 static_assert(sizeof(RingHeader) == 256);
 static_assert(std::atomic<uint64_t>::is_always_lock_free);
@@ -110,7 +116,8 @@ struct RingEvent {
   std::atomic<uint32_t>* flag = nullptr;
   std::atomic<uint32_t>* waiting = nullptr;
   int eventfd = -1;
-  RingHeader* header = nullptr;  // whether both processes take part in the barrier
+  RingHeader* header = nullptr;              // whether both processes take part in the barrier
+  std::atomic<int64_t>* woken_ns = nullptr;  // where signal() notes when it woke the other side
   // Threads of this process inside wait() on this event (shared by copies of it): while one
   // sleeps, the shared waiting flag stays set, so another thread's wait() ending (a poll with
   // timeout 0, or the signal it took) never leaves a sleeper without its wake-up.
@@ -210,6 +217,9 @@ class RingReader {
   uint32_t overruns() const { return hdr_->overruns.load(std::memory_order_relaxed); }
   bool corrupted() const { return corrupted_; }
   const RingEvent& own_event() const { return own_; }
+  // When the writer last woke this side (its CLOCK_MONOTONIC, ns), once: 0 if it did not since
+  // the last call. What the writer says: the caller bounds it.
+  int64_t take_woken_ns() { return hdr_->reader_woken_ns.exchange(0, std::memory_order_acquire); }
 
  private:
   bool load_write(uint64_t& write) const;

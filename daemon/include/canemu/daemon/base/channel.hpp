@@ -65,6 +65,7 @@ class Channel final : private model::ControllerEvents, public Doorbell {
   // Called when the doorbell rang, or at any time (before a time step): the node takes a frame
   // if it is idle.
   void kick() override;
+  int64_t take_rung_ns() override { return tx_.take_woken_ns(); }
   void set_arming(bool arming) override { arming_ = arming; }
   // The client broke a ring (positions out of range); the server drops the client.
   bool broken() const override { return rx_.corrupted_after_writes() || tx_.corrupted(); }

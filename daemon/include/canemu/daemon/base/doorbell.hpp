@@ -3,6 +3,8 @@
 // (vci_port.hpp) are both.
 #pragma once
 
+#include <cstdint>
+
 namespace canemu::daemon {
 
 class Doorbell {
@@ -11,6 +13,10 @@ class Doorbell {
   virtual int doorbell_fd() const = 0;
   // The doorbell rang (or the loop wants idle transmitters to look again).
   virtual void kick() = 0;
+  // When the client rang it, as the client's CLOCK_MONOTONIC in ns, taken once (0: not known):
+  // in real and scaled time the loop kicks the doorbell at that instant of simulated time, as
+  // if it had been awake when the client queued its frame (docs/daemon.md, "Time").
+  virtual int64_t take_rung_ns() { return 0; }
   // The client broke a ring; the server drops the client.
   virtual bool broken() const = 0;
   // Whether a transmitter that empties its ring arms the doorbell (the default). Not in stepped

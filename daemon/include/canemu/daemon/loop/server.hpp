@@ -23,6 +23,8 @@
 #include "canemu/daemon/world/simulation.hpp"
 #include "canemu/ipc/seqpacket.hpp"
 
+struct epoll_event;
+
 namespace canemu::daemon {
 
 struct ServerOptions {
@@ -136,8 +138,17 @@ class Server final : private LoopServices, private StepLoop {
   // this housekeeping (-1: none).
   int housekeeping();
 
+  // Simulated time at CLOCK_MONOTONIC `mono_ns` (real and scaled time).
+  model::SimTime wall_to_sim(int64_t mono_ns) const;
   model::SimTime wall_to_sim() const;
   void advance_to_now();
+  // Runs the events due up to `target` (at most kMaxPassWorkNs of wall time from `wall`).
+  void run_events_until(model::SimTime target, int64_t wall);
+  // The doorbells among this wake-up's `events` whose client said when it rang (within
+  // kMaxRungAgeNs): each kicked at that instant of simulated time, earliest first, the events due
+  // before it run first; their entries in `events` are set to fd -1.
+  void kick_rung_doorbells(epoll_event* events, int n);
+  static constexpr int64_t kMaxRungAgeNs = 10'000'000;
   void arm_timer();
   void accept_clients();
   void serve(int fd);

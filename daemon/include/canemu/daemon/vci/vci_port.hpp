@@ -48,6 +48,7 @@ class VciPort final : public model::ixxat::ChannelPort, public Doorbell {
   // --- Doorbell ---
   int doorbell_fd() const override { return rings_.tx().reader_event(); }
   void kick() override;
+  int64_t take_rung_ns() override { return tx_.take_woken_ns(); }
   void set_arming(bool arming) override { arming_ = arming; }
   bool broken() const override { return rx_.corrupted_after_writes() || tx_.corrupted(); }
 

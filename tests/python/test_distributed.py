@@ -91,9 +91,14 @@ class Peer:
     def frames_arriving(self, what: str) -> list:
         """The frames received, as (can_id, hexdata), waited for until there are some (`what`
         says which in a failure)."""
+        return [(i, d) for i, d, _ in self.frames_arriving_with_times(what)]
+
+    def frames_arriving_with_times(self, what: str) -> list:
+        """The frames received, as (can_id, hexdata, timestamp_ns), waited for as
+        frames_arriving."""
         got: list = []
         wait_until(lambda: got.extend(self.frames()) or got, what)
-        return [(i, d) for i, d, _ in got]
+        return got
 
     def errors(self) -> list:
         """Error frames received so far, as (can_id, hexdata)."""
@@ -592,3 +597,44 @@ def test_out_of_descriptors_the_owner_leaves_connections_queued_and_takes_them_l
         assert counters["last_reason"] == ("same-host link with a daemon not identified yet "
                                            "closed: no hello within 1000 ms")
         assert via(a, "b") == "link"
+
+
+def test_in_real_time_a_followers_frame_starts_when_its_program_queued_it(link_env):
+    # b's program queues a frame while the owner a is stopped (SIGSTOP): b makes the request at
+    # once and the link carries the instant it made it, so a, running again, starts the frame
+    # there, as one daemon would have (docs/distributed.md, "Daemons on one host"). The same
+    # frame three times: their ends of frame on a's bus, apart as their queueing was apart. a
+    # stopped 5 ms: the second frame no later than that; stopped 30 ms: more than 10 ms old, the
+    # request is applied when a runs again.
+    import signal
+    with owner_and_follower("realtime") as (a, b):
+        ecu_a = Peer(a)
+        ecu_b = can.Bus(interface="canemu", channel="can0", socket=b.socket)
+        try:
+            wait_until(lambda: any(k.startswith("b/") for k in nodes(a)), "b's node on a")
+
+            def stopped() -> bool:
+                stat = open(f"/proc/{a.proc.pid}/stat").read()
+                return stat.rsplit(")", 1)[1].split()[0] == "T"
+
+            def queued_and_ended(pause_s: float) -> tuple[int, int]:
+                if pause_s:
+                    a.proc.send_signal(signal.SIGSTOP)
+                    wait_until(stopped, "a stopped")
+                before = time.monotonic_ns()
+                ecu_b.send(can.Message(arbitration_id=0x2A0, is_extended_id=False, data=[7, 7]))
+                queued = (before + time.monotonic_ns()) // 2
+                if pause_s:
+                    time.sleep(pause_s)  # a kept stopped this long
+                    a.proc.send_signal(signal.SIGCONT)
+                (_, _, end), = ecu_a.frames_arriving_with_times("b's frame on a")
+                return queued, end
+
+            q1, e1 = queued_and_ended(0)
+            q2, e2 = queued_and_ended(0.005)
+            assert (e2 - e1) - (q2 - q1) < 2_500_000
+            q3, e3 = queued_and_ended(0.030)
+            assert (e3 - e2) - (q3 - q2) > 20_000_000
+        finally:
+            ecu_a.close()
+            ecu_b.shutdown()

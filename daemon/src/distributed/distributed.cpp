@@ -466,6 +466,19 @@ void Distributed::kick() {
   impl_->serve();
 }
 
+int64_t Distributed::take_rung_ns() {
+  return impl_->links_rung_ns();
+}
+
+bool Distributed::kick_rung() {
+  for (const auto& l : impl_->links) {
+    if (l->fd >= 0 && !l->to_owner && l->identified) {
+      impl_->link_read_requests(*l);
+    }
+  }
+  return false;  // the rest (DDS, events, new connections) at "now"
+}
+
 void Distributed::flush() {
   impl_->flush_events();
   impl_->links_sweep();  // a link that closed as it was written to: its daemon is let go now
@@ -506,6 +519,12 @@ int Distributed::doorbell_fd() const {
   return -1;
 }
 void Distributed::kick() {}
+int64_t Distributed::take_rung_ns() {
+  return 0;
+}
+bool Distributed::kick_rung() {
+  return true;
+}
 void Distributed::flush() {}
 Doorbell& Distributed::heartbeat() {
   return *this;

@@ -435,6 +435,10 @@ struct Distributed::Impl {
   void serve();  // the loop's kick: what rang in `ep`
   void link_accept();
   void link_read(LocalLink& l);
+  // The leading requests of `l`'s queue, and nothing after the first message that is none.
+  void link_read_requests(LocalLink& l);
+  // The earliest instant the first waiting request of an owner's link was made at (0: none).
+  int64_t links_rung_ns();
   void link_message(LocalLink& l, const char* data, std::size_t size);
   bool link_hello(LocalLink& l, const char* data, std::size_t size);
   // What send_request() and write_events() send over a link instead of DDS.

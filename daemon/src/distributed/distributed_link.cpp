@@ -46,7 +46,10 @@ struct Head {
   uint32_t count;
   int64_t written;  // dds_time() as it was sent (CANEMU_NET_LEGS: the delivery leg)
   char to[32];      // kEvents: the sample's `to` ("": every follower)
-  uint64_t seq;     // kEvents: the sample's seq
+  // kEvents: the sample's seq. kRequest: the sender's simulated instant it made the request at,
+  // on CLOCK_MONOTONIC (ns; 0: not known, stepped time): the owner applies it there
+  // (Distributed::take_rung_ns), as if both were one daemon.
+  uint64_t seq;
 };
 
 constexpr std::size_t kMaxMessage = sizeof(Head) + kEventsPerSample * sizeof(canemu_net_Event);
@@ -358,7 +361,47 @@ void Distributed::Impl::link_write_failed(LocalLink& l) {
 }
 
 void Distributed::Impl::link_request(LocalLink& l, const canemu_net_Request& r) {
-  link_send(l, kRequest, "", 0, &r, 1, sizeof r);
+  const int64_t made = loop != nullptr ? loop->monotonic_at(sim.scheduler().now()) : 0;
+  link_send(l, kRequest, "", static_cast<uint64_t>(std::max<int64_t>(made, 0)), &r, 1, sizeof r);
+}
+
+int64_t Distributed::Impl::links_rung_ns() {
+  int64_t earliest = 0;
+  for (const auto& l : links) {
+    if (l->fd < 0 || l->to_owner || !l->identified) {
+      continue;
+    }
+    Head h{};
+    const ssize_t n = ::recv(l->fd, &h, sizeof h, MSG_PEEK | MSG_DONTWAIT);
+    if (n != static_cast<ssize_t>(sizeof h) || h.type != kRequest) {
+      continue;
+    }
+    const auto at = static_cast<int64_t>(h.seq);
+    if (at > 0 && (earliest == 0 || at < earliest)) {
+      earliest = at;
+    }
+  }
+  return earliest;
+}
+
+void Distributed::Impl::link_read_requests(LocalLink& l) {
+  static thread_local std::vector<char> buf(kMaxMessage + 1);
+  for (uint32_t k = 0; k < kMaxTakesPerKick && l.fd >= 0; ++k) {
+    Head h{};
+    const ssize_t peeked = ::recv(l.fd, &h, sizeof h, MSG_PEEK | MSG_DONTWAIT);
+    if (peeked != static_cast<ssize_t>(sizeof h) || h.type != kRequest) {
+      return;  // nothing, or not a request: link_read() at "now"
+    }
+    const ssize_t n = ::recv(l.fd, buf.data(), buf.size(), MSG_DONTWAIT | MSG_TRUNC);
+    if (n <= 0) {
+      return;  // link_read() at "now" says what happened
+    }
+    if (static_cast<std::size_t>(n) > kMaxMessage) {
+      link_close(l, fmt::format("a message of {} bytes, more than any ({})", n, kMaxMessage), true);
+      return;
+    }
+    link_message(l, buf.data(), static_cast<std::size_t>(n));
+  }
 }
 
 void Distributed::Impl::link_events(LocalLink& l, const std::string& to, uint64_t seq,

@@ -35,6 +35,14 @@ model::SimTime Server::wall_to_sim(int64_t mono_ns) const {
   return model::SimTime::from_ns(static_cast<int64_t>(std::min(elapsed * scale, 9.0e18)));
 }
 
+int64_t Server::monotonic_at(model::SimTime t) const {
+  if (options_.time.mode == TimeMode::stepped) {
+    return 0;
+  }
+  const double scale = options_.time.mode == TimeMode::scaled ? options_.time.scale : 1.0;
+  return start_mono_ns_ + static_cast<int64_t>(static_cast<double>(t.ns()) / scale);
+}
+
 void Server::advance_to_now() {
   if (options_.time.mode == TimeMode::stepped) {
     return;
@@ -97,8 +105,9 @@ void Server::kick_rung_doorbells(epoll_event* events, int n) {
   for (std::size_t k = 0; k < count; ++k) {
     // Never before what already ran (run_until does not go back): at the latest of the two.
     run_events_until(wall_to_sim(rung[k].at), wall);
-    rung[k].bell->kick();
-    events[rung[k].index].data.fd = -1;
+    if (rung[k].bell->kick_rung()) {
+      events[rung[k].index].data.fd = -1;
+    }
   }
 }
 

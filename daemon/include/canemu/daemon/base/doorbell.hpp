@@ -17,6 +17,12 @@ class Doorbell {
   // in real and scaled time the loop kicks the doorbell at that instant of simulated time, as
   // if it had been awake when the client queued its frame (docs/daemon.md, "Time").
   virtual int64_t take_rung_ns() { return 0; }
+  // The kick at that instant. True: all of it (the loop does not kick it again at "now"); false:
+  // only what belongs to that instant, the rest at "now" (Distributed: the requests alone).
+  virtual bool kick_rung() {
+    kick();
+    return true;
+  }
   // The client broke a ring; the server drops the client.
   virtual bool broken() const = 0;
   // Whether a transmitter that empties its ring arms the doorbell (the default). Not in stepped

@@ -56,6 +56,8 @@ class StepLoop {
   virtual void finish_runs() = 0;
   // The owner whose steps these are is gone: the steps asked of it will not be answered.
   virtual void steps_failed(const std::string& why) = 0;
+  // Simulated instant `t` on CLOCK_MONOTONIC (ns) in real and scaled time; 0 in stepped time.
+  virtual int64_t monotonic_at(model::SimTime t) const = 0;
 
  protected:
   ~StepLoop() = default;
@@ -88,6 +90,11 @@ class Distributed final : public RemoteBuses, public Doorbell {
   int doorbell_fd() const override;
   void kick() override;
   bool broken() const override { return false; }
+  // Requests waiting on same-host links carry the instant their daemon made them (its
+  // simulated time on CLOCK_MONOTONIC): the earliest, and kick_rung() applies the requests
+  // alone there (docs/distributed.md, "Daemons on one host").
+  int64_t take_rung_ns() override;
+  bool kick_rung() override;
   // Rung when a heartbeat is due: announces this daemon, says hello to owners not yet
   // answering, and lets daemons not heard from within timeout_ms go.
   Doorbell& heartbeat();

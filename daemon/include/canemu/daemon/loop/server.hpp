@@ -178,6 +178,7 @@ class Server final : private LoopServices, private StepLoop {
   void run_to(model::SimTime until, std::function<void(uint64_t events)> done) override;
   void finish_runs() override;
   void steps_failed(const std::string& why) override;
+  int64_t monotonic_at(model::SimTime t) const override;
   ipc::IpcResult<void> open_listener();
   void drop_revoked_clients();
   std::size_t connections_of(uint32_t uid) const;

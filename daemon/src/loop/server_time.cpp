@@ -80,7 +80,6 @@ void Server::kick_rung_doorbells(epoll_event* events, int n) {
   struct Rung {
     int64_t at;
     int index;
-    Doorbell* bell;
   };
   std::array<Rung, 32> rung;
   std::size_t count = 0;
@@ -96,7 +95,7 @@ void Server::kick_rung_doorbells(epoll_event* events, int n) {
     if (at <= 0 || at > wall || wall - at > kMaxRungAgeNs) {
       continue;
     }
-    rung[count++] = Rung{at, i, bell->second};
+    rung[count++] = Rung{at, i};
   }
   std::sort(rung.begin(), rung.begin() + static_cast<std::ptrdiff_t>(count),
             [](const Rung& a, const Rung& b) {
@@ -105,7 +104,9 @@ void Server::kick_rung_doorbells(epoll_event* events, int n) {
   for (std::size_t k = 0; k < count; ++k) {
     // Never before what already ran (run_until does not go back): at the latest of the two.
     run_events_until(wall_to_sim(rung[k].at), wall);
-    if (rung[k].bell->kick_rung()) {
+    // Looked up again: what ran since may have removed it (as the loop below does for each).
+    const auto bell = doorbells_.find(events[rung[k].index].data.fd);
+    if (bell != doorbells_.end() && bell->second->kick_rung()) {
       events[rung[k].index].data.fd = -1;
     }
   }

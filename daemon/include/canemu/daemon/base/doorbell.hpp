@@ -15,7 +15,7 @@ class Doorbell {
   virtual void kick() = 0;
   // When the client rang it, as the client's CLOCK_MONOTONIC in ns, taken once (0: not known):
   // in real and scaled time the loop kicks the doorbell at that instant of simulated time, as
-  // if it had been awake when the client queued its frame (docs/daemon.md, "Time").
+  // if it had been awake when the client queued its frame (docs/daemon.md, "Pacing").
   virtual int64_t take_rung_ns() { return 0; }
   // The kick at that instant. True: all of it (the loop does not kick it again at "now"); false:
   // only what belongs to that instant, the rest at "now" (Distributed: the requests alone).

@@ -604,7 +604,7 @@ def test_in_real_time_a_followers_frame_starts_when_its_program_queued_it(link_e
     # once and the link carries the instant it made it, so a, running again, starts the frame
     # there, as one daemon would have (docs/distributed.md, "Daemons on one host"). The same
     # frame three times: their ends of frame on a's bus, apart as their queueing was apart. a
-    # stopped 5 ms: the second frame no later than that; stopped 30 ms: more than 10 ms old, the
+    # stopped 2 ms: the second frame no later than that; stopped 30 ms: more than 10 ms old, the
     # request is applied when a runs again.
     import signal
     with owner_and_follower("realtime") as (a, b):
@@ -631,8 +631,8 @@ def test_in_real_time_a_followers_frame_starts_when_its_program_queued_it(link_e
                 return queued, end
 
             q1, e1 = queued_and_ended(0)
-            q2, e2 = queued_and_ended(0.005)
-            assert (e2 - e1) - (q2 - q1) < 2_500_000
+            q2, e2 = queued_and_ended(0.002)
+            assert (e2 - e1) - (q2 - q1) < 1_500_000
             q3, e3 = queued_and_ended(0.030)
             assert (e3 - e2) - (q3 - q2) > 20_000_000
         finally:

@@ -49,7 +49,8 @@ bool Arbitration::resolve_in_first_word() {
       lost_.clear();
       return false;
     }
-    lost_.push_back(AtBit{contenders[k].node, at});
+    lost_.push_back(
+        AtBit{contenders[k].node, at, bits.destuffed_index(at), contenders[k].single_shot});
   }
   winning_bits_ = contenders[best].bits;
   senders_.push_back(contenders[best].node);
@@ -118,10 +119,10 @@ void Arbitration::resolve_walk() {
     if (d >= std::min(c.bits->length, winning_bits_->length)) {
       senders_.push_back(c.node);  // the same frame: sent together
     } else if (d < c.bits->arbitration_end) {
-      lost_.push_back(AtBit{c.node, d});
+      lost_.push_back(AtBit{c.node, d, c.bits->destuffed_index(d), c.single_shot});
     } else {
       senders_.push_back(c.node);
-      collisions_.push_back(AtBit{c.node, d});
+      collisions_.push_back(AtBit{c.node, d, c.bits->destuffed_index(d), c.single_shot});
     }
   }
 }

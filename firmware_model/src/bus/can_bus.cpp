@@ -38,7 +38,6 @@ NodeId CanBus::attach(CanController& controller) {
   n.last_state = n.fc->state();
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
-  completion_.losses.fit(node_count_);
   completion_.sent.fit(node_count_);
   // nodes_ may have moved: the receivers of a frame on the wire point into it anew, in place (a
   // controller may attach from a callback while the frame's end walks the list, so its room
@@ -135,10 +134,15 @@ const CanBus::Node& CanBus::load_timing(NodeId id) {
   return n;
 }
 
+SimTime CanBus::arbitration_bit_end_slow(uint16_t bit) const {
+  const Completion& c = completion_;
+  return c.sof + with_ppm(c.nominal.bits_duration(uint64_t{bit} + 1), c.ppm);
+}
+
 void CanBus::report_losses() {
-  for (const Completion::Loss& loss : completion_.losses) {
+  for (const Arbitration::AtBit& loss : arbitration_.lost()) {
     Node& n = nodes_[loss.node];
-    const SimTime at = loss.at;
+    const SimTime at = arbitration_bit_end(loss.bit);
     n.controller->on_arbitration_lost(at, loss.bit, loss.destuffed_bit);
     if (loss.single_shot) {
       n.stats.tx_dropped++;
@@ -146,7 +150,7 @@ void CanBus::report_losses() {
       n.controller->on_tx_dropped(at);
     }
   }
-  completion_.losses.clear();
+  arbitration_.forget_lost();
 }
 
 void CanBus::load_tx(Node& n) {
@@ -235,20 +239,35 @@ void CanBus::schedule_attempt(SimTime at) {
 }
 
 void CanBus::on_event(SimTime now, uint64_t tag) {
-  switch (tag) {
-    case kAttempt:
-      attempt_pending_ = false;
-      attempt(now);
+  const bool outer = handling_;
+  handling_ = true;
+  for (;;) {
+    switch (tag) {
+      case kAttempt:
+        attempt_pending_ = false;
+        attempt(now);
+        break;
+      case kFrameEnd:
+        complete_success(now);
+        break;
+      case kBusFree:
+        bus_released(completion_.last_dominant_end, completion_.ifs_end);
+        break;
+      default:
+        break;
+    }
+    if (follow_tag_ == 0) {
       break;
-    case kFrameEnd:
-      complete_success(now);
+    }
+    tag = follow_tag_;
+    follow_tag_ = 0;
+    if (!scheduler_.run_inline(follow_at_)) {
+      scheduler_.schedule_at(follow_at_, *this, tag);
       break;
-    case kBusFree:
-      bus_released(completion_.last_dominant_end, completion_.ifs_end);
-      break;
-    default:
-      break;
+    }
+    now = follow_at_;
   }
+  handling_ = outer;
 }
 
 void CanBus::attempt(SimTime now) {
@@ -287,7 +306,7 @@ void CanBus::attempt(SimTime now) {
     if (!n.encoded_valid) {
       load_encoding(n);
     }
-    arbitration.add(Arbitration::Contender{m.id, &n.encoded});
+    arbitration.add(Arbitration::Contender{m.id, &n.encoded, n.tx->single_shot});
   }
   if (arbitration.empty()) {
     if (next_ready) {
@@ -319,6 +338,11 @@ void CanBus::run_frame(SimTime sof) {
   const BitTiming& nominal = tx_timing.nominal;
   const BitTiming& data = tx_timing.has_data_phase ? tx_timing.data : tx_timing.nominal;
   const int64_t tx_bit_ns = tx_node.bit_ns;
+  Completion& c = completion_;
+  c.sof = sof;
+  c.nominal = nominal;
+  c.ppm = tx_timing.oscillator_ppm;
+  c.bit_ns = tx_bit_ns;
   auto bit_end = [&](uint32_t bit) {
     if (tx_bit_ns != 0 && (!e.brs || bit < e.brs_index)) {
       return sof + SimDuration(tx_bit_ns * (int64_t{bit} + 1));
@@ -327,14 +351,9 @@ void CanBus::run_frame(SimTime sof) {
            with_ppm(frame_prefix_duration(e, nominal, data, bit + 1), tx_timing.oscillator_ppm);
   };
 
-  // A loser contended: its pending frame and encoding are known (attempt()).
-  completion_.losses.clear();
-  for (const Arbitration::AtBit& lost : arbitration_.lost()) {
-    Node& n = nodes_[lost.node];
-    completion_.losses.push_back(Completion::Loss{lost.node, lost.bit,
-                                                  n.encoded.destuffed_index(lost.bit),
-                                                  bit_end(lost.bit), n.tx->single_shot});
-    n.stats.arbitration_lost++;
+  // The losers' statistics count from the frame's start, their reports come at its end.
+  for (const Arbitration::AtBit& loss : arbitration_.lost()) {
+    nodes_[loss.node].stats.arbitration_lost++;
   }
 
   // Everybody on the bus takes part: the transmitters, and every other node as a receiver.
@@ -369,10 +388,10 @@ void CanBus::run_frame(SimTime sof) {
     finish_success(sof, tx, nominal, data);
     return;
   }
-  if (!completion_.losses.empty()) {
+  if (!arbitration_.lost().empty()) {
     SimTime latest = sof;
-    for (const auto& loss : completion_.losses) {
-      latest = std::max(latest, loss.at);
+    for (const Arbitration::AtBit& loss : arbitration_.lost()) {
+      latest = std::max(latest, arbitration_bit_end(loss.bit));
     }
     scheduler_.schedule_at(latest, [this](SimTime) { report_losses(); });
   }
@@ -483,9 +502,7 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
                             const BitTiming& data) {
   const EncodedFrame& e = encoded_tx(tx);
   Completion& c = completion_;
-  c.ppm = nodes_[tx].timing.oscillator_ppm;
-  c.nominal = nominal;
-  const int64_t bit_ns = nodes_[tx].bit_ns;
+  const int64_t bit_ns = c.bit_ns;
   if (bit_ns != 0 && !e.brs) {
     c.eof_end = sof + SimDuration(bit_ns * e.length);
     c.ifs_end = c.eof_end + SimDuration(bit_ns * kIntermissionBits);
@@ -505,7 +522,7 @@ void CanBus::finish_success(SimTime sof, NodeId tx, const BitTiming& nominal,
   if (on_bus_event) {
     on_bus_event(BusEvent{BusEvent::Kind::frame, sof, c.eof_end, tx, c.sent[0]->frame, 0});
   }
-  scheduler_.schedule_at(c.eof_end, *this, kFrameEnd);
+  follow_up(c.eof_end, kFrameEnd);
 }
 
 void CanBus::complete_success(SimTime eof_end) {
@@ -541,7 +558,7 @@ void CanBus::complete_success(SimTime eof_end) {
     n.controller->on_tx_done(eof_end);
     report_if_changed(id, eof_end);
   }
-  scheduler_.schedule_at(c.ifs_end, *this, kBusFree);
+  follow_up(c.ifs_end, kBusFree);
 }
 
 void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {

@@ -226,5 +226,79 @@ TEST(SimScheduler, SameInputsGiveTheSameTrace) {
   EXPECT_EQ(run(), run());
 }
 
+// A handler that follows itself up every `period` ns, `left` times: at once when run_inline()
+// allows it, else through the queue. It notes each run's instant and whether it ran inline.
+class FollowingUp final : public EventHandler {
+ public:
+  FollowingUp(SimScheduler& s, int64_t period, int left) : s_(s), period_(period), left_(left) {}
+  void on_event(SimTime now, uint64_t) override {
+    for (;;) {
+      runs.push_back({now.ns(), inline_});
+      if (--left_ == 0) {
+        return;
+      }
+      const SimTime next = now + SimDuration(period_);
+      inline_ = s_.run_inline(next);
+      if (!inline_) {
+        s_.schedule_at(next, *this, 0);
+        return;
+      }
+      EXPECT_EQ(s_.now(), next);
+      now = next;
+    }
+  }
+  struct Run {
+    int64_t at;
+    bool was_inline;
+    bool operator==(const Run&) const = default;
+  };
+  std::vector<Run> runs;
+
+ private:
+  SimScheduler& s_;
+  int64_t period_;
+  int left_;
+  bool inline_ = false;
+};
+
+TEST(SimScheduler, AFollowUpRunsInlineOnlyWhenNothingElseIsDueByItsInstant) {
+  SimScheduler s;
+  FollowingUp h(s, 10, 5);
+  std::vector<int64_t> other;
+  s.schedule_at(SimTime::from_ns(0), h, 0);
+  // An event due exactly at the third run's instant, queued before it: it runs first.
+  s.schedule_at(SimTime::from_ns(20), [&](SimTime t) { other.push_back(t.ns()); });
+  std::vector<int64_t> before;
+  const std::size_t ran =
+      s.run_until(SimTime::from_ns(1000), SIZE_MAX, [&](SimTime at) { before.push_back(at.ns()); });
+  using Run = FollowingUp::Run;
+  EXPECT_EQ(h.runs,
+            (std::vector<Run>{{0, false}, {10, true}, {20, false}, {30, true}, {40, true}}));
+  EXPECT_EQ(other, (std::vector<int64_t>{20}));
+  // Every event counts, the inline ones too, and `before` hears of each in order.
+  EXPECT_EQ(ran, 6u);
+  EXPECT_EQ(before, (std::vector<int64_t>{0, 10, 20, 20, 30, 40}));
+  EXPECT_EQ(s.now().ns(), 1000);
+}
+
+TEST(SimScheduler, AFollowUpPastTheLimitOrTheBoundWaitsForTheNextRun) {
+  SimScheduler s;
+  FollowingUp h(s, 10, 6);
+  s.schedule_at(SimTime::from_ns(0), h, 0);
+  // The limit: 0, 10 and 20 run, 30 lies beyond it.
+  EXPECT_EQ(s.run_until(SimTime::from_ns(25)), 3u);
+  EXPECT_EQ(s.now().ns(), 25);
+  EXPECT_EQ(s.pending(), 1u);
+  // The bound: two events, the second inline; time stays at the last one run.
+  EXPECT_EQ(s.run_until(SimTime::from_ns(1000), 2), 2u);
+  EXPECT_EQ(s.now().ns(), 40);
+  EXPECT_EQ(s.run_until(SimTime::from_ns(1000)), 1u);
+  using Run = FollowingUp::Run;
+  EXPECT_EQ(h.runs, (std::vector<Run>{
+                        {0, false}, {10, true}, {20, true}, {30, false}, {40, true}, {50, false}}));
+  // Outside a run nothing runs inline.
+  EXPECT_FALSE(s.run_inline(SimTime::from_ns(1000)));
+}
+
 }  // namespace
 }  // namespace canemu::model

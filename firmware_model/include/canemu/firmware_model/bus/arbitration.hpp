@@ -23,10 +23,13 @@ class Arbitration {
   struct Contender {
     NodeId node = 0;
     const EncodedFrame* bits = nullptr;  // what it sends; must outlive the results
+    bool single_shot = false;            // the caller's, kept with a loss (AtBit)
   };
   struct AtBit {
     NodeId node = 0;
-    uint16_t bit = 0;  // frame bit index, SOF = 0, stuff bits counted
+    uint16_t bit = 0;            // frame bit index, SOF = 0, stuff bits counted
+    uint16_t destuffed_bit = 0;  // the same without the stuff bits before it
+    bool single_shot = false;    // the contender's
   };
 
   // Resolves one start of frame among `contenders` (at least one). Of identical frames, the
@@ -71,8 +74,10 @@ class Arbitration {
   const std::vector<NodeId>& senders() const { return senders_; }
   NodeId winner() const { return senders_.front(); }
   const EncodedFrame& winning_bits() const { return *winning_bits_; }
-  // Contenders that lost arbitration, with the bit at which they did, in contender order.
+  // Contenders that lost arbitration, with the bit at which they did, in contender order; kept
+  // until forget_lost() or the next begin().
   std::span<const AtBit> lost() const { return lost_.span(); }
+  void forget_lost() { lost_.clear(); }
   // Senders whose frame departs from the winner's after the arbitration field, at that bit.
   const std::vector<AtBit>& collisions() const { return collisions_; }
   // The bit at which `node`'s frame collides with the winner's, if it does.

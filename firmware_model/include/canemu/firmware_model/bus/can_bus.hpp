@@ -238,28 +238,44 @@ class CanBus final : private EventHandler {
   // Events the bus schedules on itself, by tag.
   enum EventTag : uint64_t { kAttempt = 1, kFrameEnd = 2, kBusFree = 3 };
   void on_event(SimTime now, uint64_t tag) override;
+  // A frame's end, and the bus free after it, are due at `at`. From on_event() they are run by
+  // its loop, at once when SimScheduler::run_inline() allows it and scheduled otherwise, once
+  // the event that made them due has done all its work; from anywhere else they are scheduled.
+  void follow_up(SimTime at, EventTag tag) {
+    if (handling_) {
+      follow_at_ = at;
+      follow_tag_ = tag;
+    } else {
+      scheduler_.schedule_at(at, *this, tag);
+    }
+  }
+  bool handling_ = false;  // on_event() runs
+  SimTime follow_at_;
+  uint64_t follow_tag_ = 0;  // 0: none
 
   // The frame on the bus between its start and its completion.
   struct Completion {
+    SimTime sof;
     SimTime eof_end;
     SimTime ifs_end;
     SimTime last_dominant_end;
     BitTiming nominal;
     int32_t ppm = 0;
+    int64_t bit_ns = 0;  // the transmitter's Node::bit_ns
     // The transmitters' frames (in_flight_ order): their pending_tx(), valid until they are told
     // the frame is done.
     NodeList<const TxFrame*> sent;
-    // Arbitration losses of this frame: node, bit, end of that bit. Reported at the end of the
-    // frame (or of its error frame), each with its own instant.
-    struct Loss {
-      NodeId node;
-      uint16_t bit;
-      uint16_t destuffed_bit;
-      SimTime at;
-      bool single_shot;  // as requested when the frame started
-    };
-    NodeList<Loss> losses;
   };
+  // The end of bit `bit` of the arbitration field of the frame on the bus, by its transmitter's
+  // clock: the instant of a loss there (the bits before a data phase are nominal).
+  SimTime arbitration_bit_end(uint16_t bit) const {
+    const Completion& c = completion_;
+    if (c.bit_ns != 0) {
+      return c.sof + SimDuration(c.bit_ns * (int64_t{bit} + 1));
+    }
+    return arbitration_bit_end_slow(bit);
+  }
+  SimTime arbitration_bit_end_slow(uint16_t bit) const;
 
   // A node that may be on the bus (connected, participating, with a usable bit time) and what a
   // start of frame needs of it. The list (in node order) is rebuilt at the first look after
@@ -375,6 +391,8 @@ class CanBus final : private EventHandler {
 
   void schedule_attempt(SimTime at);
   void attempt(SimTime now);
+  // Arbitration losses of the frame on the bus (arbitration_.lost()) are reported at its end, or
+  // at the latest of their instants when an error frame follows, each at its own instant.
   // These four are inlined into their callers in can_bus.cpp (the frame's start into attempt(),
   // its end into on_event()), the only file that calls them.
   [[gnu::always_inline]] inline void run_frame(SimTime sof);

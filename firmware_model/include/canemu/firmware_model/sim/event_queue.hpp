@@ -87,6 +87,16 @@ class EventQueue {
     return room_[0].time;
   }
 
+  // Whether an event may be due at or before `t`: an entry of the heap other than the one
+  // take_due() took, cancelled or not (a cancelled one answers yes, which is only ever safe). Its
+  // earliest lies at the top, or with the top taken in one of the top's two children.
+  bool any_due_by(SimTime t) const {
+    if (!taken_) {
+      return count_ != 0 && room_[0].time <= t;
+    }
+    return (count_ > 1 && room_[1].time <= t) || (count_ > 2 && room_[2].time <= t);
+  }
+
   // Removes and returns the earliest event, if any.
   std::optional<Entry> pop() {
     settle();

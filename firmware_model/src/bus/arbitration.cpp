@@ -29,34 +29,6 @@ inline uint16_t first_split(const EncodedFrame& a, const EncodedFrame& b, bool& 
 
 }  // namespace
 
-bool Arbitration::resolve_in_first_word() {
-  clear_results();
-  // The smallest first word wins if no other contender has it too.
-  if (tie_) {
-    return false;
-  }
-  const std::span<const Contender> contenders = contenders_.span();
-  const std::size_t best = smallest_;
-  const uint64_t best_word = smallest_word_;
-  // Every other contender must lose within its arbitration field (the first word holds it).
-  for (std::size_t k = 0; k < contenders.size(); ++k) {
-    if (k == best) {
-      continue;
-    }
-    const EncodedFrame& bits = *contenders[k].bits;
-    const auto at = static_cast<uint16_t>(__builtin_clzll(bits.level[0] ^ best_word));
-    if (at >= bits.arbitration_end) {
-      lost_.clear();
-      return false;
-    }
-    lost_.push_back(
-        AtBit{contenders[k].node, at, bits.destuffed_index(at), contenders[k].single_shot});
-  }
-  winning_bits_ = contenders[best].bits;
-  senders_.push_back(contenders[best].node);
-  return true;
-}
-
 void Arbitration::resolve(std::span<const Contender> contenders) {
   begin(contenders.size());
   for (const Contender& c : contenders) {

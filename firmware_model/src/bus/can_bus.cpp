@@ -39,6 +39,7 @@ NodeId CanBus::attach(CanController& controller) {
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
   completion_.sent.fit(node_count_);
+  arbitration_.reserve(node_count_);
   // nodes_ may have moved: the receivers of a frame on the wire point into it anew, in place (a
   // controller may attach from a callback while the frame's end walks the list, so its room
   // grows only where the list is filled: plain_roles(), general_roles()).
@@ -292,7 +293,7 @@ void CanBus::attempt(SimTime now) {
     injector_->before_arbitration(now, *this);
   }
   Arbitration& arbitration = arbitration_;
-  arbitration.begin(node_count_);
+  arbitration.begin();
   std::optional<SimTime> next_ready;
   for (const Member& m : members()) {
     Node& n = *m.node;
@@ -331,8 +332,9 @@ void CanBus::run_frame(SimTime sof) {
   const std::vector<NodeId>& active = arbitration_.senders();
   const NodeId tx = active.front();
   in_flight_ = active;  // the arbitration's list stays as it is until the bus is free again
-  const TxFrame& tx_frame = *pending(nodes_[tx]);
-  const EncodedFrame& e = encoded_tx(tx);
+  // The winner contended: its pending frame and encoding are known (attempt()).
+  const TxFrame& tx_frame = *nodes_[tx].tx;
+  const EncodedFrame& e = nodes_[tx].encoded;
   const Node& tx_node = refresh_timing(tx);
   const NodeTiming& tx_timing = tx_node.timing;
   const BitTiming& nominal = tx_timing.nominal;
@@ -486,8 +488,10 @@ std::optional<uint16_t> CanBus::plain_roles(NodeId tx, const EncodedFrame& e, bo
   if (first == UINT16_MAX) {
     // Nothing here depends on the frame beyond its sender, fd and brs: kept for the next one.
     plain_checks_.clear();
+    plain_changes_ = 0;
     for (const Member& m : ms) {
-      plain_checks_.push_back(PlainCheck{m.node->fc, m.node->fc->passive_or_off_changes()});
+      plain_checks_.push_back(m.node->fc);
+      plain_changes_ += m.node->fc->passive_or_off_changes();
     }
     plain_valid_ = true;
     plain_tx_ = tx;

@@ -40,8 +40,15 @@ class Arbitration {
   // each (in order; their first words are compared as they come, so that the common case needs
   // no second look at them), then resolve() (at least one added).
   void begin(std::size_t most) {
+    reserve(most);
+    begin();
+  }
+  // begin() for at most as many contenders as reserve() made room for.
+  void reserve(std::size_t most) {
     contenders_.fit(most);
     lost_.fit(most);
+  }
+  void begin() {
     contenders_.clear();
     smallest_ = 0;
     smallest_word_ = ~uint64_t{0};
@@ -65,7 +72,7 @@ class Arbitration {
   // from it within its arbitration field; false, with nothing recorded, if not), and the walk
   // over the whole frames (ties, collisions after the arbitration field), which decides any
   // case on its own and is what resolve() does when the first returns false.
-  bool resolve_in_first_word();
+  [[gnu::always_inline]] inline bool resolve_in_first_word();
   void resolve_walk();
   std::span<const Contender> contenders() const { return contenders_.span(); }
 
@@ -119,5 +126,34 @@ class Arbitration {
   std::vector<AtBit> collisions_;
   std::vector<uint16_t> split_;  // scratch: where each contender departs from the winner
 };
+
+// Inline: the bus calls it at every start of frame, and it is a handful of compares.
+inline bool Arbitration::resolve_in_first_word() {
+  clear_results();
+  // The smallest first word wins if no other contender has it too.
+  if (tie_) {
+    return false;
+  }
+  const std::span<const Contender> contenders = contenders_.span();
+  const std::size_t best = smallest_;
+  const uint64_t best_word = smallest_word_;
+  // Every other contender must lose within its arbitration field (the first word holds it).
+  for (std::size_t k = 0; k < contenders.size(); ++k) {
+    if (k == best) {
+      continue;
+    }
+    const EncodedFrame& bits = *contenders[k].bits;
+    const auto at = static_cast<uint16_t>(__builtin_clzll(bits.level[0] ^ best_word));
+    if (at >= bits.arbitration_end) {
+      lost_.clear();
+      return false;
+    }
+    lost_.push_back(
+        AtBit{contenders[k].node, at, bits.destuffed_index(at), contenders[k].single_shot});
+  }
+  winning_bits_ = contenders[best].bits;
+  senders_.push_back(contenders[best].node);
+  return true;
+}
 
 }  // namespace canemu::model

@@ -311,12 +311,12 @@ class CanBus final : private EventHandler {
     if (!plain_valid_ || plain_tx_ != tx || plain_fd_ != fd || plain_brs_ != brs) {
       return false;
     }
-    for (const PlainCheck& c : plain_checks_) {
-      if (c.fc->passive_or_off_changes() != c.changes) {
-        return false;
-      }
+    // Each count only grows: their sum is as it was only if every one is.
+    uint64_t changes = 0;
+    for (const FaultConfinement* fc : plain_checks_) {
+      changes += fc->passive_or_off_changes();
     }
-    return true;
+    return changes == plain_changes_;
   }
   // The same for any frame, through FrameRoles: `fault` injected, acknowledgements suppressed,
   // several senders. Both fill parts_ and return the first detection, if any.
@@ -470,11 +470,9 @@ class CanBus final : private EventHandler {
   NodeId plain_tx_ = 0;
   bool plain_fd_ = false;
   bool plain_brs_ = false;
-  struct PlainCheck {
-    const FaultConfinement* fc;
-    uint32_t changes;  // its passive_or_off_changes() then
-  };
-  std::vector<PlainCheck> plain_checks_;  // per member
+  // Each member's counters, and the sum of their passive_or_off_changes() then.
+  std::vector<const FaultConfinement*> plain_checks_;
+  uint64_t plain_changes_ = 0;
   // decodes(tx, rx, brs) for every pair: -1 unknown, 0 no, 1 yes; cleared on timing changes.
   std::vector<int8_t> decodes_cache_;
 

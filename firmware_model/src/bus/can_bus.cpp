@@ -39,7 +39,13 @@ NodeId CanBus::attach(CanController& controller) {
   nodes_.push_back(std::move(n));
   node_count_ = nodes_.size();
   completion_.sent.fit(node_count_);
-  arbitration_.reserve(node_count_);
+  // The arbitration's lists are read until the bus is free (their room would move): room for
+  // the new node is made then, before the next arbitration.
+  if (busy_) {
+    arbitration_room_due_ = true;
+  } else {
+    arbitration_.reserve(node_count_);
+  }
   // nodes_ may have moved: the receivers of a frame on the wire point into it anew, in place (a
   // controller may attach from a callback while the frame's end walks the list, so its room
   // grows only where the list is filled: plain_roles(), general_roles()).
@@ -141,11 +147,13 @@ SimTime CanBus::arbitration_bit_end_slow(uint16_t bit) const {
 }
 
 void CanBus::report_losses() {
+  // The list's room stays while the bus is busy (attach()); a node is looked up again after a
+  // controller's call, which may attach a node and move them.
   for (const Arbitration::AtBit& loss : arbitration_.lost()) {
-    Node& n = nodes_[loss.node];
     const SimTime at = arbitration_bit_end(loss.bit);
-    n.controller->on_arbitration_lost(at, loss.bit, loss.destuffed_bit);
+    nodes_[loss.node].controller->on_arbitration_lost(at, loss.bit, loss.destuffed_bit);
     if (loss.single_shot) {
+      Node& n = nodes_[loss.node];
       n.stats.tx_dropped++;
       forget_tx(n);
       n.controller->on_tx_dropped(at);
@@ -567,6 +575,10 @@ void CanBus::complete_success(SimTime eof_end) {
 
 void CanBus::bus_released(SimTime last_dominant_end, SimTime idle_at) {
   busy_ = false;
+  if (arbitration_room_due_) {
+    arbitration_room_due_ = false;
+    arbitration_.reserve(node_count_);
+  }
   in_flight_ = {};
   free_at_ = idle_at;
   last_dominant_end_ = last_dominant_end;

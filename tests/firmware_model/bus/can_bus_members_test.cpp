@@ -195,6 +195,49 @@ TEST(CanBusMembers, ANodeAttachedFromAReceiversCallbackLeavesTheFramesEndWhole) 
   EXPECT_EQ(more[0].received.size(), 1u);  // the nodes attached meanwhile get the next frame
 }
 
+TEST(CanBusMembers, ANodeAttachedFromALosersCallbackLeavesTheLossesWhole) {
+  // The frame's end reports its losses from the arbitration's list: a loser that attaches nodes
+  // from that call (the list's room and the node vector may move) leaves the report intact, the
+  // single-shot loser after it told of its loss and of its dropped frame once.
+  struct Attaching final : TestController {
+    using TestController::TestController;
+    std::deque<TestController>* more = nullptr;
+    CanBus* bus = nullptr;
+    void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed) override {
+      TestController::on_arbitration_lost(at, bit, destuffed);
+      for (int i = 0; i < 8; ++i) {
+        more->emplace_back().attach_to(*bus);
+      }
+    }
+  };
+  Fixture f;
+  std::deque<TestController> more;
+  TestController a(f.bus);
+  Attaching b(f.bus);
+  b.more = &more;
+  b.bus = &f.bus;
+  TestController c(f.bus);
+  a.send(*Frame::classic(0x100, std::vector<uint8_t>{}));
+  b.send(*Frame::classic(0x300, std::vector<uint8_t>{}));
+  c.send(*Frame::classic(0x200, std::vector<uint8_t>{}), true);
+  f.run_until(60 * kBit);
+  ASSERT_EQ(a.sent.size(), 1u);
+  ASSERT_EQ(b.lost.size(), 1u);
+  ASSERT_EQ(c.lost.size(), 1u);
+  // 0x100 against 0x300 and 0x200: both depart at bit 2 (SOF, then identifier bit 10).
+  EXPECT_EQ(b.lost[0].bit, 2);
+  EXPECT_EQ(c.lost[0].bit, 2);
+  EXPECT_EQ(c.lost[0].at.ns(), 3 * kBit);
+  ASSERT_EQ(c.dropped.size(), 1u);
+  EXPECT_EQ(c.dropped[0].ns(), 3 * kBit);
+  EXPECT_EQ(f.bus.stats(c.id()).tx_dropped, 1u);
+  EXPECT_EQ(more.size(), 8u);
+  // b tries again, and the nodes attached meanwhile receive its frame.
+  f.run_until(200 * kBit);
+  ASSERT_EQ(b.sent.size(), 1u);
+  EXPECT_EQ(more[7].received.size(), 1u);
+}
+
 TEST(CanBusMembers, CountersWrittenWithoutTellingTheBusStillDecideBusOff) {
   Fixture f;
   TestController a(f.bus), b(f.bus);

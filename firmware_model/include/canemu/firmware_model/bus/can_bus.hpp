@@ -450,6 +450,7 @@ class CanBus final : private EventHandler {
 
   // Scratch space reused from frame to frame, and the frame in flight.
   Arbitration arbitration_;
+  bool arbitration_room_due_ = false;  // a node attached while busy (attach())
   std::vector<BusParticipant> parts_;
   // Of parts_, the receivers that follow the frame (not its senders), in the same order: what
   // the frame's successful end goes through. Pointers into nodes_: attach() re-points them.

@@ -162,26 +162,39 @@ TEST(CanBusMembers, ANodeAttachedBetweenFramesReceivesTheNextOne) {
   EXPECT_EQ(b.received.size(), 2u);
 }
 
+// A controller that attaches `n` more nodes to its bus from one of its callbacks (which one, a
+// test's subclass says), into `more`.
+class Attacher : public TestController {
+ public:
+  Attacher(CanBus& bus, std::deque<TestController>& more)
+      : TestController(bus), bus_(bus), more_(more) {}
+
+ protected:
+  void attach_more(int n) {
+    for (int i = 0; i < n; ++i) {
+      more_.emplace_back().attach_to(bus_);
+    }
+  }
+
+ private:
+  CanBus& bus_;
+  std::deque<TestController>& more_;
+};
+
 TEST(CanBusMembers, ANodeAttachedFromAReceiversCallbackLeavesTheFramesEndWhole) {
   // The frame's end walks its receivers and tells each: a controller that attaches another node
   // from that call (the node vector may move) leaves the walk intact, every receiver told once.
-  struct Attaching final : TestController {
-    using TestController::TestController;
-    std::deque<TestController>* more = nullptr;
-    CanBus* bus = nullptr;
+  struct Attaching final : Attacher {
+    using Attacher::Attacher;
     void on_frame(SimTime at, const Frame& frame, bool own) override {
       TestController::on_frame(at, frame, own);
-      for (int i = 0; i < 4; ++i) {
-        more->emplace_back().attach_to(*bus);
-      }
+      attach_more(4);
     }
   };
   Fixture f;
   std::deque<TestController> more;
   TestController a(f.bus);
-  Attaching b(f.bus);
-  b.more = &more;
-  b.bus = &f.bus;
+  Attaching b(f.bus, more);
   TestController c(f.bus), d(f.bus);
   a.send(k123);
   f.run_until(100 * kBit);
@@ -199,23 +212,17 @@ TEST(CanBusMembers, ANodeAttachedFromALosersCallbackLeavesTheLossesWhole) {
   // The frame's end reports its losses from the arbitration's list: a loser that attaches nodes
   // from that call (the list's room and the node vector may move) leaves the report intact, the
   // single-shot loser after it told of its loss and of its dropped frame once.
-  struct Attaching final : TestController {
-    using TestController::TestController;
-    std::deque<TestController>* more = nullptr;
-    CanBus* bus = nullptr;
+  struct Attaching final : Attacher {
+    using Attacher::Attacher;
     void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed) override {
       TestController::on_arbitration_lost(at, bit, destuffed);
-      for (int i = 0; i < 8; ++i) {
-        more->emplace_back().attach_to(*bus);
-      }
+      attach_more(8);
     }
   };
   Fixture f;
   std::deque<TestController> more;
   TestController a(f.bus);
-  Attaching b(f.bus);
-  b.more = &more;
-  b.bus = &f.bus;
+  Attaching b(f.bus, more);
   TestController c(f.bus);
   a.send(*Frame::classic(0x100, std::vector<uint8_t>{}));
   b.send(*Frame::classic(0x300, std::vector<uint8_t>{}));

@@ -1,6 +1,6 @@
-// What the files of CanBus share (can_bus.cpp: members, arbitration, frames that succeed;
-// can_bus_errors.cpp: dominant holds and error phases; can_bus_states.cpp: error states and
-// bus-off recovery).
+// What the files of CanBus share (can_bus.cpp: arbitration, roles, frames that succeed;
+// can_bus_nodes.cpp: what it keeps of its nodes, the member list among it; can_bus_errors.cpp:
+// dominant holds and error phases; can_bus_states.cpp: error states and bus-off recovery).
 #pragma once
 
 #include "canemu/firmware_model/bus/can_bus.hpp"

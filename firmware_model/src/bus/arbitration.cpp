@@ -94,7 +94,7 @@ void Arbitration::resolve_walk() {
       lost_.push_back(AtBit{c.node, d, c.bits->destuffed_index(d), c.single_shot});
     } else {
       senders_.push_back(c.node);
-      collisions_.push_back(AtBit{c.node, d, c.bits->destuffed_index(d), c.single_shot});
+      collisions_.push_back(AtBit{c.node, d});  // only the node and the bit are read
     }
   }
 }

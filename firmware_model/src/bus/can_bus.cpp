@@ -241,11 +241,6 @@ void CanBus::run_frame(SimTime sof) {
            with_ppm(frame_prefix_duration(e, nominal, data, bit + 1), tx_timing.oscillator_ppm);
   };
 
-  // The losers' statistics count from the frame's start, their reports come at its end.
-  for (const Arbitration::AtBit& loss : arbitration_.lost()) {
-    nodes_[loss.node].stats.arbitration_lost++;
-  }
-
   // Everybody on the bus takes part: the transmitters, and every other node as a receiver.
   FrameFault fault;
   if (injector_ != nullptr && injector_->frames_wanted()) {
@@ -275,9 +270,14 @@ void CanBus::run_frame(SimTime sof) {
     }
   }
   if (!first_bit) {
+    // The losers' statistics count from the frame's start, their reports come at its end.
+    for (const Arbitration::AtBit& loss : arbitration_.lost()) {
+      nodes_[loss.node].stats.arbitration_lost++;
+    }
     finish_success(sof, tx, nominal, data);
     return;
   }
+  join_late_contenders(tx, fault, acks_suppressed, *first_bit);
   if (!arbitration_.lost().empty()) {
     SimTime latest = sof;
     for (const Arbitration::AtBit& loss : arbitration_.lost()) {
@@ -291,7 +291,7 @@ void CanBus::run_frame(SimTime sof) {
 
 std::optional<uint16_t> CanBus::general_roles(NodeId tx, const EncodedFrame& e,
                                               const FrameFault& fault, bool acks_suppressed) {
-  const std::vector<NodeId>& active = arbitration_.senders();
+  const std::span<const NodeId> active = in_flight_;  // (join_late_contenders: and more)
   const Frame& frame = pending(nodes_[tx])->frame;
   const FrameRoles roles(e, fault, acks_suppressed);
   std::vector<BusParticipant>& parts = parts_;

@@ -61,10 +61,44 @@ void CanBus::run_hold(SimTime now) {
   run_error_phase(now, parts, nullptr, nominal, nominal, 0);
 }
 
+void CanBus::join_late_contenders(NodeId tx, const FrameFault& fault, bool acks_suppressed,
+                                  uint16_t first_bit) {
+  // A contender whose loss lies after the first detection still sends when the error comes
+  // (only a dominant hold comes that early: every other detection lies at the end of the
+  // arbitration field or later). It is one of the error's transmitters, and the error phase
+  // plays out what becomes of it (a loss, an error). The others lost by then, at the latest at
+  // the same sample point: receivers, told of the loss at its instant, before the error frame
+  // ends.
+  bool late = false;
+  for (const Arbitration::AtBit& loss : arbitration_.lost()) {
+    if (loss.bit > first_bit) {
+      if (!late) {
+        late = true;
+        error_senders_.assign(in_flight_.begin(), in_flight_.end());
+      }
+      error_senders_.push_back(loss.node);
+      whole_encoding(nodes_[loss.node]);
+    } else {
+      nodes_[loss.node].stats.arbitration_lost++;
+    }
+  }
+  if (late) {
+    in_flight_ = error_senders_;  // until the bus is free, as the arbitration's list
+    arbitration_.forget_lost_after(first_bit);
+    general_roles(tx, nodes_[tx].encoded, fault, acks_suppressed);  // with them as senders
+  }
+}
+
 void CanBus::run_error_phase(SimTime sof, std::span<const BusParticipant> parts,
                              const EncodedFrame* e, const BitTiming& nominal, const BitTiming& data,
                              uint16_t first_bit) {
   ErrorPhase::Outcome out = ErrorPhase({sof, e, nominal, data, first_bit, holds_}, parts).run();
+  // The frame is the arbitration's senders' (not that of a contender still sending when the
+  // error came, join_late_contenders).
+  const std::vector<NodeId>& senders = arbitration_.senders();
+  const auto sends = [&](const BusParticipant& p) {
+    return p.transmitter && std::find(senders.begin(), senders.end(), p.id) != senders.end();
+  };
   const SimTime ifs_end = out.ifs_end;
   const SimTime dominant_end = out.dominant_end;
   error_frames_on_bus_++;
@@ -77,7 +111,7 @@ void CanBus::run_error_phase(SimTime sof, std::span<const BusParticipant> parts,
                 std::nullopt,
                 first_bit};
     for (const auto& p : parts) {
-      if (p.transmitter) {
+      if (sends(p)) {
         ev.transmitter = p.id;
         ev.frame = nodes_[p.id].controller->pending_tx()->frame;
         break;
@@ -89,7 +123,7 @@ void CanBus::run_error_phase(SimTime sof, std::span<const BusParticipant> parts,
   // Frames the receivers validated before the error reached them (last EOF bit) are delivered.
   std::optional<Frame> frame;
   for (const auto& p : parts) {
-    if (p.transmitter && e != nullptr) {
+    if (sends(p) && e != nullptr) {
       frame = nodes_[p.id].controller->pending_tx()->frame;
     }
   }
@@ -97,13 +131,15 @@ void CanBus::run_error_phase(SimTime sof, std::span<const BusParticipant> parts,
     scheduler_.schedule_at(a.at, [this, a, frame](SimTime now) { apply(now, a, frame); });
   }
   // At the end of the error frame: transmitters that did not succeed retry (or drop a single
-  // shot); error-passive transmitters suspend; the bus is free after the intermission.
+  // shot); error-passive transmitters suspend, unless they lost arbitration on the way (they
+  // were receivers of it); the bus is free after the intermission.
   scheduler_.schedule_at(
-      out.end, [this, transmitters = std::move(out.transmitters), ifs_end, nominal](SimTime now) {
+      out.end, [this, transmitters = std::move(out.transmitters),
+                lost = std::move(out.lost_arbitration), ifs_end, nominal](SimTime now) {
         for (const auto& [id, ok] : transmitters) {
           Node& n = nodes_[id];
           FaultConfinement& fc = n.controller->confinement();
-          if (fc.error_passive()) {
+          if (fc.error_passive() && std::find(lost.begin(), lost.end(), id) == lost.end()) {
             n.ready_at = ifs_end + nominal.bits_duration(kSuspendBits);
           }
           if (ok) {

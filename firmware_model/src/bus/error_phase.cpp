@@ -150,6 +150,9 @@ ErrorPhase::Outcome ErrorPhase::run() {
   for (std::size_t k = 0; k < parts_.size(); ++k) {
     if (parts_[k].transmitter) {
       out.transmitters.emplace_back(parts_[k].id, !st_[k].detected && st_[k].phase == Phase::done);
+      if (!st_[k].is_tx) {
+        out.lost_arbitration.push_back(parts_[k].id);
+      }
     }
   }
   return out;

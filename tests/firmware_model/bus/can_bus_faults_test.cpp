@@ -336,6 +336,104 @@ TEST(CanBusFaults, RecessiveStuffBitOverwrittenInArbitrationCostsTheTransmitterN
   EXPECT_EQ(a.errors[0].tec, 0);
 }
 
+// A node that notes the simulated instant it is told of a lost arbitration.
+struct ToldAt final : TestController {
+  ToldAt(CanBus& bus, const SimScheduler& s) : TestController(bus), sched(&s) {}
+  void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t destuffed) override {
+    told_at.push_back(sched->now());
+    TestController::on_arbitration_lost(at, bit, destuffed);
+  }
+  const SimScheduler* sched;
+  std::vector<SimTime> told_at;
+};
+
+// a sends `fa`, b `fb`, which loses to it in the arbitration field; a one-bit dominant hold
+// overwrites the recessive stuff bit 5 that both send.
+struct HoldInArbitration {
+  HoldInArbitration(const Frame& fa, const Frame& fb) {
+    f.bus.on_bus_event = [this](const BusEvent& e) { events.push_back(e); };
+    f.bus.hold_dominant(SimTime::from_ns(5 * kBit), SimDuration(kBit));
+    a.send(fa);
+    b.send(fb);
+    f.run_until(1'000'000);
+  }
+  Fixture f;
+  TestController a{f.bus};
+  ToldAt b{f.bus, f.sched};
+  std::vector<BusEvent> events;
+};
+
+TEST(CanBusFaults, ANodeStillInArbitrationWhenTheErrorComesIsOneOfItsTransmitters) {
+  // 0x000 and 0x001 are alike up to ID0, wire bit 13 (after the stuff bits 5 and 11): at bit 5
+  // b still sends. Like a, it detects a stuff error as a transmitter, which costs it nothing
+  // (rule 3, exception b), not one as a receiver (REC + 1); and it never lost that arbitration.
+  const Frame k001 = *Frame::classic(0x001, {});
+  ASSERT_TRUE(encode(kZero).is_stuff(5));
+  ASSERT_TRUE(encode(kZero).is_stuff(11));
+  const HoldInArbitration h(kZero, k001);
+  ASSERT_GE(h.b.errors.size(), 1u);
+  EXPECT_EQ(h.b.errors[0].type, CanErrorType::stuff);
+  EXPECT_EQ(h.b.errors[0].role, ErrorRole::transmitter);
+  EXPECT_EQ(h.b.errors[0].bit, 5);
+  EXPECT_EQ(h.b.errors[0].tec, 0);
+  EXPECT_EQ(h.b.errors[0].rec, 0);
+  EXPECT_EQ(h.a.errors.size(), 1u);
+  // Both retry: a wins, b loses at bit 13 of that frame and sends after it.
+  ASSERT_GE(h.events.size(), 3u);
+  EXPECT_EQ(h.events[0].kind, BusEvent::Kind::error_frame);
+  EXPECT_EQ(h.events[1].kind, BusEvent::Kind::frame);
+  EXPECT_EQ(h.events[1].transmitter, h.a.id());
+  ASSERT_EQ(h.b.lost.size(), 1u);
+  EXPECT_EQ(h.b.lost[0].bit, 13);
+  EXPECT_EQ(h.b.lost[0].at, h.events[1].start + SimDuration(14 * kBit));
+  EXPECT_EQ(h.a.sent.size(), 1u);
+  EXPECT_EQ(h.b.sent.size(), 1u);
+  EXPECT_EQ(h.b.fc.rec(), 0);
+  EXPECT_EQ(h.b.fc.tec(), 0);
+}
+
+TEST(CanBusFaults, AnErrorFrameOverBeforeALosersBitLeavesNoLossToReportLate) {
+  // Extended identifiers 0 and 1 part at ID0, past the end of the error frame that the hold at
+  // bit 5 starts (flag, delimiter and intermission: bit 23). b's one loss is in the
+  // retransmission, told at that frame's instant, never ahead of it.
+  const Frame e0 = *Frame::classic(0x0, {}, true);
+  const Frame e1 = *Frame::classic(0x1, {}, true);
+  const HoldInArbitration h(e0, e1);
+  ASSERT_GE(h.events.size(), 2u);
+  EXPECT_EQ(h.events[0].kind, BusEvent::Kind::error_frame);
+  EXPECT_EQ(h.events[1].transmitter, h.a.id());
+  ASSERT_EQ(h.b.lost.size(), 1u);
+  EXPECT_GT(h.b.lost[0].bit, 23);
+  EXPECT_EQ(h.b.lost[0].at, h.events[1].start + SimDuration((int64_t{h.b.lost[0].bit} + 1) * kBit));
+  ASSERT_EQ(h.b.told_at.size(), 1u);
+  EXPECT_EQ(h.b.told_at[0], h.events[1].end);  // a frame that succeeds tells its losers at its end
+  ASSERT_GE(h.b.errors.size(), 1u);
+  EXPECT_EQ(h.b.errors[0].role, ErrorRole::transmitter);
+  EXPECT_EQ(h.b.sent.size(), 1u);
+}
+
+TEST(CanBusFaults, ASenderThatLosesArbitrationToAHoldDoesNotSuspendItsNextTransmission) {
+  // An error-passive node that transmitted in an error frame waits 8 more bits before it sends
+  // again; one that lost arbitration on the way (here to a hold over its recessive ID10) was a
+  // receiver of it, and starts again right after the intermission.
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  a.fc.set_counters(128, 0);
+  std::vector<BusEvent> events;
+  f.bus.on_bus_event = [&](const BusEvent& e) { events.push_back(e); };
+  f.bus.hold_dominant(SimTime::from_ns(kBit), SimDuration(kBit));
+  a.send(*Frame::classic(0x400, {}));
+  f.run_until(1'000'000);
+  ASSERT_EQ(a.lost.size(), 1u);
+  EXPECT_EQ(a.lost[0].bit, 1);
+  EXPECT_EQ(a.lost[0].at.ns(), 2 * kBit);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0].kind, BusEvent::Kind::error_frame);
+  EXPECT_EQ(events[1].kind, BusEvent::Kind::frame);
+  EXPECT_EQ(events[1].start, events[0].end + SimDuration(3 * kBit));
+  EXPECT_EQ(a.sent.size(), 1u);
+}
+
 TEST(CanBusFaults, AckSuppressionLeavesALoneSenderPassiveAtTec128) {
   Fixture f;
   TestController a(f.bus), b(f.bus);

@@ -85,6 +85,10 @@ class Arbitration {
   // until forget_lost() or the next begin().
   std::span<const AtBit> lost() const { return lost_.span(); }
   void forget_lost() { lost_.clear(); }
+  // Forgets the losses after `bit`: an error came first (CanBus's error path).
+  void forget_lost_after(uint16_t bit) {
+    lost_.erase_if([bit](const AtBit& a) { return a.bit > bit; });
+  }
   // Senders whose frame departs from the winner's after the arbitration field, at that bit.
   const std::vector<AtBit>& collisions() const { return collisions_; }
   // The bit at which `node`'s frame collides with the winner's, if it does.

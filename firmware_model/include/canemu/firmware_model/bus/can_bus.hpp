@@ -392,7 +392,8 @@ class CanBus final : private EventHandler {
   void schedule_attempt(SimTime at);
   void attempt(SimTime now);
   // Arbitration losses of the frame on the bus (arbitration_.lost()) are reported at its end, or
-  // at the latest of their instants when an error frame follows, each at its own instant.
+  // at the latest of their instants when an error frame follows, each at its own instant: then
+  // only those before the first detection (join_late_contenders).
   // These four are inlined into their callers in can_bus.cpp (the frame's start into attempt(),
   // its end into on_event()), the only file that calls them.
   [[gnu::always_inline]] inline void run_frame(SimTime sof);
@@ -401,6 +402,10 @@ class CanBus final : private EventHandler {
                                                     const BitTiming& data);
   [[gnu::always_inline]] inline void complete_success(SimTime eof_end);
   [[gnu::always_inline]] inline void report_losses();
+  // An error detected at `first_bit` of the frame: contenders that had not lost by then send
+  // too (in_flight_, parts_); their losses are forgotten, the others' counted.
+  void join_late_contenders(NodeId tx, const FrameFault& fault, bool acks_suppressed,
+                            uint16_t first_bit);
   // Plays the bits from `first_bit` on (ErrorPhase) and schedules what follows from them.
   void run_error_phase(SimTime sof, std::span<const BusParticipant> parts, const EncodedFrame* bits,
                        const BitTiming& nominal, const BitTiming& data, uint16_t first_bit);
@@ -441,8 +446,9 @@ class CanBus final : private EventHandler {
   // Transmitters of the current activity: arbitration_.senders(), which no arbitration changes
   // before the bus is free again (empty for a dominant hold).
   std::span<const NodeId> in_flight_;
-  SimTime free_at_;            // end of intermission of the last activity
-  SimTime last_dominant_end_;  // recessive run on the wire started here
+  std::vector<NodeId> error_senders_;  // in_flight_ with late contenders (join_late_contenders)
+  SimTime free_at_;                    // end of intermission of the last activity
+  SimTime last_dominant_end_;          // recessive run on the wire started here
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   SimTime attempt_at_;

@@ -78,6 +78,9 @@ class ErrorPhase {
     SimTime dominant_end;         // end of the last dominant bit
     // Every transmitter, and whether it sent its whole frame without detecting an error.
     std::vector<std::pair<NodeId, bool>> transmitters;
+    // Those of them that lost arbitration on the way: receivers of the activity from there on
+    // (an error-passive one does not suspend its next transmission).
+    std::vector<NodeId> lost_arbitration;
   };
 
   ErrorPhase(const Setup& setup, std::span<const BusParticipant> parts);

@@ -27,6 +27,18 @@ class NodeList {
     room_[size_++] = v;
   }
 
+  // Removes the entries `pred` holds for, keeping the others in order.
+  template <class Pred>
+  void erase_if(Pred pred) {
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < size_; ++k) {
+      if (!pred(room_[k])) {
+        room_[kept++] = room_[k];
+      }
+    }
+    size_ = kept;
+  }
+
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
   const T& operator[](std::size_t k) const { return room_[k]; }

@@ -489,8 +489,7 @@ RingReader::RingReader(const RingMemory& m, int writer_eventfd, int own_eventfd)
       data_(m.elements()),
       capacity_(m.capacity()),
       size_(m.element_size()),
-      writer_{&hdr_->writer_signalled, &hdr_->writer_waiting, writer_eventfd, hdr_,
-              &hdr_->writer_woken_ns},
+      writer_{&hdr_->writer_signalled, &hdr_->writer_waiting, writer_eventfd, hdr_},
       own_{&hdr_->reader_signalled, &hdr_->reader_waiting, own_eventfd, hdr_} {
   read_ = hdr_->read_pos.load(std::memory_order_relaxed);
   slot_ = static_cast<uint32_t>(read_ % capacity_);

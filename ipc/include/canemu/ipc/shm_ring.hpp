@@ -65,12 +65,13 @@ struct alignas(64) RingHeader {
   // Set by a side while it blocks, cleared by the signal that wakes it.
   alignas(64) std::atomic<uint32_t> reader_waiting;
   std::atomic<uint32_t> writer_waiting;
-  // The signalling side's CLOCK_MONOTONIC (ns) when it last woke the other side, written just
-  // before the eventfd; taken (and zeroed) by the side woken: canemud starts a frame a client
-  // queued at that instant rather than at its own wake-up (take_woken_ns). 0: not known (an
-  // older peer, or no wake-up since the last take).
+  // The writer's CLOCK_MONOTONIC (ns) when it last woke the reader, written just before the
+  // eventfd; taken (and zeroed) by the reader: canemud starts a frame a client queued at that
+  // instant rather than at its own wake-up (take_woken_ns). 0: not known (an older peer, or no
+  // wake-up since the last take). Nobody needs the instant a reader woke a writer: the field
+  // after it is reserved (zero), which keeps the layout.
   std::atomic<int64_t> reader_woken_ns;
-  std::atomic<int64_t> writer_woken_ns;
+  std::atomic<int64_t> reserved_woken_ns;
 };
 static_assert(sizeof(RingHeader) == 256);
 static_assert(std::atomic<uint64_t>::is_always_lock_free);

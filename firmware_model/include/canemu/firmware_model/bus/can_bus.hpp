@@ -444,11 +444,12 @@ class CanBus final : private EventHandler {
   // per-frame recovery bookkeeping costs nothing on a healthy bus.
   bool maybe_recovering_ = false;
   // Transmitters of the current activity: arbitration_.senders(), which no arbitration changes
-  // before the bus is free again (empty for a dominant hold).
+  // before the bus is free again, or error_senders_: those and the contenders still sending when
+  // an error came (join_late_contenders). Empty for a dominant hold.
   std::span<const NodeId> in_flight_;
-  std::vector<NodeId> error_senders_;  // in_flight_ with late contenders (join_late_contenders)
-  SimTime free_at_;                    // end of intermission of the last activity
-  SimTime last_dominant_end_;          // recessive run on the wire started here
+  std::vector<NodeId> error_senders_;
+  SimTime free_at_;            // end of intermission of the last activity
+  SimTime last_dominant_end_;  // recessive run on the wire started here
   EventId attempt_event_ = 0;
   bool attempt_pending_ = false;
   SimTime attempt_at_;

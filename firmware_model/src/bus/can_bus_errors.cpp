@@ -64,11 +64,11 @@ void CanBus::run_hold(SimTime now) {
 void CanBus::join_late_contenders(NodeId tx, const FrameFault& fault, bool acks_suppressed,
                                   uint16_t first_bit) {
   // A contender whose loss lies after the first detection still sends when the error comes
-  // (only a dominant hold comes that early: every other detection lies at the end of the
-  // arbitration field or later). It is one of the error's transmitters, and the error phase
-  // plays out what becomes of it (a loss, an error). The others lost by then, at the latest at
-  // the same sample point: receivers, told of the loss at its instant, before the error frame
-  // ends.
+  // (only a dominant hold comes that early: every other detection lies at the first bit after
+  // the winner's arbitration field or later, and no loss after it). It is one of the error's
+  // transmitters, and the error phase plays out what becomes of it (a loss, an error). The
+  // others lost by then, at the latest at the same sample point: receivers, told of the loss at
+  // its instant, before the error frame ends.
   bool late = false;
   for (const Arbitration::AtBit& loss : arbitration_.lost()) {
     if (loss.bit > first_bit) {

@@ -36,7 +36,7 @@ ErrorPhase::ErrorPhase(const Setup& setup, std::span<const BusParticipant> parts
   }
   for (std::size_t k = 0; k < parts.size(); ++k) {
     st_[k].is_tx = parts[k].transmitter;
-    any_ack_ = any_ack_ || parts[k].acks;
+    any_ack_ = any_ack_ || (!parts[k].transmitter && parts[k].acks);
   }
 }
 
@@ -149,7 +149,9 @@ ErrorPhase::Outcome ErrorPhase::run() {
   out.actions = std::move(actions_);
   for (std::size_t k = 0; k < parts_.size(); ++k) {
     if (parts_[k].transmitter) {
-      out.transmitters.emplace_back(parts_[k].id, !st_[k].detected && st_[k].phase == Phase::done);
+      // A transmitter that lost arbitration did not send its frame, whatever it saw after.
+      out.transmitters.emplace_back(
+          parts_[k].id, st_[k].is_tx && !st_[k].detected && st_[k].phase == Phase::done);
       if (!st_[k].is_tx) {
         out.lost_arbitration.push_back(parts_[k].id);
       }

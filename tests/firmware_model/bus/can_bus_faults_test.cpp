@@ -412,6 +412,31 @@ TEST(CanBusFaults, AnErrorFrameOverBeforeALosersBitLeavesNoLossToReportLate) {
   EXPECT_EQ(h.b.sent.size(), 1u);
 }
 
+TEST(CanBusFaults, ALateContenderThatLosesReceivesAcknowledgesAndDropsItsSingleShot) {
+  // A hold over bit 1, dominant in both 0x000 and 0x001: nothing goes wrong, but the activity is
+  // played bit by bit from there with b among its transmitters. b (a single shot) loses at bit 13
+  // as it would have: it is told so and drops its frame, and as the only other node it receives
+  // a's frame and gives it the ACK.
+  Fixture f;
+  TestController a(f.bus);
+  TestController b(f.bus);
+  f.bus.hold_dominant(SimTime::from_ns(kBit), SimDuration(kBit));
+  a.send(kZero);
+  b.send(*Frame::classic(0x001, {}), /*single_shot=*/true);
+  f.run_until(1'000'000);
+  ASSERT_EQ(b.lost.size(), 1u);
+  EXPECT_EQ(b.lost[0].bit, 13);
+  EXPECT_EQ(b.lost[0].at.ns(), 14 * kBit);
+  EXPECT_EQ(b.dropped.size(), 1u);
+  EXPECT_TRUE(b.sent.empty());
+  ASSERT_EQ(a.sent.size(), 1u);
+  EXPECT_EQ(a.sent[0].at.ns(), 50 * kBit);
+  ASSERT_EQ(b.received.size(), 1u);
+  EXPECT_EQ(b.received[0].frame, kZero);
+  EXPECT_TRUE(a.errors.empty());
+  EXPECT_TRUE(b.errors.empty());
+}
+
 TEST(CanBusFaults, ASenderThatLosesArbitrationToAHoldDoesNotSuspendItsNextTransmission) {
   // An error-passive node that transmitted in an error frame waits 8 more bits before it sends
   // again; one that lost arbitration on the way (here to a hold over its recessive ID10) was a

@@ -207,5 +207,26 @@ TEST(ErrorPhase, ABusHeldDominantGivesAStuffErrorAndTheRule2And6Increments) {
   EXPECT_TRUE(out.transmitters.empty());
 }
 
+TEST(ErrorPhase, ATransmitterThatLosesArbitrationInThePhaseIsListedAsHavingLostIt) {
+  // 0x400 and kZero sent at once, a hold over bit 1 (dominant for kZero, 0x400's recessive
+  // ID10): 0x400's sender loses arbitration there and receives the rest, kZero's sends its whole
+  // frame. Both were transmitters; only the first lost arbitration (a receiver of the activity:
+  // no suspend transmission after it).
+  static const EncodedFrame k400Bits = encode(*Frame::classic(0x400, {}));
+  BusParticipant loser = sender(1);
+  loser.bits = &k400Bits;
+  const std::vector<BusParticipant> parts{sender(0), loser, receiver(2)};
+  const std::vector<DominantHold> holds{{SimTime::from_ns(kBit), SimDuration(kBit)}};
+  ErrorPhase::Setup setup = frame_setup(1);
+  setup.holds = holds;
+  const ErrorPhase::Outcome out = ErrorPhase(setup, parts).run();
+  ASSERT_GE(out.actions.size(), 1u);
+  EXPECT_EQ(step(out.actions[0]), (Step{1, Kind::arbitration_lost, CanErrorType::bit, kTx, 1}));
+  ASSERT_EQ(out.transmitters.size(), 2u);
+  EXPECT_EQ(out.transmitters[0], std::make_pair(NodeId{0}, true));
+  EXPECT_EQ(out.transmitters[1], std::make_pair(NodeId{1}, false));
+  EXPECT_EQ(out.lost_arbitration, std::vector<NodeId>{1});
+}
+
 }  // namespace
 }  // namespace canemu::model

@@ -26,7 +26,7 @@ struct BusParticipant {
   bool transmitter = false;
   bool drives = true;    // false for listen-only nodes
   bool decodes = true;   // timing and format let it follow the frame
-  bool acks = false;     // drives the ACK slot dominant
+  bool acks = false;     // drives the ACK slot dominant (a transmitter: once it lost arbitration)
   bool passive = false;  // error-passive when the activity started: its flags are recessive
   bool self_test = false;
   const EncodedFrame* bits = nullptr;                        // what it sends (transmitters)
@@ -76,7 +76,8 @@ class ErrorPhase {
     SimTime end;                  // end of that bit
     SimTime ifs_end;              // end of the intermission after it: the bus is free
     SimTime dominant_end;         // end of the last dominant bit
-    // Every transmitter, and whether it sent its whole frame without detecting an error.
+    // Every transmitter, and whether it sent its whole frame without detecting an error (never
+    // one that lost arbitration).
     std::vector<std::pair<NodeId, bool>> transmitters;
     // Those of them that lost arbitration on the way: receivers of the activity from there on
     // (an error-passive one does not suspend its next transmission).

@@ -86,6 +86,9 @@ inline BusParticipant FrameRoles::sender(const NodeFacts& node, const EncodedFra
   p.passive = node.error_passive;
   p.self_test = node.self_test;
   p.bits = &own;
+  // Should it lose arbitration in the error phase (a hold), it receives from there and
+  // acknowledges as a receiver does.
+  p.acks = p.drives && !acks_suppressed_;
   if (collision) {
     p.planned = std::make_pair(CanErrorType::bit, *collision);
   } else if (fault_.error && *fault_.error == CanErrorType::bit) {

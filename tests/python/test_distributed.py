@@ -300,8 +300,12 @@ def test_late_counts_events_beyond_its_bound_only(env):
         counters = json.loads(cli(b, "status", "--json"))["distributed"]["counters"]
         assert counters["late_bound_ns"] == 1_000_000
         assert counters["events_received"] >= 20
-        # 0 on an idle link; a loaded machine may delay an event beyond 1 ms now and then.
-        assert counters["late"] <= 2, counters
+        # 0 on an idle link; a loaded machine may delay events beyond 1 ms now and then, so the
+        # count is held to the largest delay, which the daemon measures on the same events: some
+        # counted exactly when that delay is beyond the bound.
+        assert counters["late"] <= counters["events_received"], counters
+        assert (counters["late"] > 0) == (counters["late_max_ns"] > counters["late_bound_ns"]), \
+            counters
         assert 0 <= counters["late_max_ns"]
 
 

@@ -114,6 +114,17 @@ class TestController : public CanController, public FrameLog<SimTime> {
     }
   }
 
+  // Withdraws the queued frames, but for one on the wire (CanBus::in_flight), as an abort does.
+  void abort() {
+    const std::size_t keep = bus_->in_flight(id_) && !queue_.empty() ? 1 : 0;
+    while (queue_.size() > keep) {
+      queue_.pop_back();
+    }
+    bus_->tx_changed(id_);
+  }
+  // Tells the bus to look at the pending frame again, which has not changed.
+  void look_again() { bus_->tx_changed(id_); }
+
   NodeTiming timing() const override { return timing_; }
   bool participating() const override { return running; }
   bool listen_only() const override { return listen; }

@@ -76,7 +76,7 @@ void CanBus::report_losses() {
   for (const Arbitration::AtBit& loss : arbitration_.lost()) {
     const SimTime at = arbitration_bit_end(loss.bit);
     nodes_[loss.node].controller->on_arbitration_lost(at, loss.bit, loss.destuffed_bit);
-    if (loss.single_shot) {
+    if (loss.single_shot && still_pending(nodes_[loss.node])) {
       Node& n = nodes_[loss.node];
       n.stats.tx_dropped++;
       forget_tx(n);
@@ -84,6 +84,16 @@ void CanBus::report_losses() {
     }
   }
   arbitration_.forget_lost();
+}
+
+bool CanBus::still_pending(Node& n) {
+  if (n.tx_known) {
+    return true;  // the controller has not changed its pending frame since the frame's start
+  }
+  // It has (tx_changed): an abort, a new frame, or only a look again at the same one. The frame
+  // that lost is the one its encoding was made of, which only the next arbitration replaces.
+  const TxFrame* p = pending(n);
+  return p != nullptr && n.encoded_frame && p->frame == *n.encoded_frame;
 }
 
 void CanBus::tx_changed(NodeId node) {

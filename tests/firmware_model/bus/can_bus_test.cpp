@@ -200,6 +200,42 @@ TEST(CanBus, SingleShotFrameThatLosesArbitrationIsDropped) {
   EXPECT_EQ(f.bus.frames_on_bus(), 1u);
 }
 
+// The loss is reported at the frame's end, but the single shot left the controller before: the
+// frame queued in its place is sent, not dropped.
+TEST(CanBus, ASingleShotWithdrawnAfterItLostArbitrationTakesNoOtherFrameWithIt) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  a.send(k123, /*single_shot=*/true);
+  b.send(kZero);
+  f.run_until(20 * kBit);  // kZero on the wire since bit 0; k123 lost at bit 3
+  a.abort();
+  a.send(frame(0x300, {}));
+  f.run_until(1'000'000);
+  ASSERT_EQ(a.lost.size(), 1u);
+  EXPECT_EQ(a.lost[0].bit, 3u);
+  EXPECT_TRUE(a.dropped.empty());
+  ASSERT_EQ(a.sent.size(), 1u);
+  EXPECT_EQ(a.sent[0].frame.id(), 0x300u);
+  // After kZero (50 bits) and the intermission (3): 0x300 without data, 44 bits and 4 stuff bits.
+  EXPECT_EQ(a.sent[0].at.ns(), (50 + 3 + 48) * kBit);
+  EXPECT_EQ(b.received_ids(), std::vector<uint32_t>{0x300});
+}
+
+// A controller that only looks at its pending frame again keeps it: the single shot is dropped.
+TEST(CanBus, ASingleShotLookedAtAgainAfterItLostArbitrationIsStillDropped) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  a.send(k123, /*single_shot=*/true);
+  b.send(kZero);
+  f.run_until(20 * kBit);
+  a.look_again();
+  f.run_until(1'000'000);
+  ASSERT_EQ(a.dropped.size(), 1u);
+  EXPECT_EQ(a.dropped[0].ns(), 4 * kBit);
+  EXPECT_TRUE(a.sent.empty());
+  EXPECT_EQ(f.bus.frames_on_bus(), 1u);
+}
+
 TEST(CanBus, SelfReceptionDeliversTheOwnFrame) {
   Fixture f;
   TestController a(f.bus), b(f.bus);

@@ -131,6 +131,9 @@ Frame CanFdController::take_tx() {
 }
 
 void CanFdController::on_tx_done(SimTime at) {
+  if (tx_.empty()) {
+    return;  // nothing was pending (the bus only reports a frame it took from here)
+  }
   const Frame f = take_tx();
   if (listener_ != nullptr) {
     listener_->frame_transmitted(at, f);
@@ -138,6 +141,9 @@ void CanFdController::on_tx_done(SimTime at) {
 }
 
 void CanFdController::on_tx_dropped(SimTime at) {
+  if (tx_.empty()) {
+    return;
+  }
   const Frame f = take_tx();
   if (listener_ != nullptr) {
     listener_->transmission_dropped(at, f);

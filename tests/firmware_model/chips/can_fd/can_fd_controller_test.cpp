@@ -4,6 +4,7 @@
 
 #include "canemu/firmware_model/adapters/ixxat/btp.hpp"
 #include "canemu/firmware_model/chips/sja1000/sja1000.hpp"
+#include "hosted_station.hpp"
 #include "test_controller.hpp"
 
 namespace canemu::model {
@@ -153,6 +154,18 @@ TEST(CanFdController, AbortDropsQueuedFramesAndRejectsFdWhenDisabled) {
   EXPECT_TRUE(a.submit(TxFrame{*Frame::classic(0x11, std::vector<uint8_t>{})}));
   EXPECT_EQ(a.abort_pending(), 2u);
   EXPECT_EQ(a.tx_queued(), 0u);
+}
+
+// A report of a frame done or dropped with nothing pending changes nothing and tells nothing.
+TEST(CanFdController, ATransmissionReportedWithNothingPendingIsIgnored) {
+  CanFdController c(fd_config());
+  testing::NodeLog log;
+  c.set_listener(&log);
+  c.on_tx_dropped(SimTime::from_ns(1000));
+  c.on_tx_done(SimTime::from_ns(2000));
+  EXPECT_TRUE(log.dropped.empty());
+  EXPECT_TRUE(log.sent.empty());
+  EXPECT_EQ(c.tx_queued(), 0u);
 }
 
 // The controller's receive error count is an 8-bit field: it stops at 255.

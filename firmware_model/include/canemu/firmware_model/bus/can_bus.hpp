@@ -402,6 +402,10 @@ class CanBus final : private EventHandler {
                                                     const BitTiming& data);
   [[gnu::always_inline]] inline void complete_success(SimTime eof_end);
   [[gnu::always_inline]] inline void report_losses();
+  // Whether the frame with which `n` lost arbitration in the frame on the bus is still the one
+  // it has pending: a single shot is dropped only then. A controller may withdraw or replace it
+  // before the loss is reported (the end of the frame).
+  bool still_pending(Node& n);
   // An error detected at `first_bit` of the frame: contenders that had not lost by then send
   // too (in_flight_, parts_); their losses are forgotten, the others' counted.
   void join_late_contenders(NodeId tx, const FrameFault& fault, bool acks_suppressed,

@@ -16,6 +16,7 @@ namespace canemu::model::testing {
 // Instants in ns.
 struct NodeLog : ControllerEvents, FrameLog<int64_t> {
   std::vector<std::pair<int64_t, ErrorState>> states;
+  std::vector<std::pair<int64_t, uint16_t>> lost;  // arbitration losses: instant, bit
   void frame_received(SimTime at, const Frame& f, bool own) override {
     received.push_back({at.ns(), f, own});
   }
@@ -24,6 +25,7 @@ struct NodeLog : ControllerEvents, FrameLog<int64_t> {
   }
   void transmission_dropped(SimTime at, const Frame&) override { dropped.push_back(at.ns()); }
   void bus_error(const BusErrorEvent& e) override { errors.push_back(e); }
+  void arbitration_lost(SimTime at, uint16_t bit) override { lost.emplace_back(at.ns(), bit); }
   void state_changed(SimTime at, ErrorState s, uint16_t, uint16_t) override {
     states.emplace_back(at.ns(), s);
   }

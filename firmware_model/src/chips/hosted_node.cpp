@@ -172,6 +172,7 @@ void HostedNode::arbitration_lost(SimTime at, uint16_t bit) {
   if (sink_ != nullptr && !babble_loaded_) {
     sink_->arbitration_lost(at, bit);
   }
+  read_arbitration_capture();
 }
 
 }  // namespace canemu::model

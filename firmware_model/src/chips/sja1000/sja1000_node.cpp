@@ -53,4 +53,8 @@ void Sja1000Node::release_received() {
   chip_.release_receive_buffer();
 }
 
+void Sja1000Node::read_arbitration_capture() {
+  chip_.read(ALC);
+}
+
 }  // namespace canemu::model

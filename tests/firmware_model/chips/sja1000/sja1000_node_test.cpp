@@ -98,6 +98,25 @@ TEST(Sja1000Node, SelfReceptionAndSingleShotGoThroughTheChipCommands) {
   EXPECT_EQ(a.node.chip().read(sja1000::TXERR), 8);
 }
 
+// The driver reads ALC after each loss, so the chip captures and reports every one, not only
+// the first.
+TEST(Sja1000Node, EveryArbitrationLossIsReported) {
+  Bus b;
+  Station a(b), r(b);
+  a.start();
+  r.start();
+  r.send(kZero);
+  r.send(kZero);
+  a.send(k123);
+  b.run_until(300 * kBit);
+  // k123 departs from kZero at ID.8, bit 3: in the first frame, and in the second, which starts
+  // after the first's 50 bits and the intermission.
+  const std::vector<std::pair<int64_t, uint16_t>> lost{{4 * kBit, 3}, {(53 + 4) * kBit, 3}};
+  EXPECT_EQ(a.log.lost, lost);
+  ASSERT_EQ(a.log.sent.size(), 1u);
+  EXPECT_EQ(a.log.sent[0].at, (106 + 62) * kBit);
+}
+
 TEST(Sja1000Node, AListenOnlyNodeReceivesButNeverAcknowledges) {
   Bus b;
   Station a(b), l(b);

@@ -121,6 +121,9 @@ class HostedNode : private ControllerEvents {
   // The controller leaves bus-off by itself after settings.restart_delay (the controller of a
   // node of another daemon's bus is restarted there): no restart is scheduled here.
   virtual bool restarts_itself() const { return false; }
+  // Reads what the chip captured of an arbitration loss, as a driver that reports every loss
+  // does: the chip captures the next one only then (SJA1000: ALC).
+  virtual void read_arbitration_capture() {}
 
  private:
   void frame_received(SimTime at, const Frame& frame, bool own) override;

@@ -28,6 +28,7 @@ class Sja1000Node final : public HostedNode {
   void load(const TxFrame& tx) override;
   void abort_tx() override;
   void release_received() override;
+  void read_arbitration_capture() override;
 
   Sja1000 chip_;
 };

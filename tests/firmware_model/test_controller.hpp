@@ -136,12 +136,16 @@ class TestController : public CanController, public FrameLog<SimTime> {
 
   void on_frame(SimTime at, const Frame& f, bool own) override { received.push_back({at, f, own}); }
   void on_tx_done(SimTime at) override {
-    sent.push_back({at, queue_.front().frame, false});
-    pop();
+    if (!queue_.empty()) {  // (the bus reports only a frame it took from here)
+      sent.push_back({at, queue_.front().frame, false});
+      pop();
+    }
   }
   void on_tx_dropped(SimTime at) override {
-    dropped.push_back(at);
-    pop();
+    if (!queue_.empty()) {
+      dropped.push_back(at);
+      pop();
+    }
   }
   void on_arbitration_lost(SimTime at, uint16_t bit, uint16_t) override {
     lost.push_back({at, bit});

@@ -221,6 +221,21 @@ TEST(CanBus, ASingleShotWithdrawnAfterItLostArbitrationTakesNoOtherFrameWithIt) 
   EXPECT_EQ(b.received_ids(), std::vector<uint32_t>{0x300});
 }
 
+// The same frame queued again in its place, but not single shot: sent, not dropped.
+TEST(CanBus, ASingleShotReplacedByTheSameFrameToRepeatIsSent) {
+  Fixture f;
+  TestController a(f.bus), b(f.bus);
+  a.send(k123, /*single_shot=*/true);
+  b.send(kZero);
+  f.run_until(20 * kBit);
+  a.abort();
+  a.send(k123);
+  f.run_until(1'000'000);
+  EXPECT_TRUE(a.dropped.empty());
+  ASSERT_EQ(a.sent.size(), 1u);
+  EXPECT_EQ(a.sent[0].at.ns(), (50 + 3 + 62) * kBit);
+}
+
 // A controller that only looks at its pending frame again keeps it: the single shot is dropped.
 TEST(CanBus, ASingleShotLookedAtAgainAfterItLostArbitrationIsStillDropped) {
   Fixture f;

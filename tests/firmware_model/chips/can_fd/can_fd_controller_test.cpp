@@ -168,6 +168,45 @@ TEST(CanFdController, ATransmissionReportedWithNothingPendingIsIgnored) {
   EXPECT_EQ(c.tx_queued(), 0u);
 }
 
+// A single shot that lost arbitration and is aborted before the frame's end: the frame queued
+// after the abort is sent, not dropped.
+TEST(CanFdController, AFrameQueuedAfterALosersAbortIsSent) {
+  Bus b;
+  CanFdController a(fd_config()), r(fd_config());
+  connect_and_start(b, {&a, &r});
+  testing::NodeLog log;
+  r.set_listener(&log);
+  ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x100, 8, true)}));
+  ASSERT_TRUE(r.submit(TxFrame{fd_frame(0x200, 8, true), /*single_shot=*/true}));
+  b.run_until(20'000);  // a's frame on the wire; r lost at ID.9
+  EXPECT_EQ(r.abort_pending(), 1u);
+  ASSERT_TRUE(r.submit(TxFrame{fd_frame(0x300, 8, true)}));
+  b.run_until(2'000'000);
+  EXPECT_TRUE(log.dropped.empty());
+  ASSERT_EQ(log.sent.size(), 1u);
+  EXPECT_EQ(log.sent[0].frame.id(), 0x300u);
+}
+
+// A single shot whose controller turns error-passive between its lost arbitration and the
+// frame's end is offered again with ESI set: still the frame that lost, so it is dropped.
+TEST(CanFdController, ASingleShotThatLostIsDroppedThoughItsEsiChangedMeanwhile) {
+  Bus b;
+  CanFdController a(fd_config()), r(fd_config());
+  connect_and_start(b, {&a, &r});
+  testing::NodeLog log;
+  r.set_listener(&log);
+  ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x100, 8, true)}));
+  ASSERT_TRUE(r.submit(TxFrame{fd_frame(0x200, 8, true), /*single_shot=*/true}));
+  b.run_until(20'000);
+  r.confinement().set_counters(130, 0);
+  b.bus.counters_changed(r.node());
+  ASSERT_EQ(r.state(), ErrorState::passive);
+  b.run_until(2'000'000);
+  EXPECT_EQ(log.dropped.size(), 1u);
+  EXPECT_TRUE(log.sent.empty());
+  EXPECT_EQ(r.tx_queued(), 0u);
+}
+
 // The controller's receive error count is an 8-bit field: it stops at 255.
 TEST(CanFdController, ReceiveErrorCounterStopsAt255) {
   CanFdController c(fd_config());

@@ -200,55 +200,56 @@ TEST(CanBus, SingleShotFrameThatLosesArbitrationIsDropped) {
   EXPECT_EQ(f.bus.frames_on_bus(), 1u);
 }
 
-// The loss is reported at the frame's end, but the single shot left the controller before: the
-// frame queued in its place is sent, not dropped.
-TEST(CanBus, ASingleShotWithdrawnAfterItLostArbitrationTakesNoOtherFrameWithIt) {
+// a sends k123 single shot against b's kZero, which wins: k123 lost at bit 3, and the run stops
+// at bit 20, before kZero's end (its 50 bits), where the loss is reported.
+struct LostSingleShot {
   Fixture f;
-  TestController a(f.bus), b(f.bus);
-  a.send(k123, /*single_shot=*/true);
-  b.send(kZero);
-  f.run_until(20 * kBit);  // kZero on the wire since bit 0; k123 lost at bit 3
-  a.abort();
-  a.send(frame(0x300, {}));
-  f.run_until(1'000'000);
-  ASSERT_EQ(a.lost.size(), 1u);
-  EXPECT_EQ(a.lost[0].bit, 3u);
-  EXPECT_TRUE(a.dropped.empty());
-  ASSERT_EQ(a.sent.size(), 1u);
-  EXPECT_EQ(a.sent[0].frame.id(), 0x300u);
+  TestController a{f.bus};
+  TestController b{f.bus};
+  LostSingleShot() {
+    a.send(k123, /*single_shot=*/true);
+    b.send(kZero);
+    f.run_until(20 * kBit);
+  }
+};
+
+// The single shot left the controller before its loss was reported: the frame queued in its
+// place is sent, not dropped.
+TEST(CanBus, ASingleShotWithdrawnAfterItLostArbitrationTakesNoOtherFrameWithIt) {
+  LostSingleShot t;
+  t.a.abort();
+  t.a.send(frame(0x300, {}));
+  t.f.run_until(1'000'000);
+  ASSERT_EQ(t.a.lost.size(), 1u);
+  EXPECT_EQ(t.a.lost[0].bit, 3u);
+  EXPECT_TRUE(t.a.dropped.empty());
+  ASSERT_EQ(t.a.sent.size(), 1u);
+  EXPECT_EQ(t.a.sent[0].frame.id(), 0x300u);
   // After kZero (50 bits) and the intermission (3): 0x300 without data, 44 bits and 4 stuff bits.
-  EXPECT_EQ(a.sent[0].at.ns(), (50 + 3 + 48) * kBit);
-  EXPECT_EQ(b.received_ids(), std::vector<uint32_t>{0x300});
+  EXPECT_EQ(t.a.sent[0].at.ns(), (50 + 3 + 48) * kBit);
+  EXPECT_EQ(t.b.received_ids(), std::vector<uint32_t>{0x300});
 }
 
 // The same frame queued again in its place, but not single shot: sent, not dropped.
 TEST(CanBus, ASingleShotReplacedByTheSameFrameToRepeatIsSent) {
-  Fixture f;
-  TestController a(f.bus), b(f.bus);
-  a.send(k123, /*single_shot=*/true);
-  b.send(kZero);
-  f.run_until(20 * kBit);
-  a.abort();
-  a.send(k123);
-  f.run_until(1'000'000);
-  EXPECT_TRUE(a.dropped.empty());
-  ASSERT_EQ(a.sent.size(), 1u);
-  EXPECT_EQ(a.sent[0].at.ns(), (50 + 3 + 62) * kBit);
+  LostSingleShot t;
+  t.a.abort();
+  t.a.send(k123);
+  t.f.run_until(1'000'000);
+  EXPECT_TRUE(t.a.dropped.empty());
+  ASSERT_EQ(t.a.sent.size(), 1u);
+  EXPECT_EQ(t.a.sent[0].at.ns(), (50 + 3 + 62) * kBit);
 }
 
 // A controller that only looks at its pending frame again keeps it: the single shot is dropped.
 TEST(CanBus, ASingleShotLookedAtAgainAfterItLostArbitrationIsStillDropped) {
-  Fixture f;
-  TestController a(f.bus), b(f.bus);
-  a.send(k123, /*single_shot=*/true);
-  b.send(kZero);
-  f.run_until(20 * kBit);
-  a.look_again();
-  f.run_until(1'000'000);
-  ASSERT_EQ(a.dropped.size(), 1u);
-  EXPECT_EQ(a.dropped[0].ns(), 4 * kBit);
-  EXPECT_TRUE(a.sent.empty());
-  EXPECT_EQ(f.bus.frames_on_bus(), 1u);
+  LostSingleShot t;
+  t.a.look_again();
+  t.f.run_until(1'000'000);
+  ASSERT_EQ(t.a.dropped.size(), 1u);
+  EXPECT_EQ(t.a.dropped[0].ns(), 4 * kBit);
+  EXPECT_TRUE(t.a.sent.empty());
+  EXPECT_EQ(t.f.bus.frames_on_bus(), 1u);
 }
 
 TEST(CanBus, SelfReceptionDeliversTheOwnFrame) {

@@ -168,43 +168,44 @@ TEST(CanFdController, ATransmissionReportedWithNothingPendingIsIgnored) {
   EXPECT_EQ(c.tx_queued(), 0u);
 }
 
-// A single shot that lost arbitration and is aborted before the frame's end: the frame queued
-// after the abort is sent, not dropped.
-TEST(CanFdController, AFrameQueuedAfterALosersAbortIsSent) {
+// r sends 0x200 single shot against a's 0x100 and loses at ID.9; the run stops at 20 us, on
+// a's frame, before the loss is reported at its end.
+struct LostSingleShot {
   Bus b;
-  CanFdController a(fd_config()), r(fd_config());
-  connect_and_start(b, {&a, &r});
-  testing::NodeLog log;
-  r.set_listener(&log);
-  ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x100, 8, true)}));
-  ASSERT_TRUE(r.submit(TxFrame{fd_frame(0x200, 8, true), /*single_shot=*/true}));
-  b.run_until(20'000);  // a's frame on the wire; r lost at ID.9
-  EXPECT_EQ(r.abort_pending(), 1u);
-  ASSERT_TRUE(r.submit(TxFrame{fd_frame(0x300, 8, true)}));
-  b.run_until(2'000'000);
-  EXPECT_TRUE(log.dropped.empty());
-  ASSERT_EQ(log.sent.size(), 1u);
-  EXPECT_EQ(log.sent[0].frame.id(), 0x300u);
+  CanFdController a{fd_config()};
+  CanFdController r{fd_config()};
+  testing::NodeLog log;  // r's
+  LostSingleShot() {
+    connect_and_start(b, {&a, &r});
+    r.set_listener(&log);
+    EXPECT_TRUE(a.submit(TxFrame{fd_frame(0x100, 8, true)}));
+    EXPECT_TRUE(r.submit(TxFrame{fd_frame(0x200, 8, true), /*single_shot=*/true}));
+    b.run_until(20'000);
+  }
+};
+
+// Aborted before the frame's end: the frame queued after the abort is sent, not dropped.
+TEST(CanFdController, AFrameQueuedAfterALosersAbortIsSent) {
+  LostSingleShot t;
+  EXPECT_EQ(t.r.abort_pending(), 1u);
+  ASSERT_TRUE(t.r.submit(TxFrame{fd_frame(0x300, 8, true)}));
+  t.b.run_until(2'000'000);
+  EXPECT_TRUE(t.log.dropped.empty());
+  ASSERT_EQ(t.log.sent.size(), 1u);
+  EXPECT_EQ(t.log.sent[0].frame.id(), 0x300u);
 }
 
-// A single shot whose controller turns error-passive between its lost arbitration and the
-// frame's end is offered again with ESI set: still the frame that lost, so it is dropped.
+// Error-passive before the frame's end, the controller offers the frame again with ESI set:
+// still the frame that lost, so it is dropped.
 TEST(CanFdController, ASingleShotThatLostIsDroppedThoughItsEsiChangedMeanwhile) {
-  Bus b;
-  CanFdController a(fd_config()), r(fd_config());
-  connect_and_start(b, {&a, &r});
-  testing::NodeLog log;
-  r.set_listener(&log);
-  ASSERT_TRUE(a.submit(TxFrame{fd_frame(0x100, 8, true)}));
-  ASSERT_TRUE(r.submit(TxFrame{fd_frame(0x200, 8, true), /*single_shot=*/true}));
-  b.run_until(20'000);
-  r.confinement().set_counters(130, 0);
-  b.bus.counters_changed(r.node());
-  ASSERT_EQ(r.state(), ErrorState::passive);
-  b.run_until(2'000'000);
-  EXPECT_EQ(log.dropped.size(), 1u);
-  EXPECT_TRUE(log.sent.empty());
-  EXPECT_EQ(r.tx_queued(), 0u);
+  LostSingleShot t;
+  t.r.confinement().set_counters(130, 0);
+  t.b.bus.counters_changed(t.r.node());
+  ASSERT_EQ(t.r.state(), ErrorState::passive);
+  t.b.run_until(2'000'000);
+  EXPECT_EQ(t.log.dropped.size(), 1u);
+  EXPECT_TRUE(t.log.sent.empty());
+  EXPECT_EQ(t.r.tx_queued(), 0u);
 }
 
 // The controller's receive error count is an 8-bit field: it stops at 255.

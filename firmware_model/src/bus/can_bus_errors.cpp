@@ -134,15 +134,14 @@ void CanBus::run_error_phase(SimTime sof, std::span<const BusParticipant> parts,
   // shot); error-passive transmitters suspend, unless they lost arbitration on the way (they
   // were receivers of it); the bus is free after the intermission.
   scheduler_.schedule_at(
-      out.end, [this, transmitters = std::move(out.transmitters),
-                lost = std::move(out.lost_arbitration), ifs_end, nominal](SimTime now) {
-        for (const auto& [id, ok] : transmitters) {
-          Node& n = nodes_[id];
+      out.end, [this, transmitters = std::move(out.transmitters), ifs_end, nominal](SimTime now) {
+        for (const ErrorPhase::Outcome::Transmitter& t : transmitters) {
+          Node& n = nodes_[t.id];
           FaultConfinement& fc = n.controller->confinement();
-          if (fc.error_passive() && std::find(lost.begin(), lost.end(), id) == lost.end()) {
+          if (fc.error_passive() && !t.lost_arbitration) {
             n.ready_at = ifs_end + nominal.bits_duration(kSuspendBits);
           }
-          if (ok) {
+          if (t.sent) {
             continue;
           }
           const TxFrame* p = n.controller->pending_tx();

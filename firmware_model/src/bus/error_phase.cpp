@@ -150,11 +150,9 @@ ErrorPhase::Outcome ErrorPhase::run() {
   for (std::size_t k = 0; k < parts_.size(); ++k) {
     if (parts_[k].transmitter) {
       // A transmitter that lost arbitration did not send its frame, whatever it saw after.
-      out.transmitters.emplace_back(
-          parts_[k].id, st_[k].is_tx && !st_[k].detected && st_[k].phase == Phase::done);
-      if (!st_[k].is_tx) {
-        out.lost_arbitration.push_back(parts_[k].id);
-      }
+      out.transmitters.push_back(Outcome::Transmitter{
+          parts_[k].id, st_[k].is_tx && !st_[k].detected && st_[k].phase == Phase::done,
+          !st_[k].is_tx});
     }
   }
   return out;

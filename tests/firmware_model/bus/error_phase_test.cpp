@@ -21,6 +21,7 @@ namespace {
 using testing::kBit;
 using testing::kZero;
 using Kind = ErrorPhase::Action::Kind;
+using Tx = ErrorPhase::Outcome::Transmitter;
 
 const EncodedFrame kZeroBits = encode(kZero);
 
@@ -87,7 +88,7 @@ TEST(ErrorPhase, ALoneActiveTransmitterFlagsTheAckErrorAndEndsAfterItsDelimiter)
   EXPECT_EQ(out.ifs_end.ns(), 59 * kBit);
   EXPECT_EQ(out.dominant_end.ns(), 48 * kBit);  // the flag's last bit, 47
   ASSERT_EQ(out.transmitters.size(), 1u);
-  EXPECT_EQ(out.transmitters[0], std::make_pair(NodeId{0}, false));
+  EXPECT_EQ(out.transmitters[0], (Tx{0, /*sent=*/false, /*lost_arbitration=*/false}));
 }
 
 TEST(ErrorPhase, AnErrorPassiveTransmitterWithOnlyAnAckErrorIsNotCounted) {
@@ -126,7 +127,7 @@ TEST(ErrorPhase, FlagsSuperposeAndTheFirstDetectorSeesADominantBitAfterItsFlag) 
   EXPECT_EQ(out.ifs_end.ns(), 41 * kBit);
   EXPECT_EQ(out.dominant_end.ns(), 30 * kBit);
   ASSERT_EQ(out.transmitters.size(), 1u);
-  EXPECT_FALSE(out.transmitters[0].second);
+  EXPECT_FALSE(out.transmitters[0].sent);
 }
 
 TEST(ErrorPhase, ReceiversKeepAFrameWhoseTransmitterFlagsAnErrorInTheLastEofBits) {
@@ -146,7 +147,7 @@ TEST(ErrorPhase, ReceiversKeepAFrameWhoseTransmitterFlagsAnErrorInTheLastEofBits
   // Flag 49-54, delimiter 55-62.
   EXPECT_EQ(out.end_bit, 62u);
   EXPECT_EQ(out.end.ns(), 63 * kBit);
-  EXPECT_FALSE(out.transmitters[0].second);
+  EXPECT_FALSE(out.transmitters[0].sent);
 }
 
 TEST(ErrorPhase, AListenOnlyReceiversErrorDisturbsNobodyAndTheFrameSucceeds) {
@@ -175,7 +176,7 @@ TEST(ErrorPhase, AListenOnlyReceiversErrorDisturbsNobodyAndTheFrameSucceeds) {
   EXPECT_EQ(out.end_bit, 49u);
   EXPECT_EQ(out.end.ns(), 50 * kBit);
   EXPECT_EQ(out.ifs_end.ns(), 53 * kBit);
-  EXPECT_TRUE(out.transmitters[0].second);
+  EXPECT_TRUE(out.transmitters[0].sent);
 }
 
 TEST(ErrorPhase, ABusHeldDominantGivesAStuffErrorAndTheRule2And6Increments) {
@@ -223,9 +224,8 @@ TEST(ErrorPhase, ATransmitterThatLosesArbitrationInThePhaseIsListedAsHavingLostI
   ASSERT_GE(out.actions.size(), 1u);
   EXPECT_EQ(step(out.actions[0]), (Step{1, Kind::arbitration_lost, CanErrorType::bit, kTx, 1}));
   ASSERT_EQ(out.transmitters.size(), 2u);
-  EXPECT_EQ(out.transmitters[0], std::make_pair(NodeId{0}, true));
-  EXPECT_EQ(out.transmitters[1], std::make_pair(NodeId{1}, false));
-  EXPECT_EQ(out.lost_arbitration, std::vector<NodeId>{1});
+  EXPECT_EQ(out.transmitters[0], (Tx{0, /*sent=*/true, /*lost_arbitration=*/false}));
+  EXPECT_EQ(out.transmitters[1], (Tx{1, /*sent=*/false, /*lost_arbitration=*/true}));
 }
 
 }  // namespace

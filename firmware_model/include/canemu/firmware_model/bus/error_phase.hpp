@@ -76,12 +76,16 @@ class ErrorPhase {
     SimTime end;                  // end of that bit
     SimTime ifs_end;              // end of the intermission after it: the bus is free
     SimTime dominant_end;         // end of the last dominant bit
-    // Every transmitter, and whether it sent its whole frame without detecting an error (never
-    // one that lost arbitration).
-    std::vector<std::pair<NodeId, bool>> transmitters;
-    // Those of them that lost arbitration on the way: receivers of the activity from there on
-    // (an error-passive one does not suspend its next transmission).
-    std::vector<NodeId> lost_arbitration;
+    // What became of a transmitter.
+    struct Transmitter {
+      NodeId id = 0;
+      bool sent = false;  // its whole frame, without detecting an error (never after a loss)
+      // It lost arbitration on the way: a receiver of the activity from there on (an
+      // error-passive one does not suspend its next transmission).
+      bool lost_arbitration = false;
+      friend bool operator==(const Transmitter&, const Transmitter&) = default;
+    };
+    std::vector<Transmitter> transmitters;  // every one, in the order of the participants
   };
 
   ErrorPhase(const Setup& setup, std::span<const BusParticipant> parts);

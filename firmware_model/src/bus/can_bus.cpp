@@ -96,25 +96,9 @@ bool CanBus::still_pending(Node& n) {
   if (p == nullptr || !p->single_shot || !n.encoded_frame) {
     return false;
   }
-  const Frame& lost = *n.encoded_frame;
-  if (p->frame == lost) {
-    return true;
-  }
   // A CAN FD controller sets ESI to its error state whenever it offers the frame: with the other
   // ESI it is still the frame that lost.
-  if (!lost.fd() || p->frame.esi() == lost.esi()) {
-    return false;
-  }
-  FrameSpec spec;
-  spec.id = lost.id();
-  spec.extended = lost.extended();
-  spec.fd = true;
-  spec.brs = lost.brs();
-  spec.esi = p->frame.esi();
-  spec.dlc = lost.dlc();
-  spec.data = lost.data();
-  const auto same = Frame::create(spec);
-  return same && *same == p->frame;
+  return p->frame == n.encoded_frame->with_esi(p->frame.esi());
 }
 
 void CanBus::tx_changed(NodeId node) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <span>
@@ -143,6 +144,21 @@ TEST(Frame, FramesCompareByContent) {
   EXPECT_EQ(*Frame::classic(5, a), *Frame::classic(5, a));
   EXPECT_FALSE(*Frame::classic(5, a) == *Frame::classic(5, b));
   EXPECT_FALSE(*Frame::classic(5, a) == *Frame::classic(5, a, true));
+}
+
+TEST(Frame, WithEsiChangesOnlyTheErrorStateOfACanFdFrame) {
+  const std::vector<uint8_t> data(12, 0xA5);
+  const Frame fd = *Frame::fd_frame(0x123, data, false, true);
+  const Frame passive = fd.with_esi(true);
+  EXPECT_TRUE(passive.esi());
+  EXPECT_FALSE(passive == fd);
+  EXPECT_EQ(passive.id(), 0x123u);
+  EXPECT_TRUE(passive.brs());
+  EXPECT_EQ(passive.dlc(), fd.dlc());
+  EXPECT_TRUE(std::ranges::equal(passive.data(), fd.data()));
+  EXPECT_EQ(passive.with_esi(false), fd);
+  const Frame classic = *Frame::classic(0x123, std::vector<uint8_t>{1, 2});
+  EXPECT_EQ(classic.with_esi(true), classic);  // no ESI bit in a classic frame
 }
 
 TEST(ModelErrc, EveryCodeHasAName) {

@@ -84,15 +84,7 @@ const TxFrame* CanFdController::pending_tx() {
   // ESI tells the receivers the transmitter's error state when the frame starts.
   TxFrame& head = tx_.front();
   if (head.frame.fd() && head.frame.esi() != fc_.error_passive()) {
-    FrameSpec spec;
-    spec.id = head.frame.id();
-    spec.extended = head.frame.extended();
-    spec.fd = true;
-    spec.brs = head.frame.brs();
-    spec.esi = fc_.error_passive();
-    spec.dlc = head.frame.dlc();
-    spec.data = head.frame.data();
-    head.frame = *Frame::create(spec);
+    head.frame = head.frame.with_esi(fc_.error_passive());
   }
   return &head;
 }

@@ -77,6 +77,14 @@ class Frame {
   constexpr std::size_t length() const { return remote_ ? 0 : dlc_to_length(dlc_, fd_); }
   std::span<const uint8_t> data() const { return {data_.data(), length()}; }
 
+  // The same frame with the error-state indicator `esi`; a classic frame has none and stays as
+  // it is. (A CAN FD transmitter sends its error state at the frame's start.)
+  Frame with_esi(bool esi) const {
+    Frame f = *this;
+    f.esi_ = fd_ && esi;
+    return f;
+  }
+
   // All kMaxFdLength data bytes: those past length() are zero (only create() writes them), so
   // a copy of the whole array needs no length.
   const std::array<uint8_t, kMaxFdLength>& padded_data() const { return data_; }
